@@ -1,0 +1,8 @@
+//! The flight controller's behaviour, free of any HAL: sensor drivers over embedded-hal,
+//! estimation, control and the arming/failsafe supervisor. The firmware crate only wires
+//! peripherals to what lives here, so everything here runs in host tests.
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod board;

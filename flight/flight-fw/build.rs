@@ -1,0 +1,49 @@
+//! Link setup for the STM32F405 image. Host builds (the stub `main`) get nothing.
+//!
+//! The memory layout is chosen by feature and written to OUT_DIR, because the linker runs
+//! in the workspace root and would not find a memory.x next to this file.
+
+use std::{env, fs, path::PathBuf};
+
+/// Sectors 0–3 are 16 KiB each; sectors 2–3 (0x0800_8000–0x0800_FFFF) hold the settings,
+/// where Tau Labs kept them on boards without external flash (hardware/brushedsparky).
+const DIRECT: &str = "\
+/* Flashed at 0x08000000 (probe or USB DFU). The vector table sits in sector 0; code starts
+   at sector 4 so that sectors 2-3 stay free for settings. */
+MEMORY
+{
+  FLASH : ORIGIN = 0x08000000, LENGTH = 1024K
+  RAM   : ORIGIN = 0x20000000, LENGTH = 128K
+}
+_stext = 0x08010000;
+";
+
+const BOOTLOADER: &str = "\
+/* Behind the Tau Labs bootloader: its bank is sectors 0-1, settings sectors 2-3, firmware
+   from sector 5 (0x08020000, 384 KiB; the last 100 bytes hold the firmware descriptor). */
+MEMORY
+{
+  FLASH : ORIGIN = 0x08020000, LENGTH = 384K - 100
+  RAM   : ORIGIN = 0x20000000, LENGTH = 128K
+}
+";
+
+fn main() {
+    println!("cargo:rerun-if-changed=build.rs");
+    if env::var("CARGO_CFG_TARGET_OS").as_deref() != Ok("none") {
+        return;
+    }
+    let layout = if env::var_os("CARGO_FEATURE_TAULABS_BOOTLOADER").is_some() {
+        BOOTLOADER
+    } else {
+        DIRECT
+    };
+    let out = PathBuf::from(env::var_os("OUT_DIR").unwrap_or_default());
+    if let Err(e) = fs::write(out.join("memory.x"), layout) {
+        println!("cargo:warning=cannot write memory.x: {e}");
+    }
+    println!("cargo:rustc-link-search={}", out.display());
+    println!("cargo:rustc-link-arg-bins=--nmagic");
+    println!("cargo:rustc-link-arg-bins=-Tlink.x");
+    println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+}

@@ -1,0 +1,8 @@
+//! The TauLink module's behaviour, free of any HAL: reading the handset (PPM, CRSF),
+//! driving the link as its timing master (or as a receiver), and fanning telemetry out to
+//! the handset and the HM-10. The firmware crate only wires nRF52840 peripherals to it.
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod status;
