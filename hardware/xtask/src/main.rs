@@ -1,1 +1,191 @@
-fn main() {}
+//! `cargo xtask`: builds the two firmware images (each in its own cargo invocation: their
+//! embassy time drivers cannot share one build) and writes flashable files to `dist/`.
+//!
+//! ```text
+//! cargo xtask build flight [--sparky2] [--bootloader]   # one image, release
+//! cargo xtask build module [--uf2]
+//! cargo xtask dist                                       # every variant → dist/*.{elf,bin,hex,uf2}
+//! cargo xtask size                                       # text/data/bss of what dist/ holds
+//! ```
+
+mod elf;
+mod formats;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+use std::{env, fs};
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+
+/// One firmware variant: which package, which features, what to call the files.
+struct Variant {
+    package: &'static str,
+    features: &'static [&'static str],
+    name: &'static str,
+    /// Write a UF2 file (nRF52840 behind a UF2 bootloader).
+    uf2: bool,
+}
+
+const VARIANTS: &[Variant] = &[
+    Variant {
+        package: "flight-fw",
+        features: &[],
+        name: "flight-brushedsparky",
+        uf2: false,
+    },
+    Variant {
+        package: "flight-fw",
+        features: &["sparky2"],
+        name: "flight-sparky2",
+        uf2: false,
+    },
+    Variant {
+        package: "flight-fw",
+        features: &["taulabs-bootloader"],
+        name: "flight-brushedsparky-taulabs-bl",
+        uf2: false,
+    },
+    Variant {
+        package: "module-fw",
+        features: &[],
+        name: "module-nrf52840",
+        uf2: false,
+    },
+    Variant {
+        package: "module-fw",
+        features: &["uf2"],
+        name: "module-nrf52840-uf2",
+        uf2: true,
+    },
+];
+
+fn workspace_root() -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    root.canonicalize().unwrap_or(root)
+}
+
+fn target_dir() -> PathBuf {
+    env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| workspace_root().join("target"))
+}
+
+fn build(package: &str, features: &[&str]) -> Result<PathBuf, String> {
+    let cargo = env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut cmd = Command::new(cargo);
+    cmd.current_dir(workspace_root()).args([
+        "build",
+        "--release",
+        "--target",
+        TARGET,
+        "-p",
+        package,
+    ]);
+    if !features.is_empty() {
+        cmd.args(["--features", &features.join(",")]);
+    }
+    let status = cmd.status().map_err(|e| format!("cannot run cargo: {e}"))?;
+    if !status.success() {
+        return Err(format!("building {package} failed"));
+    }
+    Ok(target_dir().join(TARGET).join("release").join(package))
+}
+
+fn write_outputs(variant: &Variant, elf_path: &Path, dist: &Path) -> Result<(), String> {
+    let elf = fs::read(elf_path).map_err(|e| format!("{}: {e}", elf_path.display()))?;
+    let segments = elf::load_segments(&elf).map_err(|e| format!("{}: {e}", elf_path.display()))?;
+    let sizes = elf::sizes(&elf).map_err(|e| e.to_string())?;
+    let (start, bin) = formats::to_bin(&segments);
+    let write = |ext: &str, bytes: &[u8]| {
+        let path = dist.join(format!("{}.{ext}", variant.name));
+        fs::write(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))
+    };
+    write("elf", &elf)?;
+    write("bin", &bin)?;
+    write("hex", formats::to_ihex(&segments).as_bytes())?;
+    if variant.uf2 {
+        write(
+            "uf2",
+            &formats::to_uf2(&segments, formats::UF2_FAMILY_NRF52840),
+        )?;
+    }
+    println!(
+        "{:<34} text {:>7}  data {:>5}  bss {:>6}  flash from 0x{start:08X}, .bin {} bytes",
+        variant.name,
+        sizes.text,
+        sizes.data,
+        sizes.bss,
+        bin.len()
+    );
+    Ok(())
+}
+
+fn dist() -> Result<(), String> {
+    let dist = workspace_root().join("dist");
+    fs::create_dir_all(&dist).map_err(|e| format!("{}: {e}", dist.display()))?;
+    let mut built = Vec::new();
+    for v in VARIANTS {
+        let elf = build(v.package, v.features)?;
+        // The next variant of the same package overwrites the ELF: keep a copy first.
+        let keep = dist.join(format!("{}.elf", v.name));
+        fs::copy(&elf, &keep).map_err(|e| format!("{}: {e}", keep.display()))?;
+        built.push((v, keep));
+    }
+    println!("\nflashable files in {}:", dist.display());
+    for (v, elf) in built {
+        write_outputs(v, &elf, &dist)?;
+    }
+    Ok(())
+}
+
+fn size() -> Result<(), String> {
+    let dist = workspace_root().join("dist");
+    for v in VARIANTS {
+        let path = dist.join(format!("{}.elf", v.name));
+        let Ok(elf) = fs::read(&path) else {
+            println!("{:<34} (not built: run `cargo xtask dist`)", v.name);
+            continue;
+        };
+        let s = elf::sizes(&elf).map_err(|e| format!("{}: {e}", path.display()))?;
+        println!(
+            "{:<34} text {:>7}  data {:>5}  bss {:>6}",
+            v.name, s.text, s.data, s.bss
+        );
+    }
+    Ok(())
+}
+
+fn run(args: &[String]) -> Result<(), String> {
+    let flag = |f: &str| args.iter().any(|a| a == f);
+    match args.first().map(String::as_str) {
+        Some("build") => {
+            let (package, mut features) = match args.get(1).map(String::as_str) {
+                Some("flight") => ("flight-fw", Vec::new()),
+                Some("module") => ("module-fw", Vec::new()),
+                _ => return Err("usage: cargo xtask build flight|module [options]".into()),
+            };
+            for (f, feature) in [("--sparky2", "sparky2"), ("--bootloader", "taulabs-bootloader"), ("--uf2", "uf2")] {
+                if flag(f) {
+                    features.push(feature);
+                }
+            }
+            let elf = build(package, &features)?;
+            println!("{}", elf.display());
+            Ok(())
+        }
+        Some("dist") => dist(),
+        Some("size") => size(),
+        _ => Err("usage: cargo xtask build flight|module [--sparky2] [--bootloader] [--uf2] | dist | size".into()),
+    }
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = env::args().skip(1).collect();
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
