@@ -6,3 +6,5 @@
 #![warn(missing_docs)]
 
 pub mod board;
+pub mod outputs;
+pub mod supervisor;

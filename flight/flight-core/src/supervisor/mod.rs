@@ -1,0 +1,45 @@
+//! Arming, disarming and link failsafe: an explicit state machine that decides whether the
+//! motors may turn and who is in command. Pure: it takes the time and the facts each loop
+//! and returns a decision; nothing here touches hardware.
+
+mod gesture;
+mod machine;
+mod modes;
+
+pub use gesture::{Gesture, GestureDetector};
+pub use machine::{ArmBlocker, Decision, Inputs, Settings, State, Supervisor};
+pub use modes::{FlightMode, ModeSwitch};
+
+/// Stick positions as the link delivers them: throttle 0…1, the others −1…1 (centre 0).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Sticks {
+    /// Throttle, 0 = low.
+    pub throttle: f32,
+    /// Roll, positive = right.
+    pub roll: f32,
+    /// Pitch, positive = nose up.
+    pub pitch: f32,
+    /// Yaw, positive = nose right.
+    pub yaw: f32,
+}
+
+impl Sticks {
+    /// Throttle at the bottom (below 5 %).
+    pub fn throttle_low(&self) -> bool {
+        self.throttle < 0.05
+    }
+
+    /// Roll, pitch and yaw within `deadband` of centre.
+    pub fn centred(&self, deadband: f32) -> bool {
+        self.roll.abs() <= deadband && self.pitch.abs() <= deadband && self.yaw.abs() <= deadband
+    }
+
+    /// All four values are finite numbers.
+    pub fn is_finite(&self) -> bool {
+        self.throttle.is_finite()
+            && self.roll.is_finite()
+            && self.pitch.is_finite()
+            && self.yaw.is_finite()
+    }
+}
