@@ -5,6 +5,8 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod alerts;
+pub mod battery;
 pub mod board;
 pub mod outputs;
 pub mod supervisor;

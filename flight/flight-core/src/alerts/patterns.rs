@@ -1,0 +1,131 @@
+//! The tone patterns. Each alert has its own rhythm and pitch so a pilot can tell them apart
+//! through the video receiver's audio without looking.
+
+use crate::supervisor::FlightMode;
+
+/// One tone (or a pause, at 0 Hz).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Tone {
+    /// Pitch, Hz; 0 is silence.
+    pub frequency_hz: u16,
+    /// Length, ms.
+    pub duration_ms: u16,
+}
+
+const fn t(frequency_hz: u16, duration_ms: u16) -> Tone {
+    Tone {
+        frequency_hz,
+        duration_ms,
+    }
+}
+
+// Fast high triplets: unmistakable.
+const BATTERY_CRITICAL: &[Tone] = &[
+    t(4000, 80),
+    t(0, 40),
+    t(4000, 80),
+    t(0, 40),
+    t(4000, 80),
+    t(0, 300),
+];
+// Three long low tones.
+const FAILSAFE: &[Tone] = &[
+    t(600, 400),
+    t(0, 150),
+    t(600, 400),
+    t(0, 150),
+    t(600, 400),
+    t(0, 300),
+];
+// Tau Labs' alarm rhythm: pause, three short, one long.
+const BATTERY_WARNING: &[Tone] = &[
+    t(0, 240),
+    t(2500, 80),
+    t(0, 80),
+    t(2500, 80),
+    t(0, 80),
+    t(2500, 80),
+    t(0, 80),
+    t(2500, 400),
+];
+// Rising pair.
+const ARMED: &[Tone] = &[t(1000, 150), t(2000, 300)];
+// Falling pair.
+const DISARMED: &[Tone] = &[t(2000, 150), t(1000, 300)];
+// A low buzz.
+const ARM_REFUSED: &[Tone] = &[t(300, 600)];
+// Two rising chirps.
+const CONTROL_RECOVERED: &[Tone] = &[t(1500, 100), t(0, 60), t(2500, 200)];
+// Mode beeps: n short beeps at a mid pitch for the n-th mode.
+const MODE_1: &[Tone] = &[t(3000, 60)];
+const MODE_2: &[Tone] = &[t(3000, 60), t(0, 100), t(3000, 60)];
+const MODE_3: &[Tone] = &[t(3000, 60), t(0, 100), t(3000, 60), t(0, 100), t(3000, 60)];
+const MODE_4: &[Tone] = &[
+    t(3000, 60),
+    t(0, 100),
+    t(3000, 60),
+    t(0, 100),
+    t(3000, 60),
+    t(0, 100),
+    t(3000, 60),
+];
+// System identification: a long high-low pair.
+const MODE_SYSID: &[Tone] = &[t(3000, 300), t(0, 100), t(1500, 300)];
+
+/// Something worth a sound.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Alert {
+    /// Battery critical: land now (repeats while critical).
+    BatteryCritical,
+    /// Link lost while armed.
+    Failsafe,
+    /// Battery warning (repeats while low).
+    BatteryWarning,
+    /// Armed.
+    Armed,
+    /// Disarmed.
+    Disarmed,
+    /// An arm attempt was refused.
+    ArmRefused,
+    /// The pilot has control again after a failsafe.
+    ControlRecovered,
+    /// Flight mode changed.
+    Mode(FlightMode),
+}
+
+impl Alert {
+    /// Higher plays first and may cut a lower one short.
+    pub const fn priority(self) -> u8 {
+        match self {
+            Alert::BatteryCritical => 7,
+            Alert::Failsafe => 6,
+            Alert::BatteryWarning => 5,
+            Alert::ArmRefused => 4,
+            Alert::Armed | Alert::Disarmed => 3,
+            Alert::ControlRecovered => 2,
+            Alert::Mode(_) => 1,
+        }
+    }
+
+    /// The pattern.
+    pub const fn tones(self) -> &'static [Tone] {
+        match self {
+            Alert::BatteryCritical => BATTERY_CRITICAL,
+            Alert::Failsafe => FAILSAFE,
+            Alert::BatteryWarning => BATTERY_WARNING,
+            Alert::Armed => ARMED,
+            Alert::Disarmed => DISARMED,
+            Alert::ArmRefused => ARM_REFUSED,
+            Alert::ControlRecovered => CONTROL_RECOVERED,
+            Alert::Mode(m) => match m {
+                FlightMode::RatePid => MODE_1,
+                FlightMode::RateLqg => MODE_2,
+                FlightMode::Attitude => MODE_3,
+                FlightMode::Horizon => MODE_4,
+                FlightMode::SystemId => MODE_SYSID,
+            },
+        }
+    }
+}
