@@ -9,4 +9,5 @@ pub mod alerts;
 pub mod battery;
 pub mod board;
 pub mod outputs;
+pub mod settings;
 pub mod supervisor;

@@ -41,7 +41,10 @@ mod tests {
         // 700 mV = 869 counts, 300 mV = 372 counts.
         assert!((868..=869).contains(&max), "{max}");
         assert!((372..=373).contains(&min), "{min}");
-        assert_eq!(t[0], 620, "starts at the centre: 500 mV × 4095 / 3300 = 620.5");
+        assert_eq!(
+            t[0], 620,
+            "starts at the centre: 500 mV × 4095 / 3300 = 620.5"
+        );
     }
 
     #[test]

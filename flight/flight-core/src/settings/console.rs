@@ -1,0 +1,156 @@
+//! The USB console's command language: one command per line, words separated by spaces.
+//!
+//! ```text
+//! help                      list the commands
+//! list [PREFIX]             every setting (or those starting with PREFIX) with its value
+//! get NAME                  one setting
+//! set NAME VALUE            change one setting (in RAM; refused while armed)
+//! save                      write changed settings to flash (refused while armed)
+//! defaults                  factory values (in RAM until saved)
+//! status                    arm state, link, battery, mode
+//! ```
+
+use core::fmt::Write;
+
+use super::params::{Kind, Settings, Value, find};
+
+/// A parsed line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Command<'a> {
+    /// Show the commands.
+    Help,
+    /// List settings whose name starts with the prefix ("" = all).
+    List(&'a str),
+    /// Show one setting.
+    Get(&'a str),
+    /// Change one setting.
+    Set {
+        /// Setting name.
+        name: &'a str,
+        /// Value text.
+        value: &'a str,
+    },
+    /// Persist.
+    Save,
+    /// Factory values.
+    Defaults,
+    /// Live status.
+    Status,
+    /// An empty line.
+    Nothing,
+}
+
+/// Why a line was not understood.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ConsoleError {
+    /// Unknown command word.
+    UnknownCommand,
+    /// Missing or extra words.
+    WrongArguments,
+}
+
+impl core::fmt::Display for ConsoleError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            ConsoleError::UnknownCommand => "unknown command (try help)",
+            ConsoleError::WrongArguments => "wrong arguments (try help)",
+        })
+    }
+}
+
+impl core::error::Error for ConsoleError {}
+
+/// Parses one line (without its line ending).
+pub fn parse_line(line: &str) -> Result<Command<'_>, ConsoleError> {
+    let mut words = line.split_ascii_whitespace();
+    let Some(word) = words.next() else {
+        return Ok(Command::Nothing);
+    };
+    let a = words.next();
+    let b = words.next();
+    if words.next().is_some() {
+        return Err(ConsoleError::WrongArguments);
+    }
+    match (word, a, b) {
+        ("help", None, None) => Ok(Command::Help),
+        ("list", prefix, None) => Ok(Command::List(prefix.unwrap_or(""))),
+        ("get", Some(name), None) => Ok(Command::Get(name)),
+        ("set", Some(name), Some(value)) => Ok(Command::Set { name, value }),
+        ("save", None, None) => Ok(Command::Save),
+        ("defaults", None, None) => Ok(Command::Defaults),
+        ("status", None, None) => Ok(Command::Status),
+        ("help" | "list" | "get" | "set" | "save" | "defaults" | "status", _, _) => {
+            Err(ConsoleError::WrongArguments)
+        }
+        _ => Err(ConsoleError::UnknownCommand),
+    }
+}
+
+/// Writes `name = value` the way `set` accepts it back.
+pub fn write_setting<W: Write>(out: &mut W, settings: &Settings, name: &str) -> core::fmt::Result {
+    let Some((_, param)) = find(name) else {
+        return writeln!(out, "{name}: no such setting");
+    };
+    match (param.kind, settings.get(name)) {
+        (Kind::Choice(names), Some(Value::U32(i))) => {
+            writeln!(
+                out,
+                "{name} = {}",
+                names.get(i as usize).copied().unwrap_or("?")
+            )
+        }
+        (_, Some(Value::F32(v))) => writeln!(out, "{name} = {v}"),
+        (_, Some(Value::U32(v))) => writeln!(out, "{name} = {v}"),
+        (_, None) => writeln!(out, "{name}: no such setting"),
+    }
+}
+
+/// Writes every setting starting with `prefix`.
+pub fn write_list<W: Write>(out: &mut W, settings: &Settings, prefix: &str) -> core::fmt::Result {
+    for (p, _) in settings.iter().filter(|(p, _)| p.name.starts_with(prefix)) {
+        write_setting(out, settings, p.name)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_commands_and_refuses_garbage() {
+        assert_eq!(
+            parse_line("  set  pid.roll.kp 0.004 "),
+            Ok(Command::Set {
+                name: "pid.roll.kp",
+                value: "0.004"
+            })
+        );
+        assert_eq!(parse_line("list pid."), Ok(Command::List("pid.")));
+        assert_eq!(parse_line("list"), Ok(Command::List("")));
+        assert_eq!(parse_line(""), Ok(Command::Nothing));
+        assert_eq!(parse_line("get"), Err(ConsoleError::WrongArguments));
+        assert_eq!(parse_line("set a b c"), Err(ConsoleError::WrongArguments));
+        assert_eq!(parse_line("rm -rf"), Err(ConsoleError::UnknownCommand));
+    }
+
+    #[test]
+    fn output_round_trips_through_set() {
+        let mut s = Settings::default();
+        s.set_text("output.protocol", "pwm").unwrap();
+        let mut text = heapless::String::<512>::new();
+        write_list(&mut text, &s, "output.").unwrap();
+        assert!(
+            text.starts_with("output.protocol = pwm\noutput.rate_hz = 32000\n"),
+            "{text}"
+        );
+        // Every printed line is accepted back by `set`.
+        let mut again = Settings::default();
+        for line in text.lines() {
+            let (name, value) = line.split_once(" = ").unwrap();
+            again.set_text(name, value).unwrap();
+        }
+        assert_eq!(again.get("output.protocol"), s.get("output.protocol"));
+    }
+}

@@ -1,0 +1,11 @@
+//! The flight controller's settings: a table of typed, range-checked parameters (gains,
+//! costs, output type and rate, mixer, thresholds), their power-fail-safe storage in flash,
+//! and the text console that reads and changes them over USB.
+
+mod console;
+mod params;
+mod store;
+
+pub use console::{Command, ConsoleError, parse_line, write_list, write_setting};
+pub use params::{Choice, Kind, PARAMS, Param, ParamError, Settings, Value};
+pub use store::{FLASH_BUFFER, LoadReport, StoreError, load, save};

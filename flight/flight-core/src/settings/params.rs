@@ -1,0 +1,340 @@
+//! The parameter table. Each parameter has a stable numeric key (what flash stores, so a
+//! rename never loses a value), a dotted name (what the console shows), a kind with its
+//! range, and a default. Values outside the range are refused, never clamped silently.
+
+/// A parameter's value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Value {
+    /// A real number.
+    F32(f32),
+    /// A whole number, or the index of a choice.
+    U32(u32),
+}
+
+impl Value {
+    /// The 32 bits stored in flash.
+    pub fn to_bits(self) -> u32 {
+        match self {
+            Value::F32(v) => v.to_bits(),
+            Value::U32(v) => v,
+        }
+    }
+}
+
+/// The names of an enumerated parameter.
+pub type Choice = &'static [&'static str];
+
+/// What a parameter holds, with its limits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Kind {
+    /// A real number in `min..=max`.
+    F32 {
+        /// Smallest allowed.
+        min: f32,
+        /// Largest allowed.
+        max: f32,
+    },
+    /// A whole number in `min..=max`.
+    U32 {
+        /// Smallest allowed.
+        min: u32,
+        /// Largest allowed.
+        max: u32,
+    },
+    /// One of named options (stored as its index).
+    Choice(Choice),
+}
+
+/// One row of the table.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Param {
+    /// Stable flash key; never reuse one.
+    pub key: u16,
+    /// Console name.
+    pub name: &'static str,
+    /// Type and range.
+    pub kind: Kind,
+    /// Factory value.
+    pub default: Value,
+}
+
+/// Why a value was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ParamError {
+    /// No parameter by that name or key.
+    Unknown,
+    /// Outside the parameter's range, or not one of its choices.
+    OutOfRange,
+    /// Not a number / not a choice name.
+    Unparsable,
+}
+
+impl core::fmt::Display for ParamError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            ParamError::Unknown => "no such setting",
+            ParamError::OutOfRange => "value out of range",
+            ParamError::Unparsable => "cannot read that value",
+        })
+    }
+}
+
+impl core::error::Error for ParamError {}
+
+const fn f(key: u16, name: &'static str, min: f32, max: f32, default: f32) -> Param {
+    Param {
+        key,
+        name,
+        kind: Kind::F32 { min, max },
+        default: Value::F32(default),
+    }
+}
+
+const fn u(key: u16, name: &'static str, min: u32, max: u32, default: u32) -> Param {
+    Param {
+        key,
+        name,
+        kind: Kind::U32 { min, max },
+        default: Value::U32(default),
+    }
+}
+
+const fn c(key: u16, name: &'static str, choice: Choice, default: u32) -> Param {
+    Param {
+        key,
+        name,
+        kind: Kind::Choice(choice),
+        default: Value::U32(default),
+    }
+}
+
+/// Output protocols, in `outputs::Protocol` order.
+pub const OUTPUT_PROTOCOLS: Choice = &["brushed", "pwm", "oneshot125"];
+/// Mixer frames.
+pub const FRAMES: Choice = &["quad-x", "quad-plus", "hex-x"];
+/// Flight modes for the three switch positions.
+pub const MODES: Choice = &["rate-pid", "rate-lqg", "attitude", "horizon", "sysid"];
+/// Gyro loop rates.
+pub const LOOP_RATES: Choice = &["500", "1000"];
+
+/// Every parameter. Keys are grouped by hundreds per subsystem.
+pub const PARAMS: &[Param] = &[
+    // outputs (1xx)
+    c(100, "output.protocol", OUTPUT_PROTOCOLS, 0),
+    u(101, "output.rate_hz", 50, 64_000, 32_000),
+    u(102, "output.min_us", 500, 2_500, 1_000),
+    u(103, "output.max_us", 500, 2_500, 2_000),
+    f(104, "output.idle", 0.0, 0.3, 0.05),
+    c(105, "mixer.frame", FRAMES, 0),
+    f(106, "mixer.thrust_expo", 0.0, 1.0, 0.0),
+    // loop (2xx)
+    c(200, "loop.rate_hz", LOOP_RATES, 1),
+    // PID rate gains (3xx): roll, pitch, yaw × kp, ki, kd
+    f(300, "pid.roll.kp", 0.0, 1.0, 0.0030),
+    f(301, "pid.roll.ki", 0.0, 1.0, 0.0050),
+    f(302, "pid.roll.kd", 0.0, 0.1, 0.00004),
+    f(303, "pid.pitch.kp", 0.0, 1.0, 0.0030),
+    f(304, "pid.pitch.ki", 0.0, 1.0, 0.0050),
+    f(305, "pid.pitch.kd", 0.0, 0.1, 0.00004),
+    f(306, "pid.yaw.kp", 0.0, 1.0, 0.0060),
+    f(307, "pid.yaw.ki", 0.0, 1.0, 0.0100),
+    f(308, "pid.yaw.kd", 0.0, 0.1, 0.0),
+    f(309, "pid.attitude.kp", 0.0, 20.0, 2.5),
+    f(310, "rate.max_dps", 30.0, 2_000.0, 720.0),
+    f(311, "attitude.max_deg", 5.0, 80.0, 45.0),
+    // LQG model and costs (4xx)
+    f(400, "lqg.ln_beta1.roll", 5.0, 14.0, 10.0),
+    f(401, "lqg.ln_beta1.pitch", 5.0, 14.0, 10.0),
+    f(402, "lqg.ln_beta2.yaw", 3.0, 12.0, 7.0),
+    f(403, "lqg.tau_s", 0.005, 0.2, 0.03),
+    f(404, "lqg.q_rate", 1e-6, 1e6, 4.0),
+    f(405, "lqg.q_torque", 1e-9, 1e3, 0.04),
+    f(406, "lqg.q_attitude", 1e-3, 1e9, 10_000.0),
+    f(407, "lqg.q_integral", 1e-9, 1e6, 0.0001),
+    // battery (5xx)
+    u(500, "battery.cells", 0, 6, 0),
+    u(501, "battery.cell_warning_mv", 2_800, 4_200, 3_500),
+    u(502, "battery.cell_critical_mv", 2_800, 4_200, 3_300),
+    f(503, "battery.divider", 1.0, 30.0, 2.0),
+    f(504, "battery.current_mv_per_a", 0.0, 1_000.0, 50.0),
+    // safety (6xx)
+    u(600, "failsafe.disarm_ms", 1_000, 120_000, 15_000),
+    f(601, "failsafe.descent_mps", 0.2, 3.0, 0.7),
+    u(602, "arm.idle_disarm_ms", 2_000, 120_000, 10_000),
+    c(603, "mode.switch_low", MODES, 2),
+    c(604, "mode.switch_mid", MODES, 0),
+    c(605, "mode.switch_high", MODES, 1),
+];
+
+/// Number of parameters.
+pub const COUNT: usize = PARAMS.len();
+
+/// Looks a parameter up by name.
+pub fn find(name: &str) -> Option<(usize, &'static Param)> {
+    PARAMS.iter().enumerate().find(|(_, p)| p.name == name)
+}
+
+impl Param {
+    /// Checks `value` against the kind and range.
+    pub fn check(&self, value: Value) -> Result<Value, ParamError> {
+        match (self.kind, value) {
+            (Kind::F32 { min, max }, Value::F32(v))
+                if v.is_finite() && (min..=max).contains(&v) =>
+            {
+                Ok(value)
+            }
+            (Kind::U32 { min, max }, Value::U32(v)) if (min..=max).contains(&v) => Ok(value),
+            (Kind::Choice(names), Value::U32(v)) if (v as usize) < names.len() => Ok(value),
+            _ => Err(ParamError::OutOfRange),
+        }
+    }
+
+    /// Reads a value from console text: a number, or a choice's name.
+    pub fn parse(&self, text: &str) -> Result<Value, ParamError> {
+        let value = match self.kind {
+            Kind::F32 { .. } => Value::F32(text.parse().map_err(|_| ParamError::Unparsable)?),
+            Kind::U32 { .. } => Value::U32(text.parse().map_err(|_| ParamError::Unparsable)?),
+            Kind::Choice(names) => {
+                let i = names
+                    .iter()
+                    .position(|n| *n == text)
+                    .ok_or(ParamError::Unparsable)?;
+                Value::U32(i as u32)
+            }
+        };
+        self.check(value)
+    }
+
+    /// Rebuilds a value from its stored bits.
+    pub fn from_bits(&self, bits: u32) -> Result<Value, ParamError> {
+        let value = match self.kind {
+            Kind::F32 { .. } => Value::F32(f32::from_bits(bits)),
+            Kind::U32 { .. } | Kind::Choice(_) => Value::U32(bits),
+        };
+        self.check(value)
+    }
+}
+
+/// The current value of every parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    values: [Value; COUNT],
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        let mut values = [Value::U32(0); COUNT];
+        for (v, p) in values.iter_mut().zip(PARAMS) {
+            *v = p.default;
+        }
+        Self { values }
+    }
+}
+
+impl Settings {
+    /// Value by name.
+    pub fn get(&self, name: &str) -> Option<Value> {
+        let (i, _) = find(name)?;
+        self.values.get(i).copied()
+    }
+
+    /// A real-number parameter (its default if the name is wrong, which a test catches).
+    pub fn f32(&self, name: &str) -> f32 {
+        match self.get(name) {
+            Some(Value::F32(v)) => v,
+            _ => 0.0,
+        }
+    }
+
+    /// A whole-number or choice parameter.
+    pub fn u32(&self, name: &str) -> u32 {
+        match self.get(name) {
+            Some(Value::U32(v)) => v,
+            _ => 0,
+        }
+    }
+
+    /// Changes a value after checking it.
+    pub fn set(&mut self, name: &str, value: Value) -> Result<(), ParamError> {
+        let (i, p) = find(name).ok_or(ParamError::Unknown)?;
+        let checked = p.check(value)?;
+        let slot = self.values.get_mut(i).ok_or(ParamError::Unknown)?;
+        *slot = checked;
+        Ok(())
+    }
+
+    /// Changes a value given as console text.
+    pub fn set_text(&mut self, name: &str, text: &str) -> Result<(), ParamError> {
+        let (_, p) = find(name).ok_or(ParamError::Unknown)?;
+        let value = p.parse(text)?;
+        self.set(name, value)
+    }
+
+    /// (parameter, value) pairs in table order.
+    pub fn iter(&self) -> impl Iterator<Item = (&'static Param, Value)> + '_ {
+        PARAMS.iter().zip(self.values.iter().copied())
+    }
+
+    pub(crate) fn set_by_key(&mut self, key: u16, bits: u32) -> Result<(), ParamError> {
+        let i = PARAMS
+            .iter()
+            .position(|p| p.key == key)
+            .ok_or(ParamError::Unknown)?;
+        let p = PARAMS.get(i).ok_or(ParamError::Unknown)?;
+        let value = p.from_bits(bits)?;
+        let slot = self.values.get_mut(i).ok_or(ParamError::Unknown)?;
+        *slot = value;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table_is_consistent() {
+        for (i, p) in PARAMS.iter().enumerate() {
+            assert_eq!(
+                p.check(p.default),
+                Ok(p.default),
+                "{} default out of range",
+                p.name
+            );
+            for q in &PARAMS[i + 1..] {
+                assert_ne!(p.key, q.key, "duplicate key");
+                assert_ne!(p.name, q.name, "duplicate name");
+            }
+        }
+    }
+
+    #[test]
+    fn set_checks_ranges_and_choices() {
+        let mut s = Settings::default();
+        assert_eq!(s.u32("output.rate_hz"), 32_000);
+        s.set_text("output.protocol", "oneshot125").unwrap();
+        assert_eq!(s.u32("output.protocol"), 2);
+        assert_eq!(
+            s.set_text("output.protocol", "dshot"),
+            Err(ParamError::Unparsable)
+        );
+        assert_eq!(
+            s.set_text("pid.roll.kp", "2.5"),
+            Err(ParamError::OutOfRange)
+        );
+        assert_eq!(
+            s.set_text("pid.roll.kp", "NaN"),
+            Err(ParamError::OutOfRange)
+        );
+        s.set_text("pid.roll.kp", "0.004").unwrap();
+        assert_eq!(s.f32("pid.roll.kp"), 0.004);
+        assert_eq!(s.set_text("no.such", "1"), Err(ParamError::Unknown));
+        assert_eq!(
+            s.set("battery.cells", Value::F32(1.0)),
+            Err(ParamError::OutOfRange),
+            "wrong kind"
+        );
+    }
+}
