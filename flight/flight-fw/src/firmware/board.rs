@@ -1,8 +1,24 @@
 //! The only file that names pins, DMA streams and interrupts. Mirrors
 //! `hardware/brushedsparky/README.md` (and the Sparky2 column there).
 
+use embassy_stm32::adc::{Adc, AdcChannel};
+use embassy_stm32::dac::DacChannel;
 use embassy_stm32::exti::ExtiInput;
-use embassy_stm32::gpio::{Level, Output, Pull, Speed};
+use embassy_stm32::flash::{Bank1Region1, Blocking, Flash};
+use embassy_stm32::gpio::{Level, Output, OutputType, Pull, Speed};
+use embassy_stm32::peripherals::{TIM3, TIM9};
+use embassy_stm32::timer::Channel;
+use embassy_stm32::timer::low_level::Timer;
+use embassy_stm32::timer::simple_pwm::PwmPin;
+use embassy_stm32::usb::{self, Driver};
+use flight_core::alerts::{DAC_SAMPLES_PER_CYCLE, sine_table};
+use flight_core::outputs::{OutputError, Protocol};
+use static_cell::StaticCell;
+
+use super::outputs::MotorTimer;
+use super::tasks::alerts::Speaker;
+use super::tasks::battery::BatterySense;
+use super::tasks::motors::{MotorPins, Motors};
 use embassy_stm32::mode::Async;
 use embassy_stm32::peripherals::IWDG;
 use embassy_stm32::spi::{self, Spi};
@@ -25,12 +41,16 @@ pub const WATCHDOG_TIMEOUT_US: u32 = 250_000;
 #[cfg(not(feature = "sparky2"))]
 bind_interrupts!(pub struct Irqs {
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
+    DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
+    OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
     DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
     DMA1_STREAM0 => dma::InterruptHandler<peripherals::DMA1_CH0>;
 });
 #[cfg(feature = "sparky2")]
 bind_interrupts!(pub struct Irqs {
     EXTI2 => exti::InterruptHandler<interrupt::typelevel::EXTI2>;
+    DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
+    OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
     DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
     DMA1_STREAM0 => dma::InterruptHandler<peripherals::DMA1_CH0>;
 });
@@ -75,6 +95,36 @@ pub struct Radio {
     pub nirq: ExtiInput<'static, Async>,
 }
 
+/// Motor outputs 1–4 before the protocol is known: the pins are already in their timer
+/// function and driven low (the FET gates have pull-downs too), so motors are stopped from
+/// power-on.
+pub struct MotorParts {
+    tim3: Peri<'static, TIM3>,
+    tim9: Peri<'static, TIM9>,
+    // Held so the pins stay in their timer function.
+    _pins: MotorPins,
+}
+
+impl MotorParts {
+    /// Starts both banks with `protocol`, every motor stopped. Output 1 = TIM3 CH3 (PB0),
+    /// 2 = TIM3 CH4 (PB1), 3 = TIM9 CH2 (PA3), 4 = TIM9 CH1 (PA2).
+    pub fn start(self, protocol: Protocol) -> Result<Motors, OutputError> {
+        Ok(Motors {
+            bank0: MotorTimer::new(
+                Timer::new(self.tim3),
+                &[Channel::Ch3, Channel::Ch4],
+                protocol,
+            )?,
+            bank1: MotorTimer::new(
+                Timer::new(self.tim9),
+                &[Channel::Ch2, Channel::Ch1],
+                protocol,
+            )?,
+            _pins: self._pins,
+        })
+    }
+}
+
 /// Everything the tasks own, split out of the peripheral singletons.
 pub struct Board {
     /// Blue STAT/HEARTBEAT LED on PB5, active low.
@@ -83,7 +133,20 @@ pub struct Board {
     pub watchdog: IndependentWatchdog<'static, IWDG>,
     /// The radio module.
     pub radio: Radio,
+    /// Motor outputs 1–4.
+    pub motors: MotorParts,
+    /// Battery voltage and current sense.
+    pub battery: BatterySense,
+    /// DAC tones into the VTX audio.
+    pub speaker: Speaker,
+    /// USB FS for the console.
+    pub usb: Driver<'static, peripherals::USB_OTG_FS>,
+    /// Flash sectors 0–3 (16 KiB each); settings use sectors 2–3.
+    pub settings_flash: Bank1Region1<'static, Blocking>,
 }
+
+static SINE: StaticCell<[u16; DAC_SAMPLES_PER_CYCLE]> = StaticCell::new();
+static USB_OUT_BUFFER: StaticCell<[u8; 256]> = StaticCell::new();
 
 impl Board {
     /// Claims the pins. Nothing is started here.
@@ -95,7 +158,67 @@ impl Board {
         let spi = Spi::new(
             p.SPI3, p.PC10, p.PC12, p.PC11, p.DMA1_CH7, p.DMA1_CH0, Irqs, spi_config,
         );
+        let motors = MotorParts {
+            tim3: p.TIM3,
+            tim9: p.TIM9,
+            _pins: (
+                PwmPin::new(p.PB0, OutputType::PushPull),
+                PwmPin::new(p.PB1, OutputType::PushPull),
+                PwmPin::new(p.PA3, OutputType::PushPull),
+                PwmPin::new(p.PA2, OutputType::PushPull),
+            ),
+        };
+
+        let battery = BatterySense {
+            adc: Adc::new(p.ADC1),
+            voltage: p.PC3.degrade_adc(),
+            current: p.PC2.degrade_adc(),
+        };
+
+        // Tau Labs' tone: 0.4 Vpp around 0.5 V, 130 samples a cycle, DMA1 stream 5.
+        let table = SINE.init([0; DAC_SAMPLES_PER_CYCLE]);
+        sine_table(table, 500.0, 200.0);
+        let pacer = Timer::new(p.TIM6);
+        // TRGO on every update event: one DAC conversion per TIM6 period.
+        pacer
+            .regs_basic()
+            .cr2()
+            .modify(|w| w.set_mms(embassy_stm32::pac::timer::vals::Mms::UPDATE));
+        pacer.start();
+        let speaker = Speaker {
+            dac: DacChannel::new_triggered(
+                p.DAC1,
+                p.DMA1_CH5,
+                embassy_stm32::triggers::TIM6_TRGO,
+                Irqs,
+                p.PA4,
+            ),
+            pacer,
+            table,
+        };
+
+        let mut usb_config = usb::Config::default();
+        // VBUS sense on PA8 is through a divider the OTG block does not watch: off.
+        usb_config.vbus_detection = false;
+        let usb = Driver::new_fs(
+            p.USB_OTG_FS,
+            Irqs,
+            p.PA12,
+            p.PA11,
+            USB_OUT_BUFFER.init([0; 256]),
+            usb_config,
+        );
+
+        let settings_flash = Flash::new_blocking(p.FLASH)
+            .into_blocking_regions()
+            .bank1_region1;
+
         Self {
+            motors,
+            battery,
+            speaker,
+            usb,
+            settings_flash,
             heartbeat_led: Output::new(p.PB5, Level::High, Speed::Low),
             watchdog: IndependentWatchdog::new(p.IWDG, WATCHDOG_TIMEOUT_US),
             radio: Radio {

@@ -1,0 +1,65 @@
+//! Owns the motor timers (outputs 1–4: TIM3 and TIM9). Applies each control loop's
+//! commands the moment they arrive, so outputs stay synchronous with the gyro; with no
+//! command for 100 ms (control stalled) every motor is stopped.
+
+use embassy_futures::select::{Either, select};
+use embassy_stm32::peripherals::{TIM3, TIM9};
+use embassy_stm32::timer::simple_pwm::PwmPin;
+use embassy_stm32::timer::{Ch1, Ch2, Ch3, Ch4};
+use embassy_time::{Duration, Timer};
+use flight_core::outputs::{Command, Protocol};
+
+use super::supervisor::{Watched, check_in};
+use crate::firmware::outputs::MotorTimer;
+use crate::firmware::signals::MOTORS;
+
+/// Both banks of a quad: outputs 1–2 and 3–4.
+pub struct Motors {
+    /// TIM3 CH3/CH4 (PB0, PB1).
+    pub bank0: MotorTimer<'static, TIM3>,
+    /// TIM9 CH2/CH1 (PA3, PA2).
+    pub bank1: MotorTimer<'static, TIM9>,
+    /// The pins, kept in their timer function.
+    pub _pins: MotorPins,
+}
+
+/// Outputs 1–4 in their timer function (held, never read).
+pub type MotorPins = (
+    PwmPin<'static, TIM3, Ch3>,
+    PwmPin<'static, TIM3, Ch4>,
+    PwmPin<'static, TIM9, Ch2>,
+    PwmPin<'static, TIM9, Ch1>,
+);
+
+impl Motors {
+    fn apply(&mut self, commands: &[Command; 4]) {
+        let [m1, m2, m3, m4] = *commands;
+        self.bank0.apply(&[m1, m2]);
+        self.bank1.apply(&[m3, m4]);
+    }
+}
+
+/// The protocol the settings ask for.
+pub fn protocol_from_settings(settings: &flight_core::settings::Settings) -> Protocol {
+    let rate = settings.u32("output.rate_hz");
+    match settings.u32("output.protocol") {
+        1 => Protocol::Pwm {
+            rate_hz: rate,
+            min_us: settings.u32("output.min_us") as u16,
+            max_us: settings.u32("output.max_us") as u16,
+        },
+        2 => Protocol::OneShot125,
+        _ => Protocol::Brushed { frequency_hz: rate },
+    }
+}
+
+#[embassy_executor::task]
+pub async fn motors_task(mut motors: Motors) {
+    loop {
+        match select(MOTORS.wait(), Timer::after(Duration::from_millis(100))).await {
+            Either::First(commands) => motors.apply(&commands),
+            Either::Second(()) => motors.apply(&[Command::Stopped; 4]),
+        }
+        check_in(Watched::Motors);
+    }
+}

@@ -1,0 +1,66 @@
+//! Settings in flash sectors 2–3 (0x0800_8000–0x0800_FFFF, hardware/brushedsparky): loaded
+//! at boot before the watchdog starts, saved on request while disarmed with the watchdog
+//! stretched over the possible sector erase.
+
+use core::sync::atomic::Ordering;
+
+use defmt::{info, warn};
+use embassy_embedded_hal::adapter::BlockingAsync;
+use embassy_stm32::flash::{Bank1Region1, Blocking};
+use flight_core::settings::{Settings, load, save};
+use sequential_storage::cache::{Cache, Uncached};
+use sequential_storage::map::{MapConfig, MapStorage};
+
+use super::supervisor::with_long_timeout;
+use crate::firmware::signals::{ARMED, SAVE_REQUEST, SETTINGS};
+
+/// The flash under the map.
+pub type SettingsFlash = BlockingAsync<Bank1Region1<'static, Blocking>>;
+/// The settings map.
+pub type SettingsMap = MapStorage<u16, SettingsFlash, Cache<Uncached, Uncached, Uncached, u16>>;
+
+/// Sectors 2 and 3, as offsets in bank 1 region 1 (which starts at 0x0800_0000).
+const SETTINGS_RANGE: core::ops::Range<u32> = 0x8000..0x1_0000;
+
+/// Opens the map and loads the settings (defaults for anything missing or refused). No
+/// map means the area is unusable: fly on defaults, never stop the flight controller.
+pub async fn open(flash: Bank1Region1<'static, Blocking>) -> (Option<SettingsMap>, Settings) {
+    let mut settings = Settings::default();
+    let Ok(config) = MapConfig::try_new(SETTINGS_RANGE) else {
+        warn!("settings area does not fit the flash sectors; using defaults");
+        return (None, settings);
+    };
+    let mut map = MapStorage::new(BlockingAsync::new(flash), config, Cache::new_uncached());
+    match load(&mut map, &mut settings).await {
+        Ok(report) => info!(
+            "settings: {} loaded, {} refused",
+            report.loaded, report.refused
+        ),
+        Err(e) => warn!("settings unreadable ({}), using defaults", e),
+    }
+    (Some(map), settings)
+}
+
+#[embassy_executor::task]
+pub async fn storage_task(mut map: SettingsMap) {
+    loop {
+        SAVE_REQUEST.wait().await;
+        if ARMED.load(Ordering::Relaxed) {
+            warn!("settings save refused while armed");
+            continue;
+        }
+        let snapshot = SETTINGS.lock().await.clone();
+        let Some((live, stored)) = snapshot else {
+            continue;
+        };
+        match with_long_timeout(save(&mut map, &live, &stored)).await {
+            Ok(n) => {
+                info!("settings saved ({} changed)", n);
+                if let Some((_, stored)) = SETTINGS.lock().await.as_mut() {
+                    *stored = live;
+                }
+            }
+            Err(e) => warn!("settings save failed: {}", e),
+        }
+    }
+}
