@@ -1,0 +1,1 @@
+//! Receiver role (state machine): bind, hop, failsafe.

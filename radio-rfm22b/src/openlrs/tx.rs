@@ -1,0 +1,1 @@
+//! Transmitter role (state machine): bind, schedule, telemetry.
