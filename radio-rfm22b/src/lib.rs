@@ -9,6 +9,8 @@
 
 mod bus;
 mod error;
+#[cfg(feature = "openlrs")]
+pub mod openlrs;
 mod probe;
 pub mod registers;
 
