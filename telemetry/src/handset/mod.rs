@@ -4,5 +4,6 @@
 
 pub mod crsf;
 pub mod report;
+pub mod sport;
 
 pub use report::HandsetTelemetry;
