@@ -6,5 +6,6 @@
 #![warn(missing_docs)]
 
 pub mod channels;
+pub mod hm10;
 pub mod ppm;
 pub mod status;
