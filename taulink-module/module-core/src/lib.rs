@@ -8,4 +8,5 @@
 pub mod channels;
 pub mod hm10;
 pub mod ppm;
+pub mod settings;
 pub mod status;
