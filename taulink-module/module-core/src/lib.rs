@@ -5,4 +5,8 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod channels;
+pub mod hm10;
+pub mod ppm;
+pub mod settings;
 pub mod status;

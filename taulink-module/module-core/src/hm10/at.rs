@@ -1,0 +1,258 @@
+//! Boot-time configuration of the HM-10 over its UART (protocols.md §5), sans-IO.
+//!
+//! HMSoft takes AT commands without CR/LF and answers `OK`, `OK+Set:x`; it ships at 9600 Bd
+//! and keeps `AT+BAUD4` (115 200 Bd) across power cycles. So the script first listens at
+//! 115 200 Bd (a phone still connected across a module reset shows up as traffic or an
+//! `OK+CONN`, and must not get an `AT`: while connected, a lone `AT` disconnects it), then
+//! probes at 115 200; if that is silent it probes at the factory 9600 and sets
+//! `AT+BAUD4` there. In both cases it sets the name and `AT+NOTI1` (connection
+//! notifications for the relay) and ends with `AT+RESET`, after which the settings apply.
+//! An `OK+CONN` at any point aborts the script: the phone wins.
+
+use heapless::Vec;
+
+/// Factory baud rate of HMSoft firmware.
+pub const FACTORY_BAUD: u32 = 9_600;
+/// The rate we configure (`AT+BAUD4`).
+pub const RELAY_BAUD: u32 = 115_200;
+/// Longest BLE name HMSoft accepts.
+pub const MAX_NAME_LEN: usize = 12;
+
+/// Time allowed for one reply; HMSoft answers within a few ms at either rate.
+const REPLY_TIMEOUT_MS: u32 = 300;
+/// Tries per command before giving up on it.
+const TRIES: u8 = 2;
+/// Listening before the first `AT`.
+const LISTEN_MS: u32 = 500;
+/// `AT+RESET` reboots the module; it needs ≈ 0.5 s before it takes commands again.
+const REBOOT_MS: u32 = 1_000;
+
+/// How the configuration ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Outcome {
+    /// Configured; the UART now runs at `baud`.
+    Configured {
+        /// UART rate to use from now on.
+        baud: u32,
+    },
+    /// A phone is (or got) connected; configuration skipped, the relay runs at `baud`.
+    PhoneConnected {
+        /// UART rate to use from now on.
+        baud: u32,
+    },
+    /// No answer at 115 200 or 9600 Bd: no HM-10 fitted (or a clone that wants CR/LF).
+    NoModule,
+    /// A command was refused or unanswered after the module had answered `AT`.
+    Failed {
+        /// The stage that failed.
+        stage: Stage,
+    },
+}
+
+/// One step of the script.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Stage {
+    /// Listening for traffic before the first command.
+    Listen,
+    /// `AT` at 115 200 Bd.
+    ProbeFast,
+    /// `AT` at 9600 Bd.
+    ProbeFactory,
+    /// `AT+NAME…`.
+    Name,
+    /// `AT+NOTI1`.
+    Notifications,
+    /// `AT+BAUD4` (only on the factory-rate path).
+    Baud,
+    /// `AT+RESET`.
+    Reset,
+    /// Waiting for the reboot.
+    Reboot,
+}
+
+/// What the firmware must do next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Action<'a> {
+    /// Re-open the UART at this rate, then call `poll` again.
+    SetBaud(u32),
+    /// Write these bytes, then call `poll` again.
+    Send(&'a [u8]),
+    /// Feed received bytes (or nothing) to `poll` no later than `until_ms`.
+    Wait {
+        /// Deadline, ms on the caller's clock.
+        until_ms: u32,
+    },
+    /// Finished.
+    Done(Outcome),
+}
+
+/// The configuration script.
+#[derive(Debug)]
+pub struct Configurator {
+    name: Vec<u8, MAX_NAME_LEN>,
+    stage: Stage,
+    /// The factory-rate path (needs `AT+BAUD4`).
+    factory: bool,
+    baud: u32,
+    baud_pending: bool,
+    send_pending: bool,
+    tries_left: u8,
+    deadline_ms: u32,
+    reply: Vec<u8, 32>,
+    command: Vec<u8, 24>,
+    outcome: Option<Outcome>,
+}
+
+fn reached(now_ms: u32, deadline_ms: u32) -> bool {
+    // Wrapping compare: the deadline is reached once now is at most half the range past it.
+    now_ms.wrapping_sub(deadline_ms) < u32::MAX / 2
+}
+
+fn contains(haystack: &[u8], needle: &[u8]) -> bool {
+    !needle.is_empty() && haystack.windows(needle.len()).any(|w| w == needle)
+}
+
+impl Configurator {
+    /// A script that will name the module `name` (cut to 12 bytes), starting at `now_ms`.
+    pub fn new(name: &str, now_ms: u32) -> Self {
+        let mut stored = Vec::new();
+        for &byte in name.as_bytes().iter().take(MAX_NAME_LEN) {
+            let _ = stored.push(byte);
+        }
+        Self {
+            name: stored,
+            stage: Stage::Listen,
+            factory: false,
+            baud: RELAY_BAUD,
+            baud_pending: true,
+            send_pending: false,
+            tries_left: TRIES,
+            deadline_ms: now_ms.wrapping_add(LISTEN_MS),
+            reply: Vec::new(),
+            command: Vec::new(),
+            outcome: None,
+        }
+    }
+
+    /// The UART rate the script currently expects.
+    pub fn baud(&self) -> u32 {
+        self.baud
+    }
+
+    /// Advances the script with the bytes received since the last call.
+    pub fn poll(&mut self, now_ms: u32, received: &[u8]) -> Action<'_> {
+        if let Some(outcome) = self.outcome {
+            return Action::Done(outcome);
+        }
+        for &byte in received {
+            if self.reply.push(byte).is_err() {
+                // Keep the newest bytes: the reply we wait for is at the end.
+                self.reply.remove(0);
+                let _ = self.reply.push(byte);
+            }
+        }
+        if contains(&self.reply, b"OK+CONN")
+            || (self.stage == Stage::Listen && !self.reply.is_empty())
+        {
+            return self.finish(Outcome::PhoneConnected { baud: self.baud });
+        }
+        if core::mem::take(&mut self.baud_pending) {
+            return Action::SetBaud(self.baud);
+        }
+        if core::mem::take(&mut self.send_pending) {
+            self.reply.clear();
+            self.deadline_ms = now_ms.wrapping_add(REPLY_TIMEOUT_MS);
+            return Action::Send(&self.command);
+        }
+        if self.reply_complete() {
+            return self.advance(now_ms);
+        }
+        if !reached(now_ms, self.deadline_ms) {
+            return Action::Wait {
+                until_ms: self.deadline_ms,
+            };
+        }
+        match self.stage {
+            Stage::Listen | Stage::Reboot => self.advance(now_ms),
+            _ if self.tries_left > 1 => {
+                self.tries_left -= 1;
+                self.send_pending = true;
+                self.poll(now_ms, &[])
+            }
+            Stage::ProbeFast => {
+                self.factory = true;
+                self.baud = FACTORY_BAUD;
+                self.baud_pending = true;
+                self.enter(Stage::ProbeFactory);
+                self.poll(now_ms, &[])
+            }
+            Stage::ProbeFactory => self.finish(Outcome::NoModule),
+            stage => self.finish(Outcome::Failed { stage }),
+        }
+    }
+
+    fn reply_complete(&self) -> bool {
+        let expected: &[u8] = match self.stage {
+            Stage::Listen | Stage::Reboot => return false,
+            Stage::ProbeFast | Stage::ProbeFactory => b"OK",
+            Stage::Name | Stage::Notifications | Stage::Baud => b"OK+Set",
+            Stage::Reset => b"OK+RESET",
+        };
+        contains(&self.reply, expected)
+    }
+
+    fn advance(&mut self, now_ms: u32) -> Action<'_> {
+        let next = match self.stage {
+            Stage::Listen => Stage::ProbeFast,
+            Stage::ProbeFast | Stage::ProbeFactory => Stage::Name,
+            Stage::Name => Stage::Notifications,
+            Stage::Notifications if self.factory => Stage::Baud,
+            Stage::Notifications | Stage::Baud => Stage::Reset,
+            Stage::Reset => {
+                self.stage = Stage::Reboot;
+                self.deadline_ms = now_ms.wrapping_add(REBOOT_MS);
+                if self.factory {
+                    self.baud = RELAY_BAUD;
+                    return Action::SetBaud(self.baud);
+                }
+                return Action::Wait {
+                    until_ms: self.deadline_ms,
+                };
+            }
+            Stage::Reboot => return self.finish(Outcome::Configured { baud: self.baud }),
+        };
+        self.enter(next);
+        self.poll(now_ms, &[])
+    }
+
+    fn enter(&mut self, stage: Stage) {
+        self.stage = stage;
+        self.tries_left = TRIES;
+        self.send_pending = true;
+        self.command.clear();
+        let parts: [&[u8]; 2] = match stage {
+            Stage::ProbeFast | Stage::ProbeFactory => [b"AT", b""],
+            Stage::Name => [b"AT+NAME", &self.name],
+            Stage::Notifications => [b"AT+NOTI1", b""],
+            Stage::Baud => [b"AT+BAUD4", b""],
+            Stage::Reset => [b"AT+RESET", b""],
+            Stage::Listen | Stage::Reboot => [b"", b""],
+        };
+        for part in parts {
+            // 8 + 12 bytes fit the 24-byte command buffer.
+            let _ = self.command.extend_from_slice(part);
+        }
+    }
+
+    fn finish(&mut self, outcome: Outcome) -> Action<'_> {
+        self.outcome = Some(outcome);
+        Action::Done(outcome)
+    }
+}
+
+#[cfg(test)]
+#[path = "at_tests.rs"]
+mod tests;

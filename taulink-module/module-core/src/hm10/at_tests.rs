@@ -1,0 +1,194 @@
+use super::*;
+
+/// An HMSoft module as §5 describes it: answers only at its own rate, no CR/LF.
+struct FakeHm10 {
+    baud: u32,
+    name: Vec<u8, 32>,
+    notify: bool,
+    /// Baud rate set by AT+BAUD4, applied at reset.
+    next_baud: u32,
+    answers_name: bool,
+    reply: std::vec::Vec<u8>,
+    /// Bytes the module sends unprompted at the start (phone traffic, notifications).
+    unprompted: std::vec::Vec<u8>,
+}
+
+impl FakeHm10 {
+    fn new(baud: u32) -> Self {
+        Self {
+            baud,
+            name: Vec::new(),
+            notify: false,
+            next_baud: baud,
+            answers_name: true,
+            reply: std::vec::Vec::new(),
+            unprompted: std::vec::Vec::new(),
+        }
+    }
+
+    fn write(&mut self, uart_baud: u32, bytes: &[u8]) {
+        if uart_baud != self.baud {
+            return; // garbage to the module
+        }
+        let reply: std::vec::Vec<u8> = match bytes {
+            b"AT" => b"OK".to_vec(),
+            b"AT+NOTI1" => {
+                self.notify = true;
+                b"OK+Set:1".to_vec()
+            }
+            b"AT+BAUD4" => {
+                self.next_baud = 115_200;
+                b"OK+Set:4".to_vec()
+            }
+            b"AT+RESET" => {
+                self.baud = self.next_baud;
+                b"OK+RESET".to_vec()
+            }
+            _ if bytes.starts_with(b"AT+NAME") && self.answers_name => {
+                self.name = Vec::from_slice(&bytes[7..]).unwrap();
+                [b"OK+Set:".as_slice(), &bytes[7..]].concat()
+            }
+            _ => return,
+        };
+        // The reply leaves at the module's old rate (before a reset applies a new one).
+        self.reply = reply;
+    }
+}
+
+/// Runs the script against the fake; returns the outcome and every (baud, command) sent.
+fn run(
+    module: &mut FakeHm10,
+    script: &mut Configurator,
+) -> (Outcome, std::vec::Vec<(u32, std::vec::Vec<u8>)>) {
+    let mut now = 0u32;
+    let mut uart_baud = 0u32;
+    let mut sent = std::vec::Vec::new();
+    let mut received = core::mem::take(&mut module.unprompted);
+    for _ in 0..200 {
+        let action = script.poll(now, &received);
+        received.clear();
+        match action {
+            Action::Done(outcome) => return (outcome, sent),
+            Action::SetBaud(baud) => uart_baud = baud,
+            Action::Send(bytes) => {
+                sent.push((uart_baud, bytes.to_vec()));
+                module.write(uart_baud, bytes);
+            }
+            Action::Wait { until_ms } => {
+                if module.reply.is_empty() {
+                    now = until_ms;
+                } else {
+                    now += 5;
+                    received = core::mem::take(&mut module.reply);
+                }
+            }
+        }
+    }
+    panic!("script did not finish");
+}
+
+fn commands(sent: &[(u32, std::vec::Vec<u8>)]) -> std::vec::Vec<(u32, &str)> {
+    sent.iter()
+        .map(|(baud, bytes)| (*baud, core::str::from_utf8(bytes).unwrap()))
+        .collect()
+}
+
+#[test]
+fn factory_module_is_moved_to_115200() {
+    let mut module = FakeHm10::new(9_600);
+    let mut script = Configurator::new("TauLink", 0);
+    let (outcome, sent) = run(&mut module, &mut script);
+    assert_eq!(outcome, Outcome::Configured { baud: 115_200 });
+    assert_eq!(
+        commands(&sent),
+        [
+            (115_200, "AT"),
+            (115_200, "AT"),
+            (9_600, "AT"),
+            (9_600, "AT+NAMETauLink"),
+            (9_600, "AT+NOTI1"),
+            (9_600, "AT+BAUD4"),
+            (9_600, "AT+RESET"),
+        ]
+    );
+    assert_eq!(module.baud, 115_200);
+    assert_eq!(&module.name[..], b"TauLink");
+    assert!(module.notify);
+}
+
+#[test]
+fn configured_module_keeps_its_rate() {
+    let mut module = FakeHm10::new(115_200);
+    let mut script = Configurator::new("TauLink-with-a-long-name", 0);
+    let (outcome, sent) = run(&mut module, &mut script);
+    assert_eq!(outcome, Outcome::Configured { baud: 115_200 });
+    assert_eq!(
+        commands(&sent),
+        [
+            (115_200, "AT"),
+            (115_200, "AT+NAMETauLink-with"),
+            (115_200, "AT+NOTI1"),
+            (115_200, "AT+RESET"),
+        ]
+    );
+}
+
+#[test]
+fn no_module_gives_up_after_both_rates() {
+    let mut module = FakeHm10::new(38_400);
+    let mut script = Configurator::new("TauLink", 0);
+    let (outcome, sent) = run(&mut module, &mut script);
+    assert_eq!(outcome, Outcome::NoModule);
+    assert_eq!(sent.len(), 4, "two tries at each rate");
+}
+
+#[test]
+fn a_connected_phone_never_sees_an_at() {
+    for unprompted in [b"OK+CONN".to_vec(), vec![0x02, 0x14, 0x00]] {
+        let mut module = FakeHm10::new(115_200);
+        module.unprompted = unprompted;
+        let mut script = Configurator::new("TauLink", 0);
+        let (outcome, sent) = run(&mut module, &mut script);
+        assert_eq!(outcome, Outcome::PhoneConnected { baud: 115_200 });
+        assert!(sent.is_empty());
+    }
+}
+
+#[test]
+fn a_connection_mid_script_aborts_it() {
+    let mut script = Configurator::new("TauLink", 0);
+    assert_eq!(script.poll(0, &[]), Action::SetBaud(115_200));
+    assert_eq!(script.poll(0, &[]), Action::Wait { until_ms: 500 });
+    assert_eq!(script.poll(500, &[]), Action::Send(b"AT"));
+    assert_eq!(script.poll(510, b"OK"), Action::Send(b"AT+NAMETauLink"));
+    assert_eq!(
+        script.poll(520, b"OK+CONN"),
+        Action::Done(Outcome::PhoneConnected { baud: 115_200 })
+    );
+    assert_eq!(
+        script.poll(900, b"OK"),
+        Action::Done(Outcome::PhoneConnected { baud: 115_200 })
+    );
+}
+
+#[test]
+fn a_refused_command_fails_its_stage() {
+    let mut module = FakeHm10::new(115_200);
+    module.answers_name = false;
+    let mut script = Configurator::new("TauLink", 0);
+    let (outcome, _) = run(&mut module, &mut script);
+    assert_eq!(outcome, Outcome::Failed { stage: Stage::Name });
+}
+
+#[test]
+fn deadlines_survive_the_millisecond_wrap() {
+    let start = u32::MAX - 100;
+    let mut script = Configurator::new("TauLink", start);
+    assert_eq!(script.poll(start, &[]), Action::SetBaud(115_200));
+    let until = start.wrapping_add(500);
+    assert_eq!(
+        script.poll(start + 50, &[]),
+        Action::Wait { until_ms: until }
+    );
+    assert_eq!(script.poll(until, &[]), Action::Send(b"AT"));
+}

@@ -1,0 +1,273 @@
+//! PPM input decoder fed with hardware edge timestamps (µs, free-running wrapping u32).
+//!
+//! The firmware captures one edge polarity only (TIMER1 CAPTURE through PPI, toolchain.md §2),
+//! so each interval between edges is one channel *period* as EdgeTX makes it (pulse plus
+//! gap, protocols.md §2.1); the polarity of the line does not matter. An interval longer
+//! than `sync_min_us` ends a frame. Frames must be clean (every period within
+//! `channel_min_us..=channel_max_us`, 4…16 of them) and `lock_frames` consecutive clean frames
+//! with the same channel count lock the decoder (Betaflight needs 25, dRonin 10, §2.2; 5 at
+//! 22.5 ms is 112 ms). A locked decoder hands out every clean frame of its channel count; a
+//! different count must itself repeat `lock_frames` times before it replaces the old one, so
+//! one glitch never changes the channel layout.
+
+use crate::channels::{Channels, MAX_CHANNELS, us_to_value};
+
+/// Decoder timing limits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DecoderConfig {
+    /// An interval longer than this ends the frame (openLRSng uses 2500 µs, §2.2).
+    pub sync_min_us: u32,
+    /// Shortest accepted channel period.
+    pub channel_min_us: u32,
+    /// Longest accepted channel period.
+    pub channel_max_us: u32,
+    /// Fewest channels a frame may carry.
+    pub min_channels: usize,
+    /// Consecutive clean frames of one channel count needed to lock.
+    pub lock_frames: u8,
+    /// Without an accepted frame for this long the lock is lost.
+    pub loss_timeout_us: u32,
+}
+
+impl Default for DecoderConfig {
+    fn default() -> Self {
+        Self {
+            sync_min_us: 2500,
+            channel_min_us: 750,
+            channel_max_us: 2250,
+            min_channels: 4,
+            lock_frames: 5,
+            // Between ELRS' 1 s and the 100 ms an FC allows before its own failsafe (§2.2).
+            loss_timeout_us: 250_000,
+        }
+    }
+}
+
+/// Why a frame was not handed out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Reject {
+    /// A period shorter than the channel minimum (a glitch or a split pulse).
+    ShortPeriod {
+        /// The period in µs.
+        period_us: u32,
+    },
+    /// A period longer than the channel maximum but too short for a sync gap.
+    LongPeriod {
+        /// The period in µs.
+        period_us: u32,
+    },
+    /// More than 16 channel periods before a sync gap.
+    TooManyChannels,
+    /// Fewer channels than the minimum.
+    TooFewChannels {
+        /// Channels the frame had.
+        count: usize,
+    },
+    /// A clean frame whose channel count differs from the locked one (not yet confirmed).
+    CountMismatch {
+        /// The locked count.
+        locked: usize,
+        /// The count of this frame.
+        count: usize,
+    },
+}
+
+/// What the end of a frame produced.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Decoded {
+    /// A clean frame while locked: the channels, mapped to link values.
+    Frame(Channels),
+    /// A clean frame on the way to a lock.
+    Acquiring {
+        /// Its channel count.
+        count: usize,
+        /// How many consecutive clean frames with this count so far.
+        consistent: u8,
+    },
+    /// The frame was dropped.
+    Rejected(Reject),
+}
+
+/// The lock was lost: no accepted frame for longer than the timeout.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Lost {
+    /// Time since the last accepted frame, µs.
+    pub silent_us: u32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum State {
+    Searching,
+    Acquiring { count: usize, consistent: u8 },
+    Locked { count: usize },
+}
+
+/// The PPM input decoder. Feed [`Decoder::on_edge`] with every captured edge and call
+/// [`Decoder::on_tick`] now and then (same clock) for loss detection.
+#[derive(Debug, Clone)]
+pub struct Decoder {
+    config: DecoderConfig,
+    previous_edge_us: Option<u32>,
+    /// A sync gap has been seen, so periods are channel periods.
+    synced: bool,
+    periods_us: [u16; MAX_CHANNELS],
+    collected: usize,
+    glitch: Option<Reject>,
+    state: State,
+    /// A different count seen while locked, and how often in a row.
+    pending: Option<(usize, u8)>,
+    last_good_us: u32,
+}
+
+impl Decoder {
+    /// A decoder searching for sync.
+    pub fn new(config: DecoderConfig) -> Self {
+        Self {
+            config,
+            previous_edge_us: None,
+            synced: false,
+            periods_us: [0; MAX_CHANNELS],
+            collected: 0,
+            glitch: None,
+            state: State::Searching,
+            pending: None,
+            last_good_us: 0,
+        }
+    }
+
+    /// The channel count locked to, if any.
+    pub fn locked_count(&self) -> Option<usize> {
+        match self.state {
+            State::Locked { count } => Some(count),
+            _ => None,
+        }
+    }
+
+    /// Channel periods of the last frame handed out, µs (valid after a `Decoded::Frame`).
+    pub fn last_periods_us(&self) -> &[u16] {
+        match self.state {
+            State::Locked { count } => self.periods_us.get(..count).unwrap_or(&[]),
+            _ => &[],
+        }
+    }
+
+    /// One captured edge at `timestamp_us`. Returns what the frame gave when this edge ends
+    /// one, `None` inside a frame.
+    pub fn on_edge(&mut self, timestamp_us: u32) -> Option<Decoded> {
+        let previous = self.previous_edge_us.replace(timestamp_us)?;
+        // Wrapping difference: correct across the 2^32 µs (71.6 min) timer wrap.
+        let period_us = timestamp_us.wrapping_sub(previous);
+        if period_us > self.config.sync_min_us {
+            let outcome = self.synced.then(|| self.end_frame(timestamp_us));
+            self.synced = true;
+            self.collected = 0;
+            self.glitch = None;
+            return outcome;
+        }
+        if !self.synced || self.glitch.is_some() {
+            return None;
+        }
+        if period_us < self.config.channel_min_us {
+            self.glitch = Some(Reject::ShortPeriod { period_us });
+        } else if period_us > self.config.channel_max_us {
+            self.glitch = Some(Reject::LongPeriod { period_us });
+        } else {
+            match self.periods_us.get_mut(self.collected) {
+                Some(slot) => {
+                    *slot = u16::try_from(period_us).unwrap_or(u16::MAX);
+                    self.collected += 1;
+                }
+                None => self.glitch = Some(Reject::TooManyChannels),
+            }
+        }
+        None
+    }
+
+    /// Loss detection at `now_us` (same clock as the edges). Reports once when a lock is lost;
+    /// a decoder still acquiring just starts over.
+    pub fn on_tick(&mut self, now_us: u32) -> Option<Lost> {
+        if self.state == State::Searching {
+            return None;
+        }
+        let silent_us = now_us.wrapping_sub(self.last_good_us);
+        // A `now` read just before the last edge's capture wraps to a huge value: not silence.
+        if silent_us <= self.config.loss_timeout_us || silent_us > u32::MAX / 2 {
+            return None;
+        }
+        let was_locked = matches!(self.state, State::Locked { .. });
+        self.state = State::Searching;
+        self.pending = None;
+        was_locked.then_some(Lost { silent_us })
+    }
+
+    fn end_frame(&mut self, timestamp_us: u32) -> Decoded {
+        if let Some(reason) = self.glitch {
+            return Decoded::Rejected(reason);
+        }
+        let count = self.collected;
+        if count < self.config.min_channels {
+            return Decoded::Rejected(Reject::TooFewChannels { count });
+        }
+        let lock_frames = self.config.lock_frames.max(1);
+        match self.state {
+            State::Locked { count: locked } if locked == count => {
+                self.pending = None;
+                self.accept(timestamp_us, count)
+            }
+            State::Locked { count: locked } => {
+                let consistent = match self.pending {
+                    Some((pending, seen)) if pending == count => seen.saturating_add(1),
+                    _ => 1,
+                };
+                if consistent >= lock_frames {
+                    self.pending = None;
+                    self.state = State::Locked { count };
+                    self.accept(timestamp_us, count)
+                } else {
+                    self.pending = Some((count, consistent));
+                    Decoded::Rejected(Reject::CountMismatch { locked, count })
+                }
+            }
+            State::Acquiring {
+                count: acquiring,
+                consistent,
+            } => {
+                let consistent = if acquiring == count {
+                    consistent.saturating_add(1)
+                } else {
+                    1
+                };
+                self.acquire(timestamp_us, count, consistent, lock_frames)
+            }
+            State::Searching => self.acquire(timestamp_us, count, 1, lock_frames),
+        }
+    }
+
+    fn acquire(&mut self, timestamp_us: u32, count: usize, consistent: u8, lock: u8) -> Decoded {
+        self.last_good_us = timestamp_us;
+        if consistent >= lock {
+            self.state = State::Locked { count };
+            self.accept(timestamp_us, count)
+        } else {
+            self.state = State::Acquiring { count, consistent };
+            Decoded::Acquiring { count, consistent }
+        }
+    }
+
+    fn accept(&mut self, timestamp_us: u32, count: usize) -> Decoded {
+        self.last_good_us = timestamp_us;
+        let mut channels = Channels::centered(count);
+        for (index, period_us) in self.periods_us.iter().take(count).enumerate() {
+            channels.set(index, us_to_value(*period_us));
+        }
+        Decoded::Frame(channels)
+    }
+}
+
+#[cfg(test)]
+#[path = "decoder_tests.rs"]
+mod tests;

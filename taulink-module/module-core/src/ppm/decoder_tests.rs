@@ -1,0 +1,307 @@
+use super::*;
+use crate::channels::{us_to_value, value_to_us};
+use crate::ppm::waveform::{edges, edgetx_frame_us};
+
+fn feed(decoder: &mut Decoder, timestamps: &[u32]) -> Vec<Decoded> {
+    timestamps
+        .iter()
+        .filter_map(|t| decoder.on_edge(*t))
+        .collect()
+}
+
+fn frames_of(outcomes: &[Decoded]) -> Vec<Channels> {
+    outcomes
+        .iter()
+        .filter_map(|o| match o {
+            Decoded::Frame(ch) => Some(*ch),
+            _ => None,
+        })
+        .collect()
+}
+
+const EIGHT: [u16; 8] = [988, 1500, 2012, 1200, 1800, 1000, 2000, 1500];
+
+#[test]
+fn locks_on_fifth_clean_frame_and_decodes_values() {
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed(&mut decoder, &edges(&EIGHT, 22_500, 10, 1_000));
+    // The first sync is only seen at frame 2's start and frame 10 has no sync after it, so
+    // 8 frame ends: 4 acquiring, then 4 handed out.
+    assert_eq!(outcomes.len(), 8);
+    assert_eq!(
+        outcomes[0],
+        Decoded::Acquiring {
+            count: 8,
+            consistent: 1
+        }
+    );
+    assert_eq!(
+        outcomes[3],
+        Decoded::Acquiring {
+            count: 8,
+            consistent: 4
+        }
+    );
+    let frames = frames_of(&outcomes);
+    assert_eq!(frames.len(), 4);
+    assert_eq!(
+        frames[0].as_slice(),
+        &[172, 992, 1811, 511, 1472, 191, 1792, 992]
+    );
+    assert_eq!(decoder.locked_count(), Some(8));
+    assert_eq!(decoder.last_periods_us(), &EIGHT);
+}
+
+#[test]
+fn every_channel_count_from_4_to_16_locks() {
+    for count in 4..=16usize {
+        let widths: Vec<u16> = (0..count).map(|i| 1000 + 60 * i as u16).collect();
+        let mut decoder = Decoder::new(DecoderConfig::default());
+        let outcomes = feed(&mut decoder, &edges(&widths, edgetx_frame_us(count), 8, 0));
+        let frames = frames_of(&outcomes);
+        assert_eq!(frames.len(), 2, "{count} channels");
+        assert_eq!(frames[0].count(), count);
+        for (value, width) in frames[1].as_slice().iter().zip(&widths) {
+            assert!(value_to_us(*value).abs_diff(*width) <= 1);
+        }
+    }
+}
+
+#[test]
+fn limits_750_and_2250_are_accepted_one_beyond_is_not() {
+    let inside = [750, 2250, 750, 2250];
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let frames = frames_of(&feed(&mut decoder, &edges(&inside, 20_000, 7, 0)));
+    assert_eq!(frames.len(), 1);
+    assert_eq!(frames[0].as_slice(), &[0, 2047, 0, 2047]);
+
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed(&mut decoder, &edges(&[749, 1500, 1500, 1500], 20_000, 3, 0));
+    assert_eq!(
+        outcomes[0],
+        Decoded::Rejected(Reject::ShortPeriod { period_us: 749 })
+    );
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed(
+        &mut decoder,
+        &edges(&[1500, 2251, 1500, 1500], 20_000, 3, 0),
+    );
+    assert_eq!(
+        outcomes[0],
+        Decoded::Rejected(Reject::LongPeriod { period_us: 2251 })
+    );
+}
+
+#[test]
+fn sync_threshold_is_strictly_above_2500_us() {
+    // 16 channels of 2012 µs need 32.2 ms; a 34.7 ms frame leaves a 2.5 ms gap: not a sync,
+    // and it is also too long for a channel, so those frames are glitches.
+    let widths = [2012u16; 16];
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let short_rest = 16 * 2012 + 2500;
+    assert!(frames_of(&feed(&mut decoder, &edges(&widths, short_rest, 10, 0))).is_empty());
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let frames = frames_of(&feed(&mut decoder, &edges(&widths, short_rest + 1, 10, 0)));
+    assert_eq!(frames.len(), 4);
+}
+
+#[test]
+fn jitter_of_two_microseconds_keeps_lock_and_values() {
+    let mut timestamps = edges(&EIGHT, 22_500, 40, 5);
+    // Deterministic ±2 µs pattern (EdgeTX's jitter is a few 0.5 µs steps, §2.2).
+    for (i, t) in timestamps.iter_mut().enumerate() {
+        *t = t.wrapping_add([0u32, 2, 1, 0, 2][i % 5]).wrapping_sub(1);
+    }
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed(&mut decoder, &timestamps);
+    let frames = frames_of(&outcomes);
+    assert_eq!(frames.len(), 34);
+    for frame in &frames {
+        for (value, width) in frame.as_slice().iter().zip(&EIGHT) {
+            // ±2 µs on each edge is at most ±4 µs on a period, ≈ 6.4 value steps.
+            assert!(value_to_us(*value).abs_diff(*width) <= 4);
+        }
+    }
+}
+
+#[test]
+fn timer_wrap_inside_a_frame_is_seamless() {
+    let start = u32::MAX - 30_000;
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let frames = frames_of(&feed(&mut decoder, &edges(&EIGHT, 22_500, 10, start)));
+    assert_eq!(frames.len(), 4);
+    assert!(frames.iter().all(|f| f.as_slice()[2] == 1811));
+}
+
+#[test]
+fn a_glitch_drops_one_frame_and_keeps_the_lock() {
+    let mut timestamps = edges(&EIGHT, 22_500, 12, 0);
+    // A spike 100 µs after a pulse in frame 8 (9 edges per frame).
+    let spike = timestamps[8 * 9 + 3] + 100;
+    timestamps.insert(8 * 9 + 4, spike);
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed(&mut decoder, &timestamps);
+    assert_eq!(
+        outcomes[7],
+        Decoded::Rejected(Reject::ShortPeriod { period_us: 100 })
+    );
+    assert_eq!(frames_of(&outcomes).len(), 5);
+    assert_eq!(decoder.locked_count(), Some(8));
+}
+
+#[test]
+fn count_change_needs_confirmation() {
+    let mut timestamps = edges(&EIGHT, 22_500, 8, 0);
+    // EIGHT sums to 12 ms, so the next frame starts 10.5 ms after the last pulse.
+    let start = timestamps.last().unwrap() + 10_500;
+    let six = [1100u16; 6];
+    timestamps.extend(edges(&six, 22_500, 8, start));
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed(&mut decoder, &timestamps);
+    let mismatches = outcomes
+        .iter()
+        .filter(|o| {
+            matches!(
+                o,
+                Decoded::Rejected(Reject::CountMismatch {
+                    locked: 8,
+                    count: 6
+                })
+            )
+        })
+        .count();
+    assert_eq!(mismatches, 4);
+    let frames = frames_of(&outcomes);
+    assert_eq!(frames.last().unwrap().count(), 6);
+    assert_eq!(decoder.locked_count(), Some(6));
+}
+
+#[test]
+fn one_stray_frame_of_another_count_does_not_switch() {
+    let mut timestamps = edges(&EIGHT, 22_500, 8, 0);
+    let t = *timestamps.last().unwrap();
+    timestamps.extend(edges(&[1500u16; 5], 22_500, 1, t + 9_000));
+    let t = *timestamps.last().unwrap();
+    timestamps.extend(edges(&EIGHT, 22_500, 3, t + 9_000));
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed(&mut decoder, &timestamps);
+    assert!(outcomes.contains(&Decoded::Rejected(Reject::CountMismatch {
+        locked: 8,
+        count: 5
+    })));
+    assert_eq!(decoder.locked_count(), Some(8));
+    assert_eq!(frames_of(&outcomes).last().unwrap().count(), 8);
+}
+
+#[test]
+fn loss_after_timeout_reported_once_then_relock() {
+    let timestamps = edges(&EIGHT, 22_500, 8, 0);
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    feed(&mut decoder, &timestamps);
+    // The last frame end seen is the sync edge at the start of frame 8 (7 · 22.5 ms).
+    let last_sync = 7 * 22_500;
+    assert_eq!(decoder.on_tick(last_sync + 250_000), None);
+    assert_eq!(
+        decoder.on_tick(last_sync + 250_001),
+        Some(Lost { silent_us: 250_001 })
+    );
+    assert_eq!(decoder.on_tick(last_sync + 400_000), None);
+    assert_eq!(decoder.locked_count(), None);
+    // The complete frame 8 before the silence counts towards the new lock, so the 7 new
+    // frames give 7 frame ends: 4 acquiring, 3 handed out.
+    let again = edges(&EIGHT, 22_500, 7, last_sync + 500_000);
+    assert_eq!(frames_of(&feed(&mut decoder, &again)).len(), 3);
+}
+
+#[test]
+fn too_few_and_too_many_channels_are_rejected() {
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed(&mut decoder, &edges(&[1500u16; 3], 20_000, 3, 0));
+    assert_eq!(
+        outcomes[0],
+        Decoded::Rejected(Reject::TooFewChannels { count: 3 })
+    );
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed(&mut decoder, &edges(&[1000u16; 17], 40_000, 3, 0));
+    assert_eq!(outcomes[0], Decoded::Rejected(Reject::TooManyChannels));
+}
+
+mod properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn clean_stream() -> impl Strategy<Value = (Vec<u16>, u32, Vec<i8>)> {
+        (4usize..=16).prop_flat_map(|count| {
+            (
+                proptest::collection::vec(760u16..=2240, count),
+                any::<u32>(),
+                proptest::collection::vec(-4i8..=4, 400),
+            )
+        })
+    }
+
+    proptest! {
+        #[test]
+        fn garbage_never_panics_and_frames_are_well_formed(
+            steps in proptest::collection::vec(0u32..40_000, 0..600),
+            start in any::<u32>(),
+        ) {
+            let mut decoder = Decoder::new(DecoderConfig::default());
+            let mut t = start;
+            for step in steps {
+                t = t.wrapping_add(step);
+                if let Some(Decoded::Frame(ch)) = decoder.on_edge(t) {
+                    prop_assert!((4..=16).contains(&ch.count()));
+                    prop_assert!(ch.as_slice().iter().all(|v| *v <= 2047));
+                }
+                let _ = decoder.on_tick(t.wrapping_add(step / 2));
+            }
+        }
+
+        #[test]
+        fn jittered_frames_are_all_delivered_after_lock(
+            (widths, start, jitter) in clean_stream(),
+        ) {
+            let frames = 20;
+            let mut timestamps = edges(&widths, edgetx_frame_us(widths.len()), frames, start);
+            for (t, j) in timestamps.iter_mut().zip(jitter.iter().cycle()) {
+                *t = t.wrapping_add_signed(i32::from(*j));
+            }
+            let mut decoder = Decoder::new(DecoderConfig::default());
+            let decoded = frames_of(&feed(&mut decoder, &timestamps));
+            // 20 frames: 18 frame ends, 4 of them to acquire.
+            prop_assert_eq!(decoded.len(), frames - 6);
+            for frame in decoded {
+                for (value, width) in frame.as_slice().iter().zip(&widths) {
+                    // ±4 µs per edge is ±8 µs per period, 1.6 value steps per µs.
+                    prop_assert!(value.abs_diff(us_to_value(*width)) <= 13);
+                }
+            }
+        }
+
+        #[test]
+        fn clean_frames_after_garbage_are_delivered(
+            steps in proptest::collection::vec(0u32..30_000, 0..300),
+            (widths, start, _jitter) in clean_stream(),
+        ) {
+            let mut decoder = Decoder::new(DecoderConfig::default());
+            let mut t = start;
+            for step in steps {
+                t = t.wrapping_add(step);
+                let _ = decoder.on_edge(t);
+            }
+            let frames = 15;
+            let clean = edges(&widths, edgetx_frame_us(widths.len()), frames, t.wrapping_add(10_000));
+            let decoded = frames_of(&feed(&mut decoder, &clean));
+            // At worst (no garbage edge before) the first gap only syncs and 4 frame ends
+            // go to acquiring, as for a fresh decoder.
+            prop_assert!(decoded.len() >= frames - 6, "{} frames", decoded.len());
+            for frame in decoded {
+                prop_assert_eq!(frame.count(), widths.len());
+                for (value, width) in frame.as_slice().iter().zip(&widths) {
+                    prop_assert_eq!(*value, us_to_value(*width));
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,312 @@
+//! The module's settings and their on-flash record.
+//!
+//! The record is one versioned, fixed-size byte string stored under one key, so a save is
+//! a single sequential-storage item write: after a power cut the map holds either the old
+//! or the new record (the item CRC rejects a torn write), never a mix of fields.
+//!
+//! Record layout (version 1, 12 bytes): `[1, role, rate, input, output, band, tx_power,
+//! failsafe, bind_id (u32 LE)]`. Every byte is checked on decode; an unknown value is an
+//! error, never a guess.
+
+pub mod store;
+
+pub use store::{SettingsStore, StoreError};
+
+use crate::ppm::FailsafeOutput;
+
+/// Which end of the link the module is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Role {
+    /// JR-bay transmitter: handset in, telemetry out.
+    Transmitter,
+    /// Receiver: link in, PPM out.
+    Receiver,
+}
+
+/// Air data rate (the OpenLRSng modem profiles, radio.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RateMode {
+    /// 4800 bit/s, longest range.
+    Bps4800,
+    /// 9600 bit/s.
+    Bps9600,
+    /// 19 200 bit/s (OpenLRSng default).
+    Bps19200,
+    /// 57 600 bit/s.
+    Bps57600,
+    /// 125 000 bit/s.
+    Bps125000,
+}
+
+/// Where the channels come from in the transmitter role.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum InputProtocol {
+    /// PPM on JR pin 1.
+    Ppm,
+    /// CRSF on JR pin 5 (half duplex).
+    Crsf,
+}
+
+/// What goes back to the handset on JR pin 5 (transmitter role).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum OutputProtocol {
+    /// Nothing.
+    Off,
+    /// CRSF telemetry frames (with CRSF input).
+    Crsf,
+    /// FrSky S.Port frames pushed unpolled at 57 600 Bd (protocols.md §1.3).
+    SPort,
+    /// FrSky D hub frames at 9600 Bd (older radios).
+    FrskyHub,
+}
+
+/// Frequency band of the RFM22B build.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Band {
+    /// 433 MHz ISM.
+    Mhz433,
+    /// 868 MHz SRD.
+    Mhz868,
+    /// 915 MHz ISM.
+    Mhz915,
+}
+
+/// Everything the module remembers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Settings {
+    /// Transmitter or receiver.
+    pub role: Role,
+    /// Air data rate.
+    pub rate: RateMode,
+    /// Handset input.
+    pub input: InputProtocol,
+    /// Handset telemetry output.
+    pub output: OutputProtocol,
+    /// RF band.
+    pub band: Band,
+    /// RFM22B power step 0…7 (register 0x6D bits 2..0, radio.md).
+    pub tx_power: u8,
+    /// Failsafe behaviour of the PPM output (receiver role).
+    pub failsafe: FailsafeOutput,
+    /// Identity shared with the bound peer.
+    pub bind_id: u32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            role: Role::Transmitter,
+            rate: RateMode::Bps19200,
+            input: InputProtocol::Ppm,
+            output: OutputProtocol::SPort,
+            band: Band::Mhz433,
+            tx_power: 7,
+            failsafe: FailsafeOutput::HoldLast,
+            bind_id: 0,
+        }
+    }
+}
+
+/// Current record version.
+pub const RECORD_VERSION: u8 = 1;
+/// Record length of version 1.
+pub const RECORD_LEN: usize = 12;
+
+/// Why a record does not decode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DecodeError {
+    /// Wrong length for its version.
+    Length {
+        /// Bytes found.
+        found: usize,
+    },
+    /// Unknown record version.
+    Version {
+        /// Version found.
+        found: u8,
+    },
+    /// A field holds a value no version-1 writer produces.
+    Field {
+        /// Byte offset of the field.
+        offset: usize,
+    },
+}
+
+impl core::fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Length { found } => write!(f, "settings record of {found} bytes"),
+            Self::Version { found } => write!(f, "settings record version {found}"),
+            Self::Field { offset } => write!(f, "bad settings field at byte {offset}"),
+        }
+    }
+}
+
+impl core::error::Error for DecodeError {}
+
+impl Settings {
+    /// The version-1 record.
+    pub fn to_record(&self) -> [u8; RECORD_LEN] {
+        let [b0, b1, b2, b3] = self.bind_id.to_le_bytes();
+        [
+            RECORD_VERSION,
+            self.role as u8,
+            self.rate as u8,
+            self.input as u8,
+            self.output as u8,
+            self.band as u8,
+            self.tx_power,
+            self.failsafe as u8,
+            b0,
+            b1,
+            b2,
+            b3,
+        ]
+    }
+
+    /// Parses a record; every field is range-checked.
+    pub fn from_record(record: &[u8]) -> Result<Self, DecodeError> {
+        let Some(&version) = record.first() else {
+            return Err(DecodeError::Length { found: 0 });
+        };
+        if version != RECORD_VERSION {
+            return Err(DecodeError::Version { found: version });
+        }
+        let Ok(
+            [
+                _,
+                role,
+                rate,
+                input,
+                output,
+                band,
+                tx_power,
+                failsafe,
+                b0,
+                b1,
+                b2,
+                b3,
+            ],
+        ) = <[u8; RECORD_LEN]>::try_from(record)
+        else {
+            return Err(DecodeError::Length {
+                found: record.len(),
+            });
+        };
+        let field = |offset: usize| DecodeError::Field { offset };
+        Ok(Self {
+            role: match role {
+                0 => Role::Transmitter,
+                1 => Role::Receiver,
+                _ => return Err(field(1)),
+            },
+            rate: match rate {
+                0 => RateMode::Bps4800,
+                1 => RateMode::Bps9600,
+                2 => RateMode::Bps19200,
+                3 => RateMode::Bps57600,
+                4 => RateMode::Bps125000,
+                _ => return Err(field(2)),
+            },
+            input: match input {
+                0 => InputProtocol::Ppm,
+                1 => InputProtocol::Crsf,
+                _ => return Err(field(3)),
+            },
+            output: match output {
+                0 => OutputProtocol::Off,
+                1 => OutputProtocol::Crsf,
+                2 => OutputProtocol::SPort,
+                3 => OutputProtocol::FrskyHub,
+                _ => return Err(field(4)),
+            },
+            band: match band {
+                0 => Band::Mhz433,
+                1 => Band::Mhz868,
+                2 => Band::Mhz915,
+                _ => return Err(field(5)),
+            },
+            tx_power: if tx_power <= 7 {
+                tx_power
+            } else {
+                return Err(field(6));
+            },
+            failsafe: match failsafe {
+                0 => FailsafeOutput::HoldLast,
+                1 => FailsafeOutput::StopPulses,
+                _ => return Err(field(7)),
+            },
+            bind_id: u32::from_le_bytes([b0, b1, b2, b3]),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn record_round_trip_and_layout() {
+        let settings = Settings {
+            role: Role::Receiver,
+            rate: RateMode::Bps57600,
+            input: InputProtocol::Crsf,
+            output: OutputProtocol::FrskyHub,
+            band: Band::Mhz915,
+            tx_power: 5,
+            failsafe: FailsafeOutput::StopPulses,
+            bind_id: 0xDEAD_BEEF,
+        };
+        let record = settings.to_record();
+        assert_eq!(record, [1, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE]);
+        assert_eq!(Settings::from_record(&record), Ok(settings));
+        assert_eq!(
+            Settings::from_record(&Settings::default().to_record()),
+            Ok(Settings::default())
+        );
+    }
+
+    #[test]
+    fn bad_records_are_errors() {
+        assert_eq!(
+            Settings::from_record(&[]),
+            Err(DecodeError::Length { found: 0 })
+        );
+        assert_eq!(
+            Settings::from_record(&[2; 12]),
+            Err(DecodeError::Version { found: 2 })
+        );
+        assert_eq!(
+            Settings::from_record(&[1; 11]),
+            Err(DecodeError::Length { found: 11 })
+        );
+        let mut record = Settings::default().to_record();
+        record[6] = 8;
+        assert_eq!(
+            Settings::from_record(&record),
+            Err(DecodeError::Field { offset: 6 })
+        );
+        record[6] = 7;
+        record[2] = 5;
+        assert_eq!(
+            Settings::from_record(&record),
+            Err(DecodeError::Field { offset: 2 })
+        );
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn any_bytes_decode_or_error(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..20)) {
+            if let Ok(settings) = Settings::from_record(&bytes) {
+                proptest::prop_assert_eq!(&settings.to_record()[..], &bytes[..]);
+            }
+        }
+    }
+}
