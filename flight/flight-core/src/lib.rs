@@ -6,3 +6,5 @@
 #![warn(missing_docs)]
 
 pub mod board;
+pub mod estimation;
+pub mod sensors;
