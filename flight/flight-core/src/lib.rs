@@ -8,6 +8,8 @@
 pub mod alerts;
 pub mod battery;
 pub mod board;
+pub mod estimation;
 pub mod outputs;
+pub mod sensors;
 pub mod settings;
 pub mod supervisor;

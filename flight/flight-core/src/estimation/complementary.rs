@@ -1,0 +1,224 @@
+//! Complementary attitude filter (Mahony style) for flight without GPS: the gyro is
+//! integrated, the accelerometer pulls the estimated "down" towards measured gravity and the
+//! magnetometer pulls the heading only; an integral term learns the gyro bias.
+
+use crate::estimation::math::inv_sqrt;
+use crate::estimation::quaternion::{self, Quaternion, ned_to_body};
+use crate::estimation::{Error, check_finite};
+
+/// Gains of the complementary filter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Config {
+    /// Proportional gain on the accelerometer error (rad/s per rad).
+    pub accel_kp: f32,
+    /// Integral gain on the accelerometer error (learns x/y gyro bias).
+    pub accel_ki: f32,
+    /// Proportional gain on the magnetometer heading error.
+    pub mag_kp: f32,
+    /// Integral gain on the heading error (learns z gyro bias).
+    pub mag_ki: f32,
+    /// The accelerometer is ignored when |f| differs from g by more than this fraction.
+    pub accel_trust_band: f32,
+    /// Earth field direction in NED (any scale); only its horizontal part is used.
+    pub earth_field_ned: [f32; 3],
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            accel_kp: 1.0,
+            accel_ki: 0.1,
+            mag_kp: 1.0,
+            mag_ki: 0.1,
+            accel_trust_band: 0.2,
+            earth_field_ned: [1.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// Attitude and gyro-bias estimate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Complementary {
+    config: Config,
+    attitude: Quaternion,
+    gyro_bias_radps: [f32; 3],
+}
+
+impl Complementary {
+    /// A filter starting level and facing north.
+    #[must_use]
+    pub fn new(config: Config) -> Self {
+        Self {
+            config,
+            attitude: quaternion::IDENTITY,
+            gyro_bias_radps: [0.0; 3],
+        }
+    }
+
+    /// Body → NED attitude.
+    #[must_use]
+    pub fn attitude(&self) -> Quaternion {
+        self.attitude
+    }
+
+    /// Estimated gyro bias (rad/s).
+    #[must_use]
+    pub fn gyro_bias_radps(&self) -> [f32; 3] {
+        self.gyro_bias_radps
+    }
+
+    /// One step: gyro (rad/s), specific force (m/s², level reads [0,0,−g]), optional
+    /// magnetometer (any unit), `dt_s` in seconds.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] or [`Error::InvalidTimeStep`]; the estimate is unchanged then.
+    pub fn update(
+        &mut self,
+        gyro_radps: [f32; 3],
+        accel_mps2: [f32; 3],
+        mag: Option<[f32; 3]>,
+        dt_s: f32,
+    ) -> Result<(), Error> {
+        check_finite(&gyro_radps)?;
+        check_finite(&accel_mps2)?;
+        if let Some(m) = mag {
+            check_finite(&m)?;
+        }
+        if !(dt_s > 0.0 && dt_s <= 0.1) {
+            return Err(Error::InvalidTimeStep);
+        }
+        let cfg = self.config;
+        let r = ned_to_body(self.attitude);
+        let mut correction = [0.0_f32; 3];
+        let mut integral = [0.0_f32; 3];
+        // Accelerometer: measured "up" (−f/|f|) against the estimated up (−third column of
+        // R_be); their cross product is the rotation error in body axes.
+        let [ax, ay, az] = accel_mps2;
+        let f2 = ax * ax + ay * ay + az * az;
+        let g = crate::estimation::GRAVITY_MPS2;
+        if f2 > 1e-6 {
+            let inv = inv_sqrt(f2);
+            let norm = f2 * inv;
+            if (norm - g).abs() < cfg.accel_trust_band * g {
+                let meas = [-ax * inv, -ay * inv, -az * inv];
+                let est = [-r[0][2], -r[1][2], -r[2][2]];
+                let e = cross(est, meas);
+                for ((c, i), e) in correction.iter_mut().zip(integral.iter_mut()).zip(e) {
+                    *c += cfg.accel_kp * e;
+                    *i += cfg.accel_ki * e;
+                }
+            }
+        }
+        if let Some(m) = mag {
+            // Heading only: compare horizontal directions in NED, apply about NED down.
+            let [mn, me, _] = quaternion::body_to_ned_vector(self.attitude, m);
+            let [bn, be, _] = cfg.earth_field_ned;
+            let (m2, b2) = (mn * mn + me * me, bn * bn + be * be);
+            if m2 > 1e-12 && b2 > 1e-12 {
+                let s = inv_sqrt(m2) * inv_sqrt(b2);
+                // sin of the angle from measured to reference, about down.
+                let yaw_error = (mn * be - me * bn) * s;
+                let down_body = [r[0][2], r[1][2], r[2][2]];
+                for ((c, i), d) in correction
+                    .iter_mut()
+                    .zip(integral.iter_mut())
+                    .zip(down_body)
+                {
+                    *c += cfg.mag_kp * yaw_error * d;
+                    *i += cfg.mag_ki * yaw_error * d;
+                }
+            }
+        }
+        for (b, i) in self.gyro_bias_radps.iter_mut().zip(integral) {
+            *b -= i * dt_s;
+        }
+        let omega: [f32; 3] = core::array::from_fn(|k| {
+            gyro_radps.get(k).copied().unwrap_or(0.0)
+                - self.gyro_bias_radps.get(k).copied().unwrap_or(0.0)
+                + correction.get(k).copied().unwrap_or(0.0)
+        });
+        self.attitude = quaternion::normalized(quaternion::rotate_by_body_vector(
+            self.attitude,
+            omega.map(|w| w * dt_s),
+        ));
+        Ok(())
+    }
+}
+
+fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn simulate(truth: Quaternion, gyro_bias: [f32; 3], seconds: f32) -> Complementary {
+        let field = [0.4, 0.05, 0.9];
+        let mut cf = Complementary::new(Config {
+            earth_field_ned: field,
+            ..Config::default()
+        });
+        let accel =
+            quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::estimation::GRAVITY_MPS2]);
+        let mag = quaternion::ned_to_body_vector(truth, field);
+        let dt = 0.002;
+        for _ in 0..(seconds / dt) as usize {
+            cf.update(gyro_bias, accel, Some(mag), dt).unwrap();
+        }
+        cf
+    }
+
+    #[test]
+    fn converges_in_tilt_without_mag() {
+        let truth = quaternion::from_euler(0.35, -0.17, 0.0);
+        let mut cf = Complementary::new(Config::default());
+        let accel =
+            quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::estimation::GRAVITY_MPS2]);
+        for _ in 0..30000 {
+            cf.update([0.0; 3], accel, None, 0.002).unwrap();
+        }
+        let [r, p, _] = quaternion::to_euler(cf.attitude());
+        assert!(
+            (r - 0.35).abs() < 1e-3 && (p + 0.17).abs() < 1e-3,
+            "{r} {p}"
+        );
+    }
+
+    #[test]
+    fn converges_to_tilted_heading_and_learns_bias() {
+        // GIVEN a static craft rolled 20°, pitched −10°, yawed 120° with a gyro offset
+        let truth = quaternion::from_euler(0.35, -0.17, 2.1);
+        // WHEN the filter runs 60 s from level/north
+        let cf = simulate(truth, [0.02, -0.03, 0.01], 60.0);
+        // THEN attitude is within 0.5° and the bias within 10 %
+        let err = quaternion::angle_between(cf.attitude(), truth).to_degrees();
+        assert!(err < 0.5, "attitude error {err}°");
+        let b = cf.gyro_bias_radps();
+        assert!(
+            (b[0] - 0.02).abs() < 0.002
+                && (b[1] + 0.03).abs() < 0.003
+                && (b[2] - 0.01).abs() < 0.001,
+            "{b:?}"
+        );
+    }
+
+    #[test]
+    fn refuses_non_finite_input() {
+        let mut cf = Complementary::new(Config::default());
+        assert_eq!(
+            cf.update([f32::NAN, 0.0, 0.0], [0.0, 0.0, -9.8], None, 0.002),
+            Err(Error::NonFinite)
+        );
+        assert_eq!(
+            cf.update([0.0; 3], [0.0, 0.0, -9.8], None, 0.0),
+            Err(Error::InvalidTimeStep)
+        );
+        assert_eq!(cf.attitude(), quaternion::IDENTITY);
+    }
+}

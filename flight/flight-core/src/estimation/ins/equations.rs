@@ -1,0 +1,140 @@
+//! The continuous-time process model, its Jacobian blocks and the heading-only magnetometer
+//! model with its Jacobian, all hand-derived in `DERIVATION.md` and checked against finite
+//! differences in `tests/ins_jacobians.rs`.
+
+use super::STATES;
+use crate::estimation::math::inv_sqrt;
+use crate::estimation::quaternion::{Quaternion, ned_to_body};
+
+/// ẋ = f(x, u) (DERIVATION.md §1): ṗ = v, v̇ = R_beᵀ(q)(f − [0,0,ab_z]) + [0,0,g],
+/// q̇ = ½ q ⊗ [0, ω − b_g], constant biases.
+#[must_use]
+pub fn derivative(
+    x: &[f32; STATES],
+    gyro_radps: [f32; 3],
+    accel_mps2: [f32; 3],
+    gravity_mps2: f32,
+) -> [f32; STATES] {
+    let [_, _, _, vn, ve, vd, q0, q1, q2, q3, bx, by, bz, ab_z] = *x;
+    let [[r11, r12, r13], [r21, r22, r23], [r31, r32, r33]] = ned_to_body([q0, q1, q2, q3]);
+    let [fx, fy, fz] = accel_mps2;
+    let fz = fz - ab_z;
+    let [wx, wy, wz] = [gyro_radps[0] - bx, gyro_radps[1] - by, gyro_radps[2] - bz];
+    [
+        vn,
+        ve,
+        vd,
+        r11 * fx + r21 * fy + r31 * fz,
+        r12 * fx + r22 * fy + r32 * fz,
+        r13 * fx + r23 * fy + r33 * fz + gravity_mps2,
+        0.5 * (-q1 * wx - q2 * wy - q3 * wz),
+        0.5 * (q0 * wx - q3 * wy + q2 * wz),
+        0.5 * (q3 * wx + q0 * wy - q1 * wz),
+        0.5 * (-q2 * wx + q1 * wy + q0 * wz),
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ]
+}
+
+/// The non-trivial blocks of F = ∂f/∂x (the rest is ∂ṗ/∂v = I and zeros).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProcessJacobian {
+    /// ∂v̇/∂q (3×4).
+    pub dv_dq: [[f32; 4]; 3],
+    /// ∂v̇/∂ab_z = −(third column of R_beᵀ).
+    pub dv_dbaz: [f32; 3],
+    /// ∂q̇/∂q = ½Ω(ω − b_g) (4×4).
+    pub dq_dq: [[f32; 4]; 4],
+    /// ∂q̇/∂b_g = −½Ξ(q) (4×3).
+    pub dq_dbg: [[f32; 3]; 4],
+}
+
+/// Ξ(q): q ⊗ [0, ω] = Ξ(q)·ω.
+#[must_use]
+pub fn xi(q: Quaternion) -> [[f32; 3]; 4] {
+    let [q0, q1, q2, q3] = q;
+    [[-q1, -q2, -q3], [q0, -q3, q2], [q3, q0, -q1], [-q2, q1, q0]]
+}
+
+/// F at state `x` with inputs held constant (DERIVATION.md §2).
+#[must_use]
+pub fn process_jacobian(
+    x: &[f32; STATES],
+    gyro_radps: [f32; 3],
+    accel_mps2: [f32; 3],
+) -> ProcessJacobian {
+    let [_, _, _, _, _, _, q0, q1, q2, q3, bx, by, bz, ab_z] = *x;
+    let [a0, a1, a2] = [accel_mps2[0], accel_mps2[1], accel_mps2[2] - ab_z];
+    let [wx, wy, wz] = [gyro_radps[0] - bx, gyro_radps[1] - by, gyro_radps[2] - bz];
+    let d1 = 2.0 * (q0 * a0 - q3 * a1 + q2 * a2);
+    let d2 = 2.0 * (q1 * a0 + q2 * a1 + q3 * a2);
+    let d3 = 2.0 * (-q2 * a0 + q1 * a1 + q0 * a2);
+    let d4 = 2.0 * (-q3 * a0 - q0 * a1 + q1 * a2);
+    // The twelve partials share four distinct expressions (up to sign), DERIVATION.md §2.
+    let dv_dq = [[d1, d2, d3, d4], [-d4, -d3, d2, d1], [d3, -d4, -d1, d2]];
+    let dv_dbaz = [
+        -2.0 * (q1 * q3 + q0 * q2),
+        -2.0 * (q2 * q3 - q0 * q1),
+        -(q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3),
+    ];
+    let (hx, hy, hz) = (0.5 * wx, 0.5 * wy, 0.5 * wz);
+    let dq_dq = [
+        [0.0, -hx, -hy, -hz],
+        [hx, 0.0, hz, -hy],
+        [hy, -hz, 0.0, hx],
+        [hz, hy, -hx, 0.0],
+    ];
+    let dq_dbg = xi([q0, q1, q2, q3]).map(|row| row.map(|c| -0.5 * c));
+    ProcessJacobian {
+        dv_dq,
+        dv_dbaz,
+        dq_dq,
+        dq_dbg,
+    }
+}
+
+/// The magnetometer reading rotated into the level heading frame with the filter's own roll
+/// and pitch (R_aᵀ·m, ekf.md §3). Its horizontal part depends on yaw alone.
+#[must_use]
+pub fn level_frame_field(q: Quaternion, mag_body: [f32; 3]) -> [f32; 3] {
+    let [[_, _, r13], [_, _, r23], [_, _, r33]] = ned_to_body(q);
+    let cos_pitch2 = (1.0 - r13 * r13).max(1e-12);
+    let inv_cos_pitch = inv_sqrt(cos_pitch2);
+    let cos_pitch = cos_pitch2 * inv_cos_pitch;
+    let sin_pitch = -r13;
+    let sin_roll = r23 * inv_cos_pitch;
+    let cos_roll = r33 * inv_cos_pitch;
+    let [m0, m1, m2] = mag_body;
+    [
+        cos_pitch * m0 + sin_roll * sin_pitch * m1 + cos_roll * sin_pitch * m2,
+        cos_roll * m1 - sin_roll * m2,
+        -sin_pitch * m0 + sin_roll * cos_pitch * m1 + cos_roll * cos_pitch * m2,
+    ]
+}
+
+/// Predicted horizontal heading-frame field Rz(ψ)·[Be0, Be1] and its Jacobian ∂/∂q
+/// (2×4), DERIVATION.md §4. ψ = atan2(R12, R11) is never evaluated: cos ψ and sin ψ are
+/// R11/r and R12/r.
+#[must_use]
+pub fn heading_field(q: Quaternion, earth_field_ne: [f32; 2]) -> ([f32; 2], [[f32; 4]; 2]) {
+    let [q0, q1, q2, q3] = q;
+    let r11 = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3;
+    let r12 = 2.0 * (q1 * q2 + q0 * q3);
+    let r2 = (r11 * r11 + r12 * r12).max(1e-12);
+    let inv_r = inv_sqrt(r2);
+    let (cos_yaw, sin_yaw) = (r11 * inv_r, r12 * inv_r);
+    let [b0, b1] = earth_field_ne;
+    let y6 = b0 * cos_yaw + b1 * sin_yaw;
+    let y7 = -b0 * sin_yaw + b1 * cos_yaw;
+    // dψ/dq = (R11·dR12 − R12·dR11) / r², with dR11 = 2[q0,q1,−q2,−q3], dR12 = 2[q3,q2,q1,q0].
+    let k = 2.0 / r2;
+    let dpsi = [
+        k * (r11 * q3 - r12 * q0),
+        k * (r11 * q2 - r12 * q1),
+        k * (r11 * q1 + r12 * q2),
+        k * (r11 * q0 + r12 * q3),
+    ];
+    ([y6, y7], [dpsi.map(|d| y7 * d), dpsi.map(|d| -y6 * d)])
+}

@@ -1,0 +1,68 @@
+//! GPS position and velocity: direct observations of the NED position and velocity states
+//! (H rows are unit vectors, ekf.md §3 rows 0–5).
+
+use super::Fusion;
+use crate::estimation::ins::{Filter, index};
+use crate::estimation::{Error, check_finite};
+
+impl Filter {
+    /// Fuses a GPS position (NED, m, relative to the origin). With `vertical` false only
+    /// north and east are used (the vertical comes from the barometer, as in the reference).
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] for non-finite input, [`Error::Diverged`] if the update failed.
+    pub fn fuse_gps_position(
+        &mut self,
+        position_ned_m: [f32; 3],
+        vertical: bool,
+    ) -> Result<Fusion, Error> {
+        check_finite(&position_ned_m)?;
+        let cfg = self.config;
+        let rows = [
+            (index::POSITION, cfg.gps_horizontal_var_m2, true),
+            (index::POSITION + 1, cfg.gps_horizontal_var_m2, true),
+            (index::POSITION + 2, cfg.gps_vertical_var_m2, vertical),
+        ];
+        self.fuse_direct_rows(&rows, &position_ned_m)
+    }
+
+    /// Fuses a GPS velocity (NED, m/s), all three axes.
+    ///
+    /// # Errors
+    /// As [`Filter::fuse_gps_position`].
+    pub fn fuse_gps_velocity(&mut self, velocity_ned_mps: [f32; 3]) -> Result<Fusion, Error> {
+        check_finite(&velocity_ned_mps)?;
+        let r = self.config.gps_velocity_var_m2ps2;
+        let rows = [
+            (index::VELOCITY, r, true),
+            (index::VELOCITY + 1, r, true),
+            (index::VELOCITY + 2, r, true),
+        ];
+        self.fuse_direct_rows(&rows, &velocity_ned_mps)
+    }
+
+    /// Gates all enabled rows against the prior first; only if every row passes are they
+    /// fused one after the other (PX4 rejects a GPS sample as a whole, too).
+    fn fuse_direct_rows(
+        &mut self,
+        rows: &[(usize, f32, bool); 3],
+        measured: &[f32; 3],
+    ) -> Result<Fusion, Error> {
+        let worst = rows
+            .iter()
+            .zip(measured.iter())
+            .filter(|((_, _, used), _)| *used)
+            .map(|(&(k, r, _), &z)| self.direct_test(k, z, r))
+            .fold(0.0_f32, |a, b| if b > a || b.is_nan() { b } else { a });
+        let outcome = Fusion::from_ratio(worst);
+        if outcome.is_fused() {
+            for (&(k, r, used), &z) in rows.iter().zip(measured.iter()) {
+                if used {
+                    self.fuse_direct(k, z, r);
+                }
+            }
+            self.finish_update()?;
+        }
+        Ok(outcome)
+    }
+}

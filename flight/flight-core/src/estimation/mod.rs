@@ -1,0 +1,45 @@
+//! Attitude and navigation estimators: a complementary attitude filter for flight without
+//! GPS, and the 14-state INS/GPS extended Kalman filter. All f32, sans-IO, no globals: every
+//! estimator is a plain value, so several can run side by side.
+
+pub mod complementary;
+pub mod ins;
+pub mod math;
+pub mod quaternion;
+
+/// Standard gravity used by the process models (m/s²), as in the Tau Labs INS.
+pub const GRAVITY_MPS2: f32 = 9.805;
+
+/// Why an estimator refused an input. Rejected *measurements* are not errors: they are
+/// reported as outcomes ([`ins::Fusion`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Error {
+    /// An input value was NaN or infinite; the estimator state was left untouched.
+    NonFinite,
+    /// The time step was not strictly positive or was implausibly long.
+    InvalidTimeStep,
+    /// The estimator's own state became non-finite; it must be re-initialised.
+    Diverged,
+}
+
+impl core::fmt::Display for Error {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::NonFinite => f.write_str("non-finite input refused"),
+            Self::InvalidTimeStep => f.write_str("time step out of range"),
+            Self::Diverged => f.write_str("estimator state is no longer finite"),
+        }
+    }
+}
+
+impl core::error::Error for Error {}
+
+/// `Ok(())` when every value is finite.
+pub(crate) fn check_finite(values: &[f32]) -> Result<(), Error> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::NonFinite)
+    }
+}
