@@ -6,3 +6,6 @@
 #![warn(missing_docs)]
 
 pub mod board;
+pub mod control;
+pub mod model;
+pub mod sysid;
