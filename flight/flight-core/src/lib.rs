@@ -8,8 +8,11 @@
 pub mod alerts;
 pub mod battery;
 pub mod board;
+pub mod control;
 pub mod estimation;
+pub mod model;
 pub mod outputs;
 pub mod sensors;
 pub mod settings;
 pub mod supervisor;
+pub mod sysid;

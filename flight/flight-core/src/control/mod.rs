@@ -1,0 +1,5 @@
+//! Rate and attitude control: the LQG (RTKF estimator + LQR), its gain design, the PID
+//! default/baseline and the motor mixer.
+
+pub mod dare;
+pub mod design;

@@ -1,0 +1,1 @@
+//! System identification (placeholder, filled in by the next commit).
