@@ -45,6 +45,7 @@ mod bus;
 pub mod carrier;
 mod config;
 mod config_error;
+mod control;
 mod error;
 pub mod fifo;
 pub mod gpio;

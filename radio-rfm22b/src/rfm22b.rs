@@ -12,7 +12,6 @@ use crate::bus::Bus;
 use crate::config::Config;
 use crate::irq::Status;
 use crate::measure;
-use crate::power::TxPower;
 use crate::probe::{ChipInfo, Version};
 use crate::registers::*;
 
@@ -22,8 +21,6 @@ const CHIP_READY_POLLS: u32 = 50;
 const SDN_HIGH_MS: u32 = 10;
 /// Power-on reset after SDN falls: up to 16.8 ms (datasheet Table 7), rounded up.
 const SDN_LOW_MS: u32 = 20;
-/// The ADC conversion takes ~305 µs (datasheet §8.3); poll every 100 µs, at most 10 times.
-const ADC_POLLS: u32 = 10;
 
 /// A stand-in for an SDN pin on boards that tie SDN low.
 #[derive(Debug, Clone, Copy, Default)]
@@ -179,7 +176,7 @@ where
     }
 
     /// Writes every register of `config`, in bursts (about 20 SPI transactions).
-    async fn configure(&mut self, config: &Config) -> Result<(), Error<SPI::Error>> {
+    pub(crate) async fn configure(&mut self, config: &Config) -> Result<(), Error<SPI::Error>> {
         let bus = &mut self.bus;
         bus.write(OPERATING_MODE_1, MODE_XTON).await?;
         bus.write(OPERATING_MODE_2, 0x00).await?;
@@ -227,88 +224,6 @@ where
         .await?;
         bus.write_burst(TX_FIFO_ALMOST_FULL, &config.fifo.registers())
             .await?;
-        Ok(())
-    }
-
-    /// Selects hop channel `channel` (0x79): carrier + channel × spacing. Takes effect at
-    /// once (the PLL settles within the 200 µs the chip waits before TX/RX).
-    ///
-    /// Cancel-safety: safe (one register write).
-    pub async fn set_channel(&mut self, channel: u8) -> Result<(), Error<SPI::Error>> {
-        self.bus.write(HOP_CHANNEL, channel).await?;
-        self.channel = channel;
-        Ok(())
-    }
-
-    /// Changes the output power (0x6D).
-    ///
-    /// Cancel-safety: safe (one register write).
-    pub async fn set_tx_power(&mut self, power: TxPower) -> Result<(), Error<SPI::Error>> {
-        let config = self.config.as_mut().ok_or(Error::NotInitialised)?;
-        config.tx_power = power;
-        let value = power.register(config.lna_switch);
-        self.bus.write(TX_POWER, value).await
-    }
-
-    /// READY: crystal on, ~1 mA, 200 µs to TX/RX. Also aborts a TX/RX left running.
-    ///
-    /// Cancel-safety: safe.
-    pub async fn idle(&mut self) -> Result<(), Error<SPI::Error>> {
-        self.bus.write(OPERATING_MODE_1, MODE_XTON).await?;
-        self.bus
-            .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
-            .await?;
-        self.read_status().await?;
-        self.busy = false;
-        Ok(())
-    }
-
-    /// STANDBY: everything off but the register file (~450 nA); the next TX/RX restarts the
-    /// crystal (≈ 600 µs longer).
-    ///
-    /// Cancel-safety: safe.
-    pub async fn sleep(&mut self) -> Result<(), Error<SPI::Error>> {
-        self.idle().await?;
-        self.bus.write(OPERATING_MODE_1, 0x00).await
-    }
-
-    /// The RSSI now (0x26), in dBm (see [`measure::rssi_dbm`]). Meaningful in RX.
-    ///
-    /// Cancel-safety: safe (a register read).
-    pub async fn rssi_dbm(&mut self) -> Result<i16, Error<SPI::Error>> {
-        let raw = self.bus.read(RSSI).await?;
-        let offset = self.config.map_or(0, |c| c.packet.rssi_offset());
-        Ok(measure::rssi_dbm(raw, offset))
-    }
-
-    /// Measures the chip temperature, in tenths of °C.
-    ///
-    /// Cancel-safety: safe.
-    pub async fn read_temperature_decidegrees_c(&mut self) -> Result<i16, Error<SPI::Error>> {
-        self.bus.write(ADC_CONFIG, ADC_START).await?;
-        for _ in 0..ADC_POLLS {
-            self.delay.delay_us(100).await;
-            if self.bus.read(ADC_CONFIG).await? & ADC_START != 0 {
-                let adc = self.bus.read(ADC_VALUE).await?;
-                return Ok(measure::temperature_decidegrees_c(adc));
-            }
-        }
-        Err(Error::Timeout)
-    }
-
-    /// Checks that the chip still holds its configuration: the identification and GPIO1
-    /// (0x0C, which reads 0 after a silent reset — OpenLRSng's "locked module" test). On a
-    /// lost configuration it re-initialises and returns [`Error::ChipReset`].
-    ///
-    /// Cancel-safety: safe to drop before the re-init starts; during it, as `init`.
-    pub async fn check_health(&mut self) -> Result<(), Error<SPI::Error>> {
-        let config = self.config.ok_or(Error::NotInitialised)?;
-        self.probe().await?;
-        let [_, expected, _] = config.gpio.registers();
-        if self.bus.read(GPIO1_CONFIG).await? != expected {
-            self.reinit().await?;
-            return Err(Error::ChipReset);
-        }
         Ok(())
     }
 

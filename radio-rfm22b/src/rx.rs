@@ -173,7 +173,12 @@ where
             }
         };
         match outcome {
-            Ok(RxOutcome::Packet(p)) => self.finish(Ok(RxOutcome::Packet(p)), FFCLR_RX).await,
+            Ok(RxOutcome::Packet(p)) => {
+                // The chip leaves RX by itself after a valid packet; make READY explicit so
+                // no second packet starts filling the FIFO.
+                self.bus.write(OPERATING_MODE_1, MODE_XTON).await?;
+                self.finish(Ok(RxOutcome::Packet(p)), FFCLR_RX).await
+            }
             // Discarded packets: back to READY with an empty FIFO, as after a timeout.
             Ok(other) => {
                 self.idle().await?;

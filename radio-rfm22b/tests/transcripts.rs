@@ -343,6 +343,7 @@ fn receive_short_packet_with_rssi_and_afc() {
         r(0x03, &[0x02, 0x00]),
         r(0x47, &[1, 2, 3, 4, 5]),
         r(0x7F, &payload),
+        w(0x07, &[0x01]),
         w(0x05, &[0x00, 0x00]),
     ]
     .concat();
@@ -382,6 +383,7 @@ fn receive_long_packet_drains_the_fifo() {
         r(0x03, &[0x02, 0x00]),
         r(0x47, &head),
         r(0x7F, &payload[96..]),
+        w(0x07, &[0x01]),
         w(0x05, &[0x00, 0x00]),
     ]
     .concat();
