@@ -5,6 +5,8 @@
 
 mod common;
 
+use common::spi::LowIrq;
+
 use std::collections::BTreeMap;
 use std::convert::Infallible;
 
@@ -48,28 +50,6 @@ impl SpiDevice for RecordingSpi {
             }
             _ => panic!("unexpected operation"),
         }
-        Ok(())
-    }
-}
-
-struct LowIrq;
-impl embedded_hal::digital::ErrorType for LowIrq {
-    type Error = Infallible;
-}
-impl embedded_hal_async::digital::Wait for LowIrq {
-    async fn wait_for_high(&mut self) -> Result<(), Infallible> {
-        Ok(())
-    }
-    async fn wait_for_low(&mut self) -> Result<(), Infallible> {
-        Ok(())
-    }
-    async fn wait_for_rising_edge(&mut self) -> Result<(), Infallible> {
-        Ok(())
-    }
-    async fn wait_for_falling_edge(&mut self) -> Result<(), Infallible> {
-        Ok(())
-    }
-    async fn wait_for_any_edge(&mut self) -> Result<(), Infallible> {
         Ok(())
     }
 }
