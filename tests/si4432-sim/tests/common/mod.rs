@@ -109,3 +109,32 @@ pub fn start_tx(spi: &mut impl SpiDevice, length: u8, first: &[u8]) {
     write(spi, 0x05, &[0x24, 0x00]); // ipksent | itxffaem
     write(spi, 0x07, &[0x0A]);
 }
+
+/// Async burst write (embedded-hal-async `SpiDevice`).
+pub async fn awrite(spi: &mut impl embedded_hal_async::spi::SpiDevice, address: u8, data: &[u8]) {
+    spi.transaction(&mut [Operation::Write(&[address | 0x80]), Operation::Write(data)])
+        .await
+        .unwrap();
+}
+
+/// Async burst read.
+pub async fn aread_n(
+    spi: &mut impl embedded_hal_async::spi::SpiDevice,
+    address: u8,
+    n: usize,
+) -> Vec<u8> {
+    let mut buf = vec![0u8; n];
+    spi.transaction(&mut [
+        Operation::Write(&[address & 0x7F]),
+        Operation::Read(&mut buf),
+    ])
+    .await
+    .unwrap();
+    buf
+}
+
+/// Async read of 0x03/0x04 (clears both).
+pub async fn astatus(spi: &mut impl embedded_hal_async::spi::SpiDevice) -> (u8, u8) {
+    let s = aread_n(spi, 0x03, 2).await;
+    (s[0], s[1])
+}
