@@ -85,6 +85,8 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod access;
+mod acquire;
 mod air;
 mod chip;
 mod executor;

@@ -218,9 +218,7 @@ impl World {
         let powers: Vec<f64> = (0..self.radios.len())
             .map(|to| self.link_power_dbm(from, to, carrier_hz, tx_power_dbm))
             .collect();
-        if let Some(tx) = self.air.get_mut(id) {
-            tx.rx_power_dbm = powers;
-        }
+        self.air.set_powers(id, powers);
         for to in (0..self.radios.len()).filter(|&to| to != from) {
             self.with_chip(to, |chip, now, ctx| chip.consider(id, now, ctx));
             self.update_irq(to);
@@ -284,24 +282,23 @@ impl World {
     /// One SPI transaction on radio `i` (instantaneous except for `DelayNs` operations).
     pub fn spi(&mut self, i: usize, operations: &mut [Operation<'_, u8>]) {
         self.process_due();
-        let live_rssi = self.live_rssi(i);
         let mut session = Session::default();
         for operation in operations.iter_mut() {
             match operation {
                 Operation::Read(buffer) => {
                     for byte in buffer.iter_mut() {
-                        *byte = self.spi_byte(i, &mut session, 0x00, live_rssi);
+                        *byte = self.spi_byte(i, &mut session, 0x00);
                     }
                 }
                 Operation::Write(bytes) => {
                     for &byte in bytes.iter() {
-                        self.spi_byte(i, &mut session, byte, live_rssi);
+                        self.spi_byte(i, &mut session, byte);
                     }
                 }
                 Operation::Transfer(read, write) => {
                     for k in 0..read.len().max(write.len()) {
                         let mosi = write.get(k).copied().unwrap_or(0x00);
-                        let miso = self.spi_byte(i, &mut session, mosi, live_rssi);
+                        let miso = self.spi_byte(i, &mut session, mosi);
                         if let Some(slot) = read.get_mut(k) {
                             *slot = miso;
                         }
@@ -309,7 +306,7 @@ impl World {
                 }
                 Operation::TransferInPlace(buffer) => {
                     for byte in buffer.iter_mut() {
-                        *byte = self.spi_byte(i, &mut session, *byte, live_rssi);
+                        *byte = self.spi_byte(i, &mut session, *byte);
                     }
                 }
                 Operation::DelayNs(ns) => {
@@ -322,7 +319,7 @@ impl World {
         self.update_irq(i);
     }
 
-    fn spi_byte(&mut self, i: usize, session: &mut Session, mosi: u8, live_rssi: u8) -> u8 {
+    fn spi_byte(&mut self, i: usize, session: &mut Session, mosi: u8) -> u8 {
         let Some(address) = session.address else {
             session.address = Some(mosi & 0x7F);
             session.write = mosi & 0x80 != 0;
@@ -336,6 +333,12 @@ impl World {
             session.address = Some((address + 1) & 0x7F);
         }
         let write = session.write;
+        // The live RSSI needs the whole medium; only compute it when 0x26 is read.
+        let live_rssi = if !write && address == 0x26 {
+            self.live_rssi(i)
+        } else {
+            0
+        };
         self.with_chip(i, |chip, now, ctx| {
             if write {
                 chip.spi_write(address, mosi, now, ctx);
