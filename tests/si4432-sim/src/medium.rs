@@ -6,7 +6,8 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use crate::chip::{ChipState, Fault, Physical};
-use crate::modem::ModemSettings;
+use crate::modem::{ModemSettings, airtime_ns, bits_on_air};
+use crate::packet::PacketFormat;
 use crate::pins::{SimDelay, SimIrq, SimSdn, SimSpi};
 use crate::trace::{RadioId, TraceFrame};
 use crate::world::World;
@@ -288,6 +289,24 @@ impl ChipHandle {
             w.radios
                 .get(self.index)
                 .map(|r| ModemSettings::from_registers(&r.chip.regs))
+        })
+    }
+
+    /// Airtime of a `payload_len`-byte packet with the current registers: preamble, sync,
+    /// header, length byte, payload and CRC as configured, at the TX bit rate (Manchester
+    /// doubles it). Add `PLL_SETTLE_NS` (or more from STANDBY) for txon → `ipksent`.
+    pub fn airtime(&self, payload_len: usize) -> Duration {
+        self.with(|w| {
+            w.radios.get(self.index).map_or(Duration::ZERO, |r| {
+                let modem = ModemSettings::from_registers(&r.chip.regs);
+                let format = PacketFormat::from_registers(&r.chip.regs);
+                let bits = bits_on_air(
+                    u32::from(format.preamble_nibbles) * 4,
+                    format.bytes_after_preamble(payload_len),
+                    modem.manchester,
+                );
+                Duration::from_nanos(airtime_ns(bits, modem.tx_bit_rate_bps))
+            })
         })
     }
 
