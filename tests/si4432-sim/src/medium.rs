@@ -14,7 +14,6 @@ use crate::world::World;
 
 /// Medium-wide settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[non_exhaustive]
 pub struct MediumConfig {
     /// Probability that a receiver misses a frame it could otherwise have received.
     /// Default 0.
@@ -38,7 +37,6 @@ impl Default for MediumConfig {
 
 /// Where a radio is and what its hardware is like.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[non_exhaustive]
 pub struct RadioConfig {
     /// Position in metres (x, y, z).
     pub position_m: [f64; 3],
@@ -98,7 +96,7 @@ pub struct Interference {
 }
 
 /// Handle to the RF medium of one simulation (cheap to clone).
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct Medium {
     pub(crate) world: Rc<RefCell<World>>,
 }
@@ -209,7 +207,7 @@ impl Medium {
 }
 
 /// Test-side access to one chip: look at it and break it.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct ChipHandle {
     world: Rc<RefCell<World>>,
     index: usize,
@@ -313,5 +311,24 @@ impl ChipHandle {
     /// Number of falling edges nIRQ has made so far.
     pub fn nirq_falling_edges(&self) -> u64 {
         self.with(|w| w.radios.get(self.index).map_or(0, |r| r.irq.falling_edges))
+    }
+}
+
+impl core::fmt::Debug for Medium {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let world = self.world.borrow();
+        f.debug_struct("Medium")
+            .field("now_ns", &world.now_ns)
+            .field("radios", &world.radios.len())
+            .field("frames", &world.air.trace.len())
+            .finish()
+    }
+}
+
+impl core::fmt::Debug for ChipHandle {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("ChipHandle")
+            .field("radio", &self.index)
+            .finish()
     }
 }

@@ -77,8 +77,10 @@ fn equal_power_collision_loses_both() {
 fn capture_effect_lets_a_much_stronger_late_frame_win() {
     // B at x = 90 m is 10 m from C: 20 dB stronger than A. It starts 300 µs into A's
     // 833 µs preamble, before C has detected A's sync word.
-    let mut config = MediumConfig::default();
-    config.capture_threshold_db = Some(6.0);
+    let config = MediumConfig {
+        capture_threshold_db: Some(6.0),
+        ..MediumConfig::default()
+    };
     let (a, b) = two_senders(config, 90.0, 300);
     assert_eq!(a, Some(Outcome::Captured));
     assert_eq!(b, Some(Outcome::Delivered { bit_errors: 0 }));
@@ -90,8 +92,10 @@ fn capture_effect_lets_a_much_stronger_late_frame_win() {
 
 #[test]
 fn random_loss_matches_its_probability() {
-    let mut config = MediumConfig::default();
-    config.packet_loss = 0.25;
+    let config = MediumConfig {
+        packet_loss: 0.25,
+        ..MediumConfig::default()
+    };
     let sim = Simulation::with_config(99, config);
     let mut a = radio(&sim, 0.0);
     let mut b = radio(&sim, 100.0);
@@ -120,8 +124,10 @@ fn random_loss_matches_its_probability() {
 #[test]
 fn crystal_offset_shows_in_the_afc_reading() {
     let sim = Simulation::new(2);
-    let mut config = RadioConfig::at([0.0, 0.0, 0.0]);
-    config.crystal_error_ppm = 20.0;
+    let config = RadioConfig {
+        crystal_error_ppm: 20.0,
+        ..RadioConfig::at([0.0, 0.0, 0.0])
+    };
     let mut a = sim.medium().add_radio(config);
     configure_57600(&mut a.spi, true);
     let mut b = radio(&sim, 50.0);
