@@ -227,3 +227,54 @@ impl Simulation {
 fn duration_ns(d: Duration) -> u64 {
     u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tasks_interleave_in_virtual_time_and_idle_time_is_skipped() {
+        let sim = Simulation::new(0);
+        let log = Rc::new(RefCell::new(Vec::new()));
+        for (name, period_us) in [("a", 300u64), ("b", 500)] {
+            let delay = sim.delay();
+            let medium = sim.medium();
+            let log = log.clone();
+            sim.spawn(async move {
+                for _ in 0..3 {
+                    delay.sleep_ns(period_us * 1_000).await;
+                    log.borrow_mut().push((name, medium.now().as_micros()));
+                }
+            });
+        }
+        sim.run_for(Duration::from_secs(3600));
+        assert_eq!(sim.now(), Duration::from_secs(3600));
+        assert_eq!(
+            *log.borrow(),
+            vec![
+                ("a", 300),
+                ("b", 500),
+                ("a", 600),
+                ("a", 900),
+                ("b", 1000),
+                ("b", 1500)
+            ]
+        );
+    }
+
+    #[test]
+    fn run_until_reports_a_condition_that_can_no_longer_become_true() {
+        let sim = Simulation::new(0);
+        let delay = sim.delay();
+        let task = sim.spawn(async move {
+            delay.sleep_ns(1_000).await;
+            7
+        });
+        assert!(!sim.run_until(|| false));
+        assert_eq!(sim.now(), Duration::from_micros(1));
+        assert!(task.is_finished());
+        assert_eq!(task.take(), Some(7));
+        assert_eq!(task.take(), None);
+        assert!(sim.run_until_or(Duration::from_millis(1), || true));
+    }
+}
