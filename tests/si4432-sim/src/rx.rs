@@ -167,13 +167,10 @@ impl Chip {
                 } else {
                     after_header(lock)
                 };
-                if matches!(
-                    lock.stage,
-                    Stage::Payload | Stage::Crc | Stage::Raw | Stage::Header | Stage::Length
-                ) {
-                    lock.next_ns = lock.clock.byte_end_ns(lock.index);
-                } else {
+                if lock.stage == Stage::Done {
                     finish = Some(Finish::Valid);
+                } else {
+                    lock.next_ns = lock.clock.byte_end_ns(lock.index);
                 }
             }
             Stage::GiveUp(outcome) => finish = Some(Finish::Quiet(outcome)),
