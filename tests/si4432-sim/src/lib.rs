@@ -28,7 +28,8 @@
 //! - **Medium** ([`Medium`]): positions → path loss → received power (TX power from 0x6D),
 //!   noise floor and sensitivity by bit rate, bit errors from SINR (the CRC catches them),
 //!   random loss, interference bursts, collisions (optional capture), and a trace of every
-//!   frame with every receiver's outcome ([`TraceFrame`]).
+//!   frame with every receiver's outcome ([`TraceFrame`]). [`Medium::inject_packet`] plays
+//!   a frame from an ideal transmitter in the receiver's own format (lora-rs' `inject_rx`).
 //! - **Execution** ([`Simulation`]): a deterministic single-threaded executor in virtual
 //!   time; all randomness from one seed ([`rng`]).
 //! - **Faults**: unplugged module (SPI reads all 0xFF or 0x00), power-on reset at any
@@ -91,6 +92,7 @@ mod air;
 mod chip;
 mod executor;
 pub mod fifo;
+mod inject;
 mod medium;
 pub mod modem;
 pub mod packet;

@@ -162,6 +162,15 @@ impl Medium {
         self.world.borrow_mut().air.config = config;
     }
 
+    /// Put a packet on air for `to` from an ideal transmitter that is not a radio (the
+    /// lora-rs `inject_rx` pattern): formatted with `to`'s own registers (carrier, bit rate,
+    /// preamble, sync, its check header, length, CRC, whitening), arriving at `power_dbm` at
+    /// every radio, starting now. `to` must be in RX to hear it. Returns the trace id; the
+    /// trace names the sender `RadioId::INJECTED`.
+    pub fn inject_packet(&self, to: RadioId, payload: &[u8], power_dbm: f64) -> Option<u64> {
+        self.world.borrow_mut().inject(to.0, payload, power_dbm)
+    }
+
     /// Add an interference burst.
     pub fn add_interference(&self, burst: Interference) {
         self.world.borrow_mut().air.bursts.push(burst);
