@@ -144,3 +144,42 @@ fn crystal_offset_shows_in_the_afc_reading() {
     assert_eq!(read(&mut b.spi, 0x2B), 13);
     assert_eq!(read(&mut b.spi, 0x2C) >> 6, 3);
 }
+
+#[test]
+fn near_sensitivity_bit_errors_are_caught_by_the_crc() {
+    // 100 m (−45.12 dBm) plus 63.08 dB of attenuation: −108.2 dBm, 1 dB below the
+    // −107.2 dBm sensitivity at 57.6 kbit/s, where BER ≈ 3.6·10⁻³: about half of the frames
+    // lose at least one of their ~220 bits after the sync word.
+    let sim = Simulation::new(17);
+    let mut a = radio(&sim, 0.0);
+    let mut b = radio(&sim, 100.0);
+    sim.medium().set_attenuation(a.id, b.id, 63.08);
+    let n = 300;
+    for _ in 0..n {
+        start_rx(&mut b.spi);
+        start_tx(&mut a.spi, 16, &[0x3C; 16]);
+        a.delay.delay_ms(6);
+    }
+    let outcomes: Vec<Outcome> = sim
+        .medium()
+        .with_trace(|t| t.iter().filter_map(|f| f.outcome_at(b.id)).collect());
+    assert_eq!(outcomes.len(), n);
+    let delivered = outcomes
+        .iter()
+        .filter(|o| matches!(o, Outcome::Delivered { .. }))
+        .count();
+    let crc_errors = outcomes
+        .iter()
+        .filter(|o| matches!(o, Outcome::CrcError { .. }))
+        .count();
+    // Every delivered frame is error-free: the CRC caught every flipped bit.
+    assert!(
+        outcomes
+            .iter()
+            .all(|o| !matches!(o, Outcome::Delivered { bit_errors } if *bit_errors > 0))
+    );
+    assert!(delivered > 90 && delivered < 210, "delivered {delivered}");
+    assert!(crc_errors > 30, "crc errors {crc_errors}");
+    let power = sim.medium().trace()[0].power_dbm[b.id.0];
+    assert!((power + 108.2).abs() < 0.01, "{power}");
+}
