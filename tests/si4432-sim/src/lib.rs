@@ -39,8 +39,9 @@
 //! Direct (GPIO/SDI) modulation, OOK details, low-duty-cycle mode, wake-up timer, low-battery
 //! detector, antenna diversity, auto-TX, GPIO pin functions, the CCA/RSSI-threshold,
 //! invalid-preamble and external interrupts, and the exact IF filter table. The CRC seed
-//! (0xFFFF) and the Biacheva polynomial are this model's assumptions; both simulated ends
-//! agree, but they are not checked against silicon. Timing of an SPI transaction is zero.
+//! (0xFFFF) and the IEC-16 / Biacheva polynomials are this model's assumptions; both
+//! simulated ends agree, but they are not checked against silicon. SPI transactions take no
+//! virtual time.
 //!
 //! # Example
 //! Two chips 100 m apart; one sends 5 bytes with raw register writes, the other receives.
