@@ -107,7 +107,7 @@ mod tx;
 mod world;
 
 pub use chip::{ChipState, Fault, PLL_SETTLE_NS, POWER_ON_RESET_NS, XTAL_START_NS};
-pub use executor::{Simulation, Task};
+pub use executor::{Simulation, Spawner, Task};
 pub use medium::{ChipHandle, Interference, Medium, MediumConfig, RadioConfig, RadioHandle};
 pub use pins::{SimDelay, SimIrq, SimSdn, SimSpi, Sleep};
 pub use trace::{Outcome, RadioId, Reception, TraceFrame};
