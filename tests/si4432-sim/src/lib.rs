@@ -16,7 +16,8 @@
 //!   `swres`; automatic return to READY/TUNE after a packet is sent or a valid packet is
 //!   received (unless 0x08 rxmpk); RX keeps searching after a CRC error.
 //! - **Interrupts**: status 0x03/0x04 latch whether enabled or not, reading clears them;
-//!   nIRQ is low while `(status & enable) != 0` and released only by reading the status.
+//!   nIRQ is low while `(status & enable) != 0` and released only by reading the status;
+//!   `irssi` when a frame pushes the in-band power to the 0x27 threshold.
 //! - **Packet handler** ([`packet`]): preamble, sync word (1–4 bytes), header (0–4 bytes,
 //!   check and enable masks, broadcast), fixed or variable length, CRC (CCITT, CRC-16,
 //!   IEC-16, Biacheva; all or data only), PN9 whitening, packets longer than 64 bytes through
@@ -37,8 +38,8 @@
 //!
 //! # What is not
 //! Direct (GPIO/SDI) modulation, OOK details, low-duty-cycle mode, wake-up timer, low-battery
-//! detector, antenna diversity, auto-TX, GPIO pin functions, the CCA/RSSI-threshold,
-//! invalid-preamble and external interrupts, and the exact IF filter table. The CRC seed
+//! detector, antenna diversity, auto-TX, GPIO pin functions (CCA output), the
+//! invalid-preamble and external interrupts, `irssi` on interference bursts, and the exact IF filter table. The CRC seed
 //! (0xFFFF) and the IEC-16 / Biacheva polynomials are this model's assumptions; both
 //! simulated ends agree, but they are not checked against silicon. SPI transactions take no
 //! virtual time.

@@ -183,3 +183,29 @@ fn near_sensitivity_bit_errors_are_caught_by_the_crc() {
     let power = sim.medium().trace()[0].power_dbm[b.id.0];
     assert!((power + 108.2).abs() < 0.01, "{power}");
 }
+
+#[test]
+fn rssi_threshold_interrupt_fires_for_strong_in_band_frames_only() {
+    // Threshold 0x27 = 100 ≙ −72 dBm. Frames from 100 m arrive at −45 dBm (raw 154),
+    // from 10 km at −85 dBm (raw 74).
+    for (distance_m, channel, expected) in
+        [(100.0, 0u8, 0x10u8), (10_000.0, 0, 0x00), (100.0, 5, 0x00)]
+    {
+        let sim = Simulation::new(6);
+        let mut a = radio(&sim, 0.0);
+        let mut b = radio(&sim, distance_m);
+        write(&mut a.spi, 0x79, &[channel]);
+        write(&mut b.spi, 0x27, &[100]);
+        start_rx(&mut b.spi);
+        write(&mut b.spi, 0x06, &[0x10]); // enrssi only
+        b.delay.delay_us(300);
+        assert_eq!(status(&mut b.spi).1 & 0x10, 0, "quiet channel: noise only");
+        start_tx(&mut a.spi, 4, &[0; 4]);
+        a.delay.delay_us(300);
+        assert_eq!(
+            status(&mut b.spi).1 & 0x10,
+            expected,
+            "{distance_m} m, channel {channel}"
+        );
+    }
+}
