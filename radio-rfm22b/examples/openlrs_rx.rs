@@ -76,6 +76,7 @@ async fn main(spawner: Spawner) {
             RxEvent::Channels {
                 channels_bits,
                 save_failsafe,
+                ..
             } => {
                 let mut us = [1500u16; PPM_CHANNELS];
                 for (slot, &bits) in us.iter_mut().zip(channels_bits.iter()) {

@@ -45,6 +45,7 @@ struct Log {
     tx_bound: Option<bool>,
     tx_link_quality: Vec<u8>,
     failsafe: usize,
+    failsafe_at_us: Vec<u64>,
 }
 
 /// Runs one TX and one RX 1 km apart for `duration`; returns the log and the medium.
@@ -55,6 +56,19 @@ fn run(
     channels: Vec<u16>,
     duration: Duration,
 ) -> (Log, Medium) {
+    let (sim, medium, log) = start(tx_version, rx_version, data, channels);
+    sim.run_for(duration);
+    let log = std::mem::take(&mut *log.borrow_mut());
+    (log, medium)
+}
+
+/// Spawns one TX and one RX 1 km apart; the caller runs the simulation.
+fn start(
+    tx_version: BindingVersion,
+    rx_version: BindingVersion,
+    data: BindData,
+    channels: Vec<u16>,
+) -> (Simulation, Medium, Rc<RefCell<Log>>) {
     let sim = Simulation::new(7);
     let medium = sim.medium();
     let tx_handle = medium.add_radio(RadioConfig::at([0.0, 0.0, 0.0]));
@@ -76,11 +90,19 @@ fn run(
                 let mut log = rx_log.borrow_mut();
                 match event {
                     RxEvent::Bound(d) => log.bound = Some(d),
-                    RxEvent::Channels { channels_bits, .. } => {
-                        log.rx_channels.push((now, channels_bits.to_vec()))
+                    RxEvent::Channels {
+                        channels_bits,
+                        received_at_us,
+                        ..
+                    } => {
+                        log.rx_channels
+                            .push((received_at_us, channels_bits.to_vec()));
                     }
                     RxEvent::Serial(bytes) => log.rx_serial.extend_from_slice(&bytes),
-                    RxEvent::FailsafeStarted => log.failsafe += 1,
+                    RxEvent::FailsafeStarted => {
+                        log.failsafe += 1;
+                        log.failsafe_at_us.push(now);
+                    }
                 }
             };
             rx_step(&mut rx_radio, &mut rx, &mut on_event)
@@ -121,9 +143,7 @@ fn run(
                 .unwrap();
         }
     });
-    sim.run_for(duration);
-    let log = std::mem::take(&mut *log.borrow_mut());
-    (log, medium)
+    (sim, medium, log)
 }
 
 fn sixteen_channels() -> (BindData, Vec<u16>) {
@@ -214,4 +234,47 @@ fn v38_tx_and_v39_rx_refuse_each_other() {
             "{outcomes:?}"
         );
     }
+}
+
+#[test]
+fn link_loss_gives_failsafe_after_one_second_and_the_rx_reacquires() {
+    let (data, channels) = sixteen_channels();
+    let interval = u64::from(timing::interval_us(&data).unwrap());
+    let (sim, medium, log) = start(
+        BindingVersion::V38,
+        BindingVersion::V38,
+        data,
+        channels.clone(),
+    );
+    sim.run_for(Duration::from_secs(2));
+    medium.set_packet_loss(1.0);
+    // A packet already on air when the loss starts may still arrive.
+    sim.run_for(Duration::from_millis(100));
+    let before = log.borrow().rx_channels.len();
+    assert!(before > 20, "{before}");
+    sim.run_for(Duration::from_millis(1900));
+    {
+        let log = log.borrow();
+        assert_eq!(log.rx_channels.len(), before);
+        assert_eq!(log.failsafe, 1);
+        // Failsafe 1.0 s (failsafeDelay 10) after the first miss, which is noticed
+        // interval + 1 ms after the last packet.
+        let last_packet = log.rx_channels[before - 1].0;
+        let delay = log.failsafe_at_us[0] - last_packet;
+        assert!(
+            delay.abs_diff(interval + 1000 + 1_000_000) <= 1000,
+            "{delay}"
+        );
+    }
+    medium.set_packet_loss(0.0);
+    let outage_end_us = medium.now().as_micros() as u64;
+    sim.run_for(Duration::from_secs(2));
+    let log = log.borrow();
+    let first_after = log.rx_channels[before].0;
+    // Slow hopping dwells interval · hopcount (8 hops) per channel while the TX visits each
+    // channel once per 8 packets, so re-acquisition takes at most about one dwell cycle.
+    let reacquire_us = first_after - outage_end_us;
+    assert!(reacquire_us < 8 * 8 * interval, "{reacquire_us}");
+    assert!(log.rx_channels.len() > before + 40);
+    assert!(log.rx_channels.iter().all(|(_, c)| *c == channels));
 }

@@ -30,6 +30,9 @@ pub enum RxEvent {
         channels_bits: heapless::Vec<u16, { super::channels::MAX_CHANNELS }>,
         /// Store them as failsafe values (once per TX button press).
         save_failsafe: bool,
+        /// When the packet was taken from the radio (the telemetry reply goes out before
+        /// the event is delivered, so "now" in the handler is later).
+        received_at_us: u64,
     },
     /// Serial bytes for the RX UART.
     Serial(heapless::Vec<u8, 8>),
@@ -117,6 +120,7 @@ where
                     on_event(RxEvent::Channels {
                         channels_bits,
                         save_failsafe,
+                        received_at_us: packet.at_us,
                     });
                 }
                 Output::Serial(bytes) => on_event(RxEvent::Serial(bytes)),
