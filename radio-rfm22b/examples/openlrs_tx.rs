@@ -42,9 +42,9 @@ bind_interrupts!(struct Irqs {
 const LINK_SEED: u32 = 0x5EED_1234;
 const BIND_WINDOW_US: u64 = 10_000_000;
 
-/// Latest decoded PPM frame (10-bit values).
-static CHANNELS: Mutex<CriticalSectionRawMutex, Cell<[u16; PPM_CHANNELS]>> =
-    Mutex::new(Cell::new([CENTER_BITS; PPM_CHANNELS]));
+/// Latest decoded PPM frame (10-bit values) and a count of frames decoded so far.
+static CHANNELS: Mutex<CriticalSectionRawMutex, Cell<(u32, [u16; PPM_CHANNELS])>> =
+    Mutex::new(Cell::new((0, [CENTER_BITS; PPM_CHANNELS])));
 
 fn now_us() -> u64 {
     Instant::now().as_micros()
@@ -83,15 +83,24 @@ async fn main(spawner: Spawner) {
         Ok(false) => info!("no receiver answered; flying with the stored identity"),
         Err(e) => warn!("bind failed: {}", defmt::Debug2Format(&e)),
     }
-    let Some(mut tx) = Transmitter::new(data, now_us()) else {
+    let Ok(tx) = Transmitter::new(data, now_us()) else {
         warn!("unusable bind data");
         return;
     };
+    // Like OpenLRSng with minch ≠ 0: no PPM for 8 packets → stop sending → RX failsafe.
+    let mut tx = tx.with_stale_input_stop();
     info!("link: {=u32} µs interval", tx.interval_us());
     if let Err(e) = tx_start(&mut radio, &tx).await {
         warn!("radio setup failed: {}", defmt::Debug2Format(&e));
     }
-    let mut set_channels = |tx: &mut Transmitter| tx.set_channels(&CHANNELS.lock(Cell::get));
+    let mut frames_seen = 0;
+    let mut set_channels = |tx: &mut Transmitter| {
+        let (frames, channels) = CHANNELS.lock(Cell::get);
+        if frames != frames_seen {
+            frames_seen = frames;
+            tx.set_channels(&channels);
+        }
+    };
     let mut on_event = |event| match event {
         TxEvent::Downlink {
             received: Received::LinkInfo(info),
@@ -124,7 +133,7 @@ async fn ppm_input(mut pin: ExtiInput<'static, Async>) {
         let width_us = u16::try_from((now - last).as_micros()).unwrap_or(u16::MAX);
         last = now;
         if let Pulse::FrameAccepted { .. } = decoder.pulse(width_us) {
-            CHANNELS.lock(|c| c.set(*decoder.channels()));
+            CHANNELS.lock(|c| c.set((c.get().0.wrapping_add(1), *decoder.channels())));
         }
     }
 }
