@@ -27,6 +27,8 @@ const ICRCERROR: u8 = 0x01;
 const REG_RX_LEN: u8 = 0x4B;
 /// RSSI register.
 const REG_RSSI: u8 = 0x26;
+/// AFC correction read-back, bits 9..2 (0x2C holds bits 1..0 in its top two bits).
+const REG_AFC: u8 = 0x2B;
 /// FIFO access register.
 const REG_FIFO: u8 = 0x7F;
 /// OpenLRSng gives up on a transmission after 100 ms (`tx_done`).
@@ -54,6 +56,8 @@ pub struct Received {
     pub bytes: Vec<u8, MAX_PACKET_LEN>,
     /// Raw RSSI (register 0x26) read right after reception.
     pub rssi: u8,
+    /// 10-bit AFC correction at the end of the packet (0x2B bits 9..2, 0x2C bits 7..6).
+    pub afc: u16,
     /// When the packet was taken from the chip.
     pub at_us: u64,
 }
@@ -224,10 +228,18 @@ where
                     .await
                     .map_err(Error::Radio)?;
                 let rssi = self.bus.read(REG_RSSI).await.map_err(Error::Radio)?;
+                let mut afc_regs = [0u8; 2];
+                self.bus
+                    .read_burst(REG_AFC, &mut afc_regs)
+                    .await
+                    .map_err(Error::Radio)?;
+                let [afc_hi, afc_lo] = afc_regs;
+                let afc = (u16::from(afc_hi) << 2) | (u16::from(afc_lo) >> 6);
                 let at_us = self.clock.now_us();
                 return Ok(Some(Received {
                     bytes: Vec::from_slice(bytes).unwrap_or_default(),
                     rssi,
+                    afc,
                     at_us,
                 }));
             }

@@ -106,7 +106,7 @@ where
     let deadline = rx.next_deadline_us().unwrap_or(now + IDLE_WAIT_US);
     match radio.receive_until(deadline).await? {
         Some(packet) => {
-            rx.set_link_measurements(packet.rssi, 0, 0, 0);
+            rx.set_radio_measurements(packet.rssi, packet.afc);
             let reception = rx.on_packet(packet.at_us, &packet.bytes);
             if let Some(reply) = &reception.reply {
                 radio.transmit(reply).await?;

@@ -210,15 +210,17 @@ impl Receiver {
         self.quality.rx_quality()
     }
 
-    /// Updates what the next link-info frame reports (RSSI, analog inputs, AFC).
-    pub fn set_link_measurements(&mut self, rssi: u8, analog0: u8, analog1: u8, afc: u16) {
-        self.link_info = LinkInfo {
-            rssi,
-            analog0,
-            analog1,
-            afc,
-            link_quality: 0,
-        };
+    /// Radio readings for the next link-info frame: raw RSSI (0x26) and the 10-bit AFC
+    /// correction (0x2B/0x2C), both sampled around the last packet.
+    pub fn set_radio_measurements(&mut self, rssi: u8, afc: u16) {
+        self.link_info.rssi = rssi;
+        self.link_info.afc = afc;
+    }
+
+    /// The RX's two analog inputs (ADC >> 2) for the next link-info frame.
+    pub fn set_analog_inputs(&mut self, analog0: u8, analog1: u8) {
+        self.link_info.analog0 = analog0;
+        self.link_info.analog1 = analog1;
     }
 
     /// Queues RX UART bytes for the downlink; returns how many did not fit.
