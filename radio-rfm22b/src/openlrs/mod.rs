@@ -7,7 +7,7 @@
 //! `shared/reference/radio.md` §1c. The layers are:
 //! - [`version`], [`bind`], [`random`]: who may talk to whom (binding version, bind data);
 //! - [`modem`], [`hopping`], [`timing`]: how the Si4432 is programmed and when it hops;
-//! - [`channels`], [`uplink`], [`telemetry`]: what the packets carry;
+//! - [`channels`], [`uplink`], [`telemetry`], [`downlink`]: what the packets carry;
 //! - [`frsky`], [`ppm`], [`crc16`]: the TX's wired interfaces to the handset;
 //! - [`rx`], [`tx`]: the two roles as state machines taking `now_us` and events;
 //! - [`radio`], [`roles`]: the IO edge — OpenLRSng's register scripts run over the crate's
@@ -18,6 +18,7 @@
 pub mod bind;
 pub mod channels;
 pub mod crc16;
+pub mod downlink;
 pub mod frsky;
 pub mod hopping;
 pub mod modem;

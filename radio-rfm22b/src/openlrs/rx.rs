@@ -3,10 +3,11 @@
 //! the telemetry reply with its sequence handshake (RX.h; radio.md §1c "Hopping",
 //! "Downlink", "Failsafe"). Time is `now_us` from the caller; nothing here touches a radio.
 
-use heapless::{Deque, Vec};
+use heapless::Vec;
 
 use super::bind::{self, BindData, BindReception};
 use super::channels::MAX_CHANNELS;
+use super::downlink::DownlinkSender;
 use super::hopping;
 use super::telemetry::{self, LinkInfo, LinkQuality};
 use super::timing;
@@ -102,9 +103,6 @@ enum Mode {
     Link,
 }
 
-/// Capacity of the RX-UART → downlink queue (OpenLRSng uses 32 bytes).
-pub const SERIAL_QUEUE_LEN: usize = 32;
-
 /// The receiver.
 #[derive(Debug, Clone)]
 pub struct Receiver {
@@ -121,9 +119,8 @@ pub struct Receiver {
     failsafe_active: bool,
     failsafe_saved: bool,
     quality: LinkQuality,
-    frame: telemetry::Frame,
+    downlink: DownlinkSender,
     link_info: LinkInfo,
-    serial_out: Deque<u8, SERIAL_QUEUE_LEN>,
 }
 
 impl Receiver {
@@ -144,7 +141,7 @@ impl Receiver {
             failsafe_active: false,
             failsafe_saved: false,
             quality: LinkQuality(0),
-            frame: [0; telemetry::DOWNLINK_FRAME_LEN],
+            downlink: DownlinkSender::new(),
             link_info: LinkInfo {
                 rssi: 0,
                 analog0: 0,
@@ -152,7 +149,6 @@ impl Receiver {
                 afc: 0,
                 link_quality: 0,
             },
-            serial_out: Deque::new(),
         }
     }
 
@@ -225,9 +221,7 @@ impl Receiver {
 
     /// Queues RX UART bytes for the downlink; returns how many did not fit.
     pub fn queue_serial(&mut self, data: &[u8]) -> usize {
-        data.iter()
-            .filter(|&&b| self.serial_out.push_back(b).is_err())
-            .count()
+        self.downlink.queue_serial(data)
     }
 
     /// When [`Receiver::poll`] next has something to do.
@@ -369,9 +363,7 @@ impl Receiver {
                 }
             }
             Uplink::Serial { data: bytes, .. } => {
-                if (header ^ self.frame[0]) & uplink::SEQ_UPLINK_SERIAL != 0 {
-                    // New serial data: our bit 7 becomes the acknowledgement.
-                    self.frame[0] ^= telemetry::SEQ_UPLINK_ACK;
+                if self.downlink.accept_uplink_serial(header) {
                     Output::Serial(bytes)
                 } else {
                     Output::Nothing
@@ -390,27 +382,10 @@ impl Receiver {
     }
 
     fn telemetry_reply(&mut self, uplink_header: u8) -> telemetry::Frame {
-        if (uplink_header ^ self.frame[0]) & telemetry::SEQ_DOWNLINK != 0 {
-            // The TX has not acknowledged our last frame: send it again unchanged.
-            return self.frame;
-        }
-        let sequence_bits = (self.frame[0] & 0xC0) ^ telemetry::SEQ_DOWNLINK;
-        let mut chunk: Vec<u8, 8> = Vec::new();
-        while chunk.len() < telemetry::MAX_SERIAL_BYTES {
-            match self.serial_out.pop_front() {
-                Some(b) => {
-                    let _ = chunk.push(b);
-                }
-                None => break,
-            }
-        }
-        self.frame = telemetry::serial_frame(sequence_bits, &chunk).unwrap_or_else(|| {
-            let info = LinkInfo {
-                link_quality: self.quality.rx_quality(),
-                ..self.link_info
-            };
-            telemetry::link_info_frame(sequence_bits, &info)
-        });
-        self.frame
+        let info = LinkInfo {
+            link_quality: self.quality.rx_quality(),
+            ..self.link_info
+        };
+        self.downlink.reply(uplink_header, &info)
     }
 }
