@@ -53,10 +53,10 @@ pub mod if_filter;
 pub mod irq;
 pub mod measure;
 pub mod modem;
-pub mod packet;
-pub mod power;
 #[cfg(feature = "openlrs")]
 pub mod openlrs;
+pub mod packet;
+pub mod power;
 mod probe;
 pub mod registers;
 mod rfm22b;

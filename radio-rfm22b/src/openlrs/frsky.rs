@@ -8,6 +8,8 @@
 
 use heapless::{Deque, Vec};
 
+use super::telemetry;
+
 /// Frame delimiter of both protocols.
 pub const FRAME_START: u8 = 0x7E;
 /// Byte-stuffing escape: 0x7E/0x7D go out as 0x7D, x ^ 0x20.
@@ -196,6 +198,61 @@ impl HubEncoder {
     }
 }
 
+/// Everything the TX forwards to its handset, fed from the downlink (`frskyUpdate` in
+/// TX.h): composite RX and TX RSSI, the RX analog bytes, and the RX serial stream (hub mode).
+#[derive(Debug, Clone, Default)]
+pub struct HandsetTelemetry {
+    hub: HubEncoder,
+    smartport: SmartPortEncoder,
+    link: Option<(telemetry::LinkInfo, u8)>,
+}
+
+impl HandsetTelemetry {
+    /// A link-info frame arrived; `tx_rssi` is the TX's own RSSI reading of the reply.
+    pub fn on_link_info(&mut self, info: telemetry::LinkInfo, tx_rssi: u8) {
+        self.link = Some((info, tx_rssi));
+    }
+
+    /// RX serial bytes (forwarded as hub user data); returns how many were dropped.
+    pub fn on_serial(&mut self, data: &[u8]) -> usize {
+        self.hub.push_serial(data)
+    }
+
+    fn composites(&self, tx_link_quality: u8) -> Option<(telemetry::LinkInfo, u8, u8)> {
+        let (info, tx_rssi) = self.link?;
+        let rx = telemetry::composite_rssi(info.link_quality, info.rssi);
+        let tx = telemetry::composite_rssi(tx_link_quality, tx_rssi);
+        Some((info, rx, tx))
+    }
+
+    /// Hub bytes for this 30 ms tick at 9600 baud; nothing before the first report (the
+    /// TX only talks to the handset once telemetry has been heard).
+    pub fn hub_tick(&mut self, tx_link_quality: u8) -> Output {
+        match self.composites(tx_link_quality) {
+            Some((info, rx, tx)) => self.hub.next(&HubLink {
+                a1: info.analog0,
+                a2: info.analog1,
+                rx_composite: rx,
+                tx_composite: tx,
+            }),
+            None => Output::new(),
+        }
+    }
+
+    /// S.Port bytes for this 12 ms tick at 57600 baud; `profile` is the TX profile 0..3.
+    pub fn smartport_tick(&mut self, tx_link_quality: u8, profile: u8) -> Output {
+        match self.composites(tx_link_quality) {
+            Some((info, rx, tx)) => self.smartport.next(&SmartPortInputs {
+                a1: info.analog0,
+                a2: info.analog1,
+                rssi: rx.min(tx),
+                profile,
+            }),
+            None => Output::new(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -225,5 +282,27 @@ mod tests {
             &[0x7E, 0xFD, 3, 0, 9, 9, 9, 0, 0, 0, 0x7E]
         );
         assert!(e.next(&link).is_empty());
+    }
+
+    #[test]
+    fn handset_telemetry_uses_composite_rssi() {
+        let mut t = HandsetTelemetry::default();
+        assert!(t.hub_tick(15).is_empty());
+        let info = telemetry::LinkInfo {
+            rssi: 200,
+            analog0: 10,
+            analog1: 20,
+            afc: 0,
+            link_quality: 15,
+        };
+        t.on_link_info(info, 100);
+        // RX composite (200 >> 1) + 128 = 228, sent halved (114); TX at LQ 10 → 90.
+        assert_eq!(
+            t.hub_tick(10).as_slice(),
+            &[0x7E, 0xFE, 10, 20, 114, 90, 0, 0, 0, 0, 0x7E]
+        );
+        // S.Port slot 0 is SWR = profile + 1, slot 1 min(228, 90) · 100 / 256 = 35.
+        assert_eq!(t.smartport_tick(10, 2)[3..6], [0x05, 0xF1, 3]);
+        assert_eq!(t.smartport_tick(10, 2)[3..6], [0x01, 0xF1, 35]);
     }
 }

@@ -7,18 +7,25 @@
 //! `shared/reference/radio.md` §1c. The layers are:
 //! - [`version`], [`bind`], [`random`]: who may talk to whom (binding version, bind data);
 //! - [`modem`], [`hopping`], [`timing`]: how the Si4432 is programmed and when it hops;
-//! - [`channels`], [`uplink`], [`telemetry`]: what the packets carry;
+//! - [`channels`], [`uplink`], [`telemetry`], [`downlink`]: what the packets carry;
 //! - [`frsky`], [`ppm`], [`crc16`]: the TX's wired interfaces to the handset;
-//! - [`rx`], [`tx`]: the two roles as state machines taking `now_us` and events.
+//! - [`rx`], [`tx`]: the two roles as state machines taking `now_us` and events;
+//! - [`radio`], [`roles`]: the IO edge — OpenLRSng's register scripts run over the crate's
+//!   SPI [`Bus`](crate::Bus) with nIRQ and a clock, and the async role loops on top.
+//!
+//! See `radio-rfm22b/docs/embedding.md` for wiring and how the layers fit together.
 
 pub mod bind;
 pub mod channels;
 pub mod crc16;
+pub mod downlink;
 pub mod frsky;
 pub mod hopping;
 pub mod modem;
 pub mod ppm;
+pub mod radio;
 pub mod random;
+pub mod roles;
 pub mod rx;
 pub mod telemetry;
 pub mod timing;

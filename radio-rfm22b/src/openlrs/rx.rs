@@ -3,10 +3,11 @@
 //! the telemetry reply with its sequence handshake (RX.h; radio.md §1c "Hopping",
 //! "Downlink", "Failsafe"). Time is `now_us` from the caller; nothing here touches a radio.
 
-use heapless::{Deque, Vec};
+use heapless::Vec;
 
 use super::bind::{self, BindData, BindReception};
 use super::channels::MAX_CHANNELS;
+use super::downlink::DownlinkSender;
 use super::hopping;
 use super::telemetry::{self, LinkInfo, LinkQuality};
 use super::timing;
@@ -102,9 +103,6 @@ enum Mode {
     Link,
 }
 
-/// Capacity of the RX-UART → downlink queue (OpenLRSng uses 32 bytes).
-pub const SERIAL_QUEUE_LEN: usize = 32;
-
 /// The receiver.
 #[derive(Debug, Clone)]
 pub struct Receiver {
@@ -121,9 +119,8 @@ pub struct Receiver {
     failsafe_active: bool,
     failsafe_saved: bool,
     quality: LinkQuality,
-    frame: telemetry::Frame,
+    downlink: DownlinkSender,
     link_info: LinkInfo,
-    serial_out: Deque<u8, SERIAL_QUEUE_LEN>,
 }
 
 impl Receiver {
@@ -144,7 +141,7 @@ impl Receiver {
             failsafe_active: false,
             failsafe_saved: false,
             quality: LinkQuality(0),
-            frame: [0; telemetry::DOWNLINK_FRAME_LEN],
+            downlink: DownlinkSender::new(),
             link_info: LinkInfo {
                 rssi: 0,
                 analog0: 0,
@@ -152,7 +149,6 @@ impl Receiver {
                 afc: 0,
                 link_quality: 0,
             },
-            serial_out: Deque::new(),
         }
     }
 
@@ -210,22 +206,22 @@ impl Receiver {
         self.quality.rx_quality()
     }
 
-    /// Updates what the next link-info frame reports (RSSI, analog inputs, AFC).
-    pub fn set_link_measurements(&mut self, rssi: u8, analog0: u8, analog1: u8, afc: u16) {
-        self.link_info = LinkInfo {
-            rssi,
-            analog0,
-            analog1,
-            afc,
-            link_quality: 0,
-        };
+    /// Radio readings for the next link-info frame: raw RSSI (0x26) and the 10-bit AFC
+    /// correction (0x2B/0x2C), both sampled around the last packet.
+    pub fn set_radio_measurements(&mut self, rssi: u8, afc: u16) {
+        self.link_info.rssi = rssi;
+        self.link_info.afc = afc;
+    }
+
+    /// The RX's two analog inputs (ADC >> 2) for the next link-info frame.
+    pub fn set_analog_inputs(&mut self, analog0: u8, analog1: u8) {
+        self.link_info.analog0 = analog0;
+        self.link_info.analog1 = analog1;
     }
 
     /// Queues RX UART bytes for the downlink; returns how many did not fit.
     pub fn queue_serial(&mut self, data: &[u8]) -> usize {
-        data.iter()
-            .filter(|&&b| self.serial_out.push_back(b).is_err())
-            .count()
+        self.downlink.queue_serial(data)
     }
 
     /// When [`Receiver::poll`] next has something to do.
@@ -367,9 +363,7 @@ impl Receiver {
                 }
             }
             Uplink::Serial { data: bytes, .. } => {
-                if (header ^ self.frame[0]) & uplink::SEQ_UPLINK_SERIAL != 0 {
-                    // New serial data: our bit 7 becomes the acknowledgement.
-                    self.frame[0] ^= telemetry::SEQ_UPLINK_ACK;
+                if self.downlink.accept_uplink_serial(header) {
                     Output::Serial(bytes)
                 } else {
                     Output::Nothing
@@ -388,27 +382,85 @@ impl Receiver {
     }
 
     fn telemetry_reply(&mut self, uplink_header: u8) -> telemetry::Frame {
-        if (uplink_header ^ self.frame[0]) & telemetry::SEQ_DOWNLINK != 0 {
-            // The TX has not acknowledged our last frame: send it again unchanged.
-            return self.frame;
-        }
-        let sequence_bits = (self.frame[0] & 0xC0) ^ telemetry::SEQ_DOWNLINK;
-        let mut chunk: Vec<u8, 8> = Vec::new();
-        while chunk.len() < telemetry::MAX_SERIAL_BYTES {
-            match self.serial_out.pop_front() {
-                Some(b) => {
-                    let _ = chunk.push(b);
+        let info = LinkInfo {
+            link_quality: self.quality.rx_quality(),
+            ..self.link_info
+        };
+        self.downlink.reply(uplink_header, &info)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bound() -> BindData {
+        BindData::defaults(BindingVersion::V38, Band::Mhz433)
+    }
+
+    fn rc_packet(header: u8) -> Vec<u8, 11> {
+        let mut p = Vec::new();
+        p.extend_from_slice(&[header, 0, 1, 2, 3, 0, 4, 5, 6, 7, 0])
+            .unwrap();
+        p
+    }
+
+    #[test]
+    fn stored_bind_data_gets_a_500_ms_bind_window_then_the_link() {
+        let mut rx = Receiver::new(
+            Config::new(BindingVersion::V38, Band::Mhz433),
+            Some(bound()),
+        );
+        assert_eq!(rx.start(1_000), Command::ListenBind);
+        assert_eq!(rx.next_deadline_us(), Some(501_000));
+        assert_eq!(rx.poll(500_999).command, None);
+        assert_eq!(rx.poll(501_000).command, Some(Command::StartLink(bound())));
+        assert!(rx.is_linked());
+        // Not acquired yet: slow hopping, one hop per interval · hopcount = 25 ms · 6.
+        assert_eq!(rx.next_deadline_us(), Some(501_000 + 150_000 + 1));
+        assert_eq!(rx.poll(651_001).command, Some(Command::Hop(1)));
+    }
+
+    #[test]
+    fn other_generation_or_invalid_stored_data_means_binding_forever() {
+        let mut other = bound();
+        other.version = 0x39;
+        let mut rx = Receiver::new(Config::new(BindingVersion::V38, Band::Mhz433), Some(other));
+        assert_eq!(rx.start(0), Command::ListenBind);
+        assert_eq!(rx.next_deadline_us(), None);
+        assert_eq!(rx.poll(10_000_000).command, None);
+    }
+
+    #[test]
+    fn save_failsafe_is_reported_once_per_press_and_lost_packets_hop_on_the_grid() {
+        let config = Config {
+            bind_window_us: None,
+            ..Config::new(BindingVersion::V38, Band::Mhz433)
+        };
+        let mut rx = Receiver::new(config, Some(bound()));
+        assert_eq!(rx.start(0), Command::StartLink(bound()));
+        let saves: [bool; 4] = core::array::from_fn(|k| {
+            let header = if k < 3 { 0x01 } else { 0x00 };
+            let r = rx.on_packet(25_000 * k as u64, &rc_packet(header));
+            assert!(
+                r.reply.is_some(),
+                "telemetry is on in the default bind data"
+            );
+            matches!(
+                r.output,
+                Output::Channels {
+                    save_failsafe: true,
+                    ..
                 }
-                None => break,
-            }
-        }
-        self.frame = telemetry::serial_frame(sequence_bits, &chunk).unwrap_or_else(|| {
-            let info = LinkInfo {
-                link_quality: self.quality.rx_quality(),
-                ..self.link_info
-            };
-            telemetry::link_info_frame(sequence_bits, &info)
+            )
         });
-        self.frame
+        assert_eq!(saves, [true, false, false, false]);
+        assert_eq!(rx.hop_index(), 4);
+        // Last packet at 75 ms: the next is missed 26 ms later, the hop follows the grid.
+        assert_eq!(rx.next_deadline_us(), Some(75_000 + 26_000 + 1));
+        assert_eq!(rx.poll(101_001).command, Some(Command::Hop(5)));
+        assert_eq!(rx.next_deadline_us(), Some(100_000 + 26_000 + 1));
+        // Four heard, one missed.
+        assert_eq!(rx.link_quality(), 4);
     }
 }

@@ -91,6 +91,25 @@ pub enum Received {
 
 /// Capacity of the handset → uplink serial queue.
 pub const SERIAL_QUEUE_LEN: usize = 64;
+/// OpenLRSng stops sending when its input is older than this many packets (`ppmAge`).
+pub const STALE_INPUT_PACKETS: u8 = 8;
+
+/// The uplink serial handshake (`serial_okToSend` in TX.h): serial goes out only after a
+/// reply confirmed an RC packet, and an unanswered serial packet is repeated after the
+/// next RC packet, so RC keeps at least half the packet rate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SerialState {
+    /// 0: an RC packet must go first.
+    NeedRc,
+    /// 1: an RC packet went out; waiting for its reply.
+    RcSent,
+    /// 2: a reply confirmed the RC packet; serial may go.
+    Ready,
+    /// 3: serial sent, not yet answered.
+    Unanswered,
+    /// 4: the serial packet went unanswered; repeat it in the next slot.
+    Resend,
+}
 
 /// The TX on the link.
 #[derive(Debug, Clone)]
@@ -105,19 +124,21 @@ pub struct Transmitter {
     channels_bits: [u16; MAX_CHANNELS],
     save_failsafe: bool,
     serial_in: Deque<u8, SERIAL_QUEUE_LEN>,
-    serial_unacked: Option<Vec<u8, 8>>,
-    last_was_serial: bool,
-    reply_since_rc: bool,
+    serial_last: Vec<u8, 8>,
+    serial_state: SerialState,
+    /// Packets sent since the last input frame; `None` when input age is not enforced.
+    input_age: Option<u8>,
 }
 
 impl Transmitter {
-    /// A transmitter for `data`, sending its first packet at `now_us`. `None` if the bind
-    /// data is unusable (unknown modem profile, empty hop list).
-    pub fn new(data: BindData, now_us: u64) -> Option<Self> {
-        data.validate().ok()?;
-        Some(Self {
+    /// A transmitter for `data`, sending its first packet at `now_us`.
+    pub fn new(data: BindData, now_us: u64) -> Result<Self, bind::Error> {
+        data.validate()?;
+        let interval_us =
+            timing::interval_us(&data).ok_or(bind::Error::ModemProfile(data.modem_profile))?;
+        Ok(Self {
             data,
-            interval_us: timing::interval_us(&data)?,
+            interval_us,
             hop_index: 0,
             next_send_us: now_us,
             quality: LinkQuality(0),
@@ -125,10 +146,19 @@ impl Transmitter {
             channels_bits: [CENTER_BITS; MAX_CHANNELS],
             save_failsafe: false,
             serial_in: Deque::new(),
-            serial_unacked: None,
-            last_was_serial: false,
-            reply_since_rc: false,
+            serial_last: Vec::new(),
+            serial_state: SerialState::NeedRc,
+            input_age: None,
         })
+    }
+
+    /// Stop sending while the input is stale, as OpenLRSng does when `minch` ≠ 0 (its
+    /// default): nothing goes out before the first [`Transmitter::set_channels`], nor once 8
+    /// packets have been sent without a new one, so the RX enters failsafe when the handset
+    /// stops. The grid keeps running and the hop index stays where it was.
+    pub fn with_stale_input_stop(mut self) -> Self {
+        self.input_age = Some(u8::MAX);
+        self
     }
 
     /// The bind data in use.
@@ -141,10 +171,13 @@ impl Transmitter {
         self.interval_us
     }
 
-    /// Sets the channel values (10-bit) sent from the next packet on.
+    /// A new input frame: the channel values (10-bit) sent from the next packet on.
     pub fn set_channels(&mut self, channels_bits: &[u16]) {
         for (dst, &src) in self.channels_bits.iter_mut().zip(channels_bits) {
             *dst = src;
+        }
+        if let Some(age) = self.input_age.as_mut() {
+            *age = 0;
         }
     }
 
@@ -170,7 +203,7 @@ impl Transmitter {
         self.next_send_us
     }
 
-    /// The packet to send now, if one is due. Advance happens here: the caller sends it.
+    /// The packet to send now, if one is due; the caller sends it.
     pub fn poll(&mut self, now_us: u64) -> Option<Send> {
         if now_us < self.next_send_us {
             return None;
@@ -182,6 +215,12 @@ impl Transmitter {
         } else {
             self.next_send_us + interval
         };
+        if let Some(age) = self.input_age.as_mut() {
+            if *age >= STALE_INPUT_PACKETS {
+                return None;
+            }
+            *age += 1;
+        }
         let packet = self.next_packet();
         let hop_index = self.hop_index;
         self.hop_index = hopping::next_index(&self.data, self.hop_index);
@@ -194,35 +233,39 @@ impl Transmitter {
 
     fn next_packet(&mut self) -> Packet {
         let size = self.data.channel_mode().packet_size();
-        // Serial only after a reply confirmed the previous RC packet, never twice in a row.
-        let may_send_serial =
-            self.data.telemetry_enabled() && !self.last_was_serial && self.reply_since_rc;
-        if may_send_serial {
-            if self.serial_unacked.is_none() && !self.serial_in.is_empty() {
+        let serial = match self.serial_state {
+            SerialState::Ready if !self.serial_in.is_empty() => {
+                // New data: toggle bit 7 so the RX knows it is not a repeat.
+                self.sequence_bits ^= uplink::SEQ_UPLINK_SERIAL;
                 let max = (size - 1).min(uplink::MAX_SERIAL_BYTES);
-                let mut chunk: Vec<u8, 8> = Vec::new();
-                while chunk.len() < max {
+                self.serial_last.clear();
+                while self.serial_last.len() < max {
                     match self.serial_in.pop_front() {
                         Some(b) => {
-                            let _ = chunk.push(b);
+                            let _ = self.serial_last.push(b);
                         }
                         None => break,
                     }
                 }
-                self.sequence_bits ^= uplink::SEQ_UPLINK_SERIAL;
-                self.serial_unacked = Some(chunk);
+                true
             }
-            if let Some(packet) = self
-                .serial_unacked
-                .as_ref()
-                .and_then(|chunk| uplink::serial_packet(self.sequence_bits, chunk, size))
-            {
-                self.last_was_serial = true;
-                return packet;
-            }
+            // A repeat keeps bit 7, so an RX that did get it drops the copy.
+            SerialState::Resend => true,
+            _ => false,
+        };
+        if serial
+            && let Some(packet) = uplink::serial_packet(self.sequence_bits, &self.serial_last, size)
+        {
+            self.serial_state = SerialState::Unanswered;
+            return packet;
         }
-        self.last_was_serial = false;
-        self.reply_since_rc = false;
+        if !self.save_failsafe {
+            self.serial_state = match self.serial_state {
+                SerialState::NeedRc => SerialState::RcSent,
+                SerialState::Unanswered => SerialState::Resend,
+                other => other,
+            };
+        }
         let mode = self.data.channel_mode();
         uplink::servo_packet(
             mode,
@@ -233,9 +276,12 @@ impl Transmitter {
         .unwrap_or_default()
     }
 
-    /// The radio finished sending (`tx_done`): one more slot in the quality register.
+    /// The radio finished sending (`tx_done`): with telemetry on, one more slot in the
+    /// quality register, to be marked when the reply arrives.
     pub fn on_sent(&mut self) {
-        self.quality.record(false);
+        if self.data.telemetry_enabled() {
+            self.quality.record(false);
+        }
     }
 
     /// Handles a 9-byte downlink frame heard after our packet.
@@ -248,12 +294,12 @@ impl Transmitter {
             return Received::Invalid(parsed);
         };
         self.quality.mark_heard();
-        self.reply_since_rc = true;
-        if self.serial_unacked.is_some()
-            && (header ^ self.sequence_bits) & telemetry::SEQ_UPLINK_ACK == 0
-        {
-            self.serial_unacked = None;
-        }
+        self.serial_state = match self.serial_state {
+            SerialState::RcSent => SerialState::Ready,
+            // Any reply to the serial packet acknowledges it.
+            SerialState::Unanswered => SerialState::NeedRc,
+            other => other,
+        };
         if (header ^ self.sequence_bits) & telemetry::SEQ_DOWNLINK == 0 {
             return Received::Duplicate;
         }
@@ -264,5 +310,61 @@ impl Transmitter {
             Downlink::Serial { data, .. } => Received::Serial(data),
             other => Received::Invalid(other),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::openlrs::{Band, BindingVersion};
+
+    fn link() -> Transmitter {
+        // 8 channels + serial telemetry, 25 ms.
+        Transmitter::new(BindData::defaults(BindingVersion::V38, Band::Mhz433), 0).unwrap()
+    }
+
+    fn reply(tx: &mut Transmitter, header: u8) -> Received {
+        tx.on_downlink(&[header, 0, 0, 0, 0, 0, 0, 0, 0])
+    }
+
+    #[test]
+    fn serial_waits_for_a_confirmed_rc_packet_and_repeats_when_unanswered() {
+        let mut tx = link();
+        tx.queue_serial(b"abc");
+        let first = tx.poll(0).unwrap();
+        assert_eq!(first.packet[0] & 0x3F, 0x00, "RC first");
+        assert_eq!(
+            reply(&mut tx, 0x40),
+            Received::LinkInfo(telemetry::LinkInfo {
+                rssi: 0,
+                analog0: 0,
+                analog1: 0,
+                afc: 0,
+                link_quality: 0
+            })
+        );
+        let serial = tx.poll(25_000).unwrap();
+        // Bit 7 toggled for new data, bit 6 acknowledges the RX's frame, 3 bytes.
+        assert_eq!(&serial.packet[..4], &[0xC0 | 0x3A, b'a', b'b', b'c']);
+        assert_eq!(serial.hop_index, 1);
+        // No reply: RC goes next, then the same serial packet again.
+        assert_eq!(tx.poll(50_000).unwrap().packet[0], 0xC0);
+        assert_eq!(
+            &tx.poll(75_000).unwrap().packet[..4],
+            &[0xFA, b'a', b'b', b'c']
+        );
+        assert_eq!(reply(&mut tx, 0x40), Received::Duplicate);
+        assert_eq!(tx.poll(100_000).unwrap().packet[0], 0xC0);
+    }
+
+    #[test]
+    fn stale_input_stops_the_uplink_without_hopping() {
+        let mut tx = link().with_stale_input_stop();
+        assert_eq!(tx.poll(0), None, "nothing before the first input frame");
+        tx.set_channels(&[512; 8]);
+        let sent: usize = (1..=12).filter(|k| tx.poll(k * 25_000).is_some()).count();
+        assert_eq!(sent, 8);
+        tx.set_channels(&[600; 8]);
+        assert_eq!(tx.poll(13 * 25_000).unwrap().hop_index, 8 % 6);
     }
 }
