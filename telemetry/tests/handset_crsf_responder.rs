@@ -150,6 +150,41 @@ fn ping_is_answered_with_taulink_device_info_once() {
 }
 
 #[test]
+fn ping_is_answered_even_in_a_short_window() {
+    // 115 200 Bd at a 5 ms radio period leaves 50 − 6 = 44 bytes after a ping, 24 after a
+    // channel frame; DEVICE_INFO (28 bytes) goes out either way.
+    let mut responder = responder(115_200);
+    responder.on_frame(0, &rc_frame());
+    responder.on_frame(5_000, &ping_frame());
+    assert_eq!(responder.reply_budget(6), 44);
+    assert_eq!(responder.reply_budget(26), 24);
+    let mut out = [0u8; 128];
+    let n = responder.reply(5_010, &HandsetTelemetry::default(), &mut out);
+    assert!(matches!(
+        decode_all(&out[..n])[..],
+        [Message::DeviceInfo(_), ..]
+    ));
+    // Ping again, answered in a window shortened by a (hypothetical) 26-byte radio frame.
+    let mut responder = responder_at_5ms_with_ping_after_channels();
+    let n = responder.reply(10_010, &full_telemetry(), &mut out);
+    assert_eq!(n, 28);
+    assert!(matches!(
+        decode_all(&out[..n])[..],
+        [Message::DeviceInfo(_)]
+    ));
+}
+
+/// A responder at 115 200 Bd with the radio at 5 ms, whose ping (heard at 0 ms, reply window
+/// missed) is still pending when a 26-byte channel frame opens a 24-byte window at 10 ms.
+fn responder_at_5ms_with_ping_after_channels() -> Responder {
+    let mut responder = responder(115_200);
+    responder.on_frame(0, &ping_frame());
+    responder.on_frame(5_000, &rc_frame());
+    responder.on_frame(10_000, &rc_frame());
+    responder
+}
+
+#[test]
 fn ping_for_someone_else_is_ignored() {
     let mut responder = responder(400_000);
     responder.on_frame(0, &Frame::new(0xC8, 0x28, &[0xEC, 0xEA]).unwrap());
