@@ -65,6 +65,7 @@ pub struct LinkFrame {
 
 /// One FrSky D frame.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Frame {
     /// 0xFE.
     Link(LinkFrame),
@@ -150,6 +151,7 @@ pub enum Rejection {
 
 /// What one byte completed.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Event {
     /// A frame of a known shape.
     Frame(Frame),
