@@ -121,6 +121,12 @@ fn silent_without_a_radio_frame() {
     assert!(responder.reply(10, &full_telemetry(), &mut out) > 0);
     // One window per radio frame.
     assert_eq!(responder.reply(20, &full_telemetry(), &mut out), 0);
+    // A window not used within half the radio period (4 ms default at 400 kBd) is missed.
+    responder.on_frame(4_000, &rc_frame());
+    assert_eq!(responder.reply(6_001, &full_telemetry(), &mut out), 0);
+    // 2 ms late is still inside; link statistics are due again 100 ms after the first ones.
+    responder.on_frame(100_000, &rc_frame());
+    assert!(responder.reply(102_000, &full_telemetry(), &mut out) > 0);
 }
 
 #[test]

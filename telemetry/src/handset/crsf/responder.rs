@@ -190,12 +190,17 @@ impl Responder {
     }
 
     /// Fills `out` with whole frames for the reply window opened by the last radio frame and
-    /// returns the byte count (0: stay silent — no window, or nothing due). Send it as one
-    /// burst right away; EdgeTX reads a burst on its UART idle interrupt.
+    /// returns the byte count (0: stay silent — no window, window missed, or nothing due). Send
+    /// it as one burst right away; EdgeTX reads a burst on its UART idle interrupt.
     pub fn reply(&mut self, now_us: u64, telemetry: &HandsetTelemetry, out: &mut [u8]) -> usize {
-        let Some((_, radio_frame_len)) = self.window.take() else {
+        let Some((frame_end_us, radio_frame_len)) = self.window.take() else {
             return 0;
         };
+        // Starting later than half a period risks colliding with the radio's next frame on
+        // the shared wire (the budget assumes we start right after its frame).
+        if now_us.saturating_sub(frame_end_us) > u64::from(self.radio_period_us / 2) {
+            return 0;
+        }
         let budget = self.reply_budget(radio_frame_len).min(out.len());
         if self.ping_pending {
             // EdgeTX ≥ 2.11 sends no channels until it has our DEVICE_INFO, so the answer goes
