@@ -230,6 +230,28 @@ fn sender_without_link_sends_rssi_zero_link_frames_only() {
     }
 }
 
+#[test]
+fn sender_without_hub_data_sends_link_frames() {
+    let mut sender = Sender::new(SenderConfig::default());
+    let bare = HandsetTelemetry {
+        battery: None,
+        flight_mode: None,
+        ..telemetry()
+    };
+    for slot in 0..12u64 {
+        let frame = sender.next_frame(slot * 30_000, &bare).unwrap();
+        assert_eq!(
+            frame,
+            Frame::Link(LinkFrame {
+                a1: 0,
+                a2: 97,
+                rssi: 90,
+                tx_rssi: 97
+            })
+        );
+    }
+}
+
 fn arbitrary_frame() -> impl Strategy<Value = Frame> {
     prop_oneof![
         any::<[u8; 4]>().prop_map(|[a1, a2, rssi, tx_rssi]| Frame::Link(LinkFrame {

@@ -215,6 +215,10 @@ impl Sender {
         if self.queue.is_empty() {
             self.refill(telemetry);
         }
+        if self.queue.is_empty() {
+            // Nothing for the hub: an empty user frame would say nothing, a link frame does.
+            return Some(Frame::Link(self.link_frame(telemetry)));
+        }
         let mut data = Vec::new();
         while data.len() < USER_DATA_MAX {
             let Some(byte) = self.queue.pop_front() else {
