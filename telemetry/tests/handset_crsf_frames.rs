@@ -487,3 +487,48 @@ fn encode_reports_buffer_needed() {
     );
     assert!(Frame::new(0xC8, 0x21, &[0; 60]).is_ok());
 }
+
+#[test]
+fn microseconds_survive_the_tick_round_trip() {
+    // One tick is 1024/1639 ≈ 0.625 µs, finer than 1 µs, so every whole µs the 11 bits can
+    // carry (881 … 2159) comes back unchanged.
+    for us in 881..=2159u16 {
+        assert_eq!(
+            channels::ticks_to_us(channels::us_to_ticks(us)),
+            us,
+            "{us} µs"
+        );
+    }
+    // And every tick value maps into that range monotonically.
+    let mut previous = 0;
+    for ticks in 0..=2047u16 {
+        let us = channels::ticks_to_us(ticks);
+        assert!(us >= previous && (881..=2159).contains(&us));
+        previous = us;
+    }
+}
+
+#[test]
+fn power_table_and_angle_saturation() {
+    use telemetry::handset::crsf::sensors::{radians_to_100urad, tx_power_index};
+    // Table 0, 10, 25, 100, 500, 1000, 2000, 250, 50 mW: largest entry not above the power.
+    for (mw, index) in [
+        (0, 0),
+        (5, 0),
+        (10, 1),
+        (20, 1),
+        (50, 8),
+        (99, 8),
+        (100, 3),
+        (250, 7),
+        (400, 7),
+        (500, 4),
+        (5000, 6),
+    ] {
+        assert_eq!(tx_power_index(mw), index, "{mw} mW");
+    }
+    assert_eq!(radians_to_100urad(f32::NAN), 0);
+    assert_eq!(radians_to_100urad(10.0), i16::MAX);
+    assert_eq!(radians_to_100urad(-10.0), i16::MIN);
+    assert_eq!(radians_to_100urad(-0.00005), -1, "half away from zero");
+}

@@ -5,6 +5,7 @@
 // 1.5708 rad is the worked frame's value (protocols.md §4.5 E), not a stand-in for π/2.
 #![allow(clippy::approx_constant)]
 
+use proptest::prelude::*;
 use telemetry::handset::HandsetTelemetry;
 use telemetry::handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
 use telemetry::handset::crsf::{Decoded, Decoder, Frame, Message, RcChannels};
@@ -121,6 +122,12 @@ fn silent_without_a_radio_frame() {
     assert!(responder.reply(10, &full_telemetry(), &mut out) > 0);
     // One window per radio frame.
     assert_eq!(responder.reply(20, &full_telemetry(), &mut out), 0);
+    // A window not used within half the radio period (4 ms default at 400 kBd) is missed.
+    responder.on_frame(4_000, &rc_frame());
+    assert_eq!(responder.reply(6_001, &full_telemetry(), &mut out), 0);
+    // 2 ms late is still inside; link statistics are due again 100 ms after the first ones.
+    responder.on_frame(100_000, &rc_frame());
+    assert!(responder.reply(102_000, &full_telemetry(), &mut out) > 0);
 }
 
 #[test]
@@ -147,6 +154,41 @@ fn ping_is_answered_with_taulink_device_info_once() {
             .iter()
             .any(|m| matches!(m, Message::DeviceInfo(_)))
     );
+}
+
+#[test]
+fn ping_is_answered_even_in_a_short_window() {
+    // 115 200 Bd at a 5 ms radio period leaves 50 − 6 = 44 bytes after a ping, 24 after a
+    // channel frame; DEVICE_INFO (28 bytes) goes out either way.
+    let mut responder = responder(115_200);
+    responder.on_frame(0, &rc_frame());
+    responder.on_frame(5_000, &ping_frame());
+    assert_eq!(responder.reply_budget(6), 44);
+    assert_eq!(responder.reply_budget(26), 24);
+    let mut out = [0u8; 128];
+    let n = responder.reply(5_010, &HandsetTelemetry::default(), &mut out);
+    assert!(matches!(
+        decode_all(&out[..n])[..],
+        [Message::DeviceInfo(_), ..]
+    ));
+    // Ping again, answered in a window shortened by a (hypothetical) 26-byte radio frame.
+    let mut responder = responder_at_5ms_with_ping_after_channels();
+    let n = responder.reply(10_010, &full_telemetry(), &mut out);
+    assert_eq!(n, 28);
+    assert!(matches!(
+        decode_all(&out[..n])[..],
+        [Message::DeviceInfo(_)]
+    ));
+}
+
+/// A responder at 115 200 Bd with the radio at 5 ms, whose ping (heard at 0 ms, reply window
+/// missed) is still pending when a 26-byte channel frame opens a 24-byte window at 10 ms.
+fn responder_at_5ms_with_ping_after_channels() -> Responder {
+    let mut responder = responder(115_200);
+    responder.on_frame(0, &ping_frame());
+    responder.on_frame(5_000, &rc_frame());
+    responder.on_frame(10_000, &rc_frame());
+    responder
 }
 
 #[test]
@@ -308,4 +350,52 @@ fn radio_locks_onto_the_air_schedule() {
     assert_eq!(radio_period_us, 10_000);
     // Locked: the last frame ended exactly 1 ms (the lead) before an air packet at 3 ms + k·10 ms.
     assert_eq!((last_arrival + 1_000 - 3_000) % 10_000, 0);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Whatever the radio sends and whenever we are asked, a reply is whole valid frames, at
+    /// most 128 bytes and within the caller's buffer, and only a lone DEVICE_INFO may exceed
+    /// the window budget.
+    #[test]
+    fn replies_are_whole_frames_within_budget(
+        baud in prop::sample::select(vec![115_200u32, 400_000, 921_600]),
+        steps in prop::collection::vec((0u64..30_000, 0u8..4, 0u64..3_000, 0usize..200), 1..120),
+        with_link in any::<bool>(),
+        schedule_period_us in prop::option::of(500u32..40_000),
+    ) {
+        let mut responder = responder(baud);
+        responder.set_link_schedule(schedule_period_us.map(|period_us| LinkSchedule { period_us, phase_us: 777 }));
+        let telemetry = if with_link { full_telemetry() } else { HandsetTelemetry { link: None, ..full_telemetry() } };
+        let mut now = 0;
+        for (gap_us, kind, delay_us, out_len) in steps {
+            now += gap_us;
+            let frame = match kind {
+                0 => rc_frame(),
+                1 => ping_frame(),
+                2 => Frame::new(0xC8, 0x32, &[0xEE, 0xEA, 0x10, 0x05, 0x07, 0x8E]).unwrap(),
+                _ => Frame::new(0xC8, 0x2D, &[0xEE, 0xEF, 0x11, 0x01]).unwrap(),
+            };
+            responder.on_frame(now, &frame);
+            let budget_after = responder.reply_budget(frame.wire_len());
+            let mut out = vec![0u8; out_len];
+            let n = responder.reply(now + delay_us, &telemetry, &mut out);
+            prop_assert!(n <= out_len && n <= 128);
+            let messages = decode_all(&out[..n]);
+            if n > budget_after {
+                prop_assert!(matches!(messages[..], [Message::DeviceInfo(_)]), "{} > {}", n, budget_after);
+            }
+            if let Some(t) = messages.iter().find_map(|m| match m { Message::TimingCorrection(t) => Some(*t), _ => None }) {
+                // Offset within half an air period; interval a whole multiple of the air period
+                // no shorter than the line allows (5 ms at 115 200 Bd, else 2 ms), or 50 ms.
+                let period_us = schedule_period_us.unwrap();
+                prop_assert!((t.offset_100ns / 10).unsigned_abs() <= period_us / 2);
+                let interval_us = t.interval_100ns / 10;
+                let min_us = if baud <= 115_200 { 5_000 } else { 2_000 };
+                prop_assert!(interval_us >= min_us && interval_us <= 50_000);
+                prop_assert!(interval_us % period_us == 0 || interval_us == 50_000);
+            }
+        }
+    }
 }

@@ -199,6 +199,17 @@ fn polls_and_restarts() {
 }
 
 #[test]
+fn escape_byte_as_physical_id_is_rejected() {
+    // Found by the cargo-fuzz target: `7E 7D …` used to decode to a frame with physical ID
+    // 0x7D, which the encoder (rightly) refuses to send.
+    let events = decode(&hex(
+        "7E 7D 10 01 F1 50 00 00 00 AC 7E 98 10 01 F1 50 00 00 00 AC",
+    ));
+    assert_eq!(events[0], Event::Rejected(Rejection::ReservedPhysicalId));
+    assert_eq!(frames(&events), vec![Frame::data(0x98, value_id::RSSI, 80)]);
+}
+
+#[test]
 fn reserved_physical_id_is_refused() {
     let mut out = [0u8; 18];
     assert_eq!(

@@ -3,6 +3,7 @@
 //! bytes in, bytes out, time passed in. What is byte-exact against what: `README.md` here.
 
 pub mod crsf;
+pub mod frsky_d;
 pub mod report;
 pub mod sport;
 

@@ -56,6 +56,7 @@ pub struct AttitudeReport {
 
 /// Flight mode: a name for CRSF and a number for the S.Port/hub sensors, which carry no text.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FlightModeReport {
     /// Short name, e.g. "ANGLE" (CRSF shows 13 characters).
     pub name: String<FLIGHT_MODE_NAME_MAX_LEN>,
@@ -83,6 +84,7 @@ pub struct GpsReport {
 
 /// Everything the handset may be told. Absent parts are simply not sent.
 #[derive(Debug, Clone, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct HandsetTelemetry {
     /// Link health; `None` = link down.
     pub link: Option<LinkReport>,

@@ -41,6 +41,7 @@ pub enum Rejection {
 
 /// What the decoder produced.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Decoded {
     /// A frame whose CRC checked.
     Frame(Frame),

@@ -67,6 +67,7 @@ impl DevicePing {
 
 /// DEVICE_INFO (0x29): name, serial, hardware and firmware ids, parameter count.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DeviceInfo {
     /// Addressee.
     pub destination: u8,

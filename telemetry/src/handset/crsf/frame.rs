@@ -119,6 +119,7 @@ impl core::error::Error for Error {}
 /// A frame: address byte, type and payload. The length byte and CRC are derived on encode
 /// and checked by the [`Decoder`](super::Decoder).
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Frame {
     /// Byte 0: the sync byte (0xC8) or the destination address.
     pub address: u8,

@@ -10,6 +10,7 @@ use super::sensors::{Attitude, Battery, FlightMode, Gps, LinkStatistics};
 
 /// A frame of a known type, decoded.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Message {
     /// 0x16, radio → module.
     RcChannels(RcChannels),

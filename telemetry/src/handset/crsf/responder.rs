@@ -190,20 +190,51 @@ impl Responder {
     }
 
     /// Fills `out` with whole frames for the reply window opened by the last radio frame and
-    /// returns the byte count (0: stay silent — no window, or nothing due). Send it as one
-    /// burst right away; EdgeTX reads a burst on its UART idle interrupt.
+    /// returns the byte count (0: stay silent — no window, window missed, or nothing due). Send
+    /// it as one burst right away; EdgeTX reads a burst on its UART idle interrupt.
     pub fn reply(&mut self, now_us: u64, telemetry: &HandsetTelemetry, out: &mut [u8]) -> usize {
-        let Some((_, radio_frame_len)) = self.window.take() else {
+        let Some((frame_end_us, radio_frame_len)) = self.window.take() else {
             return 0;
         };
+        // Starting later than half a period risks colliding with the radio's next frame on
+        // the shared wire (the budget assumes we start right after its frame).
+        if now_us.saturating_sub(frame_end_us) > u64::from(self.radio_period_us / 2) {
+            return 0;
+        }
         let budget = self.reply_budget(radio_frame_len).min(out.len());
-        let mut writer = Writer {
+        if self.ping_pending {
+            // EdgeTX ≥ 2.11 sends no channels until it has our DEVICE_INFO, so the answer goes
+            // out even if the window is short; it then has the window to itself.
+            let info = Message::DeviceInfo(self.config.device_info.clone());
+            let fits = info
+                .to_frame(address::FLIGHT_CONTROLLER)
+                .is_ok_and(|frame| frame.wire_len() <= budget);
+            let limit = if fits {
+                budget
+            } else {
+                out.len().min(MAX_REPLY_BYTES)
+            };
+            let mut writer = Writer {
+                out: out.get_mut(..limit).unwrap_or_default(),
+                used: 0,
+            };
+            if writer.put(&info) {
+                self.ping_pending = false;
+            }
+            if !fits {
+                return writer.used;
+            }
+            return self.fill(now_us, telemetry, writer);
+        }
+        let writer = Writer {
             out: out.get_mut(..budget).unwrap_or_default(),
             used: 0,
         };
-        if self.ping_pending && writer.put(&Message::DeviceInfo(self.config.device_info.clone())) {
-            self.ping_pending = false;
-        }
+        self.fill(now_us, telemetry, writer)
+    }
+
+    /// Adds what is due after a possible DEVICE_INFO: timing, link statistics, sensors.
+    fn fill(&mut self, now_us: u64, telemetry: &HandsetTelemetry, mut writer: Writer) -> usize {
         if self.timing_due(now_us)
             && let Some(timing) = self.timing_correction()
             && writer.put(&Message::TimingCorrection(timing))

@@ -200,6 +200,7 @@ impl Attitude {
 
 /// FLIGHT_MODE (0x21): NUL-terminated text.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FlightMode {
     /// The mode name (no NUL inside).
     pub name: String<FLIGHT_MODE_MAX_LEN>,

@@ -12,6 +12,9 @@ pub enum Rejection {
         /// Bytes after the physical ID collected before the restart.
         held: u8,
     },
+    /// 0x7D where the physical ID belongs: no sensor has it (IDs carry parity bits), and the
+    /// encoder could not send it back.
+    ReservedPhysicalId,
     /// The checksum over the 8 unstuffed bytes did not fold to 0xFF.
     CrcMismatch {
         /// CRC computed over the 7 body bytes.
@@ -88,6 +91,10 @@ impl Decoder {
         }
         match &mut self.state {
             State::Hunting => None,
+            State::Started if byte == STUFF => {
+                self.state = State::Hunting;
+                Some(Event::Rejected(Rejection::ReservedPhysicalId))
+            }
             State::Started => {
                 self.state = State::Body {
                     physical_id: byte,
