@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 
 pub mod app;
+pub mod battery;
 pub mod button;
 pub mod channels;
 pub mod hm10;
