@@ -85,9 +85,19 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         &self.link
     }
 
+    /// The link plug-in, mutable (its task drains what the core queued).
+    pub fn link_mut(&mut self) -> &mut L {
+        &mut self.link
+    }
+
     /// The handset plug-in.
     pub fn handset(&self) -> &H {
         &self.handset
+    }
+
+    /// The handset plug-in, mutable (the JR-line task takes its frames).
+    pub fn handset_mut(&mut self) -> &mut H {
+        &mut self.handset
     }
 
     /// Input counters.

@@ -1,5 +1,6 @@
-//! Owns the RFM22B: hard reset through SDN, probe, report; keeps retrying while no chip
-//! answers.
+//! Owns the RFM22B: hard reset through SDN, probe, report presence to the module core;
+//! keeps retrying while no chip answers. The link itself comes with the link task
+//! (see `seams`).
 
 use defmt::{info, warn};
 use embassy_time::{Delay, Duration, Timer};
@@ -8,6 +9,7 @@ use radio_rfm22b::Bus;
 
 use super::supervisor::{Watched, check_in};
 use crate::firmware::board::Radio;
+use crate::firmware::shared::{carry_out, with_app};
 
 #[embassy_executor::task]
 pub async fn radio_task(radio: Radio) {
@@ -28,13 +30,23 @@ pub async fn radio_task(radio: Radio) {
         Timer::after(Duration::from_millis(15)).await;
         sdn.set_low();
         Timer::after(Duration::from_millis(20)).await;
-        match radio_rfm22b::software_reset(&mut bus, &mut Delay, 50).await {
+        let present = match radio_rfm22b::software_reset(&mut bus, &mut Delay, 50).await {
             Ok(()) => match radio_rfm22b::probe(&mut bus).await {
-                Ok(chip) => info!("RFM22B found: Si4432 {}", chip.version),
-                Err(e) => warn!("radio probe failed: {}", e),
+                Ok(chip) => {
+                    info!("RFM22B found: Si4432 {}", chip.version);
+                    true
+                }
+                Err(e) => {
+                    warn!("radio probe failed: {}", e);
+                    false
+                }
             },
-            Err(e) => warn!("radio reset failed: {}", e),
-        }
+            Err(e) => {
+                warn!("radio reset failed: {}", e);
+                false
+            }
+        };
+        carry_out(with_app(|app| app.on_radio_present(present)).flatten());
         for _ in 0..10 {
             check_in(Watched::Radio);
             Timer::after(Duration::from_millis(100)).await;
