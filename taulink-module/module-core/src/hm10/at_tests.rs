@@ -192,3 +192,46 @@ fn deadlines_survive_the_millisecond_wrap() {
     );
     assert_eq!(script.poll(until, &[]), Action::Send(b"AT"));
 }
+
+proptest::proptest! {
+    /// Whatever the module answers (garbage, partial replies, notifications), the script
+    /// ends within a bounded number of steps and sends nothing after an `OK+CONN`.
+    #[test]
+    fn any_replies_end_the_script(
+        replies in proptest::collection::vec(proptest::collection::vec(proptest::prelude::any::<u8>(), 0..12), 0..40),
+        connect_at in proptest::option::of(0usize..40),
+    ) {
+        let mut script = Configurator::new("TauLink", 1_000);
+        let mut now = 1_000u32;
+        let mut replies = replies.into_iter().enumerate();
+        let mut connected = false;
+        let mut pending: std::vec::Vec<u8> = std::vec::Vec::new();
+        let mut finished = None;
+        for _ in 0..500 {
+            match script.poll(now, &pending) {
+                Action::Done(outcome) => {
+                    finished = Some(outcome);
+                    break;
+                }
+                Action::Send(_) => proptest::prop_assert!(!connected, "AT after OK+CONN"),
+                Action::SetBaud(baud) => proptest::prop_assert!(baud == 9_600 || baud == 115_200),
+                Action::Wait { until_ms } => {
+                    now = until_ms;
+                }
+            }
+            pending.clear();
+            if let Some((index, bytes)) = replies.next() {
+                pending = bytes;
+                if connect_at == Some(index) {
+                    pending.extend_from_slice(b"OK+CONN");
+                    connected = true;
+                }
+            }
+        }
+        let outcome = finished.expect("script must finish");
+        // The bytes with the notification reach the very next poll, which must end it.
+        if connected {
+            proptest::prop_assert!(matches!(outcome, Outcome::PhoneConnected { .. }), "{:?}", outcome);
+        }
+    }
+}
