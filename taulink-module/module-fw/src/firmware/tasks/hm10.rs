@@ -119,9 +119,14 @@ async fn relay(hm10: &mut Hm10, baud: u32) {
     let receive = async {
         let mut buffer = [0u8; 64];
         loop {
-            if let Ok(count) = rx.read_until_idle(&mut buffer).await {
-                let bytes = buffer.get(..count).unwrap_or(&[]);
-                with_app(|app| app.on_phone_bytes(bytes));
+            match rx.read_until_idle(&mut buffer).await {
+                Ok(count) => {
+                    let bytes = buffer.get(..count).unwrap_or(&[]);
+                    with_app(|app| app.on_phone_bytes(bytes));
+                }
+                // A framing or overrun error: the COBS framing resynchronises by itself;
+                // pause so a line stuck in error cannot starve the other tasks.
+                Err(_) => Timer::after(Duration::from_millis(1)).await,
             }
         }
     };
