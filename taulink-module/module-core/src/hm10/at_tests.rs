@@ -109,6 +109,7 @@ fn factory_module_is_moved_to_115200() {
             (9_600, "AT+NOTI1"),
             (9_600, "AT+BAUD4"),
             (9_600, "AT+RESET"),
+            (115_200, "AT"),
         ]
     );
     assert_eq!(module.baud, 115_200);
@@ -129,6 +130,7 @@ fn configured_module_keeps_its_rate() {
             (115_200, "AT+NAMETauLink-with"),
             (115_200, "AT+NOTI1"),
             (115_200, "AT+RESET"),
+            (115_200, "AT"),
         ]
     );
 }
@@ -169,6 +171,45 @@ fn a_connection_mid_script_aborts_it() {
         script.poll(900, b"OK"),
         Action::Done(Outcome::PhoneConnected { baud: 115_200 })
     );
+}
+
+#[test]
+fn a_module_that_ignores_baud4_fails_verification() {
+    let mut module = FakeHm10::new(9_600);
+    let mut script = Configurator::new("TauLink", 0);
+    // A clone that answers AT+BAUD4 but keeps 9600 after the reset.
+    let mut sent = std::vec::Vec::new();
+    let mut now = 0u32;
+    let mut uart_baud = 0;
+    let mut received = std::vec::Vec::new();
+    let outcome = loop {
+        let action = script.poll(now, &received);
+        received.clear();
+        match action {
+            Action::Done(outcome) => break outcome,
+            Action::SetBaud(baud) => uart_baud = baud,
+            Action::Send(bytes) => {
+                sent.push(bytes.to_vec());
+                module.write(uart_baud, bytes);
+                module.next_baud = 9_600;
+            }
+            Action::Wait { until_ms } => {
+                if module.reply.is_empty() {
+                    now = until_ms;
+                } else {
+                    now += 5;
+                    received = core::mem::take(&mut module.reply);
+                }
+            }
+        }
+    };
+    assert_eq!(
+        outcome,
+        Outcome::Failed {
+            stage: Stage::Verify
+        }
+    );
+    assert_eq!(sent.last().unwrap(), b"AT");
 }
 
 #[test]
