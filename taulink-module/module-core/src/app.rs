@@ -160,6 +160,11 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         self.flush_uplink();
     }
 
+    /// The HM-10 configuration found a phone already connected.
+    pub fn on_phone_connected(&mut self) {
+        self.relay.set_connected(true);
+    }
+
     /// The next frame for the HM-10 UART (`out` ≥ `hm10::relay::MAX_FRAME_LEN`).
     pub fn next_phone_frame(&mut self, out: &mut [u8]) -> Option<usize> {
         self.relay.next_frame_to_phone(out)

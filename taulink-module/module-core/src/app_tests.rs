@@ -94,12 +94,15 @@ fn crsf_channels_go_to_the_link_only_in_crsf_mode() {
 #[test]
 fn flight_telemetry_fans_out_to_handset_and_phone() {
     let mut app = app(Settings::default());
-    app.on_phone_bytes(b"OK+CONN");
+    app.on_link_record(&[0x55]);
+    app.on_phone_connected();
     let records = [vec![0x08, 0x00, 0x7B, 0x00], vec![0x14, 0x64, 0x00, 0xC5]];
     for record in &records {
         app.on_link_record(record);
     }
-    assert_eq!(app.handset().telemetry, records);
+    // The handset gets everything; the phone only what came after it connected.
+    assert_eq!(app.handset().telemetry[0], vec![0x55]);
+    assert_eq!(app.handset().telemetry[1..], records);
     let mut stream = Vec::new();
     let mut frame = [0u8; MAX_FRAME_LEN];
     while let Some(n) = app.next_phone_frame(&mut frame) {

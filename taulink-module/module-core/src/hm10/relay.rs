@@ -150,6 +150,12 @@ impl Relay {
         self.connected
     }
 
+    /// Sets the connection state from outside knowledge (the configuration script saw the
+    /// phone before the relay started).
+    pub fn set_connected(&mut self, connected: bool) {
+        self.connected = connected;
+    }
+
     /// The counters.
     pub fn stats(&self) -> RelayStats {
         RelayStats {

@@ -55,7 +55,7 @@ pub async fn hm10_task(mut hm10: Hm10) {
         }
     };
     if matches!(outcome, Outcome::PhoneConnected { .. }) {
-        with_app(|app| app.on_phone_bytes(b"OK+CONN"));
+        with_app(|app| app.on_phone_connected());
     }
     relay(&mut hm10, relay_baud).await;
 }
