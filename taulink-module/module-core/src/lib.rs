@@ -5,8 +5,12 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod app;
+pub mod battery;
+pub mod button;
 pub mod channels;
 pub mod hm10;
+pub mod ports;
 pub mod ppm;
 pub mod settings;
 pub mod status;

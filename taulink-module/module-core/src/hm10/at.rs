@@ -6,7 +6,8 @@
 //! `OK+CONN`, and must not get an `AT`: while connected, a lone `AT` disconnects it), then
 //! probes at 115 200; if that is silent it probes at the factory 9600 and sets
 //! `AT+BAUD4` there. In both cases it sets the name and `AT+NOTI1` (connection
-//! notifications for the relay) and ends with `AT+RESET`, after which the settings apply.
+//! notifications for the relay) and sends `AT+RESET`, after which the settings apply; a
+//! last `AT` at 115 200 Bd checks that they did.
 //! An `OK+CONN` at any point aborts the script: the phone wins.
 
 use heapless::Vec;
@@ -70,6 +71,8 @@ pub enum Stage {
     Reset,
     /// Waiting for the reboot.
     Reboot,
+    /// `AT` at the final rate: the new settings took effect.
+    Verify,
 }
 
 /// What the firmware must do next.
@@ -197,7 +200,7 @@ impl Configurator {
     fn reply_complete(&self) -> bool {
         let expected: &[u8] = match self.stage {
             Stage::Listen | Stage::Reboot => return false,
-            Stage::ProbeFast | Stage::ProbeFactory => b"OK",
+            Stage::ProbeFast | Stage::ProbeFactory | Stage::Verify => b"OK",
             Stage::Name | Stage::Notifications | Stage::Baud => b"OK+Set",
             Stage::Reset => b"OK+RESET",
         };
@@ -222,7 +225,8 @@ impl Configurator {
                     until_ms: self.deadline_ms,
                 };
             }
-            Stage::Reboot => return self.finish(Outcome::Configured { baud: self.baud }),
+            Stage::Reboot => Stage::Verify,
+            Stage::Verify => return self.finish(Outcome::Configured { baud: self.baud }),
         };
         self.enter(next);
         self.poll(now_ms, &[])
@@ -234,7 +238,7 @@ impl Configurator {
         self.send_pending = true;
         self.command.clear();
         let parts: [&[u8]; 2] = match stage {
-            Stage::ProbeFast | Stage::ProbeFactory => [b"AT", b""],
+            Stage::ProbeFast | Stage::ProbeFactory | Stage::Verify => [b"AT", b""],
             Stage::Name => [b"AT+NAME", &self.name],
             Stage::Notifications => [b"AT+NOTI1", b""],
             Stage::Baud => [b"AT+BAUD4", b""],

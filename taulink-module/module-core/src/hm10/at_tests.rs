@@ -109,6 +109,7 @@ fn factory_module_is_moved_to_115200() {
             (9_600, "AT+NOTI1"),
             (9_600, "AT+BAUD4"),
             (9_600, "AT+RESET"),
+            (115_200, "AT"),
         ]
     );
     assert_eq!(module.baud, 115_200);
@@ -129,6 +130,7 @@ fn configured_module_keeps_its_rate() {
             (115_200, "AT+NAMETauLink-with"),
             (115_200, "AT+NOTI1"),
             (115_200, "AT+RESET"),
+            (115_200, "AT"),
         ]
     );
 }
@@ -172,6 +174,45 @@ fn a_connection_mid_script_aborts_it() {
 }
 
 #[test]
+fn a_module_that_ignores_baud4_fails_verification() {
+    let mut module = FakeHm10::new(9_600);
+    let mut script = Configurator::new("TauLink", 0);
+    // A clone that answers AT+BAUD4 but keeps 9600 after the reset.
+    let mut sent = std::vec::Vec::new();
+    let mut now = 0u32;
+    let mut uart_baud = 0;
+    let mut received = std::vec::Vec::new();
+    let outcome = loop {
+        let action = script.poll(now, &received);
+        received.clear();
+        match action {
+            Action::Done(outcome) => break outcome,
+            Action::SetBaud(baud) => uart_baud = baud,
+            Action::Send(bytes) => {
+                sent.push(bytes.to_vec());
+                module.write(uart_baud, bytes);
+                module.next_baud = 9_600;
+            }
+            Action::Wait { until_ms } => {
+                if module.reply.is_empty() {
+                    now = until_ms;
+                } else {
+                    now += 5;
+                    received = core::mem::take(&mut module.reply);
+                }
+            }
+        }
+    };
+    assert_eq!(
+        outcome,
+        Outcome::Failed {
+            stage: Stage::Verify
+        }
+    );
+    assert_eq!(sent.last().unwrap(), b"AT");
+}
+
+#[test]
 fn a_refused_command_fails_its_stage() {
     let mut module = FakeHm10::new(115_200);
     module.answers_name = false;
@@ -191,4 +232,47 @@ fn deadlines_survive_the_millisecond_wrap() {
         Action::Wait { until_ms: until }
     );
     assert_eq!(script.poll(until, &[]), Action::Send(b"AT"));
+}
+
+proptest::proptest! {
+    /// Whatever the module answers (garbage, partial replies, notifications), the script
+    /// ends within a bounded number of steps and sends nothing after an `OK+CONN`.
+    #[test]
+    fn any_replies_end_the_script(
+        replies in proptest::collection::vec(proptest::collection::vec(proptest::prelude::any::<u8>(), 0..12), 0..40),
+        connect_at in proptest::option::of(0usize..40),
+    ) {
+        let mut script = Configurator::new("TauLink", 1_000);
+        let mut now = 1_000u32;
+        let mut replies = replies.into_iter().enumerate();
+        let mut connected = false;
+        let mut pending: std::vec::Vec<u8> = std::vec::Vec::new();
+        let mut finished = None;
+        for _ in 0..500 {
+            match script.poll(now, &pending) {
+                Action::Done(outcome) => {
+                    finished = Some(outcome);
+                    break;
+                }
+                Action::Send(_) => proptest::prop_assert!(!connected, "AT after OK+CONN"),
+                Action::SetBaud(baud) => proptest::prop_assert!(baud == 9_600 || baud == 115_200),
+                Action::Wait { until_ms } => {
+                    now = until_ms;
+                }
+            }
+            pending.clear();
+            if let Some((index, bytes)) = replies.next() {
+                pending = bytes;
+                if connect_at == Some(index) {
+                    pending.extend_from_slice(b"OK+CONN");
+                    connected = true;
+                }
+            }
+        }
+        let outcome = finished.expect("script must finish");
+        // The bytes with the notification reach the very next poll, which must end it.
+        if connected {
+            proptest::prop_assert!(matches!(outcome, Outcome::PhoneConnected { .. }), "{:?}", outcome);
+        }
+    }
 }

@@ -36,6 +36,19 @@ pub struct DropStats {
 }
 
 /// Up to `RECORDS` records in `BYTES` bytes, each at most `max_record_len` long.
+///
+/// ```
+/// use module_core::hm10::{Pushed, RecordQueue};
+///
+/// let mut queue = RecordQueue::<8, 4>::new(8);
+/// queue.push(&[1, 2, 3]);
+/// queue.push(&[4, 5, 6]);
+/// // 6 of 8 bytes used: the oldest record goes, whole.
+/// assert_eq!(queue.push(&[7, 8, 9]), Pushed::Stored { dropped: 1 });
+/// let mut out = [0; 8];
+/// assert_eq!(queue.pop_into(&mut out), Ok(Some(3)));
+/// assert_eq!(&out[..3], &[4, 5, 6]);
+/// ```
 #[derive(Debug)]
 pub struct RecordQueue<const BYTES: usize, const RECORDS: usize> {
     bytes: Deque<u8, BYTES>,

@@ -150,6 +150,12 @@ impl Relay {
         self.connected
     }
 
+    /// Sets the connection state from outside knowledge (the configuration script saw the
+    /// phone before the relay started).
+    pub fn set_connected(&mut self, connected: bool) {
+        self.connected = connected;
+    }
+
     /// The counters.
     pub fn stats(&self) -> RelayStats {
         RelayStats {
@@ -170,7 +176,8 @@ impl Relay {
     /// The next frame for the HM-10 UART (COBS plus delimiter) into `out`, which must hold
     /// [`MAX_FRAME_LEN`] bytes; `None` when nothing is to be sent.
     pub fn next_frame_to_phone(&mut self, out: &mut [u8]) -> Option<usize> {
-        if !self.connected {
+        // A short buffer would have to lose the record it pops: refuse before popping.
+        if !self.connected || out.len() < MAX_FRAME_LEN {
             return None;
         }
         let mut record = [0u8; MAX_RECORD_LEN];

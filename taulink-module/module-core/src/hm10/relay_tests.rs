@@ -59,6 +59,20 @@ fn records_reach_the_phone_framed_and_intact() {
 }
 
 #[test]
+fn a_short_output_buffer_takes_nothing() {
+    let mut relay = Relay::new(true);
+    relay.on_link_record(&[1, 2, 3]);
+    assert_eq!(
+        relay.next_frame_to_phone(&mut [0u8; MAX_FRAME_LEN - 1]),
+        None
+    );
+    assert_eq!(
+        phone_decode(&drain_to_phone(&mut relay)),
+        vec![vec![1, 2, 3]]
+    );
+}
+
+#[test]
 fn nothing_is_sent_without_a_phone_and_notifications_switch() {
     let mut relay = Relay::new(false);
     relay.on_link_record(&[1, 2, 3]);

@@ -108,6 +108,23 @@ enum State {
 
 /// The PPM input decoder. Feed [`Decoder::on_edge`] with every captured edge and call
 /// [`Decoder::on_tick`] now and then (same clock) for loss detection.
+///
+/// ```
+/// use module_core::ppm::{Decoded, Decoder, DecoderConfig};
+///
+/// let mut decoder = Decoder::new(DecoderConfig::default());
+/// let mut last = None;
+/// // Seven frames of four 1500 µs channels every 20 ms: the first gap only finds sync, the
+/// // next four frame ends acquire the lock, the sixth is handed out.
+/// for frame in 0..7u32 {
+///     for edge in 0..5u32 {
+///         if let Some(Decoded::Frame(channels)) = decoder.on_edge(frame * 20_000 + edge * 1_500) {
+///             last = Some(channels);
+///         }
+///     }
+/// }
+/// assert_eq!(last.unwrap().as_slice(), &[992; 4]);
+/// ```
 #[derive(Debug, Clone)]
 pub struct Decoder {
     config: DecoderConfig,

@@ -1,17 +1,28 @@
 //! The only file that names pins and interrupts. Mirrors `hardware/taulink-module/README.md`
-//! (the nice!nano-class pin map proposed in hardware.md §5).
+//! (the nice!nano-class pin map proposed in hardware.md §5); change both together.
 
 use embassy_nrf::gpio::{Input, Level, Output, OutputDrive, Pull};
+use embassy_nrf::peripherals::{
+    GPIOTE_CH0, NVMC, P0_02, P0_06, P0_08, P1_04, P1_06, P1_11, P1_13, PPI_CH0, PPI_CH1, PPI_CH2,
+    PPI_CH3, PPI_CH4, PWM0, SAADC, TIMER1, TIMER2, TIMER3, UARTE0, UARTE1,
+};
 use embassy_nrf::spim::{self, Spim};
 use embassy_nrf::wdt::{self, Watchdog, WatchdogHandle};
-use embassy_nrf::{Peripherals, bind_interrupts, config, peripherals};
+use embassy_nrf::{Peri, Peripherals, bind_interrupts, config, peripherals, saadc, uarte};
 
 bind_interrupts!(pub struct Irqs {
     SPIM3 => spim::InterruptHandler<peripherals::SPI3>;
+    UARTE0 => uarte::InterruptHandler<peripherals::UARTE0>;
+    UARTE1 => uarte::InterruptHandler<peripherals::UARTE1>;
+    SAADC => saadc::InterruptHandler;
 });
 
 /// Watchdog period in 32 768 Hz ticks (250 ms).
 const WATCHDOG_TICKS: u32 = 32_768 / 4;
+
+/// Settings area in flash: 8 pages of 4 KiB below the UF2 bootloader (build.rs keeps the
+/// image out of it in both layouts).
+pub const SETTINGS_FLASH: core::ops::Range<u32> = 0xEC000..0xF4000;
 
 /// HFXO for the radio-grade 64 MHz clock and accurate UART baud rates; LFXO for the RTC
 /// that drives embassy-time. DC/DC on (the nice!nano fits the inductor).
@@ -35,14 +46,92 @@ pub struct Radio {
     pub sdn: Output<'static>,
 }
 
+/// PPM input on JR pin 1 (P1.04): GPIOTE CH0 → PPI CH0 → TIMER1 CAPTURE[0].
+pub struct PpmIn {
+    /// Free-running 1 MHz time base.
+    pub timer: Peri<'static, TIMER1>,
+    /// The GPIOTE channel watching the pin.
+    pub edge_channel: Peri<'static, GPIOTE_CH0>,
+    /// The PPI channel from the edge event to the capture task.
+    pub capture_channel: Peri<'static, PPI_CH0>,
+    /// P1.04.
+    pub pin: Peri<'static, P1_04>,
+}
+
+/// PPM output (receiver role) on P1.06 from PWM0 channel 0.
+pub struct PpmOut {
+    /// PWM0.
+    pub pwm: Peri<'static, PWM0>,
+    /// P1.06.
+    pub pin: Peri<'static, P1_06>,
+}
+
+/// The half-duplex JR pin 5 line on UARTE0 behind the XOR and the tri-state buffer.
+pub struct JrLine {
+    /// UARTE0, re-created per direction.
+    pub uarte: Peri<'static, UARTE0>,
+    /// P0.06, UARTE0 TXD.
+    pub tx: Peri<'static, P0_06>,
+    /// P0.08, UARTE0 RXD.
+    pub rx: Peri<'static, P0_08>,
+    /// Idle-line detection for received frames: TIMER2 with PPI CH1/CH2.
+    pub idle_timer: Peri<'static, TIMER2>,
+    /// First PPI channel of the idle detection.
+    pub idle_ppi_start: Peri<'static, PPI_CH1>,
+    /// Second PPI channel of the idle detection.
+    pub idle_ppi_stop: Peri<'static, PPI_CH2>,
+    /// P0.09: buffer output enable, high only while sending.
+    pub driver_enable: Output<'static>,
+    /// P0.10: XOR control, high = inverted line.
+    pub invert: Output<'static>,
+}
+
+/// The HM-10 on UARTE1: P1.11 to its RXD, P1.13 from its TXD.
+pub struct Hm10 {
+    /// UARTE1.
+    pub uarte: Peri<'static, UARTE1>,
+    /// P1.11, UARTE1 TXD.
+    pub tx: Peri<'static, P1_11>,
+    /// P1.13, UARTE1 RXD.
+    pub rx: Peri<'static, P1_13>,
+    /// Idle-line detection: TIMER3 with PPI CH3/CH4.
+    pub idle_timer: Peri<'static, TIMER3>,
+    /// First PPI channel of the idle detection.
+    pub idle_ppi_start: Peri<'static, PPI_CH3>,
+    /// Second PPI channel of the idle detection.
+    pub idle_ppi_stop: Peri<'static, PPI_CH4>,
+}
+
+/// Radio battery sense on P0.02 (AIN0) behind the 100 k / 22 k divider.
+pub struct Battery {
+    /// The SAADC.
+    pub saadc: Peri<'static, SAADC>,
+    /// P0.02 = AIN0.
+    pub pin: Peri<'static, P0_02>,
+}
+
 /// Everything the tasks own.
 pub struct Board {
     /// On-board LED P0.15, active high.
     pub status_led: Output<'static>,
+    /// Bind button P1.15 to GND, internal pull-up.
+    pub bind_button: Input<'static>,
     /// Watchdog handle, `None` if the WDT was already running with another setup.
     pub watchdog: Option<WatchdogHandle>,
     /// The radio module.
     pub radio: Radio,
+    /// PPM input.
+    pub ppm_in: PpmIn,
+    /// PPM output.
+    pub ppm_out: PpmOut,
+    /// JR pin 5 line.
+    pub jr_line: JrLine,
+    /// HM-10 UART.
+    pub hm10: Hm10,
+    /// Battery sense.
+    pub battery: Battery,
+    /// Flash controller for the settings.
+    pub nvmc: Peri<'static, NVMC>,
 }
 
 impl Board {
@@ -66,6 +155,7 @@ impl Board {
 
         Self {
             status_led: Output::new(p.P0_15, Level::Low, OutputDrive::Standard),
+            bind_button: Input::new(p.P1_15, Pull::Up),
             watchdog,
             radio: Radio {
                 spim,
@@ -73,6 +163,40 @@ impl Board {
                 nirq: Input::new(p.P0_11, Pull::Up),
                 sdn: Output::new(p.P1_00, Level::Low, OutputDrive::Standard),
             },
+            ppm_in: PpmIn {
+                timer: p.TIMER1,
+                edge_channel: p.GPIOTE_CH0,
+                capture_channel: p.PPI_CH0,
+                pin: p.P1_04,
+            },
+            ppm_out: PpmOut {
+                pwm: p.PWM0,
+                pin: p.P1_06,
+            },
+            jr_line: JrLine {
+                uarte: p.UARTE0,
+                tx: p.P0_06,
+                rx: p.P0_08,
+                idle_timer: p.TIMER2,
+                idle_ppi_start: p.PPI_CH1,
+                idle_ppi_stop: p.PPI_CH2,
+                // Buffer off (line released) and non-inverted until the line task decides.
+                driver_enable: Output::new(p.P0_09, Level::Low, OutputDrive::Standard),
+                invert: Output::new(p.P0_10, Level::Low, OutputDrive::Standard),
+            },
+            hm10: Hm10 {
+                uarte: p.UARTE1,
+                tx: p.P1_11,
+                rx: p.P1_13,
+                idle_timer: p.TIMER3,
+                idle_ppi_start: p.PPI_CH3,
+                idle_ppi_stop: p.PPI_CH4,
+            },
+            battery: Battery {
+                saadc: p.SAADC,
+                pin: p.P0_02,
+            },
+            nvmc: p.NVMC,
         }
     }
 }

@@ -1,11 +1,19 @@
-//! Table of contents: clocks, board, then one task per concern.
+//! Table of contents: clocks, board, settings, the module core, then one task per concern.
 
 mod board;
+mod seams;
+mod shared;
 mod tasks;
 
-use defmt::{error, info};
+use defmt::{error, info, warn};
+use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_executor::{SpawnError, SpawnToken, Spawner};
+use embassy_nrf::nvmc::Nvmc;
+use module_core::app::App;
+use module_core::settings::{InputProtocol, Role, Settings, SettingsStore};
 use {defmt_rtt as _, panic_probe as _};
+
+use tasks::supervisor::Watched;
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
@@ -18,24 +26,96 @@ async fn main(spawner: Spawner) {
         error!("watchdog already running with a foreign configuration");
         return;
     };
+    // First, so the watchdog is fed while the settings load.
+    match tasks::supervisor::supervisor_task(watchdog) {
+        Ok(token) => spawner.spawn(token),
+        Err(e) => error!("cannot start the supervisor: {}", e),
+    }
+
+    let flash = BlockingAsync::new(Nvmc::new(board.nvmc));
+    let Ok(mut store) = SettingsStore::new(flash, board::SETTINGS_FLASH) else {
+        error!("settings flash range rejected");
+        return;
+    };
+    let settings = match store.load().await {
+        Ok(Some(settings)) => settings,
+        Ok(None) => Settings::default(),
+        Err(e) => {
+            warn!("settings unreadable ({}), using defaults", e);
+            Settings::default()
+        }
+    };
+    info!("settings: {}", settings);
+    match App::new(
+        settings,
+        seams::LinkSeam::new(),
+        seams::HandsetSeam::new(),
+        false,
+    ) {
+        Ok(app) => shared::install(app),
+        Err(e) => error!("module core refused its configuration: {}", e),
+    }
+
     spawn(
         &spawner,
-        "supervisor",
-        tasks::supervisor::supervisor_task(watchdog),
-    );
-    spawn(
-        &spawner,
-        "status_led",
+        Watched::StatusLed,
         tasks::status_led::status_led_task(board.status_led),
     );
-    spawn(&spawner, "radio", tasks::radio::radio_task(board.radio));
+    spawn(
+        &spawner,
+        Watched::Radio,
+        tasks::radio::radio_task(board.radio),
+    );
+    spawn(&spawner, Watched::App, tasks::app::app_task());
+    spawn(
+        &spawner,
+        Watched::Button,
+        tasks::button::button_task(board.bind_button),
+    );
+    spawn(
+        &spawner,
+        Watched::Battery,
+        tasks::battery::battery_task(board.battery),
+    );
+    spawn(
+        &spawner,
+        Watched::Settings,
+        tasks::settings::settings_task(store),
+    );
+    spawn(&spawner, Watched::Hm10, tasks::hm10::hm10_task(board.hm10));
+    match settings.role {
+        Role::Transmitter => {
+            spawn(
+                &spawner,
+                Watched::JrLine,
+                tasks::jr_line::jr_line_task(board.jr_line, settings),
+            );
+            if settings.input == InputProtocol::Ppm {
+                spawn(
+                    &spawner,
+                    Watched::PpmIn,
+                    tasks::ppm_in::ppm_in_task(board.ppm_in),
+                );
+            }
+        }
+        Role::Receiver => {
+            spawn(
+                &spawner,
+                Watched::PpmOut,
+                tasks::ppm_out::ppm_out_task(board.ppm_out),
+            );
+        }
+    }
 }
 
-/// Starts a task. A task that cannot start never checks in with the supervisor, so the
-/// watchdog resets the board: logged, not a panic.
-fn spawn<S>(spawner: &Spawner, name: &str, token: Result<SpawnToken<S>, SpawnError>) {
+/// Registers a task with the supervisor and starts it. A task that cannot start is logged;
+/// it is then not expected to check in.
+fn spawn<S>(spawner: &Spawner, task: Watched, token: Result<SpawnToken<S>, SpawnError>) {
     match token {
-        Ok(token) => spawner.spawn(token),
-        Err(e) => error!("cannot start task {}: {}", name, e),
+        Ok(token) => {
+            tasks::supervisor::expect(task);
+            spawner.spawn(token);
+        }
+        Err(e) => error!("cannot start task {}: {}", task, e),
     }
 }

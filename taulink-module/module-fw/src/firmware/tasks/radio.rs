@@ -1,5 +1,6 @@
-//! Owns the RFM22B: hard reset through SDN, probe, report; keeps retrying while no chip
-//! answers.
+//! Owns the RFM22B: hard reset through SDN, probe, report presence to the module core;
+//! keeps retrying while no chip answers. The link itself comes with the link task
+//! (see `seams`).
 
 use defmt::{info, warn};
 use embassy_time::{Delay, Duration, Timer};
@@ -8,6 +9,7 @@ use radio_rfm22b::Rfm22b;
 
 use super::supervisor::{Watched, check_in};
 use crate::firmware::board::Radio;
+use crate::firmware::shared::{carry_out, with_app};
 
 #[embassy_executor::task]
 pub async fn radio_task(radio: Radio) {
@@ -23,10 +25,17 @@ pub async fn radio_task(radio: Radio) {
         check_in(Watched::Radio);
         // `reset` holds SDN high for 10 ms (full power-down, datasheet §3.3), waits out the
         // power-on reset, then software-resets and waits for chip-ready.
-        match rfm.reset().await {
-            Ok(chip) => info!("RFM22B found: Si4432 {}", chip.version),
-            Err(e) => warn!("radio reset/probe failed: {}", e),
-        }
+        let present = match rfm.reset().await {
+            Ok(chip) => {
+                info!("RFM22B found: Si4432 {}", chip.version);
+                true
+            }
+            Err(e) => {
+                warn!("radio reset/probe failed: {}", e);
+                false
+            }
+        };
+        carry_out(with_app(|app| app.on_radio_present(present)).flatten());
         for _ in 0..10 {
             check_in(Watched::Radio);
             Timer::after(Duration::from_millis(100)).await;

@@ -7,17 +7,38 @@ use embassy_nrf::wdt::WatchdogHandle;
 use embassy_time::{Duration, Ticker};
 
 /// One bit per supervised task.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, defmt::Format)]
 #[repr(u32)]
 pub enum Watched {
     /// The status LED task.
     StatusLed = 1 << 0,
     /// The radio task.
     Radio = 1 << 1,
+    /// PPM capture (transmitter role, PPM input).
+    PpmIn = 1 << 2,
+    /// PPM output (receiver role).
+    PpmOut = 1 << 3,
+    /// JR pin 5 line (transmitter role).
+    JrLine = 1 << 4,
+    /// HM-10 UART.
+    Hm10 = 1 << 5,
+    /// Battery ADC.
+    Battery = 1 << 6,
+    /// Bind button.
+    Button = 1 << 7,
+    /// Settings storage.
+    Settings = 1 << 8,
+    /// The module core's periodic work.
+    App = 1 << 9,
 }
 
-const ALL: u32 = Watched::StatusLed as u32 | Watched::Radio as u32;
+static EXPECTED: AtomicU32 = AtomicU32::new(0);
 static CHECKED_IN: AtomicU32 = AtomicU32::new(0);
+
+/// Registers a task before it starts: from then on it must check in.
+pub fn expect(task: Watched) {
+    EXPECTED.fetch_or(task as u32, Ordering::Relaxed);
+}
 
 /// Called by a task at least every 100 ms.
 pub fn check_in(task: Watched) {
@@ -29,7 +50,8 @@ pub async fn supervisor_task(mut watchdog: WatchdogHandle) {
     let mut ticker = Ticker::every(Duration::from_millis(100));
     loop {
         ticker.next().await;
-        if CHECKED_IN.load(Ordering::Relaxed) & ALL == ALL {
+        let expected = EXPECTED.load(Ordering::Relaxed);
+        if CHECKED_IN.load(Ordering::Relaxed) & expected == expected {
             CHECKED_IN.store(0, Ordering::Relaxed);
             watchdog.pet();
         }

@@ -1,0 +1,260 @@
+//! The application core: input source → link → fan-out to the handset and the HM-10, and
+//! link → PPM output in the receiver role. A pure struct: the firmware calls the `on_*`
+//! methods from its tasks and carries out what they return.
+
+use crate::button::ButtonEvent;
+use crate::channels::Channels;
+use crate::hm10::relay::{MAX_RECORD_LEN, Relay, RelayStats};
+use crate::ports::{HandsetOutput, LinkPort, LinkStats};
+use crate::ppm::{self, Decoded, Decoder, DecoderConfig, Encoder, EncoderConfig};
+use crate::settings::{InputProtocol, Role, Settings};
+use crate::status::LinkState;
+
+/// Something the firmware must do after an event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Action {
+    /// Show this state on the LED.
+    Led(LinkState),
+    /// Persist these settings.
+    Save(Settings),
+}
+
+/// Input health counters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct InputStats {
+    /// Frames handed to the link.
+    pub frames: u32,
+    /// PPM frames dropped by the decoder.
+    pub rejected: u32,
+    /// Times the PPM lock was lost.
+    pub losses: u32,
+}
+
+/// The module core.
+pub struct App<L: LinkPort, H: HandsetOutput> {
+    settings: Settings,
+    link: L,
+    handset: H,
+    decoder: Decoder,
+    encoder: Encoder,
+    relay: Relay,
+    radio_present: bool,
+    binding: bool,
+    was_connected: bool,
+    led: LinkState,
+    input: InputStats,
+}
+
+impl<L: LinkPort, H: HandsetOutput> App<L, H> {
+    /// The core with its settings and plug-ins; the PPM output takes its failsafe behaviour
+    /// from the settings.
+    pub fn new(
+        settings: Settings,
+        link: L,
+        handset: H,
+        phone_connected: bool,
+    ) -> Result<Self, ppm::encoder::ConfigError> {
+        let encoder = Encoder::new(EncoderConfig {
+            failsafe: settings.failsafe,
+            ..EncoderConfig::default()
+        })?;
+        Ok(Self {
+            settings,
+            link,
+            handset,
+            decoder: Decoder::new(DecoderConfig::default()),
+            encoder,
+            relay: Relay::new(phone_connected),
+            radio_present: false,
+            binding: false,
+            was_connected: false,
+            led: LinkState::NoRadio,
+            input: InputStats::default(),
+        })
+    }
+
+    /// The settings in force.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// The link plug-in.
+    pub fn link(&self) -> &L {
+        &self.link
+    }
+
+    /// The link plug-in, mutable (its task drains what the core queued).
+    pub fn link_mut(&mut self) -> &mut L {
+        &mut self.link
+    }
+
+    /// The handset plug-in.
+    pub fn handset(&self) -> &H {
+        &self.handset
+    }
+
+    /// The handset plug-in, mutable (the JR-line task takes its frames).
+    pub fn handset_mut(&mut self) -> &mut H {
+        &mut self.handset
+    }
+
+    /// Input counters.
+    pub fn input_stats(&self) -> InputStats {
+        self.input
+    }
+
+    /// HM-10 relay counters.
+    pub fn relay_stats(&self) -> RelayStats {
+        self.relay.stats()
+    }
+
+    /// A captured PPM edge (µs, TIMER1 clock).
+    pub fn on_ppm_edge(&mut self, timestamp_us: u32) {
+        if self.settings.role != Role::Transmitter || self.settings.input != InputProtocol::Ppm {
+            return;
+        }
+        match self.decoder.on_edge(timestamp_us) {
+            Some(Decoded::Frame(channels)) => self.forward(&channels),
+            Some(Decoded::Rejected(_)) => {
+                self.input.rejected = self.input.rejected.saturating_add(1)
+            }
+            Some(Decoded::Acquiring { .. }) | None => {}
+        }
+    }
+
+    /// PPM loss detection, on the TIMER1 clock.
+    pub fn on_ppm_tick(&mut self, now_us: u32) {
+        if self.decoder.on_tick(now_us).is_some() {
+            self.input.losses = self.input.losses.saturating_add(1);
+        }
+    }
+
+    /// Channels decoded from the handset's CRSF RC frames (the CRSF codec calls this).
+    pub fn on_handset_channels(&mut self, channels: &Channels) {
+        if self.settings.role == Role::Transmitter && self.settings.input == InputProtocol::Crsf {
+            self.forward(channels);
+        }
+    }
+
+    /// Channels received over the link (receiver role): they go to the PPM output.
+    pub fn on_link_channels(&mut self, channels: &Channels) {
+        if self.settings.role == Role::Receiver {
+            self.encoder.set_channels(channels);
+        }
+    }
+
+    /// A telemetry record received over the link: to the handset and the phone.
+    pub fn on_link_record(&mut self, record: &[u8]) {
+        if self.settings.role == Role::Transmitter {
+            self.handset.on_telemetry(record);
+        }
+        self.relay.on_link_record(record);
+    }
+
+    /// Bytes from the HM-10 UART; complete phone records go to the link while it has room
+    /// (the rest waits in the bounded relay queue).
+    pub fn on_phone_bytes(&mut self, bytes: &[u8]) {
+        self.relay.on_phone_bytes(bytes);
+        self.flush_uplink();
+    }
+
+    /// The HM-10 configuration found a phone already connected.
+    pub fn on_phone_connected(&mut self) {
+        self.relay.set_connected(true);
+    }
+
+    /// The next frame for the HM-10 UART (`out` ≥ `hm10::relay::MAX_FRAME_LEN`).
+    pub fn next_phone_frame(&mut self, out: &mut [u8]) -> Option<usize> {
+        self.relay.next_frame_to_phone(out)
+    }
+
+    /// The next PPM output frame (receiver role), at a frame boundary.
+    pub fn next_ppm_frame(&mut self) -> Option<ppm::Frame> {
+        match self.settings.role {
+            Role::Receiver => self.encoder.next_frame(),
+            Role::Transmitter => None,
+        }
+    }
+
+    /// The radio answered its probe (or stopped answering).
+    pub fn on_radio_present(&mut self, present: bool) -> Option<Action> {
+        self.radio_present = present;
+        self.update_led()
+    }
+
+    /// A debounced button event; a long press starts binding.
+    pub fn on_button(&mut self, event: ButtonEvent) -> Option<Action> {
+        if event == ButtonEvent::LongPress && !self.binding {
+            self.binding = true;
+            self.link.start_bind();
+        }
+        self.update_led()
+    }
+
+    /// The link finished binding with `bind_id`: remember it.
+    pub fn on_bind_complete(&mut self, bind_id: u32) -> Action {
+        self.binding = false;
+        self.settings.bind_id = bind_id;
+        Action::Save(self.settings)
+    }
+
+    /// Periodic work at `now_ms` (≈ 10 Hz): link state, failsafe, handset statistics and
+    /// uplink records that waited for room.
+    pub fn on_tick(&mut self, now_ms: u32) -> Option<Action> {
+        let stats: LinkStats = self.link.stats();
+        if self.settings.role == Role::Transmitter {
+            self.handset.on_link_stats(&stats, now_ms);
+        }
+        if stats.connected {
+            self.was_connected = true;
+            self.binding = false;
+        }
+        self.encoder.set_failsafe(!stats.connected);
+        self.flush_uplink();
+        self.update_led()
+    }
+
+    fn forward(&mut self, channels: &Channels) {
+        self.input.frames = self.input.frames.saturating_add(1);
+        self.link.send_channels(channels);
+    }
+
+    fn flush_uplink(&mut self) {
+        let mut record = [0u8; MAX_RECORD_LEN];
+        while self.link.can_send_record() {
+            let Some(length) = self.relay.next_record_to_flight(&mut record) else {
+                break;
+            };
+            if let Some(bytes) = record.get(..length) {
+                self.link.send_record(bytes);
+            }
+        }
+    }
+
+    fn update_led(&mut self) -> Option<Action> {
+        let connected = self.link.stats().connected;
+        let state = if !self.radio_present {
+            LinkState::NoRadio
+        } else if self.binding {
+            LinkState::Binding
+        } else if self.settings.bind_id == 0 {
+            LinkState::Unbound
+        } else if connected {
+            LinkState::Connected
+        } else if self.was_connected {
+            LinkState::Failsafe
+        } else {
+            LinkState::Searching
+        };
+        (state != self.led).then(|| {
+            self.led = state;
+            Action::Led(state)
+        })
+    }
+}
+
+#[cfg(test)]
+#[path = "app_tests.rs"]
+mod tests;

@@ -1,0 +1,192 @@
+use super::*;
+use crate::channels::{us_to_value, value_to_us};
+use crate::hm10::cobs;
+use crate::hm10::relay::MAX_FRAME_LEN;
+use crate::ppm::FailsafeOutput;
+use crate::ppm::waveform::edges;
+
+#[derive(Default)]
+struct FakeLink {
+    channels: Vec<Channels>,
+    records: Vec<Vec<u8>>,
+    room: usize,
+    stats: LinkStats,
+    binds: u32,
+}
+
+impl LinkPort for FakeLink {
+    fn send_channels(&mut self, channels: &Channels) {
+        self.channels.push(*channels);
+    }
+    fn can_send_record(&self) -> bool {
+        self.room > 0
+    }
+    fn send_record(&mut self, record: &[u8]) {
+        self.room -= 1;
+        self.records.push(record.to_vec());
+    }
+    fn stats(&self) -> LinkStats {
+        self.stats
+    }
+    fn start_bind(&mut self) {
+        self.binds += 1;
+    }
+}
+
+#[derive(Default)]
+struct FakeHandset {
+    telemetry: Vec<Vec<u8>>,
+    stats: Vec<(LinkStats, u32)>,
+}
+
+impl HandsetOutput for FakeHandset {
+    fn on_telemetry(&mut self, record: &[u8]) {
+        self.telemetry.push(record.to_vec());
+    }
+    fn on_link_stats(&mut self, stats: &LinkStats, now_ms: u32) {
+        self.stats.push((*stats, now_ms));
+    }
+}
+
+fn app(settings: Settings) -> App<FakeLink, FakeHandset> {
+    App::new(settings, FakeLink::default(), FakeHandset::default(), false).unwrap()
+}
+
+fn cobs_frame(record: &[u8]) -> Vec<u8> {
+    let mut out = vec![0u8; MAX_FRAME_LEN];
+    let n = cobs::encode(record, &mut out).unwrap();
+    out.truncate(n);
+    out.push(0);
+    out
+}
+
+#[test]
+fn taranis_ppm_reaches_the_link() {
+    let mut app = app(Settings::default());
+    let widths = [1500u16, 1500, 988, 1500, 2012, 1000, 1750, 1250];
+    for t in edges(&widths, 22_500, 20, 7) {
+        app.on_ppm_edge(t);
+    }
+    // 20 frames: 18 frame ends, the first 4 acquire the lock.
+    let sent = &app.link().channels;
+    assert_eq!(sent.len(), 14);
+    let expected: Vec<u16> = widths.iter().map(|w| us_to_value(*w)).collect();
+    assert!(sent.iter().all(|ch| ch.as_slice() == expected.as_slice()));
+    assert_eq!(app.input_stats().frames, 14);
+    app.on_ppm_tick(7 + 19 * 22_500 + 250_001);
+    assert_eq!(app.input_stats().losses, 1);
+}
+
+#[test]
+fn crsf_channels_go_to_the_link_only_in_crsf_mode() {
+    let channels = Channels::from_values(&[172, 992, 1811, 992]);
+    let mut ppm_mode = app(Settings::default());
+    ppm_mode.on_handset_channels(&channels);
+    assert!(ppm_mode.link().channels.is_empty());
+    let mut crsf_mode = app(Settings {
+        input: InputProtocol::Crsf,
+        ..Settings::default()
+    });
+    crsf_mode.on_handset_channels(&channels);
+    assert_eq!(crsf_mode.link().channels, vec![channels]);
+}
+
+#[test]
+fn flight_telemetry_fans_out_to_handset_and_phone() {
+    let mut app = app(Settings::default());
+    app.on_link_record(&[0x55]);
+    app.on_phone_connected();
+    let records = [vec![0x08, 0x00, 0x7B, 0x00], vec![0x14, 0x64, 0x00, 0xC5]];
+    for record in &records {
+        app.on_link_record(record);
+    }
+    // The handset gets everything; the phone only what came after it connected.
+    assert_eq!(app.handset().telemetry[0], vec![0x55]);
+    assert_eq!(app.handset().telemetry[1..], records);
+    let mut stream = Vec::new();
+    let mut frame = [0u8; MAX_FRAME_LEN];
+    while let Some(n) = app.next_phone_frame(&mut frame) {
+        stream.extend_from_slice(&frame[..n]);
+    }
+    let mut expected = cobs_frame(&records[0]);
+    expected.extend(cobs_frame(&records[1]));
+    assert_eq!(stream, expected);
+}
+
+#[test]
+fn phone_records_wait_for_room_on_the_link() {
+    let mut app = app(Settings::default());
+    app.link.room = 1;
+    let mut stream = b"OK+CONN".to_vec();
+    for i in 0..3u8 {
+        stream.extend(cobs_frame(&[0xA0 + i, 0x00, i]));
+    }
+    app.on_phone_bytes(&stream);
+    assert_eq!(app.link().records, vec![vec![0xA0, 0x00, 0]]);
+    app.link.room = 5;
+    app.on_tick(100);
+    assert_eq!(app.link().records.len(), 3);
+    assert_eq!(app.link().records[2], vec![0xA2, 0x00, 2]);
+    assert_eq!(app.relay_stats().to_flight.records, 0, "nothing dropped");
+}
+
+#[test]
+fn receiver_role_outputs_ppm_and_stops_on_failsafe() {
+    let mut app = app(Settings {
+        role: Role::Receiver,
+        failsafe: FailsafeOutput::StopPulses,
+        ..Settings::default()
+    });
+    assert_eq!(app.next_ppm_frame(), None);
+    app.link.stats.connected = true;
+    app.on_tick(0);
+    let values: Vec<u16> = [1100u16, 1200, 1300, 1400, 1500, 1600, 1700, 1800]
+        .iter()
+        .map(|w| us_to_value(*w))
+        .collect();
+    app.on_link_channels(&Channels::from_values(&values));
+    let frame = app.next_ppm_frame().unwrap();
+    let widths: Vec<u16> = frame.slots()[..8].iter().map(|s| s.period_us).collect();
+    let expected: Vec<u16> = values.iter().map(|v| value_to_us(*v)).collect();
+    assert_eq!(widths, expected);
+    assert_eq!(frame.length_us(), 22_500);
+    app.link.stats.connected = false;
+    app.on_tick(100);
+    assert_eq!(app.next_ppm_frame(), None, "stop pulses on failsafe");
+    // The transmitter role never drives the PPM output.
+    assert_eq!(self::app(Settings::default()).next_ppm_frame(), None);
+}
+
+#[test]
+fn led_follows_radio_bind_and_link() {
+    let mut app = app(Settings::default());
+    assert_eq!(app.on_tick(0), None, "starts as NoRadio");
+    assert_eq!(
+        app.on_radio_present(true),
+        Some(Action::Led(LinkState::Unbound))
+    );
+    assert_eq!(
+        app.on_button(ButtonEvent::LongPress),
+        Some(Action::Led(LinkState::Binding))
+    );
+    assert_eq!(app.on_button(ButtonEvent::LongPress), None);
+    assert_eq!(app.link().binds, 1, "one bind per long press while binding");
+    let Action::Save(saved) = app.on_bind_complete(0x1234_5678) else {
+        panic!("bind must save");
+    };
+    assert_eq!(saved.bind_id, 0x1234_5678);
+    assert_eq!(app.on_tick(100), Some(Action::Led(LinkState::Searching)));
+    app.link.stats = LinkStats {
+        connected: true,
+        rssi_dbm: -70,
+        link_quality_percent: 98,
+    };
+    assert_eq!(app.on_tick(200), Some(Action::Led(LinkState::Connected)));
+    assert_eq!(app.handset().stats.last(), Some(&(app.link().stats, 200)));
+    app.link.stats.connected = false;
+    assert_eq!(app.on_tick(300), Some(Action::Led(LinkState::Failsafe)));
+    assert_eq!(
+        app.on_radio_present(false),
+        Some(Action::Led(LinkState::NoRadio))
+    );
+}
