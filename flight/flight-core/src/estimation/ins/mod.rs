@@ -14,6 +14,7 @@ mod reset;
 
 pub use aiding::{Aided, Ins};
 pub use fusion::Fusion;
+pub use reset::tilt_from_accel;
 
 use crate::estimation::quaternion::{self, Quaternion};
 use crate::estimation::{Error, GRAVITY_MPS2, check_finite};
