@@ -215,9 +215,9 @@ impl Filter {
         let a = self.config.accel_bias_limit_mps2;
         let [.., bx, by, bz, ab_z] = &mut self.x;
         for b in [bx, by, bz] {
-            *b = b.clamp(-g, g);
+            *b = symmetric_clamp(*b, g);
         }
-        *ab_z = ab_z.clamp(-a, a);
+        *ab_z = symmetric_clamp(*ab_z, a);
     }
 
     fn renormalize(&mut self) {
@@ -236,5 +236,17 @@ impl Filter {
             sum += x + row.get(i).copied().unwrap_or(0.0);
         }
         sum.is_finite()
+    }
+}
+
+/// Clamps to ±`limit` without `f32::clamp`, which panics on a negative or NaN limit (a bad
+/// config must not be able to panic the filter; it just disables the clamp).
+fn symmetric_clamp(x: f32, limit: f32) -> f32 {
+    if x > limit {
+        limit
+    } else if x < -limit {
+        -limit
+    } else {
+        x
     }
 }
