@@ -2,7 +2,9 @@
 //! models, a scenario runner that drives the INS, error metrics, and the PX4 replay format.
 #![warn(missing_docs)]
 
+pub mod compare;
 pub mod metrics;
+pub mod plot;
 pub mod replay;
 pub mod rng;
 pub mod scenario;

@@ -32,6 +32,9 @@ pub enum Motion {
     /// ekf.md §7 `rock_and_turn`: 5 °/s yaw, vertical pulses, then a pitch rocking at 0.1 Hz
     /// from 30 s; the specific force stays body-fixed so the craft drifts away.
     RockAndTurn,
+    /// Hovering in place while rotating about all three axes (rates up to ~30 °/s): the
+    /// specific force is gravity only, so an accelerometer sees true "down" at all times.
+    Wobble,
 }
 
 impl Motion {
@@ -41,6 +44,10 @@ impl Motion {
         let g = f64::from(GRAVITY_MPS2);
         match self {
             Self::Static => ([0.0; 3], rotate_to_body(q, [0.0, 0.0, -g])),
+            Self::Wobble => (
+                [0.5 * (0.5 * t).sin(), 0.3 * (0.7 * t).cos(), 0.2],
+                rotate_to_body(q, [0.0, 0.0, -g]),
+            ),
             Self::Circle => {
                 if t < 5.0 {
                     ([0.0; 3], [0.0, 0.0, -g + 0.5])

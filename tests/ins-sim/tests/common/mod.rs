@@ -48,9 +48,14 @@ pub fn run(
     check_from_s: f64,
     setup: impl FnOnce(&mut Ins),
 ) -> Run {
-    let mut sim = Simulation::new(scenario);
     let mut ins = new_ins();
     setup(&mut ins);
+    run_with(ins, scenario, seconds, check_from_s)
+}
+
+/// Runs `scenario` for `seconds` with a prepared INS.
+pub fn run_with(mut ins: Ins, scenario: Scenario, seconds: f64, check_from_s: f64) -> Run {
+    let mut sim = Simulation::new(scenario);
     let mut worst = Errors::default();
     let mut last = Errors::default();
     let mut truth = Simulation::new(scenario).next_sample().truth;

@@ -1,5 +1,5 @@
-//! Covariance bookkeeping shared by prediction, fusion and resets. The fusion steps update
-//! only the upper triangle and mirror it, so P is symmetric by construction.
+//! Covariance bookkeeping shared by prediction, fusion and resets. Every write keeps P
+//! exactly (bitwise) symmetric.
 
 use super::{Covariance, STATES};
 
@@ -8,29 +8,34 @@ pub(super) fn column(p: &Covariance, k: usize) -> [f32; STATES] {
     p.get(k).copied().unwrap_or([0.0; STATES])
 }
 
-/// P ← P − (ph·phᵀ)/s on the upper triangle, then mirrored (the scalar Kalman update
-/// P − K·H·P with K = ph/s).
-pub(super) fn subtract_outer(p: &mut Covariance, ph: &[f32; STATES], inv_s: f32) {
-    for (i, (row, &ph_i)) in p.iter_mut().zip(ph.iter()).enumerate() {
-        let k_i = ph_i * inv_s;
-        for (p_ij, &ph_j) in row.iter_mut().zip(ph.iter()).skip(i) {
-            *p_ij -= k_i * ph_j;
+/// P ← P − (ph·phᵀ)/s, the scalar Kalman update P − K·H·P with K = ph/s. Written as
+/// P − u·uᵀ with u = ph/√s: every element is one multiply-subtract and, the product being
+/// commutative, P[i][j] and P[j][i] get bit-identical values, so P stays exactly symmetric
+/// without a mirror pass or index arithmetic.
+pub(super) fn subtract_outer(p: &mut Covariance, ph: &[f32; STATES], s: f32) {
+    let scale = crate::estimation::math::inv_sqrt(s);
+    let u = ph.map(|v| v * scale);
+    for (row, &u_i) in p.iter_mut().zip(u.iter()) {
+        for (p_ij, &u_j) in row.iter_mut().zip(u.iter()) {
+            *p_ij -= u_i * u_j;
         }
     }
-    mirror_upper(p);
 }
 
-/// Copies the upper triangle onto the lower one.
-pub(super) fn mirror_upper(p: &mut Covariance) {
-    for i in 1..STATES {
-        let (upper, lower) = p.split_at_mut(i);
-        if let Some(row) = lower.first_mut() {
-            for (p_ij, upper_row) in row.iter_mut().zip(upper.iter()) {
-                if let Some(&p_ji) = upper_row.get(i) {
-                    *p_ij = p_ji;
-                }
-            }
-        }
+/// P[i][j] (0 outside the matrix, which the callers' index ranges never reach).
+#[inline(always)]
+pub(super) fn get(p: &Covariance, i: usize, j: usize) -> f32 {
+    p.get(i).and_then(|row| row.get(j)).copied().unwrap_or(0.0)
+}
+
+/// P[i][j] = P[j][i] = v.
+#[inline(always)]
+pub(super) fn set_symmetric(p: &mut Covariance, i: usize, j: usize, v: f32) {
+    if let Some(x) = p.get_mut(i).and_then(|row| row.get_mut(j)) {
+        *x = v;
+    }
+    if let Some(x) = p.get_mut(j).and_then(|row| row.get_mut(i)) {
+        *x = v;
     }
 }
 

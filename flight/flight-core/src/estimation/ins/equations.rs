@@ -100,7 +100,8 @@ pub fn process_jacobian(
 #[must_use]
 pub fn level_frame_field(q: Quaternion, mag_body: [f32; 3]) -> [f32; 3] {
     let [[_, _, r13], [_, _, r23], [_, _, r33]] = ned_to_body(q);
-    let cos_pitch2 = (1.0 - r13 * r13).max(1e-12);
+    // A plain comparison, not f32::max, which the M4F lowers to a libm `fmaxf` call.
+    let cos_pitch2 = floor_at(1.0 - r13 * r13, 1e-12);
     let inv_cos_pitch = inv_sqrt(cos_pitch2);
     let cos_pitch = cos_pitch2 * inv_cos_pitch;
     let sin_pitch = -r13;
@@ -122,7 +123,7 @@ pub fn heading_field(q: Quaternion, earth_field_ne: [f32; 2]) -> ([f32; 2], [[f3
     let [q0, q1, q2, q3] = q;
     let r11 = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3;
     let r12 = 2.0 * (q1 * q2 + q0 * q3);
-    let r2 = (r11 * r11 + r12 * r12).max(1e-12);
+    let r2 = floor_at(r11 * r11 + r12 * r12, 1e-12);
     let inv_r = inv_sqrt(r2);
     let (cos_yaw, sin_yaw) = (r11 * inv_r, r12 * inv_r);
     let [b0, b1] = earth_field_ne;
@@ -137,4 +138,10 @@ pub fn heading_field(q: Quaternion, earth_field_ne: [f32; 2]) -> ([f32; 2], [[f3
         k * (r11 * q0 + r12 * q3),
     ];
     ([y6, y7], [dpsi.map(|d| y7 * d), dpsi.map(|d| -y6 * d)])
+}
+
+/// `max(x, floor)` for finite inputs without a libm call (a NaN gives `floor`).
+#[inline(always)]
+fn floor_at(x: f32, floor: f32) -> f32 {
+    if x > floor { x } else { floor }
 }

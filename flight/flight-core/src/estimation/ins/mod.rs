@@ -14,6 +14,7 @@ mod reset;
 
 pub use aiding::{Aided, Ins};
 pub use fusion::Fusion;
+pub use reset::tilt_from_accel;
 
 use crate::estimation::quaternion::{self, Quaternion};
 use crate::estimation::{Error, GRAVITY_MPS2, check_finite};
@@ -214,9 +215,9 @@ impl Filter {
         let a = self.config.accel_bias_limit_mps2;
         let [.., bx, by, bz, ab_z] = &mut self.x;
         for b in [bx, by, bz] {
-            *b = b.clamp(-g, g);
+            *b = symmetric_clamp(*b, g);
         }
-        *ab_z = ab_z.clamp(-a, a);
+        *ab_z = symmetric_clamp(*ab_z, a);
     }
 
     fn renormalize(&mut self) {
@@ -225,7 +226,27 @@ impl Filter {
         (*a, *b, *c, *d) = (q0, q1, q2, q3);
     }
 
+    /// Finiteness of the state and the variances with one sum instead of 210 tests: NaN and
+    /// ±∞ propagate through addition (∞ − ∞ = NaN), and a sum that overflowed would mean a
+    /// diverged filter anyway. Off-diagonal terms are not scanned: a non-finite covariance
+    /// term reaches the diagonal or the state at the next update and is caught then.
     fn is_finite(&self) -> bool {
-        self.x.iter().all(|v| v.is_finite()) && self.p.iter().flatten().all(|v| v.is_finite())
+        let mut sum = 0.0_f32;
+        for (i, (x, row)) in self.x.iter().zip(self.p.iter()).enumerate() {
+            sum += x + row.get(i).copied().unwrap_or(0.0);
+        }
+        sum.is_finite()
+    }
+}
+
+/// Clamps to ±`limit` without `f32::clamp`, which panics on a negative or NaN limit (a bad
+/// config must not be able to panic the filter; it just disables the clamp).
+fn symmetric_clamp(x: f32, limit: f32) -> f32 {
+    if x > limit {
+        limit
+    } else if x < -limit {
+        -limit
+    } else {
+        x
     }
 }

@@ -11,12 +11,16 @@ use crate::estimation::{Error, check_finite};
 /// should re-initialise rather than extrapolate.
 pub const MAX_DT_S: f32 = 0.1;
 
-/// Φ = I + F·dt in factored form.
+/// Φ = I + F·dt in factored form (only the blocks that differ from I).
 struct Transition {
     dt: f32,
+    /// dt·∂v̇/∂q, rows N, E, D.
     dv_dq: [[f32; 4]; 3],
-    dv_dbaz: [f32; 3],
+    /// dt·∂v̇/∂abz.
+    dv_dab: [f32; 3],
+    /// I + dt·∂q̇/∂q.
     qq: [[f32; 4]; 4],
+    /// dt·∂q̇/∂b_g.
     qb: [[f32; 3]; 4],
 }
 
@@ -31,43 +35,41 @@ impl Transition {
         Self {
             dt,
             dv_dq: j.dv_dq.map(|row| row.map(|c| c * dt)),
-            dv_dbaz: j.dv_dbaz.map(|c| c * dt),
+            dv_dab: j.dv_dbaz.map(|c| c * dt),
             qq,
             qb: j.dq_dbg.map(|row| row.map(|c| c * dt)),
         }
     }
+}
 
-    /// Φ·v.
-    fn apply(&self, v: &[f32; STATES]) -> [f32; STATES] {
-        let [p0, p1, p2, v0, v1, v2, q0, q1, q2, q3, b0, b1, b2, bz] = *v;
-        let dt = self.dt;
-        let vel = |r: &[f32; 4], rb: f32, base: f32| {
-            base + r[0] * q0 + r[1] * q1 + r[2] * q2 + r[3] * q3 + rb * bz
-        };
-        let quat = |r: &[f32; 4], rb: &[f32; 3]| {
-            r[0] * q0 + r[1] * q1 + r[2] * q2 + r[3] * q3 + rb[0] * b0 + rb[1] * b1 + rb[2] * b2
-        };
-        let [dv0, dv1, dv2] = &self.dv_dq;
-        let [db0, db1, db2] = self.dv_dbaz;
-        let [qq0, qq1, qq2, qq3] = &self.qq;
-        let [qb0, qb1, qb2, qb3] = &self.qb;
-        [
-            p0 + dt * v0,
-            p1 + dt * v1,
-            p2 + dt * v2,
-            vel(dv0, db0, v0),
-            vel(dv1, db1, v1),
-            vel(dv2, db2, v2),
-            quat(qq0, qb0),
-            quat(qq1, qb1),
-            quat(qq2, qb2),
-            quat(qq3, qb3),
-            b0,
-            b1,
-            b2,
-            bz,
-        ]
+/// Σₙ kₙ·rowsₙ, element-wise over columns `FIRST..14`; the columns before `FIRST` are never
+/// read by the second pass (it only needs W[r][m] for m in Φ rows c ≥ r) and stay 0. N and
+/// FIRST are constants, so this unrolls with the coefficients held in registers.
+#[inline(always)]
+fn combine<const N: usize, const FIRST: usize>(
+    rows: [&[f32; STATES]; N],
+    k: [f32; N],
+) -> [f32; STATES] {
+    core::array::from_fn(|j| {
+        if j < FIRST {
+            return 0.0;
+        }
+        let mut acc = 0.0;
+        for (row, kn) in rows.iter().zip(k) {
+            acc += kn * row.get(j).copied().unwrap_or(0.0);
+        }
+        acc
+    })
+}
+
+/// Σₙ kₙ·v[first + n] for N consecutive entries of one row.
+#[inline(always)]
+fn dot<const N: usize>(v: &[f32; STATES], first: usize, k: &[f32; N]) -> f32 {
+    let mut acc = 0.0;
+    for (x, kn) in v.iter().skip(first).zip(k) {
+        acc += kn * x;
     }
+    acc
 }
 
 impl Filter {
@@ -136,22 +138,46 @@ impl Filter {
 
     fn predict_covariance(&mut self, jacobian: &ProcessJacobian, dt: f32) {
         let phi = Transition::new(jacobian, dt);
-        // W = P·Φᵀ: row k of W is Φ applied to row k of P (P symmetric).
-        let mut w: Covariance = [[0.0; STATES]; STATES];
-        for (w_row, p_row) in w.iter_mut().zip(self.p.iter()) {
-            *w_row = phi.apply(p_row);
-        }
-        // P' = Φ·W: column c of P' is Φ applied to column c of W. P' is symmetric, so
-        // writing that column as row c is the same matrix.
-        for (c, p_row) in self.p.iter_mut().enumerate() {
-            let mut col = [0.0; STATES];
-            for (dst, w_row) in col.iter_mut().zip(w.iter()) {
-                *dst = w_row.get(c).copied().unwrap_or(0.0);
+        let w_top = phi_times(&phi, &self.p);
+        let [.., p10, p11, p12, p13] = self.p;
+        let [w0, w1, w2, w3, w4, w5, w6, w7, w8, w9] = w_top;
+        let w = [w0, w1, w2, w3, w4, w5, w6, w7, w8, w9, p10, p11, p12, p13];
+        // P' = W·Φᵀ: P'[r][c] = Σₘ W[r][m]·Φ[c][m], only for r ≤ c, each value stored to both
+        // triangles; Φ row c's coefficients stay in registers across the r loop.
+        let p = &mut self.p;
+        for c in 0..STATES {
+            let rows = w.iter().enumerate().take(c + 1);
+            match c {
+                0..3 => {
+                    for (r, wr) in rows {
+                        let v = get_row(wr, c) + dt * get_row(wr, c + 3);
+                        covariance::set_symmetric(p, r, c, v);
+                    }
+                }
+                3..6 => {
+                    let a = phi.dv_dq.get(c - 3).copied().unwrap_or_default();
+                    let ab = phi.dv_dab.get(c - 3).copied().unwrap_or_default();
+                    for (r, wr) in rows {
+                        let v = get_row(wr, c) + dot(wr, 6, &a) + ab * get_row(wr, 13);
+                        covariance::set_symmetric(p, r, c, v);
+                    }
+                }
+                6..10 => {
+                    let q = phi.qq.get(c - 6).copied().unwrap_or_default();
+                    let b = phi.qb.get(c - 6).copied().unwrap_or_default();
+                    for (r, wr) in rows {
+                        let v = dot(wr, 6, &q) + dot(wr, 10, &b);
+                        covariance::set_symmetric(p, r, c, v);
+                    }
+                }
+                _ => {
+                    for (r, wr) in rows {
+                        covariance::set_symmetric(p, r, c, get_row(wr, c));
+                    }
+                }
             }
-            *p_row = phi.apply(&col);
         }
         self.add_process_noise(dt);
-        covariance::mirror_upper(&mut self.p);
     }
 
     /// Q_d = G·Q·Gᵀ·dt: accel noise through R_beᵀ (isotropic, so it stays diagonal), gyro
@@ -162,25 +188,62 @@ impl Filter {
         let [g0, g1, g2] = cfg.gyro_noise_psd.map(|g| 0.25 * g * dt);
         let bias = cfg.gyro_bias_walk_psd * dt;
         let ab_z = cfg.accel_bias_walk_psd * dt;
-        let x = xi(self.attitude());
         for (i, row) in self.p.iter_mut().enumerate() {
             match i {
                 3..6 => add_diag(row, i, accel),
-                6..10 => {
-                    if let Some(xi_i) = x.get(i - 6) {
-                        for (v, xi_j) in row.iter_mut().skip(6).zip(x.iter()) {
-                            *v += g0 * xi_i[0] * xi_j[0]
-                                + g1 * xi_i[1] * xi_j[1]
-                                + g2 * xi_i[2] * xi_j[2];
-                        }
-                    }
-                }
                 10..13 => add_diag(row, i, bias),
                 13 => add_diag(row, i, ab_z),
                 _ => {}
             }
         }
+        // Gyro noise on the quaternion block, upper triangle stored to both halves.
+        let x = xi(self.attitude());
+        for (i, xi_i) in x.iter().enumerate() {
+            for (j, xi_j) in x.iter().enumerate().skip(i) {
+                let q =
+                    g0 * (xi_i[0] * xi_j[0]) + g1 * (xi_i[1] * xi_j[1]) + g2 * (xi_i[2] * xi_j[2]);
+                let (r, c) = (6 + i, 6 + j);
+                let v = covariance::get(&self.p, r, c) + q;
+                covariance::set_symmetric(&mut self.p, r, c, v);
+            }
+        }
     }
+}
+
+/// Rows 0..10 of W = Φ·P (Φ's bias rows are the identity, so W's bias rows are P's).
+fn phi_times(phi: &Transition, p: &Covariance) -> [[f32; STATES]; 10] {
+    let [p0, p1, p2, p3, p4, p5, p6, p7, p8, p9, p10, p11, p12, p13] = p;
+    let dt = phi.dt;
+    let [a0, a1, a2] = phi.dv_dq;
+    let [c0, c1, c2] = phi.dv_dab;
+    let vel = |pv: &[f32; STATES], a: [f32; 4], c: f32| {
+        combine::<6, 3>([pv, p6, p7, p8, p9, p13], [1.0, a[0], a[1], a[2], a[3], c])
+    };
+    let quat = |q: [f32; 4], b: [f32; 3]| {
+        combine::<7, 6>(
+            [p6, p7, p8, p9, p10, p11, p12],
+            [q[0], q[1], q[2], q[3], b[0], b[1], b[2]],
+        )
+    };
+    let [q0, q1, q2, q3] = phi.qq;
+    let [b0, b1, b2, b3] = phi.qb;
+    [
+        combine::<2, 0>([p0, p3], [1.0, dt]),
+        combine::<2, 0>([p1, p4], [1.0, dt]),
+        combine::<2, 0>([p2, p5], [1.0, dt]),
+        vel(p3, a0, c0),
+        vel(p4, a1, c1),
+        vel(p5, a2, c2),
+        quat(q0, b0),
+        quat(q1, b1),
+        quat(q2, b2),
+        quat(q3, b3),
+    ]
+}
+
+#[inline(always)]
+fn get_row(row: &[f32; STATES], j: usize) -> f32 {
+    row.get(j).copied().unwrap_or(0.0)
 }
 
 fn add_diag(row: &mut [f32; STATES], i: usize, value: f32) {

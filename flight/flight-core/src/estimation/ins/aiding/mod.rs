@@ -138,7 +138,8 @@ impl Ins {
         dt_s: f32,
     ) -> Result<(), Error> {
         self.filter.predict(gyro_radps, accel_mps2, dt_s)?;
-        let alpha = (dt_s / self.aiding.accel_filter_tau_s).min(1.0);
+        let ratio = dt_s / self.aiding.accel_filter_tau_s;
+        let alpha = if ratio < 1.0 { ratio } else { 1.0 };
         for (lp, a) in self.accel_lowpass_mps2.iter_mut().zip(accel_mps2) {
             *lp += alpha * (a - *lp);
         }

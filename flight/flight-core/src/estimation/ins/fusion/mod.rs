@@ -84,7 +84,7 @@ impl Filter {
         for (x, &ph_i) in self.x.iter_mut().zip(ph.iter()) {
             *x += ph_i * gain;
         }
-        covariance::subtract_outer(&mut self.p, ph, inv_s);
+        covariance::subtract_outer(&mut self.p, ph, s);
         covariance::floor_diagonal(&mut self.p, VARIANCE_FLOOR);
     }
 
