@@ -55,16 +55,18 @@ impl AxisController for PidAxis {
     }
 }
 
-/// LQG for `model` with the given costs and noise.
+/// LQG for `model` with the given costs and noise, told about `output_delay` samples of
+/// output latency.
 pub fn lqg_axis(
     model: &AxisModel,
     ts_s: f64,
     costs: &LqrCosts,
     noise: &KfNoise,
+    output_delay: u8,
 ) -> Result<LqgAxis, DesignError> {
     let d = design::design_axis(model, ts_s, costs, costs, noise)?;
     #[allow(clippy::cast_possible_truncation)]
-    Ok(LqgAxis::new(model, ts_s as f32, &d, 0.3))
+    Ok(LqgAxis::new(model, ts_s as f32, &d, 0.3).with_output_delay(output_delay))
 }
 
 /// The analytic-autotune PID for `model` (TL defaults ζ 1.1, ghf 0.01), rate-setpoint limit
@@ -147,33 +149,30 @@ pub fn run_step<C: AxisController>(
 }
 
 impl StepResponse {
-    /// Rise, overshoot, settling (band in % of the step) and final error.
+    /// Rise, overshoot, settling (band in % of the step) and final error. With gyro noise,
+    /// average responses over seeds first: one noisy run wanders around the setpoint.
     pub fn metrics(&self, band_pct: f64) -> StepMetrics {
         let s = self.step;
+        let y = &self.response;
         let time = |i: usize| {
             #[allow(clippy::cast_precision_loss)]
             let t = (i + 1) as f64 * self.ts_s;
             t
         };
         let first = |frac: f64| {
-            self.response
-                .iter()
-                .position(|y| y / s >= frac)
+            y.iter()
+                .position(|v| v / s >= frac)
                 .map_or(f64::INFINITY, time)
         };
-        let peak = self.response.iter().fold(f64::MIN, |m, y| m.max(y / s));
+        let peak = y.iter().fold(f64::MIN, |m, v| m.max(v / s));
         let band = band_pct / 100.0;
-        let settle = self
-            .response
+        let settle = y
             .iter()
-            .rposition(|y| (y / s - 1.0).abs() > band)
+            .rposition(|v| (v / s - 1.0).abs() > band)
             .map_or(0.0, time);
-        let tail = self
-            .response
-            .get(self.response.len() * 4 / 5..)
-            .unwrap_or(&[]);
+        let tail = y.get(y.len() * 4 / 5..).unwrap_or(&[]);
         #[allow(clippy::cast_precision_loss)]
-        let final_err = tail.iter().map(|y| y / s - 1.0).sum::<f64>() / tail.len().max(1) as f64;
+        let final_err = tail.iter().map(|v| v / s - 1.0).sum::<f64>() / tail.len().max(1) as f64;
         StepMetrics {
             rise_time_s: first(0.9) - first(0.1),
             overshoot_pct: ((peak - 1.0) * 100.0).max(0.0),

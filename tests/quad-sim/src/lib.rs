@@ -5,4 +5,6 @@
 
 pub mod axis;
 pub mod closed_loop;
+pub mod identify;
+pub mod quad;
 pub mod rng;

@@ -50,7 +50,9 @@ pub struct LqrGains {
 pub struct LqgAxis {
     kf: Rtkf,
     gains: LqrGains,
-    last_output: f32,
+    /// Recent outputs, newest first: the RTKF predicts with the one that acted on the frame.
+    outputs: [f32; 4],
+    output_delay_samples: usize,
 }
 
 #[allow(clippy::cast_possible_truncation)] // f64 design → f32 flight gains, intended
@@ -73,14 +75,24 @@ impl LqgAxis {
         Self {
             kf,
             gains,
-            last_output: 0.0,
+            outputs: [0.0; 4],
+            output_delay_samples: 0,
         }
+    }
+
+    /// Whole loop periods between computing an output and it acting on the airframe beyond
+    /// the normal one-period hold (0–3; the ESC protocol and motor-update timing). The
+    /// RTKF then predicts with the output that really drove the frame, so the latency does
+    /// not leak into the bias estimate.
+    pub fn with_output_delay(mut self, samples: u8) -> Self {
+        self.output_delay_samples = usize::from(samples.min(3));
+        self
     }
 
     /// Restarts the estimator from a gyro sample (mode entry, arming).
     pub fn reset(&mut self, gyro_dps: f32) {
         self.kf.reset(gyro_dps);
-        self.last_output = 0.0;
+        self.outputs = [0.0; 4];
     }
 
     /// The current estimate.
@@ -91,7 +103,12 @@ impl LqgAxis {
     /// One control loop: update the RTKF with the previous output and this gyro sample, then
     /// the LQR law; returns the output clamped to ±1.
     pub fn update(&mut self, gyro_dps: f32, setpoint: AxisSetpoint) -> f32 {
-        let x = self.kf.update(self.last_output, gyro_dps);
+        let applied = self
+            .outputs
+            .get(self.output_delay_samples)
+            .copied()
+            .unwrap_or(0.0);
+        let x = self.kf.update(applied, gyro_dps);
         let [kw_r, kn_r] = self.gains.rate;
         let [ka, kw_a, kn_a] = self.gains.attitude;
         let rate_law = |rate_dps: f32| kw_r * (rate_dps - x.rate_dps) - kn_r * x.torque;
@@ -110,7 +127,10 @@ impl LqgAxis {
         } + x.bias;
         // NaN (never expected) clamps to NaN: fall back to 0 so the motors stay defined.
         let out = if u.is_nan() { 0.0 } else { u.clamp(-1.0, 1.0) };
-        self.last_output = out;
+        self.outputs.rotate_right(1);
+        if let Some(newest) = self.outputs.first_mut() {
+            *newest = out;
+        }
         out
     }
 }
