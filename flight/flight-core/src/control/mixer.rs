@@ -102,7 +102,9 @@ impl<const N: usize> Mixer<N> {
         let scale = if span > 1.0 { 1.0 / span } else { 1.0 };
         let (lo, hi) = (lo * scale, hi * scale);
         // Shift throttle so that min ≥ 0 and max ≤ 1 (both hold after scaling).
-        let t = throttle.clamp(0.0, 1.0).clamp(-lo, 1.0 - hi);
+        // min/max, not clamp: after scaling −lo and 1 − hi can cross by one ulp, and clamp
+        // panics on crossed bounds.
+        let t = throttle.clamp(0.0, 1.0).min(1.0 - hi).max(-lo);
         parts.map(|p| self.curve.command_for((t + p * scale).clamp(0.0, 1.0)))
     }
 }
@@ -127,6 +129,9 @@ mod tests {
         let high = mx.mix(1.0, [0.2, 0.0, 0.0]);
         assert!((high[2] - high[0] - 0.2).abs() < 1e-6 && (high[2] - 1.0).abs() < 1e-6);
         // Too much demand: scaled so the span is exactly 1 and ratios are kept.
+        // Crossed bounds by rounding (span exactly 1 after scaling) must not panic.
+        let edge = mx.mix(0.9, [0.5037707, -0.5037707, 0.3]);
+        assert!(edge.iter().all(|m| (0.0..=1.0).contains(m)), "{edge:?}");
         let sat = mx.mix(0.5, [1.0, 1.0, 0.0]);
         assert!(
             (sat[3] - 1.0).abs() < 1e-6 && sat[1].abs() < 1e-6,
