@@ -4,7 +4,9 @@
 #![warn(missing_docs)]
 
 pub mod axis;
+pub mod cli;
 pub mod closed_loop;
 pub mod identify;
+pub mod plot;
 pub mod quad;
 pub mod rng;

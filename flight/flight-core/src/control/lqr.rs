@@ -53,6 +53,7 @@ pub struct LqgAxis {
     /// Recent outputs, newest first: the RTKF predicts with the one that acted on the frame.
     outputs: [f32; 4],
     output_delay_samples: usize,
+    ts_s: f32,
 }
 
 #[allow(clippy::cast_possible_truncation)] // f64 design → f32 flight gains, intended
@@ -77,13 +78,16 @@ impl LqgAxis {
             gains,
             outputs: [0.0; 4],
             output_delay_samples: 0,
+            ts_s,
         }
     }
 
     /// Whole loop periods between computing an output and it acting on the airframe beyond
     /// the normal one-period hold (0–3; the ESC protocol and motor-update timing). The
     /// RTKF then predicts with the output that really drove the frame, so the latency does
-    /// not leak into the bias estimate.
+    /// not leak into the bias estimate, and the LQR acts on the state predicted past the
+    /// outputs still in flight (certainty-equivalent delay compensation): without it a
+    /// one-sample delay leaves a lightly damped ≈ 60 Hz mode that gyro noise keeps ringing.
     pub fn with_output_delay(mut self, samples: u8) -> Self {
         self.output_delay_samples = usize::from(samples.min(3));
         self
@@ -108,11 +112,20 @@ impl LqgAxis {
             .get(self.output_delay_samples)
             .copied()
             .unwrap_or(0.0);
-        let x = self.kf.update(applied, gyro_dps);
+        let now = self.kf.update(applied, gyro_dps);
+        // Look past the outputs computed but not yet acting, oldest first; the angle error
+        // shrinks by the rotation they will still cause.
+        let mut x = now;
+        let mut angle_ahead = 0.0;
+        for u in self.outputs.iter().take(self.output_delay_samples).rev() {
+            angle_ahead += self.ts_s * x.rate_dps;
+            x = self.kf.predict_ahead(x, *u);
+        }
         let [kw_r, kn_r] = self.gains.rate;
         let [ka, kw_a, kn_a] = self.gains.attitude;
         let rate_law = |rate_dps: f32| kw_r * (rate_dps - x.rate_dps) - kn_r * x.torque;
-        let attitude_law = |err: f32| ka * err - kw_a * x.rate_dps - kn_a * x.torque;
+        let attitude_law =
+            |err: f32| ka * (err - angle_ahead) - kw_a * x.rate_dps - kn_a * x.torque;
         let u = match setpoint {
             AxisSetpoint::Rate { rate_dps } => rate_law(rate_dps),
             AxisSetpoint::Attitude { angle_error_deg } => attitude_law(angle_error_deg),

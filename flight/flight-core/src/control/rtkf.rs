@@ -54,6 +54,18 @@ impl Rtkf {
         self.x
     }
 
+    /// `x` propagated one period ahead under output `u` (no measurement): used to look past
+    /// outputs that are computed but not yet acting.
+    pub fn predict_ahead(&self, x: RateTorqueEstimate, u: f32) -> RateTorqueEstimate {
+        let m = &self.model;
+        let drive = u - x.bias;
+        RateTorqueEstimate {
+            rate_dps: x.rate_dps + m.a_rate_torque * x.torque + m.b_rate * drive,
+            torque: m.e * x.torque + m.b_torque * drive,
+            bias: x.bias,
+        }
+    }
+
     /// One loop: predict with `previous_output` (clamped, as actually applied), correct with
     /// `gyro_dps`.
     pub fn update(&mut self, previous_output: f32, gyro_dps: f32) -> RateTorqueEstimate {

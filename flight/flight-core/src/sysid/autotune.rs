@@ -114,14 +114,22 @@ pub fn lqg_models(id: &Identification) -> Result<[AxisModel; 3], ModelError> {
 /// saturating the weakest frames).
 const LQG_ATTITUDE_BANDWIDTH_RATIO: f64 = 3.0;
 
-/// LQG costs for the identified frame: the default frame-invariant rate/torque costs and an
-/// angle cost that gives the attitude loop a bandwidth matched to what the frame (β, τ)
-/// supports, taken from the analytic PID design.
+/// Rate bandwidth of the LQG relative to the PID design: √(q2/q4) = 2·ωn, with q4 kept in
+/// [0.04, 0.3] (stiffer torque costs ring, softer ones are needlessly slow).
+const LQG_RATE_BANDWIDTH_RATIO: f64 = 2.0;
+const Q4_RANGE: (f64, f64) = (0.04, 0.3);
+
+/// LQG costs for the identified frame: frame-invariant costs whose rate (q2/q4) and angle
+/// (q1/q2) bandwidths are matched to what the frame (β, τ) supports, taken from the
+/// analytic PID design (ωn and the outer kp).
 pub fn lqg_costs(tune: &PidTune) -> FrameInvariantCosts {
     let base = FrameInvariantCosts::default();
+    let w_rate = LQG_RATE_BANDWIDTH_RATIO * tune.natural_frequency_rad_s;
+    let q4 = (base.q2_rate / (w_rate * w_rate)).clamp(Q4_RANGE.0, Q4_RANGE.1);
     let w = LQG_ATTITUDE_BANDWIDTH_RATIO * f64::from(tune.outer_kp);
     FrameInvariantCosts {
         q1_angle: base.q2_rate * w * w,
+        q4_torque: q4,
         ..base
     }
 }
