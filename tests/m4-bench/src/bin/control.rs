@@ -1,6 +1,7 @@
 //! Instructions for one flight-control cycle on the Cortex-M4F: (a) 3-axis LQG (RTKF update +
 //! LQR law, rate mode on roll/pitch/yaw) plus the quad-X mixer; (b) 3-axis PID rate loops plus
-//! the same mixer. Gains are designed (f64 DARE) before the first marker, as before take-off.
+//! the same mixer. Gains are designed (f64 DARE) before the first marker, as before take-off;
+//! the LQG compensates one sample of output delay (one look-ahead prediction per axis).
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
@@ -30,7 +31,7 @@ fn main() -> ! {
     let mut lqg = models.map(|m| {
         let costs = FrameInvariantCosts::default().for_beta(m.beta1());
         match design_axis(&m, ts, &costs, &costs, &KfNoise::default()) {
-            Ok(d) => LqgAxis::new(&m, ts as f32, &d, 0.3),
+            Ok(d) => LqgAxis::new(&m, ts as f32, &d, 0.3).with_output_delay(1),
             Err(_) => exit(),
         }
     });
