@@ -156,3 +156,27 @@ fn rate_lqg_rejects_an_input_disturbance_through_the_bias_state() {
     assert!(m.final_error_pct.abs() < 1.0, "{m:?}");
     assert!((c.estimate().bias - 0.1).abs() < 0.01, "{:?}", c.estimate());
 }
+
+#[test]
+fn yaw_with_lag_free_torque_beats_pid() {
+    // Yaw: ln β1 7.5 through the motor lag plus ln β2 6 directly from prop acceleration.
+    let model = AxisModel::new(7.5, 0.03).unwrap().with_beta2(6.0).unwrap();
+    let tune = analytic_pid([7.5; 3], 0.03, &AutotuneSettings::default()).unwrap();
+    let costs = lqg_costs(&tune).for_beta(model.beta1());
+    let l = lqg_metrics(&model, &costs, Mode::Rate, 50.0);
+    let p = mean_metrics(
+        &model,
+        || autotuned_pid(&model, TS).unwrap(),
+        Mode::Rate,
+        50.0,
+    );
+    println!("yaw: LQG {l:?}\n     PID {p:?}");
+    assert!(
+        l.rise_time_s <= p.rise_time_s && l.overshoot_pct < p.overshoot_pct,
+        "{l:?} {p:?}"
+    );
+    assert!(
+        l.overshoot_pct < 3.0 && l.final_error_pct.abs() < 1.0,
+        "{l:?}"
+    );
+}
