@@ -43,13 +43,55 @@ pub struct LqrCosts {
 }
 
 impl Default for LqrCosts {
-    /// Frame-invariant defaults chosen in closed-loop simulation at 1 kHz (tests/quad-sim):
-    /// about 25 ms rate rise at ln β 10, τ 30 ms without overshoot.
+    /// Tau Labs' LQRSettings attitude costs (4, 0.04, 10000), absolute.
     fn default() -> Self {
         Self {
-            q_angle: 0.05,
-            q_rate: 0.02,
-            q_torque: TorqueCost::PerBeta(0.05),
+            q_angle: 4.0,
+            q_rate: 0.04,
+            q_torque: TorqueCost::Absolute(10000.0),
+        }
+    }
+}
+
+/// Costs that give the same closed-loop shape on any β: q3 = β1·q4 (the blog's frame-
+/// invariant torque cost) together with q_angle = q1/β1 and q_rate = q2/β1.
+///
+/// Why the rate and angle costs scale too: with ω = β·ω̃ the cost becomes
+/// β·(q1·θ̃² + q2·ω̃² + q4·ν²) + u², whose minimiser does not depend on β once q4·β ≫ 1
+/// (u² negligible). With q3 = β1·q4 alone and a fixed q_rate the rise time still falls as
+/// β^(−1/2) (measured in tests/quad-sim/tests/control_closed_loop.rs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FrameInvariantCosts {
+    /// q1: angle cost × β1.
+    pub q1_angle: f64,
+    /// q2: rate cost × β1.
+    pub q2_rate: f64,
+    /// q4: torque cost / β1.
+    pub q4_torque: f64,
+}
+
+impl Default for FrameInvariantCosts {
+    /// Chosen in closed-loop simulation at 1 kHz (tests/quad-sim): rate rise ≈ 20 ms where
+    /// the frame allows it, < 3 % overshoot, faster than the analytic PID on ln β 8–11,
+    /// τ 15–50 ms. q1 gives a ≈ 0.2 s attitude rise; autotune matches it to the frame
+    /// (`sysid::autotune::lqg_costs`).
+    fn default() -> Self {
+        Self {
+            q1_angle: 1.0e5,
+            q2_rate: 1000.0,
+            q4_torque: 0.1,
+        }
+    }
+}
+
+impl FrameInvariantCosts {
+    /// The absolute per-sample costs for a frame with authority `beta1`.
+    pub fn for_beta(&self, beta1: f64) -> LqrCosts {
+        LqrCosts {
+            q_angle: self.q1_angle / beta1,
+            q_rate: self.q2_rate / beta1,
+            q_torque: TorqueCost::PerBeta(self.q4_torque),
         }
     }
 }
@@ -227,10 +269,10 @@ mod tests {
     use super::*;
 
     #[test]
-    fn tau_labs_python_case_textbook_gain() {
-        // lqg.md §2: for the TL python test case the textbook filter gain is
-        // (0.04595, 2.159e-4, −9.77e-5). That case: ln β 10, τ = 0.03 s? The reference
-        // only pins the rate component's scale, so check the structure it implies instead:
+    fn kalman_gain_has_expected_signs() {
+        // Positive rate and torque gains, negative bias gain (a rate above the prediction
+        // means more torque or less input bias); full agreement with scipy is tested in
+        // tests/quad-sim/tests/control_reference_dare.rs.
         let m = AxisModel::new(10.0, 0.03).unwrap();
         let (k, it) = kalman_gain(
             &m,

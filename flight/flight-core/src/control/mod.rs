@@ -3,3 +3,7 @@
 
 pub mod dare;
 pub mod design;
+pub mod lqr;
+pub mod mixer;
+pub mod pid;
+pub mod rtkf;

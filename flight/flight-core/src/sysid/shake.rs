@@ -1,0 +1,94 @@
+//! The identification excitation ("shake", lqg.md §5): square offsets added to the
+//! stabilising controller's output in an 8-phase cycle yaw+, roll+, yaw−, roll−, yaw+,
+//! pitch+, yaw−, pitch−. Roll and pitch each get one + and one − pulse per cycle and yaw four
+//! alternating ones, so every axis has zero mean excitation.
+//!
+//! Amplitude follows Tau Labs: exp(7.1 − ln β̂) from the *current* estimate, so a weak frame
+//! is pushed harder, capped at 0.25 (roll/pitch) and 0.45 (yaw).
+
+/// Axis index order used throughout identification: roll, pitch, yaw.
+const PHASES: [(usize, f32); 8] = [
+    (2, 1.0),
+    (0, 1.0),
+    (2, -1.0),
+    (0, -1.0),
+    (2, 1.0),
+    (1, 1.0),
+    (2, -1.0),
+    (1, -1.0),
+];
+
+/// ln of the amplitude numerator (Tau Labs `stabilization.c`).
+const LN_AMPLITUDE_SCALE: f32 = 7.1;
+/// Amplitude caps, roll/pitch and yaw.
+const CAPS: [f32; 3] = [0.25, 0.25, 0.45];
+
+/// The shake generator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shake {
+    phase_samples: u32,
+    counter: u32,
+}
+
+impl Shake {
+    /// A shake whose phases last `phase_s` (Tau Labs: 75 ms) at loop period `ts_s`.
+    pub fn new(ts_s: f32, phase_s: f32) -> Self {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)] // ≥ 1, small
+        let phase_samples = libm::roundf(phase_s / ts_s).max(1.0) as u32;
+        Self {
+            phase_samples,
+            counter: 0,
+        }
+    }
+
+    /// Samples per phase.
+    pub fn phase_samples(&self) -> u32 {
+        self.phase_samples
+    }
+
+    /// The offsets (roll, pitch, yaw) for this sample, then advances one sample.
+    pub fn next(&mut self, ln_beta_estimate: [f32; 3]) -> [f32; 3] {
+        let phase = (self.counter / self.phase_samples) % 8;
+        self.counter = self.counter.wrapping_add(1) % (8 * self.phase_samples);
+        let mut out = [0.0f32; 3];
+        #[allow(clippy::cast_possible_truncation)] // phase < 8
+        if let Some(&(axis, sign)) = PHASES.get(phase as usize)
+            && let (Some(o), Some(lb), Some(cap)) = (
+                out.get_mut(axis),
+                ln_beta_estimate.get(axis),
+                CAPS.get(axis),
+            )
+        {
+            *o = sign * libm::expf(LN_AMPLITUDE_SCALE - lb).min(*cap);
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pattern_amplitude_and_zero_mean() {
+        let mut s = Shake::new(0.001, 0.075);
+        assert_eq!(s.phase_samples(), 75);
+        let mut sum = [0.0f32; 3];
+        let mut first = [0.0f32; 3];
+        for i in 0..600 {
+            let o = s.next([10.0, 10.0, 5.0]);
+            if i == 0 {
+                first = o;
+            }
+            if i == 75 {
+                assert!((o[0] - libm::expf(-2.9)).abs() < 1e-6, "{o:?}");
+            }
+            for k in 0..3 {
+                sum[k] += o[k];
+            }
+        }
+        // Yaw first, capped: exp(2.1) > 0.45.
+        assert_eq!(first, [0.0, 0.0, 0.45]);
+        assert!(sum.iter().all(|v| v.abs() < 1e-3), "{sum:?}");
+    }
+}

@@ -1,0 +1,76 @@
+//! Instructions for one flight-control cycle on the Cortex-M4F: (a) 3-axis LQG (RTKF update +
+//! LQR law, rate mode on roll/pitch/yaw) plus the quad-X mixer; (b) 3-axis PID rate loops plus
+//! the same mixer. Gains are designed (f64 DARE) before the first marker, as before take-off;
+//! the LQG compensates one sample of output delay (one look-ahead prediction per axis).
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(target_os = "none")]
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    use core::hint::black_box;
+    use flight_core::control::design::{FrameInvariantCosts, KfNoise, design_axis};
+    use flight_core::control::lqr::{AxisSetpoint, LqgAxis};
+    use flight_core::control::mixer::{Mixer, QUAD_X, ThrustCurve};
+    use flight_core::control::pid::{Pid, PidGains};
+    use flight_core::model::AxisModel;
+    use m4_bench::{exit, m4count_marker};
+
+    let ts = 1.0 / 8000.0;
+    let models =
+        [(10.0, None), (10.0, None), (7.0, Some(5.0))].map(|(lb, l2): (f32, Option<f32>)| {
+            let m = AxisModel::new(lb, 0.03).unwrap_or(AxisModel {
+                ln_beta1: 10.0,
+                ln_beta2: None,
+                tau_s: 0.03,
+            });
+            match l2 {
+                Some(l) => m.with_beta2(l).unwrap_or(m),
+                None => m,
+            }
+        });
+    let mut lqg = models.map(|m| {
+        let costs = FrameInvariantCosts::default().for_beta(m.beta1());
+        match design_axis(&m, ts, &costs, &costs, &KfNoise::default()) {
+            Ok(d) => LqgAxis::new(&m, ts as f32, &d, 0.3).with_output_delay(1),
+            Err(_) => exit(),
+        }
+    });
+    let mixer = Mixer::new(QUAD_X, ThrustCurve::Linear);
+    let gyro: [f32; 3] = black_box([12.5, -3.0, 40.0]);
+    let setpoint: [f32; 3] = black_box([100.0, 0.0, 30.0]);
+    let throttle: f32 = black_box(0.4);
+
+    // (a) LQG cycle.
+    m4count_marker();
+    let mut u = [0.0f32; 3];
+    for ((axis, out), (g, sp)) in lqg
+        .iter_mut()
+        .zip(u.iter_mut())
+        .zip(gyro.iter().zip(setpoint))
+    {
+        *out = axis.update(*g, AxisSetpoint::Rate { rate_dps: sp });
+    }
+    let motors = mixer.mix(throttle, u);
+    m4count_marker();
+    black_box(motors);
+
+    // (b) PID cycle.
+    let gains = PidGains::new(2.22e-3, 8.81e-3, 4.84e-5, 5.75e-3);
+    let mut pids = [Pid::new(gains, ts as f32); 3];
+    m4count_marker();
+    let mut v = [0.0f32; 3];
+    for ((pid, out), (g, sp)) in pids
+        .iter_mut()
+        .zip(v.iter_mut())
+        .zip(gyro.iter().zip(setpoint))
+    {
+        *out = pid.update(sp, *g);
+    }
+    let motors = mixer.mix(throttle, v);
+    m4count_marker();
+    black_box(motors);
+    exit()
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {}
