@@ -13,6 +13,16 @@ pub fn crc16(bytes: &[u8]) -> u16 {
     LINK_CRC.checksum(bytes)
 }
 
+/// CRC of `key` (4 bytes, little-endian) followed by `bytes`. Air frames key their CRC with
+/// the bind ID, so a frame of another link that slipped past the chip's header check (same
+/// header bytes by chance, or a chip configured without header checking) still fails here.
+pub fn keyed_crc16(key: u32, bytes: &[u8]) -> u16 {
+    let mut digest = LINK_CRC.digest();
+    digest.update(&key.to_le_bytes());
+    digest.update(bytes);
+    digest.finalize()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -21,5 +31,14 @@ mod tests {
     fn catalogue_check_value() {
         // The check value of every CRC catalogue entry is the CRC of ASCII "123456789".
         assert_eq!(crc16(b"123456789"), 0x29B1);
+    }
+
+    #[test]
+    fn keyed_is_crc_of_key_then_bytes() {
+        let mut joined = [0u8; 13];
+        joined[..4].copy_from_slice(&0x0403_0201u32.to_le_bytes());
+        joined[4..].copy_from_slice(b"123456789");
+        assert_eq!(keyed_crc16(0x0403_0201, b"123456789"), crc16(&joined));
+        assert_ne!(keyed_crc16(1, b"abc"), keyed_crc16(2, b"abc"));
     }
 }
