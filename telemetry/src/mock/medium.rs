@@ -106,7 +106,9 @@ struct NodeState {
     node: Node,
     rate: RateMode,
     header: [u8; 4],
-    seen_seq: u64,
+    /// Transmissions this node already evaluated in its current listen (several
+    /// transmitters: the order they end in is not the order they started in).
+    seen: HashSet<u64>,
 }
 
 struct State {
@@ -172,7 +174,7 @@ impl Medium {
             node,
             rate: RateMode::L50,
             header: [0; 4],
-            seen_seq: 0,
+            seen: HashSet::new(),
         });
         s.nodes.len() - 1
     }
@@ -246,12 +248,11 @@ impl Medium {
         s.time.wake_at(end_us);
     }
 
-    /// Marks everything on the air so far as seen by `node` (it starts listening now).
+    /// `node` starts a new listen: nothing is evaluated yet (packets that started before
+    /// it was ready are excluded by time in [`Medium::poll_reception`]).
     pub(crate) fn start_listening(&self, node: usize) {
-        let mut s = self.state.borrow_mut();
-        let last = s.next_seq - 1;
-        if let Some(n) = s.nodes.get_mut(node) {
-            n.seen_seq = last;
+        if let Some(n) = self.state.borrow_mut().nodes.get_mut(node) {
+            n.seen.clear();
         }
     }
 
@@ -267,17 +268,24 @@ impl Medium {
         let s = &mut *guard;
         let now = s.time.now_us();
         let me = s.nodes.get(node)?.clone();
-        let candidates: Vec<Transmission> = s
+        let mut candidates: Vec<Transmission> = s
             .air
             .iter()
-            .filter(|t| t.seq > me.seen_seq && t.end_us <= now && t.node != node)
+            .filter(|t| {
+                t.end_us <= now
+                    && t.start_us >= ready_us
+                    && t.node != node
+                    && t.frequency_hz == frequency_hz
+                    && !me.seen.contains(&t.seq)
+            })
             .cloned()
             .collect();
+        candidates.sort_by_key(|t| t.end_us);
         for t in candidates {
             if let Some(n) = s.nodes.get_mut(node) {
-                n.seen_seq = t.seq;
+                n.seen.insert(t.seq);
             }
-            if t.frequency_hz != frequency_hz || t.start_us < ready_us || t.rate != me.rate {
+            if t.rate != me.rate {
                 continue;
             }
             if let Some(d) = evaluate(s, &me, node, &t) {

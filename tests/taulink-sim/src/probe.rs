@@ -95,6 +95,8 @@ fn check(
 pub struct Record {
     /// Time the bind completed on the follower (µs), if binding.
     pub bound_us: Option<u64>,
+    /// The parameters the follower stored (from the bind, or given).
+    pub follower_params: Option<telemetry::link::LinkParams>,
     /// Uplink latencies input → output, µs.
     pub latencies_us: Vec<u32>,
     /// Channel outputs that matched their sample exactly.

@@ -129,6 +129,7 @@ fn spawn_pair<'a>(
             params
         };
         rec.borrow_mut().bound_us = Some(flight_clock.now_us() - 987_654_321);
+        rec.borrow_mut().follower_params = Some(params);
         let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
         let _ = run_follower(
             &mut flight_radio,
