@@ -12,7 +12,7 @@ pub struct Bus<SPI> {
     spi: SPI,
 }
 
-impl<SPI: SpiDevice> Bus<SPI> {
+impl<SPI> Bus<SPI> {
     /// Wraps an SPI device (mode 0, ≤ 10 MHz, chip select handled by the device).
     pub fn new(spi: SPI) -> Self {
         Self { spi }
@@ -22,7 +22,9 @@ impl<SPI: SpiDevice> Bus<SPI> {
     pub fn release(self) -> SPI {
         self.spi
     }
+}
 
+impl<SPI: SpiDevice> Bus<SPI> {
     /// Reads one register.
     pub async fn read(&mut self, address: u8) -> Result<u8, Error<SPI::Error>> {
         let mut value = [0u8; 1];

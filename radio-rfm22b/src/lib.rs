@@ -1,17 +1,55 @@
 //! Driver for the Silicon Labs Si4432 (HopeRF RFM22B) sub-GHz transceiver.
 //!
-//! `no_std`, generic over embedded-hal 1.0 (`SpiDevice`, `DelayNs`, `OutputPin`) and
-//! embedded-hal-async (`SpiDevice`, `Wait`); it knows nothing of embassy, so it runs on any
-//! HAL, on a Linux spidev, or against the virtual Si4432 in `tests/si4432-sim`.
+//! `no_std`, generic over embedded-hal 1.0 (`OutputPin`) and embedded-hal-async
+//! (`SpiDevice`, `Wait`, `DelayNs`); it knows nothing of embassy, so it runs on any HAL, on a
+//! Linux spidev, or against the virtual Si4432 in `tests/si4432-sim`.
+//!
+//! Configure once, then per slot set the channel and transmit or receive:
+//!
+//! ```ignore
+//! const MODEM: ModemConfig = ModemConfig::new(57_600, 28_800);
+//! let config = Config::new(MODEM, PacketConfig::new(), Carrier::new(433_000_000));
+//! radio.init(config).await?;
+//! radio.set_channel(7).await?;
+//! radio.transmit(b"hello", 10_000).await?;
+//! match radio.receive(&mut buf, 20_000).await? {
+//!     RxOutcome::Packet(p) => { /* buf[..p.len], p.signal.rssi_dbm */ }
+//!     RxOutcome::CrcError(_) | RxOutcome::TooLong { .. } | RxOutcome::Timeout => {}
+//! }
+//! ```
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 mod bus;
+pub mod carrier;
+mod config;
+mod config_error;
 mod error;
+pub mod fifo;
+pub mod gpio;
+pub mod if_filter;
+pub mod irq;
+pub mod measure;
+pub mod modem;
+pub mod packet;
+pub mod power;
 mod probe;
 pub mod registers;
+mod rfm22b;
+mod rx;
+mod tx;
 
 pub use bus::Bus;
+pub use carrier::{Carrier, ChannelSpacing};
+pub use config::Config;
+pub use config_error::ConfigError;
 pub use error::Error;
-pub use probe::{ChipInfo, Version, probe, software_reset};
+pub use gpio::{AntennaSwitch, Gpio2, GpioConfig};
+pub use if_filter::IfFilter;
+pub use modem::{ModemConfig, ModemSettings, Modulation};
+pub use packet::{Crc, PacketConfig, PacketLength};
+pub use power::{CrystalLoad, TxPower};
+pub use probe::{ChipInfo, Version};
+pub use rfm22b::{NoPin, Rfm22b};
+pub use rx::{RxOutcome, RxPacket, RxSignal};

@@ -1,3 +1,110 @@
 //! A register-level virtual Si4432 and a simulated RF medium (std), so radio code can be
 //! tested on a PC through the same embedded-hal traits it uses on a board.
+//!
+//! Modelled after lora-rs' SX127x emulator (aesthetics.md §A2): the chip is behavioural at
+//! register level, interrupt semantics are exact, and nothing is imported from the driver
+//! under test — register addresses and reset values here come from the datasheet, so a wrong
+//! driver constant fails a test instead of being mirrored.
+//!
+//! # What is modelled
+//! - **Registers** ([`registers`]): datasheet reset values, read-only vs read-write, device
+//!   type 0x08 / version 0x06 (B1), temperature ADC, battery level, AFC read-back.
+//! - **FIFOs** ([`fifo`]): 64-byte TX and RX FIFOs, almost-full/almost-empty thresholds
+//!   (0x7C–0x7E) as edge events, overflow/underflow → FIFO error interrupt, clear via 0x08.
+//! - **Operating modes**: SDN shutdown, power-on reset (≈15 ms, then `ipor`), STANDBY,
+//!   READY (crystal, 600 µs, then `ichiprdy`), TUNE, TX, RX with a 200 µs PLL settle;
+//!   `swres`; automatic return to READY/TUNE after a packet is sent or a valid packet is
+//!   received (unless 0x08 rxmpk); RX keeps searching after a CRC error.
+//! - **Interrupts**: status 0x03/0x04 latch whether enabled or not, reading clears them;
+//!   nIRQ is low while `(status & enable) != 0` and released only by reading the status.
+//! - **Packet handler** ([`packet`]): preamble, sync word (1–4 bytes), header (0–4 bytes,
+//!   check and enable masks, broadcast), fixed or variable length, CRC (CCITT, CRC-16,
+//!   IEC-16, Biacheva; all or data only), PN9 whitening, packets longer than 64 bytes through
+//!   the FIFO thresholds, RSSI (0x26) latched at sync.
+//! - **Modem** ([`modem`]): carrier from 0x75–0x77 + hop channel × step + offset, TX bit
+//!   rate (0x6E/0x6F/0x70), RX bit rate from clock recovery (0x1C, 0x21–0x23), deviation,
+//!   IF bandwidth (approximate), AFC pull-in. A frame is received only if carrier, bit rate,
+//!   deviation and modulation fit the receiver. Airtime follows from the configuration.
+//! - **Medium** ([`Medium`]): positions → path loss → received power (TX power from 0x6D),
+//!   noise floor and sensitivity by bit rate, bit errors from SINR (the CRC catches them),
+//!   random loss, interference bursts, collisions (optional capture), and a trace of every
+//!   frame with every receiver's outcome ([`TraceFrame`]).
+//! - **Execution** ([`Simulation`]): a deterministic single-threaded executor in virtual
+//!   time; all randomness from one seed ([`rng`]).
+//! - **Faults**: unplugged module (SPI reads all 0xFF or 0x00), power-on reset at any
+//!   moment, register corruption ([`ChipHandle`]).
+//!
+//! # What is not
+//! Direct (GPIO/SDI) modulation, OOK details, low-duty-cycle mode, wake-up timer, low-battery
+//! detector, antenna diversity, auto-TX, GPIO pin functions, the CCA/RSSI-threshold,
+//! invalid-preamble and external interrupts, and the exact IF filter table. The CRC seed
+//! (0xFFFF) and the Biacheva polynomial are this model's assumptions; both simulated ends
+//! agree, but they are not checked against silicon. Timing of an SPI transaction is zero.
+//!
+//! # Example
+//! Two chips 100 m apart; one sends 5 bytes with raw register writes, the other receives.
+//! ```
+//! use core::time::Duration;
+//! use embedded_hal::spi::{Operation, SpiDevice};
+//! use si4432_sim::{RadioConfig, Simulation};
+//!
+//! fn write(spi: &mut impl SpiDevice, address: u8, data: &[u8]) {
+//!     spi.transaction(&mut [Operation::Write(&[address | 0x80]), Operation::Write(data)]).unwrap();
+//! }
+//! fn read(spi: &mut impl SpiDevice, address: u8, buf: &mut [u8]) {
+//!     spi.transaction(&mut [Operation::Write(&[address]), Operation::Read(buf)]).unwrap();
+//! }
+//!
+//! let sim = Simulation::new(1);
+//! let medium = sim.medium();
+//! let mut a = medium.add_radio(RadioConfig::at([0.0, 0.0, 0.0]));
+//! let mut b = medium.add_radio(RadioConfig::at([100.0, 0.0, 0.0]));
+//! for spi in [&mut a.spi, &mut b.spi] {
+//!     let mut status = [0u8; 2];
+//!     read(spi, 0x03, &mut status); // clears ipor/ichiprdy left from power-up (nIRQ high)
+//!     write(spi, 0x71, &[0x22]); // FSK from the FIFO (reset: unmodulated carrier)
+//!     write(spi, 0x05, &[0x06]); // enpksent | enpkvalid
+//! }
+//! write(&mut b.spi, 0x07, &[0x05]); // RX on
+//! write(&mut a.spi, 0x3E, &[5]); // packet length
+//! write(&mut a.spi, 0x7F, b"hello");
+//! write(&mut a.spi, 0x07, &[0x09]); // TX on
+//!
+//! assert!(sim.run_until_or(Duration::from_millis(10), || b.chip.nirq_is_low()));
+//! let mut status = [0u8; 2];
+//! read(&mut b.spi, 0x03, &mut status);
+//! assert_eq!(status[0] & 0x02, 0x02); // ipkvalid
+//! let mut payload = [0u8; 5];
+//! read(&mut b.spi, 0x7F, &mut payload);
+//! assert_eq!(&payload, b"hello");
+//! assert!(!b.chip.nirq_is_low()); // released by reading 0x03/0x04
+//! ```
+//! In async code, spawn one task per radio end with [`Simulation::spawn`] and drive the
+//! driver through `a.spi` (`embedded_hal_async::spi::SpiDevice`), `a.nirq`
+//! (`embedded_hal_async::digital::Wait`) and `a.delay` (`embedded_hal_async::delay::DelayNs`).
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+mod access;
+mod acquire;
+mod air;
+mod chip;
+mod executor;
+pub mod fifo;
+mod medium;
+pub mod modem;
+pub mod packet;
+mod pins;
+pub mod propagation;
+pub mod registers;
+pub mod rng;
+mod rx;
+mod trace;
+mod tx;
+mod world;
+
+pub use chip::{ChipState, Fault, PLL_SETTLE_NS, POWER_ON_RESET_NS, XTAL_START_NS};
+pub use executor::{Simulation, Task};
+pub use medium::{ChipHandle, Interference, Medium, MediumConfig, RadioConfig, RadioHandle};
+pub use pins::{SimDelay, SimIrq, SimSdn, SimSpi, Sleep};
+pub use trace::{Outcome, RadioId, Reception, TraceFrame};

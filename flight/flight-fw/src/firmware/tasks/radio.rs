@@ -4,7 +4,7 @@
 use defmt::{info, warn};
 use embassy_time::{Delay, Duration, Timer};
 use embedded_hal_bus::spi::ExclusiveDevice;
-use radio_rfm22b::Bus;
+use radio_rfm22b::Rfm22b;
 
 use super::supervisor::{Watched, check_in};
 use crate::firmware::board::Radio;
@@ -12,17 +12,14 @@ use crate::firmware::board::Radio;
 #[embassy_executor::task]
 pub async fn radio_task(radio: Radio) {
     let Radio { spi, nsel, nirq } = radio;
-    let _nirq = nirq; // interrupt-driven link comes with the link task
     let Ok(device) = ExclusiveDevice::new_no_delay(spi, nsel);
-    let mut bus = Bus::new(device);
+    // SDN is tied low on these boards: software reset only.
+    let mut rfm = Rfm22b::new_without_sdn(device, nirq, Delay);
     loop {
         check_in(Watched::Radio);
-        match radio_rfm22b::software_reset(&mut bus, &mut Delay, 50).await {
-            Ok(()) => match radio_rfm22b::probe(&mut bus).await {
-                Ok(chip) => info!("RFM22B found: Si4432 {}", chip.version),
-                Err(e) => warn!("radio probe failed: {}", e),
-            },
-            Err(e) => warn!("radio reset failed: {}", e),
+        match rfm.reset().await {
+            Ok(chip) => info!("RFM22B found: Si4432 {}", chip.version),
+            Err(e) => warn!("radio reset/probe failed: {}", e),
         }
         // Re-check once a second; the watchdog wants to hear from us more often than that.
         for _ in 0..10 {

@@ -4,7 +4,7 @@
 use defmt::{info, warn};
 use embassy_time::{Delay, Duration, Timer};
 use embedded_hal_bus::spi::ExclusiveDevice;
-use radio_rfm22b::Bus;
+use radio_rfm22b::Rfm22b;
 
 use super::supervisor::{Watched, check_in};
 use crate::firmware::board::Radio;
@@ -15,25 +15,17 @@ pub async fn radio_task(radio: Radio) {
         spim,
         nsel,
         nirq,
-        mut sdn,
+        sdn,
     } = radio;
-    let _nirq = nirq; // interrupt-driven link comes with the link task
     let Ok(device) = ExclusiveDevice::new_no_delay(spim, nsel);
-    let mut bus = Bus::new(device);
+    let mut rfm = Rfm22b::new(device, nirq, sdn, Delay);
     loop {
         check_in(Watched::Radio);
-        // SDN high for ≥ 10 ms powers the chip down completely (datasheet §3.5), then the
-        // power-on reset takes up to 16.8 ms; software reset waits for chip-ready after that.
-        sdn.set_high();
-        Timer::after(Duration::from_millis(15)).await;
-        sdn.set_low();
-        Timer::after(Duration::from_millis(20)).await;
-        match radio_rfm22b::software_reset(&mut bus, &mut Delay, 50).await {
-            Ok(()) => match radio_rfm22b::probe(&mut bus).await {
-                Ok(chip) => info!("RFM22B found: Si4432 {}", chip.version),
-                Err(e) => warn!("radio probe failed: {}", e),
-            },
-            Err(e) => warn!("radio reset failed: {}", e),
+        // `reset` holds SDN high for 10 ms (full power-down, datasheet §3.3), waits out the
+        // power-on reset, then software-resets and waits for chip-ready.
+        match rfm.reset().await {
+            Ok(chip) => info!("RFM22B found: Si4432 {}", chip.version),
+            Err(e) => warn!("radio reset/probe failed: {}", e),
         }
         for _ in 0..10 {
             check_in(Watched::Radio);

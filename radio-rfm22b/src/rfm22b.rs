@@ -1,0 +1,348 @@
+//! The driver: `Rfm22b` owns the SPI device, nIRQ, SDN and a delay. This file holds
+//! construction, reset/probe, configuration and the small operations; TX and RX live in
+//! `tx.rs` and `rx.rs`.
+
+use embedded_hal::digital::OutputPin;
+use embedded_hal_async::delay::DelayNs;
+use embedded_hal_async::digital::Wait;
+use embedded_hal_async::spi::SpiDevice;
+
+use crate::Error;
+use crate::bus::Bus;
+use crate::config::Config;
+use crate::irq::Status;
+use crate::measure;
+use crate::power::TxPower;
+use crate::probe::{ChipInfo, Version};
+use crate::registers::*;
+
+/// Polls of the chip-ready flag after a software reset, 1 ms apart (Tau Labs: 50).
+const CHIP_READY_POLLS: u32 = 50;
+/// SDN high long enough to discharge the chip (datasheet §3.3: ≥ 10 ms).
+const SDN_HIGH_MS: u32 = 10;
+/// Power-on reset after SDN falls: up to 16.8 ms (datasheet Table 7), rounded up.
+const SDN_LOW_MS: u32 = 20;
+/// The ADC conversion takes ~305 µs (datasheet §8.3); poll every 100 µs, at most 10 times.
+const ADC_POLLS: u32 = 10;
+
+/// A stand-in for an SDN pin on boards that tie SDN low.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoPin;
+
+impl embedded_hal::digital::ErrorType for NoPin {
+    type Error = core::convert::Infallible;
+}
+
+impl OutputPin for NoPin {
+    fn set_low(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// The Si4432 / RFM22B driver.
+///
+/// Configure once with [`Rfm22b::init`], then per slot: [`Rfm22b::set_channel`] →
+/// [`Rfm22b::transmit`] or [`Rfm22b::receive`].
+pub struct Rfm22b<SPI, IRQ, SDN, D> {
+    pub(crate) bus: Bus<SPI>,
+    pub(crate) irq: IRQ,
+    sdn: SDN,
+    sdn_present: bool,
+    pub(crate) delay: D,
+    pub(crate) config: Option<Config>,
+    pub(crate) channel: u8,
+    /// An operation left the chip in TX/RX with interrupts enabled (it was cancelled).
+    pub(crate) busy: bool,
+}
+
+impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
+    /// Gives the parts back.
+    pub fn release(self) -> (SPI, IRQ, SDN, D) {
+        (self.bus.release(), self.irq, self.sdn, self.delay)
+    }
+
+    /// The configuration programmed by [`Rfm22b::init`].
+    pub fn config(&self) -> Option<&Config> {
+        self.config.as_ref()
+    }
+
+    /// The current hop channel.
+    pub fn channel(&self) -> u8 {
+        self.channel
+    }
+}
+
+impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    SDN: OutputPin,
+    D: DelayNs,
+{
+    /// A driver for a chip whose SDN pin the MCU drives (hard reset possible).
+    pub fn new(spi: SPI, irq: IRQ, sdn: SDN, delay: D) -> Self {
+        Self::build(spi, irq, sdn, true, delay)
+    }
+
+    fn build(spi: SPI, irq: IRQ, sdn: SDN, sdn_present: bool, delay: D) -> Self {
+        Self {
+            bus: Bus::new(spi),
+            irq,
+            sdn,
+            sdn_present,
+            delay,
+            config: None,
+            channel: 0,
+            busy: false,
+        }
+    }
+
+    /// Resets the chip (SDN pulse if wired, then software reset), checks it, and programs
+    /// `config`. Returns the silicon revision.
+    ///
+    /// Cancel-safety: dropping it leaves the chip half-configured; call `init` again.
+    pub async fn init(&mut self, config: Config) -> Result<ChipInfo, Error<SPI::Error>> {
+        config.validate()?;
+        self.config = Some(config);
+        self.channel = 0;
+        self.reinit().await
+    }
+
+    /// Resets and re-programs the stored configuration (after a chip reset or brown-out).
+    ///
+    /// Cancel-safety: as [`Rfm22b::init`].
+    pub async fn reinit(&mut self) -> Result<ChipInfo, Error<SPI::Error>> {
+        let config = self.config.ok_or(Error::NotInitialised)?;
+        let info = self.reset().await?;
+        self.configure(&config).await?;
+        Ok(info)
+    }
+
+    /// Hard reset through SDN (if wired), probe, software reset with chip-ready wait,
+    /// probe again; leaves the chip in READY with all interrupts off. An absent chip (bus
+    /// reads all 0x00 or all 0xFF) gives [`Error::NotAnSi4432`], never a hang.
+    ///
+    /// Cancel-safety: safe to drop; the next `reset` starts over.
+    pub async fn reset(&mut self) -> Result<ChipInfo, Error<SPI::Error>> {
+        self.busy = false;
+        if self.sdn_present {
+            self.sdn.set_high().map_err(|_| Error::Pin)?;
+            self.delay.delay_ms(SDN_HIGH_MS).await;
+            self.sdn.set_low().map_err(|_| Error::Pin)?;
+            self.delay.delay_ms(SDN_LOW_MS).await;
+        }
+        self.probe().await?;
+        self.software_reset().await?;
+        self.bus
+            .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
+            .await?;
+        self.read_status().await?;
+        self.probe().await
+    }
+
+    /// Reads the identification registers (0x00/0x01).
+    ///
+    /// Cancel-safety: safe (a register read).
+    pub async fn probe(&mut self) -> Result<ChipInfo, Error<SPI::Error>> {
+        let mut id = [0u8; 2];
+        self.bus.read_burst(DEVICE_TYPE, &mut id).await?;
+        let [device_type, version] = id;
+        if device_type & 0x1F != DEVICE_TYPE_SI443X {
+            return Err(Error::NotAnSi4432 {
+                device_type,
+                version,
+            });
+        }
+        Ok(ChipInfo {
+            version: Version::from(version & 0x1F),
+        })
+    }
+
+    /// Software reset (0x07 = 0x80), then polls for chip-ready up to 50 ms.
+    async fn software_reset(&mut self) -> Result<(), Error<SPI::Error>> {
+        self.bus.write(OPERATING_MODE_1, MODE_SWRESET).await?;
+        for _ in 0..CHIP_READY_POLLS {
+            self.delay.delay_ms(1).await;
+            if self.read_status().await?.chip_ready() {
+                return Ok(());
+            }
+        }
+        Err(Error::Timeout)
+    }
+
+    /// Reads (and so clears) both interrupt status registers, releasing nIRQ.
+    pub(crate) async fn read_status(&mut self) -> Result<Status, Error<SPI::Error>> {
+        crate::irq::read_status(&mut self.bus).await
+    }
+
+    /// Writes every register of `config`, in bursts (about 20 SPI transactions).
+    async fn configure(&mut self, config: &Config) -> Result<(), Error<SPI::Error>> {
+        let bus = &mut self.bus;
+        bus.write(OPERATING_MODE_1, MODE_XTON).await?;
+        bus.write(OPERATING_MODE_2, 0x00).await?;
+        bus.write(CRYSTAL_LOAD, config.crystal_load.register())
+            .await?;
+        let [g0, g1, g2] = config.gpio.registers();
+        bus.write_burst(GPIO0_CONFIG, &[g0, g1, g2, 0x00]).await?;
+        // Temperature sensor on the ADC, −64…+64 °C range, 0.5 °C steps (0x12 = 0x20).
+        bus.write_burst(ADC_CONFIG, &[0x00, 0x00]).await?;
+        bus.write_burst(TEMPERATURE_CONTROL, &[0x20, 0x00]).await?;
+        bus.write(
+            RSSI_THRESHOLD,
+            measure::rssi_raw(config.clear_channel_threshold_dbm),
+        )
+        .await?;
+
+        let modem = config.modem.registers();
+        bus.write_burst(IF_FILTER_BANDWIDTH, &modem.block_1c)
+            .await?;
+        bus.write(AFC_LIMITER, modem.afc_limiter).await?;
+        bus.write(CHARGE_PUMP_TRIM, modem.charge_pump).await?;
+        bus.write(AGC_OVERRIDE, modem.agc).await?;
+        let [dr1, dr0, m70, m71, fd] = modem.block_6e;
+        let m70 = m70 | u8::from(config.packet.whitening());
+        bus.write_burst(TX_DATA_RATE_1, &[dr1, dr0, m70, m71, fd])
+            .await?;
+
+        let packet = &config.packet;
+        bus.write(DATA_ACCESS_CONTROL, packet.data_access_control())
+            .await?;
+        bus.write_burst(HEADER_CONTROL_1, &packet.header_block())
+            .await?;
+        bus.write_burst(SYNC_WORD_3, &packet.address_block())
+            .await?;
+
+        bus.write(TX_POWER, config.tx_power.register(config.lna_switch))
+            .await?;
+        let [band, fc1, fc0] = config.carrier.registers();
+        bus.write_burst(FREQUENCY_OFFSET_1, &[0x00, 0x00, band, fc1, fc0])
+            .await?;
+        bus.write_burst(
+            HOP_CHANNEL,
+            &[self.channel, config.channel_spacing.register()],
+        )
+        .await?;
+        bus.write_burst(TX_FIFO_ALMOST_FULL, &config.fifo.registers())
+            .await?;
+        Ok(())
+    }
+
+    /// Selects hop channel `channel` (0x79): carrier + channel × spacing. Takes effect at
+    /// once (the PLL settles within the 200 µs the chip waits before TX/RX).
+    ///
+    /// Cancel-safety: safe (one register write).
+    pub async fn set_channel(&mut self, channel: u8) -> Result<(), Error<SPI::Error>> {
+        self.bus.write(HOP_CHANNEL, channel).await?;
+        self.channel = channel;
+        Ok(())
+    }
+
+    /// Changes the output power (0x6D).
+    ///
+    /// Cancel-safety: safe (one register write).
+    pub async fn set_tx_power(&mut self, power: TxPower) -> Result<(), Error<SPI::Error>> {
+        let config = self.config.as_mut().ok_or(Error::NotInitialised)?;
+        config.tx_power = power;
+        let value = power.register(config.lna_switch);
+        self.bus.write(TX_POWER, value).await
+    }
+
+    /// READY: crystal on, ~1 mA, 200 µs to TX/RX. Also aborts a TX/RX left running.
+    ///
+    /// Cancel-safety: safe.
+    pub async fn idle(&mut self) -> Result<(), Error<SPI::Error>> {
+        self.bus.write(OPERATING_MODE_1, MODE_XTON).await?;
+        self.bus
+            .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
+            .await?;
+        self.read_status().await?;
+        self.busy = false;
+        Ok(())
+    }
+
+    /// STANDBY: everything off but the register file (~450 nA); the next TX/RX restarts the
+    /// crystal (≈ 600 µs longer).
+    ///
+    /// Cancel-safety: safe.
+    pub async fn sleep(&mut self) -> Result<(), Error<SPI::Error>> {
+        self.idle().await?;
+        self.bus.write(OPERATING_MODE_1, 0x00).await
+    }
+
+    /// The RSSI now (0x26), in dBm (see [`measure::rssi_dbm`]). Meaningful in RX.
+    ///
+    /// Cancel-safety: safe (a register read).
+    pub async fn rssi_dbm(&mut self) -> Result<i16, Error<SPI::Error>> {
+        let raw = self.bus.read(RSSI).await?;
+        let offset = self.config.map_or(0, |c| c.packet.rssi_offset());
+        Ok(measure::rssi_dbm(raw, offset))
+    }
+
+    /// Measures the chip temperature, in tenths of °C.
+    ///
+    /// Cancel-safety: safe.
+    pub async fn read_temperature_decidegrees_c(&mut self) -> Result<i16, Error<SPI::Error>> {
+        self.bus.write(ADC_CONFIG, ADC_START).await?;
+        for _ in 0..ADC_POLLS {
+            self.delay.delay_us(100).await;
+            if self.bus.read(ADC_CONFIG).await? & ADC_START != 0 {
+                let adc = self.bus.read(ADC_VALUE).await?;
+                return Ok(measure::temperature_decidegrees_c(adc));
+            }
+        }
+        Err(Error::Timeout)
+    }
+
+    /// Checks that the chip still holds its configuration: the identification and GPIO1
+    /// (0x0C, which reads 0 after a silent reset — OpenLRSng's "locked module" test). On a
+    /// lost configuration it re-initialises and returns [`Error::ChipReset`].
+    ///
+    /// Cancel-safety: safe to drop before the re-init starts; during it, as `init`.
+    pub async fn check_health(&mut self) -> Result<(), Error<SPI::Error>> {
+        let config = self.config.ok_or(Error::NotInitialised)?;
+        self.probe().await?;
+        let [_, expected, _] = config.gpio.registers();
+        if self.bus.read(GPIO1_CONFIG).await? != expected {
+            self.reinit().await?;
+            return Err(Error::ChipReset);
+        }
+        Ok(())
+    }
+
+    /// After a status read showed a power-on reset: re-initialise, report the reset.
+    pub(crate) async fn recover(&mut self) -> Error<SPI::Error> {
+        match self.reinit().await {
+            Ok(_) => Error::ChipReset,
+            Err(e) => e,
+        }
+    }
+
+    /// Clears the selected FIFOs (0x08 bit 1 RX, bit 0 TX: write 1, then 0).
+    pub(crate) async fn clear_fifos(&mut self, bits: u8) -> Result<(), Error<SPI::Error>> {
+        self.bus.write(OPERATING_MODE_2, bits).await?;
+        self.bus.write(OPERATING_MODE_2, 0x00).await
+    }
+
+    /// If a previous TX/RX was dropped mid-way, stop it before starting anew.
+    pub(crate) async fn abort_if_busy(&mut self) -> Result<(), Error<SPI::Error>> {
+        if self.busy {
+            self.idle().await?;
+        }
+        Ok(())
+    }
+}
+
+impl<SPI, IRQ, D> Rfm22b<SPI, IRQ, NoPin, D>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    D: DelayNs,
+{
+    /// A driver for a board that ties SDN low (software reset only).
+    pub fn new_without_sdn(spi: SPI, irq: IRQ, delay: D) -> Self {
+        Self::build(spi, irq, NoPin, false, delay)
+    }
+}

@@ -1,0 +1,212 @@
+//! Reception: arm RX, latch RSSI and AFC at sync detect, drain the FIFO on almost-full for
+//! packets over 64 bytes, finish on valid-packet or CRC error (datasheet §6.3; the Tau Labs
+//! interrupt set 0x05 = 0x93 with sync detect from 0x06).
+
+use core::pin::pin;
+
+use embedded_hal::digital::OutputPin;
+use embedded_hal_async::delay::DelayNs;
+use embedded_hal_async::digital::Wait;
+use embedded_hal_async::spi::SpiDevice;
+
+use crate::irq::{Wake, read_status, wait_for_irq};
+use crate::measure;
+use crate::packet::PacketLength;
+use crate::registers::*;
+use crate::{Error, Rfm22b};
+
+/// Signal measurements latched when the sync word was detected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RxSignal {
+    /// RSSI at sync detect in dBm (read at packet end if the sync interrupt was missed).
+    pub rssi_dbm: i16,
+    /// The raw RSSI byte behind `rssi_dbm` (OpenLRSng reports this).
+    pub rssi_raw: u8,
+    /// The AFC correction at sync detect, Hz (signed; how far the sender was off).
+    pub afc_offset_hz: i32,
+}
+
+/// A valid packet.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RxPacket {
+    /// Payload bytes written to the start of the buffer.
+    pub len: usize,
+    /// The received header (0x47–0x4A), first on air first.
+    pub header: [u8; 4],
+    /// Signal quality.
+    pub signal: RxSignal,
+}
+
+/// What a [`Rfm22b::receive`] ended with. Rejected packets are outcomes, not errors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RxOutcome {
+    /// A packet passed the header check and the CRC.
+    Packet(RxPacket),
+    /// A packet arrived with a CRC error; it was discarded.
+    CrcError(RxSignal),
+    /// A packet longer than the buffer arrived; it was discarded.
+    TooLong {
+        /// Its length.
+        len: usize,
+        /// Signal quality.
+        signal: RxSignal,
+    },
+    /// Nothing arrived before the timeout.
+    Timeout,
+}
+
+impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    SDN: OutputPin,
+    D: DelayNs,
+{
+    /// Listens on the current channel for up to `timeout_us` and receives one packet into
+    /// `buf` (up to 255 bytes; longer than 64 streams through the FIFO). The chip ends in
+    /// READY whatever the outcome.
+    ///
+    /// Errors: [`Error::ChipReset`] (a power-on reset was seen; the chip has been
+    /// re-initialised), [`Error::FifoError`] (the FIFO overflowed; flushed), bus errors.
+    ///
+    /// Cancel-safety: dropping the future loses any packet in flight and leaves the chip in
+    /// RX; the next operation on the driver stops it first.
+    pub async fn receive(
+        &mut self,
+        buf: &mut [u8],
+        timeout_us: u32,
+    ) -> Result<RxOutcome, Error<SPI::Error>> {
+        let config = self.config.ok_or(Error::NotInitialised)?;
+        self.abort_if_busy().await?;
+        self.clear_fifos(FFCLR_RX).await?;
+        self.bus
+            .write_burst(
+                INTERRUPT_ENABLE_1,
+                &[
+                    IRQ1_FIFO_ERROR | IRQ1_RX_ALMOST_FULL | IRQ1_PACKET_VALID | IRQ1_CRC_ERROR,
+                    IRQ2_SYNC_DETECTED,
+                ],
+            )
+            .await?;
+        self.read_status().await?;
+        self.busy = true;
+        self.bus
+            .write(OPERATING_MODE_1, MODE_RXON | MODE_XTON)
+            .await?;
+
+        let high_band = config.carrier.high_band();
+        let rssi_offset = config.packet.rssi_offset();
+        let drain_len = config.fifo.rx_drain_len();
+        let fixed_len = match config.packet.length() {
+            PacketLength::Fixed(n) => Some(usize::from(n)),
+            PacketLength::Variable => None,
+        };
+        let outcome = {
+            let Self {
+                irq, delay, bus, ..
+            } = &mut *self;
+            let mut deadline = pin!(delay.delay_us(timeout_us));
+            let mut expired = false;
+            let mut signal: Option<RxSignal> = None;
+            let mut got = 0usize;
+            loop {
+                match wait_for_irq(irq, deadline.as_mut(), &mut expired).await {
+                    Ok(Wake::Irq) => {}
+                    Ok(Wake::Deadline) => break Err(Error::Timeout),
+                    Err(_) => break Err(Error::Pin),
+                }
+                let status = read_status(bus).await?;
+                if status.power_on_reset() {
+                    break Err(Error::ChipReset);
+                }
+                if status.fifo_error() {
+                    break Err(Error::FifoError);
+                }
+                if status.sync_detected() && signal.is_none() {
+                    signal = Some(latch_signal(bus, high_band, rssi_offset).await?);
+                }
+                if status.crc_error() {
+                    let s = match signal {
+                        Some(s) => s,
+                        None => latch_signal(bus, high_band, rssi_offset).await?,
+                    };
+                    break Ok(RxOutcome::CrcError(s));
+                }
+                if !(status.packet_valid() || status.rx_almost_full()) {
+                    continue;
+                }
+                // Received header 0x47–0x4A and length 0x4B in one burst.
+                let mut head = [0u8; 5];
+                bus.read_burst(RECEIVED_HEADER_3, &mut head).await?;
+                let [h3, h2, h1, h0, rx_len] = head;
+                let len = fixed_len.unwrap_or(usize::from(rx_len));
+                if len > buf.len() {
+                    let s = match signal {
+                        Some(s) => s,
+                        None => latch_signal(bus, high_band, rssi_offset).await?,
+                    };
+                    break Ok(RxOutcome::TooLong { len, signal: s });
+                }
+                let take = if status.packet_valid() {
+                    len.saturating_sub(got)
+                } else {
+                    drain_len.min(len.saturating_sub(got))
+                };
+                if let Some(dst) = buf.get_mut(got..got + take) {
+                    bus.read_burst(FIFO, dst).await?;
+                    got += take;
+                }
+                if status.packet_valid() {
+                    let s = match signal {
+                        Some(s) => s,
+                        None => latch_signal(bus, high_band, rssi_offset).await?,
+                    };
+                    break Ok(RxOutcome::Packet(RxPacket {
+                        len: got,
+                        header: [h3, h2, h1, h0],
+                        signal: s,
+                    }));
+                }
+            }
+        };
+        match outcome {
+            Ok(RxOutcome::Packet(p)) => self.finish(Ok(RxOutcome::Packet(p)), FFCLR_RX).await,
+            // Discarded packets: back to READY with an empty FIFO, as after a timeout.
+            Ok(other) => {
+                self.idle().await?;
+                self.clear_fifos(FFCLR_RX).await?;
+                Ok(other)
+            }
+            Err(Error::Timeout) => {
+                self.finish::<()>(Err(Error::Timeout), FFCLR_RX)
+                    .await
+                    .or_else(|e| match e {
+                        Error::Timeout => Ok(()),
+                        other => Err(other),
+                    })?;
+                Ok(RxOutcome::Timeout)
+            }
+            Err(e) => self.finish(Err(e), FFCLR_RX).await,
+        }
+    }
+}
+
+/// Reads RSSI (0x26) and the AFC correction (0x2B, 0x2C) at sync detect.
+async fn latch_signal<SPI: SpiDevice>(
+    bus: &mut crate::Bus<SPI>,
+    high_band: bool,
+    rssi_offset: u8,
+) -> Result<RxSignal, Error<SPI::Error>> {
+    let rssi_raw = bus.read(RSSI).await?;
+    let mut afc = [0u8; 2];
+    bus.read_burst(AFC_CORRECTION, &mut afc).await?;
+    let [afc_high, afc_low] = afc;
+    Ok(RxSignal {
+        rssi_dbm: measure::rssi_dbm(rssi_raw, rssi_offset),
+        rssi_raw,
+        afc_offset_hz: measure::afc_offset_hz(afc_high, afc_low, high_band),
+    })
+}

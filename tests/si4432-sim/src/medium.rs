@@ -1,0 +1,298 @@
+//! The public face of the RF medium: configuration, adding radios, moving them, injecting
+//! interference and faults, and reading the trace.
+
+use core::time::Duration;
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use crate::chip::{ChipState, Fault, Physical};
+use crate::modem::ModemSettings;
+use crate::pins::{SimDelay, SimIrq, SimSdn, SimSpi};
+use crate::trace::{RadioId, TraceFrame};
+use crate::world::World;
+
+/// Medium-wide settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct MediumConfig {
+    /// Probability that a receiver misses a frame it could otherwise have received.
+    /// Default 0.
+    pub packet_loss: f64,
+    /// Path-loss exponent: 2.0 is free space (default); 2.7–3.5 approximates ground clutter.
+    pub path_loss_exponent: f64,
+    /// Capture effect: a frame this many dB stronger than the one a receiver is tracking
+    /// takes over if it arrives before that one's sync word. `None` (default): first wins.
+    pub capture_threshold_db: Option<f64>,
+}
+
+impl Default for MediumConfig {
+    fn default() -> Self {
+        Self {
+            packet_loss: 0.0,
+            path_loss_exponent: 2.0,
+            capture_threshold_db: None,
+        }
+    }
+}
+
+/// Where a radio is and what its hardware is like.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct RadioConfig {
+    /// Position in metres (x, y, z).
+    pub position_m: [f64; 3],
+    /// Antenna gain in dBi, applied on TX and RX. Default 0.
+    pub antenna_gain_dbi: f64,
+    /// Crystal error in ppm: the radiated carrier is scaled by (1 + ppm·10⁻⁶). Default 0.
+    pub crystal_error_ppm: f64,
+    /// Die temperature the ADC reports, in °C. Default 25.
+    pub temperature_c: f64,
+    /// Supply voltage the battery monitor reports (0x1B), in V. Default 3.3.
+    pub supply_v: f64,
+}
+
+impl Default for RadioConfig {
+    fn default() -> Self {
+        Self {
+            position_m: [0.0; 3],
+            antenna_gain_dbi: 0.0,
+            crystal_error_ppm: 0.0,
+            temperature_c: 25.0,
+            supply_v: 3.3,
+        }
+    }
+}
+
+impl RadioConfig {
+    /// A radio at `position_m` with default hardware.
+    pub fn at(position_m: [f64; 3]) -> Self {
+        Self {
+            position_m,
+            ..Self::default()
+        }
+    }
+
+    pub(crate) fn physical(&self) -> Physical {
+        Physical {
+            crystal_error_ppm: self.crystal_error_ppm,
+            temperature_c: self.temperature_c,
+            supply_v: self.supply_v,
+        }
+    }
+}
+
+/// A burst of foreign energy on some channel (another system, a jammer, a motor).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interference {
+    /// Start of the burst.
+    pub start: Duration,
+    /// End of the burst (exclusive).
+    pub end: Duration,
+    /// Centre frequency, in Hz.
+    pub center_hz: f64,
+    /// Occupied bandwidth, in Hz.
+    pub bandwidth_hz: f64,
+    /// Power at every receiver, in dBm.
+    pub power_dbm: f64,
+}
+
+/// Handle to the RF medium of one simulation (cheap to clone).
+#[derive(Clone, Debug)]
+pub struct Medium {
+    pub(crate) world: Rc<RefCell<World>>,
+}
+
+/// Everything a driver needs for one chip: the embedded-hal endpoints plus a test handle.
+#[derive(Debug)]
+pub struct RadioHandle {
+    /// This radio's id in the medium.
+    pub id: RadioId,
+    /// SPI bus to the chip (blocking and async `SpiDevice`).
+    pub spi: SimSpi,
+    /// The nIRQ line (`InputPin` and async `Wait`).
+    pub nirq: SimIrq,
+    /// The SDN pin (`OutputPin`).
+    pub sdn: SimSdn,
+    /// Virtual-time delay (blocking and async `DelayNs`).
+    pub delay: SimDelay,
+    /// Inspection and fault injection.
+    pub chip: ChipHandle,
+}
+
+impl Medium {
+    /// Add a radio; returns its embedded-hal endpoints. The chip starts powered and READY with
+    /// `ipor`/`ichiprdy` pending, as a module looks after the MCU has booted.
+    pub fn add_radio(&self, config: RadioConfig) -> RadioHandle {
+        let index = self.world.borrow_mut().add_radio(config);
+        let world = &self.world;
+        RadioHandle {
+            id: RadioId(index),
+            spi: SimSpi::new(world.clone(), index),
+            nirq: SimIrq::new(world.clone(), index),
+            sdn: SimSdn::new(world.clone(), index),
+            delay: SimDelay::new(world.clone()),
+            chip: ChipHandle {
+                world: world.clone(),
+                index,
+            },
+        }
+    }
+
+    /// Move a radio.
+    pub fn set_position(&self, radio: RadioId, position_m: [f64; 3]) {
+        if let Some(r) = self.world.borrow_mut().radios.get_mut(radio.0) {
+            r.config.position_m = position_m;
+        }
+    }
+
+    /// Extra loss between two radios (both directions), e.g. an obstacle or an attenuator.
+    pub fn set_attenuation(&self, a: RadioId, b: RadioId, loss_db: f64) {
+        self.world
+            .borrow_mut()
+            .attenuation_db
+            .insert((a.0.min(b.0), a.0.max(b.0)), loss_db);
+    }
+
+    /// Change the random packet loss probability.
+    pub fn set_packet_loss(&self, probability: f64) {
+        self.world.borrow_mut().air.config.packet_loss = probability;
+    }
+
+    /// Replace the whole medium configuration.
+    pub fn set_config(&self, config: MediumConfig) {
+        self.world.borrow_mut().air.config = config;
+    }
+
+    /// Add an interference burst.
+    pub fn add_interference(&self, burst: Interference) {
+        self.world.borrow_mut().air.bursts.push(burst);
+    }
+
+    /// Power radio `to` receives from radio `from` on `carrier_hz` at `tx_power_dbm`, in dBm.
+    pub fn received_power_dbm(
+        &self,
+        from: RadioId,
+        to: RadioId,
+        carrier_hz: f64,
+        tx_power_dbm: f64,
+    ) -> f64 {
+        self.world
+            .borrow()
+            .link_power_dbm(from.0, to.0, carrier_hz, tx_power_dbm)
+    }
+
+    /// A copy of the trace.
+    pub fn trace(&self) -> Vec<TraceFrame> {
+        self.world.borrow().air.trace.clone()
+    }
+
+    /// Number of frames in the trace.
+    pub fn trace_len(&self) -> usize {
+        self.world.borrow().air.trace.len()
+    }
+
+    /// Look at the trace without copying it.
+    pub fn with_trace<R>(&self, f: impl FnOnce(&[TraceFrame]) -> R) -> R {
+        f(&self.world.borrow().air.trace)
+    }
+
+    /// Forget the trace so far (long runs).
+    pub fn clear_trace(&self) {
+        self.world.borrow_mut().air.clear_trace();
+    }
+
+    /// Current virtual time.
+    pub fn now(&self) -> Duration {
+        Duration::from_nanos(self.world.borrow().now_ns)
+    }
+}
+
+/// Test-side access to one chip: look at it and break it.
+#[derive(Clone, Debug)]
+pub struct ChipHandle {
+    world: Rc<RefCell<World>>,
+    index: usize,
+}
+
+impl ChipHandle {
+    fn with<R>(&self, f: impl FnOnce(&mut World) -> R) -> R {
+        f(&mut self.world.borrow_mut())
+    }
+
+    /// Register value without SPI side effects (status registers are the latched bits).
+    pub fn peek(&self, address: u8) -> u8 {
+        self.with(|w| {
+            w.radios.get(self.index).map_or(0, |r| match address {
+                0x03 => r.chip.status1,
+                0x04 => r.chip.status2,
+                _ => r.chip.reg(address),
+            })
+        })
+    }
+
+    /// Overwrite a register behind the driver's back (register corruption, e.g. a glitch).
+    pub fn poke(&self, address: u8, value: u8) {
+        self.with(|w| {
+            if let Some(r) = w.radios.get_mut(self.index) {
+                r.chip.set_reg(address, value);
+            }
+            w.update_irq(self.index);
+        });
+    }
+
+    /// Inject or clear a hardware fault.
+    pub fn set_fault(&self, fault: Fault) {
+        self.with(|w| {
+            if let Some(r) = w.radios.get_mut(self.index) {
+                r.chip.fault = fault;
+            }
+            w.update_irq(self.index);
+        });
+    }
+
+    /// A power-on reset right now (brown-out): registers lost, `ipor` after the POR time.
+    pub fn power_on_reset(&self) {
+        self.with(|w| {
+            w.with_chip(self.index, |chip, now, ctx| chip.power_on_reset(now, ctx));
+            w.update_irq(self.index);
+        });
+    }
+
+    /// Operating state.
+    pub fn state(&self) -> ChipState {
+        self.with(|w| {
+            w.radios
+                .get(self.index)
+                .map_or(ChipState::Shutdown, |r| r.chip.state())
+        })
+    }
+
+    /// nIRQ level (true = low = interrupt pending).
+    pub fn nirq_is_low(&self) -> bool {
+        self.with(|w| w.radios.get(self.index).is_some_and(|r| r.chip.nirq_low()))
+    }
+
+    /// Bytes waiting in the TX FIFO.
+    pub fn tx_fifo_len(&self) -> usize {
+        self.with(|w| w.radios.get(self.index).map_or(0, |r| r.chip.tx_fifo.len()))
+    }
+
+    /// Bytes waiting in the RX FIFO.
+    pub fn rx_fifo_len(&self) -> usize {
+        self.with(|w| w.radios.get(self.index).map_or(0, |r| r.chip.rx_fifo.len()))
+    }
+
+    /// The modem settings the registers describe right now.
+    pub fn modem(&self) -> Option<ModemSettings> {
+        self.with(|w| {
+            w.radios
+                .get(self.index)
+                .map(|r| ModemSettings::from_registers(&r.chip.regs))
+        })
+    }
+
+    /// Number of falling edges nIRQ has made so far.
+    pub fn nirq_falling_edges(&self) -> u64 {
+        self.with(|w| w.radios.get(self.index).map_or(0, |r| r.irq.falling_edges))
+    }
+}

@@ -1,0 +1,313 @@
+//! The embedded-hal endpoints of one virtual chip: SPI, nIRQ, SDN and a virtual-time delay.
+//!
+//! SPI transactions are instantaneous at the current virtual time. nIRQ is level-low: it is
+//! low while any enabled interrupt status bit is set and goes high only when 0x03/0x04 are
+//! read. `Wait` futures complete when virtual time reaches the moment the line changes; a
+//! dropped wait leaves at most a stale waker behind, which costs one spurious poll.
+
+use core::convert::Infallible;
+use core::future::Future;
+use core::pin::Pin;
+use core::task::{Context, Poll};
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use embedded_hal::spi::Operation;
+
+use crate::chip::Power;
+use crate::world::World;
+
+/// SPI bus to one chip: blocking `embedded_hal::spi::SpiDevice` and async
+/// `embedded_hal_async::spi::SpiDevice`. The first byte of a transaction is the address
+/// (bit 7 = write); bursts auto-increment except at the FIFO register 0x7F.
+#[derive(Clone, Debug)]
+pub struct SimSpi {
+    world: Rc<RefCell<World>>,
+    index: usize,
+}
+
+impl SimSpi {
+    pub(crate) fn new(world: Rc<RefCell<World>>, index: usize) -> Self {
+        Self { world, index }
+    }
+}
+
+impl embedded_hal::spi::ErrorType for SimSpi {
+    type Error = Infallible;
+}
+
+impl embedded_hal::spi::SpiDevice for SimSpi {
+    fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), Infallible> {
+        self.world.borrow_mut().spi(self.index, operations);
+        Ok(())
+    }
+}
+
+impl embedded_hal_async::spi::SpiDevice for SimSpi {
+    async fn transaction(
+        &mut self,
+        operations: &mut [Operation<'_, u8>],
+    ) -> Result<(), Infallible> {
+        self.world.borrow_mut().spi(self.index, operations);
+        Ok(())
+    }
+}
+
+/// The nIRQ output of one chip: `InputPin` (level) and async `Wait`.
+#[derive(Clone, Debug)]
+pub struct SimIrq {
+    world: Rc<RefCell<World>>,
+    index: usize,
+}
+
+impl SimIrq {
+    pub(crate) fn new(world: Rc<RefCell<World>>, index: usize) -> Self {
+        Self { world, index }
+    }
+
+    fn low(&self) -> bool {
+        self.world
+            .borrow()
+            .radios
+            .get(self.index)
+            .is_some_and(|r| r.irq.low)
+    }
+
+    fn edges(&self) -> (u64, u64) {
+        self.world
+            .borrow()
+            .radios
+            .get(self.index)
+            .map_or((0, 0), |r| (r.irq.falling_edges, r.irq.rising_edges))
+    }
+
+    fn wait(&self, condition: Condition) -> IrqWait {
+        let (falling, rising) = self.edges();
+        IrqWait {
+            world: self.world.clone(),
+            index: self.index,
+            condition,
+            falling,
+            rising,
+        }
+    }
+}
+
+impl embedded_hal::digital::ErrorType for SimIrq {
+    type Error = Infallible;
+}
+
+impl embedded_hal::digital::InputPin for SimIrq {
+    fn is_high(&mut self) -> Result<bool, Infallible> {
+        Ok(!self.low())
+    }
+
+    fn is_low(&mut self) -> Result<bool, Infallible> {
+        Ok(self.low())
+    }
+}
+
+impl embedded_hal_async::digital::Wait for SimIrq {
+    async fn wait_for_high(&mut self) -> Result<(), Infallible> {
+        self.wait(Condition::High).await;
+        Ok(())
+    }
+
+    async fn wait_for_low(&mut self) -> Result<(), Infallible> {
+        self.wait(Condition::Low).await;
+        Ok(())
+    }
+
+    async fn wait_for_rising_edge(&mut self) -> Result<(), Infallible> {
+        self.wait(Condition::Rising).await;
+        Ok(())
+    }
+
+    async fn wait_for_falling_edge(&mut self) -> Result<(), Infallible> {
+        self.wait(Condition::Falling).await;
+        Ok(())
+    }
+
+    async fn wait_for_any_edge(&mut self) -> Result<(), Infallible> {
+        self.wait(Condition::AnyEdge).await;
+        Ok(())
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Condition {
+    High,
+    Low,
+    Rising,
+    Falling,
+    AnyEdge,
+}
+
+/// Future of one nIRQ wait; edge counts are those seen when the wait began.
+struct IrqWait {
+    world: Rc<RefCell<World>>,
+    index: usize,
+    condition: Condition,
+    falling: u64,
+    rising: u64,
+}
+
+impl Future for IrqWait {
+    type Output = ();
+
+    fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<()> {
+        let mut world = self.world.borrow_mut();
+        let Some(radio) = world.radios.get_mut(self.index) else {
+            return Poll::Ready(());
+        };
+        let line = &mut radio.irq;
+        let done = match self.condition {
+            Condition::High => !line.low,
+            Condition::Low => line.low,
+            Condition::Rising => line.rising_edges > self.rising,
+            Condition::Falling => line.falling_edges > self.falling,
+            Condition::AnyEdge => {
+                line.rising_edges > self.rising || line.falling_edges > self.falling
+            }
+        };
+        if done {
+            return Poll::Ready(());
+        }
+        if !line.waiters.iter().any(|w| w.will_wake(cx.waker())) {
+            line.waiters.push(cx.waker().clone());
+        }
+        Poll::Pending
+    }
+}
+
+/// The SDN (shutdown) input of one chip: high = shutdown, low = running. Releasing it from
+/// shutdown starts a power-on reset (`ipor`, then `ichiprdy`).
+#[derive(Clone, Debug)]
+pub struct SimSdn {
+    world: Rc<RefCell<World>>,
+    index: usize,
+}
+
+impl SimSdn {
+    pub(crate) fn new(world: Rc<RefCell<World>>, index: usize) -> Self {
+        Self { world, index }
+    }
+}
+
+impl embedded_hal::digital::ErrorType for SimSdn {
+    type Error = Infallible;
+}
+
+impl embedded_hal::digital::OutputPin for SimSdn {
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        let mut world = self.world.borrow_mut();
+        world.process_due();
+        world.with_chip(self.index, |chip, now, ctx| {
+            if chip.power != Power::Off {
+                chip.shut_down(now, ctx);
+            }
+        });
+        world.update_irq(self.index);
+        Ok(())
+    }
+
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        let mut world = self.world.borrow_mut();
+        world.process_due();
+        world.with_chip(self.index, |chip, now, ctx| {
+            if chip.power == Power::Off {
+                chip.power_on_reset(now, ctx);
+            }
+        });
+        world.update_irq(self.index);
+        Ok(())
+    }
+}
+
+/// Virtual-time delay. Blocking `DelayNs` advances the whole simulation (every chip and the
+/// medium) by the delay without running other tasks, like a busy-wait on a real MCU; async
+/// `DelayNs` sleeps until virtual time reaches the deadline while other tasks run.
+#[derive(Clone, Debug)]
+pub struct SimDelay {
+    world: Rc<RefCell<World>>,
+}
+
+impl SimDelay {
+    pub(crate) fn new(world: Rc<RefCell<World>>) -> Self {
+        Self { world }
+    }
+
+    fn block_for_ns(&mut self, ns: u64) {
+        let mut world = self.world.borrow_mut();
+        let until = world.now_ns.saturating_add(ns);
+        world.advance_to(until);
+    }
+
+    /// Sleep for `ns` nanoseconds of virtual time (async).
+    pub fn sleep_ns(&self, ns: u64) -> Sleep {
+        let deadline_ns = self.world.borrow().now_ns.saturating_add(ns);
+        Sleep {
+            world: self.world.clone(),
+            deadline_ns,
+            registered: None,
+        }
+    }
+}
+
+impl embedded_hal::delay::DelayNs for SimDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        self.block_for_ns(u64::from(ns));
+    }
+
+    fn delay_us(&mut self, us: u32) {
+        self.block_for_ns(u64::from(us) * 1_000);
+    }
+
+    fn delay_ms(&mut self, ms: u32) {
+        self.block_for_ns(u64::from(ms) * 1_000_000);
+    }
+}
+
+impl embedded_hal_async::delay::DelayNs for SimDelay {
+    async fn delay_ns(&mut self, ns: u32) {
+        self.sleep_ns(u64::from(ns)).await;
+    }
+
+    async fn delay_us(&mut self, us: u32) {
+        self.sleep_ns(u64::from(us) * 1_000).await;
+    }
+
+    async fn delay_ms(&mut self, ms: u32) {
+        self.sleep_ns(u64::from(ms) * 1_000_000).await;
+    }
+}
+
+/// Future that completes when virtual time reaches its deadline.
+#[derive(Debug)]
+pub struct Sleep {
+    world: Rc<RefCell<World>>,
+    deadline_ns: u64,
+    /// The waker already queued as a timer (re-polls with the same waker add nothing).
+    registered: Option<core::task::Waker>,
+}
+
+impl Future for Sleep {
+    type Output = ();
+
+    fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<()> {
+        let this = self.get_mut();
+        let mut world = this.world.borrow_mut();
+        if world.now_ns >= this.deadline_ns {
+            return Poll::Ready(());
+        }
+        if !this
+            .registered
+            .as_ref()
+            .is_some_and(|w| w.will_wake(cx.waker()))
+        {
+            world.add_timer(this.deadline_ns, cx.waker().clone());
+            this.registered = Some(cx.waker().clone());
+        }
+        Poll::Pending
+    }
+}

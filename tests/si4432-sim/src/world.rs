@@ -1,0 +1,352 @@
+//! The shared simulation state behind every handle: virtual clock, chips, air, timers.
+//!
+//! Time only moves forward through `advance_one`/`advance_to`, which process every chip
+//! event up to the new time in time order (ties in radio order), so when an SPI access or a
+//! task runs, every chip is exactly at `now`. SPI transactions themselves take no time.
+
+use core::cmp::Ordering;
+use core::task::Waker;
+use std::collections::{BinaryHeap, HashMap};
+
+use embedded_hal::spi::Operation;
+
+use crate::air::Air;
+use crate::chip::{Chip, Ctx, Fault};
+use crate::medium::{MediumConfig, RadioConfig};
+use crate::modem::ModemSettings;
+use crate::propagation::{dbm_to_mw, mw_to_dbm, noise_floor_dbm, path_loss_db, rssi_register};
+use crate::rng::Rng;
+
+/// Safety net: more chip steps than this at one instant means a model bug; stop, don't hang.
+const MAX_STEPS_PER_INSTANT: usize = 1_000_000;
+
+/// The nIRQ line of one radio and the tasks waiting on it.
+#[derive(Debug, Default)]
+pub(crate) struct IrqLine {
+    pub low: bool,
+    pub falling_edges: u64,
+    pub rising_edges: u64,
+    pub waiters: Vec<Waker>,
+}
+
+#[derive(Debug)]
+pub(crate) struct Radio {
+    pub chip: Chip,
+    pub config: RadioConfig,
+    pub irq: IrqLine,
+}
+
+#[derive(Debug)]
+struct Timer {
+    deadline_ns: u64,
+    seq: u64,
+    waker: Waker,
+}
+
+impl PartialEq for Timer {
+    fn eq(&self, other: &Self) -> bool {
+        (self.deadline_ns, self.seq) == (other.deadline_ns, other.seq)
+    }
+}
+impl Eq for Timer {}
+impl PartialOrd for Timer {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Timer {
+    // Reversed, so the max-heap pops the earliest deadline first.
+    fn cmp(&self, other: &Self) -> Ordering {
+        (other.deadline_ns, other.seq).cmp(&(self.deadline_ns, self.seq))
+    }
+}
+
+#[derive(Debug)]
+pub(crate) struct World {
+    pub now_ns: u64,
+    pub rng: Rng,
+    pub radios: Vec<Radio>,
+    pub air: Air,
+    pub attenuation_db: HashMap<(usize, usize), f64>,
+    timers: BinaryHeap<Timer>,
+    timer_seq: u64,
+}
+
+/// Decoder state of one SPI transaction (nSEL low): the first byte is the address.
+#[derive(Default)]
+struct Session {
+    address: Option<u8>,
+    write: bool,
+}
+
+impl World {
+    pub fn new(seed: u64, config: MediumConfig) -> Self {
+        Self {
+            now_ns: 0,
+            rng: Rng::new(seed),
+            radios: Vec::new(),
+            air: Air::new(config),
+            attenuation_db: HashMap::new(),
+            timers: BinaryHeap::new(),
+            timer_seq: 0,
+        }
+    }
+
+    pub fn add_radio(&mut self, config: RadioConfig) -> usize {
+        let me = self.radios.len();
+        let chip = Chip::new(me, config.physical());
+        let low = chip.nirq_low();
+        self.radios.push(Radio {
+            chip,
+            config,
+            irq: IrqLine {
+                low,
+                ..IrqLine::default()
+            },
+        });
+        me
+    }
+
+    /// Earliest pending chip event or timer.
+    pub fn next_event_ns(&self) -> Option<u64> {
+        let chips = self
+            .radios
+            .iter()
+            .filter_map(|r| r.chip.next_event_ns())
+            .min();
+        let timer = self.timers.peek().map(|t| t.deadline_ns);
+        match (chips, timer) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// Move to `t` (never backwards), process everything due, fire expired timers.
+    pub fn advance_one(&mut self, t: u64) {
+        self.now_ns = self.now_ns.max(t);
+        self.process_due();
+        while self
+            .timers
+            .peek()
+            .is_some_and(|timer| timer.deadline_ns <= self.now_ns)
+        {
+            if let Some(timer) = self.timers.pop() {
+                timer.waker.wake();
+            }
+        }
+    }
+
+    /// Process every event up to `t`, then stand at `t`.
+    pub fn advance_to(&mut self, t: u64) {
+        while let Some(next) = self.next_event_ns().filter(|&next| next <= t) {
+            self.advance_one(next);
+        }
+        self.now_ns = self.now_ns.max(t);
+    }
+
+    /// Wake `waker` when virtual time reaches `deadline_ns`.
+    pub fn add_timer(&mut self, deadline_ns: u64, waker: Waker) {
+        self.timer_seq += 1;
+        self.timers.push(Timer {
+            deadline_ns,
+            seq: self.timer_seq,
+            waker,
+        });
+    }
+
+    /// Run every chip step due at `now`, in radio order, until none is left.
+    pub fn process_due(&mut self) {
+        let now = self.now_ns;
+        let mut steps = 0;
+        loop {
+            let mut progressed = false;
+            for i in 0..self.radios.len() {
+                while self
+                    .radios
+                    .get(i)
+                    .and_then(|r| r.chip.next_event_ns())
+                    .is_some_and(|t| t <= now)
+                {
+                    steps += 1;
+                    if steps > MAX_STEPS_PER_INSTANT {
+                        return;
+                    }
+                    progressed = true;
+                    let started = self.with_chip(i, |chip, now, ctx| chip.process(now, ctx));
+                    if let Some(Some(id)) = started {
+                        self.on_transmission_start(i, id);
+                    }
+                    self.update_irq(i);
+                }
+            }
+            if !progressed {
+                return;
+            }
+        }
+    }
+
+    /// Run `f` on chip `i` with a context borrowing the rest of the world.
+    pub fn with_chip<R>(
+        &mut self,
+        i: usize,
+        f: impl FnOnce(&mut Chip, u64, &mut Ctx<'_>) -> R,
+    ) -> Option<R> {
+        let radio_count = self.radios.len();
+        let now = self.now_ns;
+        let Self {
+            radios, air, rng, ..
+        } = self;
+        let radio = radios.get_mut(i)?;
+        let mut ctx = Ctx {
+            air,
+            rng,
+            radio_count,
+        };
+        Some(f(&mut radio.chip, now, &mut ctx))
+    }
+
+    /// A frame went on air at radio `from`: fill in its power at every radio and let every
+    /// other radio decide whether it hears it.
+    fn on_transmission_start(&mut self, from: usize, id: u64) {
+        let Some((carrier_hz, tx_power_dbm)) = self
+            .air
+            .get(id)
+            .map(|tx| (tx.carrier_hz, tx.modem.tx_power_dbm))
+        else {
+            return;
+        };
+        let powers: Vec<f64> = (0..self.radios.len())
+            .map(|to| self.link_power_dbm(from, to, carrier_hz, tx_power_dbm))
+            .collect();
+        self.air.set_powers(id, powers);
+        for to in (0..self.radios.len()).filter(|&to| to != from) {
+            self.with_chip(to, |chip, now, ctx| chip.consider(id, now, ctx));
+            self.update_irq(to);
+        }
+    }
+
+    /// Power arriving at radio `to` from radio `from` transmitting `tx_power_dbm` on `carrier_hz`.
+    pub fn link_power_dbm(
+        &self,
+        from: usize,
+        to: usize,
+        carrier_hz: f64,
+        tx_power_dbm: f64,
+    ) -> f64 {
+        let (Some(a), Some(b)) = (self.radios.get(from), self.radios.get(to)) else {
+            return -200.0;
+        };
+        let [ax, ay, az] = a.config.position_m;
+        let [bx, by, bz] = b.config.position_m;
+        let distance_m = ((ax - bx).powi(2) + (ay - by).powi(2) + (az - bz).powi(2)).sqrt();
+        let key = (from.min(to), from.max(to));
+        let extra_db = self.attenuation_db.get(&key).copied().unwrap_or(0.0);
+        tx_power_dbm + a.config.antenna_gain_dbi + b.config.antenna_gain_dbi
+            - path_loss_db(distance_m, carrier_hz, self.air.config.path_loss_exponent)
+            - extra_db
+    }
+
+    /// Re-evaluate nIRQ of radio `i`; wake its waiters on any change.
+    pub fn update_irq(&mut self, i: usize) {
+        let Some(radio) = self.radios.get_mut(i) else {
+            return;
+        };
+        let low = radio.chip.nirq_low();
+        if low != radio.irq.low {
+            radio.irq.low = low;
+            if low {
+                radio.irq.falling_edges += 1;
+            } else {
+                radio.irq.rising_edges += 1;
+            }
+            for waker in radio.irq.waiters.drain(..) {
+                waker.wake();
+            }
+        }
+    }
+
+    /// What the RSSI register of radio `i` would read now if nothing were latched.
+    fn live_rssi(&self, i: usize) -> u8 {
+        let Some(radio) = self.radios.get(i) else {
+            return 0;
+        };
+        let modem = ModemSettings::from_registers(&radio.chip.regs);
+        let carrier_hz = radio.chip.radiated_carrier_hz(&modem);
+        let in_band_mw = dbm_to_mw(noise_floor_dbm(modem.rx_bit_rate_bps))
+            + self
+                .air
+                .interference_mw(i, self.now_ns, carrier_hz, modem.if_bandwidth_hz, None);
+        rssi_register(mw_to_dbm(in_band_mw), radio.chip.reg(0x35) & 0x07)
+    }
+
+    /// One SPI transaction on radio `i` (instantaneous except for `DelayNs` operations).
+    pub fn spi(&mut self, i: usize, operations: &mut [Operation<'_, u8>]) {
+        self.process_due();
+        let mut session = Session::default();
+        for operation in operations.iter_mut() {
+            match operation {
+                Operation::Read(buffer) => {
+                    for byte in buffer.iter_mut() {
+                        *byte = self.spi_byte(i, &mut session, 0x00);
+                    }
+                }
+                Operation::Write(bytes) => {
+                    for &byte in bytes.iter() {
+                        self.spi_byte(i, &mut session, byte);
+                    }
+                }
+                Operation::Transfer(read, write) => {
+                    for k in 0..read.len().max(write.len()) {
+                        let mosi = write.get(k).copied().unwrap_or(0x00);
+                        let miso = self.spi_byte(i, &mut session, mosi);
+                        if let Some(slot) = read.get_mut(k) {
+                            *slot = miso;
+                        }
+                    }
+                }
+                Operation::TransferInPlace(buffer) => {
+                    for byte in buffer.iter_mut() {
+                        *byte = self.spi_byte(i, &mut session, *byte);
+                    }
+                }
+                Operation::DelayNs(ns) => {
+                    let until = self.now_ns.saturating_add(u64::from(*ns));
+                    self.advance_to(until);
+                }
+            }
+        }
+        self.process_due();
+        self.update_irq(i);
+    }
+
+    fn spi_byte(&mut self, i: usize, session: &mut Session, mosi: u8) -> u8 {
+        let Some(address) = session.address else {
+            session.address = Some(mosi & 0x7F);
+            session.write = mosi & 0x80 != 0;
+            return match self.radios.get(i).map(|r| r.chip.fault) {
+                Some(Fault::Unplugged { miso }) => miso,
+                _ => 0x00,
+            };
+        };
+        // Bursts auto-increment the address, except on the FIFO register (datasheet §3.1).
+        if address != 0x7F {
+            session.address = Some((address + 1) & 0x7F);
+        }
+        let write = session.write;
+        // The live RSSI needs the whole medium; only compute it when 0x26 is read.
+        let live_rssi = if !write && address == 0x26 {
+            self.live_rssi(i)
+        } else {
+            0
+        };
+        self.with_chip(i, |chip, now, ctx| {
+            if write {
+                chip.spi_write(address, mosi, now, ctx);
+                0x00
+            } else {
+                chip.spi_read(address, live_rssi)
+            }
+        })
+        .unwrap_or(0xFF)
+    }
+}
