@@ -2,7 +2,8 @@
 //! the pure halves of the over-the-air bind exchange on the fixed bind channel and rate.
 
 use super::hopping::{Band, mix32};
-use super::rate::RateMode;
+use super::radio::RadioConfig;
+use super::rate::{BIND_RATE, RateMode};
 use crate::channels::ChannelFormat;
 use crate::frame::{BindOffer, Frame, Received, decode};
 
@@ -62,6 +63,16 @@ impl LinkParams {
         }
     }
 
+    /// The radio configuration of the bound link: its rate, its header, its band's grid.
+    pub fn radio_config(&self) -> RadioConfig {
+        RadioConfig {
+            rate: self.rate,
+            header: self.header(),
+            base_hz: self.band.base_hz(),
+            spacing_hz: self.band.spacing_hz(),
+        }
+    }
+
     /// The bind offer carrying these parameters.
     pub fn offer(&self) -> BindOffer {
         BindOffer {
@@ -90,6 +101,17 @@ pub const OFFER_PERIOD_US: u32 = 4 * RateMode::L50.slot_us();
 /// The follower answers an offer this many times, one L50 slot apart, so one lost accept
 /// does not leave the master offering forever.
 pub const ACCEPT_REPEATS: u8 = 3;
+
+/// The radio configuration of bind mode in `band`: bind rate and header, channel 0 on the
+/// bind frequency.
+pub fn bind_radio_config(band: Band) -> RadioConfig {
+    RadioConfig {
+        rate: BIND_RATE,
+        header: BIND_HEADER,
+        base_hz: band.bind_hz(),
+        spacing_hz: band.spacing_hz(),
+    }
+}
 
 /// Master side: is this packet the follower's accept of our offer?
 pub fn is_accept_of(packet: &[u8], params: &LinkParams) -> bool {

@@ -2,11 +2,11 @@
 //! clock and lets the application take channel outputs and exchange telemetry after every
 //! step.
 
-use super::bind::{ACCEPT_REPEATS, BIND_HEADER, BIND_KEY, LinkParams, offered_params};
+use super::bind::{ACCEPT_REPEATS, BIND_KEY, LinkParams, bind_radio_config, offered_params};
 use super::core::{Follower, Step};
 use super::hopping::Band;
-use super::radio::{LinkClock, PacketRadio, RadioConfig, RxOutcome};
-use super::rate::{BIND_RATE, FIFO_BYTES};
+use super::radio::{LinkClock, PacketRadio, RxOutcome};
+use super::rate::FIFO_BYTES;
 use crate::frame::{Frame, encode};
 
 /// Gap between receiving an offer and answering, and between repeated accepts: the master
@@ -22,13 +22,8 @@ pub async fn bind_follower<R: PacketRadio, C: LinkClock>(
     band: Band,
     timeout_us: u64,
 ) -> Result<Option<LinkParams>, R::Error> {
-    radio
-        .configure(&RadioConfig {
-            rate: BIND_RATE,
-            header: BIND_HEADER,
-        })
-        .await?;
-    radio.set_frequency(band.bind_hz()).await?;
+    radio.configure(&bind_radio_config(band)).await?;
+    radio.set_channel(0).await?;
     let give_up = clock.now_us() + timeout_us;
     let mut buf = [0u8; FIFO_BYTES];
     while clock.now_us() < give_up {
@@ -76,21 +71,21 @@ pub async fn run_follower<R: PacketRadio, C: LinkClock, H: FollowerHooks>(
     loop {
         match follower.plan(clock.now_us(), &mut buf) {
             Step::Transmit {
-                frequency_hz,
+                channel,
                 at_us,
                 len,
             } => {
-                radio.set_frequency(frequency_hz).await?;
+                radio.set_channel(channel).await?;
                 clock.sleep_until_us(at_us).await;
                 radio.transmit(buf.get(..len).unwrap_or(&[])).await?;
                 follower.on_sent();
             }
             Step::Listen {
-                frequency_hz,
+                channel,
                 from_us,
                 until_us,
             } => {
-                radio.set_frequency(frequency_hz).await?;
+                radio.set_channel(channel).await?;
                 clock.sleep_until_us(from_us).await;
                 let timeout = until_us.saturating_sub(clock.now_us());
                 let outcome = radio

@@ -2,10 +2,10 @@
 //! one slot after another on its own time base, and lets the application exchange channels
 //! and telemetry with the state machine at every slot boundary.
 
-use super::bind::{BIND_HEADER, BIND_KEY, LinkParams, OFFER_PERIOD_US, is_accept_of};
+use super::bind::{BIND_KEY, LinkParams, OFFER_PERIOD_US, bind_radio_config, is_accept_of};
 use super::core::{Master, Step};
-use super::radio::{LinkClock, PacketRadio, RadioConfig, RxOutcome};
-use super::rate::{BIND_RATE, FIFO_BYTES};
+use super::radio::{LinkClock, PacketRadio, RxOutcome};
+use super::rate::FIFO_BYTES;
 use crate::frame::{Frame, encode};
 
 /// Bind mode on the master (started by the bind button/command): offers `params` on the
@@ -17,13 +17,8 @@ pub async fn bind_master<R: PacketRadio, C: LinkClock>(
     params: &LinkParams,
     timeout_us: u64,
 ) -> Result<bool, R::Error> {
-    radio
-        .configure(&RadioConfig {
-            rate: BIND_RATE,
-            header: BIND_HEADER,
-        })
-        .await?;
-    radio.set_frequency(params.band.bind_hz()).await?;
+    radio.configure(&bind_radio_config(params.band)).await?;
+    radio.set_channel(0).await?;
     let give_up = clock.now_us() + timeout_us;
     let mut offer = [0u8; FIFO_BYTES];
     let Ok(offer_len) = encode(&Frame::BindOffer(params.offer()), BIND_KEY, &mut offer) else {
@@ -73,21 +68,21 @@ pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
         hooks.on_slot(slot_start_us, master);
         match master.plan(slot_start_us, &mut buf) {
             Step::Transmit {
-                frequency_hz,
+                channel,
                 at_us,
                 len,
             } => {
-                radio.set_frequency(frequency_hz).await?;
+                radio.set_channel(channel).await?;
                 clock.sleep_until_us(at_us).await;
                 radio.transmit(buf.get(..len).unwrap_or(&[])).await?;
                 master.on_sent();
             }
             Step::Listen {
-                frequency_hz,
+                channel,
                 from_us,
                 until_us,
             } => {
-                radio.set_frequency(frequency_hz).await?;
+                radio.set_channel(channel).await?;
                 clock.sleep_until_us(from_us).await;
                 let timeout = until_us.saturating_sub(clock.now_us());
                 let outcome = radio

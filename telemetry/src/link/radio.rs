@@ -14,6 +14,17 @@ pub struct RadioConfig {
     /// Hardware header: sent on TX (Si4432 0x3A–0x3D) and required on RX (0x3F–0x42, all
     /// bits checked, broadcast off), so packets of other links never reach the FIFO.
     pub header: [u8; 4],
+    /// Carrier of channel 0 (Si4432 0x75–0x77).
+    pub base_hz: u32,
+    /// Channel spacing, a multiple of 10 kHz (Si4432 0x7A).
+    pub spacing_hz: u32,
+}
+
+impl RadioConfig {
+    /// Frequency of `channel`.
+    pub const fn channel_hz(&self, channel: u8) -> u32 {
+        self.base_hz + channel as u32 * self.spacing_hz
+    }
 }
 
 /// Result of one receive.
@@ -39,8 +50,9 @@ pub trait PacketRadio {
     /// Loads the modem profile and header for `config`.
     async fn configure(&mut self, config: &RadioConfig) -> Result<(), Self::Error>;
 
-    /// Tunes to `frequency_hz` (takes effect for the next transmit or receive).
-    async fn set_frequency(&mut self, frequency_hz: u32) -> Result<(), Self::Error>;
+    /// Tunes to `channel` of the configured grid (the Si4432 hop register 0x79; takes effect
+    /// for the next transmit or receive).
+    async fn set_channel(&mut self, channel: u8) -> Result<(), Self::Error>;
 
     /// Sends one packet; returns when it has left the antenna.
     async fn transmit(&mut self, frame: &[u8]) -> Result<(), Self::Error>;

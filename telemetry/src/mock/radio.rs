@@ -15,7 +15,7 @@ pub struct MockRadio {
     medium: Medium,
     time: VirtualTime,
     node: usize,
-    rate: RateMode,
+    config: RadioConfig,
     frequency_hz: u32,
     transmitted: u64,
 }
@@ -28,7 +28,12 @@ impl MockRadio {
             medium,
             time,
             node,
-            rate: RateMode::L50,
+            config: RadioConfig {
+                rate: RateMode::L50,
+                header: [0; 4],
+                base_hz: 0,
+                spacing_hz: 0,
+            },
             frequency_hz: 0,
             transmitted: 0,
         }
@@ -54,19 +59,19 @@ impl PacketRadio for MockRadio {
     type Error = Infallible;
 
     async fn configure(&mut self, config: &RadioConfig) -> Result<(), Infallible> {
-        self.rate = config.rate;
+        self.config = *config;
         self.medium.configure(self.node, config.rate, config.header);
         Ok(())
     }
 
-    async fn set_frequency(&mut self, frequency_hz: u32) -> Result<(), Infallible> {
-        self.frequency_hz = frequency_hz;
+    async fn set_channel(&mut self, channel: u8) -> Result<(), Infallible> {
+        self.frequency_hz = self.config.channel_hz(channel);
         Ok(())
     }
 
     async fn transmit(&mut self, frame: &[u8]) -> Result<(), Infallible> {
         let start = self.time.now_us() + u64::from(PLL_SETTLE_US);
-        let end = start + u64::from(airtime_us(frame.len(), self.rate.bit_rate_bps()));
+        let end = start + u64::from(airtime_us(frame.len(), self.config.rate.bit_rate_bps()));
         self.medium
             .transmit(self.node, start, end, self.frequency_hz, frame);
         self.transmitted += 1;

@@ -163,6 +163,8 @@ fn spawn_jammer(
             .configure(&RadioConfig {
                 rate,
                 header: *b"JAM!",
+                base_hz: band.base_hz(),
+                spacing_hz: band.spacing_hz(),
             })
             .await;
         let mut junk = [0u8; 32];
@@ -171,7 +173,7 @@ fn spawn_jammer(
                 *b = rng.next_u64() as u8;
             }
             let _ = radio
-                .set_frequency(band.channel_hz(rng.below(HOP_CHANNELS as u64) as u8))
+                .set_channel(rng.below(HOP_CHANNELS as u64) as u8)
                 .await;
             let _ = radio.transmit(&junk).await;
             let on = f64::from(airtime_us(junk.len(), rate.bit_rate_bps()));

@@ -106,10 +106,7 @@ impl Follower {
 
     /// Radio configuration of this link.
     pub fn radio_config(&self) -> RadioConfig {
-        RadioConfig {
-            rate: self.params.rate,
-            header: self.params.header(),
-        }
+        self.params.radio_config()
     }
 
     /// Link parameters.
@@ -223,12 +220,9 @@ impl Follower {
                 let Sync::Acquiring { index, .. } = self.sync else {
                     return Step::Idle;
                 };
-                let frequency_hz = self
-                    .params
-                    .band
-                    .channel_hz(self.hops.channel(usize::from(index)));
+                let channel = self.hops.channel(usize::from(index));
                 Step::Listen {
-                    frequency_hz,
+                    channel,
                     from_us: now_us,
                     until_us: end,
                 }
@@ -238,19 +232,16 @@ impl Follower {
                 slot_start_us,
                 ..
             } => {
-                let frequency_hz = self
-                    .params
-                    .band
-                    .channel_hz(self.hops.channel_for_slot(u32::from(slot)));
+                let channel = self.hops.channel_for_slot(u32::from(slot));
                 match self.schedule.kind(u32::from(slot)) {
                     SlotKind::Uplink => Step::Listen {
-                        frequency_hz,
+                        channel,
                         from_us: slot_start_us.saturating_sub(RX_EARLY_US),
                         until_us: self.slot_end_us(slot, slot_start_us),
                     },
                     SlotKind::Downlink => match self.build_downlink(slot, buf) {
                         Some(len) => Step::Transmit {
-                            frequency_hz,
+                            channel,
                             at_us: slot_start_us + u64::from(TX_LEAD_US),
                             len,
                         },

@@ -63,10 +63,7 @@ impl Master {
 
     /// Radio configuration of this link.
     pub fn radio_config(&self) -> RadioConfig {
-        RadioConfig {
-            rate: self.params.rate,
-            header: self.params.header(),
-        }
+        self.params.radio_config()
     }
 
     /// Link parameters.
@@ -98,19 +95,16 @@ impl Master {
     /// Plans the current slot, which starts at `slot_start_us`, writing an uplink frame into
     /// `buf` when it is an uplink slot.
     pub fn plan(&mut self, slot_start_us: u64, buf: &mut [u8]) -> Step {
-        let frequency_hz = self
-            .params
-            .band
-            .channel_hz(self.hops.channel_for_slot(self.slot));
+        let channel = self.hops.channel_for_slot(self.slot);
         match self.schedule.kind(self.slot) {
             SlotKind::Downlink => Step::Listen {
-                frequency_hz,
+                channel,
                 from_us: slot_start_us,
                 until_us: slot_start_us + u64::from(self.schedule.listen_end_offset_us()),
             },
             SlotKind::Uplink => match self.build_uplink(buf) {
                 Some(len) => Step::Transmit {
-                    frequency_hz,
+                    channel,
                     at_us: slot_start_us + u64::from(TX_LEAD_US),
                     len,
                 },

@@ -19,8 +19,8 @@ pub const STREAM_RX_BYTES: usize = 1024;
 pub enum Step {
     /// Send the `len` bytes the state machine wrote into the frame buffer, starting at `at_us`.
     Transmit {
-        /// Carrier.
-        frequency_hz: u32,
+        /// Grid channel.
+        channel: u8,
         /// Start of transmission (the loop sleeps until then).
         at_us: u64,
         /// Frame length.
@@ -28,8 +28,8 @@ pub enum Step {
     },
     /// Listen from `from_us` until `until_us`.
     Listen {
-        /// Carrier.
-        frequency_hz: u32,
+        /// Grid channel.
+        channel: u8,
         /// Start listening (the loop sleeps until then).
         from_us: u64,
         /// Stop listening.
