@@ -84,11 +84,17 @@ pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
             } => {
                 radio.set_channel(channel).await?;
                 clock.sleep_until_us(from_us).await;
-                let timeout = until_us.saturating_sub(clock.now_us());
-                let outcome = radio
-                    .receive(&mut buf, u32::try_from(timeout).unwrap_or(u32::MAX))
-                    .await?;
-                master.on_received(outcome, &buf, clock.now_us());
+                // Listen on after a foreign or corrupted packet: ours may still come.
+                while clock.now_us() < until_us {
+                    let timeout = until_us - clock.now_us();
+                    let outcome = radio
+                        .receive(&mut buf, u32::try_from(timeout).unwrap_or(u32::MAX))
+                        .await?;
+                    if master.on_received(outcome, &buf, clock.now_us()) {
+                        break;
+                    }
+                }
+                master.finish_listen();
             }
             Step::Idle => master.on_skipped(),
         }

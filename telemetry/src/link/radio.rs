@@ -38,6 +38,9 @@ pub enum RxOutcome {
         /// RSSI latched at sync-word detection, dBm.
         rssi_dbm: i16,
     },
+    /// A packet arrived but failed the chip's own checks (CRC, length); the radio returns
+    /// early so the caller can count it and listen on for the rest of its window.
+    Corrupted,
     /// Nothing valid arrived before the timeout.
     Timeout,
 }

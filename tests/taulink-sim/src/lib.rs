@@ -6,6 +6,8 @@
 //! measure, [`report`] summarises.
 #![warn(missing_docs)]
 
+pub mod chip_world;
+pub mod driver;
 pub mod probe;
 pub mod report;
 pub mod scenario;

@@ -11,7 +11,6 @@ use telemetry::link::core::follower::SyncState;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::FollowerHooks;
 use telemetry::link::master::MasterHooks;
-use telemetry::mock::VirtualTime;
 
 /// Handset sample period: about 1 kHz from the handset's own crystal, so its phase drifts
 /// against the module's slots (1 µs per ms) and latency sees every alignment.
@@ -152,11 +151,13 @@ pub struct Snapshot {
 
 /// Shared record handle.
 pub type Shared = Rc<RefCell<Record>>;
+/// The common time reference of a simulation (virtual µs, not either end's clock).
+pub type Now = Rc<dyn Fn() -> u64>;
 
 /// The module's application: handset samples in, telemetry out and in.
 pub struct ModuleApp {
     /// Virtual time (the common reference for latency).
-    pub time: VirtualTime,
+    pub now: Now,
     /// Where measurements go.
     pub record: Shared,
     /// Link salt (channel pattern and stream bytes).
@@ -169,9 +170,9 @@ pub struct ModuleApp {
 
 impl ModuleApp {
     /// A module application.
-    pub fn new(time: VirtualTime, record: Shared, salt: u64, telemetry_load: bool) -> Self {
+    pub fn new(now: Now, record: Shared, salt: u64, telemetry_load: bool) -> Self {
         Self {
-            time,
+            now,
             record,
             salt,
             telemetry_load,
@@ -183,7 +184,7 @@ impl ModuleApp {
 
 impl MasterHooks for ModuleApp {
     fn on_slot(&mut self, _now_us: u64, master: &mut Master) {
-        let now = self.time.now_us();
+        let now = (self.now)();
         master.set_channels(&sample_channels(self.salt, now / SAMPLE_PERIOD_US));
         if self.telemetry_load {
             let free = master.uplink_stream.free();
@@ -216,7 +217,7 @@ impl MasterHooks for ModuleApp {
 /// The flight controller's application: channel outputs checked, telemetry out and in.
 pub struct FlightApp {
     /// Virtual time.
-    pub time: VirtualTime,
+    pub now: Now,
     /// Where measurements go.
     pub record: Shared,
     /// Link salt.
@@ -234,14 +235,14 @@ pub struct FlightApp {
 impl FlightApp {
     /// A flight application for a link with `format`.
     pub fn new(
-        time: VirtualTime,
+        now: Now,
         record: Shared,
         salt: u64,
         telemetry_load: bool,
         format: ChannelFormat,
     ) -> Self {
         Self {
-            time,
+            now,
             record,
             salt,
             telemetry_load,
@@ -257,7 +258,7 @@ impl FlightApp {
 
 impl FollowerHooks for FlightApp {
     fn on_step(&mut self, _now_us: u64, follower: &mut Follower) {
-        let now = self.time.now_us();
+        let now = (self.now)();
         let mut guard = self.record.borrow_mut();
         let rec = &mut *guard;
         if follower.updates() != self.last_updates && !follower.in_failsafe() {

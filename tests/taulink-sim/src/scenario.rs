@@ -39,8 +39,12 @@ pub struct Scenario {
     pub telemetry_load: bool,
     /// Chip header check on the receivers (off exposes foreign packets to the link CRC).
     pub header_check: bool,
-    /// Chip CRC on the receivers (off exposes corrupted packets to the link CRC).
+    /// Chip CRC on the receivers (off exposes corrupted packets to the link CRC; packet
+    /// level only).
     pub chip_crc: bool,
+    /// Run the real RFM22b driver on virtual Si4432s (`si4432-sim`); otherwise the
+    /// packet-level mock radios (faster; supports `bit_error_rate` and `chip_crc`).
+    pub chip_level: bool,
 }
 
 impl Default for Scenario {
@@ -63,6 +67,7 @@ impl Default for Scenario {
             telemetry_load: true,
             header_check: true,
             chip_crc: true,
+            chip_level: true,
         }
     }
 }
@@ -90,7 +95,8 @@ pub const USAGE: &str =
     "taulink-sim [--rate L50|M100|F250|F500] [--ratio N] [--compact8] [--band 433|868|915]
             [--distance M] [--loss P] [--ber P] [--interference DUTY] [--foreign]
             [--seed N] [--duration S] [--failsafe-ms MS] [--cut FROM:TO] [--no-bind]
-            [--no-telemetry] [--no-header-check] [--no-chip-crc] [--json] [--quiet] [--sweep]";
+            [--no-telemetry] [--no-header-check] [--no-chip-crc] [--packet-level]
+            [--json] [--quiet] [--sweep]";
 
 /// Parses command-line arguments (without the program name).
 pub fn parse_args(args: &[String]) -> Result<(Scenario, Output), String> {
@@ -142,6 +148,7 @@ pub fn parse_args(args: &[String]) -> Result<(Scenario, Output), String> {
             "--no-telemetry" => s.telemetry_load = false,
             "--no-header-check" => s.header_check = false,
             "--no-chip-crc" => s.chip_crc = false,
+            "--packet-level" => s.chip_level = false,
             "--json" => out.json = true,
             "--quiet" => out.quiet = true,
             "--sweep" => out.sweep = true,

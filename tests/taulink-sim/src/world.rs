@@ -15,14 +15,14 @@ use telemetry::mock::{
     VirtualTime,
 };
 
-use crate::probe::{FlightApp, ModuleApp, Record, Shared, Snapshot};
+use crate::probe::{FlightApp, ModuleApp, Now, Record, Shared, Snapshot};
 use crate::report::{Report, summarise};
 use crate::scenario::Scenario;
 
 /// How long each end's bind mode lasts before giving up.
-const BIND_TIMEOUT_US: u64 = 5_000_000;
+pub(crate) const BIND_TIMEOUT_US: u64 = 5_000_000;
 /// Status callback period, virtual.
-const STATUS_PERIOD_US: u64 = 1_000_000;
+pub(crate) const STATUS_PERIOD_US: u64 = 1_000_000;
 
 /// One live status sample.
 #[derive(Clone, Copy, Debug)]
@@ -51,7 +51,7 @@ pub struct Outcome {
     pub params: LinkParams,
 }
 
-fn params_for(s: &Scenario, random: u32) -> LinkParams {
+pub(crate) fn params_for(s: &Scenario, random: u32) -> LinkParams {
     LinkParams::new(random, s.band, s.rate, s.format, s.telemetry_ratio)
 }
 
@@ -81,14 +81,10 @@ fn spawn_pair<'a>(
     // The ends boot at different times and count from different epochs.
     let mut module_clock = MockClock::new(time.clone(), 1_234_567);
     let mut flight_clock = MockClock::new(time.clone(), 987_654_321);
-    let mut module_app = ModuleApp::new(time.clone(), record.clone(), salt, s.telemetry_load);
-    let mut flight_app = FlightApp::new(
-        time.clone(),
-        record.clone(),
-        salt,
-        s.telemetry_load,
-        s.format,
-    );
+    let t = time.clone();
+    let now: Now = Rc::new(move || t.now_us());
+    let mut module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);
+    let mut flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
     let failsafe_us = s.failsafe_ms * 1000;
     let band = s.band;
     let rec = record.clone();
@@ -184,8 +180,56 @@ fn spawn_jammer(
     });
 }
 
-/// Runs `s`, calling `status` once per virtual second.
-pub fn simulate(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome {
+/// Turns cumulative records into per-period status samples.
+#[derive(Default)]
+pub(crate) struct StatusTracker {
+    outputs: u64,
+    up_bytes: u64,
+    down_bytes: u64,
+    latencies: usize,
+}
+
+impl StatusTracker {
+    /// The status at `t_us`, `period_us` after the previous sample.
+    pub(crate) fn sample(&mut self, t_us: u64, r: &Record, period_us: u64) -> Status {
+        let period_s = (period_us as f64 / 1e6).max(1e-9);
+        let lat = r.latencies_us.get(self.latencies..).unwrap_or(&[]);
+        let latency_us = if lat.is_empty() {
+            0.0
+        } else {
+            lat.iter().map(|&v| f64::from(v)).sum::<f64>() / lat.len() as f64
+        };
+        let st = Status {
+            time_s: t_us as f64 / 1e6,
+            link: r.now,
+            update_rate_hz: (r.outputs_ok - self.outputs) as f64 / period_s,
+            latency_us,
+            goodput_bps: (
+                (r.up_bytes_ok - self.up_bytes) as f64 / period_s,
+                (r.down_bytes_ok - self.down_bytes) as f64 / period_s,
+            ),
+        };
+        *self = Self {
+            outputs: r.outputs_ok,
+            up_bytes: r.up_bytes_ok,
+            down_bytes: r.down_bytes_ok,
+            latencies: r.latencies_us.len(),
+        };
+        st
+    }
+}
+
+/// Runs `s` on the backend it names, calling `status` once per virtual second.
+pub fn simulate(s: &Scenario, status: impl FnMut(&Status)) -> Outcome {
+    if s.chip_level {
+        crate::chip_world::simulate_chip(s, status)
+    } else {
+        simulate_packet(s, status)
+    }
+}
+
+/// Runs `s` on the packet-level mock radios, calling `status` once per virtual second.
+pub fn simulate_packet(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome {
     let time = VirtualTime::new();
     let model = ChannelModel {
         loss: s.loss,
@@ -234,50 +278,13 @@ pub fn simulate(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome {
         });
     }
     let end_us = (s.duration_s * 1e6) as u64;
-    let (t, rec) = (time.clone(), main.clone());
-    let samples: Rc<RefCell<Vec<Status>>> = Rc::default();
-    let out = samples.clone();
-    ex.spawn(async move {
-        let mut last = (0u64, 0u64, 0u64, 0usize);
-        let mut k = 1;
-        loop {
-            t.sleep_until(k * STATUS_PERIOD_US).await;
-            let r = rec.borrow();
-            let period = STATUS_PERIOD_US as f64 / 1e6;
-            let lat = r.latencies_us.get(last.3..).unwrap_or(&[]);
-            let latency_us = if lat.is_empty() {
-                0.0
-            } else {
-                lat.iter().map(|&v| f64::from(v)).sum::<f64>() / lat.len() as f64
-            };
-            out.borrow_mut().push(Status {
-                time_s: t.now_us() as f64 / 1e6,
-                link: r.now,
-                update_rate_hz: (r.outputs_ok - last.0) as f64 / period,
-                latency_us,
-                goodput_bps: (
-                    (r.up_bytes_ok - last.1) as f64 / period,
-                    (r.down_bytes_ok - last.2) as f64 / period,
-                ),
-            });
-            last = (
-                r.outputs_ok,
-                r.up_bytes_ok,
-                r.down_bytes_ok,
-                r.latencies_us.len(),
-            );
-            k += 1;
-        }
-    });
-    let mut next_status = 0usize;
+    let mut tracker = StatusTracker::default();
     let mut t_us = 0;
     while t_us < end_us {
-        t_us = (t_us + STATUS_PERIOD_US).min(end_us);
+        let step = STATUS_PERIOD_US.min(end_us - t_us);
+        t_us += step;
         ex.run_until(t_us);
-        for st in samples.borrow().get(next_status..).unwrap_or(&[]) {
-            status(st);
-        }
-        next_status = samples.borrow().len();
+        status(&tracker.sample(t_us, &main.borrow(), step));
     }
     drop(ex);
     let main = main.borrow().clone();

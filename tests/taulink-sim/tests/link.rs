@@ -46,7 +46,8 @@ fn sixteen_channels_arrive_unchanged() {
     };
     let o = simulate(&compact, |_| {});
     assert_eq!(o.main.outputs_bad, 0);
-    assert!(o.main.outputs_ok > 150, "{}", o.main.outputs_ok);
+    // 37.5 updates/s for ≈4.6 s, minus acquisition (up to one 660 ms dwell).
+    assert!(o.main.outputs_ok > 120, "{}", o.main.outputs_ok);
 }
 
 #[test]
@@ -121,14 +122,15 @@ fn link_cut_gives_failsafe_within_the_configured_time_then_recovery() {
         );
         let (entered, left) = (changes[1].0, changes[2].0);
         let slot = u64::from(rate.slot_us());
-        // The last packet before the cut arrived at most 2 slots (one may be a downlink)
-        // before 5 s; failsafe follows exactly `failsafe_ms` later, at the next step.
+        // The last packet arrived between 2 slots before the cut (one may be a downlink
+        // slot) and one airtime after it (a packet already on the air when the path was
+        // cut); failsafe is declared at the first slot boundary `failsafe_ms` after it.
         assert!(
             entered >= 5_000_000 + failsafe_ms * 1000 - 2 * slot,
             "{rate:?}: {entered}"
         );
         assert!(
-            entered <= 5_000_000 + failsafe_ms * 1000 + slot,
+            entered <= 5_000_000 + failsafe_ms * 1000 + 2 * slot,
             "{rate:?}: {entered}"
         );
         // Recovery: at most one dwell (a hop cycle + 1 slot) per channel tried, plus one
@@ -191,4 +193,27 @@ fn default_run_reports_sane_figures() {
         r.latency_p99_ms
     );
     assert!(r.to_json().contains("\"update_rate_hz\": 18"));
+}
+
+#[test]
+fn packet_level_bit_errors_without_chip_crc_never_reach_the_outputs() {
+    // The packet-level medium can turn the chip CRC off: every corrupted packet then
+    // reaches the link decoder, which must reject all of them.
+    let s = Scenario {
+        chip_level: false,
+        chip_crc: false,
+        bit_error_rate: 2e-3,
+        ..quick(RateMode::F500, 30.0)
+    };
+    let o = simulate(&s, |_| {});
+    assert!(o.medium.corrupted_delivered > 1_000, "{:?}", o.medium);
+    assert_eq!(
+        (
+            o.main.outputs_bad,
+            o.main.up_bytes_bad,
+            o.main.down_bytes_bad
+        ),
+        (0, 0, 0)
+    );
+    assert!(o.main.outputs_ok > 1_000);
 }

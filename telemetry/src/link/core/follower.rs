@@ -312,6 +312,8 @@ impl Follower {
                 }
             }
             self.counters.rejected += 1;
+        } else if outcome == RxOutcome::Corrupted {
+            self.counters.rejected += 1;
         }
         self.check_failsafe(now_us);
     }

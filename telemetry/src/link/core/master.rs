@@ -26,6 +26,7 @@ pub struct Master {
     channels: Channels,
     save_failsafe: bool,
     report_due: bool,
+    heard: bool,
     /// Telemetry towards the follower.
     pub uplink_stream: StreamSender<STREAM_TX_BYTES>,
     /// Telemetry from the follower.
@@ -51,6 +52,7 @@ impl Master {
             channels: [CHANNEL_CENTER; 16],
             save_failsafe: false,
             report_due: false,
+            heard: false,
             uplink_stream: StreamSender::new(),
             downlink_stream: StreamReceiver::new(),
             lq: LqWindow::new(),
@@ -159,27 +161,38 @@ impl Master {
         self.slot = self.slot.wrapping_add(1);
     }
 
-    /// The outcome of listening in the current (downlink) slot, at `now_us`.
-    pub fn on_received(&mut self, outcome: RxOutcome, packet: &[u8], now_us: u64) {
-        let mut heard = false;
-        if let RxOutcome::Packet { len, rssi_dbm } = outcome {
-            match decode(packet.get(..len).unwrap_or(&[]), self.params.bind_id) {
-                Received::Accepted(Frame::Downlink(down)) if down.slot == self.slot as u8 => {
-                    heard = true;
-                    self.counters.received += 1;
-                    self.rssi.push(rssi_dbm);
-                    self.remote = down.report.or(self.remote);
-                    self.uplink_stream.on_ack(down.stream.ack);
-                    self.downlink_stream.on_data(down.stream.seq, down.data);
-                    self.last_downlink_us = Some(now_us);
+    /// One receive outcome in the current (downlink) slot, at `now_us`. Returns true once
+    /// the follower's downlink has been heard (the slot is done); otherwise the loop listens
+    /// on for the rest of the window. Then call [`Master::finish_listen`].
+    pub fn on_received(&mut self, outcome: RxOutcome, packet: &[u8], now_us: u64) -> bool {
+        match outcome {
+            RxOutcome::Packet { len, rssi_dbm } => {
+                match decode(packet.get(..len).unwrap_or(&[]), self.params.bind_id) {
+                    Received::Accepted(Frame::Downlink(down)) if down.slot == self.slot as u8 => {
+                        self.heard = true;
+                        self.counters.received += 1;
+                        self.rssi.push(rssi_dbm);
+                        self.remote = down.report.or(self.remote);
+                        self.uplink_stream.on_ack(down.stream.ack);
+                        self.downlink_stream.on_data(down.stream.seq, down.data);
+                        self.last_downlink_us = Some(now_us);
+                    }
+                    _ => self.counters.rejected += 1,
                 }
-                _ => self.counters.rejected += 1,
             }
+            RxOutcome::Corrupted => self.counters.rejected += 1,
+            RxOutcome::Timeout => {}
         }
-        if !heard {
+        self.heard
+    }
+
+    /// The downlink slot's listening window is over.
+    pub fn finish_listen(&mut self) {
+        if !self.heard {
             self.counters.missed += 1;
         }
-        self.lq.push(heard);
+        self.lq.push(self.heard);
+        self.heard = false;
         self.report_due = true;
         self.slot = self.slot.wrapping_add(1);
     }
