@@ -9,6 +9,8 @@
 pub mod channels;
 pub mod checksum;
 pub mod frame;
+pub mod framing;
 pub mod link;
+pub mod messages;
 #[cfg(feature = "std")]
 pub mod mock;

@@ -1,5 +1,6 @@
 //! Property tests of the air-frame decoder: it never panics on arbitrary bytes, and every
-//! frame the encoder can produce decodes back to itself.
+//! frame the encoder can produce decodes back to itself; the message-stream reader never
+//! panics either.
 
 use proptest::prelude::*;
 use telemetry::channels::{ChannelFormat, pack};
@@ -27,6 +28,14 @@ proptest! {
         let crc = telemetry::checksum::keyed_crc16(key, &bytes);
         bytes.extend_from_slice(&crc.to_be_bytes());
         let _ = decode(&bytes, key);
+    }
+
+    #[test]
+    fn message_reader_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
+        let mut reader = telemetry::messages::MessageReader::new();
+        for b in bytes {
+            let _ = reader.push(b);
+        }
     }
 
     #[test]
