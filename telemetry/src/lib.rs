@@ -1,9 +1,17 @@
 //! TauLink's messages and wire formats: what travels over the air between the module and
 //! the flight controller, and what the module speaks to the handset. Pure `no_std` code,
-//! no radio and no async: the radio driver and the firmware crates plug into it.
-#![cfg_attr(not(test), no_std)]
+//! no radio and no async runtime: the radio driver and the firmware crates plug into it
+//! through [`link::PacketRadio`] and [`link::LinkClock`].
+#![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod channels;
 pub mod checksum;
+pub mod frame;
+pub mod framing;
 pub mod handset;
+pub mod link;
+pub mod messages;
+#[cfg(feature = "std")]
+pub mod mock;

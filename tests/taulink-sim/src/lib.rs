@@ -1,2 +1,18 @@
-//! Both TauLink ends — module and flight link code on the real radio driver over virtual Si4432s — running against each other in a simulated RF medium, in virtual time.
+//! Both TauLink ends — the real module-side and flight-side link code — running against
+//! each other in a simulated RF medium, in virtual time: the project's main job.
+//!
+//! The radios are `telemetry::mock` packet-level radios (settle time and airtime charged
+//! as on the Si4432). [`world`] builds a scenario, [`probe`] holds the application ends that
+//! measure, [`report`] summarises.
 #![warn(missing_docs)]
+
+pub mod chip_world;
+pub mod driver;
+pub mod probe;
+pub mod report;
+pub mod scenario;
+pub mod world;
+
+pub use report::Report;
+pub use scenario::{Output, Scenario, parse_args};
+pub use world::{Status, run, simulate};

@@ -1,0 +1,409 @@
+//! Air frames: the bytes TauLink puts in the Si4432's FIFO. Encoding writes into a caller
+//! buffer; decoding borrows from the received buffer and never panics — a bad packet is a
+//! [`Received::Rejected`] outcome. Layout and rationale: `spec/protocol.md` §5.
+
+use crate::channels::{ChannelFormat, Channels, unpack};
+use crate::checksum::keyed_crc16;
+use crate::link::{Band, RateMode};
+
+/// Protocol version, the first byte of every frame. Bumped on any incompatible change; a
+/// receiver drops frames of other versions before looking further.
+pub const PROTOCOL_VERSION: u8 = 1;
+/// Bytes of every uplink/downlink frame before the optional parts: version, kind, slot,
+/// stream seq, stream ack.
+pub const LINK_HEADER_BYTES: usize = 5;
+/// Link CRC bytes at the end of every frame.
+pub const CRC_BYTES: usize = 2;
+/// Bytes of the optional link report (RSSI, LQ).
+pub const REPORT_BYTES: usize = 2;
+
+const KIND_MASK: u8 = 0x07;
+const FLAG_REPORT: u8 = 0x08;
+const FLAG_SAVE_FAILSAFE: u8 = 0x10;
+const RESERVED_MASK: u8 = 0xE0;
+
+const KIND_BIND_OFFER: u8 = 0;
+const KIND_BIND_ACCEPT: u8 = 1;
+const KIND_RC16: u8 = 2;
+const KIND_RC8: u8 = 3;
+const KIND_DOWNLINK: u8 = 4;
+
+/// Telemetry-stream position carried by every link frame (see `link::stream`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StreamHeader {
+    /// Stream offset (mod 256) of the first data byte in this frame.
+    pub seq: u8,
+    /// Next stream offset (mod 256) the sender of this frame expects from its peer.
+    pub ack: u8,
+}
+
+/// How well the sender of this frame hears its peer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkReport {
+    /// Smoothed RSSI of the peer's packets, dBm.
+    pub rssi_dbm: i8,
+    /// Link quality: % of the last 100 expected packets received.
+    pub lq_percent: u8,
+}
+
+/// Bind parameters the master offers; the follower stores them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BindOffer {
+    /// The new link's identity.
+    pub bind_id: u32,
+    /// Band of the hop grid.
+    pub band: Band,
+    /// Rate mode of the bound link.
+    pub rate: RateMode,
+    /// Uplink channel format.
+    pub format: ChannelFormat,
+    /// One slot in `telemetry_ratio` is a downlink slot (a power of two, 2..=128).
+    pub telemetry_ratio: u8,
+}
+
+/// A decoded frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Frame<'a> {
+    /// Master → follower on the bind channel.
+    BindOffer(BindOffer),
+    /// Follower → master on the bind channel: "stored this bind ID".
+    BindAccept {
+        /// The ID being accepted.
+        bind_id: u32,
+    },
+    /// Master → follower: channels, optional report, stream data.
+    Uplink(Uplink<'a>),
+    /// Follower → master: optional report, stream data.
+    Downlink(Downlink<'a>),
+}
+
+/// An uplink (channel) frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Uplink<'a> {
+    /// The master's slot counter (mod 256): gives the follower hop index and slot phase.
+    pub slot: u8,
+    /// Stream position.
+    pub stream: StreamHeader,
+    /// How the master hears the follower, when included.
+    pub report: Option<LinkReport>,
+    /// "Store the current channels as failsafe values".
+    pub save_failsafe: bool,
+    /// Channel format of `packed_channels`.
+    pub format: ChannelFormat,
+    /// Packed channel bytes ([`crate::channels::pack`]).
+    pub packed_channels: &'a [u8],
+    /// Stream data bytes.
+    pub data: &'a [u8],
+}
+
+impl Uplink<'_> {
+    /// Unpacks the channels into `channels` (the compact format leaves 8..15 unchanged).
+    pub fn channels_into(&self, channels: &mut Channels) -> bool {
+        unpack(self.packed_channels, self.format, channels)
+    }
+}
+
+/// A downlink (telemetry) frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Downlink<'a> {
+    /// Echo of the slot it answers.
+    pub slot: u8,
+    /// Stream position.
+    pub stream: StreamHeader,
+    /// How the follower hears the master, when included.
+    pub report: Option<LinkReport>,
+    /// Stream data bytes.
+    pub data: &'a [u8],
+}
+
+/// Why a received packet was dropped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Rejection {
+    /// Shorter than the smallest frame.
+    TooShort,
+    /// Another protocol version.
+    Version(u8),
+    /// Link CRC mismatch: corrupted, or keyed with another bind ID.
+    Crc,
+    /// Unknown kind or reserved bits set.
+    UnknownKind(u8),
+    /// Length or field values inconsistent with the kind.
+    Malformed,
+}
+
+/// Outcome of decoding one packet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Received<'a> {
+    /// A valid frame.
+    Accepted(Frame<'a>),
+    /// Dropped, and why.
+    Rejected(Rejection),
+}
+
+/// Encoding failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EncodeError {
+    /// The output buffer is too small; this many bytes are needed.
+    BufferTooSmall {
+        /// Bytes the frame needs.
+        needed: usize,
+    },
+    /// A field does not fit its wire encoding (packed channel length, telemetry ratio).
+    InvalidField,
+}
+
+impl core::fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            EncodeError::BufferTooSmall { needed } => {
+                write!(f, "buffer too small, need {needed} bytes")
+            }
+            EncodeError::InvalidField => f.write_str("field does not fit its wire encoding"),
+        }
+    }
+}
+
+impl core::error::Error for EncodeError {}
+
+/// Is `ratio` a valid telemetry ratio (power of two, 2..=128)?
+pub const fn valid_telemetry_ratio(ratio: u8) -> bool {
+    ratio >= 2 && ratio.is_power_of_two()
+}
+
+/// Writes `bytes` at `*at` in `out`, advancing `*at`.
+fn put(out: &mut [u8], at: &mut usize, bytes: &[u8]) -> Result<(), EncodeError> {
+    let end = *at + bytes.len();
+    let dst = out
+        .get_mut(*at..end)
+        .ok_or(EncodeError::BufferTooSmall { needed: end })?;
+    dst.copy_from_slice(bytes);
+    *at = end;
+    Ok(())
+}
+
+/// Encodes `frame` into `out`, with the link CRC keyed by `key` (the bind ID, or
+/// [`crate::link::BIND_KEY`] for bind frames). Returns the frame length.
+pub fn encode(frame: &Frame<'_>, key: u32, out: &mut [u8]) -> Result<usize, EncodeError> {
+    let mut at = 0usize;
+    match frame {
+        Frame::BindOffer(offer) => {
+            if !valid_telemetry_ratio(offer.telemetry_ratio) {
+                return Err(EncodeError::InvalidField);
+            }
+            put(out, &mut at, &[PROTOCOL_VERSION, KIND_BIND_OFFER])?;
+            put(out, &mut at, &offer.bind_id.to_le_bytes())?;
+            let params = [
+                offer.band.code(),
+                offer.rate.code(),
+                offer.format.code(),
+                offer.telemetry_ratio,
+            ];
+            put(out, &mut at, &params)?;
+        }
+        Frame::BindAccept { bind_id } => {
+            put(out, &mut at, &[PROTOCOL_VERSION, KIND_BIND_ACCEPT])?;
+            put(out, &mut at, &bind_id.to_le_bytes())?;
+        }
+        Frame::Uplink(up) => {
+            if up.packed_channels.len() != up.format.packed_bytes() {
+                return Err(EncodeError::InvalidField);
+            }
+            let kind = match up.format {
+                ChannelFormat::Full16 => KIND_RC16,
+                ChannelFormat::Compact8 => KIND_RC8,
+            };
+            let flags = if up.save_failsafe {
+                FLAG_SAVE_FAILSAFE
+            } else {
+                0
+            };
+            put_link_header(out, &mut at, kind | flags, up.slot, up.stream, up.report)?;
+            put(out, &mut at, up.packed_channels)?;
+            put(out, &mut at, up.data)?;
+        }
+        Frame::Downlink(down) => {
+            put_link_header(
+                out,
+                &mut at,
+                KIND_DOWNLINK,
+                down.slot,
+                down.stream,
+                down.report,
+            )?;
+            put(out, &mut at, down.data)?;
+        }
+    }
+    let body = out
+        .get(..at)
+        .ok_or(EncodeError::BufferTooSmall { needed: at })?;
+    let crc = keyed_crc16(key, body);
+    put(out, &mut at, &crc.to_be_bytes())?;
+    Ok(at)
+}
+
+fn put_link_header(
+    out: &mut [u8],
+    at: &mut usize,
+    kind_and_flags: u8,
+    slot: u8,
+    stream: StreamHeader,
+    report: Option<LinkReport>,
+) -> Result<(), EncodeError> {
+    let flag = if report.is_some() { FLAG_REPORT } else { 0 };
+    put(
+        out,
+        at,
+        &[
+            PROTOCOL_VERSION,
+            kind_and_flags | flag,
+            slot,
+            stream.seq,
+            stream.ack,
+        ],
+    )?;
+    if let Some(r) = report {
+        put(out, at, &[r.rssi_dbm.to_ne_bytes()[0], r.lq_percent])?;
+    }
+    Ok(())
+}
+
+/// Decodes one received packet, checking the link CRC with `key`. Never panics.
+pub fn decode(packet: &[u8], key: u32) -> Received<'_> {
+    match decode_inner(packet, key) {
+        Ok(frame) => Received::Accepted(frame),
+        Err(why) => Received::Rejected(why),
+    }
+}
+
+fn decode_inner(packet: &[u8], key: u32) -> Result<Frame<'_>, Rejection> {
+    let (body, crc) = packet
+        .split_at_checked(packet.len().saturating_sub(CRC_BYTES))
+        .ok_or(Rejection::TooShort)?;
+    let [version, kind_byte, rest @ ..] = body else {
+        return Err(Rejection::TooShort);
+    };
+    if *version != PROTOCOL_VERSION {
+        return Err(Rejection::Version(*version));
+    }
+    let [c0, c1] = crc else {
+        return Err(Rejection::TooShort);
+    };
+    if keyed_crc16(key, body) != u16::from_be_bytes([*c0, *c1]) {
+        return Err(Rejection::Crc);
+    }
+    if kind_byte & RESERVED_MASK != 0 {
+        return Err(Rejection::UnknownKind(*kind_byte));
+    }
+    let kind = kind_byte & KIND_MASK;
+    let has_report = kind_byte & FLAG_REPORT != 0;
+    let save_failsafe = kind_byte & FLAG_SAVE_FAILSAFE != 0;
+    match kind {
+        KIND_BIND_OFFER | KIND_BIND_ACCEPT if has_report || save_failsafe => {
+            Err(Rejection::Malformed)
+        }
+        KIND_BIND_OFFER => {
+            let [a, b, c, d, band, rate, format, ratio] = rest else {
+                return Err(Rejection::Malformed);
+            };
+            let offer = BindOffer {
+                bind_id: u32::from_le_bytes([*a, *b, *c, *d]),
+                band: Band::from_code(*band).ok_or(Rejection::Malformed)?,
+                rate: RateMode::from_code(*rate).ok_or(Rejection::Malformed)?,
+                format: ChannelFormat::from_code(*format).ok_or(Rejection::Malformed)?,
+                telemetry_ratio: *ratio,
+            };
+            if !valid_telemetry_ratio(offer.telemetry_ratio) {
+                return Err(Rejection::Malformed);
+            }
+            Ok(Frame::BindOffer(offer))
+        }
+        KIND_BIND_ACCEPT => {
+            let [a, b, c, d] = rest else {
+                return Err(Rejection::Malformed);
+            };
+            Ok(Frame::BindAccept {
+                bind_id: u32::from_le_bytes([*a, *b, *c, *d]),
+            })
+        }
+        KIND_RC16 | KIND_RC8 | KIND_DOWNLINK => {
+            let [slot, seq, ack, rest @ ..] = rest else {
+                return Err(Rejection::Malformed);
+            };
+            let stream = StreamHeader {
+                seq: *seq,
+                ack: *ack,
+            };
+            let (report, rest) = if has_report {
+                let (r, rest) = rest
+                    .split_at_checked(REPORT_BYTES)
+                    .ok_or(Rejection::Malformed)?;
+                let [rssi, lq] = r else {
+                    return Err(Rejection::Malformed);
+                };
+                if *lq > 100 {
+                    return Err(Rejection::Malformed);
+                }
+                (
+                    Some(LinkReport {
+                        rssi_dbm: i8::from_ne_bytes([*rssi]),
+                        lq_percent: *lq,
+                    }),
+                    rest,
+                )
+            } else {
+                (None, rest)
+            };
+            if kind == KIND_DOWNLINK {
+                if save_failsafe {
+                    return Err(Rejection::Malformed);
+                }
+                return Ok(Frame::Downlink(Downlink {
+                    slot: *slot,
+                    stream,
+                    report,
+                    data: rest,
+                }));
+            }
+            let format = if kind == KIND_RC16 {
+                ChannelFormat::Full16
+            } else {
+                ChannelFormat::Compact8
+            };
+            let (packed_channels, data) = rest
+                .split_at_checked(format.packed_bytes())
+                .ok_or(Rejection::Malformed)?;
+            Ok(Frame::Uplink(Uplink {
+                slot: *slot,
+                stream,
+                report,
+                save_failsafe,
+                format,
+                packed_channels,
+                data,
+            }))
+        }
+        other => Err(Rejection::UnknownKind(other)),
+    }
+}
+
+/// Frame bytes an uplink takes before its stream data.
+pub const fn uplink_overhead(format: ChannelFormat, with_report: bool) -> usize {
+    LINK_HEADER_BYTES
+        + if with_report { REPORT_BYTES } else { 0 }
+        + format.packed_bytes()
+        + CRC_BYTES
+}
+
+/// Frame bytes a downlink takes before its stream data.
+pub const fn downlink_overhead(with_report: bool) -> usize {
+    LINK_HEADER_BYTES + if with_report { REPORT_BYTES } else { 0 } + CRC_BYTES
+}
+
+#[cfg(test)]
+#[path = "frame_tests.rs"]
+mod tests;

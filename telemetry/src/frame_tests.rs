@@ -1,0 +1,174 @@
+//! Unit tests of the air frame codec.
+
+use super::*;
+use crate::channels::pack;
+
+const KEY: u32 = 0xA1B2_C3D4;
+
+fn uplink_bytes(data: &[u8]) -> ([u8; 64], usize) {
+    let mut ch = [0u16; 16];
+    for (i, c) in ch.iter_mut().enumerate() {
+        *c = 172 + i as u16 * 100;
+    }
+    let mut packed = [0u8; 22];
+    pack(&ch, ChannelFormat::Full16, &mut packed);
+    let up = Uplink {
+        slot: 77,
+        stream: StreamHeader { seq: 3, ack: 250 },
+        report: Some(LinkReport {
+            rssi_dbm: -87,
+            lq_percent: 96,
+        }),
+        save_failsafe: true,
+        format: ChannelFormat::Full16,
+        packed_channels: &packed,
+        data,
+    };
+    let mut out = [0u8; 64];
+    let n = encode(&Frame::Uplink(up), KEY, &mut out).unwrap();
+    (out, n)
+}
+
+#[test]
+fn uplink_round_trip_and_size() {
+    let (out, n) = uplink_bytes(b"hello");
+    assert_eq!(n, uplink_overhead(ChannelFormat::Full16, true) + 5);
+    assert_eq!(n, 36);
+    assert_eq!(out[0], PROTOCOL_VERSION);
+    assert_eq!(out[1], KIND_RC16 | FLAG_REPORT | FLAG_SAVE_FAILSAFE);
+    let Received::Accepted(Frame::Uplink(up)) = decode(&out[..n], KEY) else {
+        panic!("not accepted");
+    };
+    assert_eq!(up.slot, 77);
+    assert_eq!(up.stream, StreamHeader { seq: 3, ack: 250 });
+    assert_eq!(
+        up.report,
+        Some(LinkReport {
+            rssi_dbm: -87,
+            lq_percent: 96
+        })
+    );
+    assert!(up.save_failsafe);
+    assert_eq!(up.data, b"hello");
+    let mut ch = [0u16; 16];
+    assert!(up.channels_into(&mut ch));
+    assert_eq!(ch[15], 172 + 1500);
+}
+
+#[test]
+fn downlink_and_bind_round_trip() {
+    let down = Downlink {
+        slot: 9,
+        stream: StreamHeader { seq: 1, ack: 2 },
+        report: None,
+        data: &[0, 255, 7],
+    };
+    let mut out = [0u8; 64];
+    let n = encode(&Frame::Downlink(down), KEY, &mut out).unwrap();
+    assert_eq!(n, downlink_overhead(false) + 3);
+    assert_eq!(
+        decode(&out[..n], KEY),
+        Received::Accepted(Frame::Downlink(down))
+    );
+
+    let offer = BindOffer {
+        bind_id: 0xDEAD_BEEF,
+        band: Band::Mhz868,
+        rate: RateMode::F250,
+        format: ChannelFormat::Compact8,
+        telemetry_ratio: 4,
+    };
+    let n = encode(&Frame::BindOffer(offer), KEY, &mut out).unwrap();
+    assert_eq!(n, 12);
+    assert_eq!(
+        decode(&out[..n], KEY),
+        Received::Accepted(Frame::BindOffer(offer))
+    );
+    let n = encode(&Frame::BindAccept { bind_id: 5 }, KEY, &mut out).unwrap();
+    assert_eq!(&out[..6], &[PROTOCOL_VERSION, KIND_BIND_ACCEPT, 5, 0, 0, 0]);
+    assert_eq!(
+        decode(&out[..n], KEY),
+        Received::Accepted(Frame::BindAccept { bind_id: 5 })
+    );
+}
+
+#[test]
+fn foreign_key_is_rejected() {
+    let (out, n) = uplink_bytes(b"x");
+    assert_eq!(
+        decode(&out[..n], KEY ^ 1),
+        Received::Rejected(Rejection::Crc)
+    );
+}
+
+#[test]
+fn every_single_bit_flip_is_rejected() {
+    let (out, n) = uplink_bytes(b"abcdef");
+    for bit in 0..n * 8 {
+        let mut bad = out;
+        bad[bit / 8] ^= 1 << (bit % 8);
+        assert!(
+            matches!(decode(&bad[..n], KEY), Received::Rejected(_)),
+            "bit {bit}"
+        );
+    }
+}
+
+#[test]
+fn other_version_is_rejected_first() {
+    let (mut out, n) = uplink_bytes(b"");
+    out[0] = 2;
+    assert_eq!(
+        decode(&out[..n], KEY),
+        Received::Rejected(Rejection::Version(2))
+    );
+}
+
+#[test]
+fn short_and_inconsistent_packets_are_rejected() {
+    assert_eq!(decode(&[], KEY), Received::Rejected(Rejection::TooShort));
+    assert_eq!(
+        decode(&[1, 2, 3], KEY),
+        Received::Rejected(Rejection::TooShort)
+    );
+    // A correctly keyed RC16 frame whose channel block is cut short.
+    let mut body = [0u8; 12];
+    body[..5].copy_from_slice(&[PROTOCOL_VERSION, KIND_RC16, 0, 0, 0]);
+    let crc = keyed_crc16(KEY, &body[..10]);
+    body[10..].copy_from_slice(&crc.to_be_bytes());
+    assert_eq!(decode(&body, KEY), Received::Rejected(Rejection::Malformed));
+    // Unknown kind 7 with a valid CRC.
+    let mut unknown = [PROTOCOL_VERSION, 7, 0, 0];
+    let crc = keyed_crc16(KEY, &unknown[..2]);
+    unknown[2..].copy_from_slice(&crc.to_be_bytes());
+    assert_eq!(
+        decode(&unknown, KEY),
+        Received::Rejected(Rejection::UnknownKind(7))
+    );
+}
+
+#[test]
+fn encode_reports_needed_size() {
+    let mut small = [0u8; 10];
+    let down = Downlink {
+        slot: 0,
+        stream: StreamHeader::default(),
+        report: None,
+        data: &[1; 8],
+    };
+    assert_eq!(
+        encode(&Frame::Downlink(down), KEY, &mut small),
+        Err(EncodeError::BufferTooSmall { needed: 13 })
+    );
+    let bad_ratio = BindOffer {
+        bind_id: 1,
+        band: Band::Mhz433,
+        rate: RateMode::L50,
+        format: ChannelFormat::Full16,
+        telemetry_ratio: 3,
+    };
+    assert_eq!(
+        encode(&Frame::BindOffer(bad_ratio), KEY, &mut [0; 64]),
+        Err(EncodeError::InvalidField)
+    );
+}

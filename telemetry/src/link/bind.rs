@@ -1,0 +1,175 @@
+//! Binding: the parameters both ends store, the identity bytes derived from the bind ID, and
+//! the pure halves of the over-the-air bind exchange on the fixed bind channel and rate.
+
+use super::hopping::{Band, mix32};
+use super::radio::RadioConfig;
+use super::rate::{BIND_RATE, RateMode};
+use crate::channels::ChannelFormat;
+use crate::frame::{BindOffer, Frame, Received, decode};
+
+/// CRC key of bind frames (fixed: both ends must read them before sharing anything).
+pub const BIND_KEY: u32 = 0x7A17_B1ED;
+/// Hardware header of bind frames ("TLB" + protocol version 1).
+pub const BIND_HEADER: [u8; 4] = *b"TLB\x01";
+
+/// Everything a bound link is: stored by both ends after a bind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkParams {
+    /// 32-bit link identity.
+    pub bind_id: u32,
+    /// Band.
+    pub band: Band,
+    /// Rate mode.
+    pub rate: RateMode,
+    /// Uplink channel format.
+    pub format: ChannelFormat,
+    /// One slot in this many is a downlink slot.
+    pub telemetry_ratio: u8,
+}
+
+impl LinkParams {
+    /// A new link with a bind ID from `random` (an injected random 32-bit value; the module
+    /// draws it from its hardware RNG). 0 and the bind key are avoided.
+    pub fn new(
+        random: u32,
+        band: Band,
+        rate: RateMode,
+        format: ChannelFormat,
+        telemetry_ratio: u8,
+    ) -> Self {
+        let bind_id = match random {
+            0 | BIND_KEY => mix32(random) | 1,
+            id => id,
+        };
+        Self {
+            bind_id,
+            band,
+            rate,
+            format,
+            telemetry_ratio,
+        }
+    }
+
+    /// The four hardware header bytes: a mix of the bind ID, so links whose IDs differ in
+    /// any bit almost surely differ here (a 2^-32 chance to collide), and never the bind
+    /// header.
+    pub fn header(&self) -> [u8; 4] {
+        let h = mix32(self.bind_id ^ 0x4EAD_E125).to_be_bytes();
+        if h == BIND_HEADER {
+            [h[0] ^ 0xFF, h[1], h[2], h[3]]
+        } else {
+            h
+        }
+    }
+
+    /// The radio configuration of the bound link: its rate, its header, its band's grid.
+    pub fn radio_config(&self) -> RadioConfig {
+        RadioConfig {
+            rate: self.rate,
+            header: self.header(),
+            base_hz: self.band.base_hz(),
+            spacing_hz: self.band.spacing_hz(),
+        }
+    }
+
+    /// The bind offer carrying these parameters.
+    pub fn offer(&self) -> BindOffer {
+        BindOffer {
+            bind_id: self.bind_id,
+            band: self.band,
+            rate: self.rate,
+            format: self.format,
+            telemetry_ratio: self.telemetry_ratio,
+        }
+    }
+
+    /// Parameters from a received offer.
+    pub fn from_offer(offer: &BindOffer) -> Self {
+        Self {
+            bind_id: offer.bind_id,
+            band: offer.band,
+            rate: offer.rate,
+            format: offer.format,
+            telemetry_ratio: offer.telemetry_ratio,
+        }
+    }
+}
+
+/// Bind-mode timing: the master offers every `OFFER_PERIOD_US` and listens in between.
+pub const OFFER_PERIOD_US: u32 = 4 * RateMode::L50.slot_us();
+/// The follower answers an offer this many times, one L50 slot apart, so one lost accept
+/// does not leave the master offering forever.
+pub const ACCEPT_REPEATS: u8 = 3;
+
+/// The radio configuration of bind mode in `band`: bind rate and header, channel 0 on the
+/// bind frequency.
+pub fn bind_radio_config(band: Band) -> RadioConfig {
+    RadioConfig {
+        rate: BIND_RATE,
+        header: BIND_HEADER,
+        base_hz: band.bind_hz(),
+        spacing_hz: band.spacing_hz(),
+    }
+}
+
+/// Master side: is this packet the follower's accept of our offer?
+pub fn is_accept_of(packet: &[u8], params: &LinkParams) -> bool {
+    matches!(decode(packet, BIND_KEY), Received::Accepted(Frame::BindAccept { bind_id }) if bind_id == params.bind_id)
+}
+
+/// Follower side: the parameters offered in this packet, if it is a valid offer.
+pub fn offered_params(packet: &[u8]) -> Option<LinkParams> {
+    match decode(packet, BIND_KEY) {
+        Received::Accepted(Frame::BindOffer(offer)) => Some(LinkParams::from_offer(&offer)),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::encode;
+
+    fn params(id: u32) -> LinkParams {
+        LinkParams::new(id, Band::Mhz433, RateMode::F250, ChannelFormat::Full16, 4)
+    }
+
+    #[test]
+    fn offer_accept_exchange() {
+        let p = params(0x1357_9BDF);
+        let mut buf = [0u8; 32];
+        let n = encode(&Frame::BindOffer(p.offer()), BIND_KEY, &mut buf).unwrap();
+        assert_eq!(offered_params(&buf[..n]), Some(p));
+        let n = encode(
+            &Frame::BindAccept { bind_id: p.bind_id },
+            BIND_KEY,
+            &mut buf,
+        )
+        .unwrap();
+        assert!(is_accept_of(&buf[..n], &p));
+        assert!(!is_accept_of(&buf[..n], &params(0x1357_9BDE)));
+        // A frame keyed with a link ID is not a bind frame.
+        let n = encode(
+            &Frame::BindAccept { bind_id: p.bind_id },
+            p.bind_id,
+            &mut buf,
+        )
+        .unwrap();
+        assert!(!is_accept_of(&buf[..n], &p));
+    }
+
+    #[test]
+    fn ids_avoid_reserved_values_and_headers_differ() {
+        assert_ne!(params(0).bind_id, 0);
+        assert_ne!(params(BIND_KEY).bind_id, BIND_KEY);
+        assert_eq!(params(77).bind_id, 77);
+        let mut headers: Vec<[u8; 4]> = (0..2000u32)
+            .map(|i| params(i * 7919 + 1).header())
+            .collect();
+        headers.sort();
+        headers.dedup();
+        assert_eq!(headers.len(), 2000);
+        assert_ne!(params(1).header(), BIND_HEADER);
+    }
+}

@@ -1,0 +1,399 @@
+//! The follower's (flight side's) link logic, sans IO: acquisition (dwell on one hop channel
+//! for a whole hop cycle until the master's packet lands there), tracking (re-timing the
+//! slot grid on every packet heard), failsafe after a configurable silence, and resync.
+
+use crate::channels::{CHANNEL_CENTER, Channels, FailsafeValues};
+use crate::frame::{
+    Downlink, Frame, LinkReport, Received, StreamHeader, decode, downlink_overhead, encode,
+};
+use crate::link::bind::LinkParams;
+use crate::link::hopping::{HOP_CHANNELS, HopSequence};
+use crate::link::quality::{Counters, LqWindow, RssiFilter};
+use crate::link::radio::{RadioConfig, RxOutcome};
+use crate::link::rate::TX_LEAD_US;
+use crate::link::schedule::{Schedule, SlotKind};
+use crate::link::stream::{StreamReceiver, StreamSender};
+
+use super::{STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
+
+/// Default failsafe delay.
+pub const DEFAULT_FAILSAFE_US: u64 = 250_000;
+/// The follower opens its receive window this long before the expected slot start, to
+/// absorb clock drift between packets (40 ppm × one hop cycle at 20 ms slots ≈ 26 µs).
+pub const RX_EARLY_US: u64 = 100;
+/// Consecutive missed uplinks after which the follower gives up tracking and re-acquires:
+/// one hop cycle, i.e. every channel failed once.
+pub const RESYNC_MISSES: u32 = HOP_CHANNELS as u32;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Sync {
+    Acquiring {
+        index: u8,
+        dwell_end_us: Option<u64>,
+    },
+    Tracking {
+        slot: u8,
+        slot_start_us: u64,
+        misses: u32,
+    },
+}
+
+/// Whether the follower is locked to the master.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SyncState {
+    /// Scanning for the master.
+    Acquiring,
+    /// On the master's slot grid.
+    Tracking,
+}
+
+/// The follower's state.
+#[derive(Debug)]
+pub struct Follower {
+    params: LinkParams,
+    schedule: Schedule,
+    hops: HopSequence,
+    sync: Sync,
+    failsafe_us: u64,
+    failsafe_values: FailsafeValues,
+    in_failsafe: bool,
+    output: Channels,
+    last_valid_us: Option<u64>,
+    updates: u32,
+    /// Telemetry towards the master.
+    pub downlink_stream: StreamSender<STREAM_TX_BYTES>,
+    /// Telemetry from the master.
+    pub uplink_stream: StreamReceiver<STREAM_RX_BYTES>,
+    lq: LqWindow,
+    rssi: RssiFilter,
+    remote: Option<LinkReport>,
+    counters: Counters,
+    resyncs: u32,
+}
+
+impl Follower {
+    /// A follower of a bound link, in failsafe until it hears the master.
+    pub fn new(params: LinkParams, failsafe_values: FailsafeValues, failsafe_us: u64) -> Self {
+        let mut output = [CHANNEL_CENTER; 16];
+        failsafe_values.apply(&mut output);
+        Self {
+            params,
+            schedule: Schedule {
+                rate: params.rate,
+                telemetry_ratio: params.telemetry_ratio,
+            },
+            hops: HopSequence::new(params.bind_id),
+            sync: Sync::Acquiring {
+                index: 0,
+                dwell_end_us: None,
+            },
+            failsafe_us,
+            failsafe_values,
+            in_failsafe: true,
+            output,
+            last_valid_us: None,
+            updates: 0,
+            downlink_stream: StreamSender::new(),
+            uplink_stream: StreamReceiver::new(),
+            lq: LqWindow::new(),
+            rssi: RssiFilter::default(),
+            remote: None,
+            counters: Counters::default(),
+            resyncs: 0,
+        }
+    }
+
+    /// Radio configuration of this link.
+    pub fn radio_config(&self) -> RadioConfig {
+        self.params.radio_config()
+    }
+
+    /// Link parameters.
+    pub fn params(&self) -> &LinkParams {
+        &self.params
+    }
+
+    fn dwell_us(&self) -> u64 {
+        // One full hop cycle plus a slot: the master visits every channel once per cycle.
+        (HOP_CHANNELS as u64 + 1) * u64::from(self.schedule.slot_us())
+    }
+
+    fn check_failsafe(&mut self, now_us: u64) {
+        if self.in_failsafe {
+            return;
+        }
+        let silent = self
+            .last_valid_us
+            .is_none_or(|t| now_us.saturating_sub(t) >= self.failsafe_us);
+        if silent {
+            self.in_failsafe = true;
+            self.failsafe_values.apply(&mut self.output);
+        }
+    }
+
+    fn slot_end_us(&self, slot: u8, slot_start_us: u64) -> u64 {
+        match self.schedule.kind(u32::from(slot)) {
+            SlotKind::Uplink => slot_start_us + u64::from(self.schedule.listen_end_offset_us()),
+            SlotKind::Downlink => slot_start_us + u64::from(TX_LEAD_US),
+        }
+    }
+
+    /// Moves past the tracked slot; an uplink slot passed without a packet is a miss.
+    fn advance(&mut self, heard: bool) {
+        let Sync::Tracking {
+            slot,
+            slot_start_us,
+            misses,
+        } = self.sync
+        else {
+            return;
+        };
+        let uplink = self.schedule.kind(u32::from(slot)) == SlotKind::Uplink;
+        let misses = if heard {
+            0
+        } else if uplink {
+            misses + 1
+        } else {
+            misses
+        };
+        if uplink && !heard {
+            self.lq.push(false);
+            self.counters.missed += 1;
+        }
+        let next = slot.wrapping_add(1);
+        self.sync = if misses >= RESYNC_MISSES {
+            self.resyncs += 1;
+            self.lq.reset();
+            Sync::Acquiring {
+                index: next % HOP_CHANNELS as u8,
+                dwell_end_us: None,
+            }
+        } else {
+            Sync::Tracking {
+                slot: next,
+                slot_start_us: slot_start_us + u64::from(self.schedule.slot_us()),
+                misses,
+            }
+        };
+    }
+
+    /// Plans the next step at `now_us`; writes a downlink frame into `buf` when it is time
+    /// to send one.
+    pub fn plan(&mut self, now_us: u64, buf: &mut [u8]) -> Step {
+        self.check_failsafe(now_us);
+        // Slots whose window has passed (the loop fell behind) are misses.
+        while let Sync::Tracking {
+            slot,
+            slot_start_us,
+            ..
+        } = self.sync
+        {
+            if now_us < self.slot_end_us(slot, slot_start_us) {
+                break;
+            }
+            self.advance(false);
+        }
+        match self.sync {
+            Sync::Acquiring {
+                index,
+                dwell_end_us,
+            } => {
+                let end = match dwell_end_us {
+                    Some(end) if now_us < end => end,
+                    Some(_) => {
+                        let next = (index + 1) % HOP_CHANNELS as u8;
+                        self.sync = Sync::Acquiring {
+                            index: next,
+                            dwell_end_us: Some(now_us + self.dwell_us()),
+                        };
+                        now_us + self.dwell_us()
+                    }
+                    None => {
+                        self.sync = Sync::Acquiring {
+                            index,
+                            dwell_end_us: Some(now_us + self.dwell_us()),
+                        };
+                        now_us + self.dwell_us()
+                    }
+                };
+                let Sync::Acquiring { index, .. } = self.sync else {
+                    return Step::Idle;
+                };
+                let channel = self.hops.channel(usize::from(index));
+                Step::Listen {
+                    channel,
+                    from_us: now_us,
+                    until_us: end,
+                }
+            }
+            Sync::Tracking {
+                slot,
+                slot_start_us,
+                ..
+            } => {
+                let channel = self.hops.channel_for_slot(u32::from(slot));
+                match self.schedule.kind(u32::from(slot)) {
+                    SlotKind::Uplink => Step::Listen {
+                        channel,
+                        from_us: slot_start_us.saturating_sub(RX_EARLY_US),
+                        until_us: self.slot_end_us(slot, slot_start_us),
+                    },
+                    SlotKind::Downlink => match self.build_downlink(slot, buf) {
+                        Some(len) => Step::Transmit {
+                            channel,
+                            at_us: slot_start_us + u64::from(TX_LEAD_US),
+                            len,
+                        },
+                        None => Step::Idle,
+                    },
+                }
+            }
+        }
+    }
+
+    fn build_downlink(&mut self, slot: u8, buf: &mut [u8]) -> Option<usize> {
+        let report = LinkReport {
+            rssi_dbm: self.rssi.report_dbm(),
+            lq_percent: self.lq.percent(),
+        };
+        let room = self
+            .params
+            .rate
+            .max_frame_bytes()
+            .saturating_sub(downlink_overhead(true));
+        let mut data = [0u8; 64];
+        let data = data.get_mut(..room)?;
+        let (seq, n) = self.downlink_stream.fill(data);
+        let down = Downlink {
+            slot,
+            stream: StreamHeader {
+                seq,
+                ack: self.uplink_stream.ack(),
+            },
+            report: Some(report),
+            data: data.get(..n)?,
+        };
+        encode(&Frame::Downlink(down), self.params.bind_id, buf).ok()
+    }
+
+    /// The downlink planned by [`Follower::plan`] has been sent.
+    pub fn on_sent(&mut self) {
+        self.counters.sent += 1;
+        self.advance(true);
+    }
+
+    /// A planned step was not carried out (e.g. `Idle`); move on.
+    pub fn on_skipped(&mut self) {
+        self.advance(false);
+    }
+
+    /// The outcome of a listen, at `now_us` (for a packet: when it had fully arrived).
+    pub fn on_received(&mut self, outcome: RxOutcome, packet: &[u8], now_us: u64) {
+        if let RxOutcome::Packet { len, rssi_dbm } = outcome {
+            let bytes = packet.get(..len).unwrap_or(&[]);
+            if let Received::Accepted(Frame::Uplink(up)) = decode(bytes, self.params.bind_id) {
+                // Re-time the grid: the master started this slot `packet_end_offset` ago.
+                let slot_start_us =
+                    now_us.saturating_sub(u64::from(self.schedule.packet_end_offset_us(len)));
+                let expected = match self.sync {
+                    Sync::Acquiring { index, .. } => (up.slot % HOP_CHANNELS as u8) == index,
+                    Sync::Tracking { .. } => true,
+                };
+                if expected && self.schedule.kind(u32::from(up.slot)) == SlotKind::Uplink {
+                    self.sync = Sync::Tracking {
+                        slot: up.slot,
+                        slot_start_us,
+                        misses: 0,
+                    };
+                    self.accept(&up, rssi_dbm, now_us);
+                    self.advance(true);
+                    return;
+                }
+            }
+            self.counters.rejected += 1;
+        } else if outcome == RxOutcome::Corrupted {
+            self.counters.rejected += 1;
+        }
+        self.check_failsafe(now_us);
+    }
+
+    fn accept(&mut self, up: &crate::frame::Uplink<'_>, rssi_dbm: i16, now_us: u64) {
+        self.counters.received += 1;
+        self.lq.push(true);
+        self.rssi.push(rssi_dbm);
+        up.channels_into(&mut self.output);
+        if up.save_failsafe {
+            self.failsafe_values = FailsafeValues::from_channels(&self.output);
+        }
+        self.in_failsafe = false;
+        self.last_valid_us = Some(now_us);
+        self.updates = self.updates.wrapping_add(1);
+        self.remote = up.report.or(self.remote);
+        self.downlink_stream.on_ack(up.stream.ack);
+        self.uplink_stream.on_data(up.stream.seq, up.data);
+    }
+
+    /// Channel outputs (failsafe values while in failsafe).
+    pub fn output(&self) -> &Channels {
+        &self.output
+    }
+
+    /// Number of channel updates received so far (changes when `output` was refreshed).
+    pub fn updates(&self) -> u32 {
+        self.updates
+    }
+
+    /// In failsafe?
+    pub fn in_failsafe(&self) -> bool {
+        self.in_failsafe
+    }
+
+    /// Locked to the master?
+    pub fn sync_state(&self) -> SyncState {
+        match self.sync {
+            Sync::Acquiring { .. } => SyncState::Acquiring,
+            Sync::Tracking { .. } => SyncState::Tracking,
+        }
+    }
+
+    /// Slot and hop channel being tracked, if tracking.
+    pub fn tracked_slot(&self) -> Option<(u8, u8)> {
+        match self.sync {
+            Sync::Tracking { slot, .. } => {
+                Some((slot, self.hops.channel_for_slot(u32::from(slot))))
+            }
+            Sync::Acquiring { .. } => None,
+        }
+    }
+
+    /// Current failsafe settings.
+    pub fn failsafe_values(&self) -> &FailsafeValues {
+        &self.failsafe_values
+    }
+
+    /// Uplink LQ (% of the last 100 expected uplinks received).
+    pub fn uplink_lq(&self) -> u8 {
+        self.lq.percent()
+    }
+
+    /// Smoothed RSSI of the master's packets.
+    pub fn uplink_rssi_dbm(&self) -> Option<i16> {
+        self.rssi.dbm()
+    }
+
+    /// The master's last report of how it hears us.
+    pub fn remote_report(&self) -> Option<LinkReport> {
+        self.remote
+    }
+
+    /// Packet counters.
+    pub fn counters(&self) -> Counters {
+        self.counters
+    }
+
+    /// Times tracking was lost and acquisition restarted.
+    pub fn resyncs(&self) -> u32 {
+        self.resyncs
+    }
+}

@@ -1,0 +1,233 @@
+//! The master's (module's) link logic, sans IO: it owns the slot counter, so it never waits
+//! for anyone — every slot it either sends channels or listens for telemetry, on the hop
+//! channel of that slot, whether or not the follower is there.
+
+use crate::channels::{CHANNEL_CENTER, Channels, pack};
+use crate::frame::{
+    Frame, LinkReport, Received, StreamHeader, Uplink, decode, encode, uplink_overhead,
+};
+use crate::link::bind::LinkParams;
+use crate::link::hopping::HopSequence;
+use crate::link::quality::{Counters, LqWindow, RssiFilter};
+use crate::link::radio::{RadioConfig, RxOutcome};
+use crate::link::rate::TX_LEAD_US;
+use crate::link::schedule::{Schedule, SlotKind};
+use crate::link::stream::{StreamReceiver, StreamSender};
+
+use super::{STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
+
+/// The master's state.
+#[derive(Debug)]
+pub struct Master {
+    params: LinkParams,
+    schedule: Schedule,
+    hops: HopSequence,
+    slot: u32,
+    channels: Channels,
+    save_failsafe: bool,
+    report_due: bool,
+    heard: bool,
+    /// Telemetry towards the follower.
+    pub uplink_stream: StreamSender<STREAM_TX_BYTES>,
+    /// Telemetry from the follower.
+    pub downlink_stream: StreamReceiver<STREAM_RX_BYTES>,
+    lq: LqWindow,
+    rssi: RssiFilter,
+    remote: Option<LinkReport>,
+    counters: Counters,
+    last_downlink_us: Option<u64>,
+}
+
+impl Master {
+    /// A master for a bound link, starting at slot 0 with centred channels.
+    pub fn new(params: LinkParams) -> Self {
+        Self {
+            params,
+            schedule: Schedule {
+                rate: params.rate,
+                telemetry_ratio: params.telemetry_ratio,
+            },
+            hops: HopSequence::new(params.bind_id),
+            slot: 0,
+            channels: [CHANNEL_CENTER; 16],
+            save_failsafe: false,
+            report_due: false,
+            heard: false,
+            uplink_stream: StreamSender::new(),
+            downlink_stream: StreamReceiver::new(),
+            lq: LqWindow::new(),
+            rssi: RssiFilter::default(),
+            remote: None,
+            counters: Counters::default(),
+            last_downlink_us: None,
+        }
+    }
+
+    /// Radio configuration of this link.
+    pub fn radio_config(&self) -> RadioConfig {
+        self.params.radio_config()
+    }
+
+    /// Link parameters.
+    pub fn params(&self) -> &LinkParams {
+        &self.params
+    }
+
+    /// The schedule.
+    pub fn schedule(&self) -> &Schedule {
+        &self.schedule
+    }
+
+    /// Sets the channel values sent from the next uplink on.
+    pub fn set_channels(&mut self, channels: &Channels) {
+        self.channels = *channels;
+    }
+
+    /// Asks the follower to store the current channels as its failsafe values (sent in the
+    /// next uplink).
+    pub fn request_save_failsafe(&mut self) {
+        self.save_failsafe = true;
+    }
+
+    /// The slot about to run.
+    pub fn slot(&self) -> u32 {
+        self.slot
+    }
+
+    /// Plans the current slot, which starts at `slot_start_us`, writing an uplink frame into
+    /// `buf` when it is an uplink slot.
+    pub fn plan(&mut self, slot_start_us: u64, buf: &mut [u8]) -> Step {
+        let channel = self.hops.channel_for_slot(self.slot);
+        match self.schedule.kind(self.slot) {
+            SlotKind::Downlink => Step::Listen {
+                channel,
+                from_us: slot_start_us,
+                until_us: slot_start_us + u64::from(self.schedule.listen_end_offset_us()),
+            },
+            SlotKind::Uplink => match self.build_uplink(buf) {
+                Some(len) => Step::Transmit {
+                    channel,
+                    at_us: slot_start_us + u64::from(TX_LEAD_US),
+                    len,
+                },
+                // Only with a buffer smaller than max_frame_bytes: skip the slot, never panic.
+                None => Step::Idle,
+            },
+        }
+    }
+
+    fn build_uplink(&mut self, buf: &mut [u8]) -> Option<usize> {
+        let format = self.params.format;
+        let report = if self.report_due {
+            Some(LinkReport {
+                rssi_dbm: self.rssi.report_dbm(),
+                lq_percent: self.lq.percent(),
+            })
+        } else {
+            None
+        };
+        let mut packed = [0u8; 22];
+        let packed = packed.get_mut(..format.packed_bytes())?;
+        pack(&self.channels, format, packed);
+        let room = self
+            .params
+            .rate
+            .max_frame_bytes()
+            .saturating_sub(uplink_overhead(format, report.is_some()));
+        let mut data = [0u8; 64];
+        let data = data.get_mut(..room)?;
+        let (seq, n) = self.uplink_stream.fill(data);
+        let up = Uplink {
+            slot: self.slot as u8,
+            stream: StreamHeader {
+                seq,
+                ack: self.downlink_stream.ack(),
+            },
+            report,
+            save_failsafe: self.save_failsafe,
+            format,
+            packed_channels: packed,
+            data: data.get(..n)?,
+        };
+        let len = encode(&Frame::Uplink(up), self.params.bind_id, buf).ok()?;
+        Some(len)
+    }
+
+    /// The uplink of the current slot has been sent.
+    pub fn on_sent(&mut self) {
+        self.counters.sent += 1;
+        self.save_failsafe = false;
+        self.report_due = false;
+        self.slot = self.slot.wrapping_add(1);
+    }
+
+    /// One receive outcome in the current (downlink) slot, at `now_us`. Returns true once
+    /// the follower's downlink has been heard (the slot is done); otherwise the loop listens
+    /// on for the rest of the window. Then call [`Master::finish_listen`].
+    pub fn on_received(&mut self, outcome: RxOutcome, packet: &[u8], now_us: u64) -> bool {
+        match outcome {
+            RxOutcome::Packet { len, rssi_dbm } => {
+                match decode(packet.get(..len).unwrap_or(&[]), self.params.bind_id) {
+                    Received::Accepted(Frame::Downlink(down)) if down.slot == self.slot as u8 => {
+                        self.heard = true;
+                        self.counters.received += 1;
+                        self.rssi.push(rssi_dbm);
+                        self.remote = down.report.or(self.remote);
+                        self.uplink_stream.on_ack(down.stream.ack);
+                        self.downlink_stream.on_data(down.stream.seq, down.data);
+                        self.last_downlink_us = Some(now_us);
+                    }
+                    _ => self.counters.rejected += 1,
+                }
+            }
+            RxOutcome::Corrupted => self.counters.rejected += 1,
+            RxOutcome::Timeout => {}
+        }
+        self.heard
+    }
+
+    /// The downlink slot's listening window is over.
+    pub fn finish_listen(&mut self) {
+        if !self.heard {
+            self.counters.missed += 1;
+        }
+        self.lq.push(self.heard);
+        self.heard = false;
+        self.report_due = true;
+        self.slot = self.slot.wrapping_add(1);
+    }
+
+    /// The current slot was skipped (the loop fell behind).
+    pub fn on_skipped(&mut self) {
+        if self.schedule.kind(self.slot) == SlotKind::Downlink {
+            self.lq.push(false);
+            self.counters.missed += 1;
+        }
+        self.slot = self.slot.wrapping_add(1);
+    }
+
+    /// Downlink LQ (% of the last 100 downlink slots that brought valid telemetry).
+    pub fn downlink_lq(&self) -> u8 {
+        self.lq.percent()
+    }
+
+    /// Smoothed RSSI of the follower's packets.
+    pub fn downlink_rssi_dbm(&self) -> Option<i16> {
+        self.rssi.dbm()
+    }
+
+    /// The follower's last report of how it hears us (uplink RSSI and LQ).
+    pub fn remote_report(&self) -> Option<LinkReport> {
+        self.remote
+    }
+
+    /// Packet counters.
+    pub fn counters(&self) -> Counters {
+        self.counters
+    }
+
+    /// Time of the last valid downlink.
+    pub fn last_downlink_us(&self) -> Option<u64> {
+        self.last_downlink_us
+    }
+}

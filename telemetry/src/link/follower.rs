@@ -1,0 +1,100 @@
+//! The follower's async loop: a thin shell that runs [`Follower`]'s steps on a radio and a
+//! clock and lets the application take channel outputs and exchange telemetry after every
+//! step.
+
+use super::bind::{ACCEPT_REPEATS, BIND_KEY, LinkParams, bind_radio_config, offered_params};
+use super::core::{Follower, Step};
+use super::hopping::Band;
+use super::radio::{LinkClock, PacketRadio, RxOutcome};
+use super::rate::FIFO_BYTES;
+use crate::frame::{Frame, encode};
+
+/// Gap between receiving an offer and answering, and between repeated accepts: the master
+/// needs to turn around to RX (PLL settle) after its offer.
+const ACCEPT_GAP_US: u64 = 2_000;
+
+/// Bind mode on the follower (started by the bind button/command): listens on `band`'s bind
+/// channel for an offer, answers with accepts and returns the offered parameters for the
+/// caller to store, or `None` after `timeout_us`.
+pub async fn bind_follower<R: PacketRadio, C: LinkClock>(
+    radio: &mut R,
+    clock: &mut C,
+    band: Band,
+    timeout_us: u64,
+) -> Result<Option<LinkParams>, R::Error> {
+    radio.configure(&bind_radio_config(band)).await?;
+    radio.set_channel(0).await?;
+    let give_up = clock.now_us() + timeout_us;
+    let mut buf = [0u8; FIFO_BYTES];
+    while clock.now_us() < give_up {
+        let timeout = u32::try_from(give_up - clock.now_us()).unwrap_or(u32::MAX);
+        let RxOutcome::Packet { len, .. } = radio.receive(&mut buf, timeout).await? else {
+            continue;
+        };
+        let Some(params) = offered_params(buf.get(..len).unwrap_or(&[])) else {
+            continue;
+        };
+        let mut accept = [0u8; 16];
+        let Ok(n) = encode(
+            &Frame::BindAccept {
+                bind_id: params.bind_id,
+            },
+            BIND_KEY,
+            &mut accept,
+        ) else {
+            continue;
+        };
+        for _ in 0..ACCEPT_REPEATS {
+            clock.sleep_until_us(clock.now_us() + ACCEPT_GAP_US).await;
+            radio.transmit(accept.get(..n).unwrap_or(&[])).await?;
+        }
+        return Ok(Some(params));
+    }
+    Ok(None)
+}
+
+/// The application side of a follower: called after every step.
+pub trait FollowerHooks {
+    /// Read channel outputs and telemetry from `follower`, feed telemetry in.
+    fn on_step(&mut self, now_us: u64, follower: &mut Follower);
+}
+
+/// Runs the follower forever (until the radio fails).
+pub async fn run_follower<R: PacketRadio, C: LinkClock, H: FollowerHooks>(
+    radio: &mut R,
+    clock: &mut C,
+    follower: &mut Follower,
+    hooks: &mut H,
+) -> Result<core::convert::Infallible, R::Error> {
+    radio.configure(&follower.radio_config()).await?;
+    let mut buf = [0u8; FIFO_BYTES];
+    loop {
+        match follower.plan(clock.now_us(), &mut buf) {
+            Step::Transmit {
+                channel,
+                at_us,
+                len,
+            } => {
+                radio.set_channel(channel).await?;
+                clock.sleep_until_us(at_us).await;
+                radio.transmit(buf.get(..len).unwrap_or(&[])).await?;
+                follower.on_sent();
+            }
+            Step::Listen {
+                channel,
+                from_us,
+                until_us,
+            } => {
+                radio.set_channel(channel).await?;
+                clock.sleep_until_us(from_us).await;
+                let timeout = until_us.saturating_sub(clock.now_us());
+                let outcome = radio
+                    .receive(&mut buf, u32::try_from(timeout).unwrap_or(u32::MAX))
+                    .await?;
+                follower.on_received(outcome, &buf, clock.now_us());
+            }
+            Step::Idle => follower.on_skipped(),
+        }
+        hooks.on_step(clock.now_us(), follower);
+    }
+}

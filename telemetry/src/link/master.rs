@@ -1,0 +1,104 @@
+//! The master's async loop: a thin shell that runs [`Master`]'s steps on a radio and a clock,
+//! one slot after another on its own time base, and lets the application exchange channels
+//! and telemetry with the state machine at every slot boundary.
+
+use super::bind::{BIND_KEY, LinkParams, OFFER_PERIOD_US, bind_radio_config, is_accept_of};
+use super::core::{Master, Step};
+use super::radio::{LinkClock, PacketRadio, RxOutcome};
+use super::rate::FIFO_BYTES;
+use crate::frame::{Frame, encode};
+
+/// Bind mode on the master (started by the bind button/command): offers `params` on the
+/// band's bind channel every [`OFFER_PERIOD_US`] and listens in between, until a follower
+/// accepts (true) or `timeout_us` passes (false).
+pub async fn bind_master<R: PacketRadio, C: LinkClock>(
+    radio: &mut R,
+    clock: &mut C,
+    params: &LinkParams,
+    timeout_us: u64,
+) -> Result<bool, R::Error> {
+    radio.configure(&bind_radio_config(params.band)).await?;
+    radio.set_channel(0).await?;
+    let give_up = clock.now_us() + timeout_us;
+    let mut offer = [0u8; FIFO_BYTES];
+    let Ok(offer_len) = encode(&Frame::BindOffer(params.offer()), BIND_KEY, &mut offer) else {
+        return Ok(false);
+    };
+    let mut buf = [0u8; FIFO_BYTES];
+    while clock.now_us() < give_up {
+        let period_end = clock.now_us() + u64::from(OFFER_PERIOD_US);
+        radio
+            .transmit(offer.get(..offer_len).unwrap_or(&[]))
+            .await?;
+        while clock.now_us() < period_end {
+            let timeout = u32::try_from(period_end - clock.now_us()).unwrap_or(u32::MAX);
+            if let RxOutcome::Packet { len, .. } = radio.receive(&mut buf, timeout).await?
+                && is_accept_of(buf.get(..len).unwrap_or(&[]), params)
+            {
+                return Ok(true);
+            }
+        }
+    }
+    Ok(false)
+}
+
+/// The application side of a master: called at the start of every slot.
+pub trait MasterHooks {
+    /// Feed channels and telemetry into `master`, read telemetry and stats out.
+    fn on_slot(&mut self, now_us: u64, master: &mut Master);
+}
+
+/// Runs the master forever (until the radio fails).
+pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
+    radio: &mut R,
+    clock: &mut C,
+    master: &mut Master,
+    hooks: &mut H,
+) -> Result<core::convert::Infallible, R::Error> {
+    radio.configure(&master.radio_config()).await?;
+    let slot_us = u64::from(master.schedule().slot_us());
+    let mut slot_start_us = clock.now_us();
+    let mut buf = [0u8; FIFO_BYTES];
+    loop {
+        // Fell behind by a whole slot (a debugger, a radio reset): skip, keep the grid.
+        while clock.now_us() > slot_start_us + slot_us / 2 {
+            master.on_skipped();
+            slot_start_us += slot_us;
+        }
+        hooks.on_slot(slot_start_us, master);
+        match master.plan(slot_start_us, &mut buf) {
+            Step::Transmit {
+                channel,
+                at_us,
+                len,
+            } => {
+                radio.set_channel(channel).await?;
+                clock.sleep_until_us(at_us).await;
+                radio.transmit(buf.get(..len).unwrap_or(&[])).await?;
+                master.on_sent();
+            }
+            Step::Listen {
+                channel,
+                from_us,
+                until_us,
+            } => {
+                radio.set_channel(channel).await?;
+                clock.sleep_until_us(from_us).await;
+                // Listen on after a foreign or corrupted packet: ours may still come.
+                while clock.now_us() < until_us {
+                    let timeout = until_us - clock.now_us();
+                    let outcome = radio
+                        .receive(&mut buf, u32::try_from(timeout).unwrap_or(u32::MAX))
+                        .await?;
+                    if master.on_received(outcome, &buf, clock.now_us()) {
+                        break;
+                    }
+                }
+                master.finish_listen();
+            }
+            Step::Idle => master.on_skipped(),
+        }
+        slot_start_us += slot_us;
+        clock.sleep_until_us(slot_start_us).await;
+    }
+}

@@ -1,0 +1,21 @@
+//! The TauLink air protocol: rate modes, hopping, slot schedule, reliable stream, link
+//! quality and bind — each a small pure module — plus the pure master/follower state
+//! machines (`core`) and the thin async loops that drive them over a [`PacketRadio`].
+//! Wire format and timing: `spec/protocol.md`.
+
+pub mod bind;
+pub mod core;
+pub mod follower;
+pub mod hopping;
+pub mod master;
+pub mod quality;
+pub mod radio;
+pub mod rate;
+pub mod schedule;
+pub mod stream;
+
+pub use bind::{BIND_HEADER, BIND_KEY, LinkParams};
+pub use hopping::{Band, HOP_CHANNELS, HopSequence};
+pub use radio::{LinkClock, PacketRadio, RadioConfig, RxOutcome};
+pub use rate::RateMode;
+pub use schedule::{Schedule, SlotKind};

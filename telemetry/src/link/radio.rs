@@ -1,0 +1,75 @@
+//! What the link needs from a radio and a clock. The protocol owns these traits (as
+//! lorawan-device owns its radio trait); the RFM22b driver, the packet-level mock and the
+//! chip simulator implement them. Async fns in traits: the loops are generic, never `dyn`.
+#![allow(async_fn_in_trait)]
+
+use super::rate::RateMode;
+
+/// Radio setup for one link phase (bind or bound).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RadioConfig {
+    /// Modem profile (bit rate, deviation, filter) to load.
+    pub rate: RateMode,
+    /// Hardware header: sent on TX (Si4432 0x3A–0x3D) and required on RX (0x3F–0x42, all
+    /// bits checked, broadcast off), so packets of other links never reach the FIFO.
+    pub header: [u8; 4],
+    /// Carrier of channel 0 (Si4432 0x75–0x77).
+    pub base_hz: u32,
+    /// Channel spacing, a multiple of 10 kHz (Si4432 0x7A).
+    pub spacing_hz: u32,
+}
+
+impl RadioConfig {
+    /// Frequency of `channel`.
+    pub const fn channel_hz(&self, channel: u8) -> u32 {
+        self.base_hz + channel as u32 * self.spacing_hz
+    }
+}
+
+/// Result of one receive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RxOutcome {
+    /// A packet passed the chip's checks; `len` bytes are in the buffer.
+    Packet {
+        /// Packet length.
+        len: usize,
+        /// RSSI latched at sync-word detection, dBm.
+        rssi_dbm: i16,
+    },
+    /// A packet arrived but failed the chip's own checks (CRC, length); the radio returns
+    /// early so the caller can count it and listen on for the rest of its window.
+    Corrupted,
+    /// Nothing valid arrived before the timeout.
+    Timeout,
+}
+
+/// A half-duplex packet radio.
+pub trait PacketRadio {
+    /// The radio's own error (bus failure, chip lost its registers, …).
+    type Error: core::fmt::Debug;
+
+    /// Loads the modem profile and header for `config`.
+    async fn configure(&mut self, config: &RadioConfig) -> Result<(), Self::Error>;
+
+    /// Tunes to `channel` of the configured grid (the Si4432 hop register 0x79; takes effect
+    /// for the next transmit or receive).
+    async fn set_channel(&mut self, channel: u8) -> Result<(), Self::Error>;
+
+    /// Sends one packet; returns when it has left the antenna.
+    async fn transmit(&mut self, frame: &[u8]) -> Result<(), Self::Error>;
+
+    /// Listens for one packet for up to `timeout_us`; returns as soon as one has fully
+    /// arrived (the caller timestamps it with its clock).
+    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<RxOutcome, Self::Error>;
+}
+
+/// Microsecond time base shared by a link end (embassy-time on hardware, virtual in tests).
+pub trait LinkClock {
+    /// Microseconds since an arbitrary epoch; monotonic.
+    fn now_us(&self) -> u64;
+
+    /// Sleeps until `deadline_us` (returns at once if it has passed).
+    async fn sleep_until_us(&mut self, deadline_us: u64);
+}

@@ -1,0 +1,342 @@
+//! The message set carried in the telemetry stream (both directions) and relayed to a phone:
+//! postcard-encoded, then framed ([`crate::framing`]: COBS + CRC-16). Integer units in the
+//! names keep the encoding compact (postcard varints) and exact.
+
+use postcard::experimental::max_size::MaxSize;
+use serde::{Deserialize, Serialize};
+
+use crate::framing::{Deframed, Deframer, FramingError, frame, framed_len};
+
+/// Attitude estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Attitude {
+    /// Roll, centidegrees (−18000..18000).
+    pub roll_cdeg: i16,
+    /// Pitch, centidegrees.
+    pub pitch_cdeg: i16,
+    /// Yaw (heading), centidegrees.
+    pub yaw_cdeg: i16,
+}
+
+/// Flight battery.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Battery {
+    /// Pack voltage, mV.
+    pub voltage_mv: u16,
+    /// Current, 10 mA units (negative while charging).
+    pub current_ca: i16,
+    /// Charge used since arming, mAh.
+    pub used_mah: u16,
+    /// Estimated remaining charge, %.
+    pub remaining_percent: u8,
+}
+
+/// Link statistics of one end, as it sees them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkStats {
+    /// RSSI of the uplink at the flight side, dBm.
+    pub uplink_rssi_dbm: i8,
+    /// Uplink LQ, % of the last 100 expected packets.
+    pub uplink_lq: u8,
+    /// RSSI of the downlink at the module, dBm.
+    pub downlink_rssi_dbm: i8,
+    /// Downlink LQ, %.
+    pub downlink_lq: u8,
+    /// Rate mode wire code (`link::RateMode::code`).
+    pub rate_mode: u8,
+    /// Valid packets received.
+    pub received: u32,
+    /// Expected packets missed.
+    pub missed: u32,
+    /// Failsafe events since boot.
+    pub failsafes: u16,
+}
+
+/// Flight mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FlightMode {
+    /// Direct rate (acro).
+    Rate,
+    /// Self-levelling.
+    Attitude,
+    /// Attitude with altitude hold.
+    AltitudeHold,
+    /// Position hold.
+    PositionHold,
+    /// Return to home.
+    ReturnToHome,
+    /// System-identification excitation running.
+    SystemId,
+}
+
+/// Arming and failsafe state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ArmState {
+    /// Motors armed.
+    pub armed: bool,
+    /// Radio failsafe active.
+    pub failsafe: bool,
+    /// Why arming is refused (0 = nothing), a bit set defined by the flight code.
+    pub arming_blockers: u16,
+}
+
+/// GNSS fix quality.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum GpsFix {
+    /// No fix.
+    None,
+    /// 2-D fix.
+    Fix2d,
+    /// 3-D fix.
+    Fix3d,
+}
+
+/// GNSS position.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Gps {
+    /// Latitude, 1e-7 degrees.
+    pub latitude_e7: i32,
+    /// Longitude, 1e-7 degrees.
+    pub longitude_e7: i32,
+    /// Altitude above mean sea level, cm.
+    pub altitude_cm: i32,
+    /// Ground speed, cm/s.
+    pub ground_speed_cm_s: u16,
+    /// Course over ground, centidegrees (0..36000).
+    pub course_cdeg: u16,
+    /// Satellites used.
+    pub satellites: u8,
+    /// Fix quality.
+    pub fix: GpsFix,
+}
+
+/// Body axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Axis {
+    /// Roll.
+    Roll,
+    /// Pitch.
+    Pitch,
+    /// Yaw.
+    Yaw,
+}
+
+/// Result of a system-identification run on one axis (lqg.md §1: ω' = β1·ν + β2·(u − ν),
+/// ν' = (u − ν)/τ, with ν the lagged actuator).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SysIdResult {
+    /// Axis identified.
+    pub axis: Axis,
+    /// Actuator gain β1, (deg/s²) per unit of actuator.
+    pub beta1: f32,
+    /// Lag-free term β2 (0 on roll/pitch; yaw reaction torque), (deg/s²) per unit.
+    pub beta2: f32,
+    /// Motor time constant τ, s.
+    pub tau_s: f32,
+    /// Fit quality: variance of the residual.
+    pub noise: f32,
+}
+
+/// Change one setting (module → flight), or report its value (flight → module).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SettingChange {
+    /// Setting identifier (the flight code's parameter table index).
+    pub id: u16,
+    /// New value, in the setting's own fixed-point unit.
+    pub value: i32,
+}
+
+/// Everything the telemetry stream carries.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Message {
+    /// Attitude.
+    Attitude(Attitude),
+    /// Battery.
+    Battery(Battery),
+    /// Link statistics.
+    LinkStats(LinkStats),
+    /// Flight mode.
+    FlightMode(FlightMode),
+    /// Arming / failsafe.
+    ArmState(ArmState),
+    /// GNSS.
+    Gps(Gps),
+    /// System identification result.
+    SysIdResult(SysIdResult),
+    /// Setting change / report.
+    SettingChange(SettingChange),
+}
+
+/// Largest postcard encoding of a [`Message`].
+pub const MESSAGE_MAX_BYTES: usize = Message::POSTCARD_MAX_SIZE;
+/// Largest framed [`Message`].
+pub const FRAMED_MAX_BYTES: usize = framed_len(MESSAGE_MAX_BYTES);
+
+/// Encoding a message failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EncodeError {
+    /// postcard could not serialise it (cannot happen for these types within the bound).
+    Serialize,
+    /// The output buffer is too small.
+    Framing(FramingError),
+}
+
+impl core::fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            EncodeError::Serialize => f.write_str("postcard serialisation failed"),
+            EncodeError::Framing(e) => write!(f, "framing: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for EncodeError {}
+
+/// Encodes and frames `message` into `out`; returns the bytes to put in the stream.
+pub fn encode_message(message: &Message, out: &mut [u8]) -> Result<usize, EncodeError> {
+    let mut scratch = [0u8; MESSAGE_MAX_BYTES];
+    let payload = postcard::to_slice(message, &mut scratch).map_err(|_| EncodeError::Serialize)?;
+    frame(payload, out).map_err(EncodeError::Framing)
+}
+
+/// What one delimiter in the stream produced.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Decoded {
+    /// A message.
+    Message(Message),
+    /// A frame was dropped (corrupt, oversize, or not a known message — e.g. from a newer
+    /// protocol version).
+    Dropped,
+}
+
+/// Stream decoder: feed bytes, get messages.
+#[derive(Debug, Default)]
+pub struct MessageReader {
+    deframer: Deframer<FRAMED_MAX_BYTES>,
+}
+
+impl MessageReader {
+    /// A reader waiting for the first delimiter's frame.
+    pub const fn new() -> Self {
+        Self {
+            deframer: Deframer::new(),
+        }
+    }
+
+    /// Feeds one byte.
+    pub fn push(&mut self, byte: u8) -> Option<Decoded> {
+        match self.deframer.push(byte)? {
+            Deframed::Frame { .. } => Some(
+                match postcard::from_bytes::<Message>(self.deframer.payload()) {
+                    Ok(m) => Decoded::Message(m),
+                    Err(_) => Decoded::Dropped,
+                },
+            ),
+            Deframed::Overflow | Deframed::Corrupt => Some(Decoded::Dropped),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn samples() -> [Message; 8] {
+        [
+            Message::Attitude(Attitude {
+                roll_cdeg: -1234,
+                pitch_cdeg: 250,
+                yaw_cdeg: 17999,
+            }),
+            Message::Battery(Battery {
+                voltage_mv: 16_420,
+                current_ca: -150,
+                used_mah: 850,
+                remaining_percent: 64,
+            }),
+            Message::LinkStats(LinkStats {
+                uplink_rssi_dbm: -87,
+                uplink_lq: 98,
+                downlink_rssi_dbm: -91,
+                downlink_lq: 95,
+                rate_mode: 3,
+                received: 123_456,
+                missed: 789,
+                failsafes: 1,
+            }),
+            Message::FlightMode(FlightMode::AltitudeHold),
+            Message::ArmState(ArmState {
+                armed: true,
+                failsafe: false,
+                arming_blockers: 0,
+            }),
+            Message::Gps(Gps {
+                latitude_e7: 473_977_419,
+                longitude_e7: 85_455_938,
+                altitude_cm: 48_830,
+                ground_speed_cm_s: 1_250,
+                course_cdeg: 27_000,
+                satellites: 14,
+                fix: GpsFix::Fix3d,
+            }),
+            Message::SysIdResult(SysIdResult {
+                axis: Axis::Pitch,
+                beta1: 10.7,
+                beta2: 6.2,
+                tau_s: 0.042,
+                noise: 0.01,
+            }),
+            Message::SettingChange(SettingChange { id: 42, value: -7 }),
+        ]
+    }
+
+    #[test]
+    fn every_message_round_trips_through_the_stream() {
+        let mut stream = Vec::new();
+        for m in samples() {
+            let mut buf = [0u8; FRAMED_MAX_BYTES];
+            let n = encode_message(&m, &mut buf).unwrap();
+            assert!(n <= FRAMED_MAX_BYTES);
+            stream.extend_from_slice(&buf[..n]);
+        }
+        let mut reader = MessageReader::new();
+        let got: Vec<_> = stream.iter().filter_map(|&b| reader.push(b)).collect();
+        let want: Vec<_> = samples().into_iter().map(Decoded::Message).collect();
+        assert_eq!(got, want);
+    }
+
+    #[test]
+    fn sizes_are_compact() {
+        let mut buf = [0u8; FRAMED_MAX_BYTES];
+        // Tag 0, three zig-zag varints of 2–3 bytes, CRC 2, COBS 1, delimiter 1.
+        let n = encode_message(&samples()[0], &mut buf).unwrap();
+        assert_eq!(n, 1 + 2 + 2 + 3 + 2 + 1 + 1);
+        // Largest: GPS, tag + 3 × i32 varint (5) + 2 × u16 (3) + u8 + fix tag.
+        assert_eq!(MESSAGE_MAX_BYTES, 24);
+    }
+
+    #[test]
+    fn a_damaged_frame_is_dropped_and_the_next_one_read() {
+        let mut a = [0u8; FRAMED_MAX_BYTES];
+        let n = encode_message(&samples()[1], &mut a).unwrap();
+        let mut reader = MessageReader::new();
+        let mut out = Vec::new();
+        for (i, &b) in a[..n].iter().chain(&a[..n]).enumerate() {
+            let b = if i == 2 { b ^ 0x01 } else { b };
+            out.extend(reader.push(b));
+        }
+        assert_eq!(out, vec![Decoded::Dropped, Decoded::Message(samples()[1])]);
+    }
+}

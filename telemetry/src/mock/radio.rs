@@ -1,0 +1,112 @@
+//! A packet-level radio on the [`Medium`]: PLL settling and airtime are charged in virtual
+//! time exactly as the slot budget assumes (`link::rate`), so link timing is exercised too.
+
+use std::convert::Infallible;
+use std::future::poll_fn;
+use std::task::Poll;
+
+use super::executor::VirtualTime;
+use super::medium::Medium;
+use crate::link::rate::{PLL_SETTLE_US, airtime_us};
+use crate::link::{PacketRadio, RadioConfig, RateMode, RxOutcome};
+
+/// One mock radio (node) on a medium.
+pub struct MockRadio {
+    medium: Medium,
+    time: VirtualTime,
+    node: usize,
+    config: RadioConfig,
+    frequency_hz: u32,
+    transmitted: u64,
+}
+
+impl MockRadio {
+    /// The radio of `node` (from [`Medium::add_node`]).
+    pub fn new(medium: Medium, node: usize) -> Self {
+        let time = medium.time();
+        Self {
+            medium,
+            time,
+            node,
+            config: RadioConfig {
+                rate: RateMode::L50,
+                header: [0; 4],
+                base_hz: 0,
+                spacing_hz: 0,
+            },
+            frequency_hz: 0,
+            transmitted: 0,
+        }
+    }
+
+    /// Its node index.
+    pub fn node(&self) -> usize {
+        self.node
+    }
+
+    /// Current frequency.
+    pub fn frequency_hz(&self) -> u32 {
+        self.frequency_hz
+    }
+
+    /// Packets sent.
+    pub fn transmitted(&self) -> u64 {
+        self.transmitted
+    }
+}
+
+impl PacketRadio for MockRadio {
+    type Error = Infallible;
+
+    async fn configure(&mut self, config: &RadioConfig) -> Result<(), Infallible> {
+        self.config = *config;
+        self.medium.configure(self.node, config.rate, config.header);
+        Ok(())
+    }
+
+    async fn set_channel(&mut self, channel: u8) -> Result<(), Infallible> {
+        self.frequency_hz = self.config.channel_hz(channel);
+        Ok(())
+    }
+
+    async fn transmit(&mut self, frame: &[u8]) -> Result<(), Infallible> {
+        let start = self.time.now_us() + u64::from(PLL_SETTLE_US);
+        let end = start + u64::from(airtime_us(frame.len(), self.config.rate.bit_rate_bps()));
+        self.medium
+            .transmit(self.node, start, end, self.frequency_hz, frame);
+        self.transmitted += 1;
+        self.time.sleep_until(end).await;
+        Ok(())
+    }
+
+    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<RxOutcome, Infallible> {
+        let now = self.time.now_us();
+        let ready = now + u64::from(PLL_SETTLE_US);
+        let deadline = now + u64::from(timeout_us);
+        self.medium.start_listening(self.node);
+        let (medium, time, node, freq) = (&self.medium, &self.time, self.node, self.frequency_hz);
+        let mut registered = false;
+        let outcome = poll_fn(|_| {
+            if let Some(d) = medium.poll_reception(node, freq, ready) {
+                let len = d.bytes.len().min(buf.len());
+                if let (Some(dst), Some(src)) = (buf.get_mut(..len), d.bytes.get(..len)) {
+                    dst.copy_from_slice(src);
+                }
+                return Poll::Ready(RxOutcome::Packet {
+                    len,
+                    rssi_dbm: d.rssi_dbm,
+                });
+            }
+            if time.now_us() >= deadline {
+                return Poll::Ready(RxOutcome::Timeout);
+            }
+            if !registered {
+                time.wake_at(deadline);
+                registered = true;
+            }
+            Poll::Pending
+        })
+        .await;
+        Ok(outcome)
+    }
+}

@@ -1,0 +1,235 @@
+//! The chip-level world: both link ends run the real `radio-rfm22b` driver on virtual
+//! Si4432s (`si4432-sim`), register by register, through its RF medium and executor.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::time::Duration;
+
+use radio_rfm22b::Rfm22b;
+use si4432_sim::{
+    Interference, Medium, MediumConfig, Outcome as ChipOutcome, RadioConfig as ChipPlacement,
+    RadioId, Simulation,
+};
+use telemetry::channels::FailsafeValues;
+use telemetry::link::core::{Follower, Master};
+use telemetry::link::follower::{bind_follower, run_follower};
+use telemetry::link::master::{bind_master, run_master};
+use telemetry::link::rate::airtime_us;
+use telemetry::link::{HOP_CHANNELS, LinkClock, LinkParams};
+use telemetry::mock::{MediumStats, SplitMix64};
+
+use crate::driver::{DriverRadio, SimClock};
+use crate::probe::{FlightApp, ModuleApp, Now, Record, Shared};
+use crate::scenario::Scenario;
+use crate::world::{BIND_TIMEOUT_US, Outcome, STATUS_PERIOD_US, Status, StatusTracker, params_for};
+
+/// Boot offsets of the two ends' clocks (they count from different epochs).
+const MODULE_EPOCH_US: u64 = 1_234_567;
+const FLIGHT_EPOCH_US: u64 = 987_654_321;
+
+#[allow(clippy::too_many_arguments)]
+fn spawn_pair(
+    sim: &Simulation,
+    medium: &Medium,
+    s: &Scenario,
+    params: LinkParams,
+    x_m: (f64, f64),
+    salt: u64,
+    bind: bool,
+) -> (Shared, RadioId, RadioId) {
+    let record: Shared = Rc::new(RefCell::new(Record::default()));
+    // Crystals a few ppm off, in opposite directions: AFC and frequency tolerance at work.
+    let placement = |x: f64, ppm: f64| {
+        let mut p = ChipPlacement::at([x, 0.0, 0.0]);
+        p.crystal_error_ppm = ppm;
+        p
+    };
+    let module = medium.add_radio(placement(x_m.0, 8.0));
+    let flight = medium.add_radio(placement(x_m.1, -6.0));
+    let ids = (module.id, flight.id);
+    let mut module_clock = SimClock::new(medium.clone(), module.delay.clone(), MODULE_EPOCH_US);
+    let mut flight_clock = SimClock::new(medium.clone(), flight.delay.clone(), FLIGHT_EPOCH_US);
+    let mut module_radio = DriverRadio::new(
+        Rfm22b::new(module.spi, module.nirq, module.sdn, module.delay),
+        s.header_check,
+    );
+    let mut flight_radio = DriverRadio::new(
+        Rfm22b::new(flight.spi, flight.nirq, flight.sdn, flight.delay),
+        s.header_check,
+    );
+    let m = medium.clone();
+    let now: Now = Rc::new(move || m.now().as_micros() as u64);
+    let mut module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);
+    let mut flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
+    let failsafe_us = s.failsafe_ms * 1000;
+    let band = s.band;
+    sim.spawn(async move {
+        if bind {
+            let start = module_clock.now_us() + 300_000;
+            module_clock.sleep_until_us(start).await;
+            let Ok(true) = bind_master(
+                &mut module_radio,
+                &mut module_clock,
+                &params,
+                BIND_TIMEOUT_US,
+            )
+            .await
+            else {
+                return;
+            };
+        }
+        let mut master = Master::new(params);
+        let _ = run_master(
+            &mut module_radio,
+            &mut module_clock,
+            &mut master,
+            &mut module_app,
+        )
+        .await;
+    });
+    let rec = record.clone();
+    sim.spawn(async move {
+        let params = if bind {
+            match bind_follower(&mut flight_radio, &mut flight_clock, band, BIND_TIMEOUT_US).await {
+                Ok(Some(p)) => p,
+                _ => return,
+            }
+        } else {
+            let start = flight_clock.now_us() + 123_457;
+            flight_clock.sleep_until_us(start).await;
+            params
+        };
+        rec.borrow_mut().bound_us = Some(flight_clock.virtual_us());
+        rec.borrow_mut().follower_params = Some(params);
+        let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
+        let _ = run_follower(
+            &mut flight_radio,
+            &mut flight_clock,
+            &mut follower,
+            &mut flight_app,
+        )
+        .await;
+    });
+    (record, ids.0, ids.1)
+}
+
+/// Random interference bursts over the link's grid at `duty` of the time.
+fn add_interference(medium: &Medium, s: &Scenario, params: &LinkParams) {
+    let mut rng = SplitMix64::new(s.seed ^ 0x1A33_E500);
+    let duty = s.interference.clamp(0.001, 0.95);
+    let on_us = u64::from(airtime_us(32, s.rate.bit_rate_bps()));
+    let end_us = (s.duration_s * 1e6) as u64;
+    let mut t = 0u64;
+    while t < end_us {
+        let channel = rng.below(HOP_CHANNELS as u64) as u8;
+        medium.add_interference(Interference {
+            start: Duration::from_micros(t),
+            end: Duration::from_micros(t + on_us),
+            center_hz: f64::from(params.band.channel_hz(channel)),
+            bandwidth_hz: 2.0 * f64::from(s.rate.bit_rate_bps()),
+            power_dbm: -60.0,
+        });
+        t += on_us + (on_us as f64 * (1.0 - duty) / duty * 2.0 * rng.unit()) as u64;
+    }
+}
+
+fn air_stats(medium: &Medium) -> MediumStats {
+    medium.with_trace(|frames| {
+        let mut st = MediumStats {
+            transmitted: frames.len() as u64,
+            ..MediumStats::default()
+        };
+        for r in frames.iter().flat_map(|f| f.receptions.iter()) {
+            match r.outcome {
+                ChipOutcome::Delivered { .. } => st.delivered += 1,
+                ChipOutcome::CrcError { .. } => st.chip_crc_rejected += 1,
+                ChipOutcome::HeaderMismatch => st.header_rejected += 1,
+                ChipOutcome::RandomLoss => st.lost_random += 1,
+                ChipOutcome::TooWeak => st.lost_weak += 1,
+                ChipOutcome::Captured => st.lost_collision += 1,
+                _ => {}
+            }
+        }
+        st
+    })
+}
+
+fn accumulate(total: &mut MediumStats, part: MediumStats) {
+    total.transmitted += part.transmitted;
+    total.delivered += part.delivered;
+    total.lost_weak += part.lost_weak;
+    total.lost_collision += part.lost_collision;
+    total.lost_random += part.lost_random;
+    total.lost_cut += part.lost_cut;
+    total.header_rejected += part.header_rejected;
+    total.chip_crc_rejected += part.chip_crc_rejected;
+    total.corrupted_delivered += part.corrupted_delivered;
+}
+
+/// Runs `s` on the chip simulator, calling `status` once per virtual second.
+pub fn simulate_chip(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome {
+    let mut config = MediumConfig::default();
+    config.packet_loss = s.loss;
+    let sim = Simulation::with_config(s.seed, config);
+    let medium = sim.medium();
+    let mut rng = SplitMix64::new(s.seed);
+    let params = params_for(s, rng.next_u64() as u32);
+    let (main, module_id, flight_id) = spawn_pair(
+        &sim,
+        &medium,
+        s,
+        params,
+        (0.0, s.distance_m),
+        0xA11CE,
+        s.bind,
+    );
+    let foreign = s.foreign_link.then(|| {
+        let foreign_params = params_for(s, rng.next_u64() as u32);
+        let mid = s.distance_m / 2.0;
+        spawn_pair(
+            &sim,
+            &medium,
+            s,
+            foreign_params,
+            (mid - 5.0, mid + 5.0),
+            0xB0B,
+            false,
+        )
+        .0
+    });
+    if s.interference > 0.0 {
+        add_interference(&medium, s, &params);
+    }
+    if let Some((from_s, to_s)) = s.cut_s {
+        let (m, delay) = (medium.clone(), sim.delay());
+        sim.spawn(async move {
+            delay.sleep_ns((from_s * 1e9) as u64).await;
+            m.set_attenuation(module_id, flight_id, 300.0);
+            delay.sleep_ns(((to_s - from_s) * 1e9) as u64).await;
+            m.set_attenuation(module_id, flight_id, 0.0);
+        });
+    }
+    let end_us = (s.duration_s * 1e6) as u64;
+    let mut tracker = StatusTracker::default();
+    let mut air = MediumStats::default();
+    let mut t_us = 0;
+    while t_us < end_us {
+        let step = STATUS_PERIOD_US.min(end_us - t_us);
+        sim.run_for(Duration::from_micros(step));
+        t_us += step;
+        status(&tracker.sample(t_us, &main.borrow(), step));
+        // The trace grows with every frame; keep only what the summary needs.
+        if medium.trace_len() > 50_000 {
+            accumulate(&mut air, air_stats(&medium));
+            medium.clear_trace();
+        }
+    }
+    accumulate(&mut air, air_stats(&medium));
+    let main_record = main.borrow().clone();
+    Outcome {
+        main: main_record,
+        foreign: foreign.map(|f| f.borrow().clone()),
+        medium: air,
+        params,
+    }
+}

@@ -1,0 +1,320 @@
+//! The application ends of the simulated link: a handset that produces a new channel sample
+//! every millisecond (stamped inside the channels, so the flight side can measure latency
+//! and check every value), telemetry sources and sinks with known byte streams, and the
+//! shared record both ends write into.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use telemetry::channels::{CHANNEL_MAX, ChannelFormat, Channels};
+use telemetry::link::core::follower::SyncState;
+use telemetry::link::core::{Follower, Master};
+use telemetry::link::follower::FollowerHooks;
+use telemetry::link::master::MasterHooks;
+
+/// Handset sample period: about 1 kHz from the handset's own crystal, so its phase drifts
+/// against the module's slots (1 µs per ms) and latency sees every alignment.
+pub const SAMPLE_PERIOD_US: u64 = 1_001;
+/// Samples more than this far behind are not counted as latency (the link was down: that
+/// time shows up as failsafe, not as latency).
+const MAX_BACKLOG_SAMPLES: u64 = 1_000;
+/// Channels that carry the sample stamp, low and high 11 bits (present in both formats).
+const STAMP_LOW: usize = 6;
+const STAMP_HIGH: usize = 7;
+/// Hop records kept for the hop-sequence check.
+const HOP_RECORDS: usize = 20_000;
+
+fn mix64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Byte `index` of the test stream `salt`.
+pub fn stream_byte(salt: u64, index: u64) -> u8 {
+    (mix64(salt ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15)) >> 24) as u8
+}
+
+/// The channels of handset sample `k` on link `salt`.
+pub fn sample_channels(salt: u64, k: u64) -> Channels {
+    let mut ch = [0u16; 16];
+    for (i, c) in ch.iter_mut().enumerate() {
+        *c = (mix64(salt ^ (k << 5) ^ i as u64) % (u64::from(CHANNEL_MAX) + 1)) as u16;
+    }
+    if let Some(c) = ch.get_mut(STAMP_LOW) {
+        *c = (k & 0x7FF) as u16;
+    }
+    if let Some(c) = ch.get_mut(STAMP_HIGH) {
+        *c = ((k >> 11) & 0x7FF) as u16;
+    }
+    ch
+}
+
+/// The handset sample index stamped into `channels`.
+fn stamp(channels: &Channels) -> u64 {
+    let get = |i: usize| u64::from(channels.get(i).copied().unwrap_or(0));
+    get(STAMP_LOW) | (get(STAMP_HIGH) << 11)
+}
+
+/// Fills up to 256 bytes of test stream `salt` from index `*written` into `write`.
+fn feed(salt: u64, written: &mut u64, free: usize, write: impl FnOnce(&[u8]) -> usize) {
+    let bytes: Vec<u8> = (0..free.min(256) as u64)
+        .map(|i| stream_byte(salt, *written + i))
+        .collect();
+    *written += write(&bytes) as u64;
+}
+
+/// Drains a stream with `read`, checking every byte against test stream `salt`.
+fn check(
+    salt: u64,
+    read_index: &mut u64,
+    ok: &mut u64,
+    bad: &mut u64,
+    mut read: impl FnMut(&mut [u8]) -> usize,
+) {
+    let mut buf = [0u8; 256];
+    loop {
+        let n = read(&mut buf);
+        if n == 0 {
+            return;
+        }
+        for &b in buf.iter().take(n) {
+            if b == stream_byte(salt, *read_index) {
+                *ok += 1;
+            } else {
+                *bad += 1;
+            }
+            *read_index += 1;
+        }
+    }
+}
+
+/// Everything measured on one link.
+#[derive(Clone, Debug, Default)]
+pub struct Record {
+    /// Time the bind completed on the follower (µs), if binding.
+    pub bound_us: Option<u64>,
+    /// The parameters the follower stored (from the bind, or given).
+    pub follower_params: Option<telemetry::link::LinkParams>,
+    /// Uplink latencies input → output, µs.
+    pub latencies_us: Vec<u32>,
+    /// Channel outputs that matched their sample exactly.
+    pub outputs_ok: u64,
+    /// Channel outputs that did not (must stay 0).
+    pub outputs_bad: u64,
+    /// Uplink stream bytes received correct / wrong.
+    pub up_bytes_ok: u64,
+    /// Uplink stream bytes received wrong (must stay 0).
+    pub up_bytes_bad: u64,
+    /// Downlink stream bytes received correct.
+    pub down_bytes_ok: u64,
+    /// Downlink stream bytes received wrong (must stay 0).
+    pub down_bytes_bad: u64,
+    /// (time µs, entering?) failsafe transitions on the follower.
+    pub failsafe_changes: Vec<(u64, bool)>,
+    /// (slot mod 256, grid channel) of the master's slots.
+    pub master_hops: Vec<(u8, u8)>,
+    /// (slot mod 256, grid channel) the follower tracked.
+    pub follower_hops: Vec<(u8, u8)>,
+    /// Latest snapshot of both ends.
+    pub now: Snapshot,
+}
+
+/// Current state of both ends, for the status line.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Snapshot {
+    /// Uplink LQ measured on the follower.
+    pub uplink_lq: u8,
+    /// Downlink LQ measured on the master.
+    pub downlink_lq: u8,
+    /// RSSI of the master's packets at the follower.
+    pub follower_rssi_dbm: Option<i16>,
+    /// RSSI of the follower's packets at the master.
+    pub master_rssi_dbm: Option<i16>,
+    /// Valid uplinks received by the follower.
+    pub uplinks_received: u32,
+    /// Valid downlinks received by the master.
+    pub downlinks_received: u32,
+    /// Packets rejected by the follower's decoder.
+    pub follower_rejected: u32,
+    /// Packets rejected by the master's decoder.
+    pub master_rejected: u32,
+    /// Follower in failsafe.
+    pub failsafe: bool,
+    /// Follower tracking the master.
+    pub tracking: bool,
+    /// Times the follower lost and re-acquired.
+    pub resyncs: u32,
+    /// The follower's first four outputs.
+    pub channels: [u16; 4],
+}
+
+/// Shared record handle.
+pub type Shared = Rc<RefCell<Record>>;
+/// The common time reference of a simulation (virtual µs, not either end's clock).
+pub type Now = Rc<dyn Fn() -> u64>;
+
+/// The module's application: handset samples in, telemetry out and in.
+pub struct ModuleApp {
+    /// Virtual time (the common reference for latency).
+    pub now: Now,
+    /// Where measurements go.
+    pub record: Shared,
+    /// Link salt (channel pattern and stream bytes).
+    pub salt: u64,
+    /// Keep the uplink stream saturated.
+    pub telemetry_load: bool,
+    written: u64,
+    read: u64,
+}
+
+impl ModuleApp {
+    /// A module application.
+    pub fn new(now: Now, record: Shared, salt: u64, telemetry_load: bool) -> Self {
+        Self {
+            now,
+            record,
+            salt,
+            telemetry_load,
+            written: 0,
+            read: 0,
+        }
+    }
+}
+
+impl MasterHooks for ModuleApp {
+    fn on_slot(&mut self, _now_us: u64, master: &mut Master) {
+        let now = (self.now)();
+        master.set_channels(&sample_channels(self.salt, now / SAMPLE_PERIOD_US));
+        if self.telemetry_load {
+            let free = master.uplink_stream.free();
+            feed(self.salt ^ 0x0F, &mut self.written, free, |b| {
+                master.uplink_stream.write(b)
+            });
+        }
+        let mut guard = self.record.borrow_mut();
+        let rec = &mut *guard;
+        check(
+            self.salt ^ 0xF0,
+            &mut self.read,
+            &mut rec.down_bytes_ok,
+            &mut rec.down_bytes_bad,
+            |b| master.downlink_stream.read(b),
+        );
+        if rec.master_hops.len() < HOP_RECORDS {
+            let slot = master.slot();
+            let ch =
+                telemetry::link::HopSequence::new(master.params().bind_id).channel_for_slot(slot);
+            rec.master_hops.push((slot as u8, ch));
+        }
+        rec.now.downlink_lq = master.downlink_lq();
+        rec.now.master_rssi_dbm = master.downlink_rssi_dbm();
+        rec.now.downlinks_received = master.counters().received;
+        rec.now.master_rejected = master.counters().rejected;
+    }
+}
+
+/// The flight controller's application: channel outputs checked, telemetry out and in.
+pub struct FlightApp {
+    /// Virtual time.
+    pub now: Now,
+    /// Where measurements go.
+    pub record: Shared,
+    /// Link salt.
+    pub salt: u64,
+    /// Keep the downlink stream saturated.
+    pub telemetry_load: bool,
+    format: ChannelFormat,
+    last_updates: u32,
+    last_sample: Option<u64>,
+    last_failsafe: bool,
+    written: u64,
+    read: u64,
+}
+
+impl FlightApp {
+    /// A flight application for a link with `format`.
+    pub fn new(
+        now: Now,
+        record: Shared,
+        salt: u64,
+        telemetry_load: bool,
+        format: ChannelFormat,
+    ) -> Self {
+        Self {
+            now,
+            record,
+            salt,
+            telemetry_load,
+            format,
+            last_updates: 0,
+            last_sample: None,
+            last_failsafe: true,
+            written: 0,
+            read: 0,
+        }
+    }
+}
+
+impl FollowerHooks for FlightApp {
+    fn on_step(&mut self, _now_us: u64, follower: &mut Follower) {
+        let now = (self.now)();
+        let mut guard = self.record.borrow_mut();
+        let rec = &mut *guard;
+        if follower.updates() != self.last_updates && !follower.in_failsafe() {
+            self.last_updates = follower.updates();
+            let out = follower.output();
+            let k = stamp(out);
+            let expected = sample_channels(self.salt, k);
+            let n = self.format.count();
+            if out.get(..n) == expected.get(..n) {
+                rec.outputs_ok += 1;
+                // Input → output: every handset sample since the previous output (a stick
+                // movement at that sample) first shows at the output now.
+                let first = match self.last_sample {
+                    Some(last) if k > last && k - last <= MAX_BACKLOG_SAMPLES => last + 1,
+                    _ => k,
+                };
+                for j in first..=k {
+                    rec.latencies_us
+                        .push(now.saturating_sub(j * SAMPLE_PERIOD_US) as u32);
+                }
+                self.last_sample = Some(k);
+            } else {
+                rec.outputs_bad += 1;
+            }
+        }
+        if follower.in_failsafe() != self.last_failsafe {
+            self.last_failsafe = follower.in_failsafe();
+            rec.failsafe_changes.push((now, self.last_failsafe));
+        }
+        if self.telemetry_load {
+            let free = follower.downlink_stream.free();
+            feed(self.salt ^ 0xF0, &mut self.written, free, |b| {
+                follower.downlink_stream.write(b)
+            });
+        }
+        check(
+            self.salt ^ 0x0F,
+            &mut self.read,
+            &mut rec.up_bytes_ok,
+            &mut rec.up_bytes_bad,
+            |b| follower.uplink_stream.read(b),
+        );
+        if let Some(hop) = follower.tracked_slot()
+            && rec.follower_hops.len() < HOP_RECORDS
+            && rec.follower_hops.last() != Some(&hop)
+        {
+            rec.follower_hops.push(hop);
+        }
+        rec.now.uplink_lq = follower.uplink_lq();
+        rec.now.follower_rssi_dbm = follower.uplink_rssi_dbm();
+        rec.now.uplinks_received = follower.counters().received;
+        rec.now.follower_rejected = follower.counters().rejected;
+        rec.now.failsafe = follower.in_failsafe();
+        rec.now.tracking = follower.sync_state() == SyncState::Tracking;
+        rec.now.resyncs = follower.resyncs();
+        let out = follower.output();
+        rec.now.channels = [out[0], out[1], out[2], out[3]];
+    }
+}

@@ -1,0 +1,232 @@
+//! The end-of-run summary: figures computed from the records, printed as a table or JSON
+//! (hand-written JSON: flat numbers only, no dependency needed).
+
+use std::fmt::Write;
+
+use telemetry::link::rate::airtime_us;
+
+use crate::scenario::Scenario;
+use crate::world::Outcome;
+
+/// Figures of one run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Report {
+    /// Rate mode name.
+    pub rate: String,
+    /// Telemetry ratio.
+    pub telemetry_ratio: u8,
+    /// Channels per uplink.
+    pub channels: usize,
+    /// Air bit rate.
+    pub bit_rate_bps: u32,
+    /// Slots per second.
+    pub slot_rate_hz: u32,
+    /// Airtime of a full uplink frame, µs.
+    pub uplink_airtime_us: u32,
+    /// Virtual seconds simulated.
+    pub duration_s: f64,
+    /// Injected loss.
+    pub loss: f64,
+    /// Seconds from start until the follower was bound (bind mode) or started.
+    pub bound_s: f64,
+    /// Channel updates delivered per second (after the first one).
+    pub update_rate_hz: f64,
+    /// Mean uplink latency input → output, ms.
+    pub latency_mean_ms: f64,
+    /// 99th percentile uplink latency, ms.
+    pub latency_p99_ms: f64,
+    /// Uplink LQ at the end (follower).
+    pub uplink_lq: u8,
+    /// Downlink LQ at the end (master).
+    pub downlink_lq: u8,
+    /// RSSI at the follower, dBm.
+    pub follower_rssi_dbm: i16,
+    /// RSSI at the master, dBm.
+    pub master_rssi_dbm: i16,
+    /// Uplink stream goodput, B/s.
+    pub uplink_goodput_bps: f64,
+    /// Downlink stream goodput, B/s.
+    pub downlink_goodput_bps: f64,
+    /// Outputs / stream bytes that were wrong (must be 0).
+    pub errors: u64,
+    /// Failsafe entries.
+    pub failsafes: usize,
+    /// Resyncs.
+    pub resyncs: u32,
+    /// Packets on air.
+    pub transmitted: u64,
+    /// Packets dropped by the chip header check.
+    pub header_rejected: u64,
+    /// Packets dropped by the chip CRC.
+    pub chip_crc_rejected: u64,
+    /// Packets rejected by the link decoders.
+    pub link_rejected: u64,
+    /// Wrong outputs or bytes on the foreign link (must be 0).
+    pub foreign_errors: u64,
+}
+
+fn percentile(sorted: &[u32], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let i = ((sorted.len() - 1) as f64 * p).round() as usize;
+    sorted.get(i).map_or(0.0, |&v| f64::from(v))
+}
+
+/// Summarises an outcome.
+pub fn summarise(s: &Scenario, o: &Outcome) -> Report {
+    let m = &o.main;
+    let mut lat = m.latencies_us.clone();
+    lat.sort_unstable();
+    let bound_us = m.bound_us.unwrap_or(0);
+    let active_s = (s.duration_s - bound_us as f64 / 1e6).max(1e-6);
+    let mean = if lat.is_empty() {
+        0.0
+    } else {
+        lat.iter().map(|&v| f64::from(v)).sum::<f64>() / lat.len() as f64
+    };
+    let frame = telemetry::frame::uplink_overhead(s.format, false);
+    Report {
+        rate: format!("{:?}", s.rate),
+        telemetry_ratio: s.telemetry_ratio,
+        channels: s.format.count(),
+        bit_rate_bps: s.rate.bit_rate_bps(),
+        slot_rate_hz: s.rate.slot_rate_hz(),
+        uplink_airtime_us: airtime_us(frame, s.rate.bit_rate_bps()),
+        duration_s: s.duration_s,
+        loss: s.loss,
+        bound_s: bound_us as f64 / 1e6,
+        update_rate_hz: m.outputs_ok as f64 / active_s,
+        latency_mean_ms: mean / 1000.0,
+        latency_p99_ms: percentile(&lat, 0.99) / 1000.0,
+        uplink_lq: m.now.uplink_lq,
+        downlink_lq: m.now.downlink_lq,
+        follower_rssi_dbm: m.now.follower_rssi_dbm.unwrap_or(0),
+        master_rssi_dbm: m.now.master_rssi_dbm.unwrap_or(0),
+        uplink_goodput_bps: m.up_bytes_ok as f64 / active_s,
+        downlink_goodput_bps: m.down_bytes_ok as f64 / active_s,
+        errors: m.outputs_bad + m.up_bytes_bad + m.down_bytes_bad,
+        failsafes: m
+            .failsafe_changes
+            .iter()
+            .filter(|(_, entering)| *entering)
+            .count(),
+        resyncs: m.now.resyncs,
+        transmitted: o.medium.transmitted,
+        header_rejected: o.medium.header_rejected,
+        chip_crc_rejected: o.medium.chip_crc_rejected,
+        link_rejected: u64::from(m.now.follower_rejected) + u64::from(m.now.master_rejected),
+        foreign_errors: o
+            .foreign
+            .as_ref()
+            .map_or(0, |f| f.outputs_bad + f.up_bytes_bad + f.down_bytes_bad),
+    }
+}
+
+impl Report {
+    /// One JSON object.
+    pub fn to_json(&self) -> String {
+        let mut j = String::from("{");
+        let mut field = |k: &str, v: String| {
+            if j.len() > 1 {
+                j.push_str(", ");
+            }
+            let _ = write!(j, "\"{k}\": {v}");
+        };
+        field("rate", format!("\"{}\"", self.rate));
+        field("telemetry_ratio", self.telemetry_ratio.to_string());
+        field("channels", self.channels.to_string());
+        field("bit_rate_bps", self.bit_rate_bps.to_string());
+        field("slot_rate_hz", self.slot_rate_hz.to_string());
+        field("uplink_airtime_us", self.uplink_airtime_us.to_string());
+        field("duration_s", format!("{:.3}", self.duration_s));
+        field("loss", format!("{:.3}", self.loss));
+        field("bound_s", format!("{:.3}", self.bound_s));
+        field("update_rate_hz", format!("{:.1}", self.update_rate_hz));
+        field("latency_mean_ms", format!("{:.3}", self.latency_mean_ms));
+        field("latency_p99_ms", format!("{:.3}", self.latency_p99_ms));
+        field("uplink_lq", self.uplink_lq.to_string());
+        field("downlink_lq", self.downlink_lq.to_string());
+        field("follower_rssi_dbm", self.follower_rssi_dbm.to_string());
+        field("master_rssi_dbm", self.master_rssi_dbm.to_string());
+        field(
+            "uplink_goodput_bps",
+            format!("{:.1}", self.uplink_goodput_bps),
+        );
+        field(
+            "downlink_goodput_bps",
+            format!("{:.1}", self.downlink_goodput_bps),
+        );
+        field("errors", self.errors.to_string());
+        field("failsafes", self.failsafes.to_string());
+        field("resyncs", self.resyncs.to_string());
+        field("transmitted", self.transmitted.to_string());
+        field("header_rejected", self.header_rejected.to_string());
+        field("chip_crc_rejected", self.chip_crc_rejected.to_string());
+        field("link_rejected", self.link_rejected.to_string());
+        field("foreign_errors", self.foreign_errors.to_string());
+        j.push('}');
+        j
+    }
+
+    /// The human-readable summary.
+    pub fn table(&self) -> String {
+        let mut t = String::new();
+        let mut row = |k: &str, v: String| {
+            let _ = writeln!(t, "  {k:<28} {v}");
+        };
+        row(
+            "rate mode",
+            format!(
+                "{} ({} bps, {} Hz slots, 1:{} telemetry, {} ch)",
+                self.rate,
+                self.bit_rate_bps,
+                self.slot_rate_hz,
+                self.telemetry_ratio,
+                self.channels
+            ),
+        );
+        row("uplink airtime", format!("{} µs", self.uplink_airtime_us));
+        row("bound after", format!("{:.3} s", self.bound_s));
+        row("channel updates", format!("{:.1} /s", self.update_rate_hz));
+        row(
+            "latency input→output",
+            format!(
+                "mean {:.2} ms, p99 {:.2} ms",
+                self.latency_mean_ms, self.latency_p99_ms
+            ),
+        );
+        row(
+            "LQ up / down",
+            format!("{} % / {} %", self.uplink_lq, self.downlink_lq),
+        );
+        row(
+            "RSSI follower / master",
+            format!("{} / {} dBm", self.follower_rssi_dbm, self.master_rssi_dbm),
+        );
+        row(
+            "telemetry goodput up / down",
+            format!(
+                "{:.0} / {:.0} B/s",
+                self.uplink_goodput_bps, self.downlink_goodput_bps
+            ),
+        );
+        row(
+            "failsafes / resyncs",
+            format!("{} / {}", self.failsafes, self.resyncs),
+        );
+        row("packets on air", self.transmitted.to_string());
+        row(
+            "rejected hdr / chip CRC / link",
+            format!(
+                "{} / {} / {}",
+                self.header_rejected, self.chip_crc_rejected, self.link_rejected
+            ),
+        );
+        row(
+            "errors (must be 0)",
+            format!("{} (foreign link: {})", self.errors, self.foreign_errors),
+        );
+        t
+    }
+}
