@@ -12,6 +12,7 @@ pub mod control;
 pub mod estimation;
 pub mod model;
 pub mod outputs;
+pub mod pipeline;
 pub mod sensors;
 pub mod settings;
 pub mod supervisor;

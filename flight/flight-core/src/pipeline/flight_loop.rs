@@ -1,0 +1,300 @@
+//! One pass of the flight loop, run right after each gyro sample:
+//! estimate → supervise → control → mix → output commands.
+
+use super::controllers::Controllers;
+use super::sticks::StickShaping;
+use crate::control::lqr::AxisSetpoint;
+use crate::control::mixer::Mixer;
+use crate::estimation::complementary::{self, Complementary};
+use crate::estimation::math::{inv_sqrt, wrap_pi};
+use crate::estimation::quaternion::{Quaternion, ned_to_body};
+use crate::outputs::Command;
+use crate::supervisor::{
+    Decision, FlightMode, Inputs, ModeSwitch, Settings as SupervisorSettings, Sticks, Supervisor,
+};
+
+const DEG_PER_RAD: f32 = 180.0 / core::f32::consts::PI;
+/// A MEMS gyro saturates at 2000 deg/s; anything beyond (or non-finite) is a sensor fault.
+const GYRO_LIMIT_DPS: f32 = 2200.0;
+
+/// Fixed configuration of the loop.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopConfig {
+    /// Loop period, s (the gyro's sample period).
+    pub ts_s: f32,
+    /// Stick shaping.
+    pub shaping: StickShaping,
+    /// Motor command while armed at zero throttle (keeps props spinning), 0…0.3.
+    pub idle: f32,
+    /// Arming and failsafe tunables.
+    pub supervisor: SupervisorSettings,
+    /// Flight modes on the switch's three positions.
+    pub modes: [FlightMode; 3],
+    /// Attitude and horizon modes use the LQG (else the attitude PID).
+    pub attitude_uses_lqg: bool,
+    /// Attitude filter gains.
+    pub attitude_filter: complementary::Config,
+}
+
+/// One IMU sample, body FRD axes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImuSample {
+    /// Angular rate, rad/s.
+    pub gyro_radps: [f32; 3],
+    /// Specific force, m/s² (level at rest: [0, 0, −g]).
+    pub accel_mps2: [f32; 3],
+    /// Magnetometer (any unit) when a fresh one came with this sample.
+    pub mag: Option<[f32; 3]>,
+}
+
+/// What the link delivers this loop.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LinkInput {
+    /// Fresh channels (not in failsafe).
+    pub up: bool,
+    /// Sticks.
+    pub sticks: Sticks,
+    /// The arm switch, if one is configured.
+    pub arm_switch: Option<bool>,
+    /// The flight-mode switch channel, −1…1.
+    pub mode_channel: f32,
+}
+
+/// The loop's result.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopOutput {
+    /// Commands for motors 1–4.
+    pub motors: [Command; 4],
+    /// What the supervisor decided.
+    pub decision: Decision,
+    /// Active flight mode.
+    pub mode: FlightMode,
+    /// The mode changed this loop.
+    pub mode_changed: bool,
+    /// Motors may turn.
+    pub armed: bool,
+    /// Link failsafe descent active.
+    pub failsafe: bool,
+    /// Estimated attitude (roll, pitch, yaw), deg.
+    pub attitude_deg: [f32; 3],
+}
+
+/// The loop's state.
+#[derive(Debug, Clone, Copy)]
+pub struct FlightLoop {
+    config: LoopConfig,
+    attitude: Complementary,
+    supervisor: Supervisor,
+    modes: ModeSwitch,
+    mode: FlightMode,
+    controllers: Option<Controllers>,
+    mixer: Mixer<4>,
+    /// Low-passed throttle while flying normally: the failsafe descent starts from it.
+    hover_throttle: f32,
+}
+
+impl FlightLoop {
+    /// A loop with `controllers` (`None` until the gains are solved: arming is refused).
+    pub fn new(config: LoopConfig, mixer: Mixer<4>, controllers: Option<Controllers>) -> Self {
+        let modes = ModeSwitch::new(config.modes);
+        Self {
+            config,
+            attitude: Complementary::new(config.attitude_filter),
+            supervisor: Supervisor::new(config.supervisor),
+            mode: modes.mode(),
+            modes,
+            controllers,
+            mixer,
+            hover_throttle: 0.5,
+        }
+    }
+
+    /// Installs newly designed controllers (only while disarmed, or nothing changes).
+    pub fn set_controllers(&mut self, controllers: Controllers) -> bool {
+        if self.supervisor.motors_enabled() {
+            return false;
+        }
+        self.controllers = Some(controllers);
+        true
+    }
+
+    /// Body → NED attitude estimate.
+    pub fn attitude(&self) -> Quaternion {
+        self.attitude.attitude()
+    }
+
+    /// One loop at `now_ms`. `climb_rate_mps` (up positive) comes from the INS/baro when
+    /// available and makes the failsafe descent rate-controlled.
+    pub fn step(
+        &mut self,
+        now_ms: u32,
+        imu: &ImuSample,
+        link: &LinkInput,
+        climb_rate_mps: Option<f32>,
+    ) -> LoopOutput {
+        let gyro_dps = imu.gyro_radps.map(|g| g * DEG_PER_RAD);
+        let gyro_ok = gyro_dps
+            .iter()
+            .all(|g| g.is_finite() && g.abs() < GYRO_LIMIT_DPS);
+        let filter_ok = self
+            .attitude
+            .update(imu.gyro_radps, imu.accel_mps2, imu.mag, self.config.ts_s)
+            .is_ok();
+        let previous_mode = self.mode;
+        if link.up {
+            self.mode = self.modes.update(link.mode_channel);
+        }
+        let decision = self.supervisor.update(&Inputs {
+            now_ms,
+            link_up: link.up,
+            sticks: link.sticks,
+            arm_switch: link.arm_switch,
+            sensors_healthy: gyro_ok && filter_ok,
+            gains_ready: self.controllers.is_some(),
+        });
+        let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
+        let failsafe = self.supervisor.failsafe_descent_mps();
+        let mut motors = [Command::Stopped; 4];
+        if let (true, Some(c)) = (
+            self.supervisor.motors_enabled() && gyro_ok,
+            self.controllers.as_mut(),
+        ) {
+            if matches!(decision, Decision::Armed | Decision::ControlRecovered)
+                || self.mode != previous_mode
+            {
+                c.reset(gyro_dps);
+            }
+            let (throttle, attitude_out) = match failsafe {
+                Some(descent_mps) => {
+                    // Level (angle error = −angle), no yaw rotation, descend.
+                    let sp = [
+                        AxisSetpoint::Attitude {
+                            angle_error_deg: -roll,
+                        },
+                        AxisSetpoint::Attitude {
+                            angle_error_deg: -pitch,
+                        },
+                        AxisSetpoint::Rate { rate_dps: 0.0 },
+                    ];
+                    let throttle = match climb_rate_mps {
+                        // 0.1 throttle per m/s of climb-rate error around the hover value.
+                        Some(climb) => self.hover_throttle + 0.1 * (-descent_mps - climb),
+                        None => self.hover_throttle * 0.9,
+                    };
+                    (throttle.clamp(0.0, 1.0), c.lqg(gyro_dps, sp))
+                }
+                None => {
+                    let sticks = &link.sticks;
+                    let rates = self.config.shaping.rates_dps(sticks);
+                    let [yaw_rate] = [rates[2]];
+                    let [roll_sp, pitch_sp] = self.config.shaping.angles_deg(sticks);
+                    let errors = [roll_sp - roll, pitch_sp - pitch];
+                    let out = match self.mode {
+                        FlightMode::RatePid | FlightMode::SystemId => c.pid_rate(gyro_dps, rates),
+                        FlightMode::RateLqg => c.lqg(
+                            gyro_dps,
+                            rates.map(|rate_dps| AxisSetpoint::Rate { rate_dps }),
+                        ),
+                        FlightMode::Attitude if !self.config.attitude_uses_lqg => {
+                            c.pid_attitude(gyro_dps, errors, yaw_rate)
+                        }
+                        FlightMode::Attitude => c.lqg(
+                            gyro_dps,
+                            [
+                                AxisSetpoint::Attitude {
+                                    angle_error_deg: errors[0],
+                                },
+                                AxisSetpoint::Attitude {
+                                    angle_error_deg: errors[1],
+                                },
+                                AxisSetpoint::Rate { rate_dps: yaw_rate },
+                            ],
+                        ),
+                        FlightMode::Horizon => {
+                            let w = self.config.shaping.horizon_weight(sticks);
+                            let blend = |i: usize| AxisSetpoint::Blend {
+                                rate_dps: rates.get(i).copied().unwrap_or(0.0),
+                                angle_error_deg: errors.get(i).copied().unwrap_or(0.0),
+                                attitude_weight: w,
+                            };
+                            c.lqg(
+                                gyro_dps,
+                                [
+                                    blend(0),
+                                    blend(1),
+                                    AxisSetpoint::Rate { rate_dps: yaw_rate },
+                                ],
+                            )
+                        }
+                    };
+                    let throttle = sticks.throttle.clamp(0.0, 1.0);
+                    // 2 s low-pass of the flying throttle: what hovering takes.
+                    if throttle > 0.1 {
+                        let k = self.config.ts_s / (2.0 + self.config.ts_s);
+                        self.hover_throttle += k * (throttle - self.hover_throttle);
+                    }
+                    (throttle, out)
+                }
+            };
+            let idle = self.config.idle.clamp(0.0, 0.3);
+            let mixed = self.mixer.mix(throttle, attitude_out);
+            for (m, x) in motors.iter_mut().zip(mixed) {
+                *m = Command::Throttle(idle + (1.0 - idle) * x);
+            }
+        } else if let Some(c) = self.controllers.as_mut() {
+            // On the ground nothing integrates.
+            c.reset(gyro_dps);
+        }
+        LoopOutput {
+            motors,
+            decision,
+            mode: self.mode,
+            mode_changed: self.mode != previous_mode,
+            armed: self.supervisor.motors_enabled(),
+            failsafe: failsafe.is_some(),
+            attitude_deg: [roll, pitch, yaw],
+        }
+    }
+}
+
+/// (roll, pitch, yaw) in degrees without libm: a polynomial atan2 (error < 0.01°) on the
+/// rotation matrix, so the loop never calls soft-double trigonometry on the M4F.
+fn euler_deg(q: Quaternion) -> [f32; 3] {
+    let [[r11, r12, r13], [_, _, r23], [_, _, r33]] = ned_to_body(q);
+    let horizontal = r23 * r23 + r33 * r33;
+    let cos_pitch = if horizontal > 0.0 {
+        horizontal * inv_sqrt(horizontal)
+    } else {
+        0.0
+    };
+    [
+        atan2(r23, r33) * DEG_PER_RAD,
+        atan2(-r13, cos_pitch) * DEG_PER_RAD,
+        wrap_pi(atan2(r12, r11)) * DEG_PER_RAD,
+    ]
+}
+
+/// atan2 by octant reduction and a degree-9 odd minimax polynomial on [−1, 1].
+fn atan2(y: f32, x: f32) -> f32 {
+    use core::f32::consts::{FRAC_PI_2, PI};
+    let (ax, ay) = (x.abs(), y.abs());
+    if ax == 0.0 && ay == 0.0 {
+        return 0.0;
+    }
+    let swap = ay > ax;
+    let z = if swap { ax / ay } else { ay / ax };
+    let z2 = z * z;
+    let mut a = z
+        * (0.999_866
+            + z2 * (-0.330_299_5 + z2 * (0.180_141 + z2 * (-0.085_133 + z2 * 0.020_835_1))));
+    if swap {
+        a = FRAC_PI_2 - a;
+    }
+    if x < 0.0 {
+        a = PI - a;
+    }
+    if y < 0.0 { -a } else { a }
+}
+
+#[cfg(test)]
+mod tests;
