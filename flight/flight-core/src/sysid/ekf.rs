@@ -173,6 +173,8 @@ impl SystemIdentifier {
         for (axis, y) in gyro_dps.iter().enumerate() {
             self.correct(axis, *y);
         }
+        // Round-off makes P drift from symmetric; once per step is enough.
+        self.p = (self.p + self.p.transpose()) * 0.5;
         self.samples = self.samples.saturating_add(1);
     }
 
@@ -237,7 +239,6 @@ impl SystemIdentifier {
         let k = col / s;
         self.x += k * innovation;
         self.p -= k * col.transpose();
-        self.p = (self.p + self.p.transpose()) * 0.5;
         for a in 0..3 {
             if let Some(lb) = self.x.get_mut(4 * a + 3) {
                 *lb = lb.clamp(LN_BETA_RANGE.0, LN_BETA_RANGE.1);
