@@ -86,3 +86,28 @@ fn yaw_direct_term_changes_the_design() {
     );
     assert!(dy.kalman[0] != dp.kalman[0]);
 }
+
+#[test]
+fn design_never_returns_non_finite_gains() {
+    // Extremes around and beyond the validated range: every result is either finite gains
+    // or an error value.
+    let mut ok = 0;
+    for ln_beta in [0.5f32, 4.0, 7.0, 12.0, 16.0, 20.0] {
+        for tau in [0.001f32, 0.005, 0.08, 0.5, 1.0] {
+            for ts in [1e-5, 1.0 / 8000.0, 1.0 / 400.0, 0.1] {
+                let m = AxisModel::new(ln_beta, tau).unwrap();
+                let c = FrameInvariantCosts::default().for_beta(m.beta1());
+                if let Ok(d) = design_axis(&m, ts, &c, &c, &KfNoise::default()) {
+                    let all = d.kalman.iter().chain(&d.rate).chain(&d.attitude);
+                    assert!(
+                        all.clone().all(|g| g.is_finite()),
+                        "{ln_beta} {tau} {ts}: {d:?}"
+                    );
+                    ok += 1;
+                }
+            }
+        }
+    }
+    println!("{ok} of 120 extreme designs solved, the rest returned errors");
+    assert!(ok > 60, "{ok} of 120 solved");
+}

@@ -22,6 +22,21 @@ pub struct AutotuneSettings {
     pub pole_ratio: f64,
     /// Outer attitude loop damping ζo (1.3).
     pub outer_damping: f64,
+    /// dRonin's soft limit of the outer kp above 7: 3·ln(kp − 4) + 7 − 3·ln 3.
+    pub soften_outer_kp: bool,
+}
+
+impl AutotuneSettings {
+    /// dRonin's GCS defaults: ζ 1.05, ghf 0.010, N = 25, outer kp softened above 7.
+    pub fn dronin() -> Self {
+        Self {
+            damping: 1.05,
+            noise_gain: 0.010,
+            pole_ratio: 25.0,
+            outer_damping: 1.3,
+            soften_outer_kp: true,
+        }
+    }
 }
 
 impl Default for AutotuneSettings {
@@ -31,6 +46,7 @@ impl Default for AutotuneSettings {
             noise_gain: 0.010,
             pole_ratio: 20.0,
             outer_damping: 1.3,
+            soften_outer_kp: false,
         }
     }
 }
@@ -93,7 +109,12 @@ pub fn analytic_pid(
         return Err(ModelError::NonFinite);
     }
     #[allow(clippy::cast_possible_truncation)]
-    let outer_kp = (wn / (4.0 * s.outer_damping * s.outer_damping)) as f32;
+    let mut outer_kp = wn / (4.0 * s.outer_damping * s.outer_damping);
+    if s.soften_outer_kp && outer_kp > 7.0 {
+        // Continuous at 7 (3·ln 3 + 7 − 3·ln 3) and growing only logarithmically above.
+        outer_kp = 3.0 * libm::log(outer_kp - 4.0) + 7.0 - 3.0 * libm::log(3.0);
+    }
+    let outer_kp = outer_kp as f32;
     Ok(PidTune {
         rate: [r.beta1(), p.beta1(), y.beta1()].map(|beta| gains_for(beta, tau, td, wn, z, a, b)),
         outer_kp,
@@ -150,6 +171,13 @@ mod tests {
         assert!((g.ki - 8.81e-3).abs() < 0.005e-3);
         assert!((g.kd - 4.84e-5).abs() < 0.005e-5);
         assert!((t.outer_kp - 7.30).abs() < 0.01);
+        // dRonin: same formulas with ζ 1.05 and N 25; its outer kp 7.x is softened.
+        let d = analytic_pid([10.0, 10.0, 10.0], 0.03, &AutotuneSettings::dronin()).unwrap();
+        let raw = d.natural_frequency_rad_s / (4.0 * 1.3 * 1.3);
+        assert!(raw > 7.0);
+        let soft = 3.0 * libm::log(raw - 4.0) + 7.0 - 3.0 * libm::log(3.0);
+        assert!((f64::from(d.outer_kp) - soft).abs() < 1e-5 && f64::from(d.outer_kp) < raw);
+        assert!(d.natural_frequency_rad_s != t.natural_frequency_rad_s);
         assert!(analytic_pid([10.0, 10.0, 10.0], 0.0, &AutotuneSettings::default()).is_err());
     }
 }

@@ -106,12 +106,6 @@ fn get(v: &Vector, i: usize) -> f32 {
     v.get(i).copied().unwrap_or(0.0)
 }
 
-fn set(m: &mut Mat, i: usize, j: usize, value: f32) {
-    if let Some(e) = m.get_mut((i, j)) {
-        *e = value;
-    }
-}
-
 /// ln β and ln τ are kept inside physically possible ranges so a bad transient cannot
 /// overflow exp().
 const LN_BETA_RANGE: (f32, f32) = (4.0, 15.0);
@@ -173,6 +167,8 @@ impl SystemIdentifier {
         for (axis, y) in gyro_dps.iter().enumerate() {
             self.correct(axis, *y);
         }
+        // Round-off makes P drift from symmetric; once per step is enough.
+        self.p = (self.p + self.p.transpose()) * 0.5;
         self.samples = self.samples.saturating_add(1);
     }
 
@@ -181,9 +177,11 @@ impl SystemIdentifier {
         let tau = libm::expf(get(&self.x, LN_TAU));
         let x = ts / tau;
         let phi = Phi::new(x);
-        let mut f = Mat::identity();
+        // F = I + E; E has two non-zero rows per axis (ω and ν), each listed as
+        // (row, [(column, value); 4]) with unused slots pointing at column 0 with value 0.
+        let mut rows = [(0usize, [(0usize, 0.0f32); 4]); 6];
         let mut next = self.x;
-        for (axis, u) in u.iter().enumerate() {
+        for ((axis, u), pair) in u.iter().enumerate().zip(rows.chunks_exact_mut(2)) {
             let base = 4 * axis;
             let (w, nu, b, lb) = (
                 get(&self.x, base),
@@ -200,15 +198,43 @@ impl SystemIdentifier {
             if let Some(e) = next.get_mut(base + 1) {
                 *e = phi.e * nu + phi.phi1 * drive;
             }
-            set(&mut f, base, base + 1, beta * tau * phi.phi1);
-            set(&mut f, base, base + 2, -beta * tau * phi.phi2);
-            set(&mut f, base, base + 3, dw);
-            set(&mut f, base, LN_TAU, beta * tau * phi.g * (nu - drive));
-            set(&mut f, base + 1, base + 1, phi.e);
-            set(&mut f, base + 1, base + 2, -phi.phi1);
-            set(&mut f, base + 1, LN_TAU, x * phi.e * (nu - drive));
+            let rate_row = [
+                (base + 1, beta * tau * phi.phi1),
+                (base + 2, -beta * tau * phi.phi2),
+                (base + 3, dw),
+                (LN_TAU, beta * tau * phi.g * (nu - drive)),
+            ];
+            let torque_row = [
+                (base + 1, phi.e - 1.0),
+                (base + 2, -phi.phi1),
+                (LN_TAU, x * phi.e * (nu - drive)),
+                (0, 0.0),
+            ];
+            if let [r0, r1] = pair {
+                *r0 = (base, rate_row);
+                *r1 = (base + 1, torque_row);
+            }
         }
         self.x = next;
+        // P' = F·P·Fᵀ exploiting the sparsity of E: rows of F·P first (from the old P),
+        // then columns of (F·P)·Fᵀ (from F·P): ≈ 600 multiply-adds instead of 2·13³.
+        let old = self.p;
+        let mut fp = old;
+        for (r, entries) in &rows {
+            let mut row = old.row(*r).into_owned();
+            for (c, v) in entries {
+                row += old.row(*c) * *v;
+            }
+            fp.set_row(*r, &row);
+        }
+        let mut p = fp;
+        for (r, entries) in &rows {
+            let mut col = fp.column(*r).into_owned();
+            for (c, v) in entries {
+                col += fp.column(*c) * *v;
+            }
+            p.set_column(*r, &col);
+        }
         let c = &self.cfg;
         let q_axis = [c.q_rate, c.q_torque, c.q_bias, c.q_ln_beta];
         let q = Vector::from_fn(|i, _| {
@@ -218,7 +244,6 @@ impl SystemIdentifier {
                 q_axis.get(i % 4).copied().unwrap_or(0.0)
             }
         });
-        let mut p = f * self.p * f.transpose();
         p.set_diagonal(&(p.diagonal() + q));
         self.p = p;
     }
@@ -237,7 +262,6 @@ impl SystemIdentifier {
         let k = col / s;
         self.x += k * innovation;
         self.p -= k * col.transpose();
-        self.p = (self.p + self.p.transpose()) * 0.5;
         for a in 0..3 {
             if let Some(lb) = self.x.get_mut(4 * a + 3) {
                 *lb = lb.clamp(LN_BETA_RANGE.0, LN_BETA_RANGE.1);

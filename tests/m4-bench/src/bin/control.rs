@@ -2,6 +2,9 @@
 //! LQR law, rate mode on roll/pitch/yaw) plus the quad-X mixer; (b) 3-axis PID rate loops plus
 //! the same mixer. Gains are designed (f64 DARE) before the first marker, as before take-off;
 //! the LQG compensates one sample of output delay (one look-ahead prediction per axis).
+//! (c) one step of the identification EKF, for the autotune flight's CPU budget.
+//! m4count regions: 1 = gain design (3 axes × Kalman/rate/attitude DARE), 3 = (a), 5 = (b),
+//! 7 = (c); the even regions are setup between them.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
@@ -28,6 +31,8 @@ fn main() -> ! {
                 None => m,
             }
         });
+    // (0) The f64 gain design for three axes (soft double on the M4F), before take-off.
+    m4count_marker();
     let mut lqg = models.map(|m| {
         let costs = FrameInvariantCosts::default().for_beta(m.beta1());
         match design_axis(&m, ts, &costs, &costs, &KfNoise::default()) {
@@ -35,6 +40,7 @@ fn main() -> ! {
             Err(_) => exit(),
         }
     });
+    m4count_marker();
     let mixer = Mixer::new(QUAD_X, ThrustCurve::Linear);
     let gyro: [f32; 3] = black_box([12.5, -3.0, 40.0]);
     let setpoint: [f32; 3] = black_box([100.0, 0.0, 30.0]);
@@ -69,6 +75,15 @@ fn main() -> ! {
     let motors = mixer.mix(throttle, v);
     m4count_marker();
     black_box(motors);
+
+    // (c) One step of the 13-state identification EKF (autotune, not in the normal loop).
+    let mut ekf =
+        flight_core::sysid::SystemIdentifier::new(flight_core::sysid::SysidConfig::new(ts as f32));
+    ekf.record_output(black_box([0.05, -0.02, 0.1]));
+    m4count_marker();
+    ekf.update(gyro);
+    m4count_marker();
+    black_box(ekf.result());
     exit()
 }
 
