@@ -106,7 +106,9 @@ where
     /// Cancel-safety: safe.
     pub async fn sleep(&mut self) -> Result<(), Error<SPI::Error>> {
         self.idle().await?;
-        self.bus.write(OPERATING_MODE_1, 0x00).await
+        self.bus.write(OPERATING_MODE_1, 0x00).await?;
+        self.standby = true;
+        Ok(())
     }
 
     /// The RSSI now (0x26), in dBm (see [`measure::rssi_dbm`]). Meaningful in RX.

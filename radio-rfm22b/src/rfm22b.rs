@@ -53,6 +53,8 @@ pub struct Rfm22b<SPI, IRQ, SDN, D> {
     pub(crate) channel: u8,
     /// An operation left the chip in TX/RX with interrupts enabled (it was cancelled).
     pub(crate) busy: bool,
+    /// The chip is in standby: the next TX/RX will see a (legitimate) chip-ready flag.
+    pub(crate) standby: bool,
 }
 
 impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
@@ -94,6 +96,7 @@ where
             config: None,
             channel: 0,
             busy: false,
+            standby: false,
         }
     }
 
@@ -125,6 +128,7 @@ where
     /// Cancel-safety: safe to drop; the next `reset` starts over.
     pub async fn reset(&mut self) -> Result<ChipInfo, Error<SPI::Error>> {
         self.busy = false;
+        self.standby = false;
         if self.sdn_present {
             self.sdn.set_high().map_err(|_| Error::Pin)?;
             self.delay.delay_ms(SDN_HIGH_MS).await;

@@ -70,6 +70,7 @@ where
             .await?;
 
         let refill_len = config.fifo.tx_refill_len();
+        let waking = core::mem::take(&mut self.standby);
         let outcome = {
             let Self {
                 irq, delay, bus, ..
@@ -87,7 +88,7 @@ where
                     }
                 }
                 let status = read_status(bus).await?;
-                if status.power_on_reset() {
+                if status.reset_seen(waking) {
                     outcome = Err(Error::ChipReset);
                     break;
                 }

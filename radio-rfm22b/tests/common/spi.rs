@@ -215,3 +215,30 @@ impl embedded_hal_async::digital::Wait for SwitchIrq {
         Ok(())
     }
 }
+
+/// nIRQ following a script: each wait takes the next entry; `true` = low at once, `false`
+/// (or an empty script) = never low.
+pub struct ScriptIrq(pub std::collections::VecDeque<bool>);
+impl embedded_hal::digital::ErrorType for ScriptIrq {
+    type Error = Infallible;
+}
+impl embedded_hal_async::digital::Wait for ScriptIrq {
+    async fn wait_for_high(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+    async fn wait_for_low(&mut self) -> Result<(), Infallible> {
+        if !self.0.pop_front().unwrap_or(false) {
+            core::future::pending::<()>().await;
+        }
+        Ok(())
+    }
+    async fn wait_for_rising_edge(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+    async fn wait_for_falling_edge(&mut self) -> Result<(), Infallible> {
+        self.wait_for_low().await
+    }
+    async fn wait_for_any_edge(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+}
