@@ -245,6 +245,33 @@ where
         self.bus.write(OPERATING_MODE_2, 0x00).await
     }
 
+    /// Ends a TX/RX: on success only disables interrupts; on failure also goes to READY and
+    /// flushes `fifos`; a POR triggers re-init; a timeout checks the chip is still there.
+    pub(crate) async fn finish<T>(
+        &mut self,
+        outcome: Result<T, Error<SPI::Error>>,
+        fifos: u8,
+    ) -> Result<T, Error<SPI::Error>> {
+        match outcome {
+            Ok(value) => {
+                self.bus
+                    .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
+                    .await?;
+                self.busy = false;
+                Ok(value)
+            }
+            Err(Error::ChipReset) => Err(self.recover().await),
+            Err(e) => {
+                self.idle().await?;
+                self.clear_fifos(fifos).await?;
+                if matches!(e, Error::Timeout) {
+                    self.probe().await?;
+                }
+                Err(e)
+            }
+        }
+    }
+
     /// If a previous TX/RX was dropped mid-way, stop it before starting anew.
     pub(crate) async fn abort_if_busy(&mut self) -> Result<(), Error<SPI::Error>> {
         if self.busy {

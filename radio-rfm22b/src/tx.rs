@@ -114,31 +114,4 @@ where
         };
         self.finish(outcome, FFCLR_TX).await
     }
-
-    /// Ends a TX/RX: on success only disables interrupts; on failure also goes to READY and
-    /// flushes `fifos`; a POR triggers re-init; a timeout checks the chip is still there.
-    pub(crate) async fn finish<T>(
-        &mut self,
-        outcome: Result<T, Error<SPI::Error>>,
-        fifos: u8,
-    ) -> Result<T, Error<SPI::Error>> {
-        match outcome {
-            Ok(value) => {
-                self.bus
-                    .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
-                    .await?;
-                self.busy = false;
-                Ok(value)
-            }
-            Err(Error::ChipReset) => Err(self.recover().await),
-            Err(e) => {
-                self.idle().await?;
-                self.clear_fifos(fifos).await?;
-                if matches!(e, Error::Timeout) {
-                    self.probe().await?;
-                }
-                Err(e)
-            }
-        }
-    }
 }
