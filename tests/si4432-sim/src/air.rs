@@ -13,8 +13,9 @@ use crate::modem::ModemSettings;
 use crate::propagation::dbm_to_mw;
 use crate::trace::{Outcome, RadioId, Reception, TraceFrame};
 
-/// How long an ended transmission is kept for late readers (longer than one byte at 1 kbit/s).
-const KEEP_AFTER_END_NS: u64 = 50_000_000;
+/// How long an ended transmission is kept after its last bit. Receivers read byte k exactly
+/// when it ends, so nothing needs it later; a little slack keeps pruning order-independent.
+const KEEP_AFTER_END_NS: u64 = 1_000_000;
 
 /// One frame (or carrier) on air.
 #[derive(Clone, Debug)]
@@ -120,6 +121,7 @@ impl Air {
             tx_power_dbm: tx.modem.tx_power_dbm,
             bytes: trace_bytes,
             damaged: false,
+            power_dbm: Vec::new(),
             receptions: Vec::new(),
         });
         self.transmissions.push_back(tx);
@@ -167,6 +169,16 @@ impl Air {
         }
     }
 
+    /// Set the per-radio received powers of frame `id`.
+    pub fn set_powers(&mut self, id: u64, powers_dbm: Vec<f64>) {
+        if let Some(frame) = self.trace_mut(id) {
+            frame.power_dbm.clone_from(&powers_dbm);
+        }
+        if let Some(tx) = self.get_mut(id) {
+            tx.rx_power_dbm = powers_dbm;
+        }
+    }
+
     /// Mark frame `id` damaged (aborted, or the TX FIFO ran dry).
     pub fn mark_damaged(&mut self, id: u64) {
         if let Some(frame) = self.trace_mut(id) {
@@ -187,8 +199,8 @@ impl Air {
 
     /// Record (or replace) what `radio` made of frame `id`.
     pub fn record(&mut self, id: u64, radio: usize, outcome: Outcome) {
-        let power_dbm = self.get(id).map_or(-200.0, |tx| tx.power_at(radio));
         if let Some(frame) = self.trace_mut(id) {
+            let power_dbm = frame.power_dbm.get(radio).copied().unwrap_or(-200.0);
             let reception = Reception {
                 radio: RadioId(radio),
                 power_dbm,
@@ -242,5 +254,24 @@ impl Air {
             .map(|b| dbm_to_mw(b.power_dbm))
             .sum();
         frames + bursts
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bit_clock_places_bytes_after_the_preamble() {
+        // 10 kbit/s → 100 µs per bit; 32 preamble bits.
+        let clock = BitClock {
+            start_ns: 1_000,
+            preamble_bits: 32,
+            ns_per_bit: 100_000.0,
+        };
+        assert_eq!(clock.byte_start_ns(0), 1_000 + 3_200_000);
+        assert_eq!(clock.byte_end_ns(0), 1_000 + 4_000_000);
+        assert_eq!(clock.byte_end_ns(9), 1_000 + 3_200_000 + 8_000_000);
+        assert_eq!(clock.after_bits_ns(500, 3), 300_500);
     }
 }

@@ -1,14 +1,15 @@
 //! One virtual Si4432: register file, power and operating-mode state machine, interrupt
 //! status, and what an SPI access does to each register.
 //!
-//! The TX and RX halves of the packet handler live in `tx.rs` and `rx.rs` (more `impl Chip`).
+//! More `impl Chip` lives next door: SPI register semantics in `access.rs`, the TX packet
+//! handler in `tx.rs`, frame acquisition in `acquire.rs` and reception in `rx.rs`.
 //! Timing follows the datasheet's operating-mode response times (Table 11 / §3): crystal
 //! start 600 µs (STANDBY → READY), PLL settle 200 µs (READY/TUNE → TX/RX), and a power-on
 //! reset of about 15 ms after SDN is released.
 
 use crate::air::Air;
 use crate::fifo::Fifo;
-use crate::registers::{self, Access, addr, irq1, irq2, mode1};
+use crate::registers::{self, addr, irq2, mode1};
 use crate::rng::Rng;
 use crate::rx::RxState;
 use crate::tx::TxState;
@@ -303,7 +304,7 @@ impl Chip {
     }
 
     /// A write to 0x07: pick STANDBY/READY/TUNE/TX/RX (datasheet §3, Table 10).
-    fn write_mode(&mut self, value: u8, now_ns: u64, ctx: &mut Ctx<'_>) {
+    pub(crate) fn write_mode(&mut self, value: u8, now_ns: u64, ctx: &mut Ctx<'_>) {
         if value & mode1::SWRES != 0 {
             self.software_reset(now_ns, ctx);
             return;
@@ -347,112 +348,5 @@ impl Chip {
                 target,
             };
         }
-    }
-
-    /// What an SPI read of `address` returns (and its side effects). `live_rssi` is the RSSI
-    /// register value the medium computes for this moment.
-    pub fn spi_read(&mut self, address: u8, live_rssi: u8) -> u8 {
-        if let Fault::Unplugged { miso } = self.fault {
-            return miso;
-        }
-        if self.power != Power::On {
-            return 0x00;
-        }
-        match address {
-            addr::DEVICE_STATUS => {
-                let cps = match self.activity {
-                    Activity::Tx(_) => 0b10,
-                    Activity::Rx(_) => 0b01,
-                    _ => 0b00,
-                };
-                self.device_flags | (u8::from(self.rx_fifo.is_empty()) << 5) | cps
-            }
-            addr::INTERRUPT_STATUS_1 => core::mem::take(&mut self.status1),
-            addr::INTERRUPT_STATUS_2 => core::mem::take(&mut self.status2),
-            addr::RSSI => self.rssi_latch.unwrap_or(live_rssi),
-            addr::AFC_CORRECTION => (self.afc_raw >> 2) as u8,
-            addr::OOK_COUNTER_1 => ((self.afc_raw as u8 & 0x03) << 6) | (self.reg(address) & 0x3F),
-            addr::EZMAC_STATUS => self.ezmac_status(),
-            addr::ADC_VALUE => self.adc_value(),
-            addr::BATTERY_LEVEL => ((self.physical.supply_v - 1.7) / 0.05)
-                .round()
-                .clamp(0.0, 31.0) as u8,
-            addr::FIFO_ACCESS => match self.rx_fifo.pop(0).0 {
-                Some(byte) => byte,
-                None => {
-                    self.status1 |= irq1::FIFO_ERROR;
-                    self.device_flags |= STATUS_FFUNFL;
-                    0x00
-                }
-            },
-            _ => self.reg(address),
-        }
-    }
-
-    /// What an SPI write of `value` to `address` does.
-    pub fn spi_write(&mut self, address: u8, value: u8, now_ns: u64, ctx: &mut Ctx<'_>) {
-        if self.fault != Fault::None || self.power != Power::On {
-            return;
-        }
-        match (address, registers::access(address)) {
-            (_, Access::ReadOnly) => {}
-            (addr::OPERATING_MODE_1, _) => self.write_mode(value, now_ns, ctx),
-            (addr::OPERATING_MODE_2, _) => {
-                // ffclrtx / ffclrrx: the FIFO is cleared while the bit is written as 1.
-                if value & 0x01 != 0 {
-                    self.tx_fifo.clear();
-                }
-                if value & 0x02 != 0 {
-                    self.rx_fifo.clear();
-                }
-                if value & 0x03 != 0 {
-                    self.device_flags &= !(STATUS_FFOVFL | STATUS_FFUNFL);
-                }
-                self.set_reg(address, value);
-            }
-            // adcstart: the conversion is instantaneous here, so adcdone reads back at once.
-            (addr::ADC_CONFIG, _) => self.set_reg(address, value | 0x80),
-            (addr::FIFO_ACCESS, _) => {
-                let events = self
-                    .tx_fifo
-                    .push(value, self.reg(addr::TX_FIFO_CONTROL_1) & 0x3F);
-                if events.error {
-                    self.status1 |= irq1::FIFO_ERROR;
-                    self.device_flags |= STATUS_FFOVFL;
-                }
-                if events.almost_full {
-                    self.status1 |= irq1::TX_FIFO_ALMOST_FULL;
-                }
-            }
-            _ => self.set_reg(address, value),
-        }
-    }
-
-    fn ezmac_status(&self) -> u8 {
-        let live = match &self.activity {
-            Activity::Tx(_) => 1 << 1,
-            Activity::Rx(rx) if rx.receiving() => 1 << 4,
-            Activity::Rx(_) => 1 << 5,
-            _ => 0,
-        };
-        live | self.ezmac_latched
-    }
-
-    /// Temperature sensor through the ADC (0x12 tsrange, entsoffs + 0x13 offset).
-    fn adc_value(&self) -> u8 {
-        let t = self.physical.temperature_c;
-        let control = self.reg(addr::TEMPERATURE_CONTROL);
-        let code = match control >> 6 {
-            0b00 => (t + 64.0) * 2.0,      // −64…64 °C, 0.5 °C
-            0b01 => t + 64.0,              // −64…192 °C, 1 °C
-            0b10 => t * 1.8 + 32.0 + 40.0, // −40…216 °F, 1 °F
-            _ => t * 2.0,                  // 0…128 °C, 0.5 °C
-        };
-        let offset = if control & 0x20 != 0 {
-            f64::from(self.reg(addr::TEMPERATURE_OFFSET) as i8)
-        } else {
-            0.0
-        };
-        (code + offset).round().clamp(0.0, 255.0) as u8
     }
 }

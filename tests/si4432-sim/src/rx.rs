@@ -7,18 +7,16 @@
 //! interference ratio at that moment, so collisions and interference bursts corrupt exactly
 //! the bytes they overlap.
 
-use crate::air::BitClock;
+use crate::air::{Air, BitClock};
 use crate::chip::{Activity, Chip, Ctx, EZMAC_CRCERROR, EZMAC_PKVALID, STATUS_HEADERR};
 use crate::modem::ModemSettings;
 use crate::packet::{Crc16, PacketFormat, Pn9};
-use crate::propagation::{
-    bit_error_rate, dbm_to_mw, mw_to_dbm, noise_floor_dbm, rssi_register, sensitivity_dbm,
-};
+use crate::propagation::{bit_error_rate, dbm_to_mw, mw_to_dbm, noise_floor_dbm, rssi_register};
 use crate::registers::{addr, irq1, irq2, mode1};
 use crate::trace::Outcome;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Stage {
+pub(crate) enum Stage {
     PreambleValid,
     SyncDetect,
     GiveUp(Outcome),
@@ -33,31 +31,34 @@ enum Stage {
 
 #[derive(Debug)]
 pub(crate) struct Lock {
-    tx_id: u64,
-    clock: BitClock,
-    tx_stream_len: usize,
-    tx_carrier_hz: f64,
-    signal_dbm: f64,
-    stage: Stage,
-    next_ns: u64,
-    format: PacketFormat,
-    modem: ModemSettings,
-    carrier_hz: f64,
+    pub(crate) tx_id: u64,
+    pub(crate) clock: BitClock,
+    pub(crate) tx_stream_len: usize,
+    pub(crate) tx_carrier_hz: f64,
+    pub(crate) signal_dbm: f64,
+    pub(crate) stage: Stage,
+    pub(crate) next_ns: u64,
+    pub(crate) format: PacketFormat,
+    pub(crate) modem: ModemSettings,
+    pub(crate) carrier_hz: f64,
     /// Next stream index to receive.
-    index: usize,
-    pn9: Option<Pn9>,
-    crc: Option<Crc16>,
-    header: Vec<u8>,
-    length: usize,
-    payload_received: usize,
-    crc_received: Vec<u8>,
-    bit_errors: u32,
+    pub(crate) index: usize,
+    pub(crate) pn9: Option<Pn9>,
+    pub(crate) crc: Option<Crc16>,
+    pub(crate) header: Vec<u8>,
+    pub(crate) length: usize,
+    pub(crate) payload_received: usize,
+    pub(crate) crc_received: Vec<u8>,
+    pub(crate) bit_errors: u32,
+    /// Receiver noise power (mW) and the bit error rate without interference.
+    pub(crate) noise_mw: f64,
+    pub(crate) clean_ber: f64,
 }
 
 #[derive(Debug)]
 pub(crate) struct RxState {
     pub listening_since_ns: u64,
-    lock: Option<Box<Lock>>,
+    pub(crate) lock: Option<Box<Lock>>,
 }
 
 impl RxState {
@@ -91,131 +92,27 @@ enum Finish {
 }
 
 impl Chip {
-    /// PLL settled with rxon: start searching, and look at frames already on air.
-    pub(crate) fn begin_rx(&mut self, now_ns: u64, ctx: &mut Ctx<'_>) {
-        self.activity = Activity::Rx(RxState {
-            listening_since_ns: now_ns,
-            lock: None,
-        });
-        self.rssi_latch = None;
-        self.ezmac_latched &= !(EZMAC_PKVALID | EZMAC_CRCERROR);
-        self.scan_air(now_ns, ctx, None);
-    }
-
-    /// Look at frames already on air. After a frame ends (`finished`), the search only
-    /// locks; it does not overwrite outcomes already recorded for the other frames.
-    fn scan_air(&mut self, now_ns: u64, ctx: &mut Ctx<'_>, finished: Option<u64>) {
-        let ids: Vec<u64> = ctx
-            .air
-            .transmissions()
-            .filter(|tx| tx.active_at(now_ns) && Some(tx.id) != finished)
-            .map(|tx| tx.id)
-            .collect();
-        for id in ids {
-            self.consider_into(id, now_ns, ctx, finished.is_none());
-        }
-    }
-
-    /// A frame `id` is on air: lock onto it if this receiver can, and record why not otherwise.
-    pub(crate) fn consider(&mut self, id: u64, now_ns: u64, ctx: &mut Ctx<'_>) {
-        self.consider_into(id, now_ns, ctx, true);
-    }
-
-    /// `consider`; failures go to the trace only if `record_failure`.
-    fn consider_into(&mut self, id: u64, now_ns: u64, ctx: &mut Ctx<'_>, record_failure: bool) {
-        if let Err(outcome) = self.try_lock(id, now_ns, ctx)
-            && record_failure
-        {
-            ctx.air.record(id, self.me, outcome);
-        }
-    }
-
-    /// Lock onto frame `id`, or say why not.
-    fn try_lock(&mut self, id: u64, now_ns: u64, ctx: &mut Ctx<'_>) -> Result<(), Outcome> {
-        let me = self.me;
-        let Some((clock, tx_stream_len, tx_carrier_hz, tx_modem, signal_dbm, decodable, from)) =
-            ctx.air.get(id).map(|tx| {
-                (
-                    tx.clock,
-                    tx.stream_len,
-                    tx.carrier_hz,
-                    tx.modem,
-                    tx.power_at(me),
-                    tx.decodable,
-                    tx.radio,
-                )
-            })
-        else {
-            return Ok(());
-        };
-        if from == me {
-            return Ok(());
-        }
-        let Activity::Rx(rx) = &self.activity else {
-            return Err(Outcome::NotListening);
-        };
-        if !decodable {
-            return Err(Outcome::NoData);
-        }
+    /// The RSSI register as the medium makes it now: noise + every frame and burst in the
+    /// IF bandwidth (radio.md §1a: raw = 2·(dBm + 122) + rssi_off steps).
+    pub(crate) fn live_rssi(&self, air: &Air, now_ns: u64) -> u8 {
         let modem = ModemSettings::from_registers(&self.regs);
         let carrier_hz = self.radiated_carrier_hz(&modem);
-        if let Err(mismatch) = modem.can_receive(&tx_modem, tx_carrier_hz, carrier_hz) {
-            return Err(Outcome::Mismatch(mismatch));
+        let in_band_mw = dbm_to_mw(noise_floor_dbm(modem.rx_bit_rate_bps))
+            + air.interference_mw(self.me, now_ns, carrier_hz, modem.if_bandwidth_hz, None);
+        rssi_register(
+            mw_to_dbm(in_band_mw),
+            self.reg(addr::PREAMBLE_DETECTION) & 0x07,
+        )
+    }
+
+    /// `irssi`: in RX, the in-band power reached the 0x27 threshold. Evaluated when RX
+    /// starts and whenever a frame starts (not for interference bursts).
+    pub(crate) fn check_rssi_threshold(&mut self, now_ns: u64, ctx: &Ctx<'_>) {
+        if matches!(self.activity, Activity::Rx(_))
+            && self.live_rssi(ctx.air, now_ns) >= self.reg(addr::RSSI_THRESHOLD)
+        {
+            self.status2 |= irq2::RSSI;
         }
-        if signal_dbm < sensitivity_dbm(modem.rx_bit_rate_bps) - 6.0 {
-            return Err(Outcome::TooWeak);
-        }
-        let format = PacketFormat::from_registers(&self.regs);
-        let detect_from = clock.start_ns.max(rx.listening_since_ns).max(now_ns);
-        let preamble_valid_ns = clock.after_bits_ns(
-            detect_from,
-            u32::from(format.preamble_threshold_nibbles.max(1)) * 4,
-        );
-        if preamble_valid_ns > clock.byte_start_ns(0) {
-            return Err(Outcome::MissedPreamble);
-        }
-        let loss = ctx.air.config.packet_loss;
-        if ctx.rng.chance(loss) {
-            return Err(Outcome::RandomLoss);
-        }
-        if let Some(current) = &rx.lock {
-            let capture = ctx
-                .air
-                .config
-                .capture_threshold_db
-                .is_some_and(|threshold_db| {
-                    matches!(current.stage, Stage::PreambleValid | Stage::SyncDetect)
-                        && signal_dbm >= current.signal_dbm + threshold_db
-                });
-            if !capture {
-                return Err(Outcome::Busy);
-            }
-            ctx.air.record(current.tx_id, me, Outcome::Captured);
-        }
-        let lock = Lock {
-            tx_id: id,
-            clock,
-            tx_stream_len,
-            tx_carrier_hz,
-            signal_dbm,
-            stage: Stage::PreambleValid,
-            next_ns: preamble_valid_ns,
-            pn9: None,
-            crc: None,
-            header: Vec::with_capacity(4),
-            length: 0,
-            payload_received: 0,
-            crc_received: Vec::with_capacity(2),
-            bit_errors: 0,
-            index: 0,
-            carrier_hz,
-            modem,
-            format,
-        };
-        if let Activity::Rx(rx) = &mut self.activity {
-            rx.lock = Some(Box::new(lock));
-        }
-        Ok(())
     }
 
     /// Something is due for the frame this receiver is locked to.
@@ -293,13 +190,10 @@ impl Chip {
                 } else {
                     after_header(lock)
                 };
-                if matches!(
-                    lock.stage,
-                    Stage::Payload | Stage::Crc | Stage::Raw | Stage::Header | Stage::Length
-                ) {
-                    lock.next_ns = lock.clock.byte_end_ns(lock.index);
-                } else {
+                if lock.stage == Stage::Done {
                     finish = Some(Finish::Valid);
+                } else {
+                    lock.next_ns = lock.clock.byte_end_ns(lock.index);
                 }
             }
             Stage::GiveUp(outcome) => finish = Some(Finish::Quiet(outcome)),
@@ -476,8 +370,10 @@ fn ber_now(lock: &Lock, me: usize, now_ns: u64, ctx: &Ctx<'_>) -> f64 {
         lock.modem.if_bandwidth_hz,
         Some(lock.tx_id),
     );
-    let noise = dbm_to_mw(noise_floor_dbm(lock.modem.rx_bit_rate_bps));
-    bit_error_rate(lock.signal_dbm, mw_to_dbm(noise + interference))
+    if interference == 0.0 {
+        return lock.clean_ber;
+    }
+    bit_error_rate(lock.signal_dbm, mw_to_dbm(lock.noise_mw + interference))
 }
 
 /// The next stream byte as this receiver demodulates it: the transmitted byte with bit

@@ -80,6 +80,9 @@ pub struct TraceFrame {
     pub bytes: Vec<u8>,
     /// True when the transmitter aborted the frame or ran its FIFO dry.
     pub damaged: bool,
+    /// Power of this frame at every radio (index = `RadioId.0`; the sender's own entry
+    /// included), in dBm.
+    pub power_dbm: Vec<f64>,
     /// Every other radio's outcome, in radio order of first decision.
     pub receptions: Vec<Reception>,
 }

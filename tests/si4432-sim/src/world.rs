@@ -13,8 +13,7 @@ use embedded_hal::spi::Operation;
 use crate::air::Air;
 use crate::chip::{Chip, Ctx, Fault};
 use crate::medium::{MediumConfig, RadioConfig};
-use crate::modem::ModemSettings;
-use crate::propagation::{dbm_to_mw, mw_to_dbm, noise_floor_dbm, path_loss_db, rssi_register};
+use crate::propagation::path_loss_db;
 use crate::rng::Rng;
 
 /// Safety net: more chip steps than this at one instant means a model bug; stop, don't hang.
@@ -218,11 +217,12 @@ impl World {
         let powers: Vec<f64> = (0..self.radios.len())
             .map(|to| self.link_power_dbm(from, to, carrier_hz, tx_power_dbm))
             .collect();
-        if let Some(tx) = self.air.get_mut(id) {
-            tx.rx_power_dbm = powers;
-        }
+        self.air.set_powers(id, powers);
         for to in (0..self.radios.len()).filter(|&to| to != from) {
-            self.with_chip(to, |chip, now, ctx| chip.consider(id, now, ctx));
+            self.with_chip(to, |chip, now, ctx| {
+                chip.consider(id, now, ctx);
+                chip.check_rssi_threshold(now, ctx);
+            });
             self.update_irq(to);
         }
     }
@@ -269,39 +269,31 @@ impl World {
 
     /// What the RSSI register of radio `i` would read now if nothing were latched.
     fn live_rssi(&self, i: usize) -> u8 {
-        let Some(radio) = self.radios.get(i) else {
-            return 0;
-        };
-        let modem = ModemSettings::from_registers(&radio.chip.regs);
-        let carrier_hz = radio.chip.radiated_carrier_hz(&modem);
-        let in_band_mw = dbm_to_mw(noise_floor_dbm(modem.rx_bit_rate_bps))
-            + self
-                .air
-                .interference_mw(i, self.now_ns, carrier_hz, modem.if_bandwidth_hz, None);
-        rssi_register(mw_to_dbm(in_band_mw), radio.chip.reg(0x35) & 0x07)
+        self.radios
+            .get(i)
+            .map_or(0, |r| r.chip.live_rssi(&self.air, self.now_ns))
     }
 
     /// One SPI transaction on radio `i` (instantaneous except for `DelayNs` operations).
     pub fn spi(&mut self, i: usize, operations: &mut [Operation<'_, u8>]) {
         self.process_due();
-        let live_rssi = self.live_rssi(i);
         let mut session = Session::default();
         for operation in operations.iter_mut() {
             match operation {
                 Operation::Read(buffer) => {
                     for byte in buffer.iter_mut() {
-                        *byte = self.spi_byte(i, &mut session, 0x00, live_rssi);
+                        *byte = self.spi_byte(i, &mut session, 0x00);
                     }
                 }
                 Operation::Write(bytes) => {
                     for &byte in bytes.iter() {
-                        self.spi_byte(i, &mut session, byte, live_rssi);
+                        self.spi_byte(i, &mut session, byte);
                     }
                 }
                 Operation::Transfer(read, write) => {
                     for k in 0..read.len().max(write.len()) {
                         let mosi = write.get(k).copied().unwrap_or(0x00);
-                        let miso = self.spi_byte(i, &mut session, mosi, live_rssi);
+                        let miso = self.spi_byte(i, &mut session, mosi);
                         if let Some(slot) = read.get_mut(k) {
                             *slot = miso;
                         }
@@ -309,7 +301,7 @@ impl World {
                 }
                 Operation::TransferInPlace(buffer) => {
                     for byte in buffer.iter_mut() {
-                        *byte = self.spi_byte(i, &mut session, *byte, live_rssi);
+                        *byte = self.spi_byte(i, &mut session, *byte);
                     }
                 }
                 Operation::DelayNs(ns) => {
@@ -322,7 +314,7 @@ impl World {
         self.update_irq(i);
     }
 
-    fn spi_byte(&mut self, i: usize, session: &mut Session, mosi: u8, live_rssi: u8) -> u8 {
+    fn spi_byte(&mut self, i: usize, session: &mut Session, mosi: u8) -> u8 {
         let Some(address) = session.address else {
             session.address = Some(mosi & 0x7F);
             session.write = mosi & 0x80 != 0;
@@ -336,6 +328,12 @@ impl World {
             session.address = Some((address + 1) & 0x7F);
         }
         let write = session.write;
+        // The live RSSI needs the whole medium; only compute it when 0x26 is read.
+        let live_rssi = if !write && address == 0x26 {
+            self.live_rssi(i)
+        } else {
+            0
+        };
         self.with_chip(i, |chip, now, ctx| {
             if write {
                 chip.spi_write(address, mosi, now, ctx);

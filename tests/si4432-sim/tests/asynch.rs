@@ -97,8 +97,10 @@ fn timeout_wins_when_nothing_happens_and_irq_wins_at_the_exact_moment() {
 
 /// Master sends every 20 ms and waits for a reply; follower answers every packet.
 fn ping_pong(seed: u64, loss: f64, rounds: usize) -> (Vec<TraceFrame>, usize, usize) {
-    let mut config = MediumConfig::default();
-    config.packet_loss = loss;
+    let config = MediumConfig {
+        packet_loss: loss,
+        ..MediumConfig::default()
+    };
     let sim = Simulation::with_config(seed, config);
     let medium = sim.medium();
     let mut master = medium.add_radio(RadioConfig::at([0.0, 0.0, 0.0]));
@@ -169,4 +171,33 @@ fn same_seed_same_trace_different_seed_different_trace() {
     assert!(ra > 10 && ra < 50, "{ra}");
     let (c, _, _) = ping_pong(43, 0.3, 60);
     assert_ne!(a, c);
+}
+
+#[test]
+fn sdn_power_cycle_gives_a_falling_edge_at_the_end_of_the_power_on_reset() {
+    use embedded_hal::digital::OutputPin;
+    let sim = Simulation::new(8);
+    let medium = sim.medium();
+    let mut r = medium.add_radio(RadioConfig::default());
+    let m = medium.clone();
+    let task = sim.spawn(async move {
+        astatus(&mut r.spi).await;
+        r.sdn.set_high().unwrap();
+        r.delay.delay_ms(10).await;
+        r.sdn.set_low().unwrap();
+        let t0 = m.now();
+        r.nirq.wait_for_falling_edge().await.unwrap();
+        let t_por = m.now() - t0;
+        let first = astatus(&mut r.spi).await;
+        r.nirq.wait_for_falling_edge().await.unwrap();
+        let t_ready = m.now() - t0;
+        let second = astatus(&mut r.spi).await;
+        (t_por, first, t_ready, second)
+    });
+    sim.run_for(Duration::from_millis(50));
+    let (t_por, first, t_ready, second) = task.take().unwrap();
+    assert_eq!(t_por, Duration::from_millis(15));
+    assert_eq!(first, (0x00, 0x01));
+    assert_eq!(t_ready, Duration::from_micros(15_600));
+    assert_eq!(second, (0x00, 0x02));
 }

@@ -109,6 +109,8 @@ fn short_packet_is_delivered_with_header_length_and_rssi() {
         trace[0].outcome_at(b.id),
         Some(Outcome::Delivered { bit_errors: 0 })
     );
+    assert!((trace[0].power_dbm[1] + 45.11).abs() < 0.01);
+    assert_eq!(trace[0].receptions[0].power_dbm, trace[0].power_dbm[1]);
 }
 
 #[test]
@@ -129,6 +131,9 @@ fn airtime_matches_the_configuration() {
     assert_eq!(frame.airtime(), Duration::from_nanos(4_583_180));
     // TX started one PLL settle (200 µs) after txon; 0x07 = 0x0A was written at t0.
     assert!((frame.bit_rate_bps - 57_601.93).abs() < 0.01);
+    assert_eq!(a.chip.airtime(16), frame.airtime());
+    // A 200-byte packet: 6 + 4 + 4 + 1 + 200 + 2 bytes = 1736 bits · 65536/3775 µs = 30 137 879.7 ns.
+    assert_eq!(a.chip.airtime(200), Duration::from_nanos(30_137_880));
 }
 
 #[test]
@@ -256,4 +261,80 @@ fn receiver_not_in_rx_is_recorded_as_not_listening() {
         sim.medium().trace()[0].outcome_at(RadioId(1)),
         Some(Outcome::NotListening)
     );
+}
+
+/// Send 10 bytes a → b after `tweak` changed the registers of (a, b); returns b's outcome,
+/// what b found in its RX FIFO, and (ipkvalid, icrcerror) as bits 1, 0.
+fn variant(tweak: impl Fn(&mut RadioHandle, &mut RadioHandle)) -> (Option<Outcome>, Vec<u8>, u8) {
+    let (sim, mut a, mut b) = pair(100.0);
+    tweak(&mut a, &mut b);
+    let got = exchange(
+        &mut a,
+        &mut b,
+        &payload(10),
+        true,
+        Duration::from_millis(10),
+    );
+    let s1 = (u8::from(got.valid) << 1) | u8::from(got.crc_error);
+    (sim.medium().trace()[0].outcome_at(b.id), got.data, s1)
+}
+
+#[test]
+fn fixed_length_without_header_and_every_crc_kind() {
+    for crc in 0..4u8 {
+        let (outcome, data, s1) = variant(|a, b| {
+            for r in [a, b] {
+                // Packet handler + CRC of kind `crc` over the data only; fixed length,
+                // no header, 2-byte sync.
+                write(&mut r.spi, 0x30, &[0xAC | crc]);
+                write(&mut r.spi, 0x33, &[0x0A]);
+                write(&mut r.spi, 0x3E, &[10]);
+            }
+        });
+        assert_eq!(
+            outcome,
+            Some(Outcome::Delivered { bit_errors: 0 }),
+            "crc kind {crc}"
+        );
+        assert_eq!(s1, 0b10);
+        assert_eq!(data, payload(10));
+    }
+}
+
+#[test]
+fn mismatched_crc_kind_sync_word_or_whitening_fail() {
+    // CCITT at the sender, CRC-16 at the receiver.
+    let (outcome, _, s1) = variant(|_, b| write(&mut b.spi, 0x30, &[0x8D]));
+    assert!(
+        matches!(outcome, Some(Outcome::CrcError { bit_errors: 0 })),
+        "{outcome:?}"
+    );
+    assert_eq!(s1, 0b01);
+    // Receiver expects sync 2D D4 4B 5A.
+    let (outcome, _, s1) = variant(|_, b| write(&mut b.spi, 0x39, &[0x5A]));
+    assert_eq!(outcome, Some(Outcome::SyncMismatch));
+    assert_eq!(s1, 0);
+    // A 2-byte receiver sync (2D D4) finds the first half of the 4-byte one and reads 4B 59
+    // as header: the header check fails.
+    let (outcome, _, _) = variant(|_, b| write(&mut b.spi, 0x33, &[0x42]));
+    assert_eq!(outcome, Some(Outcome::HeaderMismatch));
+    // Whitening off at the receiver only: the de-whitened header is garbage.
+    let (outcome, _, _) = variant(|_, b| write(&mut b.spi, 0x70, &[0x0C]));
+    assert_eq!(outcome, Some(Outcome::HeaderMismatch));
+}
+
+#[test]
+fn multi_packet_rx_stays_in_rx() {
+    let (sim, mut a, mut b) = pair(100.0);
+    start_rx(&mut b.spi);
+    write(&mut b.spi, 0x08, &[0x10]); // rxmpk (start_rx's FIFO clear wrote 0x08 = 0)
+    for n in 0..2u8 {
+        start_tx(&mut a.spi, 4, &[n; 4]);
+        a.delay.delay_ms(5);
+        assert_eq!(status(&mut b.spi).0 & 0x02, 0x02, "packet {n}");
+        assert_eq!(b.chip.state(), ChipState::Rx);
+        assert_eq!(read(&mut b.spi, 0x07), 0x06);
+    }
+    assert_eq!(read_n(&mut b.spi, 0x7F, 8), vec![0, 0, 0, 0, 1, 1, 1, 1]);
+    assert_eq!(sim.medium().trace_len(), 2);
 }
