@@ -172,6 +172,8 @@ impl Receiver {
     fn start_link(&mut self, now_us: u64, data: BindData) -> Command {
         self.data = Some(data);
         self.mode = Mode::Link;
+        // Only validated bind data gets here (`new` filters, bind packets are checked), so
+        // the profile exists; the fallback merely keeps the arithmetic finite.
         self.interval_us = timing::interval_us(&data).unwrap_or(u32::MAX / 64);
         self.hop_count = data.hop_count() as u8;
         self.hop_index = 0;
