@@ -9,6 +9,7 @@ use embedded_hal_async::spi::SpiDevice;
 use super::bind::BindData;
 use super::modem::Purpose;
 use super::radio::{Clock, Error, Radio};
+use super::random::{SCAN_CHANNELS, choose_channels_per_rssi};
 use super::rx::{Command, Output, Receiver};
 use super::tx::{BIND_LISTEN_US, BindBeacon, Received, Transmitter};
 
@@ -267,5 +268,51 @@ where
             None => on_event(TxEvent::ReplyMissed),
         }
     }
+    Ok(())
+}
+
+/// RSSI samples are taken this often while dwelling on a channel during a scan.
+const SCAN_SAMPLE_US: u64 = 250;
+
+/// The TX's adaptive channel selection (long button press): listens `dwell_us` on every
+/// channel 1..254 of the link's band plan, keeps the maximum RSSI of each, and lets
+/// [`choose_channels_per_rssi`] replace the hop list with the quietest, well-spread channels.
+/// OpenLRSng dwells 500 ms (about two minutes in all). Unlike upstream, which tunes through
+/// `hopchannel[ch]` and so measures the wrong frequencies, this tunes each channel itself.
+pub async fn scan_hop_channels<SPI, IRQ, D, C>(
+    radio: &mut Radio<SPI, IRQ, D, C>,
+    data: &mut BindData,
+    dwell_us: u32,
+    max_frequency_hz: u32,
+) -> Result<(), Error<SPI::Error, IRQ::Error>>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    D: DelayNs,
+    C: Clock,
+{
+    radio.configure(data, Purpose::Link).await?;
+    radio.listen().await?;
+    let mut max_rssi = [255u8; SCAN_CHANNELS];
+    for (channel, slot) in (1..=u8::MAX).zip(max_rssi.iter_mut()) {
+        let frequency_hz = u64::from(data.rf_frequency_hz)
+            + u64::from(channel) * u64::from(data.rf_channel_spacing) * 10_000;
+        if frequency_hz > u64::from(max_frequency_hz) {
+            continue; // stays 255: never picked
+        }
+        radio.tune_channel_number(channel).await?;
+        let until = radio.now_us() + u64::from(dwell_us);
+        let mut loudest = 0;
+        loop {
+            let next_sample = radio.now_us() + SCAN_SAMPLE_US;
+            radio.delay_until(next_sample).await;
+            loudest = loudest.max(radio.rssi().await?);
+            if radio.now_us() >= until {
+                break;
+            }
+        }
+        *slot = loudest;
+    }
+    choose_channels_per_rssi(data, &max_rssi, max_frequency_hz);
     Ok(())
 }
