@@ -107,7 +107,7 @@ where
     let deadline = rx.next_deadline_us().unwrap_or(now + IDLE_WAIT_US);
     match radio.receive_until(deadline).await? {
         Some(packet) => {
-            rx.set_radio_measurements(packet.rssi, packet.afc);
+            rx.set_afc(packet.afc);
             let reception = rx.on_packet(packet.at_us, &packet.bytes);
             if let Some(reply) = &reception.reply {
                 radio.transmit(reply).await?;
@@ -132,6 +132,10 @@ where
         None => {
             let now = radio.now_us();
             let tick = rx.poll(now);
+            if tick.sample_rssi {
+                let rssi = radio.rssi().await?;
+                rx.on_rssi_sample(rssi);
+            }
             if tick.failsafe_started {
                 on_event(RxEvent::FailsafeStarted);
             }
