@@ -1,6 +1,10 @@
 //! The role loops: the RX and TX state machines ([`rx`](super::rx), [`tx`](super::tx))
 //! driven over a [`Radio`]. Each `*_step` does one wait-and-react cycle, so a test harness
 //! or a firmware task can run them; `run_*` loop forever.
+//!
+//! Cancel-safety: a step dropped at an `.await` leaves the chip wherever it was (listening,
+//! sending, half-programmed) and the state machine consistent; call `rx_start` / `tx_start`
+//! again before the next step. Errors are returned as they come, never retried silently.
 
 use embedded_hal_async::delay::DelayNs;
 use embedded_hal_async::digital::Wait;
