@@ -60,6 +60,13 @@ where
         self.bus.write_burst(CHECK_HEADER_3, &header).await
     }
 
+    /// Time on air of a packet with `payload_len` bytes under the current configuration, in
+    /// µs (preamble, sync, header, length byte, payload, CRC), for slot planning.
+    pub fn airtime_us(&self, payload_len: u8) -> Option<u32> {
+        let config = self.config.as_ref()?;
+        Some(config.packet.airtime_us(&config.modem, payload_len))
+    }
+
     /// The raw RSSI byte now (0x26), as OpenLRSng reports it.
     ///
     /// Cancel-safety: safe (a register read).

@@ -314,6 +314,27 @@ mod tests {
             let r = m.registers();
             let rxosr = u32::from(r.block_1c[4]) | (u32::from(r.block_1c[5] >> 5) << 8);
             assert!((8..=2047).contains(&rxosr), "rate {rate}: rxosr {rxosr}");
+            // The programmed TX rate is within 0.05 % of the asked one (datasheet §3.5.2).
+            let txdr = f64::from(u16::from_be_bytes([r.block_6e[0], r.block_6e[1]]));
+            let scale = if r.block_6e[2] & 0x20 != 0 {
+                2f64.powi(21)
+            } else {
+                2f64.powi(16)
+            };
+            let actual = txdr * 1e6 / scale;
+            let error = (actual - f64::from(rate)).abs() / f64::from(rate);
+            assert!(error < 5e-4, "rate {rate}: programmed {actual:.1} bps");
+            // The clock-recovery NCO reproduces the rate: Rb = ncoff·500 kHz·(1+2·dwn3)/2^(20+ndec).
+            let ncoff = (u32::from(r.block_1c[5] & 0x0F) << 16)
+                | (u32::from(r.block_1c[6]) << 8)
+                | u32::from(r.block_1c[7]);
+            let f = m.if_filter();
+            let dwn3 = if f.dwn3_bypass() { 3.0 } else { 1.0 };
+            let rx_rate = f64::from(ncoff) * 500e3 * dwn3 / 2f64.powi(20 + i32::from(f.ndec_exp()));
+            assert!(
+                (rx_rate - f64::from(rate)).abs() / f64::from(rate) < 1e-3,
+                "rate {rate}: NCO {rx_rate:.1}"
+            );
             rate += 1_000;
         }
     }
