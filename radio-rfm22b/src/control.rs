@@ -13,7 +13,7 @@ use crate::power::TxPower;
 use crate::registers::*;
 use crate::{Error, Rfm22b};
 
-/// The ADC conversion takes ~305 µs (datasheet §8.3); poll every 100 µs, at most 10 times.
+/// The ADC conversion takes ~305 µs (datasheet, "Temperature Sensor"); poll every 100 µs, at most 10 times.
 const ADC_POLLS: u32 = 10;
 
 impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D>

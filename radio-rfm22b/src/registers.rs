@@ -1,4 +1,4 @@
-//! Register addresses and bit fields of the Si4432 (datasheet rev 1.1 §9 "Register table",
+//! Register addresses and bit fields of the Si4432 (datasheet register table,
 //! and AN440 for the modem registers). Only what the driver uses is named here.
 
 /// 0x00 Device Type: reads 0x08 on every Si4430/31/32 ("EZRadioPRO transceiver").

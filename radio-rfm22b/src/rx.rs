@@ -1,5 +1,5 @@
 //! Reception: arm RX, latch RSSI and AFC at sync detect, drain the FIFO on almost-full for
-//! packets over 64 bytes, finish on valid-packet or CRC error (datasheet §6.3; the Tau Labs
+//! packets over 64 bytes, finish on valid-packet or CRC error (datasheet "Packet Handler"; the Tau Labs
 //! interrupt set 0x05 = 0x93 with sync detect from 0x06).
 
 use core::pin::pin;
