@@ -94,7 +94,7 @@ where
         self.bus.write(TX_POWER, value).await
     }
 
-    /// READY: crystal on, ~1 mA, 200 µs to TX/RX. Also aborts a TX/RX left running.
+    /// READY: crystal on (≈ 0.8 mA), about 200 µs to TX/RX. Also aborts a TX/RX left running.
     ///
     /// Cancel-safety: safe.
     pub async fn idle(&mut self) -> Result<(), Error<SPI::Error>> {
