@@ -201,7 +201,9 @@ impl Reception<'_> {
         if status.fifo_error() {
             return Ok(Some(Err(Error::FifoError)));
         }
-        if status.sync_detected() && self.signal.is_none() {
+        if status.sync_detected() {
+            // Latched afresh at every sync: a packet the header check dropped silently
+            // must not lend its RSSI to the next one.
             self.signal = Some(latch_signal(bus, self.high_band, self.rssi_offset).await?);
         }
         if status.crc_error() {
