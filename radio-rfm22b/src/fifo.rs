@@ -1,4 +1,4 @@
-//! The two 64-byte FIFOs (datasheet §6.1): their thresholds (0x7C–0x7E) and how packets
+//! The two 64-byte FIFOs (datasheet, "FIFO Mode"): their thresholds (0x7C–0x7E) and how packets
 //! longer than a FIFO are streamed through them, plus the FIFO clear (0x08).
 
 use crate::ConfigError;

@@ -1,4 +1,4 @@
-//! GPIO pin functions (0x0B–0x0D; datasheet §8.4 Table 14): the antenna switch wiring of
+//! GPIO pin functions (0x0B–0x0D; datasheet, "GPIO Configuration"): the antenna switch wiring of
 //! RFM22B-style modules and GPIO2's function. Pure.
 
 /// GPIO function codes (bits 4:0 of 0x0B–0x0D).

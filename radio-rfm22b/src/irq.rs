@@ -1,4 +1,4 @@
-//! The interrupt status pair (0x03/0x04; datasheet §9, read clears both and releases the
+//! The interrupt status pair (0x03/0x04; datasheet register table; read clears both and releases the
 //! level-low nIRQ line) and the race of nIRQ against a deadline, every wait's timeout.
 
 use core::future::{Future, poll_fn};

@@ -1,6 +1,6 @@
 //! The driver: `Rfm22b` owns the SPI device, nIRQ, SDN and a delay. This file holds
-//! construction, reset/probe, configuration and the small operations; TX and RX live in
-//! `tx.rs` and `rx.rs`.
+//! construction, reset/probe, configuration and the end-of-operation clean-up; run-time
+//! controls live in `control.rs`, TX and RX in `tx.rs` and `rx.rs`.
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal_async::delay::DelayNs;
@@ -17,9 +17,9 @@ use crate::registers::*;
 
 /// Polls of the chip-ready flag after a software reset, 1 ms apart (Tau Labs: 50).
 const CHIP_READY_POLLS: u32 = 50;
-/// SDN high long enough to discharge the chip (datasheet §3.3: ≥ 10 ms).
+/// SDN high long enough to discharge the chip (≥ 10 ms).
 const SDN_HIGH_MS: u32 = 10;
-/// Power-on reset after SDN falls: up to 16.8 ms (datasheet Table 7), rounded up.
+/// Power-on reset after SDN falls: up to 16.8 ms (datasheet), rounded up.
 const SDN_LOW_MS: u32 = 20;
 
 /// A stand-in for an SDN pin on boards that tie SDN low.

@@ -1,5 +1,5 @@
 //! Reception: arm RX, latch RSSI and AFC at sync detect, drain the FIFO on almost-full for
-//! packets over 64 bytes, finish on valid-packet or CRC error (datasheet §6.3; the Tau Labs
+//! packets over 64 bytes, finish on valid-packet or CRC error (datasheet "Packet Handler"; the Tau Labs
 //! interrupt set 0x05 = 0x93 with sync detect from 0x06).
 
 use core::pin::pin;
@@ -201,7 +201,9 @@ impl Reception<'_> {
         if status.fifo_error() {
             return Ok(Some(Err(Error::FifoError)));
         }
-        if status.sync_detected() && self.signal.is_none() {
+        if status.sync_detected() {
+            // Latched afresh at every sync: a packet the header check dropped silently
+            // must not lend its RSSI to the next one.
             self.signal = Some(latch_signal(bus, self.high_band, self.rssi_offset).await?);
         }
         if status.crc_error() {

@@ -1,5 +1,5 @@
 //! Transmission: load the FIFO, start TX, refill on almost-empty for packets over 64 bytes,
-//! finish on packet-sent (datasheet §6.2; Tau Labs' `PIOS_RFM22B_TransmitPacket` order).
+//! finish on packet-sent (datasheet "Packet Handler"; Tau Labs' `PIOS_RFM22B_TransmitPacket` order).
 
 use core::pin::pin;
 

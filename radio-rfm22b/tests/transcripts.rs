@@ -115,6 +115,8 @@ fn headers_carrier_and_reconfiguration() {
     block_on(radio.set_check_header([0xDE, 0xAD, 0xFE, 0xEC])).unwrap();
     block_on(radio.set_carrier(radio_rfm22b::Carrier::new(868_000_000))).unwrap();
     assert_eq!(radio.config().unwrap().carrier.frequency_hz(), 868_000_000);
+    // 48 preamble + 32 sync + 32 header + 8 length + 128 payload bits at 57.6 kbps.
+    assert_eq!(radio.airtime_us(16), Some(4_306));
     // `apply` re-programs everything without a reset.
     block_on(radio.apply(tau_config())).unwrap();
     done(radio);

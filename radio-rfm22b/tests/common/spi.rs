@@ -134,7 +134,9 @@ pub fn reset_transcript() -> Vec<T> {
     .concat()
 }
 
-/// Every register of `tau_config`, in the driver's order.
+/// Every register of `tau_config`, in the driver's order. The values are Tau Labs'
+/// `rfm22_init` sequence and its 57.6 kbps table column (radio.md §1a), so this also checks
+/// that the driver can program a Tau Labs-identical chip.
 pub fn configure_transcript() -> Vec<T> {
     [
         w(0x07, &[0x01]),
