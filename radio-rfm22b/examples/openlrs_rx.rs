@@ -2,11 +2,10 @@
 //! RFM22B on SPI3 (SCK PC10, MISO PC11, MOSI PC12, nSEL PA15, nIRQ PB7 — BrushedSparky).
 //! PPM (8 channels, 22.5 ms frames, positive) comes out on PB6.
 //!
-//! Build: `cargo rustc -p radio-rfm22b --example openlrs_rx --features openlrs-examples
-//! --target thumbv7em-none-eabihf --release -- -C link-arg=--nmagic -C link-arg=-Tlink.x
-//! -C link-arg=-Tdefmt.x`. It listens for a 3.8 TX on 435 MHz at every boot (nothing is
-//! persisted here; real firmware stores `RxEvent::Bound` data in flash and passes it to
-//! `Receiver::new`).
+//! Build: `cargo build -p radio-rfm22b --example openlrs_rx --features openlrs-examples
+//! --target thumbv7em-none-eabihf --release` (link arguments come from build.rs).
+//! It listens for a 3.8 TX on 435 MHz at every boot (nothing is persisted here; real
+//! firmware stores `RxEvent::Bound` data in flash and passes it to `Receiver::new`).
 #![no_std]
 #![no_main]
 

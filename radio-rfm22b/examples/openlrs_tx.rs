@@ -2,10 +2,10 @@
 //! RFM22B on SPI3 (SCK PC10, MISO PC11, MOSI PC12, nSEL PA15, nIRQ PB7). PPM input (from a
 //! handset trainer port, positive, rising edges) on PB6.
 //!
-//! Build: `cargo rustc -p radio-rfm22b --example openlrs_tx --features openlrs-examples
-//! --target thumbv7em-none-eabihf --release -- -C link-arg=--nmagic -C link-arg=-Tlink.x
-//! -C link-arg=-Tdefmt.x`. At boot it offers binding for 10 s (like a TX started with the
-//! bind button), then flies: 8 channels + serial telemetry at 19200 bps, 40 Hz, 3.8 format.
+//! Build: `cargo build -p radio-rfm22b --example openlrs_tx --features openlrs-examples
+//! --target thumbv7em-none-eabihf --release` (link arguments come from build.rs).
+//! At boot it offers binding for 10 s (like a TX started with the bind button), then flies:
+//! 8 channels + serial telemetry at 19200 bps, 40 Hz, 3.8 format.
 #![no_std]
 #![no_main]
 

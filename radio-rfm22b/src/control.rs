@@ -13,7 +13,7 @@ use crate::power::TxPower;
 use crate::registers::*;
 use crate::{Error, Rfm22b};
 
-/// The ADC conversion takes ~305 µs (datasheet §8.3); poll every 100 µs, at most 10 times.
+/// The ADC conversion takes ~305 µs (datasheet, "Temperature Sensor"); poll every 100 µs, at most 10 times.
 const ADC_POLLS: u32 = 10;
 
 impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D>
@@ -60,6 +60,13 @@ where
         self.bus.write_burst(CHECK_HEADER_3, &header).await
     }
 
+    /// Time on air of a packet with `payload_len` bytes under the current configuration, in
+    /// µs (preamble, sync, header, length byte, payload, CRC), for slot planning.
+    pub fn airtime_us(&self, payload_len: u8) -> Option<u32> {
+        let config = self.config.as_ref()?;
+        Some(config.packet.airtime_us(&config.modem, payload_len))
+    }
+
     /// The raw RSSI byte now (0x26), as OpenLRSng reports it.
     ///
     /// Cancel-safety: safe (a register read).
@@ -87,7 +94,7 @@ where
         self.bus.write(TX_POWER, value).await
     }
 
-    /// READY: crystal on, ~1 mA, 200 µs to TX/RX. Also aborts a TX/RX left running.
+    /// READY: crystal on (≈ 0.8 mA), about 200 µs to TX/RX. Also aborts a TX/RX left running.
     ///
     /// Cancel-safety: safe.
     pub async fn idle(&mut self) -> Result<(), Error<SPI::Error>> {
@@ -106,7 +113,9 @@ where
     /// Cancel-safety: safe.
     pub async fn sleep(&mut self) -> Result<(), Error<SPI::Error>> {
         self.idle().await?;
-        self.bus.write(OPERATING_MODE_1, 0x00).await
+        self.bus.write(OPERATING_MODE_1, 0x00).await?;
+        self.standby = true;
+        Ok(())
     }
 
     /// The RSSI now (0x26), in dBm (see [`measure::rssi_dbm`]). Meaningful in RX.

@@ -1,4 +1,4 @@
-//! GPIO pin functions (0x0B–0x0D; datasheet §8.4 Table 14): the antenna switch wiring of
+//! GPIO pin functions (0x0B–0x0D; datasheet, "GPIO Configuration"): the antenna switch wiring of
 //! RFM22B-style modules and GPIO2's function. Pure.
 
 /// GPIO function codes (bits 4:0 of 0x0B–0x0D).
@@ -43,15 +43,19 @@ pub struct GpioConfig {
 
 impl Default for GpioConfig {
     fn default() -> Self {
-        Self {
-            antenna_switch: AntennaSwitch::Gpio0TxGpio1Rx,
-            gpio2: Gpio2::ClearChannel,
-            drive: 3,
-        }
+        Self::RFM22B
     }
 }
 
 impl GpioConfig {
+    /// The RFM22B module wiring as Tau Labs drives it: GPIO0 = TX state, GPIO1 = RX state,
+    /// GPIO2 = clear-channel output, drive strength 3.
+    pub const RFM22B: Self = Self {
+        antenna_switch: AntennaSwitch::Gpio0TxGpio1Rx,
+        gpio2: Gpio2::ClearChannel,
+        drive: 3,
+    };
+
     /// Registers 0x0B, 0x0C, 0x0D.
     pub const fn registers(&self) -> [u8; 3] {
         let drive = (self.drive & 0x03) << 6;

@@ -1,6 +1,6 @@
 //! Modem configuration, computed: bit rate, deviation and modulation in; the 18 modem
 //! registers (0x1C–0x25, 0x2A, 0x58, 0x69, 0x6E–0x72) out, the way Silicon Labs' register
-//! calculator derives them (datasheet §3.5/§8, AN440). Pure and `const`.
+//! calculator derives them (datasheet "Modulation Options" and register descriptions, AN440). Pure and `const`.
 //!
 //! The calculator is a spreadsheet whose outputs also depend on choices it makes from
 //! lookup tables. Those are encoded here from the datasheet (IF filter table, see
@@ -78,7 +78,7 @@ pub struct ModemConfig {
     registers: ModemRegisters,
 }
 
-/// Below this rate the TX data rate uses the fine scale (0x70 txdtrtscale, datasheet §3.5).
+/// Below this rate the TX data rate uses the fine scale (0x70 txdtrtscale, datasheet "Data Rate").
 const TX_FINE_SCALE_BELOW_BPS: u32 = 30_000;
 
 /// `round(num / den)`, halves up, as the calculator's `ROUND`.
@@ -123,12 +123,12 @@ impl ModemConfig {
         if bit_rate < 1_000 || bit_rate > 256_000 {
             return Err(ConfigError::BitRateOutOfRange);
         }
-        // fd is 9 bits of 625 Hz (datasheet §3.5.3: Δf = fd · 625 Hz).
+        // fd is 9 bits of 625 Hz (datasheet "Frequency Deviation": Δf = fd · 625 Hz).
         let fd = div_round(settings.deviation_hz as u64, 625);
         if fd == 0 || fd > 0x1FF || settings.rx_deviation_hz < 625 {
             return Err(ConfigError::DeviationOutOfRange);
         }
-        // The receiver sees twice the rate with Manchester (AN440 §4, "Rb·(1+enmanch)").
+        // The receiver sees twice the rate with Manchester (AN440: "Rb·(1+enmanch)").
         let chip_rate = bit_rate as u64 * if settings.manchester { 2 } else { 1 };
         let rx_deviation = settings.rx_deviation_hz as u64;
         // Carson's rule, as the calculator: BW = Rb + 2·Δf.
@@ -154,7 +154,7 @@ impl ModemConfig {
         let crgain = if crgain > 0x7FF { 0x7FF } else { crgain };
 
         let fine_scale = bit_rate < TX_FINE_SCALE_BELOW_BPS;
-        // Datasheet §3.5.2: DR = txdr · 1 MHz / 2^(16 + 5·txdtrtscale).
+        // Datasheet "Data Rate": DR = txdr · 1 MHz / 2^(16 + 5·txdtrtscale).
         let txdr = if fine_scale {
             div_round((bit_rate as u64) << 21, 1_000_000)
         } else {
@@ -314,6 +314,27 @@ mod tests {
             let r = m.registers();
             let rxosr = u32::from(r.block_1c[4]) | (u32::from(r.block_1c[5] >> 5) << 8);
             assert!((8..=2047).contains(&rxosr), "rate {rate}: rxosr {rxosr}");
+            // The programmed TX rate is within 0.05 % of the asked one (datasheet "Data Rate").
+            let txdr = f64::from(u16::from_be_bytes([r.block_6e[0], r.block_6e[1]]));
+            let scale = if r.block_6e[2] & 0x20 != 0 {
+                2f64.powi(21)
+            } else {
+                2f64.powi(16)
+            };
+            let actual = txdr * 1e6 / scale;
+            let error = (actual - f64::from(rate)).abs() / f64::from(rate);
+            assert!(error < 5e-4, "rate {rate}: programmed {actual:.1} bps");
+            // The clock-recovery NCO reproduces the rate: Rb = ncoff·500 kHz·(1+2·dwn3)/2^(20+ndec).
+            let ncoff = (u32::from(r.block_1c[5] & 0x0F) << 16)
+                | (u32::from(r.block_1c[6]) << 8)
+                | u32::from(r.block_1c[7]);
+            let f = m.if_filter();
+            let dwn3 = if f.dwn3_bypass() { 3.0 } else { 1.0 };
+            let rx_rate = f64::from(ncoff) * 500e3 * dwn3 / 2f64.powi(20 + i32::from(f.ndec_exp()));
+            assert!(
+                (rx_rate - f64::from(rate)).abs() / f64::from(rate) < 1e-3,
+                "rate {rate}: NCO {rx_rate:.1}"
+            );
             rate += 1_000;
         }
     }

@@ -1,6 +1,6 @@
-//! The packet handler's configuration (registers 0x30–0x46; datasheet §6 "Packet Handler"):
+//! The packet handler's configuration (registers 0x30–0x46; datasheet "Packet Handler"):
 //! preamble, sync word, header and its checks, CRC, fixed or variable length, whitening.
-//! Pure and `const`; the driver writes [`PacketConfig::writes`].
+//! Pure and `const`; the driver writes its register blocks.
 
 use crate::ConfigError;
 use crate::modem::ModemConfig;

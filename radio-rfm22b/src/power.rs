@@ -1,8 +1,8 @@
-//! Transmit power (0x6D; datasheet §4.5) and crystal load capacitance (0x09; §8.2). Pure.
+//! Transmit power (0x6D; datasheet "Output Power Selection") and crystal load capacitance (0x09; "Crystal Oscillator"). Pure.
 
 use crate::ConfigError;
 
-/// The eight output levels of the Si4432 / RFM22B (0x6D txpow[2:0]).
+/// The eight output levels of the Si4432 / RFM22B (0x6D `txpow[2:0]`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TxPower(u8);

@@ -1,6 +1,6 @@
 //! The driver: `Rfm22b` owns the SPI device, nIRQ, SDN and a delay. This file holds
-//! construction, reset/probe, configuration and the small operations; TX and RX live in
-//! `tx.rs` and `rx.rs`.
+//! construction, reset/probe, configuration and the end-of-operation clean-up; run-time
+//! controls live in `control.rs`, TX and RX in `tx.rs` and `rx.rs`.
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal_async::delay::DelayNs;
@@ -17,9 +17,9 @@ use crate::registers::*;
 
 /// Polls of the chip-ready flag after a software reset, 1 ms apart (Tau Labs: 50).
 const CHIP_READY_POLLS: u32 = 50;
-/// SDN high long enough to discharge the chip (datasheet §3.3: ≥ 10 ms).
+/// SDN high long enough to discharge the chip (≥ 10 ms).
 const SDN_HIGH_MS: u32 = 10;
-/// Power-on reset after SDN falls: up to 16.8 ms (datasheet Table 7), rounded up.
+/// Power-on reset after SDN falls: up to 16.8 ms (datasheet), rounded up.
 const SDN_LOW_MS: u32 = 20;
 
 /// A stand-in for an SDN pin on boards that tie SDN low.
@@ -53,6 +53,8 @@ pub struct Rfm22b<SPI, IRQ, SDN, D> {
     pub(crate) channel: u8,
     /// An operation left the chip in TX/RX with interrupts enabled (it was cancelled).
     pub(crate) busy: bool,
+    /// The chip is in standby: the next TX/RX will see a (legitimate) chip-ready flag.
+    pub(crate) standby: bool,
 }
 
 impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
@@ -94,6 +96,7 @@ where
             config: None,
             channel: 0,
             busy: false,
+            standby: false,
         }
     }
 
@@ -125,6 +128,7 @@ where
     /// Cancel-safety: safe to drop; the next `reset` starts over.
     pub async fn reset(&mut self) -> Result<ChipInfo, Error<SPI::Error>> {
         self.busy = false;
+        self.standby = false;
         if self.sdn_present {
             self.sdn.set_high().map_err(|_| Error::Pin)?;
             self.delay.delay_ms(SDN_HIGH_MS).await;
@@ -239,6 +243,33 @@ where
     pub(crate) async fn clear_fifos(&mut self, bits: u8) -> Result<(), Error<SPI::Error>> {
         self.bus.write(OPERATING_MODE_2, bits).await?;
         self.bus.write(OPERATING_MODE_2, 0x00).await
+    }
+
+    /// Ends a TX/RX: on success only disables interrupts; on failure also goes to READY and
+    /// flushes `fifos`; a POR triggers re-init; a timeout checks the chip is still there.
+    pub(crate) async fn finish<T>(
+        &mut self,
+        outcome: Result<T, Error<SPI::Error>>,
+        fifos: u8,
+    ) -> Result<T, Error<SPI::Error>> {
+        match outcome {
+            Ok(value) => {
+                self.bus
+                    .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
+                    .await?;
+                self.busy = false;
+                Ok(value)
+            }
+            Err(Error::ChipReset) => Err(self.recover().await),
+            Err(e) => {
+                self.idle().await?;
+                self.clear_fifos(fifos).await?;
+                if matches!(e, Error::Timeout) {
+                    self.probe().await?;
+                }
+                Err(e)
+            }
+        }
     }
 
     /// If a previous TX/RX was dropped mid-way, stop it before starting anew.

@@ -82,7 +82,8 @@ fn run_link(
     tx.set_channels(channels);
     tx.queue_serial(b"uplink serial!");
     rx.queue_serial(b"downlink data");
-    rx.set_radio_measurements(180, 300);
+    rx.on_rssi_sample(180);
+    rx.set_afc(300);
     rx.set_analog_inputs(10, 20);
     let mut listening = Listening::Hop(0);
     let mut run = Run {

@@ -278,3 +278,41 @@ fn link_loss_gives_failsafe_after_one_second_and_the_rx_reacquires() {
     assert!(log.rx_channels.len() > before + 40);
     assert!(log.rx_channels.iter().all(|(_, c)| *c == channels));
 }
+
+#[test]
+fn adaptive_channel_scan_picks_the_quiet_channels() {
+    use radio_rfm22b::openlrs::roles::scan_hop_channels;
+    use si4432_sim::Interference;
+
+    let sim = Simulation::new(3);
+    let medium = sim.medium();
+    let handle = medium.add_radio(RadioConfig::at([0.0, 0.0, 0.0]));
+    // 413 MHz + ch · 250 kHz: channels 1..200 lie below the 463 MHz limit, and the 250 kHz
+    // step is wider than the 19200 profile's IF filter, so channels do not bleed together.
+    let mut data = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+    data.rf_frequency_hz = 413_000_000;
+    data.rf_channel_spacing = 25;
+    let quiet = [17u8, 50, 83, 116, 149, 182];
+    for ch in (1u8..=200).filter(|ch| !quiet.contains(ch)) {
+        medium.add_interference(Interference {
+            start: Duration::ZERO,
+            end: Duration::from_secs(10),
+            center_hz: 413e6 + f64::from(ch) * 250e3,
+            bandwidth_hz: 50e3,
+            power_dbm: -60.0 - f64::from(ch % 7), // loud, and not all alike
+        });
+    }
+    let mut r = radio(handle, &medium, BindingVersion::V38);
+    let mut power_up = sim.delay();
+    let task = sim.spawn(async move {
+        embedded_hal_async::delay::DelayNs::delay_us(&mut power_up, POWER_UP_US).await;
+        scan_hop_channels(&mut r, &mut data, 1_000, Band::Mhz433.max_frequency_hz())
+            .await
+            .unwrap();
+        data
+    });
+    sim.run_for(Duration::from_secs(2));
+    let data = task.take().unwrap();
+    // Sorted [17, 50, 83, 116, 149, 182], then i ↔ i + 3 for i = 0, 2.
+    assert_eq!(data.hop_channels[..7], [116, 50, 182, 17, 149, 83, 0]);
+}

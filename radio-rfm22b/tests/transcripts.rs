@@ -99,3 +99,25 @@ fn channel_power_rssi_temperature_sleep() {
     block_on(radio.sleep()).unwrap();
     done(radio);
 }
+
+#[test]
+fn headers_carrier_and_reconfiguration() {
+    let t = [
+        w(0x3A, &[0xDE, 0xAD, 0xFE, 0xED]),
+        w(0x3F, &[0xDE, 0xAD, 0xFE, 0xEC]),
+        // 868 MHz: hbsel 1, fb 19, fc 25600.
+        w(0x75, &[0x73, 0x64, 0x00]),
+        configure_transcript(),
+    ]
+    .concat();
+    let mut radio = ready_radio(t, LowIrq, PATIENT);
+    block_on(radio.set_tx_header([0xDE, 0xAD, 0xFE, 0xED])).unwrap();
+    block_on(radio.set_check_header([0xDE, 0xAD, 0xFE, 0xEC])).unwrap();
+    block_on(radio.set_carrier(radio_rfm22b::Carrier::new(868_000_000))).unwrap();
+    assert_eq!(radio.config().unwrap().carrier.frequency_hz(), 868_000_000);
+    // 48 preamble + 32 sync + 32 header + 8 length + 128 payload bits at 57.6 kbps.
+    assert_eq!(radio.airtime_us(16), Some(4_306));
+    // `apply` re-programs everything without a reset.
+    block_on(radio.apply(tau_config())).unwrap();
+    done(radio);
+}

@@ -217,3 +217,150 @@ fn dropped_receive_is_stopped_by_the_next_operation() {
     block_on(radio.transmit(&[0x55], 10_000_000)).unwrap();
     done(radio);
 }
+
+#[test]
+fn packet_started_before_the_timeout_is_completed() {
+    // The 5 ms timeout expires right after the sync interrupt; the packet still completes
+    // within the extension (airtime of a 255-byte packet at 57.6 kbps ≈ 37 ms, which this
+    // delay double never lets expire).
+    let payload = [1, 2, 3];
+    let t = [
+        rx_start(),
+        r(0x03, &[0x00, 0x80]),
+        r(0x26, &[120]),
+        r(0x2B, &[0x00, 0x00]),
+        r(0x03, &[0x02, 0x00]),
+        r(0x47, &[1, 2, 3, 4, 3]),
+        r(0x7F, &payload),
+        w(0x07, &[0x01]),
+        w(0x05, &[0x00, 0x00]),
+    ]
+    .concat();
+    let irq = ScriptIrq([true, false, true].into());
+    let mut radio = ready_radio(t, irq, TestDelay { limit_us: 10_000 });
+    let mut buf = [0u8; 16];
+    let outcome = block_on(radio.receive(&mut buf, 5_000)).unwrap();
+    let RxOutcome::Packet(p) = outcome else {
+        panic!("{outcome:?}")
+    };
+    assert_eq!(p.len, 3);
+    assert_eq!(p.signal.rssi_dbm, -62);
+    done(radio);
+}
+
+#[test]
+fn unexpected_chip_ready_means_the_chip_reset() {
+    let t = [rx_start(), r(0x03, &[0x00, 0x02]), init_transcript()].concat();
+    let mut radio = ready_radio(t, LowIrq, PATIENT);
+    let mut buf = [0u8; 16];
+    assert_eq!(
+        block_on(radio.receive(&mut buf, 10_000_000)),
+        Err(Error::ChipReset)
+    );
+    done(radio);
+}
+
+#[test]
+fn chip_ready_after_standby_is_expected() {
+    let t = [
+        // sleep(): READY, interrupts off, status, STANDBY.
+        w(0x07, &[0x01]),
+        w(0x05, &[0x00, 0x00]),
+        r(0x03, &[0x00, 0x00]),
+        w(0x07, &[0x00]),
+        rx_start(),
+        // The crystal restarts: chip-ready together with the packet.
+        r(0x03, &[0x02, 0x02]),
+        r(0x47, &[0, 0, 0, 0, 1]),
+        r(0x7F, &[0x42]),
+        r(0x26, &[140]),
+        r(0x2B, &[0x00, 0x00]),
+        w(0x07, &[0x01]),
+        w(0x05, &[0x00, 0x00]),
+    ]
+    .concat();
+    let mut radio = ready_radio(t, LowIrq, PATIENT);
+    block_on(radio.sleep()).unwrap();
+    let mut buf = [0u8; 16];
+    let outcome = block_on(radio.receive(&mut buf, 10_000_000)).unwrap();
+    assert!(matches!(outcome, RxOutcome::Packet(p) if p.len == 1 && p.signal.rssi_dbm == -52));
+    assert_eq!(buf[0], 0x42);
+    done(radio);
+}
+
+#[test]
+fn fixed_length_packets_ignore_the_length_register() {
+    let mut config = tau_config();
+    config.packet = config
+        .packet
+        .with_length(radio_rfm22b::PacketLength::Fixed(4));
+    let mut t = init_transcript();
+    // 0x33 gets fixpklen (0x08) and 0x3E the length.
+    let pos = t
+        .iter()
+        .position(|x| *x == embedded_hal_mock::eh1::spi::Transaction::write(0x32 | 0x80))
+        .unwrap();
+    t[pos + 1] = embedded_hal_mock::eh1::spi::Transaction::write_vec(vec![0xFF, 0x4E, 0x0C, 0x30]);
+    let pos = t
+        .iter()
+        .position(|x| *x == embedded_hal_mock::eh1::spi::Transaction::write(0x36 | 0x80))
+        .unwrap();
+    t[pos + 1] = embedded_hal_mock::eh1::spi::Transaction::write_vec(vec![
+        0x2D, 0xD4, 0x4B, 0x59, 1, 2, 3, 4, 4, 1, 2, 3, 4, 0xFF, 0xFF, 0xFF, 0xFF,
+    ]);
+    t.extend(
+        [
+            rx_start(),
+            r(0x03, &[0x02, 0x80]),
+            r(0x26, &[100]),
+            r(0x2B, &[0x00, 0x00]),
+            // 0x4B reads garbage in fixed mode; the configured 4 bytes are read.
+            r(0x47, &[1, 2, 3, 4, 0xEE]),
+            r(0x7F, &[10, 20, 30, 40]),
+            w(0x07, &[0x01]),
+            w(0x05, &[0x00, 0x00]),
+        ]
+        .concat(),
+    );
+    let spi = Mock::new(&t);
+    let mut radio = Rfm22b::new_without_sdn(spi, LowIrq, PATIENT);
+    block_on(radio.init(config)).unwrap();
+    let mut buf = [0u8; 8];
+    let outcome = block_on(radio.receive(&mut buf, 10_000_000)).unwrap();
+    assert!(matches!(outcome, RxOutcome::Packet(p) if p.len == 4));
+    assert_eq!(buf[..4], [10, 20, 30, 40]);
+    assert_eq!(
+        block_on(radio.transmit(&[1, 2, 3], 1_000)),
+        Err(Error::InvalidLength { len: 3 })
+    );
+    done(radio);
+}
+
+#[test]
+fn each_sync_latches_its_own_signal() {
+    // A first sync whose packet the header check drops (no further interrupt), then a
+    // second packet: its own RSSI is reported.
+    let t = [
+        rx_start(),
+        r(0x03, &[0x00, 0x80]),
+        r(0x26, &[60]),
+        r(0x2B, &[0x00, 0x00]),
+        r(0x03, &[0x00, 0x80]),
+        r(0x26, &[160]),
+        r(0x2B, &[0x00, 0x00]),
+        r(0x03, &[0x02, 0x00]),
+        r(0x47, &[1, 2, 3, 4, 2]),
+        r(0x7F, &[7, 7]),
+        w(0x07, &[0x01]),
+        w(0x05, &[0x00, 0x00]),
+    ]
+    .concat();
+    let mut radio = ready_radio(t, LowIrq, PATIENT);
+    let mut buf = [0u8; 16];
+    let outcome = block_on(radio.receive(&mut buf, 10_000_000)).unwrap();
+    assert!(
+        matches!(outcome, RxOutcome::Packet(p) if p.signal.rssi_dbm == -42),
+        "{outcome:?}"
+    );
+    done(radio);
+}

@@ -183,6 +183,19 @@ where
         Ok(())
     }
 
+    /// Tunes a raw channel number (0x79) without touching the header, for channel scans.
+    pub async fn tune_channel_number(
+        &mut self,
+        channel: u8,
+    ) -> Result<(), Error<SPI::Error, IRQ::Error>> {
+        self.bus.write(0x79, channel).await.map_err(Error::Radio)
+    }
+
+    /// Reads the RSSI register (0x26) as it is now.
+    pub async fn rssi(&mut self) -> Result<u8, Error<SPI::Error, IRQ::Error>> {
+        self.bus.read(REG_RSSI).await.map_err(Error::Radio)
+    }
+
     /// `rx_reset`: clears the FIFOs and enters RX.
     pub async fn listen(&mut self) -> Result<(), Error<SPI::Error, IRQ::Error>> {
         let script = modem::rx_reset_script(self.version, self.diversity).map_err(Error::Script)?;

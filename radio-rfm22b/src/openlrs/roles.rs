@@ -1,6 +1,10 @@
 //! The role loops: the RX and TX state machines ([`rx`](super::rx), [`tx`](super::tx))
 //! driven over a [`Radio`]. Each `*_step` does one wait-and-react cycle, so a test harness
 //! or a firmware task can run them; `run_*` loop forever.
+//!
+//! Cancel-safety: a step dropped at an `.await` leaves the chip wherever it was (listening,
+//! sending, half-programmed) and the state machine consistent; call `rx_start` / `tx_start`
+//! again before the next step. Errors are returned as they come, never retried silently.
 
 use embedded_hal_async::delay::DelayNs;
 use embedded_hal_async::digital::Wait;
@@ -9,6 +13,7 @@ use embedded_hal_async::spi::SpiDevice;
 use super::bind::BindData;
 use super::modem::Purpose;
 use super::radio::{Clock, Error, Radio};
+use super::random::{SCAN_CHANNELS, choose_channels_per_rssi};
 use super::rx::{Command, Output, Receiver};
 use super::tx::{BIND_LISTEN_US, BindBeacon, Received, Transmitter};
 
@@ -106,7 +111,7 @@ where
     let deadline = rx.next_deadline_us().unwrap_or(now + IDLE_WAIT_US);
     match radio.receive_until(deadline).await? {
         Some(packet) => {
-            rx.set_radio_measurements(packet.rssi, packet.afc);
+            rx.set_afc(packet.afc);
             let reception = rx.on_packet(packet.at_us, &packet.bytes);
             if let Some(reply) = &reception.reply {
                 radio.transmit(reply).await?;
@@ -131,6 +136,10 @@ where
         None => {
             let now = radio.now_us();
             let tick = rx.poll(now);
+            if tick.sample_rssi {
+                let rssi = radio.rssi().await?;
+                rx.on_rssi_sample(rssi);
+            }
             if tick.failsafe_started {
                 on_event(RxEvent::FailsafeStarted);
             }
@@ -267,5 +276,51 @@ where
             None => on_event(TxEvent::ReplyMissed),
         }
     }
+    Ok(())
+}
+
+/// RSSI samples are taken this often while dwelling on a channel during a scan.
+const SCAN_SAMPLE_US: u64 = 250;
+
+/// The TX's adaptive channel selection (long button press): listens `dwell_us` on every
+/// channel 1..254 of the link's band plan, keeps the maximum RSSI of each, and lets
+/// [`choose_channels_per_rssi`] replace the hop list with the quietest, well-spread channels.
+/// OpenLRSng dwells 500 ms (about two minutes in all). Unlike upstream, which tunes through
+/// `hopchannel[ch]` and so measures the wrong frequencies, this tunes each channel itself.
+pub async fn scan_hop_channels<SPI, IRQ, D, C>(
+    radio: &mut Radio<SPI, IRQ, D, C>,
+    data: &mut BindData,
+    dwell_us: u32,
+    max_frequency_hz: u32,
+) -> Result<(), Error<SPI::Error, IRQ::Error>>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    D: DelayNs,
+    C: Clock,
+{
+    radio.configure(data, Purpose::Link).await?;
+    radio.listen().await?;
+    let mut max_rssi = [255u8; SCAN_CHANNELS];
+    for (channel, slot) in (1..=u8::MAX).zip(max_rssi.iter_mut()) {
+        let frequency_hz = u64::from(data.rf_frequency_hz)
+            + u64::from(channel) * u64::from(data.rf_channel_spacing) * 10_000;
+        if frequency_hz > u64::from(max_frequency_hz) {
+            continue; // stays 255: never picked
+        }
+        radio.tune_channel_number(channel).await?;
+        let until = radio.now_us() + u64::from(dwell_us);
+        let mut loudest = 0;
+        loop {
+            let next_sample = radio.now_us() + SCAN_SAMPLE_US;
+            radio.delay_until(next_sample).await;
+            loudest = loudest.max(radio.rssi().await?);
+            if radio.now_us() >= until {
+                break;
+            }
+        }
+        *slot = loudest;
+    }
+    choose_channels_per_rssi(data, &max_rssi, max_frequency_hz);
     Ok(())
 }

@@ -156,6 +156,68 @@ impl LinkQuality {
     }
 }
 
+/// The RX's RSSI sampling (RX.h): one reading per slot, taken `interval − 1500 µs` after the
+/// last packet — while the next packet is on air — and only while at most one packet has
+/// been missed. Every 9 readings are averaged into `smooth = (3·smooth + avg) / 4`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RssiSampler {
+    sampled_for_us: Option<u64>,
+    sum: u16,
+    count: u8,
+    last: u8,
+    smooth: u8,
+}
+
+impl RssiSampler {
+    /// When the next reading is due, if one is (`last_packet_us` is the expected-packet
+    /// grid the RX keeps, which moves on by one interval per missed packet).
+    pub fn due_us(&self, last_packet_us: u64, interval_us: u32, lost_packets: u8) -> Option<u64> {
+        (lost_packets < 2 && self.sampled_for_us != Some(last_packet_us))
+            .then(|| last_packet_us + u64::from(interval_us.saturating_sub(1500)) + 1)
+    }
+
+    /// Whether to read RSSI now; marks this slot as sampled when it says yes.
+    pub fn take_due(
+        &mut self,
+        now_us: u64,
+        last_packet_us: u64,
+        interval_us: u32,
+        lost_packets: u8,
+    ) -> bool {
+        match self.due_us(last_packet_us, interval_us, lost_packets) {
+            Some(due) if now_us >= due => {
+                self.sampled_for_us = Some(last_packet_us);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Adds a reading of register 0x26.
+    pub fn record(&mut self, rssi: u8) {
+        self.last = rssi;
+        self.sum += u16::from(rssi);
+        self.count += 1;
+        if self.count > 8 {
+            let average = self.sum / u16::from(self.count);
+            self.smooth = ((u16::from(self.smooth) * 3 + average) / 4) as u8;
+            self.sum = 0;
+            self.count = 0;
+        }
+    }
+
+    /// The last reading (what the link-info frame reports).
+    pub fn last(&self) -> u8 {
+        self.last
+    }
+
+    /// The smoothed RSSI (for RSSI outputs and injection).
+    pub fn smoothed(&self) -> u8 {
+        self.smooth
+    }
+}
+
 /// `compositeRSSI`: at full quality (≥ 15) the RSSI maps to 128..255, otherwise the quality
 /// alone maps to 0..126 in steps of 9 — one scale that degrades gracefully.
 pub const fn composite_rssi(link_quality: u8, rssi: u8) -> u8 {
@@ -214,5 +276,23 @@ mod tests {
         assert_eq!(lq.tx_quality(), 15);
         assert_eq!(composite_rssi(15, 100), 178);
         assert_eq!(composite_rssi(3, 100), 27);
+    }
+
+    #[test]
+    fn rssi_sampler_once_per_slot_and_smoothing() {
+        let mut r = RssiSampler::default();
+        assert_eq!(r.due_us(100_000, 25_000, 0), Some(123_501));
+        assert!(!r.take_due(123_500, 100_000, 25_000, 0));
+        assert!(r.take_due(123_501, 100_000, 25_000, 0));
+        assert!(!r.take_due(124_000, 100_000, 25_000, 0), "once per slot");
+        assert_eq!(r.due_us(125_000, 25_000, 2), None, "not after two misses");
+        for _ in 0..9 {
+            r.record(200);
+        }
+        assert_eq!((r.last(), r.smoothed()), (200, 50));
+        for _ in 0..9 {
+            r.record(200);
+        }
+        assert_eq!(r.smoothed(), 87);
     }
 }

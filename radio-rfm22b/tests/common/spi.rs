@@ -134,7 +134,9 @@ pub fn reset_transcript() -> Vec<T> {
     .concat()
 }
 
-/// Every register of `tau_config`, in the driver's order.
+/// Every register of `tau_config`, in the driver's order. The values are Tau Labs'
+/// `rfm22_init` sequence and its 57.6 kbps table column (radio.md §1a), so this also checks
+/// that the driver can program a Tau Labs-identical chip.
 pub fn configure_transcript() -> Vec<T> {
     [
         w(0x07, &[0x01]),
@@ -201,6 +203,33 @@ impl embedded_hal_async::digital::Wait for SwitchIrq {
     }
     async fn wait_for_low(&mut self) -> Result<(), Infallible> {
         if !self.0.get() {
+            core::future::pending::<()>().await;
+        }
+        Ok(())
+    }
+    async fn wait_for_rising_edge(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+    async fn wait_for_falling_edge(&mut self) -> Result<(), Infallible> {
+        self.wait_for_low().await
+    }
+    async fn wait_for_any_edge(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+}
+
+/// nIRQ following a script: each wait takes the next entry; `true` = low at once, `false`
+/// (or an empty script) = never low.
+pub struct ScriptIrq(pub std::collections::VecDeque<bool>);
+impl embedded_hal::digital::ErrorType for ScriptIrq {
+    type Error = Infallible;
+}
+impl embedded_hal_async::digital::Wait for ScriptIrq {
+    async fn wait_for_high(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+    async fn wait_for_low(&mut self) -> Result<(), Infallible> {
+        if !self.0.pop_front().unwrap_or(false) {
             core::future::pending::<()>().await;
         }
         Ok(())

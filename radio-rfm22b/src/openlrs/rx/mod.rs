@@ -6,96 +6,17 @@
 use heapless::Vec;
 
 use super::bind::{self, BindData, BindReception};
-use super::channels::MAX_CHANNELS;
 use super::downlink::DownlinkSender;
 use super::hopping;
-use super::telemetry::{self, LinkInfo, LinkQuality};
+use super::telemetry::{self, LinkInfo, LinkQuality, RssiSampler};
 use super::timing;
 use super::uplink::{self, Uplink};
-use super::version::{Band, BindingVersion};
 
-/// Receiver settings (the parts of OpenLRSng's `rx_config` the link logic uses).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Config {
-    /// Generation to bind with; bind packets of the other one are refused.
-    pub version: BindingVersion,
-    /// Module band (binding frequency).
-    pub band: Band,
-    /// `failsafeDelay` in `delayInMs` code (default 10 = 1 s); 0 never applies failsafe.
-    pub failsafe_delay: u8,
-    /// Bind listening at boot when already bound (`ALWAYS_BIND`: 500 ms); `None` skips it.
-    pub bind_window_us: Option<u32>,
-}
+mod events;
+#[cfg(test)]
+mod tests;
 
-impl Config {
-    /// OpenLRSng's defaults: failsafe after 1 s, a 500 ms bind window at boot.
-    pub const fn new(version: BindingVersion, band: Band) -> Self {
-        Self {
-            version,
-            band,
-            failsafe_delay: 10,
-            bind_window_us: Some(500_000),
-        }
-    }
-}
-
-/// What the radio must do next.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Command {
-    /// Program the bind configuration (`init_rfm(1)`) and listen.
-    ListenBind,
-    /// Program the link configuration (`init_rfm(0)`), tune hop index 0 and listen.
-    StartLink(BindData),
-    /// Tune this hop index (0x79 and the header byte) and listen again.
-    Hop(u8),
-}
-
-/// What the application gets from a received packet.
-#[derive(Debug, Clone, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Output {
-    /// Nothing new (a repeated serial packet, an ignored bind-channel packet).
-    Nothing,
-    /// New bind data: persist it; the link starts with it.
-    Bound(BindData),
-    /// A bind packet that this RX refuses.
-    BindRefused(BindReception),
-    /// Channel values (10-bit). `save_failsafe` is set once per TX button press.
-    Channels {
-        /// `mode.channel_count()` values.
-        channels_bits: Vec<u16, MAX_CHANNELS>,
-        /// Store these values as failsafe.
-        save_failsafe: bool,
-    },
-    /// New serial bytes for the RX UART.
-    Serial(Vec<u8, 8>),
-    /// A packet of a type we do not handle.
-    Unknown(Uplink),
-}
-
-/// The RX's answer to one packet.
-#[derive(Debug, Clone, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Reception {
-    /// Send this now, on the same channel (the `'B'` ack or a 9-byte telemetry frame).
-    pub reply: Option<Vec<u8, { telemetry::DOWNLINK_FRAME_LEN }>>,
-    /// Then do this (after the reply has gone).
-    pub command: Option<Command>,
-    /// For the application.
-    pub output: Output,
-}
-
-/// What a timer tick changed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Tick {
-    /// Radio command, if any.
-    pub command: Option<Command>,
-    /// Failsafe has just started: apply the stored failsafe values.
-    pub failsafe_started: bool,
-}
+pub use events::{Command, Config, Output, Reception, Tick};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Mode {
@@ -121,6 +42,7 @@ pub struct Receiver {
     quality: LinkQuality,
     downlink: DownlinkSender,
     link_info: LinkInfo,
+    rssi: RssiSampler,
 }
 
 impl Receiver {
@@ -142,6 +64,7 @@ impl Receiver {
             failsafe_saved: false,
             quality: LinkQuality(0),
             downlink: DownlinkSender::new(),
+            rssi: RssiSampler::default(),
             link_info: LinkInfo {
                 rssi: 0,
                 analog0: 0,
@@ -172,6 +95,8 @@ impl Receiver {
     fn start_link(&mut self, now_us: u64, data: BindData) -> Command {
         self.data = Some(data);
         self.mode = Mode::Link;
+        // Only validated bind data gets here (`new` filters, bind packets are checked), so
+        // the profile exists; the fallback merely keeps the arithmetic finite.
         self.interval_us = timing::interval_us(&data).unwrap_or(u32::MAX / 64);
         self.hop_count = data.hop_count() as u8;
         self.hop_index = 0;
@@ -206,11 +131,21 @@ impl Receiver {
         self.quality.rx_quality()
     }
 
-    /// Radio readings for the next link-info frame: raw RSSI (0x26) and the 10-bit AFC
-    /// correction (0x2B/0x2C), both sampled around the last packet.
-    pub fn set_radio_measurements(&mut self, rssi: u8, afc: u16) {
-        self.link_info.rssi = rssi;
+    /// The 10-bit AFC correction (0x2B/0x2C) read after the last packet, for the next
+    /// link-info frame.
+    pub fn set_afc(&mut self, afc: u16) {
         self.link_info.afc = afc;
+    }
+
+    /// An RSSI reading requested by [`Tick::sample_rssi`].
+    pub fn on_rssi_sample(&mut self, rssi: u8) {
+        self.rssi.record(rssi);
+        self.link_info.rssi = rssi;
+    }
+
+    /// RSSI averaged over 9 slots and smoothed, as OpenLRSng's `smoothRSSI`.
+    pub fn smoothed_rssi(&self) -> u8 {
+        self.rssi.smoothed()
     }
 
     /// The RX's two analog inputs (ADC >> 2) for the next link-info frame.
@@ -239,7 +174,16 @@ impl Receiver {
                     .link_lost_at_us
                     .filter(|_| !self.failsafe_active && self.config.failsafe_delay != 0)
                     .map(|t| t + self.failsafe_delay_us() + 1);
-                Some(failsafe_deadline.map_or(hop_deadline, |f| f.min(hop_deadline)))
+                let rssi_deadline = self
+                    .rssi
+                    .due_us(self.last_packet_us, self.interval_us, self.lost_packets)
+                    .filter(|_| self.link_acquired);
+                Some(
+                    [failsafe_deadline, rssi_deadline]
+                        .into_iter()
+                        .flatten()
+                        .fold(hop_deadline, u64::min),
+                )
             }
         }
     }
@@ -266,6 +210,15 @@ impl Receiver {
             }
             Mode::Bind { .. } => {}
             Mode::Link => {
+                // Only once a packet has been heard: before that no packet is due to be on air
+                // (OpenLRSng samples regardless; the value is not used until then either).
+                tick.sample_rssi = self.link_acquired
+                    && self.rssi.take_due(
+                        now_us,
+                        self.last_packet_us,
+                        self.interval_us,
+                        self.lost_packets,
+                    );
                 let interval = u64::from(self.interval_us);
                 let since = now_us.saturating_sub(self.last_packet_us);
                 let slow_dwell = interval * u64::from(self.hop_count);
@@ -387,80 +340,5 @@ impl Receiver {
             ..self.link_info
         };
         self.downlink.reply(uplink_header, &info)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn bound() -> BindData {
-        BindData::defaults(BindingVersion::V38, Band::Mhz433)
-    }
-
-    fn rc_packet(header: u8) -> Vec<u8, 11> {
-        let mut p = Vec::new();
-        p.extend_from_slice(&[header, 0, 1, 2, 3, 0, 4, 5, 6, 7, 0])
-            .unwrap();
-        p
-    }
-
-    #[test]
-    fn stored_bind_data_gets_a_500_ms_bind_window_then_the_link() {
-        let mut rx = Receiver::new(
-            Config::new(BindingVersion::V38, Band::Mhz433),
-            Some(bound()),
-        );
-        assert_eq!(rx.start(1_000), Command::ListenBind);
-        assert_eq!(rx.next_deadline_us(), Some(501_000));
-        assert_eq!(rx.poll(500_999).command, None);
-        assert_eq!(rx.poll(501_000).command, Some(Command::StartLink(bound())));
-        assert!(rx.is_linked());
-        // Not acquired yet: slow hopping, one hop per interval · hopcount = 25 ms · 6.
-        assert_eq!(rx.next_deadline_us(), Some(501_000 + 150_000 + 1));
-        assert_eq!(rx.poll(651_001).command, Some(Command::Hop(1)));
-    }
-
-    #[test]
-    fn other_generation_or_invalid_stored_data_means_binding_forever() {
-        let mut other = bound();
-        other.version = 0x39;
-        let mut rx = Receiver::new(Config::new(BindingVersion::V38, Band::Mhz433), Some(other));
-        assert_eq!(rx.start(0), Command::ListenBind);
-        assert_eq!(rx.next_deadline_us(), None);
-        assert_eq!(rx.poll(10_000_000).command, None);
-    }
-
-    #[test]
-    fn save_failsafe_is_reported_once_per_press_and_lost_packets_hop_on_the_grid() {
-        let config = Config {
-            bind_window_us: None,
-            ..Config::new(BindingVersion::V38, Band::Mhz433)
-        };
-        let mut rx = Receiver::new(config, Some(bound()));
-        assert_eq!(rx.start(0), Command::StartLink(bound()));
-        let saves: [bool; 4] = core::array::from_fn(|k| {
-            let header = if k < 3 { 0x01 } else { 0x00 };
-            let r = rx.on_packet(25_000 * k as u64, &rc_packet(header));
-            assert!(
-                r.reply.is_some(),
-                "telemetry is on in the default bind data"
-            );
-            matches!(
-                r.output,
-                Output::Channels {
-                    save_failsafe: true,
-                    ..
-                }
-            )
-        });
-        assert_eq!(saves, [true, false, false, false]);
-        assert_eq!(rx.hop_index(), 4);
-        // Last packet at 75 ms: the next is missed 26 ms later, the hop follows the grid.
-        assert_eq!(rx.next_deadline_us(), Some(75_000 + 26_000 + 1));
-        assert_eq!(rx.poll(101_001).command, Some(Command::Hop(5)));
-        assert_eq!(rx.next_deadline_us(), Some(100_000 + 26_000 + 1));
-        // Four heard, one missed.
-        assert_eq!(rx.link_quality(), 4);
     }
 }
