@@ -8,6 +8,11 @@ use crate::Error;
 const WRITE: u8 = 0x80;
 
 /// The chip's SPI interface. The only place that talks to the `SpiDevice`.
+///
+/// Cancel-safety of every method: each is one `SpiDevice::transaction`; dropping it is as
+/// safe as the device's own transaction (embedded-hal-bus and embassy devices release chip
+/// select when dropped), and a register access that did not complete has no effect beyond
+/// that register.
 pub struct Bus<SPI> {
     spi: SPI,
 }
