@@ -33,7 +33,8 @@ pub struct RxSignal {
 pub struct RxPacket {
     /// Payload bytes written to the start of the buffer.
     pub len: usize,
-    /// The received header (0x47–0x4A), first on air first.
+    /// The received header (0x47–0x4A), first on air first; bytes beyond the configured
+    /// header length are not part of this packet.
     pub header: [u8; 4],
     /// Signal quality.
     pub signal: RxSignal,
