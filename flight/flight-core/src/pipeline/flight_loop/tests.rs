@@ -182,4 +182,3 @@ fn failsafe_levels_a_rolled_quad_and_descends() {
     assert!(!out.armed);
     assert_eq!(out.motors, [Command::Stopped; 4]);
 }
-
