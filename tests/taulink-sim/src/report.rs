@@ -37,6 +37,10 @@ pub struct Report {
     pub latency_p99_ms: f64,
     /// Uplink LQ at the end (follower).
     pub uplink_lq: u8,
+    /// Mean uplink LQ over the run.
+    pub uplink_lq_mean: f64,
+    /// Mean downlink LQ over the run.
+    pub downlink_lq_mean: f64,
     /// Downlink LQ at the end (master).
     pub downlink_lq: u8,
     /// RSSI at the follower, dBm.
@@ -100,6 +104,8 @@ pub fn summarise(s: &Scenario, o: &Outcome) -> Report {
         latency_mean_ms: mean / 1000.0,
         latency_p99_ms: percentile(&lat, 0.99) / 1000.0,
         uplink_lq: m.now.uplink_lq,
+        uplink_lq_mean: m.uplink_lq_mean(),
+        downlink_lq_mean: m.downlink_lq_mean(),
         downlink_lq: m.now.downlink_lq,
         follower_rssi_dbm: m.now.follower_rssi_dbm.unwrap_or(0),
         master_rssi_dbm: m.now.master_rssi_dbm.unwrap_or(0),
@@ -147,6 +153,8 @@ impl Report {
         field("latency_p99_ms", format!("{:.3}", self.latency_p99_ms));
         field("uplink_lq", self.uplink_lq.to_string());
         field("downlink_lq", self.downlink_lq.to_string());
+        field("uplink_lq_mean", format!("{:.1}", self.uplink_lq_mean));
+        field("downlink_lq_mean", format!("{:.1}", self.downlink_lq_mean));
         field("follower_rssi_dbm", self.follower_rssi_dbm.to_string());
         field("master_rssi_dbm", self.master_rssi_dbm.to_string());
         field(
