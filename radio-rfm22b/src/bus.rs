@@ -1,5 +1,5 @@
 //! Register access framing over an async `SpiDevice`: the address byte carries the
-//! direction in bit 7 (1 = write), and bursts auto-increment (datasheet §3.1, Fig. 3/4).
+//! direction in bit 7 (1 = write), and bursts auto-increment (datasheet, "Serial Peripheral Interface").
 
 use embedded_hal_async::spi::{Operation, SpiDevice};
 

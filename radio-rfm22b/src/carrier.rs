@@ -1,5 +1,5 @@
 //! Carrier frequency and frequency hopping (registers 0x75–0x77, 0x79, 0x7A; datasheet
-//! §3.5.1): f = (fb + 24 + fc/64000) · 10 MHz · (hbsel+1) + fhch · fhs · 10 kHz. Pure, `const`.
+//! "Frequency Control"): f = (fb + 24 + fc/64000) · 10 MHz · (hbsel+1) + fhch · fhs · 10 kHz. Pure, `const`.
 
 use crate::ConfigError;
 

@@ -38,7 +38,7 @@ pub struct Config {
 impl Config {
     /// `modem`, `packet` and `carrier` with: 10 kHz hop spacing, +20 dBm with `lna_sw`,
     /// crystal load 0x7F, Tau Labs GPIO wiring, 62/32/32 FIFO thresholds, CCA at −90 dBm.
-    pub fn new(modem: ModemConfig, packet: PacketConfig, carrier: Carrier) -> Self {
+    pub const fn new(modem: ModemConfig, packet: PacketConfig, carrier: Carrier) -> Self {
         Self {
             modem,
             packet,
@@ -47,15 +47,17 @@ impl Config {
             tx_power: TxPower::MAX,
             lna_switch: true,
             crystal_load: CrystalLoad::RFM22B,
-            gpio: GpioConfig::default(),
-            fifo: FifoThresholds::default(),
+            gpio: GpioConfig::RFM22B,
+            fifo: FifoThresholds::HALF,
             clear_channel_threshold_dbm: -90,
         }
     }
 
     /// Checks the parts that are not validated at their own construction.
-    pub fn validate(&self) -> Result<(), ConfigError> {
-        self.packet.validate()?;
+    pub const fn validate(&self) -> Result<(), ConfigError> {
+        if let Err(e) = self.packet.validate() {
+            return Err(e);
+        }
         self.fifo.validate()
     }
 }

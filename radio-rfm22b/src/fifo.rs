@@ -1,4 +1,4 @@
-//! The two 64-byte FIFOs (datasheet §6.1): their thresholds (0x7C–0x7E) and how packets
+//! The two 64-byte FIFOs (datasheet, "FIFO Mode"): their thresholds (0x7C–0x7E) and how packets
 //! longer than a FIFO are streamed through them, plus the FIFO clear (0x08).
 
 use crate::ConfigError;
@@ -20,18 +20,20 @@ pub struct FifoThresholds {
 }
 
 impl Default for FifoThresholds {
-    /// Tau Labs' 62 / 32 / 32: half a FIFO of slack each way, i.e. one refill or drain
-    /// every 32 bytes (2.2 ms at 115 kbps, far longer than an SPI burst).
     fn default() -> Self {
-        Self {
-            tx_almost_full: 62,
-            tx_almost_empty: 32,
-            rx_almost_full: 32,
-        }
+        Self::HALF
     }
 }
 
 impl FifoThresholds {
+    /// Tau Labs' 62 / 32 / 32: half a FIFO of slack each way, i.e. one refill or drain
+    /// every 32 bytes (2.2 ms at 115 kbps, far longer than an SPI burst).
+    pub const HALF: Self = Self {
+        tx_almost_full: 62,
+        tx_almost_empty: 32,
+        rx_almost_full: 32,
+    };
+
     /// Checks the ranges.
     pub const fn validate(&self) -> Result<(), ConfigError> {
         const fn ok(t: u8) -> bool {

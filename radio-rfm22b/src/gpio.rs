@@ -1,4 +1,4 @@
-//! GPIO pin functions (0x0B–0x0D; datasheet §8.4 Table 14): the antenna switch wiring of
+//! GPIO pin functions (0x0B–0x0D; datasheet, "GPIO Configuration"): the antenna switch wiring of
 //! RFM22B-style modules and GPIO2's function. Pure.
 
 /// GPIO function codes (bits 4:0 of 0x0B–0x0D).
@@ -25,7 +25,7 @@ pub enum Gpio2 {
     ClearChannel,
     /// Tied high (VDD), as OpenLRSng.
     Vdd,
-    /// Any raw function code (bits 4:0).
+    /// A raw 0x0D value, drive bits included (OpenLRSng writes 0xFD: drive 3, VDD).
     Raw(u8),
 }
 
@@ -43,15 +43,19 @@ pub struct GpioConfig {
 
 impl Default for GpioConfig {
     fn default() -> Self {
-        Self {
-            antenna_switch: AntennaSwitch::Gpio0TxGpio1Rx,
-            gpio2: Gpio2::ClearChannel,
-            drive: 3,
-        }
+        Self::RFM22B
     }
 }
 
 impl GpioConfig {
+    /// The RFM22B module wiring as Tau Labs drives it: GPIO0 = TX state, GPIO1 = RX state,
+    /// GPIO2 = clear-channel output, drive strength 3.
+    pub const RFM22B: Self = Self {
+        antenna_switch: AntennaSwitch::Gpio0TxGpio1Rx,
+        gpio2: Gpio2::ClearChannel,
+        drive: 3,
+    };
+
     /// Registers 0x0B, 0x0C, 0x0D.
     pub const fn registers(&self) -> [u8; 3] {
         let drive = (self.drive & 0x03) << 6;
@@ -60,11 +64,11 @@ impl GpioConfig {
             AntennaSwitch::Gpio0RxGpio1Tx => (RX_STATE, TX_STATE),
         };
         let gpio2 = match self.gpio2 {
-            Gpio2::ClearChannel => CLEAR_CHANNEL,
-            Gpio2::Vdd => VDD,
-            Gpio2::Raw(code) => code & 0x1F,
+            Gpio2::ClearChannel => drive | CLEAR_CHANNEL,
+            Gpio2::Vdd => drive | VDD,
+            Gpio2::Raw(value) => value,
         };
-        [drive | gpio0, drive | gpio1, drive | gpio2]
+        [drive | gpio0, drive | gpio1, gpio2]
     }
 }
 
@@ -82,12 +86,17 @@ mod tests {
             ..tau
         };
         assert_eq!(swapped.registers(), [0xD5, 0xD2, 0xDC]);
-        // OpenLRSng: 0x0B=12 0x0C=15, GPIO2 0xFD (drive 3 | VDD) — it drives only GPIO2 hard.
+        // OpenLRSng: 0x0B=12 0x0C=15 (drive 0), GPIO2 0xFD (drive 3 | VDD).
         let openlrs = GpioConfig {
             antenna_switch: AntennaSwitch::Gpio0TxGpio1Rx,
-            gpio2: Gpio2::Vdd,
+            gpio2: Gpio2::Raw(0xFD),
             drive: 0,
         };
-        assert_eq!(openlrs.registers(), [0x12, 0x15, 0x1D]);
+        assert_eq!(openlrs.registers(), [0x12, 0x15, 0xFD]);
+        let vdd = GpioConfig {
+            gpio2: Gpio2::Vdd,
+            ..openlrs
+        };
+        assert_eq!(vdd.registers(), [0x12, 0x15, 0x1D]);
     }
 }

@@ -1,5 +1,5 @@
 //! The receiver's channel (IF) filter: register 0x1C and its bandwidth table (datasheet
-//! Table 16 "Filter Bandwidth Parameters"; AN440 §3). Pure lookup, `const`.
+//! filter-bandwidth table; AN440). Pure lookup, `const`.
 
 /// One row of the datasheet table: the filter's −3 dB bandwidth and its 0x1C value.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1,4 +1,4 @@
-//! The interrupt status pair (0x03/0x04; datasheet §9, read clears both and releases the
+//! The interrupt status pair (0x03/0x04; datasheet register table; read clears both and releases the
 //! level-low nIRQ line) and the race of nIRQ against a deadline, every wait's timeout.
 
 use core::future::{Future, poll_fn};
@@ -50,14 +50,18 @@ impl Status {
     pub const fn sync_detected(self) -> bool {
         self.status2 & IRQ2_SYNC_DETECTED != 0
     }
-    /// The chip went through a power-on reset. The crystal-ready flag is not used for this:
-    /// it also fires, legitimately, when the chip leaves standby.
+    /// The chip went through a power-on reset.
     pub const fn power_on_reset(self) -> bool {
         self.status2 & IRQ2_POWER_ON_RESET != 0
     }
     /// The crystal is running.
     pub const fn chip_ready(self) -> bool {
         self.status2 & IRQ2_CHIP_READY != 0
+    }
+    /// The chip has reset itself: the power-on-reset flag, or a chip-ready flag when the
+    /// driver did not just wake the chip from standby (`waking`), where it is expected.
+    pub const fn reset_seen(self, waking: bool) -> bool {
+        self.power_on_reset() || (self.chip_ready() && !waking)
     }
 }
 

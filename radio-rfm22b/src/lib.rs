@@ -6,15 +6,35 @@
 //!
 //! Configure once, then per slot set the channel and transmit or receive:
 //!
-//! ```ignore
+//! ```
+//! use radio_rfm22b::{Carrier, Config, Error, ModemConfig, PacketConfig, Rfm22b, RxOutcome};
+//!
+//! /// Checked when compiling: an impossible modem setting does not build.
 //! const MODEM: ModemConfig = ModemConfig::new(57_600, 28_800);
-//! let config = Config::new(MODEM, PacketConfig::new(), Carrier::new(433_000_000));
-//! radio.init(config).await?;
-//! radio.set_channel(7).await?;
-//! radio.transmit(b"hello", 10_000).await?;
-//! match radio.receive(&mut buf, 20_000).await? {
-//!     RxOutcome::Packet(p) => { /* buf[..p.len], p.signal.rssi_dbm */ }
-//!     RxOutcome::CrcError(_) | RxOutcome::TooLong { .. } | RxOutcome::Timeout => {}
+//!
+//! async fn one_slot<SPI, IRQ, SDN, D>(
+//!     radio: &mut Rfm22b<SPI, IRQ, SDN, D>,
+//! ) -> Result<(), Error<SPI::Error>>
+//! where
+//!     SPI: embedded_hal_async::spi::SpiDevice,
+//!     IRQ: embedded_hal_async::digital::Wait,
+//!     SDN: embedded_hal::digital::OutputPin,
+//!     D: embedded_hal_async::delay::DelayNs,
+//! {
+//!     radio
+//!         .init(Config::new(MODEM, PacketConfig::new(), Carrier::new(433_000_000)))
+//!         .await?;
+//!     radio.set_channel(7).await?;
+//!     radio.transmit(b"hello", 10_000).await?;
+//!     let mut buf = [0u8; 255];
+//!     match radio.receive(&mut buf, 20_000).await? {
+//!         RxOutcome::Packet(p) => {
+//!             let _payload = &buf[..p.len];
+//!             let _quality = (p.signal.rssi_dbm, p.signal.afc_offset_hz);
+//!         }
+//!         RxOutcome::CrcError(_) | RxOutcome::TooLong { .. } | RxOutcome::Timeout => {}
+//!     }
+//!     Ok(())
 //! }
 //! ```
 #![cfg_attr(not(test), no_std)]
@@ -25,6 +45,7 @@ mod bus;
 pub mod carrier;
 mod config;
 mod config_error;
+mod control;
 mod error;
 pub mod fifo;
 pub mod gpio;

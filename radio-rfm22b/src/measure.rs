@@ -31,7 +31,7 @@ pub const fn afc_offset_hz(reg_2b: u8, reg_2c: u8, high_band: bool) -> i32 {
 }
 
 /// Temperature in tenths of °C from the ADC value, for the driver's sensor setup
-/// (0x12 = 0x20: range −64…+64 °C at 0.5 °C per LSB, datasheet §8.3).
+/// (0x12 = 0x20: range −64…+64 °C at 0.5 °C per LSB, datasheet, "Temperature Sensor").
 pub const fn temperature_decidegrees_c(adc: u8) -> i16 {
     adc as i16 * 5 - 640
 }

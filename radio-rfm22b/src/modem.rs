@@ -1,6 +1,6 @@
 //! Modem configuration, computed: bit rate, deviation and modulation in; the 18 modem
 //! registers (0x1C–0x25, 0x2A, 0x58, 0x69, 0x6E–0x72) out, the way Silicon Labs' register
-//! calculator derives them (datasheet §3.5/§8, AN440). Pure and `const`.
+//! calculator derives them (datasheet "Modulation Options" and register descriptions, AN440). Pure and `const`.
 //!
 //! The calculator is a spreadsheet whose outputs also depend on choices it makes from
 //! lookup tables. Those are encoded here from the datasheet (IF filter table, see
@@ -11,6 +11,9 @@
 use crate::ConfigError;
 use crate::if_filter::IfFilter;
 
+mod settings;
+pub use settings::ModemSettings;
+
 /// Frequency-shift keying flavour (0x71 modtyp).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -19,91 +22,6 @@ pub enum Modulation {
     Gfsk,
     /// Plain 2-FSK.
     Fsk,
-}
-
-/// The inputs of a modem calculation. Build with [`ModemSettings::new`] and the `with_*`
-/// methods (all `const`), then turn into registers with [`ModemConfig::from_settings`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct ModemSettings {
-    /// Air bit rate, 1 000–256 000 bps.
-    pub bit_rate_bps: u32,
-    /// Transmitted frequency deviation (peak), 625 Hz steps, up to 319 375 Hz.
-    pub deviation_hz: u32,
-    /// The deviation the receiver is designed for (IF bandwidth and clock-recovery gain).
-    /// Normally equal to `deviation_hz`; some published profiles used a larger design value.
-    pub rx_deviation_hz: u32,
-    /// GFSK or FSK.
-    pub modulation: Modulation,
-    /// Manchester coding (doubles the chip rate the receiver sees).
-    pub manchester: bool,
-    /// 0x70 bits 3:2 (manppol, enmaninv). Reset value: set. They only act with Manchester on.
-    pub manchester_inverted: bool,
-    /// Automatic frequency control (0x1D = 0x40).
-    pub afc: bool,
-    /// Force an IF filter instead of the calculator's choice.
-    pub if_filter: Option<IfFilter>,
-    /// Force the AFC limiter (0x2A) instead of the calculator's choice.
-    pub afc_limiter: Option<u8>,
-}
-
-impl ModemSettings {
-    /// GFSK at `bit_rate_bps` with `deviation_hz`, AFC on, calculator choices.
-    pub const fn new(bit_rate_bps: u32, deviation_hz: u32) -> Self {
-        Self {
-            bit_rate_bps,
-            deviation_hz,
-            rx_deviation_hz: deviation_hz,
-            modulation: Modulation::Gfsk,
-            manchester: false,
-            manchester_inverted: true,
-            afc: true,
-            if_filter: None,
-            afc_limiter: None,
-        }
-    }
-
-    /// Sets the modulation.
-    pub const fn with_modulation(mut self, modulation: Modulation) -> Self {
-        self.modulation = modulation;
-        self
-    }
-
-    /// Sets the deviation the receive side is computed for.
-    pub const fn with_rx_deviation_hz(mut self, rx_deviation_hz: u32) -> Self {
-        self.rx_deviation_hz = rx_deviation_hz;
-        self
-    }
-
-    /// Forces an IF filter.
-    pub const fn with_if_filter(mut self, filter: IfFilter) -> Self {
-        self.if_filter = Some(filter);
-        self
-    }
-
-    /// Forces the AFC limiter register value.
-    pub const fn with_afc_limiter(mut self, limiter: u8) -> Self {
-        self.afc_limiter = Some(limiter);
-        self
-    }
-
-    /// Turns AFC on or off.
-    pub const fn with_afc(mut self, afc: bool) -> Self {
-        self.afc = afc;
-        self
-    }
-
-    /// Turns Manchester coding on or off.
-    pub const fn with_manchester(mut self, manchester: bool) -> Self {
-        self.manchester = manchester;
-        self
-    }
-
-    /// Sets 0x70 bits 3:2 (see the field).
-    pub const fn with_manchester_inverted(mut self, inverted: bool) -> Self {
-        self.manchester_inverted = inverted;
-        self
-    }
 }
 
 /// The computed modem registers, in address order.
@@ -160,7 +78,7 @@ pub struct ModemConfig {
     registers: ModemRegisters,
 }
 
-/// Below this rate the TX data rate uses the fine scale (0x70 txdtrtscale, datasheet §3.5).
+/// Below this rate the TX data rate uses the fine scale (0x70 txdtrtscale, datasheet "Data Rate").
 const TX_FINE_SCALE_BELOW_BPS: u32 = 30_000;
 
 /// `round(num / den)`, halves up, as the calculator's `ROUND`.
@@ -205,12 +123,12 @@ impl ModemConfig {
         if bit_rate < 1_000 || bit_rate > 256_000 {
             return Err(ConfigError::BitRateOutOfRange);
         }
-        // fd is 9 bits of 625 Hz (datasheet §3.5.3: Δf = fd · 625 Hz).
+        // fd is 9 bits of 625 Hz (datasheet "Frequency Deviation": Δf = fd · 625 Hz).
         let fd = div_round(settings.deviation_hz as u64, 625);
         if fd == 0 || fd > 0x1FF || settings.rx_deviation_hz < 625 {
             return Err(ConfigError::DeviationOutOfRange);
         }
-        // The receiver sees twice the rate with Manchester (AN440 §4, "Rb·(1+enmanch)").
+        // The receiver sees twice the rate with Manchester (AN440: "Rb·(1+enmanch)").
         let chip_rate = bit_rate as u64 * if settings.manchester { 2 } else { 1 };
         let rx_deviation = settings.rx_deviation_hz as u64;
         // Carson's rule, as the calculator: BW = Rb + 2·Δf.
@@ -236,7 +154,7 @@ impl ModemConfig {
         let crgain = if crgain > 0x7FF { 0x7FF } else { crgain };
 
         let fine_scale = bit_rate < TX_FINE_SCALE_BELOW_BPS;
-        // Datasheet §3.5.2: DR = txdr · 1 MHz / 2^(16 + 5·txdtrtscale).
+        // Datasheet "Data Rate": DR = txdr · 1 MHz / 2^(16 + 5·txdtrtscale).
         let txdr = if fine_scale {
             div_round((bit_rate as u64) << 21, 1_000_000)
         } else {
@@ -396,6 +314,27 @@ mod tests {
             let r = m.registers();
             let rxosr = u32::from(r.block_1c[4]) | (u32::from(r.block_1c[5] >> 5) << 8);
             assert!((8..=2047).contains(&rxosr), "rate {rate}: rxosr {rxosr}");
+            // The programmed TX rate is within 0.05 % of the asked one (datasheet "Data Rate").
+            let txdr = f64::from(u16::from_be_bytes([r.block_6e[0], r.block_6e[1]]));
+            let scale = if r.block_6e[2] & 0x20 != 0 {
+                2f64.powi(21)
+            } else {
+                2f64.powi(16)
+            };
+            let actual = txdr * 1e6 / scale;
+            let error = (actual - f64::from(rate)).abs() / f64::from(rate);
+            assert!(error < 5e-4, "rate {rate}: programmed {actual:.1} bps");
+            // The clock-recovery NCO reproduces the rate: Rb = ncoff·500 kHz·(1+2·dwn3)/2^(20+ndec).
+            let ncoff = (u32::from(r.block_1c[5] & 0x0F) << 16)
+                | (u32::from(r.block_1c[6]) << 8)
+                | u32::from(r.block_1c[7]);
+            let f = m.if_filter();
+            let dwn3 = if f.dwn3_bypass() { 3.0 } else { 1.0 };
+            let rx_rate = f64::from(ncoff) * 500e3 * dwn3 / 2f64.powi(20 + i32::from(f.ndec_exp()));
+            assert!(
+                (rx_rate - f64::from(rate)).abs() / f64::from(rate) < 1e-3,
+                "rate {rate}: NCO {rx_rate:.1}"
+            );
             rate += 1_000;
         }
     }

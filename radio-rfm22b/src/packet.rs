@@ -1,4 +1,4 @@
-//! The packet handler's configuration (registers 0x30–0x46; datasheet §6 "Packet Handler"):
+//! The packet handler's configuration (registers 0x30–0x46; datasheet "Packet Handler"):
 //! preamble, sync word, header and its checks, CRC, fixed or variable length, whitening.
 //! Pure and `const`; the driver writes [`PacketConfig::writes`].
 

@@ -1,4 +1,4 @@
-//! Transmit power (0x6D; datasheet §4.5) and crystal load capacitance (0x09; §8.2). Pure.
+//! Transmit power (0x6D; datasheet "Output Power Selection") and crystal load capacitance (0x09; "Crystal Oscillator"). Pure.
 
 use crate::ConfigError;
 

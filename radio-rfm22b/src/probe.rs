@@ -1,6 +1,6 @@
 //! Identification: the silicon revision reported by register 0x01.
 
-/// Silicon revision from register 0x01 (datasheet §9, "Device Version").
+/// Silicon revision from register 0x01 (datasheet register 01h, "Device Version").
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Version {

@@ -1,4 +1,4 @@
-//! Register addresses and bit fields of the Si4432 (datasheet rev 1.1 §9 "Register table",
+//! Register addresses and bit fields of the Si4432 (datasheet register table,
 //! and AN440 for the modem registers). Only what the driver uses is named here.
 
 /// 0x00 Device Type: reads 0x08 on every Si4430/31/32 ("EZRadioPRO transceiver").
@@ -87,7 +87,7 @@ pub const HEADER_ENABLE_3: u8 = 0x43;
 pub const RECEIVED_HEADER_3: u8 = 0x47;
 /// 0x4B Received Packet Length.
 pub const RECEIVED_PACKET_LENGTH: u8 = 0x4B;
-/// 0x58 Charge-pump current trim (undocumented in the register table; set by the calculator).
+/// 0x58 Charge-pump current trim (the calculator raises it above 100 kbps).
 pub const CHARGE_PUMP_TRIM: u8 = 0x58;
 /// 0x69 AGC Override 1.
 pub const AGC_OVERRIDE: u8 = 0x69;

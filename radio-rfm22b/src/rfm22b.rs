@@ -1,6 +1,6 @@
 //! The driver: `Rfm22b` owns the SPI device, nIRQ, SDN and a delay. This file holds
-//! construction, reset/probe, configuration and the small operations; TX and RX live in
-//! `tx.rs` and `rx.rs`.
+//! construction, reset/probe, configuration and the end-of-operation clean-up; run-time
+//! controls live in `control.rs`, TX and RX in `tx.rs` and `rx.rs`.
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal_async::delay::DelayNs;
@@ -12,18 +12,15 @@ use crate::bus::Bus;
 use crate::config::Config;
 use crate::irq::Status;
 use crate::measure;
-use crate::power::TxPower;
 use crate::probe::{ChipInfo, Version};
 use crate::registers::*;
 
 /// Polls of the chip-ready flag after a software reset, 1 ms apart (Tau Labs: 50).
 const CHIP_READY_POLLS: u32 = 50;
-/// SDN high long enough to discharge the chip (datasheet §3.3: ≥ 10 ms).
+/// SDN high long enough to discharge the chip (≥ 10 ms).
 const SDN_HIGH_MS: u32 = 10;
-/// Power-on reset after SDN falls: up to 16.8 ms (datasheet Table 7), rounded up.
+/// Power-on reset after SDN falls: up to 16.8 ms (datasheet), rounded up.
 const SDN_LOW_MS: u32 = 20;
-/// The ADC conversion takes ~305 µs (datasheet §8.3); poll every 100 µs, at most 10 times.
-const ADC_POLLS: u32 = 10;
 
 /// A stand-in for an SDN pin on boards that tie SDN low.
 #[derive(Debug, Clone, Copy, Default)]
@@ -56,6 +53,8 @@ pub struct Rfm22b<SPI, IRQ, SDN, D> {
     pub(crate) channel: u8,
     /// An operation left the chip in TX/RX with interrupts enabled (it was cancelled).
     pub(crate) busy: bool,
+    /// The chip is in standby: the next TX/RX will see a (legitimate) chip-ready flag.
+    pub(crate) standby: bool,
 }
 
 impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
@@ -97,6 +96,7 @@ where
             config: None,
             channel: 0,
             busy: false,
+            standby: false,
         }
     }
 
@@ -128,6 +128,7 @@ where
     /// Cancel-safety: safe to drop; the next `reset` starts over.
     pub async fn reset(&mut self) -> Result<ChipInfo, Error<SPI::Error>> {
         self.busy = false;
+        self.standby = false;
         if self.sdn_present {
             self.sdn.set_high().map_err(|_| Error::Pin)?;
             self.delay.delay_ms(SDN_HIGH_MS).await;
@@ -179,7 +180,7 @@ where
     }
 
     /// Writes every register of `config`, in bursts (about 20 SPI transactions).
-    async fn configure(&mut self, config: &Config) -> Result<(), Error<SPI::Error>> {
+    pub(crate) async fn configure(&mut self, config: &Config) -> Result<(), Error<SPI::Error>> {
         let bus = &mut self.bus;
         bus.write(OPERATING_MODE_1, MODE_XTON).await?;
         bus.write(OPERATING_MODE_2, 0x00).await?;
@@ -230,88 +231,6 @@ where
         Ok(())
     }
 
-    /// Selects hop channel `channel` (0x79): carrier + channel × spacing. Takes effect at
-    /// once (the PLL settles within the 200 µs the chip waits before TX/RX).
-    ///
-    /// Cancel-safety: safe (one register write).
-    pub async fn set_channel(&mut self, channel: u8) -> Result<(), Error<SPI::Error>> {
-        self.bus.write(HOP_CHANNEL, channel).await?;
-        self.channel = channel;
-        Ok(())
-    }
-
-    /// Changes the output power (0x6D).
-    ///
-    /// Cancel-safety: safe (one register write).
-    pub async fn set_tx_power(&mut self, power: TxPower) -> Result<(), Error<SPI::Error>> {
-        let config = self.config.as_mut().ok_or(Error::NotInitialised)?;
-        config.tx_power = power;
-        let value = power.register(config.lna_switch);
-        self.bus.write(TX_POWER, value).await
-    }
-
-    /// READY: crystal on, ~1 mA, 200 µs to TX/RX. Also aborts a TX/RX left running.
-    ///
-    /// Cancel-safety: safe.
-    pub async fn idle(&mut self) -> Result<(), Error<SPI::Error>> {
-        self.bus.write(OPERATING_MODE_1, MODE_XTON).await?;
-        self.bus
-            .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
-            .await?;
-        self.read_status().await?;
-        self.busy = false;
-        Ok(())
-    }
-
-    /// STANDBY: everything off but the register file (~450 nA); the next TX/RX restarts the
-    /// crystal (≈ 600 µs longer).
-    ///
-    /// Cancel-safety: safe.
-    pub async fn sleep(&mut self) -> Result<(), Error<SPI::Error>> {
-        self.idle().await?;
-        self.bus.write(OPERATING_MODE_1, 0x00).await
-    }
-
-    /// The RSSI now (0x26), in dBm (see [`measure::rssi_dbm`]). Meaningful in RX.
-    ///
-    /// Cancel-safety: safe (a register read).
-    pub async fn rssi_dbm(&mut self) -> Result<i16, Error<SPI::Error>> {
-        let raw = self.bus.read(RSSI).await?;
-        let offset = self.config.map_or(0, |c| c.packet.rssi_offset());
-        Ok(measure::rssi_dbm(raw, offset))
-    }
-
-    /// Measures the chip temperature, in tenths of °C.
-    ///
-    /// Cancel-safety: safe.
-    pub async fn read_temperature_decidegrees_c(&mut self) -> Result<i16, Error<SPI::Error>> {
-        self.bus.write(ADC_CONFIG, ADC_START).await?;
-        for _ in 0..ADC_POLLS {
-            self.delay.delay_us(100).await;
-            if self.bus.read(ADC_CONFIG).await? & ADC_START != 0 {
-                let adc = self.bus.read(ADC_VALUE).await?;
-                return Ok(measure::temperature_decidegrees_c(adc));
-            }
-        }
-        Err(Error::Timeout)
-    }
-
-    /// Checks that the chip still holds its configuration: the identification and GPIO1
-    /// (0x0C, which reads 0 after a silent reset — OpenLRSng's "locked module" test). On a
-    /// lost configuration it re-initialises and returns [`Error::ChipReset`].
-    ///
-    /// Cancel-safety: safe to drop before the re-init starts; during it, as `init`.
-    pub async fn check_health(&mut self) -> Result<(), Error<SPI::Error>> {
-        let config = self.config.ok_or(Error::NotInitialised)?;
-        self.probe().await?;
-        let [_, expected, _] = config.gpio.registers();
-        if self.bus.read(GPIO1_CONFIG).await? != expected {
-            self.reinit().await?;
-            return Err(Error::ChipReset);
-        }
-        Ok(())
-    }
-
     /// After a status read showed a power-on reset: re-initialise, report the reset.
     pub(crate) async fn recover(&mut self) -> Error<SPI::Error> {
         match self.reinit().await {
@@ -324,6 +243,33 @@ where
     pub(crate) async fn clear_fifos(&mut self, bits: u8) -> Result<(), Error<SPI::Error>> {
         self.bus.write(OPERATING_MODE_2, bits).await?;
         self.bus.write(OPERATING_MODE_2, 0x00).await
+    }
+
+    /// Ends a TX/RX: on success only disables interrupts; on failure also goes to READY and
+    /// flushes `fifos`; a POR triggers re-init; a timeout checks the chip is still there.
+    pub(crate) async fn finish<T>(
+        &mut self,
+        outcome: Result<T, Error<SPI::Error>>,
+        fifos: u8,
+    ) -> Result<T, Error<SPI::Error>> {
+        match outcome {
+            Ok(value) => {
+                self.bus
+                    .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
+                    .await?;
+                self.busy = false;
+                Ok(value)
+            }
+            Err(Error::ChipReset) => Err(self.recover().await),
+            Err(e) => {
+                self.idle().await?;
+                self.clear_fifos(fifos).await?;
+                if matches!(e, Error::Timeout) {
+                    self.probe().await?;
+                }
+                Err(e)
+            }
+        }
     }
 
     /// If a previous TX/RX was dropped mid-way, stop it before starting anew.

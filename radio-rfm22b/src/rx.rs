@@ -1,5 +1,5 @@
 //! Reception: arm RX, latch RSSI and AFC at sync detect, drain the FIFO on almost-full for
-//! packets over 64 bytes, finish on valid-packet or CRC error (datasheet §6.3; the Tau Labs
+//! packets over 64 bytes, finish on valid-packet or CRC error (datasheet "Packet Handler"; the Tau Labs
 //! interrupt set 0x05 = 0x93 with sync detect from 0x06).
 
 use core::pin::pin;
@@ -65,9 +65,10 @@ where
     SDN: OutputPin,
     D: DelayNs,
 {
-    /// Listens on the current channel for up to `timeout_us` and receives one packet into
-    /// `buf` (up to 255 bytes; longer than 64 streams through the FIFO). The chip ends in
-    /// READY whatever the outcome.
+    /// Listens on the current channel for up to `timeout_us` for a packet to start, and
+    /// receives it into `buf` (up to 255 bytes; longer than 64 streams through the FIFO). A
+    /// packet whose sync word arrived before the timeout is completed (for at most the
+    /// airtime of a 255-byte packet more). The chip ends in READY whatever the outcome.
     ///
     /// Errors: [`Error::ChipReset`] (a power-on reset was seen; the chip has been
     /// re-initialised), [`Error::FifoError`] (the FIFO overflowed; flushed), bus errors.
@@ -97,83 +98,59 @@ where
             .write(OPERATING_MODE_1, MODE_RXON | MODE_XTON)
             .await?;
 
-        let high_band = config.carrier.high_band();
-        let rssi_offset = config.packet.rssi_offset();
-        let drain_len = config.fifo.rx_drain_len();
-        let fixed_len = match config.packet.length() {
-            PacketLength::Fixed(n) => Some(usize::from(n)),
-            PacketLength::Variable => None,
-        };
+        // The timeout bounds the wait for a packet to *start*: once its sync word was seen,
+        // the packet gets as long as the longest packet takes on air to complete.
+        let completion_us = config
+            .packet
+            .airtime_us(&config.modem, u8::MAX)
+            .saturating_add(COMPLETION_MARGIN_US);
+        let waking = core::mem::take(&mut self.standby);
         let outcome = {
             let Self {
                 irq, delay, bus, ..
             } = &mut *self;
-            let mut deadline = pin!(delay.delay_us(timeout_us));
-            let mut expired = false;
-            let mut signal: Option<RxSignal> = None;
-            let mut got = 0usize;
-            loop {
-                match wait_for_irq(irq, deadline.as_mut(), &mut expired).await {
-                    Ok(Wake::Irq) => {}
-                    Ok(Wake::Deadline) => break Err(Error::Timeout),
-                    Err(_) => break Err(Error::Pin),
-                }
-                let status = read_status(bus).await?;
-                if status.power_on_reset() {
-                    break Err(Error::ChipReset);
-                }
-                if status.fifo_error() {
-                    break Err(Error::FifoError);
-                }
-                if status.sync_detected() && signal.is_none() {
-                    signal = Some(latch_signal(bus, high_band, rssi_offset).await?);
-                }
-                if status.crc_error() {
-                    let s = match signal {
-                        Some(s) => s,
-                        None => latch_signal(bus, high_band, rssi_offset).await?,
-                    };
-                    break Ok(RxOutcome::CrcError(s));
-                }
-                if !(status.packet_valid() || status.rx_almost_full()) {
-                    continue;
-                }
-                // Received header 0x47–0x4A and length 0x4B in one burst.
-                let mut head = [0u8; 5];
-                bus.read_burst(RECEIVED_HEADER_3, &mut head).await?;
-                let [h3, h2, h1, h0, rx_len] = head;
-                let len = fixed_len.unwrap_or(usize::from(rx_len));
-                if len > buf.len() {
-                    let s = match signal {
-                        Some(s) => s,
-                        None => latch_signal(bus, high_band, rssi_offset).await?,
-                    };
-                    break Ok(RxOutcome::TooLong { len, signal: s });
-                }
-                let take = if status.packet_valid() {
-                    len.saturating_sub(got)
-                } else {
-                    drain_len.min(len.saturating_sub(got))
-                };
-                if let Some(dst) = buf.get_mut(got..got + take) {
-                    bus.read_burst(FIFO, dst).await?;
-                    got += take;
-                }
-                if status.packet_valid() {
-                    let s = match signal {
-                        Some(s) => s,
-                        None => latch_signal(bus, high_band, rssi_offset).await?,
-                    };
-                    break Ok(RxOutcome::Packet(RxPacket {
-                        len: got,
-                        header: [h3, h2, h1, h0],
-                        signal: s,
-                    }));
+            let mut rx = Reception {
+                buf,
+                got: 0,
+                signal: None,
+                high_band: config.carrier.high_band(),
+                rssi_offset: config.packet.rssi_offset(),
+                drain_len: config.fifo.rx_drain_len(),
+                fixed_len: match config.packet.length() {
+                    PacketLength::Fixed(n) => Some(usize::from(n)),
+                    PacketLength::Variable => None,
+                },
+                waking,
+            };
+            let mut budget_us = timeout_us;
+            let mut extended = false;
+            'phase: loop {
+                let mut deadline = pin!(delay.delay_us(budget_us));
+                let mut expired = false;
+                loop {
+                    match wait_for_irq(irq, deadline.as_mut(), &mut expired).await {
+                        Ok(Wake::Irq) => {}
+                        Ok(Wake::Deadline) if rx.signal.is_some() && !extended => {
+                            extended = true;
+                            budget_us = completion_us;
+                            continue 'phase;
+                        }
+                        Ok(Wake::Deadline) => break 'phase Err(Error::Timeout),
+                        Err(_) => break 'phase Err(Error::Pin),
+                    }
+                    if let Some(done) = rx.service(bus).await? {
+                        break 'phase done;
+                    }
                 }
             }
         };
         match outcome {
-            Ok(RxOutcome::Packet(p)) => self.finish(Ok(RxOutcome::Packet(p)), FFCLR_RX).await,
+            Ok(RxOutcome::Packet(p)) => {
+                // The chip leaves RX by itself after a valid packet; make READY explicit so
+                // no second packet starts filling the FIFO.
+                self.bus.write(OPERATING_MODE_1, MODE_XTON).await?;
+                self.finish(Ok(RxOutcome::Packet(p)), FFCLR_RX).await
+            }
             // Discarded packets: back to READY with an empty FIFO, as after a timeout.
             Ok(other) => {
                 self.idle().await?;
@@ -190,6 +167,88 @@ where
                 Ok(RxOutcome::Timeout)
             }
             Err(e) => self.finish(Err(e), FFCLR_RX).await,
+        }
+    }
+}
+
+/// Slack on top of the longest packet's airtime once a sync word was seen.
+const COMPLETION_MARGIN_US: u32 = 2_000;
+
+/// The state of one reception between interrupts.
+struct Reception<'a> {
+    buf: &'a mut [u8],
+    got: usize,
+    signal: Option<RxSignal>,
+    high_band: bool,
+    rssi_offset: u8,
+    drain_len: usize,
+    fixed_len: Option<usize>,
+    /// The chip left standby for this reception, so a chip-ready flag is expected.
+    waking: bool,
+}
+
+impl Reception<'_> {
+    /// Handles one nIRQ: reads the status, latches RSSI/AFC at sync, drains the FIFO.
+    /// `Some` ends the reception.
+    async fn service<SPI: SpiDevice>(
+        &mut self,
+        bus: &mut crate::Bus<SPI>,
+    ) -> Result<Option<Result<RxOutcome, Error<SPI::Error>>>, Error<SPI::Error>> {
+        let status = read_status(bus).await?;
+        if status.reset_seen(self.waking) {
+            return Ok(Some(Err(Error::ChipReset)));
+        }
+        if status.fifo_error() {
+            return Ok(Some(Err(Error::FifoError)));
+        }
+        if status.sync_detected() && self.signal.is_none() {
+            self.signal = Some(latch_signal(bus, self.high_band, self.rssi_offset).await?);
+        }
+        if status.crc_error() {
+            let signal = self.signal(bus).await?;
+            return Ok(Some(Ok(RxOutcome::CrcError(signal))));
+        }
+        if !(status.packet_valid() || status.rx_almost_full()) {
+            return Ok(None);
+        }
+        // Received header 0x47–0x4A and length 0x4B in one burst.
+        let mut head = [0u8; 5];
+        bus.read_burst(RECEIVED_HEADER_3, &mut head).await?;
+        let [h3, h2, h1, h0, rx_len] = head;
+        let len = self.fixed_len.unwrap_or(usize::from(rx_len));
+        if len > self.buf.len() {
+            let signal = self.signal(bus).await?;
+            return Ok(Some(Ok(RxOutcome::TooLong { len, signal })));
+        }
+        let remaining = len.saturating_sub(self.got);
+        let take = if status.packet_valid() {
+            remaining
+        } else {
+            self.drain_len.min(remaining)
+        };
+        if let Some(dst) = self.buf.get_mut(self.got..self.got + take) {
+            bus.read_burst(FIFO, dst).await?;
+            self.got += take;
+        }
+        if !status.packet_valid() {
+            return Ok(None);
+        }
+        let signal = self.signal(bus).await?;
+        Ok(Some(Ok(RxOutcome::Packet(RxPacket {
+            len: self.got,
+            header: [h3, h2, h1, h0],
+            signal,
+        }))))
+    }
+
+    /// The signal latched at sync, or read now if the sync interrupt was not seen.
+    async fn signal<SPI: SpiDevice>(
+        &mut self,
+        bus: &mut crate::Bus<SPI>,
+    ) -> Result<RxSignal, Error<SPI::Error>> {
+        match self.signal {
+            Some(signal) => Ok(signal),
+            None => latch_signal(bus, self.high_band, self.rssi_offset).await,
         }
     }
 }

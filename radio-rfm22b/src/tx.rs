@@ -1,5 +1,5 @@
 //! Transmission: load the FIFO, start TX, refill on almost-empty for packets over 64 bytes,
-//! finish on packet-sent (datasheet §6.2; Tau Labs' `PIOS_RFM22B_TransmitPacket` order).
+//! finish on packet-sent (datasheet "Packet Handler"; Tau Labs' `PIOS_RFM22B_TransmitPacket` order).
 
 use core::pin::pin;
 
@@ -70,6 +70,7 @@ where
             .await?;
 
         let refill_len = config.fifo.tx_refill_len();
+        let waking = core::mem::take(&mut self.standby);
         let outcome = {
             let Self {
                 irq, delay, bus, ..
@@ -87,7 +88,7 @@ where
                     }
                 }
                 let status = read_status(bus).await?;
-                if status.power_on_reset() {
+                if status.reset_seen(waking) {
                     outcome = Err(Error::ChipReset);
                     break;
                 }
@@ -112,32 +113,5 @@ where
             outcome
         };
         self.finish(outcome, FFCLR_TX).await
-    }
-
-    /// Ends a TX/RX: on success only disables interrupts; on failure also goes to READY and
-    /// flushes `fifos`; a POR triggers re-init; a timeout checks the chip is still there.
-    pub(crate) async fn finish<T>(
-        &mut self,
-        outcome: Result<T, Error<SPI::Error>>,
-        fifos: u8,
-    ) -> Result<T, Error<SPI::Error>> {
-        match outcome {
-            Ok(value) => {
-                self.bus
-                    .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
-                    .await?;
-                self.busy = false;
-                Ok(value)
-            }
-            Err(Error::ChipReset) => Err(self.recover().await),
-            Err(e) => {
-                self.idle().await?;
-                self.clear_fifos(fifos).await?;
-                if matches!(e, Error::Timeout) {
-                    self.probe().await?;
-                }
-                Err(e)
-            }
-        }
     }
 }

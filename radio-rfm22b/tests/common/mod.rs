@@ -1,5 +1,7 @@
 //! Shared helpers of the integration tests: locating the conformance vectors.
-#![allow(clippy::unwrap_used, clippy::panic)] // test code
+#![allow(dead_code, clippy::unwrap_used, clippy::panic)] // test code
+
+pub mod spi;
 
 use std::path::PathBuf;
 

@@ -9,14 +9,19 @@ mod bench {
     use core::future::Future;
     use core::hint::black_box;
     use core::pin::pin;
+    use core::sync::atomic::{AtomicU8, Ordering};
     use core::task::{Context, Poll, Waker};
 
     use embedded_hal_async::spi::{ErrorType, Operation, SpiDevice};
     use radio_rfm22b::{Carrier, Config, ModemConfig, PacketConfig, Rfm22b, RxOutcome};
 
     /// A no-op SPI device that answers reads with plausible chip bytes: identification B1,
-    /// status "chip ready / packet sent / sync + valid packet", a 16-byte received length.
+    /// status "packet sent / sync + valid packet" (plus "chip ready" while `STATUS_2` says so,
+    /// i.e. during init), a 16-byte received length.
     struct FakeSpi;
+
+    /// Interrupt status 2 as the fake reports it: chip ready + sync during init, then sync.
+    static STATUS_2: AtomicU8 = AtomicU8::new(0x82);
 
     impl ErrorType for FakeSpi {
         type Error = Infallible;
@@ -31,7 +36,7 @@ mod bench {
                     Operation::Read(buf) => {
                         let answer: &[u8] = match address {
                             0x00 => &[0x08, 0x06],
-                            0x03 => &[0x06, 0x82],
+                            0x03 => &[0x06, STATUS_2.load(Ordering::Relaxed)],
                             0x47 => &[1, 2, 3, 4, 16],
                             0x26 => &[100],
                             _ => &[],
@@ -83,6 +88,13 @@ mod bench {
         }
     }
 
+    /// Ends the run with a failure status: a wrong driver result invalidates the counts.
+    fn fail() -> ! {
+        cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
+        #[allow(clippy::empty_loop)]
+        loop {}
+    }
+
     /// The trivial executor: poll with a no-op waker until ready.
     fn block_on<F: Future>(future: F) -> F::Output {
         let mut future = pin!(future);
@@ -104,7 +116,7 @@ mod bench {
         // Region 1: compute the modem registers.
         let modem = ModemConfig::try_new(rate, deviation);
         m4count_marker();
-        let Ok(modem) = black_box(modem) else { exit() };
+        let Ok(modem) = black_box(modem) else { fail() };
 
         let config = Config::new(modem, PacketConfig::new(), Carrier::new(433_000_000));
         let mut radio = Rfm22b::new_without_sdn(FakeSpi, LowIrq, Delay);
@@ -113,15 +125,18 @@ mod bench {
         let init = block_on(radio.init(black_box(config)));
         m4count_marker();
         if init.is_err() {
-            exit()
+            fail()
         }
+        STATUS_2.store(0x80, Ordering::Relaxed);
 
         let packet = black_box([0x5Au8; 16]);
         m4count_marker();
         // Region 3: send a 16-byte packet (FIFO load, TX on, one nIRQ: packet sent).
         let sent = block_on(radio.transmit(&packet, 1_000_000_000));
         m4count_marker();
-        black_box(sent.is_ok());
+        if sent.is_err() {
+            fail()
+        }
 
         let mut buf = [0u8; 64];
         m4count_marker();
@@ -129,8 +144,11 @@ mod bench {
         // header + length, FIFO read).
         let received = block_on(radio.receive(&mut buf, 1_000_000_000));
         m4count_marker();
-        if let Ok(RxOutcome::Packet(p)) = received {
-            black_box(p.len);
+        match received {
+            Ok(RxOutcome::Packet(p)) if p.len == 16 => {
+                black_box(p.len);
+            }
+            _ => fail(),
         }
         black_box(&buf);
         exit()
