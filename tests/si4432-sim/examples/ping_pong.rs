@@ -139,8 +139,10 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let seconds: u64 = args.next().map_or(30, |s| s.parse().expect("seconds"));
     let loss: f64 = args.next().map_or(0.0, |s| s.parse().expect("loss"));
-    let mut config = MediumConfig::default();
-    config.packet_loss = loss;
+    let config = MediumConfig {
+        packet_loss: loss,
+        ..MediumConfig::default()
+    };
     let sim = Simulation::with_config(2024, config);
     let medium = sim.medium();
     let mut master = medium.add_radio(RadioConfig::at([0.0, 0.0, 0.0]));

@@ -19,6 +19,7 @@ impl Chip {
         self.rssi_latch = None;
         self.ezmac_latched &= !(EZMAC_PKVALID | EZMAC_CRCERROR);
         self.scan_air(now_ns, ctx, None);
+        self.check_rssi_threshold(now_ns, ctx);
     }
 
     /// Look at frames already on air. After a frame ends (`finished`), the search only

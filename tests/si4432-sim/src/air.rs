@@ -256,3 +256,22 @@ impl Air {
         frames + bursts
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bit_clock_places_bytes_after_the_preamble() {
+        // 10 kbit/s → 100 µs per bit; 32 preamble bits.
+        let clock = BitClock {
+            start_ns: 1_000,
+            preamble_bits: 32,
+            ns_per_bit: 100_000.0,
+        };
+        assert_eq!(clock.byte_start_ns(0), 1_000 + 3_200_000);
+        assert_eq!(clock.byte_end_ns(0), 1_000 + 4_000_000);
+        assert_eq!(clock.byte_end_ns(9), 1_000 + 3_200_000 + 8_000_000);
+        assert_eq!(clock.after_bits_ns(500, 3), 300_500);
+    }
+}

@@ -53,29 +53,105 @@ struct Slot {
     waker: Arc<TaskWaker>,
 }
 
-/// Handle to a spawned task's result.
-#[derive(Debug)]
+/// What a task shares with its `Task` handle.
+struct TaskState<T> {
+    result: RefCell<Option<T>>,
+    finished: core::cell::Cell<bool>,
+    joiner: RefCell<Option<Waker>>,
+}
+
+/// Handle to a spawned task's result. Also a future: awaiting it (from another task)
+/// yields the output once the task finishes.
 pub struct Task<T> {
-    result: Rc<RefCell<Option<T>>>,
-    finished: Rc<core::cell::Cell<bool>>,
+    state: Rc<TaskState<T>>,
+}
+
+impl<T> core::fmt::Debug for Task<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Task")
+            .field("finished", &self.is_finished())
+            .finish()
+    }
 }
 
 impl<T> Task<T> {
     /// True once the task has run to completion.
     pub fn is_finished(&self) -> bool {
-        self.finished.get()
+        self.state.finished.get()
     }
 
     /// The task's output, once (None before it finishes or after it was taken).
     pub fn take(&self) -> Option<T> {
-        self.result.borrow_mut().take()
+        self.state.result.borrow_mut().take()
+    }
+}
+
+impl<T> Future for Task<T> {
+    type Output = T;
+
+    /// Ready with the output when the task has finished; pends forever if the output was
+    /// already taken.
+    fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> core::task::Poll<T> {
+        if let Some(value) = self.take() {
+            return core::task::Poll::Ready(value);
+        }
+        *self.state.joiner.borrow_mut() = Some(cx.waker().clone());
+        core::task::Poll::Pending
+    }
+}
+
+/// Spawns tasks into a simulation from anywhere, including from inside a task.
+#[derive(Clone)]
+pub struct Spawner {
+    tasks: Rc<RefCell<Vec<Slot>>>,
+    ready: Arc<ReadyQueue>,
+}
+
+impl core::fmt::Debug for Spawner {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Spawner").finish_non_exhaustive()
+    }
+}
+
+impl Spawner {
+    /// Add a task; it first runs the next time the simulation polls.
+    pub fn spawn<F>(&self, future: F) -> Task<F::Output>
+    where
+        F: Future + 'static,
+    {
+        let state = Rc::new(TaskState {
+            result: RefCell::new(None),
+            finished: core::cell::Cell::new(false),
+            joiner: RefCell::new(None),
+        });
+        let shared = state.clone();
+        let wrapped = async move {
+            let value = future.await;
+            *shared.result.borrow_mut() = Some(value);
+            shared.finished.set(true);
+            if let Some(joiner) = shared.joiner.borrow_mut().take() {
+                joiner.wake();
+            }
+        };
+        let mut tasks = self.tasks.borrow_mut();
+        let waker = Arc::new(TaskWaker {
+            index: tasks.len(),
+            scheduled: AtomicBool::new(false),
+            ready: self.ready.clone(),
+        });
+        waker.wake_by_ref();
+        tasks.push(Slot {
+            future: Some(Box::pin(wrapped)),
+            waker,
+        });
+        Task { state }
     }
 }
 
 /// A whole simulation: virtual clock, RF medium, radios and the tasks that drive them.
 pub struct Simulation {
     world: Rc<RefCell<World>>,
-    tasks: RefCell<Vec<Slot>>,
+    tasks: Rc<RefCell<Vec<Slot>>>,
     ready: Arc<ReadyQueue>,
 }
 
@@ -98,7 +174,7 @@ impl Simulation {
     pub fn with_config(seed: u64, config: MediumConfig) -> Self {
         Self {
             world: Rc::new(RefCell::new(World::new(seed, config))),
-            tasks: RefCell::new(Vec::new()),
+            tasks: Rc::new(RefCell::new(Vec::new())),
             ready: Arc::new(ReadyQueue::default()),
         }
     }
@@ -125,26 +201,15 @@ impl Simulation {
     where
         F: Future + 'static,
     {
-        let result = Rc::new(RefCell::new(None));
-        let finished = Rc::new(core::cell::Cell::new(false));
-        let (r, f) = (result.clone(), finished.clone());
-        let wrapped = async move {
-            let value = future.await;
-            *r.borrow_mut() = Some(value);
-            f.set(true);
-        };
-        let mut tasks = self.tasks.borrow_mut();
-        let waker = Arc::new(TaskWaker {
-            index: tasks.len(),
-            scheduled: AtomicBool::new(false),
+        self.spawner().spawn(future)
+    }
+
+    /// A handle that spawns into this simulation (usable inside tasks).
+    pub fn spawner(&self) -> Spawner {
+        Spawner {
+            tasks: self.tasks.clone(),
             ready: self.ready.clone(),
-        });
-        waker.wake_by_ref();
-        tasks.push(Slot {
-            future: Some(Box::pin(wrapped)),
-            waker,
-        });
-        Task { result, finished }
+        }
     }
 
     /// Run for `duration` of virtual time.
@@ -226,4 +291,72 @@ impl Simulation {
 
 fn duration_ns(d: Duration) -> u64 {
     u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tasks_interleave_in_virtual_time_and_idle_time_is_skipped() {
+        let sim = Simulation::new(0);
+        let log = Rc::new(RefCell::new(Vec::new()));
+        for (name, period_us) in [("a", 300u64), ("b", 500)] {
+            let delay = sim.delay();
+            let medium = sim.medium();
+            let log = log.clone();
+            sim.spawn(async move {
+                for _ in 0..3 {
+                    delay.sleep_ns(period_us * 1_000).await;
+                    log.borrow_mut().push((name, medium.now().as_micros()));
+                }
+            });
+        }
+        sim.run_for(Duration::from_secs(3600));
+        assert_eq!(sim.now(), Duration::from_secs(3600));
+        assert_eq!(
+            *log.borrow(),
+            vec![
+                ("a", 300),
+                ("b", 500),
+                ("a", 600),
+                ("a", 900),
+                ("b", 1000),
+                ("b", 1500)
+            ]
+        );
+    }
+
+    #[test]
+    fn tasks_spawned_inside_tasks_can_be_awaited() {
+        let sim = Simulation::new(0);
+        let spawner = sim.spawner();
+        let delay = sim.delay();
+        let outer = sim.spawn(async move {
+            let inner = spawner.spawn(async move {
+                delay.sleep_ns(2_500).await;
+                21
+            });
+            inner.await * 2
+        });
+        assert!(sim.run_until_or(Duration::from_millis(1), || outer.is_finished()));
+        assert_eq!(outer.take(), Some(42));
+        assert_eq!(sim.now(), Duration::from_nanos(2_500));
+    }
+
+    #[test]
+    fn run_until_reports_a_condition_that_can_no_longer_become_true() {
+        let sim = Simulation::new(0);
+        let delay = sim.delay();
+        let task = sim.spawn(async move {
+            delay.sleep_ns(1_000).await;
+            7
+        });
+        assert!(!sim.run_until(|| false));
+        assert_eq!(sim.now(), Duration::from_micros(1));
+        assert!(task.is_finished());
+        assert_eq!(task.take(), Some(7));
+        assert_eq!(task.take(), None);
+        assert!(sim.run_until_or(Duration::from_millis(1), || true));
+    }
 }

@@ -16,7 +16,8 @@
 //!   `swres`; automatic return to READY/TUNE after a packet is sent or a valid packet is
 //!   received (unless 0x08 rxmpk); RX keeps searching after a CRC error.
 //! - **Interrupts**: status 0x03/0x04 latch whether enabled or not, reading clears them;
-//!   nIRQ is low while `(status & enable) != 0` and released only by reading the status.
+//!   nIRQ is low while `(status & enable) != 0` and released only by reading the status;
+//!   `irssi` when a frame pushes the in-band power to the 0x27 threshold.
 //! - **Packet handler** ([`packet`]): preamble, sync word (1–4 bytes), header (0–4 bytes,
 //!   check and enable masks, broadcast), fixed or variable length, CRC (CCITT, CRC-16,
 //!   IEC-16, Biacheva; all or data only), PN9 whitening, packets longer than 64 bytes through
@@ -28,7 +29,8 @@
 //! - **Medium** ([`Medium`]): positions → path loss → received power (TX power from 0x6D),
 //!   noise floor and sensitivity by bit rate, bit errors from SINR (the CRC catches them),
 //!   random loss, interference bursts, collisions (optional capture), and a trace of every
-//!   frame with every receiver's outcome ([`TraceFrame`]).
+//!   frame with every receiver's outcome ([`TraceFrame`]). [`Medium::inject_packet`] plays
+//!   a frame from an ideal transmitter in the receiver's own format (lora-rs' `inject_rx`).
 //! - **Execution** ([`Simulation`]): a deterministic single-threaded executor in virtual
 //!   time; all randomness from one seed ([`rng`]).
 //! - **Faults**: unplugged module (SPI reads all 0xFF or 0x00), power-on reset at any
@@ -36,10 +38,11 @@
 //!
 //! # What is not
 //! Direct (GPIO/SDI) modulation, OOK details, low-duty-cycle mode, wake-up timer, low-battery
-//! detector, antenna diversity, auto-TX, GPIO pin functions, the CCA/RSSI-threshold,
-//! invalid-preamble and external interrupts, and the exact IF filter table. The CRC seed
-//! (0xFFFF) and the Biacheva polynomial are this model's assumptions; both simulated ends
-//! agree, but they are not checked against silicon. Timing of an SPI transaction is zero.
+//! detector, antenna diversity, auto-TX, GPIO pin functions (CCA output), the
+//! invalid-preamble and external interrupts, `irssi` on interference bursts, and the exact IF filter table. The CRC seed
+//! (0xFFFF) and the IEC-16 / Biacheva polynomials are this model's assumptions; both
+//! simulated ends agree, but they are not checked against silicon. SPI transactions take no
+//! virtual time.
 //!
 //! # Example
 //! Two chips 100 m apart; one sends 5 bytes with raw register writes, the other receives.
@@ -91,6 +94,7 @@ mod air;
 mod chip;
 mod executor;
 pub mod fifo;
+mod inject;
 mod medium;
 pub mod modem;
 pub mod packet;
@@ -104,7 +108,7 @@ mod tx;
 mod world;
 
 pub use chip::{ChipState, Fault, PLL_SETTLE_NS, POWER_ON_RESET_NS, XTAL_START_NS};
-pub use executor::{Simulation, Task};
+pub use executor::{Simulation, Spawner, Task};
 pub use medium::{ChipHandle, Interference, Medium, MediumConfig, RadioConfig, RadioHandle};
 pub use pins::{SimDelay, SimIrq, SimSdn, SimSpi, Sleep};
 pub use trace::{Outcome, RadioId, Reception, TraceFrame};

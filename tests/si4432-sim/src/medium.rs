@@ -6,14 +6,14 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use crate::chip::{ChipState, Fault, Physical};
-use crate::modem::ModemSettings;
+use crate::modem::{ModemSettings, airtime_ns, bits_on_air};
+use crate::packet::PacketFormat;
 use crate::pins::{SimDelay, SimIrq, SimSdn, SimSpi};
 use crate::trace::{RadioId, TraceFrame};
 use crate::world::World;
 
 /// Medium-wide settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[non_exhaustive]
 pub struct MediumConfig {
     /// Probability that a receiver misses a frame it could otherwise have received.
     /// Default 0.
@@ -37,7 +37,6 @@ impl Default for MediumConfig {
 
 /// Where a radio is and what its hardware is like.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[non_exhaustive]
 pub struct RadioConfig {
     /// Position in metres (x, y, z).
     pub position_m: [f64; 3],
@@ -97,7 +96,7 @@ pub struct Interference {
 }
 
 /// Handle to the RF medium of one simulation (cheap to clone).
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct Medium {
     pub(crate) world: Rc<RefCell<World>>,
 }
@@ -163,6 +162,15 @@ impl Medium {
         self.world.borrow_mut().air.config = config;
     }
 
+    /// Put a packet on air for `to` from an ideal transmitter that is not a radio (the
+    /// lora-rs `inject_rx` pattern): formatted with `to`'s own registers (carrier, bit rate,
+    /// preamble, sync, its check header, length, CRC, whitening), arriving at `power_dbm` at
+    /// every radio, starting now. `to` must be in RX to hear it. Returns the trace id; the
+    /// trace names the sender `RadioId::INJECTED`.
+    pub fn inject_packet(&self, to: RadioId, payload: &[u8], power_dbm: f64) -> Option<u64> {
+        self.world.borrow_mut().inject(to.0, payload, power_dbm)
+    }
+
     /// Add an interference burst.
     pub fn add_interference(&self, burst: Interference) {
         self.world.borrow_mut().air.bursts.push(burst);
@@ -208,7 +216,7 @@ impl Medium {
 }
 
 /// Test-side access to one chip: look at it and break it.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct ChipHandle {
     world: Rc<RefCell<World>>,
     index: usize,
@@ -291,8 +299,45 @@ impl ChipHandle {
         })
     }
 
+    /// Airtime of a `payload_len`-byte packet with the current registers: preamble, sync,
+    /// header, length byte, payload and CRC as configured, at the TX bit rate (Manchester
+    /// doubles it). Add `PLL_SETTLE_NS` (or more from STANDBY) for txon → `ipksent`.
+    pub fn airtime(&self, payload_len: usize) -> Duration {
+        self.with(|w| {
+            w.radios.get(self.index).map_or(Duration::ZERO, |r| {
+                let modem = ModemSettings::from_registers(&r.chip.regs);
+                let format = PacketFormat::from_registers(&r.chip.regs);
+                let bits = bits_on_air(
+                    u32::from(format.preamble_nibbles) * 4,
+                    format.bytes_after_preamble(payload_len),
+                    modem.manchester,
+                );
+                Duration::from_nanos(airtime_ns(bits, modem.tx_bit_rate_bps))
+            })
+        })
+    }
+
     /// Number of falling edges nIRQ has made so far.
     pub fn nirq_falling_edges(&self) -> u64 {
         self.with(|w| w.radios.get(self.index).map_or(0, |r| r.irq.falling_edges))
+    }
+}
+
+impl core::fmt::Debug for Medium {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let world = self.world.borrow();
+        f.debug_struct("Medium")
+            .field("now_ns", &world.now_ns)
+            .field("radios", &world.radios.len())
+            .field("frames", &world.air.trace.len())
+            .finish()
+    }
+}
+
+impl core::fmt::Debug for ChipHandle {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("ChipHandle")
+            .field("radio", &self.index)
+            .finish()
     }
 }

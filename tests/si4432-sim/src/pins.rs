@@ -20,7 +20,7 @@ use crate::world::World;
 /// SPI bus to one chip: blocking `embedded_hal::spi::SpiDevice` and async
 /// `embedded_hal_async::spi::SpiDevice`. The first byte of a transaction is the address
 /// (bit 7 = write); bursts auto-increment except at the FIFO register 0x7F.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct SimSpi {
     world: Rc<RefCell<World>>,
     index: usize,
@@ -54,7 +54,7 @@ impl embedded_hal_async::spi::SpiDevice for SimSpi {
 }
 
 /// The nIRQ output of one chip: `InputPin` (level) and async `Wait`.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct SimIrq {
     world: Rc<RefCell<World>>,
     index: usize,
@@ -182,7 +182,7 @@ impl Future for IrqWait {
 
 /// The SDN (shutdown) input of one chip: high = shutdown, low = running. Releasing it from
 /// shutdown starts a power-on reset (`ipor`, then `ichiprdy`).
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct SimSdn {
     world: Rc<RefCell<World>>,
     index: usize,
@@ -227,7 +227,7 @@ impl embedded_hal::digital::OutputPin for SimSdn {
 /// Virtual-time delay. Blocking `DelayNs` advances the whole simulation (every chip and the
 /// medium) by the delay without running other tasks, like a busy-wait on a real MCU; async
 /// `DelayNs` sleeps until virtual time reaches the deadline while other tasks run.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct SimDelay {
     world: Rc<RefCell<World>>,
 }
@@ -283,7 +283,6 @@ impl embedded_hal_async::delay::DelayNs for SimDelay {
 }
 
 /// Future that completes when virtual time reaches its deadline.
-#[derive(Debug)]
 pub struct Sleep {
     world: Rc<RefCell<World>>,
     deadline_ns: u64,
@@ -309,5 +308,43 @@ impl Future for Sleep {
             this.registered = Some(cx.waker().clone());
         }
         Poll::Pending
+    }
+}
+
+impl core::fmt::Debug for SimSpi {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("SimSpi")
+            .field("radio", &self.index)
+            .finish()
+    }
+}
+
+impl core::fmt::Debug for SimIrq {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("SimIrq")
+            .field("radio", &self.index)
+            .finish()
+    }
+}
+
+impl core::fmt::Debug for SimSdn {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("SimSdn")
+            .field("radio", &self.index)
+            .finish()
+    }
+}
+
+impl core::fmt::Debug for SimDelay {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("SimDelay").finish_non_exhaustive()
+    }
+}
+
+impl core::fmt::Debug for Sleep {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Sleep")
+            .field("deadline_ns", &self.deadline_ns)
+            .finish_non_exhaustive()
     }
 }

@@ -53,6 +53,8 @@ pub mod addr {
     pub const CLOCK_RECOVERY_OFFSET_0: u8 = 0x23;
     /// 0x26 Received Signal Strength Indicator.
     pub const RSSI: u8 = 0x26;
+    /// 0x27 RSSI Threshold for Clear Channel Indicator (same units as 0x26).
+    pub const RSSI_THRESHOLD: u8 = 0x27;
     /// 0x2A AFC Limiter.
     pub const AFC_LIMITER: u8 = 0x2A;
     /// 0x2B AFC Correction Read (bits 9..2 of the 10-bit correction).
@@ -149,7 +151,7 @@ pub mod irq2 {
     pub const VALID_PREAMBLE: u8 = 1 << 6;
     /// Invalid preamble (not modelled).
     pub const INVALID_PREAMBLE: u8 = 1 << 5;
-    /// RSSI above threshold (not modelled).
+    /// RSSI at or above the 0x27 threshold.
     pub const RSSI: u8 = 1 << 4;
     /// Wake-up timer (not modelled).
     pub const WAKE_UP_TIMER: u8 = 1 << 3;

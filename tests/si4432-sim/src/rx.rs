@@ -7,7 +7,7 @@
 //! interference ratio at that moment, so collisions and interference bursts corrupt exactly
 //! the bytes they overlap.
 
-use crate::air::BitClock;
+use crate::air::{Air, BitClock};
 use crate::chip::{Activity, Chip, Ctx, EZMAC_CRCERROR, EZMAC_PKVALID, STATUS_HEADERR};
 use crate::modem::ModemSettings;
 use crate::packet::{Crc16, PacketFormat, Pn9};
@@ -92,6 +92,29 @@ enum Finish {
 }
 
 impl Chip {
+    /// The RSSI register as the medium makes it now: noise + every frame and burst in the
+    /// IF bandwidth (radio.md §1a: raw = 2·(dBm + 122) + rssi_off steps).
+    pub(crate) fn live_rssi(&self, air: &Air, now_ns: u64) -> u8 {
+        let modem = ModemSettings::from_registers(&self.regs);
+        let carrier_hz = self.radiated_carrier_hz(&modem);
+        let in_band_mw = dbm_to_mw(noise_floor_dbm(modem.rx_bit_rate_bps))
+            + air.interference_mw(self.me, now_ns, carrier_hz, modem.if_bandwidth_hz, None);
+        rssi_register(
+            mw_to_dbm(in_band_mw),
+            self.reg(addr::PREAMBLE_DETECTION) & 0x07,
+        )
+    }
+
+    /// `irssi`: in RX, the in-band power reached the 0x27 threshold. Evaluated when RX
+    /// starts and whenever a frame starts (not for interference bursts).
+    pub(crate) fn check_rssi_threshold(&mut self, now_ns: u64, ctx: &Ctx<'_>) {
+        if matches!(self.activity, Activity::Rx(_))
+            && self.live_rssi(ctx.air, now_ns) >= self.reg(addr::RSSI_THRESHOLD)
+        {
+            self.status2 |= irq2::RSSI;
+        }
+    }
+
     /// Something is due for the frame this receiver is locked to.
     pub(crate) fn rx_step(&mut self, now_ns: u64, ctx: &mut Ctx<'_>) {
         let me = self.me;
@@ -167,13 +190,10 @@ impl Chip {
                 } else {
                     after_header(lock)
                 };
-                if matches!(
-                    lock.stage,
-                    Stage::Payload | Stage::Crc | Stage::Raw | Stage::Header | Stage::Length
-                ) {
-                    lock.next_ns = lock.clock.byte_end_ns(lock.index);
-                } else {
+                if lock.stage == Stage::Done {
                     finish = Some(Finish::Valid);
+                } else {
+                    lock.next_ns = lock.clock.byte_end_ns(lock.index);
                 }
             }
             Stage::GiveUp(outcome) => finish = Some(Finish::Quiet(outcome)),

@@ -13,8 +13,7 @@ use embedded_hal::spi::Operation;
 use crate::air::Air;
 use crate::chip::{Chip, Ctx, Fault};
 use crate::medium::{MediumConfig, RadioConfig};
-use crate::modem::ModemSettings;
-use crate::propagation::{dbm_to_mw, mw_to_dbm, noise_floor_dbm, path_loss_db, rssi_register};
+use crate::propagation::path_loss_db;
 use crate::rng::Rng;
 
 /// Safety net: more chip steps than this at one instant means a model bug; stop, don't hang.
@@ -220,7 +219,10 @@ impl World {
             .collect();
         self.air.set_powers(id, powers);
         for to in (0..self.radios.len()).filter(|&to| to != from) {
-            self.with_chip(to, |chip, now, ctx| chip.consider(id, now, ctx));
+            self.with_chip(to, |chip, now, ctx| {
+                chip.consider(id, now, ctx);
+                chip.check_rssi_threshold(now, ctx);
+            });
             self.update_irq(to);
         }
     }
@@ -267,16 +269,9 @@ impl World {
 
     /// What the RSSI register of radio `i` would read now if nothing were latched.
     fn live_rssi(&self, i: usize) -> u8 {
-        let Some(radio) = self.radios.get(i) else {
-            return 0;
-        };
-        let modem = ModemSettings::from_registers(&radio.chip.regs);
-        let carrier_hz = radio.chip.radiated_carrier_hz(&modem);
-        let in_band_mw = dbm_to_mw(noise_floor_dbm(modem.rx_bit_rate_bps))
-            + self
-                .air
-                .interference_mw(i, self.now_ns, carrier_hz, modem.if_bandwidth_hz, None);
-        rssi_register(mw_to_dbm(in_band_mw), radio.chip.reg(0x35) & 0x07)
+        self.radios
+            .get(i)
+            .map_or(0, |r| r.chip.live_rssi(&self.air, self.now_ns))
     }
 
     /// One SPI transaction on radio `i` (instantaneous except for `DelayNs` operations).

@@ -97,8 +97,10 @@ fn timeout_wins_when_nothing_happens_and_irq_wins_at_the_exact_moment() {
 
 /// Master sends every 20 ms and waits for a reply; follower answers every packet.
 fn ping_pong(seed: u64, loss: f64, rounds: usize) -> (Vec<TraceFrame>, usize, usize) {
-    let mut config = MediumConfig::default();
-    config.packet_loss = loss;
+    let config = MediumConfig {
+        packet_loss: loss,
+        ..MediumConfig::default()
+    };
     let sim = Simulation::with_config(seed, config);
     let medium = sim.medium();
     let mut master = medium.add_radio(RadioConfig::at([0.0, 0.0, 0.0]));

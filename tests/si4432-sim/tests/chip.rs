@@ -210,9 +210,11 @@ fn injected_power_on_reset_and_register_corruption() {
 #[test]
 fn temperature_and_battery_readings() {
     let sim = Simulation::new(1);
-    let mut config = RadioConfig::default();
-    config.temperature_c = 25.0;
-    config.supply_v = 3.0;
+    let config = RadioConfig {
+        temperature_c: 25.0,
+        supply_v: 3.0,
+        ..RadioConfig::default()
+    };
     let mut r = sim.medium().add_radio(config);
     write(&mut r.spi, 0x12, &[0x20]);
     write(&mut r.spi, 0x0F, &[0x80]);
@@ -221,8 +223,10 @@ fn temperature_and_battery_readings() {
     assert_eq!(read(&mut r.spi, 0x11), 178);
     // vbat[4:0]: 1.7 V + 50 mV · 26 = 3.0 V; the 5-bit field saturates at 3.25 V.
     assert_eq!(read(&mut r.spi, 0x1B), 26);
-    let mut high = RadioConfig::default();
-    high.supply_v = 3.3;
+    let high = RadioConfig {
+        supply_v: 3.3,
+        ..RadioConfig::default()
+    };
     let mut r = sim.medium().add_radio(high);
     assert_eq!(read(&mut r.spi, 0x1B), 31);
 }

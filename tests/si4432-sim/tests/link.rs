@@ -131,6 +131,9 @@ fn airtime_matches_the_configuration() {
     assert_eq!(frame.airtime(), Duration::from_nanos(4_583_180));
     // TX started one PLL settle (200 µs) after txon; 0x07 = 0x0A was written at t0.
     assert!((frame.bit_rate_bps - 57_601.93).abs() < 0.01);
+    assert_eq!(a.chip.airtime(16), frame.airtime());
+    // A 200-byte packet: 6 + 4 + 4 + 1 + 200 + 2 bytes = 1736 bits · 65536/3775 µs = 30 137 879.7 ns.
+    assert_eq!(a.chip.airtime(200), Duration::from_nanos(30_137_880));
 }
 
 #[test]

@@ -77,8 +77,10 @@ fn equal_power_collision_loses_both() {
 fn capture_effect_lets_a_much_stronger_late_frame_win() {
     // B at x = 90 m is 10 m from C: 20 dB stronger than A. It starts 300 µs into A's
     // 833 µs preamble, before C has detected A's sync word.
-    let mut config = MediumConfig::default();
-    config.capture_threshold_db = Some(6.0);
+    let config = MediumConfig {
+        capture_threshold_db: Some(6.0),
+        ..MediumConfig::default()
+    };
     let (a, b) = two_senders(config, 90.0, 300);
     assert_eq!(a, Some(Outcome::Captured));
     assert_eq!(b, Some(Outcome::Delivered { bit_errors: 0 }));
@@ -90,8 +92,10 @@ fn capture_effect_lets_a_much_stronger_late_frame_win() {
 
 #[test]
 fn random_loss_matches_its_probability() {
-    let mut config = MediumConfig::default();
-    config.packet_loss = 0.25;
+    let config = MediumConfig {
+        packet_loss: 0.25,
+        ..MediumConfig::default()
+    };
     let sim = Simulation::with_config(99, config);
     let mut a = radio(&sim, 0.0);
     let mut b = radio(&sim, 100.0);
@@ -120,8 +124,10 @@ fn random_loss_matches_its_probability() {
 #[test]
 fn crystal_offset_shows_in_the_afc_reading() {
     let sim = Simulation::new(2);
-    let mut config = RadioConfig::at([0.0, 0.0, 0.0]);
-    config.crystal_error_ppm = 20.0;
+    let config = RadioConfig {
+        crystal_error_ppm: 20.0,
+        ..RadioConfig::at([0.0, 0.0, 0.0])
+    };
     let mut a = sim.medium().add_radio(config);
     configure_57600(&mut a.spi, true);
     let mut b = radio(&sim, 50.0);
@@ -137,4 +143,69 @@ fn crystal_offset_shows_in_the_afc_reading() {
     // 0x2B holds bits 9..2 (13), 0x2C[7:6] bits 1..0 (3).
     assert_eq!(read(&mut b.spi, 0x2B), 13);
     assert_eq!(read(&mut b.spi, 0x2C) >> 6, 3);
+}
+
+#[test]
+fn near_sensitivity_bit_errors_are_caught_by_the_crc() {
+    // 100 m (−45.12 dBm) plus 63.08 dB of attenuation: −108.2 dBm, 1 dB below the
+    // −107.2 dBm sensitivity at 57.6 kbit/s, where BER ≈ 3.6·10⁻³: about half of the frames
+    // lose at least one of their ~220 bits after the sync word.
+    let sim = Simulation::new(17);
+    let mut a = radio(&sim, 0.0);
+    let mut b = radio(&sim, 100.0);
+    sim.medium().set_attenuation(a.id, b.id, 63.08);
+    let n = 300;
+    for _ in 0..n {
+        start_rx(&mut b.spi);
+        start_tx(&mut a.spi, 16, &[0x3C; 16]);
+        a.delay.delay_ms(6);
+    }
+    let outcomes: Vec<Outcome> = sim
+        .medium()
+        .with_trace(|t| t.iter().filter_map(|f| f.outcome_at(b.id)).collect());
+    assert_eq!(outcomes.len(), n);
+    let delivered = outcomes
+        .iter()
+        .filter(|o| matches!(o, Outcome::Delivered { .. }))
+        .count();
+    let crc_errors = outcomes
+        .iter()
+        .filter(|o| matches!(o, Outcome::CrcError { .. }))
+        .count();
+    // Every delivered frame is error-free: the CRC caught every flipped bit.
+    assert!(
+        outcomes
+            .iter()
+            .all(|o| !matches!(o, Outcome::Delivered { bit_errors } if *bit_errors > 0))
+    );
+    assert!(delivered > 90 && delivered < 210, "delivered {delivered}");
+    assert!(crc_errors > 30, "crc errors {crc_errors}");
+    let power = sim.medium().trace()[0].power_dbm[b.id.0];
+    assert!((power + 108.2).abs() < 0.01, "{power}");
+}
+
+#[test]
+fn rssi_threshold_interrupt_fires_for_strong_in_band_frames_only() {
+    // Threshold 0x27 = 100 ≙ −72 dBm. Frames from 100 m arrive at −45 dBm (raw 154),
+    // from 10 km at −85 dBm (raw 74).
+    for (distance_m, channel, expected) in
+        [(100.0, 0u8, 0x10u8), (10_000.0, 0, 0x00), (100.0, 5, 0x00)]
+    {
+        let sim = Simulation::new(6);
+        let mut a = radio(&sim, 0.0);
+        let mut b = radio(&sim, distance_m);
+        write(&mut a.spi, 0x79, &[channel]);
+        write(&mut b.spi, 0x27, &[100]);
+        start_rx(&mut b.spi);
+        write(&mut b.spi, 0x06, &[0x10]); // enrssi only
+        b.delay.delay_us(300);
+        assert_eq!(status(&mut b.spi).1 & 0x10, 0, "quiet channel: noise only");
+        start_tx(&mut a.spi, 4, &[0; 4]);
+        a.delay.delay_us(300);
+        assert_eq!(
+            status(&mut b.spi).1 & 0x10,
+            expected,
+            "{distance_m} m, channel {channel}"
+        );
+    }
 }
