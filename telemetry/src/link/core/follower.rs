@@ -119,6 +119,14 @@ impl Follower {
         (HOP_CHANNELS as u64 + 1) * u64::from(self.schedule.slot_us())
     }
 
+    /// When failsafe will be declared if nothing arrives (None while in failsafe).
+    fn failsafe_deadline_us(&self) -> Option<u64> {
+        if self.in_failsafe {
+            return None;
+        }
+        self.last_valid_us.map(|t| t + self.failsafe_us)
+    }
+
     fn check_failsafe(&mut self, now_us: u64) {
         if self.in_failsafe {
             return;
@@ -221,10 +229,16 @@ impl Follower {
                     return Step::Idle;
                 };
                 let channel = self.hops.channel(usize::from(index));
+                // Wake up at the failsafe deadline even mid-dwell, so failsafe is declared
+                // on time while acquiring (the dwell is up to 660 ms).
+                let until_us = match self.failsafe_deadline_us() {
+                    Some(deadline) if deadline > now_us => end.min(deadline),
+                    _ => end,
+                };
                 Step::Listen {
                     channel,
                     from_us: now_us,
-                    until_us: end,
+                    until_us,
                 }
             }
             Sync::Tracking {
