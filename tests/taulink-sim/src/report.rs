@@ -55,6 +55,10 @@ pub struct Report {
     pub errors: u64,
     /// Failsafe entries.
     pub failsafes: usize,
+    /// Time of the first failsafe entry after the link came up, s (0 if none).
+    pub failsafe_at_s: f64,
+    /// Time the link left that failsafe, s (0 if it did not).
+    pub recovered_at_s: f64,
     /// Resyncs.
     pub resyncs: u32,
     /// Packets on air.
@@ -117,6 +121,17 @@ pub fn summarise(s: &Scenario, o: &Outcome) -> Report {
             .iter()
             .filter(|(_, entering)| *entering)
             .count(),
+        failsafe_at_s: m
+            .failsafe_changes
+            .iter()
+            .find(|c| c.1)
+            .map_or(0.0, |c| c.0 as f64 / 1e6),
+        recovered_at_s: m
+            .failsafe_changes
+            .iter()
+            .skip_while(|c| !c.1)
+            .find(|c| !c.1)
+            .map_or(0.0, |c| c.0 as f64 / 1e6),
         resyncs: m.now.resyncs,
         transmitted: o.medium.transmitted,
         header_rejected: o.medium.header_rejected,
@@ -167,6 +182,8 @@ impl Report {
         );
         field("errors", self.errors.to_string());
         field("failsafes", self.failsafes.to_string());
+        field("failsafe_at_s", format!("{:.4}", self.failsafe_at_s));
+        field("recovered_at_s", format!("{:.4}", self.recovered_at_s));
         field("resyncs", self.resyncs.to_string());
         field("transmitted", self.transmitted.to_string());
         field("header_rejected", self.header_rejected.to_string());
