@@ -46,8 +46,11 @@ fn spawn_pair(
     let module = medium.add_radio(placement(x_m.0, 8.0));
     let flight = medium.add_radio(placement(x_m.1, -6.0));
     let ids = (module.id, flight.id);
-    let mut module_clock = SimClock::new(medium.clone(), module.delay.clone(), MODULE_EPOCH_US);
-    let mut flight_clock = SimClock::new(medium.clone(), flight.delay.clone(), FLIGHT_EPOCH_US);
+    // The MCU clocks drift too, 40 ppm apart: the follower must keep re-timing its grid.
+    let mut module_clock =
+        SimClock::new(medium.clone(), module.delay.clone(), MODULE_EPOCH_US, 20.0);
+    let mut flight_clock =
+        SimClock::new(medium.clone(), flight.delay.clone(), FLIGHT_EPOCH_US, -20.0);
     let mut module_radio = DriverRadio::new(
         Rfm22b::new(module.spi, module.nirq, module.sdn, module.delay),
         s.header_check,
