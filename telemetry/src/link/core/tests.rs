@@ -201,3 +201,45 @@ fn failsafe_exactly_after_the_configured_silence_then_resync() {
     assert_eq!(follower.resyncs(), 1);
     assert_eq!(follower.uplink_lq(), 0, "LQ restarts after a resync");
 }
+
+#[test]
+fn save_failsafe_command_stores_the_channels_on_the_follower() {
+    let (mut master, mut follower) = pair();
+    let channels: crate::channels::Channels = core::array::from_fn(|i| 1000 + i as u16);
+    master.set_channels(&channels);
+    master.request_save_failsafe();
+    let mut buf = [0u8; 64];
+    let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
+        panic!()
+    };
+    let mut t = 0;
+    let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
+    // The flag rides in the next SAVE_FAILSAFE_REPEATS uplinks, then stops.
+    let mut flagged = u8::from(frame[1] & 0x10 != 0);
+    for _ in 0..16 {
+        match master.plan(t, &mut buf) {
+            Step::Transmit { .. } => {
+                flagged += u8::from(buf[1] & 0x10 != 0);
+                master.on_sent();
+            }
+            _ => master.finish_listen(),
+        }
+        t += SLOT_US;
+    }
+    assert_eq!(flagged, super::master::SAVE_FAILSAFE_REPEATS);
+    follower.on_received(
+        RxOutcome::Packet {
+            len: frame.len(),
+            rssi_dbm: -70,
+        },
+        &frame,
+        end,
+    );
+    assert_eq!(
+        follower.failsafe_values(),
+        &FailsafeValues::from_channels(&channels)
+    );
+    follower.plan(end + DEFAULT_FAILSAFE_US, &mut buf);
+    assert!(follower.in_failsafe());
+    assert_eq!(follower.output(), &channels);
+}
