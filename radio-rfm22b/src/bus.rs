@@ -8,6 +8,11 @@ use crate::Error;
 const WRITE: u8 = 0x80;
 
 /// The chip's SPI interface. The only place that talks to the `SpiDevice`.
+///
+/// Cancel-safety of every method: each is one `SpiDevice::transaction`, so dropping it is
+/// exactly as safe as dropping the device's transaction future. If that future does not
+/// release chip select when dropped, nSEL can stay low and the chip would read the next
+/// transaction as the continuation of the cut one.
 pub struct Bus<SPI> {
     spi: SPI,
 }

@@ -21,7 +21,7 @@ pub enum ConfigError {
     InvalidPreamble,
     /// The sync word is not 1–4 bytes.
     InvalidSyncWord,
-    /// The header is longer than 4 bytes.
+    /// The header is longer than 4 bytes, or a checked byte is not sent.
     InvalidHeader,
     /// A fixed packet length of 0.
     InvalidLength,
@@ -42,7 +42,7 @@ impl core::fmt::Display for ConfigError {
             ConfigError::FrequencyOutOfRange => "carrier outside 240-960 MHz",
             ConfigError::InvalidPreamble => "invalid preamble length or threshold",
             ConfigError::InvalidSyncWord => "sync word must be 1-4 bytes",
-            ConfigError::InvalidHeader => "header longer than 4 bytes",
+            ConfigError::InvalidHeader => "header longer than 4 bytes or checks unsent bytes",
             ConfigError::InvalidLength => "fixed packet length of 0",
             ConfigError::TxPowerOutOfRange => "TX power outside 1-20 dBm",
             ConfigError::InvalidFifoThreshold => "FIFO threshold outside 1-63",

@@ -305,6 +305,34 @@ mod tests {
     }
 
     #[test]
+    fn fsk_manchester_and_afc_switches() {
+        let gfsk = ModemConfig::new(9_600, 30_000);
+        let fsk = ModemConfig::from_settings(
+            ModemSettings::new(9_600, 30_000).with_modulation(Modulation::Fsk),
+        );
+        assert_eq!(gfsk.registers().block_6e[3], 0x23);
+        assert_eq!(fsk.registers().block_6e[3], 0x22);
+        // Manchester: the receiver sees 19.2 kchip/s, so rxosr halves (417 → 208) and the
+        // filter must pass 19.2 + 60 = 79.2 kHz (0x02, 83.2 kHz, instead of 0x01).
+        let manchester =
+            ModemConfig::from_settings(ModemSettings::new(9_600, 30_000).with_manchester(true));
+        let r = manchester.registers();
+        assert_eq!(r.block_1c[0], 0x02);
+        assert_eq!(r.block_1c[4], 208);
+        assert_eq!(r.block_6e[2] & 0x02, 0x02);
+        // TX rate is the bit rate, not the chip rate.
+        assert_eq!(r.block_6e[..2], gfsk.registers().block_6e[..2]);
+        // AFC off clears 0x1D.
+        let no_afc = ModemConfig::from_settings(ModemSettings::new(9_600, 30_000).with_afc(false));
+        assert_eq!(no_afc.registers().block_1c[1], 0x00);
+        // A deviation above 159.375 kHz sets fd[8] in 0x71.
+        let wide = ModemConfig::new(100_000, 200_000);
+        assert_eq!(wide.registers().block_6e[3], 0x27);
+        assert_eq!(wide.registers().block_6e[4], 0x40);
+        assert_eq!(wide.deviation_hz(), 200_000);
+    }
+
+    #[test]
     fn whole_range_computes() {
         // Every rate from 1 to 256 kbps with a deviation of half the rate (min 2.5 kHz).
         let mut rate = 1_000;

@@ -1,6 +1,6 @@
 //! The packet handler's configuration (registers 0x30–0x46; datasheet "Packet Handler"):
 //! preamble, sync word, header and its checks, CRC, fixed or variable length, whitening.
-//! Pure and `const`; the driver writes [`PacketConfig::writes`].
+//! Pure and `const`; the driver writes its register blocks.
 
 use crate::ConfigError;
 use crate::modem::ModemConfig;
@@ -167,7 +167,12 @@ impl PacketConfig {
         if self.sync_len == 0 || self.sync_len > 4 {
             return Err(ConfigError::InvalidSyncWord);
         }
-        if self.header_len > 4 || self.header_check_bytes > 0x0F || self.broadcast_bytes > 0x0F {
+        if self.header_len > 4 {
+            return Err(ConfigError::InvalidHeader);
+        }
+        // Only bytes that are sent can be checked: header 3 (bit 3) first, then 2, 1, 0.
+        let present = (0xF0u8 >> self.header_len) & 0x0F;
+        if self.header_check_bytes & !present != 0 || self.broadcast_bytes & !present != 0 {
             return Err(ConfigError::InvalidHeader);
         }
         if let PacketLength::Fixed(0) = self.length {
@@ -328,6 +333,18 @@ mod tests {
         );
         assert_eq!(
             PacketConfig::new().with_header([0; 4], 5).validate(),
+            Err(ConfigError::InvalidHeader)
+        );
+        // Checking header byte 1 while only bytes 3 and 2 are sent.
+        let two = PacketConfig::new().with_header([7, 8, 0, 0], 2);
+        assert!(
+            two.with_header_check([7, 8, 0, 0], [0xFF; 4], 0x0C, 0)
+                .validate()
+                .is_ok()
+        );
+        assert_eq!(
+            two.with_header_check([7, 8, 0, 0], [0xFF; 4], 0x0E, 0)
+                .validate(),
             Err(ConfigError::InvalidHeader)
         );
         assert_eq!(

@@ -2,7 +2,7 @@
 
 use crate::ConfigError;
 
-/// The eight output levels of the Si4432 / RFM22B (0x6D txpow[2:0]).
+/// The eight output levels of the Si4432 / RFM22B (0x6D `txpow[2:0]`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TxPower(u8);

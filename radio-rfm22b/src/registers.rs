@@ -49,7 +49,7 @@ pub const AFC_GEARSHIFT: u8 = 0x1D;
 pub const AFC_TIMING: u8 = 0x1E;
 /// 0x1F Clock Recovery Gearshift Override.
 pub const CLOCK_RECOVERY_GEARSHIFT: u8 = 0x1F;
-/// 0x20 Clock Recovery Oversampling Ratio (rxosr[7:0]); 0x21–0x25 follow.
+/// 0x20 Clock Recovery Oversampling Ratio (`rxosr[7:0]`); 0x21–0x25 follow.
 pub const CLOCK_RECOVERY_OVERSAMPLING: u8 = 0x20;
 /// 0x26 Received Signal Strength Indicator.
 pub const RSSI: u8 = 0x26;
@@ -57,9 +57,9 @@ pub const RSSI: u8 = 0x26;
 pub const RSSI_THRESHOLD: u8 = 0x27;
 /// 0x2A AFC Limiter.
 pub const AFC_LIMITER: u8 = 0x2A;
-/// 0x2B AFC Correction Read (afc_corr[9:2]).
+/// 0x2B AFC Correction Read (`afc_corr[9:2]`).
 pub const AFC_CORRECTION: u8 = 0x2B;
-/// 0x2C OOK Counter Value 1 (bits 7:6 are afc_corr[1:0]).
+/// 0x2C OOK Counter Value 1 (bits 7:6 are `afc_corr[1:0]`).
 pub const OOK_COUNTER_1: u8 = 0x2C;
 /// 0x2D OOK Counter Value 2.
 pub const OOK_COUNTER_2: u8 = 0x2D;
@@ -93,13 +93,13 @@ pub const CHARGE_PUMP_TRIM: u8 = 0x58;
 pub const AGC_OVERRIDE: u8 = 0x69;
 /// 0x6D TX Power.
 pub const TX_POWER: u8 = 0x6D;
-/// 0x6E TX Data Rate 1 (txdr[15:8]); 0x6F is txdr[7:0].
+/// 0x6E TX Data Rate 1 (`txdr[15:8]`); 0x6F is `txdr[7:0]`.
 pub const TX_DATA_RATE_1: u8 = 0x6E;
 /// 0x70 Modulation Mode Control 1.
 pub const MODULATION_MODE_1: u8 = 0x70;
 /// 0x71 Modulation Mode Control 2.
 pub const MODULATION_MODE_2: u8 = 0x71;
-/// 0x72 Frequency Deviation (fd[7:0]).
+/// 0x72 Frequency Deviation (`fd[7:0]`).
 pub const FREQUENCY_DEVIATION: u8 = 0x72;
 /// 0x73 Frequency Offset 1; 0x74 Frequency Offset 2.
 pub const FREQUENCY_OFFSET_1: u8 = 0x73;

@@ -17,8 +17,8 @@ use crate::registers::*;
 
 /// Polls of the chip-ready flag after a software reset, 1 ms apart (Tau Labs: 50).
 const CHIP_READY_POLLS: u32 = 50;
-/// SDN high long enough to discharge the chip (≥ 10 ms).
-const SDN_HIGH_MS: u32 = 10;
+/// SDN high long enough to discharge the chip (≥ 10 ms, with margin).
+const SDN_HIGH_MS: u32 = 15;
 /// Power-on reset after SDN falls: up to 16.8 ms (datasheet), rounded up.
 const SDN_LOW_MS: u32 = 20;
 

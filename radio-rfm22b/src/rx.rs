@@ -33,7 +33,8 @@ pub struct RxSignal {
 pub struct RxPacket {
     /// Payload bytes written to the start of the buffer.
     pub len: usize,
-    /// The received header (0x47–0x4A), first on air first.
+    /// The received header (0x47–0x4A), first on air first; bytes beyond the configured
+    /// header length are not part of this packet.
     pub header: [u8; 4],
     /// Signal quality.
     pub signal: RxSignal,
@@ -201,7 +202,9 @@ impl Reception<'_> {
         if status.fifo_error() {
             return Ok(Some(Err(Error::FifoError)));
         }
-        if status.sync_detected() && self.signal.is_none() {
+        if status.sync_detected() {
+            // Latched afresh at every sync: a packet the header check dropped silently
+            // must not lend its RSSI to the next one.
             self.signal = Some(latch_signal(bus, self.high_band, self.rssi_offset).await?);
         }
         if status.crc_error() {

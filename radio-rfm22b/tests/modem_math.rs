@@ -211,3 +211,31 @@ fn carrier_vectors() {
         assert_eq!(Carrier::try_new(f).unwrap().registers(), expected, "{f} Hz");
     }
 }
+
+#[test]
+fn hop_frequencies_match_openlrsng_schedules() {
+    use radio_rfm22b::ChannelSpacing;
+    use radio_rfm22b::carrier::channel_frequency_hz;
+    let json = common::load("openlrs", "hop_schedule.json");
+    let mut checked = 0;
+    for variant in json["variants"].as_array().unwrap() {
+        for case in variant["cases"].as_array().unwrap() {
+            let bind = &case["bind_data"];
+            let carrier = Carrier::try_new(bind["rf_frequency"].as_u64().unwrap() as u32).unwrap();
+            let spacing = ChannelSpacing::from_10khz_steps(
+                bind["rf_channel_spacing"].as_u64().unwrap() as u8,
+            );
+            for packet in case["packets"].as_array().unwrap() {
+                let channel = packet["reg_0x79"].as_u64().unwrap() as u8;
+                assert_eq!(
+                    u64::from(channel_frequency_hz(&carrier, spacing, channel)),
+                    packet["frequency_hz"].as_u64().unwrap(),
+                    "{} channel {channel}",
+                    case["name"]
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 100, "only {checked} hop vectors");
+}

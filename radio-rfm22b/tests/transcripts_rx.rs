@@ -335,3 +335,32 @@ fn fixed_length_packets_ignore_the_length_register() {
     );
     done(radio);
 }
+
+#[test]
+fn each_sync_latches_its_own_signal() {
+    // A first sync whose packet the header check drops (no further interrupt), then a
+    // second packet: its own RSSI is reported.
+    let t = [
+        rx_start(),
+        r(0x03, &[0x00, 0x80]),
+        r(0x26, &[60]),
+        r(0x2B, &[0x00, 0x00]),
+        r(0x03, &[0x00, 0x80]),
+        r(0x26, &[160]),
+        r(0x2B, &[0x00, 0x00]),
+        r(0x03, &[0x02, 0x00]),
+        r(0x47, &[1, 2, 3, 4, 2]),
+        r(0x7F, &[7, 7]),
+        w(0x07, &[0x01]),
+        w(0x05, &[0x00, 0x00]),
+    ]
+    .concat();
+    let mut radio = ready_radio(t, LowIrq, PATIENT);
+    let mut buf = [0u8; 16];
+    let outcome = block_on(radio.receive(&mut buf, 10_000_000)).unwrap();
+    assert!(
+        matches!(outcome, RxOutcome::Packet(p) if p.signal.rssi_dbm == -42),
+        "{outcome:?}"
+    );
+    done(radio);
+}

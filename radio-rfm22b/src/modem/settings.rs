@@ -4,7 +4,7 @@ use super::Modulation;
 use crate::if_filter::IfFilter;
 
 /// The inputs of a modem calculation. Build with [`ModemSettings::new`] and the `with_*`
-/// methods (all `const`), then turn into registers with [`ModemConfig::from_settings`].
+/// methods (all `const`), then turn into registers with [`ModemConfig::from_settings`](super::ModemConfig::from_settings).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ModemSettings {

@@ -21,7 +21,7 @@ pub async fn radio_task(radio: Radio) {
     let mut rfm = Rfm22b::new(device, nirq, sdn, Delay);
     loop {
         check_in(Watched::Radio);
-        // `reset` holds SDN high for 10 ms (full power-down, datasheet §3.3), waits out the
+        // `reset` holds SDN high for 15 ms (full power-down), waits out the
         // power-on reset, then software-resets and waits for chip-ready.
         match rfm.reset().await {
             Ok(chip) => info!("RFM22B found: Si4432 {}", chip.version),
