@@ -112,6 +112,10 @@ pub struct Record {
     pub down_bytes_bad: u64,
     /// (time µs, entering?) failsafe transitions on the follower.
     pub failsafe_changes: Vec<(u64, bool)>,
+    /// For each failsafe entry: time since the last valid channel update, µs.
+    pub silence_before_failsafe_us: Vec<u64>,
+    /// Time of the last valid channel update, µs.
+    pub last_output_us: u64,
     /// (slot mod 256, grid channel) of the master's slots.
     pub master_hops: Vec<(u8, u8)>,
     /// (slot mod 256, grid channel) the follower tracked.
@@ -290,6 +294,7 @@ impl FollowerHooks for FlightApp {
             let n = self.format.count();
             if out.get(..n) == expected.get(..n) {
                 rec.outputs_ok += 1;
+                rec.last_output_us = now;
                 // Input → output: every handset sample since the previous output (a stick
                 // movement at that sample) first shows at the output now.
                 let first = match self.last_sample {
@@ -308,6 +313,10 @@ impl FollowerHooks for FlightApp {
         if follower.in_failsafe() != self.last_failsafe {
             self.last_failsafe = follower.in_failsafe();
             rec.failsafe_changes.push((now, self.last_failsafe));
+            if self.last_failsafe {
+                let silence = now.saturating_sub(rec.last_output_us);
+                rec.silence_before_failsafe_us.push(silence);
+            }
         }
         if self.telemetry_load {
             let free = follower.downlink_stream.free();
