@@ -1,5 +1,5 @@
 //! The follower's async loop: a thin shell that runs [`Follower`]'s steps on a radio and a
-//! clock and lets the application take channel outputs and exchange telemetry after every
+//! clock and lets the application take channel outputs and exchange telemetry at every
 //! step.
 
 use super::bind::{ACCEPT_REPEATS, BIND_KEY, LinkParams, bind_radio_config, offered_params};
@@ -53,7 +53,7 @@ pub async fn bind_follower<R: PacketRadio, C: LinkClock>(
     Ok(None)
 }
 
-/// The application side of a follower: called after every step.
+/// The application side of a follower: called after every plan, before the step runs.
 pub trait FollowerHooks {
     /// Read channel outputs and telemetry from `follower`, feed telemetry in.
     fn on_step(&mut self, now_us: u64, follower: &mut Follower);
@@ -69,7 +69,11 @@ pub async fn run_follower<R: PacketRadio, C: LinkClock, H: FollowerHooks>(
     radio.configure(&follower.radio_config()).await?;
     let mut buf = [0u8; FIFO_BYTES];
     loop {
-        match follower.plan(clock.now_us(), &mut buf) {
+        let step = follower.plan(clock.now_us(), &mut buf);
+        // Right after planning: a packet just received and any failsafe just declared are
+        // visible to the application at once, not a step later.
+        hooks.on_step(clock.now_us(), follower);
+        match step {
             Step::Transmit {
                 channel,
                 at_us,
@@ -95,6 +99,5 @@ pub async fn run_follower<R: PacketRadio, C: LinkClock, H: FollowerHooks>(
             }
             Step::Idle => follower.on_skipped(),
         }
-        hooks.on_step(clock.now_us(), follower);
     }
 }

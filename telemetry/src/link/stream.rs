@@ -11,6 +11,9 @@ use heapless::Deque;
 /// Most stream bytes that may be unacknowledged at once: half the 8-bit offset space, so an
 /// offset is never ambiguous between "old" and "new".
 pub const MAX_IN_FLIGHT: usize = 127;
+/// Consecutive acks outside the sent window after which the sender adopts the peer's offset:
+/// the peer rebooted (or this end did), so the two offset counters no longer agree.
+pub const STALE_ACKS_TO_RESYNC: u8 = 8;
 
 /// Sending half: buffers bytes until the peer acknowledges them.
 #[derive(Debug)]
@@ -25,6 +28,8 @@ pub struct StreamSender<const N: usize> {
     acked_total: u64,
     /// Bytes ever (re)sent (statistics).
     sent_total: u64,
+    /// Consecutive acks outside `base..=next`.
+    stale_acks: u8,
 }
 
 impl<const N: usize> Default for StreamSender<N> {
@@ -42,6 +47,7 @@ impl<const N: usize> StreamSender<N> {
             next: 0,
             acked_total: 0,
             sent_total: 0,
+            stale_acks: 0,
         }
     }
 
@@ -89,14 +95,23 @@ impl<const N: usize> StreamSender<N> {
         (seq, count)
     }
 
-    /// Processes the peer's cumulative ack. An ack outside `base..=next` is stale or foreign
-    /// and ignored; otherwise the acknowledged bytes are released and sending restarts at
-    /// the ack (Go-Back-N).
+    /// Processes the peer's cumulative ack. An ack outside `base..=next` is stale and
+    /// ignored — unless [`STALE_ACKS_TO_RESYNC`] come in a row: then the peer's counter is
+    /// adopted and the unacknowledged bytes are sent again from it (the peer restarted, and
+    /// lost whatever it had not handed on). Otherwise the acknowledged bytes are released
+    /// and sending restarts at the ack (Go-Back-N).
     pub fn on_ack(&mut self, ack: u8) {
         let acked = usize::from(ack.wrapping_sub(self.base));
         if acked > self.in_flight() {
+            self.stale_acks = self.stale_acks.saturating_add(1);
+            if self.stale_acks >= STALE_ACKS_TO_RESYNC {
+                self.stale_acks = 0;
+                self.base = ack;
+                self.next = ack;
+            }
             return;
         }
+        self.stale_acks = 0;
         for _ in 0..acked {
             self.buffer.pop_front();
         }
@@ -267,6 +282,31 @@ mod tests {
         rx.read(&mut out);
         assert_eq!(rx.on_data(0, b"abcdef"), 2);
         assert_eq!(rx.ack(), 6);
+    }
+
+    #[test]
+    fn a_restarted_receiver_is_resynchronised() {
+        let mut tx = StreamSender::<64>::new();
+        let mut rx = StreamReceiver::<64>::new();
+        tx.write(b"0123456789");
+        let mut buf = [0u8; 4];
+        let (seq, n) = tx.fill(&mut buf);
+        rx.on_data(seq, &buf[..n]);
+        tx.on_ack(rx.ack());
+        let (seq, n) = tx.fill(&mut buf); // "4567" sent, never delivered: the peer reboots
+        assert_eq!((seq, n), (4, 4));
+        let mut rx = StreamReceiver::<64>::new();
+        let mut got = Vec::new();
+        for _ in 0..20 {
+            let (seq, n) = tx.fill(&mut buf);
+            rx.on_data(seq, &buf[..n]);
+            tx.on_ack(rx.ack());
+            let mut out = [0u8; 16];
+            let k = rx.read(&mut out);
+            got.extend_from_slice(&out[..k]);
+        }
+        // Everything not acknowledged before the reboot arrives, in order.
+        assert_eq!(got, b"456789");
     }
 
     #[test]

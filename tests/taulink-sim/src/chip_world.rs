@@ -7,8 +7,7 @@ use std::time::Duration;
 
 use radio_rfm22b::Rfm22b;
 use si4432_sim::{
-    Interference, Medium, MediumConfig, Outcome as ChipOutcome, RadioConfig as ChipPlacement,
-    RadioId, Simulation,
+    Interference, Medium, Outcome as ChipOutcome, RadioConfig as ChipPlacement, RadioId, Simulation,
 };
 use telemetry::channels::FailsafeValues;
 use telemetry::link::core::{Follower, Master};
@@ -47,8 +46,11 @@ fn spawn_pair(
     let module = medium.add_radio(placement(x_m.0, 8.0));
     let flight = medium.add_radio(placement(x_m.1, -6.0));
     let ids = (module.id, flight.id);
-    let mut module_clock = SimClock::new(medium.clone(), module.delay.clone(), MODULE_EPOCH_US);
-    let mut flight_clock = SimClock::new(medium.clone(), flight.delay.clone(), FLIGHT_EPOCH_US);
+    // The MCU clocks drift too, 40 ppm apart: the follower must keep re-timing its grid.
+    let mut module_clock =
+        SimClock::new(medium.clone(), module.delay.clone(), MODULE_EPOCH_US, 20.0);
+    let mut flight_clock =
+        SimClock::new(medium.clone(), flight.delay.clone(), FLIGHT_EPOCH_US, -20.0);
     let mut module_radio = DriverRadio::new(
         Rfm22b::new(module.spi, module.nirq, module.sdn, module.delay),
         s.header_check,
@@ -168,10 +170,9 @@ fn accumulate(total: &mut MediumStats, part: MediumStats) {
 
 /// Runs `s` on the chip simulator, calling `status` once per virtual second.
 pub fn simulate_chip(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome {
-    let mut config = MediumConfig::default();
-    config.packet_loss = s.loss;
-    let sim = Simulation::with_config(s.seed, config);
+    let sim = Simulation::new(s.seed);
     let medium = sim.medium();
+    medium.set_packet_loss(s.loss);
     let mut rng = SplitMix64::new(s.seed);
     let params = params_for(s, rng.next_u64() as u32);
     let (main, module_id, flight_id) = spawn_pair(

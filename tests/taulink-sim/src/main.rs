@@ -40,6 +40,11 @@ fn sweep(base: &Scenario, json: bool) {
     for name in ["L50", "M100", "F250", "F500"] {
         let mut s = base.clone();
         s.rate = parse_rate(name).unwrap_or(s.rate);
+        // The long-range mode carries 8 channels (as OpenLRSng does at that rate) to leave
+        // room for uplink telemetry; the others carry 16.
+        if s.rate == telemetry::link::RateMode::L50 {
+            s.format = telemetry::channels::ChannelFormat::Compact8;
+        }
         let clean = run(
             &Scenario {
                 loss: 0.0,
@@ -65,19 +70,22 @@ fn sweep(base: &Scenario, json: bool) {
         return;
     }
     println!(
-        "mode  bit rate  slots  updates/s  latency mean/p99 ms  LQ clean/10%  goodput up/down B/s (10%: up/down)"
+        "mode  bit rate  slots  ch  updates/s  latency mean/p99 ms   mean LQ up/down clean | 10%     goodput up/down B/s clean | 10%"
     );
     for (c, l) in &reports {
         println!(
-            "{:<5} {:>8}  {:>5}  {:>9.1}  {:>8.2} / {:<8.2}  {:>4} / {:<4}   {:>6.0} / {:<6.0} ({:.0} / {:.0})",
+            "{:<5} {:>8}  {:>5}  {:>2}  {:>9.1}  {:>8.2} / {:<8.2}  {:>5.1} / {:<5.1} | {:>5.1} / {:<5.1}  {:>5.0} / {:<5.0} | {:>5.0} / {:<5.0}",
             c.rate,
             c.bit_rate_bps,
             c.slot_rate_hz,
+            c.channels,
             c.update_rate_hz,
             c.latency_mean_ms,
             c.latency_p99_ms,
-            c.uplink_lq,
-            l.uplink_lq,
+            c.uplink_lq_mean,
+            c.downlink_lq_mean,
+            l.uplink_lq_mean,
+            l.downlink_lq_mean,
             c.uplink_goodput_bps,
             c.downlink_goodput_bps,
             l.uplink_goodput_bps,

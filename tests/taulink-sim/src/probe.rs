@@ -112,12 +112,32 @@ pub struct Record {
     pub down_bytes_bad: u64,
     /// (time µs, entering?) failsafe transitions on the follower.
     pub failsafe_changes: Vec<(u64, bool)>,
+    /// For each failsafe entry: time since the last valid channel update, µs.
+    pub silence_before_failsafe_us: Vec<u64>,
+    /// Time of the last valid channel update, µs.
+    pub last_output_us: u64,
     /// (slot mod 256, grid channel) of the master's slots.
     pub master_hops: Vec<(u8, u8)>,
     /// (slot mod 256, grid channel) the follower tracked.
     pub follower_hops: Vec<(u8, u8)>,
     /// Latest snapshot of both ends.
     pub now: Snapshot,
+    /// Sum and count of uplink LQ readings (one per follower step while tracking).
+    pub uplink_lq_sum: (u64, u64),
+    /// Sum and count of downlink LQ readings (one per master slot from the 100th downlink).
+    pub downlink_lq_sum: (u64, u64),
+}
+
+impl Record {
+    /// Mean uplink LQ over the run (while tracking).
+    pub fn uplink_lq_mean(&self) -> f64 {
+        self.uplink_lq_sum.0 as f64 / self.uplink_lq_sum.1.max(1) as f64
+    }
+
+    /// Mean downlink LQ over the run (from the 100th downlink on).
+    pub fn downlink_lq_mean(&self) -> f64 {
+        self.downlink_lq_sum.0 as f64 / self.downlink_lq_sum.1.max(1) as f64
+    }
 }
 
 /// Current state of both ends, for the status line.
@@ -208,6 +228,11 @@ impl MasterHooks for ModuleApp {
             rec.master_hops.push((slot as u8, ch));
         }
         rec.now.downlink_lq = master.downlink_lq();
+        // From the 100th downlink on, so the window no longer holds acquisition-time misses.
+        if master.counters().received >= 100 {
+            rec.downlink_lq_sum.0 += u64::from(rec.now.downlink_lq);
+            rec.downlink_lq_sum.1 += 1;
+        }
         rec.now.master_rssi_dbm = master.downlink_rssi_dbm();
         rec.now.downlinks_received = master.counters().received;
         rec.now.master_rejected = master.counters().rejected;
@@ -269,6 +294,7 @@ impl FollowerHooks for FlightApp {
             let n = self.format.count();
             if out.get(..n) == expected.get(..n) {
                 rec.outputs_ok += 1;
+                rec.last_output_us = now;
                 // Input → output: every handset sample since the previous output (a stick
                 // movement at that sample) first shows at the output now.
                 let first = match self.last_sample {
@@ -287,6 +313,10 @@ impl FollowerHooks for FlightApp {
         if follower.in_failsafe() != self.last_failsafe {
             self.last_failsafe = follower.in_failsafe();
             rec.failsafe_changes.push((now, self.last_failsafe));
+            if self.last_failsafe {
+                let silence = now.saturating_sub(rec.last_output_us);
+                rec.silence_before_failsafe_us.push(silence);
+            }
         }
         if self.telemetry_load {
             let free = follower.downlink_stream.free();
@@ -308,6 +338,10 @@ impl FollowerHooks for FlightApp {
             rec.follower_hops.push(hop);
         }
         rec.now.uplink_lq = follower.uplink_lq();
+        if follower.sync_state() == SyncState::Tracking {
+            rec.uplink_lq_sum.0 += u64::from(rec.now.uplink_lq);
+            rec.uplink_lq_sum.1 += 1;
+        }
         rec.now.follower_rssi_dbm = follower.uplink_rssi_dbm();
         rec.now.uplinks_received = follower.counters().received;
         rec.now.follower_rejected = follower.counters().rejected;

@@ -37,6 +37,10 @@ pub struct Report {
     pub latency_p99_ms: f64,
     /// Uplink LQ at the end (follower).
     pub uplink_lq: u8,
+    /// Mean uplink LQ over the run.
+    pub uplink_lq_mean: f64,
+    /// Mean downlink LQ over the run.
+    pub downlink_lq_mean: f64,
     /// Downlink LQ at the end (master).
     pub downlink_lq: u8,
     /// RSSI at the follower, dBm.
@@ -51,6 +55,10 @@ pub struct Report {
     pub errors: u64,
     /// Failsafe entries.
     pub failsafes: usize,
+    /// Time of the first failsafe entry after the link came up, s (0 if none).
+    pub failsafe_at_s: f64,
+    /// Time the link left that failsafe, s (0 if it did not).
+    pub recovered_at_s: f64,
     /// Resyncs.
     pub resyncs: u32,
     /// Packets on air.
@@ -100,6 +108,8 @@ pub fn summarise(s: &Scenario, o: &Outcome) -> Report {
         latency_mean_ms: mean / 1000.0,
         latency_p99_ms: percentile(&lat, 0.99) / 1000.0,
         uplink_lq: m.now.uplink_lq,
+        uplink_lq_mean: m.uplink_lq_mean(),
+        downlink_lq_mean: m.downlink_lq_mean(),
         downlink_lq: m.now.downlink_lq,
         follower_rssi_dbm: m.now.follower_rssi_dbm.unwrap_or(0),
         master_rssi_dbm: m.now.master_rssi_dbm.unwrap_or(0),
@@ -111,6 +121,17 @@ pub fn summarise(s: &Scenario, o: &Outcome) -> Report {
             .iter()
             .filter(|(_, entering)| *entering)
             .count(),
+        failsafe_at_s: m
+            .failsafe_changes
+            .iter()
+            .find(|c| c.1)
+            .map_or(0.0, |c| c.0 as f64 / 1e6),
+        recovered_at_s: m
+            .failsafe_changes
+            .iter()
+            .skip_while(|c| !c.1)
+            .find(|c| !c.1)
+            .map_or(0.0, |c| c.0 as f64 / 1e6),
         resyncs: m.now.resyncs,
         transmitted: o.medium.transmitted,
         header_rejected: o.medium.header_rejected,
@@ -147,6 +168,8 @@ impl Report {
         field("latency_p99_ms", format!("{:.3}", self.latency_p99_ms));
         field("uplink_lq", self.uplink_lq.to_string());
         field("downlink_lq", self.downlink_lq.to_string());
+        field("uplink_lq_mean", format!("{:.1}", self.uplink_lq_mean));
+        field("downlink_lq_mean", format!("{:.1}", self.downlink_lq_mean));
         field("follower_rssi_dbm", self.follower_rssi_dbm.to_string());
         field("master_rssi_dbm", self.master_rssi_dbm.to_string());
         field(
@@ -159,6 +182,8 @@ impl Report {
         );
         field("errors", self.errors.to_string());
         field("failsafes", self.failsafes.to_string());
+        field("failsafe_at_s", format!("{:.4}", self.failsafe_at_s));
+        field("recovered_at_s", format!("{:.4}", self.recovered_at_s));
         field("resyncs", self.resyncs.to_string());
         field("transmitted", self.transmitted.to_string());
         field("header_rejected", self.header_rejected.to_string());

@@ -156,6 +156,11 @@ pub fn parse_args(args: &[String]) -> Result<(Scenario, Output), String> {
             other => return Err(format!("unknown option {other}\n{USAGE}")),
         }
     }
+    // Injected bit errors and a disabled chip CRC exist only in the packet-level medium
+    // (the chip simulator derives bit errors from the signal-to-noise ratio).
+    if s.bit_error_rate > 0.0 || !s.chip_crc {
+        s.chip_level = false;
+    }
     Ok((s, out))
 }
 

@@ -121,6 +121,17 @@ fn link_cut_gives_failsafe_within_the_configured_time_then_recovery() {
             "{rate:?}: {changes:?}"
         );
         let (entered, left) = (changes[1].0, changes[2].0);
+        // A 2 s cut is longer than 32 missed uplinks at every rate: tracking was given up
+        // and the master re-acquired by scanning.
+        assert_eq!(o.main.now.resyncs, 1, "{rate:?}");
+        // Declared `failsafe_ms` after the last valid update (a radio operation in progress
+        // — a downlink being sent — may delay it by at most one slot).
+        let silence = o.main.silence_before_failsafe_us[0];
+        let slot_us = u64::from(rate.slot_us());
+        assert!(
+            (failsafe_ms * 1000..=failsafe_ms * 1000 + slot_us).contains(&silence),
+            "{rate:?}: {silence} µs of silence"
+        );
         let slot = u64::from(rate.slot_us());
         // The last packet arrived between 2 slots before the cut (one may be a downlink
         // slot) and one airtime after it (a packet already on the air when the path was

@@ -119,6 +119,24 @@ impl Follower {
         (HOP_CHANNELS as u64 + 1) * u64::from(self.schedule.slot_us())
     }
 
+    /// When failsafe will be declared if nothing arrives (None while in failsafe).
+    fn failsafe_deadline_us(&self) -> Option<u64> {
+        if self.in_failsafe {
+            return None;
+        }
+        self.last_valid_us.map(|t| t + self.failsafe_us)
+    }
+
+    /// A listen that would end at `end_us` ends at the failsafe deadline instead if that
+    /// comes first, so failsafe is declared on time, not at the end of a slot or of a dwell
+    /// (up to 660 ms). The listen then resumes for the rest of its window.
+    fn listen_until(&self, now_us: u64, end_us: u64) -> u64 {
+        match self.failsafe_deadline_us() {
+            Some(deadline) if deadline > now_us => end_us.min(deadline),
+            _ => end_us,
+        }
+    }
+
     fn check_failsafe(&mut self, now_us: u64) {
         if self.in_failsafe {
             return;
@@ -221,10 +239,16 @@ impl Follower {
                     return Step::Idle;
                 };
                 let channel = self.hops.channel(usize::from(index));
+                // Wake up at the failsafe deadline even mid-dwell, so failsafe is declared
+                // on time while acquiring (the dwell is up to 660 ms).
+                let until_us = match self.failsafe_deadline_us() {
+                    Some(deadline) if deadline > now_us => end.min(deadline),
+                    _ => end,
+                };
                 Step::Listen {
                     channel,
                     from_us: now_us,
-                    until_us: end,
+                    until_us,
                 }
             }
             Sync::Tracking {
@@ -237,7 +261,7 @@ impl Follower {
                     SlotKind::Uplink => Step::Listen {
                         channel,
                         from_us: slot_start_us.saturating_sub(RX_EARLY_US),
-                        until_us: self.slot_end_us(slot, slot_start_us),
+                        until_us: self.listen_until(now_us, self.slot_end_us(slot, slot_start_us)),
                     },
                     SlotKind::Downlink => match self.build_downlink(slot, buf) {
                         Some(len) => Step::Transmit {
@@ -280,7 +304,9 @@ impl Follower {
     /// The downlink planned by [`Follower::plan`] has been sent.
     pub fn on_sent(&mut self) {
         self.counters.sent += 1;
-        self.advance(true);
+        // Sending is not hearing: the run of missed uplinks goes on (a downlink slot is
+        // neither a hit nor a miss).
+        self.advance(false);
     }
 
     /// A planned step was not carried out (e.g. `Idle`); move on.

@@ -16,6 +16,10 @@ use crate::link::stream::{StreamReceiver, StreamSender};
 
 use super::{STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
 
+/// Uplinks that carry a save-failsafe request, so one lost packet does not lose it (storing
+/// twice is harmless: the follower keeps the channels of the last flagged packet).
+pub const SAVE_FAILSAFE_REPEATS: u8 = 8;
+
 /// The master's state.
 #[derive(Debug)]
 pub struct Master {
@@ -24,7 +28,8 @@ pub struct Master {
     hops: HopSequence,
     slot: u32,
     channels: Channels,
-    save_failsafe: bool,
+    /// Uplinks still to carry the save-failsafe flag.
+    save_failsafe: u8,
     report_due: bool,
     heard: bool,
     /// Telemetry towards the follower.
@@ -50,7 +55,7 @@ impl Master {
             hops: HopSequence::new(params.bind_id),
             slot: 0,
             channels: [CHANNEL_CENTER; 16],
-            save_failsafe: false,
+            save_failsafe: 0,
             report_due: false,
             heard: false,
             uplink_stream: StreamSender::new(),
@@ -83,10 +88,10 @@ impl Master {
         self.channels = *channels;
     }
 
-    /// Asks the follower to store the current channels as its failsafe values (sent in the
-    /// next uplink).
+    /// Asks the follower to store the current channels as its failsafe values (flag set in
+    /// the next [`SAVE_FAILSAFE_REPEATS`] uplinks).
     pub fn request_save_failsafe(&mut self) {
-        self.save_failsafe = true;
+        self.save_failsafe = SAVE_FAILSAFE_REPEATS;
     }
 
     /// The slot about to run.
@@ -144,7 +149,7 @@ impl Master {
                 ack: self.downlink_stream.ack(),
             },
             report,
-            save_failsafe: self.save_failsafe,
+            save_failsafe: self.save_failsafe > 0,
             format,
             packed_channels: packed,
             data: data.get(..n)?,
@@ -156,7 +161,7 @@ impl Master {
     /// The uplink of the current slot has been sent.
     pub fn on_sent(&mut self) {
         self.counters.sent += 1;
-        self.save_failsafe = false;
+        self.save_failsafe = self.save_failsafe.saturating_sub(1);
         self.report_due = false;
         self.slot = self.slot.wrapping_add(1);
     }

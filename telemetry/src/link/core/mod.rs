@@ -4,6 +4,8 @@
 
 pub mod follower;
 pub mod master;
+#[cfg(test)]
+mod tests;
 
 pub use follower::Follower;
 pub use master::Master;

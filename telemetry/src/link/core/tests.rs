@@ -1,0 +1,245 @@
+//! The two state machines driven against each other by hand, no radio: acquisition,
+//! tracking, downlink exchange, failsafe timing and resync.
+
+use super::follower::{DEFAULT_FAILSAFE_US, RESYNC_MISSES, SyncState};
+use super::*;
+use crate::channels::{ChannelFormat, FailsafeValues};
+use crate::link::radio::RxOutcome;
+use crate::link::{Band, LinkParams, RateMode};
+
+const SLOT_US: u64 = 4_000;
+
+fn pair() -> (Master, Follower) {
+    let params = LinkParams::new(
+        0xC0FF_EE11,
+        Band::Mhz433,
+        RateMode::F250,
+        ChannelFormat::Full16,
+        4,
+    );
+    (
+        Master::new(params),
+        Follower::new(params, FailsafeValues::default(), DEFAULT_FAILSAFE_US),
+    )
+}
+
+/// Runs master slots from `slot_start` until one is an uplink on `channel`; returns that
+/// frame and when it has fully arrived.
+fn next_uplink_on(master: &mut Master, slot_start: &mut u64, channel: u8) -> (Vec<u8>, u64) {
+    for _ in 0..1000 {
+        let mut buf = [0u8; 64];
+        let start = *slot_start;
+        *slot_start += SLOT_US;
+        match master.plan(start, &mut buf) {
+            Step::Transmit {
+                channel: c, len, ..
+            } if c == channel => {
+                master.on_sent();
+                let end = start + u64::from(master.schedule().packet_end_offset_us(len));
+                return (buf[..len].to_vec(), end);
+            }
+            Step::Transmit { .. } => master.on_sent(),
+            _ => master.finish_listen(),
+        }
+    }
+    panic!("channel {channel} never used");
+}
+
+#[test]
+fn follower_acquires_then_tracks_the_master() {
+    let (mut master, mut follower) = pair();
+    let channels: crate::channels::Channels = core::array::from_fn(|i| 200 + 100 * i as u16);
+    master.set_channels(&channels);
+    assert!(follower.in_failsafe());
+    let mut buf = [0u8; 64];
+    let Step::Listen {
+        channel, until_us, ..
+    } = follower.plan(0, &mut buf)
+    else {
+        panic!()
+    };
+    // Dwell: a whole hop cycle plus one slot.
+    assert_eq!(until_us, 33 * SLOT_US);
+    let mut t = 1_000;
+    let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
+    assert!(end < until_us);
+    follower.on_received(
+        RxOutcome::Packet {
+            len: frame.len(),
+            rssi_dbm: -70,
+        },
+        &frame,
+        end,
+    );
+    assert_eq!(follower.sync_state(), SyncState::Tracking);
+    assert!(!follower.in_failsafe());
+    assert_eq!(follower.output(), &channels);
+    // Tracking: the next step listens for the master's next slot on its channel, opening
+    // 100 µs before that slot starts.
+    let master_next = master.slot();
+    let Step::Listen {
+        channel, from_us, ..
+    } = follower.plan(end, &mut buf)
+    else {
+        panic!()
+    };
+    assert_eq!(
+        follower.tracked_slot().map(|(s, _)| u32::from(s)),
+        Some(master_next % 256)
+    );
+    assert_eq!(from_us, t - 100);
+    let mut m = [0u8; 64];
+    match master.plan(t, &mut m) {
+        Step::Transmit { channel: c, .. } | Step::Listen { channel: c, .. } => {
+            assert_eq!(c, channel)
+        }
+        Step::Idle => panic!(),
+    }
+}
+
+#[test]
+fn downlink_reaches_the_master_with_report_and_ack() {
+    let (mut master, mut follower) = pair();
+    let mut buf = [0u8; 64];
+    let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
+        panic!()
+    };
+    let mut t = 0;
+    let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
+    follower.on_received(
+        RxOutcome::Packet {
+            len: frame.len(),
+            rssi_dbm: -70,
+        },
+        &frame,
+        end,
+    );
+    follower.downlink_stream.write(b"telemetry!");
+    // Step both until the follower transmits in a downlink slot.
+    for _ in 0..8 {
+        let mut fbuf = [0u8; 64];
+        let mut mbuf = [0u8; 64];
+        let f = follower.plan(t, &mut fbuf);
+        let m = master.plan(t, &mut mbuf);
+        match (m, f) {
+            (Step::Transmit { len, .. }, Step::Listen { .. }) => {
+                master.on_sent();
+                let end = t + u64::from(master.schedule().packet_end_offset_us(len));
+                follower.on_received(RxOutcome::Packet { len, rssi_dbm: -71 }, &mbuf, end);
+            }
+            (
+                Step::Listen { channel: mc, .. },
+                Step::Transmit {
+                    channel: fc, len, ..
+                },
+            ) => {
+                assert_eq!(mc, fc);
+                follower.on_sent();
+                let end = t + u64::from(master.schedule().packet_end_offset_us(len));
+                assert!(master.on_received(RxOutcome::Packet { len, rssi_dbm: -75 }, &fbuf, end));
+                master.finish_listen();
+                let mut got = [0u8; 16];
+                let n = master.downlink_stream.read(&mut got);
+                assert_eq!(&got[..n], b"telemetry!");
+                assert_eq!(
+                    master.remote_report().map(|r| (r.rssi_dbm, r.lq_percent)),
+                    Some((-70, 100))
+                );
+                assert_eq!(master.downlink_lq(), 100);
+                return;
+            }
+            other => panic!("{other:?}"),
+        }
+        t += SLOT_US;
+    }
+    panic!("no downlink slot");
+}
+
+#[test]
+fn failsafe_exactly_after_the_configured_silence_then_resync() {
+    let (mut master, mut follower) = pair();
+    let mut buf = [0u8; 64];
+    let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
+        panic!()
+    };
+    let mut t = 0;
+    let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
+    follower.on_received(
+        RxOutcome::Packet {
+            len: frame.len(),
+            rssi_dbm: -70,
+        },
+        &frame,
+        end,
+    );
+    // Step slot by slot through the silence, as the loop would.
+    let (mut failsafe_at, mut resync_at) = (None, None);
+    let mut now = end;
+    while failsafe_at.is_none() {
+        now += 500;
+        let step = follower.plan(now, &mut buf);
+        if follower.in_failsafe() && failsafe_at.is_none() {
+            failsafe_at = Some(now);
+        }
+        if follower.sync_state() == SyncState::Acquiring && resync_at.is_none() {
+            resync_at = Some(now);
+        }
+        // While acquiring, the listen must end no later than the failsafe deadline.
+        if let (Step::Listen { until_us, .. }, false) = (step, follower.in_failsafe()) {
+            assert!(until_us <= end + DEFAULT_FAILSAFE_US, "{until_us}");
+        }
+    }
+    assert_eq!(failsafe_at, Some(end + DEFAULT_FAILSAFE_US));
+    assert_eq!(follower.output()[2], 172, "throttle to its failsafe value");
+    // RESYNC_MISSES uplinks (32) = 43 slots at 1:4 after the last packet: before failsafe at
+    // F250, so the follower is already scanning when failsafe comes.
+    let slots = (resync_at.unwrap() - end) / SLOT_US;
+    assert!(
+        (42..=44).contains(&slots),
+        "{slots} slots, {RESYNC_MISSES} misses"
+    );
+    assert_eq!(follower.resyncs(), 1);
+    assert_eq!(follower.uplink_lq(), 0, "LQ restarts after a resync");
+}
+
+#[test]
+fn save_failsafe_command_stores_the_channels_on_the_follower() {
+    let (mut master, mut follower) = pair();
+    let channels: crate::channels::Channels = core::array::from_fn(|i| 1000 + i as u16);
+    master.set_channels(&channels);
+    master.request_save_failsafe();
+    let mut buf = [0u8; 64];
+    let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
+        panic!()
+    };
+    let mut t = 0;
+    let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
+    // The flag rides in the next SAVE_FAILSAFE_REPEATS uplinks, then stops.
+    let mut flagged = u8::from(frame[1] & 0x10 != 0);
+    for _ in 0..16 {
+        match master.plan(t, &mut buf) {
+            Step::Transmit { .. } => {
+                flagged += u8::from(buf[1] & 0x10 != 0);
+                master.on_sent();
+            }
+            _ => master.finish_listen(),
+        }
+        t += SLOT_US;
+    }
+    assert_eq!(flagged, super::master::SAVE_FAILSAFE_REPEATS);
+    follower.on_received(
+        RxOutcome::Packet {
+            len: frame.len(),
+            rssi_dbm: -70,
+        },
+        &frame,
+        end,
+    );
+    assert_eq!(
+        follower.failsafe_values(),
+        &FailsafeValues::from_channels(&channels)
+    );
+    follower.plan(end + DEFAULT_FAILSAFE_US, &mut buf);
+    assert!(follower.in_failsafe());
+    assert_eq!(follower.output(), &channels);
+}
