@@ -9,22 +9,17 @@ use radio_rfm22b::Rfm22b;
 use si4432_sim::{
     Interference, Medium, Outcome as ChipOutcome, RadioConfig as ChipPlacement, RadioId, Simulation,
 };
-use telemetry::channels::FailsafeValues;
-use telemetry::link::core::{Follower, Master};
-use telemetry::link::follower::{bind_follower, run_follower};
-use telemetry::link::master::{bind_master, run_master};
 use telemetry::link::rate::airtime_us;
-use telemetry::link::{HOP_CHANNELS, LinkClock, LinkParams};
+use telemetry::link::{HOP_CHANNELS, LinkParams};
 use telemetry::mock::{MediumStats, SplitMix64};
 
 use crate::driver::{DriverRadio, SimClock};
+use crate::ends::{FlightStart, flight_end, module_end};
 use crate::probe::{FlightApp, ModuleApp, Now, Record, Shared};
 use crate::scenario::Scenario;
-use crate::world::{BIND_TIMEOUT_US, Outcome, STATUS_PERIOD_US, Status, StatusTracker, params_for};
-
-/// Boot offsets of the two ends' clocks (they count from different epochs).
-const MODULE_EPOCH_US: u64 = 1_234_567;
-const FLIGHT_EPOCH_US: u64 = 987_654_321;
+use crate::world::{
+    FLIGHT_EPOCH_US, MODULE_EPOCH_US, Outcome, STATUS_PERIOD_US, Status, StatusTracker, params_for,
+};
 
 #[allow(clippy::too_many_arguments)]
 fn spawn_pair(
@@ -47,71 +42,41 @@ fn spawn_pair(
     let flight = medium.add_radio(placement(x_m.1, -6.0));
     let ids = (module.id, flight.id);
     // The MCU clocks drift too, 40 ppm apart: the follower must keep re-timing its grid.
-    let mut module_clock =
-        SimClock::new(medium.clone(), module.delay.clone(), MODULE_EPOCH_US, 20.0);
-    let mut flight_clock =
-        SimClock::new(medium.clone(), flight.delay.clone(), FLIGHT_EPOCH_US, -20.0);
-    let mut module_radio = DriverRadio::new(
+    let module_clock = SimClock::new(medium.clone(), module.delay.clone(), MODULE_EPOCH_US, 20.0);
+    let flight_clock = SimClock::new(medium.clone(), flight.delay.clone(), FLIGHT_EPOCH_US, -20.0);
+    let module_radio = DriverRadio::new(
         Rfm22b::new(module.spi, module.nirq, module.sdn, module.delay),
         s.header_check,
     );
-    let mut flight_radio = DriverRadio::new(
+    let flight_radio = DriverRadio::new(
         Rfm22b::new(flight.spi, flight.nirq, flight.sdn, flight.delay),
         s.header_check,
     );
     let m = medium.clone();
     let now: Now = Rc::new(move || m.now().as_micros() as u64);
-    let mut module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);
-    let mut flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
-    let failsafe_us = s.failsafe_ms * 1000;
-    let band = s.band;
-    sim.spawn(async move {
-        if bind {
-            let start = module_clock.now_us() + 300_000;
-            module_clock.sleep_until_us(start).await;
-            let Ok(true) = bind_master(
-                &mut module_radio,
-                &mut module_clock,
-                &params,
-                BIND_TIMEOUT_US,
-            )
-            .await
-            else {
-                return;
-            };
-        }
-        let mut master = Master::new(params);
-        let _ = run_master(
-            &mut module_radio,
-            &mut module_clock,
-            &mut master,
-            &mut module_app,
-        )
-        .await;
-    });
-    let rec = record.clone();
-    sim.spawn(async move {
-        let params = if bind {
-            match bind_follower(&mut flight_radio, &mut flight_clock, band, BIND_TIMEOUT_US).await {
-                Ok(Some(p)) => p,
-                _ => return,
-            }
-        } else {
-            let start = flight_clock.now_us() + 123_457;
-            flight_clock.sleep_until_us(start).await;
-            params
-        };
-        rec.borrow_mut().bound_us = Some(flight_clock.virtual_us());
-        rec.borrow_mut().follower_params = Some(params);
-        let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
-        let _ = run_follower(
-            &mut flight_radio,
-            &mut flight_clock,
-            &mut follower,
-            &mut flight_app,
-        )
-        .await;
-    });
+    let module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);
+    let flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
+    sim.spawn(module_end(
+        module_radio,
+        module_clock,
+        params,
+        bind,
+        module_app,
+    ));
+    let start = FlightStart {
+        bind,
+        params,
+        band: s.band,
+        failsafe_us: s.failsafe_ms * 1000,
+    };
+    sim.spawn(flight_end(
+        flight_radio,
+        flight_clock,
+        start,
+        flight_app,
+        record.clone(),
+        SimClock::virtual_us,
+    ));
     (record, ids.0, ids.1)
 }
 

@@ -8,6 +8,7 @@
 
 pub mod chip_world;
 pub mod driver;
+mod ends;
 pub mod probe;
 pub mod report;
 pub mod scenario;

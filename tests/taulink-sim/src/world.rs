@@ -4,10 +4,6 @@
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use telemetry::channels::FailsafeValues;
-use telemetry::link::core::{Follower, Master};
-use telemetry::link::follower::{bind_follower, run_follower};
-use telemetry::link::master::{bind_master, run_master};
 use telemetry::link::rate::airtime_us;
 use telemetry::link::{HOP_CHANNELS, LinkClock, LinkParams, PacketRadio, RadioConfig};
 use telemetry::mock::{
@@ -15,12 +11,16 @@ use telemetry::mock::{
     VirtualTime,
 };
 
+use crate::ends::{FlightStart, flight_end, module_end};
 use crate::probe::{FlightApp, ModuleApp, Now, Record, Shared, Snapshot};
 use crate::report::{Report, summarise};
 use crate::scenario::Scenario;
 
 /// How long each end's bind mode lasts before giving up.
 pub(crate) const BIND_TIMEOUT_US: u64 = 5_000_000;
+/// Boot offsets of the two ends' clocks (they count from different epochs).
+pub(crate) const MODULE_EPOCH_US: u64 = 1_234_567;
+pub(crate) const FLIGHT_EPOCH_US: u64 = 987_654_321;
 /// Status callback period, virtual.
 pub(crate) const STATUS_PERIOD_US: u64 = 1_000_000;
 
@@ -76,65 +76,37 @@ fn spawn_pair<'a>(
     };
     let module_node = medium.add_node(node(positions.0));
     let flight_node = medium.add_node(node(positions.1));
-    let mut module_radio = MockRadio::new(medium.clone(), module_node);
-    let mut flight_radio = MockRadio::new(medium.clone(), flight_node);
+    let module_radio = MockRadio::new(medium.clone(), module_node);
+    let flight_radio = MockRadio::new(medium.clone(), flight_node);
     // The ends boot at different times and count from different epochs.
-    let mut module_clock = MockClock::new(time.clone(), 1_234_567);
-    let mut flight_clock = MockClock::new(time.clone(), 987_654_321);
+    let module_clock = MockClock::new(time.clone(), MODULE_EPOCH_US);
+    let flight_clock = MockClock::new(time.clone(), FLIGHT_EPOCH_US);
     let t = time.clone();
     let now: Now = Rc::new(move || t.now_us());
-    let mut module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);
-    let mut flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
-    let failsafe_us = s.failsafe_ms * 1000;
-    let band = s.band;
-    let rec = record.clone();
-    ex.spawn(async move {
-        if bind {
-            let start = module_clock.now_us() + 300_000;
-            module_clock.sleep_until_us(start).await;
-            let Ok(true) = bind_master(
-                &mut module_radio,
-                &mut module_clock,
-                &params,
-                BIND_TIMEOUT_US,
-            )
-            .await
-            else {
-                return;
-            };
-        }
-        let mut master = Master::new(params);
-        let _ = run_master(
-            &mut module_radio,
-            &mut module_clock,
-            &mut master,
-            &mut module_app,
-        )
-        .await;
-    });
-    ex.spawn(async move {
-        let params = if bind {
-            match bind_follower(&mut flight_radio, &mut flight_clock, band, BIND_TIMEOUT_US).await {
-                Ok(Some(p)) => p,
-                _ => return,
-            }
-        } else {
-            // Boot a little later than the master, somewhere in its hop cycle.
-            let start = flight_clock.now_us() + 123_457;
-            flight_clock.sleep_until_us(start).await;
-            params
-        };
-        rec.borrow_mut().bound_us = Some(flight_clock.now_us() - 987_654_321);
-        rec.borrow_mut().follower_params = Some(params);
-        let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
-        let _ = run_follower(
-            &mut flight_radio,
-            &mut flight_clock,
-            &mut follower,
-            &mut flight_app,
-        )
-        .await;
-    });
+    let module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);
+    let flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
+    ex.spawn(module_end(
+        module_radio,
+        module_clock,
+        params,
+        bind,
+        module_app,
+    ));
+    let start = FlightStart {
+        bind,
+        params,
+        band: s.band,
+        failsafe_us: s.failsafe_ms * 1000,
+    };
+    // Both mock clocks count the shared virtual time from their own epoch.
+    ex.spawn(flight_end(
+        flight_radio,
+        flight_clock,
+        start,
+        flight_app,
+        record.clone(),
+        |c: &MockClock| c.now_us() - FLIGHT_EPOCH_US,
+    ));
     (record, module_node, flight_node)
 }
 
