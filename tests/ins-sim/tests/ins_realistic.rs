@@ -2,7 +2,12 @@
 //! (IMU 1 kHz, mag 100 Hz, baro 50 Hz, GPS 5 Hz), with the INS tuned from those sensor
 //! specifications; and the complementary filter on the same simulator.
 
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::needless_range_loop
+)] // test code
 
 mod common;
 

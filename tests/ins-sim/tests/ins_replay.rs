@@ -3,7 +3,12 @@
 //! "change indication" files (tests/ins-sim/change_indication/*.csv, 10 Hz), so every
 //! numerical change to the filter shows up as a diff. `UPDATE_GOLDEN=1` rewrites them.
 
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::needless_range_loop
+)] // test code
 
 use std::path::PathBuf;
 
