@@ -198,8 +198,20 @@ impl Bench {
     }
 
     /// `to` listens for up to `rx_timeout_us` while `from` sends `payload` `RX_LEAD_US`
-    /// after RX was armed. Runs until both calls return.
+    /// after RX was armed, with `TX_TIMEOUT_US`. Runs until both calls return.
     pub fn exchange(&self, from: &Node, to: &Node, payload: &[u8], rx_timeout_us: u32) -> Exchange {
+        self.exchange_with(from, to, payload, TX_TIMEOUT_US, rx_timeout_us)
+    }
+
+    /// As [`Bench::exchange`] with a chosen TX timeout.
+    pub fn exchange_with(
+        &self,
+        from: &Node,
+        to: &Node,
+        payload: &[u8],
+        tx_timeout_us: u32,
+        rx_timeout_us: u32,
+    ) -> Exchange {
         let (from, to) = (from.clone(), to.clone());
         let payload = payload.to_vec();
         let (rx_medium, tx_medium) = (self.medium.clone(), self.medium.clone());
@@ -220,7 +232,7 @@ impl Bench {
             lead.await;
             let start = tx_medium.now();
             let sent = from
-                .with(async |r| r.transmit(&payload, TX_TIMEOUT_US).await)
+                .with(async |r| r.transmit(&payload, tx_timeout_us).await)
                 .await;
             (sent, tx_medium.now() - start)
         });

@@ -1,0 +1,178 @@
+//! The real driver against the virtual Si4432 when things go wrong: RX and TX timeouts at the
+//! exact virtual time, CRC errors from medium bit errors and from an interference burst
+//! (reported as outcomes, never as a corrupted packet), and the chip usable afterwards.
+#![allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
+
+#[path = "common/sim_bench.rs"]
+mod bench;
+
+use core::time::Duration;
+
+use bench::*;
+use radio_rfm22b::{Error, RxOutcome};
+use si4432_sim::{ChipState, Interference, Outcome, PLL_SETTLE_NS};
+
+/// After an operation the chip is in READY with interrupts off, nIRQ released and both
+/// FIFOs empty.
+fn assert_idle(node: &Node) {
+    assert_eq!(node.chip.state(), ChipState::Ready);
+    assert_eq!((node.chip.peek(0x05), node.chip.peek(0x06)), (0, 0));
+    assert!(!node.chip.nirq_is_low());
+    assert_eq!((node.chip.rx_fifo_len(), node.chip.tx_fifo_len()), (0, 0));
+}
+
+#[test]
+fn rx_timeout_returns_at_the_exact_virtual_time_and_the_chip_still_receives() {
+    let bench = Bench::new(4);
+    let (a, b) = bench.link(config(57_600, 45_000));
+    for timeout_us in [0, 1, 5_000, 123_457] {
+        let (out, elapsed) = bench.op(&b, async move |r| {
+            let mut buf = [0u8; 255];
+            r.receive(&mut buf, timeout_us).await
+        });
+        assert_eq!(out.unwrap(), RxOutcome::Timeout);
+        assert_eq!(elapsed, Duration::from_micros(u64::from(timeout_us)));
+        assert_idle(&b);
+    }
+    // Nobody listening: the frame goes out, B (in READY) is recorded as not listening.
+    let (sent, elapsed) = bench.op(&a, async |r| r.transmit(&[1, 2, 3], 20_000).await);
+    sent.unwrap();
+    assert_eq!(
+        elapsed,
+        Duration::from_nanos(PLL_SETTLE_NS) + a.chip.airtime(3)
+    );
+    assert_eq!(bench.last_outcome_at(&b), Some(Outcome::NotListening));
+
+    let payload = pattern(16, 7);
+    let x = bench.exchange(&a, &b, &payload, 20_000);
+    assert_eq!(x.payload, payload);
+    // The receive returned when the packet was complete: lead + settle + airtime.
+    assert_eq!(
+        x.rx_elapsed,
+        Duration::from_micros(RX_LEAD_US)
+            + Duration::from_nanos(PLL_SETTLE_NS)
+            + a.chip.airtime(16)
+    );
+    assert_idle(&b);
+}
+
+#[test]
+fn tx_timeout_cuts_the_packet_is_never_delivered_and_the_next_one_is() {
+    let bench = Bench::new(5);
+    let (a, b) = bench.link(config(57_600, 45_000));
+    let long = pattern(255, 1);
+    // 255 bytes at 57.6 kbit/s are ~36 ms on air; give TX only 10 ms.
+    assert!(a.chip.airtime(255) > Duration::from_millis(35));
+    let x = bench.exchange_with(&a, &b, &long, 10_000, 60_000);
+    assert_eq!(x.sent, Err(Error::Timeout));
+    assert_eq!(x.tx_elapsed, Duration::from_millis(10));
+    assert!(
+        !matches!(x.received, Ok(RxOutcome::Packet(_))),
+        "a cut frame was delivered: {x:?}"
+    );
+    let frame = bench.last_frame().unwrap();
+    assert!(frame.damaged);
+    assert_eq!(
+        frame.airtime(),
+        Duration::from_millis(10) - Duration::from_nanos(PLL_SETTLE_NS)
+    );
+    assert_idle(&a);
+    assert_idle(&b);
+
+    let x = bench.exchange(&a, &b, &long, 60_000);
+    x.sent.unwrap();
+    assert_eq!(x.payload, long);
+}
+
+#[test]
+fn bit_errors_give_crc_error_outcomes_never_a_corrupted_packet() {
+    let bench = Bench::new(21);
+    let (a, b) = bench.link(config(57_600, 45_000));
+    // 1 dB below the 57.6 kbit/s sensitivity (−107.2 dBm): a mix of clean packets, CRC
+    // errors and lost sync words.
+    let extra_db = bench.link_power_dbm(&a, &b) + 108.2;
+    bench.medium.set_attenuation(a.id, b.id, extra_db);
+    let (mut packets, mut crc_errors, mut lost) = (0, 0, 0);
+    for i in 0..60u8 {
+        let payload = pattern(16, i);
+        // Long enough for a frame whose length byte was corrupted to 255 (≈ 37 ms).
+        let x = bench.exchange(&a, &b, &payload, 60_000);
+        x.sent.unwrap();
+        let medium_says = bench.last_outcome_at(&b).unwrap();
+        match (x.received.unwrap(), medium_says) {
+            (RxOutcome::Packet(p), Outcome::Delivered { .. }) => {
+                assert_eq!((p.len, &x.payload), (16, &payload));
+                // −108.2 dBm of signal plus the noise floor, read in 0.5 dB steps.
+                assert!((-109..=-106).contains(&p.signal.rssi_dbm), "{p:?}");
+                packets += 1;
+            }
+            (RxOutcome::CrcError(signal), Outcome::CrcError { bit_errors }) => {
+                assert!(bit_errors > 0);
+                assert!((-109..=-106).contains(&signal.rssi_dbm), "{signal:?}");
+                crc_errors += 1;
+            }
+            (RxOutcome::Timeout, Outcome::SyncCorrupted | Outcome::HeaderMismatch) => lost += 1,
+            (driver, medium) => panic!("packet {i}: driver {driver:?}, medium {medium:?}"),
+        }
+        assert_idle(&b);
+    }
+    println!("60 packets at -108.2 dBm: {packets} valid, {crc_errors} CRC errors, {lost} lost");
+    assert_eq!(packets + crc_errors + lost, 60);
+    assert!(
+        packets >= 15 && crc_errors >= 10,
+        "{packets}/{crc_errors}/{lost}"
+    );
+
+    // The obstacle goes away: the next packet is clean, at the free-space level again.
+    bench.medium.set_attenuation(a.id, b.id, 0.0);
+    let payload = pattern(16, 0xEE);
+    let x = bench.exchange(&a, &b, &payload, 20_000);
+    assert_eq!(x.payload, payload);
+    assert!((f64::from(x.packet().signal.rssi_dbm) - bench.link_power_dbm(&a, &b)).abs() < 1.5);
+}
+
+#[test]
+fn an_interference_burst_over_the_payload_is_a_crc_error_then_the_link_recovers() {
+    let bench = Bench::new(6);
+    let (a, b) = bench.link(config(57_600, 45_000));
+    // The frame starts RX_LEAD_US + 200 µs after the exchange begins; preamble (40 bits),
+    // sync (16) and length (8) take 1.11 ms, the 16-byte payload the next 2.22 ms. A −55 dBm
+    // burst (10 dB over the −65 dBm signal) from 1.5 to 2.5 ms into the frame hits only it.
+    let frame_start = bench.now() + Duration::from_micros(RX_LEAD_US + PLL_SETTLE_NS / 1_000);
+    bench.medium.add_interference(Interference {
+        start: frame_start + Duration::from_micros(1_500),
+        end: frame_start + Duration::from_micros(2_500),
+        center_hz: f64::from(CARRIER_HZ),
+        bandwidth_hz: 100e3,
+        power_dbm: -55.0,
+    });
+    let payload = pattern(16, 3);
+    let x = bench.exchange(&a, &b, &payload, 20_000);
+    x.sent.unwrap();
+    let Ok(RxOutcome::CrcError(signal)) = x.received else {
+        panic!("expected a CRC error: {x:?}");
+    };
+    // RSSI was latched at sync, before the burst.
+    assert!((f64::from(signal.rssi_dbm) - bench.link_power_dbm(&a, &b)).abs() < 1.5);
+    let Some(Outcome::CrcError { bit_errors }) = bench.last_outcome_at(&b) else {
+        panic!("{:?}", bench.last_frame());
+    };
+    // About 58 bits lie under the burst at BER ≈ 0.3; every hit byte has one flipped bit.
+    assert!((5..=58).contains(&bit_errors), "{bit_errors}");
+    assert!(x.payload.is_empty());
+    // The driver gave up at the end of the frame, not at its timeout.
+    assert_eq!(
+        x.rx_elapsed,
+        Duration::from_micros(RX_LEAD_US)
+            + Duration::from_nanos(PLL_SETTLE_NS)
+            + a.chip.airtime(16)
+    );
+    assert_idle(&b);
+
+    let x = bench.exchange(&a, &b, &payload, 20_000);
+    assert_eq!(x.payload, payload);
+    assert_eq!(
+        bench.last_outcome_at(&b),
+        Some(Outcome::Delivered { bit_errors: 0 })
+    );
+}
