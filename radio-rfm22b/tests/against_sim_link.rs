@@ -67,6 +67,85 @@ fn init_resets_through_sdn_reports_b1_and_programs_the_modem() {
 }
 
 #[test]
+fn revisions_reset_without_sdn_and_the_temperature_sensor() {
+    let bench = Bench::new(2);
+    let node = bench.node(RadioConfig {
+        temperature_c: 31.5,
+        ..RadioConfig::at([0.0; 3])
+    });
+    // The identification registers are read-only; poke stands in for other silicon.
+    for (version, expected) in [
+        (0x02, Version::V2),
+        (0x04, Version::A0),
+        (0x06, Version::B1),
+    ] {
+        node.chip.poke(0x01, version);
+        let (info, _) = bench.op(&node, async |r| r.probe().await);
+        assert_eq!(info.unwrap().version, expected);
+    }
+    node.chip.poke(0x00, 0x07);
+    let (info, _) = bench.op(&node, async |r| r.probe().await);
+    assert_eq!(
+        info,
+        Err(radio_rfm22b::Error::NotAnSi4432 {
+            device_type: 0x07,
+            version: 0x06
+        })
+    );
+    // A reset restores the datasheet identification (0x08, B1).
+    let (info, elapsed) = bench.op(&node, async |r| r.reset().await);
+    assert_eq!(info.unwrap().version, Version::B1);
+    assert_eq!(elapsed, Duration::from_millis(31));
+    bench.init(&node, config(9_600, 30_000)).unwrap();
+    // ADC at −64…+64 °C, 0.5 °C steps: (31.5 + 64) · 2 = 191 → 31.5 °C.
+    let (t, elapsed) = bench.op(&node, async |r| r.read_temperature_decidegrees_c().await);
+    assert_eq!(t.unwrap(), 315);
+    assert_eq!(elapsed, Duration::from_micros(100));
+
+    // A board that ties SDN low: software reset only, chip ready after 1 ms.
+    let handle = bench.medium.add_radio(RadioConfig::at([5.0, 0.0, 0.0]));
+    let mut radio = radio_rfm22b::Rfm22b::new_without_sdn(handle.spi, handle.nirq, handle.delay);
+    let config = config(256_000, 150_000);
+    let start = bench.now();
+    let info = bench.run(async move { radio.init(config).await });
+    assert_eq!(info.unwrap().version, Version::B1);
+    assert_eq!(bench.now() - start, Duration::from_millis(1));
+    let modem = handle.chip.modem().unwrap();
+    assert!((modem.tx_bit_rate_bps - 256_000.0).abs() < 100.0);
+    assert!((modem.deviation_hz - 150_000.0).abs() < 1.0);
+}
+
+#[test]
+fn rssi_at_sync_follows_the_path_loss_over_distance() {
+    let bench = Bench::new(5);
+    let (a, b) = bench.link(config(9_600, 30_000));
+    let mut readings = Vec::new();
+    for distance_m in [10.0, 100.0, 1_000.0, 10_000.0, 30_000.0] {
+        bench.medium.set_position(b.id, [distance_m, 0.0, 0.0]);
+        let expected_dbm = bench.link_power_dbm(&a, &b);
+        let payload = pattern(16, 1);
+        let x = bench.exchange(&a, &b, &payload, 50_000);
+        assert_eq!(x.payload, payload, "{distance_m} m");
+        let rssi_dbm = x.packet().signal.rssi_dbm;
+        assert!(
+            (f64::from(rssi_dbm) - expected_dbm).abs() <= 1.5,
+            "{distance_m} m: RSSI {rssi_dbm} dBm, path loss gives {expected_dbm:.1} dBm"
+        );
+        readings.push(rssi_dbm);
+    }
+    // Free space: 20 dB per decade of distance, 9.5 dB from 10 to 30 km (±1 dB of RSSI
+    // rounding in 0.5 dB register steps).
+    for pair in readings[..4].windows(2) {
+        assert!((19..=21).contains(&(pair[0] - pair[1])), "{readings:?}");
+    }
+    assert!(
+        (9..=10).contains(&(readings[3] - readings[4])),
+        "{readings:?}"
+    );
+    assert_eq!(readings[..4], [-25, -45, -65, -85]);
+}
+
+#[test]
 fn sixteen_bytes_both_ways_at_four_rates_with_rssi_afc_and_airtime() {
     for (rate, deviation) in RATES {
         let bench = Bench::new(u64::from(rate));
