@@ -177,3 +177,38 @@ fn tx_and_rx_from_standby_wait_for_the_crystal() {
         (ChipState::Ready, ChipState::Ready)
     );
 }
+
+#[test]
+fn every_length_from_1_to_255_streams_through_the_fifo_at_any_threshold() {
+    // The default 62/32/32, and thresholds near both ends of the FIFO (refill when only 4
+    // bytes are left; drain at 60 or already at 3).
+    let thresholds = [(62, 32, 32), (62, 4, 60), (40, 60, 3)];
+    for (tx_almost_full, tx_almost_empty, rx_almost_full) in thresholds {
+        let bench = Bench::new(44);
+        let mut config = config(256_000, 150_000);
+        config.fifo = radio_rfm22b::fifo::FifoThresholds {
+            tx_almost_full,
+            tx_almost_empty,
+            rx_almost_full,
+        };
+        let (a, b) = bench.link(config);
+        assert_eq!(
+            [a.chip.peek(0x7C), a.chip.peek(0x7D), a.chip.peek(0x7E)],
+            [tx_almost_full, tx_almost_empty, rx_almost_full]
+        );
+        for len in 1..=255usize {
+            let (from, to) = if len % 2 == 0 { (&a, &b) } else { (&b, &a) };
+            let payload = pattern(len, len as u8 ^ rx_almost_full);
+            let x = bench.exchange(from, to, &payload, 20_000);
+            assert_eq!(
+                (x.sent, x.payload.len()),
+                (Ok(()), len),
+                "thresholds {tx_almost_empty}/{rx_almost_full}, {len} bytes: {x:?}"
+            );
+            assert_eq!(
+                x.payload, payload,
+                "{tx_almost_empty}/{rx_almost_full}/{len}"
+            );
+        }
+    }
+}
