@@ -212,6 +212,44 @@ fn sixteen_bytes_both_ways_at_four_rates_with_rssi_afc_and_airtime() {
 }
 
 #[test]
+fn high_band_link_at_868_mhz_reports_afc_in_312_hz_steps_and_offset_rssi() {
+    let bench = Bench::new(6);
+    let mut config = config_with(
+        57_600,
+        45_000,
+        radio_rfm22b::PacketConfig::new().with_rssi_offset(2),
+    );
+    config.carrier = radio_rfm22b::Carrier::new(868_000_000);
+    assert!(config.carrier.high_band());
+    let (a, b) = skewed_link(&bench, config);
+    let decoded = a.chip.modem().unwrap();
+    assert!(
+        (decoded.carrier_hz - 868e6).abs() < 1.0,
+        "{}",
+        decoded.carrier_hz
+    );
+    assert_eq!(decoded.step_hz, 312.5);
+    let expected_dbm = bench
+        .medium
+        .received_power_dbm(a.id, b.id, 868e6, TX_POWER_DBM);
+    // 8 ppm of 868 MHz.
+    let offset_hz = (PPM_A - PPM_B) * 1e-6 * 868e6;
+    for (from, to, sign) in [(&a, &b, 1.0), (&b, &a, -1.0)] {
+        let payload = pattern(16, 6);
+        let x = bench.exchange(from, to, &payload, 50_000);
+        assert_eq!(x.payload, payload);
+        let signal = x.packet().signal;
+        let afc_error_hz = f64::from(signal.afc_offset_hz) - sign * offset_hz;
+        assert!(afc_error_hz.abs() <= 312.5, "{signal:?}, {offset_hz:.0} Hz");
+        // rssi_off = 2 lifts the register by 8 LSB; the driver takes it back out.
+        assert!(
+            (f64::from(signal.rssi_dbm) - expected_dbm).abs() <= 1.5,
+            "{signal:?} vs {expected_dbm:.1} dBm"
+        );
+    }
+}
+
+#[test]
 fn long_packets_stream_through_the_fifo_thresholds_both_ways() {
     for (rate, deviation) in [(57_600, 45_000), (256_000, 150_000)] {
         let bench = Bench::new(3);

@@ -108,6 +108,7 @@ pub struct Exchange {
 
 impl Exchange {
     /// The received packet; panics with the whole exchange otherwise.
+    #[track_caller]
     pub fn packet(&self) -> RxPacket {
         match self.received {
             Ok(RxOutcome::Packet(p)) => p,
