@@ -194,3 +194,55 @@ fn a_deadline_in_the_middle_of_a_packet_is_a_timeout_never_half_a_packet() {
     let x = bench.exchange(&a, &b, &payload, 400_000);
     assert_eq!(x.payload, payload);
 }
+
+#[test]
+fn a_collision_is_a_crc_error_at_the_receiver_never_a_mixed_packet() {
+    let bench = Bench::new(8);
+    let config = config(57_600, 45_000);
+    let (a, b) = bench.link(config);
+    // C is as far from B as A is, so neither frame can capture the receiver.
+    let c = bench.node_at([DISTANCE_M, DISTANCE_M, 0.0]);
+    bench.init(&c, config).unwrap();
+    let receiver = b.clone();
+    let listen = bench.sim.spawn(async move {
+        receiver
+            .with(async |r| {
+                let mut buf = [0u8; 255];
+                r.receive(&mut buf, 50_000).await
+            })
+            .await
+    });
+    // A starts at 1 ms; C 1.5 ms later, after A's sync word, over A's payload.
+    let mut senders = Vec::new();
+    for (node, lead_us, fill) in [(&a, RX_LEAD_US, 0xA5), (&c, RX_LEAD_US + 1_500, 0x5A)] {
+        let node = node.clone();
+        let lead = bench.pause(lead_us);
+        senders.push(bench.sim.spawn(async move {
+            lead.await;
+            node.with(async |r| r.transmit(&[fill; 32], TX_TIMEOUT_US).await)
+                .await
+        }));
+    }
+    assert!(bench.sim.run_until_or(RUN_LIMIT, || {
+        listen.is_finished() && senders.iter().all(|s| s.is_finished())
+    }));
+    for s in &senders {
+        s.take().unwrap().unwrap();
+    }
+    let Ok(RxOutcome::CrcError(_)) = listen.take().unwrap() else {
+        panic!("{:?}", bench.medium.trace());
+    };
+    let trace = bench.medium.trace();
+    let [first, second] = &trace[trace.len() - 2..] else {
+        panic!("expected two frames")
+    };
+    assert!(matches!(
+        first.outcome_at(b.id),
+        Some(Outcome::CrcError { bit_errors }) if bit_errors > 0
+    ));
+    assert_eq!(second.outcome_at(b.id), Some(Outcome::Busy));
+    assert_idle(&b);
+    // The air is clear again: A's next packet arrives intact.
+    let x = bench.exchange(&a, &b, &[0xA5; 32], 20_000);
+    assert_eq!(x.payload, vec![0xA5; 32]);
+}
