@@ -212,3 +212,57 @@ fn every_length_from_1_to_255_streams_through_the_fifo_at_any_threshold() {
         }
     }
 }
+
+#[test]
+fn an_fsk_modem_round_trips_with_the_drivers_airtime() {
+    use radio_rfm22b::{ModemConfig, ModemSettings, Modulation};
+    let bench = Bench::new(45);
+    let mut config = config(9_600, 30_000);
+    let settings = ModemSettings::new(19_200, 45_000).with_modulation(Modulation::Fsk);
+    config.modem = ModemConfig::try_from_settings(settings).unwrap();
+    let (a, b) = bench.link(config);
+    assert_eq!(a.chip.peek(0x71) & 0x03, 0x02); // modtyp = FSK
+    let payload = pattern(40, 7);
+    for (from, to) in [(&a, &b), (&b, &a)] {
+        let x = bench.exchange(from, to, &payload, 100_000);
+        assert_eq!(x.payload, payload);
+        assert_eq!(
+            x.tx_elapsed,
+            Duration::from_nanos(PLL_SETTLE_NS) + from.chip.airtime(40)
+        );
+    }
+    let driver_us = f64::from(config.packet.airtime_us(&config.modem, 40));
+    let chip_us = a.chip.airtime(40).as_secs_f64() * 1e6;
+    assert!(
+        (driver_us - chip_us).abs() <= 1.0,
+        "{driver_us} vs {chip_us}"
+    );
+}
+
+/// Two disagreements, reported: the sim (`si4432-sim/src/modem.rs`, `can_receive`) compares
+/// the TX *data* rate with the RX clock-recovery rate, which AN440 (and the driver,
+/// `modem.rs:131`) programs as the Manchester *chip* rate Rb·(1+enmanch), so no Manchester
+/// frame is ever received (`Mismatch::BitRate { tx 4 800, rx 9 600 }`); and the driver's
+/// `PacketConfig::airtime_us` ignores Manchester (half the sim's and the real airtime).
+#[test]
+#[ignore = "sim bug: Manchester TX data rate compared with RX chip rate; driver gap: airtime_us ignores Manchester"]
+fn a_manchester_modem_round_trips_with_the_drivers_airtime() {
+    use radio_rfm22b::{ModemConfig, ModemSettings};
+    let bench = Bench::new(46);
+    let mut config = config(9_600, 30_000);
+    let settings = ModemSettings::new(4_800, 20_000).with_manchester(true);
+    config.modem = ModemConfig::try_from_settings(settings).unwrap();
+    let (a, b) = bench.link(config);
+    assert!(a.chip.modem().unwrap().manchester);
+    let payload = pattern(40, 8);
+    for (from, to) in [(&a, &b), (&b, &a)] {
+        let x = bench.exchange(from, to, &payload, 300_000);
+        assert_eq!(x.payload, payload, "{:?}", bench.last_frame());
+    }
+    let driver_us = f64::from(config.packet.airtime_us(&config.modem, 40));
+    let chip_us = a.chip.airtime(40).as_secs_f64() * 1e6;
+    assert!(
+        (driver_us - chip_us).abs() <= 1.0 + chip_us * 1e-3,
+        "{driver_us} vs {chip_us}"
+    );
+}
