@@ -1,6 +1,7 @@
 //! The real driver against the virtual Si4432 when things go wrong: RX and TX timeouts at the
-//! exact virtual time, CRC errors from medium bit errors and from an interference burst
-//! (reported as outcomes, never as a corrupted packet), and the chip usable afterwards.
+//! exact virtual time (also mid-packet), CRC errors from medium bit errors, an interference
+//! burst, a collision and corrupted injected frames — reported as outcomes, never as a
+//! corrupted packet — and the chip usable afterwards.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 
 #[path = "common/sim_bench.rs"]
@@ -245,4 +246,60 @@ fn a_collision_is_a_crc_error_at_the_receiver_never_a_mixed_packet() {
     // The air is clear again: A's next packet arrives intact.
     let x = bench.exchange(&a, &b, &[0xA5; 32], 20_000);
     assert_eq!(x.payload, vec![0xA5; 32]);
+}
+
+/// B listens for 50 ms; 1 ms in, an ideal transmitter injects `payload` at `power_dbm`.
+fn receive_injected(bench: &Bench, b: &Node, payload: &[u8], power_dbm: f64) -> RxOutcome {
+    let medium = bench.medium.clone();
+    let (id, payload) = (b.id, payload.to_vec());
+    let lead = bench.pause(RX_LEAD_US);
+    bench.sim.spawn(async move {
+        lead.await;
+        medium.inject_packet(id, &payload, power_dbm).unwrap();
+    });
+    let (out, _) = bench.op(b, async |r| {
+        let mut buf = [0u8; 255];
+        let out = r.receive(&mut buf, 50_000).await;
+        if let Ok(RxOutcome::Packet(p)) = out {
+            assert_eq!(&buf[..p.len], pattern(p.len, 0x33).as_slice());
+        }
+        out
+    });
+    out.unwrap()
+}
+
+#[test]
+fn injected_frames_clean_then_under_a_burst_then_clean() {
+    let bench = Bench::new(9);
+    let b = bench.node_at([0.0; 3]);
+    bench.init(&b, config(128_000, 90_000)).unwrap();
+    // A clean frame from an ideal transmitter in B's own format, at −80 dBm.
+    let RxOutcome::Packet(p) = receive_injected(&bench, &b, &pattern(120, 0x33), -80.0) else {
+        panic!("{:?}", bench.last_frame());
+    };
+    assert_eq!(p.len, 120);
+    assert!((-81..=-79).contains(&p.signal.rssi_dbm), "{p:?}");
+    assert_eq!(p.signal.afc_offset_hz, 0);
+    // The same frame (8.125 ms on air) under a burst 20 dB stronger from 1 ms to 8 ms in.
+    let start = bench.now() + Duration::from_micros(RX_LEAD_US);
+    bench.medium.add_interference(Interference {
+        start: start + Duration::from_millis(1),
+        end: start + Duration::from_millis(8),
+        center_hz: f64::from(CARRIER_HZ),
+        bandwidth_hz: 200e3,
+        power_dbm: -60.0,
+    });
+    let outcome = receive_injected(&bench, &b, &pattern(120, 0x33), -80.0);
+    assert!(matches!(outcome, RxOutcome::CrcError(_)), "{outcome:?}");
+    assert!(matches!(
+        bench.last_outcome_at(&b),
+        Some(Outcome::CrcError { bit_errors }) if bit_errors > 20
+    ));
+    assert_idle(&b);
+    // Burst over: clean again.
+    let outcome = receive_injected(&bench, &b, &pattern(16, 0x33), -80.0);
+    assert!(
+        matches!(outcome, RxOutcome::Packet(p) if p.len == 16),
+        "{outcome:?}"
+    );
 }
