@@ -1,7 +1,7 @@
 //! The real driver against the virtual Si4432: what a receiver must not hear. Another hop
 //! channel, another carrier, another bit rate, a foreign sync word or header → the driver
-//! times out at exactly its deadline (the medium says why), and once the settings match
-//! again the packet arrives.
+//! times out at its deadline (the medium says why), and once the settings match again the
+//! packet arrives.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 
 #[path = "common/sim_bench.rs"]
@@ -16,17 +16,28 @@ use si4432_sim::modem::Mismatch;
 
 const RX_TIMEOUT_US: u32 = 20_000;
 
-/// `from` sends to `to`, which must time out at exactly `RX_TIMEOUT_US`; returns what the
-/// medium recorded at `to`.
+/// `from` sends to `to`, which must time out; returns what the medium recorded at `to`.
+/// Without a sync word the timeout is exact. A header-rejected packet did show its sync
+/// word, and a driver may give a started packet the airtime of the longest one (+2 ms) to
+/// complete, so there the bound is that.
 fn not_received(bench: &Bench, from: &Node, to: &Node) -> Outcome {
     let x = bench.exchange(from, to, &pattern(16, 9), RX_TIMEOUT_US);
     x.sent.unwrap();
     assert_eq!(x.received.unwrap(), RxOutcome::Timeout);
-    assert_eq!(
-        x.rx_elapsed,
-        Duration::from_micros(u64::from(RX_TIMEOUT_US))
-    );
-    bench.last_outcome_at(to).unwrap()
+    let outcome = bench.last_outcome_at(to).unwrap();
+    let timeout = Duration::from_micros(u64::from(RX_TIMEOUT_US));
+    if outcome == Outcome::HeaderMismatch {
+        // 2 ms of the driver's margin plus 1 ms for its airtime at the nominal bit rate.
+        let bound = timeout + to.chip.airtime(255) + Duration::from_millis(3);
+        assert!(
+            x.rx_elapsed >= timeout && x.rx_elapsed <= bound,
+            "{:?}",
+            x.rx_elapsed
+        );
+    } else {
+        assert_eq!(x.rx_elapsed, timeout, "{outcome:?}");
+    }
+    outcome
 }
 
 /// `from` sends to `to`, which must get the exact payload.

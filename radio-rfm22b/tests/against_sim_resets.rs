@@ -13,11 +13,6 @@ use bench::*;
 use radio_rfm22b::{Carrier, Error, PacketConfig, RxOutcome, TxPower, Version};
 use si4432_sim::{ChipState, Fault, POWER_ON_RESET_NS};
 
-/// `reinit` after a reset: SDN 10 ms high + 20 ms low, then chip ready at the first 1 ms
-/// poll after the software reset.
-const REINIT: Duration = Duration::from_millis(31);
-/// The SDN pulse of a reset (10 ms high, 20 ms low); a reset of an absent chip ends there.
-const SDN_PULSE: Duration = Duration::from_millis(30);
 /// The chip's power-on reset time (datasheet ≈ 15 ms), after which it raises `ipor`.
 const POR: Duration = Duration::from_nanos(POWER_ON_RESET_NS);
 
@@ -36,7 +31,7 @@ fn assert_absent_within<T: core::fmt::Debug>(
     };
     assert_eq!(out.err(), Some(expected), "{miso:#04x}");
     assert!(
-        elapsed <= timeout.max(SDN_PULSE),
+        elapsed <= timeout.max(sdn_pulse()),
         "{miso:#04x}: {elapsed:?} for a {timeout:?} timeout"
     );
     if miso == 0x00 {
@@ -96,7 +91,7 @@ fn power_on_reset_during_rx_is_detected_reinitialised_and_the_next_packet_arrive
     assert_eq!(out, Err(Error::ChipReset));
     // Brown-out at 5 ms, `ipor` (enabled by 0x06's reset value) 15 ms later pulls nIRQ low,
     // then the driver re-initialises.
-    assert_eq!(elapsed, Duration::from_millis(5) + POR + REINIT);
+    assert_eq!(elapsed, Duration::from_millis(5) + POR + reset_time());
     assert_eq!(b.chip.state(), ChipState::Ready);
     assert_configured(&b, &config);
 
@@ -122,7 +117,7 @@ fn power_on_reset_during_tx_is_detected_reinitialised_and_the_next_packet_arrive
     let long = pattern(255, 2);
     let x = bench.exchange(&a, &b, &long, 100_000);
     assert_eq!(x.sent, Err(Error::ChipReset));
-    assert_eq!(x.tx_elapsed, Duration::from_millis(10) + POR + REINIT);
+    assert_eq!(x.tx_elapsed, Duration::from_millis(10) + POR + reset_time());
     assert!(
         !matches!(x.received, Ok(RxOutcome::Packet(_))),
         "half a frame was delivered: {x:?}"
@@ -169,7 +164,7 @@ fn power_on_reset_while_idle_is_found_by_check_health() {
     b.chip.power_on_reset();
     bench.run(bench.pause(20_000));
     let (out, elapsed) = bench.op(&b, async |r| r.check_health().await);
-    assert_eq!((out, elapsed), (Err(Error::ChipReset), REINIT));
+    assert_eq!((out, elapsed), (Err(Error::ChipReset), reset_time()));
     assert_configured(&b, &config);
     let payload = pattern(16, 4);
     let x = bench.exchange(&a, &b, &payload, 20_000);
@@ -188,7 +183,7 @@ fn a_register_file_lost_behind_the_driver_is_found_by_check_health() {
     b.chip.poke(0x1C, 0x01);
     let (out, elapsed) = bench.op(&b, async |r| r.check_health().await);
     assert_eq!(out, Err(Error::ChipReset));
-    assert_eq!(elapsed, REINIT);
+    assert_eq!(elapsed, reset_time());
     assert_configured(&b, &config);
     let payload = pattern(32, 5);
     let x = bench.exchange(&a, &b, &payload, 20_000);
@@ -209,11 +204,11 @@ fn an_unplugged_module_is_not_an_si4432_and_no_call_hangs() {
         let (out, elapsed) = bench.op(&node, async move |r| r.init(config).await);
         assert_eq!(out, absent, "{miso:#04x}");
         // Only the SDN pulse: the probe right after it fails.
-        assert_eq!(elapsed, SDN_PULSE);
+        assert_eq!(elapsed, sdn_pulse());
         let (out, elapsed) = bench.op(&node, async |r| r.probe().await);
         assert_eq!((out, elapsed), (absent, Duration::ZERO));
         let (out, elapsed) = bench.op(&node, async |r| r.reset().await);
-        assert_eq!((out, elapsed), (absent, SDN_PULSE));
+        assert_eq!((out, elapsed), (absent, sdn_pulse()));
         // `init` keeps the configuration for a later `reinit`, so TX runs into its 1 ms
         // deadline (or a reset attempt) and finds no chip.
         let (out, elapsed) = bench.op(&node, async |r| r.transmit(&[1], 1_000).await);
@@ -257,7 +252,7 @@ fn a_module_unplugged_after_init_fails_every_call_within_its_timeout() {
         let (out, elapsed) = bench.op(&b, async |r| r.check_health().await);
         assert_eq!((out, elapsed), (absent, Duration::ZERO));
         let (out, elapsed) = bench.op(&b, async |r| r.reinit().await.map(|_| ()));
-        assert_eq!((out, elapsed), (absent, SDN_PULSE));
+        assert_eq!((out, elapsed), (absent, sdn_pulse()));
         // The ADC poll is bounded by 10 × 100 µs. With MISO low `adcdone` never reads back
         // (timeout); with MISO high it reads "done" at once and the driver returns ADC 0xFF
         // as 63.5 °C without checking the chip (reported as a driver gap, not asserted).

@@ -36,6 +36,9 @@ pub const TX_POWER_DBM: f64 = 20.0;
 pub const RX_LEAD_US: u64 = 1_000;
 /// Generous TX timeout: a 255-byte packet at 9.6 kbit/s is on air for ~221 ms.
 pub const TX_TIMEOUT_US: u32 = 400_000;
+/// The driver polls chip-ready every 1 ms after a software reset; the virtual crystal is
+/// ready after 600 µs, so the first poll sees it.
+pub const CHIP_READY_POLL: Duration = Duration::from_millis(1);
 /// Virtual time after which `Bench::run` declares the driver hung.
 pub const RUN_LIMIT: Duration = Duration::from_secs(10);
 
@@ -57,6 +60,24 @@ pub fn config(bit_rate_bps: u32, deviation_hz: u32) -> Config {
 pub fn config_with(bit_rate_bps: u32, deviation_hz: u32, packet: PacketConfig) -> Config {
     let modem = ModemConfig::try_new(bit_rate_bps, deviation_hz).unwrap();
     Config::new(modem, packet, Carrier::new(CARRIER_HZ))
+}
+
+/// How long the driver's `init` takes on a healthy chip with SDN wired (SDN pulse, then one
+/// chip-ready poll), measured once on a scratch simulation. The driver's SDN timings are
+/// private; `init_resets_through_sdn_…` checks this figure against the datasheet.
+pub fn reset_time() -> Duration {
+    let bench = Bench::new(0);
+    let node = bench.node_at([0.0; 3]);
+    let config = config(57_600, 45_000);
+    let (info, elapsed) = bench.op(&node, async move |r| r.init(config).await);
+    info.unwrap();
+    elapsed
+}
+
+/// The SDN pulse alone (high, then low until the chip's power-on reset is over): a reset
+/// of an absent chip ends there, at the failed probe.
+pub fn sdn_pulse() -> Duration {
+    reset_time() - CHIP_READY_POLL
 }
 
 /// `len` bytes that differ from position to position and from `seed` to `seed`.
