@@ -50,6 +50,9 @@ where
     ///
     /// Cancel-safety: safe (one burst write).
     pub async fn set_tx_header(&mut self, header: [u8; 4]) -> Result<(), Error<SPI::Error>> {
+        // Stored like the channel and power, so the re-init after a power-on reset keeps it.
+        let config = self.config.as_mut().ok_or(Error::NotInitialised)?;
+        config.packet.set_header_bytes(header);
         self.bus.write_burst(TRANSMIT_HEADER_3, &header).await
     }
 
@@ -57,6 +60,8 @@ where
     ///
     /// Cancel-safety: safe (one burst write).
     pub async fn set_check_header(&mut self, header: [u8; 4]) -> Result<(), Error<SPI::Error>> {
+        let config = self.config.as_mut().ok_or(Error::NotInitialised)?;
+        config.packet.set_check_header_bytes(header);
         self.bus.write_burst(CHECK_HEADER_3, &header).await
     }
 
@@ -102,9 +107,8 @@ where
         self.bus
             .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
             .await?;
-        self.read_status().await?;
         self.busy = false;
-        Ok(())
+        self.clear_status().await
     }
 
     /// STANDBY: everything off but the register file (~450 nA); the next TX/RX restarts the

@@ -119,6 +119,17 @@ impl PacketConfig {
         self
     }
 
+    /// Replaces the transmitted header bytes, keeping its length (run-time changes go through
+    /// the stored configuration so a re-init after a reset keeps them).
+    pub(crate) const fn set_header_bytes(&mut self, header: [u8; 4]) {
+        self.header = header;
+    }
+
+    /// Replaces the expected header bytes, keeping the masks.
+    pub(crate) const fn set_check_header_bytes(&mut self, expected: [u8; 4]) {
+        self.check_header = expected;
+    }
+
     /// Receive-side header filter. `check_bytes` / `broadcast_bytes` are 4-bit masks (bit 3 =
     /// the first header byte on air): a checked byte must equal `expected & enable`, or be 0xFF
     /// if broadcast is on for it. `enable` masks the bits compared in each byte.
@@ -247,6 +258,11 @@ impl PacketConfig {
         }
         if !matches!(self.crc, Crc::Off) {
             bits += 16;
+        }
+        // Manchester sends two chips per data bit: the air time doubles (the TX data-rate
+        // register holds the data rate, the receiver's clock recovery the chip rate).
+        if modem.settings().manchester {
+            bits *= 2;
         }
         let rate = modem.bit_rate_bps() as u64;
         ((bits as u64 * 1_000_000).div_ceil(rate)) as u32

@@ -65,6 +65,10 @@ pub const OOK_COUNTER_1: u8 = 0x2C;
 pub const OOK_COUNTER_2: u8 = 0x2D;
 /// 0x30 Data Access Control (packet handler, CRC).
 pub const DATA_ACCESS_CONTROL: u8 = 0x30;
+/// 0x31 EZMAC Status (read-only): live packet-handler state.
+pub const EZMAC_STATUS: u8 = 0x31;
+/// 0x31 bit 4 pkrx: a packet is being received (sync and header accepted).
+pub const EZMAC_PKRX: u8 = 1 << 4;
 /// 0x32 Header Control 1 (broadcast enables, header checks).
 pub const HEADER_CONTROL_1: u8 = 0x32;
 /// 0x33 Header Control 2 (header length, fixed length, sync length, preamble bit 8).

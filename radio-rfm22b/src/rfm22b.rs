@@ -231,6 +231,20 @@ where
         Ok(())
     }
 
+    /// Reads (and so clears) the interrupt status before arming an operation. A power-on
+    /// reset latched while the chip sat idle means its registers are back at their reset
+    /// values (915 MHz, 40 kbit/s): re-initialise and report it rather than clear it unseen.
+    pub(crate) async fn clear_status(&mut self) -> Result<(), Error<SPI::Error>> {
+        let status = self.read_status().await?;
+        // All ones is a bus with no chip on it, not a reset: the operation's own presence
+        // check reports that (as NotAnSi4432) without a pointless re-init first.
+        let floating = status.status1 == 0xFF && status.status2 == 0xFF;
+        if status.power_on_reset() && !floating && self.config.is_some() {
+            return Err(self.recover().await);
+        }
+        Ok(())
+    }
+
     /// After a status read showed a power-on reset: re-initialise, report the reset.
     pub(crate) async fn recover(&mut self) -> Error<SPI::Error> {
         match self.reinit().await {

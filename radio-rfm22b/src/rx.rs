@@ -93,7 +93,7 @@ where
                 ],
             )
             .await?;
-        self.read_status().await?;
+        self.clear_status().await?;
         self.busy = true;
         self.bus
             .write(OPERATING_MODE_1, MODE_RXON | MODE_XTON)
@@ -132,6 +132,12 @@ where
                     match wait_for_irq(irq, deadline.as_mut(), &mut expired).await {
                         Ok(Wake::Irq) => {}
                         Ok(Wake::Deadline) if rx.signal.is_some() && !extended => {
+                            // Only a packet really being received (0x31 pkrx) earns the extra
+                            // time: a sync word whose header the chip then refused (another
+                            // link on the channel) must not stretch every receive.
+                            if bus.read(EZMAC_STATUS).await? & EZMAC_PKRX == 0 {
+                                break 'phase Err(Error::Timeout);
+                            }
                             extended = true;
                             budget_us = completion_us;
                             continue 'phase;

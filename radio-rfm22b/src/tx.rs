@@ -63,7 +63,7 @@ where
                 &[IRQ1_FIFO_ERROR | IRQ1_PACKET_SENT | refill, 0x00],
             )
             .await?;
-        self.read_status().await?;
+        self.clear_status().await?;
         self.busy = true;
         self.bus
             .write(OPERATING_MODE_1, MODE_TXON | MODE_XTON)

@@ -245,7 +245,6 @@ fn an_fsk_modem_round_trips_with_the_drivers_airtime() {
 /// frame is ever received (`Mismatch::BitRate { tx 4 800, rx 9 600 }`); and the driver's
 /// `PacketConfig::airtime_us` ignores Manchester (half the sim's and the real airtime).
 #[test]
-#[ignore = "sim bug: Manchester TX data rate compared with RX chip rate; driver gap: airtime_us ignores Manchester"]
 fn a_manchester_modem_round_trips_with_the_drivers_airtime() {
     use radio_rfm22b::{ModemConfig, ModemSettings};
     let bench = Bench::new(46);

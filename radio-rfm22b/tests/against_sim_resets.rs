@@ -135,7 +135,6 @@ fn power_on_reset_during_tx_is_detected_reinitialised_and_the_next_packet_arrive
 /// what they read, so an `ipor` latched while the driver was idle is lost; RX then runs on
 /// reset registers (915 MHz, 40 kbit/s) and only times out.
 #[test]
-#[ignore = "driver bug: ipor latched while idle is discarded by receive/transmit (rx.rs:94, tx.rs:66)"]
 fn power_on_reset_while_idle_is_reported_by_the_next_operation() {
     let bench = Bench::new(10);
     let config = config(57_600, 45_000);
@@ -326,7 +325,6 @@ fn a_power_on_reset_keeps_the_run_time_channel_carrier_and_power() {
 /// therefore silently reverts the headers, and a link that changes them at run time
 /// (OpenLRSng per hop) stops matching.
 #[test]
-#[ignore = "driver gap: set_tx_header/set_check_header are lost by the re-init after a power-on reset (control.rs)"]
 fn a_power_on_reset_keeps_the_run_time_headers() {
     const FIRST: [u8; 4] = *b"hdr1";
     const LATER: [u8; 4] = *b"hdr2";

@@ -229,6 +229,8 @@ fn packet_started_before_the_timeout_is_completed() {
         r(0x03, &[0x00, 0x80]),
         r(0x26, &[120]),
         r(0x2B, &[0x00, 0x00]),
+        // Deadline: 0x31 pkrx says a packet is being received, so it gets the extension.
+        r(0x31, &[0x10]),
         r(0x03, &[0x02, 0x00]),
         r(0x47, &[1, 2, 3, 4, 3]),
         r(0x7F, &payload),
@@ -245,6 +247,30 @@ fn packet_started_before_the_timeout_is_completed() {
     };
     assert_eq!(p.len, 3);
     assert_eq!(p.signal.rssi_dbm, -62);
+    done(radio);
+}
+
+#[test]
+fn a_refused_header_does_not_stretch_the_timeout() {
+    // A sync word is seen (another link's packet), then the chip drops it on its header
+    // check: 0x31 pkrx reads 0 at the deadline, so the receive times out on time.
+    let t = [
+        rx_start(),
+        r(0x03, &[0x00, 0x80]),
+        r(0x26, &[120]),
+        r(0x2B, &[0x00, 0x00]),
+        r(0x31, &[0x20]), // pksrch: back to searching
+        discard_tail(),
+        r(0x00, &[0x08, 0x06]),
+    ]
+    .concat();
+    let irq = ScriptIrq([true, false].into());
+    let mut radio = ready_radio(t, irq, TestDelay { limit_us: 10_000 });
+    let mut buf = [0u8; 16];
+    assert_eq!(
+        block_on(radio.receive(&mut buf, 5_000)),
+        Ok(RxOutcome::Timeout)
+    );
     done(radio);
 }
 

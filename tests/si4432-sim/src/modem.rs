@@ -143,11 +143,15 @@ impl ModemSettings {
         if offset_hz.abs() > self.frequency_tolerance_hz() {
             return Err(Mismatch::Frequency { offset_hz });
         }
-        // Clock recovery locks within a couple of percent of its nominal rate.
-        let rate_error = (tx.tx_bit_rate_bps - self.rx_bit_rate_bps) / self.rx_bit_rate_bps;
+        // Clock recovery locks within a couple of percent of its nominal rate. With
+        // Manchester it runs at the chip rate, twice the data rate the sender programs
+        // (AN440, "Manchester coding").
+        let chips_per_bit = if tx.manchester { 2.0 } else { 1.0 };
+        let tx_chip_rate = tx.tx_bit_rate_bps * chips_per_bit;
+        let rate_error = (tx_chip_rate - self.rx_bit_rate_bps) / self.rx_bit_rate_bps;
         if !rate_error.is_finite() || rate_error.abs() > 0.02 {
             return Err(Mismatch::BitRate {
-                tx_bps: tx.tx_bit_rate_bps,
+                tx_bps: tx_chip_rate,
                 rx_bps: self.rx_bit_rate_bps,
             });
         }
