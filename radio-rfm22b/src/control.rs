@@ -140,6 +140,11 @@ where
             self.delay.delay_us(100).await;
             if self.bus.read(ADC_CONFIG).await? & ADC_START != 0 {
                 let adc = self.bus.read(ADC_VALUE).await?;
+                if adc == 0xFF {
+                    // A bus with nothing on it reads "done" and 0xFF at once: make sure a
+                    // chip answered before reporting 63.5 °C.
+                    self.probe().await?;
+                }
                 return Ok(measure::temperature_decidegrees_c(adc));
             }
         }
