@@ -11,7 +11,7 @@ pub async fn app_task() {
     loop {
         check_in(Watched::App);
         let now = now_ms();
-        carry_out(with_app(|app| app.on_tick(now)).flatten());
+        carry_out(with_app(|app| app.on_tick()).flatten());
         ticker.next().await;
     }
 }
