@@ -117,6 +117,15 @@ impl AirLink {
         core::mem::take(&mut self.bind_requested)
     }
 
+    /// The link loop stopped (bind, radio failure): nothing arrives until it runs again.
+    pub fn on_link_stopped(&mut self) {
+        self.stats = LinkStats {
+            rate_code: self.stats.rate_code,
+            ..LinkStats::default()
+        };
+        self.received_channels = None;
+    }
+
     /// Telemetry frames from the air that were corrupt or too long.
     pub fn dropped_frames(&self) -> u32 {
         self.splitter.dropped()

@@ -238,6 +238,12 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         }
     }
 
+    /// The bind procedure ended without a peer (timeout or radio failure).
+    pub fn on_bind_failed(&mut self) -> Option<Action> {
+        self.binding = false;
+        self.update_led()
+    }
+
     /// Periodic work (≈ 10 Hz): link state, failsafe, handset statistics and
     /// uplink records that waited for room.
     pub fn on_tick(&mut self) -> Option<Action> {

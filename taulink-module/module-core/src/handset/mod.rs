@@ -48,10 +48,9 @@ pub enum LineMode {
 
 /// The encoder in use.
 #[derive(Debug)]
-#[expect(
-    clippy::large_enum_variant,
-    reason = "one instance for the firmware's lifetime, no heap to box into"
-)]
+// One instance for the firmware's lifetime and no heap to box into; `allow`, not `expect`:
+// on the 32-bit target the variants are close enough that the lint stays quiet.
+#[allow(clippy::large_enum_variant)]
 enum Protocol {
     /// CRSF input and telemetry.
     Crsf {

@@ -12,10 +12,11 @@ use module_core::app::{Action, App};
 use module_core::settings::Settings;
 use module_core::status::LinkState;
 
-use super::seams::{HandsetSeam, LinkSeam};
+use module_core::air::AirLink;
+use module_core::handset::Handset;
 
 /// The module core as the firmware instantiates it.
-pub type FirmwareApp = App<LinkSeam, HandsetSeam>;
+pub type FirmwareApp = App<AirLink, Handset>;
 
 static APP: Mutex<CriticalSectionRawMutex, RefCell<Option<FirmwareApp>>> =
     Mutex::new(RefCell::new(None));
@@ -46,6 +47,11 @@ pub fn carry_out(action: Option<Action>) {
         Some(Action::Save(settings)) => SAVE.signal(settings),
         None => {}
     }
+}
+
+/// Microseconds since boot: the link's clock, and the CRSF frames' time stamps.
+pub fn now_us() -> u64 {
+    Instant::now().as_micros()
 }
 
 /// Milliseconds since boot, wrapping (the core works on wrapping differences).
