@@ -265,3 +265,41 @@ impl LinkPort for AirLink {
         self.received_channels.take()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_map_to_link_parameters() {
+        let mut settings = Settings::default();
+        assert_eq!(link_params(&settings), None, "unbound");
+        settings.bind_id = 0x1234_5678;
+        settings.rate = RateMode::Bps57600;
+        settings.band = Band::Mhz868;
+        let params = link_params(&settings).unwrap();
+        assert_eq!(params.bind_id, 0x1234_5678);
+        assert_eq!(params.rate, LinkRate::M100);
+        assert_eq!(params.band, LinkBand::Mhz868);
+        assert_eq!(params.format, ChannelFormat::Full16);
+        assert_eq!(params.telemetry_ratio, 4);
+        assert_eq!(link_rate(RateMode::Bps4800), LinkRate::L50);
+        assert_eq!(link_rate(RateMode::Bps125000), LinkRate::F250);
+        let fresh = new_bind_params(&settings, 0xCAFE);
+        assert_eq!((fresh.bind_id, fresh.rate), (0xCAFE, LinkRate::M100));
+    }
+
+    #[test]
+    fn records_wait_for_room_and_bind_requests_are_taken_once() {
+        let mut link = AirLink::new();
+        for _ in 0..UPLINK_RECORDS {
+            assert!(link.can_send_record());
+            link.send_record(&[1, 2, 3]);
+        }
+        assert!(!link.can_send_record());
+        link.start_bind();
+        assert!(link.take_bind_request());
+        assert!(!link.take_bind_request());
+        assert_eq!(link.stats(), LinkStats::default());
+    }
+}

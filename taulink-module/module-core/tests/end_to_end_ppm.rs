@@ -245,3 +245,53 @@ fn ppm_to_flight_and_telemetry_back_as_sport_and_hm10() {
         })]
     );
 }
+
+#[test]
+fn ppm_mode_fallback_frsky_d_hub_decodes_to_the_flight_values() {
+    use telemetry::handset::frsky_d::{self, HubDecoder, hub};
+
+    let mut world = World::new(module_settings(
+        InputProtocol::Ppm,
+        OutputProtocol::FrskyHub,
+    ));
+    spawn_taranis(&mut world);
+    let jr = spawn_jr_line(&mut world);
+    world.run_until(RUN_US);
+
+    let mut decoder = frsky_d::Decoder::new();
+    let mut hub_decoder = HubDecoder::default();
+    let mut links = Vec::new();
+    let mut records = Vec::new();
+    for (t, bytes) in jr.borrow().iter() {
+        // One frame per 30 ms slot at 9600 Bd: ≤ 19 stuffed bytes = 19.8 ms on the wire.
+        assert!(bytes.len() <= frsky_d::MAX_WIRE_LEN);
+        decoder.push_all(bytes, |event| match event {
+            frsky_d::Event::Frame(frsky_d::Frame::Link(link)) => links.push((*t, link)),
+            frsky_d::Event::Frame(frsky_d::Frame::User(data)) => {
+                for &b in &data {
+                    if let Some(record) = hub_decoder.push(b) {
+                        records.push(record);
+                    }
+                }
+            }
+            frsky_d::Event::Rejected(r) => panic!("FrSky D frame rejected: {r:?}"),
+        });
+    }
+    let frames = jr.borrow().len();
+    // 30 ms slots: 4 s → ≈ 133 frames.
+    assert!((120..=134).contains(&frames), "{frames} frames");
+    let link = links.last().unwrap().1;
+    // A1 = 11.87 V on EdgeTX's 13.2 V scale: 11870 · 255 / 13200 = 229.3 → 229.
+    assert_eq!(link.a1, 229);
+    assert_eq!(link.a2, 100, "uplink LQ");
+    assert_eq!(link.rssi, 100, "downlink LQ");
+    let value = |id: u8| records.iter().rev().find(|r| r.id == id).map(|r| r.value);
+    // VFAS high precision: 1187 (0.01 V) + 2000.
+    assert_eq!(value(hub::id::VFAS), Some(3187));
+    assert_eq!(value(hub::id::CURRENT), Some(125));
+    assert_eq!(value(hub::id::FUEL), Some(64));
+    assert_eq!(value(hub::id::TEMP1), Some(2), "flight mode number");
+    // Channels arrive on this path too.
+    let flight = world.flight.borrow();
+    assert_eq!(last_output(&flight)[0], us_to_value(WIDTHS_US[0]));
+}

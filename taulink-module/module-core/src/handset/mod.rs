@@ -191,3 +191,43 @@ impl HandsetOutput for Handset {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_choose_the_line() {
+        let mut settings = Settings::default();
+        assert_eq!(
+            Handset::new(&settings).line_mode(),
+            LineMode::Push { baud: 57_600 }
+        );
+        settings.output = OutputProtocol::FrskyHub;
+        assert_eq!(
+            Handset::new(&settings).line_mode(),
+            LineMode::Push { baud: 9_600 }
+        );
+        settings.output = OutputProtocol::Off;
+        assert_eq!(Handset::new(&settings).line_mode(), LineMode::Off);
+        settings.input = InputProtocol::Crsf;
+        assert_eq!(
+            Handset::new(&settings).line_mode(),
+            LineMode::Crsf { baud: 400_000 }
+        );
+        settings.role = Role::Receiver;
+        assert_eq!(Handset::new(&settings).line_mode(), LineMode::Off);
+    }
+
+    #[test]
+    fn sport_goes_quiet_between_slots_and_sends_rssi_zero_without_link() {
+        let mut handset = Handset::new(&Settings::default());
+        let mut out = [0u8; MAX_LINE_BURST];
+        let len = handset.next_line_bytes(0, &mut out);
+        // 7E 98 10 01 F1 00 00 00 00 crc: RSSI 0 (no link), nothing stuffed.
+        assert_eq!(len, 10);
+        assert_eq!(&out[..6], &[0x7E, 0x98, 0x10, 0x01, 0xF1, 0x00]);
+        assert_eq!(handset.next_line_bytes(11_999, &mut out), 0, "12 ms slot");
+        assert!(handset.next_line_bytes(100_000, &mut out) > 0);
+    }
+}

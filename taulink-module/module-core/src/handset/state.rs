@@ -144,3 +144,97 @@ impl FlightState {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn up() -> LinkStats {
+        LinkStats {
+            connected: true,
+            rssi_dbm: -71,
+            link_quality_percent: 87,
+            rate_code: 2,
+            ..LinkStats::default()
+        }
+    }
+
+    #[test]
+    fn units_convert_to_the_report() {
+        let mut state = FlightState::new(3);
+        state.on_link_stats(&up());
+        state.on_message(&Message::Battery(messages::Battery {
+            voltage_mv: 16_020,
+            current_ca: -40,
+            used_mah: 900,
+            remaining_percent: 20,
+        }));
+        state.on_message(&Message::Attitude(messages::Attitude {
+            roll_cdeg: 18_000,
+            pitch_cdeg: -9_000,
+            yaw_cdeg: 0,
+        }));
+        state.on_message(&Message::Gps(messages::Gps {
+            latitude_e7: 1,
+            longitude_e7: 2,
+            altitude_cm: -250,
+            ground_speed_cm_s: 3,
+            course_cdeg: 4,
+            satellites: 5,
+            fix: GpsFix::None,
+        }));
+        let report = state.report();
+        let battery = report.battery.unwrap();
+        assert_eq!(battery.voltage_mv, 16_020);
+        assert_eq!(battery.current_ma, 0, "charging shows as 0 A");
+        let attitude = report.attitude.unwrap();
+        assert!((attitude.roll_rad - core::f32::consts::PI).abs() < 1e-6);
+        assert!((attitude.pitch_rad + core::f32::consts::FRAC_PI_2).abs() < 1e-6);
+        assert_eq!(report.gps, None, "no fix, no GPS frame");
+        let link = report.link.unwrap();
+        assert_eq!(link.tx_power_mw, 6, "+8 dBm");
+        assert_eq!(link.rf_mode, 2);
+        assert_eq!(
+            (link.downlink_rssi_dbm, link.downlink_lq_percent),
+            (-71, 87)
+        );
+    }
+
+    #[test]
+    fn uplink_lq_prefers_the_air_report_then_the_message_then_the_downlink() {
+        let mut state = FlightState::new(7);
+        state.on_link_stats(&up());
+        // Nothing from the other end yet: the downlink stands in.
+        assert_eq!(state.link_report().unwrap().uplink_lq_percent, 87);
+        state.on_message(&Message::LinkStats(messages::LinkStats {
+            uplink_rssi_dbm: -80,
+            uplink_lq: 64,
+            downlink_rssi_dbm: 0,
+            downlink_lq: 0,
+            rate_mode: 2,
+            received: 0,
+            missed: 0,
+            failsafes: 0,
+        }));
+        let link = state.link_report().unwrap();
+        assert_eq!((link.uplink_rssi_dbm, link.uplink_lq_percent), (-80, 64));
+        state.on_link_stats(&LinkStats {
+            remote_rssi_dbm: -90,
+            remote_link_quality_percent: Some(0),
+            ..up()
+        });
+        // The air report wins, and a connected link never shows LQ 0.
+        let link = state.link_report().unwrap();
+        assert_eq!((link.uplink_rssi_dbm, link.uplink_lq_percent), (-90, 1));
+        state.on_link_stats(&LinkStats::default());
+        assert_eq!(state.report().link, None);
+    }
+
+    #[test]
+    fn flight_modes_have_names_and_numbers() {
+        let report = flight_mode_report(messages::FlightMode::ReturnToHome);
+        assert_eq!((report.name.as_str(), report.number), ("RTH", 4));
+        let report = flight_mode_report(messages::FlightMode::Attitude);
+        assert_eq!((report.name.as_str(), report.number), ("ANGLE", 1));
+    }
+}
