@@ -95,8 +95,10 @@ pub struct FlightSide {
     next_telemetry_us: u64,
 }
 
-struct FlightHooks {
-    side: Shared<FlightSide>,
+/// The flight side's follower hook.
+pub struct FlightHooks {
+    /// What it records.
+    pub side: Shared<FlightSide>,
 }
 
 impl FollowerHooks for FlightHooks {
@@ -152,8 +154,10 @@ impl FollowerHooks for FlightHooks {
     }
 }
 
-struct ModuleHooks {
-    app: Shared<ModuleApp>,
+/// The module's master hook, as the firmware's link task has it.
+pub struct ModuleHooks {
+    /// The module core.
+    pub app: Shared<ModuleApp>,
 }
 
 impl MasterHooks for ModuleHooks {

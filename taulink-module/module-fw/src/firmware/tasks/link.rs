@@ -15,6 +15,7 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 use embassy_time::{Delay, Duration, Timer};
 use embedded_hal_bus::spi::ExclusiveDevice;
+use module_core::air::radio::LinkRadio;
 use module_core::air::{link_band, link_params, link_rate, new_bind_params};
 use module_core::settings::{Role, Settings};
 use radio_rfm22b::Rfm22b;
@@ -27,7 +28,7 @@ use telemetry::link::master::{MasterHooks, bind_master, run_master};
 
 use super::supervisor::{Watched, check_in};
 use crate::firmware::board::Radio;
-use crate::firmware::link_radio::{EmbassyClock, LinkRadio};
+use crate::firmware::link_radio::EmbassyClock;
 use crate::firmware::shared::{carry_out, now_ms, with_app};
 
 /// How long one bind attempt lasts.

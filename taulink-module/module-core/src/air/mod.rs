@@ -7,6 +7,8 @@
 //! Records travel in the link's telemetry stream as `telemetry::framing` frames
 //! (`crate::records`); a record that does not fit the stream now waits in a bounded queue.
 
+pub mod radio;
+
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat};
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::rate::TX_LEAD_US;
