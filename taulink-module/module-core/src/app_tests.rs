@@ -171,6 +171,13 @@ fn led_follows_radio_bind_and_link() {
     );
     assert_eq!(app.on_button(ButtonEvent::LongPress), None);
     assert_eq!(app.link().binds, 1, "one bind per long press while binding");
+    // No peer: back to unbound, and the next press binds again.
+    assert_eq!(app.on_bind_failed(), Some(Action::Led(LinkState::Unbound)));
+    assert_eq!(
+        app.on_button(ButtonEvent::LongPress),
+        Some(Action::Led(LinkState::Binding))
+    );
+    assert_eq!(app.link().binds, 2);
     let Action::Save(saved) = app.on_bind_complete(0x1234_5678) else {
         panic!("bind must save");
     };

@@ -83,6 +83,7 @@ pub struct AirLink {
     stats: LinkStats,
     bind_requested: bool,
     follower_updates: u32,
+    rejected_records: u32,
 }
 
 impl Default for AirLink {
@@ -111,6 +112,7 @@ impl AirLink {
             },
             bind_requested: false,
             follower_updates: 0,
+            rejected_records: 0,
         }
     }
 
@@ -131,6 +133,12 @@ impl AirLink {
     /// Telemetry frames from the air that were corrupt or too long.
     pub fn dropped_frames(&self) -> u32 {
         self.splitter.dropped()
+    }
+
+    /// Records for the air refused because their CRC failed (a phone's damaged frame that
+    /// still decoded as COBS).
+    pub fn rejected_records(&self) -> u32 {
+        self.rejected_records
     }
 
     /// Records dropped because a queue was full (to the air, from the air).
@@ -215,8 +223,9 @@ impl AirLink {
         let mut record = [0u8; MAX_RECORD_LEN];
         loop {
             let len = self.uplink.pop_into(&mut record).ok()??;
-            if let Ok(n) = to_stream(record.get(..len)?, frame) {
-                return Some(n);
+            match to_stream(record.get(..len)?, frame) {
+                Ok(n) => return Some(n),
+                Err(_) => self.rejected_records = self.rejected_records.saturating_add(1),
             }
         }
     }
@@ -299,9 +308,35 @@ mod tests {
             link.send_record(&[1, 2, 3]);
         }
         assert!(!link.can_send_record());
+        let mut master = Master::new(
+            link_params(&Settings {
+                bind_id: 9,
+                ..Settings::default()
+            })
+            .unwrap(),
+        );
+        link.on_master_slot(0, &mut master);
+        // Three bytes are no record (no valid CRC): refused and counted, nothing sent.
+        assert_eq!(link.rejected_records(), UPLINK_RECORDS as u32);
+        assert_eq!(master.uplink_stream.pending(), 0);
+        assert!(link.can_send_record());
+        let mut record = [0u8; MAX_RECORD_LEN];
+        let len = crate::records::with_crc(&[7, 7, 7], &mut record).unwrap();
+        link.send_record(&record[..len]);
+        link.on_master_slot(4_000, &mut master);
+        // COBS(7 7 7 crc crc) + 0x00.
+        assert_eq!(master.uplink_stream.pending(), len + 2);
+        let stats = link.stats();
+        assert!(!stats.connected);
+        assert_eq!(stats.schedule.unwrap().period_us, 20_000);
+        assert_eq!(
+            stats.schedule.unwrap().phase_us,
+            4_000 + u64::from(TX_LEAD_US)
+        );
         link.start_bind();
         assert!(link.take_bind_request());
         assert!(!link.take_bind_request());
-        assert_eq!(link.stats(), LinkStats::default());
+        link.on_link_stopped();
+        assert_eq!(link.stats().schedule, None);
     }
 }
