@@ -149,7 +149,22 @@ fn crsf_channels_to_flight_and_telemetry_back_as_crsf() {
     let last = stats.last().unwrap().1;
     assert_eq!(last.uplink_lq_percent, 100);
     assert_eq!(last.downlink_lq_percent, 100);
-    assert!(last.uplink_rssi1_dbm < -20 && last.uplink_rssi1_dbm > -120);
+    // RSSI both ways: the uplink RSSI is a value the follower measured; the downlink RSSI is
+    // the module's own (its filter moves by at most 1 dB between the last reply and the end).
+    for (_, s) in &after {
+        let rssi = i16::from(s.uplink_rssi1_dbm);
+        assert!(
+            flight.uplink_rssi_dbm.contains(&rssi),
+            "uplink RSSI {rssi} dBm"
+        );
+    }
+    let link = module_core::ports::LinkPort::stats(world.app.borrow().link());
+    assert!(i16::from(last.downlink_rssi_dbm).abs_diff(link.rssi_dbm) <= 1);
+    assert!(
+        (-110..-30).contains(&link.rssi_dbm),
+        "{} dBm at 200 m",
+        link.rssi_dbm
+    );
 
     // Sensors carry the flight side's values.
     let battery = messages.iter().rev().find_map(|(_, m)| match m {
@@ -207,5 +222,87 @@ fn crsf_channels_to_flight_and_telemetry_back_as_crsf() {
         messages.len(),
         timing.len(),
         stats.len()
+    );
+}
+
+/// A radio that obeys the timing frame as EdgeTX does: the interval becomes its period, the
+/// offset lengthens the next period once (positive = our frame was early). Its crystal runs
+/// 50 ppm slow. Returns the end time of every channel frame on the module's clock.
+fn spawn_obedient_radio(world: &mut World<'_>) -> common::Shared<Vec<u64>> {
+    let log = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+    let (app, time, ends) = (world.app.clone(), world.time.clone(), log.clone());
+    world.executor.spawn(async move {
+        let channels = RcChannels::from_us(&WIDTHS_US);
+        // Virtual time in ns, so the 50 ppm drift (0.2 µs per 4 ms frame) accumulates.
+        let mut t_ns: u64 = 21_234_000;
+        let mut period_ns: u64 = RADIO_PERIOD_US * 1_000;
+        let mut decoder = Decoder::new();
+        loop {
+            let t = t_ns / 1_000;
+            time.sleep_until(t).await;
+            let mut frame = [0u8; 64];
+            let n = Message::RcChannels(channels)
+                .encode(address::TX_MODULE, &mut frame)
+                .unwrap();
+            let mut reply = [0u8; 128];
+            let len = {
+                let mut app = app.borrow_mut();
+                app.on_handset_bytes(module_now(t), &frame[..n]);
+                app.on_handset_idle(module_now(t));
+                app.next_handset_bytes(module_now(t + 100), &mut reply)
+            };
+            ends.borrow_mut().push(module_now(t));
+            let mut next_ns = t_ns + period_ns;
+            for decoded in decoder.feed(&reply[..len]) {
+                if let Decoded::Frame(frame) = decoded
+                    && let Ok(Message::TimingCorrection(c)) = Message::from_frame(&frame)
+                {
+                    period_ns = u64::from(c.interval_100ns) * 100 * 1_000_050 / 1_000_000;
+                    next_ns = next_ns.saturating_add_signed(i64::from(c.offset_100ns) * 100);
+                }
+            }
+            t_ns = next_ns;
+        }
+    });
+    log
+}
+
+#[test]
+fn the_timing_frame_pulls_the_radio_onto_the_air_packets() {
+    let mut world = World::new(module_settings(InputProtocol::Crsf, OutputProtocol::Crsf));
+    let ends = spawn_obedient_radio(&mut world);
+    world.run_until(RUN_US);
+
+    let stats = module_core::ports::LinkPort::stats(world.app.borrow().link());
+    let schedule = stats.schedule.unwrap();
+    assert_eq!(schedule.period_us, 4_000);
+    // Where each frame ended relative to "1 ms before an air packet", wrapped to ±P/2.
+    let period = i64::from(schedule.period_us);
+    let error = |end_us: u64| {
+        let target = schedule.phase_us as i64 - 1_000;
+        let e = (end_us as i64 - target).rem_euclid(period);
+        if e >= period / 2 { e - period } else { e }
+    };
+    let ends = ends.borrow();
+    let first = error(ends[0]);
+    let late: Vec<i64> = ends
+        .iter()
+        .filter(|&&t| t > module_now(1_000_000))
+        .map(|&t| error(t))
+        .collect();
+    assert!(late.len() > 400);
+    let worst = late.iter().map(|e| e.abs()).max().unwrap();
+    // 50 ppm drifts 10 µs between 200 ms timing frames; the correction removes it each time.
+    assert!(
+        worst <= 12,
+        "worst phase error {worst} µs (started at {first} µs)"
+    );
+    assert!(
+        first.abs() > 100,
+        "the radio started out of step ({first} µs)"
+    );
+    eprintln!(
+        "timing: start {first} µs off, worst {worst} µs after 1 s over {} frames",
+        late.len()
     );
 }

@@ -88,6 +88,8 @@ pub struct FlightSide {
     pub received: Vec<Message>,
     /// Uplink LQ values the follower computed, in order.
     pub uplink_lq: Vec<u8>,
+    /// Every smoothed uplink RSSI value the follower held, dBm.
+    pub uplink_rssi_dbm: std::collections::BTreeSet<i16>,
     /// Messages sent down.
     pub sent: Vec<Message>,
     reader: MessageReader,
@@ -105,6 +107,9 @@ impl FollowerHooks for FlightHooks {
     fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
         let mut side = self.side.borrow_mut();
         let virtual_us = now_us - FLIGHT_EPOCH_US;
+        if let Some(rssi) = follower.uplink_rssi_dbm() {
+            side.uplink_rssi_dbm.insert(rssi);
+        }
         if follower.updates() != side.updates {
             side.updates = follower.updates();
             side.outputs.push((virtual_us, *follower.output()));
