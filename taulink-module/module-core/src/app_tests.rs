@@ -198,3 +198,25 @@ fn led_follows_radio_bind_and_link() {
         Some(Action::Led(LinkState::NoRadio))
     );
 }
+
+#[test]
+fn a_receiver_takes_band_and_rate_from_the_bind_offer() {
+    let mut app = app(Settings {
+        role: Role::Receiver,
+        ..Settings::default()
+    });
+    let offer = telemetry::link::LinkParams::new(
+        0x0102_0304,
+        telemetry::link::Band::Mhz868,
+        telemetry::link::RateMode::M100,
+        telemetry::channels::ChannelFormat::Full16,
+        4,
+    );
+    let Action::Save(saved) = app.on_bind_offer_accepted(&offer) else {
+        panic!("bind must save");
+    };
+    assert_eq!(saved.bind_id, 0x0102_0304);
+    assert_eq!(saved.rate, crate::settings::RateMode::Bps57600);
+    assert_eq!(saved.band, crate::settings::Band::Mhz868);
+    assert_eq!(crate::air::link_params(&saved), Some(offer));
+}

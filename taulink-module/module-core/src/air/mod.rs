@@ -49,6 +49,30 @@ pub fn link_band(band: Band) -> LinkBand {
     }
 }
 
+/// The settings' rate for a link rate mode: `current` if it already gives `rate` (the three
+/// slow settings share L50), else the one setting that does; `None` for F500, which no setting
+/// gives.
+pub fn settings_rate(rate: LinkRate, current: RateMode) -> Option<RateMode> {
+    if link_rate(current) == rate {
+        return Some(current);
+    }
+    match rate {
+        LinkRate::L50 => Some(RateMode::Bps19200),
+        LinkRate::M100 => Some(RateMode::Bps57600),
+        LinkRate::F250 => Some(RateMode::Bps125000),
+        LinkRate::F500 => None,
+    }
+}
+
+/// The settings' band for a link band.
+pub fn settings_band(band: LinkBand) -> Band {
+    match band {
+        LinkBand::Mhz433 => Band::Mhz433,
+        LinkBand::Mhz868 => Band::Mhz868,
+        LinkBand::Mhz915 => Band::Mhz915,
+    }
+}
+
 /// The bound link's parameters (`None` while unbound): 16 channels, one downlink slot in
 /// [`TELEMETRY_RATIO`].
 pub fn link_params(settings: &Settings) -> Option<LinkParams> {
@@ -296,6 +320,16 @@ mod tests {
         assert_eq!(params.telemetry_ratio, 4);
         assert_eq!(link_rate(RateMode::Bps4800), LinkRate::L50);
         assert_eq!(link_rate(RateMode::Bps125000), LinkRate::F250);
+        assert_eq!(
+            settings_rate(LinkRate::L50, RateMode::Bps9600),
+            Some(RateMode::Bps9600)
+        );
+        assert_eq!(
+            settings_rate(LinkRate::L50, RateMode::Bps57600),
+            Some(RateMode::Bps19200)
+        );
+        assert_eq!(settings_rate(LinkRate::F500, RateMode::Bps9600), None);
+        assert_eq!(settings_band(LinkBand::Mhz915), Band::Mhz915);
         let fresh = new_bind_params(&settings, 0xCAFE);
         assert_eq!((fresh.bind_id, fresh.rate), (0xCAFE, LinkRate::M100));
     }

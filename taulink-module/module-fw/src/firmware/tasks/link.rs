@@ -16,7 +16,7 @@ use embassy_sync::signal::Signal;
 use embassy_time::{Delay, Duration, Timer};
 use embedded_hal_bus::spi::ExclusiveDevice;
 use module_core::air::radio::LinkRadio;
-use module_core::air::{link_band, link_params, link_rate, new_bind_params};
+use module_core::air::{link_band, link_params, new_bind_params, settings_rate};
 use module_core::settings::{Role, Settings};
 use radio_rfm22b::Rfm22b;
 use telemetry::channels::{Failsafe, FailsafeValues, MAX_CHANNELS};
@@ -173,7 +173,7 @@ async fn bind<R: PacketRadio>(
     R::Error: defmt::Format,
 {
     info!("binding as {}", settings.role);
-    let bound = match settings.role {
+    let action = match settings.role {
         Role::Transmitter => {
             let params = new_bind_params(settings, rng.blocking_next_u32());
             match select(
@@ -182,7 +182,10 @@ async fn bind<R: PacketRadio>(
             )
             .await
             {
-                Either::First(Ok(true)) => Some(params.bind_id),
+                Either::First(Ok(true)) => {
+                    info!("bound: {:08x}", params.bind_id);
+                    with_app(|app| app.on_bind_complete(params.bind_id))
+                }
                 Either::First(Ok(false)) => None,
                 Either::First(Err(e)) => {
                     warn!("bind: radio failed: {}", e);
@@ -200,15 +203,11 @@ async fn bind<R: PacketRadio>(
             .await
             {
                 Either::First(Ok(Some(params))) => {
-                    if params.rate != link_rate(settings.rate) {
-                        // The settings' rate decides the link after a reboot: say so.
-                        warn!(
-                            "bound at {} but the rate setting gives {}",
-                            params.rate,
-                            link_rate(settings.rate)
-                        );
+                    info!("bound: {:08x} at {}", params.bind_id, params.rate);
+                    if settings_rate(params.rate, settings.rate).is_none() {
+                        warn!("no rate setting gives {}: keeping the setting", params.rate);
                     }
-                    Some(params.bind_id)
+                    with_app(|app| app.on_bind_offer_accepted(&params))
                 }
                 Either::First(Ok(None)) => None,
                 Either::First(Err(e)) => {
@@ -219,11 +218,8 @@ async fn bind<R: PacketRadio>(
             }
         }
     };
-    match bound {
-        Some(bind_id) => {
-            info!("bound: {:08x}", bind_id);
-            carry_out(with_app(|app| app.on_bind_complete(bind_id)));
-        }
+    match action {
+        Some(action) => carry_out(Some(action)),
         None => {
             info!("bind: no peer");
             carry_out(with_app(|app| app.on_bind_failed()).flatten());
