@@ -200,12 +200,67 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         Action::Save(self.settings)
     }
 
-    /// Periodic work at `now_ms` (≈ 10 Hz): link state, failsafe, handset statistics and
+    /// Bytes the radio sent on the JR line, the last at `now_us`: CRSF channel frames reach
+    /// the link (CRSF input only).
+    pub fn on_handset_bytes(&mut self, now_us: u64, bytes: &[u8]) {
+        if let Some(channels) = self.handset.on_line_bytes(now_us, bytes) {
+            self.on_handset_channels(&channels);
+        }
+    }
+
+    /// The JR line went idle at `now_us` (the radio's burst is over).
+    pub fn on_handset_idle(&mut self, now_us: u64) {
+        if let Some(channels) = self.handset.on_line_idle(now_us) {
+            self.on_handset_channels(&channels);
+        }
+    }
+
+    /// What to send on the JR line at `now_us` (`out` ≥ `handset::MAX_LINE_BURST`); 0 =
+    /// nothing now.
+    pub fn next_handset_bytes(&mut self, now_us: u64, out: &mut [u8]) -> usize {
+        if self.settings.role != Role::Transmitter {
+            return 0;
+        }
+        self.handset.next_line_bytes(now_us, out)
+    }
+
+    /// Takes what the link received (records, channels) and fans it out; the link task calls
+    /// it after every slot.
+    pub fn poll_link(&mut self) {
+        let mut record = [0u8; MAX_RECORD_LEN];
+        while let Some(length) = self.link.take_received_record(&mut record) {
+            if let Some(bytes) = record.get(..length) {
+                self.on_link_record(bytes);
+            }
+        }
+        if let Some(channels) = self.link.take_received_channels() {
+            self.on_link_channels(&channels);
+        }
+    }
+
+    /// The receiver accepted a master's bind offer: remember the bind ID and the offer's band
+    /// and rate, so the link comes back the same after a reboot. An offer at a rate no
+    /// setting gives (F500) keeps the rate setting.
+    pub fn on_bind_offer_accepted(&mut self, params: &telemetry::link::LinkParams) -> Action {
+        if let Some(rate) = crate::air::settings_rate(params.rate, self.settings.rate) {
+            self.settings.rate = rate;
+        }
+        self.settings.band = crate::air::settings_band(params.band);
+        self.on_bind_complete(params.bind_id)
+    }
+
+    /// The bind procedure ended without a peer (timeout or radio failure).
+    pub fn on_bind_failed(&mut self) -> Option<Action> {
+        self.binding = false;
+        self.update_led()
+    }
+
+    /// Periodic work (≈ 10 Hz): link state, failsafe, handset statistics and
     /// uplink records that waited for room.
-    pub fn on_tick(&mut self, now_ms: u32) -> Option<Action> {
+    pub fn on_tick(&mut self) -> Option<Action> {
         let stats: LinkStats = self.link.stats();
         if self.settings.role == Role::Transmitter {
-            self.handset.on_link_stats(&stats, now_ms);
+            self.handset.on_link_stats(&stats);
         }
         if stats.connected {
             self.was_connected = true;

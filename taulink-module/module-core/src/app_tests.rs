@@ -36,15 +36,15 @@ impl LinkPort for FakeLink {
 #[derive(Default)]
 struct FakeHandset {
     telemetry: Vec<Vec<u8>>,
-    stats: Vec<(LinkStats, u32)>,
+    stats: Vec<LinkStats>,
 }
 
 impl HandsetOutput for FakeHandset {
     fn on_telemetry(&mut self, record: &[u8]) {
         self.telemetry.push(record.to_vec());
     }
-    fn on_link_stats(&mut self, stats: &LinkStats, now_ms: u32) {
-        self.stats.push((*stats, now_ms));
+    fn on_link_stats(&mut self, stats: &LinkStats) {
+        self.stats.push(*stats);
     }
 }
 
@@ -124,7 +124,7 @@ fn phone_records_wait_for_room_on_the_link() {
     app.on_phone_bytes(&stream);
     assert_eq!(app.link().records, vec![vec![0xA0, 0x00, 0]]);
     app.link.room = 5;
-    app.on_tick(100);
+    app.on_tick();
     assert_eq!(app.link().records.len(), 3);
     assert_eq!(app.link().records[2], vec![0xA2, 0x00, 2]);
     assert_eq!(app.relay_stats().to_flight.records, 0, "nothing dropped");
@@ -139,7 +139,7 @@ fn receiver_role_outputs_ppm_and_stops_on_failsafe() {
     });
     assert_eq!(app.next_ppm_frame(), None);
     app.link.stats.connected = true;
-    app.on_tick(0);
+    app.on_tick();
     let values: Vec<u16> = [1100u16, 1200, 1300, 1400, 1500, 1600, 1700, 1800]
         .iter()
         .map(|w| us_to_value(*w))
@@ -151,7 +151,7 @@ fn receiver_role_outputs_ppm_and_stops_on_failsafe() {
     assert_eq!(widths, expected);
     assert_eq!(frame.length_us(), 22_500);
     app.link.stats.connected = false;
-    app.on_tick(100);
+    app.on_tick();
     assert_eq!(app.next_ppm_frame(), None, "stop pulses on failsafe");
     // The transmitter role never drives the PPM output.
     assert_eq!(self::app(Settings::default()).next_ppm_frame(), None);
@@ -160,7 +160,7 @@ fn receiver_role_outputs_ppm_and_stops_on_failsafe() {
 #[test]
 fn led_follows_radio_bind_and_link() {
     let mut app = app(Settings::default());
-    assert_eq!(app.on_tick(0), None, "starts as NoRadio");
+    assert_eq!(app.on_tick(), None, "starts as NoRadio");
     assert_eq!(
         app.on_radio_present(true),
         Some(Action::Led(LinkState::Unbound))
@@ -171,22 +171,52 @@ fn led_follows_radio_bind_and_link() {
     );
     assert_eq!(app.on_button(ButtonEvent::LongPress), None);
     assert_eq!(app.link().binds, 1, "one bind per long press while binding");
+    // No peer: back to unbound, and the next press binds again.
+    assert_eq!(app.on_bind_failed(), Some(Action::Led(LinkState::Unbound)));
+    assert_eq!(
+        app.on_button(ButtonEvent::LongPress),
+        Some(Action::Led(LinkState::Binding))
+    );
+    assert_eq!(app.link().binds, 2);
     let Action::Save(saved) = app.on_bind_complete(0x1234_5678) else {
         panic!("bind must save");
     };
     assert_eq!(saved.bind_id, 0x1234_5678);
-    assert_eq!(app.on_tick(100), Some(Action::Led(LinkState::Searching)));
+    assert_eq!(app.on_tick(), Some(Action::Led(LinkState::Searching)));
     app.link.stats = LinkStats {
         connected: true,
         rssi_dbm: -70,
         link_quality_percent: 98,
+        ..LinkStats::default()
     };
-    assert_eq!(app.on_tick(200), Some(Action::Led(LinkState::Connected)));
-    assert_eq!(app.handset().stats.last(), Some(&(app.link().stats, 200)));
+    assert_eq!(app.on_tick(), Some(Action::Led(LinkState::Connected)));
+    assert_eq!(app.handset().stats.last(), Some(&app.link().stats));
     app.link.stats.connected = false;
-    assert_eq!(app.on_tick(300), Some(Action::Led(LinkState::Failsafe)));
+    assert_eq!(app.on_tick(), Some(Action::Led(LinkState::Failsafe)));
     assert_eq!(
         app.on_radio_present(false),
         Some(Action::Led(LinkState::NoRadio))
     );
+}
+
+#[test]
+fn a_receiver_takes_band_and_rate_from_the_bind_offer() {
+    let mut app = app(Settings {
+        role: Role::Receiver,
+        ..Settings::default()
+    });
+    let offer = telemetry::link::LinkParams::new(
+        0x0102_0304,
+        telemetry::link::Band::Mhz868,
+        telemetry::link::RateMode::M100,
+        telemetry::channels::ChannelFormat::Full16,
+        4,
+    );
+    let Action::Save(saved) = app.on_bind_offer_accepted(&offer) else {
+        panic!("bind must save");
+    };
+    assert_eq!(saved.bind_id, 0x0102_0304);
+    assert_eq!(saved.rate, crate::settings::RateMode::Bps57600);
+    assert_eq!(saved.band, crate::settings::Band::Mhz868);
+    assert_eq!(crate::air::link_params(&saved), Some(offer));
 }

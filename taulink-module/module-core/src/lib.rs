@@ -5,12 +5,15 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod air;
 pub mod app;
 pub mod battery;
 pub mod button;
 pub mod channels;
+pub mod handset;
 pub mod hm10;
 pub mod ports;
 pub mod ppm;
+pub mod records;
 pub mod settings;
 pub mod status;

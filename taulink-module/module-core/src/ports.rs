@@ -1,8 +1,20 @@
 //! The seams where other crates plug into the module core: the air link (telemetry crate's
-//! `link`, driven by the radio driver) and the handset telemetry encoders (telemetry crate's
-//! `handset`: CRSF, S.Port, FrSky D). The core only ever talks to these traits.
+//! `link`, driven by the radio driver; [`crate::air::AirLink`]) and the handset telemetry
+//! encoders (telemetry crate's `handset`: CRSF, S.Port, FrSky D; [`crate::handset::Handset`]).
+//! The core only ever talks to these traits.
 
 use crate::channels::Channels;
+
+/// When the link sends its uplink packets, on the firmware's µs clock: at `phase_us + k ·
+/// period_us`. The CRSF timing frame pulls the radio's channel frames onto this grid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AirSchedule {
+    /// Slot length (one packet per slot).
+    pub period_us: u32,
+    /// Start of one uplink transmission.
+    pub phase_us: u64,
+}
 
 /// What the link reports about itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -10,10 +22,18 @@ use crate::channels::Channels;
 pub struct LinkStats {
     /// Packets are arriving from the other end.
     pub connected: bool,
-    /// Received signal strength of the last packet, dBm.
+    /// Received signal strength at this module (downlink in the transmitter role), dBm.
     pub rssi_dbm: i16,
-    /// Share of expected packets received over the last second, 0…100 %.
+    /// Share of expected packets this module received over the last 100 slots, 0…100 %.
     pub link_quality_percent: u8,
+    /// What the other end reports about how it hears us, dBm (0: no report yet).
+    pub remote_rssi_dbm: i16,
+    /// The other end's LQ of our packets, % (`None`: no report yet).
+    pub remote_link_quality_percent: Option<u8>,
+    /// Wire code of the rate mode (`telemetry::link::RateMode::code`).
+    pub rate_code: u8,
+    /// The uplink schedule (transmitter role, once the link runs).
+    pub schedule: Option<AirSchedule>,
 }
 
 /// The air link as the module core sees it.
@@ -29,13 +49,35 @@ pub trait LinkPort {
     fn stats(&self) -> LinkStats;
     /// Start the bind procedure.
     fn start_bind(&mut self);
+    /// The next telemetry record received over the air into `out` (≥ 64 bytes).
+    fn take_received_record(&mut self, _out: &mut [u8]) -> Option<usize> {
+        None
+    }
+    /// Channels received over the air since the last call (receiver role).
+    fn take_received_channels(&mut self) -> Option<Channels> {
+        None
+    }
 }
 
-/// The handset telemetry encoder (CRSF, S.Port or FrSky D, chosen by the settings).
+/// The handset side of the JR line: telemetry encoders (CRSF, S.Port or FrSky D, chosen by
+/// the settings) and, with CRSF, the decoder of the radio's frames.
 pub trait HandsetOutput {
-    /// A telemetry record from the flight side.
+    /// A telemetry record from the flight side (`crate::records`).
     fn on_telemetry(&mut self, record: &[u8]);
-    /// Link statistics at `now_ms`; the encoder paces its own frames (S.Port pushes RSSI
-    /// at least once a second, CRSF sends LINK_STATISTICS in step with the link).
-    fn on_link_stats(&mut self, stats: &LinkStats, now_ms: u32);
+    /// The link's statistics, as often as they change.
+    fn on_link_stats(&mut self, stats: &LinkStats);
+    /// Bytes the radio sent on the JR line, the last one received at `now_us`; returns the
+    /// newest RC channels they completed.
+    fn on_line_bytes(&mut self, _now_us: u64, _bytes: &[u8]) -> Option<Channels> {
+        None
+    }
+    /// The JR line went idle at `now_us` (end of the radio's burst).
+    fn on_line_idle(&mut self, _now_us: u64) -> Option<Channels> {
+        None
+    }
+    /// What to send on the JR line at `now_us` into `out` (≥ 128 bytes); 0 = nothing. The
+    /// encoder paces itself (S.Port slots, CRSF reply windows).
+    fn next_line_bytes(&mut self, _now_us: u64, _out: &mut [u8]) -> usize {
+        0
+    }
 }

@@ -37,7 +37,7 @@ struct Handset;
 
 impl HandsetOutput for Handset {
     fn on_telemetry(&mut self, _record: &[u8]) {}
-    fn on_link_stats(&mut self, _stats: &LinkStats, _now_ms: u32) {}
+    fn on_link_stats(&mut self, _stats: &LinkStats) {}
 }
 
 #[test]

@@ -4,7 +4,7 @@
 use embassy_nrf::gpio::{Input, Level, Output, OutputDrive, Pull};
 use embassy_nrf::peripherals::{
     GPIOTE_CH0, NVMC, P0_02, P0_06, P0_08, P1_04, P1_06, P1_11, P1_13, PPI_CH0, PPI_CH1, PPI_CH2,
-    PPI_CH3, PPI_CH4, PWM0, SAADC, TIMER1, TIMER2, TIMER3, UARTE0, UARTE1,
+    PPI_CH3, PPI_CH4, PWM0, RNG, SAADC, TIMER1, TIMER2, TIMER3, UARTE0, UARTE1,
 };
 use embassy_nrf::spim::{self, Spim};
 use embassy_nrf::wdt::{self, Watchdog, WatchdogHandle};
@@ -44,6 +44,8 @@ pub struct Radio {
     pub nirq: Input<'static>,
     /// SDN: high holds the radio in shutdown (hard reset); a 10 k pull-down keeps it on.
     pub sdn: Output<'static>,
+    /// Hardware RNG: the bind ID of a new link.
+    pub rng: Peri<'static, RNG>,
 }
 
 /// PPM input on JR pin 1 (P1.04): GPIOTE CH0 → PPI CH0 → TIMER1 CAPTURE[0].
@@ -162,6 +164,7 @@ impl Board {
                 nsel: Output::new(p.P0_24, Level::High, OutputDrive::Standard),
                 nirq: Input::new(p.P0_11, Pull::Up),
                 sdn: Output::new(p.P1_00, Level::Low, OutputDrive::Standard),
+                rng: p.RNG,
             },
             ppm_in: PpmIn {
                 timer: p.TIMER1,

@@ -1,7 +1,7 @@
 //! Table of contents: clocks, board, settings, the module core, then one task per concern.
 
 mod board;
-mod seams;
+mod link_radio;
 mod shared;
 mod tasks;
 
@@ -48,8 +48,8 @@ async fn main(spawner: Spawner) {
     info!("settings: {}", settings);
     match App::new(
         settings,
-        seams::LinkSeam::new(),
-        seams::HandsetSeam::new(),
+        module_core::air::AirLink::new(),
+        module_core::handset::Handset::new(&settings),
         false,
     ) {
         Ok(app) => shared::install(app),
@@ -64,7 +64,7 @@ async fn main(spawner: Spawner) {
     spawn(
         &spawner,
         Watched::Radio,
-        tasks::radio::radio_task(board.radio),
+        tasks::link::link_task(board.radio, settings),
     );
     spawn(&spawner, Watched::App, tasks::app::app_task());
     spawn(
@@ -88,7 +88,7 @@ async fn main(spawner: Spawner) {
             spawn(
                 &spawner,
                 Watched::JrLine,
-                tasks::jr_line::jr_line_task(board.jr_line, settings),
+                tasks::jr_line::jr_line_task(board.jr_line),
             );
             if settings.input == InputProtocol::Ppm {
                 spawn(

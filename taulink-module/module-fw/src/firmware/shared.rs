@@ -11,13 +11,17 @@ use embassy_time::Instant;
 use module_core::app::{Action, App};
 use module_core::settings::Settings;
 use module_core::status::LinkState;
+use static_cell::StaticCell;
 
-use super::seams::{HandsetSeam, LinkSeam};
+use module_core::air::AirLink;
+use module_core::handset::Handset;
 
 /// The module core as the firmware instantiates it.
-pub type FirmwareApp = App<LinkSeam, HandsetSeam>;
+pub type FirmwareApp = App<AirLink, Handset>;
 
-static APP: Mutex<CriticalSectionRawMutex, RefCell<Option<FirmwareApp>>> =
+/// The core's storage: uninitialised RAM (.bss), not a 4 KiB initialiser in flash.
+static APP_STORAGE: StaticCell<FirmwareApp> = StaticCell::new();
+static APP: Mutex<CriticalSectionRawMutex, RefCell<Option<&'static mut FirmwareApp>>> =
     Mutex::new(RefCell::new(None));
 
 /// The state the LED shows.
@@ -25,8 +29,11 @@ pub static LED: Signal<CriticalSectionRawMutex, LinkState> = Signal::new();
 /// Settings to persist.
 pub static SAVE: Signal<CriticalSectionRawMutex, Settings> = Signal::new();
 
-/// Installs the core (once, before the tasks start).
+/// Installs the core (once, before the tasks start; a second call is refused).
 pub fn install(app: FirmwareApp) {
+    let Some(app) = APP_STORAGE.try_init(app) else {
+        return;
+    };
     APP.lock(|cell| {
         if let Ok(mut slot) = cell.try_borrow_mut() {
             *slot = Some(app);
@@ -36,7 +43,7 @@ pub fn install(app: FirmwareApp) {
 
 /// Runs `f` on the core; `None` before it is installed.
 pub fn with_app<R>(f: impl FnOnce(&mut FirmwareApp) -> R) -> Option<R> {
-    APP.lock(|cell| cell.try_borrow_mut().ok()?.as_mut().map(f))
+    APP.lock(|cell| cell.try_borrow_mut().ok()?.as_deref_mut().map(f))
 }
 
 /// Hands an action of the core to the task that carries it out.
@@ -46,6 +53,11 @@ pub fn carry_out(action: Option<Action>) {
         Some(Action::Save(settings)) => SAVE.signal(settings),
         None => {}
     }
+}
+
+/// Microseconds since boot: the link's clock, and the CRSF frames' time stamps.
+pub fn now_us() -> u64 {
+    Instant::now().as_micros()
 }
 
 /// Milliseconds since boot, wrapping (the core works on wrapping differences).

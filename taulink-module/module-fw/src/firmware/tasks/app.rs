@@ -3,15 +3,14 @@
 use embassy_time::{Duration, Ticker};
 
 use super::supervisor::{Watched, check_in};
-use crate::firmware::shared::{carry_out, now_ms, with_app};
+use crate::firmware::shared::{carry_out, with_app};
 
 #[embassy_executor::task]
 pub async fn app_task() {
     let mut ticker = Ticker::every(Duration::from_millis(100));
     loop {
         check_in(Watched::App);
-        let now = now_ms();
-        carry_out(with_app(|app| app.on_tick(now)).flatten());
+        carry_out(with_app(|app| app.on_tick()).flatten());
         ticker.next().await;
     }
 }

@@ -1,0 +1,376 @@
+//! The module core's side of the air link (`telemetry::link`): link parameters from the
+//! settings, and [`AirLink`], the [`LinkPort`] the core talks to. The firmware's link task
+//! runs the link's master (transmitter role) or follower (receiver role) loop and, from the
+//! loop's hook, hands the state machine to [`AirLink::on_master_slot`] /
+//! [`AirLink::on_follower_step`], which exchange channels, telemetry records and statistics.
+//!
+//! Records travel in the link's telemetry stream as `telemetry::framing` frames
+//! (`crate::records`); a record that does not fit the stream now waits in a bounded queue.
+
+pub mod radio;
+
+use telemetry::channels::{CHANNEL_CENTER, ChannelFormat};
+use telemetry::link::core::{Follower, Master};
+use telemetry::link::rate::TX_LEAD_US;
+use telemetry::link::{Band as LinkBand, LinkParams, RateMode as LinkRate};
+
+use crate::channels::Channels;
+use crate::hm10::RecordQueue;
+use crate::hm10::relay::MAX_RECORD_LEN;
+use crate::ports::{AirSchedule, LinkPort, LinkStats};
+use crate::records::{MAX_STREAM_FRAME_LEN, Splitter, to_stream};
+use crate::settings::{Band, RateMode, Settings};
+
+/// One downlink slot in this many (the link's default telemetry ratio).
+pub const TELEMETRY_RATIO: u8 = 4;
+/// The master counts the link as up while a downlink arrived within this time.
+pub const CONNECTED_TIMEOUT_US: u64 = 500_000;
+/// Records from the phone waiting for room in the uplink stream.
+const UPLINK_RECORDS: usize = 8;
+/// Records received over the air waiting for the core.
+const RECEIVED_RECORDS: usize = 16;
+
+/// The link's rate mode for the settings' air rate: the three OpenLRSng-style slow rates
+/// share the link's 19.2 kbit/s long-range mode, 57.6 kbit/s is M100, 125 kbit/s F250.
+pub fn link_rate(rate: RateMode) -> LinkRate {
+    match rate {
+        RateMode::Bps4800 | RateMode::Bps9600 | RateMode::Bps19200 => LinkRate::L50,
+        RateMode::Bps57600 => LinkRate::M100,
+        RateMode::Bps125000 => LinkRate::F250,
+    }
+}
+
+/// The link's band.
+pub fn link_band(band: Band) -> LinkBand {
+    match band {
+        Band::Mhz433 => LinkBand::Mhz433,
+        Band::Mhz868 => LinkBand::Mhz868,
+        Band::Mhz915 => LinkBand::Mhz915,
+    }
+}
+
+/// The settings' rate for a link rate mode: `current` if it already gives `rate` (the three
+/// slow settings share L50), else the one setting that does; `None` for F500, which no setting
+/// gives.
+pub fn settings_rate(rate: LinkRate, current: RateMode) -> Option<RateMode> {
+    if link_rate(current) == rate {
+        return Some(current);
+    }
+    match rate {
+        LinkRate::L50 => Some(RateMode::Bps19200),
+        LinkRate::M100 => Some(RateMode::Bps57600),
+        LinkRate::F250 => Some(RateMode::Bps125000),
+        LinkRate::F500 => None,
+    }
+}
+
+/// The settings' band for a link band.
+pub fn settings_band(band: LinkBand) -> Band {
+    match band {
+        LinkBand::Mhz433 => Band::Mhz433,
+        LinkBand::Mhz868 => Band::Mhz868,
+        LinkBand::Mhz915 => Band::Mhz915,
+    }
+}
+
+/// The bound link's parameters (`None` while unbound): 16 channels, one downlink slot in
+/// [`TELEMETRY_RATIO`].
+pub fn link_params(settings: &Settings) -> Option<LinkParams> {
+    (settings.bind_id != 0).then(|| LinkParams {
+        bind_id: settings.bind_id,
+        band: link_band(settings.band),
+        rate: link_rate(settings.rate),
+        format: ChannelFormat::Full16,
+        telemetry_ratio: TELEMETRY_RATIO,
+    })
+}
+
+/// Parameters for a new bind: the settings' band and rate with a fresh ID from `random`.
+pub fn new_bind_params(settings: &Settings, random: u32) -> LinkParams {
+    LinkParams::new(
+        random,
+        link_band(settings.band),
+        link_rate(settings.rate),
+        ChannelFormat::Full16,
+        TELEMETRY_RATIO,
+    )
+}
+
+/// The link as the core sees it; filled and drained by the link loop's hook.
+#[derive(Debug)]
+pub struct AirLink {
+    channels: Option<Channels>,
+    uplink: RecordQueue<512, UPLINK_RECORDS>,
+    received: RecordQueue<1024, RECEIVED_RECORDS>,
+    received_channels: Option<Channels>,
+    splitter: Splitter,
+    stats: LinkStats,
+    bind_requested: bool,
+    follower_updates: u32,
+    rejected_records: u32,
+}
+
+impl Default for AirLink {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl AirLink {
+    /// A link with nothing exchanged yet.
+    pub const fn new() -> Self {
+        Self {
+            channels: None,
+            uplink: RecordQueue::new(MAX_RECORD_LEN),
+            received: RecordQueue::new(MAX_RECORD_LEN),
+            received_channels: None,
+            splitter: Splitter::new(),
+            stats: LinkStats {
+                connected: false,
+                rssi_dbm: 0,
+                link_quality_percent: 0,
+                remote_rssi_dbm: 0,
+                remote_link_quality_percent: None,
+                rate_code: 0,
+                schedule: None,
+            },
+            bind_requested: false,
+            follower_updates: 0,
+            rejected_records: 0,
+        }
+    }
+
+    /// For the link task: a bind was asked for since the last call.
+    pub fn take_bind_request(&mut self) -> bool {
+        core::mem::take(&mut self.bind_requested)
+    }
+
+    /// The link loop stopped (bind, radio failure): nothing arrives until it runs again.
+    pub fn on_link_stopped(&mut self) {
+        self.stats = LinkStats {
+            rate_code: self.stats.rate_code,
+            ..LinkStats::default()
+        };
+        self.received_channels = None;
+    }
+
+    /// Telemetry frames from the air that were corrupt or too long.
+    pub fn dropped_frames(&self) -> u32 {
+        self.splitter.dropped()
+    }
+
+    /// Records for the air refused because their CRC failed (a phone's damaged frame that
+    /// still decoded as COBS).
+    pub fn rejected_records(&self) -> u32 {
+        self.rejected_records
+    }
+
+    /// Records dropped because a queue was full (to the air, from the air).
+    pub fn dropped_records(&self) -> (u32, u32) {
+        (
+            self.uplink.dropped().records,
+            self.received.dropped().records,
+        )
+    }
+
+    /// Transmitter role, at the start of every slot (`now_us` = slot start on the link
+    /// clock, which is the firmware's µs clock): channels and queued records in, received
+    /// records and statistics out.
+    pub fn on_master_slot(&mut self, now_us: u64, master: &mut Master) {
+        if let Some(channels) = &self.channels {
+            let mut values = [CHANNEL_CENTER; telemetry::channels::MAX_CHANNELS];
+            for (slot, value) in values.iter_mut().zip(channels.as_slice()) {
+                *slot = *value;
+            }
+            master.set_channels(&values);
+        }
+        while master.uplink_stream.free() >= MAX_STREAM_FRAME_LEN {
+            let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
+            let Some(len) = self.pop_uplink_frame(&mut frame) else {
+                break;
+            };
+            master.uplink_stream.write(frame.get(..len).unwrap_or(&[]));
+        }
+        self.read_stream(|buf| master.downlink_stream.read(buf));
+        let remote = master.remote_report();
+        let rate = master.params().rate;
+        self.stats = LinkStats {
+            connected: master
+                .last_downlink_us()
+                .is_some_and(|t| now_us.saturating_sub(t) < CONNECTED_TIMEOUT_US),
+            rssi_dbm: master.downlink_rssi_dbm().unwrap_or(0),
+            link_quality_percent: master.downlink_lq(),
+            remote_rssi_dbm: remote.map_or(0, |r| i16::from(r.rssi_dbm)),
+            remote_link_quality_percent: remote.map(|r| r.lq_percent),
+            rate_code: rate.code(),
+            schedule: Some(AirSchedule {
+                period_us: rate.slot_us(),
+                phase_us: now_us + u64::from(TX_LEAD_US),
+            }),
+        };
+    }
+
+    /// Receiver role, after every follower step: new channels and received records out,
+    /// queued records in, statistics (connected = not in failsafe).
+    pub fn on_follower_step(&mut self, _now_us: u64, follower: &mut Follower) {
+        if follower.updates() != self.follower_updates {
+            self.follower_updates = follower.updates();
+            let count = follower.params().format.count();
+            let output = follower.output();
+            self.received_channels =
+                Some(Channels::from_values(output.get(..count).unwrap_or(output)));
+        }
+        while follower.downlink_stream.free() >= MAX_STREAM_FRAME_LEN {
+            let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
+            let Some(len) = self.pop_uplink_frame(&mut frame) else {
+                break;
+            };
+            follower
+                .downlink_stream
+                .write(frame.get(..len).unwrap_or(&[]));
+        }
+        self.read_stream(|buf| follower.uplink_stream.read(buf));
+        let remote = follower.remote_report();
+        self.stats = LinkStats {
+            connected: !follower.in_failsafe(),
+            rssi_dbm: follower.uplink_rssi_dbm().unwrap_or(0),
+            link_quality_percent: follower.uplink_lq(),
+            remote_rssi_dbm: remote.map_or(0, |r| i16::from(r.rssi_dbm)),
+            remote_link_quality_percent: remote.map(|r| r.lq_percent),
+            rate_code: follower.params().rate.code(),
+            schedule: None,
+        };
+    }
+
+    /// The next queued record as a stream frame; a record that fails its check is dropped.
+    fn pop_uplink_frame(&mut self, frame: &mut [u8]) -> Option<usize> {
+        let mut record = [0u8; MAX_RECORD_LEN];
+        loop {
+            let len = self.uplink.pop_into(&mut record).ok()??;
+            match to_stream(record.get(..len)?, frame) {
+                Ok(n) => return Some(n),
+                Err(_) => self.rejected_records = self.rejected_records.saturating_add(1),
+            }
+        }
+    }
+
+    fn read_stream(&mut self, mut read: impl FnMut(&mut [u8]) -> usize) {
+        let mut buf = [0u8; 64];
+        let mut record = [0u8; MAX_RECORD_LEN];
+        loop {
+            let n = read(&mut buf);
+            if n == 0 {
+                break;
+            }
+            for &byte in buf.get(..n).unwrap_or(&[]) {
+                if let Some(len) = self.splitter.push(byte, &mut record) {
+                    self.received.push(record.get(..len).unwrap_or(&[]));
+                }
+            }
+        }
+    }
+}
+
+impl LinkPort for AirLink {
+    fn send_channels(&mut self, channels: &Channels) {
+        self.channels = Some(*channels);
+    }
+
+    fn can_send_record(&self) -> bool {
+        self.uplink.len() < UPLINK_RECORDS
+    }
+
+    fn send_record(&mut self, record: &[u8]) {
+        self.uplink.push(record);
+    }
+
+    fn stats(&self) -> LinkStats {
+        self.stats
+    }
+
+    fn start_bind(&mut self) {
+        self.bind_requested = true;
+    }
+
+    fn take_received_record(&mut self, out: &mut [u8]) -> Option<usize> {
+        self.received.pop_into(out).ok().flatten()
+    }
+
+    fn take_received_channels(&mut self) -> Option<Channels> {
+        self.received_channels.take()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_map_to_link_parameters() {
+        let mut settings = Settings::default();
+        assert_eq!(link_params(&settings), None, "unbound");
+        settings.bind_id = 0x1234_5678;
+        settings.rate = RateMode::Bps57600;
+        settings.band = Band::Mhz868;
+        let params = link_params(&settings).unwrap();
+        assert_eq!(params.bind_id, 0x1234_5678);
+        assert_eq!(params.rate, LinkRate::M100);
+        assert_eq!(params.band, LinkBand::Mhz868);
+        assert_eq!(params.format, ChannelFormat::Full16);
+        assert_eq!(params.telemetry_ratio, 4);
+        assert_eq!(link_rate(RateMode::Bps4800), LinkRate::L50);
+        assert_eq!(link_rate(RateMode::Bps125000), LinkRate::F250);
+        assert_eq!(
+            settings_rate(LinkRate::L50, RateMode::Bps9600),
+            Some(RateMode::Bps9600)
+        );
+        assert_eq!(
+            settings_rate(LinkRate::L50, RateMode::Bps57600),
+            Some(RateMode::Bps19200)
+        );
+        assert_eq!(settings_rate(LinkRate::F500, RateMode::Bps9600), None);
+        assert_eq!(settings_band(LinkBand::Mhz915), Band::Mhz915);
+        let fresh = new_bind_params(&settings, 0xCAFE);
+        assert_eq!((fresh.bind_id, fresh.rate), (0xCAFE, LinkRate::M100));
+    }
+
+    #[test]
+    fn records_wait_for_room_and_bind_requests_are_taken_once() {
+        let mut link = AirLink::new();
+        for _ in 0..UPLINK_RECORDS {
+            assert!(link.can_send_record());
+            link.send_record(&[1, 2, 3]);
+        }
+        assert!(!link.can_send_record());
+        let mut master = Master::new(
+            link_params(&Settings {
+                bind_id: 9,
+                ..Settings::default()
+            })
+            .unwrap(),
+        );
+        link.on_master_slot(0, &mut master);
+        // Three bytes are no record (no valid CRC): refused and counted, nothing sent.
+        assert_eq!(link.rejected_records(), UPLINK_RECORDS as u32);
+        assert_eq!(master.uplink_stream.pending(), 0);
+        assert!(link.can_send_record());
+        let mut record = [0u8; MAX_RECORD_LEN];
+        let len = crate::records::with_crc(&[7, 7, 7], &mut record).unwrap();
+        link.send_record(&record[..len]);
+        link.on_master_slot(4_000, &mut master);
+        // COBS(7 7 7 crc crc) + 0x00.
+        assert_eq!(master.uplink_stream.pending(), len + 2);
+        let stats = link.stats();
+        assert!(!stats.connected);
+        assert_eq!(stats.schedule.unwrap().period_us, 20_000);
+        assert_eq!(
+            stats.schedule.unwrap().phase_us,
+            4_000 + u64::from(TX_LEAD_US)
+        );
+        link.start_bind();
+        assert!(link.take_bind_request());
+        assert!(!link.take_bind_request());
+        link.on_link_stopped();
+        assert_eq!(link.stats().schedule, None);
+    }
+}

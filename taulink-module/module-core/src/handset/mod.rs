@@ -1,0 +1,233 @@
+//! The handset side of the JR line, built on `telemetry::handset`: the CRSF decoder and
+//! reply responder (CRSF input), the S.Port push scheduler and the FrSky D hub sender (PPM
+//! input), chosen from the settings. Implements [`HandsetOutput`] for the module core.
+//!
+//! Line settings the firmware applies (protocols.md §1.3, §4): CRSF 400 kBd, not inverted,
+//! half duplex; S.Port 57 600 Bd inverted, push only; FrSky D 9600 Bd inverted, push only.
+
+pub mod state;
+
+use telemetry::handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
+use telemetry::handset::crsf::{Decoded, Decoder, Message};
+use telemetry::handset::frsky_d::Sender;
+use telemetry::handset::frsky_d::hub::SenderConfig;
+use telemetry::handset::sport::Scheduler;
+use telemetry::handset::sport::schedule::Config as SportConfig;
+
+use crate::channels::Channels;
+use crate::ports::{HandsetOutput, LinkStats};
+use crate::settings::{InputProtocol, OutputProtocol, Role, Settings};
+pub use state::FlightState;
+
+/// CRSF line rate (EdgeTX's 400 kBd; 115 200 is not a setting yet).
+pub const CRSF_BAUD: u32 = 400_000;
+/// S.Port push rate.
+pub const SPORT_BAUD: u32 = 57_600;
+/// FrSky D rate.
+pub const FRSKY_D_BAUD: u32 = 9_600;
+/// Largest burst [`HandsetOutput::next_line_bytes`] writes (EdgeTX's CRSF receive buffer).
+pub const MAX_LINE_BURST: usize = telemetry::handset::crsf::responder::MAX_REPLY_BYTES;
+
+/// How the JR line is driven.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LineMode {
+    /// CRSF, half duplex, not inverted.
+    Crsf {
+        /// Line rate.
+        baud: u32,
+    },
+    /// Inverted, transmit-only pushes (S.Port or FrSky D).
+    Push {
+        /// Line rate.
+        baud: u32,
+    },
+    /// Nothing on the line.
+    Off,
+}
+
+/// The encoder in use.
+#[derive(Debug)]
+// One instance for the firmware's lifetime and no heap to box into; `allow`, not `expect`:
+// on the 32-bit target the variants are close enough that the lint stays quiet.
+#[allow(clippy::large_enum_variant)]
+enum Protocol {
+    /// CRSF input and telemetry.
+    Crsf {
+        decoder: Decoder,
+        responder: Responder,
+    },
+    /// S.Port push (PPM input).
+    SPort(Scheduler),
+    /// FrSky D hub (PPM input).
+    FrskyD(Sender),
+    /// No telemetry to the handset.
+    Off,
+}
+
+/// The handset codecs for the settings in force.
+#[derive(Debug)]
+pub struct Handset {
+    protocol: Protocol,
+    state: FlightState,
+    /// Radio frames the CRSF decoder rejected.
+    pub crsf_rejected: u32,
+}
+
+impl Handset {
+    /// The codec the settings call for: CRSF input always answers in CRSF (EdgeTX needs the
+    /// DEVICE_INFO and LINK_STATISTICS); PPM input pushes S.Port or FrSky D; the receiver
+    /// role has no handset.
+    pub fn new(settings: &Settings) -> Self {
+        let protocol = match (settings.role, settings.input, settings.output) {
+            (Role::Receiver, _, _) => Protocol::Off,
+            (Role::Transmitter, InputProtocol::Crsf, _) => Protocol::Crsf {
+                decoder: Decoder::new(),
+                responder: Responder::new(Config::new(CRSF_BAUD, taulink_device_info(0, 1, 0))),
+            },
+            (Role::Transmitter, InputProtocol::Ppm, OutputProtocol::SPort) => {
+                Protocol::SPort(Scheduler::new(SportConfig::default()))
+            }
+            (Role::Transmitter, InputProtocol::Ppm, OutputProtocol::FrskyHub) => {
+                Protocol::FrskyD(Sender::new(SenderConfig::default()))
+            }
+            (Role::Transmitter, InputProtocol::Ppm, OutputProtocol::Off | OutputProtocol::Crsf) => {
+                Protocol::Off
+            }
+        };
+        Self {
+            protocol,
+            state: FlightState::new(settings.tx_power),
+            crsf_rejected: 0,
+        }
+    }
+
+    /// How the firmware drives the line.
+    pub fn line_mode(&self) -> LineMode {
+        match self.protocol {
+            Protocol::Crsf { .. } => LineMode::Crsf { baud: CRSF_BAUD },
+            Protocol::SPort(_) => LineMode::Push { baud: SPORT_BAUD },
+            Protocol::FrskyD(_) => LineMode::Push { baud: FRSKY_D_BAUD },
+            Protocol::Off => LineMode::Off,
+        }
+    }
+
+    /// What the handset is told.
+    pub fn state(&self) -> &FlightState {
+        &self.state
+    }
+
+    fn take_frames(
+        feed: impl Iterator<Item = Decoded>,
+        responder: &mut Responder,
+        rejected: &mut u32,
+        now_us: u64,
+    ) -> Option<Channels> {
+        let mut channels = None;
+        for decoded in feed {
+            match decoded {
+                Decoded::Frame(frame) => {
+                    if let Some(Message::RcChannels(rc)) = responder.on_frame(now_us, &frame) {
+                        channels = Some(Channels::from_values(&rc.ticks));
+                    }
+                }
+                Decoded::Rejected(_) => *rejected = rejected.saturating_add(1),
+            }
+        }
+        channels
+    }
+}
+
+impl HandsetOutput for Handset {
+    fn on_telemetry(&mut self, record: &[u8]) {
+        self.state.on_record(record);
+    }
+
+    fn on_link_stats(&mut self, stats: &LinkStats) {
+        self.state.on_link_stats(stats);
+        if let Protocol::Crsf { responder, .. } = &mut self.protocol {
+            responder.set_link_schedule(stats.schedule.map(|s| LinkSchedule {
+                period_us: s.period_us,
+                phase_us: s.phase_us,
+            }));
+        }
+    }
+
+    fn on_line_bytes(&mut self, now_us: u64, bytes: &[u8]) -> Option<Channels> {
+        match &mut self.protocol {
+            Protocol::Crsf { decoder, responder } => Self::take_frames(
+                decoder.feed(bytes),
+                responder,
+                &mut self.crsf_rejected,
+                now_us,
+            ),
+            // Push modes only send (a PPM-mode radio does not poll).
+            Protocol::SPort(_) | Protocol::FrskyD(_) | Protocol::Off => None,
+        }
+    }
+
+    fn on_line_idle(&mut self, now_us: u64) -> Option<Channels> {
+        match &mut self.protocol {
+            Protocol::Crsf { decoder, responder } => {
+                Self::take_frames(decoder.idle(), responder, &mut self.crsf_rejected, now_us)
+            }
+            Protocol::SPort(_) | Protocol::FrskyD(_) | Protocol::Off => None,
+        }
+    }
+
+    fn next_line_bytes(&mut self, now_us: u64, out: &mut [u8]) -> usize {
+        let report = self.state.report();
+        match &mut self.protocol {
+            Protocol::Crsf { responder, .. } => responder.reply(now_us, &report, out),
+            Protocol::SPort(scheduler) => scheduler
+                .next_frame(now_us, &report)
+                .and_then(|frame| frame.encode(out).ok())
+                .unwrap_or(0),
+            Protocol::FrskyD(sender) => sender
+                .next_frame(now_us, &report)
+                .and_then(|frame| frame.encode(out).ok())
+                .unwrap_or(0),
+            Protocol::Off => 0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_choose_the_line() {
+        let mut settings = Settings::default();
+        assert_eq!(
+            Handset::new(&settings).line_mode(),
+            LineMode::Push { baud: 57_600 }
+        );
+        settings.output = OutputProtocol::FrskyHub;
+        assert_eq!(
+            Handset::new(&settings).line_mode(),
+            LineMode::Push { baud: 9_600 }
+        );
+        settings.output = OutputProtocol::Off;
+        assert_eq!(Handset::new(&settings).line_mode(), LineMode::Off);
+        settings.input = InputProtocol::Crsf;
+        assert_eq!(
+            Handset::new(&settings).line_mode(),
+            LineMode::Crsf { baud: 400_000 }
+        );
+        settings.role = Role::Receiver;
+        assert_eq!(Handset::new(&settings).line_mode(), LineMode::Off);
+    }
+
+    #[test]
+    fn sport_goes_quiet_between_slots_and_sends_rssi_zero_without_link() {
+        let mut handset = Handset::new(&Settings::default());
+        let mut out = [0u8; MAX_LINE_BURST];
+        let len = handset.next_line_bytes(0, &mut out);
+        // 7E 98 10 01 F1 00 00 00 00 crc: RSSI 0 (no link), nothing stuffed.
+        assert_eq!(len, 10);
+        assert_eq!(&out[..6], &[0x7E, 0x98, 0x10, 0x01, 0xF1, 0x00]);
+        assert_eq!(handset.next_line_bytes(11_999, &mut out), 0, "12 ms slot");
+        assert!(handset.next_line_bytes(100_000, &mut out) > 0);
+    }
+}
