@@ -51,6 +51,8 @@ pub mod fifo;
 pub mod gpio;
 pub mod if_filter;
 pub mod irq;
+#[cfg(feature = "telemetry")]
+pub mod link;
 pub mod measure;
 pub mod modem;
 #[cfg(feature = "openlrs")]

@@ -27,6 +27,7 @@ use module_core::handset::Handset;
 use module_core::hm10::relay::MAX_FRAME_LEN;
 use module_core::settings::{InputProtocol, OutputProtocol};
 use radio_rfm22b::Rfm22b;
+use radio_rfm22b::TxPower;
 use si4432_sim::{Medium, RadioConfig as Placement, SimDelay, Simulation};
 use telemetry::channels::FailsafeValues;
 use telemetry::handset::sport::{self, value_id};
@@ -83,7 +84,7 @@ fn ppm_over_the_driver_on_virtual_si4432s() {
             module_chip.sdn,
             module_chip.delay,
         ),
-        settings.tx_power,
+        TxPower::from_step(settings.tx_power),
     );
     let mut hooks = ModuleHooks { app: app.clone() };
     sim.spawn(async move {
@@ -111,7 +112,7 @@ fn ppm_over_the_driver_on_virtual_si4432s() {
             flight_chip.sdn,
             flight_chip.delay,
         ),
-        7,
+        TxPower::from_step(7),
     );
     let mut flight_hooks = FlightHooks {
         side: flight.clone(),

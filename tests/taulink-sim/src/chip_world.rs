@@ -5,7 +5,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::Duration;
 
-use radio_rfm22b::Rfm22b;
+use radio_rfm22b::{Rfm22b, TxPower};
 use si4432_sim::{
     Interference, Medium, Outcome as ChipOutcome, RadioConfig as ChipPlacement, RadioId, Simulation,
 };
@@ -13,7 +13,7 @@ use telemetry::link::rate::airtime_us;
 use telemetry::link::{HOP_CHANNELS, LinkParams};
 use telemetry::mock::{MediumStats, SplitMix64};
 
-use crate::driver::{DriverRadio, SimClock};
+use crate::driver::{LinkRadio, SimClock};
 use crate::ends::{FlightStart, flight_end, module_end};
 use crate::probe::{FlightApp, ModuleApp, Now, Record, Shared};
 use crate::scenario::Scenario;
@@ -44,14 +44,26 @@ fn spawn_pair(
     // The MCU clocks drift too, 40 ppm apart: the follower must keep re-timing its grid.
     let module_clock = SimClock::new(medium.clone(), module.delay.clone(), MODULE_EPOCH_US, 20.0);
     let flight_clock = SimClock::new(medium.clone(), flight.delay.clone(), FLIGHT_EPOCH_US, -20.0);
-    let module_radio = DriverRadio::new(
-        Rfm22b::new(module.spi, module.nirq, module.sdn, module.delay),
-        s.header_check,
-    );
-    let flight_radio = DriverRadio::new(
-        Rfm22b::new(flight.spi, flight.nirq, flight.sdn, flight.delay),
-        s.header_check,
-    );
+    let link_radio = |radio| {
+        let r = LinkRadio::new(radio, TxPower::MAX);
+        if s.header_check {
+            r
+        } else {
+            r.without_header_check()
+        }
+    };
+    let module_radio = link_radio(Rfm22b::new(
+        module.spi,
+        module.nirq,
+        module.sdn,
+        module.delay,
+    ));
+    let flight_radio = link_radio(Rfm22b::new(
+        flight.spi,
+        flight.nirq,
+        flight.sdn,
+        flight.delay,
+    ));
     let m = medium.clone();
     let now: Now = Rc::new(move || m.now().as_micros() as u64);
     let module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);

@@ -19,6 +19,7 @@ use module_core::air::radio::LinkRadio;
 use module_core::air::{link_band, link_params, new_bind_params, settings_rate};
 use module_core::settings::{Role, Settings};
 use radio_rfm22b::Rfm22b;
+use radio_rfm22b::TxPower;
 use telemetry::channels::{Failsafe, FailsafeValues, MAX_CHANNELS};
 use telemetry::link::PacketRadio;
 use telemetry::link::core::follower::DEFAULT_FAILSAFE_US;
@@ -64,7 +65,7 @@ pub async fn link_task(radio: Radio, boot_settings: Settings) {
     let mut rng = Rng::new_blocking(rng);
     let mut radio = LinkRadio::new(
         Rfm22b::new(device, nirq, sdn, Delay),
-        boot_settings.tx_power,
+        TxPower::from_step(boot_settings.tx_power),
     );
     let mut clock = EmbassyClock;
     loop {

@@ -1,0 +1,154 @@
+//! The driver as the TauLink air link's radio (`telemetry::link::PacketRadio`), behind the
+//! `telemetry` feature: one adapter for the module firmware, the flight firmware and the
+//! host simulations, so they all run the link on the same chip setup.
+//!
+//! The chip setup is what the link's airtime budget (`telemetry::link::rate`) assumes:
+//! preamble of `PREAMBLE_BYTES` with 20-bit detection, sync `2D D4`, the link's four header
+//! bytes sent and all 32 bits checked, CRC-CCITT, variable length.
+
+use embedded_hal::digital::OutputPin;
+use embedded_hal_async::delay::DelayNs;
+use embedded_hal_async::digital::Wait;
+use embedded_hal_async::spi::SpiDevice;
+use telemetry::link::rate::{PREAMBLE_BYTES, airtime_us};
+use telemetry::link::{PacketRadio, RadioConfig, RateMode, RxOutcome};
+
+use crate::{
+    Carrier, ChannelSpacing, Config, ConfigError, Crc, Error, ModemConfig, PacketConfig, Rfm22b,
+    TxPower,
+};
+
+/// The modem of each rate mode: deviation for a modulation index 2Δf/R of 1.2…3.1 (Tau
+/// Labs' and OpenLRSng's profiles span 1.1–4.7); 256 kbps uses the 150 kHz Tau Labs
+/// intended, not its table's 9.4 kHz typo.
+pub fn modem_for(rate: RateMode) -> Result<ModemConfig, ConfigError> {
+    let deviation_hz = match rate {
+        RateMode::L50 => 30_000,
+        RateMode::M100 => 45_000,
+        RateMode::F250 => 90_000,
+        RateMode::F500 => 150_000,
+    };
+    ModemConfig::try_new(rate.bit_rate_bps(), deviation_hz)
+}
+
+/// The packet handler for a link with `header`; `check_header` = false turns the hardware
+/// header filter off (a test mode that exposes foreign packets to the link CRC).
+pub fn packet_config(header: [u8; 4], check_header: bool) -> PacketConfig {
+    let nibbles = (PREAMBLE_BYTES * 2) as u16;
+    let checked = if check_header { 0x0F } else { 0x00 };
+    PacketConfig::new()
+        .with_preamble(nibbles, 5)
+        .with_sync_word([0x2D, 0xD4, 0, 0], 2)
+        .with_header(header, 4)
+        .with_header_check(header, [0xFF; 4], checked, 0)
+        .with_crc(Crc::Ccitt)
+}
+
+/// Why the link's radio failed.
+#[derive(Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LinkRadioError<E> {
+    /// The driver failed (bus, chip reset, FIFO).
+    Radio(Error<E>),
+    /// The link asked for a setup the chip cannot do.
+    Config(ConfigError),
+}
+
+/// The driver, configured per link phase (bind, then the bound link).
+pub struct LinkRadio<SPI, IRQ, SDN, D> {
+    radio: Rfm22b<SPI, IRQ, SDN, D>,
+    tx_power: TxPower,
+    check_header: bool,
+    rate: RateMode,
+    configured: Option<RadioConfig>,
+}
+
+impl<SPI, IRQ, SDN, D> LinkRadio<SPI, IRQ, SDN, D> {
+    /// Wraps a driver, transmitting at `tx_power`, with the header filter on.
+    pub fn new(radio: Rfm22b<SPI, IRQ, SDN, D>, tx_power: TxPower) -> Self {
+        Self {
+            radio,
+            tx_power,
+            check_header: true,
+            rate: RateMode::L50,
+            configured: None,
+        }
+    }
+
+    /// Turns the hardware header filter off (tests of the link CRC against foreign links).
+    pub fn without_header_check(mut self) -> Self {
+        self.check_header = false;
+        self
+    }
+
+    /// The driver itself (probe and reset between link sessions).
+    pub fn driver(&mut self) -> &mut Rfm22b<SPI, IRQ, SDN, D> {
+        // Whoever touches the chip directly invalidates our idea of its setup.
+        self.configured = None;
+        &mut self.radio
+    }
+}
+
+impl<SPI, IRQ, SDN, D> PacketRadio for LinkRadio<SPI, IRQ, SDN, D>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    SDN: OutputPin,
+    D: DelayNs,
+{
+    type Error = LinkRadioError<SPI::Error>;
+
+    async fn configure(&mut self, config: &RadioConfig) -> Result<(), Self::Error> {
+        if self.configured == Some(*config) {
+            return Ok(());
+        }
+        let modem = modem_for(config.rate).map_err(LinkRadioError::Config)?;
+        let carrier = Carrier::try_new(config.base_hz).map_err(LinkRadioError::Config)?;
+        let mut chip = Config::new(
+            modem,
+            packet_config(config.header, self.check_header),
+            carrier,
+        );
+        chip.channel_spacing =
+            ChannelSpacing::try_from_hz(config.spacing_hz).map_err(LinkRadioError::Config)?;
+        chip.tx_power = self.tx_power;
+        self.radio.init(chip).await.map_err(LinkRadioError::Radio)?;
+        self.rate = config.rate;
+        self.configured = Some(*config);
+        Ok(())
+    }
+
+    async fn set_channel(&mut self, channel: u8) -> Result<(), Self::Error> {
+        self.radio
+            .set_channel(channel)
+            .await
+            .map_err(LinkRadioError::Radio)
+    }
+
+    async fn transmit(&mut self, frame: &[u8]) -> Result<(), Self::Error> {
+        // Twice the airtime plus the PLL settle: a chip that has not sent by then is stuck.
+        let timeout_us = 2 * airtime_us(frame.len(), self.rate.bit_rate_bps()) + 1_000;
+        self.radio
+            .transmit(frame, timeout_us)
+            .await
+            .map_err(LinkRadioError::Radio)
+    }
+
+    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<RxOutcome, Self::Error> {
+        let outcome = self
+            .radio
+            .receive(buf, timeout_us)
+            .await
+            .map_err(LinkRadioError::Radio)?;
+        Ok(match outcome {
+            crate::RxOutcome::Packet(packet) => RxOutcome::Packet {
+                len: packet.len,
+                rssi_dbm: packet.signal.rssi_dbm,
+            },
+            crate::RxOutcome::CrcError(_) | crate::RxOutcome::TooLong { .. } => {
+                RxOutcome::Corrupted
+            }
+            crate::RxOutcome::Timeout => RxOutcome::Timeout,
+        })
+    }
+}
