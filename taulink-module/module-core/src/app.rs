@@ -133,7 +133,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
 
     /// Channels decoded from the handset's CRSF RC frames (the CRSF codec calls this).
     pub fn on_handset_channels(&mut self, channels: &Channels) {
-        if self.settings.role == Role::Transmitter && self.settings.input == InputProtocol::Crsf {
+        if self.settings.role == Role::Transmitter && self.settings.input.is_crsf() {
             self.forward(channels);
         }
     }

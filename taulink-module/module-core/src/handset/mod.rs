@@ -19,8 +19,10 @@ use crate::ports::{HandsetOutput, LinkStats};
 use crate::settings::{InputProtocol, OutputProtocol, Role, Settings};
 pub use state::FlightState;
 
-/// CRSF line rate (EdgeTX's 400 kBd; 115 200 is not a setting yet).
+/// CRSF line rate (EdgeTX's default, 400 kBd).
 pub const CRSF_BAUD: u32 = 400_000;
+/// The slower CRSF rate the settings offer (`InputProtocol::Crsf115200`).
+pub const CRSF_SLOW_BAUD: u32 = 115_200;
 /// S.Port push rate.
 pub const SPORT_BAUD: u32 = 57_600;
 /// FrSky D rate.
@@ -56,6 +58,7 @@ enum Protocol {
     Crsf {
         decoder: Decoder,
         responder: Responder,
+        baud: u32,
     },
     /// S.Port push (PPM input).
     SPort(Scheduler),
@@ -81,10 +84,19 @@ impl Handset {
     pub fn new(settings: &Settings) -> Self {
         let protocol = match (settings.role, settings.input, settings.output) {
             (Role::Receiver, _, _) => Protocol::Off,
-            (Role::Transmitter, InputProtocol::Crsf, _) => Protocol::Crsf {
-                decoder: Decoder::new(),
-                responder: Responder::new(Config::new(CRSF_BAUD, taulink_device_info(0, 1, 0))),
-            },
+            (Role::Transmitter, input @ (InputProtocol::Crsf | InputProtocol::Crsf115200), _) => {
+                let baud = if input == InputProtocol::Crsf115200 {
+                    CRSF_SLOW_BAUD
+                } else {
+                    CRSF_BAUD
+                };
+                Protocol::Crsf {
+                    decoder: Decoder::new(),
+                    // The responder sizes its reply window from the line rate.
+                    responder: Responder::new(Config::new(baud, taulink_device_info(0, 1, 0))),
+                    baud,
+                }
+            }
             (Role::Transmitter, InputProtocol::Ppm, OutputProtocol::SPort) => {
                 Protocol::SPort(Scheduler::new(SportConfig::default()))
             }
@@ -105,7 +117,7 @@ impl Handset {
     /// How the firmware drives the line.
     pub fn line_mode(&self) -> LineMode {
         match self.protocol {
-            Protocol::Crsf { .. } => LineMode::Crsf { baud: CRSF_BAUD },
+            Protocol::Crsf { baud, .. } => LineMode::Crsf { baud },
             Protocol::SPort(_) => LineMode::Push { baud: SPORT_BAUD },
             Protocol::FrskyD(_) => LineMode::Push { baud: FRSKY_D_BAUD },
             Protocol::Off => LineMode::Off,
@@ -155,7 +167,9 @@ impl HandsetOutput for Handset {
 
     fn on_line_bytes(&mut self, now_us: u64, bytes: &[u8]) -> Option<Channels> {
         match &mut self.protocol {
-            Protocol::Crsf { decoder, responder } => Self::take_frames(
+            Protocol::Crsf {
+                decoder, responder, ..
+            } => Self::take_frames(
                 decoder.feed(bytes),
                 responder,
                 &mut self.crsf_rejected,
@@ -168,9 +182,9 @@ impl HandsetOutput for Handset {
 
     fn on_line_idle(&mut self, now_us: u64) -> Option<Channels> {
         match &mut self.protocol {
-            Protocol::Crsf { decoder, responder } => {
-                Self::take_frames(decoder.idle(), responder, &mut self.crsf_rejected, now_us)
-            }
+            Protocol::Crsf {
+                decoder, responder, ..
+            } => Self::take_frames(decoder.idle(), responder, &mut self.crsf_rejected, now_us),
             Protocol::SPort(_) | Protocol::FrskyD(_) | Protocol::Off => None,
         }
     }
@@ -214,6 +228,11 @@ mod tests {
         assert_eq!(
             Handset::new(&settings).line_mode(),
             LineMode::Crsf { baud: 400_000 }
+        );
+        settings.input = InputProtocol::Crsf115200;
+        assert_eq!(
+            Handset::new(&settings).line_mode(),
+            LineMode::Crsf { baud: 115_200 }
         );
         settings.role = Role::Receiver;
         assert_eq!(Handset::new(&settings).line_mode(), LineMode::Off);

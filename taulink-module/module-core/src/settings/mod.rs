@@ -4,7 +4,8 @@
 //! a single sequential-storage item write: after a power cut the map holds either the old
 //! or the new record (the item CRC rejects a torn write), never a mix of fields.
 //!
-//! Record layout (version 1, 12 bytes): `[1, role, rate, input, output, band, tx_power,
+//! Record layout (version 1, 12 bytes; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd):
+//! `[1, role, rate, input, output, band, tx_power,
 //! failsafe, bind_id (u32 LE)]`. Every byte is checked on decode; an unknown value is an
 //! error, never a guess.
 
@@ -46,8 +47,17 @@ pub enum RateMode {
 pub enum InputProtocol {
     /// PPM on JR pin 1.
     Ppm,
-    /// CRSF on JR pin 5 (half duplex).
+    /// CRSF on JR pin 5 (half duplex) at 400 kBd, EdgeTX's default.
     Crsf,
+    /// CRSF at 115 200 Bd, for radios or cables that cannot run 400 kBd.
+    Crsf115200,
+}
+
+impl InputProtocol {
+    /// CRSF at either rate.
+    pub const fn is_crsf(self) -> bool {
+        matches!(self, InputProtocol::Crsf | InputProtocol::Crsf115200)
+    }
 }
 
 /// What goes back to the handset on JR pin 5 (transmitter role).
@@ -218,6 +228,7 @@ impl Settings {
             input: match input {
                 0 => InputProtocol::Ppm,
                 1 => InputProtocol::Crsf,
+                2 => InputProtocol::Crsf115200,
                 _ => return Err(field(3)),
             },
             output: match output {
@@ -271,6 +282,13 @@ mod tests {
             Settings::from_record(&Settings::default().to_record()),
             Ok(Settings::default())
         );
+        // The slower CRSF rate is input code 2 (older records never hold it).
+        let slow = Settings {
+            input: InputProtocol::Crsf115200,
+            ..settings
+        };
+        assert_eq!(slow.to_record()[3], 2);
+        assert_eq!(Settings::from_record(&slow.to_record()), Ok(slow));
     }
 
     #[test]
