@@ -93,6 +93,20 @@ impl LqgAxis {
         self
     }
 
+    /// Replaces the output the last [`Self::update`] returned with what the mixer realised
+    /// of it (`Mixer::mix_with_applied`), so the RTKF predicts with the torque really
+    /// commanded. Without it, whenever the mixer scales the attitude demand down (gyro
+    /// noise through a yaw axis with little authority, plus a roll step) the filter
+    /// over-predicts the response: on the 6-DoF quad at 3 deg/s noise that cost 0.3–0.5 %
+    /// attitude overshoot and a 35 ms instead of 24 ms rate rise.
+    pub fn set_realised_output(&mut self, realised: f32) {
+        if let Some(newest) = self.outputs.first_mut()
+            && !realised.is_nan()
+        {
+            *newest = realised.clamp(-1.0, 1.0);
+        }
+    }
+
     /// Restarts the estimator from a gyro sample (mode entry, arming).
     pub fn reset(&mut self, gyro_dps: f32) {
         self.kf.reset(gyro_dps);

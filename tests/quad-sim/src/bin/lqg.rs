@@ -110,6 +110,7 @@ fn step(a: &Args) -> Res<serde_json::Value> {
         gyro_noise_dps: a.number_or("gyro-noise", 3.0)?,
         input_disturbance: a.number_or("disturbance", 0.0)?,
         seed,
+        antithetic: false,
     };
     let (c, source) = costs(a, &m)?;
     let mut lqg = lqg_axis(&m, ts, &c, &noise(a)?, latency)?;
