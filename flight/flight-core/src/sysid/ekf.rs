@@ -166,7 +166,7 @@ impl SystemIdentifier {
     /// (`Mixer::mix_with_applied`), not the controller's request. When the mixer has to
     /// scale the attitude demand down (span > 1, e.g. a noisy yaw PID at the ±1 clamp plus
     /// the shake), telling the filter the request makes every ln β come out low: measured on
-    /// the 6-DoF quad at 5 deg/s gyro noise with I_yaw ≈ 3.6·I_roll, −0.03…−0.10 on all
+    /// the 6-DoF quad at 5 deg/s gyro noise with I_yaw ≈ 3.6·I_roll, −0.03…−0.11 on all
     /// axes (the demand was scaled in 20–40 % of the samples), and ±0.01 once it is told
     /// the realised output.
     pub fn record_output(&mut self, output: [f32; 3]) {
