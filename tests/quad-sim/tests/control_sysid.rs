@@ -79,6 +79,8 @@ struct SixDof {
     gyro_noise_dps: f64,
     /// Tell the EKF the mixer's realised output (true) or the controller's request.
     tell_realised: bool,
+    /// Sensor-noise seed of the quad.
+    seed: u64,
 }
 
 /// Shakes the 6-DoF quad for 60 s and returns (truth ln β, identification, share of samples
@@ -98,7 +100,7 @@ fn identify_six_dof(run: &SixDof) -> ([f64; 3], flight_core::sysid::Identificati
     params.gyro_noise_dps = run.gyro_noise_dps;
     let truth = params.ln_beta(&QUAD_X);
     let hover = params.hover_throttle() as f32;
-    let mut quad = Quad::new(params, 11);
+    let mut quad = Quad::new(params, run.seed);
     let mixer = Mixer::new(QUAD_X, ThrustCurve::Linear);
     let tune = analytic_pid(
         truth.map(|l| l as f32),
@@ -152,21 +154,29 @@ fn shake_identifies_the_six_dof_quad() {
     // Realistic inertias and 5 deg/s gyro noise over the frame sweep: the yaw rate PID of a
     // low-β yaw axis amplifies the noise to the ±1 clamp, and with the shake on top the mixer
     // scales the attitude demand down in 20–40 % of the samples. Told the realised output
-    // (`Mixer::mix_with_applied`) the EKF recovers every axis within ±0.05 and τ within ±5 %.
+    // (`Mixer::mix_with_applied`) the EKF recovers every axis within ±0.05 and τ within ±5 %
+    // (measured ≤ 0.020 roll/pitch, ≤ 0.027 yaw, ≤ 0.84 %; yaw needs the 0.7 shake cap,
+    // see `sysid::shake`).
+    // Four noise seeds per frame (48 runs).
     let mut worst = (0.0f64, 0.0f64);
-    for ln_beta in [8.0, 9.0, 10.0, 11.0] {
-        for tau_s in [0.015, 0.03, 0.05] {
+    for (seed, ln_beta, tau_s) in [1, 2, 3, 11].into_iter().flat_map(|seed| {
+        [8.0, 9.0, 10.0, 11.0]
+            .into_iter()
+            .flat_map(move |lb| [0.015, 0.03, 0.05].map(|tau| (seed, lb, tau)))
+    }) {
+        {
             let run = SixDof {
                 ln_beta,
                 ln_beta_yaw: realistic_yaw(ln_beta),
                 tau_s,
                 gyro_noise_dps: 5.0,
                 tell_realised: true,
+                seed,
             };
             let (truth, r, scaled) = identify_six_dof(&run);
             let tau_err = f64::from(r.tau_s) / tau_s - 1.0;
             println!(
-                "6-DoF lnβ {truth:.3?} τ {tau_s}: lnβ {:.4?} τ {:+.2} % (σ {:.4?}); demand \
+                "6-DoF seed {seed} lnβ {truth:.3?} τ {tau_s}: lnβ {:.4?} τ {:+.2} % (σ {:.4?}); demand \
                  scaled in {:.0} % of samples",
                 r.ln_beta,
                 tau_err * 100.0,
@@ -195,7 +205,8 @@ fn shake_identifies_the_six_dof_quad() {
 
 #[test]
 fn six_dof_low_noise_and_the_cost_of_ignoring_the_mixer() {
-    // At 0.3 deg/s the demand is never scaled and the result is exact: the rigid body's
+    // At 0.3 deg/s the demand is almost never scaled (measured 0.02 % of the samples, when
+    // a 0.7 yaw pulse meets a roll correction) and the result is exact: the rigid body's
     // cross-coupling (I_y − I_z)·q·r/I_x, which the per-axis model leaves out, is a few
     // deg/s² against a shake torque of thousands and does not bias the result.
     let quiet = SixDof {
@@ -204,15 +215,16 @@ fn six_dof_low_noise_and_the_cost_of_ignoring_the_mixer() {
         tau_s: 0.03,
         gyro_noise_dps: 0.3,
         tell_realised: true,
+        seed: 11,
     };
     let (truth, r, scaled) = identify_six_dof(&quiet);
     println!("6-DoF σ 0.3: truth {truth:.3?}, {r:?}, scaled {scaled}");
-    assert_eq!(scaled, 0.0);
+    assert!(scaled < 1e-3, "{scaled}");
     for (got, want) in r.ln_beta.iter().zip(truth) {
         assert!((f64::from(*got) - want).abs() <= 0.01, "{got} vs {want}");
     }
     // At 5 deg/s, telling the EKF the controller's request instead of what the mixer
-    // realised biases every axis low (the earlier −0.03…−0.07 of this frame).
+    // realised biases every axis low (measured −0.043/−0.033/−0.061).
     let noisy = SixDof {
         gyro_noise_dps: 5.0,
         tell_realised: false,
