@@ -1,5 +1,6 @@
 //! LQG axis controller behaviour that needs no plant: the horizon blend is the weighted mix of
-//! the two laws, outputs clamp to ±1, and a design failure is an error, never NaN gains.
+//! the two laws, outputs clamp to ±1, a design failure is an error, never NaN gains, and the
+//! RTKF predicts with the output the mixer realised when told it.
 
 // Test helpers outside #[test] fns are not covered by clippy.toml's test allowances.
 #![allow(clippy::unwrap_used)]
@@ -110,4 +111,40 @@ fn design_never_returns_non_finite_gains() {
     }
     println!("{ok} of 120 extreme designs solved, the rest returned errors");
     assert!(ok > 60, "{ok} of 120 solved");
+}
+
+#[test]
+fn the_rtkf_predicts_with_the_realised_output() {
+    // Two identical axes saturate at +1; one is told the mixer realised only 0.5. The next
+    // prediction differs by exactly B·Δu, and the correction by the filter gain.
+    let m = AxisModel::new(10.0, 0.03).unwrap();
+    let c = FrameInvariantCosts::default().for_beta(m.beta1());
+    let d = design_axis(&m, 0.001, &c, &c, &KfNoise::default()).unwrap();
+    let mut told = LqgAxis::new(&m, 0.001, &d, 0.3);
+    let mut plain = told;
+    let sp = AxisSetpoint::Rate { rate_dps: 1000.0 };
+    assert_eq!(told.update(0.0, sp), 1.0);
+    assert_eq!(plain.update(0.0, sp), 1.0);
+    told.set_realised_output(0.5);
+    told.update(0.0, sp);
+    plain.update(0.0, sp);
+    let em = flight_core::model::EstimatorMatrices::<f64>::new(&m, 0.001);
+    let [l_rate, l_torque, _] = d.kalman;
+    let du = 0.5;
+    let d_rate = (plain.estimate().rate_dps - told.estimate().rate_dps) as f64;
+    let d_torque = (plain.estimate().torque - told.estimate().torque) as f64;
+    let want_rate = em.b_rate * du * (1.0 - l_rate);
+    let want_torque = em.b_torque * du - l_torque * em.b_rate * du;
+    assert!(
+        (d_rate / want_rate - 1.0).abs() < 1e-3,
+        "{d_rate} vs {want_rate}"
+    );
+    assert!(
+        (d_torque / want_torque - 1.0).abs() < 1e-3,
+        "{d_torque} vs {want_torque}"
+    );
+    // NaN is ignored; out-of-range values are clamped like the output.
+    let before = told;
+    told.set_realised_output(f32::NAN);
+    assert_eq!(told, before);
 }

@@ -25,6 +25,9 @@ pub struct AxisPlantConfig {
     pub input_disturbance: f64,
     /// Noise seed.
     pub seed: u64,
+    /// Negate every noise sample of the seed (the antithetic twin run): for the linear
+    /// closed loop the mean of a run and its twin is exactly the noise-free response.
+    pub antithetic: bool,
 }
 
 impl AxisPlantConfig {
@@ -37,6 +40,7 @@ impl AxisPlantConfig {
             gyro_noise_dps: 3.0,
             input_disturbance: 0.0,
             seed: 1,
+            antithetic: false,
         }
     }
 }
@@ -84,7 +88,8 @@ impl AxisPlant {
 
     /// A gyro sample of the current state.
     pub fn gyro(&mut self) -> f32 {
-        let noise = self.cfg.gyro_noise_dps * self.rng.gaussian();
+        let sign = if self.cfg.antithetic { -1.0 } else { 1.0 };
+        let noise = sign * self.cfg.gyro_noise_dps * self.rng.gaussian();
         #[allow(clippy::cast_possible_truncation)]
         let g = (self.truth.rate_dps + noise) as f32;
         g

@@ -23,6 +23,8 @@ pub enum Mode {
 pub trait AxisController {
     /// One loop from the gyro (deg/s) and the attitude estimate (deg); returns the output.
     fn update(&mut self, gyro_dps: f32, angle_deg: f32, mode: Mode, setpoint: f32) -> f32;
+    /// What the mixer realised of the last output (default: ignored).
+    fn realised(&mut self, _output: f32) {}
 }
 
 impl AxisController for LqgAxis {
@@ -34,6 +36,10 @@ impl AxisController for LqgAxis {
             },
         };
         LqgAxis::update(self, gyro_dps, sp)
+    }
+
+    fn realised(&mut self, output: f32) {
+        self.set_realised_output(output);
     }
 }
 
@@ -145,6 +151,76 @@ pub fn run_step<C: AxisController>(
         step: f64::from(step),
         response,
         output,
+    }
+}
+
+/// The ensemble of a step experiment over noise seeds.
+#[derive(Debug, Clone)]
+pub struct Ensemble {
+    /// The mean response: the expected response (see [`ensemble`]).
+    pub mean: StepResponse,
+    /// RMS deviation of the single runs from the mean over the second half of the run: the
+    /// noise-driven wander while holding the setpoint (deg/s or deg).
+    pub wander_rms: f64,
+}
+
+/// Runs `pairs` antithetic seed pairs (seed s with its noise, and with the same noise
+/// negated) and averages them.
+///
+/// Why antithetic: with independent seeds the mean of N noisy runs still wanders by
+/// σ/√N around the expected response, and its peak reads as overshoot (0.03–0.1 % on a
+/// 10° attitude step at 3 deg/s noise and 32 seeds) for any controller that reaches the
+/// setpoint within the run. For the linear closed loop the mean of a run and its twin is
+/// exactly the noise-free response, so the metrics of the mean are the controller's own;
+/// the noise is measured separately as `wander_rms`.
+pub fn ensemble<C: AxisController>(
+    cfg: &AxisPlantConfig,
+    make: impl Fn() -> C,
+    mode: Mode,
+    step: f32,
+    duration_s: f64,
+    pairs: u64,
+) -> Ensemble {
+    let runs: Vec<StepResponse> = (1..=pairs.max(1))
+        .flat_map(|seed| [false, true].map(|antithetic| (seed, antithetic)))
+        .map(|(seed, antithetic)| {
+            let c = AxisPlantConfig {
+                seed,
+                antithetic,
+                ..*cfg
+            };
+            run_step(&c, &mut make(), mode, step, duration_s)
+        })
+        .collect();
+    #[allow(clippy::cast_precision_loss)]
+    let count = runs.len() as f64;
+    let n = runs.first().map_or(0, |r| r.response.len());
+    let mean_of = |pick: fn(&StepResponse) -> &Vec<f64>| -> Vec<f64> {
+        (0..n)
+            .map(|i| {
+                runs.iter()
+                    .map(|r| pick(r).get(i).copied().unwrap_or(0.0))
+                    .sum::<f64>()
+                    / count
+            })
+            .collect()
+    };
+    let mean = StepResponse {
+        ts_s: cfg.ts_s,
+        step: f64::from(step),
+        response: mean_of(|r| &r.response),
+        output: mean_of(|r| &r.output),
+    };
+    let (mut sum, mut samples) = (0.0, 0.0);
+    for r in &runs {
+        for (y, m) in r.response.iter().zip(&mean.response).skip(n / 2) {
+            sum += (y - m) * (y - m);
+            samples += 1.0;
+        }
+    }
+    Ensemble {
+        mean,
+        wander_rms: (sum / f64::max(samples, 1.0)).sqrt(),
     }
 }
 

@@ -66,6 +66,7 @@ impl SysidExperiment {
                 gyro_noise_dps: self.gyro_noise_dps,
                 input_disturbance: 0.02,
                 seed: self.seed.wrapping_mul(3).wrapping_add(i as u64),
+                antithetic: false,
             });
             let rate = Pid::new(gains, ts);
             let pid = PidAxis {

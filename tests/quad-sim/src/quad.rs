@@ -56,6 +56,9 @@ pub struct QuadParams {
     pub gyro_bias_dps: [f64; 3],
     /// Accelerometer white noise σ, m/s².
     pub accel_noise_mps2: f64,
+    /// Negate every sensor noise sample of the seed (the antithetic twin run, for expected
+    /// responses; see `closed_loop::ensemble`).
+    pub antithetic_noise: bool,
 }
 
 impl QuadParams {
@@ -96,6 +99,7 @@ impl QuadParams {
             gyro_noise_dps: 3.0,
             gyro_bias_dps: [0.0; 3],
             accel_noise_mps2: 0.05,
+            antithetic_noise: false,
         }
     }
 
@@ -232,6 +236,7 @@ impl Quad {
     /// Samples the sensors at the current state.
     pub fn sensors(&mut self) -> Sensors {
         let p = &self.params;
+        let sign = if p.antithetic_noise { -1.0 } else { 1.0 };
         let mut gyro = [0.0f32; 3];
         for ((g, rate), bias) in gyro
             .iter_mut()
@@ -239,7 +244,7 @@ impl Quad {
             .zip(p.gyro_bias_dps)
         {
             #[allow(clippy::cast_possible_truncation)]
-            let v = (rate * DEG + bias + p.gyro_noise_dps * self.rng.gaussian()) as f32;
+            let v = (rate * DEG + bias + sign * p.gyro_noise_dps * self.rng.gaussian()) as f32;
             *g = v;
         }
         let thrust: f64 = self.state.motor.iter().map(|m| self.thrust(*m)).sum();
@@ -255,7 +260,7 @@ impl Quad {
         ];
         let accel = f.map(|a| {
             #[allow(clippy::cast_possible_truncation)]
-            let v = (a + p.accel_noise_mps2 * self.rng.gaussian()) as f32;
+            let v = (a + sign * p.accel_noise_mps2 * self.rng.gaussian()) as f32;
             v
         });
         Sensors {

@@ -90,6 +90,14 @@ impl<const N: usize> Mixer<N> {
 
     /// Mixes throttle in [0, 1] and (roll, pitch, yaw) in ±1 into motor commands in [0, 1].
     pub fn mix(&self, throttle: f32, attitude: [f32; 3]) -> [f32; N] {
+        self.mix_with_applied(throttle, attitude).0
+    }
+
+    /// [`Self::mix`], also returning the (roll, pitch, yaw) the motors will realise: the
+    /// request times the desaturation scale. Controllers and the identification EKF that
+    /// predict with their own output must be told this, not the request (see
+    /// `sysid::ekf::SystemIdentifier::record_output`).
+    pub fn mix_with_applied(&self, throttle: f32, attitude: [f32; 3]) -> ([f32; N], [f32; 3]) {
         let [roll, pitch, yaw] = attitude;
         let parts = self
             .factors
@@ -105,7 +113,8 @@ impl<const N: usize> Mixer<N> {
         // min/max, not clamp: after scaling −lo and 1 − hi can cross by one ulp, and clamp
         // panics on crossed bounds.
         let t = throttle.clamp(0.0, 1.0).min(1.0 - hi).max(-lo);
-        parts.map(|p| self.curve.command_for((t + p * scale).clamp(0.0, 1.0)))
+        let motors = parts.map(|p| self.curve.command_for((t + p * scale).clamp(0.0, 1.0)));
+        (motors, attitude.map(|a| a * scale))
     }
 }
 
@@ -137,6 +146,14 @@ mod tests {
             (sat[3] - 1.0).abs() < 1e-6 && sat[1].abs() < 1e-6,
             "{sat:?}"
         );
+        // What is realised: the request within the range, halved when the span is 2.
+        assert_eq!(
+            mx.mix_with_applied(0.5, [0.2, 0.1, -0.3]).1,
+            [0.2, 0.1, -0.3]
+        );
+        let (motors, applied) = mx.mix_with_applied(0.5, [1.0, 1.0, 0.0]);
+        assert_eq!(motors, sat);
+        assert_eq!(applied, [0.5, 0.5, 0.0]);
     }
 
     #[test]

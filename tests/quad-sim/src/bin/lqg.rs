@@ -6,7 +6,9 @@ use flight_core::model::{AxisModel, EstimatorMatrices, LqrMatrices};
 use flight_core::sysid::autotune::{AutotuneSettings, analytic_pid, lqg_costs};
 use quad_sim::axis::AxisPlantConfig;
 use quad_sim::cli::Args;
-use quad_sim::closed_loop::{Mode, autotuned_pid, lqg_axis, run_step};
+use quad_sim::closed_loop::{
+    AxisController, Mode, StepResponse, autotuned_pid, ensemble, lqg_axis, run_step,
+};
 use serde_json::json;
 use std::process::ExitCode;
 
@@ -110,34 +112,63 @@ fn step(a: &Args) -> Res<serde_json::Value> {
         gyro_noise_dps: a.number_or("gyro-noise", 3.0)?,
         input_disturbance: a.number_or("disturbance", 0.0)?,
         seed,
+        antithetic: false,
     };
     let (c, source) = costs(a, &m)?;
-    let mut lqg = lqg_axis(&m, ts, &c, &noise(a)?, latency)?;
-    let lqg_run = run_step(&cfg, &mut lqg, mode, size, seconds);
+    let lqg = lqg_axis(&m, ts, &c, &noise(a)?, latency)?;
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+    let pairs = a.number_or("pairs", 0.0)? as u64;
+    let band = a.number_or("band", 2.0)?;
+    let (lqg_run, lqg_report) = experiment(&cfg, lqg, mode, size, seconds, pairs, band);
     let mut out = json!({
         "mode": mode, "step": size, "plant": {"ln_beta1": m.ln_beta1, "tau_s": m.tau_s, "ts_s": ts, "latency_samples": latency, "gyro_noise_dps": cfg.gyro_noise_dps},
-        "costs": cost_json(&c, &m), "costs_source": source,
-        "lqg": lqg_run.metrics(a.number_or("band", 2.0)?),
+        "costs": cost_json(&c, &m), "costs_source": source, "antithetic_pairs": pairs,
+        "lqg": lqg_report,
     });
     let mut runs = vec![("lqg", lqg_run)];
     if a.has("compare-pid") {
-        let mut pid = autotuned_pid(&m, ts)?;
-        let pid_run = run_step(&cfg, &mut pid, mode, size, seconds);
-        let metrics = serde_json::to_value(pid_run.metrics(a.number_or("band", 2.0)?))?;
+        let pid = autotuned_pid(&m, ts)?;
+        let (pid_run, pid_report) = experiment(&cfg, pid, mode, size, seconds, pairs, band);
         if let Some(o) = out.as_object_mut() {
-            o.insert("pid".into(), metrics);
+            o.insert("pid".into(), pid_report);
         }
         runs.push(("pid", pid_run));
     }
     if let Some(path) = a.text("plot") {
-        let refs: Vec<(&str, &quad_sim::closed_loop::StepResponse)> =
-            runs.iter().map(|(n, r)| (*n, r)).collect();
+        let refs: Vec<(&str, &StepResponse)> = runs.iter().map(|(n, r)| (*n, r)).collect();
         quad_sim::plot::step_png(path, &refs)?;
         if let Some(o) = out.as_object_mut() {
             o.insert("plot".into(), json!(path));
         }
     }
     Ok(out)
+}
+
+/// One noisy run of `ctrl`, or with `pairs` > 0 the expected response of that many
+/// antithetic seed pairs (`closed_loop::ensemble`); returns the response and its metrics
+/// (plus the noise wander around the expected response).
+fn experiment<C: AxisController + Copy>(
+    cfg: &AxisPlantConfig,
+    ctrl: C,
+    mode: Mode,
+    step: f32,
+    seconds: f64,
+    pairs: u64,
+    band: f64,
+) -> (StepResponse, serde_json::Value) {
+    if pairs == 0 {
+        let mut c = ctrl;
+        let run = run_step(cfg, &mut c, mode, step, seconds);
+        let report = json!(run.metrics(band));
+        (run, report)
+    } else {
+        let e = ensemble(cfg, || ctrl, mode, step, seconds, pairs);
+        let mut report = json!(e.mean.metrics(band));
+        if let Some(o) = report.as_object_mut() {
+            o.insert("wander_rms".into(), json!(e.wander_rms));
+        }
+        (e.mean, report)
+    }
 }
 
 fn main() -> ExitCode {
