@@ -32,8 +32,14 @@ pub struct LoopConfig {
     pub modes: [FlightMode; 3],
     /// Attitude and horizon modes use the LQG (else the attitude PID).
     pub attitude_uses_lqg: bool,
-    /// Attitude filter gains.
+    /// Attitude filter gains (on the ground).
     pub attitude_filter: complementary::Config,
+    /// While armed the accelerometer corrects the attitude on one sample in this many (1 =
+    /// every sample). In flight a multirotor's accelerometer reads thrust and drag, not
+    /// gravity: in a steady bank it points "level", so the ground gains would drag the
+    /// estimate (and the frame) off by degrees per second. Skipping samples divides the
+    /// filter's kp and ki by this factor without touching its ground behaviour.
+    pub armed_accel_divider: u16,
 }
 
 /// One IMU sample, body FRD axes.
@@ -91,6 +97,10 @@ pub struct FlightLoop {
     mixer: Mixer<4>,
     /// Low-passed throttle while flying normally: the failsafe descent starts from it.
     hover_throttle: f32,
+    /// Samples since the accelerometer last corrected the estimate while armed.
+    accel_phase: u16,
+    /// Integral of the failsafe descent-rate error (throttle units).
+    descent_integral: f32,
 }
 
 impl FlightLoop {
@@ -106,6 +116,8 @@ impl FlightLoop {
             controllers,
             mixer,
             hover_throttle: 0.5,
+            accel_phase: 0,
+            descent_integral: 0.0,
         }
     }
 
@@ -136,9 +148,23 @@ impl FlightLoop {
         let gyro_ok = gyro_dps
             .iter()
             .all(|g| g.is_finite() && g.abs() < GYRO_LIMIT_DPS);
+        // A zero vector is below the filter's accelerometer threshold: gyro (and mag) only.
+        let accel = if self.supervisor.motors_enabled() {
+            self.accel_phase = self.accel_phase.wrapping_add(1);
+            if self.accel_phase >= self.config.armed_accel_divider.max(1) {
+                self.accel_phase = 0;
+                imu.accel_mps2
+            } else if imu.accel_mps2.iter().all(|a| a.is_finite()) {
+                [0.0; 3]
+            } else {
+                imu.accel_mps2
+            }
+        } else {
+            imu.accel_mps2
+        };
         let filter_ok = self
             .attitude
-            .update(imu.gyro_radps, imu.accel_mps2, imu.mag, self.config.ts_s)
+            .update(imu.gyro_radps, accel, imu.mag, self.config.ts_s)
             .is_ok();
         let previous_mode = self.mode;
         if link.up {
@@ -176,9 +202,21 @@ impl FlightLoop {
                         },
                         AxisSetpoint::Rate { rate_dps: 0.0 },
                     ];
+                    if decision == Decision::FailsafeEntered {
+                        self.descent_integral = 0.0;
+                    }
                     let throttle = match climb_rate_mps {
-                        // 0.1 throttle per m/s of climb-rate error around the hover value.
-                        Some(climb) => self.hover_throttle + 0.1 * (-descent_mps - climb),
+                        // PI on the climb rate around the hover value: 0.1 throttle per m/s
+                        // and 0.2 per metre of accumulated error. With ≈ 60 m/s² per unit
+                        // throttle (a 2:1 thrust-to-weight frame) the loop has ωn ≈ 3.5 rad/s,
+                        // ζ ≈ 0.9; the integral absorbs a wrong hover estimate (±0.2).
+                        Some(climb) => {
+                            let error = -descent_mps - climb;
+                            self.descent_integral = (self.descent_integral
+                                + 0.2 * error * self.config.ts_s)
+                                .clamp(-0.2, 0.2);
+                            self.hover_throttle + 0.1 * error + self.descent_integral
+                        }
                         None => self.hover_throttle * 0.9,
                     };
                     (throttle.clamp(0.0, 1.0), c.lqg(gyro_dps, sp))
@@ -228,6 +266,15 @@ impl FlightLoop {
                         }
                     };
                     let throttle = sticks.throttle.clamp(0.0, 1.0);
+                    // Throttle at the bottom means sitting on the ground (no air mode): the
+                    // controllers neither act nor wind up, or a held arming gesture (yaw
+                    // full right) would spin the frame up to full power.
+                    let out = if sticks.throttle_low() {
+                        c.reset(gyro_dps);
+                        [0.0; 3]
+                    } else {
+                        out
+                    };
                     // 2 s low-pass of the flying throttle: what hovering takes.
                     if throttle > 0.1 {
                         let k = self.config.ts_s / (2.0 + self.config.ts_s);

@@ -21,6 +21,7 @@ fn config() -> LoopConfig {
         ],
         attitude_uses_lqg: true,
         attitude_filter: complementary::Config::default(),
+        armed_accel_divider: 1,
     }
 }
 
@@ -29,8 +30,8 @@ fn controllers() -> Controllers {
     Controllers::design(&ControlParams {
         ts_s: TS,
         models: [model, model, AxisModel::new(8.0, 0.03).unwrap()],
-        rate_costs: LqrCosts::default(),
-        attitude_costs: LqrCosts::default(),
+        rate_costs: [LqrCosts::default(); 3],
+        attitude_costs: [LqrCosts::default(); 3],
         noise: KfNoise::default(),
         pid_rate: [PidGains::new(0.003, 0.005, 0.00004, 0.002); 3],
         attitude_kp: 2.5,
@@ -183,3 +184,14 @@ fn failsafe_levels_a_rolled_quad_and_descends() {
     assert_eq!(out.motors, [Command::Stopped; 4]);
 }
 
+#[test]
+fn throttle_low_while_armed_holds_idle_whatever_the_sticks() {
+    let mut l = flight_loop();
+    let t = arm(&mut l);
+    // Still holding the arming gesture (yaw full right), and a rolled, rotating frame.
+    let mut imu = resting(10.0);
+    imu.gyro_radps = [0.5, -0.3, 0.2];
+    let out = run(&mut l, t, 50, &imu, &link(0.0, 1.0));
+    assert!(out.armed);
+    assert_eq!(out.motors, [Command::Throttle(0.05); 4]);
+}

@@ -1,0 +1,296 @@
+//! The issue-9 acceptance flights: take off and hold attitude, stick steps in rate (PID, LQG)
+//! and attitude mode, a link cut (failsafe descent, then disarm) and a low battery (alert).
+//! Every run: link sync, stick-gesture arming (throttle low, yaw right, 1 s), then flight.
+
+#![allow(
+    clippy::unwrap_used,
+    clippy::indexing_slicing,
+    clippy::cast_precision_loss
+)]
+
+use flight_core::battery::BatteryLevel;
+use flight_core::outputs::Command;
+use flight_core::settings::{Settings, Value};
+use flight_core::supervisor::{Decision, FlightMode};
+use flight_sitl::metrics::{step, window, worst};
+use flight_sitl::scenario::default_airframe;
+use flight_sitl::{PilotInput, Scenario, Sitl, run};
+
+/// Arming gesture from 0.5 s to 2.0 s.
+const ARMED_BY_S: f64 = 2.0;
+/// Take-off throttle from 2.5 s, hover-ish throttle from `CLIMB_END_S`.
+const TAKEOFF_S: f64 = 2.5;
+const CLIMB_END_S: f64 = 3.5;
+const CLIMB_THROTTLE: f32 = 0.17;
+/// Hover: 0.5 kg · g / (4 · 8 N) = 0.153 thrust; with idle 0.05, (0.153 − 0.05)/0.95 = 0.109.
+const CRUISE_THROTTLE: f32 = 0.11;
+
+/// The common start: gesture, take-off, cruise; `then` decides after `CLIMB_END_S`.
+fn pilot(
+    mode_switch: f32,
+    then: impl Fn(f64) -> PilotInput + 'static,
+) -> Box<dyn FnMut(f64) -> PilotInput> {
+    Box::new(move |t| {
+        let base = PilotInput {
+            mode_switch,
+            ..PilotInput::default()
+        };
+        if t < 0.5 {
+            base
+        } else if t < ARMED_BY_S {
+            PilotInput { yaw: 1.0, ..base }
+        } else if t < TAKEOFF_S {
+            base
+        } else if t < CLIMB_END_S {
+            PilotInput {
+                throttle: CLIMB_THROTTLE,
+                ..base
+            }
+        } else {
+            then(t)
+        }
+    })
+}
+
+fn cruise(mode_switch: f32) -> PilotInput {
+    PilotInput {
+        mode_switch,
+        throttle: CRUISE_THROTTLE,
+        ..PilotInput::default()
+    }
+}
+
+fn fly(settings: Settings, seconds: f64, pilot: Box<dyn FnMut(f64) -> PilotInput>) -> Sitl {
+    let (quad, _) = default_airframe();
+    run(Scenario {
+        settings,
+        quad,
+        seed: 7,
+        duration_s: seconds,
+        link_failsafe_ms: 500,
+        pilot,
+    })
+}
+
+fn airframe_settings() -> Settings {
+    default_airframe().1
+}
+
+#[test]
+fn takes_off_and_holds_attitude() {
+    let sitl = fly(airframe_settings(), 8.0, pilot(-1.0, |_| cruise(-1.0)));
+    let s = &sitl.samples;
+    let armed_at = s
+        .iter()
+        .find(|x| x.out.decision == Decision::Armed)
+        .unwrap();
+    println!("armed at {:.3} s", armed_at.t_s);
+    assert!(
+        (1.5..2.0).contains(&armed_at.t_s),
+        "gesture held 1 s after sync"
+    );
+    assert_eq!(armed_at.out.mode, FlightMode::Attitude);
+    // On the ground before take-off, armed: idle, not moving.
+    let ground = window(s, 2.1, 2.5);
+    assert!(ground.iter().all(|x| x.altitude_m < 0.01));
+    let flight = window(s, 3.0, 8.0);
+    let roll = worst(&flight, |x| x.truth.euler_deg[0]);
+    let pitch = worst(&flight, |x| x.truth.euler_deg[1]);
+    let est = worst(&flight, |x| {
+        f64::from(x.out.attitude_deg[0]) - x.truth.euler_deg[0]
+    });
+    let alt = s.last().unwrap().altitude_m;
+    println!(
+        "take-off: worst roll {roll:.2}°, pitch {pitch:.2}°, estimate error {est:.2}°, altitude {alt:.2} m"
+    );
+    assert!(roll < 2.0 && pitch < 2.0, "{roll} {pitch}");
+    assert!(est < 1.0, "{est}");
+    assert!(alt > 2.0, "climbed: {alt}");
+    assert!(s.iter().all(|x| x.link_up || x.t_s < 0.5), "link stayed up");
+}
+
+/// A roll stick step of 0.2 in a rate mode: 0.7·0.2 + 0.3·0.008 = 0.1424 → 102.5 deg/s.
+fn rate_step(mode_switch: f32) -> (flight_sitl::metrics::Step, f64) {
+    let sitl = fly(
+        airframe_settings(),
+        5.6,
+        pilot(mode_switch, move |t| PilotInput {
+            roll: if (5.0..5.5).contains(&t) { 0.2 } else { 0.0 },
+            ..cruise(mode_switch)
+        }),
+    );
+    let w = window(&sitl.samples, 5.0, 5.5);
+    let pitch = worst(&w, |x| x.truth.rate_dps[1]);
+    (step(&w, |x| x.truth.rate_dps[0], 0.0, 102.5), pitch)
+}
+
+#[test]
+fn follows_roll_rate_steps_with_pid() {
+    let (m, cross) = rate_step(0.0);
+    println!("rate PID 102.5°/s step: {m:?}, pitch-rate cross-talk {cross:.1}°/s");
+    assert!(m.rise_s < 0.06, "{m:?}");
+    assert!(m.overshoot_pct < 25.0, "{m:?}");
+    assert!((m.final_value - 102.5).abs() < 10.0, "{m:?}");
+}
+
+#[test]
+fn follows_roll_rate_steps_with_lqg() {
+    let (m, cross) = rate_step(1.0);
+    println!("rate LQG 102.5°/s step: {m:?}, pitch-rate cross-talk {cross:.1}°/s");
+    assert!(m.rise_s < 0.06, "{m:?}");
+    assert!(m.overshoot_pct < 10.0, "{m:?}");
+    assert!((m.final_value - 102.5).abs() < 5.0, "{m:?}");
+}
+
+#[test]
+fn reaches_commanded_angles_in_attitude_mode() {
+    // Roll stick 1/3 → 15°, for 1 s, then back.
+    let sitl = fly(
+        airframe_settings(),
+        6.5,
+        pilot(-1.0, |t| PilotInput {
+            roll: if (5.0..6.0).contains(&t) {
+                1.0 / 3.0
+            } else {
+                0.0
+            },
+            ..cruise(-1.0)
+        }),
+    );
+    let w = window(&sitl.samples, 5.0, 6.0);
+    let m = step(&w, |x| x.truth.euler_deg[0], 0.0, 15.0);
+    let within = w
+        .iter()
+        .find(|x| (x.truth.euler_deg[0] - 15.0).abs() < 1.0)
+        .map(|x| x.t_s - 5.0)
+        .unwrap();
+    let back = window(&sitl.samples, 6.4, 6.5);
+    let level = worst(&back, |x| x.truth.euler_deg[0]);
+    println!(
+        "attitude 15° step: {m:?}, within 1° after {within:.3} s, back to {level:.2}° 0.4 s after release"
+    );
+    assert!(within < 0.4, "{within}");
+    assert!(m.overshoot_pct < 10.0, "{m:?}");
+    assert!((m.final_value - 15.0).abs() < 1.0, "{m:?}");
+    assert!(level < 2.0, "{level}");
+}
+
+#[test]
+fn link_cut_levels_descends_and_disarms() {
+    let mut settings = airframe_settings();
+    settings
+        .set("failsafe.descent_mps", Value::F32(1.0))
+        .unwrap();
+    // Climbing through ≈ 5 m at 3.5 m/s, rolled 10° right when the link is cut at 4.5 s; the
+    // default failsafe disarm time (15 s).
+    let sitl = fly(
+        settings,
+        22.0,
+        pilot(-1.0, |t| PilotInput {
+            roll: if t >= 4.0 { 10.0 / 45.0 } else { 0.0 },
+            link_cut: t >= 4.5,
+            ..cruise(-1.0)
+        }),
+    );
+    let s = &sitl.samples;
+    let entered = s
+        .iter()
+        .find(|x| x.out.decision == Decision::FailsafeEntered)
+        .unwrap();
+    let alt0 = entered.altitude_m;
+    println!(
+        "failsafe at {:.3} s, altitude {alt0:.2} m, roll {:.1}°",
+        entered.t_s, entered.truth.euler_deg[0]
+    );
+    // The follower declares failsafe 0.5 s after the last packet.
+    assert!((4.95..5.1).contains(&entered.t_s), "{}", entered.t_s);
+    assert!(alt0 > 3.0, "{alt0}");
+    let t0 = entered.t_s;
+    let levelled = window(s, t0 + 1.0, t0 + 3.0);
+    let tilt = worst(&levelled, |x| {
+        x.truth.euler_deg[0].abs().max(x.truth.euler_deg[1].abs())
+    });
+    // It first stops the climb (peak ≈ 10.5 m at t0 + 1.6 s), then descends.
+    let descent = window(s, t0 + 3.0, t0 + 10.0);
+    let rate = descent.iter().map(|x| x.climb_mps).sum::<f64>() / descent.len() as f64;
+    let landed = s
+        .iter()
+        .find(|x| x.t_s > t0 && x.altitude_m == 0.0)
+        .unwrap();
+    let disarm = s
+        .iter()
+        .find(|x| x.out.decision == Decision::DisarmedFailsafe)
+        .unwrap();
+    println!(
+        "levelled to {tilt:.2}° within 1 s, descent {rate:.2} m/s, landed at {:.2} s, disarmed at {:.2} s",
+        landed.t_s, disarm.t_s
+    );
+    assert!(tilt < 2.0, "{tilt}");
+    let spread = worst(&descent, |x| x.climb_mps - rate);
+    println!("descent rate spread ±{spread:.2} m/s");
+    assert!((-1.05..-0.95).contains(&rate), "{rate}");
+    assert!(spread < 0.3, "{spread}");
+    assert!(landed.t_s < disarm.t_s, "landed before the disarm");
+    assert!((disarm.t_s - t0 - 15.0).abs() < 0.01, "{}", disarm.t_s);
+    let after = window(s, disarm.t_s, 22.0);
+    assert!(
+        after
+            .iter()
+            .all(|x| !x.out.armed && x.out.motors == [Command::Stopped; 4])
+    );
+    assert!(after.iter().all(|x| x.altitude_m == 0.0));
+}
+
+#[test]
+fn low_battery_sounds_the_alarm() {
+    let mut settings = airframe_settings();
+    settings.set("battery.cells", Value::U32(1)).unwrap();
+    // 4.0 V falling 50 mV/s from 5 s: crosses the 3.5 V warning at 15 s and the 3.3 V
+    // critical level at 19 s. (Falling much faster, the critical level would replace the
+    // warning before its hold time ends: the monitor then goes straight to critical.)
+    let sitl = fly(
+        settings,
+        23.0,
+        pilot(-1.0, |t| PilotInput {
+            battery_mv: (4_000.0 - 50.0 * (t - 5.0).max(0.0)) as f32,
+            ..cruise(-1.0)
+        }),
+    );
+    let s = &sitl.samples;
+    let warn = s
+        .iter()
+        .find(|x| x.battery == BatteryLevel::Warning)
+        .unwrap();
+    let crit = s
+        .iter()
+        .find(|x| x.battery == BatteryLevel::Critical)
+        .unwrap();
+    // Battery warning tune: 2.5 kHz beeps; critical: 4 kHz.
+    let beep = s.iter().find(|x| x.tone_hz == 2500).unwrap();
+    let siren = s.iter().find(|x| x.tone_hz == 4000).unwrap();
+    println!(
+        "warning at {:.2} s (beep {:.2} s), critical at {:.2} s (siren {:.2} s)",
+        warn.t_s, beep.t_s, crit.t_s, siren.t_s
+    );
+    // 0.5 s filter lag (τ 0.5 s on a 50 mV/s ramp) + 2 s hold after the crossing.
+    assert!((17.45..17.6).contains(&warn.t_s), "{}", warn.t_s);
+    assert!(
+        beep.t_s >= warn.t_s && beep.t_s - warn.t_s < 0.5,
+        "{}",
+        beep.t_s
+    );
+    assert!((21.45..21.6).contains(&crit.t_s), "{}", crit.t_s);
+    assert!(siren.t_s >= crit.t_s && siren.t_s - crit.t_s < 0.2);
+    // No battery sound before the warning (the armed tune is 1–2 kHz).
+    assert!(
+        s.iter()
+            .filter(|x| x.t_s < warn.t_s)
+            .all(|x| x.tone_hz != 2500 && x.tone_hz != 4000)
+    );
+    // The arming tune played when armed.
+    let armed = s
+        .iter()
+        .find(|x| x.out.decision == Decision::Armed)
+        .unwrap();
+    assert_eq!(armed.tone_hz, 1000);
+}
