@@ -3,6 +3,7 @@
 
 use flight_core::settings::Settings;
 use quad_sim::quad::QuadParams;
+use telemetry::messages::SettingChange;
 
 /// The pilot's transmitter and the world at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,6 +57,8 @@ pub struct Scenario {
     pub link_failsafe_ms: u64,
     /// The pilot.
     pub pilot: Pilot,
+    /// Setting changes the module sends up (in order, as soon as the stream has room).
+    pub setting_changes: Vec<SettingChange>,
 }
 
 /// The airframe the SITL flies by default: quad-sim's 250-class quad X with roll/pitch

@@ -69,6 +69,7 @@ fn fly(settings: Settings, seconds: f64, pilot: Box<dyn FnMut(f64) -> PilotInput
         duration_s: seconds,
         link_failsafe_ms: 500,
         pilot,
+        setting_changes: Vec::new(),
     })
 }
 
@@ -293,4 +294,89 @@ fn low_battery_sounds_the_alarm() {
         .find(|x| x.out.decision == Decision::Armed)
         .unwrap();
     assert_eq!(armed.tone_hz, 1000);
+}
+
+#[test]
+fn telemetry_reaches_the_module_and_settings_come_back() {
+    use flight_core::report::f32_value;
+    use flight_core::settings::PARAMS;
+    use telemetry::messages::{FlightMode as WireMode, Message, SettingChange};
+    let (quad, settings) = default_airframe();
+    let id = PARAMS
+        .iter()
+        .position(|p| p.name == "failsafe.descent_mps")
+        .unwrap() as u16;
+    let change = SettingChange {
+        id,
+        value: f32_value(0.9),
+    };
+    let sitl = run(Scenario {
+        settings,
+        quad,
+        seed: 3,
+        duration_s: 6.0,
+        link_failsafe_ms: 500,
+        pilot: pilot(-1.0, |_| cruise(-1.0)),
+        setting_changes: vec![change],
+    });
+    let rx = &sitl.module_rx;
+    let per_s = rx.len() as f64 / 5.5;
+    println!("module received {} messages ({per_s:.0}/s)", rx.len());
+    assert!(per_s > 30.0, "{per_s}");
+    // The change was applied on the flight side and echoed.
+    assert_eq!(sitl.settings.f32("failsafe.descent_mps"), 0.9);
+    assert!(rx.iter().any(|(_, m)| *m == Message::SettingChange(change)));
+    // Armed state after the gesture (armed at 1.507 s; allow the downlink's latency).
+    let armed_at = rx
+        .iter()
+        .find(|(_, m)| matches!(m, Message::ArmState(a) if a.armed))
+        .map(|(t, _)| *t)
+        .unwrap();
+    let armed = sitl
+        .samples
+        .iter()
+        .find(|x| x.out.decision == Decision::Armed)
+        .unwrap()
+        .t_s;
+    println!("armed at {armed:.3} s, the module saw it at {armed_at:.3} s");
+    assert!(armed_at > armed && armed_at - armed < 0.05, "{armed_at}");
+    assert!(
+        rx.iter()
+            .any(|(_, m)| *m == Message::FlightMode(WireMode::Attitude))
+    );
+    // Attitude in hover (truth within 0.35°, estimate within 0.3° of it): within 1°.
+    let hover: Vec<_> = rx
+        .iter()
+        .filter_map(|(t, m)| match m {
+            Message::Attitude(a) if *t > 3.0 => Some(*a),
+            _ => None,
+        })
+        .collect();
+    assert!(hover.len() > 40, "{}", hover.len());
+    assert!(
+        hover
+            .iter()
+            .all(|a| a.roll_cdeg.abs() < 100 && a.pitch_cdeg.abs() < 100),
+        "{hover:?}"
+    );
+    let link = rx
+        .iter()
+        .rev()
+        .find_map(|(_, m)| match m {
+            Message::LinkStats(l) => Some(*l),
+            _ => None,
+        })
+        .unwrap();
+    println!("flight-side link stats: {link:?}");
+    assert!(link.uplink_lq >= 95, "{link:?}");
+    assert!(link.downlink_lq >= 95, "{link:?}");
+    let battery = rx
+        .iter()
+        .rev()
+        .find_map(|(_, m)| match m {
+            Message::Battery(b) => Some(*b),
+            _ => None,
+        })
+        .unwrap();
+    assert!((4_130..=4_170).contains(&battery.voltage_mv), "{battery:?}");
 }
