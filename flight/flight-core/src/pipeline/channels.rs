@@ -78,14 +78,14 @@ impl ChannelMap {
 pub fn channel_for(position: f32) -> u16 {
     let half = f32::from(CHANNEL_HIGH - CHANNEL_LOW) / 2.0;
     let v = f32::from(CHANNEL_MID) + position.clamp(-1.0, 1.0) * half;
-    v.round() as u16
+    (v + 0.5) as u16
 }
 
 /// The channel value for a throttle 0…1.
 pub fn throttle_channel(throttle: f32) -> u16 {
     let v =
         f32::from(CHANNEL_LOW) + throttle.clamp(0.0, 1.0) * f32::from(CHANNEL_HIGH - CHANNEL_LOW);
-    v.round() as u16
+    (v + 0.5) as u16
 }
 
 #[cfg(test)]
