@@ -6,6 +6,7 @@
 
 mod announce;
 mod channels;
+mod climb;
 mod controllers;
 mod flight_loop;
 mod setup;
@@ -15,6 +16,7 @@ pub use announce::{BATTERY_REPEAT_MS, announce, announce_battery, battery_alert,
 pub use channels::{
     CHANNEL_HIGH, CHANNEL_LOW, CHANNEL_MID, ChannelMap, channel_for, throttle_channel,
 };
+pub use climb::ClimbRate;
 pub use controllers::{ControlParams, Controllers};
 pub use flight_loop::{FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
 pub use setup::{FlightSetup, SetupError, from_settings};

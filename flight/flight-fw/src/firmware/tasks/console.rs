@@ -15,7 +15,7 @@ use flight_core::settings::{Command, Settings, parse_line, write_list, write_set
 use heapless::String;
 use static_cell::StaticCell;
 
-use crate::firmware::signals::{ARMED, BATTERY, SAVE_REQUEST, SETTINGS};
+use crate::firmware::signals::{ARMED, BATTERY, SAVE_REQUEST, SETTINGS, SETTINGS_CHANGED};
 
 const HELP: &str =
     "help | list [prefix] | get NAME | set NAME VALUE | save | defaults | status\r\n";
@@ -115,7 +115,10 @@ async fn answer(line: &str, out: &mut String<2048>) {
             out.write_str("refused: disarm first\r\n")
         }
         Ok(Command::Set { name, value }) => match settings.set_text(name, value) {
-            Ok(()) => write_setting(out, settings, name),
+            Ok(()) => {
+                SETTINGS_CHANGED.signal(());
+                write_setting(out, settings, name)
+            }
             Err(e) => writeln!(out, "{e}"),
         },
         Ok(Command::Save) => {
@@ -124,6 +127,7 @@ async fn answer(line: &str, out: &mut String<2048>) {
         }
         Ok(Command::Defaults) => {
             *settings = Settings::default();
+            SETTINGS_CHANGED.signal(());
             out.write_str("factory values (not saved)\r\n")
         }
         Ok(Command::Status) => {
