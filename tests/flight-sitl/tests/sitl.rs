@@ -380,3 +380,50 @@ fn telemetry_reaches_the_module_and_settings_come_back() {
         .unwrap();
     assert!((4_130..=4_170).contains(&battery.voltage_mv), "{battery:?}");
 }
+
+#[test]
+fn control_returns_with_the_link_only_once_the_sticks_are_centred() {
+    // Cut 4.5–6.0 s while the pilot holds 10° right roll; the stick stays there until 7 s,
+    // then centres.
+    let sitl = fly(
+        airframe_settings(),
+        8.0,
+        pilot(-1.0, |t| PilotInput {
+            roll: if (4.0..7.0).contains(&t) {
+                10.0 / 45.0
+            } else {
+                0.0
+            },
+            link_cut: (4.5..6.0).contains(&t),
+            ..cruise(-1.0)
+        }),
+    );
+    let s = &sitl.samples;
+    let entered = s
+        .iter()
+        .find(|x| x.out.decision == Decision::FailsafeEntered)
+        .unwrap();
+    let link_back = s.iter().find(|x| x.t_s > 6.0 && x.link_up).unwrap();
+    let recovered = s
+        .iter()
+        .find(|x| x.out.decision == Decision::ControlRecovered)
+        .unwrap();
+    println!(
+        "failsafe {:.3} s, link back {:.3} s, control recovered {:.3} s",
+        entered.t_s, link_back.t_s, recovered.t_s
+    );
+    assert!((5.0..5.1).contains(&entered.t_s), "{}", entered.t_s);
+    assert!((6.0..6.1).contains(&link_back.t_s), "{}", link_back.t_s);
+    // Link back with the stick deflected: still failsafe (levelled), until it centres at 7 s.
+    let waiting = window(s, link_back.t_s, 7.0);
+    assert!(waiting.iter().all(|x| x.out.failsafe));
+    assert!(worst(&waiting, |x| x.truth.euler_deg[0]) < 2.0);
+    assert!((7.0..7.05).contains(&recovered.t_s), "{}", recovered.t_s);
+    // The recovery tune (1.5 kHz first tone) plays.
+    assert_eq!(recovered.tone_hz, 1500);
+    assert!(
+        window(s, recovered.t_s, 8.0)
+            .iter()
+            .all(|x| x.out.armed && !x.out.failsafe)
+    );
+}
