@@ -73,6 +73,11 @@ bind_interrupts!(pub struct Irqs {
     I2C1_ER => i2c::ErrorInterruptHandler<peripherals::I2C1>;
 });
 
+/// MPU9250 clock for configuration registers (≤ 1 MHz): APB2 84 MHz / 128.
+pub const IMU_SPI_SLOW_HZ: u32 = 656_250;
+/// MPU9250 clock for sensor reads (≤ 20 MHz): APB2 84 MHz / 8, as Tau Labs ran it.
+pub const IMU_SPI_FAST_HZ: u32 = 10_500_000;
+
 /// The MS5611's I²C address (CSB to GND).
 pub const BARO_ADDRESS: u8 = 0x77;
 
@@ -208,12 +213,10 @@ impl Board {
         let spi = Spi::new(
             p.SPI3, p.PC10, p.PC12, p.PC11, p.DMA1_CH7, p.DMA1_CH2, Irqs, spi_config,
         );
-        // MPU9250: SPI mode 3 at APB2 84 MHz / 128 = 656 kHz, inside the datasheet's 1 MHz
-        // limit for configuration registers (20 MHz applies to sensor reads only). A 23-byte
-        // burst then takes 0.28 ms: fine at 1 kHz; switching to 10.5 MHz after the set-up is
-        // the next step for faster loops.
+        // MPU9250: SPI mode 3, starting slow for the configuration (imu_bus.rs switches to
+        // the fast clock for sensor reads).
         let mut imu_config = spi::Config::default();
-        imu_config.frequency = Hertz(656_250);
+        imu_config.frequency = Hertz(IMU_SPI_SLOW_HZ);
         imu_config.mode = spi::MODE_3;
         let imu = Imu {
             spi: Spi::new(

@@ -5,6 +5,7 @@
 //! data flow.
 
 mod board;
+mod imu_bus;
 mod link_radio;
 mod outputs;
 mod signals;

@@ -19,6 +19,7 @@ use flight_core::supervisor::Decision;
 
 use super::supervisor::{Watched, check_in};
 use crate::firmware::board::{Imu, imu_to_body};
+use crate::firmware::imu_bus::{IMU_SPI_FAST, ImuBus};
 use crate::firmware::signals::{ALERTS, ARMED, CLIMB, FLIGHT_STATE, LINK_INPUT, MOTORS, NEW_SETUP};
 
 /// A data-ready edge later than this (several periods) means the sensor stalled.
@@ -41,8 +42,14 @@ pub async fn imu_task(imu: Imu, setup: FlightSetup, controllers: Option<Controll
     let Ok(device) = ExclusiveDevice::new_no_delay(spi, cs);
     let mut delay = Delay;
     check_in(Watched::Imu);
-    let mut sensor = match Mpu9250::new(device, sensor_config(&setup), &mut delay).await {
-        Ok(s) => s,
+    IMU_SPI_FAST.store(false, Ordering::Relaxed);
+    let bus = ImuBus::new(device);
+    let mut sensor = match Mpu9250::new(bus, sensor_config(&setup), &mut delay).await {
+        Ok(s) => {
+            // Configured: the sample reads may run at the fast clock.
+            IMU_SPI_FAST.store(true, Ordering::Relaxed);
+            s
+        }
         Err(e) => {
             // Without the IMU nothing may arm. The motors task holds every output stopped;
             // keep checking in so the console stays up to diagnose, and say why each second.
