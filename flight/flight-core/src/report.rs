@@ -17,6 +17,7 @@ use crate::battery::BatteryStatus;
 use crate::pipeline::LoopOutput;
 use crate::settings::{PARAMS, Param, ParamError, Settings, Value};
 use crate::supervisor::{ArmBlocker, FlightMode};
+use crate::sysid::ekf::Identification;
 
 /// What the flight side's link end sees.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -186,6 +187,21 @@ pub fn sysid_message(axis: Axis, beta1: f32, beta2: f32, tau_s: f32, noise: f32)
         tau_s,
         noise,
     }
+}
+
+/// An identification as three messages (roll, pitch, yaw): β1 = e^(ln β), β2 = 0 (the EKF
+/// models none), the shared τ, and the residual variance (RMS gyro innovation²).
+pub fn sysid_messages(id: &Identification) -> [SysIdResult; 3] {
+    let [lr, lp, ly] = id.ln_beta;
+    let [nr, np, ny] = id.gyro_noise_dps;
+    [
+        (Axis::Roll, lr, nr),
+        (Axis::Pitch, lp, np),
+        (Axis::Yaw, ly, ny),
+    ]
+    .map(|(axis, ln_beta, noise)| {
+        sysid_message(axis, libm::expf(ln_beta), 0.0, id.tau_s, noise * noise)
+    })
 }
 
 fn to_wire(value: Value) -> i32 {

@@ -14,9 +14,10 @@ use flight_core::pipeline::{
     ChannelMap, Controllers, FlightLoop, ImuSample, LoopOutput, announce, announce_battery,
     channel_for, from_settings, throttle_channel,
 };
-use flight_core::report::{LinkSeen, Reporter, Snapshot, apply_setting};
+use flight_core::report::{LinkSeen, Reporter, Snapshot, apply_setting, sysid_messages};
 use flight_core::settings::Settings;
 use flight_core::supervisor::FlightMode;
+use flight_core::sysid::ekf::Identification;
 use quad_sim::quad::{GRAVITY_MPS2, Quad, QuadState, Truth};
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat, Channels, FailsafeValues, MAX_CHANNELS};
 use telemetry::link::core::{Follower, Master};
@@ -24,7 +25,7 @@ use telemetry::link::follower::{FollowerHooks, run_follower};
 use telemetry::link::master::{MasterHooks, run_master};
 use telemetry::link::{Band, LinkClock, LinkParams, RateMode};
 use telemetry::messages::{
-    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, encode_message,
+    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, SysIdResult, encode_message,
 };
 use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
 
@@ -57,6 +58,8 @@ pub struct Sample {
     pub battery: BatteryLevel,
     /// The tone sounding (Hz, 0 = silence).
     pub tone_hz: u16,
+    /// The identification that finished on this loop (system-identification mode left).
+    pub identification: Option<Identification>,
 }
 
 /// The run's records.
@@ -88,6 +91,8 @@ struct LinkState {
     uplink: Vec<SettingChange>,
     /// The flight side's settings (changes from the module land here).
     settings: Settings,
+    /// Identification results waiting for the downlink.
+    sysid: Vec<SysIdResult>,
 }
 
 type Shared = Rc<RefCell<LinkState>>;
@@ -176,6 +181,7 @@ impl FollowerHooks for FlightSide {
         let Some(mut snap) = s.snapshot else {
             return;
         };
+        snap.sysid = s.sysid.first().copied();
         let counters = follower.counters();
         snap.link = LinkSeen {
             rssi_dbm: follower
@@ -199,6 +205,9 @@ impl FollowerHooks for FlightSide {
         let m = if let Some(c) = self.echo.first().copied() {
             self.echo.remove(0);
             Message::SettingChange(c)
+        } else if let Some(r) = snap.sysid {
+            s.sysid.remove(0);
+            Message::SysIdResult(r)
         } else if self.last_state != Some(state) {
             // A state change goes out of turn.
             self.last_state = Some(state);
@@ -399,6 +408,10 @@ pub fn run(scenario: Scenario) -> Sitl {
                     }
                 }
                 let tone_hz = player.tick(now_ms);
+                let identification = fl.take_identification();
+                if let Some(id) = &identification {
+                    shared.borrow_mut().sysid.extend(sysid_messages(id));
+                }
                 shared.borrow_mut().snapshot = Some(Snapshot {
                     out,
                     battery: last_battery,
@@ -416,6 +429,7 @@ pub fn run(scenario: Scenario) -> Sitl {
                     truth,
                     battery: level,
                     tone_hz,
+                    identification,
                 });
             }
         });

@@ -2,6 +2,7 @@
 //! estimate → supervise → control → mix → output commands.
 
 use super::controllers::Controllers;
+use super::identify::{Sysid, sysid_output};
 use super::sticks::StickShaping;
 use crate::control::lqr::AxisSetpoint;
 use crate::control::mixer::Mixer;
@@ -12,6 +13,7 @@ use crate::outputs::Command;
 use crate::supervisor::{
     Decision, FlightMode, Inputs, ModeSwitch, Settings as SupervisorSettings, Sticks, Supervisor,
 };
+use crate::sysid::ekf::Identification;
 
 const DEG_PER_RAD: f32 = 180.0 / core::f32::consts::PI;
 /// A MEMS gyro saturates at 2000 deg/s; anything beyond (or non-finite) is a sensor fault.
@@ -86,7 +88,7 @@ pub struct LoopOutput {
 }
 
 /// The loop's state.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct FlightLoop {
     config: LoopConfig,
     attitude: Complementary,
@@ -101,6 +103,10 @@ pub struct FlightLoop {
     accel_phase: u16,
     /// Integral of the failsafe descent-rate error (throttle units).
     descent_integral: f32,
+    /// The identification while the system-identification mode flies.
+    sysid: Option<Sysid>,
+    /// The last finished identification, until taken.
+    identification: Option<Identification>,
 }
 
 impl FlightLoop {
@@ -118,6 +124,8 @@ impl FlightLoop {
             hover_throttle: 0.5,
             accel_phase: 0,
             descent_integral: 0.0,
+            sysid: None,
+            identification: None,
         }
     }
 
@@ -128,6 +136,26 @@ impl FlightLoop {
         }
         self.controllers = Some(controllers);
         true
+    }
+
+    /// The identification finished when the system-identification mode was left (once).
+    pub fn take_identification(&mut self) -> Option<Identification> {
+        self.identification.take()
+    }
+
+    /// The identification in progress, if the mode is flying.
+    pub fn identification_in_progress(&self) -> Option<Identification> {
+        self.sysid.as_ref().map(|s| s.ekf.result())
+    }
+
+    /// Ends a running identification, keeping its result if it saw any samples.
+    fn finish_sysid(&mut self) {
+        if let Some(s) = self.sysid.take() {
+            let result = s.ekf.result();
+            if result.samples > 0 {
+                self.identification = Some(result);
+            }
+        }
     }
 
     /// Body → NED attitude estimate.
@@ -180,6 +208,12 @@ impl FlightLoop {
         });
         let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
         let failsafe = self.supervisor.failsafe_descent_mps();
+        if self.mode != FlightMode::SystemId
+            || failsafe.is_some()
+            || !self.supervisor.motors_enabled()
+        {
+            self.finish_sysid();
+        }
         let mut motors = [Command::Stopped; 4];
         if let (true, Some(c)) = (
             self.supervisor.motors_enabled() && gyro_ok,
@@ -228,7 +262,18 @@ impl FlightLoop {
                     let [roll_sp, pitch_sp] = self.config.shaping.angles_deg(sticks);
                     let errors = [roll_sp - roll, pitch_sp - pitch];
                     let out = match self.mode {
-                        FlightMode::RatePid | FlightMode::SystemId => c.pid_rate(gyro_dps, rates),
+                        FlightMode::RatePid => c.pid_rate(gyro_dps, rates),
+                        // On the ground (throttle low) nothing shakes: the output is zeroed
+                        // below, and the EKF only learns in the air.
+                        FlightMode::SystemId if sticks.throttle_low() => [0.0; 3],
+                        FlightMode::SystemId => sysid_output(
+                            &mut self.sysid,
+                            self.config.ts_s,
+                            gyro_dps,
+                            errors,
+                            yaw_rate,
+                            c,
+                        ),
                         FlightMode::RateLqg => c.lqg(
                             gyro_dps,
                             rates.map(|rate_dps| AxisSetpoint::Rate { rate_dps }),

@@ -9,6 +9,7 @@ mod channels;
 mod climb;
 mod controllers;
 mod flight_loop;
+mod identify;
 mod setup;
 mod sticks;
 

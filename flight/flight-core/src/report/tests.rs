@@ -136,3 +136,25 @@ fn setting_changes_are_checked_and_echoed() {
     assert_eq!((r, echo), (Err(ParamError::Unknown), None));
     assert_eq!(blocker_bit(ArmBlocker::GainsNotReady), 8);
 }
+
+#[test]
+fn identification_becomes_three_messages() {
+    let id = Identification {
+        ln_beta: [10.0, 9.5, 6.5],
+        tau_s: 0.031,
+        bias: [0.0; 3],
+        sigma_ln_beta: [0.01; 3],
+        sigma_ln_tau: 0.02,
+        gyro_noise_dps: [3.0, 4.0, 5.0],
+        samples: 30_000,
+    };
+    let [r, p, y] = sysid_messages(&id);
+    assert_eq!(r.axis, Axis::Roll);
+    assert!((r.beta1 - 22_026.47).abs() < 0.5, "{r:?}");
+    assert!((p.beta1 - 13_359.73).abs() < 0.5, "{p:?}");
+    assert!((y.beta1 - 665.14).abs() < 0.05, "{y:?}");
+    assert_eq!(
+        (y.axis, y.tau_s, y.noise, y.beta2),
+        (Axis::Yaw, 0.031, 25.0, 0.0)
+    );
+}
