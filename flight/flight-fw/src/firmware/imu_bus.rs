@@ -1,8 +1,8 @@
-//! The MPU9250's SPI device with two clock rates: the datasheet allows 1 MHz for the
-//! configuration registers but 20 MHz for reading sensor and interrupt registers (MPU-9250
-//! datasheet, SPI interface). The driver configures the chip once through the slow clock; the IMU task
-//! then flips [`IMU_SPI_FAST`] and every later transaction runs fast — the 23-byte burst drops
-//! from 0.28 ms to 18 µs.
+//! The MPU9250's SPI device with two clock rates: the datasheet (SPI interface) allows 1 MHz
+//! for the configuration registers but 20 MHz for reading sensor and interrupt registers.
+//! The driver configures the chip once through the slow clock; the IMU task then flips
+//! [`IMU_SPI_FAST`] and every later transaction runs fast — the 23-byte burst drops from
+//! 0.28 ms to 18 µs.
 
 use core::sync::atomic::{AtomicBool, Ordering};
 

@@ -4,7 +4,7 @@
 //! imu (MPU9250 EXTI) ──MOTORS────▶ motors         battery ──ALERTS──▶ alerts (DAC tones)
 //!     ▲    ▲         ──ALERTS────▶ alerts         battery ──BATTERY─▶ alerts, link
 //!     │    └─CLIMB── baro (MS5611)
-//!     └──LINK_INPUT── link (RFM22B follower) ◀──FLIGHT_STATE── imu
+//!     └──LINK_INPUT── link (RFM22B follower) ◀──FLIGHT_STATE, SYSID── imu
 //!                     link ──SETTINGS (shared)── console, storage
 //! gains ──NEW_SETUP──▶ imu     (SETTINGS_CHANGED from link/console wakes gains)
 //! ```
@@ -22,6 +22,7 @@ use flight_core::battery::BatteryStatus;
 use flight_core::outputs::Command;
 use flight_core::pipeline::{Controllers, FlightSetup, LinkInput, LoopOutput};
 use flight_core::settings::Settings;
+use flight_core::sysid::ekf::Identification;
 
 /// Motor commands for outputs 1–4, published once per control loop; the motor task applies
 /// them right away so the outputs stay synchronous with the gyro sample.
@@ -68,6 +69,9 @@ pub static CLIMB: BlockingMutex<CriticalSectionRawMutex, Cell<Option<f32>>> =
 /// The loop's latest output and arming blockers, for telemetry.
 pub static FLIGHT_STATE: BlockingMutex<CriticalSectionRawMutex, Cell<Option<(LoopOutput, u16)>>> =
     BlockingMutex::new(Cell::new(None));
+
+/// A finished identification (system-identification mode left), for the downlink.
+pub static SYSID: Signal<CriticalSectionRawMutex, Identification> = Signal::new();
 
 /// A new configuration with its solved gains, installed by the loop while disarmed.
 pub static NEW_SETUP: Signal<CriticalSectionRawMutex, (FlightSetup, Controllers)> = Signal::new();

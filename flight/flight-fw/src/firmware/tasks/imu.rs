@@ -20,7 +20,9 @@ use flight_core::supervisor::Decision;
 use super::supervisor::{Watched, check_in};
 use crate::firmware::board::{Imu, imu_to_body};
 use crate::firmware::imu_bus::{IMU_SPI_FAST, ImuBus};
-use crate::firmware::signals::{ALERTS, ARMED, CLIMB, FLIGHT_STATE, LINK_INPUT, MOTORS, NEW_SETUP};
+use crate::firmware::signals::{
+    ALERTS, ARMED, CLIMB, FLIGHT_STATE, LINK_INPUT, MOTORS, NEW_SETUP, SYSID,
+};
 
 /// A data-ready edge later than this (several periods) means the sensor stalled.
 const SAMPLE_TIMEOUT: Duration = Duration::from_millis(20);
@@ -112,5 +114,9 @@ pub async fn imu_task(imu: Imu, setup: FlightSetup, controllers: Option<Controll
             let _ = ALERTS.try_send(alert);
         }
         FLIGHT_STATE.lock(|c| c.set(Some((out, blockers))));
+        if let Some(id) = fl.take_identification() {
+            info!("identified: ln β {} τ {} s", id.ln_beta, id.tau_s);
+            SYSID.signal(id);
+        }
     }
 }

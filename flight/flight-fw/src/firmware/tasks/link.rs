@@ -2,7 +2,8 @@
 //! the channels become the loop's `LinkInput` (sticks, arm and mode switches; "up" only while
 //! the link is out of failsafe), setting changes from the module are applied (disarmed only)
 //! and echoed, and one telemetry message goes down when the stream is empty (attitude,
-//! battery, link statistics, flight mode, arm/failsafe state; state changes out of turn).
+//! battery, link statistics, flight mode, arm/failsafe state, identification results; state
+//! changes out of turn).
 //!
 //! Binding: for `BIND_WINDOW_US` after boot the follower listens for a bind offer; without
 //! one it uses the compiled-in link (`DEFAULT_BIND_ID`). The bound parameters live in RAM
@@ -16,7 +17,7 @@ use embassy_time::{Delay, Duration, Timer};
 use embedded_hal_bus::spi::ExclusiveDevice;
 use flight_core::battery::BatteryStatus;
 use flight_core::pipeline::ChannelMap;
-use flight_core::report::{LinkSeen, Reporter, Snapshot, apply_setting};
+use flight_core::report::{LinkSeen, Reporter, Snapshot, apply_setting, sysid_messages};
 use flight_core::supervisor::FlightMode;
 use radio_rfm22b::Rfm22b;
 use telemetry::channels::{ChannelFormat, FailsafeValues};
@@ -24,14 +25,14 @@ use telemetry::link::core::Follower;
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 use telemetry::link::{Band, LinkParams, RateMode};
 use telemetry::messages::{
-    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, encode_message,
+    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, SysIdResult, encode_message,
 };
 
 use super::supervisor::{Watched, check_in};
 use crate::firmware::board::Radio;
 use crate::firmware::link_radio::{EmbassyClock, LinkRadio};
 use crate::firmware::signals::{
-    ARMED, BATTERY, FLIGHT_STATE, LINK_INPUT, SETTINGS, SETTINGS_CHANGED,
+    ARMED, BATTERY, FLIGHT_STATE, LINK_INPUT, SETTINGS, SETTINGS_CHANGED, SYSID,
 };
 
 /// How long the follower listens for a bind offer after boot.
@@ -54,6 +55,8 @@ struct FlightHooks {
     last_state: Option<(bool, bool, FlightMode)>,
     failsafes: u16,
     was_failsafe: bool,
+    /// Identification results (roll, pitch, yaw) still to send.
+    sysid: heapless::Deque<SysIdResult, 3>,
 }
 
 impl FlightHooks {
@@ -68,6 +71,7 @@ impl FlightHooks {
             last_state: None,
             failsafes: 0,
             was_failsafe: false,
+            sysid: heapless::Deque::new(),
         }
     }
 
@@ -118,11 +122,13 @@ impl FlightHooks {
                 failsafes: self.failsafes,
             },
             arming_blockers,
-            sysid: None,
+            sysid: self.sysid.front().copied(),
         };
         let state = (out.armed, out.failsafe, out.mode);
         let message = if let Some(c) = self.echo.take() {
             Message::SettingChange(c)
+        } else if let Some(r) = self.sysid.pop_front() {
+            Message::SysIdResult(r)
         } else if self.last_state != Some(state) {
             self.last_state = Some(state);
             flight_core::report::Reporter::state(&snap)
@@ -161,6 +167,13 @@ impl FollowerHooks for FlightHooks {
             }
         }
         self.apply_pending();
+        if let Some(id) = SYSID.try_take() {
+            self.sysid.clear();
+            for r in sysid_messages(&id) {
+                // Capacity 3 after the clear: cannot fail.
+                let _ = self.sysid.push_back(r);
+            }
+        }
         if now_us.saturating_sub(self.last_report_us) >= REPORT_PERIOD_US {
             self.last_report_us = now_us;
             self.report(follower);
