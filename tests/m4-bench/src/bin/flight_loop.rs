@@ -7,7 +7,9 @@
 //! m4count regions: 1 = gain design, 3 = attitude mode (LQG angle law), 5 = rate PID,
 //! 7 = rate LQG — each one step on which the accelerometer is skipped (armed, one sample in
 //! 20 corrects the attitude) — and 9 = 20 attitude-mode steps, so one with the
-//! accelerometer correction (divide by 20 for the mean); the even regions are setup.
+//! accelerometer correction (divide by 20 for the mean), 11 = one step of the
+//! system-identification mode (shake + 13-state EKF, switch high set to `sysid`); the even
+//! regions are setup.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
@@ -26,6 +28,15 @@ fn main() -> ! {
     let controllers = Controllers::design(&setup.control).ok();
     m4count_marker();
     let mut fl = FlightLoop::new(setup.loop_config, setup.mixer, controllers);
+    // A second loop whose switch-high position is the identification mode.
+    let mut settings = Settings::default();
+    if settings.set_text("mode.switch_high", "sysid").is_err() {
+        exit()
+    }
+    let Ok(sysid_setup) = from_settings(&settings) else {
+        exit()
+    };
+    let mut id_loop = FlightLoop::new(sysid_setup.loop_config, sysid_setup.mixer, controllers);
     let imu = ImuSample {
         gyro_radps: [0.01, -0.02, 0.005],
         accel_mps2: [0.1, -0.2, -9.8],
@@ -89,7 +100,22 @@ fn main() -> ! {
     }
     m4count_marker();
     black_box(out);
-    if !out.armed {
+    // System identification: arm the second loop, hover, switch high, measure its 2nd step.
+    let mut t = 0u32;
+    for _ in 0..1200 {
+        id_loop.step(t, &imu, &link(0.0, 1.0, -1.0), None);
+        t += 1;
+    }
+    let shake = flying(1.0);
+    for _ in 0..2 {
+        id_loop.step(t, &sample, &shake, Some(0.1));
+        t += 1;
+    }
+    m4count_marker();
+    let out = id_loop.step(t, &sample, &shake, Some(0.1));
+    m4count_marker();
+    black_box(out);
+    if id_loop.identification_in_progress().is_none() {
         exit()
     }
     exit()
