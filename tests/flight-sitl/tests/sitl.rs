@@ -484,4 +484,3 @@ fn system_identification_flight_finds_the_airframe() {
     let roll = results[0].1;
     assert!((roll.beta1.ln() - lr).abs() < 1e-3 && roll.tau_s == id.tau_s);
 }
-
