@@ -484,3 +484,81 @@ fn system_identification_flight_finds_the_airframe() {
     let roll = results[0].1;
     assert!((roll.beta1.ln() - lr).abs() < 1e-3 && roll.tau_s == id.tau_s);
 }
+
+#[test]
+fn idle_on_the_ground_disarms() {
+    // Armed at 1.507 s, never takes off: the default 10 s idle time disarms it.
+    let sitl = fly(
+        airframe_settings(),
+        13.0,
+        Box::new(|t| PilotInput {
+            yaw: if (0.5..ARMED_BY_S).contains(&t) {
+                1.0
+            } else {
+                0.0
+            },
+            ..PilotInput::default()
+        }),
+    );
+    let s = &sitl.samples;
+    let armed = s
+        .iter()
+        .find(|x| x.out.decision == Decision::Armed)
+        .unwrap();
+    let disarmed = s
+        .iter()
+        .find(|x| x.out.decision == Decision::DisarmedIdle)
+        .unwrap();
+    println!(
+        "armed {:.3} s, idle-disarmed {:.3} s",
+        armed.t_s, disarmed.t_s
+    );
+    assert!((disarmed.t_s - armed.t_s - 10.0).abs() < 0.01);
+    // The disarm tune starts at 2 kHz; the motors stop.
+    assert_eq!(disarmed.tone_hz, 2000);
+    assert!(
+        window(s, disarmed.t_s, 13.0)
+            .iter()
+            .all(|x| x.out.motors == [Command::Stopped; 4])
+    );
+    assert!(s.iter().all(|x| x.altitude_m < 0.01));
+}
+
+#[test]
+fn horizon_mode_rolls_on_the_stick_and_levels_when_centred() {
+    let mut settings = airframe_settings();
+    settings.set_text("mode.switch_mid", "horizon").unwrap();
+    // Full right roll for 0.5 s: a rate command at full deflection (horizon weight 0).
+    let sitl = fly(
+        settings,
+        7.5,
+        pilot(0.0, |t| PilotInput {
+            roll: if (5.0..5.5).contains(&t) { 1.0 } else { 0.0 },
+            ..cruise(0.0)
+        }),
+    );
+    let s = &sitl.samples;
+    assert!(
+        s.iter()
+            .filter(|x| x.t_s > 3.0)
+            .all(|x| x.out.mode == FlightMode::Horizon)
+    );
+    let rolling = window(s, 5.0, 5.5);
+    let peak_rate = rolling
+        .iter()
+        .map(|x| x.truth.rate_dps[0])
+        .fold(f64::MIN, f64::max);
+    let bank = s
+        .iter()
+        .map(|x| x.truth.euler_deg[0].abs())
+        .fold(0.0, f64::max);
+    let level = worst(&window(s, 6.5, 7.5), |x| x.truth.euler_deg[0]);
+    println!(
+        "horizon: peak roll rate {peak_rate:.0}°/s, largest bank {bank:.0}°, 1–2 s after release {level:.2}°"
+    );
+    // Full deflection = 720 °/s for 0.5 s: a full flip (the Euler roll passes ±180°), then
+    // the centred stick is attitude mode again and levels the frame.
+    assert!(peak_rate > 500.0, "{peak_rate}");
+    assert!(bank > 90.0, "{bank}");
+    assert!(level < 3.0, "{level}");
+}
