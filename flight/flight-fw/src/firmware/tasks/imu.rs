@@ -77,7 +77,9 @@ pub async fn imu_task(imu: Imu, setup: FlightSetup, controllers: Option<Controll
             fl = FlightLoop::new(new_setup.loop_config, new_setup.mixer, Some(gains));
             info!("new gains installed");
         }
-        match select(int.wait_for_rising_edge(), Timer::after(SAMPLE_TIMEOUT)).await {
+        // INT is latched until any register is read: waiting for the level (not the edge)
+        // cannot miss a sample whose edge came while the previous step was still running.
+        match select(int.wait_for_high(), Timer::after(SAMPLE_TIMEOUT)).await {
             Either::First(()) => {}
             Either::Second(()) => {
                 warn!("IMU data-ready missing");
