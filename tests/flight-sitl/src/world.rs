@@ -14,26 +14,22 @@ use flight_core::pipeline::{
     ChannelMap, Controllers, FlightLoop, ImuSample, LoopOutput, announce, announce_battery,
     channel_for, from_settings, throttle_channel,
 };
-use flight_core::report::{LinkSeen, Reporter, Snapshot, apply_setting, sysid_messages};
+use flight_core::report::{LinkSeen, Snapshot, sysid_messages};
 use flight_core::settings::Settings;
-use flight_core::supervisor::FlightMode;
 use flight_core::sysid::ekf::Identification;
 use quad_sim::quad::{GRAVITY_MPS2, Quad, QuadState, Truth};
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat, Channels, FailsafeValues, MAX_CHANNELS};
 use telemetry::link::core::{Follower, Master};
-use telemetry::link::follower::{FollowerHooks, run_follower};
-use telemetry::link::master::{MasterHooks, run_master};
+use telemetry::link::follower::run_follower;
+use telemetry::link::master::run_master;
 use telemetry::link::{Band, LinkClock, LinkParams, RateMode};
-use telemetry::messages::{
-    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, SysIdResult, encode_message,
-};
+use telemetry::messages::{Message, MessageReader};
 use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
 
+use crate::link_ends::{FlightSide, LinkState, MODULE_CLOCK_OFFSET_US, ModuleSide, Shared};
 use crate::scenario::{PilotInput, Scenario};
 
 const RAD_PER_DEG: f32 = core::f32::consts::PI / 180.0;
-/// The module's clock reads virtual time plus this (the ends count from different epochs).
-const MODULE_CLOCK_OFFSET_US: u64 = 1_000_000;
 /// Battery sampling period, ms (the firmware's ADC task rate).
 const BATTERY_PERIOD_MS: u32 = 20;
 
@@ -72,151 +68,6 @@ pub struct Sitl {
     pub module_rx: Vec<(f64, Message)>,
     /// The flight side's settings at the end (after changes from the module).
     pub settings: Settings,
-}
-
-/// What the two link ends share with the flight task.
-#[derive(Default)]
-struct LinkState {
-    /// Channels the pilot's transmitter sends (master side).
-    tx: Option<Channels>,
-    /// Channels the follower outputs.
-    rx: Option<Channels>,
-    /// The follower is in failsafe.
-    failsafe: bool,
-    /// The flight side's latest state, for its telemetry reports.
-    snapshot: Option<Snapshot>,
-    /// Messages the module decoded from the downlink stream, with the time (s).
-    module_rx: Vec<(f64, Message)>,
-    /// Setting changes the module is to send up.
-    uplink: Vec<SettingChange>,
-    /// The flight side's settings (changes from the module land here).
-    settings: Settings,
-    /// Identification results waiting for the downlink.
-    sysid: Vec<SysIdResult>,
-}
-
-type Shared = Rc<RefCell<LinkState>>;
-
-/// Bytes of stream room one framed message needs.
-const MESSAGE_ROOM: usize = FRAMED_MAX_BYTES;
-
-fn send(stream: &mut impl FnMut(&[u8]) -> usize, free: usize, m: &Message) -> bool {
-    let mut buf = [0u8; FRAMED_MAX_BYTES];
-    match encode_message(m, &mut buf) {
-        Ok(n) if n <= free => stream(buf.get(..n).unwrap_or(&[])) == n,
-        _ => false,
-    }
-}
-
-struct ModuleSide {
-    shared: Shared,
-    reader: MessageReader,
-}
-
-impl MasterHooks for ModuleSide {
-    fn on_slot(&mut self, now_us: u64, master: &mut Master) {
-        let mut s = self.shared.borrow_mut();
-        if let Some(ch) = s.tx {
-            master.set_channels(&ch);
-        }
-        if let Some(change) = s.uplink.first().copied() {
-            let free = master.uplink_stream.free();
-            if send(
-                &mut |b| master.uplink_stream.write(b),
-                free,
-                &Message::SettingChange(change),
-            ) {
-                s.uplink.remove(0);
-            }
-        }
-        let mut buf = [0u8; 64];
-        loop {
-            let n = master.downlink_stream.read(&mut buf);
-            if n == 0 {
-                break;
-            }
-            for b in buf.iter().take(n) {
-                if let Some(Decoded::Message(m)) = self.reader.push(*b) {
-                    s.module_rx
-                        .push(((now_us - MODULE_CLOCK_OFFSET_US) as f64 * 1e-6, m));
-                }
-            }
-        }
-    }
-}
-
-struct FlightSide {
-    shared: Shared,
-    reporter: Reporter,
-    reader: MessageReader,
-    echo: Vec<SettingChange>,
-    last_report_us: u64,
-    last_state: Option<(bool, bool, FlightMode)>,
-}
-
-/// Telemetry report period on the flight side, µs.
-const REPORT_PERIOD_US: u64 = 20_000;
-
-impl FollowerHooks for FlightSide {
-    fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
-        let mut s = self.shared.borrow_mut();
-        s.rx = Some(*follower.output());
-        s.failsafe = follower.in_failsafe();
-        let mut buf = [0u8; 64];
-        loop {
-            let n = follower.uplink_stream.read(&mut buf);
-            if n == 0 {
-                break;
-            }
-            for b in buf.iter().take(n) {
-                if let Some(Decoded::Message(Message::SettingChange(c))) = self.reader.push(*b) {
-                    let (_, echo) = apply_setting(&mut s.settings, c);
-                    self.echo.extend(echo);
-                }
-            }
-        }
-        if now_us.saturating_sub(self.last_report_us) < REPORT_PERIOD_US {
-            return;
-        }
-        let Some(mut snap) = s.snapshot else {
-            return;
-        };
-        snap.sysid = s.sysid.first().copied();
-        let counters = follower.counters();
-        snap.link = LinkSeen {
-            rssi_dbm: follower
-                .uplink_rssi_dbm()
-                .map_or(0, |r| i8::try_from(r).unwrap_or(i8::MIN)),
-            lq_percent: follower.uplink_lq(),
-            downlink: follower.remote_report().map(|r| (r.rssi_dbm, r.lq_percent)),
-            rate_mode: follower.params().rate.code(),
-            received: counters.received,
-            missed: counters.missed,
-            failsafes: 0,
-        };
-        // Keep at most one message queued: the stream is reliable, so anything more only
-        // adds latency (stale attitude) when the downlink slows.
-        let free = follower.downlink_stream.free();
-        if free < MESSAGE_ROOM || follower.downlink_stream.pending() > 0 {
-            return;
-        }
-        self.last_report_us = now_us;
-        let state = (snap.out.armed, snap.out.failsafe, snap.out.mode);
-        let m = if let Some(c) = self.echo.first().copied() {
-            self.echo.remove(0);
-            Message::SettingChange(c)
-        } else if let Some(r) = snap.sysid {
-            s.sysid.remove(0);
-            Message::SysIdResult(r)
-        } else if self.last_state != Some(state) {
-            // A state change goes out of turn.
-            self.last_state = Some(state);
-            Reporter::state(&snap)
-        } else {
-            self.reporter.next(&snap)
-        };
-        send(&mut |b| follower.downlink_stream.write(b), free, &m);
-    }
 }
 
 fn transmitter(p: &PilotInput) -> Channels {
@@ -300,14 +151,7 @@ pub fn run(scenario: Scenario) -> Sitl {
     {
         let mut radio = MockRadio::new(medium.clone(), flight_node);
         let mut clock = MockClock::new(time.clone(), 50_000_000);
-        let mut hooks = FlightSide {
-            shared: shared.clone(),
-            reporter: Reporter::new(),
-            reader: MessageReader::new(),
-            echo: Vec::new(),
-            last_report_us: 0,
-            last_state: None,
-        };
+        let mut hooks = FlightSide::new(shared.clone());
         ex.spawn(async move {
             // The flight controller boots a little after the module.
             let start = clock.now_us() + 77_777;
