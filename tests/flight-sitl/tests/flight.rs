@@ -80,6 +80,36 @@ fn follows_roll_rate_steps_with_lqg() {
     assert!((m.final_value - 102.5).abs() < 5.0, "{m:?}");
 }
 
+/// A yaw stick step of 0.4: (0.7·0.4 + 0.3·0.064)·720/2 = 107.7 deg/s; the yaw axis has
+/// 30× less authority (ln β 6.5), so it is slower than roll.
+fn yaw_step(mode_switch: f32) -> flight_sitl::metrics::Step {
+    let sitl = fly(
+        airframe_settings(),
+        6.0,
+        pilot(mode_switch, move |t| PilotInput {
+            yaw: if (5.0..6.0).contains(&t) { 0.4 } else { 0.0 },
+            ..cruise(mode_switch)
+        }),
+    );
+    let w = window(&sitl.samples, 5.0, 6.0);
+    step(&w, |x| x.truth.rate_dps[2], 0.0, 107.712)
+}
+
+#[test]
+fn follows_yaw_rate_steps_with_pid_and_lqg() {
+    let pid = yaw_step(0.0);
+    let lqg = yaw_step(1.0);
+    println!("yaw 107.7°/s step: PID {pid:?}\n                    LQG {lqg:?}");
+    assert!(pid.rise_s < 0.25 && pid.overshoot_pct < 15.0, "{pid:?}");
+    assert!(
+        lqg.rise_s < pid.rise_s && lqg.overshoot_pct < 5.0,
+        "{lqg:?}"
+    );
+    for m in [pid, lqg] {
+        assert!((m.final_value - 107.7).abs() < 8.0, "{m:?}");
+    }
+}
+
 #[test]
 fn reaches_commanded_angles_in_attitude_mode() {
     // Roll stick 1/3 → 15°, for 1 s, then back.
