@@ -11,8 +11,8 @@ use flight_core::alerts::TonePlayer;
 use flight_core::battery::{BatteryLevel, BatteryMonitor};
 use flight_core::outputs::Command;
 use flight_core::pipeline::{
-    ChannelMap, Controllers, FlightLoop, ImuSample, LoopOutput, announce, announce_battery,
-    channel_for, from_settings, throttle_channel,
+    ChannelMap, ClimbRate, Controllers, FlightLoop, ImuSample, LoopOutput, announce,
+    announce_battery, channel_for, from_settings, throttle_channel,
 };
 use flight_core::report::{LinkSeen, Snapshot, sysid_messages};
 use flight_core::settings::Settings;
@@ -24,12 +24,18 @@ use telemetry::link::follower::run_follower;
 use telemetry::link::master::run_master;
 use telemetry::link::{Band, LinkClock, LinkParams, RateMode};
 use telemetry::messages::{Message, MessageReader};
-use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
+use telemetry::mock::{
+    ChannelModel, Executor, Medium, MockClock, MockRadio, Node, SplitMix64, VirtualTime,
+};
 
 use crate::link_ends::{FlightSide, LinkState, MODULE_CLOCK_OFFSET_US, ModuleSide, Shared};
 use crate::scenario::{PilotInput, Scenario};
 
 const RAD_PER_DEG: f32 = core::f32::consts::PI / 180.0;
+/// Baro sampling period, ms (the firmware's baro task rate).
+const BARO_PERIOD_MS: u32 = 20;
+/// Baro altitude noise, m (1σ; MS5611 at OSR 1024).
+const BARO_NOISE_M: f64 = 0.1;
 /// Battery sampling period, ms (the firmware's ADC task rate).
 const BATTERY_PERIOD_MS: u32 = 20;
 
@@ -183,6 +189,9 @@ pub fn run(scenario: Scenario) -> Sitl {
             let mut last_battery = None;
             let map = ChannelMap::default();
             let mut sensors = quad.sensors();
+            let mut climb_filter = ClimbRate::new();
+            let mut baro_climb = None;
+            let mut baro_noise = SplitMix64::new(seed ^ 0xBA40);
             let mut next_us = period_us;
             let mut k: u64 = 0;
             while k as f64 * ts_s < duration_s {
@@ -205,9 +214,13 @@ pub fn run(scenario: Scenario) -> Sitl {
                     accel_mps2: sensors.accel_mps2,
                     mag: None,
                 };
-                // The baro/INS climb rate stand-in: truth.
-                let climb = -quad.state().velocity_mps[2];
-                let out = fl.step(now_ms, &imu, &link, Some(climb as f32));
+                // The baro task's path: MS5611 altitude at 50 Hz with 0.1 m (1σ) noise through
+                // `ClimbRate`, held between readings.
+                if now_ms.is_multiple_of(BARO_PERIOD_MS) {
+                    let altitude = -quad.state().position_m[2] + baro_noise.normal(BARO_NOISE_M);
+                    baro_climb = climb_filter.update(now_ms, altitude as f32);
+                }
+                let out = fl.step(now_ms, &imu, &link, baro_climb);
                 let cmds = out.motors.map(|m| match m {
                     Command::Throttle(x) => x,
                     Command::Stopped => 0.0,

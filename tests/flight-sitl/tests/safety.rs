@@ -52,8 +52,15 @@ fn link_cut_levels_descends_and_disarms() {
     let tilt = worst(&levelled, |x| {
         x.truth.euler_deg[0].abs().max(x.truth.euler_deg[1].abs())
     });
-    // It first stops the climb (peak ≈ 10.5 m at t0 + 1.6 s), then descends.
-    let descent = window(s, t0 + 3.0, t0 + 10.0);
+    // It first stops the climb (peak ≈ 10.5 m at t0 + 1.6 s), overshoots to ≈ 2 m/s down
+    // while the baro-blended climb rate catches up, then holds the set rate.
+    let fastest = window(s, t0, t0 + 15.0)
+        .iter()
+        .map(|x| -x.climb_mps)
+        .fold(0.0, f64::max);
+    println!("fastest descent {fastest:.2} m/s");
+    assert!(fastest < 2.5, "{fastest}");
+    let descent = window(s, t0 + 5.0, t0 + 10.0);
     let rate = descent.iter().map(|x| x.climb_mps).sum::<f64>() / descent.len() as f64;
     let landed = s
         .iter()
@@ -71,7 +78,7 @@ fn link_cut_levels_descends_and_disarms() {
     let spread = worst(&descent, |x| x.climb_mps - rate);
     println!("descent rate spread ±{spread:.2} m/s");
     assert!((-1.05..-0.95).contains(&rate), "{rate}");
-    assert!(spread < 0.3, "{spread}");
+    assert!(spread < 0.15, "{spread}");
     assert!(landed.t_s < disarm.t_s, "landed before the disarm");
     assert!((disarm.t_s - t0 - 15.0).abs() < 0.01, "{}", disarm.t_s);
     let after = window(s, disarm.t_s, 22.0);

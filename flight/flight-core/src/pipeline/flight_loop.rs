@@ -6,9 +6,10 @@ use super::identify::{Sysid, sysid_output};
 use super::sticks::StickShaping;
 use crate::control::lqr::AxisSetpoint;
 use crate::control::mixer::Mixer;
+use crate::estimation::GRAVITY_MPS2;
 use crate::estimation::complementary::{self, Complementary};
 use crate::estimation::math::{inv_sqrt, wrap_pi};
-use crate::estimation::quaternion::{Quaternion, ned_to_body};
+use crate::estimation::quaternion::{Quaternion, body_to_ned_vector, ned_to_body};
 use crate::outputs::Command;
 use crate::supervisor::{
     Decision, FlightMode, Inputs, ModeSwitch, Settings as SupervisorSettings, Sticks, Supervisor,
@@ -18,6 +19,8 @@ use crate::sysid::ekf::Identification;
 const DEG_PER_RAD: f32 = 180.0 / core::f32::consts::PI;
 /// A MEMS gyro saturates at 2000 deg/s; anything beyond (or non-finite) is a sensor fault.
 const GYRO_LIMIT_DPS: f32 = 2200.0;
+/// Time constant pulling the accelerometer-integrated climb rate towards the measured one, s.
+const CLIMB_BLEND_S: f32 = 1.0;
 
 /// Fixed configuration of the loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -103,6 +106,8 @@ pub struct FlightLoop {
     accel_phase: u16,
     /// Integral of the failsafe descent-rate error (throttle units).
     descent_integral: f32,
+    /// Blended climb rate, m/s up.
+    climb_mps: Option<f32>,
     /// The identification while the system-identification mode flies.
     sysid: Option<Sysid>,
     /// The last finished identification, until taken.
@@ -124,6 +129,7 @@ impl FlightLoop {
             hover_throttle: 0.5,
             accel_phase: 0,
             descent_integral: 0.0,
+            climb_mps: None,
             sysid: None,
             identification: None,
         }
@@ -136,6 +142,36 @@ impl FlightLoop {
         }
         self.controllers = Some(controllers);
         true
+    }
+
+    /// The blended climb rate, m/s up (`None` without a baro/INS rate).
+    pub fn climb_estimate(&self) -> Option<f32> {
+        self.climb_mps
+    }
+
+    /// Vertical complementary filter: the accelerometer's vertical acceleration (rotated to
+    /// NED with the attitude estimate, gravity removed) integrated each loop, pulled towards
+    /// the baro/INS rate with a 1 s time constant. The accelerometer gives the bandwidth the
+    /// failsafe's climb-rate loop needs; the slow baro rate (α-β tracked, ≈ 0.2 s lag) only
+    /// removes the drift, so a 0.1 m/s² accelerometer bias leaves 0.1 m/s.
+    fn fuse_climb(&mut self, measured_mps: Option<f32>, accel_mps2: [f32; 3]) -> Option<f32> {
+        let Some(measured) = measured_mps.filter(|m| m.is_finite()) else {
+            self.climb_mps = None;
+            return None;
+        };
+        let [_, _, f_down] = body_to_ned_vector(self.attitude.attitude(), accel_mps2);
+        let up_accel = -(f_down + GRAVITY_MPS2);
+        let ts = self.config.ts_s;
+        let k = ts / (CLIMB_BLEND_S + ts);
+        let v = self.climb_mps.unwrap_or(measured);
+        let v = if up_accel.is_finite() {
+            v + up_accel * ts
+        } else {
+            v
+        };
+        let v = v + k * (measured - v);
+        self.climb_mps = Some(v);
+        self.climb_mps
     }
 
     /// The identification finished when the system-identification mode was left (once).
@@ -164,7 +200,8 @@ impl FlightLoop {
     }
 
     /// One loop at `now_ms`. `climb_rate_mps` (up positive) comes from the INS/baro when
-    /// available and makes the failsafe descent rate-controlled.
+    /// available and makes the failsafe descent rate-controlled; the loop blends it with the
+    /// accelerometer's vertical acceleration (see [`FlightLoop::climb_estimate`]).
     pub fn step(
         &mut self,
         now_ms: u32,
@@ -206,6 +243,7 @@ impl FlightLoop {
             sensors_healthy: gyro_ok && filter_ok,
             gains_ready: self.controllers.is_some(),
         });
+        let climb_rate_mps = self.fuse_climb(climb_rate_mps, imu.accel_mps2);
         let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
         let failsafe = self.supervisor.failsafe_descent_mps();
         if self.mode != FlightMode::SystemId
