@@ -108,6 +108,8 @@ pub struct FlightLoop {
     descent_integral: f32,
     /// Blended climb rate, m/s up.
     climb_mps: Option<f32>,
+    /// The throttle has been raised since arming (cleared when disarmed).
+    airborne: bool,
     /// The identification while the system-identification mode flies.
     sysid: Option<Sysid>,
     /// The last finished identification, until taken.
@@ -130,6 +132,7 @@ impl FlightLoop {
             accel_phase: 0,
             descent_integral: 0.0,
             climb_mps: None,
+            airborne: false,
             sysid: None,
             identification: None,
         }
@@ -349,10 +352,11 @@ impl FlightLoop {
                         }
                     };
                     let throttle = sticks.throttle.clamp(0.0, 1.0);
-                    // Throttle at the bottom means sitting on the ground (no air mode): the
-                    // controllers neither act nor wind up, or a held arming gesture (yaw
-                    // full right) would spin the frame up to full power.
-                    let out = if sticks.throttle_low() {
+                    // Throttle at the bottom before the first take-off means sitting on the
+                    // ground: the controllers neither act nor wind up, or a held arming
+                    // gesture (yaw full right) would spin the frame up to full power. Once
+                    // airborne, a closed throttle keeps full stabilisation (air mode).
+                    let out = if sticks.throttle_low() && !self.airborne {
                         c.reset(gyro_dps);
                         [0.0; 3]
                     } else {
@@ -360,6 +364,7 @@ impl FlightLoop {
                     };
                     // 2 s low-pass of the flying throttle: what hovering takes.
                     if throttle > 0.1 {
+                        self.airborne = true;
                         let k = self.config.ts_s / (2.0 + self.config.ts_s);
                         self.hover_throttle += k * (throttle - self.hover_throttle);
                     }
@@ -372,6 +377,7 @@ impl FlightLoop {
                 *m = Command::Throttle(idle + (1.0 - idle) * x);
             }
         } else if let Some(c) = self.controllers.as_mut() {
+            self.airborne = false;
             // On the ground nothing integrates.
             c.reset(gyro_dps);
         }

@@ -195,3 +195,22 @@ fn throttle_low_while_armed_holds_idle_whatever_the_sticks() {
     assert!(out.armed);
     assert_eq!(out.motors, [Command::Throttle(0.05); 4]);
 }
+
+#[test]
+fn once_airborne_a_closed_throttle_keeps_stabilising() {
+    let mut l = flight_loop();
+    let t = arm(&mut l);
+    run(&mut l, t, 100, &resting(0.0), &link(0.4, 0.0));
+    // Throttle closed in the air while the frame rolls right at 30 deg/s: the controller
+    // still pushes back (air mode), motors are not all at idle.
+    let mut imu = resting(0.0);
+    imu.gyro_radps = [0.5, 0.0, 0.0];
+    let out = run(&mut l, t + 200, 20, &imu, &link(0.0, 0.0));
+    let thrust = out.motors.map(|m| match m {
+        Command::Throttle(x) => x,
+        Command::Stopped => 0.0,
+    });
+    let spread = thrust.iter().copied().fold(0.0f32, f32::max)
+        - thrust.iter().copied().fold(1.0f32, f32::min);
+    assert!(spread > 0.05, "{thrust:?}");
+}
