@@ -59,6 +59,8 @@ pub struct Scenario {
     pub pilot: Pilot,
     /// Setting changes the module sends up (in order, as soon as the stream has room).
     pub setting_changes: Vec<SettingChange>,
+    /// Extra random packet loss on the air, 0…1 (both directions).
+    pub packet_loss: f64,
 }
 
 /// The airframe the SITL flies by default: quad-sim's 250-class quad X with roll/pitch

@@ -113,6 +113,7 @@ pub fn run(scenario: Scenario) -> Sitl {
         link_failsafe_ms,
         mut pilot,
         setting_changes,
+        packet_loss,
     } = scenario;
     let setup = from_settings(&settings).expect("settings make a flyable setup");
     // Solve the gains before arming is possible, as the firmware does at boot.
@@ -121,7 +122,11 @@ pub fn run(scenario: Scenario) -> Sitl {
     let period_us = (ts_s * 1e6).round() as u64;
 
     let time = VirtualTime::new();
-    let medium = Medium::new(time.clone(), ChannelModel::default(), seed);
+    let channel = ChannelModel {
+        loss: packet_loss,
+        ..ChannelModel::default()
+    };
+    let medium = Medium::new(time.clone(), channel, seed);
     let module_node = medium.add_node(Node::default());
     let flight_node = medium.add_node(Node {
         position_m: 100.0,

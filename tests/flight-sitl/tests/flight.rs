@@ -181,3 +181,54 @@ fn horizon_mode_rolls_on_the_stick_and_levels_when_centred() {
     assert!(bank > 90.0, "{bank}");
     assert!(level < 3.0, "{level}");
 }
+
+#[test]
+fn flies_through_a_lossy_link() {
+    use flight_sitl::Scenario;
+    // 30 % of packets lost at random in both directions: the sticks still arrive (250 Hz
+    // uplink), no failsafe, and the 15° attitude step is flown as with a clean link.
+    let (quad, settings) = flight_sitl::scenario::default_airframe();
+    let sitl = flight_sitl::run(Scenario {
+        settings,
+        quad,
+        seed: 7,
+        duration_s: 6.5,
+        link_failsafe_ms: 500,
+        pilot: pilot(-1.0, |t| PilotInput {
+            roll: if (5.0..6.0).contains(&t) {
+                1.0 / 3.0
+            } else {
+                0.0
+            },
+            ..cruise(-1.0)
+        }),
+        setting_changes: Vec::new(),
+        packet_loss: 0.3,
+    });
+    let s = &sitl.samples;
+    assert!(
+        s.iter().filter(|x| x.t_s > 1.0).all(|x| x.link_up),
+        "no failsafe"
+    );
+    assert!(s.iter().all(|x| !x.out.failsafe));
+    let w = window(s, 5.0, 6.0);
+    let m = step(&w, |x| x.truth.euler_deg[0], 0.0, 15.0);
+    let lq = sitl
+        .module_rx
+        .iter()
+        .rev()
+        .find_map(|(_, m)| match m {
+            telemetry::messages::Message::LinkStats(l) => Some(*l),
+            _ => None,
+        })
+        .unwrap();
+    println!(
+        "30 % loss: attitude step {m:?}, flight-side LQ {} %, module-side {} %",
+        lq.uplink_lq, lq.downlink_lq
+    );
+    assert!((60..=85).contains(&lq.uplink_lq), "{lq:?}");
+    assert!(
+        m.overshoot_pct < 10.0 && (m.final_value - 15.0).abs() < 1.0,
+        "{m:?}"
+    );
+}

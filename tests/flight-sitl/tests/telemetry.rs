@@ -37,6 +37,7 @@ fn telemetry_reaches_the_module_and_settings_come_back() {
         link_failsafe_ms: 500,
         pilot: pilot(-1.0, |_| cruise(-1.0)),
         setting_changes: vec![change],
+        packet_loss: 0.0,
     });
     let rx = &sitl.module_rx;
     let per_s = rx.len() as f64 / 5.5;

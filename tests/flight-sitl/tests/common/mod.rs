@@ -67,6 +67,7 @@ pub fn fly(settings: Settings, seconds: f64, pilot: Box<dyn FnMut(f64) -> PilotI
         link_failsafe_ms: 500,
         pilot,
         setting_changes: Vec::new(),
+        packet_loss: 0.0,
     })
 }
 
