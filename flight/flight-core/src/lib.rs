@@ -13,6 +13,7 @@ pub mod estimation;
 pub mod model;
 pub mod outputs;
 pub mod pipeline;
+pub mod report;
 pub mod sensors;
 pub mod settings;
 pub mod supervisor;

@@ -14,10 +14,11 @@ pub struct ControlParams {
     pub ts_s: f32,
     /// Roll, pitch, yaw models.
     pub models: [AxisModel; 3],
-    /// LQR costs in rate mode.
-    pub rate_costs: LqrCosts,
-    /// LQR costs in attitude mode.
-    pub attitude_costs: LqrCosts,
+    /// LQR costs in rate mode (roll, pitch, yaw): per axis, because frame-invariant costs
+    /// scale with each axis' β.
+    pub rate_costs: [LqrCosts; 3],
+    /// LQR costs in attitude mode (roll, pitch, yaw).
+    pub attitude_costs: [LqrCosts; 3],
     /// RTKF noise model.
     pub noise: KfNoise,
     /// Rate PID gains (roll, pitch, yaw), output per deg/s.
@@ -46,8 +47,13 @@ impl Controllers {
     pub fn design(p: &ControlParams) -> Result<Self, DesignError> {
         let ts = f64::from(p.ts_s);
         let mut lqg = [None; 3];
-        for (slot, model) in lqg.iter_mut().zip(p.models.iter()) {
-            let design = design_axis(model, ts, &p.rate_costs, &p.attitude_costs, &p.noise)?;
+        for (((slot, model), rate), attitude) in lqg
+            .iter_mut()
+            .zip(p.models.iter())
+            .zip(&p.rate_costs)
+            .zip(&p.attitude_costs)
+        {
+            let design = design_axis(model, ts, rate, attitude, &p.noise)?;
             *slot = Some(
                 LqgAxis::new(model, p.ts_s, &design, BIAS_LIMIT)
                     .with_output_delay(p.output_delay_samples),

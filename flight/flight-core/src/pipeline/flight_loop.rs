@@ -2,20 +2,25 @@
 //! estimate → supervise → control → mix → output commands.
 
 use super::controllers::Controllers;
+use super::identify::{Sysid, sysid_output};
 use super::sticks::StickShaping;
 use crate::control::lqr::AxisSetpoint;
 use crate::control::mixer::Mixer;
+use crate::estimation::GRAVITY_MPS2;
 use crate::estimation::complementary::{self, Complementary};
 use crate::estimation::math::{inv_sqrt, wrap_pi};
-use crate::estimation::quaternion::{Quaternion, ned_to_body};
+use crate::estimation::quaternion::{Quaternion, body_to_ned_vector, ned_to_body};
 use crate::outputs::Command;
 use crate::supervisor::{
     Decision, FlightMode, Inputs, ModeSwitch, Settings as SupervisorSettings, Sticks, Supervisor,
 };
+use crate::sysid::ekf::Identification;
 
 const DEG_PER_RAD: f32 = 180.0 / core::f32::consts::PI;
 /// A MEMS gyro saturates at 2000 deg/s; anything beyond (or non-finite) is a sensor fault.
 const GYRO_LIMIT_DPS: f32 = 2200.0;
+/// Time constant pulling the accelerometer-integrated climb rate towards the measured one, s.
+const CLIMB_BLEND_S: f32 = 1.0;
 
 /// Fixed configuration of the loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,8 +37,14 @@ pub struct LoopConfig {
     pub modes: [FlightMode; 3],
     /// Attitude and horizon modes use the LQG (else the attitude PID).
     pub attitude_uses_lqg: bool,
-    /// Attitude filter gains.
+    /// Attitude filter gains (on the ground).
     pub attitude_filter: complementary::Config,
+    /// While armed the accelerometer corrects the attitude on one sample in this many (1 =
+    /// every sample). In flight a multirotor's accelerometer reads thrust and drag, not
+    /// gravity: in a steady bank it points "level", so the ground gains would drag the
+    /// estimate (and the frame) off by degrees per second. Skipping samples divides the
+    /// filter's kp and ki by this factor without touching its ground behaviour.
+    pub armed_accel_divider: u16,
 }
 
 /// One IMU sample, body FRD axes.
@@ -80,7 +91,7 @@ pub struct LoopOutput {
 }
 
 /// The loop's state.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct FlightLoop {
     config: LoopConfig,
     attitude: Complementary,
@@ -91,6 +102,18 @@ pub struct FlightLoop {
     mixer: Mixer<4>,
     /// Low-passed throttle while flying normally: the failsafe descent starts from it.
     hover_throttle: f32,
+    /// Samples since the accelerometer last corrected the estimate while armed.
+    accel_phase: u16,
+    /// Integral of the failsafe descent-rate error (throttle units).
+    descent_integral: f32,
+    /// Blended climb rate, m/s up.
+    climb_mps: Option<f32>,
+    /// The throttle has been raised since arming (cleared when disarmed).
+    airborne: bool,
+    /// The identification while the system-identification mode flies.
+    sysid: Option<Sysid>,
+    /// The last finished identification, until taken.
+    identification: Option<Identification>,
 }
 
 impl FlightLoop {
@@ -106,6 +129,12 @@ impl FlightLoop {
             controllers,
             mixer,
             hover_throttle: 0.5,
+            accel_phase: 0,
+            descent_integral: 0.0,
+            climb_mps: None,
+            airborne: false,
+            sysid: None,
+            identification: None,
         }
     }
 
@@ -118,13 +147,64 @@ impl FlightLoop {
         true
     }
 
+    /// The blended climb rate, m/s up (`None` without a baro/INS rate).
+    pub fn climb_estimate(&self) -> Option<f32> {
+        self.climb_mps
+    }
+
+    /// Vertical complementary filter: the accelerometer's vertical acceleration (rotated to
+    /// NED with the attitude estimate, gravity removed) integrated each loop, pulled towards
+    /// the baro/INS rate with a 1 s time constant. The accelerometer gives the bandwidth the
+    /// failsafe's climb-rate loop needs; the slow baro rate (α-β tracked, ≈ 0.2 s lag) only
+    /// removes the drift, so a 0.1 m/s² accelerometer bias leaves 0.1 m/s.
+    fn fuse_climb(&mut self, measured_mps: Option<f32>, accel_mps2: [f32; 3]) -> Option<f32> {
+        let Some(measured) = measured_mps.filter(|m| m.is_finite()) else {
+            self.climb_mps = None;
+            return None;
+        };
+        let [_, _, f_down] = body_to_ned_vector(self.attitude.attitude(), accel_mps2);
+        let up_accel = -(f_down + GRAVITY_MPS2);
+        let ts = self.config.ts_s;
+        let k = ts / (CLIMB_BLEND_S + ts);
+        let v = self.climb_mps.unwrap_or(measured);
+        let v = if up_accel.is_finite() {
+            v + up_accel * ts
+        } else {
+            v
+        };
+        let v = v + k * (measured - v);
+        self.climb_mps = Some(v);
+        self.climb_mps
+    }
+
+    /// The identification finished when the system-identification mode was left (once).
+    pub fn take_identification(&mut self) -> Option<Identification> {
+        self.identification.take()
+    }
+
+    /// The identification in progress, if the mode is flying.
+    pub fn identification_in_progress(&self) -> Option<Identification> {
+        self.sysid.as_ref().map(|s| s.ekf.result())
+    }
+
+    /// Ends a running identification, keeping its result if it saw any samples.
+    fn finish_sysid(&mut self) {
+        if let Some(s) = self.sysid.take() {
+            let result = s.ekf.result();
+            if result.samples > 0 {
+                self.identification = Some(result);
+            }
+        }
+    }
+
     /// Body → NED attitude estimate.
     pub fn attitude(&self) -> Quaternion {
         self.attitude.attitude()
     }
 
     /// One loop at `now_ms`. `climb_rate_mps` (up positive) comes from the INS/baro when
-    /// available and makes the failsafe descent rate-controlled.
+    /// available and makes the failsafe descent rate-controlled; the loop blends it with the
+    /// accelerometer's vertical acceleration (see [`FlightLoop::climb_estimate`]).
     pub fn step(
         &mut self,
         now_ms: u32,
@@ -136,9 +216,23 @@ impl FlightLoop {
         let gyro_ok = gyro_dps
             .iter()
             .all(|g| g.is_finite() && g.abs() < GYRO_LIMIT_DPS);
+        // A zero vector is below the filter's accelerometer threshold: gyro (and mag) only.
+        let accel = if self.supervisor.motors_enabled() {
+            self.accel_phase = self.accel_phase.wrapping_add(1);
+            if self.accel_phase >= self.config.armed_accel_divider.max(1) {
+                self.accel_phase = 0;
+                imu.accel_mps2
+            } else if imu.accel_mps2.iter().all(|a| a.is_finite()) {
+                [0.0; 3]
+            } else {
+                imu.accel_mps2
+            }
+        } else {
+            imu.accel_mps2
+        };
         let filter_ok = self
             .attitude
-            .update(imu.gyro_radps, imu.accel_mps2, imu.mag, self.config.ts_s)
+            .update(imu.gyro_radps, accel, imu.mag, self.config.ts_s)
             .is_ok();
         let previous_mode = self.mode;
         if link.up {
@@ -152,8 +246,15 @@ impl FlightLoop {
             sensors_healthy: gyro_ok && filter_ok,
             gains_ready: self.controllers.is_some(),
         });
+        let climb_rate_mps = self.fuse_climb(climb_rate_mps, imu.accel_mps2);
         let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
         let failsafe = self.supervisor.failsafe_descent_mps();
+        if self.mode != FlightMode::SystemId
+            || failsafe.is_some()
+            || !self.supervisor.motors_enabled()
+        {
+            self.finish_sysid();
+        }
         let mut motors = [Command::Stopped; 4];
         if let (true, Some(c)) = (
             self.supervisor.motors_enabled() && gyro_ok,
@@ -176,9 +277,21 @@ impl FlightLoop {
                         },
                         AxisSetpoint::Rate { rate_dps: 0.0 },
                     ];
+                    if decision == Decision::FailsafeEntered {
+                        self.descent_integral = 0.0;
+                    }
                     let throttle = match climb_rate_mps {
-                        // 0.1 throttle per m/s of climb-rate error around the hover value.
-                        Some(climb) => self.hover_throttle + 0.1 * (-descent_mps - climb),
+                        // PI on the climb rate around the hover value: 0.1 throttle per m/s
+                        // and 0.2 per metre of accumulated error. With ≈ 60 m/s² per unit
+                        // throttle (a 2:1 thrust-to-weight frame) the loop has ωn ≈ 3.5 rad/s,
+                        // ζ ≈ 0.9; the integral absorbs a wrong hover estimate (±0.2).
+                        Some(climb) => {
+                            let error = -descent_mps - climb;
+                            self.descent_integral = (self.descent_integral
+                                + 0.2 * error * self.config.ts_s)
+                                .clamp(-0.2, 0.2);
+                            self.hover_throttle + 0.1 * error + self.descent_integral
+                        }
                         None => self.hover_throttle * 0.9,
                     };
                     (throttle.clamp(0.0, 1.0), c.lqg(gyro_dps, sp))
@@ -190,7 +303,18 @@ impl FlightLoop {
                     let [roll_sp, pitch_sp] = self.config.shaping.angles_deg(sticks);
                     let errors = [roll_sp - roll, pitch_sp - pitch];
                     let out = match self.mode {
-                        FlightMode::RatePid | FlightMode::SystemId => c.pid_rate(gyro_dps, rates),
+                        FlightMode::RatePid => c.pid_rate(gyro_dps, rates),
+                        // On the ground (throttle low) nothing shakes: the output is zeroed
+                        // below, and the EKF only learns in the air.
+                        FlightMode::SystemId if sticks.throttle_low() => [0.0; 3],
+                        FlightMode::SystemId => sysid_output(
+                            &mut self.sysid,
+                            self.config.ts_s,
+                            gyro_dps,
+                            errors,
+                            yaw_rate,
+                            c,
+                        ),
                         FlightMode::RateLqg => c.lqg(
                             gyro_dps,
                             rates.map(|rate_dps| AxisSetpoint::Rate { rate_dps }),
@@ -228,8 +352,19 @@ impl FlightLoop {
                         }
                     };
                     let throttle = sticks.throttle.clamp(0.0, 1.0);
+                    // Throttle at the bottom before the first take-off means sitting on the
+                    // ground: the controllers neither act nor wind up, or a held arming
+                    // gesture (yaw full right) would spin the frame up to full power. Once
+                    // airborne, a closed throttle keeps full stabilisation (air mode).
+                    let out = if sticks.throttle_low() && !self.airborne {
+                        c.reset(gyro_dps);
+                        [0.0; 3]
+                    } else {
+                        out
+                    };
                     // 2 s low-pass of the flying throttle: what hovering takes.
                     if throttle > 0.1 {
+                        self.airborne = true;
                         let k = self.config.ts_s / (2.0 + self.config.ts_s);
                         self.hover_throttle += k * (throttle - self.hover_throttle);
                     }
@@ -242,6 +377,7 @@ impl FlightLoop {
                 *m = Command::Throttle(idle + (1.0 - idle) * x);
             }
         } else if let Some(c) = self.controllers.as_mut() {
+            self.airborne = false;
             // On the ground nothing integrates.
             c.reset(gyro_dps);
         }

@@ -1,12 +1,24 @@
 //! The flight loop: one gyro sample in, motor commands out. It composes the pieces the other
 //! modules own — attitude estimation, the arming/failsafe supervisor, the flight-mode switch,
 //! the LQG and PID controllers and the mixer — in the order the firmware runs them right
-//! after each data-ready interrupt, so the outputs are synchronous with the gyro.
+//! after each data-ready interrupt, so the outputs are synchronous with the gyro. `setup`
+//! derives its configuration from the settings; `channels` turns link channels into sticks; `announce` picks the alerts to sound.
 
+mod announce;
+mod channels;
+mod climb;
 mod controllers;
 mod flight_loop;
+mod identify;
+mod setup;
 mod sticks;
 
+pub use announce::{BATTERY_REPEAT_MS, announce, announce_battery, battery_alert, loop_alerts};
+pub use channels::{
+    CHANNEL_HIGH, CHANNEL_LOW, CHANNEL_MID, ChannelMap, channel_for, throttle_channel,
+};
+pub use climb::ClimbRate;
 pub use controllers::{ControlParams, Controllers};
 pub use flight_loop::{FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
+pub use setup::{FlightSetup, SetupError, from_settings};
 pub use sticks::StickShaping;

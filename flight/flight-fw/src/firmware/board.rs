@@ -6,6 +6,7 @@ use embassy_stm32::dac::DacChannel;
 use embassy_stm32::exti::ExtiInput;
 use embassy_stm32::flash::{Bank1Region1, Blocking, Flash};
 use embassy_stm32::gpio::{Level, Output, OutputType, Pull, Speed};
+use embassy_stm32::i2c::{self, I2c};
 use embassy_stm32::peripherals::{TIM3, TIM9};
 use embassy_stm32::timer::Channel;
 use embassy_stm32::timer::low_level::Timer;
@@ -38,22 +39,72 @@ pub const BOARD: &str = "Sparky2";
 /// Independent watchdog timeout (Tau Labs used 250 ms).
 pub const WATCHDOG_TIMEOUT_US: u32 = 250_000;
 
+// DMA streams (RM0090 tables 42/43): DAC1 on DMA1 S5; SPI3 (radio) TX S7, RX S2 (channel 0
+// both; S0 is left to I2C1); I2C1 (baro) TX S6, RX S0 (channel 1); SPI1 (IMU) TX DMA2 S3,
+// RX DMA2 S0 (channel 3). EXTI9_5 serves the IMU's data-ready (EXTI5) and, on the
+// BrushedSparky, the radio's nIRQ (EXTI7).
 #[cfg(not(feature = "sparky2"))]
 bind_interrupts!(pub struct Irqs {
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
     DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
+    DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
+    DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
     DMA1_STREAM0 => dma::InterruptHandler<peripherals::DMA1_CH0>;
+    DMA2_STREAM3 => dma::InterruptHandler<peripherals::DMA2_CH3>;
+    DMA2_STREAM0 => dma::InterruptHandler<peripherals::DMA2_CH0>;
+    I2C1_EV => i2c::EventInterruptHandler<peripherals::I2C1>;
+    I2C1_ER => i2c::ErrorInterruptHandler<peripherals::I2C1>;
 });
 #[cfg(feature = "sparky2")]
 bind_interrupts!(pub struct Irqs {
     EXTI2 => exti::InterruptHandler<interrupt::typelevel::EXTI2>;
+    EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
     DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
+    DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
+    DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
     DMA1_STREAM0 => dma::InterruptHandler<peripherals::DMA1_CH0>;
+    DMA2_STREAM3 => dma::InterruptHandler<peripherals::DMA2_CH3>;
+    DMA2_STREAM0 => dma::InterruptHandler<peripherals::DMA2_CH0>;
+    I2C1_EV => i2c::EventInterruptHandler<peripherals::I2C1>;
+    I2C1_ER => i2c::ErrorInterruptHandler<peripherals::I2C1>;
 });
+
+/// MPU9250 clock for configuration registers (≤ 1 MHz): APB2 84 MHz / 128.
+pub const IMU_SPI_SLOW_HZ: u32 = 656_250;
+/// MPU9250 clock for sensor reads (≤ 20 MHz): APB2 84 MHz / 8, as Tau Labs ran it.
+pub const IMU_SPI_FAST_HZ: u32 = 10_500_000;
+
+/// The MS5611's I²C address (CSB to GND).
+pub const BARO_ADDRESS: u8 = 0x77;
+
+/// MPU9250 axes → body FRD. The chip's z points up out of the board (it reads +1 g lying
+/// flat) and the board mounts it "top, 180°" (hardware.md): chip x points aft, chip y to the
+/// right, so body = (−x, y, −z). A proper rotation: accelerometer, gyro and magnetometer
+/// vectors all map the same way.
+pub fn imu_to_body(v: [f32; 3]) -> [f32; 3] {
+    let [x, y, z] = v;
+    [-x, y, -z]
+}
+
+/// The MPU9250 on SPI1 (SCK PA5, MISO PA6, MOSI PA7), CS PC4, data-ready PC5 (EXTI5).
+pub struct Imu {
+    /// SPI1 with DMA2 streams 3 (TX) and 0 (RX).
+    pub spi: Spi<'static, Async, spi::mode::Master>,
+    /// Chip select, idle high.
+    pub cs: Output<'static>,
+    /// INT, rising edge at each new sample.
+    pub int: ExtiInput<'static, Async>,
+}
+
+/// The MS5611 on I2C1 (SCL PB8, SDA PB9, 10 k pull-ups on the board), 400 kHz.
+pub struct Baro {
+    /// I2C1 with DMA1 streams 6 (TX) and 0 (RX).
+    pub i2c: I2c<'static, Async, i2c::Master>,
+}
 
 /// HSE 8 MHz → PLL (M 8, N 336, P 2, Q 7): SYSCLK 168 MHz, USB 48 MHz; APB1 42 MHz
 /// (timers 84 MHz), APB2 84 MHz (timers 168 MHz). The board has a ceramic resonator, so the
@@ -133,6 +184,10 @@ pub struct Board {
     pub watchdog: IndependentWatchdog<'static, IWDG>,
     /// The radio module.
     pub radio: Radio,
+    /// Gyro/accelerometer/magnetometer.
+    pub imu: Imu,
+    /// Barometer.
+    pub baro: Baro,
     /// Motor outputs 1–4.
     pub motors: MotorParts,
     /// Battery voltage and current sense.
@@ -156,8 +211,27 @@ impl Board {
         spi_config.frequency = Hertz(5_250_000);
         spi_config.mode = spi::MODE_0;
         let spi = Spi::new(
-            p.SPI3, p.PC10, p.PC12, p.PC11, p.DMA1_CH7, p.DMA1_CH0, Irqs, spi_config,
+            p.SPI3, p.PC10, p.PC12, p.PC11, p.DMA1_CH7, p.DMA1_CH2, Irqs, spi_config,
         );
+        // MPU9250: SPI mode 3, starting slow for the configuration (imu_bus.rs switches to
+        // the fast clock for sensor reads).
+        let mut imu_config = spi::Config::default();
+        imu_config.frequency = Hertz(IMU_SPI_SLOW_HZ);
+        imu_config.mode = spi::MODE_3;
+        let imu = Imu {
+            spi: Spi::new(
+                p.SPI1, p.PA5, p.PA7, p.PA6, p.DMA2_CH3, p.DMA2_CH0, Irqs, imu_config,
+            ),
+            cs: Output::new(p.PC4, Level::High, Speed::VeryHigh),
+            int: ExtiInput::new(p.PC5, p.EXTI5, Pull::None, Irqs),
+        };
+        let mut i2c_config = i2c::Config::default();
+        i2c_config.frequency = Hertz(400_000);
+        let baro = Baro {
+            i2c: I2c::new(
+                p.I2C1, p.PB8, p.PB9, p.DMA1_CH6, p.DMA1_CH0, Irqs, i2c_config,
+            ),
+        };
         let motors = MotorParts {
             tim3: p.TIM3,
             tim9: p.TIM9,
@@ -214,6 +288,8 @@ impl Board {
             .bank1_region1;
 
         Self {
+            imu,
+            baro,
             motors,
             battery,
             speaker,

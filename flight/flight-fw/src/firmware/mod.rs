@@ -1,17 +1,22 @@
-//! Table of contents: clocks, board, settings, then one task per concern.
+//! Table of contents: clocks, board, settings → flight setup and solved gains, then one task
+//! per concern: imu (the flight loop, driven by the MPU9250's data-ready), motors, link (the
+//! TauLink follower on the RFM22B), baro, gains (re-solve after setting changes), battery,
+//! alerts, console, storage, heartbeat and the watchdog supervisor. See `signals` for the
+//! data flow.
 
 mod board;
+mod imu_bus;
+mod link_radio;
 mod outputs;
 mod signals;
 mod tasks;
 
 use defmt::{error, info};
 use embassy_executor::{SpawnError, SpawnToken, Spawner};
-use flight_core::battery::{BatteryConfig, BatteryMonitor};
+use flight_core::battery::BatteryMonitor;
+use flight_core::pipeline::{Controllers, from_settings};
 use flight_core::settings::Settings;
 use {defmt_rtt as _, panic_probe as _};
-
-use tasks::motors::protocol_from_settings;
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
@@ -22,8 +27,26 @@ async fn main(spawner: Spawner) {
     // Flash work first: a sector erase can stall the CPU longer than the watchdog timeout,
     // and the watchdog starts with the supervisor below.
     let (map, settings) = tasks::storage::open(board.settings_flash).await;
-    let protocol = protocol_from_settings(&settings);
-    let monitor = BatteryMonitor::new(battery_config(&settings));
+    // Settings → configuration; the gains are solved here, before anything can arm. Stored
+    // settings that do not make a flyable setup fall back to the factory ones.
+    let setup = match from_settings(&settings) {
+        Ok(s) => s,
+        Err(e) => {
+            error!("stored settings not flyable ({}): factory setup", e);
+            match from_settings(&Settings::default()) {
+                Ok(s) => s,
+                Err(_) => return, // the table's own defaults are tested flyable
+            }
+        }
+    };
+    let controllers = match Controllers::design(&setup.control) {
+        Ok(c) => Some(c),
+        Err(e) => {
+            error!("gain design failed ({}): arming refused", e);
+            None
+        }
+    };
+    let monitor = BatteryMonitor::new(setup.battery);
     *signals::SETTINGS.lock().await = Some((settings.clone(), settings));
     if let Some(map) = map {
         spawn(&spawner, "storage", tasks::storage::storage_task(map));
@@ -34,17 +57,24 @@ async fn main(spawner: Spawner) {
         "supervisor",
         tasks::supervisor::supervisor_task(board.watchdog),
     );
-    match board.motors.start(protocol) {
+    match board.motors.start(setup.protocol) {
         Ok(motors) => spawn(&spawner, "motors", tasks::motors::motors_task(motors)),
         // Without the motor task the watchdog is never fed: reset, and the pins stay low.
-        Err(e) => error!("motor outputs cannot run {}: {}", protocol, e),
+        Err(e) => error!("motor outputs cannot run {}: {}", setup.protocol, e),
     }
+    spawn(
+        &spawner,
+        "imu",
+        tasks::imu::imu_task(board.imu, setup, controllers),
+    );
+    spawn(&spawner, "link", tasks::link::link_task(board.radio));
+    spawn(&spawner, "baro", tasks::baro::baro_task(board.baro));
+    spawn(&spawner, "gains", tasks::gains::gains_task());
     spawn(
         &spawner,
         "heartbeat",
         tasks::heartbeat::heartbeat_task(board.heartbeat_led),
     );
-    spawn(&spawner, "radio", tasks::radio::radio_task(board.radio));
     spawn(
         &spawner,
         "battery",
@@ -56,19 +86,6 @@ async fn main(spawner: Spawner) {
         tasks::alerts::alerts_task(board.speaker),
     );
     spawn(&spawner, "console", tasks::console::console_task(board.usb));
-}
-
-fn battery_config(settings: &Settings) -> BatteryConfig {
-    let cells = settings.u32("battery.cells") as u8;
-    let current = settings.f32("battery.current_mv_per_a");
-    BatteryConfig {
-        voltage_divider: settings.f32("battery.divider"),
-        current_mv_per_amp: (current > 0.0).then_some(current),
-        cells: (cells > 0).then_some(cells),
-        cell_warning_mv: settings.u32("battery.cell_warning_mv") as u16,
-        cell_critical_mv: settings.u32("battery.cell_critical_mv") as u16,
-        ..BatteryConfig::brushed_sparky()
-    }
 }
 
 /// Starts a task. A task that cannot start never checks in with the supervisor, so the

@@ -21,6 +21,7 @@ fn config() -> LoopConfig {
         ],
         attitude_uses_lqg: true,
         attitude_filter: complementary::Config::default(),
+        armed_accel_divider: 1,
     }
 }
 
@@ -29,8 +30,8 @@ fn controllers() -> Controllers {
     Controllers::design(&ControlParams {
         ts_s: TS,
         models: [model, model, AxisModel::new(8.0, 0.03).unwrap()],
-        rate_costs: LqrCosts::default(),
-        attitude_costs: LqrCosts::default(),
+        rate_costs: [LqrCosts::default(); 3],
+        attitude_costs: [LqrCosts::default(); 3],
         noise: KfNoise::default(),
         pid_rate: [PidGains::new(0.003, 0.005, 0.00004, 0.002); 3],
         attitude_kp: 2.5,
@@ -181,4 +182,35 @@ fn failsafe_levels_a_rolled_quad_and_descends() {
     let out = run(&mut l, t + 4102, 7_500, &resting(0.0), &lost);
     assert!(!out.armed);
     assert_eq!(out.motors, [Command::Stopped; 4]);
+}
+
+#[test]
+fn throttle_low_while_armed_holds_idle_whatever_the_sticks() {
+    let mut l = flight_loop();
+    let t = arm(&mut l);
+    // Still holding the arming gesture (yaw full right), and a rolled, rotating frame.
+    let mut imu = resting(10.0);
+    imu.gyro_radps = [0.5, -0.3, 0.2];
+    let out = run(&mut l, t, 50, &imu, &link(0.0, 1.0));
+    assert!(out.armed);
+    assert_eq!(out.motors, [Command::Throttle(0.05); 4]);
+}
+
+#[test]
+fn once_airborne_a_closed_throttle_keeps_stabilising() {
+    let mut l = flight_loop();
+    let t = arm(&mut l);
+    run(&mut l, t, 100, &resting(0.0), &link(0.4, 0.0));
+    // Throttle closed in the air while the frame rolls right at 30 deg/s: the controller
+    // still pushes back (air mode), motors are not all at idle.
+    let mut imu = resting(0.0);
+    imu.gyro_radps = [0.5, 0.0, 0.0];
+    let out = run(&mut l, t + 200, 20, &imu, &link(0.0, 0.0));
+    let thrust = out.motors.map(|m| match m {
+        Command::Throttle(x) => x,
+        Command::Stopped => 0.0,
+    });
+    let spread = thrust.iter().copied().fold(0.0f32, f32::max)
+        - thrust.iter().copied().fold(1.0f32, f32::min);
+    assert!(spread > 0.05, "{thrust:?}");
 }

@@ -15,7 +15,9 @@ use flight_core::settings::{Command, Settings, parse_line, write_list, write_set
 use heapless::String;
 use static_cell::StaticCell;
 
-use crate::firmware::signals::{ARMED, BATTERY, SAVE_REQUEST, SETTINGS};
+use crate::firmware::signals::{
+    ARMED, BATTERY, FLIGHT_STATE, LINK_INPUT, SAVE_REQUEST, SETTINGS, SETTINGS_CHANGED,
+};
 
 const HELP: &str =
     "help | list [prefix] | get NAME | set NAME VALUE | save | defaults | status\r\n";
@@ -115,7 +117,10 @@ async fn answer(line: &str, out: &mut String<2048>) {
             out.write_str("refused: disarm first\r\n")
         }
         Ok(Command::Set { name, value }) => match settings.set_text(name, value) {
-            Ok(()) => write_setting(out, settings, name),
+            Ok(()) => {
+                SETTINGS_CHANGED.signal(());
+                write_setting(out, settings, name)
+            }
             Err(e) => writeln!(out, "{e}"),
         },
         Ok(Command::Save) => {
@@ -124,10 +129,24 @@ async fn answer(line: &str, out: &mut String<2048>) {
         }
         Ok(Command::Defaults) => {
             *settings = Settings::default();
+            SETTINGS_CHANGED.signal(());
             out.write_str("factory values (not saved)\r\n")
         }
         Ok(Command::Status) => {
-            let battery = BATTERY.receiver().and_then(|mut r| r.try_get());
+            let link_up = LINK_INPUT.lock(|c| c.get()).up;
+            let _ = match FLIGHT_STATE.lock(|c| c.get()) {
+                Some((state, blockers)) => writeln!(
+                    out,
+                    "mode {}, failsafe {}, link {}, arm blockers {:#x}, attitude {:?} deg",
+                    state.mode.name(),
+                    state.failsafe,
+                    if link_up { "up" } else { "down" },
+                    blockers,
+                    state.attitude_deg
+                ),
+                None => writeln!(out, "flight loop not running (IMU?)"),
+            };
+            let battery = BATTERY.try_get();
             match battery {
                 Some(b) => writeln!(
                     out,

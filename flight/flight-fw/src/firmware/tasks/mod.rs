@@ -1,10 +1,13 @@
 //! One task per concern; each owns its hardware.
 
 pub mod alerts;
+pub mod baro;
 pub mod battery;
 pub mod console;
+pub mod gains;
 pub mod heartbeat;
+pub mod imu;
+pub mod link;
 pub mod motors;
-pub mod radio;
 pub mod storage;
 pub mod supervisor;

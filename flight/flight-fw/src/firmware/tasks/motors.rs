@@ -7,7 +7,7 @@ use embassy_stm32::peripherals::{TIM3, TIM9};
 use embassy_stm32::timer::simple_pwm::PwmPin;
 use embassy_stm32::timer::{Ch1, Ch2, Ch3, Ch4};
 use embassy_time::{Duration, Timer};
-use flight_core::outputs::{Command, Protocol};
+use flight_core::outputs::Command;
 
 use super::supervisor::{Watched, check_in};
 use crate::firmware::outputs::MotorTimer;
@@ -36,20 +36,6 @@ impl Motors {
         let [m1, m2, m3, m4] = *commands;
         self.bank0.apply(&[m1, m2]);
         self.bank1.apply(&[m3, m4]);
-    }
-}
-
-/// The protocol the settings ask for.
-pub fn protocol_from_settings(settings: &flight_core::settings::Settings) -> Protocol {
-    let rate = settings.u32("output.rate_hz");
-    match settings.u32("output.protocol") {
-        1 => Protocol::Pwm {
-            rate_hz: rate,
-            min_us: settings.u32("output.min_us") as u16,
-            max_us: settings.u32("output.max_us") as u16,
-        },
-        2 => Protocol::OneShot125,
-        _ => Protocol::Brushed { frequency_hz: rate },
     }
 }
 

@@ -21,21 +21,30 @@ use embassy_time::{Duration, Ticker};
 pub enum Watched {
     /// The heartbeat task.
     Heartbeat = 1 << 0,
-    /// The radio task.
-    Radio = 1 << 1,
+    /// The link (radio) task.
+    Link = 1 << 1,
     /// The motor output task.
     Motors = 1 << 2,
     /// The battery task.
     Battery = 1 << 3,
     /// The alert (tone) task.
     Alerts = 1 << 4,
+    /// The IMU / flight-loop task.
+    Imu = 1 << 5,
+    /// The baro task.
+    Baro = 1 << 6,
+    /// The gain-design task.
+    Gains = 1 << 7,
 }
 
 const ALL: u32 = Watched::Heartbeat as u32
-    | Watched::Radio as u32
+    | Watched::Link as u32
     | Watched::Motors as u32
     | Watched::Battery as u32
-    | Watched::Alerts as u32;
+    | Watched::Alerts as u32
+    | Watched::Imu as u32
+    | Watched::Baro as u32
+    | Watched::Gains as u32;
 static CHECKED_IN: AtomicU32 = AtomicU32::new(0);
 
 /// Called by a task at least every 100 ms.

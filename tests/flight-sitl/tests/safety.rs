@@ -1,0 +1,231 @@
+//! Safety: a link cut (level, descend at the set rate, disarm after the set time), control
+//! back only with centred sticks, idle disarm on the ground, and the low-battery alarm.
+
+#![allow(
+    clippy::unwrap_used,
+    clippy::indexing_slicing,
+    clippy::cast_precision_loss
+)]
+
+mod common;
+
+use common::*;
+use flight_core::battery::BatteryLevel;
+use flight_core::outputs::Command;
+use flight_core::settings::Value;
+use flight_core::supervisor::Decision;
+use flight_sitl::PilotInput;
+use flight_sitl::metrics::{window, worst};
+
+#[test]
+fn link_cut_levels_descends_and_disarms() {
+    let mut settings = airframe_settings();
+    settings
+        .set("failsafe.descent_mps", Value::F32(1.0))
+        .unwrap();
+    // Climbing through ≈ 5 m at 3.5 m/s, rolled 10° right when the link is cut at 4.5 s; the
+    // default failsafe disarm time (15 s).
+    let sitl = fly(
+        settings,
+        22.0,
+        pilot(-1.0, |t| PilotInput {
+            roll: if t >= 4.0 { 10.0 / 45.0 } else { 0.0 },
+            link_cut: t >= 4.5,
+            ..cruise(-1.0)
+        }),
+    );
+    let s = &sitl.samples;
+    let entered = s
+        .iter()
+        .find(|x| x.out.decision == Decision::FailsafeEntered)
+        .unwrap();
+    let alt0 = entered.altitude_m;
+    println!(
+        "failsafe at {:.3} s, altitude {alt0:.2} m, roll {:.1}°",
+        entered.t_s, entered.truth.euler_deg[0]
+    );
+    // The follower declares failsafe 0.5 s after the last packet.
+    assert!((4.95..5.1).contains(&entered.t_s), "{}", entered.t_s);
+    assert!(alt0 > 3.0, "{alt0}");
+    let t0 = entered.t_s;
+    let levelled = window(s, t0 + 1.0, t0 + 3.0);
+    let tilt = worst(&levelled, |x| {
+        x.truth.euler_deg[0].abs().max(x.truth.euler_deg[1].abs())
+    });
+    // It first stops the climb (peak ≈ 10.5 m at t0 + 1.6 s), overshoots to ≈ 2 m/s down
+    // while the baro-blended climb rate catches up, then holds the set rate.
+    let fastest = window(s, t0, t0 + 15.0)
+        .iter()
+        .map(|x| -x.climb_mps)
+        .fold(0.0, f64::max);
+    println!("fastest descent {fastest:.2} m/s");
+    assert!(fastest < 2.5, "{fastest}");
+    let descent = window(s, t0 + 5.0, t0 + 10.0);
+    let rate = descent.iter().map(|x| x.climb_mps).sum::<f64>() / descent.len() as f64;
+    let landed = s
+        .iter()
+        .find(|x| x.t_s > t0 && x.altitude_m == 0.0)
+        .unwrap();
+    let disarm = s
+        .iter()
+        .find(|x| x.out.decision == Decision::DisarmedFailsafe)
+        .unwrap();
+    println!(
+        "levelled to {tilt:.2}° within 1 s, descent {rate:.2} m/s, landed at {:.2} s, disarmed at {:.2} s",
+        landed.t_s, disarm.t_s
+    );
+    assert!(tilt < 2.0, "{tilt}");
+    let spread = worst(&descent, |x| x.climb_mps - rate);
+    println!("descent rate spread ±{spread:.2} m/s");
+    assert!((-1.05..-0.95).contains(&rate), "{rate}");
+    assert!(spread < 0.15, "{spread}");
+    assert!(landed.t_s < disarm.t_s, "landed before the disarm");
+    assert!((disarm.t_s - t0 - 15.0).abs() < 0.01, "{}", disarm.t_s);
+    let after = window(s, disarm.t_s, 22.0);
+    assert!(
+        after
+            .iter()
+            .all(|x| !x.out.armed && x.out.motors == [Command::Stopped; 4])
+    );
+    assert!(after.iter().all(|x| x.altitude_m == 0.0));
+}
+
+#[test]
+fn control_returns_with_the_link_only_once_the_sticks_are_centred() {
+    // Cut 4.5–6.0 s while the pilot holds 10° right roll; the stick stays there until 7 s,
+    // then centres.
+    let sitl = fly(
+        airframe_settings(),
+        8.0,
+        pilot(-1.0, |t| PilotInput {
+            roll: if (4.0..7.0).contains(&t) {
+                10.0 / 45.0
+            } else {
+                0.0
+            },
+            link_cut: (4.5..6.0).contains(&t),
+            ..cruise(-1.0)
+        }),
+    );
+    let s = &sitl.samples;
+    let entered = s
+        .iter()
+        .find(|x| x.out.decision == Decision::FailsafeEntered)
+        .unwrap();
+    let link_back = s.iter().find(|x| x.t_s > 6.0 && x.link_up).unwrap();
+    let recovered = s
+        .iter()
+        .find(|x| x.out.decision == Decision::ControlRecovered)
+        .unwrap();
+    println!(
+        "failsafe {:.3} s, link back {:.3} s, control recovered {:.3} s",
+        entered.t_s, link_back.t_s, recovered.t_s
+    );
+    assert!((5.0..5.1).contains(&entered.t_s), "{}", entered.t_s);
+    assert!((6.0..6.1).contains(&link_back.t_s), "{}", link_back.t_s);
+    // Link back with the stick deflected: still failsafe (levelled), until it centres at 7 s.
+    let waiting = window(s, link_back.t_s, 7.0);
+    assert!(waiting.iter().all(|x| x.out.failsafe));
+    assert!(worst(&waiting, |x| x.truth.euler_deg[0]) < 2.0);
+    assert!((7.0..7.05).contains(&recovered.t_s), "{}", recovered.t_s);
+    // The recovery tune (1.5 kHz first tone) plays.
+    assert_eq!(recovered.tone_hz, 1500);
+    assert!(
+        window(s, recovered.t_s, 8.0)
+            .iter()
+            .all(|x| x.out.armed && !x.out.failsafe)
+    );
+}
+
+#[test]
+fn idle_on_the_ground_disarms() {
+    // Armed at 1.507 s, never takes off: the default 10 s idle time disarms it.
+    let sitl = fly(
+        airframe_settings(),
+        13.0,
+        Box::new(|t| PilotInput {
+            yaw: if (0.5..ARMED_BY_S).contains(&t) {
+                1.0
+            } else {
+                0.0
+            },
+            ..PilotInput::default()
+        }),
+    );
+    let s = &sitl.samples;
+    let armed = s
+        .iter()
+        .find(|x| x.out.decision == Decision::Armed)
+        .unwrap();
+    let disarmed = s
+        .iter()
+        .find(|x| x.out.decision == Decision::DisarmedIdle)
+        .unwrap();
+    println!(
+        "armed {:.3} s, idle-disarmed {:.3} s",
+        armed.t_s, disarmed.t_s
+    );
+    assert!((disarmed.t_s - armed.t_s - 10.0).abs() < 0.01);
+    // The disarm tune starts at 2 kHz; the motors stop.
+    assert_eq!(disarmed.tone_hz, 2000);
+    assert!(
+        window(s, disarmed.t_s, 13.0)
+            .iter()
+            .all(|x| x.out.motors == [Command::Stopped; 4])
+    );
+    assert!(s.iter().all(|x| x.altitude_m < 0.01));
+}
+
+#[test]
+fn low_battery_sounds_the_alarm() {
+    let mut settings = airframe_settings();
+    settings.set("battery.cells", Value::U32(1)).unwrap();
+    // 4.0 V falling 50 mV/s from 5 s: crosses the 3.5 V warning at 15 s and the 3.3 V
+    // critical level at 19 s. (Falling much faster, the critical level would replace the
+    // warning before its hold time ends: the monitor then goes straight to critical.)
+    let sitl = fly(
+        settings,
+        23.0,
+        pilot(-1.0, |t| PilotInput {
+            battery_mv: (4_000.0 - 50.0 * (t - 5.0).max(0.0)) as f32,
+            ..cruise(-1.0)
+        }),
+    );
+    let s = &sitl.samples;
+    let warn = s
+        .iter()
+        .find(|x| x.battery == BatteryLevel::Warning)
+        .unwrap();
+    let crit = s
+        .iter()
+        .find(|x| x.battery == BatteryLevel::Critical)
+        .unwrap();
+    // Battery warning tune: 2.5 kHz beeps; critical: 4 kHz.
+    let beep = s.iter().find(|x| x.tone_hz == 2500).unwrap();
+    let siren = s.iter().find(|x| x.tone_hz == 4000).unwrap();
+    println!(
+        "warning at {:.2} s (beep {:.2} s), critical at {:.2} s (siren {:.2} s)",
+        warn.t_s, beep.t_s, crit.t_s, siren.t_s
+    );
+    // 0.5 s filter lag (τ 0.5 s on a 50 mV/s ramp) + 2 s hold after the crossing.
+    assert!((17.45..17.6).contains(&warn.t_s), "{}", warn.t_s);
+    assert!(
+        beep.t_s >= warn.t_s && beep.t_s - warn.t_s < 0.5,
+        "{}",
+        beep.t_s
+    );
+    assert!((21.45..21.6).contains(&crit.t_s), "{}", crit.t_s);
+    assert!(siren.t_s >= crit.t_s && siren.t_s - crit.t_s < 0.2);
+    // No battery sound before the warning (the armed tune is 1–2 kHz).
+    assert!(
+        s.iter()
+            .filter(|x| x.t_s < warn.t_s)
+            .all(|x| x.tone_hz != 2500 && x.tone_hz != 4000)
+    );
+    // The arming tune played when armed.
+    let armed = s
+        .iter()
+        .find(|x| x.out.decision == Decision::Armed)
+        .unwrap();
+    assert_eq!(armed.tone_hz, 1000);
+}

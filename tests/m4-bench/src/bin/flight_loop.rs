@@ -1,0 +1,125 @@
+//! Instructions for one full flight-loop iteration, `FlightLoop::step`, exactly as the firmware
+//! runs it after each gyro sample: complementary-filter attitude update (accelerometer
+//! correction), the arming/failsafe supervisor, the mode switch, Euler angles, the controller
+//! of the active mode and the quad-X mixer. Configuration from the factory settings
+//! (`pipeline::from_settings`, 1 kHz), gains designed before the first measured step, the loop
+//! armed by the stick gesture (1.2 s of steps, not measured).
+//! m4count regions: 1 = gain design, 3 = attitude mode (LQG angle law), 5 = rate PID,
+//! 7 = rate LQG — each one step on which the accelerometer is skipped (armed, one sample in
+//! 20 corrects the attitude) — and 9 = 20 attitude-mode steps, so one with the
+//! accelerometer correction (divide by 20 for the mean), 11 = one step of the
+//! system-identification mode (shake + 13-state EKF, switch high set to `sysid`); the even
+//! regions are setup.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(target_os = "none")]
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    use core::hint::black_box;
+    use flight_core::pipeline::{Controllers, FlightLoop, ImuSample, LinkInput, from_settings};
+    use flight_core::settings::Settings;
+    use flight_core::supervisor::Sticks;
+    use m4_bench::{exit, m4count_marker};
+
+    let Ok(setup) = from_settings(&Settings::default()) else {
+        exit()
+    };
+    m4count_marker();
+    let controllers = Controllers::design(&setup.control).ok();
+    m4count_marker();
+    let mut fl = FlightLoop::new(setup.loop_config, setup.mixer, controllers);
+    // A second loop whose switch-high position is the identification mode.
+    let mut settings = Settings::default();
+    if settings.set_text("mode.switch_high", "sysid").is_err() {
+        exit()
+    }
+    let Ok(sysid_setup) = from_settings(&settings) else {
+        exit()
+    };
+    let mut id_loop = FlightLoop::new(sysid_setup.loop_config, sysid_setup.mixer, controllers);
+    let imu = ImuSample {
+        gyro_radps: [0.01, -0.02, 0.005],
+        accel_mps2: [0.1, -0.2, -9.8],
+        mag: None,
+    };
+    let link = |throttle: f32, yaw: f32, mode_channel: f32| LinkInput {
+        up: true,
+        sticks: Sticks {
+            throttle,
+            roll: 0.1,
+            pitch: -0.05,
+            yaw,
+        },
+        arm_switch: None,
+        mode_channel,
+    };
+    // Arm: throttle low, yaw right for 1.2 s.
+    let mut t = 0u32;
+    for _ in 0..1200 {
+        fl.step(t, &imu, &link(0.0, 1.0, -1.0), None);
+        t += 1;
+    }
+    // Fly a little so the hover estimate and controllers have state.
+    for _ in 0..19 {
+        fl.step(t, &imu, &link(0.4, 0.0, -1.0), Some(0.1));
+        t += 1;
+    }
+    let flying = |mode: f32| black_box(link(0.4, 0.02, mode));
+    let sample = black_box(imu);
+    // The 20th armed step: the accelerometer corrects on this one.
+    let attitude = flying(-1.0);
+    m4count_marker();
+    let out = fl.step(t, &sample, &attitude, Some(0.1));
+    m4count_marker();
+    black_box(out);
+    t += 1;
+    // Rate PID (switch middle). Mode change resets happen on the first step: take the second.
+    let pid = flying(0.0);
+    fl.step(t, &sample, &pid, Some(0.1));
+    t += 1;
+    m4count_marker();
+    let out = fl.step(t, &sample, &pid, Some(0.1));
+    m4count_marker();
+    black_box(out);
+    t += 1;
+    let lqg = flying(1.0);
+    fl.step(t, &sample, &lqg, Some(0.1));
+    t += 1;
+    m4count_marker();
+    let out = fl.step(t, &sample, &lqg, Some(0.1));
+    m4count_marker();
+    black_box(out);
+    t += 1;
+    fl.step(t, &sample, &attitude, Some(0.1));
+    t += 1;
+    m4count_marker();
+    let mut out = fl.step(t, &sample, &attitude, Some(0.1));
+    for _ in 0..19 {
+        t += 1;
+        out = fl.step(t, &sample, &attitude, Some(0.1));
+    }
+    m4count_marker();
+    black_box(out);
+    // System identification: arm the second loop, hover, switch high, measure its 2nd step.
+    let mut t = 0u32;
+    for _ in 0..1200 {
+        id_loop.step(t, &imu, &link(0.0, 1.0, -1.0), None);
+        t += 1;
+    }
+    let shake = flying(1.0);
+    for _ in 0..2 {
+        id_loop.step(t, &sample, &shake, Some(0.1));
+        t += 1;
+    }
+    m4count_marker();
+    let out = id_loop.step(t, &sample, &shake, Some(0.1));
+    m4count_marker();
+    black_box(out);
+    if id_loop.identification_in_progress().is_none() {
+        exit()
+    }
+    exit()
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {}
