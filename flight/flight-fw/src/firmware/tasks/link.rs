@@ -34,6 +34,7 @@ use crate::firmware::link_radio::{EmbassyClock, LinkRadio};
 use crate::firmware::signals::{
     ARMED, BATTERY, FLIGHT_STATE, LINK_INPUT, SETTINGS, SETTINGS_CHANGED, SYSID,
 };
+use radio_rfm22b::TxPower;
 
 /// How long the follower listens for a bind offer after boot.
 const BIND_WINDOW_US: u64 = 3_000_000;
@@ -194,7 +195,7 @@ pub async fn link_task(radio: Radio) {
     let Radio { spi, nsel, nirq } = radio;
     let Ok(device) = ExclusiveDevice::new_no_delay(spi, nsel);
     // SDN is tied low on these boards: software reset only.
-    let mut radio = LinkRadio::new(Rfm22b::new_without_sdn(device, nirq, Delay));
+    let mut radio = LinkRadio::new(Rfm22b::new_without_sdn(device, nirq, Delay), TxPower::MAX);
     let mut clock = EmbassyClock;
     let mut hooks = FlightHooks::new();
     let mut params = LinkParams::new(
