@@ -87,6 +87,13 @@ impl Controllers {
         }
     }
 
+    /// Tells the three LQG axes what the mixer realised of their last outputs.
+    pub fn lqg_realised(&mut self, applied: [f32; 3]) {
+        for (c, a) in self.lqg.iter_mut().zip(applied) {
+            c.set_realised_output(a);
+        }
+    }
+
     /// LQG on all three axes.
     pub fn lqg(&mut self, gyro_dps: [f32; 3], setpoints: [AxisSetpoint; 3]) -> [f32; 3] {
         let mut out = [0.0; 3];

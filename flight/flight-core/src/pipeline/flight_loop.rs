@@ -256,6 +256,7 @@ impl FlightLoop {
             self.finish_sysid();
         }
         let mut motors = [Command::Stopped; 4];
+        let mut shaking = false;
         if let (true, Some(c)) = (
             self.supervisor.motors_enabled() && gyro_ok,
             self.controllers.as_mut(),
@@ -307,14 +308,17 @@ impl FlightLoop {
                         // On the ground (throttle low) nothing shakes: the output is zeroed
                         // below, and the EKF only learns in the air.
                         FlightMode::SystemId if sticks.throttle_low() => [0.0; 3],
-                        FlightMode::SystemId => sysid_output(
-                            &mut self.sysid,
-                            self.config.ts_s,
-                            gyro_dps,
-                            errors,
-                            yaw_rate,
-                            c,
-                        ),
+                        FlightMode::SystemId => {
+                            shaking = true;
+                            sysid_output(
+                                &mut self.sysid,
+                                self.config.ts_s,
+                                gyro_dps,
+                                errors,
+                                yaw_rate,
+                                c,
+                            )
+                        }
                         FlightMode::RateLqg => c.lqg(
                             gyro_dps,
                             rates.map(|rate_dps| AxisSetpoint::Rate { rate_dps }),
@@ -372,7 +376,21 @@ impl FlightLoop {
                 }
             };
             let idle = self.config.idle.clamp(0.0, 0.3);
-            let mixed = self.mixer.mix(throttle, attitude_out);
+            let (mixed, applied) = self.mixer.mix_with_applied(throttle, attitude_out);
+            // Controllers that predict with their own output are told what the motors will
+            // realise: desaturation scales the demand down whenever it does not fit.
+            let uses_lqg = failsafe.is_some()
+                || match self.mode {
+                    FlightMode::RateLqg | FlightMode::Horizon => true,
+                    FlightMode::Attitude => self.config.attitude_uses_lqg,
+                    FlightMode::RatePid | FlightMode::SystemId => false,
+                };
+            if uses_lqg {
+                c.lqg_realised(applied);
+            }
+            if let (true, Some(s)) = (shaking, self.sysid.as_mut()) {
+                s.ekf.record_output(applied);
+            }
             for (m, x) in motors.iter_mut().zip(mixed) {
                 *m = Command::Throttle(idle + (1.0 - idle) * x);
             }

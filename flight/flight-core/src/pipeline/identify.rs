@@ -19,7 +19,8 @@ pub(super) struct Sysid {
 }
 
 /// System identification: the attitude PID holds the frame level (hands-off safe) and
-/// the shake adds its square offsets; the EKF sees the gyro and the output actually sent.
+/// the shake adds its square offsets; the EKF sees the gyro here and, from the loop, the
+/// output the motors actually realised.
 pub(super) fn sysid_output(
     sysid: &mut Option<Sysid>,
     ts_s: f32,
@@ -44,6 +45,6 @@ pub(super) fn sysid_output(
     for ((o, a), b) in u.iter_mut().zip(stabilise).zip(offsets) {
         *o = (a + b).clamp(-1.0, 1.0);
     }
-    s.ekf.record_output(u);
+    // The loop tells the EKF what the mixer realised of `u` (`record_output`), not `u`.
     u
 }
