@@ -83,7 +83,7 @@ pub fn default_airframe() -> (QuadParams, Settings) {
     };
     set(&mut s, "lqg.ln_beta1.roll", 10.0);
     set(&mut s, "lqg.ln_beta1.pitch", 10.0);
-    set(&mut s, "lqg.ln_beta2.yaw", 6.5);
+    set(&mut s, "lqg.ln_beta1.yaw", 6.5);
     set(&mut s, "lqg.tau_s", 0.03);
     let tune = analytic_pid([10.0, 10.0, 6.5], 0.03, &AutotuneSettings::default())
         .expect("the autotune accepts the frame");

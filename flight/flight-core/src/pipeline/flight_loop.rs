@@ -245,6 +245,7 @@ impl FlightLoop {
             arm_switch: link.arm_switch,
             sensors_healthy: gyro_ok && filter_ok,
             gains_ready: self.controllers.is_some(),
+            landed: at_rest(&gyro_dps, imu.accel_mps2),
         });
         let climb_rate_mps = self.fuse_climb(climb_rate_mps, imu.accel_mps2);
         let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
@@ -409,6 +410,16 @@ impl FlightLoop {
             attitude_deg: [roll, pitch, yaw],
         }
     }
+}
+
+/// Still and feeling 1 g: resting on the ground. A frame falling or descending with the
+/// throttle closed feels much less than 1 g, and one flying around turns.
+fn at_rest(gyro_dps: &[f32; 3], accel_mps2: [f32; 3]) -> bool {
+    const G: f32 = crate::estimation::GRAVITY_MPS2;
+    let [x, y, z] = accel_mps2;
+    let f2 = x * x + y * y + z * z;
+    gyro_dps.iter().all(|g| g.abs() < 30.0)
+        && (0.85 * 0.85 * G * G..1.15 * 1.15 * G * G).contains(&f2)
 }
 
 /// (roll, pitch, yaw) in degrees without libm: a polynomial atan2 (error < 0.01°) on the

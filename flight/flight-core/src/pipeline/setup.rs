@@ -136,7 +136,7 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
     let models = [
         AxisModel::new(s.f32("lqg.ln_beta1.roll"), tau_s)?,
         AxisModel::new(s.f32("lqg.ln_beta1.pitch"), tau_s)?,
-        AxisModel::new(s.f32("lqg.ln_beta2.yaw"), tau_s)?,
+        AxisModel::new(s.f32("lqg.ln_beta1.yaw"), tau_s)?,
     ];
     // The stored costs are frame-invariant (q1 angle, q2 rate, q4 torque; design.rs
     // `FrameInvariantCosts`): what autotune's `lqg_costs` produces, and they stay right when
@@ -247,14 +247,14 @@ mod tests {
         assert_eq!(setup.control.pid_rate[0].ki, 0.005);
         // Frame-invariant costs scaled by β1 = e^10 = 22026.5 (roll) and e^7 = 1096.6 (yaw).
         let roll = setup.control.rate_costs[0];
-        assert!((roll.q_rate - 4.0 / 22_026.47).abs() < 1e-8, "{roll:?}");
+        assert!((roll.q_rate - 1_000.0 / 22_026.47).abs() < 1e-6, "{roll:?}");
         assert!(
-            (roll.q_angle - 10_000.0 / 22_026.47).abs() < 1e-5,
+            (roll.q_angle - 480_000.0 / 22_026.47).abs() < 1e-3,
             "{roll:?}"
         );
-        assert!((roll.q_torque.q3(22_026.47) - 0.04 * 22_026.47).abs() < 1e-3);
+        assert!((roll.q_torque.q3(22_026.47) - 0.1 * 22_026.47).abs() < 1e-2);
         let yaw = setup.control.attitude_costs[2];
-        assert!((yaw.q_rate - 4.0 / 1_096.63).abs() < 1e-6, "{yaw:?}");
+        assert!((yaw.q_rate - 1_000.0 / 1_096.63).abs() < 1e-4, "{yaw:?}");
         assert_eq!(setup.battery.cells, None);
         assert_eq!(setup.battery.current_mv_per_amp, Some(50.0));
         assert_eq!(setup.battery.cell_warning_mv, 3_500);

@@ -147,12 +147,16 @@ pub const PARAMS: &[Param] = &[
     // LQG model and costs (4xx)
     f(400, "lqg.ln_beta1.roll", 5.0, 14.0, 10.0),
     f(401, "lqg.ln_beta1.pitch", 5.0, 14.0, 10.0),
-    f(402, "lqg.ln_beta2.yaw", 3.0, 12.0, 7.0),
+    f(402, "lqg.ln_beta1.yaw", 3.0, 12.0, 7.0),
     f(403, "lqg.tau_s", 0.005, 0.2, 0.03),
-    f(404, "lqg.q_rate", 1e-6, 1e6, 4.0),
-    f(405, "lqg.q_torque", 1e-9, 1e3, 0.04),
-    f(406, "lqg.q_attitude", 1e-3, 1e9, 10_000.0),
-    f(407, "lqg.q_integral", 1e-9, 1e6, 0.0001),
+    // Frame-invariant LQR costs (control::design::FrameInvariantCosts: q1 angle, q2 rate,
+    // q4 torque; each axis scales them by its own β1). Defaults: what autotune's
+    // `lqg_costs` gives for τ = 30 ms (any β): 38 ms rate rise in the SITL, where Tau Labs'
+    // absolute (10⁴, 4, 0.04) read as invariant gave a sluggish 216 ms. Key 407 (an unused
+    // integral cost) is retired and must not be reused.
+    f(404, "lqg.q_rate", 1e-6, 1e6, 1_000.0),
+    f(405, "lqg.q_torque", 1e-9, 1e3, 0.1),
+    f(406, "lqg.q_attitude", 1e-3, 1e9, 480_000.0),
     // battery (5xx)
     u(500, "battery.cells", 0, 6, 0),
     u(501, "battery.cell_warning_mv", 2_800, 4_200, 3_500),

@@ -18,7 +18,7 @@ use super::{Gesture, GestureDetector, Sticks};
 pub struct Settings {
     /// How long a stick gesture must be held.
     pub gesture_hold_ms: u32,
-    /// Disarm after the throttle has been low this long while armed (landed).
+    /// Disarm after the throttle has been low this long while armed and landed.
     pub idle_disarm_ms: u32,
     /// Disarm this long after the link failsafe began; the descent must have landed by then.
     pub failsafe_disarm_ms: u32,
@@ -56,6 +56,9 @@ pub struct Inputs {
     pub sensors_healthy: bool,
     /// Controller gains are solved (the LQG Riccati solution runs before take-off).
     pub gains_ready: bool,
+    /// The frame rests on the ground (still, feeling 1 g). The idle disarm only counts
+    /// while it does, so a closed throttle in the air never disarms.
+    pub landed: bool,
 }
 
 /// The supervisor's state.
@@ -189,7 +192,7 @@ impl Supervisor {
                     self.state = State::Disarmed;
                     return Decision::DisarmedByPilot;
                 }
-                if inputs.sticks.throttle_low() {
+                if inputs.sticks.throttle_low() && inputs.landed {
                     let since = *self.throttle_low_since.get_or_insert(now);
                     if now.wrapping_sub(since) >= self.settings.idle_disarm_ms {
                         self.state = State::Disarmed;
@@ -236,6 +239,7 @@ mod tests {
             arm_switch: None,
             sensors_healthy: true,
             gains_ready: true,
+            landed: true,
         }
     }
 
@@ -285,6 +289,30 @@ mod tests {
         );
         assert_eq!(
             sup.update(&inputs(13_000, true, 0.0, 0.0)),
+            Decision::DisarmedIdle
+        );
+    }
+
+    #[test]
+    fn a_closed_throttle_in_the_air_never_idle_disarms() {
+        let s = Settings::default();
+        let mut sup = armed(&s);
+        for t in (2_000..60_000).step_by(10) {
+            let mut falling = inputs(t, true, 0.0, 0.0);
+            falling.landed = false;
+            assert_eq!(sup.update(&falling), Decision::Steady);
+        }
+        // Touch-down: the idle timer starts only now.
+        assert_eq!(
+            sup.update(&inputs(60_000, true, 0.0, 0.0)),
+            Decision::Steady
+        );
+        assert_eq!(
+            sup.update(&inputs(69_999, true, 0.0, 0.0)),
+            Decision::Steady
+        );
+        assert_eq!(
+            sup.update(&inputs(70_000, true, 0.0, 0.0)),
             Decision::DisarmedIdle
         );
     }
