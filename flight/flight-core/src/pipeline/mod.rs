@@ -2,7 +2,8 @@
 //! modules own — attitude estimation, the arming/failsafe supervisor, the flight-mode switch,
 //! the LQG and PID controllers and the mixer — in the order the firmware runs them right
 //! after each data-ready interrupt, so the outputs are synchronous with the gyro. `setup`
-//! derives its configuration from the settings; `channels` turns link channels into sticks; `announce` picks the alerts to sound.
+//! derives its configuration from the settings; `channels` turns link channels into sticks;
+//! `announce` picks the alerts to sound; `link` keeps the bound link in the settings.
 
 mod announce;
 mod channels;
@@ -10,6 +11,7 @@ mod climb;
 mod controllers;
 mod flight_loop;
 mod identify;
+mod link;
 mod setup;
 mod sticks;
 
@@ -20,5 +22,6 @@ pub use channels::{
 pub use climb::ClimbRate;
 pub use controllers::{ControlParams, Controllers};
 pub use flight_loop::{FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
+pub use link::{store_link, stored_link};
 pub use setup::{FlightSetup, SetupError, from_settings};
 pub use sticks::StickShaping;

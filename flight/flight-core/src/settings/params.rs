@@ -116,6 +116,12 @@ pub const OUTPUT_PROTOCOLS: Choice = &["brushed", "pwm", "oneshot125"];
 pub const FRAMES: Choice = &["quad-x", "quad-plus", "hex-x"];
 /// Flight modes for the three switch positions.
 pub const MODES: Choice = &["rate-pid", "rate-lqg", "attitude", "horizon", "sysid"];
+/// Link bands (`telemetry::link::Band`).
+pub const BANDS: Choice = &["433", "868", "915"];
+/// Link rate modes (`telemetry::link::RateMode`).
+pub const RATES: Choice = &["l50", "m100", "f250", "f500"];
+/// Uplink channel formats (`telemetry::channels::ChannelFormat`).
+pub const CHANNEL_FORMATS: Choice = &["16", "8"];
 /// Gyro loop rates.
 pub const LOOP_RATES: Choice = &["500", "1000"];
 
@@ -170,6 +176,12 @@ pub const PARAMS: &[Param] = &[
     c(603, "mode.switch_low", MODES, 2),
     c(604, "mode.switch_mid", MODES, 0),
     c(605, "mode.switch_high", MODES, 1),
+    // the bound link (7xx), written after an over-the-air bind; bind ID 0 = never bound
+    u(700, "link.bind_id", 0, u32::MAX, 0),
+    c(701, "link.band", BANDS, 0),
+    c(702, "link.rate", RATES, 2),
+    c(703, "link.channels", CHANNEL_FORMATS, 0),
+    u(704, "link.telemetry_ratio", 2, 128, 4),
 ];
 
 /// Number of parameters.

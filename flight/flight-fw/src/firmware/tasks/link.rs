@@ -5,9 +5,10 @@
 //! battery, link statistics, flight mode, arm/failsafe state, identification results; state
 //! changes out of turn).
 //!
-//! Binding: for `BIND_WINDOW_US` after boot the follower listens for a bind offer; without
-//! one it uses the compiled-in link (`DEFAULT_BIND_ID`). The bound parameters live in RAM
-//! until the settings table gets keys for them.
+//! Binding: for `BIND_WINDOW_US` after boot the follower listens for a bind offer (start the
+//! module's bind, then power the flight controller). A bind is stored in the settings
+//! (`link.*`) and saved, so later boots find the same module; a never-bound controller uses
+//! the compiled-in link (`DEFAULT_BIND_ID`).
 
 use core::sync::atomic::Ordering;
 
@@ -16,7 +17,7 @@ use embassy_futures::select::{Either, select};
 use embassy_time::{Delay, Duration, Timer};
 use embedded_hal_bus::spi::ExclusiveDevice;
 use flight_core::battery::BatteryStatus;
-use flight_core::pipeline::ChannelMap;
+use flight_core::pipeline::{ChannelMap, store_link, stored_link};
 use flight_core::report::{LinkSeen, Reporter, Snapshot, apply_setting, sysid_messages};
 use flight_core::supervisor::FlightMode;
 use radio_rfm22b::Rfm22b;
@@ -32,7 +33,7 @@ use super::supervisor::{Watched, check_in};
 use crate::firmware::board::Radio;
 use crate::firmware::link_radio::{EmbassyClock, LinkRadio};
 use crate::firmware::signals::{
-    ARMED, BATTERY, FLIGHT_STATE, LINK_INPUT, SETTINGS, SETTINGS_CHANGED, SYSID,
+    ARMED, BATTERY, FLIGHT_STATE, LINK_INPUT, SAVE_REQUEST, SETTINGS, SETTINGS_CHANGED, SYSID,
 };
 use radio_rfm22b::TxPower;
 
@@ -198,13 +199,20 @@ pub async fn link_task(radio: Radio) {
     let mut radio = LinkRadio::new(Rfm22b::new_without_sdn(device, nirq, Delay), TxPower::MAX);
     let mut clock = EmbassyClock;
     let mut hooks = FlightHooks::new();
-    let mut params = LinkParams::new(
-        DEFAULT_BIND_ID,
-        Band::Mhz433,
-        RateMode::F250,
-        ChannelFormat::Full16,
-        4,
-    );
+    let stored = SETTINGS
+        .lock()
+        .await
+        .as_ref()
+        .and_then(|(live, _)| stored_link(live));
+    let mut params = stored.unwrap_or_else(|| {
+        LinkParams::new(
+            DEFAULT_BIND_ID,
+            Band::Mhz433,
+            RateMode::F250,
+            ChannelFormat::Full16,
+            4,
+        )
+    });
     let mut bind_window = true;
     loop {
         check_in(Watched::Link);
@@ -214,6 +222,12 @@ pub async fn link_task(radio: Radio) {
                 Either::First(Ok(Some(offered))) => {
                     info!("bound to link {:08x}", offered.bind_id);
                     params = offered;
+                    if let Some((live, _)) = SETTINGS.lock().await.as_mut()
+                        && store_link(live, &offered).is_ok()
+                    {
+                        // Saved now, while still disarmed at boot.
+                        SAVE_REQUEST.signal(());
+                    }
                     bind_window = false;
                 }
                 Either::First(Ok(None)) => bind_window = false,
