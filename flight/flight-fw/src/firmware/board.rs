@@ -269,6 +269,9 @@ impl Board {
             ),
             pacer,
             table,
+            // Output 8 (PC8): BrushedSparky's JP9 "external LEDs or buzzer" FET, Sparky2's
+            // CONN7 pin 4. Low = off, also while the MCU is in reset (gate pull-down).
+            buzzer: Output::new(p.PC8, Level::Low, Speed::Low),
         };
 
         let mut usb_config = usb::Config::default();

@@ -1,9 +1,10 @@
 //! Sounds alerts through the DAC into the video transmitter's audio (PA4): a sine table
-//! played by DMA, paced by TIM6 so the pitch is TIM6's rate / 130. Battery alarms repeat
-//! while the battery stays low.
+//! played by DMA, paced by TIM6 so the pitch is TIM6's rate / 130 — and on the buzzer
+//! output. Battery alarms repeat while the battery stays low.
 
 use embassy_futures::select::{Either, select};
 use embassy_stm32::dac::{DacChannel, Value, ValueArray};
+use embassy_stm32::gpio::Output;
 use embassy_stm32::mode::Async;
 use embassy_stm32::peripherals::TIM6;
 use embassy_stm32::timer::low_level::Timer;
@@ -25,6 +26,9 @@ pub struct Speaker {
     pub pacer: Timer<'static, TIM6>,
     /// One sine cycle.
     pub table: &'static [u16; DAC_SAMPLES_PER_CYCLE],
+    /// The buzzer output (an active buzzer on the low-side FET of output 8): on while a
+    /// tone sounds, so the same patterns are heard without the video link.
+    pub buzzer: Output<'static>,
 }
 
 fn now_ms() -> u32 {
@@ -78,6 +82,11 @@ pub async fn alerts_task(mut speaker: Speaker) {
             }
         };
         frequency = next;
+        if frequency == 0 {
+            speaker.buzzer.set_low();
+        } else {
+            speaker.buzzer.set_high();
+        }
         match dac_sample_period_ticks(frequency, DAC_SAMPLES_PER_CYCLE) {
             Some(arr) => {
                 let arr = arr.min(0xFFFF) as u16;
