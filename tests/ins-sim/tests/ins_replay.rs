@@ -15,18 +15,29 @@ use std::path::PathBuf;
 use ins_sim::compare::{compare, parse_reference};
 use ins_sim::replay::{HEADER, Options, Row, parse_sensors, run};
 
-fn dataset(kind: &str, name: &str) -> Option<String> {
-    let root =
-        std::env::var("PX4_ECL_DIR").unwrap_or_else(|_| "/work/shared/datasets/px4-ecl".into());
-    std::fs::read_to_string(PathBuf::from(root).join(kind).join(format!("{name}.csv"))).ok()
+/// The recordings live in `shared/` beside the checkout (as CI has it), or in `PX4_ECL_DIR`.
+/// A missing recording fails the test: a replay test that silently skips asserts nothing.
+fn dataset(kind: &str, name: &str) -> String {
+    let root = std::env::var("PX4_ECL_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|_| {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/datasets/px4-ecl")
+        });
+    let path = root.join(kind).join(format!("{name}.csv"));
+    std::fs::read_to_string(&path).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e} (set PX4_ECL_DIR to the px4-ecl dataset)",
+            path.display()
+        )
+    })
 }
 
-/// (our rows, EKF2 rows) or None when the dataset is not on this machine.
-fn replay(name: &str) -> Option<(Vec<Row>, Vec<Row>)> {
-    let sensors = dataset("replay_data", name)?;
-    let ekf2 = dataset("change_indication", name)?;
+/// (our rows, EKF2 rows).
+fn replay(name: &str) -> (Vec<Row>, Vec<Row>) {
+    let sensors = dataset("replay_data", name);
+    let ekf2 = dataset("change_indication", name);
     let rows = run(&parse_sensors(&sensors).unwrap(), &Options::default());
-    Some((rows, parse_reference(&ekf2).unwrap()))
+    (rows, parse_reference(&ekf2).unwrap())
 }
 
 fn max_horizontal_difference(rows: &[Row], reference: &[Row], from_s: f64) -> f64 {
@@ -46,10 +57,7 @@ fn max_horizontal_difference(rows: &[Row], reference: &[Row], from_s: f64) -> f6
 
 #[test]
 fn iris_gps_agrees_with_ekf2() {
-    let Some((rows, reference)) = replay("iris_gps") else {
-        eprintln!("PX4 ECL dataset not found, skipped");
-        return;
-    };
+    let (rows, reference) = replay("iris_gps");
     // From 34.585 s on, EKF2's rows fall at ~10 m/s² (vD 0.66 → 3.6 m/s) while GPS (last fix
     // 34.456 s) and baro say the craft sits on the ground: the recording ends and EKF2 coasts.
     // Those rows are left out.
@@ -69,10 +77,7 @@ fn iris_gps_agrees_with_ekf2() {
 
 #[test]
 fn ekf_gsf_reset_agrees_with_ekf2() {
-    let Some((rows, reference)) = replay("ekf_gsf_reset") else {
-        eprintln!("PX4 ECL dataset not found, skipped");
-        return;
-    };
+    let (rows, reference) = replay("ekf_gsf_reset");
     let m = compare(&rows, &reference, 10.0);
     println!("ekf_gsf_reset vs EKF2: {}", m.to_json());
     // Attitude within a few degrees, including the 180° yaw turn at 33 s (EKF2 logs its
@@ -105,10 +110,7 @@ fn decimated(rows: &[Row]) -> String {
 }
 
 fn check_golden(name: &str) {
-    let Some((rows, _)) = replay(name) else {
-        eprintln!("PX4 ECL dataset not found, skipped");
-        return;
-    };
+    let (rows, _) = replay(name);
     let now = decimated(&rows);
     let path = golden_path(name);
     if std::env::var_os("UPDATE_GOLDEN").is_some() {
