@@ -7,7 +7,8 @@
     clippy::unwrap_used,
     clippy::expect_used,
     clippy::indexing_slicing,
-    clippy::needless_range_loop
+    clippy::needless_range_loop,
+    clippy::panic
 )] // test code
 
 use std::path::PathBuf;
