@@ -42,24 +42,22 @@ impl Transition {
     }
 }
 
-/// Σₙ kₙ·rowsₙ, element-wise over columns `FIRST..14`; the columns before `FIRST` are never
-/// read by the second pass (it only needs W[r][m] for m in Φ rows c ≥ r) and stay 0. N and
-/// FIRST are constants, so this unrolls with the coefficients held in registers.
+/// out[j] = Σₙ kₙ·rowsₙ[j] for the columns `FIRST..14`; the columns before `FIRST` are
+/// never read by the second pass (it only needs W[r][m] for m in Φ rows c ≥ r) and stay 0.
+/// N and FIRST are constants, so this unrolls with the coefficients held in registers.
 #[inline(always)]
 fn combine<const N: usize, const FIRST: usize>(
+    out: &mut [f32; STATES],
     rows: [&[f32; STATES]; N],
     k: [f32; N],
-) -> [f32; STATES] {
-    core::array::from_fn(|j| {
-        if j < FIRST {
-            return 0.0;
-        }
+) {
+    for (j, o) in out.iter_mut().enumerate().skip(FIRST) {
         let mut acc = 0.0;
         for (row, kn) in rows.iter().zip(k) {
             acc += kn * row.get(j).copied().unwrap_or(0.0);
         }
-        acc
-    })
+        *o = acc;
+    }
 }
 
 /// Σₙ kₙ·v[first + n] for N consecutive entries of one row.
@@ -138,7 +136,8 @@ impl Filter {
 
     fn predict_covariance(&mut self, jacobian: &ProcessJacobian, dt: f32) {
         let phi = Transition::new(jacobian, dt);
-        let w_top = phi_times(&phi, &self.p);
+        let mut w_top = [[0.0; STATES]; 10];
+        phi_times(&phi, &self.p, &mut w_top);
         let [.., p10, p11, p12, p13] = self.p;
         let [w0, w1, w2, w3, w4, w5, w6, w7, w8, w9] = w_top;
         let w = [w0, w1, w2, w3, w4, w5, w6, w7, w8, w9, p10, p11, p12, p13];
@@ -210,35 +209,33 @@ impl Filter {
     }
 }
 
-/// Rows 0..10 of W = Φ·P (Φ's bias rows are the identity, so W's bias rows are P's).
-fn phi_times(phi: &Transition, p: &Covariance) -> [[f32; STATES]; 10] {
+/// Rows 0..10 of W = Φ·P into `w` (Φ's bias rows are the identity, so W's bias rows are
+/// P's and are not computed).
+fn phi_times(phi: &Transition, p: &Covariance, w: &mut [[f32; STATES]; 10]) {
     let [p0, p1, p2, p3, p4, p5, p6, p7, p8, p9, p10, p11, p12, p13] = p;
     let dt = phi.dt;
     let [a0, a1, a2] = phi.dv_dq;
     let [c0, c1, c2] = phi.dv_dab;
-    let vel = |pv: &[f32; STATES], a: [f32; 4], c: f32| {
-        combine::<6, 3>([pv, p6, p7, p8, p9, p13], [1.0, a[0], a[1], a[2], a[3], c])
-    };
-    let quat = |q: [f32; 4], b: [f32; 3]| {
-        combine::<7, 6>(
-            [p6, p7, p8, p9, p10, p11, p12],
-            [q[0], q[1], q[2], q[3], b[0], b[1], b[2]],
-        )
-    };
     let [q0, q1, q2, q3] = phi.qq;
     let [b0, b1, b2, b3] = phi.qb;
-    [
-        combine::<2, 0>([p0, p3], [1.0, dt]),
-        combine::<2, 0>([p1, p4], [1.0, dt]),
-        combine::<2, 0>([p2, p5], [1.0, dt]),
-        vel(p3, a0, c0),
-        vel(p4, a1, c1),
-        vel(p5, a2, c2),
-        quat(q0, b0),
-        quat(q1, b1),
-        quat(q2, b2),
-        quat(q3, b3),
-    ]
+    let [w0, w1, w2, w3, w4, w5, w6, w7, w8, w9] = w;
+    combine::<2, 0>(w0, [p0, p3], [1.0, dt]);
+    combine::<2, 0>(w1, [p1, p4], [1.0, dt]);
+    combine::<2, 0>(w2, [p2, p5], [1.0, dt]);
+    for (wv, pv, a, c) in [(w3, p3, a0, c0), (w4, p4, a1, c1), (w5, p5, a2, c2)] {
+        combine::<6, 3>(
+            wv,
+            [pv, p6, p7, p8, p9, p13],
+            [1.0, a[0], a[1], a[2], a[3], c],
+        );
+    }
+    for (wq, q, b) in [(w6, q0, b0), (w7, q1, b1), (w8, q2, b2), (w9, q3, b3)] {
+        combine::<7, 6>(
+            wq,
+            [p6, p7, p8, p9, p10, p11, p12],
+            [q[0], q[1], q[2], q[3], b[0], b[1], b[2]],
+        );
+    }
 }
 
 #[inline(always)]
