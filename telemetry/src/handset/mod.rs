@@ -6,5 +6,6 @@ pub mod crsf;
 pub mod frsky_d;
 pub mod report;
 pub mod sport;
+pub mod stuffing;
 
 pub use report::HandsetTelemetry;

@@ -4,6 +4,8 @@
 
 use core::fmt;
 
+use super::stuffing::{self, Writer, stuffed_len};
+
 use heapless::Vec;
 
 pub mod hub;
@@ -11,11 +13,11 @@ pub mod hub;
 pub use hub::{HubDecoder, HubRecord, Sender};
 
 /// Frame delimiter (before and after every frame).
-pub const DELIMITER: u8 = 0x7E;
+pub const DELIMITER: u8 = stuffing::FRAME;
 /// Escape byte: the next byte was XORed with [`STUFF_XOR`].
-pub const STUFF: u8 = 0x7D;
+pub const STUFF: u8 = stuffing::ESCAPE;
 /// XOR applied to an escaped byte.
-pub const STUFF_XOR: u8 = 0x20;
+pub const STUFF_XOR: u8 = stuffing::ESCAPE_XOR;
 /// Type byte of a link frame.
 pub const LINK_FRAME: u8 = 0xFE;
 /// Type byte of a user-data frame.
@@ -101,29 +103,16 @@ impl Frame {
     /// Writes `7E`, the stuffed frame and `7E`; returns the bytes written (11…19).
     pub fn encode(&self, out: &mut [u8]) -> Result<usize, Error> {
         let bytes = self.bytes();
-        let needed = 2 + bytes
-            .iter()
-            .map(|&b| if matches!(b, DELIMITER | STUFF) { 2 } else { 1 })
-            .sum::<usize>();
+        let needed = 2 + stuffed_len(bytes);
         let Some(out) = out.get_mut(..needed) else {
             return Err(Error::BufferTooSmall { needed });
         };
-        let mut slots = out.iter_mut();
-        let mut put = |byte: u8| {
-            if let Some(slot) = slots.next() {
-                *slot = byte;
-            }
-        };
-        put(DELIMITER);
+        let mut w = Writer::new(out);
+        w.raw(DELIMITER);
         for byte in bytes {
-            if matches!(byte, DELIMITER | STUFF) {
-                put(STUFF);
-                put(byte ^ STUFF_XOR);
-            } else {
-                put(byte);
-            }
+            w.stuffed(byte);
         }
-        put(DELIMITER);
+        w.raw(DELIMITER);
         Ok(needed)
     }
 }

@@ -4,6 +4,8 @@
 
 use core::fmt;
 
+use super::stuffing::{self, Writer, stuffed_len};
+
 pub mod decoder;
 pub mod schedule;
 
@@ -11,11 +13,11 @@ pub use decoder::{Decoder, Event, Rejection};
 pub use schedule::Scheduler;
 
 /// Frame start; also what a bus master sends before a physical ID to poll it.
-pub const START: u8 = 0x7E;
+pub const START: u8 = stuffing::FRAME;
 /// Escape byte: the next byte was XORed with [`STUFF_XOR`].
-pub const STUFF: u8 = 0x7D;
+pub const STUFF: u8 = stuffing::ESCAPE;
 /// XOR applied to an escaped byte.
-pub const STUFF_XOR: u8 = 0x20;
+pub const STUFF_XOR: u8 = stuffing::ESCAPE_XOR;
 /// Primitive of a sensor data frame.
 pub const DATA_FRAME: u8 = 0x10;
 /// Longest frame on the wire: start, physical ID, and 8 bytes that may each be escaped.
@@ -152,29 +154,15 @@ impl Frame {
         }
         let body = self.body();
         let crc = self.crc();
-        let needed = 2 + body
-            .iter()
-            .chain(core::iter::once(&crc))
-            .map(|&b| if matches!(b, START | STUFF) { 2 } else { 1 })
-            .sum::<usize>();
+        let needed = 2 + stuffed_len(body.into_iter().chain([crc]));
         let Some(out) = out.get_mut(..needed) else {
             return Err(Error::BufferTooSmall { needed });
         };
-        let mut slots = out.iter_mut();
-        let mut put = |byte: u8| {
-            if let Some(slot) = slots.next() {
-                *slot = byte;
-            }
-        };
-        put(START);
-        put(self.physical_id);
-        for &byte in body.iter().chain(core::iter::once(&crc)) {
-            if matches!(byte, START | STUFF) {
-                put(STUFF);
-                put(byte ^ STUFF_XOR);
-            } else {
-                put(byte);
-            }
+        let mut w = Writer::new(out);
+        w.raw(START);
+        w.raw(self.physical_id);
+        for byte in body.into_iter().chain([crc]) {
+            w.stuffed(byte);
         }
         Ok(needed)
     }
