@@ -20,12 +20,16 @@ _stext = 0x08010000;
 
 const BOOTLOADER: &str = "\
 /* Behind the Tau Labs bootloader: its bank is sectors 0-1, settings sectors 2-3, firmware
-   from sector 5 (0x08020000, 384 KiB; the last 100 bytes hold the firmware descriptor). */
+   from sector 5 (0x08020000, 384 KiB; the last 100 bytes hold the firmware descriptor that
+   the GCS writes from the .tlfw). The bootloader starts the firmware only if
+   (initial SP & 0x2FFE0000) == 0x20000000, which the end of the 128 KiB SRAM (0x20020000)
+   fails: the stack starts 16 bytes below it. */
 MEMORY
 {
   FLASH : ORIGIN = 0x08020000, LENGTH = 384K - 100
   RAM   : ORIGIN = 0x20000000, LENGTH = 128K
 }
+_stack_start = ORIGIN(RAM) + LENGTH(RAM) - 16;
 ";
 
 fn main() {

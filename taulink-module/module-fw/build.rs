@@ -5,25 +5,29 @@
 
 use std::{env, fs, path::PathBuf};
 
-/// Flash 0x0–0xEBFFF for code, 0xEC000–0xF3FFF (8 pages of 4 KiB) for settings, and the top
-/// 48 KiB left to a UF2 bootloader, so both layouts keep settings in the same place.
+/// Flash 0x0–0xE9FFF for code, 0xEC000–0xF3FFF (8 pages of 4 KiB) for settings, and the top
+/// 48 KiB left to a UF2 bootloader, so both layouts keep settings in the same place. The
+/// Adafruit bootloader keeps 10 pages below itself (0xEA000–0xF3FFF) for application data and
+/// refuses UF2 blocks there, so code ends at 0xEA000 in both layouts.
 const PROBE: &str = "\
 /* Flashed at 0x0 with a debug probe (no SoftDevice, no bootloader). */
 MEMORY
 {
-  FLASH : ORIGIN = 0x00000000, LENGTH = 0xEC000
+  FLASH : ORIGIN = 0x00000000, LENGTH = 0xEA000
   RAM   : ORIGIN = 0x20000000, LENGTH = 256K
 }
 ";
 
 const UF2: &str = "\
-/* Behind the Adafruit nRF52 UF2 bootloader (nice!nano): the MBR and the space of SoftDevice
-   S140 v6 end at 0x26000. The bootloader does not leave the SoftDevice running, so all RAM
-   is ours. */
+/* Behind the Adafruit nRF52 UF2 bootloader (nice!nano) with SoftDevice S140 v6 in flash: the
+   MBR and the SoftDevice end at 0x26000; UF2 blocks are accepted up to 0xEA000. The
+   SoftDevice is never enabled, but the MBR (and the disabled SoftDevice) forward interrupts
+   through the first 8 bytes of RAM, so RAM starts at 0x20000008. The reset handler points
+   VTOR at our own table (cortex-m-rt set-vtor), so interrupts do not depend on them. */
 MEMORY
 {
-  FLASH : ORIGIN = 0x00026000, LENGTH = 0xEC000 - 0x26000
-  RAM   : ORIGIN = 0x20000000, LENGTH = 256K
+  FLASH : ORIGIN = 0x00026000, LENGTH = 0xEA000 - 0x26000
+  RAM   : ORIGIN = 0x20000008, LENGTH = 256K - 8
 }
 ";
 

@@ -99,6 +99,51 @@ pub fn load_segments(elf: &[u8]) -> Result<Vec<Segment>, ElfError> {
     Ok(segments)
 }
 
+/// One allocated section: where it lives at run time and how big it is.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Section {
+    /// Section name (`.data`, `.bss`, ...).
+    pub name: String,
+    /// Run-time (virtual) address.
+    pub address: u32,
+    /// Size in bytes.
+    pub size: u32,
+}
+
+/// The allocated sections (those that take memory at run time), in header order.
+pub fn alloc_sections(elf: &[u8]) -> Result<Vec<Section>, ElfError> {
+    check_header(elf)?;
+    let shoff = u32_at(elf, 0x20)? as usize;
+    let shentsize = u16_at(elf, 0x2E)? as usize;
+    let shnum = u16_at(elf, 0x30)? as usize;
+    let shstrndx = u16_at(elf, 0x32)? as usize;
+    let names = u32_at(elf, shoff + shstrndx * shentsize + 16)? as usize;
+    let mut out = Vec::new();
+    for i in 0..shnum {
+        let sh = shoff + i * shentsize;
+        let (name, flags, address, size) = (
+            u32_at(elf, sh)? as usize,
+            u32_at(elf, sh + 8)?,
+            u32_at(elf, sh + 12)?,
+            u32_at(elf, sh + 20)?,
+        );
+        if flags & SHF_ALLOC == 0 || size == 0 {
+            continue;
+        }
+        let tail = elf.get(names + name..).ok_or(ElfError::Truncated)?;
+        let end = tail
+            .iter()
+            .position(|&b| b == 0)
+            .ok_or(ElfError::Truncated)?;
+        out.push(Section {
+            name: String::from_utf8_lossy(tail.get(..end).unwrap_or_default()).into_owned(),
+            address,
+            size,
+        });
+    }
+    Ok(out)
+}
+
 /// text/data/bss from the section headers.
 pub fn sizes(elf: &[u8]) -> Result<Sizes, ElfError> {
     check_header(elf)?;

@@ -4,12 +4,19 @@
 //! ```text
 //! cargo xtask build flight [--sparky2] [--bootloader]   # one image, release
 //! cargo xtask build module [--uf2]
-//! cargo xtask dist                                       # every variant → dist/*.{elf,bin,hex,uf2}
+//! cargo xtask dist                                       # every variant → dist/*.{elf,bin,hex,uf2,tlfw}
 //! cargo xtask size                                       # text/data/bss of what dist/ holds
+//! cargo xtask verify                                     # each file against its boot contract
+//! cargo xtask readme                                     # the README's sizes table from dist/
 //! ```
 
 mod elf;
 mod formats;
+mod layout;
+mod tlfw;
+mod verify;
+
+use layout::Layout;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -24,6 +31,10 @@ struct Variant {
     name: &'static str,
     /// Write a UF2 file (nRF52840 behind a UF2 bootloader).
     uf2: bool,
+    /// Write a Tau Labs `.tlfw` for this board type and revision.
+    tlfw: Option<(u8, u8)>,
+    /// The boot contract the files must keep.
+    layout: &'static Layout,
 }
 
 const VARIANTS: &[Variant] = &[
@@ -32,32 +43,53 @@ const VARIANTS: &[Variant] = &[
         features: &[],
         name: "flight-brushedsparky",
         uf2: false,
+        tlfw: None,
+        layout: &layout::F405_DIRECT,
     },
     Variant {
         package: "flight-fw",
         features: &["sparky2"],
         name: "flight-sparky2",
         uf2: false,
+        tlfw: None,
+        layout: &layout::F405_DIRECT,
     },
     Variant {
         package: "flight-fw",
         features: &["taulabs-bootloader"],
         name: "flight-brushedsparky-taulabs-bl",
         uf2: false,
+        tlfw: Some((tlfw::BOARD_TYPE_SPARKY2, tlfw::REVISION_BRUSHEDSPARKY)),
+        layout: &layout::F405_TAULABS,
+    },
+    Variant {
+        package: "flight-fw",
+        features: &["sparky2", "taulabs-bootloader"],
+        name: "flight-sparky2-taulabs-bl",
+        uf2: false,
+        tlfw: Some((tlfw::BOARD_TYPE_SPARKY2, tlfw::REVISION_SPARKY2)),
+        layout: &layout::F405_TAULABS,
     },
     Variant {
         package: "module-fw",
         features: &[],
         name: "module-nrf52840",
         uf2: false,
+        tlfw: None,
+        layout: &layout::NRF_PROBE,
     },
     Variant {
         package: "module-fw",
         features: &["uf2"],
         name: "module-nrf52840-uf2",
         uf2: true,
+        tlfw: None,
+        layout: &layout::NRF_UF2,
     },
 ];
+
+/// Version tag written into `.tlfw` descriptors.
+const TLFW_TAG: &str = concat!("taulink-", env!("CARGO_PKG_VERSION"));
 
 fn workspace_root() -> PathBuf {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -109,6 +141,9 @@ fn write_outputs(variant: &Variant, elf_path: &Path, dist: &Path) -> Result<(), 
             &formats::to_uf2(&segments, formats::UF2_FAMILY_NRF52840),
         )?;
     }
+    if let Some((board_type, revision)) = variant.tlfw {
+        write("tlfw", &tlfw::package(&bin, board_type, revision, TLFW_TAG))?;
+    }
     println!(
         "{:<34} text {:>7}  data {:>5}  bss {:>6}  flash from 0x{start:08X}, .bin {} bytes",
         variant.name,
@@ -155,6 +190,109 @@ fn size() -> Result<(), String> {
     Ok(())
 }
 
+/// Where the README's generated sizes table starts and ends.
+const SIZES_BEGIN: &str = "<!-- xtask sizes: begin (cargo xtask readme writes this table) -->";
+const SIZES_END: &str = "<!-- xtask sizes: end -->";
+
+/// The sizes table for the README, from the ELFs in dist/.
+fn sizes_table() -> Result<String, String> {
+    let dist = workspace_root().join("dist");
+    let mut t = String::from(
+        "| image | flash from | flash used | text | data | bss |\n|---|---|---|---|---|---|\n",
+    );
+    for v in VARIANTS {
+        let path = dist.join(format!("{}.elf", v.name));
+        let elf = fs::read(&path)
+            .map_err(|e| format!("{}: {e} (run `cargo xtask dist`)", path.display()))?;
+        let s = elf::sizes(&elf).map_err(|e| format!("{}: {e}", path.display()))?;
+        let segments = elf::load_segments(&elf).map_err(|e| format!("{}: {e}", path.display()))?;
+        let used: usize = segments.iter().map(|s| s.data.len()).sum();
+        t.push_str(&format!(
+            "| `{}` | 0x{:08X} | {} B | {} B | {} B | {} B |\n",
+            v.name, v.layout.origin, used, s.text, s.data, s.bss
+        ));
+    }
+    Ok(t)
+}
+
+/// README.md with the sizes table replaced, or an error if the markers are missing.
+fn readme_with_sizes(readme: &str, table: &str) -> Result<String, String> {
+    let start = readme
+        .find(SIZES_BEGIN)
+        .ok_or("README.md has no sizes begin marker")?
+        + SIZES_BEGIN.len();
+    let end = readme
+        .get(start..)
+        .and_then(|rest| rest.find(SIZES_END))
+        .ok_or("README.md has no sizes end marker")?
+        + start;
+    Ok(format!(
+        "{}\n{table}{}",
+        readme.get(..start).unwrap_or_default(),
+        readme.get(end..).unwrap_or_default()
+    ))
+}
+
+fn readme() -> Result<(), String> {
+    let path = workspace_root().join("README.md");
+    let text = fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let new = readme_with_sizes(&text, &sizes_table()?)?;
+    fs::write(&path, new).map_err(|e| format!("{}: {e}", path.display()))?;
+    println!("sizes table in {} updated", path.display());
+    Ok(())
+}
+
+fn verify() -> Result<(), String> {
+    let dist = workspace_root().join("dist");
+    let read = |v: &Variant, ext: &str| fs::read(dist.join(format!("{}.{ext}", v.name))).ok();
+    let mut failed = 0;
+    for v in VARIANTS {
+        let Some(elf) = read(v, "elf") else {
+            println!(
+                "FAIL {:<34} dist/{0}.elf missing: run `cargo xtask dist`",
+                v.name
+            );
+            failed += 1;
+            continue;
+        };
+        let (bin, uf2, tl) = (read(v, "bin"), read(v, "uf2"), read(v, "tlfw"));
+        let mut problems = Vec::new();
+        if v.tlfw.is_some() && tl.is_none() {
+            problems.push("no .tlfw written".to_string());
+        }
+        let files = verify::Files {
+            elf: &elf,
+            bin: bin.as_deref(),
+            uf2: uf2.as_deref(),
+            tlfw: tl.as_deref().zip(v.tlfw).map(|(f, (t, r))| (f, t, r)),
+        };
+        problems.extend(verify::check(v.layout, &files));
+        println!(
+            "{} {:<34} behind {}",
+            if problems.is_empty() { "ok  " } else { "FAIL" },
+            v.name,
+            v.layout.starter
+        );
+        for p in &problems {
+            println!("       {p}");
+        }
+        failed += usize::from(!problems.is_empty());
+    }
+    // The README's sizes are generated; a stale table is a failure, not a footnote.
+    let path = workspace_root().join("README.md");
+    let text = fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    if readme_with_sizes(&text, &sizes_table()?)? != text {
+        println!("FAIL README.md sizes table is stale: run `cargo xtask readme`");
+        failed += 1;
+    } else {
+        println!("ok   README.md sizes table matches dist/");
+    }
+    if failed > 0 {
+        return Err(format!("{failed} check(s) failed"));
+    }
+    Ok(())
+}
+
 fn run(args: &[String]) -> Result<(), String> {
     let flag = |f: &str| args.iter().any(|a| a == f);
     match args.first().map(String::as_str) {
@@ -164,7 +302,11 @@ fn run(args: &[String]) -> Result<(), String> {
                 Some("module") => ("module-fw", Vec::new()),
                 _ => return Err("usage: cargo xtask build flight|module [options]".into()),
             };
-            for (f, feature) in [("--sparky2", "sparky2"), ("--bootloader", "taulabs-bootloader"), ("--uf2", "uf2")] {
+            for (f, feature) in [
+                ("--sparky2", "sparky2"),
+                ("--bootloader", "taulabs-bootloader"),
+                ("--uf2", "uf2"),
+            ] {
                 if flag(f) {
                     features.push(feature);
                 }
@@ -175,7 +317,13 @@ fn run(args: &[String]) -> Result<(), String> {
         }
         Some("dist") => dist(),
         Some("size") => size(),
-        _ => Err("usage: cargo xtask build flight|module [--sparky2] [--bootloader] [--uf2] | dist | size".into()),
+        Some("verify") => verify(),
+        Some("readme") => readme(),
+        _ => Err(
+            "usage: cargo xtask build flight|module [--sparky2] [--bootloader] [--uf2] \
+                  | dist | size | verify | readme"
+                .into(),
+        ),
     }
 }
 
@@ -186,6 +334,40 @@ fn main() -> ExitCode {
         Err(e) => {
             eprintln!("xtask: {e}");
             ExitCode::FAILURE
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn readme_sizes_table_is_replaced_between_the_markers() {
+        let text = format!("intro\n{SIZES_BEGIN}\nold table\n{SIZES_END}\noutro\n");
+        let new = readme_with_sizes(&text, "| new |\n").unwrap();
+        assert_eq!(
+            new,
+            format!("intro\n{SIZES_BEGIN}\n| new |\n{SIZES_END}\noutro\n")
+        );
+        assert_eq!(readme_with_sizes(&new, "| new |\n").unwrap(), new);
+        assert!(readme_with_sizes("no markers", "x").is_err());
+    }
+
+    #[test]
+    fn every_layout_has_a_sparky2_build() {
+        let flight: Vec<_> = VARIANTS
+            .iter()
+            .filter(|v| v.package == "flight-fw")
+            .collect();
+        for layout in [&layout::F405_DIRECT, &layout::F405_TAULABS] {
+            assert!(
+                flight
+                    .iter()
+                    .any(|v| std::ptr::eq(v.layout, layout) && v.features.contains(&"sparky2")),
+                "no Sparky2 build behind {}",
+                layout.starter
+            );
         }
     }
 }

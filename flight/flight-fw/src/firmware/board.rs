@@ -200,12 +200,20 @@ pub struct Board {
     pub settings_flash: Bank1Region1<'static, Blocking>,
 }
 
+/// Keeps the M25P16's chip select driven for the life of the firmware (a dropped `Output`
+/// would float the pin again).
+static FLASH_CS: StaticCell<Output<'static>> = StaticCell::new();
 static SINE: StaticCell<[u16; DAC_SAMPLES_PER_CYCLE]> = StaticCell::new();
 static USB_OUT_BUFFER: StaticCell<[u8; 256]> = StaticCell::new();
 
 impl Board {
     /// Claims the pins. Nothing is started here.
     pub fn new(p: Peripherals) -> Self {
+        // The Sparky2's M25P16 flash shares SPI3 with the RFM22B; its chip select (PB3) floats
+        // from reset unless the firmware drives it, so it goes high before SPI3 starts
+        // clocking, or the flash may answer the radio's traffic. PB3 is unconnected on the
+        // BrushedSparky, so driving it there is harmless.
+        FLASH_CS.init(Output::new(p.PB3, Level::High, Speed::Low));
         let mut spi_config = spi::Config::default();
         // Si4432: SPI mode 0, ≤ 10 MHz; APB1 42 MHz / 8 = 5.25 MHz as Tau Labs ran it.
         spi_config.frequency = Hertz(5_250_000);
