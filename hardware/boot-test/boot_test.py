@@ -3,7 +3,7 @@
 handler in an emulated Cortex-M4 (unicorn), then takes one interrupt and checks that it lands
 in our handler.
 
-- module-nrf52840-uf2: the real Nordic MBR (hardware/nrf52840-mbr) at 0x0, our image at
+- module-nrf52840-uf2: the real Nordic nRF52 MBR at 0x0 (see `nordic_mbr`), our image at
   0x26000. The run starts at the MBR's reset vector. UICR.NRFFW[0] names a bootloader at
   0xF4000; a stand-in there does what the Adafruit bootloader's `bootloader_app_start` does
   when it hands over (forward address 0x26000 into the MBR's RAM word 0x2000_0000, MSP and
@@ -22,8 +22,12 @@ exception entry are emulated as the Armv7-M architecture defines them. Usage:
 Exit status 0 only if every image boots and every interrupt lands in our handler.
 """
 
+import os
 import struct
+import subprocess
 import sys
+import tarfile
+import tempfile
 from pathlib import Path
 
 from unicorn import (UC_ARCH_ARM, UC_HOOK_CODE, UC_MODE_MCLASS, UC_MODE_THUMB, Uc,
@@ -31,7 +35,13 @@ from unicorn import (UC_ARCH_ARM, UC_HOOK_CODE, UC_MODE_MCLASS, UC_MODE_THUMB, U
 from unicorn.arm_const import UC_ARM_REG_LR, UC_ARM_REG_PC, UC_ARM_REG_SP, UC_CPU_ARM_CORTEX_M4
 
 HERE = Path(__file__).resolve().parent
-MBR_HEX = HERE.parent / "nrf52840-mbr" / "mbr_nrf52_from_s140_6.1.0.hex"
+# Nordic's MBR is not ours to commit: it is read at test time from a SoftDevice hex that a
+# registry package ships (Nordic's pc-ble-driver-py 0.11.4 sdist carries S132 3.1.0, whose
+# first 0x1000 bytes are the nRF52 MBR, the same code family the Adafruit bootloader ships
+# with S140). `MBR_SDIST` may point at an already downloaded copy.
+MBR_PACKAGE = "pc-ble-driver-py==0.11.4"
+MBR_MEMBER = "pc_ble_driver_py-0.11.4/pc_ble_driver_py/hex/sd_api_v3/s132_nrf52_3.1.0_softdevice.hex"
+MBR_END = 0x1000  # the SoftDevice starts here
 VTOR = 0xE000ED08
 SCS = 0xE000E000
 STEP_LIMIT = 2_000_000  # reset handler to main: bss/data loops, well under this
@@ -215,13 +225,40 @@ def boot_taulabs(elf):
 BOOTLOADER_STANDIN = 0xF4000
 
 
+def nordic_mbr():
+    """{address: byte} of Nordic's nRF52 MBR (below 0x1000), from the registry package."""
+    sdist = os.environ.get("MBR_SDIST")
+    if not sdist:
+        cache = Path(tempfile.gettempdir()) / "taulink-mbr"
+        found = sorted(cache.glob("pc_ble_driver_py-0.11.4.tar.gz"))
+        if not found:
+            subprocess.run([sys.executable, "-m", "pip", "download", "--quiet", "--no-deps",
+                            "--no-binary", ":all:", "-d", str(cache),
+                            MBR_PACKAGE], check=True)
+            found = sorted(cache.glob("pc_ble_driver_py-0.11.4.tar.gz"))
+        if not found:
+            raise FileNotFoundError(f"pip did not fetch {MBR_PACKAGE}")
+        sdist = found[0]
+    with tarfile.open(sdist) as tar, tempfile.TemporaryDirectory() as tmp:
+        member = tar.extractfile(MBR_MEMBER)
+        if member is None:
+            raise FileNotFoundError(f"{MBR_MEMBER} not in {sdist}")
+        hexfile = Path(tmp) / "sd.hex"
+        hexfile.write_bytes(member.read())
+        image = ihex(hexfile)
+    mbr = {a: b for a, b in image.items() if a < MBR_END}
+    if len(mbr) < 0x100:
+        raise ValueError("no MBR below 0x1000 in the SoftDevice hex")
+    return mbr
+
+
 def boot_uf2(elf):
     """Nordic MBR → (Adafruit bootloader stand-in) → our image at 0x26000."""
     segments, symbols = elf_image(elf)
     m = Machine([(0x0, 0x100000), (0x10000000, 0x2000), (0x20000000, 0x40000)])
     m.uc.mem_write(0x0, b"\xff" * 0x100000)
     m.uc.mem_write(0x10000000, b"\xff" * 0x2000)
-    for addr, byte in ihex(MBR_HEX).items():
+    for addr, byte in nordic_mbr().items():
         m.uc.mem_write(addr, bytes([byte]))
     m.load(segments)
     # UICR.NRFFW[0]: bootloader start; NRFFW[1]: MBR parameter page (erased: no command).
