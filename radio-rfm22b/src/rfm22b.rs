@@ -12,7 +12,7 @@ use crate::bus::Bus;
 use crate::config::Config;
 use crate::irq::Status;
 use crate::measure;
-use crate::probe::{ChipInfo, Version};
+use crate::probe::ChipInfo;
 use crate::registers::*;
 
 /// Polls of the chip-ready flag after a software reset, 1 ms apart (Tau Labs: 50).
@@ -148,18 +148,7 @@ where
     ///
     /// Cancel-safety: safe (a register read).
     pub async fn probe(&mut self) -> Result<ChipInfo, Error<SPI::Error>> {
-        let mut id = [0u8; 2];
-        self.bus.read_burst(DEVICE_TYPE, &mut id).await?;
-        let [device_type, version] = id;
-        if device_type & 0x1F != DEVICE_TYPE_SI443X {
-            return Err(Error::NotAnSi4432 {
-                device_type,
-                version,
-            });
-        }
-        Ok(ChipInfo {
-            version: Version::from(version & 0x1F),
-        })
+        crate::probe::identify(&mut self.bus).await
     }
 
     /// Software reset (0x07 = 0x80), then polls for chip-ready up to 50 ms.
