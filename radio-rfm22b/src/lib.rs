@@ -38,6 +38,7 @@
 //! }
 //! ```
 #![cfg_attr(not(test), no_std)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -52,10 +53,15 @@ pub mod gpio;
 pub mod if_filter;
 pub mod irq;
 #[cfg(feature = "telemetry")]
+#[cfg_attr(docsrs, doc(cfg(feature = "telemetry")))]
 pub mod link;
+#[cfg(feature = "linux")]
+#[cfg_attr(docsrs, doc(cfg(feature = "linux")))]
+pub mod linux;
 pub mod measure;
 pub mod modem;
 #[cfg(feature = "openlrs")]
+#[cfg_attr(docsrs, doc(cfg(feature = "openlrs")))]
 pub mod openlrs;
 pub mod packet;
 pub mod power;
