@@ -42,6 +42,8 @@
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+// `rfm22b` first: rustdoc lists `Rfm22b`'s methods in module order, constructors first.
+mod rfm22b;
 mod bus;
 pub mod carrier;
 mod config;
@@ -67,7 +69,6 @@ pub mod packet;
 pub mod power;
 mod probe;
 pub mod registers;
-mod rfm22b;
 mod rx;
 mod tx;
 

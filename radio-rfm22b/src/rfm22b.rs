@@ -57,6 +57,35 @@ pub struct Rfm22b<SPI, IRQ, SDN, D> {
     pub(crate) standby: bool,
 }
 
+// Constructors first (rustdoc lists methods in this order); they need no trait bounds.
+impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
+    /// A driver for a chip whose SDN pin the MCU drives (hard reset possible).
+    pub fn new(spi: SPI, irq: IRQ, sdn: SDN, delay: D) -> Self {
+        Self::build(spi, irq, sdn, true, delay)
+    }
+
+    fn build(spi: SPI, irq: IRQ, sdn: SDN, sdn_present: bool, delay: D) -> Self {
+        Self {
+            bus: Bus::new(spi),
+            irq,
+            sdn,
+            sdn_present,
+            delay,
+            config: None,
+            channel: 0,
+            busy: false,
+            standby: false,
+        }
+    }
+}
+
+impl<SPI, IRQ, D> Rfm22b<SPI, IRQ, NoPin, D> {
+    /// A driver for a board that ties SDN low (software reset only).
+    pub fn new_without_sdn(spi: SPI, irq: IRQ, delay: D) -> Self {
+        Self::build(spi, irq, NoPin, false, delay)
+    }
+}
+
 impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
     /// Gives the parts back.
     pub fn release(self) -> (SPI, IRQ, SDN, D) {
@@ -81,25 +110,6 @@ where
     SDN: OutputPin,
     D: DelayNs,
 {
-    /// A driver for a chip whose SDN pin the MCU drives (hard reset possible).
-    pub fn new(spi: SPI, irq: IRQ, sdn: SDN, delay: D) -> Self {
-        Self::build(spi, irq, sdn, true, delay)
-    }
-
-    fn build(spi: SPI, irq: IRQ, sdn: SDN, sdn_present: bool, delay: D) -> Self {
-        Self {
-            bus: Bus::new(spi),
-            irq,
-            sdn,
-            sdn_present,
-            delay,
-            config: None,
-            channel: 0,
-            busy: false,
-            standby: false,
-        }
-    }
-
     /// Resets the chip (SDN pulse if wired, then software reset), checks it, and programs
     /// `config`. Returns the silicon revision.
     ///
@@ -281,17 +291,5 @@ where
             self.idle().await?;
         }
         Ok(())
-    }
-}
-
-impl<SPI, IRQ, D> Rfm22b<SPI, IRQ, NoPin, D>
-where
-    SPI: SpiDevice,
-    IRQ: Wait,
-    D: DelayNs,
-{
-    /// A driver for a board that ties SDN low (software reset only).
-    pub fn new_without_sdn(spi: SPI, irq: IRQ, delay: D) -> Self {
-        Self::build(spi, irq, NoPin, false, delay)
     }
 }
