@@ -25,7 +25,7 @@ use radio_rfm22b::openlrs::roles::{RxEvent, run_receiver};
 use radio_rfm22b::openlrs::rx::{Config, Receiver};
 use radio_rfm22b::openlrs::{Band, BindingVersion};
 
-fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     let spi = open_spidev("/dev/spidev0.0", 4_000_000)?;
     let nirq = open_nirq("/dev/gpiochip0", 25)?;
     let (version, band) = (BindingVersion::V38, Band::Mhz433);

@@ -10,7 +10,7 @@
 use radio_rfm22b::linux::{StdDelay, open_nirq, open_spidev};
 use radio_rfm22b::{Carrier, Config, ModemConfig, PacketConfig, Rfm22b, RxOutcome};
 
-fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     let spi = open_spidev("/dev/spidev0.0", 4_000_000)?;
     let nirq = open_nirq("/dev/gpiochip0", 25)?;
     let config = Config::new(

@@ -135,7 +135,7 @@ impl embedded_hal_async::delay::DelayNs for StdDelay {
 }
 
 /// Why [`open_spidev`] or [`open_nirq`] failed (no such device, no permission, line busy …).
-pub type OpenError = Box<dyn std::error::Error + Send + Sync>;
+pub type OpenError = Box<dyn std::error::Error>;
 
 /// Opens `path` (e.g. `/dev/spidev0.0`) in SPI mode 0, 8-bit words, at `max_speed_hz`
 /// (the Si4432 allows up to 10 MHz; 4 MHz is plenty).
