@@ -3,7 +3,7 @@
 //!
 //! It programs registers directly instead of going through a generic modem configuration
 //! because air compatibility needs OpenLRSng's exact profiles and the per-hop header XOR
-//! (radio.md §1c). Interrupt bits: datasheet Table 13/14 (0x03 bit 2 `ipksent`, bit 1
+//! (OpenLRSng `common.h`). Interrupt bits: datasheet Table 13/14 (0x03 bit 2 `ipksent`, bit 1
 //! `ipkvalid`, bit 0 `icrcerror`); nIRQ stays low until the status registers are read.
 
 use embassy_futures::select::{Either, select};
