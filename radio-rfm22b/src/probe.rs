@@ -2,11 +2,8 @@
 //! Shared by [`Rfm22b::probe`](crate::Rfm22b::probe) and the OpenLRSng radio layer, so both
 //! report an absent chip the same way.
 
-use embedded_hal_async::spi::SpiDevice;
-
 use crate::Error;
-use crate::bus::Bus;
-use crate::registers::{DEVICE_TYPE, DEVICE_TYPE_SI443X};
+use crate::registers::DEVICE_TYPE_SI443X;
 
 /// Silicon revision from register 0x01 (datasheet register 01h, "Device Version").
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -41,14 +38,10 @@ pub struct ChipInfo {
     pub version: Version,
 }
 
-/// Reads the identification registers (0x00/0x01). A bus with no chip on it reads all
-/// 0x00 or all 0xFF, so it fails the device-type check instead of passing unnoticed.
-pub(crate) async fn identify<SPI: SpiDevice>(
-    bus: &mut Bus<SPI>,
-) -> Result<ChipInfo, Error<SPI::Error>> {
-    let mut id = [0u8; 2];
-    bus.read_burst(DEVICE_TYPE, &mut id).await?;
-    let [device_type, version] = id;
+/// The device-type check on what 0x00/0x01 read. A bus with no chip on it reads all 0x00 or
+/// all 0xFF, so it fails here instead of passing unnoticed. Synchronous on purpose: an
+/// extra nested future in `Rfm22b::probe` cost its `init` 65 instructions on the M4.
+pub(crate) fn check_identity<E>([device_type, version]: [u8; 2]) -> Result<ChipInfo, Error<E>> {
     if device_type & 0x1F != DEVICE_TYPE_SI443X {
         return Err(Error::NotAnSi4432 {
             device_type,

@@ -158,7 +158,9 @@ where
     ///
     /// Cancel-safety: safe (a register read).
     pub async fn probe(&mut self) -> Result<ChipInfo, Error<SPI::Error>> {
-        crate::probe::identify(&mut self.bus).await
+        let mut id = [0u8; 2];
+        self.bus.read_burst(DEVICE_TYPE, &mut id).await?;
+        crate::probe::check_identity(id)
     }
 
     /// Software reset (0x07 = 0x80), then polls for chip-ready up to 50 ms.

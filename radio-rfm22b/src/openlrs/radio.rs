@@ -164,9 +164,12 @@ where
     /// module (the bus reads all 0x00 or all 0xFF) gives
     /// `Error::Radio(radio_rfm22b::Error::NotAnSi4432 { .. })`.
     pub async fn probe(&mut self) -> Result<ChipInfo, Error<SPI::Error, IRQ::Error>> {
-        crate::probe::identify(&mut self.bus)
+        let mut id = [0u8; 2];
+        self.bus
+            .read_burst(crate::registers::DEVICE_TYPE, &mut id)
             .await
-            .map_err(Error::Radio)
+            .map_err(Error::Radio)?;
+        crate::probe::check_identity(id).map_err(Error::Radio)
     }
 
     /// `init_rfm`: checks the chip is there ([`Radio::probe`]), then programs the bind or
