@@ -21,7 +21,7 @@ pub const fn rssi_raw(dbm: i16) -> u8 {
 
 /// The AFC correction in Hz from 0x2B (`afc_corr[9:2]`) and 0x2C (bits 7:6 = `afc_corr[1:0]`):
 /// a signed 10-bit value in steps of 156.25 Hz · (hbsel+1). (Tau Labs reads it unsigned and
-/// with a zero step in the 433 band; both are bugs, radio.md §1a.)
+/// with a zero step in the 433 band; both are bugs.)
 pub const fn afc_offset_hz(reg_2b: u8, reg_2c: u8, high_band: bool) -> i32 {
     let raw = ((reg_2b as u16) << 2) | (reg_2c >> 6) as u16;
     // Sign-extend 10 bits.

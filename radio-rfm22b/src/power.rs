@@ -7,7 +7,7 @@ use crate::ConfigError;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TxPower(u8);
 
-/// dBm of each txpow step (radio.md §1a: +1, +2, +5, +8, +11, +14, +17, +20 dBm).
+/// dBm of each txpow step (+1, +2, +5, +8, +11, +14, +17, +20 dBm).
 const STEPS_DBM: [i8; 8] = [1, 2, 5, 8, 11, 14, 17, 20];
 
 impl TxPower {

@@ -12,7 +12,7 @@ use crate::bus::Bus;
 use crate::config::Config;
 use crate::irq::Status;
 use crate::measure;
-use crate::probe::{ChipInfo, Version};
+use crate::probe::ChipInfo;
 use crate::registers::*;
 
 /// Polls of the chip-ready flag after a software reset, 1 ms apart (Tau Labs: 50).
@@ -57,6 +57,35 @@ pub struct Rfm22b<SPI, IRQ, SDN, D> {
     pub(crate) standby: bool,
 }
 
+// Constructors first (rustdoc lists methods in this order); they need no trait bounds.
+impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
+    /// A driver for a chip whose SDN pin the MCU drives (hard reset possible).
+    pub fn new(spi: SPI, irq: IRQ, sdn: SDN, delay: D) -> Self {
+        Self::build(spi, irq, sdn, true, delay)
+    }
+
+    fn build(spi: SPI, irq: IRQ, sdn: SDN, sdn_present: bool, delay: D) -> Self {
+        Self {
+            bus: Bus::new(spi),
+            irq,
+            sdn,
+            sdn_present,
+            delay,
+            config: None,
+            channel: 0,
+            busy: false,
+            standby: false,
+        }
+    }
+}
+
+impl<SPI, IRQ, D> Rfm22b<SPI, IRQ, NoPin, D> {
+    /// A driver for a board that ties SDN low (software reset only).
+    pub fn new_without_sdn(spi: SPI, irq: IRQ, delay: D) -> Self {
+        Self::build(spi, irq, NoPin, false, delay)
+    }
+}
+
 impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
     /// Gives the parts back.
     pub fn release(self) -> (SPI, IRQ, SDN, D) {
@@ -81,25 +110,6 @@ where
     SDN: OutputPin,
     D: DelayNs,
 {
-    /// A driver for a chip whose SDN pin the MCU drives (hard reset possible).
-    pub fn new(spi: SPI, irq: IRQ, sdn: SDN, delay: D) -> Self {
-        Self::build(spi, irq, sdn, true, delay)
-    }
-
-    fn build(spi: SPI, irq: IRQ, sdn: SDN, sdn_present: bool, delay: D) -> Self {
-        Self {
-            bus: Bus::new(spi),
-            irq,
-            sdn,
-            sdn_present,
-            delay,
-            config: None,
-            channel: 0,
-            busy: false,
-            standby: false,
-        }
-    }
-
     /// Resets the chip (SDN pulse if wired, then software reset), checks it, and programs
     /// `config`. Returns the silicon revision.
     ///
@@ -150,16 +160,7 @@ where
     pub async fn probe(&mut self) -> Result<ChipInfo, Error<SPI::Error>> {
         let mut id = [0u8; 2];
         self.bus.read_burst(DEVICE_TYPE, &mut id).await?;
-        let [device_type, version] = id;
-        if device_type & 0x1F != DEVICE_TYPE_SI443X {
-            return Err(Error::NotAnSi4432 {
-                device_type,
-                version,
-            });
-        }
-        Ok(ChipInfo {
-            version: Version::from(version & 0x1F),
-        })
+        crate::probe::check_identity(id)
     }
 
     /// Software reset (0x07 = 0x80), then polls for chip-ready up to 50 ms.
@@ -292,17 +293,5 @@ where
             self.idle().await?;
         }
         Ok(())
-    }
-}
-
-impl<SPI, IRQ, D> Rfm22b<SPI, IRQ, NoPin, D>
-where
-    SPI: SpiDevice,
-    IRQ: Wait,
-    D: DelayNs,
-{
-    /// A driver for a board that ties SDN low (software reset only).
-    pub fn new_without_sdn(spi: SPI, irq: IRQ, delay: D) -> Self {
-        Self::build(spi, irq, NoPin, false, delay)
     }
 }

@@ -316,3 +316,138 @@ fn adaptive_channel_scan_picks_the_quiet_channels() {
     // Sorted [17, 50, 83, 116, 149, 182], then i ↔ i + 3 for i = 0, 2.
     assert_eq!(data.hop_channels[..7], [116, 50, 182, 17, 149, 83, 0]);
 }
+
+/// A receiver and a binding transmitter whose module is unplugged (the bus reads all 0xFF
+/// or all 0x00) report `NotAnSi4432` at once instead of listening to nothing forever.
+#[test]
+fn an_absent_module_is_reported_as_not_an_si4432() {
+    use radio_rfm22b::openlrs::radio::Error as RadioError;
+    use radio_rfm22b::openlrs::roles::run_receiver;
+    use si4432_sim::Fault;
+
+    for miso in [0xFF, 0x00] {
+        let sim = Simulation::new(5);
+        let medium = sim.medium();
+        let rx_handle = medium.add_radio(RadioConfig::at([0.0, 0.0, 0.0]));
+        let tx_handle = medium.add_radio(RadioConfig::at([10.0, 0.0, 0.0]));
+        rx_handle.chip.set_fault(Fault::Unplugged { miso });
+        tx_handle.chip.set_fault(Fault::Unplugged { miso });
+        let absent = RadioError::Radio(radio_rfm22b::Error::NotAnSi4432 {
+            device_type: miso,
+            version: miso,
+        });
+
+        let mut rx_radio = radio(rx_handle, &medium, BindingVersion::V38);
+        let mut power_up = sim.delay();
+        let rx_task = sim.spawn(async move {
+            embedded_hal_async::delay::DelayNs::delay_us(&mut power_up, POWER_UP_US).await;
+            let mut rx = Receiver::new(Config::new(BindingVersion::V38, Band::Mhz433), None);
+            let mut events = 0;
+            let error = run_receiver(&mut rx_radio, &mut rx, |_| events += 1).await;
+            (error, events)
+        });
+        let mut tx_radio = radio(tx_handle, &medium, BindingVersion::V38);
+        let mut power_up = sim.delay();
+        let tx_task = sim.spawn(async move {
+            embedded_hal_async::delay::DelayNs::delay_us(&mut power_up, POWER_UP_US).await;
+            let data = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+            let until = tx_radio.now_us() + BIND_WINDOW_US;
+            tx_bind(&mut tx_radio, &data, until).await
+        });
+        // Both give up at the first register access, without waiting for anything.
+        sim.run_until_or(Duration::from_secs(5), || {
+            rx_task.is_finished() && tx_task.is_finished()
+        });
+        assert_eq!(sim.now(), Duration::from_micros(u64::from(POWER_UP_US)));
+        assert_eq!(rx_task.take().unwrap(), (absent, 0), "{miso:#04x}");
+        assert_eq!(tx_task.take().unwrap(), Err(absent), "{miso:#04x}");
+        // Nothing was sent on air.
+        assert!(medium.trace().is_empty());
+    }
+}
+
+/// A module that falls off the bus mid-link: the receiver still delivers failsafe (the
+/// outputs must go to their failsafe values), then reports the missing chip.
+#[test]
+fn a_module_lost_mid_link_gives_failsafe_then_not_an_si4432() {
+    use radio_rfm22b::openlrs::radio::Error as RadioError;
+    use si4432_sim::Fault;
+
+    let (data, channels) = sixteen_channels();
+    let sim = Simulation::new(9);
+    let medium = sim.medium();
+    let tx_handle = medium.add_radio(RadioConfig::at([0.0, 0.0, 0.0]));
+    let rx_handle = medium.add_radio(RadioConfig::at([1000.0, 0.0, 0.0]));
+    let rx_chip = rx_handle.chip.clone();
+    let events = Rc::new(RefCell::new(Vec::new()));
+
+    // The RX starts already bound to `data`, the TX flies it without a bind phase.
+    let mut rx_radio = radio(rx_handle, &medium, BindingVersion::V38);
+    let rx_events = events.clone();
+    let rx_clock = medium.clone();
+    let mut power_up = sim.delay();
+    let rx_task = sim.spawn(async move {
+        embedded_hal_async::delay::DelayNs::delay_us(&mut power_up, POWER_UP_US).await;
+        let mut rx = Receiver::new(Config::new(BindingVersion::V38, Band::Mhz433), Some(data));
+        rx_start(&mut rx_radio, &mut rx).await.unwrap();
+        loop {
+            let mut on_event = |event: RxEvent| {
+                let kind = match event {
+                    RxEvent::Channels { .. } => "channels",
+                    RxEvent::FailsafeStarted => "failsafe",
+                    RxEvent::Bound(_) | RxEvent::Serial(_) => "other",
+                };
+                rx_events
+                    .borrow_mut()
+                    .push((rx_clock.now().as_micros() as u64, kind));
+            };
+            if let Err(e) = rx_step(&mut rx_radio, &mut rx, &mut on_event).await {
+                return (rx_clock.now().as_micros() as u64, e);
+            }
+        }
+    });
+    let mut tx_radio = radio(tx_handle, &medium, BindingVersion::V38);
+    let mut power_up = sim.delay();
+    sim.spawn(async move {
+        embedded_hal_async::delay::DelayNs::delay_us(&mut power_up, 2 * POWER_UP_US).await;
+        let mut tx = Transmitter::new(data, tx_radio.now_us()).unwrap();
+        tx_start(&mut tx_radio, &tx).await.unwrap();
+        let mut set = |tx: &mut Transmitter| tx.set_channels(&channels);
+        loop {
+            tx_step(&mut tx_radio, &mut tx, &mut set, &mut |_| {})
+                .await
+                .unwrap();
+        }
+    });
+    sim.run_for(Duration::from_secs(2));
+    assert!(
+        events
+            .borrow()
+            .iter()
+            .filter(|(_, k)| *k == "channels")
+            .count()
+            > 20,
+        "{:?}",
+        events.borrow()
+    );
+    rx_chip.set_fault(Fault::Unplugged { miso: 0x00 });
+    let unplugged_us = medium.now().as_micros() as u64;
+    sim.run_until_or(Duration::from_secs(5), || rx_task.is_finished());
+    let (error_at_us, error) = rx_task.take().unwrap();
+    assert_eq!(
+        error,
+        RadioError::Radio(radio_rfm22b::Error::NotAnSi4432 {
+            device_type: 0,
+            version: 0
+        })
+    );
+    let events = events.borrow();
+    let (failsafe_at_us, _) = *events.last().unwrap();
+    assert_eq!(events.last().unwrap().1, "failsafe");
+    // Failsafe about 1 s after the last packet, and the error right with it.
+    assert!(
+        (unplugged_us + 900_000..unplugged_us + 1_200_000).contains(&failsafe_at_us),
+        "{failsafe_at_us} {unplugged_us}"
+    );
+    assert_eq!(error_at_us, failsafe_at_us);
+}

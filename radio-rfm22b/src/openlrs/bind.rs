@@ -1,5 +1,5 @@
 //! `struct bind_data` (41 bytes, packed little-endian as on AVR) and the bind exchange: the
-//! TX's 42-byte `'b'` packet and the RX's 1-byte `'B'` reply (radio.md §1c "Bind data").
+//! TX's 42-byte `'b'` packet and the RX's 1-byte `'B'` reply.
 
 use super::channels::ChannelMode;
 use super::version::{Band, BindingVersion};

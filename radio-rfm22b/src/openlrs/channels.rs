@@ -1,6 +1,5 @@
 //! RC channel values: the 10-bit "bits" scale and its µs mapping, the 2-bit switch channels,
-//! and the channel packing of modes 0..7 (`packChannels`/`unpackChannels`, radio.md §1c
-//! "Uplink packets and channel packing").
+//! and the channel packing of modes 0..7 (`packChannels`/`unpackChannels`).
 
 /// Most channels any mode carries (dRonin's mode 7, 16 + 4).
 pub const MAX_CHANNELS: usize = 20;

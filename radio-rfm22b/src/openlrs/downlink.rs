@@ -1,6 +1,6 @@
 //! The receiver's side of the telemetry handshake (RX.h): the 9-byte frame it last sent, its
 //! sequence bits (bit 6 new-frame toggle, bit 7 uplink-serial acknowledge) and the queue of
-//! RX UART bytes waiting to go down (radio.md §1c "Downlink", "Sequence handshake").
+//! RX UART bytes waiting to go down.
 
 use heapless::{Deque, Vec};
 

@@ -1,6 +1,5 @@
 //! What an OpenLRSng TX writes to its handset's telemetry input (`frskytx.h`): FrSky D hub
-//! frames at 9600 baud and S.Port frames at 57600 (radio.md §1c "FrSky telemetry emulation",
-//! protocols.md §3).
+//! frames at 9600 baud and S.Port frames at 57600.
 //!
 //! Upstream leaves some bytes uninitialised and so sends stack garbage: the unused data bytes
 //! of a hub user frame (`7E FD n 00 d0..d5 7E` when n < 6) and S.Port value bytes v1..v3.

@@ -1,5 +1,5 @@
 //! The hop sequence: index n mod hopcount through the 0-terminated list, and what each hop
-//! programs (radio.md §1c "Hopping"). Timing of hops lives in the role state machines.
+//! programs. Timing of hops lives in the role state machines.
 
 use super::bind::{BindData, MAX_HOPS};
 use super::modem;

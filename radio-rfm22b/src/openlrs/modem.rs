@@ -1,7 +1,7 @@
 //! How OpenLRSng programs the Si4432: its own five modem profiles (not recomputed — they are
 //! OpenLRSng's table, air compatibility depends on them), `init_rfm`, `rx_reset`,
-//! `tx_packet_async`, the carrier and hop-channel registers (radio.md §1c "Radio
-//! configuration", Si4432 datasheet §3.5 for the frequency registers).
+//! `tx_packet_async`, the carrier and hop-channel registers (Si4432
+//! datasheet §3.5 for the frequency registers).
 
 use heapless::Vec;
 

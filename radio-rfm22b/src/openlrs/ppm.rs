@@ -1,6 +1,6 @@
 //! PPM input of the TX (`processPulse`, TX.h): pulse widths in µs, edge to edge. A pulse over
 //! 2500 µs is sync, one over 700 µs a channel; anything else, or a 17th channel, drops the
-//! frame (radio.md §1c "TX input capture").
+//! frame (OpenLRSng `TX.h` input capture).
 
 use super::channels::{CENTER_BITS, us_to_bits};
 

@@ -3,7 +3,7 @@
 //!
 //! It programs registers directly instead of going through a generic modem configuration
 //! because air compatibility needs OpenLRSng's exact profiles and the per-hop header XOR
-//! (radio.md §1c). Interrupt bits: datasheet Table 13/14 (0x03 bit 2 `ipksent`, bit 1
+//! (OpenLRSng `common.h`). Interrupt bits: datasheet Table 13/14 (0x03 bit 2 `ipksent`, bit 1
 //! `ipkvalid`, bit 0 `icrcerror`); nIRQ stays low until the status registers are read.
 
 use embassy_futures::select::{Either, select};
@@ -15,7 +15,7 @@ use heapless::Vec;
 use super::bind::BindData;
 use super::modem::{self, Purpose, RegOp};
 use super::version::{Band, BindingVersion};
-use crate::Bus;
+use crate::{Bus, ChipInfo};
 
 /// Interrupt status 1: packet sent.
 const IPKSENT: u8 = 0x04;
@@ -107,7 +107,8 @@ where
     D: DelayNs,
     C: Clock,
 {
-    /// Wraps the parts; nothing is written until [`Radio::configure`].
+    /// Wraps the parts; nothing is written until [`Radio::configure`], which first checks
+    /// that an Si4432 answers.
     pub fn new(
         spi: SPI,
         irq: IRQ,
@@ -159,7 +160,23 @@ where
         Ok(())
     }
 
-    /// `init_rfm`: programs the bind or the link configuration (hop index 0).
+    /// Reads the identification registers (0x00/0x01): an absent, unpowered or mis-wired
+    /// module (the bus reads all 0x00 or all 0xFF) gives
+    /// `Error::Radio(radio_rfm22b::Error::NotAnSi4432 { .. })`.
+    pub async fn probe(&mut self) -> Result<ChipInfo, Error<SPI::Error, IRQ::Error>> {
+        let mut id = [0u8; 2];
+        self.bus
+            .read_burst(crate::registers::DEVICE_TYPE, &mut id)
+            .await
+            .map_err(Error::Radio)?;
+        crate::probe::check_identity(id).map_err(Error::Radio)
+    }
+
+    /// `init_rfm`: checks the chip is there ([`Radio::probe`]), then programs the bind or
+    /// the link configuration (hop index 0).
+    ///
+    /// The probe comes first because writes to an absent chip succeed silently: without it
+    /// a receiver with no module would listen forever and never report anything.
     pub async fn configure(
         &mut self,
         data: &BindData,
@@ -167,6 +184,7 @@ where
     ) -> Result<(), Error<SPI::Error, IRQ::Error>> {
         let script =
             modem::init_script(self.version, self.band, data, purpose).map_err(Error::Script)?;
+        self.probe().await?;
         self.diversity = data.diversity();
         self.run(&script).await
     }

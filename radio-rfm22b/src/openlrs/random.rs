@@ -1,6 +1,6 @@
 //! Fresh link identities: avr-libc's `random()` (Park–Miller "minimal standard", which
 //! OpenLRSng seeds from `micros()`), `bindRandomize()` and the adaptive hop-channel picker
-//! `chooseChannelsPerRSSI()` (radio.md §1c "Bind data"). Seeds are injected, never read.
+//! `chooseChannelsPerRSSI()`. Seeds are injected, never read.
 
 use super::bind::{BindData, MAX_HOPS};
 

@@ -96,6 +96,10 @@ where
 }
 
 /// One receiver cycle: wait for a packet or the next deadline, then react.
+///
+/// When failsafe starts, the event is delivered first and then the chip is probed: a module
+/// that is gone returns `Error::Radio(radio_rfm22b::Error::NotAnSi4432 { .. })` instead of
+/// leaving the receiver listening to nothing.
 pub async fn rx_step<SPI, IRQ, D, C>(
     radio: &mut Radio<SPI, IRQ, D, C>,
     rx: &mut Receiver,
@@ -142,6 +146,9 @@ where
             }
             if tick.failsafe_started {
                 on_event(RxEvent::FailsafeStarted);
+                // Writes to a module that fell off the bus succeed silently, so a lost link
+                // and a lost chip look alike; tell them apart once, after failsafe is out.
+                radio.probe().await?;
             }
             if tick.command.is_some() {
                 apply(radio, rx, tick.command).await?;
@@ -151,7 +158,8 @@ where
     }
 }
 
-/// Runs the receiver forever (returns only on a radio error).
+/// Runs the receiver forever (returns only on a radio error, e.g. `NotAnSi4432` at start
+/// or at failsafe when no module answers).
 pub async fn run_receiver<SPI, IRQ, D, C>(
     radio: &mut Radio<SPI, IRQ, D, C>,
     rx: &mut Receiver,

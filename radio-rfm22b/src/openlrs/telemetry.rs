@@ -1,5 +1,5 @@
 //! The downlink (RX → TX): the 9-byte link-info frame, serial-data frames 0x38..0x3F, link
-//! quality shift registers and the composite RSSI scale (radio.md §1c "Downlink").
+//! quality shift registers and the composite RSSI scale.
 
 use heapless::Vec;
 

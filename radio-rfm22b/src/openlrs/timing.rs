@@ -1,6 +1,6 @@
 //! Packet timing: `getInterval()` (airtime of the uplink plus the optional 9-byte reply,
 //! rounded up to whole ms), the RX timeouts derived from it, and the `delayInMs` encoding of
-//! failsafe and beacon delays (radio.md §1c "Timing", "Failsafe").
+//! failsafe and beacon delays.
 
 use super::bind::BindData;
 use super::modem;

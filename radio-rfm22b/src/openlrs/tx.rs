@@ -1,7 +1,6 @@
 //! The transmitter role as sans-IO state machines: the bind beacon (`bindMode()`) and the
 //! link (`TX.h` loop): one uplink packet per interval on hop index n mod hopcount, RC and
-//! serial interleaved, the downlink handshake and link quality (radio.md §1c "Hopping",
-//! "Uplink", "Downlink"). Time is `now_us` from the caller.
+//! serial interleaved, the downlink handshake and link quality. Time is `now_us` from the caller.
 
 use heapless::{Deque, Vec};
 

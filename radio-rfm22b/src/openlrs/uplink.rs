@@ -1,5 +1,5 @@
 //! Uplink (TX → RX) packets: header byte 0 with its sequence bits and type, servo packets,
-//! the save-failsafe variant and serial-data packets 0x38..0x3F (radio.md §1c "Uplink").
+//! the save-failsafe variant and serial-data packets 0x38..0x3F.
 
 use heapless::Vec;
 

@@ -1,5 +1,5 @@
 //! OpenLRSng firmware generations and RF bands: the binding version, the bind magic and the
-//! per-band frequency limits (radio.md §1c "Versions / compatibility", `binding.h`).
+//! per-band frequency limits (OpenLRSng `binding.h`).
 
 /// Which OpenLRSng generation we speak to. 3.8 and 3.9 refuse each other at bind time and at
 /// every packet afterwards (the bind magic differs), so this must match the other end.

@@ -100,7 +100,7 @@ pub struct HandsetTelemetry {
 
 impl HandsetTelemetry {
     /// True if the link is up with a non-zero uplink LQ: the radio then accepts sensor values
-    /// (EdgeTX drops all of them while the LQ / RSSI it sees is 0, protocols.md §3.3, §4.4).
+    /// (EdgeTX drops all of them while the LQ / RSSI it sees is 0).
     pub fn link_streaming(&self) -> bool {
         self.link.is_some_and(|link| link.uplink_lq_percent > 0)
     }

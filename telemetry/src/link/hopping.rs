@@ -29,7 +29,7 @@ impl Band {
     }
 
     /// Channel spacing. A multiple of 10 kHz: the Si4432 hop step register (0x7A) counts in
-    /// 10 kHz in every band (radio.md §1a, carrier formula).
+    /// 10 kHz in every band (carrier formula).
     pub const fn spacing_hz(self) -> u32 {
         match self {
             Band::Mhz433 => 300_000,

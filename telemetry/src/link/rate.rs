@@ -22,13 +22,13 @@ pub const CHIP_OVERHEAD_BYTES: usize =
 pub const FIFO_BYTES: usize = 64;
 
 /// PLL settling after a channel change or a TX/RX enable. OpenLRSng waits 200 µs after each
-/// (radio.md §1a); the datasheet's TUNE→TX/RX figure is of the same order.
+/// step; the datasheet's TUNE→TX/RX figure is of the same order.
 pub const PLL_SETTLE_US: u32 = 200;
 /// Time the sender waits after its slot starts before it enables TX, so a receiver whose slot
 /// estimate runs a little late is already listening; also covers SPI register writes.
 pub const TX_LEAD_US: u32 = 100;
 /// Time kept free at the end of every slot: the receiver drains the FIFO, the next slot's
-/// sender turns around (RX→TX) and retunes (radio.md §1a: mode switches are a handful of
+/// sender turns around (RX→TX) and retunes (mode switches are a handful of
 /// SPI writes at 4.5 MHz, well under 100 µs, plus IRQ latency).
 pub const TAIL_GUARD_US: u32 = 200;
 

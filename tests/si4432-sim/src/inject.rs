@@ -1,5 +1,5 @@
 //! Frames from an ideal transmitter that is not a radio: the lora-rs `inject_rx` pattern
-//! (aesthetics.md §A2), for receiver tests that do not want to drive a second chip.
+//! (lora-rs), for receiver tests that do not want to drive a second chip.
 //!
 //! The frame is built from the *receiver's* own registers — carrier, clock-recovery bit
 //! rate, preamble, sync word, its check header (so the header passes), length byte, CRC and

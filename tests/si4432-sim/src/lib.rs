@@ -1,10 +1,21 @@
 //! A register-level virtual Si4432 and a simulated RF medium (std), so radio code can be
 //! tested on a PC through the same embedded-hal traits it uses on a board.
 //!
-//! Modelled after lora-rs' SX127x emulator (aesthetics.md §A2): the chip is behavioural at
+//! Modelled after lora-rs' SX127x emulator: the chip is behavioural at
 //! register level, interrupt semantics are exact, and nothing is imported from the driver
 //! under test — register addresses and reset values here come from the datasheet, so a wrong
 //! driver constant fails a test instead of being mirrored.
+//!
+//! # Using it in your tests
+//! It is not on crates.io (`publish = false`): depend on it from your crate's tests by path
+//! (or `git`) into a TauLink checkout, next to the driver you test:
+//! ```toml
+//! [dev-dependencies]
+//! si4432-sim = { path = "../taulink/tests/si4432-sim" }
+//! ```
+//! It needs `std` and nothing of TauLink's: any Si4432 driver on embedded-hal 1.0 (blocking or
+//! async) runs on it. The radio-rfm22b crate's `guide` module has a complete host test of an
+//! OpenLRSng link written against it.
 //!
 //! # What is modelled
 //! - **Registers** ([`registers`]): datasheet reset values, read-only vs read-write, device

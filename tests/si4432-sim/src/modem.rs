@@ -1,8 +1,8 @@
 //! The modem as the registers describe it: carrier, bit rates, deviation, IF bandwidth, and
 //! whether a transmitter's signal can be demodulated by a receiver.
 //!
-//! Formulas are the datasheet's (radio.md §1a "Carrier frequency", "Data-rate-related
-//! registers"). The IF filter bandwidth (0x1C) is an approximation: exact at the codes the
+//! Formulas are the datasheet's (Si4432 rev B1,
+//! "Carrier frequency" and the data-rate registers). The IF filter bandwidth (0x1C) is an approximation: exact at the codes the
 //! Tau Labs / OpenLRSng tables use, interpolated elsewhere.
 
 /// Modulation type (0x71 modtyp\[1:0\]).
@@ -226,7 +226,7 @@ pub fn tx_power_dbm(reg_6d: u8) -> f64 {
 
 /// Approximate IF filter bandwidth for 0x1C.
 ///
-/// Exact for the codes the Tau Labs / OpenLRSng tables use (radio.md §1a). Otherwise:
+/// Exact for the codes the Tau Labs / OpenLRSng tables use. Otherwise:
 /// dwn3 = 0, ndec = 0, filset 1..7 = 75.2, 83.2, 90.0, 95.3, 112.1, 127.9, 137.9 kHz;
 /// dwn3 = 1, ndec = 0 interpolated between filset 1 = 225.1, 8 = 335.5, 11 = 468.4,
 /// 13 = 577.0, 15 = 620.7 kHz; each ndec step halves the bandwidth.

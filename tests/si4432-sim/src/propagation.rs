@@ -47,7 +47,7 @@ pub fn mw_to_dbm(mw: f64) -> f64 {
 }
 
 /// The RSSI register value for an in-band power: raw = 2·(dBm + 122) + 8·rssi_off, clamped
-/// to 0..=255 (Tau Labs' dBm = raw/2 − 122 at rssi_off 0; radio.md §1a "RSSI").
+/// to 0..=255 (Tau Labs' dBm = raw/2 − 122 at rssi_off 0).
 pub fn rssi_register(power_dbm: f64, rssi_offset: u8) -> u8 {
     let raw = 2.0 * (power_dbm + 122.0) + 8.0 * f64::from(rssi_offset);
     raw.round().clamp(0.0, 255.0) as u8

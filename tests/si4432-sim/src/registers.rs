@@ -2,8 +2,8 @@
 //!
 //! Written from the Si4430/31/32 rev B1 datasheet register summary ("Register Descriptions"
 //! table), deliberately **not** imported from `radio-rfm22b`: a wrong constant in the driver
-//! must show up as a failing test, not be mirrored here (the lora-rs fixture rule,
-//! aesthetics.md §A2).
+//! must show up as a failing test, not be mirrored here (the lora-rs fixture
+//! rule).
 
 /// Register addresses (datasheet names, shortened).
 pub mod addr {

@@ -93,7 +93,7 @@ enum Finish {
 
 impl Chip {
     /// The RSSI register as the medium makes it now: noise + every frame and burst in the
-    /// IF bandwidth (radio.md §1a: raw = 2·(dBm + 122) + rssi_off steps).
+    /// IF bandwidth (raw = 2·(dBm + 122) + rssi_off steps).
     pub(crate) fn live_rssi(&self, air: &Air, now_ns: u64) -> u8 {
         let modem = ModemSettings::from_registers(&self.regs);
         let carrier_hz = self.radiated_carrier_hz(&modem);

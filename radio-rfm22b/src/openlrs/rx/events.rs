@@ -90,7 +90,7 @@ pub struct Tick {
     pub command: Option<Command>,
     /// Failsafe has just started: apply the stored failsafe values.
     pub failsafe_started: bool,
-    /// Read RSSI (0x26) now and pass it to [`Receiver::on_rssi_sample`]: the next packet
+    /// Read RSSI (0x26) now and pass it to [`Receiver::on_rssi_sample`](super::Receiver::on_rssi_sample): the next packet
     /// should be on air.
     pub sample_rssi: bool,
 }

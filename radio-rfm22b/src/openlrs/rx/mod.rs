@@ -1,7 +1,7 @@
 //! The receiver role as a sans-IO state machine: bind listening, following the hop sequence,
 //! the fast re-hop after a missed packet, slow hopping after `hopcount` misses, failsafe, and
-//! the telemetry reply with its sequence handshake (RX.h; radio.md §1c "Hopping",
-//! "Downlink", "Failsafe"). Time is `now_us` from the caller; nothing here touches a radio.
+//! the telemetry reply with its sequence handshake (OpenLRSng
+//! `RX.h`). Time is `now_us` from the caller; nothing here touches a radio.
 
 use heapless::Vec;
 

@@ -1,5 +1,5 @@
 //! RC_CHANNELS_PACKED (0x16): 16 channels × 11 bit, packed little-endian bit-first
-//! (protocols.md §4.2), and the tick ↔ microsecond mapping of ExpressLRS/EdgeTX.
+//! (CRSF spec, `RC_CHANNELS_PACKED`), and the tick ↔ microsecond mapping of ExpressLRS/EdgeTX.
 
 use super::frame::{Error, Frame, address, frame_type};
 

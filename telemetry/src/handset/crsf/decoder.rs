@@ -6,7 +6,7 @@ use heapless::Vec;
 use super::frame::{FRAME_CRC, Frame, MAX_FRAME_LEN, MAX_LENGTH_BYTE, MIN_LENGTH_BYTE, address};
 
 /// Byte-0 values a frame may start with: the serial sync byte and the device addresses that
-/// EdgeTX and receivers put there (protocols.md §4.1: radio → module uses 0xEE and 0xC8,
+/// EdgeTX and receivers put there (radio → module uses 0xEE and 0xC8,
 /// module → radio 0xC8 and 0xEA).
 pub const FRAME_STARTS: [u8; 4] = [
     address::FLIGHT_CONTROLLER,

@@ -1,5 +1,5 @@
 //! Extended-header frames between radio and module: DEVICE_PING 0x28, DEVICE_INFO 0x29, the
-//! RADIO_ID 0x3A timing correction and the model-select command 0x32 (protocols.md §4.2).
+//! RADIO_ID 0x3A timing correction and the model-select command 0x32 (CRSF spec).
 
 use crc::{Algorithm, Crc};
 use heapless::{String, Vec};
@@ -15,8 +15,8 @@ pub const COMMAND_MODEL_SELECT: u8 = 0x05;
 /// Longest device name this module keeps.
 pub const DEVICE_NAME_MAX_LEN: usize = 32;
 
-/// CRC-8 poly 0xBA (init 0, unreflected) that command frames carry before the frame CRC
-/// (protocols.md §4.1). Check value over "123456789" is 0x20.
+/// CRC-8 poly 0xBA (init 0, unreflected) that command frames carry before the frame CRC.
+/// Check value over "123456789" is 0x20.
 pub const COMMAND_CRC: Crc<u8> = Crc::<u8>::new(&Algorithm {
     width: 8,
     poly: 0xBA,
@@ -164,7 +164,7 @@ impl DeviceInfo {
 }
 
 /// RADIO_ID (0x3A) sub-type 0x10: the module tells the radio at which period and phase to
-/// send its channel frames (EdgeTX mixer sync, protocols.md §4.2).
+/// send its channel frames (EdgeTX mixer sync).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TimingCorrection {

@@ -1,4 +1,4 @@
-//! One CRSF frame: `[address][len][type][payload…][crc]` (protocols.md §4.1), its CRC and its
+//! One CRSF frame: `[address][len][type][payload…][crc]` (CRSF spec), its CRC and its
 //! encoding into a caller buffer.
 
 use core::fmt;
@@ -6,7 +6,7 @@ use core::fmt;
 use crc::{CRC_8_DVB_S2, Crc};
 use heapless::Vec;
 
-/// CRC-8/DVB-S2 (poly 0xD5, init 0, no reflection) over type + payload (protocols.md §4.1).
+/// CRC-8/DVB-S2 (poly 0xD5, init 0, no reflection) over type + payload.
 pub const FRAME_CRC: Crc<u8> = Crc::<u8>::new(&CRC_8_DVB_S2);
 
 /// Longest frame on the wire, address byte to CRC.
@@ -18,7 +18,7 @@ pub const MIN_LENGTH_BYTE: u8 = 2;
 /// Largest value of the length byte (everything after it in a 64-byte frame).
 pub const MAX_LENGTH_BYTE: u8 = (MAX_FRAME_LEN - 2) as u8;
 
-/// Frame types this module knows (TBS spec `crsf.md`; protocols.md §4.2).
+/// Frame types this module knows (TBS spec `crsf.md`).
 pub mod frame_type {
     /// GPS position, speed, heading, altitude, satellites.
     pub const GPS: u8 = 0x02;
@@ -44,7 +44,7 @@ pub mod frame_type {
     pub const FIRST_EXTENDED: u8 = 0x28;
 }
 
-/// Device addresses (protocols.md §4.1).
+/// Device addresses.
 pub mod address {
     /// Broadcast.
     pub const BROADCAST: u8 = 0x00;

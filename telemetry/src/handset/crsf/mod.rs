@@ -1,6 +1,6 @@
 //! CRSF ("Crossfire") between the radio and the module on the JR bay's half-duplex S.Port
 //! pin: frames, a streaming decoder, typed messages and the module's reply logic
-//! (protocols.md §4).
+//! (the CRSF protocol as ExpressLRS and EdgeTX implement it).
 //!
 //! The module's receive loop, with the UART and clock left to the caller:
 //!

@@ -1,6 +1,6 @@
 //! The module's side of the half-duplex JR line (sans-IO): after each radio frame it decides
 //! what to send in the reply window — DEVICE_INFO for a ping, the 0x3A timing frame that pulls
-//! the radio onto the link's packet rate, and rotating telemetry (protocols.md §4.3, §4.4).
+//! the radio onto the link's packet rate, and rotating telemetry (ExpressLRS/EdgeTX).
 
 use heapless::String;
 
@@ -13,7 +13,7 @@ use crate::handset::report::HandsetTelemetry;
 /// EdgeTX's receive buffer for one burst (`TELEMETRY_RX_PACKET_SIZE`).
 pub const MAX_REPLY_BYTES: usize = 128;
 /// Serial number we report. Anything but "ELRS": EdgeTX would enable ExpressLRS-only
-/// features for that (protocols.md §4.2).
+/// features for that.
 pub const TAULINK_SERIAL: [u8; 4] = *b"TAUL";
 /// Hardware id we report (RFM22B module on nRF52840, revision 1).
 pub const TAULINK_HARDWARE_ID: u32 = 0x0000_2201;
@@ -64,7 +64,7 @@ impl Config {
         }
     }
 
-    /// EdgeTX's frame period before any timing frame (protocols.md §4.3).
+    /// EdgeTX's frame period before any timing frame.
     pub fn default_radio_period_us(&self) -> u32 {
         match self.baud {
             0..=115_200 => 16_000,
@@ -74,7 +74,7 @@ impl Config {
     }
 
     /// Shortest period we ask the radio for: 5 ms at ≤ 115 200 Bd, 2 ms faster (ExpressLRS'
-    /// half-duplex minimums, protocols.md §4.3).
+    /// half-duplex minimums).
     pub fn min_radio_period_us(&self) -> u32 {
         if self.baud <= 115_200 { 5_000 } else { 2_000 }
     }

@@ -1,5 +1,5 @@
 //! Module → radio telemetry payloads: LINK_STATISTICS 0x14, BATTERY_SENSOR 0x08, ATTITUDE
-//! 0x1E, FLIGHT_MODE 0x21, GPS 0x02 (protocols.md §4.2; all multi-byte fields big-endian).
+//! 0x1E, FLIGHT_MODE 0x21, GPS 0x02 (all multi-byte fields big-endian).
 
 use heapless::{String, Vec};
 
@@ -8,7 +8,7 @@ use super::frame::{Error, MAX_PAYLOAD_LEN, be_bytes, frame_type};
 /// Longest flight-mode text this module carries.
 pub const FLIGHT_MODE_MAX_LEN: usize = 16;
 /// EdgeTX shows at most this many characters of a flight mode (it terminates the string at
-/// index `min(16, len)` of the frame, protocols.md §4.2), so senders should not exceed it.
+/// index `min(16, len)` of the frame), so senders should not exceed it.
 pub const FLIGHT_MODE_VISIBLE_LEN: usize = 13;
 
 fn exact<const N: usize>(frame_type: u8, payload: &[u8]) -> Result<[u8; N], Error> {
@@ -22,7 +22,7 @@ fn exact<const N: usize>(frame_type: u8, payload: &[u8]) -> Result<[u8; N], Erro
 }
 
 /// LINK_STATISTICS (0x14), 10 bytes. RSSI bytes carry the (negative) dBm as a signed byte,
-/// as ExpressLRS sends and EdgeTX sign-extends (protocols.md §4.2).
+/// as ExpressLRS sends and EdgeTX sign-extends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct LinkStatistics {
@@ -109,7 +109,7 @@ impl LinkStatistics {
 }
 
 /// BATTERY_SENSOR (0x08), 8 bytes. 0.1 V / 0.1 A as EdgeTX, ExpressLRS and Betaflight read
-/// it (the TBS text's "10 µV" is not what radios do, protocols.md §4.2).
+/// it (the TBS text's "10 µV" is not what radios do).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Battery {

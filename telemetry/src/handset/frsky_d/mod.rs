@@ -1,6 +1,6 @@
 //! FrSky D ("hub") telemetry at 9600 Bd as openLRSng's TX sends it to the radio: 0x7E-framed
 //! link frames (0xFE: A1, A2, RSSI) and user frames (0xFD: up to 6 hub-stream bytes), with
-//! 0x7D stuffing (protocols.md §3.4; EdgeTX `frsky_d.cpp`).
+//! 0x7D stuffing (EdgeTX `frsky_d.cpp`).
 
 use core::fmt;
 

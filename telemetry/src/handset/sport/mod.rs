@@ -1,5 +1,5 @@
 //! FrSky S.Port (SmartPort) data frames as EdgeTX parses them: `7E physId 10 id id v v v v crc`
-//! with 0x7D byte stuffing (protocols.md §3.1–3.3), the value IDs we push, a streaming decoder
+//! with 0x7D byte stuffing (EdgeTX `frsky_sport.cpp`), the value IDs we push, a streaming decoder
 //! and the push scheduler for PPM mode.
 
 use core::fmt;
@@ -23,7 +23,7 @@ pub const DATA_FRAME: u8 = 0x10;
 /// Longest frame on the wire: start, physical ID, and 8 bytes that may each be escaped.
 pub const MAX_WIRE_LEN: usize = 2 + 2 * 8;
 
-/// Value IDs EdgeTX knows (`frsky_defs.h`, protocols.md §3.3) plus the two DIY IDs we use.
+/// Value IDs EdgeTX knows (`frsky_defs.h`) plus the two DIY IDs we use.
 pub mod value_id {
     /// RSSI in dB, low byte only. A non-zero RSSI is EdgeTX's "streaming" heartbeat (1 s).
     pub const RSSI: u16 = 0xF101;
@@ -52,7 +52,7 @@ pub mod value_id {
     pub const TAULINK_FLIGHT_MODE: u16 = 0x5101;
 }
 
-/// Physical IDs: 5-bit sensor ID plus three parity bits (protocols.md §3.2).
+/// Physical IDs: 5-bit sensor ID plus three parity bits.
 pub mod physical_id {
     /// ID 24, what FrSky receivers use for RSSI/RxBt and openLRSng's TX pushes with.
     pub const RECEIVER: u8 = 0x98;

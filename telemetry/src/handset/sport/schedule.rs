@@ -1,5 +1,5 @@
 //! Which S.Port value to push when, in PPM mode where the radio never polls (EdgeTX ≥ 2.11
-//! "SPort", OpenTX 2.2/2.3; protocols.md §1.3): one frame per slot, RSSI often enough to keep
+//! "SPort", OpenTX 2.2/2.3): one frame per slot, RSSI often enough to keep
 //! EdgeTX's 1 s streaming gate open, the rest by rate and age.
 
 use super::{Frame, physical_id, value_id};
