@@ -49,10 +49,10 @@ pub struct App<L: LinkPort, H: HandsetOutput> {
 
 impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// The core with its settings and plug-ins; the PPM output takes its failsafe behaviour
-    /// from the settings.
+    /// and the link its handset-input timeout from the settings.
     pub fn new(
         settings: Settings,
-        link: L,
+        mut link: L,
         handset: H,
         phone_connected: bool,
     ) -> Result<Self, ppm::encoder::ConfigError> {
@@ -60,6 +60,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             failsafe: settings.failsafe,
             ..EncoderConfig::default()
         })?;
+        link.set_input_timeout_ms(settings.input_timeout_ms);
         Ok(Self {
             settings,
             link,

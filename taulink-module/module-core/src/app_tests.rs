@@ -12,11 +12,15 @@ struct FakeLink {
     room: usize,
     stats: LinkStats,
     binds: u32,
+    input_timeout_ms: u16,
 }
 
 impl LinkPort for FakeLink {
     fn send_channels(&mut self, channels: &Channels) {
         self.channels.push(*channels);
+    }
+    fn set_input_timeout_ms(&mut self, timeout_ms: u16) {
+        self.input_timeout_ms = timeout_ms;
     }
     fn can_send_record(&self) -> bool {
         self.room > 0
@@ -155,6 +159,31 @@ fn receiver_role_outputs_ppm_and_stops_on_failsafe() {
     assert_eq!(app.next_ppm_frame(), None, "stop pulses on failsafe");
     // The transmitter role never drives the PPM output.
     assert_eq!(self::app(Settings::default()).next_ppm_frame(), None);
+}
+
+#[test]
+fn a_factory_receiver_stops_pulses_on_failsafe_and_the_link_gets_the_input_timeout() {
+    let mut app = app(Settings {
+        role: Role::Receiver,
+        ..Settings::default()
+    });
+    assert_eq!(app.link().input_timeout_ms, 500);
+    app.link.stats.connected = true;
+    app.on_tick();
+    app.on_link_channels(&Channels::from_values(&[us_to_value(1600); 8]));
+    assert!(app.next_ppm_frame().is_some());
+    app.link.stats.connected = false;
+    app.on_tick();
+    assert_eq!(
+        app.next_ppm_frame(),
+        None,
+        "no held throttle on a lost link"
+    );
+    let app = self::app(Settings {
+        input_timeout_ms: 250,
+        ..Settings::default()
+    });
+    assert_eq!(app.link().input_timeout_ms, 250);
 }
 
 #[test]

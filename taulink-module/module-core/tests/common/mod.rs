@@ -92,6 +92,8 @@ pub struct FlightSide {
     pub uplink_rssi_dbm: std::collections::BTreeSet<i16>,
     /// Messages sent down.
     pub sent: Vec<Message>,
+    /// Every change of the follower's failsafe state: (virtual µs, in failsafe).
+    pub failsafe_changes: Vec<(u64, bool)>,
     reader: MessageReader,
     updates: u32,
     next_telemetry_us: u64,
@@ -107,6 +109,10 @@ impl FollowerHooks for FlightHooks {
     fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
         let mut side = self.side.borrow_mut();
         let virtual_us = now_us - FLIGHT_EPOCH_US;
+        if side.failsafe_changes.last().map(|c| c.1) != Some(follower.in_failsafe()) {
+            side.failsafe_changes
+                .push((virtual_us, follower.in_failsafe()));
+        }
         if let Some(rssi) = follower.uplink_rssi_dbm() {
             side.uplink_rssi_dbm.insert(rssi);
         }
@@ -187,8 +193,15 @@ pub struct World<'a> {
 
 impl World<'_> {
     /// Both ends, 200 m apart on a clean channel, the follower booting 123 ms after the
-    /// master; a 10 Hz task does the module's periodic work.
+    /// master; a 10 Hz task does the module's periodic work. The follower declares failsafe
+    /// after 250 ms of silence.
     pub fn new(settings: Settings) -> Self {
+        Self::with_flight_failsafe(settings, 250_000)
+    }
+
+    /// As [`World::new`], with the follower's silence timeout (the flight firmware's is
+    /// 500 ms).
+    pub fn with_flight_failsafe(settings: Settings, failsafe_us: u64) -> Self {
         let time = VirtualTime::new();
         let medium = Medium::new(time.clone(), ChannelModel::default(), 7);
         let module_node = medium.add_node(Node::default());
@@ -218,7 +231,7 @@ impl World<'_> {
         let flight_time = time.clone();
         executor.spawn(async move {
             flight_time.sleep_until(123_457).await;
-            let mut follower = Follower::new(params, FailsafeValues::default(), 250_000);
+            let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
             let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut hooks).await;
         });
         let tick_app = app.clone();
