@@ -249,3 +249,43 @@ fn a_receiver_takes_band_and_rate_from_the_bind_offer() {
     assert_eq!(saved.band, crate::settings::Band::Mhz868);
     assert_eq!(crate::air::link_params(&saved), Some(offer));
 }
+
+#[test]
+fn a_long_press_stops_the_link_and_the_bind_outcome_is_saved_or_undone() {
+    use crate::session::{BindOutcome, LinkStep, SessionEnd};
+    let mut app = app(Settings {
+        bind_id: 0x0101_0101,
+        ..Settings::default()
+    });
+    assert_eq!(app.next_link_step(0, 7), LinkStep::Probe);
+    app.on_radio_present(true);
+    assert!(matches!(app.next_link_step(0, 7), LinkStep::RunMaster(_)));
+    assert_eq!(app.poll_session(50), None);
+    app.on_button(ButtonEvent::LongPress);
+    assert_eq!(app.poll_session(100), Some(SessionEnd::BindRequested));
+    assert_eq!(app.poll_session(150), None, "one press, one bind");
+    app.on_session_end(SessionEnd::BindRequested);
+    let LinkStep::BindMaster { params, .. } = app.next_link_step(200, 0xABCD_0123) else {
+        panic!("a transmitter binds as master");
+    };
+    assert_eq!(params.bind_id, 0xABCD_0123);
+    let Some(Action::Save(saved)) = app.on_bind_outcome(BindOutcome::Offered { accepted: true })
+    else {
+        panic!("an accepted offer is saved");
+    };
+    assert_eq!(saved.bind_id, 0xABCD_0123);
+    assert_eq!(app.settings().bind_id, 0xABCD_0123);
+    // A bind nobody answers keeps the old ID and ends the Binding LED.
+    assert_eq!(app.next_link_step(300, 0), LinkStep::Probe);
+    app.on_radio_present(true);
+    app.next_link_step(300, 0);
+    app.on_button(ButtonEvent::LongPress);
+    app.poll_session(350);
+    app.on_session_end(SessionEnd::BindRequested);
+    app.next_link_step(400, 0x5555_5555);
+    assert_eq!(
+        app.on_bind_outcome(BindOutcome::Offered { accepted: false }),
+        Some(Action::Led(LinkState::Searching))
+    );
+    assert_eq!(app.settings().bind_id, 0xABCD_0123);
+}

@@ -53,6 +53,8 @@ pub trait LinkPort {
     fn stats(&self) -> LinkStats;
     /// Start the bind procedure.
     fn start_bind(&mut self);
+    /// The link loop stopped (bind, radio failure): forget what only a running link knows.
+    fn on_link_stopped(&mut self) {}
     /// The next telemetry record received over the air into `out` (≥ 64 bytes).
     fn take_received_record(&mut self, _out: &mut [u8]) -> Option<usize> {
         None

@@ -164,15 +164,6 @@ impl AirLink {
         core::mem::take(&mut self.bind_requested)
     }
 
-    /// The link loop stopped (bind, radio failure): nothing arrives until it runs again.
-    pub fn on_link_stopped(&mut self) {
-        self.stats = LinkStats {
-            rate_code: self.stats.rate_code,
-            ..LinkStats::default()
-        };
-        self.received_channels = None;
-    }
-
     /// Whether the handset's channels are stale (none yet, or none for the input timeout):
     /// the uplinks then tell the follower to fly its failsafe.
     pub fn input_lost(&self) -> bool {
@@ -341,6 +332,14 @@ impl LinkPort for AirLink {
 
     fn start_bind(&mut self) {
         self.bind_requested = true;
+    }
+
+    fn on_link_stopped(&mut self) {
+        self.stats = LinkStats {
+            rate_code: self.stats.rate_code,
+            ..LinkStats::default()
+        };
+        self.received_channels = None;
     }
 
     fn take_received_record(&mut self, out: &mut [u8]) -> Option<usize> {

@@ -11,6 +11,7 @@ use std::rc::Rc;
 use module_core::air::{AirLink, link_params};
 use module_core::app::App;
 use module_core::handset::Handset;
+use module_core::session::LinkStep;
 use module_core::settings::{Band, InputProtocol, OutputProtocol, RateMode, Role, Settings};
 use telemetry::channels::{Channels as LinkChannels, FailsafeValues};
 use telemetry::link::core::{Follower, Master};
@@ -174,8 +175,7 @@ pub struct ModuleHooks {
 impl MasterHooks for ModuleHooks {
     fn on_slot(&mut self, now_us: u64, master: &mut Master) {
         let mut app = self.app.borrow_mut();
-        app.link_mut().on_master_slot(now_us, master);
-        app.poll_link();
+        app.on_master_slot(now_us, (now_us / 1_000) as u32, master);
     }
 }
 
@@ -213,7 +213,13 @@ impl World<'_> {
         let app = Rc::new(RefCell::new(
             App::new(settings, AirLink::new(), Handset::new(&settings), false).unwrap(),
         ));
+        // As the firmware's link task: probe, then run what the core says.
+        assert_eq!(app.borrow_mut().next_link_step(0, 0), LinkStep::Probe);
         app.borrow_mut().on_radio_present(true);
+        assert_eq!(
+            app.borrow_mut().next_link_step(0, 0),
+            LinkStep::RunMaster(params)
+        );
         let flight = Rc::new(RefCell::new(FlightSide::default()));
         let mut executor = Executor::new(time.clone());
         let mut hooks = ModuleHooks { app: app.clone() };
