@@ -122,8 +122,7 @@ fn power_cut_at_every_byte_leaves_old_or_new() {
     // A plain save writes a 28-byte item (8-byte header; key, generation and record padded to
     // words) and marks the other key's item erased; a page holds eight such items, so the
     // saves go round the four pages, and one that must reclaim the oldest page first erases
-    // its 256 bytes (measured:
-    // 2 800 cut points over the 48 saves, 300 for that save).
+    // its 256 bytes (measured: 2 800 cut points over the 48 saves, 300 for that save).
     assert!(total > 48 * 28, "{total} cut points tried");
     assert!(
         most > 256,
