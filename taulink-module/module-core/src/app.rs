@@ -174,6 +174,20 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         self.relay.set_connected(true);
     }
 
+    /// The HM-10's boot script ended: the UART rate to relay records at, or `None` when no
+    /// usable module is fitted (the relay then stays off).
+    pub fn on_hm10_configured(&mut self, outcome: crate::hm10::at::Outcome) -> Option<u32> {
+        use crate::hm10::at::Outcome;
+        match outcome {
+            Outcome::Configured { baud } => Some(baud),
+            Outcome::PhoneConnected { baud } => {
+                self.on_phone_connected();
+                Some(baud)
+            }
+            Outcome::NoModule | Outcome::Failed { .. } => None,
+        }
+    }
+
     /// The next frame for the HM-10 UART (`out` ≥ `hm10::relay::MAX_FRAME_LEN`).
     pub fn next_phone_frame(&mut self, out: &mut [u8]) -> Option<usize> {
         self.relay.next_frame_to_phone(out)

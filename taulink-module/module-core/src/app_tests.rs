@@ -289,3 +289,30 @@ fn a_long_press_stops_the_link_and_the_bind_outcome_is_saved_or_undone() {
     );
     assert_eq!(app.settings().bind_id, 0xABCD_0123);
 }
+
+#[test]
+fn the_hm10_script_outcome_decides_the_relay() {
+    use crate::hm10::at::{Outcome, Stage};
+    let mut app = app(Settings::default());
+    assert_eq!(app.on_hm10_configured(Outcome::NoModule), None);
+    assert_eq!(
+        app.on_hm10_configured(Outcome::Failed {
+            stage: Stage::Name
+        }),
+        None
+    );
+    assert_eq!(
+        app.on_hm10_configured(Outcome::Configured { baud: 115_200 }),
+        Some(115_200)
+    );
+    // Not connected yet: a record from the link is held back, not sent as AT input.
+    app.on_link_record(&[1, 2, 3]);
+    let mut frame = [0u8; MAX_FRAME_LEN];
+    assert_eq!(app.next_phone_frame(&mut frame), None);
+    assert_eq!(
+        app.on_hm10_configured(Outcome::PhoneConnected { baud: 9_600 }),
+        Some(9_600)
+    );
+    app.on_link_record(&[4, 5, 6]);
+    assert!(app.next_phone_frame(&mut frame).is_some(), "relay open");
+}
