@@ -296,9 +296,7 @@ fn the_hm10_script_outcome_decides_the_relay() {
     let mut app = app(Settings::default());
     assert_eq!(app.on_hm10_configured(Outcome::NoModule), None);
     assert_eq!(
-        app.on_hm10_configured(Outcome::Failed {
-            stage: Stage::Name
-        }),
+        app.on_hm10_configured(Outcome::Failed { stage: Stage::Name }),
         None
     );
     assert_eq!(
