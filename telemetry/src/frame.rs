@@ -20,7 +20,8 @@ pub const REPORT_BYTES: usize = 2;
 const KIND_MASK: u8 = 0x07;
 const FLAG_REPORT: u8 = 0x08;
 const FLAG_SAVE_FAILSAFE: u8 = 0x10;
-const RESERVED_MASK: u8 = 0xE0;
+const FLAG_INPUT_LOST: u8 = 0x20;
+const RESERVED_MASK: u8 = 0xC0;
 
 const KIND_BIND_OFFER: u8 = 0;
 const KIND_BIND_ACCEPT: u8 = 1;
@@ -91,6 +92,9 @@ pub struct Uplink<'a> {
     pub report: Option<LinkReport>,
     /// "Store the current channels as failsafe values".
     pub save_failsafe: bool,
+    /// The master has no fresh channels (its handset input stopped): the packed channels
+    /// are stale and must not be flown; the follower enters failsafe.
+    pub input_lost: bool,
     /// Channel format of `packed_channels`.
     pub format: ChannelFormat,
     /// Packed channel bytes ([`crate::channels::pack`]).
@@ -217,11 +221,13 @@ pub fn encode(frame: &Frame<'_>, key: u32, out: &mut [u8]) -> Result<usize, Enco
                 ChannelFormat::Full16 => KIND_RC16,
                 ChannelFormat::Compact8 => KIND_RC8,
             };
-            let flags = if up.save_failsafe {
-                FLAG_SAVE_FAILSAFE
-            } else {
-                0
-            };
+            let mut flags = 0;
+            if up.save_failsafe {
+                flags |= FLAG_SAVE_FAILSAFE;
+            }
+            if up.input_lost {
+                flags |= FLAG_INPUT_LOST;
+            }
             put_link_header(out, &mut at, kind | flags, up.slot, up.stream, up.report)?;
             put(out, &mut at, up.packed_channels)?;
             put(out, &mut at, up.data)?;
@@ -302,8 +308,9 @@ fn decode_inner(packet: &[u8], key: u32) -> Result<Frame<'_>, Rejection> {
     let kind = kind_byte & KIND_MASK;
     let has_report = kind_byte & FLAG_REPORT != 0;
     let save_failsafe = kind_byte & FLAG_SAVE_FAILSAFE != 0;
+    let input_lost = kind_byte & FLAG_INPUT_LOST != 0;
     match kind {
-        KIND_BIND_OFFER | KIND_BIND_ACCEPT if has_report || save_failsafe => {
+        KIND_BIND_OFFER | KIND_BIND_ACCEPT if has_report || save_failsafe || input_lost => {
             Err(Rejection::Malformed)
         }
         KIND_BIND_OFFER => {
@@ -359,7 +366,7 @@ fn decode_inner(packet: &[u8], key: u32) -> Result<Frame<'_>, Rejection> {
                 (None, rest)
             };
             if kind == KIND_DOWNLINK {
-                if save_failsafe {
+                if save_failsafe || input_lost {
                     return Err(Rejection::Malformed);
                 }
                 return Ok(Frame::Downlink(Downlink {
@@ -382,6 +389,7 @@ fn decode_inner(packet: &[u8], key: u32) -> Result<Frame<'_>, Rejection> {
                 stream,
                 report,
                 save_failsafe,
+                input_lost,
                 format,
                 packed_channels,
                 data,

@@ -20,6 +20,7 @@ fn uplink_bytes(data: &[u8]) -> ([u8; 64], usize) {
             lq_percent: 96,
         }),
         save_failsafe: true,
+        input_lost: false,
         format: ChannelFormat::Full16,
         packed_channels: &packed,
         data,
@@ -144,6 +145,49 @@ fn short_and_inconsistent_packets_are_rejected() {
     assert_eq!(
         decode(&unknown, KEY),
         Received::Rejected(Rejection::UnknownKind(7))
+    );
+}
+
+#[test]
+fn input_lost_is_bit_5_of_uplinks_only() {
+    let mut packed = [0u8; 11];
+    pack(&[992; 16], ChannelFormat::Compact8, &mut packed);
+    let up = Uplink {
+        slot: 1,
+        stream: StreamHeader::default(),
+        report: None,
+        save_failsafe: false,
+        input_lost: true,
+        format: ChannelFormat::Compact8,
+        packed_channels: &packed,
+        data: &[],
+    };
+    let mut out = [0u8; 64];
+    let n = encode(&Frame::Uplink(up), KEY, &mut out).unwrap();
+    assert_eq!(out[1], KIND_RC8 | FLAG_INPUT_LOST);
+    assert_eq!(
+        decode(&out[..n], KEY),
+        Received::Accepted(Frame::Uplink(up))
+    );
+    // The same bit on a downlink is malformed; bits 7..6 stay reserved.
+    let mut down = [
+        PROTOCOL_VERSION,
+        KIND_DOWNLINK | FLAG_INPUT_LOST,
+        0,
+        0,
+        0,
+        0,
+        0,
+    ];
+    let crc = keyed_crc16(KEY, &down[..5]);
+    down[5..].copy_from_slice(&crc.to_be_bytes());
+    assert_eq!(decode(&down, KEY), Received::Rejected(Rejection::Malformed));
+    let mut reserved = [PROTOCOL_VERSION, KIND_RC8 | 0x40, 0, 0];
+    let crc = keyed_crc16(KEY, &reserved[..2]);
+    reserved[2..].copy_from_slice(&crc.to_be_bytes());
+    assert_eq!(
+        decode(&reserved, KEY),
+        Received::Rejected(Rejection::UnknownKind(KIND_RC8 | 0x40))
     );
 }
 

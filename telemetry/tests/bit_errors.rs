@@ -49,6 +49,7 @@ fn random_frame(rng: &mut SplitMix64, buf: &mut [u8; 64]) -> usize {
             stream,
             report,
             save_failsafe: false,
+            input_lost: false,
             format,
             packed_channels: packed,
             data: frame_data,

@@ -45,6 +45,7 @@ proptest! {
         slot in any::<u8>(), seq in any::<u8>(), ack in any::<u8>(),
         report in proptest::option::of((any::<i8>(), 0u8..=100)),
         save in any::<bool>(),
+        input_lost in any::<bool>(),
         data in proptest::collection::vec(any::<u8>(), 0..20),
         key in any::<u32>(),
     ) {
@@ -56,6 +57,7 @@ proptest! {
             stream: StreamHeader { seq, ack },
             report: report.map(|(rssi_dbm, lq_percent)| LinkReport { rssi_dbm, lq_percent }),
             save_failsafe: save,
+            input_lost,
             format,
             packed_channels: &packed,
             data: &data,

@@ -2,13 +2,16 @@
 //! link → PPM output in the receiver role. A pure struct: the firmware calls the `on_*`
 //! methods from its tasks and carries out what they return.
 
+use crate::air::AirLink;
 use crate::button::ButtonEvent;
 use crate::channels::Channels;
 use crate::hm10::relay::{MAX_RECORD_LEN, Relay, RelayStats};
 use crate::ports::{HandsetOutput, LinkPort, LinkStats};
 use crate::ppm::{self, Decoded, Decoder, DecoderConfig, Encoder, EncoderConfig};
+use crate::session::{BindOutcome, LinkStep, Session, SessionEnd};
 use crate::settings::{InputProtocol, Role, Settings};
 use crate::status::LinkState;
+use telemetry::link::core::{Follower, Master};
 
 /// Something the firmware must do after an event.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -42,6 +45,9 @@ pub struct App<L: LinkPort, H: HandsetOutput> {
     relay: Relay,
     radio_present: bool,
     binding: bool,
+    /// A long press not yet taken by the link session.
+    bind_request: bool,
+    session: Session,
     was_connected: bool,
     led: LinkState,
     input: InputStats,
@@ -49,10 +55,10 @@ pub struct App<L: LinkPort, H: HandsetOutput> {
 
 impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// The core with its settings and plug-ins; the PPM output takes its failsafe behaviour
-    /// from the settings.
+    /// and the link its handset-input timeout from the settings.
     pub fn new(
         settings: Settings,
-        link: L,
+        mut link: L,
         handset: H,
         phone_connected: bool,
     ) -> Result<Self, ppm::encoder::ConfigError> {
@@ -60,6 +66,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             failsafe: settings.failsafe,
             ..EncoderConfig::default()
         })?;
+        link.set_input_timeout_ms(settings.input_timeout_ms);
         Ok(Self {
             settings,
             link,
@@ -69,6 +76,8 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             relay: Relay::new(phone_connected),
             radio_present: false,
             binding: false,
+            bind_request: false,
+            session: Session::new(),
             was_connected: false,
             led: LinkState::NoRadio,
             input: InputStats::default(),
@@ -165,6 +174,20 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         self.relay.set_connected(true);
     }
 
+    /// The HM-10's boot script ended: the UART rate to relay records at, or `None` when no
+    /// usable module is fitted (the relay then stays off).
+    pub fn on_hm10_configured(&mut self, outcome: crate::hm10::at::Outcome) -> Option<u32> {
+        use crate::hm10::at::Outcome;
+        match outcome {
+            Outcome::Configured { baud } => Some(baud),
+            Outcome::PhoneConnected { baud } => {
+                self.on_phone_connected();
+                Some(baud)
+            }
+            Outcome::NoModule | Outcome::Failed { .. } => None,
+        }
+    }
+
     /// The next frame for the HM-10 UART (`out` ≥ `hm10::relay::MAX_FRAME_LEN`).
     pub fn next_phone_frame(&mut self, out: &mut [u8]) -> Option<usize> {
         self.relay.next_frame_to_phone(out)
@@ -181,6 +204,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// The radio answered its probe (or stopped answering).
     pub fn on_radio_present(&mut self, present: bool) -> Option<Action> {
         self.radio_present = present;
+        self.session.on_probe(present);
         self.update_led()
     }
 
@@ -188,6 +212,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     pub fn on_button(&mut self, event: ButtonEvent) -> Option<Action> {
         if event == ButtonEvent::LongPress && !self.binding {
             self.binding = true;
+            self.bind_request = true;
             self.link.start_bind();
         }
         self.update_led()
@@ -255,6 +280,43 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         self.update_led()
     }
 
+    /// The link task's next step (`crate::session`), at `now_ms`; `random` (hardware RNG)
+    /// becomes the bind ID if a master bind is next.
+    pub fn next_link_step(&mut self, now_ms: u32, random: u32) -> LinkStep {
+        self.session.next(&self.settings, now_ms, random)
+    }
+
+    /// While a link step runs (every `session::POLL_MS`): whether it must stop now (a long
+    /// press, or the loop's hook silent for `session::HOOK_SILENCE_MS`).
+    pub fn poll_session(&mut self, now_ms: u32) -> Option<SessionEnd> {
+        let end = self.session.poll(now_ms, self.bind_request);
+        if end == Some(SessionEnd::BindRequested) {
+            self.bind_request = false;
+        }
+        end
+    }
+
+    /// The running link step ended (as `poll_session` said, or its radio failed): nothing
+    /// arrives until the next one runs.
+    pub fn on_session_end(&mut self, end: SessionEnd) -> Option<Action> {
+        self.link.on_link_stopped();
+        self.session.on_end(end);
+        self.update_led()
+    }
+
+    /// A bind step ended: a success is remembered (and must be saved), anything else goes
+    /// back to the previous state.
+    pub fn on_bind_outcome(&mut self, outcome: BindOutcome) -> Option<Action> {
+        let offered = self.session.on_bind_done();
+        match (outcome, offered) {
+            (BindOutcome::Offered { accepted: true }, Some(params)) => {
+                Some(self.on_bind_complete(params.bind_id))
+            }
+            (BindOutcome::Listened(Some(params)), _) => Some(self.on_bind_offer_accepted(&params)),
+            _ => self.on_bind_failed(),
+        }
+    }
+
     /// Periodic work (≈ 10 Hz): link state, failsafe, handset statistics and
     /// uplink records that waited for room.
     pub fn on_tick(&mut self) -> Option<Action> {
@@ -307,6 +369,23 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             self.led = state;
             Action::Led(state)
         })
+    }
+}
+
+impl<H: HandsetOutput> App<AirLink, H> {
+    /// The master loop's hook (transmitter role), at the slot starting at `now_us` (link
+    /// clock) and `now_ms` (the session's clock): channels and records in, telemetry out.
+    pub fn on_master_slot(&mut self, now_us: u64, now_ms: u32, master: &mut Master) {
+        self.session.on_hook(now_ms);
+        self.link.on_master_slot(now_us, master);
+        self.poll_link();
+    }
+
+    /// The follower loop's hook (receiver role), after every step.
+    pub fn on_follower_step(&mut self, now_us: u64, now_ms: u32, follower: &mut Follower) {
+        self.session.on_hook(now_ms);
+        self.link.on_follower_step(now_us, follower);
+        self.poll_link();
     }
 }
 

@@ -12,11 +12,15 @@ struct FakeLink {
     room: usize,
     stats: LinkStats,
     binds: u32,
+    input_timeout_ms: u16,
 }
 
 impl LinkPort for FakeLink {
     fn send_channels(&mut self, channels: &Channels) {
         self.channels.push(*channels);
+    }
+    fn set_input_timeout_ms(&mut self, timeout_ms: u16) {
+        self.input_timeout_ms = timeout_ms;
     }
     fn can_send_record(&self) -> bool {
         self.room > 0
@@ -158,6 +162,31 @@ fn receiver_role_outputs_ppm_and_stops_on_failsafe() {
 }
 
 #[test]
+fn a_factory_receiver_stops_pulses_on_failsafe_and_the_link_gets_the_input_timeout() {
+    let mut app = app(Settings {
+        role: Role::Receiver,
+        ..Settings::default()
+    });
+    assert_eq!(app.link().input_timeout_ms, 500);
+    app.link.stats.connected = true;
+    app.on_tick();
+    app.on_link_channels(&Channels::from_values(&[us_to_value(1600); 8]));
+    assert!(app.next_ppm_frame().is_some());
+    app.link.stats.connected = false;
+    app.on_tick();
+    assert_eq!(
+        app.next_ppm_frame(),
+        None,
+        "no held throttle on a lost link"
+    );
+    let app = self::app(Settings {
+        input_timeout_ms: 250,
+        ..Settings::default()
+    });
+    assert_eq!(app.link().input_timeout_ms, 250);
+}
+
+#[test]
 fn led_follows_radio_bind_and_link() {
     let mut app = app(Settings::default());
     assert_eq!(app.on_tick(), None, "starts as NoRadio");
@@ -219,4 +248,69 @@ fn a_receiver_takes_band_and_rate_from_the_bind_offer() {
     assert_eq!(saved.rate, crate::settings::RateMode::Bps57600);
     assert_eq!(saved.band, crate::settings::Band::Mhz868);
     assert_eq!(crate::air::link_params(&saved), Some(offer));
+}
+
+#[test]
+fn a_long_press_stops_the_link_and_the_bind_outcome_is_saved_or_undone() {
+    use crate::session::{BindOutcome, LinkStep, SessionEnd};
+    let mut app = app(Settings {
+        bind_id: 0x0101_0101,
+        ..Settings::default()
+    });
+    assert_eq!(app.next_link_step(0, 7), LinkStep::Probe);
+    app.on_radio_present(true);
+    assert!(matches!(app.next_link_step(0, 7), LinkStep::RunMaster(_)));
+    assert_eq!(app.poll_session(50), None);
+    app.on_button(ButtonEvent::LongPress);
+    assert_eq!(app.poll_session(100), Some(SessionEnd::BindRequested));
+    assert_eq!(app.poll_session(150), None, "one press, one bind");
+    app.on_session_end(SessionEnd::BindRequested);
+    let LinkStep::BindMaster { params, .. } = app.next_link_step(200, 0xABCD_0123) else {
+        panic!("a transmitter binds as master");
+    };
+    assert_eq!(params.bind_id, 0xABCD_0123);
+    let Some(Action::Save(saved)) = app.on_bind_outcome(BindOutcome::Offered { accepted: true })
+    else {
+        panic!("an accepted offer is saved");
+    };
+    assert_eq!(saved.bind_id, 0xABCD_0123);
+    assert_eq!(app.settings().bind_id, 0xABCD_0123);
+    // A bind nobody answers keeps the old ID and ends the Binding LED.
+    assert_eq!(app.next_link_step(300, 0), LinkStep::Probe);
+    app.on_radio_present(true);
+    app.next_link_step(300, 0);
+    app.on_button(ButtonEvent::LongPress);
+    app.poll_session(350);
+    app.on_session_end(SessionEnd::BindRequested);
+    app.next_link_step(400, 0x5555_5555);
+    assert_eq!(
+        app.on_bind_outcome(BindOutcome::Offered { accepted: false }),
+        Some(Action::Led(LinkState::Searching))
+    );
+    assert_eq!(app.settings().bind_id, 0xABCD_0123);
+}
+
+#[test]
+fn the_hm10_script_outcome_decides_the_relay() {
+    use crate::hm10::at::{Outcome, Stage};
+    let mut app = app(Settings::default());
+    assert_eq!(app.on_hm10_configured(Outcome::NoModule), None);
+    assert_eq!(
+        app.on_hm10_configured(Outcome::Failed { stage: Stage::Name }),
+        None
+    );
+    assert_eq!(
+        app.on_hm10_configured(Outcome::Configured { baud: 115_200 }),
+        Some(115_200)
+    );
+    // Not connected yet: a record from the link is held back, not sent as AT input.
+    app.on_link_record(&[1, 2, 3]);
+    let mut frame = [0u8; MAX_FRAME_LEN];
+    assert_eq!(app.next_phone_frame(&mut frame), None);
+    assert_eq!(
+        app.on_hm10_configured(Outcome::PhoneConnected { baud: 9_600 }),
+        Some(9_600)
+    );
+    app.on_link_record(&[4, 5, 6]);
+    assert!(app.next_phone_frame(&mut frame).is_some(), "relay open");
 }

@@ -15,5 +15,6 @@ pub mod hm10;
 pub mod ports;
 pub mod ppm;
 pub mod records;
+pub mod session;
 pub mod settings;
 pub mod status;

@@ -38,8 +38,12 @@ pub struct LinkStats {
 
 /// The air link as the module core sees it.
 pub trait LinkPort {
-    /// Channels for the next uplink packet (transmitter role).
+    /// Channels for the next uplink packet (transmitter role), as the handset delivers them.
     fn send_channels(&mut self, channels: &Channels);
+    /// After this long without [`LinkPort::send_channels`] the handset input counts as lost
+    /// and the link must stop flying the last channels (it makes the other end fly its
+    /// failsafe). The core sets it from the settings when it is built.
+    fn set_input_timeout_ms(&mut self, timeout_ms: u16);
     /// Whether the link can take another uplink telemetry record now.
     fn can_send_record(&self) -> bool;
     /// A record for the other end (phone → flight side); only called after
@@ -49,6 +53,8 @@ pub trait LinkPort {
     fn stats(&self) -> LinkStats;
     /// Start the bind procedure.
     fn start_bind(&mut self);
+    /// The link loop stopped (bind, radio failure): forget what only a running link knows.
+    fn on_link_stopped(&mut self) {}
     /// The next telemetry record received over the air into `out` (≥ 64 bytes).
     fn take_received_record(&mut self, _out: &mut [u8]) -> Option<usize> {
         None

@@ -1,4 +1,5 @@
-//! A bind over the (mock) air between two module cores, as the firmware's link task runs it:
+//! A bind over the (mock) air between two module cores, as the firmware's link task runs it
+//! (long press → the session stops → the core's bind step → its outcome back to the core):
 //! the transmitter draws a bind ID and offers the link parameters of its settings; the
 //! receiver accepts and stores the offer. Afterwards both ends' settings must give the same
 //! link parameters, so the link comes back after a reboot of either.
@@ -9,9 +10,11 @@
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use module_core::air::{AirLink, link_band, link_params, new_bind_params};
+use module_core::air::{AirLink, link_params, new_bind_params};
 use module_core::app::{Action, App};
+use module_core::button::ButtonEvent;
 use module_core::handset::Handset;
+use module_core::session::{BindOutcome, LinkStep, SessionEnd};
 use module_core::settings::{Band, RateMode, Role, Settings};
 use telemetry::link::follower::bind_follower;
 use telemetry::link::master::bind_master;
@@ -19,6 +22,18 @@ use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node
 
 fn core(settings: Settings) -> App<AirLink, Handset> {
     App::new(settings, AirLink::new(), Handset::new(&settings), false).unwrap()
+}
+
+/// Probe, idle unbound, long press: the bind step the core asks for.
+fn press_bind(app: &mut App<AirLink, Handset>, random: u32) -> LinkStep {
+    assert_eq!(app.next_link_step(0, 0), LinkStep::Probe);
+    app.on_radio_present(true);
+    assert_eq!(app.next_link_step(0, 0), LinkStep::WaitForBind);
+    assert_eq!(app.poll_session(50), None);
+    app.on_button(ButtonEvent::LongPress);
+    assert_eq!(app.poll_session(100), Some(SessionEnd::BindRequested));
+    app.on_session_end(SessionEnd::BindRequested);
+    app.next_link_step(100, random)
 }
 
 #[test]
@@ -50,24 +65,32 @@ fn both_ends_store_the_same_link() {
     let (tx_app, tx_saved) = (tx.clone(), saved.clone());
     let mut radio = MockRadio::new(medium.clone(), tx_node);
     let mut clock = MockClock::new(time.clone(), 1_000);
+    let LinkStep::BindMaster { params, timeout_us } = press_bind(&mut tx.borrow_mut(), 0x7777_1234)
+    else {
+        panic!("a transmitter binds as master");
+    };
+    assert_eq!(params, new_bind_params(&tx_settings, 0x7777_1234));
     executor.spawn(async move {
-        let params = new_bind_params(&tx_settings, 0x7777_1234);
-        if bind_master(&mut radio, &mut clock, &params, 5_000_000).await == Ok(true) {
-            let action = tx_app.borrow_mut().on_bind_complete(params.bind_id);
-            tx_saved.borrow_mut().push(("tx", action));
-        }
+        let result = bind_master(&mut radio, &mut clock, &params, timeout_us).await;
+        let action = tx_app
+            .borrow_mut()
+            .on_bind_outcome(BindOutcome::offered(result));
+        tx_saved.borrow_mut().push(("tx", action));
     });
     let (rx_app, rx_saved) = (rx.clone(), saved.clone());
     let mut radio = MockRadio::new(medium, rx_node);
     let mut clock = MockClock::new(time.clone(), 2_000_000);
+    let LinkStep::BindFollower { band, timeout_us } = press_bind(&mut rx.borrow_mut(), 1) else {
+        panic!("a receiver binds as follower");
+    };
     executor.spawn(async move {
-        let band = link_band(rx_settings.band);
-        if let Ok(Some(params)) = bind_follower(&mut radio, &mut clock, band, 5_000_000).await {
-            let action = rx_app.borrow_mut().on_bind_offer_accepted(&params);
-            rx_saved.borrow_mut().push(("rx", action));
-        }
+        let result = bind_follower(&mut radio, &mut clock, band, timeout_us).await;
+        let action = rx_app
+            .borrow_mut()
+            .on_bind_outcome(BindOutcome::listened(result));
+        rx_saved.borrow_mut().push(("rx", action));
     });
-    executor.run_until(6_000_000);
+    executor.run_until(12_000_000);
 
     let saved = saved.borrow();
     assert_eq!(saved.len(), 2, "both ends bound: {saved:?}");
@@ -75,7 +98,7 @@ fn both_ends_store_the_same_link() {
         saved
             .iter()
             .find_map(|(e, a)| match a {
-                Action::Save(s) if *e == end => Some(*s),
+                Some(Action::Save(s)) if *e == end => Some(*s),
                 _ => None,
             })
             .unwrap()

@@ -21,6 +21,7 @@ struct Link {
 
 impl LinkPort for Link {
     fn send_channels(&mut self, _channels: &Channels) {}
+    fn set_input_timeout_ms(&mut self, _timeout_ms: u16) {}
     fn can_send_record(&self) -> bool {
         false
     }

@@ -13,6 +13,7 @@ use module_core::app::App;
 use module_core::channels::us_to_value;
 use module_core::handset::Handset;
 use module_core::ppm::FailsafeOutput;
+use module_core::session::LinkStep;
 use module_core::settings::{RateMode, Role, Settings};
 use telemetry::channels::{CHANNEL_CENTER, Failsafe, FailsafeValues, MAX_CHANNELS};
 use telemetry::link::core::follower::DEFAULT_FAILSAFE_US;
@@ -48,9 +49,10 @@ struct Receiver {
 
 impl FollowerHooks for Receiver {
     fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
-        let mut app = self.app.borrow_mut();
-        app.link_mut().on_follower_step(now_us, follower);
-        app.poll_link();
+        let now_ms = (now_us / 1_000) as u32;
+        self.app
+            .borrow_mut()
+            .on_follower_step(now_us, now_ms, follower);
     }
 }
 
@@ -75,6 +77,21 @@ fn run(failsafe: FailsafeOutput) -> Vec<(u64, Option<Vec<u16>>)> {
     let app = Rc::new(RefCell::new(
         App::new(settings, AirLink::new(), Handset::new(&settings), false).unwrap(),
     ));
+    // As the firmware's link task: probe, then the follower the core asks for.
+    app.borrow_mut().on_radio_present(true);
+    let step = app.borrow_mut().next_link_step(0, 0);
+    let LinkStep::RunFollower {
+        params: follower_params,
+        failsafe,
+        failsafe_us,
+    } = step
+    else {
+        panic!("a bound receiver follows: {step:?}");
+    };
+    assert_eq!(follower_params, params);
+    // The module holds every channel; its PPM output applies its own failsafe setting.
+    assert_eq!(failsafe, FailsafeValues([Failsafe::Hold; MAX_CHANNELS]));
+    assert_eq!(failsafe_us, DEFAULT_FAILSAFE_US);
     let mut executor = Executor::new(time.clone());
     let mut radio = MockRadio::new(medium.clone(), tx_node);
     let mut clock = MockClock::new(time.clone(), 55_555);
@@ -86,9 +103,7 @@ fn run(failsafe: FailsafeOutput) -> Vec<(u64, Option<Vec<u16>>)> {
     let mut clock = MockClock::new(time.clone(), 7_777_777);
     let mut hooks = Receiver { app: app.clone() };
     executor.spawn(async move {
-        // The module holds every channel; its PPM output applies its own failsafe setting.
-        let hold = FailsafeValues([Failsafe::Hold; MAX_CHANNELS]);
-        let mut follower = Follower::new(params, hold, DEFAULT_FAILSAFE_US);
+        let mut follower = Follower::new(params, failsafe, failsafe_us);
         let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut hooks).await;
     });
     let (tick_app, tick_time) = (app.clone(), time.clone());

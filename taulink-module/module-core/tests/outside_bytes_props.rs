@@ -52,6 +52,7 @@ impl LinkPort for Link {
     fn send_channels(&mut self, channels: &Channels) {
         self.channels.push(*channels);
     }
+    fn set_input_timeout_ms(&mut self, _timeout_ms: u16) {}
     fn can_send_record(&self) -> bool {
         false
     }

@@ -4,6 +4,12 @@
 //! loop's hook, hands the state machine to [`AirLink::on_master_slot`] /
 //! [`AirLink::on_follower_step`], which exchange channels, telemetry records and statistics.
 //!
+//! In the transmitter role the master sends the handset's channels only while they are
+//! fresh: when no channels came from the handset for the input timeout (setting
+//! `input_timeout_ms`), every uplink carries the link's input-lost flag and the follower
+//! flies its failsafe at once (`telemetry::link::core::Master::set_input_lost`). Freshness
+//! is taken at slot starts on the link clock, so it lags the input by less than a slot.
+//!
 //! Records travel in the link's telemetry stream as `telemetry::framing` frames
 //! (`crate::records`); a record that does not fit the stream now waits in a bounded queue.
 
@@ -100,6 +106,13 @@ pub fn new_bind_params(settings: &Settings, random: u32) -> LinkParams {
 #[derive(Debug)]
 pub struct AirLink {
     channels: Option<Channels>,
+    /// Channels arrived since the last master slot.
+    input_fresh: bool,
+    /// Slot start (link clock) at which the newest channels were first seen.
+    last_input_us: Option<u64>,
+    input_timeout_us: u64,
+    input_lost: bool,
+    input_losses: u32,
     uplink: RecordQueue<512, UPLINK_RECORDS>,
     received: RecordQueue<1024, RECEIVED_RECORDS>,
     received_channels: Option<Channels>,
@@ -121,6 +134,12 @@ impl AirLink {
     pub const fn new() -> Self {
         Self {
             channels: None,
+            input_fresh: false,
+            last_input_us: None,
+            input_timeout_us: crate::settings::DEFAULT_INPUT_TIMEOUT_MS as u64 * 1_000,
+            // Nothing from the handset yet: no channels are flown.
+            input_lost: true,
+            input_losses: 0,
             uplink: RecordQueue::new(MAX_RECORD_LEN),
             received: RecordQueue::new(MAX_RECORD_LEN),
             received_channels: None,
@@ -145,13 +164,15 @@ impl AirLink {
         core::mem::take(&mut self.bind_requested)
     }
 
-    /// The link loop stopped (bind, radio failure): nothing arrives until it runs again.
-    pub fn on_link_stopped(&mut self) {
-        self.stats = LinkStats {
-            rate_code: self.stats.rate_code,
-            ..LinkStats::default()
-        };
-        self.received_channels = None;
+    /// Whether the handset's channels are stale (none yet, or none for the input timeout):
+    /// the uplinks then tell the follower to fly its failsafe.
+    pub fn input_lost(&self) -> bool {
+        self.input_lost
+    }
+
+    /// Times the handset input was lost after it had been delivering channels.
+    pub fn input_losses(&self) -> u32 {
+        self.input_losses
     }
 
     /// Telemetry frames from the air that were corrupt or too long.
@@ -177,7 +198,9 @@ impl AirLink {
     /// clock, which is the firmware's µs clock): channels and queued records in, received
     /// records and statistics out.
     pub fn on_master_slot(&mut self, now_us: u64, master: &mut Master) {
-        if let Some(channels) = &self.channels {
+        self.update_input(now_us);
+        master.set_input_lost(self.input_lost);
+        if let Some(channels) = self.channels.filter(|_| !self.input_lost) {
             let mut values = [CHANNEL_CENTER; telemetry::channels::MAX_CHANNELS];
             for (slot, value) in values.iter_mut().zip(channels.as_slice()) {
                 *slot = *value;
@@ -242,6 +265,20 @@ impl AirLink {
         };
     }
 
+    /// Input freshness at the slot starting at `now_us`.
+    fn update_input(&mut self, now_us: u64) {
+        if core::mem::take(&mut self.input_fresh) {
+            self.last_input_us = Some(now_us);
+        }
+        let lost = self
+            .last_input_us
+            .is_none_or(|t| now_us.saturating_sub(t) >= self.input_timeout_us);
+        if lost && !self.input_lost {
+            self.input_losses = self.input_losses.saturating_add(1);
+        }
+        self.input_lost = lost;
+    }
+
     /// The next queued record as a stream frame; a record that fails its check is dropped.
     fn pop_uplink_frame(&mut self, frame: &mut [u8]) -> Option<usize> {
         let mut record = [0u8; MAX_RECORD_LEN];
@@ -274,6 +311,11 @@ impl AirLink {
 impl LinkPort for AirLink {
     fn send_channels(&mut self, channels: &Channels) {
         self.channels = Some(*channels);
+        self.input_fresh = true;
+    }
+
+    fn set_input_timeout_ms(&mut self, timeout_ms: u16) {
+        self.input_timeout_us = u64::from(timeout_ms) * 1_000;
     }
 
     fn can_send_record(&self) -> bool {
@@ -290,6 +332,14 @@ impl LinkPort for AirLink {
 
     fn start_bind(&mut self) {
         self.bind_requested = true;
+    }
+
+    fn on_link_stopped(&mut self) {
+        self.stats = LinkStats {
+            rate_code: self.stats.rate_code,
+            ..LinkStats::default()
+        };
+        self.received_channels = None;
     }
 
     fn take_received_record(&mut self, out: &mut [u8]) -> Option<usize> {
@@ -372,5 +422,33 @@ mod tests {
         assert!(!link.take_bind_request());
         link.on_link_stopped();
         assert_eq!(link.stats().schedule, None);
+    }
+
+    #[test]
+    fn channels_are_flown_only_while_the_handset_delivers_them() {
+        let mut link = AirLink::new();
+        link.set_input_timeout_ms(100);
+        let mut master = Master::new(
+            link_params(&Settings {
+                bind_id: 9,
+                ..Settings::default()
+            })
+            .unwrap(),
+        );
+        link.on_master_slot(0, &mut master);
+        assert!(master.input_lost(), "nothing from the handset yet");
+        link.send_channels(&Channels::from_values(&[1500; 8]));
+        link.on_master_slot(20_000, &mut master);
+        assert!(!master.input_lost());
+        // Fresh as of the slot that saw them: lost exactly one timeout later.
+        link.on_master_slot(119_999, &mut master);
+        assert!(!link.input_lost());
+        link.on_master_slot(120_000, &mut master);
+        assert!(master.input_lost() && link.input_lost());
+        assert_eq!(link.input_losses(), 1);
+        link.send_channels(&Channels::from_values(&[1500; 8]));
+        link.on_master_slot(140_000, &mut master);
+        assert!(!master.input_lost());
+        assert_eq!(link.input_losses(), 1);
     }
 }

@@ -54,7 +54,8 @@ impl Default for EncoderConfig {
             // ±114 % around 1500 µs: 8 × 2100 µs still leaves a 5.7 ms sync in 22.5 ms.
             min_width_us: 900,
             max_width_us: 2_100,
-            failsafe: FailsafeOutput::HoldLast,
+            // Holding the last values would hold the throttle on a lost link.
+            failsafe: FailsafeOutput::StopPulses,
         }
     }
 }

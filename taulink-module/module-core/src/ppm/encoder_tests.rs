@@ -111,17 +111,18 @@ fn new_values_only_at_frame_boundaries() {
 
 #[test]
 fn failsafe_hold_last_or_stop() {
-    let mut hold = Encoder::new(EncoderConfig::default()).unwrap();
+    let mut hold = Encoder::new(EncoderConfig {
+        failsafe: FailsafeOutput::HoldLast,
+        ..EncoderConfig::default()
+    })
+    .unwrap();
     hold.set_channels(&channels_us(&[1300; 8]));
     let before = hold.next_frame().unwrap();
     hold.set_failsafe(true);
     assert_eq!(hold.next_frame(), Some(before));
 
-    let config = EncoderConfig {
-        failsafe: FailsafeOutput::StopPulses,
-        ..EncoderConfig::default()
-    };
-    let mut stop = Encoder::new(config).unwrap();
+    // The default: a lost link must not hold the throttle.
+    let mut stop = Encoder::new(EncoderConfig::default()).unwrap();
     stop.set_channels(&channels_us(&[1300; 8]));
     assert!(stop.next_frame().is_some());
     stop.set_failsafe(true);

@@ -4,10 +4,12 @@
 //! a single sequential-storage item write: after a power cut the map holds either the old
 //! or the new record (the item CRC rejects a torn write), never a mix of fields.
 //!
-//! Record layout (version 1, 12 bytes; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd):
-//! `[1, role, rate, input, output, band, tx_power,
-//! failsafe, bind_id (u32 LE)]`. Every byte is checked on decode; an unknown value is an
-//! error, never a guess.
+//! Record layout (version 2, 14 bytes; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd;
+//! failsafe 0 hold last, 1 stop pulses): `[2, role, rate, input, output, band, tx_power,
+//! failsafe, bind_id (u32 LE), input_timeout_ms (u16 LE)]`. Version 1 (12 bytes, up to
+//! `bind_id`) still loads, with the default input timeout; every stored field keeps its
+//! meaning (a stored "hold last" stays hold last, only the default changed). Every byte is
+//! checked on decode; an unknown value is an error, never a guess.
 
 pub mod store;
 
@@ -106,7 +108,18 @@ pub struct Settings {
     pub failsafe: FailsafeOutput,
     /// Identity shared with the bound peer.
     pub bind_id: u32,
+    /// Transmitter role: the handset input (PPM or CRSF) counts as lost after this long
+    /// without a frame, ms ([`INPUT_TIMEOUT_MS`]); the link then tells the flight side to
+    /// fly its failsafe instead of stale sticks.
+    pub input_timeout_ms: u16,
 }
+
+/// Range and default of [`Settings::input_timeout_ms`]: never shorter than a few frames of
+/// the slowest input (PPM 22.5 ms, CRSF at 50 Hz), never so long that stale sticks fly for
+/// seconds.
+pub const INPUT_TIMEOUT_MS: core::ops::RangeInclusive<u16> = 100..=2_000;
+/// Factory input timeout: the flight side is in failsafe within 1 s of the input stopping.
+pub const DEFAULT_INPUT_TIMEOUT_MS: u16 = 500;
 
 impl Default for Settings {
     fn default() -> Self {
@@ -117,16 +130,20 @@ impl Default for Settings {
             output: OutputProtocol::SPort,
             band: Band::Mhz433,
             tx_power: 7,
-            failsafe: FailsafeOutput::HoldLast,
+            // Holding the last values would hold the throttle on a lost link.
+            failsafe: FailsafeOutput::StopPulses,
             bind_id: 0,
+            input_timeout_ms: DEFAULT_INPUT_TIMEOUT_MS,
         }
     }
 }
 
 /// Current record version.
-pub const RECORD_VERSION: u8 = 1;
-/// Record length of version 1.
-pub const RECORD_LEN: usize = 12;
+pub const RECORD_VERSION: u8 = 2;
+/// Record length of the current version.
+pub const RECORD_LEN: usize = 14;
+/// Record length of version 1 (no input timeout).
+pub const RECORD_V1_LEN: usize = 12;
 
 /// Why a record does not decode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -142,7 +159,7 @@ pub enum DecodeError {
         /// Version found.
         found: u8,
     },
-    /// A field holds a value no version-1 writer produces.
+    /// A field holds a value no writer of its version produces.
     Field {
         /// Byte offset of the field.
         offset: usize,
@@ -162,9 +179,10 @@ impl core::fmt::Display for DecodeError {
 impl core::error::Error for DecodeError {}
 
 impl Settings {
-    /// The version-1 record.
+    /// The current (version 2) record.
     pub fn to_record(&self) -> [u8; RECORD_LEN] {
         let [b0, b1, b2, b3] = self.bind_id.to_le_bytes();
+        let [t0, t1] = self.input_timeout_ms.to_le_bytes();
         [
             RECORD_VERSION,
             self.role as u8,
@@ -178,18 +196,41 @@ impl Settings {
             b1,
             b2,
             b3,
+            t0,
+            t1,
         ]
     }
 
-    /// Parses a record; every field is range-checked.
+    /// Parses a record of version 1 or 2; every field is range-checked.
     pub fn from_record(record: &[u8]) -> Result<Self, DecodeError> {
         let Some(&version) = record.first() else {
             return Err(DecodeError::Length { found: 0 });
         };
-        if version != RECORD_VERSION {
-            return Err(DecodeError::Version { found: version });
-        }
-        let Ok(
+        let (common, input_timeout_ms) = match version {
+            1 => (
+                <[u8; RECORD_V1_LEN]>::try_from(record).ok(),
+                DEFAULT_INPUT_TIMEOUT_MS,
+            ),
+            RECORD_VERSION => {
+                let Some((common, [t0, t1])) = record
+                    .split_first_chunk::<RECORD_V1_LEN>()
+                    .and_then(|(common, rest)| Some((*common, <[u8; 2]>::try_from(rest).ok()?)))
+                else {
+                    return Err(DecodeError::Length {
+                        found: record.len(),
+                    });
+                };
+                let timeout = u16::from_le_bytes([t0, t1]);
+                if !INPUT_TIMEOUT_MS.contains(&timeout) {
+                    return Err(DecodeError::Field {
+                        offset: RECORD_V1_LEN,
+                    });
+                }
+                (Some(common), timeout)
+            }
+            found => return Err(DecodeError::Version { found }),
+        };
+        let Some(
             [
                 _,
                 role,
@@ -204,7 +245,7 @@ impl Settings {
                 b2,
                 b3,
             ],
-        ) = <[u8; RECORD_LEN]>::try_from(record)
+        ) = common
         else {
             return Err(DecodeError::Length {
                 found: record.len(),
@@ -255,6 +296,7 @@ impl Settings {
                 _ => return Err(field(7)),
             },
             bind_id: u32::from_le_bytes([b0, b1, b2, b3]),
+            input_timeout_ms,
         })
     }
 }
@@ -274,9 +316,13 @@ mod tests {
             tx_power: 5,
             failsafe: FailsafeOutput::StopPulses,
             bind_id: 0xDEAD_BEEF,
+            input_timeout_ms: 750,
         };
         let record = settings.to_record();
-        assert_eq!(record, [1, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE]);
+        assert_eq!(
+            record,
+            [2, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02]
+        );
         assert_eq!(Settings::from_record(&record), Ok(settings));
         assert_eq!(
             Settings::from_record(&Settings::default().to_record()),
@@ -298,8 +344,12 @@ mod tests {
             Err(DecodeError::Length { found: 0 })
         );
         assert_eq!(
+            Settings::from_record(&[3; 14]),
+            Err(DecodeError::Version { found: 3 })
+        );
+        assert_eq!(
             Settings::from_record(&[2; 12]),
-            Err(DecodeError::Version { found: 2 })
+            Err(DecodeError::Length { found: 12 })
         );
         assert_eq!(
             Settings::from_record(&[1; 11]),
@@ -317,13 +367,54 @@ mod tests {
             Settings::from_record(&record),
             Err(DecodeError::Field { offset: 2 })
         );
+        record[2] = 2;
+        for (timeout, ok) in [(99u16, false), (100, true), (2_000, true), (2_001, false)] {
+            record[12..].copy_from_slice(&timeout.to_le_bytes());
+            assert_eq!(
+                Settings::from_record(&record).map(|s| s.input_timeout_ms),
+                if ok {
+                    Ok(timeout)
+                } else {
+                    Err(DecodeError::Field { offset: 12 })
+                }
+            );
+        }
+    }
+
+    #[test]
+    fn the_factory_failsafe_stops_pulses_and_old_records_keep_their_meaning() {
+        assert_eq!(Settings::default().failsafe, FailsafeOutput::StopPulses);
+        assert_eq!(Settings::default().input_timeout_ms, 500);
+        // Version-1 records as the previous firmware wrote them: hold last (its default) stays
+        // hold last, stop pulses stays stop pulses, and the input timeout is the default.
+        let v1_hold = [1, 0, 2, 0, 2, 0, 7, 0, 0x78, 0x56, 0x34, 0x12];
+        let settings = Settings::from_record(&v1_hold).unwrap();
+        assert_eq!(settings.failsafe, FailsafeOutput::HoldLast);
+        assert_eq!(settings.bind_id, 0x1234_5678);
+        assert_eq!(settings.input_timeout_ms, DEFAULT_INPUT_TIMEOUT_MS);
+        let mut v1_stop = v1_hold;
+        v1_stop[7] = 1;
+        assert_eq!(
+            Settings::from_record(&v1_stop).unwrap().failsafe,
+            FailsafeOutput::StopPulses
+        );
+        // Re-saved, they become version 2 with the same values.
+        let upgraded = settings.to_record();
+        assert_eq!(upgraded[0], 2);
+        assert_eq!(Settings::from_record(&upgraded), Ok(settings));
     }
 
     proptest::proptest! {
         #[test]
         fn any_bytes_decode_or_error(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..20)) {
             if let Ok(settings) = Settings::from_record(&bytes) {
-                proptest::prop_assert_eq!(&settings.to_record()[..], &bytes[..]);
+                // A current record re-encodes to itself; a version-1 record to its upgrade.
+                let record = settings.to_record();
+                if bytes.first() == Some(&RECORD_VERSION) {
+                    proptest::prop_assert_eq!(&record[..], &bytes[..]);
+                } else {
+                    proptest::prop_assert_eq!(&record[1..RECORD_V1_LEN], &bytes[1..]);
+                }
             }
         }
     }

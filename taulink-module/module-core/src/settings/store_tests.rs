@@ -1,6 +1,7 @@
 use super::*;
 use crate::settings::{Band, Role};
 use embassy_futures::block_on;
+use embedded_storage_async::nor_flash::NorFlash;
 use sequential_storage::mock_flash::{MockFlashBase, WriteCountCheck};
 
 /// 4 pages of 256 bytes, 4-byte words like the nRF52840 NVMC (which allows two writes per
@@ -118,12 +119,149 @@ fn power_cut_at_every_byte_leaves_old_or_new() {
         total += cuts;
         most = most.max(cuts);
     }
-    // A plain save writes 24 bytes (8-byte header, key and record padded to words); every
-    // tenth save here starts a new page, and the one that must reclaim the oldest page
-    // first erases its 256 bytes (measured: 288 cut points for that save).
-    assert!(total > 48 * 24, "{total} cut points tried");
+    // A plain save writes a 28-byte item (8-byte header; key, generation and record padded to
+    // words) and marks the other key's item erased; a page holds eight such items, so the
+    // saves go round the four pages, and one that must reclaim the oldest page first erases
+    // its 256 bytes (measured: 2 800 cut points over the 48 saves, 300 for that save).
+    assert!(total > 48 * 28, "{total} cut points tried");
     assert!(
         most > 256,
         "a save with a page erase was cut ({most} points)"
     );
+}
+
+/// xorshift64*: a fixed, seedable stream of corruption positions (no dependency).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n
+    }
+}
+
+/// What a trial did to the flash after its saves.
+#[derive(Debug, Clone, Copy)]
+enum Corruption {
+    /// 1…4 bits flipped anywhere (retention faults).
+    BitFlips,
+    /// One page erased (an erase that was not ours, or a cut one that did finish).
+    ErasedPage,
+    /// One word cleared to zero (a torn write of a neighbour in the same word).
+    ZeroedWord,
+}
+
+fn corrupt(flash: &mut Flash, kind: Corruption, rng: &mut Rng) {
+    let len = flash.as_bytes().len() as u64;
+    match kind {
+        Corruption::BitFlips => {
+            for _ in 0..=rng.below(4) {
+                let at = rng.below(len) as usize;
+                flash.as_bytes_mut()[at] ^= 1 << rng.below(8);
+            }
+        }
+        Corruption::ErasedPage => {
+            let page = rng.below(4) as u32;
+            block_on(NorFlash::erase(flash, page * 256, (page + 1) * 256)).unwrap();
+        }
+        Corruption::ZeroedWord => {
+            let at = (rng.below(len / 4) * 4) as usize;
+            flash.as_bytes_mut()[at..at + 4].fill(0);
+        }
+    }
+}
+
+/// Random corruption after `saves` saves, then a reboot and a save: the load gives the newest
+/// settings or no settings (an error, or none: the firmware then runs the defaults, unbound),
+/// never an older bind ID; a save reported successful is what the next boot reads.
+fn corruption_trial(seed: u64, kind: Corruption) {
+    let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    let saves = 1 + rng.below(40) as u32;
+    block_on(async {
+        let mut store = SettingsStore::new(flash(), RANGE).unwrap();
+        for n in 1..=saves {
+            store.save(&nth(n)).await.unwrap();
+        }
+        let mut flash = store.release();
+        corrupt(&mut flash, kind, &mut rng);
+        let mut store = SettingsStore::new(flash, RANGE).unwrap();
+        if let Ok(Some(loaded)) = store.load().await {
+            assert_eq!(
+                loaded,
+                nth(saves),
+                "seed {seed} {kind:?}: an older record presented as current after {saves} saves"
+            );
+        }
+        let saved = store.save(&nth(1000)).await;
+        let mut store = SettingsStore::new(store.release(), RANGE).unwrap();
+        let loaded = store.load().await;
+        if saved.is_ok() {
+            assert_eq!(
+                loaded,
+                Ok(Some(nth(1000))),
+                "seed {seed} {kind:?}: a save reported successful did not stick"
+            );
+        } else if let Ok(Some(loaded)) = loaded {
+            assert!(
+                loaded == nth(saves) || loaded == nth(1000),
+                "seed {seed} {kind:?}: a failed save left {loaded:?}"
+            );
+        }
+    });
+}
+
+#[test]
+fn random_bit_flips_never_present_an_older_bind_id() {
+    for seed in 0..3_000 {
+        corruption_trial(seed, Corruption::BitFlips);
+    }
+}
+
+#[test]
+fn an_erased_page_never_presents_an_older_bind_id() {
+    for seed in 0..1_000 {
+        corruption_trial(seed, Corruption::ErasedPage);
+    }
+}
+
+#[test]
+fn a_zeroed_word_never_presents_an_older_bind_id() {
+    for seed in 0..3_000 {
+        corruption_trial(seed, Corruption::ZeroedWord);
+    }
+}
+
+#[test]
+fn a_record_of_the_first_firmware_loads_and_is_replaced_by_the_next_save() {
+    block_on(async {
+        // What the first firmware wrote: a version-1 record under key 1, no generation.
+        let mut map: Map<Flash> =
+            MapStorage::new(flash(), MapConfig::new(RANGE), Cache::new_uncached());
+        let mut buffer = WorkBuffer([0; 32]);
+        let v1 = [1, 0, 2, 0, 2, 0, 7, 0, 0x78, 0x56, 0x34, 0x12];
+        map.store_item(&mut buffer.0, &LEGACY_KEY, &&v1[..])
+            .await
+            .unwrap();
+        let mut store = SettingsStore::new(map.destroy().0, RANGE).unwrap();
+        let loaded = store.load().await.unwrap().unwrap();
+        assert_eq!(loaded.bind_id, 0x1234_5678);
+        assert_eq!(loaded.failsafe, crate::ppm::FailsafeOutput::HoldLast);
+        store.save(&nth(5)).await.unwrap();
+        let flash = store.release();
+        let mut map: Map<Flash> =
+            MapStorage::new(flash, MapConfig::new(RANGE), Cache::new_uncached());
+        let legacy: Option<&[u8]> = map.fetch_item(&mut buffer.0, &LEGACY_KEY).await.unwrap();
+        assert_eq!(
+            legacy, None,
+            "the old record is gone: it can never come back"
+        );
+        let mut store = SettingsStore::new(map.destroy().0, RANGE).unwrap();
+        assert_eq!(store.load().await, Ok(Some(nth(5))));
+    });
 }

@@ -11,6 +11,7 @@ use std::rc::Rc;
 use module_core::air::{AirLink, link_params};
 use module_core::app::App;
 use module_core::handset::Handset;
+use module_core::session::LinkStep;
 use module_core::settings::{Band, InputProtocol, OutputProtocol, RateMode, Role, Settings};
 use telemetry::channels::{Channels as LinkChannels, FailsafeValues};
 use telemetry::link::core::{Follower, Master};
@@ -92,6 +93,8 @@ pub struct FlightSide {
     pub uplink_rssi_dbm: std::collections::BTreeSet<i16>,
     /// Messages sent down.
     pub sent: Vec<Message>,
+    /// Every change of the follower's failsafe state: (virtual µs, in failsafe).
+    pub failsafe_changes: Vec<(u64, bool)>,
     reader: MessageReader,
     updates: u32,
     next_telemetry_us: u64,
@@ -107,6 +110,10 @@ impl FollowerHooks for FlightHooks {
     fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
         let mut side = self.side.borrow_mut();
         let virtual_us = now_us - FLIGHT_EPOCH_US;
+        if side.failsafe_changes.last().map(|c| c.1) != Some(follower.in_failsafe()) {
+            side.failsafe_changes
+                .push((virtual_us, follower.in_failsafe()));
+        }
         if let Some(rssi) = follower.uplink_rssi_dbm() {
             side.uplink_rssi_dbm.insert(rssi);
         }
@@ -168,8 +175,7 @@ pub struct ModuleHooks {
 impl MasterHooks for ModuleHooks {
     fn on_slot(&mut self, now_us: u64, master: &mut Master) {
         let mut app = self.app.borrow_mut();
-        app.link_mut().on_master_slot(now_us, master);
-        app.poll_link();
+        app.on_master_slot(now_us, (now_us / 1_000) as u32, master);
     }
 }
 
@@ -187,8 +193,15 @@ pub struct World<'a> {
 
 impl World<'_> {
     /// Both ends, 200 m apart on a clean channel, the follower booting 123 ms after the
-    /// master; a 10 Hz task does the module's periodic work.
+    /// master; a 10 Hz task does the module's periodic work. The follower declares failsafe
+    /// after 250 ms of silence.
     pub fn new(settings: Settings) -> Self {
+        Self::with_flight_failsafe(settings, 250_000)
+    }
+
+    /// As [`World::new`], with the follower's silence timeout (the flight firmware's is
+    /// 500 ms).
+    pub fn with_flight_failsafe(settings: Settings, failsafe_us: u64) -> Self {
         let time = VirtualTime::new();
         let medium = Medium::new(time.clone(), ChannelModel::default(), 7);
         let module_node = medium.add_node(Node::default());
@@ -200,7 +213,13 @@ impl World<'_> {
         let app = Rc::new(RefCell::new(
             App::new(settings, AirLink::new(), Handset::new(&settings), false).unwrap(),
         ));
+        // As the firmware's link task: probe, then run what the core says.
+        assert_eq!(app.borrow_mut().next_link_step(0, 0), LinkStep::Probe);
         app.borrow_mut().on_radio_present(true);
+        assert_eq!(
+            app.borrow_mut().next_link_step(0, 0),
+            LinkStep::RunMaster(params)
+        );
         let flight = Rc::new(RefCell::new(FlightSide::default()));
         let mut executor = Executor::new(time.clone());
         let mut hooks = ModuleHooks { app: app.clone() };
@@ -218,7 +237,7 @@ impl World<'_> {
         let flight_time = time.clone();
         executor.spawn(async move {
             flight_time.sleep_until(123_457).await;
-            let mut follower = Follower::new(params, FailsafeValues::default(), 250_000);
+            let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
             let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut hooks).await;
         });
         let tick_app = app.clone();

@@ -104,6 +104,85 @@ pub struct Hm10 {
     pub idle_ppi_stop: Peri<'static, PPI_CH4>,
 }
 
+impl JrLine {
+    /// UARTE0 receiving at `baud` with idle-line detection (the buffer must be off).
+    pub fn receiver(&mut self, baud: u32) -> uarte::UarteRxWithIdle<'_> {
+        uarte::UarteRx::new(
+            self.uarte.reborrow(),
+            Irqs,
+            self.rx.reborrow(),
+            jr_line_config(baud),
+        )
+        .with_idle(
+            self.idle_timer.reborrow(),
+            self.idle_ppi_start.reborrow(),
+            self.idle_ppi_stop.reborrow(),
+        )
+    }
+
+    /// Sends `bytes` (if any) at `baud` with the buffer enabled only for them; dropping the
+    /// transmitter afterwards disables UARTE0 and frees the pins for the next direction.
+    pub async fn send(&mut self, baud: u32, bytes: &[u8]) {
+        if bytes.is_empty() {
+            return;
+        }
+        self.driver_enable.set_high();
+        {
+            let mut tx = uarte::UarteTx::new(
+                self.uarte.reborrow(),
+                Irqs,
+                self.tx.reborrow(),
+                jr_line_config(baud),
+            );
+            if tx.write(bytes).await.is_err() {
+                defmt::warn!("JR line write failed");
+            }
+            // ENDTX comes when the last byte is loaded, not sent: wait two byte times before
+            // the drop disables the UARTE and the buffer lets go of the line.
+            embassy_time::Timer::after_micros(u64::from(2 * 10 * 1_000_000 / baud) + 1).await;
+        }
+        self.driver_enable.set_low();
+    }
+}
+
+/// UARTE BAUDRATE register for `baud`: baud · 2³² / 16 MHz, low 12 bits cleared as the
+/// named presets do (0x0666_6000 ≈ 399 994 Bd for CRSF).
+const fn baud_register(baud: u32) -> uarte::Baudrate {
+    let bits = ((baud as u64) << 32) / 16_000_000;
+    uarte::Baudrate::from_bits((bits as u32) & 0xFFFF_F000)
+}
+
+fn jr_line_config(baud: u32) -> uarte::Config {
+    let mut config = uarte::Config::default();
+    config.baudrate = baud_register(baud);
+    config
+}
+
+impl Hm10 {
+    /// UARTE1 at `baud` (9600 or else 115 200, the HM-10's rates), split, receiving with
+    /// idle-line detection.
+    pub fn open(&mut self, baud: u32) -> (uarte::UarteTx<'_>, uarte::UarteRxWithIdle<'_>) {
+        let mut config = uarte::Config::default();
+        config.baudrate = if baud == 9_600 {
+            uarte::Baudrate::Baud9600
+        } else {
+            uarte::Baudrate::Baud115200
+        };
+        uarte::Uarte::new(
+            self.uarte.reborrow(),
+            self.rx.reborrow(),
+            self.tx.reborrow(),
+            Irqs,
+            config,
+        )
+        .split_with_idle(
+            self.idle_timer.reborrow(),
+            self.idle_ppi_start.reborrow(),
+            self.idle_ppi_stop.reborrow(),
+        )
+    }
+}
+
 /// Radio battery sense on P0.02 (AIN0) behind the 100 k / 22 k divider.
 pub struct Battery {
     /// The SAADC.

@@ -348,13 +348,22 @@ impl Follower {
         self.counters.received += 1;
         self.lq.push(true);
         self.rssi.push(rssi_dbm);
-        up.channels_into(&mut self.output);
-        if up.save_failsafe {
-            self.failsafe_values = FailsafeValues::from_channels(&self.output);
-        }
-        self.in_failsafe = false;
         self.last_valid_us = Some(now_us);
-        self.updates = self.updates.wrapping_add(1);
+        if up.input_lost {
+            // The master's own input stopped: its channels are stale. Fly the failsafe now
+            // rather than after `failsafe_us`; the link itself stays tracked.
+            if !self.in_failsafe {
+                self.in_failsafe = true;
+                self.failsafe_values.apply(&mut self.output);
+            }
+        } else {
+            up.channels_into(&mut self.output);
+            if up.save_failsafe {
+                self.failsafe_values = FailsafeValues::from_channels(&self.output);
+            }
+            self.in_failsafe = false;
+            self.updates = self.updates.wrapping_add(1);
+        }
         self.remote = up.report.or(self.remote);
         self.downlink_stream.on_ack(up.stream.ack);
         self.uplink_stream.on_data(up.stream.seq, up.data);

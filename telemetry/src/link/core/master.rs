@@ -30,6 +30,8 @@ pub struct Master {
     channels: Channels,
     /// Uplinks still to carry the save-failsafe flag.
     save_failsafe: u8,
+    /// Uplinks carry the input-lost flag (the application has no fresh channels).
+    input_lost: bool,
     report_due: bool,
     heard: bool,
     /// Telemetry towards the follower.
@@ -56,6 +58,7 @@ impl Master {
             slot: 0,
             channels: [CHANNEL_CENTER; 16],
             save_failsafe: 0,
+            input_lost: false,
             report_due: false,
             heard: false,
             uplink_stream: StreamSender::new(),
@@ -86,6 +89,19 @@ impl Master {
     /// Sets the channel values sent from the next uplink on.
     pub fn set_channels(&mut self, channels: &Channels) {
         self.channels = *channels;
+    }
+
+    /// Whether the channels are stale because the application's input stopped (handset
+    /// unplugged or frozen). While set, every uplink carries the input-lost flag and the
+    /// follower flies its failsafe instead of the channels; the link, its statistics and the
+    /// telemetry streams keep running. No save-failsafe request goes out meanwhile.
+    pub fn set_input_lost(&mut self, lost: bool) {
+        self.input_lost = lost;
+    }
+
+    /// Whether uplinks carry the input-lost flag.
+    pub fn input_lost(&self) -> bool {
+        self.input_lost
     }
 
     /// Asks the follower to store the current channels as its failsafe values (flag set in
@@ -149,7 +165,8 @@ impl Master {
                 ack: self.downlink_stream.ack(),
             },
             report,
-            save_failsafe: self.save_failsafe > 0,
+            save_failsafe: self.save_failsafe > 0 && !self.input_lost,
+            input_lost: self.input_lost,
             format,
             packed_channels: packed,
             data: data.get(..n)?,

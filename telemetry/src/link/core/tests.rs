@@ -243,3 +243,63 @@ fn save_failsafe_command_stores_the_channels_on_the_follower() {
     assert!(follower.in_failsafe());
     assert_eq!(follower.output(), &channels);
 }
+
+#[test]
+fn input_lost_uplinks_put_the_follower_in_failsafe_at_once_and_keep_it_tracking() {
+    let (mut master, mut follower) = pair();
+    let channels: crate::channels::Channels = core::array::from_fn(|i| 1200 + i as u16);
+    master.set_channels(&channels);
+    let mut buf = [0u8; 64];
+    let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
+        panic!()
+    };
+    let mut t = 0;
+    let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
+    let packet = |frame: &[u8]| RxOutcome::Packet {
+        len: frame.len(),
+        rssi_dbm: -70,
+    };
+    follower.on_received(packet(&frame), &frame, end);
+    assert!(!follower.in_failsafe());
+    let updates = follower.updates();
+
+    // The master's input stops: the very next uplink it sends carries the flag.
+    master.set_input_lost(true);
+    master.request_save_failsafe();
+    let Step::Listen { channel, .. } = follower.plan(end, &mut buf) else {
+        panic!()
+    };
+    let (lost, lost_end) = next_uplink_on(&mut master, &mut t, channel);
+    assert_eq!(
+        lost[1] & 0x30,
+        0x20,
+        "input lost, never save-failsafe with it"
+    );
+    follower.on_received(packet(&lost), &lost, lost_end);
+    assert!(
+        follower.in_failsafe(),
+        "failsafe with the first flagged uplink"
+    );
+    assert_eq!(follower.sync_state(), SyncState::Tracking);
+    assert_eq!(
+        follower.updates(),
+        updates,
+        "stale channels are not an update"
+    );
+    // Default failsafe: sticks centred, throttle low, aux held at the last flown values.
+    let mut failsafe = channels;
+    FailsafeValues::default().apply(&mut failsafe);
+    assert_eq!(failsafe[2], 172);
+    assert_eq!(follower.output(), &failsafe);
+    assert_eq!(follower.failsafe_values(), &FailsafeValues::default());
+
+    // Input back: the next uplink's channels fly again.
+    master.set_input_lost(false);
+    let Step::Listen { channel, .. } = follower.plan(lost_end, &mut buf) else {
+        panic!()
+    };
+    let (back, back_end) = next_uplink_on(&mut master, &mut t, channel);
+    follower.on_received(packet(&back), &back, back_end);
+    assert!(!follower.in_failsafe());
+    assert_eq!(follower.output(), &channels);
+}

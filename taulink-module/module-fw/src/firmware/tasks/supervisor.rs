@@ -45,6 +45,14 @@ pub fn check_in(task: Watched) {
     CHECKED_IN.fetch_or(task as u32, Ordering::Relaxed);
 }
 
+/// For a task with nothing (left) to do: checks in forever.
+pub async fn idle(task: Watched) -> ! {
+    loop {
+        check_in(task);
+        embassy_time::Timer::after_millis(50).await;
+    }
+}
+
 #[embassy_executor::task]
 pub async fn supervisor_task(mut watchdog: WatchdogHandle) {
     let mut ticker = Ticker::every(Duration::from_millis(100));

@@ -1,0 +1,230 @@
+//! The link task's decisions: when to probe the radio, which link loop to run with which
+//! parameters (master in the transmitter role, follower in the receiver role), when a running
+//! loop must stop (a bind request, a radio failure, a hook gone silent) and how to bind in
+//! each role. The firmware's link task only asks "what next?" ([`crate::app::App::next_link_step`]),
+//! carries the step out on the radio and feeds the outcome back (`App::on_*`).
+
+use telemetry::channels::{Failsafe, FailsafeValues, MAX_CHANNELS};
+use telemetry::link::core::follower::DEFAULT_FAILSAFE_US;
+use telemetry::link::{Band as LinkBand, LinkParams};
+
+use crate::air::{link_band, link_params, new_bind_params};
+use crate::settings::{Role, Settings};
+
+/// How long one bind attempt lasts.
+pub const BIND_TIMEOUT_US: u64 = 10_000_000;
+/// A running link loop counts as alive while its hook ran within this time. Longer than any
+/// one step (the follower's acquisition dwell is one hop cycle, ≤ 660 ms), short enough that
+/// a hung radio is noticed.
+pub const HOOK_SILENCE_MS: u32 = 2_000;
+/// With no radio found, probe again after this long.
+pub const PROBE_RETRY_MS: u32 = 1_000;
+/// How often the task should call [`crate::app::App::poll_session`] while a step runs.
+pub const POLL_MS: u32 = 50;
+
+/// What the link task does next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LinkStep {
+    /// Reset and probe the radio; report with `App::on_radio_present`.
+    Probe,
+    /// No radio: wait this long (checking in), then ask again.
+    Wait {
+        /// Milliseconds to wait.
+        ms: u32,
+    },
+    /// Unbound: idle until [`crate::app::App::poll_session`] says a bind was asked for.
+    WaitForBind,
+    /// Run the master loop (transmitter role), the core's `on_master_slot` as its hook.
+    RunMaster(LinkParams),
+    /// Run the follower loop (receiver role), the core's `on_follower_step` as its hook.
+    RunFollower {
+        /// The bound link.
+        params: LinkParams,
+        /// Every channel held: the PPM output applies the module's own failsafe setting
+        /// once the follower reports failsafe.
+        failsafe: FailsafeValues,
+        /// The follower's silence timeout.
+        failsafe_us: u64,
+    },
+    /// Offer `params` (a fresh bind ID) until a follower accepts or the timeout passes.
+    BindMaster {
+        /// What is offered.
+        params: LinkParams,
+        /// How long to offer.
+        timeout_us: u64,
+    },
+    /// Listen for a master's offer on `band`.
+    BindFollower {
+        /// The band's bind channel.
+        band: LinkBand,
+        /// How long to listen.
+        timeout_us: u64,
+    },
+}
+
+/// Why a running step ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SessionEnd {
+    /// A long press asked for a bind: bind next.
+    BindRequested,
+    /// The radio driver failed: probe it again.
+    RadioFailed,
+    /// The loop's hook stopped running for [`HOOK_SILENCE_MS`]: probe the radio again.
+    HookSilent,
+}
+
+/// How a bind step ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BindOutcome {
+    /// Master: whether a follower accepted the offer.
+    Offered {
+        /// Accepted within the timeout.
+        accepted: bool,
+    },
+    /// Follower: the offer taken, if one came.
+    Listened(Option<LinkParams>),
+    /// The radio failed during the bind.
+    RadioFailed,
+}
+
+impl BindOutcome {
+    /// The master's bind result (`telemetry::link::master::bind_master`).
+    pub fn offered<E>(result: Result<bool, E>) -> Self {
+        result.map_or(Self::RadioFailed, |accepted| Self::Offered { accepted })
+    }
+
+    /// The follower's bind result (`telemetry::link::follower::bind_follower`).
+    pub fn listened<E>(result: Result<Option<LinkParams>, E>) -> Self {
+        result.map_or(Self::RadioFailed, Self::Listened)
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum State {
+    Probe,
+    Absent,
+    Ready,
+    WaitingForBind,
+    Running,
+    Bind,
+    Binding,
+}
+
+/// The link task's state machine (held by the core's `App`).
+#[derive(Debug, Clone)]
+pub struct Session {
+    state: State,
+    last_hook_ms: u32,
+    offered: Option<LinkParams>,
+}
+
+impl Default for Session {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Session {
+    /// Before the first probe.
+    pub const fn new() -> Self {
+        Self {
+            state: State::Probe,
+            last_hook_ms: 0,
+            offered: None,
+        }
+    }
+
+    /// The probe's result.
+    pub fn on_probe(&mut self, present: bool) {
+        self.state = if present { State::Ready } else { State::Absent };
+    }
+
+    /// The next step for `settings`, at `now_ms`; `random` gives a new bind ID when a master
+    /// bind is next. A step still running when this is called is abandoned: probe again.
+    pub fn next(&mut self, settings: &Settings, now_ms: u32, random: u32) -> LinkStep {
+        match self.state {
+            State::Absent => {
+                self.state = State::Probe;
+                LinkStep::Wait { ms: PROBE_RETRY_MS }
+            }
+            State::Ready => match link_params(settings) {
+                None => {
+                    self.state = State::WaitingForBind;
+                    LinkStep::WaitForBind
+                }
+                Some(params) => {
+                    self.state = State::Running;
+                    self.last_hook_ms = now_ms;
+                    match settings.role {
+                        Role::Transmitter => LinkStep::RunMaster(params),
+                        Role::Receiver => LinkStep::RunFollower {
+                            params,
+                            failsafe: FailsafeValues([Failsafe::Hold; MAX_CHANNELS]),
+                            failsafe_us: DEFAULT_FAILSAFE_US,
+                        },
+                    }
+                }
+            },
+            State::Bind => {
+                self.state = State::Binding;
+                match settings.role {
+                    Role::Transmitter => {
+                        let params = new_bind_params(settings, random);
+                        self.offered = Some(params);
+                        LinkStep::BindMaster {
+                            params,
+                            timeout_us: BIND_TIMEOUT_US,
+                        }
+                    }
+                    Role::Receiver => LinkStep::BindFollower {
+                        band: link_band(settings.band),
+                        timeout_us: BIND_TIMEOUT_US,
+                    },
+                }
+            }
+            State::Probe | State::WaitingForBind | State::Running | State::Binding => {
+                self.state = State::Probe;
+                LinkStep::Probe
+            }
+        }
+    }
+
+    /// The running loop's hook ran at `now_ms`.
+    pub fn on_hook(&mut self, now_ms: u32) {
+        self.last_hook_ms = now_ms;
+    }
+
+    /// Whether the running step must stop, at `now_ms`; `bind_requested` is a pending long
+    /// press (only consumed when this returns [`SessionEnd::BindRequested`]).
+    pub fn poll(&self, now_ms: u32, bind_requested: bool) -> Option<SessionEnd> {
+        match self.state {
+            State::Running | State::WaitingForBind if bind_requested => {
+                Some(SessionEnd::BindRequested)
+            }
+            State::Running if now_ms.wrapping_sub(self.last_hook_ms) > HOOK_SILENCE_MS => {
+                Some(SessionEnd::HookSilent)
+            }
+            _ => None,
+        }
+    }
+
+    /// The running step ended.
+    pub fn on_end(&mut self, end: SessionEnd) {
+        self.state = match end {
+            SessionEnd::BindRequested => State::Bind,
+            SessionEnd::RadioFailed | SessionEnd::HookSilent => State::Probe,
+        };
+    }
+
+    /// A bind step ended: the radio is probed again either way. Returns the parameters this
+    /// end offered (master role).
+    pub fn on_bind_done(&mut self) -> Option<LinkParams> {
+        self.state = State::Probe;
+        self.offered.take()
+    }
+}
+
+#[cfg(test)]
+#[path = "session_tests.rs"]
+mod tests;
