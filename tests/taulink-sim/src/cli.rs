@@ -15,7 +15,6 @@ use crate::scenario::Scenario;
 #[command(
     name = "taulink-sim",
     version,
-    about,
     // "--duration -5" is a value to refuse with a reason, not an unknown flag "-5".
     allow_negative_numbers = true,
     after_help = "Examples:
