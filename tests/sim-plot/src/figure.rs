@@ -391,6 +391,8 @@ fn draw_panel<DB: DrawingBackend>(
         .y_label_area_size(78)
         .build_cartesian_2d(t0..t1, y0..y1)
         .map_err(err)?;
+    let y_tick = |v: &f64| tick(*v, y1 - y0);
+    let x_tick = |v: &f64| tick(*v, t1 - t0);
     let mut mesh = chart.configure_mesh();
     mesh.light_line_style(RGBColor(246, 246, 246))
         .bold_line_style(RGBColor(205, 205, 205))
@@ -399,11 +401,11 @@ fn draw_panel<DB: DrawingBackend>(
         .label_style((font::FAMILY, 13))
         .axis_desc_style((font::FAMILY, 14))
         .y_desc(panel.y_label.as_str())
-        .y_label_formatter(&|v| tick(*v));
+        .y_label_formatter(&y_tick);
     if let Some(x) = x_label {
         mesh.x_desc(x);
     }
-    mesh.x_label_formatter(&|v| tick(*v)).draw().map_err(err)?;
+    mesh.x_label_formatter(&x_tick).draw().map_err(err)?;
 
     for e in &panel.events {
         let grey = RGBColor(110, 110, 110);
@@ -465,10 +467,11 @@ fn draw_panel<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Tick label: few significant digits, no float noise ("0.30000000000000004").
-fn tick(v: f64) -> String {
+/// Tick label: few significant digits, no float noise ("0.30000000000000004", or
+/// "-1.4e-17" for a zero tick on an axis spanning `span`).
+fn tick(v: f64, span: f64) -> String {
     let a = v.abs();
-    if a == 0.0 {
+    if a <= span.abs() * 1e-9 {
         "0".into()
     } else if !(1e-3..1e5).contains(&a) {
         format!("{v:.1e}")
@@ -499,10 +502,11 @@ mod tests {
 
     #[test]
     fn ticks_are_short() {
-        assert_eq!(tick(0.30000000000000004), "0.3");
-        assert_eq!(tick(-0.00001), "-1.0e-5");
-        assert_eq!(tick(250.0), "250");
-        assert_eq!(tick(0.0), "0");
+        assert_eq!(tick(0.30000000000000004, 1.0), "0.3");
+        assert_eq!(tick(-0.00001, 1e-4), "-1.0e-5");
+        assert_eq!(tick(250.0, 1000.0), "250");
+        assert_eq!(tick(0.0, 1.0), "0");
+        assert_eq!(tick(-1.4e-17, 0.2), "0");
     }
 
     #[test]
