@@ -407,7 +407,7 @@ fn draw_panel<DB: DrawingBackend>(
     }
     mesh.x_label_formatter(&x_tick).draw().map_err(err)?;
 
-    for e in &panel.events {
+    for (k, e) in panel.events.iter().enumerate() {
         let grey = RGBColor(110, 110, 110);
         chart
             .draw_series(DashedLineSeries::new(
@@ -422,7 +422,9 @@ fn draw_panel<DB: DrawingBackend>(
                 EmptyElement::at((e.t, y1))
                     + Text::new(
                         e.label.clone(),
-                        (4, 3),
+                        // Close events (a cut and the failsafe it causes) would print
+                        // over each other: step the labels down in turn.
+                        (4, 3 + 14 * (k % 4) as i32),
                         (font::FAMILY, 12).into_font().color(&grey),
                     ),
             ))

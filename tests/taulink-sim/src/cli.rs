@@ -20,7 +20,8 @@ use crate::scenario::Scenario;
     after_help = "Examples:
   taulink-sim                                      30 s at F250, 500 m, status line + table
   taulink-sim --rate F500 --loss 0.1 --foreign --json
-  taulink-sim --cut 10:12 --duration 20            failsafe and recovery after a 2 s cut
+  taulink-sim --cut 10:12 --duration 20 --plot out failsafe and recovery after a 2 s cut,
+                                                   drawn to out/link.png
   taulink-sim --sweep                              every rate mode, clean and at 10 % loss
 
 Exit status: 0 if every channel output and stream byte was right, 1 if any was wrong,
@@ -83,8 +84,12 @@ pub struct Cli {
     pub packet_level: bool,
     /// Run every rate mode, clean and at 10 % loss, and print the comparison (with a
     /// progress bar on a terminal).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "plot")]
     pub sweep: bool,
+    /// `--plot DIR`: draw `link.png` (LQ, RSSI, updates/s, latency over time, cut and
+    /// failsafe marked) into DIR.
+    #[command(flatten)]
+    pub plot: sim_plot::PlotArgs,
     /// Print the report as JSON on stdout (fields in the README); no status line.
     #[arg(long)]
     pub json: bool,

@@ -133,10 +133,12 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         };
     }
+    let mut trace = taulink_sim::plot::Trace::default();
     let report = run(&scenario, |st| {
         if live {
             status_line(st);
         }
+        trace.push(st);
     });
     if live {
         eprintln!();
@@ -149,6 +151,15 @@ fn main() -> ExitCode {
             scenario.duration_s, scenario.seed
         );
         print!("{}", report.table());
+    }
+    if let Some(path) = cli.plot.path("link") {
+        if let Err(e) = trace
+            .figure(&scenario, &report)
+            .save_as(&path, cli.plot.plot_format)
+        {
+            eprintln!("taulink-sim: plot {}: {e}", path.display());
+            return ExitCode::FAILURE;
+        }
     }
     if report.errors > 0 || report.foreign_errors > 0 {
         ExitCode::FAILURE

@@ -88,3 +88,42 @@ fn short_run_prints_the_documented_json() {
         assert!(json.contains(field), "{field} missing: {json}");
     }
 }
+
+#[test]
+fn plot_draws_the_link_figure_and_refuses_a_sweep() {
+    let dir = std::env::temp_dir().join(format!("taulink-sim-plot-{}", std::process::id()));
+    let d = dir.to_str().unwrap();
+    let out = sim(&[
+        "--duration",
+        "3",
+        "--cut",
+        "1:2",
+        "--packet-level",
+        "--no-bind",
+        "--quiet",
+        "--plot",
+        d,
+        "--plot-format",
+        "svg",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let svg = std::fs::read_to_string(dir.join("link.svg")).unwrap();
+    for label in [
+        "LQ (%)",
+        "RSSI (dBm)",
+        "updates (1/s)",
+        "latency (ms)",
+        "path cut",
+        "virtual time (s)",
+    ] {
+        assert!(svg.contains(label), "{label} missing");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = sim(&["--sweep", "--plot", d]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).contains("cannot be used with"),
+        "{}",
+        text(&out.stderr)
+    );
+}
