@@ -152,14 +152,13 @@ fn main() -> ExitCode {
         );
         print!("{}", report.table());
     }
-    if let Some(path) = cli.plot.path("link") {
-        if let Err(e) = trace
+    if let Some(path) = cli.plot.path("link")
+        && let Err(e) = trace
             .figure(&scenario, &report)
             .save_as(&path, cli.plot.plot_format)
-        {
-            eprintln!("taulink-sim: plot {}: {e}", path.display());
-            return ExitCode::FAILURE;
-        }
+    {
+        eprintln!("taulink-sim: plot {}: {e}", path.display());
+        return ExitCode::FAILURE;
     }
     if report.errors > 0 || report.foreign_errors > 0 {
         ExitCode::FAILURE
