@@ -22,6 +22,60 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 use std::{env, fs};
 
+use clap::{Parser, Subcommand};
+
+/// Builds the TauLink firmware images (release, thumbv7em-none-eabihf) and turns them into
+/// flashable .bin, .hex and .uf2 files.
+#[derive(Parser, Debug)]
+#[command(
+    name = "xtask",
+    version,
+    after_help = "Examples:
+  cargo xtask build flight --sparky2     the Sparky2 image, prints the ELF's path
+  cargo xtask build module --uf2         the nRF52840 image for a UF2 bootloader
+  cargo xtask dist                       every variant -> dist/*.{elf,bin,hex,uf2}
+  cargo xtask size                       text/data/bss of what dist/ holds"
+)]
+struct Cli {
+    #[command(subcommand)]
+    task: Task,
+}
+
+#[derive(Subcommand, Debug)]
+enum Task {
+    /// Build one firmware image (release) and print the ELF's path.
+    #[command(subcommand)]
+    Build(Image),
+    /// Build every variant and write dist/NAME.{elf,bin,hex[,uf2][,tlfw]}.
+    Dist,
+    /// Print text/data/bss of the ELFs in dist/.
+    Size,
+    /// Check every file in dist/ against its bootloader's boot contract, and the README's
+    /// sizes table against dist/ (fails when stale).
+    Verify,
+    /// Rewrite the README's sizes table from the ELFs in dist/.
+    Readme,
+}
+
+#[derive(Subcommand, Debug)]
+enum Image {
+    /// The flight controller (STM32F405; BrushedSparky unless told otherwise).
+    Flight {
+        /// Build for the Sparky2 board instead of the BrushedSparky.
+        #[arg(long)]
+        sparky2: bool,
+        /// Link at 0x08020000 behind the Tau Labs bootloader instead of at 0x08000000.
+        #[arg(long)]
+        bootloader: bool,
+    },
+    /// The TauLink module (nRF52840).
+    Module {
+        /// Link at 0x26000 behind a UF2 bootloader (nice!nano and friends) and write a .uf2.
+        #[arg(long)]
+        uf2: bool,
+    },
+}
+
 const TARGET: &str = "thumbv7em-none-eabihf";
 
 /// One firmware variant: which package, which features, what to call the files.
@@ -293,43 +347,38 @@ fn verify() -> Result<(), String> {
     Ok(())
 }
 
-fn run(args: &[String]) -> Result<(), String> {
-    let flag = |f: &str| args.iter().any(|a| a == f);
-    match args.first().map(String::as_str) {
-        Some("build") => {
-            let (package, mut features) = match args.get(1).map(String::as_str) {
-                Some("flight") => ("flight-fw", Vec::new()),
-                Some("module") => ("module-fw", Vec::new()),
-                _ => return Err("usage: cargo xtask build flight|module [options]".into()),
+fn run(task: &Task) -> Result<(), String> {
+    match task {
+        Task::Build(image) => {
+            let (package, wanted) = match *image {
+                Image::Flight {
+                    sparky2,
+                    bootloader,
+                } => (
+                    "flight-fw",
+                    vec![(sparky2, "sparky2"), (bootloader, "taulabs-bootloader")],
+                ),
+                Image::Module { uf2 } => ("module-fw", vec![(uf2, "uf2")]),
             };
-            for (f, feature) in [
-                ("--sparky2", "sparky2"),
-                ("--bootloader", "taulabs-bootloader"),
-                ("--uf2", "uf2"),
-            ] {
-                if flag(f) {
-                    features.push(feature);
-                }
-            }
+            let features: Vec<&str> = wanted
+                .into_iter()
+                .filter_map(|(on, f)| on.then_some(f))
+                .collect();
             let elf = build(package, &features)?;
             println!("{}", elf.display());
             Ok(())
         }
-        Some("dist") => dist(),
-        Some("size") => size(),
-        Some("verify") => verify(),
-        Some("readme") => readme(),
-        _ => Err(
-            "usage: cargo xtask build flight|module [--sparky2] [--bootloader] [--uf2] \
-                  | dist | size | verify | readme"
-                .into(),
-        ),
+        Task::Dist => dist(),
+        Task::Size => size(),
+        Task::Verify => verify(),
+        Task::Readme => readme(),
     }
 }
 
 fn main() -> ExitCode {
-    let args: Vec<String> = env::args().skip(1).collect();
-    match run(&args) {
+    // clap prints --help/--version (exit 0) and usage errors with a suggestion (exit 2).
+    let cli = Cli::parse();
+    match run(&cli.task) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("xtask: {e}");

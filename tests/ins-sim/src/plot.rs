@@ -1,77 +1,47 @@
-//! PNG plots of a replay (plotters, bitmap backend, no fonts): `attitude.png` (roll, pitch,
-//! yaw in degrees), `velocity.png`, `position.png` (N, E, D) and `bias.png` (gyro x, y, z and
-//! accel z), one panel per component, time on x. Estimate in blue, reference in red.
+//! Figures of a replay, drawn by `sim-plot` (axes, units, legends, PNG or SVG):
+//! `attitude` (roll, pitch, yaw in degrees), `velocity` and `position` (N, E, D) and `bias`
+//! (gyro x, y, z in deg/s, accel z in m/s²), one panel per component, time in seconds.
+//! Estimate blue, reference (the `--truth` file) vermillion.
 
 use std::path::Path;
 
-use plotters::prelude::*;
+use sim_plot::{Figure, Format, Panel, PlotError, Series};
 
 use crate::replay::Row;
 use crate::trajectory::to_euler;
 
-type Series = Vec<(f64, f64)>;
-
-fn series(rows: &[Row], f: impl Fn(&Row) -> f64) -> Series {
+fn series(rows: &[Row], f: &dyn Fn(&Row) -> f64) -> Vec<(f64, f64)> {
     rows.iter()
         .map(|r| (r.time_us as f64 * 1e-6, f(r)))
         .collect()
 }
 
-fn panel_range(all: &[&Series]) -> (std::ops::Range<f64>, std::ops::Range<f64>) {
-    let (mut t0, mut t1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for s in all {
-        for &(t, y) in s.iter() {
-            t0 = t0.min(t);
-            t1 = t1.max(t);
-            y0 = y0.min(y);
-            y1 = y1.max(y);
-        }
+/// A panel of the estimate and, if given, the reference.
+fn panel(
+    title: &str,
+    y_label: &str,
+    estimates: &[Row],
+    reference: Option<&[Row]>,
+    f: &dyn Fn(&Row) -> f64,
+) -> Panel {
+    let p = Panel::new(title, y_label).series(Series::new("estimate", series(estimates, f)));
+    match reference {
+        Some(r) => p.series(Series::new("reference", series(r, f)).width(1)),
+        None => p,
     }
-    if t0 > t1 {
-        return (0.0..1.0, -1.0..1.0);
-    }
-    let pad = ((y1 - y0) * 0.05).max(1e-3);
-    (t0..t1.max(t0 + 1e-3), (y0 - pad)..(y1 + pad))
 }
 
-fn draw(
-    path: &Path,
-    panels: &[(Series, Option<Series>)],
-) -> Result<(), Box<dyn std::error::Error>> {
-    let root = BitMapBackend::new(path, (1000, 250 * panels.len() as u32)).into_drawing_area();
-    root.fill(&WHITE)?;
-    for (area, (est, reference)) in root.split_evenly((panels.len(), 1)).iter().zip(panels) {
-        let mut all = vec![est];
-        if let Some(r) = reference {
-            all.push(r);
-        }
-        let (x, y) = panel_range(&all);
-        let mut chart = ChartBuilder::on(area).margin(8).build_cartesian_2d(x, y)?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .y_labels(5)
-            .x_labels(10)
-            .draw()?;
-        if let Some(r) = reference {
-            chart.draw_series(LineSeries::new(r.iter().copied(), &RED))?;
-        }
-        chart.draw_series(LineSeries::new(est.iter().copied(), &BLUE))?;
-    }
-    root.present()?;
-    Ok(())
-}
-
-/// Writes the four PNGs into `dir` (created if needed).
+/// Writes `attitude`, `velocity`, `position` and `bias` in `format` into `dir` (created if
+/// needed); returns the paths written.
 ///
 /// # Errors
 /// File-system or drawing errors.
 pub fn write_plots(
     dir: &Path,
+    format: Format,
     estimates: &[Row],
     reference: Option<&[Row]>,
-) -> Result<(), Box<dyn std::error::Error>> {
-    std::fs::create_dir_all(dir)?;
+) -> Result<Vec<std::path::PathBuf>, PlotError> {
     let euler = |i: usize| {
         move |r: &Row| {
             to_euler(r.attitude)
@@ -81,28 +51,55 @@ pub fn write_plots(
                 .to_degrees()
         }
     };
-    let both = |f: &dyn Fn(&Row) -> f64| (series(estimates, f), reference.map(|r| series(r, f)));
-    let attitude: Vec<_> = (0..3).map(|i| both(&euler(i))).collect();
-    draw(&dir.join("attitude.png"), &attitude)?;
-    let velocity: Vec<_> = (0..3)
-        .map(|i| both(&move |r: &Row| r.velocity_ned_mps.get(i).copied().unwrap_or(0.0)))
-        .collect();
-    draw(&dir.join("velocity.png"), &velocity)?;
-    let position: Vec<_> = (0..3)
-        .map(|i| both(&move |r: &Row| r.position_ned_m.get(i).copied().unwrap_or(0.0)))
-        .collect();
-    draw(&dir.join("position.png"), &position)?;
-    let mut bias: Vec<_> = (0..3)
-        .map(|i| {
-            (
-                series(estimates, move |r: &Row| {
-                    r.gyro_bias_radps.get(i).copied().unwrap_or(0.0)
-                }),
-                None,
-            )
-        })
-        .collect();
-    bias.push((series(estimates, |r: &Row| r.accel_bias_z_mps2), None));
-    draw(&dir.join("bias.png"), &bias)?;
-    Ok(())
+    let pick = |v: [f64; 3], i: usize| v.get(i).copied().unwrap_or(0.0);
+    let axes = ["north", "east", "down"];
+    let mut attitude = Figure::new("Attitude: estimate vs reference");
+    for (i, name) in ["roll", "pitch", "yaw"].into_iter().enumerate() {
+        let label = format!("{name} (deg)");
+        attitude = attitude.panel(panel(name, &label, estimates, reference, &euler(i)));
+    }
+    let mut velocity = Figure::new("Velocity (NED)");
+    let mut position = Figure::new("Position (NED, from the first GPS fix)");
+    for (i, name) in axes.into_iter().enumerate() {
+        let v = move |r: &Row| pick(r.velocity_ned_mps, i);
+        let p = move |r: &Row| pick(r.position_ned_m, i);
+        velocity = velocity.panel(panel(
+            name,
+            &format!("v {name} (m/s)"),
+            estimates,
+            reference,
+            &v,
+        ));
+        position = position.panel(panel(
+            name,
+            &format!("{name} (m)"),
+            estimates,
+            reference,
+            &p,
+        ));
+    }
+    let mut bias = Figure::new("Estimated sensor biases");
+    for (i, name) in ["gyro x", "gyro y", "gyro z"].into_iter().enumerate() {
+        let b = move |r: &Row| pick(r.gyro_bias_radps, i).to_degrees();
+        bias = bias.panel(panel(name, &format!("{name} (deg/s)"), estimates, None, &b));
+    }
+    bias = bias.panel(panel(
+        "accel z",
+        "accel z (m/s²)",
+        estimates,
+        None,
+        &|r: &Row| r.accel_bias_z_mps2,
+    ));
+    let mut written = Vec::new();
+    for (name, fig) in [
+        ("attitude", attitude),
+        ("velocity", velocity),
+        ("position", position),
+        ("bias", bias),
+    ] {
+        let path = dir.join(format!("{name}.{}", format.extension()));
+        fig.save_as(&path, format)?;
+        written.push(path);
+    }
+    Ok(written)
 }

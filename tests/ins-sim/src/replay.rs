@@ -61,7 +61,68 @@ pub struct ParseError {
 
 impl std::fmt::Display for ParseError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "line {}: {}", self.line, self.reason)
+        if self.line == 0 {
+            // Not one line's fault (an empty file).
+            f.write_str(&self.reason)
+        } else {
+            write!(f, "line {}: {}", self.line, self.reason)
+        }
+    }
+}
+
+/// Physical bounds of the sensor values a log may hold: wider than any sensor on a
+/// multirotor reports (MEMS gyros saturate at 35–70 rad/s, accelerometers at 16–32 g), so
+/// a value outside is a corrupt or mis-scaled log, not flight.
+pub mod limits {
+    /// |specific force| per axis, m/s² (≈ 100 g).
+    pub const ACCEL_MPS2: f64 = 1000.0;
+    /// |rate| per axis, rad/s (≈ 5700 deg/s).
+    pub const GYRO_RADPS: f64 = 100.0;
+    /// |field| per axis, gauss (the earth's is < 0.7).
+    pub const MAG_GAUSS: f64 = 20.0;
+    /// Altitude AMSL, m (baro and GPS): Dead Sea shore to well above any multirotor.
+    pub const ALTITUDE_M: (f64, f64) = (-1000.0, 50_000.0);
+    /// |GPS velocity| per axis, m/s.
+    pub const VELOCITY_MPS: f64 = 500.0;
+}
+
+fn within(
+    values: &[f64],
+    bound: f64,
+    what: &str,
+    unit: &str,
+    line: usize,
+) -> Result<(), ParseError> {
+    match values.iter().find(|v| v.abs() > bound) {
+        Some(v) => Err(ParseError {
+            line,
+            reason: format!(
+                "{what} {} {unit} is beyond ±{bound} {unit}: not a plausible reading",
+                if v.abs() >= 1e6 {
+                    format!("{v:e}")
+                } else {
+                    v.to_string()
+                }
+            ),
+        }),
+        None => Ok(()),
+    }
+}
+
+fn in_range(
+    v: f64,
+    (lo, hi): (f64, f64),
+    what: &str,
+    unit: &str,
+    line: usize,
+) -> Result<(), ParseError> {
+    if (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(ParseError {
+            line,
+            reason: format!("{what} {v} {unit} is outside {lo}..={hi} {unit}"),
+        })
     }
 }
 
@@ -76,10 +137,15 @@ fn numbers<const N: usize>(fields: &[&str], line: usize) -> Result<[f64; N], Par
     }
     let mut out = [0.0; N];
     for (o, f) in out.iter_mut().zip(fields) {
-        *o = f.trim().parse().map_err(|_| ParseError {
-            line,
-            reason: format!("not a number: {f:?}"),
-        })?;
+        *o = f
+            .trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| ParseError {
+                line,
+                reason: format!("not a finite number: {f:?}"),
+            })?;
     }
     Ok(out)
 }
@@ -88,9 +154,11 @@ fn numbers<const N: usize>(fields: &[&str], line: usize) -> Result<[f64; N], Par
 /// skipped. Empty lines are ignored.
 ///
 /// # Errors
-/// The first malformed line.
+/// The first malformed line: not a number (NaN and infinities included), a time earlier
+/// than the line before, a value beyond [`limits`]; or a file with no IMU record.
 pub fn parse_sensors(text: &str) -> Result<Vec<Record>, ParseError> {
     let mut out = Vec::new();
+    let mut last_time_us = 0;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let fields: Vec<&str> = raw.trim().split(',').collect();
@@ -104,10 +172,26 @@ pub fn parse_sensors(text: &str) -> Result<Vec<Record>, ParseError> {
             line,
             reason: format!("bad time {t:?}"),
         })?;
+        // The replay integrates in file order: a step back in time would be a negative dt.
+        if time_us < last_time_us {
+            return Err(ParseError {
+                line,
+                reason: format!("time goes backwards: {time_us} µs after {last_time_us} µs"),
+            });
+        }
+        last_time_us = time_us;
         let f = |v: f64| v as f32;
         match kind.trim() {
             "imu" => {
                 let [ax, ay, az, gx, gy, gz] = numbers::<6>(values, line)?;
+                within(
+                    &[ax, ay, az],
+                    limits::ACCEL_MPS2,
+                    "specific force",
+                    "m/s²",
+                    line,
+                )?;
+                within(&[gx, gy, gz], limits::GYRO_RADPS, "rate", "rad/s", line)?;
                 out.push(Record::Imu {
                     time_us,
                     accel_mps2: [f(ax), f(ay), f(az)],
@@ -116,6 +200,13 @@ pub fn parse_sensors(text: &str) -> Result<Vec<Record>, ParseError> {
             }
             "mag" => {
                 let [x, y, z] = numbers::<3>(values, line)?;
+                within(
+                    &[x, y, z],
+                    limits::MAG_GAUSS,
+                    "magnetic field",
+                    "gauss",
+                    line,
+                )?;
                 out.push(Record::Mag {
                     time_us,
                     field_gauss: [f(x), f(y), f(z)],
@@ -123,6 +214,7 @@ pub fn parse_sensors(text: &str) -> Result<Vec<Record>, ParseError> {
             }
             "baro" => {
                 let [alt] = numbers::<1>(values, line)?;
+                in_range(alt, limits::ALTITUDE_M, "baro altitude", "m", line)?;
                 out.push(Record::Baro {
                     time_us,
                     altitude_m: f(alt),
@@ -130,6 +222,16 @@ pub fn parse_sensors(text: &str) -> Result<Vec<Record>, ParseError> {
             }
             "gps" => {
                 let [alt_mm, lon, lat, vn, ve, vd] = numbers::<6>(values, line)?;
+                in_range(lat * 1e-7, (-90.0, 90.0), "latitude", "deg", line)?;
+                in_range(lon * 1e-7, (-180.0, 180.0), "longitude", "deg", line)?;
+                in_range(alt_mm * 1e-3, limits::ALTITUDE_M, "GPS altitude", "m", line)?;
+                within(
+                    &[vn, ve, vd],
+                    limits::VELOCITY_MPS,
+                    "GPS velocity",
+                    "m/s",
+                    line,
+                )?;
                 out.push(Record::Gps {
                     time_us,
                     lat_deg: lat * 1e-7,
@@ -140,6 +242,13 @@ pub fn parse_sensors(text: &str) -> Result<Vec<Record>, ParseError> {
             }
             _ => {}
         }
+    }
+    // Nothing to integrate: an empty file, or one of another format.
+    if !out.iter().any(|r| matches!(r, Record::Imu { .. })) {
+        return Err(ParseError {
+            line: 0,
+            reason: "no IMU records (empty file, or not the PX4 replay format \"time_us,imu,ax,ay,az,gx,gy,gz\")".into(),
+        });
     }
     Ok(out)
 }
@@ -242,6 +351,17 @@ pub fn ned_from_origin(
 /// Rows before alignment hold the identity attitude and zeros, as EKF2's do.
 #[must_use]
 pub fn run(records: &[Record], options: &Options) -> Vec<Row> {
+    run_with_progress(records, options, |_| {})
+}
+
+/// [`run`], calling `progress` with the number of records done every 10 000 records (for a
+/// host tool's progress bar).
+#[must_use]
+pub fn run_with_progress(
+    records: &[Record],
+    options: &Options,
+    mut progress: impl FnMut(usize),
+) -> Vec<Row> {
     let mut ins = Ins::new(options.config, options.aiding);
     let mut rows = Vec::new();
     let mut last_imu_us: Option<u64> = None;
@@ -250,7 +370,10 @@ pub fn run(records: &[Record], options: &Options) -> Vec<Row> {
     let mut aligned = false;
     let mut origin: Option<(f64, f64, f64)> = None;
     let mut baro_offset_m = 0.0_f32;
-    for record in records {
+    for (i, record) in records.iter().enumerate() {
+        if i % 10_000 == 0 {
+            progress(i);
+        }
         match *record {
             Record::Imu {
                 time_us,

@@ -1,144 +1,151 @@
-//! Argument parsing shared by the `lqg` and `sysid` host commands: `--name value` pairs,
-//! numbers and comma-separated lists, with errors that say which flag was wrong.
+//! Command-line pieces shared by the `lqg` and `sysid` host commands (clap derive): the
+//! axis model, the LQR costs and the Kalman noise, and the value parsers that refuse
+//! nonsense where it is typed (a NaN step, a negative or billion-second duration, a τ
+//! outside 1 ms..1 s) with a message naming the flag and exit code 2. The ranges are the
+//! flight-core model's own (`AxisModel::new`, `check_sample_period`).
 
-use std::collections::HashMap;
-use std::fmt;
+use clap::Args;
 
-/// A command-line problem.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ArgError {
-    /// A flag without its value.
-    MissingValue(String),
-    /// A word that is not a `--flag`.
-    Unexpected(String),
-    /// A value that is not a number (flag, value).
-    NotANumber(String, String),
-    /// A list with the wrong number of entries (flag, wanted).
-    WrongLength(String, usize),
-    /// A required flag is absent.
-    Required(String),
+/// A finite number within `lo..=hi`.
+///
+/// # Errors
+/// Not a number, not finite, or out of range (the message says which).
+pub fn number_in(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number"))?;
+    if !v.is_finite() {
+        return Err(format!("{s} is not a finite number"));
+    }
+    if v < lo || v > hi {
+        return Err(format!("must be within {lo}..={hi}, got {s}"));
+    }
+    Ok(v)
 }
 
-impl fmt::Display for ArgError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ArgError::MissingValue(k) => write!(f, "--{k} needs a value"),
-            ArgError::Unexpected(w) => write!(f, "unexpected argument {w:?}"),
-            ArgError::NotANumber(k, v) => write!(f, "--{k}: {v:?} is not a number"),
-            ArgError::WrongLength(k, n) => write!(f, "--{k} needs {n} comma-separated numbers"),
-            ArgError::Required(k) => write!(f, "--{k} is required"),
-        }
+/// Any finite number.
+///
+/// # Errors
+/// As [`number_in`].
+pub fn finite(s: &str) -> Result<f64, String> {
+    number_in(s, f64::MIN, f64::MAX)
+}
+
+/// ln β (natural log of the authority, (deg/s²)/unit): 0..=20.
+///
+/// # Errors
+/// As [`number_in`].
+pub fn ln_beta(s: &str) -> Result<f64, String> {
+    number_in(s, 0.0, 20.0)
+}
+
+/// τ, s: 0.001..=1.
+///
+/// # Errors
+/// As [`number_in`].
+pub fn tau(s: &str) -> Result<f64, String> {
+    number_in(s, 0.001, 1.0)
+}
+
+/// Loop period, s: 1e-5..=0.1.
+///
+/// # Errors
+/// As [`number_in`].
+pub fn sample_period(s: &str) -> Result<f64, String> {
+    number_in(s, 1e-5, 0.1)
+}
+
+/// A simulated duration, s: more than 0, at most 3600 (an hour at 1 kHz is 3.6 M steps).
+///
+/// # Errors
+/// As [`number_in`], or zero.
+pub fn duration(s: &str) -> Result<f64, String> {
+    let v = number_in(s, 0.0, 3600.0)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be greater than 0, got {s}"))
     }
 }
 
-impl std::error::Error for ArgError {}
-
-/// Parsed `--flag value` pairs (a flag followed by another flag, or last, is a switch).
-#[derive(Debug, Clone, Default)]
-pub struct Args {
-    values: HashMap<String, String>,
+/// A non-negative finite number up to 1e12 (noise σ, variances, costs).
+///
+/// # Errors
+/// As [`number_in`].
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    number_in(s, 0.0, 1e12)
 }
 
-impl Args {
-    /// Parses words after the sub-command.
-    pub fn parse(words: &[String]) -> Result<Self, ArgError> {
-        let mut values = HashMap::new();
-        let mut it = words.iter().peekable();
-        while let Some(w) = it.next() {
-            let key = w
-                .strip_prefix("--")
-                .ok_or_else(|| ArgError::Unexpected(w.clone()))?;
-            // Values may be negative numbers ("-4"), which are not flags.
-            let value = match it.peek() {
-                Some(v) if !v.starts_with("--") => it.next().cloned().unwrap_or_default(),
-                _ => String::new(),
-            };
-            values.insert(key.to_string(), value);
-        }
-        Ok(Self { values })
-    }
+/// Exactly three comma-separated non-negative finite numbers: `4,0.04,10000`.
+///
+/// # Errors
+/// Wrong count or a bad number.
+pub fn triple(s: &str) -> Result<[f64; 3], String> {
+    let items: Vec<f64> = s.split(',').map(non_negative).collect::<Result<_, _>>()?;
+    <[f64; 3]>::try_from(items)
+        .map_err(|v| format!("needs 3 comma-separated numbers, got {}", v.len()))
+}
 
-    /// Whether a switch or flag is present.
-    pub fn has(&self, key: &str) -> bool {
-        self.values.contains_key(key)
-    }
+/// The axis model: ln β1 [ln β2], τ, loop period.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct ModelArgs {
+    /// ln β1: natural log of the axis authority in (deg/s²) per unit of output, 0..=20
+    /// (a 250-class quad's roll is about 10).
+    #[arg(long, value_name = "L", value_parser = ln_beta)]
+    pub ln_beta1: f64,
+    /// ln β2: a lag-free (yaw-direct) authority besides β1, 0..=20.
+    #[arg(long, value_name = "L", value_parser = ln_beta)]
+    pub ln_beta2: Option<f64>,
+    /// Motor time constant τ, seconds (0.001..=1).
+    #[arg(long, value_name = "S", value_parser = tau)]
+    pub tau: f64,
+    /// Loop period, seconds (1e-5..=0.1).
+    #[arg(long, value_name = "S", default_value_t = 0.001, value_parser = sample_period)]
+    pub ts: f64,
+}
 
-    /// A string value.
-    pub fn text(&self, key: &str) -> Option<&str> {
-        self.values
-            .get(key)
-            .map(String::as_str)
-            .filter(|s| !s.is_empty())
-    }
+/// LQR costs: given, frame-invariant, or (neither) autotuned.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct CostArgs {
+    /// Absolute costs per sample (r = 1): angle, rate, torque.
+    #[arg(long, value_name = "ANGLE,RATE,TORQUE", value_parser = triple, conflicts_with = "invariant")]
+    pub q: Option<[f64; 3]>,
+    /// With --q: make the torque cost β1·X (frame-invariant torque cost).
+    #[arg(long, value_name = "X", value_parser = non_negative, requires = "q")]
+    pub q4: Option<f64>,
+    /// Fully frame-invariant costs q1,q2,q4: q_angle = q1/β1, q_rate = q2/β1, q3 = β1·q4.
+    #[arg(long, value_name = "Q1,Q2,Q4", value_parser = triple)]
+    pub invariant: Option<[f64; 3]>,
+}
 
-    /// An optional number.
-    pub fn number(&self, key: &str) -> Result<Option<f64>, ArgError> {
-        match self.values.get(key) {
-            None => Ok(None),
-            Some(v) if v.is_empty() => Err(ArgError::MissingValue(key.to_string())),
-            Some(v) => v
-                .parse()
-                .map(Some)
-                .map_err(|_| ArgError::NotANumber(key.to_string(), v.clone())),
-        }
-    }
-
-    /// A number with a default.
-    pub fn number_or(&self, key: &str, default: f64) -> Result<f64, ArgError> {
-        Ok(self.number(key)?.unwrap_or(default))
-    }
-
-    /// A required number.
-    pub fn required(&self, key: &str) -> Result<f64, ArgError> {
-        self.number(key)?
-            .ok_or_else(|| ArgError::Required(key.to_string()))
-    }
-
-    /// An optional list of exactly `N` numbers.
-    pub fn list<const N: usize>(&self, key: &str) -> Result<Option<[f64; N]>, ArgError> {
-        let Some(v) = self.values.get(key) else {
-            return Ok(None);
-        };
-        let items: Result<Vec<f64>, _> = v.split(',').map(|s| s.trim().parse::<f64>()).collect();
-        let items = items.map_err(|_| ArgError::NotANumber(key.to_string(), v.clone()))?;
-        <[f64; N]>::try_from(items)
-            .map(Some)
-            .map_err(|_| ArgError::WrongLength(key.to_string(), N))
-    }
+/// Kalman filter noise.
+#[derive(Args, Clone, Debug, PartialEq)]
+pub struct NoiseArgs {
+    /// Process noise per sample: rate, torque, bias (Tau Labs' default 1,1e-5,1e-7).
+    #[arg(long, value_name = "RATE,TORQUE,BIAS", value_parser = triple)]
+    pub kf_q: Option<[f64; 3]>,
+    /// Gyro measurement variance, (deg/s)² (default 1000).
+    #[arg(long, value_name = "R", value_parser = non_negative)]
+    pub kf_r: Option<f64>,
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn words(s: &str) -> Vec<String> {
-        s.split_whitespace().map(String::from).collect()
-    }
-
     #[test]
-    fn parses_numbers_lists_and_switches() {
-        let a = Args::parse(&words(
-            "--tau 0.03 --q 4,0.04,10000 --ln-tau -4 --compare-pid",
-        ))
-        .unwrap();
-        assert_eq!(a.required("tau").unwrap(), 0.03);
-        assert_eq!(a.list::<3>("q").unwrap().unwrap(), [4.0, 0.04, 10000.0]);
-        assert_eq!(a.number("ln-tau").unwrap(), Some(-4.0));
-        assert!(a.has("compare-pid"));
-        assert_eq!(
-            a.list::<2>("q").unwrap_err(),
-            ArgError::WrongLength("q".into(), 2)
-        );
-        assert_eq!(
-            a.required("ts").unwrap_err(),
-            ArgError::Required("ts".into())
-        );
-        assert!(Args::parse(&words("tau 3")).is_err());
-        assert!(
-            Args::parse(&words("--tau x"))
-                .unwrap()
-                .number("tau")
-                .is_err()
-        );
+    fn parsers_refuse_nonsense() {
+        assert_eq!(triple("4, 0.04,10000"), Ok([4.0, 0.04, 10000.0]));
+        assert!(triple("4,0.04").is_err());
+        assert!(triple("4,x,1").is_err());
+        assert!(triple("4,nan,1").is_err());
+        for bad in ["-5", "1e9", "nan", "inf", "0", "x"] {
+            assert!(duration(bad).is_err(), "{bad}");
+        }
+        assert_eq!(duration("2.5"), Ok(2.5));
+        assert!(finite("nan").is_err());
+        assert!(tau("0").is_err());
+        assert!(ln_beta("21").is_err());
     }
 }

@@ -52,6 +52,16 @@ impl SysidExperiment {
     /// Runs the shake with the EKF told `ekf_delay_samples` of output delay (to show what a
     /// wrong pairing does).
     pub fn run_with_ekf_delay(&self, ekf_delay_samples: u8) -> Result<Identification, ModelError> {
+        self.run_with_progress(ekf_delay_samples, |_| {})
+    }
+
+    /// [`Self::run_with_ekf_delay`], calling `progress` with the simulated seconds done after
+    /// each one (for a host tool's progress bar).
+    pub fn run_with_progress(
+        &self,
+        ekf_delay_samples: u8,
+        mut progress: impl FnMut(u64),
+    ) -> Result<Identification, ModelError> {
         #[allow(clippy::cast_possible_truncation)]
         let ts = self.ts_s as f32;
         // The frame's existing tune (here: the analytic PID of the true frame).
@@ -90,7 +100,12 @@ impl SysidExperiment {
         }
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
         let n = (self.seconds / self.ts_s).round() as usize;
-        for _ in 0..n {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let per_second = ((1.0 / self.ts_s).round() as usize).max(1);
+        for k in 0..n {
+            if k > 0 && k % per_second == 0 {
+                progress((k / per_second) as u64);
+            }
             ekf.update(gyro);
             let offsets = shake.next(ekf.ln_beta());
             let mut out = [0.0f32; 3];

@@ -7,13 +7,16 @@
 #![warn(missing_docs)]
 
 pub mod chip_world;
+pub mod cli;
 pub mod driver;
 mod ends;
+pub mod plot;
 pub mod probe;
 pub mod report;
 pub mod scenario;
 pub mod world;
 
+pub use cli::Cli;
 pub use report::Report;
-pub use scenario::{Output, Scenario, parse_args};
+pub use scenario::Scenario;
 pub use world::{Status, run, simulate};

@@ -1,10 +1,12 @@
 //! `cargo run --release -p taulink-sim -- [options]`: runs both link ends for a virtual
-//! duration and prints a live status line and a summary (or JSON).
+//! duration and prints a live status line and a summary (or JSON). `--help` lists the
+//! options (`cli.rs`).
 
 use std::io::Write;
+use std::process::ExitCode;
 
-use taulink_sim::scenario::parse_rate;
-use taulink_sim::{Report, Scenario, Status, parse_args, run};
+use clap::Parser;
+use taulink_sim::{Cli, Report, Scenario, Status, run};
 
 fn status_line(st: &Status) {
     let l = &st.link;
@@ -35,26 +37,42 @@ fn status_line(st: &Status) {
     let _ = std::io::stderr().flush();
 }
 
-fn sweep(base: &Scenario, json: bool) {
+/// The sweep's runs: every rate mode, clean and at 10 % loss, with a progress bar over the
+/// virtual seconds of all runs when `progress` is on.
+fn sweep(base: &Scenario, progress: bool) -> Vec<(Report, Report)> {
+    let modes = telemetry::link::RateMode::ALL;
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)] // ≤ 86400 s each
+    let per_run = base.duration_s.ceil() as u64;
+    let total = per_run * 2 * modes.len() as u64;
+    let bar = sim_plot::progress::bar(total, "virtual s", progress);
     let mut reports: Vec<(Report, Report)> = Vec::new();
-    for name in ["L50", "M100", "F250", "F500"] {
+    let mut done = 0;
+    for mode in modes {
         let mut s = base.clone();
-        s.rate = parse_rate(name).unwrap_or(s.rate);
+        s.rate = mode;
         // The long-range mode carries 8 channels (as OpenLRSng does at that rate) to leave
         // room for uplink telemetry; the others carry 16.
         if s.rate == telemetry::link::RateMode::L50 {
             s.format = telemetry::channels::ChannelFormat::Compact8;
         }
-        let clean = run(
-            &Scenario {
-                loss: 0.0,
-                ..s.clone()
-            },
-            |_| {},
-        );
-        let lossy = run(&Scenario { loss: 0.1, ..s }, |_| {});
+        let mut one = |loss: f64| {
+            bar.set_message(format!("{mode:?} loss {:.0} %", loss * 100.0));
+            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            let r = run(&Scenario { loss, ..s.clone() }, |st| {
+                bar.set_position(done + st.time_s as u64);
+            });
+            done += per_run;
+            r
+        };
+        let clean = one(0.0);
+        let lossy = one(0.1);
         reports.push((clean, lossy));
     }
+    bar.finish_and_clear();
+    reports
+}
+
+fn print_sweep(reports: &[(Report, Report)], json: bool) {
     if json {
         let items: Vec<String> = reports
             .iter()
@@ -72,7 +90,7 @@ fn sweep(base: &Scenario, json: bool) {
     println!(
         "mode  bit rate  slots  ch  updates/s  latency mean/p99 ms   mean LQ up/down clean | 10%     goodput up/down B/s clean | 10%"
     );
-    for (c, l) in &reports {
+    for (c, l) in reports {
         println!(
             "{:<5} {:>8}  {:>5}  {:>2}  {:>9.1}  {:>8.2} / {:<8.2}  {:>5.1} / {:<5.1} | {:>5.1} / {:<5.1}  {:>5.0} / {:<5.0} | {:>5.0} / {:<5.0}",
             c.rate,
@@ -97,29 +115,35 @@ fn sweep(base: &Scenario, json: bool) {
     );
 }
 
-fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let (scenario, output) = match parse_args(&args) {
-        Ok(v) => v,
-        Err(msg) => {
-            eprintln!("{msg}");
-            std::process::exit(2);
-        }
-    };
-    if output.sweep {
-        sweep(&scenario, output.json);
-        return;
+fn main() -> ExitCode {
+    // clap prints --help/--version (exit 0) and usage errors with a suggestion (exit 2).
+    let cli = Cli::parse();
+    let scenario = cli.scenario();
+    let live = sim_plot::progress::wanted(cli.quiet, cli.json);
+    if cli.sweep {
+        let reports = sweep(&scenario, live);
+        print_sweep(&reports, cli.json);
+        let wrong = reports
+            .iter()
+            .flat_map(|(c, l)| [c, l])
+            .any(|r| r.errors > 0 || r.foreign_errors > 0);
+        return if wrong {
+            ExitCode::FAILURE
+        } else {
+            ExitCode::SUCCESS
+        };
     }
-    let live = !output.quiet && !output.json;
+    let mut trace = taulink_sim::plot::Trace::default();
     let report = run(&scenario, |st| {
         if live {
             status_line(st);
         }
+        trace.push(st);
     });
     if live {
         eprintln!();
     }
-    if output.json {
+    if cli.json {
         println!("{}", report.to_json());
     } else {
         println!(
@@ -128,7 +152,17 @@ fn main() {
         );
         print!("{}", report.table());
     }
+    if let Some(path) = cli.plot.path("link")
+        && let Err(e) = trace
+            .figure(&scenario, &report)
+            .save_as(&path, cli.plot.plot_format)
+    {
+        eprintln!("taulink-sim: plot {}: {e}", path.display());
+        return ExitCode::FAILURE;
+    }
     if report.errors > 0 || report.foreign_errors > 0 {
-        std::process::exit(1);
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
     }
 }

@@ -1,70 +1,96 @@
 //! `replay SENSORS.csv --out EST.csv [--truth TRUTH.csv] [--plot DIR] [--declination-deg D]`
-//! — runs the 14-state INS over a PX4-format sensor log (see tests/ins-sim/README.md).
+//! — runs the 14-state INS over a PX4-format sensor log (see tests/ins-sim/README.md;
+//! `replay --help` lists the flags).
 
+use std::path::PathBuf;
 use std::process::ExitCode;
 
+use clap::Parser;
 use ins_sim::compare::{compare, parse_reference};
-use ins_sim::replay::{HEADER, Options, parse_sensors, run};
+use ins_sim::replay::{HEADER, Options, parse_sensors, run_with_progress};
+use sim_plot::PlotArgs;
 
-struct Args {
-    sensors: String,
-    out: String,
-    truth: Option<String>,
-    plot: Option<String>,
+/// Run the 14-state INS/GPS EKF of flight-core over a PX4 ECL replay-format sensor log,
+/// write one estimate row per IMU sample, and optionally compare with a truth or PX4 EKF2
+/// history (JSON on stdout) and plot both.
+#[derive(Parser, Debug)]
+#[command(
+    name = "replay",
+    version,
+    allow_negative_numbers = true,
+    after_help = "Examples:
+  replay iris_gps.csv --out est.csv
+  replay iris_gps.csv --out est.csv --truth ekf2_history.csv --plot figs
+  replay flight.csv --out est.csv --declination-deg -3.5 --plot figs --plot-format svg
+
+Exit status: 0 on success, 1 if a file cannot be read or holds nonsense (the message names
+the line), 2 for a command-line error."
+)]
+struct Cli {
+    /// The sensor log: PX4 ECL replay CSV lines `time_us,kind,values...` (imu, mag, baro,
+    /// gps; other kinds are skipped).
+    #[arg(value_name = "SENSORS.csv")]
+    sensors: PathBuf,
+    /// Where to write the estimates, one CSV row per IMU sample.
+    #[arg(long, value_name = "EST.csv")]
+    out: PathBuf,
+    /// A truth or EKF2 estimate history to compare with (our CSV format or PX4's
+    /// change-indication files); prints the comparison as JSON on stdout.
+    #[arg(long, value_name = "TRUTH.csv")]
+    truth: Option<PathBuf>,
+    /// Magnetic declination at the flight, degrees, east positive (-180..=180).
+    #[arg(long, value_name = "DEG", default_value_t = 0.0, value_parser = declination)]
     declination_deg: f32,
+    #[command(flatten)]
+    plot: PlotArgs,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
-const USAGE: &str = "usage: replay SENSORS.csv --out EST.csv [--truth TRUTH.csv] [--plot DIR] [--declination-deg D]";
-
-fn parse_args() -> Result<Args, String> {
-    let mut it = std::env::args().skip(1);
-    let (mut sensors, mut out, mut truth, mut plot, mut declination_deg) =
-        (None, None, None, None, 0.0);
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--out" => out = it.next(),
-            "--truth" => truth = it.next(),
-            "--plot" => plot = it.next(),
-            "--declination-deg" => {
-                declination_deg = it
-                    .next()
-                    .and_then(|v| v.parse().ok())
-                    .ok_or("--declination-deg needs a number")?;
-            }
-            "-h" | "--help" => return Err(USAGE.into()),
-            s if s.starts_with("--") => return Err(format!("unknown option {s}\n{USAGE}")),
-            _ => sensors = Some(a),
-        }
+fn declination(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number"))?;
+    if v.is_finite() && (-180.0..=180.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "must be a finite angle within -180..=180 degrees, got {s}"
+        ))
     }
-    Ok(Args {
-        sensors: sensors.ok_or(USAGE)?,
-        out: out.ok_or(USAGE)?,
-        truth,
-        plot,
-        declination_deg,
-    })
 }
 
 fn main() -> ExitCode {
-    match real_main() {
+    // clap prints --help/--version (exit 0) and usage errors with a suggestion (exit 2).
+    let cli = Cli::parse();
+    match real_main(&cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("{e}");
+            eprintln!("replay: {e}");
             ExitCode::FAILURE
         }
     }
 }
 
-fn real_main() -> Result<(), String> {
-    let args = parse_args()?;
-    let text =
-        std::fs::read_to_string(&args.sensors).map_err(|e| format!("{}: {e}", args.sensors))?;
-    let records = parse_sensors(&text).map_err(|e| format!("{}: {e}", args.sensors))?;
+fn real_main(args: &Cli) -> Result<(), String> {
+    let shown = |p: &PathBuf| p.display().to_string();
+    let text = std::fs::read_to_string(&args.sensors)
+        .map_err(|e| format!("{}: {e}", shown(&args.sensors)))?;
+    let records = parse_sensors(&text).map_err(|e| format!("{}: {e}", shown(&args.sensors)))?;
     let options = Options {
         declination_deg: args.declination_deg,
         ..Options::default()
     };
-    let rows = run(&records, &options);
+    let bar = sim_plot::progress::bar(
+        records.len() as u64,
+        "records",
+        sim_plot::progress::wanted(args.quiet, false),
+    );
+    bar.set_message("replaying");
+    let rows = run_with_progress(&records, &options, |i| bar.set_position(i as u64));
+    bar.finish_and_clear();
     let mut csv = String::with_capacity(rows.len() * 120);
     csv.push_str(HEADER);
     csv.push('\n');
@@ -72,18 +98,18 @@ fn real_main() -> Result<(), String> {
         csv.push_str(&r.to_csv());
         csv.push('\n');
     }
-    std::fs::write(&args.out, csv).map_err(|e| format!("{}: {e}", args.out))?;
+    std::fs::write(&args.out, csv).map_err(|e| format!("{}: {e}", shown(&args.out)))?;
     let reference = match &args.truth {
         Some(path) => {
-            let t = std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?;
-            let reference = parse_reference(&t).map_err(|e| format!("{path}: {e}"))?;
+            let t = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", shown(path)))?;
+            let reference = parse_reference(&t).map_err(|e| format!("{}: {e}", shown(path)))?;
             println!("{}", compare(&rows, &reference, 10.0).to_json());
             Some(reference)
         }
         None => None,
     };
-    if let Some(dir) = &args.plot {
-        ins_sim::plot::write_plots(std::path::Path::new(dir), &rows, reference.as_deref())
+    if let Some(dir) = &args.plot.plot {
+        ins_sim::plot::write_plots(dir, args.plot.plot_format, &rows, reference.as_deref())
             .map_err(|e| format!("plot: {e}"))?;
     }
     Ok(())

@@ -1,0 +1,291 @@
+//! The command line of `taulink-sim` (clap derive): every option with a sentence of help,
+//! values checked where they are parsed (a probability is within 0..=1, a duration is a
+//! positive finite number of seconds), so nonsense is refused with a clear message and exit
+//! code 2 before anything runs. [`Cli::scenario`] turns it into a [`Scenario`].
+
+use clap::{Parser, ValueEnum};
+use telemetry::channels::ChannelFormat;
+use telemetry::link::{Band, RateMode};
+
+use crate::scenario::Scenario;
+
+/// Both TauLink ends (module master and flight follower, each on the real radio driver
+/// driving a virtual Si4432) talking through a simulated RF medium in virtual time.
+#[derive(Parser, Clone, Debug, PartialEq)]
+#[command(
+    name = "taulink-sim",
+    version,
+    // "--duration -5" is a value to refuse with a reason, not an unknown flag "-5".
+    allow_negative_numbers = true,
+    after_help = "Examples:
+  taulink-sim                                      30 s at F250, 500 m, status line + table
+  taulink-sim --rate F500 --loss 0.1 --foreign --json
+  taulink-sim --cut 10:12 --duration 20 --plot out failsafe and recovery after a 2 s cut,
+                                                   drawn to out/link.png
+  taulink-sim --sweep                              every rate mode, clean and at 10 % loss
+
+Exit status: 0 if every channel output and stream byte was right, 1 if any was wrong,
+2 for a command-line error."
+)]
+pub struct Cli {
+    /// Rate mode: L50 (long range), M100, F250 or F500 (fast, short range).
+    #[arg(long, value_enum, ignore_case = true, default_value_t = RateArg::F250)]
+    pub rate: RateArg,
+    /// Telemetry ratio: one downlink slot in N (a power of two, 2..=128).
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = ratio)]
+    pub ratio: u8,
+    /// Carry 8 channels per uplink instead of 16 (more room for uplink telemetry).
+    #[arg(long)]
+    pub compact8: bool,
+    /// Frequency band in MHz.
+    #[arg(long, value_enum, default_value_t = BandArg::Mhz433)]
+    pub band: BandArg,
+    /// Distance between module and flight controller, metres (0 < M ≤ 100000).
+    #[arg(long, value_name = "M", default_value_t = 500.0, value_parser = distance)]
+    pub distance: f64,
+    /// Extra random packet loss, a probability 0..=1 (0.1 drops one packet in ten).
+    #[arg(long, value_name = "P", default_value_t = 0.0, value_parser = probability)]
+    pub loss: f64,
+    /// Bit error rate on air, 0..=1 (packet-level medium only; selects it).
+    #[arg(long, value_name = "P", default_value_t = 0.0, value_parser = probability)]
+    pub ber: f64,
+    /// Duty cycle 0..=1 of a jammer hopping in random bursts over the link's channel grid.
+    #[arg(long, value_name = "DUTY", default_value_t = 0.0, value_parser = probability)]
+    pub interference: f64,
+    /// Run a second, independently bound link in the same medium.
+    #[arg(long)]
+    pub foreign: bool,
+    /// Seed of every random choice (noise, loss, hopping, test data); same seed, same run.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub seed: u64,
+    /// Virtual duration, seconds (0 < S ≤ 86400).
+    #[arg(long, value_name = "S", default_value_t = 30.0, value_parser = duration)]
+    pub duration: f64,
+    /// Follower failsafe delay, milliseconds (1..=60000).
+    #[arg(long, value_name = "MS", default_value_t = 250, value_parser = clap::value_parser!(u64).range(1..=60_000))]
+    pub failsafe_ms: u64,
+    /// Cut the path between the two ends from FROM to TO seconds of virtual time.
+    #[arg(long, value_name = "FROM:TO", value_parser = cut)]
+    pub cut: Option<(f64, f64)>,
+    /// Start both ends bound (skip the over-the-air bind).
+    #[arg(long)]
+    pub no_bind: bool,
+    /// Do not keep the telemetry streams saturated with test bytes.
+    #[arg(long)]
+    pub no_telemetry: bool,
+    /// Turn the receivers' chip header check off (foreign packets then reach the link CRC).
+    #[arg(long)]
+    pub no_header_check: bool,
+    /// Turn the receivers' chip CRC off (packet-level medium only; selects it).
+    #[arg(long)]
+    pub no_chip_crc: bool,
+    /// Use the packet-level mock radios instead of the chip simulator (faster).
+    #[arg(long)]
+    pub packet_level: bool,
+    /// Run every rate mode, clean and at 10 % loss, and print the comparison (with a
+    /// progress bar on a terminal).
+    #[arg(long, conflicts_with = "plot")]
+    pub sweep: bool,
+    /// `--plot DIR`: draw `link.png` (LQ, RSSI, updates/s, latency over time, cut and
+    /// failsafe marked) into DIR.
+    #[command(flatten)]
+    pub plot: sim_plot::PlotArgs,
+    /// Print the report as JSON on stdout (fields in the README); no status line.
+    #[arg(long)]
+    pub json: bool,
+    /// No status line or progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Rate modes as command-line words.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(missing_docs)] // the names are the documentation
+pub enum RateArg {
+    #[value(name = "L50")]
+    L50,
+    #[value(name = "M100")]
+    M100,
+    #[value(name = "F250")]
+    F250,
+    #[value(name = "F500")]
+    F500,
+}
+
+impl From<RateArg> for RateMode {
+    fn from(r: RateArg) -> Self {
+        match r {
+            RateArg::L50 => RateMode::L50,
+            RateArg::M100 => RateMode::M100,
+            RateArg::F250 => RateMode::F250,
+            RateArg::F500 => RateMode::F500,
+        }
+    }
+}
+
+/// Bands as command-line words.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BandArg {
+    /// 433 MHz ISM.
+    #[value(name = "433")]
+    Mhz433,
+    /// 868 MHz SRD.
+    #[value(name = "868")]
+    Mhz868,
+    /// 915 MHz ISM.
+    #[value(name = "915")]
+    Mhz915,
+}
+
+impl From<BandArg> for Band {
+    fn from(b: BandArg) -> Self {
+        match b {
+            BandArg::Mhz433 => Band::Mhz433,
+            BandArg::Mhz868 => Band::Mhz868,
+            BandArg::Mhz915 => Band::Mhz915,
+        }
+    }
+}
+
+/// A finite number within `lo..=hi` (`what` names it in the error).
+pub fn number_in(s: &str, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number"))?;
+    if !v.is_finite() || v < lo || v > hi {
+        return Err(format!("{what} must be within {lo}..={hi}, got {s}"));
+    }
+    Ok(v)
+}
+
+fn probability(s: &str) -> Result<f64, String> {
+    number_in(s, 0.0, 1.0, "a probability")
+}
+
+fn positive(s: &str, hi: f64, what: &str) -> Result<f64, String> {
+    let v = number_in(s, 0.0, hi, what)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{what} must be greater than 0, got {s}"))
+    }
+}
+
+fn distance(s: &str) -> Result<f64, String> {
+    positive(s, 100_000.0, "the distance (m)")
+}
+
+fn duration(s: &str) -> Result<f64, String> {
+    positive(s, 86_400.0, "the duration (s)")
+}
+
+fn ratio(s: &str) -> Result<u8, String> {
+    let v: u8 = s
+        .parse()
+        .map_err(|_| format!("{s:?} is not a whole number 2..=128"))?;
+    if telemetry::frame::valid_telemetry_ratio(v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "the ratio must be a power of two, 2..=128, got {v}"
+        ))
+    }
+}
+
+fn cut(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("{s:?}: expected FROM:TO in seconds, e.g. 10:12"))?;
+    let from = number_in(a, 0.0, 86_400.0, "FROM (s)")?;
+    let to = number_in(b, 0.0, 86_400.0, "TO (s)")?;
+    if to <= from {
+        return Err(format!("the cut must end after it starts, got {s}"));
+    }
+    Ok((from, to))
+}
+
+impl Cli {
+    /// The scenario these options describe. Injected bit errors and a disabled chip CRC
+    /// exist only in the packet-level medium (the chip simulator derives bit errors from
+    /// the signal-to-noise ratio), so either selects it.
+    #[must_use]
+    pub fn scenario(&self) -> Scenario {
+        Scenario {
+            rate: self.rate.into(),
+            telemetry_ratio: self.ratio,
+            format: if self.compact8 {
+                ChannelFormat::Compact8
+            } else {
+                ChannelFormat::Full16
+            },
+            band: self.band.into(),
+            distance_m: self.distance,
+            loss: self.loss,
+            bit_error_rate: self.ber,
+            interference: self.interference,
+            foreign_link: self.foreign,
+            seed: self.seed,
+            duration_s: self.duration,
+            failsafe_ms: self.failsafe_ms,
+            cut_s: self.cut,
+            bind: !self.no_bind,
+            telemetry_load: !self.no_telemetry,
+            header_check: !self.no_header_check,
+            chip_crc: !self.no_chip_crc,
+            chip_level: !self.packet_level && self.ber == 0.0 && !self.no_chip_crc,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<Cli, clap::Error> {
+        Cli::try_parse_from(std::iter::once("taulink-sim").chain(s.split_whitespace()))
+    }
+
+    #[test]
+    fn parses_options() {
+        let c = parse("--rate f500 --ratio 8 --loss 0.1 --cut 2:3.5 --foreign --json").unwrap();
+        let s = c.scenario();
+        assert_eq!(s.rate, RateMode::F500);
+        assert_eq!(s.telemetry_ratio, 8);
+        assert_eq!(s.loss, 0.1);
+        assert_eq!(s.cut_s, Some((2.0, 3.5)));
+        assert!(s.foreign_link && c.json && s.chip_level);
+        assert!(!parse("--ber 0.001").unwrap().scenario().chip_level);
+    }
+
+    #[test]
+    fn defaults_are_the_scenario_defaults() {
+        let d = Scenario::default();
+        let s = parse("").unwrap().scenario();
+        assert_eq!(format!("{s:?}"), format!("{d:?}"));
+    }
+
+    #[test]
+    fn refuses_nonsense() {
+        for bad in [
+            "--ratio 3",
+            "--loss 2",
+            "--loss -0.1",
+            "--loss nan",
+            "--duration -5",
+            "--duration nan",
+            "--duration 0",
+            "--duration inf",
+            "--distance nan",
+            "--distance -1",
+            "--cut 5:2",
+            "--cut 5",
+            "--failsafe-ms 0",
+            "--band 2400",
+            "--rate F1000",
+            "--bogus",
+        ] {
+            assert!(parse(bad).is_err(), "{bad} accepted");
+        }
+    }
+}
