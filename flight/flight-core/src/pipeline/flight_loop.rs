@@ -139,6 +139,19 @@ impl FlightLoop {
         }
     }
 
+    /// The IMU delivered nothing usable for longer than the ride-through bound: disarm with
+    /// [`Decision::DisarmedSensorFault`] (`Steady` if already disarmed).
+    pub fn sensor_fault(&mut self) -> Decision {
+        let decision = self.supervisor.sensor_fault();
+        self.finish_sysid();
+        decision
+    }
+
+    /// Motors may turn.
+    pub fn armed(&self) -> bool {
+        self.supervisor.motors_enabled()
+    }
+
     /// Installs newly designed controllers (only while disarmed, or nothing changes).
     pub fn set_controllers(&mut self, controllers: Controllers) -> bool {
         if self.supervisor.motors_enabled() {
