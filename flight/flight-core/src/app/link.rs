@@ -54,7 +54,8 @@ impl LinkSide {
             last_report_us: None,
             last_state: None,
             failsafes: 0,
-            was_failsafe: false,
+            // The follower starts in failsafe (no link yet): that is not a failsafe event.
+            was_failsafe: true,
             sysid: heapless::Deque::new(),
         }
     }

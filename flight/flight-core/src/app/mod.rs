@@ -35,6 +35,7 @@ use crate::pipeline::{
 use crate::report::blocker_bit;
 use crate::settings::Settings;
 use crate::supervisor::{ArmBlocker, Decision};
+use crate::sysid::ekf::Identification;
 
 /// What the IMU adapter does after a sample (or a missing one).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -66,6 +67,7 @@ pub struct FlightApp {
     link_input: LinkInput,
     link: link::LinkSide,
     watchdog: Watchdog,
+    identified: Option<Identification>,
 }
 
 /// The flight setup for `settings`, or the factory one (and why) if they do not fly.
@@ -108,6 +110,7 @@ impl FlightApp {
                 ..LinkInput::default()
             },
             watchdog: Watchdog::new(now_ms),
+            identified: None,
         })
     }
 
@@ -140,6 +143,12 @@ impl FlightApp {
     /// What the link delivers to the loop now.
     pub fn link_input(&self) -> LinkInput {
         self.link_input
+    }
+
+    /// The identification that finished on the latest sample (system-identification mode
+    /// left); it also goes down the link.
+    pub fn identification_finished(&self) -> Option<Identification> {
+        self.identified
     }
 
     /// The standing IMU fault.
@@ -192,8 +201,9 @@ impl FlightApp {
             .flight
             .step(now_ms, sample, &self.link_input, self.climb_mps);
         self.record(out);
-        if let Some(id) = self.flight.take_identification() {
-            self.link.queue_identification(&id);
+        self.identified = self.flight.take_identification();
+        if let Some(id) = &self.identified {
+            self.link.queue_identification(id);
         }
         ImuStep {
             motors: out.motors,

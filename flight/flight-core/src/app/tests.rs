@@ -210,8 +210,10 @@ fn every_link_hook_call_checks_the_link_in() {
     }
     app.on_link_idle();
     assert!(app.on_watchdog_poll(200));
-    // Failsafe from the start: the loop sees the link down.
+    // Failsafe from the start: the loop sees the link down, and a link that never came up
+    // is not a failsafe event in telemetry.
     assert!(!app.link_input().up);
+    assert_eq!(app.link_failsafes(), 0);
 }
 
 #[test]
