@@ -11,5 +11,5 @@ mod module_end;
 pub mod scenario;
 pub mod world;
 
-pub use scenario::{Pilot, PilotInput, Scenario};
+pub use scenario::{ImuInjection, Pilot, PilotInput, Scenario};
 pub use world::{Sample, Sitl, run};

@@ -10,7 +10,7 @@
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use flight_core::app::FlightApp;
+use flight_core::app::{FlightApp, ImuFault};
 use flight_core::battery::BatteryLevel;
 use flight_core::outputs::Command;
 use flight_core::pipeline::{ChannelMap, ImuSample, LoopOutput, channel_for, throttle_channel};
@@ -28,7 +28,7 @@ use telemetry::mock::{
 };
 
 use crate::module_end::{LinkState, MODULE_CLOCK_OFFSET_US, ModuleSide, Shared};
-use crate::scenario::{PilotInput, Scenario};
+use crate::scenario::{ImuInjection, PilotInput, Scenario};
 
 const RAD_PER_DEG: f32 = core::f32::consts::PI / 180.0;
 /// Baro sampling period, ms (the firmware's baro task rate).
@@ -61,6 +61,12 @@ pub struct Sample {
     pub tone_hz: u16,
     /// The identification that finished on this loop (system-identification mode left).
     pub identification: Option<Identification>,
+    /// The commands the motors got (the loop's, or the IMU fault policy's hold/stop).
+    pub motors: [Command; 4],
+    /// The app asked the IMU adapter to re-probe the sensor.
+    pub imu_reprobe: bool,
+    /// The standing IMU fault.
+    pub imu_fault: Option<ImuFault>,
 }
 
 /// The run's records.
@@ -198,6 +204,11 @@ pub fn run(scenario: Scenario) -> Sitl {
             let mut sensors = quad.sensors();
             let mut baro_noise = SplitMix64::new(seed ^ 0xBA40);
             let mut level = BatteryLevel::Ok;
+            let mut last_good = ImuSample {
+                gyro_radps: [0.0; 3],
+                accel_mps2: sensors.accel_mps2,
+                mag: None,
+            };
             let mut next_us = period_us;
             let mut k: u64 = 0;
             while k as f64 * ts_s < duration_s {
@@ -216,14 +227,30 @@ pub fn run(scenario: Scenario) -> Sitl {
                     app.on_baro(now_ms, Some(altitude as f32));
                 }
                 let link_up = app.link_input().up;
-                // The IMU task.
+                // The IMU task: a sample, or what the injected fault leaves of it.
                 let imu = ImuSample {
                     gyro_radps: sensors.gyro_dps.map(|g| g * RAD_PER_DEG),
                     accel_mps2: sensors.accel_mps2,
                     mag: None,
                 };
-                let step = app.on_imu_sample(now_ms, &imu);
-                let out = *app.last_output().expect("a usable sample makes an output");
+                let step = match input.imu {
+                    ImuInjection::Healthy => {
+                        last_good = imu;
+                        app.on_imu_sample(now_ms, &imu)
+                    }
+                    ImuInjection::Frozen => app.on_imu_sample(now_ms, &last_good),
+                    ImuInjection::AllZero => app.on_imu_sample(
+                        now_ms,
+                        &ImuSample {
+                            gyro_radps: [0.0; 3],
+                            accel_mps2: [0.0; 3],
+                            mag: None,
+                        },
+                    ),
+                    ImuInjection::Stalled => app.on_imu_missing(now_ms, ImuFault::Stalled),
+                    ImuInjection::ReadError => app.on_imu_missing(now_ms, ImuFault::ReadError),
+                };
+                let out = app.last_output().copied();
                 let cmds = step.motors.map(|m| match m {
                     Command::Throttle(x) => x,
                     Command::Stopped => 0.0,
@@ -239,6 +266,8 @@ pub fn run(scenario: Scenario) -> Sitl {
                 // The alert task.
                 let tone_hz = app.on_alert_tick(now_ms);
                 let identification = app.identification_finished();
+                // Nothing to record before the loop's first output (an IMU dead at boot).
+                let Some(out) = out else { continue };
                 samples.borrow_mut().push(Sample {
                     t_s,
                     pilot: input,
@@ -250,6 +279,9 @@ pub fn run(scenario: Scenario) -> Sitl {
                     battery: level,
                     tone_hz,
                     identification,
+                    motors: step.motors,
+                    imu_reprobe: step.reprobe,
+                    imu_fault: app.imu_fault(),
                 });
             }
         });
