@@ -9,29 +9,17 @@ use core::sync::atomic::Ordering;
 use defmt::warn;
 use embassy_futures::select::{Either, select};
 use embassy_time::{Duration, Timer};
-use embedded_hal_async::delay::DelayNs;
 use embedded_hal_bus::spi::ExclusiveDevice;
-use flight_core::app::{ImuFault, Task};
+use flight_core::app::ImuFault;
 use flight_core::pipeline::ImuSample;
 use flight_core::sensors::mpu9250::{Config, Mpu9250, SampleRate};
 
 use crate::firmware::board::{Imu, imu_to_body};
-use crate::firmware::imu_bus::{IMU_SPI_FAST, ImuBus};
-use crate::firmware::shared::{MOTORS, check_in, now_ms, with_app};
+use crate::firmware::imu_bus::{AliveDelay, IMU_SPI_FAST, ImuBus};
+use crate::firmware::shared::{MOTORS, now_ms, with_app};
 
 /// How long to wait for a data-ready edge before telling the app it is missing.
 const POLL: Duration = Duration::from_millis(5);
-
-/// The driver's waits (a 100 ms reset) check in, so a re-probe never starves the watchdog.
-struct AliveDelay;
-
-impl DelayNs for AliveDelay {
-    async fn delay_ns(&mut self, ns: u32) {
-        check_in(Task::Imu);
-        Timer::after_nanos(u64::from(ns)).await;
-        check_in(Task::Imu);
-    }
-}
 
 #[embassy_executor::task]
 pub async fn imu_task(imu: Imu, sample_rate: SampleRate) {
@@ -51,10 +39,16 @@ pub async fn imu_task(imu: Imu, sample_rate: SampleRate) {
             Err(e) => warn!("MPU9250: {}", defmt::Debug2Format(e)),
         }
         loop {
-            let edge = select(int.wait_for_high(), Timer::after(POLL)).await;
-            let sample = match (&mut sensor, edge) {
-                (Ok(s), Either::First(())) => s.read().await.map_err(|_| ImuFault::ReadError),
-                _ => Err(ImuFault::Stalled),
+            let sample = match &mut sensor {
+                Ok(s) => match select(int.wait_for_high(), Timer::after(POLL)).await {
+                    Either::First(()) => s.read().await.map_err(|_| ImuFault::ReadError),
+                    Either::Second(()) => Err(ImuFault::Stalled),
+                },
+                // No sensor: INT may float high, so wait the poll period, never spin.
+                Err(_) => {
+                    Timer::after(POLL).await;
+                    Err(ImuFault::Stalled)
+                }
             };
             let step = with_app(|a| match sample {
                 Ok(s) => a.on_imu_sample(
