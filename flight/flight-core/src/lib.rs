@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 
 pub mod alerts;
+pub mod app;
 pub mod battery;
 pub mod board;
 pub mod control;

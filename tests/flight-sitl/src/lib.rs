@@ -1,14 +1,15 @@
-//! Software-in-the-loop flight: the flight controller's logic exactly as the firmware runs it
-//! (settings → `pipeline::from_settings` → `FlightLoop`, battery monitor, alert player,
-//! telemetry reports) fed by the TauLink follower, whose channels come over the packet-level
+//! Software-in-the-loop flight: the flight firmware's own application
+//! (`flight_core::app::FlightApp`: flight loop, IMU fault policy, battery monitor, alert
+//! player, link hooks and telemetry) driven by simulated task adapters and fed by the
+//! TauLink follower, whose channels come over the packet-level
 //! mock air from a simulated module master, flying the quad-sim 6-DoF quadrotor — all in one
 //! deterministic virtual-time executor. See README.md.
 #![warn(missing_docs)]
 
-mod link_ends;
 pub mod metrics;
+mod module_end;
 pub mod scenario;
 pub mod world;
 
-pub use scenario::{Pilot, PilotInput, Scenario};
+pub use scenario::{ImuInjection, Pilot, PilotInput, Scenario};
 pub use world::{Sample, Sitl, run};

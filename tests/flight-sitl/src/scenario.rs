@@ -22,6 +22,24 @@ pub struct PilotInput {
     pub link_cut: bool,
     /// Battery pack voltage, mV (what the divider feeds the ADC).
     pub battery_mv: f32,
+    /// What the IMU delivers (faults injected at the IMU adapter).
+    pub imu: ImuInjection,
+}
+
+/// An IMU fault injected at the simulated IMU task.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ImuInjection {
+    /// Real samples.
+    #[default]
+    Healthy,
+    /// No data-ready edge.
+    Stalled,
+    /// Bus reads fail.
+    ReadError,
+    /// The last good sample, bit for bit, again and again.
+    Frozen,
+    /// All six axes read zero.
+    AllZero,
 }
 
 impl Default for PilotInput {
@@ -36,6 +54,7 @@ impl Default for PilotInput {
             mode_switch: -1.0,
             link_cut: false,
             battery_mv: 4_150.0,
+            imu: ImuInjection::Healthy,
         }
     }
 }

@@ -1,26 +1,25 @@
 //! The simulated world: a module master and the flight-side follower on the mock air, and
-//! the flight task — at the gyro rate it reads the follower's channels, steps the
-//! `FlightLoop` on the quad's sensors, applies the motor commands to the quad (with a ground
-//! contact), runs the battery monitor at 50 Hz and the tone player every millisecond, and
-//! records a [`Sample`]. One executor, one virtual clock: runs are exactly repeatable.
+//! the flight controller's own application (`flight_core::app::FlightApp`) driven by thin
+//! simulated adapters making the firmware tasks' calls — the follower's hooks go to
+//! `on_link_step`; at the gyro rate the quad's sensors go to `on_imu_sample` and its motor
+//! commands to the quad (with `quad_sim::ground` contact); the baro every 20 ms to
+//! `on_baro`, the battery ADC every 20 ms to `on_battery`, and `on_alert_tick` gives the
+//! tone — and records a [`Sample`]. One executor, one virtual clock: runs are exactly
+//! repeatable.
 
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use flight_core::alerts::TonePlayer;
-use flight_core::battery::{BatteryLevel, BatteryMonitor};
+use flight_core::app::{FlightApp, ImuFault};
+use flight_core::battery::BatteryLevel;
 use flight_core::outputs::Command;
-use flight_core::pipeline::{
-    ChannelMap, ClimbRate, Controllers, FlightLoop, ImuSample, LoopOutput, announce,
-    announce_battery, channel_for, from_settings, throttle_channel,
-};
-use flight_core::report::{LinkSeen, Snapshot, sysid_messages};
+use flight_core::pipeline::{ChannelMap, ImuSample, LoopOutput, channel_for, throttle_channel};
 use flight_core::settings::Settings;
 use flight_core::sysid::ekf::Identification;
-use quad_sim::quad::{GRAVITY_MPS2, Quad, QuadState, Truth};
+use quad_sim::quad::{Quad, Truth};
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat, Channels, FailsafeValues, MAX_CHANNELS};
 use telemetry::link::core::{Follower, Master};
-use telemetry::link::follower::run_follower;
+use telemetry::link::follower::{FollowerHooks, run_follower};
 use telemetry::link::master::run_master;
 use telemetry::link::{Band, LinkClock, LinkParams, RateMode};
 use telemetry::messages::{Message, MessageReader};
@@ -28,8 +27,8 @@ use telemetry::mock::{
     ChannelModel, Executor, Medium, MockClock, MockRadio, Node, SplitMix64, VirtualTime,
 };
 
-use crate::link_ends::{FlightSide, LinkState, MODULE_CLOCK_OFFSET_US, ModuleSide, Shared};
-use crate::scenario::{PilotInput, Scenario};
+use crate::module_end::{LinkState, MODULE_CLOCK_OFFSET_US, ModuleSide, Shared};
+use crate::scenario::{ImuInjection, PilotInput, Scenario};
 
 const RAD_PER_DEG: f32 = core::f32::consts::PI / 180.0;
 /// Baro sampling period, ms (the firmware's baro task rate).
@@ -62,6 +61,12 @@ pub struct Sample {
     pub tone_hz: u16,
     /// The identification that finished on this loop (system-identification mode left).
     pub identification: Option<Identification>,
+    /// The commands the motors got (the loop's, or the IMU fault policy's hold/stop).
+    pub motors: [Command; 4],
+    /// The app asked the IMU adapter to re-probe the sensor.
+    pub imu_reprobe: bool,
+    /// The standing IMU fault.
+    pub imu_fault: Option<ImuFault>,
 }
 
 /// The run's records.
@@ -98,6 +103,15 @@ fn battery_raw(pack_mv: f32, divider: f32) -> u16 {
     v.clamp(0.0, 4095.0) as u16
 }
 
+/// The flight link task's adapter: the follower's hooks go straight into the app.
+struct AppHooks(Rc<RefCell<FlightApp>>);
+
+impl FollowerHooks for AppHooks {
+    fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
+        self.0.borrow_mut().on_link_step(now_us, follower);
+    }
+}
+
 /// Runs `scenario` and returns the records.
 ///
 /// # Panics
@@ -115,9 +129,12 @@ pub fn run(scenario: Scenario) -> Sitl {
         setting_changes,
         packet_loss,
     } = scenario;
-    let setup = from_settings(&settings).expect("settings make a flyable setup");
-    // Solve the gains before arming is possible, as the firmware does at boot.
-    let controllers = Controllers::design(&setup.control).expect("gains solve");
+    // The application boots as the firmware's does: setup and gains solved before anything
+    // can arm.
+    let app = FlightApp::new(settings, 0).expect("settings make a setup");
+    assert!(app.setup_error().is_none(), "settings make a flyable setup");
+    let setup = *app.setup();
+    let app = Rc::new(RefCell::new(app));
     let ts_s = f64::from(setup.loop_config.ts_s);
     let period_us = (ts_s * 1e6).round() as u64;
 
@@ -141,7 +158,6 @@ pub fn run(scenario: Scenario) -> Sitl {
     );
     let shared: Shared = Rc::new(RefCell::new(LinkState {
         uplink: setting_changes,
-        settings: settings.clone(),
         ..LinkState::default()
     }));
     let samples: Rc<RefCell<Vec<Sample>>> = Rc::new(RefCell::new(Vec::new()));
@@ -162,7 +178,7 @@ pub fn run(scenario: Scenario) -> Sitl {
     {
         let mut radio = MockRadio::new(medium.clone(), flight_node);
         let mut clock = MockClock::new(time.clone(), 50_000_000);
-        let mut hooks = FlightSide::new(shared.clone());
+        let mut hooks = AppHooks(app.clone());
         ex.spawn(async move {
             // The flight controller boots a little after the module.
             let start = clock.now_us() + 77_777;
@@ -181,22 +197,18 @@ pub fn run(scenario: Scenario) -> Sitl {
         let samples = samples.clone();
         let medium = medium.clone();
         let divider = setup.battery.voltage_divider;
+        let app = app.clone();
         ex.spawn(async move {
             let mut quad = Quad::new(params, seed);
-            let mut ground = quad.state().clone();
-            ground.position_m = [0.0; 3];
-            ground.motor.iter_mut().for_each(|m| *m = 0.0);
-            quad.set_state(ground);
-            let mut fl = FlightLoop::new(setup.loop_config, setup.mixer, Some(controllers));
-            let mut battery = BatteryMonitor::new(setup.battery);
-            let mut player = TonePlayer::new();
-            let mut level = BatteryLevel::Ok;
-            let mut last_battery = None;
-            let map = ChannelMap::default();
+            quad_sim::ground::on_the_ground(&mut quad);
             let mut sensors = quad.sensors();
-            let mut climb_filter = ClimbRate::new();
-            let mut baro_climb = None;
             let mut baro_noise = SplitMix64::new(seed ^ 0xBA40);
+            let mut level = BatteryLevel::Ok;
+            let mut last_good = ImuSample {
+                gyro_radps: [0.0; 3],
+                accel_mps2: sensors.accel_mps2,
+                mag: None,
+            };
             let mut next_us = period_us;
             let mut k: u64 = 0;
             while k as f64 * ts_s < duration_s {
@@ -207,80 +219,55 @@ pub fn run(scenario: Scenario) -> Sitl {
                 let now_ms = (t_s * 1000.0).round() as u32;
                 let input = pilot(t_s);
                 medium.set_cut(module_node, flight_node, input.link_cut);
-                let (rx, link_up) = {
-                    let mut s = shared.borrow_mut();
-                    s.tx = Some(transmitter(&input));
-                    (s.rx, s.rx.is_some() && !s.failsafe)
-                };
-                let channels = rx.unwrap_or([CHANNEL_CENTER; MAX_CHANNELS]);
-                let link = map.link_input(&channels, link_up);
+                shared.borrow_mut().tx = Some(transmitter(&input));
+                let mut app = app.borrow_mut();
+                // The baro task: MS5611 altitude at 50 Hz with 0.1 m (1σ) noise.
+                if now_ms.is_multiple_of(BARO_PERIOD_MS) {
+                    let altitude = -quad.state().position_m[2] + baro_noise.normal(BARO_NOISE_M);
+                    app.on_baro(now_ms, Some(altitude as f32));
+                }
+                let link_up = app.link_input().up;
+                // The IMU task: a sample, or what the injected fault leaves of it.
                 let imu = ImuSample {
                     gyro_radps: sensors.gyro_dps.map(|g| g * RAD_PER_DEG),
                     accel_mps2: sensors.accel_mps2,
                     mag: None,
                 };
-                // The baro task's path: MS5611 altitude at 50 Hz with 0.1 m (1σ) noise through
-                // `ClimbRate`, held between readings.
-                if now_ms.is_multiple_of(BARO_PERIOD_MS) {
-                    let altitude = -quad.state().position_m[2] + baro_noise.normal(BARO_NOISE_M);
-                    baro_climb = climb_filter.update(now_ms, altitude as f32);
-                }
-                let out = fl.step(now_ms, &imu, &link, baro_climb);
-                let cmds = out.motors.map(|m| match m {
+                let step = match input.imu {
+                    ImuInjection::Healthy => {
+                        last_good = imu;
+                        app.on_imu_sample(now_ms, &imu)
+                    }
+                    ImuInjection::Frozen => app.on_imu_sample(now_ms, &last_good),
+                    ImuInjection::AllZero => app.on_imu_sample(
+                        now_ms,
+                        &ImuSample {
+                            gyro_radps: [0.0; 3],
+                            accel_mps2: [0.0; 3],
+                            mag: None,
+                        },
+                    ),
+                    ImuInjection::Stalled => app.on_imu_missing(now_ms, ImuFault::Stalled),
+                    ImuInjection::ReadError => app.on_imu_missing(now_ms, ImuFault::ReadError),
+                };
+                let out = app.last_output().copied();
+                let cmds = step.motors.map(|m| match m {
                     Command::Throttle(x) => x,
                     Command::Stopped => 0.0,
                 });
                 let (s, truth) = quad.step(ts_s, &cmds);
+                let (truth, s) = quad_sim::ground::contact(&mut quad, truth, s);
                 sensors = s;
-                // Ground contact: resting on the ground while thrust < weight, the frame does
-                // not rotate and the accelerometer reads the ground's reaction.
-                let on_ground = truth.state.position_m[2] >= 0.0;
-                let thrust_n: f64 = truth
-                    .state
-                    .motor
-                    .iter()
-                    .map(|m| m * quad.params().max_thrust_n)
-                    .sum();
-                let truth = if on_ground && thrust_n < quad.params().mass_kg * GRAVITY_MPS2 {
-                    let mut st: QuadState = truth.state.clone();
-                    st.rate_rad_s = [0.0; 3];
-                    st.velocity_mps = [0.0; 3];
-                    quad.set_state(st);
-                    sensors = quad.sensors();
-                    // The model reads −thrust/m (+ noise) on z; the ground adds thrust/m − g.
-                    let [ax, ay, az] = sensors.accel_mps2;
-                    let reaction = thrust_n / quad.params().mass_kg - GRAVITY_MPS2;
-                    sensors.accel_mps2 = [ax, ay, az + reaction as f32];
-                    Truth {
-                        rate_dps: [0.0; 3],
-                        state: quad.state().clone(),
-                        ..truth
-                    }
-                } else {
-                    truth
-                };
-                announce(&mut player, &out);
+                // The battery task.
                 if now_ms.is_multiple_of(BATTERY_PERIOD_MS) {
-                    let status =
-                        battery.update(now_ms, battery_raw(input.battery_mv, divider), None);
-                    level = status.level;
-                    last_battery = Some(status);
-                    if status.level_changed {
-                        announce_battery(&mut player, level);
-                    }
+                    app.on_battery(now_ms, battery_raw(input.battery_mv, divider), None);
+                    level = app.battery().map_or(level, |b| b.level);
                 }
-                let tone_hz = player.tick(now_ms);
-                let identification = fl.take_identification();
-                if let Some(id) = &identification {
-                    shared.borrow_mut().sysid.extend(sysid_messages(id));
-                }
-                shared.borrow_mut().snapshot = Some(Snapshot {
-                    out,
-                    battery: last_battery,
-                    link: LinkSeen::default(),
-                    arming_blockers: 0,
-                    sysid: None,
-                });
+                // The alert task.
+                let tone_hz = app.on_alert_tick(now_ms);
+                let identification = app.identification_finished();
+                // Nothing to record before the loop's first output (an IMU dead at boot).
+                let Some(out) = out else { continue };
                 samples.borrow_mut().push(Sample {
                     t_s,
                     pilot: input,
@@ -292,6 +279,9 @@ pub fn run(scenario: Scenario) -> Sitl {
                     battery: level,
                     tone_hz,
                     identification,
+                    motors: step.motors,
+                    imu_reprobe: step.reprobe,
+                    imu_fault: app.imu_fault(),
                 });
             }
         });
@@ -301,10 +291,8 @@ pub fn run(scenario: Scenario) -> Sitl {
     let samples = Rc::try_unwrap(samples)
         .map(RefCell::into_inner)
         .unwrap_or_default();
-    let (module_rx, settings) = {
-        let mut s = shared.borrow_mut();
-        (std::mem::take(&mut s.module_rx), s.settings.clone())
-    };
+    let module_rx = std::mem::take(&mut shared.borrow_mut().module_rx);
+    let settings = app.borrow().settings().clone();
     Sitl {
         samples,
         ts_s,

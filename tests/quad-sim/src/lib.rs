@@ -6,6 +6,7 @@
 pub mod axis;
 pub mod cli;
 pub mod closed_loop;
+pub mod ground;
 pub mod identify;
 pub mod plot;
 pub mod quad;

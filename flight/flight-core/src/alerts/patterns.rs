@@ -49,6 +49,16 @@ const BATTERY_WARNING: &[Tone] = &[
     t(0, 80),
     t(2500, 400),
 ];
+// Alternating high-low siren, fast: the IMU failed and the motors were stopped.
+const SENSOR_FAULT: &[Tone] = &[
+    t(3500, 100),
+    t(800, 100),
+    t(3500, 100),
+    t(800, 100),
+    t(3500, 100),
+    t(800, 100),
+    t(0, 300),
+];
 // Rising pair.
 const ARMED: &[Tone] = &[t(1000, 150), t(2000, 300)];
 // Falling pair.
@@ -77,6 +87,8 @@ const MODE_SYSID: &[Tone] = &[t(3000, 300), t(0, 100), t(1500, 300)];
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Alert {
+    /// The IMU failed; the motors were stopped (disarmed, re-arm needed).
+    SensorFault,
     /// Battery critical: land now (repeats while critical).
     BatteryCritical,
     /// Link lost while armed.
@@ -99,6 +111,7 @@ impl Alert {
     /// Higher plays first and may cut a lower one short.
     pub const fn priority(self) -> u8 {
         match self {
+            Alert::SensorFault => 8,
             Alert::BatteryCritical => 7,
             Alert::Failsafe => 6,
             Alert::BatteryWarning => 5,
@@ -112,6 +125,7 @@ impl Alert {
     /// The pattern.
     pub const fn tones(self) -> &'static [Tone] {
         match self {
+            Alert::SensorFault => SENSOR_FAULT,
             Alert::BatteryCritical => BATTERY_CRITICAL,
             Alert::Failsafe => FAILSAFE,
             Alert::BatteryWarning => BATTERY_WARNING,

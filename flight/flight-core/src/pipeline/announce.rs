@@ -21,6 +21,7 @@ pub fn loop_alerts(out: &LoopOutput) -> [Option<Alert>; 2] {
         }
         Decision::FailsafeEntered => Some(Alert::Failsafe),
         Decision::ControlRecovered => Some(Alert::ControlRecovered),
+        Decision::DisarmedSensorFault => Some(Alert::SensorFault),
     };
     [decision, out.mode_changed.then_some(Alert::Mode(out.mode))]
 }

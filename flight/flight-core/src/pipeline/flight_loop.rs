@@ -1,10 +1,11 @@
-//! One pass of the flight loop, run right after each gyro sample:
-//! estimate → supervise → control → mix → output commands.
+//! One pass of the flight loop, run right after each gyro sample, in named stages:
+//! estimate → supervise → failsafe descent or setpoint → mix → output commands. The
+//! stateless parts of the setpoint and mix stages live in `stages`.
 
 use super::controllers::Controllers;
-use super::identify::{Sysid, sysid_output};
+use super::identify::Sysid;
+use super::stages;
 use super::sticks::StickShaping;
-use crate::control::lqr::AxisSetpoint;
 use crate::control::mixer::Mixer;
 use crate::estimation::GRAVITY_MPS2;
 use crate::estimation::complementary::{self, Complementary};
@@ -138,6 +139,19 @@ impl FlightLoop {
         }
     }
 
+    /// The IMU delivered nothing usable for longer than the ride-through bound: disarm with
+    /// [`Decision::DisarmedSensorFault`] (`Steady` if already disarmed).
+    pub fn sensor_fault(&mut self) -> Decision {
+        let decision = self.supervisor.sensor_fault();
+        self.finish_sysid();
+        decision
+    }
+
+    /// Motors may turn.
+    pub fn armed(&self) -> bool {
+        self.supervisor.motors_enabled()
+    }
+
     /// Installs newly designed controllers (only while disarmed, or nothing changes).
     pub fn set_controllers(&mut self, controllers: Controllers) -> bool {
         if self.supervisor.motors_enabled() {
@@ -205,6 +219,8 @@ impl FlightLoop {
     /// One loop at `now_ms`. `climb_rate_mps` (up positive) comes from the INS/baro when
     /// available and makes the failsafe descent rate-controlled; the loop blends it with the
     /// accelerometer's vertical acceleration (see [`FlightLoop::climb_estimate`]).
+    ///
+    /// The stages, in order: estimate → supervise → (failsafe descent | setpoint) → mix.
     pub fn step(
         &mut self,
         now_ms: u32,
@@ -212,6 +228,49 @@ impl FlightLoop {
         link: &LinkInput,
         climb_rate_mps: Option<f32>,
     ) -> LoopOutput {
+        let estimate = self.estimate(imu);
+        let previous_mode = self.mode;
+        let decision = self.supervise(now_ms, link, &estimate, imu.accel_mps2);
+        let climb_rate_mps = self.fuse_climb(climb_rate_mps, imu.accel_mps2);
+        let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
+        let failsafe = self.supervisor.failsafe_descent_mps();
+        if self.mode != FlightMode::SystemId
+            || failsafe.is_some()
+            || !self.supervisor.motors_enabled()
+        {
+            self.finish_sysid();
+        }
+        let motors = if self.supervisor.motors_enabled() && estimate.gyro_ok {
+            let fly = Fly {
+                decision,
+                mode_changed: self.mode != previous_mode,
+                gyro_dps: estimate.gyro_dps,
+                attitude_deg: [roll, pitch],
+                failsafe_descent_mps: failsafe,
+                climb_rate_mps,
+            };
+            self.fly(&fly, &link.sticks)
+        } else {
+            if let Some(c) = self.controllers.as_mut() {
+                self.airborne = false;
+                // On the ground nothing integrates.
+                c.reset(estimate.gyro_dps);
+            }
+            [Command::Stopped; 4]
+        };
+        LoopOutput {
+            motors,
+            decision,
+            mode: self.mode,
+            mode_changed: self.mode != previous_mode,
+            armed: self.supervisor.motors_enabled(),
+            failsafe: failsafe.is_some(),
+            attitude_deg: [roll, pitch, yaw],
+        }
+    }
+
+    /// Estimate stage: gyro plausibility and the attitude filter update.
+    fn estimate(&mut self, imu: &ImuSample) -> Estimate {
         let gyro_dps = imu.gyro_radps.map(|g| g * DEG_PER_RAD);
         let gyro_ok = gyro_dps
             .iter()
@@ -234,182 +293,159 @@ impl FlightLoop {
             .attitude
             .update(imu.gyro_radps, accel, imu.mag, self.config.ts_s)
             .is_ok();
-        let previous_mode = self.mode;
+        Estimate {
+            gyro_dps,
+            gyro_ok,
+            filter_ok,
+        }
+    }
+
+    /// Supervise stage: the flight-mode switch (while the link is up) and the arming /
+    /// failsafe state machine.
+    fn supervise(
+        &mut self,
+        now_ms: u32,
+        link: &LinkInput,
+        estimate: &Estimate,
+        accel_mps2: [f32; 3],
+    ) -> Decision {
         if link.up {
             self.mode = self.modes.update(link.mode_channel);
         }
-        let decision = self.supervisor.update(&Inputs {
+        self.supervisor.update(&Inputs {
             now_ms,
             link_up: link.up,
             sticks: link.sticks,
             arm_switch: link.arm_switch,
-            sensors_healthy: gyro_ok && filter_ok,
+            sensors_healthy: estimate.gyro_ok && estimate.filter_ok,
             gains_ready: self.controllers.is_some(),
-            landed: at_rest(&gyro_dps, imu.accel_mps2),
-        });
-        let climb_rate_mps = self.fuse_climb(climb_rate_mps, imu.accel_mps2);
-        let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
-        let failsafe = self.supervisor.failsafe_descent_mps();
-        if self.mode != FlightMode::SystemId
-            || failsafe.is_some()
-            || !self.supervisor.motors_enabled()
-        {
-            self.finish_sysid();
+            landed: at_rest(&estimate.gyro_dps, accel_mps2),
+        })
+    }
+
+    /// Failsafe-descent stage, throttle part: PI on the climb rate around the hover value
+    /// (the attitude part levels the frame, see [`stages::level_setpoint`]).
+    fn descent_throttle(
+        &mut self,
+        decision: Decision,
+        descent_mps: f32,
+        climb_rate_mps: Option<f32>,
+    ) -> f32 {
+        if decision == Decision::FailsafeEntered {
+            self.descent_integral = 0.0;
         }
-        let mut motors = [Command::Stopped; 4];
-        let mut shaking = false;
-        if let (true, Some(c)) = (
-            self.supervisor.motors_enabled() && gyro_ok,
-            self.controllers.as_mut(),
-        ) {
-            if matches!(decision, Decision::Armed | Decision::ControlRecovered)
-                || self.mode != previous_mode
-            {
-                c.reset(gyro_dps);
+        let throttle = match climb_rate_mps {
+            // PI on the climb rate around the hover value: 0.1 throttle per m/s and 0.2 per
+            // metre of accumulated error. With ≈ 60 m/s² per unit throttle (a 2:1
+            // thrust-to-weight frame) the loop has ωn ≈ 3.5 rad/s, ζ ≈ 0.9; the integral
+            // absorbs a wrong hover estimate (±0.2).
+            Some(climb) => {
+                let error = -descent_mps - climb;
+                self.descent_integral =
+                    (self.descent_integral + 0.2 * error * self.config.ts_s).clamp(-0.2, 0.2);
+                self.hover_throttle + 0.1 * error + self.descent_integral
             }
-            let (throttle, attitude_out) = match failsafe {
-                Some(descent_mps) => {
-                    // Level (angle error = −angle), no yaw rotation, descend.
-                    let sp = [
-                        AxisSetpoint::Attitude {
-                            angle_error_deg: -roll,
-                        },
-                        AxisSetpoint::Attitude {
-                            angle_error_deg: -pitch,
-                        },
-                        AxisSetpoint::Rate { rate_dps: 0.0 },
-                    ];
-                    if decision == Decision::FailsafeEntered {
-                        self.descent_integral = 0.0;
-                    }
-                    let throttle = match climb_rate_mps {
-                        // PI on the climb rate around the hover value: 0.1 throttle per m/s
-                        // and 0.2 per metre of accumulated error. With ≈ 60 m/s² per unit
-                        // throttle (a 2:1 thrust-to-weight frame) the loop has ωn ≈ 3.5 rad/s,
-                        // ζ ≈ 0.9; the integral absorbs a wrong hover estimate (±0.2).
-                        Some(climb) => {
-                            let error = -descent_mps - climb;
-                            self.descent_integral = (self.descent_integral
-                                + 0.2 * error * self.config.ts_s)
-                                .clamp(-0.2, 0.2);
-                            self.hover_throttle + 0.1 * error + self.descent_integral
-                        }
-                        None => self.hover_throttle * 0.9,
-                    };
-                    (throttle.clamp(0.0, 1.0), c.lqg(gyro_dps, sp))
-                }
-                None => {
-                    let sticks = &link.sticks;
-                    let rates = self.config.shaping.rates_dps(sticks);
-                    let [yaw_rate] = [rates[2]];
-                    let [roll_sp, pitch_sp] = self.config.shaping.angles_deg(sticks);
-                    let errors = [roll_sp - roll, pitch_sp - pitch];
-                    let out = match self.mode {
-                        FlightMode::RatePid => c.pid_rate(gyro_dps, rates),
-                        // On the ground (throttle low) nothing shakes: the output is zeroed
-                        // below, and the EKF only learns in the air.
-                        FlightMode::SystemId if sticks.throttle_low() => [0.0; 3],
-                        FlightMode::SystemId => {
-                            shaking = true;
-                            sysid_output(
-                                &mut self.sysid,
-                                self.config.ts_s,
-                                gyro_dps,
-                                errors,
-                                yaw_rate,
-                                c,
-                            )
-                        }
-                        FlightMode::RateLqg => c.lqg(
-                            gyro_dps,
-                            rates.map(|rate_dps| AxisSetpoint::Rate { rate_dps }),
-                        ),
-                        FlightMode::Attitude if !self.config.attitude_uses_lqg => {
-                            c.pid_attitude(gyro_dps, errors, yaw_rate)
-                        }
-                        FlightMode::Attitude => c.lqg(
-                            gyro_dps,
-                            [
-                                AxisSetpoint::Attitude {
-                                    angle_error_deg: errors[0],
-                                },
-                                AxisSetpoint::Attitude {
-                                    angle_error_deg: errors[1],
-                                },
-                                AxisSetpoint::Rate { rate_dps: yaw_rate },
-                            ],
-                        ),
-                        FlightMode::Horizon => {
-                            let w = self.config.shaping.horizon_weight(sticks);
-                            let blend = |i: usize| AxisSetpoint::Blend {
-                                rate_dps: rates.get(i).copied().unwrap_or(0.0),
-                                angle_error_deg: errors.get(i).copied().unwrap_or(0.0),
-                                attitude_weight: w,
-                            };
-                            c.lqg(
-                                gyro_dps,
-                                [
-                                    blend(0),
-                                    blend(1),
-                                    AxisSetpoint::Rate { rate_dps: yaw_rate },
-                                ],
-                            )
-                        }
-                    };
-                    let throttle = sticks.throttle.clamp(0.0, 1.0);
-                    // Throttle at the bottom before the first take-off means sitting on the
-                    // ground: the controllers neither act nor wind up, or a held arming
-                    // gesture (yaw full right) would spin the frame up to full power. Once
-                    // airborne, a closed throttle keeps full stabilisation (air mode).
-                    let out = if sticks.throttle_low() && !self.airborne {
-                        c.reset(gyro_dps);
-                        [0.0; 3]
-                    } else {
-                        out
-                    };
-                    // 2 s low-pass of the flying throttle: what hovering takes.
-                    if throttle > 0.1 {
-                        self.airborne = true;
-                        let k = self.config.ts_s / (2.0 + self.config.ts_s);
-                        self.hover_throttle += k * (throttle - self.hover_throttle);
-                    }
-                    (throttle, out)
-                }
-            };
-            let idle = self.config.idle.clamp(0.0, 0.3);
-            let (mixed, applied) = self.mixer.mix_with_applied(throttle, attitude_out);
-            // Controllers that predict with their own output are told what the motors will
-            // realise: desaturation scales the demand down whenever it does not fit.
-            let uses_lqg = failsafe.is_some()
-                || match self.mode {
-                    FlightMode::RateLqg | FlightMode::Horizon => true,
-                    FlightMode::Attitude => self.config.attitude_uses_lqg,
-                    FlightMode::RatePid | FlightMode::SystemId => false,
-                };
-            if uses_lqg {
-                c.lqg_realised(applied);
-            }
-            if let (true, Some(s)) = (shaking, self.sysid.as_mut()) {
-                s.ekf.record_output(applied);
-            }
-            for (m, x) in motors.iter_mut().zip(mixed) {
-                *m = Command::Throttle(idle + (1.0 - idle) * x);
-            }
-        } else if let Some(c) = self.controllers.as_mut() {
-            self.airborne = false;
-            // On the ground nothing integrates.
+            None => self.hover_throttle * 0.9,
+        };
+        throttle.clamp(0.0, 1.0)
+    }
+
+    /// Armed with a plausible gyro: failsafe descent or the pilot's setpoint, then the mix.
+    fn fly(&mut self, fly: &Fly, sticks: &Sticks) -> [Command; 4] {
+        if self.controllers.is_none() {
+            return [Command::Stopped; 4];
+        }
+        let descent = fly
+            .failsafe_descent_mps
+            .map(|d| self.descent_throttle(fly.decision, d, fly.climb_rate_mps));
+        let Some(c) = self.controllers.as_mut() else {
+            return [Command::Stopped; 4];
+        };
+        let gyro_dps = fly.gyro_dps;
+        if matches!(fly.decision, Decision::Armed | Decision::ControlRecovered) || fly.mode_changed
+        {
             c.reset(gyro_dps);
         }
-        LoopOutput {
-            motors,
-            decision,
-            mode: self.mode,
-            mode_changed: self.mode != previous_mode,
-            armed: self.supervisor.motors_enabled(),
-            failsafe: failsafe.is_some(),
-            attitude_deg: [roll, pitch, yaw],
-        }
+        let (throttle, attitude_out, shaking) = match descent {
+            Some(throttle) => (
+                throttle,
+                c.lqg(gyro_dps, stages::level_setpoint(fly.attitude_deg)),
+                false,
+            ),
+            None => {
+                let (out, shaking) = stages::setpoint(
+                    c,
+                    &mut self.sysid,
+                    &self.config,
+                    self.mode,
+                    sticks,
+                    gyro_dps,
+                    fly.attitude_deg,
+                );
+                let throttle = sticks.throttle.clamp(0.0, 1.0);
+                // Throttle at the bottom before the first take-off means sitting on the
+                // ground: the controllers neither act nor wind up, or a held arming
+                // gesture (yaw full right) would spin the frame up to full power. Once
+                // airborne, a closed throttle keeps full stabilisation (air mode).
+                let out = if sticks.throttle_low() && !self.airborne {
+                    c.reset(gyro_dps);
+                    [0.0; 3]
+                } else {
+                    out
+                };
+                // 2 s low-pass of the flying throttle: what hovering takes.
+                if throttle > 0.1 {
+                    self.airborne = true;
+                    let k = self.config.ts_s / (2.0 + self.config.ts_s);
+                    self.hover_throttle += k * (throttle - self.hover_throttle);
+                }
+                (throttle, out, shaking)
+            }
+        };
+        // Controllers that predict with their own output are told what the motors will
+        // realise: desaturation scales the demand down whenever it does not fit.
+        let uses_lqg = descent.is_some()
+            || match self.mode {
+                FlightMode::RateLqg | FlightMode::Horizon => true,
+                FlightMode::Attitude => self.config.attitude_uses_lqg,
+                FlightMode::RatePid | FlightMode::SystemId => false,
+            };
+        let sysid = if shaking { self.sysid.as_mut() } else { None };
+        stages::mix(
+            c,
+            &self.mixer,
+            sysid,
+            stages::Demand {
+                throttle,
+                attitude: attitude_out,
+                idle: self.config.idle,
+                uses_lqg,
+            },
+        )
     }
+}
+
+/// What the estimate stage found this loop.
+struct Estimate {
+    /// Gyro, deg/s.
+    gyro_dps: [f32; 3],
+    /// The gyro reads finite values within its range.
+    gyro_ok: bool,
+    /// The attitude filter accepted the sample.
+    filter_ok: bool,
+}
+
+/// What the flying stages need from the estimate and supervise stages.
+struct Fly {
+    decision: Decision,
+    mode_changed: bool,
+    gyro_dps: [f32; 3],
+    /// Roll and pitch estimate, deg.
+    attitude_deg: [f32; 2],
+    /// Link failsafe descent active, at this rate (m/s).
+    failsafe_descent_mps: Option<f32>,
+    /// Blended climb rate, m/s up.
+    climb_rate_mps: Option<f32>,
 }
 
 /// Still and feeling 1 g: resting on the ground. A frame falling or descending with the

@@ -13,6 +13,7 @@ mod flight_loop;
 mod identify;
 mod link;
 mod setup;
+mod stages;
 mod sticks;
 
 pub use announce::{BATTERY_REPEAT_MS, announce, announce_battery, battery_alert, loop_alerts};

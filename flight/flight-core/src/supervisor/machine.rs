@@ -110,6 +110,9 @@ pub enum Decision {
     FailsafeEntered,
     /// Link back and sticks centred: the pilot has control again.
     ControlRecovered,
+    /// Disarmed because the attitude sensor stopped delivering usable data (the frame can
+    /// no longer sense its attitude). Only a fresh arm restarts the motors.
+    DisarmedSensorFault,
 }
 
 /// The state machine.
@@ -159,6 +162,17 @@ impl Supervisor {
         } else {
             None
         }
+    }
+
+    /// The attitude sensor failed for longer than the loop can ride through: disarm (a
+    /// no-op while disarmed). Motors restart only after a new arm gesture.
+    pub fn sensor_fault(&mut self) -> Decision {
+        if !self.motors_enabled() {
+            return Decision::Steady;
+        }
+        self.state = State::Disarmed;
+        self.throttle_low_since = None;
+        Decision::DisarmedSensorFault
     }
 
     /// One loop.

@@ -1,21 +1,22 @@
 //! Table of contents: clocks, board, settings → flight setup and solved gains, then one task
 //! per concern: imu (the flight loop, driven by the MPU9250's data-ready), motors, link (the
 //! TauLink follower on the RFM22B), baro, gains (re-solve after setting changes), battery,
-//! alerts, console, storage, heartbeat and the watchdog supervisor. See `signals` for the
-//! data flow.
+//! alerts, console, storage, heartbeat and the watchdog supervisor. Every decision is in
+//! `flight_core::app::FlightApp` (installed in `shared`); the tasks only move data between
+//! their peripheral and the app. See `shared` for the data flow.
 
 mod board;
 mod imu_bus;
 mod link_radio;
 mod outputs;
-mod signals;
+mod shared;
 mod tasks;
+mod usb_cdc;
 
 use defmt::{error, info};
 use embassy_executor::{SpawnError, SpawnToken, Spawner};
-use flight_core::battery::BatteryMonitor;
-use flight_core::pipeline::{Controllers, from_settings};
-use flight_core::settings::Settings;
+use flight_core::app::FlightApp;
+use flight_core::sensors::mpu9250::SampleRate;
 use {defmt_rtt as _, panic_probe as _};
 
 #[embassy_executor::main]
@@ -27,27 +28,17 @@ async fn main(spawner: Spawner) {
     // Flash work first: a sector erase can stall the CPU longer than the watchdog timeout,
     // and the watchdog starts with the supervisor below.
     let (map, settings) = tasks::storage::open(board.settings_flash).await;
-    // Settings → configuration; the gains are solved here, before anything can arm. Stored
-    // settings that do not make a flyable setup fall back to the factory ones.
-    let setup = match from_settings(&settings) {
-        Ok(s) => s,
-        Err(e) => {
-            error!("stored settings not flyable ({}): factory setup", e);
-            match from_settings(&Settings::default()) {
-                Ok(s) => s,
-                Err(_) => return, // the table's own defaults are tested flyable
-            }
-        }
+    // The application: settings → setup (factory setup if the stored one does not fly) and
+    // the solved gains, before anything can arm.
+    let Some(app) = FlightApp::new(settings, shared::now_ms()) else {
+        error!("no flyable setup, not even the factory one");
+        return;
     };
-    let controllers = match Controllers::design(&setup.control) {
-        Ok(c) => Some(c),
-        Err(e) => {
-            error!("gain design failed ({}): arming refused", e);
-            None
-        }
-    };
-    let monitor = BatteryMonitor::new(setup.battery);
-    *signals::SETTINGS.lock().await = Some((settings.clone(), settings));
+    if let Some(e) = app.setup_error() {
+        error!("stored settings not flyable ({}): factory setup", e);
+    }
+    let setup = *app.setup();
+    shared::install(app);
     if let Some(map) = map {
         spawn(&spawner, "storage", tasks::storage::storage_task(map));
     }
@@ -65,7 +56,7 @@ async fn main(spawner: Spawner) {
     spawn(
         &spawner,
         "imu",
-        tasks::imu::imu_task(board.imu, setup, controllers),
+        tasks::imu::imu_task(board.imu, sample_rate(setup.loop_rate_hz)),
     );
     spawn(&spawner, "link", tasks::link::link_task(board.radio));
     spawn(&spawner, "baro", tasks::baro::baro_task(board.baro));
@@ -78,7 +69,7 @@ async fn main(spawner: Spawner) {
     spawn(
         &spawner,
         "battery",
-        tasks::battery::battery_task(board.battery, monitor),
+        tasks::battery::battery_task(board.battery),
     );
     spawn(
         &spawner,
@@ -86,6 +77,15 @@ async fn main(spawner: Spawner) {
         tasks::alerts::alerts_task(board.speaker),
     );
     spawn(&spawner, "console", tasks::console::console_task(board.usb));
+}
+
+/// The MPU9250's sample rate for the loop rate.
+fn sample_rate(loop_rate_hz: u32) -> SampleRate {
+    if loop_rate_hz >= 1000 {
+        SampleRate::Hz1000
+    } else {
+        SampleRate::Hz500
+    }
 }
 
 /// Starts a task. A task that cannot start never checks in with the supervisor, so the

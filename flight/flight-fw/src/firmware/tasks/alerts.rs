@@ -1,6 +1,6 @@
-//! Sounds alerts through the DAC into the video transmitter's audio (PA4): a sine table
-//! played by DMA, paced by TIM6 so the pitch is TIM6's rate / 130 — and on the buzzer
-//! output. Battery alarms repeat while the battery stays low.
+//! Sounds the app's tone (`FlightApp::on_alert_tick`, every 10 ms) through the DAC into the
+//! video transmitter's audio (PA4): a sine table played by DMA, paced by TIM6 so the pitch
+//! is TIM6's rate / 130 — and on the buzzer output.
 
 use embassy_futures::select::{Either, select};
 use embassy_stm32::dac::{DacChannel, Value, ValueArray};
@@ -8,12 +8,10 @@ use embassy_stm32::gpio::Output;
 use embassy_stm32::mode::Async;
 use embassy_stm32::peripherals::TIM6;
 use embassy_stm32::timer::low_level::Timer;
-use embassy_time::{Duration, Instant, Ticker};
-use flight_core::alerts::{Alert, DAC_SAMPLES_PER_CYCLE, TonePlayer, dac_sample_period_ticks};
-use flight_core::battery::BatteryLevel;
+use embassy_time::{Duration, Ticker};
+use flight_core::alerts::{DAC_SAMPLES_PER_CYCLE, dac_sample_period_ticks};
 
-use super::supervisor::{Watched, check_in};
-use crate::firmware::signals::{ALERTS, BATTERY};
+use crate::firmware::shared::{now_ms, with_app};
 
 /// DAC output at rest (the sine's centre), 500 mV.
 const CENTRE_COUNTS: u16 = 620;
@@ -31,14 +29,8 @@ pub struct Speaker {
     pub buzzer: Output<'static>,
 }
 
-fn now_ms() -> u32 {
-    Instant::now().as_millis() as u32
-}
-
 #[embassy_executor::task]
 pub async fn alerts_task(mut speaker: Speaker) {
-    let mut player = TonePlayer::new();
-    let mut battery = BATTERY.receiver();
     let mut ticker = Ticker::every(Duration::from_millis(10));
     let mut frequency = 0u16;
     loop {
@@ -47,22 +39,7 @@ pub async fn alerts_task(mut speaker: Speaker) {
         let changed = async {
             loop {
                 ticker.next().await;
-                check_in(Watched::Alerts);
-                while let Ok(alert) = ALERTS.try_receive() {
-                    player.push(alert);
-                }
-                if let Some(b) = battery.as_mut().and_then(|r| r.try_get()) {
-                    match b.level {
-                        BatteryLevel::Critical => {
-                            player.set_repeating(Some(Alert::BatteryCritical), 2_000)
-                        }
-                        BatteryLevel::Warning => {
-                            player.set_repeating(Some(Alert::BatteryWarning), 10_000)
-                        }
-                        BatteryLevel::Ok => player.set_repeating(None, 0),
-                    }
-                }
-                let next = player.tick(now_ms());
+                let next = with_app(|a| a.on_alert_tick(now_ms())).unwrap_or(0);
                 if next != frequency {
                     return next;
                 }

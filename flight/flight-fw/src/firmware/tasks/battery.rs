@@ -1,14 +1,11 @@
-//! Samples battery voltage (PC3) and current (PC2) at 20 Hz, runs the battery monitor, and
-//! announces level changes.
+//! Samples battery voltage (PC3) and current (PC2) at 20 Hz and hands the raw counts to
+//! `FlightApp::on_battery` (the monitor and its alarms live there).
 
 use embassy_stm32::adc::{Adc, AnyAdcChannel, SampleTime};
 use embassy_stm32::peripherals::ADC1;
-use embassy_time::{Duration, Instant, Ticker};
-use flight_core::alerts::Alert;
-use flight_core::battery::{BatteryLevel, BatteryMonitor};
+use embassy_time::{Duration, Ticker};
 
-use super::supervisor::{Watched, check_in};
-use crate::firmware::signals::{ALERTS, BATTERY};
+use crate::firmware::shared::{now_ms, with_app};
 
 /// The ADC and its two channels.
 pub struct BatterySense {
@@ -21,12 +18,10 @@ pub struct BatterySense {
 }
 
 #[embassy_executor::task]
-pub async fn battery_task(mut sense: BatterySense, mut monitor: BatteryMonitor) {
-    let sender = BATTERY.sender();
+pub async fn battery_task(mut sense: BatterySense) {
     let mut ticker = Ticker::every(Duration::from_millis(50));
     loop {
         ticker.next().await;
-        check_in(Watched::Battery);
         // 480 cycles: the 10 k source impedance needs a long sample time.
         let v = sense
             .adc
@@ -34,19 +29,6 @@ pub async fn battery_task(mut sense: BatterySense, mut monitor: BatteryMonitor) 
         let i = sense
             .adc
             .blocking_read(&mut sense.current, SampleTime::CYCLES480);
-        let now_ms = Instant::now().as_millis() as u32;
-        let status = monitor.update(now_ms, v, Some(i));
-        if status.level_changed {
-            let alert = match status.level {
-                BatteryLevel::Critical => Some(Alert::BatteryCritical),
-                BatteryLevel::Warning => Some(Alert::BatteryWarning),
-                BatteryLevel::Ok => None,
-            };
-            if let Some(alert) = alert {
-                // A full queue already holds alarms; the repeating one comes back anyway.
-                let _ = ALERTS.try_send(alert);
-            }
-        }
-        sender.send(status);
+        with_app(|a| a.on_battery(now_ms(), v, Some(i)));
     }
 }

@@ -3,7 +3,9 @@
 use embassy_stm32::gpio::Output;
 use embassy_time::{Duration, Ticker};
 
-use super::supervisor::{Watched, check_in};
+use flight_core::app::Task;
+
+use crate::firmware::shared::check_in;
 
 #[embassy_executor::task]
 pub async fn heartbeat_task(mut led: Output<'static>) {
@@ -11,7 +13,7 @@ pub async fn heartbeat_task(mut led: Output<'static>) {
     let mut tick = 0u32;
     loop {
         ticker.next().await;
-        check_in(Watched::Heartbeat);
+        check_in(Task::Heartbeat);
         tick = tick.wrapping_add(1);
         // Active low: 100 ms on, 900 ms off.
         if tick % 20 < 2 {

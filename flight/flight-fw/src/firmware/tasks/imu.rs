@@ -1,124 +1,71 @@
-//! The flight loop's clock: the MPU9250's data-ready interrupt (EXTI5, PC5) at the configured
-//! gyro rate. Each edge: one burst read (accel, gyro and — at the AK8963's own 100 Hz — the
-//! magnetometer), the board rotation, `FlightLoop::step` with the link's latest sticks and
-//! the baro climb rate, and the motor commands handed to the motor task at once (synchronous
-//! outputs). Alerts and the arming state go out as the loop reports them; a new setup with
-//! solved gains is installed only while disarmed.
+//! The flight loop's clock: the MPU9250's data-ready interrupt (EXTI5, PC5). Each edge: one
+//! burst read, the board rotation, `FlightApp::on_imu_sample`; no edge within `POLL` or a
+//! failed read: `on_imu_missing` (the app's fault policy decides). The motor commands go
+//! to the motor task at once (synchronous outputs); a re-probe request re-initialises the
+//! sensor.
 
 use core::sync::atomic::Ordering;
 
-use defmt::{error, info, warn};
+use defmt::warn;
 use embassy_futures::select::{Either, select};
-use embassy_time::{Delay, Duration, Instant, Timer};
+use embassy_time::{Duration, Timer};
 use embedded_hal_bus::spi::ExclusiveDevice;
-use flight_core::outputs::Command;
-use flight_core::pipeline::{Controllers, FlightLoop, FlightSetup, ImuSample, loop_alerts};
-use flight_core::report::blocker_bit;
+use flight_core::app::ImuFault;
+use flight_core::pipeline::ImuSample;
 use flight_core::sensors::mpu9250::{Config, Mpu9250, SampleRate};
-use flight_core::supervisor::Decision;
 
-use super::supervisor::{Watched, check_in};
 use crate::firmware::board::{Imu, imu_to_body};
-use crate::firmware::imu_bus::{IMU_SPI_FAST, ImuBus};
-use crate::firmware::signals::{
-    ALERTS, ARMED, CLIMB, FLIGHT_STATE, LINK_INPUT, MOTORS, NEW_SETUP, SYSID,
-};
+use crate::firmware::imu_bus::{AliveDelay, IMU_SPI_FAST, ImuBus};
+use crate::firmware::shared::{MOTORS, now_ms, with_app};
 
-/// A data-ready edge later than this (several periods) means the sensor stalled.
-const SAMPLE_TIMEOUT: Duration = Duration::from_millis(20);
-
-fn sensor_config(setup: &FlightSetup) -> Config {
-    Config {
-        sample_rate: if setup.loop_rate_hz >= 1000 {
-            SampleRate::Hz1000
-        } else {
-            SampleRate::Hz500
-        },
-        ..Config::default()
-    }
-}
+/// How long to wait for a data-ready edge before telling the app it is missing.
+const POLL: Duration = Duration::from_millis(5);
 
 #[embassy_executor::task]
-pub async fn imu_task(imu: Imu, setup: FlightSetup, controllers: Option<Controllers>) {
+pub async fn imu_task(imu: Imu, sample_rate: SampleRate) {
     let Imu { spi, cs, mut int } = imu;
     let Ok(device) = ExclusiveDevice::new_no_delay(spi, cs);
-    let mut delay = Delay;
-    check_in(Watched::Imu);
-    IMU_SPI_FAST.store(false, Ordering::Relaxed);
-    let bus = ImuBus::new(device);
-    let mut sensor = match Mpu9250::new(bus, sensor_config(&setup), &mut delay).await {
-        Ok(s) => {
-            // Configured: the sample reads may run at the fast clock.
-            IMU_SPI_FAST.store(true, Ordering::Relaxed);
-            s
-        }
-        Err(e) => {
-            // Without the IMU nothing may arm. The motors task holds every output stopped;
-            // keep checking in so the console stays up to diagnose, and say why each second.
-            loop {
-                error!("MPU9250 unavailable: {}", defmt::Debug2Format(&e));
-                for _ in 0..10 {
-                    check_in(Watched::Imu);
-                    MOTORS.signal([Command::Stopped; 4]);
-                    Timer::after(Duration::from_millis(100)).await;
-                }
-            }
-        }
+    let mut bus = ImuBus::new(device);
+    let config = Config {
+        sample_rate,
+        ..Config::default()
     };
-    info!("MPU9250 up at {} Hz", setup.loop_rate_hz);
-    let mut fl = FlightLoop::new(setup.loop_config, setup.mixer, controllers);
-    let mut blockers = 0u16;
     loop {
-        check_in(Watched::Imu);
-        if !ARMED.load(Ordering::Relaxed)
-            && let Some((new_setup, gains)) = NEW_SETUP.try_take()
-        {
-            // Same sensor rate only: a rate change needs the chip reconfigured (next boot).
-            fl = FlightLoop::new(new_setup.loop_config, new_setup.mixer, Some(gains));
-            info!("new gains installed");
+        IMU_SPI_FAST.store(false, Ordering::Relaxed);
+        let mut sensor = Mpu9250::new(&mut bus, config, &mut AliveDelay).await;
+        match &sensor {
+            // Configured: the sample reads may run at the fast clock.
+            Ok(_) => IMU_SPI_FAST.store(true, Ordering::Relaxed),
+            Err(e) => warn!("MPU9250: {}", defmt::Debug2Format(e)),
         }
-        // INT is latched until any register is read: waiting for the level (not the edge)
-        // cannot miss a sample whose edge came while the previous step was still running.
-        match select(int.wait_for_high(), Timer::after(SAMPLE_TIMEOUT)).await {
-            Either::First(()) => {}
-            Either::Second(()) => {
-                warn!("IMU data-ready missing");
-                // Stop the motors now; the loop's sensor check keeps them stopped.
-                MOTORS.signal([Command::Stopped; 4]);
-                continue;
+        loop {
+            let sample = match &mut sensor {
+                Ok(s) => match select(int.wait_for_high(), Timer::after(POLL)).await {
+                    Either::First(()) => s.read().await.map_err(|_| ImuFault::ReadError),
+                    Either::Second(()) => Err(ImuFault::Stalled),
+                },
+                // No sensor: INT may float high, so wait the poll period, never spin.
+                Err(_) => {
+                    Timer::after(POLL).await;
+                    Err(ImuFault::Stalled)
+                }
+            };
+            let step = with_app(|a| match sample {
+                Ok(s) => a.on_imu_sample(
+                    now_ms(),
+                    &ImuSample {
+                        gyro_radps: imu_to_body(s.gyro_radps),
+                        accel_mps2: imu_to_body(s.accel_mps2),
+                        mag: s.mag_ut.map(imu_to_body),
+                    },
+                ),
+                Err(cause) => a.on_imu_missing(now_ms(), cause),
+            });
+            let Some(step) = step else { continue };
+            MOTORS.signal(step.motors);
+            if step.reprobe {
+                break;
             }
-        }
-        let sample = match sensor.read().await {
-            Ok(s) => s,
-            Err(e) => {
-                warn!("IMU read: {}", defmt::Debug2Format(&e));
-                continue;
-            }
-        };
-        let imu = ImuSample {
-            gyro_radps: imu_to_body(sample.gyro_radps),
-            accel_mps2: imu_to_body(sample.accel_mps2),
-            mag: sample.mag_ut.map(imu_to_body),
-        };
-        let link = LINK_INPUT.lock(|c| c.get());
-        let climb = CLIMB.lock(|c| c.get());
-        let now_ms = Instant::now().as_millis() as u32;
-        let out = fl.step(now_ms, &imu, &link, climb);
-        MOTORS.signal(out.motors);
-        ARMED.store(out.armed, Ordering::Relaxed);
-        if let Decision::ArmRefused(b) = out.decision {
-            blockers = blocker_bit(b);
-        } else if out.decision == Decision::Armed {
-            blockers = 0;
-        }
-        for alert in loop_alerts(&out).into_iter().flatten() {
-            // A full queue already holds more important alerts; the state is in telemetry.
-            let _ = ALERTS.try_send(alert);
-        }
-        FLIGHT_STATE.lock(|c| c.set(Some((out, blockers))));
-        if let Some(id) = fl.take_identification() {
-            info!("identified: ln β {} τ {} s", id.ln_beta, id.tau_s);
-            SYSID.signal(id);
         }
     }
 }

@@ -1,4 +1,4 @@
-//! One task per concern; each owns its hardware.
+//! One task per concern; each owns its hardware and hands its data to `FlightApp`.
 
 pub mod alerts;
 pub mod baro;

@@ -9,9 +9,9 @@ use embassy_stm32::timer::{Ch1, Ch2, Ch3, Ch4};
 use embassy_time::{Duration, Timer};
 use flight_core::outputs::Command;
 
-use super::supervisor::{Watched, check_in};
 use crate::firmware::outputs::MotorTimer;
-use crate::firmware::signals::MOTORS;
+use crate::firmware::shared::{MOTORS, check_in};
+use flight_core::app::Task;
 
 /// Both banks of a quad: outputs 1–2 and 3–4.
 pub struct Motors {
@@ -46,6 +46,6 @@ pub async fn motors_task(mut motors: Motors) {
             Either::First(commands) => motors.apply(&commands),
             Either::Second(()) => motors.apply(&[Command::Stopped; 4]),
         }
-        check_in(Watched::Motors);
+        check_in(Task::Motors);
     }
 }

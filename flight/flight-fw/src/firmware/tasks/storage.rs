@@ -1,18 +1,17 @@
 //! Settings in flash sectors 2–3 (0x0800_8000–0x0800_FFFF, hardware/brushedsparky): loaded
-//! at boot before the watchdog starts, saved on request while disarmed with the watchdog
+//! at boot before the watchdog starts, saved when the app asks (`FlightApp::take_save`, disarmed only) with the watchdog
 //! stretched over the possible sector erase.
-
-use core::sync::atomic::Ordering;
 
 use defmt::{info, warn};
 use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_stm32::flash::{Bank1Region1, Blocking};
+use embassy_time::{Duration, Timer};
 use flight_core::settings::{Settings, load, save};
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
 
 use super::supervisor::with_long_timeout;
-use crate::firmware::signals::{ARMED, SAVE_REQUEST, SETTINGS};
+use crate::firmware::shared::with_app;
 
 /// The flash under the map.
 pub type SettingsFlash = BlockingAsync<Bank1Region1<'static, Blocking>>;
@@ -44,21 +43,15 @@ pub async fn open(flash: Bank1Region1<'static, Blocking>) -> (Option<SettingsMap
 #[embassy_executor::task]
 pub async fn storage_task(mut map: SettingsMap) {
     loop {
-        SAVE_REQUEST.wait().await;
-        if ARMED.load(Ordering::Relaxed) {
-            warn!("settings save refused while armed");
-            continue;
-        }
-        let snapshot = SETTINGS.lock().await.clone();
-        let Some((live, stored)) = snapshot else {
+        Timer::after(Duration::from_millis(100)).await;
+        // The app hands out a save only while disarmed.
+        let Some(Some((live, stored))) = with_app(|a| a.take_save()) else {
             continue;
         };
         match with_long_timeout(save(&mut map, &live, &stored)).await {
             Ok(n) => {
                 info!("settings saved ({} changed)", n);
-                if let Some((_, stored)) = SETTINGS.lock().await.as_mut() {
-                    *stored = live;
-                }
+                with_app(|a| a.on_saved(live));
             }
             Err(e) => warn!("settings save failed: {}", e),
         }

@@ -1,0 +1,81 @@
+//! The console's behaviour: a line of `settings::console`'s command language in, the answer
+//! out. Changes go to the live settings (the gains are re-designed); `save` requests a
+//! write; `set`, `save` and `defaults` are refused while armed. The USB adapter only moves
+//! lines and bytes.
+
+use core::fmt::Write;
+
+use super::FlightApp;
+use crate::settings::{Command, Settings, parse_line, write_list, write_setting};
+
+const HELP: &str =
+    "help | list [prefix] | get NAME | set NAME VALUE | save | defaults | status\r\n";
+
+impl FlightApp {
+    /// Answers one console line (without its line ending) into `out`.
+    pub fn on_console_line<W: Write>(&mut self, line: &str, out: &mut W) -> core::fmt::Result {
+        let armed = self.flight.armed();
+        match parse_line(line) {
+            Ok(Command::Nothing) => Ok(()),
+            Ok(Command::Help) => out.write_str(HELP),
+            Ok(Command::List(prefix)) => write_list(out, &self.live, prefix),
+            Ok(Command::Get(name)) => write_setting(out, &self.live, name),
+            Ok(Command::Set { .. } | Command::Save | Command::Defaults) if armed => {
+                out.write_str("refused: disarm first\r\n")
+            }
+            Ok(Command::Set { name, value }) => match self.live.set_text(name, value) {
+                Ok(()) => {
+                    self.settings_changed();
+                    write_setting(out, &self.live, name)
+                }
+                Err(e) => write!(out, "{e}\r\n"),
+            },
+            Ok(Command::Save) => {
+                self.request_save();
+                out.write_str("saving\r\n")
+            }
+            Ok(Command::Defaults) => {
+                self.live = Settings::default();
+                self.settings_changed();
+                out.write_str("factory values (not saved)\r\n")
+            }
+            Ok(Command::Status) => self.write_status(out),
+            Err(e) => write!(out, "{e}\r\n"),
+        }
+    }
+
+    fn write_status<W: Write>(&self, out: &mut W) -> core::fmt::Result {
+        let link = if self.link_input.up { "up" } else { "down" };
+        match &self.last_out {
+            Some(state) => write!(
+                out,
+                "mode {}, failsafe {}, link {}, arm blockers {:#x}, attitude {:?} deg\r\n",
+                state.mode.name(),
+                state.failsafe,
+                link,
+                self.arming_blockers(),
+                state.attitude_deg
+            )?,
+            None => out.write_str("flight loop not running (IMU?)\r\n")?,
+        }
+        if let Some(fault) = self.imu.fault() {
+            write!(
+                out,
+                "IMU fault: {} (motors stopped, re-arm needed)\r\n",
+                fault.name()
+            )?;
+        }
+        if let Some(e) = self.setup_error {
+            write!(out, "stored settings not flyable ({e}): factory setup\r\n")?;
+        }
+        let armed = self.flight.armed();
+        match self.battery {
+            Some(b) => write!(
+                out,
+                "armed {armed}, battery {} mV {} mA {:?}\r\n",
+                b.voltage_mv, b.current_ma, b.level
+            ),
+            None => write!(out, "armed {armed}, battery unknown\r\n"),
+        }
+    }
+}

@@ -1,0 +1,212 @@
+//! The flight side of the TauLink link: the follower's hooks (channels → the loop's
+//! `LinkInput`, failsafe counting, setting changes from the module applied while disarmed
+//! and echoed, one telemetry message per [`REPORT_PERIOD_US`] when the downlink stream is
+//! empty), the link's parameters (stored bind or [`DEFAULT_BIND_ID`]) and the bind result.
+//!
+//! Watchdog: every hook call checks the link task in, whatever the slot length; the
+//! follower calls its hooks at least every 50 ms in every sync state, and the adapter
+//! checks in while it waits outside the follower (bind window, retry after a radio error).
+
+use telemetry::channels::ChannelFormat;
+use telemetry::link::core::Follower;
+use telemetry::link::follower::FollowerHooks;
+use telemetry::link::{Band, LinkParams, RateMode};
+use telemetry::messages::{
+    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, SysIdResult, encode_message,
+};
+
+use super::{FlightApp, Task};
+use crate::pipeline::{ChannelMap, store_link, stored_link};
+use crate::report::{LinkSeen, Reporter, Snapshot, apply_setting, setting_report, sysid_messages};
+use crate::supervisor::FlightMode;
+use crate::sysid::ekf::Identification;
+
+/// How long the follower listens for a bind offer after boot, µs.
+pub const BIND_WINDOW_US: u64 = 3_000_000;
+/// The link used when nobody binds (both ends built with it).
+pub const DEFAULT_BIND_ID: u32 = 0x7A11_0001;
+/// The follower declares failsafe after this long without a valid packet, µs.
+pub const FAILSAFE_US: u64 = 500_000;
+/// Telemetry message period, µs.
+pub const REPORT_PERIOD_US: u64 = 20_000;
+
+/// What the hooks keep between slots.
+pub(super) struct LinkSide {
+    map: ChannelMap,
+    reporter: Reporter,
+    reader: MessageReader,
+    echo: Option<SettingChange>,
+    last_report_us: Option<u64>,
+    last_state: Option<(bool, bool, FlightMode)>,
+    failsafes: u16,
+    was_failsafe: bool,
+    /// Identification results (roll, pitch, yaw) still to send.
+    sysid: heapless::Deque<SysIdResult, 3>,
+}
+
+impl LinkSide {
+    pub(super) fn new() -> Self {
+        Self {
+            map: ChannelMap::default(),
+            reporter: Reporter::new(),
+            reader: MessageReader::new(),
+            echo: None,
+            last_report_us: None,
+            last_state: None,
+            failsafes: 0,
+            // The follower starts in failsafe (no link yet): that is not a failsafe event.
+            was_failsafe: true,
+            sysid: heapless::Deque::new(),
+        }
+    }
+
+    /// A finished identification: its three results replace any still unsent.
+    pub(super) fn queue_identification(&mut self, id: &Identification) {
+        self.sysid.clear();
+        for r in sysid_messages(id) {
+            // Capacity 3 after the clear: cannot fail.
+            let _ = self.sysid.push_back(r);
+        }
+    }
+}
+
+impl FlightApp {
+    /// The link to run: the stored bind, else the compiled-in default.
+    pub fn link_params(&self) -> LinkParams {
+        stored_link(&self.live).unwrap_or_else(|| {
+            LinkParams::new(
+                DEFAULT_BIND_ID,
+                Band::Mhz433,
+                RateMode::F250,
+                ChannelFormat::Full16,
+                4,
+            )
+        })
+    }
+
+    /// A module bound us (in the boot window, disarmed): the link goes into the settings
+    /// and a save is requested.
+    pub fn on_bound(&mut self, params: &LinkParams) {
+        if self.flight.armed() {
+            return;
+        }
+        if store_link(&mut self.live, params).is_ok() {
+            self.request_save();
+        }
+    }
+
+    /// The link task is waiting outside the follower (bind window, retry): it is alive.
+    pub fn on_link_idle(&mut self) {
+        self.watchdog.check_in(Task::Link);
+    }
+
+    /// The follower stopped (radio error): the loop sees the link down until it runs again.
+    pub fn on_link_down(&mut self) {
+        self.watchdog.check_in(Task::Link);
+        self.link_input.up = false;
+    }
+
+    /// The follower's hook, after every step (`now_us` on the link's clock).
+    pub fn on_link_step(&mut self, now_us: u64, follower: &mut Follower) {
+        self.watchdog.check_in(Task::Link);
+        let failsafe = follower.in_failsafe();
+        if failsafe && !self.link.was_failsafe {
+            self.link.failsafes = self.link.failsafes.saturating_add(1);
+        }
+        self.link.was_failsafe = failsafe;
+        self.link_input = self.link.map.link_input(follower.output(), !failsafe);
+        let mut buf = [0u8; 32];
+        loop {
+            let n = follower.uplink_stream.read(&mut buf);
+            if n == 0 {
+                break;
+            }
+            for b in buf.iter().take(n) {
+                if let Some(Decoded::Message(Message::SettingChange(c))) = self.link.reader.push(*b)
+                {
+                    self.apply_link_change(c);
+                }
+            }
+        }
+        let due = self
+            .link
+            .last_report_us
+            .is_none_or(|t| now_us.saturating_sub(t) >= REPORT_PERIOD_US);
+        if due {
+            self.link.last_report_us = Some(now_us);
+            self.report(follower);
+        }
+    }
+
+    /// A setting change from the module: applied while disarmed; the resulting (or,
+    /// refused, the unchanged) value is echoed.
+    fn apply_link_change(&mut self, change: SettingChange) {
+        if self.flight.armed() {
+            self.link.echo = setting_report(&self.live, change.id);
+            return;
+        }
+        let (result, echo) = apply_setting(&mut self.live, change);
+        if result.is_ok() {
+            self.settings_changed();
+        }
+        self.link.echo = echo;
+    }
+
+    /// One telemetry message when the downlink stream is empty: a setting echo, then an
+    /// identification result, then a state change out of turn, else the rotation.
+    fn report(&mut self, follower: &mut Follower) {
+        let stream = &follower.downlink_stream;
+        if stream.pending() > 0 || stream.free() < FRAMED_MAX_BYTES {
+            return; // one message in flight at most: stale telemetry helps nobody
+        }
+        let Some(out) = self.last_out else {
+            return;
+        };
+        let counters = follower.counters();
+        let snap = Snapshot {
+            out,
+            battery: self.battery,
+            link: LinkSeen {
+                rssi_dbm: follower
+                    .uplink_rssi_dbm()
+                    .map_or(0, |r| i8::try_from(r).unwrap_or(i8::MIN)),
+                lq_percent: follower.uplink_lq(),
+                downlink: follower.remote_report().map(|r| (r.rssi_dbm, r.lq_percent)),
+                rate_mode: follower.params().rate.code(),
+                received: counters.received,
+                missed: counters.missed,
+                failsafes: self.link.failsafes,
+            },
+            arming_blockers: self.arming_blockers(),
+            sysid: self.link.sysid.front().copied(),
+        };
+        let state = (out.armed, out.failsafe, out.mode);
+        let message = if let Some(c) = self.link.echo.take() {
+            Message::SettingChange(c)
+        } else if let Some(r) = self.link.sysid.pop_front() {
+            Message::SysIdResult(r)
+        } else if self.link.last_state != Some(state) {
+            self.link.last_state = Some(state);
+            Reporter::state(&snap)
+        } else {
+            self.link.reporter.next(&snap)
+        };
+        let mut buf = [0u8; FRAMED_MAX_BYTES];
+        if let Ok(n) = encode_message(&message, &mut buf) {
+            follower
+                .downlink_stream
+                .write(buf.get(..n).unwrap_or_default());
+        }
+    }
+
+    /// Link failsafe events since boot.
+    pub fn link_failsafes(&self) -> u16 {
+        self.link.failsafes
+    }
+}
+
+impl FollowerHooks for FlightApp {
+    fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
+        self.on_link_step(now_us, follower);
+    }
+}

@@ -1,0 +1,340 @@
+//! The flight application: everything the flight firmware's tasks decide, as one pure
+//! struct shaped like `module_core::app::App`. The firmware (and the simulator) call the
+//! `on_*` methods from their tasks with the time and the peripheral's data, and carry out
+//! what they return: motor commands, a sensor re-probe, a tone frequency, a watchdog feed,
+//! a settings save ([`FlightApp::take_save`]) or a gain design
+//! ([`FlightApp::take_design_request`]). No heap, no panics, time injected.
+//!
+//! Owned here: the live and stored settings and the setup derived from them; the flight
+//! loop and its controllers; the IMU fault policy (`imu`); the baro climb rate; the
+//! battery monitor and the tone player; the link follower's hooks, bind handling and
+//! telemetry (`link`); the console's command language (`console`); the watchdog check-in
+//! policy (`watchdog`).
+
+mod console;
+mod imu;
+mod link;
+mod watchdog;
+
+#[cfg(test)]
+mod tests;
+
+pub use imu::{
+    CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
+};
+pub use link::{BIND_WINDOW_US, DEFAULT_BIND_ID, FAILSAFE_US, REPORT_PERIOD_US};
+pub use watchdog::{FEED_PERIOD_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog};
+
+use crate::alerts::{Alert, TonePlayer};
+use crate::battery::{BatteryMonitor, BatteryStatus};
+use crate::outputs::Command;
+use crate::pipeline::{
+    ClimbRate, Controllers, FlightLoop, FlightSetup, ImuSample, LinkInput, LoopOutput, SetupError,
+    announce_battery, from_settings, loop_alerts,
+};
+use crate::report::blocker_bit;
+use crate::settings::Settings;
+use crate::supervisor::{ArmBlocker, Decision};
+use crate::sysid::ekf::Identification;
+
+/// What the IMU adapter does after a sample (or a missing one).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImuStep {
+    /// Commands for motors 1–4, to apply now.
+    pub motors: [Command; 4],
+    /// Re-initialise the sensor (it is faulted).
+    pub reprobe: bool,
+}
+
+/// The flight application.
+pub struct FlightApp {
+    live: Settings,
+    stored: Settings,
+    setup: FlightSetup,
+    setup_error: Option<SetupError>,
+    flight: FlightLoop,
+    pending_setup: Option<(FlightSetup, Controllers)>,
+    design_requested: bool,
+    save_requested: bool,
+    imu: ImuHealth,
+    last_out: Option<LoopOutput>,
+    blockers: u16,
+    climb: ClimbRate,
+    climb_mps: Option<f32>,
+    battery_monitor: BatteryMonitor,
+    battery: Option<BatteryStatus>,
+    player: TonePlayer,
+    link_input: LinkInput,
+    link: link::LinkSide,
+    watchdog: Watchdog,
+    identified: Option<Identification>,
+}
+
+/// The flight setup for `settings`, or the factory one (and why) if they do not fly.
+fn setup_for(settings: &Settings) -> (Option<FlightSetup>, Option<SetupError>) {
+    match from_settings(settings) {
+        Ok(s) => (Some(s), None),
+        Err(e) => (from_settings(&Settings::default()).ok(), Some(e)),
+    }
+}
+
+impl FlightApp {
+    /// The application booting at `now_ms` with the settings loaded from flash. Settings
+    /// that do not make a flyable setup fall back to the factory setup (see
+    /// [`FlightApp::setup_error`]); the gains are solved here (≈ 5.5 M instructions), before
+    /// anything can arm. `None` only if not even the factory settings make a setup.
+    pub fn new(stored: Settings, now_ms: u32) -> Option<Self> {
+        let (setup, setup_error) = setup_for(&stored);
+        let setup = setup?;
+        let controllers = Controllers::design(&setup.control).ok();
+        Some(Self {
+            link: link::LinkSide::new(),
+            live: stored.clone(),
+            stored,
+            flight: FlightLoop::new(setup.loop_config, setup.mixer, controllers),
+            battery_monitor: BatteryMonitor::new(setup.battery),
+            setup,
+            setup_error,
+            pending_setup: None,
+            design_requested: false,
+            save_requested: false,
+            imu: ImuHealth::new(now_ms),
+            last_out: None,
+            blockers: 0,
+            climb: ClimbRate::new(),
+            climb_mps: None,
+            battery: None,
+            player: TonePlayer::new(),
+            link_input: LinkInput {
+                mode_channel: -1.0,
+                ..LinkInput::default()
+            },
+            watchdog: Watchdog::new(now_ms),
+            identified: None,
+        })
+    }
+
+    /// The setup in force (motor protocol, loop rate: the firmware starts its peripherals
+    /// from it).
+    pub fn setup(&self) -> &FlightSetup {
+        &self.setup
+    }
+
+    /// Why the stored settings were not used at boot, if they were not.
+    pub fn setup_error(&self) -> Option<SetupError> {
+        self.setup_error
+    }
+
+    /// The live settings.
+    pub fn settings(&self) -> &Settings {
+        &self.live
+    }
+
+    /// Motors may turn.
+    pub fn armed(&self) -> bool {
+        self.flight.armed()
+    }
+
+    /// The loop's latest output.
+    pub fn last_output(&self) -> Option<&LoopOutput> {
+        self.last_out.as_ref()
+    }
+
+    /// What the link delivers to the loop now.
+    pub fn link_input(&self) -> LinkInput {
+        self.link_input
+    }
+
+    /// The identification that finished on the latest sample (system-identification mode
+    /// left); it also goes down the link.
+    pub fn identification_finished(&self) -> Option<Identification> {
+        self.identified
+    }
+
+    /// The standing IMU fault.
+    pub fn imu_fault(&self) -> Option<ImuFault> {
+        self.imu.fault()
+    }
+
+    /// The latest battery reading.
+    pub fn battery(&self) -> Option<BatteryStatus> {
+        self.battery
+    }
+
+    /// The flight loop (read-only: estimates for logs and the simulator).
+    pub fn flight_loop(&self) -> &FlightLoop {
+        &self.flight
+    }
+
+    /// Arming blockers as telemetry's bit set; an IMU fault shows as "sensors unhealthy".
+    pub fn arming_blockers(&self) -> u16 {
+        let imu = if self.imu.fault().is_some() {
+            blocker_bit(ArmBlocker::SensorsUnhealthy)
+        } else {
+            0
+        };
+        self.blockers | imu
+    }
+
+    // ---- IMU task -------------------------------------------------------------------
+
+    /// A sample from the IMU at `now_ms`: one loop, unless the sample is unusable (then
+    /// the ride-through policy decides). A new setup is installed first while disarmed.
+    pub fn on_imu_sample(&mut self, now_ms: u32, sample: &ImuSample) -> ImuStep {
+        self.watchdog.check_in(Task::Imu);
+        if !self.flight.armed()
+            && let Some((setup, controllers)) = self.pending_setup.take()
+        {
+            // Same sensor rate only: a rate change needs the chip reconfigured (next boot).
+            self.flight = FlightLoop::new(setup.loop_config, setup.mixer, Some(controllers));
+            self.battery_monitor = BatteryMonitor::new(setup.battery);
+            self.setup = setup;
+        }
+        if self.imu.check_sample(now_ms, sample).is_some() {
+            return self.ride_through(now_ms);
+        }
+        if self.imu.fault().is_some() {
+            // Good data again, not yet for long enough to trust: stay disarmed.
+            return self.ride_through(now_ms);
+        }
+        let out = self
+            .flight
+            .step(now_ms, sample, &self.link_input, self.climb_mps);
+        self.record(out);
+        self.identified = self.flight.take_identification();
+        if let Some(id) = &self.identified {
+            self.link.queue_identification(id);
+        }
+        ImuStep {
+            motors: out.motors,
+            reprobe: false,
+        }
+    }
+
+    /// No usable sample: the data-ready edge did not come within the adapter's poll
+    /// period (`ImuFault::Stalled`) or the read failed (`ImuFault::ReadError`).
+    pub fn on_imu_missing(&mut self, now_ms: u32, cause: ImuFault) -> ImuStep {
+        self.watchdog.check_in(Task::Imu);
+        self.imu.problem(cause);
+        self.ride_through(now_ms)
+    }
+
+    /// Holds the last command within the ride-through bound; past it, disarms once.
+    fn ride_through(&mut self, now_ms: u32) -> ImuStep {
+        if self.imu.expire(now_ms).is_some() {
+            let decision = self.flight.sensor_fault();
+            if let Some(out) = self.last_out.as_mut() {
+                out.motors = [Command::Stopped; 4];
+                out.armed = false;
+                out.failsafe = false;
+                out.decision = decision;
+            }
+            if decision == Decision::DisarmedSensorFault {
+                self.player.push(Alert::SensorFault);
+            }
+        }
+        let motors = match self.last_out {
+            Some(out) if self.flight.armed() => out.motors,
+            _ => [Command::Stopped; 4],
+        };
+        ImuStep {
+            motors,
+            reprobe: self.imu.reprobe_due(now_ms),
+        }
+    }
+
+    fn record(&mut self, out: LoopOutput) {
+        if let Decision::ArmRefused(b) = out.decision {
+            self.blockers = blocker_bit(b);
+        } else if out.decision == Decision::Armed {
+            self.blockers = 0;
+        }
+        for alert in loop_alerts(&out).into_iter().flatten() {
+            self.player.push(alert);
+        }
+        self.last_out = Some(out);
+    }
+
+    // ---- baro, battery, alerts, watchdog --------------------------------------------
+
+    /// A baro altitude (`None`: the reading failed) at `now_ms`.
+    pub fn on_baro(&mut self, now_ms: u32, altitude_m: Option<f32>) {
+        self.watchdog.check_in(Task::Baro);
+        self.climb_mps = altitude_m.and_then(|a| self.climb.update(now_ms, a));
+    }
+
+    /// A battery sample (raw ADC counts) at `now_ms`.
+    pub fn on_battery(&mut self, now_ms: u32, voltage_raw: u16, current_raw: Option<u16>) {
+        self.watchdog.check_in(Task::Battery);
+        let status = self
+            .battery_monitor
+            .update(now_ms, voltage_raw, current_raw);
+        if status.level_changed || self.battery.is_none() {
+            announce_battery(&mut self.player, status.level);
+        }
+        self.battery = Some(status);
+    }
+
+    /// The tone to play at `now_ms`, Hz (0 = silence). Call every few ms.
+    pub fn on_alert_tick(&mut self, now_ms: u32) -> u16 {
+        self.watchdog.check_in(Task::Alerts);
+        self.player.tick(now_ms)
+    }
+
+    /// A task that has nothing to hand the app checks in.
+    pub fn check_in(&mut self, task: Task) {
+        self.watchdog.check_in(task);
+    }
+
+    /// The supervisor's poll at `now_ms`: `true` = feed the hardware watchdog.
+    pub fn on_watchdog_poll(&mut self, now_ms: u32) -> bool {
+        self.watchdog.poll(now_ms)
+    }
+
+    /// The check-in state (for the simulator's IWDG model and diagnostics).
+    pub fn watchdog(&self) -> &Watchdog {
+        &self.watchdog
+    }
+
+    // ---- settings: save and gain design ---------------------------------------------
+
+    /// A setting changed: the gains adapter re-derives the setup and re-solves the gains.
+    fn settings_changed(&mut self) {
+        self.design_requested = true;
+    }
+
+    /// Asks for the live settings to be saved.
+    fn request_save(&mut self) {
+        self.save_requested = true;
+    }
+
+    /// For the storage adapter: (live, stored) to write, when a save is due and the
+    /// motors are stopped (a sector erase stalls the CPU).
+    pub fn take_save(&mut self) -> Option<(Settings, Settings)> {
+        if !self.save_requested || self.flight.armed() {
+            return None;
+        }
+        self.save_requested = false;
+        Some((self.live.clone(), self.stored.clone()))
+    }
+
+    /// The storage adapter wrote `saved`.
+    pub fn on_saved(&mut self, saved: Settings) {
+        self.stored = saved;
+    }
+
+    /// For the gains adapter: settings to design a setup and gains for (once per change).
+    pub fn take_design_request(&mut self) -> Option<Settings> {
+        self.watchdog.check_in(Task::Gains);
+        if !core::mem::take(&mut self.design_requested) {
+            return None;
+        }
+        Some(self.live.clone())
+    }
+
+    /// The gains adapter designed `setup` and `controllers`: installed by the IMU path as
+    /// soon as the motors are stopped.
+    pub fn on_designed(&mut self, setup: FlightSetup, controllers: Controllers) {
+        self.pending_setup = Some((setup, controllers));
+    }
+}

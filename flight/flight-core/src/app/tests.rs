@@ -1,0 +1,242 @@
+use super::*;
+use crate::supervisor::Sticks;
+use telemetry::channels::FailsafeValues;
+use telemetry::link::core::Follower;
+
+/// A level frame at rest; a tiny sample-dependent gyro wiggle like real sensor noise
+/// (bit-identical samples are the frozen-data fault).
+fn resting(i: u32) -> ImuSample {
+    let wiggle = (i % 13) as f32 * 1e-4;
+    ImuSample {
+        gyro_radps: [wiggle, -wiggle, 0.0],
+        accel_mps2: [0.0, 0.0, -crate::estimation::GRAVITY_MPS2],
+        mag: None,
+    }
+}
+
+fn sticks(throttle: f32, yaw: f32) -> LinkInput {
+    LinkInput {
+        up: true,
+        sticks: Sticks {
+            throttle,
+            yaw,
+            ..Sticks::default()
+        },
+        arm_switch: None,
+        mode_channel: -1.0,
+    }
+}
+
+fn app() -> FlightApp {
+    let Some(app) = FlightApp::new(Settings::default(), 0) else {
+        panic!("factory settings make a setup");
+    };
+    app
+}
+
+/// Feeds `n` good samples at 1 ms from `t0`; returns the next time and the last step.
+fn fly(app: &mut FlightApp, t0: u32, n: u32, link: LinkInput) -> (u32, ImuStep) {
+    app.link_input = link;
+    let mut last = None;
+    for i in 0..n {
+        last = Some(app.on_imu_sample(t0 + i, &resting(t0 + i)));
+    }
+    let Some(last) = last else {
+        panic!("n > 0");
+    };
+    (t0 + n, last)
+}
+
+/// Arms with the yaw gesture and brings the throttle up to hover; returns the time.
+fn armed_in_the_air(app: &mut FlightApp) -> u32 {
+    let (t, _) = fly(app, 0, 1500, sticks(0.0, 1.0));
+    let (t, _) = fly(app, t, 100, sticks(0.0, 0.0));
+    assert!(app.armed());
+    let (t, step) = fly(app, t, 200, sticks(0.5, 0.0));
+    assert!(
+        step.motors
+            .iter()
+            .all(|m| matches!(m, Command::Throttle(x) if *x > 0.3))
+    );
+    t
+}
+
+fn running(step: &ImuStep) -> bool {
+    step.motors
+        .iter()
+        .all(|m| matches!(m, Command::Throttle(_)))
+}
+
+#[test]
+fn a_short_imu_stall_holds_the_last_command_then_disarms_with_a_reason() {
+    let mut app = app();
+    let t = armed_in_the_air(&mut app);
+    let (_, before) = fly(&mut app, t - 1, 1, sticks(0.5, 0.0));
+    // Data-ready missing, polled every 5 ms: the last command is held within the bound.
+    let mut now = t;
+    while now < t + STALL_RIDE_THROUGH_MS - 1 {
+        let step = app.on_imu_missing(now, ImuFault::Stalled);
+        assert_eq!(step.motors, before.motors, "held at {} ms", now - t);
+        assert!(!step.reprobe);
+        assert!(app.armed());
+        now += 5;
+    }
+    let step = app.on_imu_missing(t + STALL_RIDE_THROUGH_MS, ImuFault::Stalled);
+    assert_eq!(step.motors, [Command::Stopped; 4]);
+    assert!(step.reprobe, "the adapter re-probes the sensor");
+    assert!(!app.armed(), "disarmed, not 'armed with stopped motors'");
+    assert_eq!(app.imu_fault(), Some(ImuFault::Stalled));
+    let out = app.last_output().copied();
+    assert_eq!(out.map(|o| o.decision), Some(Decision::DisarmedSensorFault));
+    assert_ne!(
+        app.arming_blockers() & blocker_bit(ArmBlocker::SensorsUnhealthy),
+        0
+    );
+    // The distinct tone: the sensor-fault siren starts at 3.5 kHz.
+    assert_eq!(app.on_alert_tick(t + STALL_RIDE_THROUGH_MS), 3500);
+    let mut status = heapless::String::<512>::new();
+    let _ = app.on_console_line("status", &mut status);
+    assert!(status.contains("IMU fault: stalled"), "{status}");
+    // Re-probed at most every 500 ms.
+    assert!(!app.on_imu_missing(t + 100, ImuFault::Stalled).reprobe);
+    assert!(
+        app.on_imu_missing(
+            t + STALL_RIDE_THROUGH_MS + REPROBE_PERIOD_MS,
+            ImuFault::Stalled
+        )
+        .reprobe
+    );
+}
+
+#[test]
+fn motors_never_restart_after_an_imu_fault_without_a_fresh_arm() {
+    let mut app = app();
+    let t = armed_in_the_air(&mut app);
+    let mut now = t;
+    while now <= t + STALL_RIDE_THROUGH_MS {
+        app.on_imu_missing(now, ImuFault::ReadError);
+        now += 1;
+    }
+    assert_eq!(app.imu_fault(), Some(ImuFault::ReadError));
+    // The sensor comes back; the pilot still holds hover throttle.
+    let (now, step) = fly(&mut app, now, 2_000, sticks(0.5, 0.0));
+    assert!(!running(&step));
+    assert!(!app.armed());
+    assert_eq!(app.imu_fault(), None, "good data clears the fault");
+    // Only a new arm gesture (throttle low) starts them again.
+    let (now, _) = fly(&mut app, now, 1_500, sticks(0.0, 1.0));
+    let (_, step) = fly(&mut app, now, 100, sticks(0.0, 0.0));
+    assert!(app.armed());
+    assert!(running(&step));
+}
+
+#[test]
+fn frozen_and_all_zero_samples_are_faults() {
+    for bad in [
+        resting(7),
+        ImuSample {
+            gyro_radps: [0.0; 3],
+            accel_mps2: [0.0; 3],
+            mag: None,
+        },
+    ] {
+        let mut app = app();
+        let t = armed_in_the_air(&mut app);
+        let mut disarmed_at = None;
+        for i in 0..200 {
+            let step = app.on_imu_sample(t + i, &bad);
+            if !app.armed() && disarmed_at.is_none() {
+                disarmed_at = Some(i);
+                assert_eq!(step.motors, [Command::Stopped; 4]);
+            }
+        }
+        let Some(at) = disarmed_at else {
+            panic!("{bad:?} never disarmed");
+        };
+        // Frozen data is usable for FROZEN_SAMPLES − 1 samples; then the ride-through runs.
+        assert!(at <= FROZEN_SAMPLES as u32 + STALL_RIDE_THROUGH_MS, "{at}");
+        // The last good sample came 1 ms before the first bad one.
+        assert!(at + 1 >= STALL_RIDE_THROUGH_MS, "{at}");
+        assert!(app.imu_fault().is_some());
+    }
+}
+
+#[test]
+fn a_still_noisy_sensor_is_never_a_fault() {
+    let mut app = app();
+    let (_, step) = fly(&mut app, 0, 5_000, sticks(0.0, 0.0));
+    assert!(!step.reprobe);
+    assert_eq!(app.imu_fault(), None);
+    assert_eq!(app.arming_blockers(), 0);
+}
+
+#[test]
+fn the_watchdog_is_fed_only_when_every_task_checked_in() {
+    let mut w = Watchdog::new(0);
+    for t in Task::ALL.iter().skip(1) {
+        w.check_in(*t);
+    }
+    assert!(!w.poll(100));
+    assert_eq!(
+        w.missing().collect::<heapless::Vec<_, 8>>(),
+        [Task::Heartbeat]
+    );
+    assert!(!w.expired(249));
+    assert!(w.expired(250), "250 ms without a feed is a reset");
+    w.check_in(Task::Heartbeat);
+    assert!(w.poll(200));
+    assert!(!w.expired(449));
+    assert!(!w.poll(300), "the set starts over after a feed");
+    assert_eq!(w.missing().count(), Task::ALL.len());
+}
+
+#[test]
+fn every_link_hook_call_checks_the_link_in() {
+    let mut app = app();
+    let mut follower = Follower::new(app.link_params(), FailsafeValues::default(), FAILSAFE_US);
+    for t in Task::ALL {
+        if t != Task::Link {
+            app.check_in(t);
+        }
+    }
+    assert!(!app.on_watchdog_poll(100));
+    app.on_link_step(100_000, &mut follower);
+    assert!(app.on_watchdog_poll(100));
+    // Waiting outside the follower counts too.
+    for t in Task::ALL {
+        if t != Task::Link {
+            app.check_in(t);
+        }
+    }
+    app.on_link_idle();
+    assert!(app.on_watchdog_poll(200));
+    // Failsafe from the start: the loop sees the link down, and a link that never came up
+    // is not a failsafe event in telemetry.
+    assert!(!app.link_input().up);
+    assert_eq!(app.link_failsafes(), 0);
+}
+
+#[test]
+fn console_changes_are_refused_while_armed_and_request_designs_and_saves_when_not() {
+    let mut app = app();
+    let mut out = heapless::String::<256>::new();
+    let _ = app.on_console_line("set battery.cells 3", &mut out);
+    assert!(!out.contains("refused"), "{out}");
+    let Some(request) = app.take_design_request() else {
+        panic!("a change asks for a gain design");
+    };
+    assert_eq!(request, *app.settings());
+    assert_eq!(app.take_design_request(), None, "once per change");
+    assert_eq!(app.take_save(), None, "set alone does not save");
+    let _ = app.on_console_line("save", &mut out);
+    let Some((live, _stored)) = app.take_save() else {
+        panic!("save requested");
+    };
+    app.on_saved(live);
+    armed_in_the_air(&mut app);
+    out.clear();
+    let _ = app.on_console_line("defaults", &mut out);
+    assert!(out.contains("refused"), "{out}");
+    let _ = app.on_console_line("save", &mut out);
+    assert_eq!(app.take_save(), None);
+}

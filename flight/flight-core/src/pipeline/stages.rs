@@ -1,0 +1,124 @@
+//! The stateless halves of the flight loop's setpoint, failsafe-descent and mix stages:
+//! what the active flight mode's controller asks for, the levelling setpoint of the
+//! failsafe descent, and the mix into motor commands. `FlightLoop::step` owns the order
+//! and the state; these only compute.
+
+use super::controllers::Controllers;
+use super::flight_loop::LoopConfig;
+use super::identify::{Sysid, sysid_output};
+use crate::control::lqr::AxisSetpoint;
+use crate::control::mixer::Mixer;
+use crate::outputs::Command;
+use crate::supervisor::{FlightMode, Sticks};
+
+/// Failsafe descent: level (angle error = −angle), no yaw rotation.
+pub(super) fn level_setpoint([roll, pitch]: [f32; 2]) -> [AxisSetpoint; 3] {
+    [
+        AxisSetpoint::Attitude {
+            angle_error_deg: -roll,
+        },
+        AxisSetpoint::Attitude {
+            angle_error_deg: -pitch,
+        },
+        AxisSetpoint::Rate { rate_dps: 0.0 },
+    ]
+}
+
+/// Setpoint stage: the sticks through the active mode's controller. Returns the
+/// roll/pitch/yaw demand and whether the identification shake is on.
+pub(super) fn setpoint(
+    c: &mut Controllers,
+    sysid: &mut Option<Sysid>,
+    config: &LoopConfig,
+    mode: FlightMode,
+    sticks: &Sticks,
+    gyro_dps: [f32; 3],
+    [roll, pitch]: [f32; 2],
+) -> ([f32; 3], bool) {
+    let rates = config.shaping.rates_dps(sticks);
+    let [yaw_rate] = [rates[2]];
+    let [roll_sp, pitch_sp] = config.shaping.angles_deg(sticks);
+    let errors = [roll_sp - roll, pitch_sp - pitch];
+    let out = match mode {
+        FlightMode::RatePid => c.pid_rate(gyro_dps, rates),
+        // On the ground (throttle low) nothing shakes: the output is zeroed by the loop,
+        // and the EKF only learns in the air.
+        FlightMode::SystemId if sticks.throttle_low() => [0.0; 3],
+        FlightMode::SystemId => {
+            let out = sysid_output(sysid, config.ts_s, gyro_dps, errors, yaw_rate, c);
+            return (out, true);
+        }
+        FlightMode::RateLqg => c.lqg(
+            gyro_dps,
+            rates.map(|rate_dps| AxisSetpoint::Rate { rate_dps }),
+        ),
+        FlightMode::Attitude if !config.attitude_uses_lqg => {
+            c.pid_attitude(gyro_dps, errors, yaw_rate)
+        }
+        FlightMode::Attitude => c.lqg(
+            gyro_dps,
+            [
+                AxisSetpoint::Attitude {
+                    angle_error_deg: errors[0],
+                },
+                AxisSetpoint::Attitude {
+                    angle_error_deg: errors[1],
+                },
+                AxisSetpoint::Rate { rate_dps: yaw_rate },
+            ],
+        ),
+        FlightMode::Horizon => {
+            let w = config.shaping.horizon_weight(sticks);
+            let blend = |i: usize| AxisSetpoint::Blend {
+                rate_dps: rates.get(i).copied().unwrap_or(0.0),
+                angle_error_deg: errors.get(i).copied().unwrap_or(0.0),
+                attitude_weight: w,
+            };
+            c.lqg(
+                gyro_dps,
+                [
+                    blend(0),
+                    blend(1),
+                    AxisSetpoint::Rate { rate_dps: yaw_rate },
+                ],
+            )
+        }
+    };
+    (out, false)
+}
+
+/// What the flying stages hand to the mix.
+pub(super) struct Demand {
+    /// Collective throttle, 0…1.
+    pub throttle: f32,
+    /// Roll, pitch, yaw demand, −1…1.
+    pub attitude: [f32; 3],
+    /// Motor command at zero throttle.
+    pub idle: f32,
+    /// The active controller predicts with its own output (told what was realised).
+    pub uses_lqg: bool,
+}
+
+/// Mix stage: throttle and attitude demand into motor commands above idle. Controllers
+/// that predict with their own output, and a running identification, are told what the
+/// motors realise (desaturation scales the demand down whenever it does not fit).
+pub(super) fn mix(
+    c: &mut Controllers,
+    mixer: &Mixer<4>,
+    sysid: Option<&mut Sysid>,
+    demand: Demand,
+) -> [Command; 4] {
+    let idle = demand.idle.clamp(0.0, 0.3);
+    let (mixed, applied) = mixer.mix_with_applied(demand.throttle, demand.attitude);
+    if demand.uses_lqg {
+        c.lqg_realised(applied);
+    }
+    if let Some(s) = sysid {
+        s.ekf.record_output(applied);
+    }
+    let mut motors = [Command::Stopped; 4];
+    for (m, x) in motors.iter_mut().zip(mixed) {
+        *m = Command::Throttle(idle + (1.0 - idle) * x);
+    }
+    motors
+}
