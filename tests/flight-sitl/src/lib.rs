@@ -11,5 +11,7 @@ mod module_end;
 pub mod scenario;
 pub mod world;
 
-pub use scenario::{ImuInjection, Pilot, PilotInput, Scenario};
-pub use world::{Sample, Sitl, run};
+pub use scenario::{
+    End, FlashInjection, ImuInjection, Pilot, PilotInput, RadioInjection, Scenario,
+};
+pub use world::{Boot, BootCause, Sample, Sitl, WatchdogResets, run};

@@ -24,6 +24,54 @@ pub struct PilotInput {
     pub battery_mv: f32,
     /// What the IMU delivers (faults injected at the IMU adapter).
     pub imu: ImuInjection,
+    /// The handset's PPM/CRSF input reaches the module (false: wire pulled, handset frozen —
+    /// the module sees no more frames).
+    pub handset_connected: bool,
+    /// The flight controller is powered (false → true is a power-on boot: state lost,
+    /// settings loaded from its simulated flash).
+    pub flight_powered: bool,
+    /// The flight side's RFM22B.
+    pub flight_radio: RadioInjection,
+    /// The module's RFM22B.
+    pub module_radio: RadioInjection,
+}
+
+/// A fault injected at one end's radio (chip and bus of the virtual Si4432).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RadioInjection {
+    /// Working.
+    #[default]
+    Healthy,
+    /// nIRQ reads low whatever the chip does (an unpowered module can read that way).
+    IrqStuckLow,
+    /// nIRQ never asserts.
+    IrqStuckHigh,
+    /// The chip is browned out: held in reset while this lasts, a power-on reset after it.
+    BrownOut,
+    /// Every SPI transfer fails while this lasts.
+    SpiErrors,
+}
+
+/// What the flight controller's settings flash holds at the first boot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FlashInjection {
+    /// The scenario's settings, cleanly stored.
+    #[default]
+    Stored,
+    /// The scenario's settings stored, then corrupted (bit flips, a torn write, an erased
+    /// page) from this seed.
+    Corrupted(u64),
+    /// Erased (a new board).
+    Erased,
+}
+
+/// The end of the link a figure belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum End {
+    /// The flight controller.
+    Flight,
+    /// The JR-bay module.
+    Module,
 }
 
 /// An IMU fault injected at the simulated IMU task.
@@ -55,6 +103,10 @@ impl Default for PilotInput {
             link_cut: false,
             battery_mv: 4_150.0,
             imu: ImuInjection::Healthy,
+            handset_connected: true,
+            flight_powered: true,
+            flight_radio: RadioInjection::Healthy,
+            module_radio: RadioInjection::Healthy,
         }
     }
 }
@@ -80,6 +132,33 @@ pub struct Scenario {
     pub setting_changes: Vec<SettingChange>,
     /// Extra random packet loss on the air, 0…1 (both directions).
     pub packet_loss: f64,
+    /// The link's rate mode (both ends bound at it).
+    pub rate: telemetry::link::RateMode,
+    /// The module's settings (role transmitter; bind, rate and input as the scenario needs).
+    pub module_settings: Option<module_core::settings::Settings>,
+    /// What the flight controller's settings flash holds at the first boot.
+    pub flight_flash: FlashInjection,
+}
+
+impl Scenario {
+    /// A scenario with the defaults: seed 7, link failsafe 500 ms, no setting changes, no
+    /// extra loss, F250, the module's factory settings bound to the flight side, settings
+    /// cleanly stored.
+    pub fn new(settings: Settings, quad: QuadParams, duration_s: f64, pilot: Pilot) -> Self {
+        Self {
+            settings,
+            quad,
+            seed: 7,
+            duration_s,
+            link_failsafe_ms: 500,
+            pilot,
+            setting_changes: Vec::new(),
+            packet_loss: 0.0,
+            rate: telemetry::link::RateMode::F250,
+            module_settings: None,
+            flight_flash: FlashInjection::Stored,
+        }
+    }
 }
 
 /// The airframe the SITL flies by default: quad-sim's 250-class quad X with roll/pitch

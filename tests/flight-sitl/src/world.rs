@@ -67,6 +67,9 @@ pub struct Sample {
     pub imu_reprobe: bool,
     /// The standing IMU fault.
     pub imu_fault: Option<ImuFault>,
+    /// The flight controller was running its application this loop (false while it is
+    /// unpowered or booting; `out` is then the last output it gave, `motors` all stopped).
+    pub flight_up: bool,
 }
 
 /// The run's records.
@@ -79,6 +82,41 @@ pub struct Sitl {
     pub module_rx: Vec<(f64, Message)>,
     /// The flight side's settings at the end (after changes from the module).
     pub settings: Settings,
+    /// Independent-watchdog resets of each end.
+    pub watchdog_resets: WatchdogResets,
+    /// Every boot of either end, with the time (s) and why.
+    pub boots: Vec<Boot>,
+}
+
+/// Independent-watchdog resets counted per end.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct WatchdogResets {
+    /// The flight controller.
+    pub flight: u32,
+    /// The module.
+    pub module: u32,
+}
+
+/// One boot of one end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Boot {
+    /// Simulated time, s.
+    pub t_s: f64,
+    /// Which end.
+    pub end: crate::scenario::End,
+    /// Why it booted.
+    pub cause: BootCause,
+    /// What the settings load reported (flight end; `None` for the module).
+    pub settings_error: bool,
+}
+
+/// Why an end booted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BootCause {
+    /// Powered on (the first boot, or power back after `flight_powered` false).
+    PowerOn,
+    /// Its independent watchdog expired.
+    Watchdog,
 }
 
 fn transmitter(p: &PilotInput) -> Channels {
@@ -128,6 +166,9 @@ pub fn run(scenario: Scenario) -> Sitl {
         mut pilot,
         setting_changes,
         packet_loss,
+        rate: _,
+        module_settings: _,
+        flight_flash: _,
     } = scenario;
     // The application boots as the firmware's does: setup and gains solved before anything
     // can arm.
@@ -282,6 +323,7 @@ pub fn run(scenario: Scenario) -> Sitl {
                     motors: step.motors,
                     imu_reprobe: step.reprobe,
                     imu_fault: app.imu_fault(),
+                    flight_up: true,
                 });
             }
         });
@@ -298,5 +340,8 @@ pub fn run(scenario: Scenario) -> Sitl {
         ts_s,
         module_rx,
         settings,
+        // Filled once the world models the watchdog and power (issue 12).
+        watchdog_resets: WatchdogResets::default(),
+        boots: Vec::new(),
     }
 }

@@ -204,6 +204,9 @@ fn flies_through_a_lossy_link() {
         }),
         setting_changes: Vec::new(),
         packet_loss: 0.3,
+        rate: telemetry::link::RateMode::F250,
+        module_settings: None,
+        flight_flash: flight_sitl::FlashInjection::Stored,
     });
     let s = &sitl.samples;
     assert!(

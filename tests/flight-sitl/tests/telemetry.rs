@@ -38,6 +38,9 @@ fn telemetry_reaches_the_module_and_settings_come_back() {
         pilot: pilot(-1.0, |_| cruise(-1.0)),
         setting_changes: vec![change],
         packet_loss: 0.0,
+        rate: telemetry::link::RateMode::F250,
+        module_settings: None,
+        flight_flash: flight_sitl::FlashInjection::Stored,
     });
     let rx = &sitl.module_rx;
     let per_s = rx.len() as f64 / 5.5;

@@ -59,16 +59,7 @@ pub fn cruise(mode_switch: f32) -> PilotInput {
 
 pub fn fly(settings: Settings, seconds: f64, pilot: Box<dyn FnMut(f64) -> PilotInput>) -> Sitl {
     let (quad, _) = default_airframe();
-    run(Scenario {
-        settings,
-        quad,
-        seed: 7,
-        duration_s: seconds,
-        link_failsafe_ms: 500,
-        pilot,
-        setting_changes: Vec::new(),
-        packet_loss: 0.0,
-    })
+    run(Scenario::new(settings, quad, seconds, pilot))
 }
 
 pub fn airframe_settings() -> Settings {
