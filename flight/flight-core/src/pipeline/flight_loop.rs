@@ -12,7 +12,8 @@ use crate::estimation::math::{inv_sqrt, wrap_pi};
 use crate::estimation::quaternion::{Quaternion, body_to_ned_vector, ned_to_body};
 use crate::outputs::Command;
 use crate::supervisor::{
-    Decision, FlightMode, Inputs, ModeSwitch, Settings as SupervisorSettings, Sticks, Supervisor,
+    Decision, FlightMode, Inputs, LandingDetector, LandingInputs, ModeSwitch,
+    Settings as SupervisorSettings, Sticks, Supervisor,
 };
 use crate::sysid::ekf::Identification;
 
@@ -114,6 +115,10 @@ pub struct FlightLoop {
     sysid: Option<Sysid>,
     /// The last finished identification, until taken.
     identification: Option<Identification>,
+    /// Touchdown detection for the automatic disarms.
+    landing: LandingDetector,
+    /// The battery is at its critical level (arming refused).
+    battery_critical: bool,
 }
 
 impl FlightLoop {
@@ -135,7 +140,20 @@ impl FlightLoop {
             airborne: false,
             sysid: None,
             identification: None,
+            landing: LandingDetector::new(),
+            battery_critical: false,
         }
+    }
+
+    /// Tells the loop whether the battery is at its critical level: arming is refused then
+    /// unless the supervisor settings override it. The firmware calls it with each reading.
+    pub fn set_battery_critical(&mut self, critical: bool) {
+        self.battery_critical = critical;
+    }
+
+    /// Whether the touchdown detector sees the frame on the ground.
+    pub fn landed(&self) -> bool {
+        self.landing.landed()
     }
 
     /// Installs newly designed controllers (only while disarmed, or nothing changes).
@@ -245,7 +263,8 @@ impl FlightLoop {
             arm_switch: link.arm_switch,
             sensors_healthy: gyro_ok && filter_ok,
             gains_ready: self.controllers.is_some(),
-            landed: at_rest(&gyro_dps, imu.accel_mps2),
+            landed: self.landing.landed(),
+            battery_critical: self.battery_critical,
         });
         let climb_rate_mps = self.fuse_climb(climb_rate_mps, imu.accel_mps2);
         let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
@@ -258,6 +277,7 @@ impl FlightLoop {
         }
         let mut motors = [Command::Stopped; 4];
         let mut shaking = false;
+        let mut thrust = 0.0;
         if let (true, Some(c)) = (
             self.supervisor.motors_enabled() && gyro_ok,
             self.controllers.as_mut(),
@@ -376,6 +396,7 @@ impl FlightLoop {
                     (throttle, out)
                 }
             };
+            thrust = throttle;
             let idle = self.config.idle.clamp(0.0, 0.3);
             let (mixed, applied) = self.mixer.mix_with_applied(throttle, attitude_out);
             // Controllers that predict with their own output are told what the motors will
@@ -400,6 +421,19 @@ impl FlightLoop {
             // On the ground nothing integrates.
             c.reset(gyro_dps);
         }
+        if self.supervisor.motors_enabled() {
+            self.landing.update(&LandingInputs {
+                now_ms,
+                gyro_dps,
+                accel_mps2: imu.accel_mps2,
+                climb_mps: climb_rate_mps,
+                thrust,
+                hover_thrust: self.hover_throttle,
+                failsafe_descent_mps: failsafe,
+            });
+        } else {
+            self.landing.reset();
+        }
         LoopOutput {
             motors,
             decision,
@@ -410,16 +444,6 @@ impl FlightLoop {
             attitude_deg: [roll, pitch, yaw],
         }
     }
-}
-
-/// Still and feeling 1 g: resting on the ground. A frame falling or descending with the
-/// throttle closed feels much less than 1 g, and one flying around turns.
-fn at_rest(gyro_dps: &[f32; 3], accel_mps2: [f32; 3]) -> bool {
-    const G: f32 = crate::estimation::GRAVITY_MPS2;
-    let [x, y, z] = accel_mps2;
-    let f2 = x * x + y * y + z * z;
-    gyro_dps.iter().all(|g| g.abs() < 30.0)
-        && (0.85 * 0.85 * G * G..1.15 * 1.15 * G * G).contains(&f2)
 }
 
 /// (roll, pitch, yaw) in degrees without libm: a polynomial atan2 (error < 0.01°) on the

@@ -110,7 +110,7 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
     };
     let supervisor = SupervisorSettings {
         idle_disarm_ms: s.u32("arm.idle_disarm_ms"),
-        failsafe_disarm_ms: s.u32("failsafe.disarm_ms"),
+        arm_on_critical_battery: s.u32("arm.critical_battery") == 1,
         failsafe_descent_mps: s.f32("failsafe.descent_mps"),
         ..SupervisorSettings::default()
     };
@@ -231,7 +231,7 @@ mod tests {
                 FlightMode::RateLqg
             ]
         );
-        assert_eq!(setup.loop_config.supervisor.failsafe_disarm_ms, 15_000);
+        assert!(!setup.loop_config.supervisor.arm_on_critical_battery);
         assert_eq!(setup.loop_config.supervisor.failsafe_descent_mps, 0.7);
         assert_eq!(setup.loop_config.supervisor.idle_disarm_ms, 10_000);
         assert_eq!(

@@ -122,6 +122,8 @@ pub const BANDS: Choice = &["433", "868", "915"];
 pub const RATES: Choice = &["l50", "m100", "f250", "f500"];
 /// Uplink channel formats (`telemetry::channels::ChannelFormat`).
 pub const CHANNEL_FORMATS: Choice = &["16", "8"];
+/// Arming at a critical battery: refused (factory) or allowed.
+pub const ARM_ON_CRITICAL: Choice = &["refuse", "allow"];
 /// Gyro loop rates.
 pub const LOOP_RATES: Choice = &["500", "1000"];
 
@@ -170,12 +172,14 @@ pub const PARAMS: &[Param] = &[
     f(503, "battery.divider", 1.0, 30.0, 2.0),
     f(504, "battery.current_mv_per_a", 0.0, 1_000.0, 50.0),
     // safety (6xx)
-    u(600, "failsafe.disarm_ms", 1_000, 120_000, 15_000),
+    // Key 600 (`failsafe.disarm_ms`, a fixed disarm time that could stop the motors in the
+    // air) is retired and must not be reused: a failsafe now ends on detected touchdown.
     f(601, "failsafe.descent_mps", 0.2, 3.0, 0.7),
     u(602, "arm.idle_disarm_ms", 2_000, 120_000, 10_000),
     c(603, "mode.switch_low", MODES, 2),
     c(604, "mode.switch_mid", MODES, 0),
     c(605, "mode.switch_high", MODES, 1),
+    c(606, "arm.critical_battery", ARM_ON_CRITICAL, 0),
     // the bound link (7xx), written after an over-the-air bind; bind ID 0 = never bound
     u(700, "link.bind_id", 0, u32::MAX, 0),
     c(701, "link.band", BANDS, 0),
