@@ -76,6 +76,9 @@ pub struct Sitl {
     pub settings: Settings,
 }
 
+/// The transmitter's arm switch: channel 5 (AUX1), index 4 (`arm.channel 5` listens to it).
+const ARM_SWITCH_CHANNEL: usize = 4;
+
 fn transmitter(p: &PilotInput) -> Channels {
     let mut ch = [CHANNEL_CENTER; MAX_CHANNELS];
     let map = ChannelMap::default();
@@ -89,6 +92,7 @@ fn transmitter(p: &PilotInput) -> Channels {
     set(map.throttle, throttle_channel(p.throttle));
     set(map.yaw, channel_for(p.yaw));
     set(map.mode, channel_for(p.mode_switch));
+    set(ARM_SWITCH_CHANNEL, channel_for(p.arm_switch));
     ch
 }
 
@@ -192,7 +196,7 @@ pub fn run(scenario: Scenario) -> Sitl {
             let mut player = TonePlayer::new();
             let mut level = BatteryLevel::Ok;
             let mut last_battery = None;
-            let map = ChannelMap::default();
+            let map = setup.channels;
             let mut sensors = quad.sensors();
             let mut climb_filter = ClimbRate::new();
             let mut baro_climb = None;
@@ -264,6 +268,7 @@ pub fn run(scenario: Scenario) -> Sitl {
                     let status =
                         battery.update(now_ms, battery_raw(input.battery_mv, divider), None);
                     level = status.level;
+                    fl.set_battery_critical(level == BatteryLevel::Critical);
                     last_battery = Some(status);
                     if status.level_changed {
                         announce_battery(&mut player, level);

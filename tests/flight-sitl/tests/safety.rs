@@ -14,7 +14,7 @@ use common::*;
 use flight_core::battery::BatteryLevel;
 use flight_core::outputs::Command;
 use flight_core::settings::Value;
-use flight_core::supervisor::Decision;
+use flight_core::supervisor::{ArmBlocker, Decision};
 use flight_sitl::PilotInput;
 use flight_sitl::metrics::{window, worst};
 
@@ -298,4 +298,103 @@ fn low_battery_sounds_the_alarm() {
         .find(|x| x.out.decision == Decision::Armed)
         .unwrap();
     assert_eq!(armed.tone_hz, 1000);
+}
+
+/// The first decision of each kind other than `Steady`, in order, with its time.
+fn decisions(s: &[flight_sitl::Sample]) -> Vec<(f64, Decision)> {
+    s.iter()
+        .filter(|x| x.out.decision != Decision::Steady)
+        .map(|x| (x.t_s, x.out.decision))
+        .collect()
+}
+
+#[test]
+fn an_arm_switch_arms_only_when_flicked_on_with_the_throttle_low() {
+    let mut settings = airframe_settings();
+    settings.set("arm.channel", Value::U32(5)).unwrap();
+    // Left on at power-up: nothing until it is cycled off (3 s) and on (4 s).
+    let sitl = fly(
+        settings.clone(),
+        6.0,
+        Box::new(|t| PilotInput {
+            arm_switch: if (3.0..4.0).contains(&t) { -1.0 } else { 1.0 },
+            ..PilotInput::default()
+        }),
+    );
+    let d = decisions(&sitl.samples);
+    println!("switch on at boot: {d:?}");
+    assert!(
+        sitl.samples
+            .iter()
+            .filter(|x| x.t_s < 3.0)
+            .all(|x| !x.out.armed)
+    );
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert_eq!(d[0].1, Decision::Armed);
+    assert!((4.0..4.05).contains(&d[0].0), "{d:?}");
+    // Flicked on at 2 s with the throttle at 30 %: refused; the throttle closed at 3 s with
+    // the switch still on does not arm; cycled off (4 s) and on (5 s), it does.
+    let sitl = fly(
+        settings,
+        6.0,
+        Box::new(|t| PilotInput {
+            throttle: if (1.5..3.0).contains(&t) { 0.3 } else { 0.0 },
+            arm_switch: if (2.0..4.0).contains(&t) || t >= 5.0 {
+                1.0
+            } else {
+                -1.0
+            },
+            ..PilotInput::default()
+        }),
+    );
+    let d = decisions(&sitl.samples);
+    println!("switch on with the throttle up: {d:?}");
+    assert!(
+        sitl.samples
+            .iter()
+            .filter(|x| x.t_s < 5.0)
+            .all(|x| !x.out.armed)
+    );
+    assert_eq!(
+        d.iter().map(|x| x.1).collect::<Vec<_>>(),
+        [
+            Decision::ArmRefused(ArmBlocker::ThrottleNotLow),
+            Decision::Armed
+        ]
+    );
+    assert!((5.0..5.05).contains(&d[1].0), "{d:?}");
+}
+
+#[test]
+fn a_critical_battery_refuses_arming_unless_allowed() {
+    for allow in [false, true] {
+        let mut settings = airframe_settings();
+        settings.set("battery.cells", Value::U32(1)).unwrap();
+        if allow {
+            settings.set_text("arm.critical_battery", "allow").unwrap();
+        }
+        // A 1S pack at 3.2 V, below the 3.3 V critical level, from power-up.
+        let sitl = fly(
+            settings,
+            4.0,
+            Box::new(|t| PilotInput {
+                yaw: if (0.5..3.0).contains(&t) { 1.0 } else { 0.0 },
+                battery_mv: 3_200.0,
+                ..PilotInput::default()
+            }),
+        );
+        let d = decisions(&sitl.samples);
+        println!("allow {allow}: {d:?}");
+        let expected = if allow {
+            Decision::Armed
+        } else {
+            Decision::ArmRefused(ArmBlocker::BatteryCritical)
+        };
+        assert_eq!(d.first().map(|x| x.1), Some(expected), "{d:?}");
+        assert_eq!(
+            sitl.samples.iter().any(|x| x.out.armed),
+            allow,
+            "armed only when allowed"
+        );
+    }
 }

@@ -17,7 +17,8 @@ mod sticks;
 
 pub use announce::{BATTERY_REPEAT_MS, announce, announce_battery, battery_alert, loop_alerts};
 pub use channels::{
-    CHANNEL_HIGH, CHANNEL_LOW, CHANNEL_MID, ChannelMap, channel_for, throttle_channel,
+    ArmChannel, CHANNEL_HIGH, CHANNEL_LOW, CHANNEL_MID, ChannelMap, channel_for, channel_us,
+    throttle_channel,
 };
 pub use climb::ClimbRate;
 pub use controllers::{ControlParams, Controllers};

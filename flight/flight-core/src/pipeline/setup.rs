@@ -4,6 +4,7 @@
 //! and after a setting changes (while disarmed), then solves the gains with
 //! [`Controllers::design`](super::Controllers::design) before arming is allowed.
 
+use super::channels::ChannelMap;
 use super::controllers::ControlParams;
 use super::flight_loop::LoopConfig;
 use super::sticks::StickShaping;
@@ -32,6 +33,8 @@ pub struct FlightSetup {
     pub battery: BatteryConfig,
     /// Gyro loop rate, Hz.
     pub loop_rate_hz: u32,
+    /// Which link channel carries what, with the arm switch if one is set.
+    pub channels: ChannelMap,
 }
 
 /// Why the settings do not make a flyable configuration.
@@ -46,6 +49,10 @@ pub enum SetupError {
     BadChoice,
     /// The warning threshold is below the critical one.
     BatteryThresholds,
+    /// The arm switch is set to a stick's or the mode switch's channel.
+    ArmChannelInUse,
+    /// The arm switch's window is empty (`arm.min_us` not below `arm.max_us`).
+    ArmWindow,
 }
 
 impl core::fmt::Display for SetupError {
@@ -55,6 +62,8 @@ impl core::fmt::Display for SetupError {
             SetupError::Model(e) => write!(f, "model: {e}"),
             SetupError::BadChoice => f.write_str("setting holds an unknown choice"),
             SetupError::BatteryThresholds => f.write_str("battery warning below critical"),
+            SetupError::ArmChannelInUse => f.write_str("arm channel is a stick or the mode switch"),
+            SetupError::ArmWindow => f.write_str("arm.min_us must be below arm.max_us"),
         }
     }
 }
@@ -199,7 +208,9 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
         cell_critical_mv: critical,
         ..BatteryConfig::brushed_sparky()
     };
+    let channels = ChannelMap::from_settings(s)?;
     Ok(FlightSetup {
+        channels,
         loop_config,
         control,
         protocol,

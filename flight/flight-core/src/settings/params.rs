@@ -180,6 +180,11 @@ pub const PARAMS: &[Param] = &[
     c(604, "mode.switch_mid", MODES, 0),
     c(605, "mode.switch_high", MODES, 1),
     c(606, "arm.critical_battery", ARM_ON_CRITICAL, 0),
+    // The arm switch: 0 = stick gesture only; 1–16 = the channel number (5 = AUX1), "on"
+    // while its pulse lies in arm.min_us…arm.max_us (CRSF: 988…2012 µs for −100…+100 %).
+    u(607, "arm.channel", 0, 16, 0),
+    u(608, "arm.min_us", 800, 2_200, 1_750),
+    u(609, "arm.max_us", 800, 2_200, 2_100),
     // the bound link (7xx), written after an over-the-air bind; bind ID 0 = never bound
     u(700, "link.bind_id", 0, u32::MAX, 0),
     c(701, "link.band", BANDS, 0),
