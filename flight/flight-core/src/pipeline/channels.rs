@@ -223,7 +223,14 @@ mod tests {
         assert_eq!(low.link_input(&ch, true).arm_switch, Some(true));
         // The throttle channel cannot be the arm switch.
         let mut t = Settings::default();
-        t.set("arm.channel", Value::U32(3)).unwrap();
+        assert_eq!(
+            t.set("arm.channel", Value::U32(3)),
+            Err(crate::settings::ParamError::Invalid(
+                crate::pipeline::InvalidSettings::Setup(SetupError::ArmChannelInUse)
+            ))
+        );
+        assert_eq!(ChannelMap::from_settings(&t), Ok(ChannelMap::default()));
+        t.set_by_key(607, 3).unwrap();
         assert_eq!(
             ChannelMap::from_settings(&t),
             Err(SetupError::ArmChannelInUse)

@@ -14,6 +14,7 @@ mod identify;
 mod link;
 mod setup;
 mod sticks;
+mod validate;
 
 pub use announce::{BATTERY_REPEAT_MS, announce, announce_battery, battery_alert, loop_alerts};
 pub use channels::{
@@ -26,3 +27,4 @@ pub use flight_loop::{FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
 pub use link::{store_link, stored_link};
 pub use setup::{FlightSetup, SetupError, from_settings};
 pub use sticks::StickShaping;
+pub use validate::{InvalidSettings, validate};

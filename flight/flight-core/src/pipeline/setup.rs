@@ -277,8 +277,11 @@ mod tests {
     fn changed_settings_reach_every_consumer() {
         let mut s = Settings::default();
         s.set_text("loop.rate_hz", "500").unwrap();
-        s.set_text("output.protocol", "pwm").unwrap();
-        s.set("output.rate_hz", Value::U32(400)).unwrap();
+        s.set_many(&[
+            ("output.protocol", Value::U32(1)),
+            ("output.rate_hz", Value::U32(400)),
+        ])
+        .unwrap();
         s.set("output.min_us", Value::U32(1_050)).unwrap();
         s.set("mixer.thrust_expo", Value::F32(0.7)).unwrap();
         s.set("battery.cells", Value::U32(3)).unwrap();
@@ -308,11 +311,13 @@ mod tests {
 
     #[test]
     fn unflyable_settings_are_refused() {
+        // `Settings::set` refuses these now; a stored set can still hold them.
         let mut s = Settings::default();
-        s.set_text("mixer.frame", "hex-x").unwrap();
+        s.set_by_key(105, 2).unwrap(); // mixer.frame hex-x
         assert_eq!(from_settings(&s), Err(SetupError::FrameNotSupported));
         let mut s = Settings::default();
-        s.set("battery.cell_warning_mv", Value::U32(3_200)).unwrap();
+        s.set_by_key(501, 3_200).unwrap(); // battery.cell_warning_mv
         assert_eq!(from_settings(&s), Err(SetupError::BatteryThresholds));
+        assert!(s.set("battery.cell_warning_mv", Value::U32(3_200)).is_err());
     }
 }

@@ -11,7 +11,9 @@ use embassy_stm32::usb::Driver;
 use embassy_usb::class::cdc_acm::{CdcAcmClass, State};
 use embassy_usb::driver::EndpointError;
 use embassy_usb::{Builder, Config};
-use flight_core::settings::{Command, Settings, parse_line, write_list, write_setting};
+use flight_core::settings::{
+    Command, LineAssembler, Settings, parse_line, write_list, write_setting,
+};
 use heapless::String;
 use static_cell::StaticCell;
 
@@ -19,8 +21,7 @@ use crate::firmware::signals::{
     ARMED, BATTERY, FLIGHT_STATE, LINK_INPUT, SAVE_REQUEST, SETTINGS, SETTINGS_CHANGED,
 };
 
-const HELP: &str =
-    "help | list [prefix] | get NAME | set NAME VALUE | save | defaults | status\r\n";
+const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status\r\n";
 
 struct Buffers {
     config_descriptor: [u8; 256],
@@ -66,23 +67,23 @@ pub async fn console_task(driver: Driver<'static, USB_OTG_FS>) {
 async fn serve(
     class: &mut CdcAcmClass<'static, Driver<'static, USB_OTG_FS>>,
 ) -> Result<(), EndpointError> {
-    let mut line: String<96> = String::new();
+    let mut lines: LineAssembler<96> = LineAssembler::new();
     let mut packet = [0u8; 64];
     loop {
         let n = class.read_packet(&mut packet).await?;
         for &byte in packet.get(..n).unwrap_or(&[]) {
-            match byte {
-                b'\r' | b'\n' => {
-                    let mut reply: String<2048> = String::new();
-                    answer(line.as_str(), &mut reply).await;
-                    send(class, reply.as_bytes()).await?;
-                    line.clear();
-                }
-                // Overlong lines are cut; the command then fails to parse and says so.
-                b => {
-                    let _ = line.push(char::from(b));
+            // Overlong lines are refused whole, never cut (a cut line can mean something else).
+            let Some(line) = lines.push(byte) else {
+                continue;
+            };
+            let mut reply: String<2048> = String::new();
+            match line {
+                Ok(line) => answer(line.as_str(), &mut reply).await,
+                Err(e) => {
+                    let _ = writeln!(reply, "{e}");
                 }
             }
+            send(class, reply.as_bytes()).await?;
         }
     }
 }
@@ -113,13 +114,22 @@ async fn answer(line: &str, out: &mut String<2048>) {
         Ok(Command::Help) => out.write_str(HELP),
         Ok(Command::List(prefix)) => write_list(out, settings, prefix),
         Ok(Command::Get(name)) => write_setting(out, settings, name),
-        Ok(Command::Set { .. } | Command::Save | Command::Defaults) if armed => {
+        Ok(Command::Set { .. } | Command::SetAll(_) | Command::Save | Command::Defaults)
+            if armed =>
+        {
             out.write_str("refused: disarm first\r\n")
         }
         Ok(Command::Set { name, value }) => match settings.set_text(name, value) {
             Ok(()) => {
                 SETTINGS_CHANGED.signal(());
                 write_setting(out, settings, name)
+            }
+            Err(e) => writeln!(out, "{e}"),
+        },
+        Ok(Command::SetAll(pairs)) => match settings.set_text_pairs(pairs) {
+            Ok(()) => {
+                SETTINGS_CHANGED.signal(());
+                out.write_str("ok\r\n")
             }
             Err(e) => writeln!(out, "{e}"),
         },
