@@ -5,6 +5,7 @@
 //! deterministic virtual-time executor. See README.md.
 #![warn(missing_docs)]
 
+pub mod console;
 mod link_ends;
 pub mod metrics;
 pub mod scenario;
