@@ -12,8 +12,10 @@
 //! by the supervisor's last-resort time limit).
 //!
 //! It starts landed (motors are off at power-up and arming needs a closed throttle) and
-//! leaves that state only on evidence of a take-off: thrust at or above the hover margin, or
-//! vertical movement.
+//! leaves that state on any sign of a take-off: thrust above [`TAKEOFF_THRUST`] (the pilot
+//! raised the throttle out of the idle band — the hover estimate may still be far off before
+//! the first flight, so thrust against it proves nothing), or vertical movement. A false
+//! "airborne" only delays a disarm; a false "landed" would stop motors in the air.
 
 /// Climb rate magnitude below which the frame counts as not moving vertically, m/s. Well
 /// below the slowest failsafe descent setting (0.2 m/s is the floor of `failsafe.descent_mps`
@@ -28,8 +30,12 @@ pub const QUIET_GYRO_DPS: f32 = 20.0;
 pub const ONE_G_TOLERANCE: f32 = 0.1;
 /// How long every condition must hold, ms.
 pub const LANDED_HOLD_MS: u32 = 1_000;
-/// Vertical speed that proves the frame left the ground, m/s.
-pub const TAKEOFF_CLIMB_MPS: f32 = 1.0;
+/// Vertical speed that proves the frame left the ground, m/s (the blended rate's noise on
+/// the ground is ≈ 0.05 m/s).
+pub const TAKEOFF_CLIMB_MPS: f32 = 0.5;
+/// Thrust command above which a landed frame counts as taking off (throttle units): the
+/// flight loop's own "throttle raised" threshold.
+pub const TAKEOFF_THRUST: f32 = 0.1;
 
 /// The climb-rate band counted as "not descending" for a commanded descent rate: never more
 /// than half the commanded rate, so a steady descent can never look landed.
@@ -99,7 +105,8 @@ impl LandingDetector {
             let moved = i
                 .climb_mps
                 .is_some_and(|c| !c.is_finite() || c.abs() > TAKEOFF_CLIMB_MPS);
-            if !thrust_low || moved {
+            let thrust_up = !i.thrust.is_finite() || i.thrust > TAKEOFF_THRUST;
+            if !thrust_low || thrust_up || moved {
                 self.landed = false;
                 self.candidate_since = None;
             }
@@ -231,11 +238,14 @@ mod tests {
         for k in 0..5_000 {
             ground.now_ms = k;
             // Baro noise on the ground does not count as a take-off.
-            ground.climb_mps = Some(if k % 2 == 0 { 0.4 } else { -0.4 });
+            ground.climb_mps = Some(if k % 2 == 0 { 0.2 } else { -0.2 });
             assert!(d.update(&ground));
         }
+        // A gentle take-off at the real hover thrust (0.11) while the hover estimate still
+        // holds its 0.5 start value, climbing at only 0.2 m/s: airborne at once.
         let mut up = ground;
-        up.thrust = 0.45;
+        up.thrust = 0.11;
+        up.climb_mps = Some(0.2);
         assert!(!d.update(&up));
         d.reset();
         let mut knocked = ground;

@@ -313,3 +313,22 @@ fn once_airborne_a_closed_throttle_keeps_stabilising() {
         - thrust.iter().copied().fold(1.0f32, f32::min);
     assert!(spread > 0.05, "{thrust:?}");
 }
+
+#[test]
+fn a_link_loss_just_after_a_gentle_take_off_does_not_disarm() {
+    // Take-off at 0.15 throttle (the hover estimate still near its 0.5 start value),
+    // climbing at 0.2 m/s; the link drops 0.5 s later, 10 cm up.
+    let mut l = flight_loop();
+    let t = arm(&mut l);
+    run_climb(&mut l, t, 250, &resting(0.0), &link(0.15, 0.0), 0.2);
+    assert!(!l.landed(), "airborne once the throttle left idle");
+    let lost = LinkInput {
+        up: false,
+        ..link(0.15, 0.0)
+    };
+    let out = l.step(t + 500, &resting(0.0), &lost, Some(0.2));
+    assert_eq!(out.decision, Decision::FailsafeEntered);
+    // Descending at the set rate: no disarm.
+    let out = run_climb(&mut l, t + 502, 2_000, &resting(0.0), &lost, -0.7);
+    assert!(out.armed && out.failsafe);
+}
