@@ -79,6 +79,8 @@ pub struct BatteryMonitor {
     level: BatteryLevel,
     below_since: Option<(BatteryLevel, u32)>,
     last_ms: Option<u32>,
+    /// A level has been judged since power-up.
+    judged: bool,
 }
 
 /// Voltage filter time constant: long enough to ride out a punch-out, short enough to see
@@ -98,6 +100,7 @@ impl BatteryMonitor {
             level: BatteryLevel::Ok,
             below_since: None,
             last_ms: None,
+            judged: false,
         }
     }
 
@@ -154,7 +157,12 @@ impl BatteryMonitor {
         } else {
             BatteryLevel::Ok
         };
-        if wanted > self.level {
+        if !self.judged {
+            // The first verdict needs no hold: at power-up the motors are stopped, so a low
+            // reading is no load sag, and arming must see a flat pack at once.
+            self.judged = true;
+            self.level = wanted;
+        } else if wanted > self.level {
             // Worse: only after it stayed worse for the hold time.
             match self.below_since {
                 Some((level, since)) if level == wanted => {
@@ -254,5 +262,16 @@ mod tests {
             .last()
             .unwrap();
         assert_eq!(s.level, BatteryLevel::Ok);
+    }
+
+    #[test]
+    fn a_flat_pack_at_power_up_is_critical_at_once() {
+        let mut m = BatteryMonitor::new(BatteryConfig::brushed_sparky());
+        // 3.2 V on a 1S pack from the first reading: no hold time (motors are off).
+        let s = m.update(0, raw(3200.0), None);
+        assert_eq!(s.level, BatteryLevel::Critical);
+        assert!(s.level_changed);
+        let mut fine = BatteryMonitor::new(BatteryConfig::brushed_sparky());
+        assert_eq!(fine.update(0, raw(4100.0), None).level, BatteryLevel::Ok);
     }
 }

@@ -20,3 +20,18 @@ impl Board {
         }
     }
 }
+
+/// The motor timers as the firmware starts them on both boards (`MotorParts::start`):
+/// outputs 1–2 on TIM3 (APB1, timer clock 84 MHz), 3–4 on TIM9 (APB2, 168 MHz), both
+/// 16-bit. Settings validation checks the output protocol against each, exactly as the
+/// motor task will.
+pub const MOTOR_TIMER_CLOCKS: [crate::outputs::TimerClock; 2] = [
+    crate::outputs::TimerClock {
+        clock_hz: 84_000_000,
+        max_count: 0xFFFF,
+    },
+    crate::outputs::TimerClock {
+        clock_hz: 168_000_000,
+        max_count: 0xFFFF,
+    },
+];

@@ -60,6 +60,7 @@ pub const fn blocker_bit(b: ArmBlocker) -> u16 {
         ArmBlocker::ThrottleNotLow => 2,
         ArmBlocker::SensorsUnhealthy => 4,
         ArmBlocker::GainsNotReady => 8,
+        ArmBlocker::BatteryCritical => 16,
     }
 }
 

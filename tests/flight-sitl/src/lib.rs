@@ -6,6 +6,7 @@
 //! deterministic virtual-time executor. See README.md.
 #![warn(missing_docs)]
 
+pub mod console;
 pub mod metrics;
 mod module_end;
 pub mod scenario;

@@ -22,6 +22,8 @@ pub struct PilotInput {
     pub link_cut: bool,
     /// Battery pack voltage, mV (what the divider feeds the ADC).
     pub battery_mv: f32,
+    /// The arm switch on channel 5 (AUX1), −1 (off, factory window) … 1 (on).
+    pub arm_switch: f32,
     /// What the IMU delivers (faults injected at the IMU adapter).
     pub imu: ImuInjection,
     /// The handset's PPM/CRSF input reaches the module (false: wire pulled, handset frozen —
@@ -102,6 +104,7 @@ impl Default for PilotInput {
             mode_switch: -1.0,
             link_cut: false,
             battery_mv: 4_150.0,
+            arm_switch: -1.0,
             imu: ImuInjection::Healthy,
             handset_connected: true,
             flight_powered: true,

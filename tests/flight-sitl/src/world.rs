@@ -119,6 +119,9 @@ pub enum BootCause {
     Watchdog,
 }
 
+/// The transmitter's arm switch: channel 5 (AUX1), index 4 (`arm.channel 5` listens to it).
+const ARM_SWITCH_CHANNEL: usize = 4;
+
 fn transmitter(p: &PilotInput) -> Channels {
     let mut ch = [CHANNEL_CENTER; MAX_CHANNELS];
     let map = ChannelMap::default();
@@ -132,6 +135,7 @@ fn transmitter(p: &PilotInput) -> Channels {
     set(map.throttle, throttle_channel(p.throttle));
     set(map.yaw, channel_for(p.yaw));
     set(map.mode, channel_for(p.mode_switch));
+    set(ARM_SWITCH_CHANNEL, channel_for(p.arm_switch));
     ch
 }
 

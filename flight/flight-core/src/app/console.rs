@@ -6,12 +6,24 @@
 use core::fmt::Write;
 
 use super::FlightApp;
-use crate::settings::{Command, Settings, parse_line, write_list, write_setting};
+use crate::settings::{Command, LineError, Settings, parse_line, write_list, write_setting};
 
-const HELP: &str =
-    "help | list [prefix] | get NAME | set NAME VALUE | save | defaults | status\r\n";
+const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status\r\n";
 
 impl FlightApp {
+    /// Answers what the line assembler (`settings::LineAssembler`) produced: a whole line,
+    /// or the reason one was refused (too long, not text) — never a cut line.
+    pub fn on_console_input<W: Write>(
+        &mut self,
+        line: Result<&str, &LineError>,
+        out: &mut W,
+    ) -> core::fmt::Result {
+        match line {
+            Ok(line) => self.on_console_line(line, out),
+            Err(e) => write!(out, "{e}\r\n"),
+        }
+    }
+
     /// Answers one console line (without its line ending) into `out`.
     pub fn on_console_line<W: Write>(&mut self, line: &str, out: &mut W) -> core::fmt::Result {
         let armed = self.flight.armed();
@@ -20,13 +32,22 @@ impl FlightApp {
             Ok(Command::Help) => out.write_str(HELP),
             Ok(Command::List(prefix)) => write_list(out, &self.live, prefix),
             Ok(Command::Get(name)) => write_setting(out, &self.live, name),
-            Ok(Command::Set { .. } | Command::Save | Command::Defaults) if armed => {
+            Ok(Command::Set { .. } | Command::SetAll(_) | Command::Save | Command::Defaults)
+                if armed =>
+            {
                 out.write_str("refused: disarm first\r\n")
             }
             Ok(Command::Set { name, value }) => match self.live.set_text(name, value) {
                 Ok(()) => {
                     self.settings_changed();
                     write_setting(out, &self.live, name)
+                }
+                Err(e) => write!(out, "{e}\r\n"),
+            },
+            Ok(Command::SetAll(pairs)) => match self.live.set_text_pairs(pairs) {
+                Ok(()) => {
+                    self.settings_changed();
+                    out.write_str("ok\r\n")
                 }
                 Err(e) => write!(out, "{e}\r\n"),
             },

@@ -45,9 +45,10 @@ pub(super) struct LinkSide {
 }
 
 impl LinkSide {
-    pub(super) fn new() -> Self {
+    /// Hooks reading the sticks and switches through `map` (from the settings).
+    pub(super) fn new(map: ChannelMap) -> Self {
         Self {
-            map: ChannelMap::default(),
+            map,
             reporter: Reporter::new(),
             reader: MessageReader::new(),
             echo: None,
@@ -58,6 +59,11 @@ impl LinkSide {
             was_failsafe: true,
             sysid: heapless::Deque::new(),
         }
+    }
+
+    /// A new setup's channel map (arm switch, mode switch) takes effect.
+    pub(super) fn set_channel_map(&mut self, map: ChannelMap) {
+        self.map = map;
     }
 
     /// A finished identification: its three results replace any still unsent.

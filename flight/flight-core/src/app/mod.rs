@@ -88,7 +88,7 @@ impl FlightApp {
         let setup = setup?;
         let controllers = Controllers::design(&setup.control).ok();
         Some(Self {
-            link: link::LinkSide::new(),
+            link: link::LinkSide::new(setup.channels),
             live: stored.clone(),
             stored,
             flight: FlightLoop::new(setup.loop_config, setup.mixer, controllers),
@@ -188,6 +188,7 @@ impl FlightApp {
             // Same sensor rate only: a rate change needs the chip reconfigured (next boot).
             self.flight = FlightLoop::new(setup.loop_config, setup.mixer, Some(controllers));
             self.battery_monitor = BatteryMonitor::new(setup.battery);
+            self.link.set_channel_map(setup.channels);
             self.setup = setup;
         }
         if self.imu.check_sample(now_ms, sample).is_some() {
@@ -272,6 +273,9 @@ impl FlightApp {
         if status.level_changed || self.battery.is_none() {
             announce_battery(&mut self.player, status.level);
         }
+        // Arming is refused on a critical pack (unless `arm.critical_battery allow`).
+        self.flight
+            .set_battery_critical(status.level == crate::battery::BatteryLevel::Critical);
         self.battery = Some(status);
     }
 

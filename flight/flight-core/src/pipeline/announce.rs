@@ -16,9 +16,10 @@ pub fn loop_alerts(out: &LoopOutput) -> [Option<Alert>; 2] {
         Decision::Steady => None,
         Decision::Armed => Some(Alert::Armed),
         Decision::ArmRefused(_) => Some(Alert::ArmRefused),
-        Decision::DisarmedByPilot | Decision::DisarmedIdle | Decision::DisarmedFailsafe => {
-            Some(Alert::Disarmed)
-        }
+        Decision::DisarmedByPilot
+        | Decision::DisarmedIdle
+        | Decision::DisarmedFailsafe
+        | Decision::DisarmedLastResort => Some(Alert::Disarmed),
         Decision::FailsafeEntered => Some(Alert::Failsafe),
         Decision::ControlRecovered => Some(Alert::ControlRecovered),
         Decision::DisarmedSensorFault => Some(Alert::SensorFault),

@@ -3,6 +3,8 @@
 //! Kept here, not in the link, because which channel is which is a flight setting.
 
 use super::flight_loop::LinkInput;
+use super::setup::SetupError;
+use crate::settings::Settings;
 use crate::supervisor::Sticks;
 
 /// Channel value at −100 % (CRSF).
@@ -11,6 +13,24 @@ pub const CHANNEL_LOW: u16 = 172;
 pub const CHANNEL_MID: u16 = 992;
 /// Channel value at +100 %.
 pub const CHANNEL_HIGH: u16 = 1811;
+
+/// The arm switch: a channel and the pulse-width window in which it reads "armed".
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ArmChannel {
+    /// Channel index (0-based).
+    pub index: usize,
+    /// Lowest pulse width that reads "on", µs.
+    pub min_us: u16,
+    /// Highest pulse width that reads "on", µs.
+    pub max_us: u16,
+}
+
+/// A CRSF channel value as the pulse width it stands for, µs (172 → 988, 992 → 1500,
+/// 1811 → 2012: the CRSF convention, 5/8 µs per count).
+pub fn channel_us(value: u16) -> f32 {
+    1500.0 + (f32::from(value) - f32::from(CHANNEL_MID)) * 0.625
+}
 
 /// Which channel (0-based) carries what.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -25,7 +45,7 @@ pub struct ChannelMap {
     /// Yaw (rudder).
     pub yaw: usize,
     /// The arm switch, or `None` for the stick gesture.
-    pub arm: Option<usize>,
+    pub arm: Option<ArmChannel>,
     /// The flight-mode switch.
     pub mode: usize,
 }
@@ -52,6 +72,35 @@ fn bipolar(channels: &[u16], i: usize) -> f32 {
 }
 
 impl ChannelMap {
+    /// The map the settings ask for: AETR and the mode switch as [`ChannelMap::default`], the
+    /// arm switch from `arm.channel` (0 = stick gesture, 1–16 = channel number) with its
+    /// window `arm.min_us`…`arm.max_us`. Refuses a window that is empty or an arm channel that
+    /// is also a stick or the mode switch.
+    pub fn from_settings(s: &Settings) -> Result<Self, SetupError> {
+        let map = Self::default();
+        let channel = s.u32("arm.channel");
+        if channel == 0 {
+            return Ok(map);
+        }
+        let index = (channel - 1) as usize;
+        if [map.roll, map.pitch, map.throttle, map.yaw, map.mode].contains(&index) {
+            return Err(SetupError::ArmChannelInUse);
+        }
+        let min_us = u16::try_from(s.u32("arm.min_us")).map_err(|_| SetupError::ArmWindow)?;
+        let max_us = u16::try_from(s.u32("arm.max_us")).map_err(|_| SetupError::ArmWindow)?;
+        if min_us >= max_us {
+            return Err(SetupError::ArmWindow);
+        }
+        Ok(Self {
+            arm: Some(ArmChannel {
+                index,
+                min_us,
+                max_us,
+            }),
+            ..map
+        })
+    }
+
     /// The loop input from the link's channels; `up` is false while the link is in
     /// failsafe (the channels then hold the link's failsafe values, which the loop ignores).
     pub fn link_input(&self, channels: &[u16], up: bool) -> LinkInput {
@@ -67,7 +116,12 @@ impl ChannelMap {
                 pitch: bipolar(channels, self.pitch),
                 yaw: bipolar(channels, self.yaw),
             },
-            arm_switch: self.arm.map(|i| bipolar(channels, i) > 0.5),
+            // A missing channel reads "off": it can never arm.
+            arm_switch: self.arm.map(|a| {
+                channels.get(a.index).is_some_and(|&v| {
+                    (f32::from(a.min_us)..=f32::from(a.max_us)).contains(&channel_us(v))
+                })
+            }),
             mode_channel: bipolar(channels, self.mode),
         }
     }
@@ -126,11 +180,61 @@ mod tests {
         let input = map.link_input(&[], true);
         assert_eq!(input.sticks, Sticks::default());
         let with_switch = ChannelMap {
-            arm: Some(4),
+            arm: Some(ArmChannel {
+                index: 4,
+                min_us: 1_750,
+                max_us: 2_100,
+            }),
             ..map
         };
         ch[4] = CHANNEL_HIGH;
         assert_eq!(with_switch.link_input(&ch, true).arm_switch, Some(true));
+        ch[4] = CHANNEL_MID;
+        assert_eq!(with_switch.link_input(&ch, true).arm_switch, Some(false));
+        assert_eq!(with_switch.link_input(&[], true).arm_switch, Some(false));
+    }
+
+    #[test]
+    fn the_arm_switch_comes_from_the_settings() {
+        use crate::settings::Value;
+        let mut s = Settings::default();
+        assert_eq!(ChannelMap::from_settings(&s), Ok(ChannelMap::default()));
+        s.set("arm.channel", Value::U32(5)).unwrap();
+        let map = ChannelMap::from_settings(&s).unwrap();
+        assert_eq!(
+            map.arm,
+            Some(ArmChannel {
+                index: 4,
+                min_us: 1_750,
+                max_us: 2_100
+            })
+        );
+        let mut ch = [CHANNEL_MID; 16];
+        // 1811 = 2012 µs: on; 1700 µs (1312): off.
+        ch[4] = CHANNEL_HIGH;
+        assert_eq!(map.link_input(&ch, true).arm_switch, Some(true));
+        ch[4] = 1312;
+        assert_eq!(map.link_input(&ch, true).arm_switch, Some(false));
+        // A low window (switch down = armed) works too.
+        s.set("arm.min_us", Value::U32(900)).unwrap();
+        s.set("arm.max_us", Value::U32(1_250)).unwrap();
+        let low = ChannelMap::from_settings(&s).unwrap();
+        ch[4] = CHANNEL_LOW;
+        assert_eq!(low.link_input(&ch, true).arm_switch, Some(true));
+        // The throttle channel cannot be the arm switch.
+        let mut t = Settings::default();
+        assert_eq!(
+            t.set("arm.channel", Value::U32(3)),
+            Err(crate::settings::ParamError::Invalid(
+                crate::pipeline::InvalidSettings::Setup(SetupError::ArmChannelInUse)
+            ))
+        );
+        assert_eq!(ChannelMap::from_settings(&t), Ok(ChannelMap::default()));
+        t.set_by_key(607, 3).unwrap();
+        assert_eq!(
+            ChannelMap::from_settings(&t),
+            Err(SetupError::ArmChannelInUse)
+        );
     }
 
     #[test]

@@ -13,7 +13,8 @@ use crate::estimation::math::{inv_sqrt, wrap_pi};
 use crate::estimation::quaternion::{Quaternion, body_to_ned_vector, ned_to_body};
 use crate::outputs::Command;
 use crate::supervisor::{
-    Decision, FlightMode, Inputs, ModeSwitch, Settings as SupervisorSettings, Sticks, Supervisor,
+    Decision, FlightMode, Inputs, LandingDetector, LandingInputs, ModeSwitch,
+    Settings as SupervisorSettings, Sticks, Supervisor,
 };
 use crate::sysid::ekf::Identification;
 
@@ -115,6 +116,10 @@ pub struct FlightLoop {
     sysid: Option<Sysid>,
     /// The last finished identification, until taken.
     identification: Option<Identification>,
+    /// Touchdown detection for the automatic disarms.
+    landing: LandingDetector,
+    /// The battery is at its critical level (arming refused).
+    battery_critical: bool,
 }
 
 impl FlightLoop {
@@ -136,6 +141,8 @@ impl FlightLoop {
             airborne: false,
             sysid: None,
             identification: None,
+            landing: LandingDetector::new(),
+            battery_critical: false,
         }
     }
 
@@ -150,6 +157,17 @@ impl FlightLoop {
     /// Motors may turn.
     pub fn armed(&self) -> bool {
         self.supervisor.motors_enabled()
+    }
+
+    /// Tells the loop whether the battery is at its critical level: arming is refused then
+    /// unless the supervisor settings override it. The firmware calls it with each reading.
+    pub fn set_battery_critical(&mut self, critical: bool) {
+        self.battery_critical = critical;
+    }
+
+    /// Whether the touchdown detector sees the frame on the ground.
+    pub fn landed(&self) -> bool {
+        self.landing.landed()
     }
 
     /// Installs newly designed controllers (only while disarmed, or nothing changes).
@@ -230,7 +248,7 @@ impl FlightLoop {
     ) -> LoopOutput {
         let estimate = self.estimate(imu);
         let previous_mode = self.mode;
-        let decision = self.supervise(now_ms, link, &estimate, imu.accel_mps2);
+        let decision = self.supervise(now_ms, link, &estimate);
         let climb_rate_mps = self.fuse_climb(climb_rate_mps, imu.accel_mps2);
         let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
         let failsafe = self.supervisor.failsafe_descent_mps();
@@ -240,7 +258,7 @@ impl FlightLoop {
         {
             self.finish_sysid();
         }
-        let motors = if self.supervisor.motors_enabled() && estimate.gyro_ok {
+        let (motors, thrust) = if self.supervisor.motors_enabled() && estimate.gyro_ok {
             let fly = Fly {
                 decision,
                 mode_changed: self.mode != previous_mode,
@@ -256,8 +274,9 @@ impl FlightLoop {
                 // On the ground nothing integrates.
                 c.reset(estimate.gyro_dps);
             }
-            [Command::Stopped; 4]
+            ([Command::Stopped; 4], 0.0)
         };
+        self.detect_landing(now_ms, imu, &estimate, climb_rate_mps, thrust, failsafe);
         LoopOutput {
             motors,
             decision,
@@ -302,13 +321,7 @@ impl FlightLoop {
 
     /// Supervise stage: the flight-mode switch (while the link is up) and the arming /
     /// failsafe state machine.
-    fn supervise(
-        &mut self,
-        now_ms: u32,
-        link: &LinkInput,
-        estimate: &Estimate,
-        accel_mps2: [f32; 3],
-    ) -> Decision {
+    fn supervise(&mut self, now_ms: u32, link: &LinkInput, estimate: &Estimate) -> Decision {
         if link.up {
             self.mode = self.modes.update(link.mode_channel);
         }
@@ -319,8 +332,34 @@ impl FlightLoop {
             arm_switch: link.arm_switch,
             sensors_healthy: estimate.gyro_ok && estimate.filter_ok,
             gains_ready: self.controllers.is_some(),
-            landed: at_rest(&estimate.gyro_dps, accel_mps2),
+            landed: self.landing.landed(),
+            battery_critical: self.battery_critical,
         })
+    }
+
+    /// Touchdown stage: feeds the detector while armed (the automatic disarms wait for it).
+    fn detect_landing(
+        &mut self,
+        now_ms: u32,
+        imu: &ImuSample,
+        estimate: &Estimate,
+        climb_mps: Option<f32>,
+        thrust: f32,
+        failsafe_descent_mps: Option<f32>,
+    ) {
+        if self.supervisor.motors_enabled() {
+            self.landing.update(&LandingInputs {
+                now_ms,
+                gyro_dps: estimate.gyro_dps,
+                accel_mps2: imu.accel_mps2,
+                climb_mps,
+                thrust,
+                hover_thrust: self.hover_throttle,
+                failsafe_descent_mps,
+            });
+        } else {
+            self.landing.reset();
+        }
     }
 
     /// Failsafe-descent stage, throttle part: PI on the climb rate around the hover value
@@ -351,15 +390,16 @@ impl FlightLoop {
     }
 
     /// Armed with a plausible gyro: failsafe descent or the pilot's setpoint, then the mix.
-    fn fly(&mut self, fly: &Fly, sticks: &Sticks) -> [Command; 4] {
+    /// Returns the motor commands and the collective throttle they carry.
+    fn fly(&mut self, fly: &Fly, sticks: &Sticks) -> ([Command; 4], f32) {
         if self.controllers.is_none() {
-            return [Command::Stopped; 4];
+            return ([Command::Stopped; 4], 0.0);
         }
         let descent = fly
             .failsafe_descent_mps
             .map(|d| self.descent_throttle(fly.decision, d, fly.climb_rate_mps));
         let Some(c) = self.controllers.as_mut() else {
-            return [Command::Stopped; 4];
+            return ([Command::Stopped; 4], 0.0);
         };
         let gyro_dps = fly.gyro_dps;
         if matches!(fly.decision, Decision::Armed | Decision::ControlRecovered) || fly.mode_changed
@@ -411,7 +451,7 @@ impl FlightLoop {
                 FlightMode::RatePid | FlightMode::SystemId => false,
             };
         let sysid = if shaking { self.sysid.as_mut() } else { None };
-        stages::mix(
+        let motors = stages::mix(
             c,
             &self.mixer,
             sysid,
@@ -421,7 +461,8 @@ impl FlightLoop {
                 idle: self.config.idle,
                 uses_lqg,
             },
-        )
+        );
+        (motors, throttle)
     }
 }
 
@@ -446,16 +487,6 @@ struct Fly {
     failsafe_descent_mps: Option<f32>,
     /// Blended climb rate, m/s up.
     climb_rate_mps: Option<f32>,
-}
-
-/// Still and feeling 1 g: resting on the ground. A frame falling or descending with the
-/// throttle closed feels much less than 1 g, and one flying around turns.
-fn at_rest(gyro_dps: &[f32; 3], accel_mps2: [f32; 3]) -> bool {
-    const G: f32 = crate::estimation::GRAVITY_MPS2;
-    let [x, y, z] = accel_mps2;
-    let f2 = x * x + y * y + z * z;
-    gyro_dps.iter().all(|g| g.abs() < 30.0)
-        && (0.85 * 0.85 * G * G..1.15 * 1.15 * G * G).contains(&f2)
 }
 
 /// (roll, pitch, yaw) in degrees without libm: a polynomial atan2 (error < 0.01°) on the

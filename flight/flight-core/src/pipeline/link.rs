@@ -32,30 +32,33 @@ pub fn stored_link(s: &Settings) -> Option<LinkParams> {
     })
 }
 
-/// Writes a freshly bound link into `s` (in RAM; the storage task persists it).
+/// Writes a freshly bound link into `s` (in RAM; the storage task persists it): all five
+/// values or none (see [`Settings::set_many`]).
 pub fn store_link(s: &mut Settings, link: &LinkParams) -> Result<(), ParamError> {
     let index = |found: Option<usize>| {
         found
             .map(|i| Value::U32(i as u32))
             .ok_or(ParamError::OutOfRange)
     };
-    s.set("link.bind_id", Value::U32(link.bind_id))?;
-    s.set(
-        "link.band",
-        index(BANDS.iter().position(|b| *b == link.band))?,
-    )?;
-    s.set(
-        "link.rate",
-        index(RATES.iter().position(|r| *r == link.rate))?,
-    )?;
-    s.set(
-        "link.channels",
-        index(FORMATS.iter().position(|f| *f == link.format))?,
-    )?;
-    s.set(
-        "link.telemetry_ratio",
-        Value::U32(u32::from(link.telemetry_ratio)),
-    )
+    s.set_many(&[
+        ("link.bind_id", Value::U32(link.bind_id)),
+        (
+            "link.band",
+            index(BANDS.iter().position(|b| *b == link.band))?,
+        ),
+        (
+            "link.rate",
+            index(RATES.iter().position(|r| *r == link.rate))?,
+        ),
+        (
+            "link.channels",
+            index(FORMATS.iter().position(|f| *f == link.format))?,
+        ),
+        (
+            "link.telemetry_ratio",
+            Value::U32(u32::from(link.telemetry_ratio)),
+        ),
+    ])
 }
 
 #[cfg(test)]
@@ -82,5 +85,16 @@ mod tests {
             ..link
         };
         assert_eq!(store_link(&mut s, &odd), Err(ParamError::OutOfRange));
+        assert_eq!(stored_link(&s), Some(link));
+        // A ratio that is no power of two, on a new bind ID: none of the five values is
+        // stored (the old code stored the first four, then refused the ratio... or took 3).
+        let three = LinkParams {
+            bind_id: 0x1234_5678,
+            band: Band::Mhz433,
+            telemetry_ratio: 3,
+            ..link
+        };
+        assert!(store_link(&mut s, &three).is_err());
+        assert_eq!(stored_link(&s), Some(link), "the old link, whole");
     }
 }

@@ -15,10 +15,12 @@ mod link;
 mod setup;
 mod stages;
 mod sticks;
+mod validate;
 
 pub use announce::{BATTERY_REPEAT_MS, announce, announce_battery, battery_alert, loop_alerts};
 pub use channels::{
-    CHANNEL_HIGH, CHANNEL_LOW, CHANNEL_MID, ChannelMap, channel_for, throttle_channel,
+    ArmChannel, CHANNEL_HIGH, CHANNEL_LOW, CHANNEL_MID, ChannelMap, channel_for, channel_us,
+    throttle_channel,
 };
 pub use climb::ClimbRate;
 pub use controllers::{ControlParams, Controllers};
@@ -26,3 +28,4 @@ pub use flight_loop::{FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
 pub use link::{store_link, stored_link};
 pub use setup::{FlightSetup, SetupError, from_settings};
 pub use sticks::StickShaping;
+pub use validate::{InvalidSettings, validate};

@@ -4,6 +4,7 @@
 //! and after a setting changes (while disarmed), then solves the gains with
 //! [`Controllers::design`](super::Controllers::design) before arming is allowed.
 
+use super::channels::ChannelMap;
 use super::controllers::ControlParams;
 use super::flight_loop::LoopConfig;
 use super::sticks::StickShaping;
@@ -32,6 +33,8 @@ pub struct FlightSetup {
     pub battery: BatteryConfig,
     /// Gyro loop rate, Hz.
     pub loop_rate_hz: u32,
+    /// Which link channel carries what, with the arm switch if one is set.
+    pub channels: ChannelMap,
 }
 
 /// Why the settings do not make a flyable configuration.
@@ -46,6 +49,10 @@ pub enum SetupError {
     BadChoice,
     /// The warning threshold is below the critical one.
     BatteryThresholds,
+    /// The arm switch is set to a stick's or the mode switch's channel.
+    ArmChannelInUse,
+    /// The arm switch's window is empty (`arm.min_us` not below `arm.max_us`).
+    ArmWindow,
 }
 
 impl core::fmt::Display for SetupError {
@@ -55,6 +62,8 @@ impl core::fmt::Display for SetupError {
             SetupError::Model(e) => write!(f, "model: {e}"),
             SetupError::BadChoice => f.write_str("setting holds an unknown choice"),
             SetupError::BatteryThresholds => f.write_str("battery warning below critical"),
+            SetupError::ArmChannelInUse => f.write_str("arm channel is a stick or the mode switch"),
+            SetupError::ArmWindow => f.write_str("arm.min_us must be below arm.max_us"),
         }
     }
 }
@@ -110,7 +119,7 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
     };
     let supervisor = SupervisorSettings {
         idle_disarm_ms: s.u32("arm.idle_disarm_ms"),
-        failsafe_disarm_ms: s.u32("failsafe.disarm_ms"),
+        arm_on_critical_battery: s.u32("arm.critical_battery") == 1,
         failsafe_descent_mps: s.f32("failsafe.descent_mps"),
         ..SupervisorSettings::default()
     };
@@ -199,7 +208,9 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
         cell_critical_mv: critical,
         ..BatteryConfig::brushed_sparky()
     };
+    let channels = ChannelMap::from_settings(s)?;
     Ok(FlightSetup {
+        channels,
         loop_config,
         control,
         protocol,
@@ -231,7 +242,7 @@ mod tests {
                 FlightMode::RateLqg
             ]
         );
-        assert_eq!(setup.loop_config.supervisor.failsafe_disarm_ms, 15_000);
+        assert!(!setup.loop_config.supervisor.arm_on_critical_battery);
         assert_eq!(setup.loop_config.supervisor.failsafe_descent_mps, 0.7);
         assert_eq!(setup.loop_config.supervisor.idle_disarm_ms, 10_000);
         assert_eq!(
@@ -266,8 +277,11 @@ mod tests {
     fn changed_settings_reach_every_consumer() {
         let mut s = Settings::default();
         s.set_text("loop.rate_hz", "500").unwrap();
-        s.set_text("output.protocol", "pwm").unwrap();
-        s.set("output.rate_hz", Value::U32(400)).unwrap();
+        s.set_many(&[
+            ("output.protocol", Value::U32(1)),
+            ("output.rate_hz", Value::U32(400)),
+        ])
+        .unwrap();
         s.set("output.min_us", Value::U32(1_050)).unwrap();
         s.set("mixer.thrust_expo", Value::F32(0.7)).unwrap();
         s.set("battery.cells", Value::U32(3)).unwrap();
@@ -297,11 +311,13 @@ mod tests {
 
     #[test]
     fn unflyable_settings_are_refused() {
+        // `Settings::set` refuses these now; a stored set can still hold them.
         let mut s = Settings::default();
-        s.set_text("mixer.frame", "hex-x").unwrap();
+        s.set_by_key(105, 2).unwrap(); // mixer.frame hex-x
         assert_eq!(from_settings(&s), Err(SetupError::FrameNotSupported));
         let mut s = Settings::default();
-        s.set("battery.cell_warning_mv", Value::U32(3_200)).unwrap();
+        s.set_by_key(501, 3_200).unwrap(); // battery.cell_warning_mv
         assert_eq!(from_settings(&s), Err(SetupError::BatteryThresholds));
+        assert!(s.set("battery.cell_warning_mv", Value::U32(3_200)).is_err());
     }
 }

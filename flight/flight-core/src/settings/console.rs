@@ -4,7 +4,8 @@
 //! help                      list the commands
 //! list [PREFIX]             every setting (or those starting with PREFIX) with its value
 //! get NAME                  one setting
-//! set NAME VALUE            change one setting (in RAM; refused while armed)
+//! set NAME VALUE [NAME VALUE]…  change settings together (in RAM; refused while armed);
+//!                           refused whole if any value, or the set they make, cannot run
 //! save                      write changed settings to flash (refused while armed)
 //! defaults                  factory values (in RAM until saved)
 //! status                    arm state, link, battery, mode
@@ -30,6 +31,9 @@ pub enum Command<'a> {
         /// Value text.
         value: &'a str,
     },
+    /// Change several settings together: the `NAME VALUE …` pairs, for
+    /// [`Settings::set_text_pairs`].
+    SetAll(&'a str),
     /// Persist.
     Save,
     /// Factory values.
@@ -67,6 +71,13 @@ pub fn parse_line(line: &str) -> Result<Command<'_>, ConsoleError> {
     let Some(word) = words.next() else {
         return Ok(Command::Nothing);
     };
+    if word == "set" {
+        let pairs = line.trim_start().get(3..).unwrap_or("").trim();
+        let count = pairs.split_ascii_whitespace().count();
+        if count > 2 && count % 2 == 0 && count <= 2 * super::params::MAX_PAIRS {
+            return Ok(Command::SetAll(pairs));
+        }
+    }
     let a = words.next();
     let b = words.next();
     if words.next().is_some() {
@@ -132,17 +143,26 @@ mod tests {
         assert_eq!(parse_line(""), Ok(Command::Nothing));
         assert_eq!(parse_line("get"), Err(ConsoleError::WrongArguments));
         assert_eq!(parse_line("set a b c"), Err(ConsoleError::WrongArguments));
+        assert_eq!(
+            parse_line(" set output.protocol pwm  output.rate_hz 400 "),
+            Ok(Command::SetAll("output.protocol pwm  output.rate_hz 400"))
+        );
+        assert_eq!(
+            parse_line(&format!("set{}", " a 1".repeat(9))),
+            Err(ConsoleError::WrongArguments),
+            "at most eight pairs"
+        );
         assert_eq!(parse_line("rm -rf"), Err(ConsoleError::UnknownCommand));
     }
 
     #[test]
     fn output_round_trips_through_set() {
         let mut s = Settings::default();
-        s.set_text("output.protocol", "pwm").unwrap();
+        s.set_text("output.protocol", "oneshot125").unwrap();
         let mut text = heapless::String::<512>::new();
         write_list(&mut text, &s, "output.").unwrap();
         assert!(
-            text.starts_with("output.protocol = pwm\noutput.rate_hz = 32000\n"),
+            text.starts_with("output.protocol = oneshot125\noutput.rate_hz = 32000\n"),
             "{text}"
         );
         // Every printed line is accepted back by `set`.

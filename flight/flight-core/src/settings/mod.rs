@@ -3,9 +3,11 @@
 //! and the text console that reads and changes them over USB.
 
 mod console;
+mod line;
 mod params;
 mod store;
 
 pub use console::{Command, ConsoleError, parse_line, write_list, write_setting};
-pub use params::{Choice, Kind, PARAMS, Param, ParamError, Settings, Value};
+pub use line::{LineAssembler, LineError};
+pub use params::{Choice, Kind, MAX_PAIRS, PARAMS, Param, ParamError, Settings, Value};
 pub use store::{FLASH_BUFFER, LoadReport, StoreError, load, save};

@@ -1,6 +1,10 @@
 //! The parameter table. Each parameter has a stable numeric key (what flash stores, so a
 //! rename never loses a value), a dotted name (what the console shows), a kind with its
-//! range, and a default. Values outside the range are refused, never clamped silently.
+//! range, and a default. Values outside the range are refused, never clamped silently, and
+//! so is any change after which the whole set would not run
+//! ([`crate::pipeline::validate`]): a change leaves the set valid or untouched.
+
+use crate::pipeline::{InvalidSettings, validate};
 
 /// A parameter's value.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -67,8 +71,10 @@ pub enum ParamError {
     Unknown,
     /// Outside the parameter's range, or not one of its choices.
     OutOfRange,
-    /// Not a number / not a choice name.
+    /// Not a number / not a choice name (or, for several pairs, a name without a value).
     Unparsable,
+    /// The value is fine on its own, but the whole set would not run (nothing changed).
+    Invalid(InvalidSettings),
 }
 
 impl core::fmt::Display for ParamError {
@@ -77,9 +83,13 @@ impl core::fmt::Display for ParamError {
             ParamError::Unknown => "no such setting",
             ParamError::OutOfRange => "value out of range",
             ParamError::Unparsable => "cannot read that value",
+            ParamError::Invalid(e) => return write!(f, "refused, the settings would not run: {e}"),
         })
     }
 }
+
+/// Most name/value pairs one `set` line may change together.
+pub const MAX_PAIRS: usize = 8;
 
 impl core::error::Error for ParamError {}
 
@@ -122,6 +132,8 @@ pub const BANDS: Choice = &["433", "868", "915"];
 pub const RATES: Choice = &["l50", "m100", "f250", "f500"];
 /// Uplink channel formats (`telemetry::channels::ChannelFormat`).
 pub const CHANNEL_FORMATS: Choice = &["16", "8"];
+/// Arming at a critical battery: refused (factory) or allowed.
+pub const ARM_ON_CRITICAL: Choice = &["refuse", "allow"];
 /// Gyro loop rates.
 pub const LOOP_RATES: Choice = &["500", "1000"];
 
@@ -170,7 +182,8 @@ pub const PARAMS: &[Param] = &[
     f(503, "battery.divider", 1.0, 30.0, 2.0),
     f(504, "battery.current_mv_per_a", 0.0, 1_000.0, 50.0),
     // safety (6xx)
-    u(600, "failsafe.disarm_ms", 1_000, 120_000, 15_000),
+    // Key 600 (`failsafe.disarm_ms`, a fixed disarm time that could stop the motors in the
+    // air) is retired and must not be reused: a failsafe now ends on detected touchdown.
     f(601, "failsafe.descent_mps", 0.2, 3.0, 0.7),
     u(602, "arm.idle_disarm_ms", 2_000, 120_000, 10_000),
     c(603, "mode.switch_low", MODES, 2),
@@ -182,6 +195,14 @@ pub const PARAMS: &[Param] = &[
     c(702, "link.rate", RATES, 2),
     c(703, "link.channels", CHANNEL_FORMATS, 0),
     u(704, "link.telemetry_ratio", 2, 128, 4),
+    // Later safety settings, appended so the table index (the telemetry `SettingChange` id)
+    // of every older row stays put.
+    c(606, "arm.critical_battery", ARM_ON_CRITICAL, 0),
+    // The arm switch: 0 = stick gesture only; 1–16 = the channel number (5 = AUX1), "on"
+    // while its pulse lies in arm.min_us…arm.max_us (CRSF: 988…2012 µs for −100…+100 %).
+    u(607, "arm.channel", 0, 16, 0),
+    u(608, "arm.min_us", 800, 2_200, 1_750),
+    u(609, "arm.max_us", 800, 2_200, 2_100),
 ];
 
 /// Number of parameters.
@@ -272,12 +293,24 @@ impl Settings {
         }
     }
 
-    /// Changes a value after checking it.
+    /// Changes a value after checking it and the whole set it makes.
     pub fn set(&mut self, name: &str, value: Value) -> Result<(), ParamError> {
-        let (i, p) = find(name).ok_or(ParamError::Unknown)?;
-        let checked = p.check(value)?;
-        let slot = self.values.get_mut(i).ok_or(ParamError::Unknown)?;
-        *slot = checked;
+        self.set_many(&[(name, value)])
+    }
+
+    /// Changes several values at once: each is range-checked, then the whole resulting set
+    /// is validated; on any error nothing changes. Use it for changes that are only valid
+    /// together (PWM and its rate, a bind's five `link.*` values).
+    pub fn set_many(&mut self, changes: &[(&str, Value)]) -> Result<(), ParamError> {
+        let mut candidate = self.clone();
+        for &(name, value) in changes {
+            let (i, p) = find(name).ok_or(ParamError::Unknown)?;
+            let checked = p.check(value)?;
+            let slot = candidate.values.get_mut(i).ok_or(ParamError::Unknown)?;
+            *slot = checked;
+        }
+        candidate.check().map_err(ParamError::Invalid)?;
+        *self = candidate;
         Ok(())
     }
 
@@ -286,6 +319,36 @@ impl Settings {
         let (_, p) = find(name).ok_or(ParamError::Unknown)?;
         let value = p.parse(text)?;
         self.set(name, value)
+    }
+
+    /// Changes up to [`MAX_PAIRS`] values given as console text, `NAME VALUE NAME VALUE …`,
+    /// together (see [`Settings::set_many`]).
+    pub fn set_text_pairs(&mut self, text: &str) -> Result<(), ParamError> {
+        let mut changes: heapless::Vec<(&str, Value), MAX_PAIRS> = heapless::Vec::new();
+        let mut words = text.split_ascii_whitespace();
+        while let Some(name) = words.next() {
+            let value_text = words.next().ok_or(ParamError::Unparsable)?;
+            let (_, p) = find(name).ok_or(ParamError::Unknown)?;
+            let value = p.parse(value_text)?;
+            changes
+                .push((p.name, value))
+                .map_err(|_| ParamError::Unparsable)?;
+        }
+        self.set_many(&changes)
+    }
+
+    /// Whether the whole set can run (every cross-setting rule).
+    pub fn check(&self) -> Result<(), InvalidSettings> {
+        validate(self).map(|_| ())
+    }
+
+    /// This set if it can run, else the factory set and why this one was refused (for the
+    /// console and telemetry). What boot does with a stored set.
+    pub fn or_defaults(self) -> (Self, Option<InvalidSettings>) {
+        match self.check() {
+            Ok(()) => (self, None),
+            Err(e) => (Self::default(), Some(e)),
+        }
     }
 
     /// (parameter, value) pairs in table order.

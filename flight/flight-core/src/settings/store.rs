@@ -1,20 +1,53 @@
-//! Settings in flash through sequential-storage's map: one item per parameter, keyed by the
-//! parameter's stable key, holding its 32 value bits.
+//! Settings in flash: the whole set as one record — format version, generation number, every
+//! (key, value) pair, CRC-32 — in sequential-storage's map, alternating between two slots.
 //!
-//! Power-fail behaviour: sequential-storage writes each item with a CRC and never erases the
-//! only copy of a live item, so a power cut during `save` leaves every parameter with either
-//! its old or its new value (tested with the crate's fault-injecting mock flash). Values that
-//! fail their range check on load (a table change between firmware versions) are skipped and
-//! keep their defaults.
+//! Integrity: a save writes the new generation into the slot that does not hold the newest
+//! one, so the last committed set stays untouched until the new record is completely written
+//! (and sequential-storage itself never erases the only copy of a live item); then it writes
+//! the same record into the other slot, so one damaged copy still leaves the newest set. A
+//! power cut mid-save therefore leaves the previous set whole; a multi-parameter change (the
+//! five `link.*` values after a bind) is one record, so it lands whole or not at all. On load,
+//! a record counts only if its CRC, version and every cross-setting rule
+//! ([`crate::pipeline::validate`]) pass; the newest such record wins. Nothing ever mixes
+//! stored values with defaults while reporting success: a damaged or missing record is
+//! reported in [`LoadReport::problem`], and without a usable record the set is the factory
+//! one. The limit: sequential-storage skips an item whose CRC fails and returns the previous
+//! item of that key, so if *both* copies of the newest record are destroyed (an erased page
+//! holding both, bit flips in both), an older committed generation loads without a report —
+//! a whole set, never a mix, but not the newest (measured in the random-corruption test).
+//!
+//! The old format (one map item per parameter, before this record) is not migrated: such a
+//! store loads as factory settings with [`LoadProblem::OldFormat`], and the next save writes
+//! the record format.
 
 use embedded_storage_async::nor_flash::NorFlash;
 use sequential_storage::cache::CacheImpl;
 use sequential_storage::map::MapStorage;
 
-use super::params::{ParamError, Settings};
+use super::params::{PARAMS, Settings};
+use crate::pipeline::InvalidSettings;
 
-/// Scratch buffer size for one item (key + value, rounded up to the flash word).
-pub const FLASH_BUFFER: usize = 32;
+/// Scratch buffer size for one map item: the slot key and the record, rounded up to the
+/// flash word (the record is 11 + 6 × parameters bytes).
+pub const FLASH_BUFFER: usize = 16 + RECORD_MAX;
+
+/// The map's scratch buffer, aligned for the flash's write word (the F405's internal flash
+/// and the mock both need at least 4).
+#[repr(align(8))]
+struct Buffer([u8; FLASH_BUFFER]);
+
+impl Buffer {
+    const fn new() -> Self {
+        Self([0; FLASH_BUFFER])
+    }
+}
+
+/// The two slots' map keys (parameter keys are 100…999, the old format's item keys).
+const SLOTS: [u16; 2] = [0xFE00, 0xFE01];
+/// Record format version.
+const VERSION: u8 = 2;
+/// Longest record: version, generation, count, pairs, CRC.
+const RECORD_MAX: usize = 1 + 4 + 2 + 6 * super::params::COUNT + 4;
 
 /// A storage failure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -32,6 +65,42 @@ impl core::fmt::Display for StoreError {
 
 impl core::error::Error for StoreError {}
 
+/// What went wrong with the stored settings (the set loaded is still whole: see each case).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LoadProblem {
+    /// No usable record although something was stored: factory settings.
+    Corrupt,
+    /// One slot holds a damaged record; the other slot's whole set loaded (it may be one
+    /// generation older than the last save).
+    CopyDamaged,
+    /// Only the old one-item-per-parameter format is stored: factory settings.
+    OldFormat,
+    /// The newest record is intact but breaks a cross-setting rule: factory settings.
+    Invalid(InvalidSettings),
+    /// The record holds values today's table refuses (a range narrowed, a key retired);
+    /// those parameters have their factory values.
+    Refused,
+}
+
+impl core::fmt::Display for LoadProblem {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            LoadProblem::Corrupt => f.write_str("stored settings corrupt, factory settings"),
+            LoadProblem::CopyDamaged => {
+                f.write_str("one settings copy damaged, the other loaded (may be older)")
+            }
+            LoadProblem::OldFormat => {
+                f.write_str("settings in the old format, factory settings (save to convert)")
+            }
+            LoadProblem::Invalid(e) => {
+                write!(f, "stored settings cannot run ({e}), factory settings")
+            }
+            LoadProblem::Refused => f.write_str("some stored values refused, factory values"),
+        }
+    }
+}
+
 /// What `load` found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -40,152 +109,233 @@ pub struct LoadReport {
     pub loaded: u16,
     /// Stored values refused by today's range checks (they keep their defaults).
     pub refused: u16,
+    /// Generation of the loaded record (0 = none loaded).
+    pub generation: u32,
+    /// Anything the console and telemetry should say; `None` = the stored set, whole.
+    pub problem: Option<LoadProblem>,
 }
 
-/// Reads every stored parameter into `settings` (which should hold the defaults).
+/// IEEE CRC-32 (reflected, polynomial 0xEDB88320), bitwise: the record is read once per boot.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// Serialises `settings` as generation `generation`; returns the record length.
+fn encode(settings: &Settings, generation: u32, out: &mut [u8; RECORD_MAX]) -> usize {
+    let mut at = 0;
+    let mut put = |bytes: &[u8]| {
+        for &b in bytes {
+            if let Some(slot) = out.get_mut(at) {
+                *slot = b;
+            }
+            at += 1;
+        }
+    };
+    put(&[VERSION]);
+    put(&generation.to_le_bytes());
+    put(&(PARAMS.len() as u16).to_le_bytes());
+    for (p, v) in settings.iter() {
+        put(&p.key.to_le_bytes());
+        put(&v.to_bits().to_le_bytes());
+    }
+    let body = at;
+    let crc = crc32(out.get(..body).unwrap_or(&[]));
+    let mut at2 = body;
+    for b in crc.to_le_bytes() {
+        if let Some(slot) = out.get_mut(at2) {
+            *slot = b;
+        }
+        at2 += 1;
+    }
+    at2
+}
+
+/// A decoded record.
+struct Record {
+    generation: u32,
+    settings: Settings,
+    loaded: u16,
+    refused: u16,
+}
+
+/// Parses and checks a record (CRC, version, length); values go through the table's checks.
+fn decode(bytes: &[u8]) -> Option<Record> {
+    let (body, crc) = bytes.split_at_checked(bytes.len().checked_sub(4)?)?;
+    if crc32(body).to_le_bytes() != *crc {
+        return None;
+    }
+    let (&version, rest) = body.split_first()?;
+    if version != VERSION {
+        return None;
+    }
+    let (generation, rest) = rest.split_first_chunk::<4>()?;
+    let (count, pairs) = rest.split_first_chunk::<2>()?;
+    let count = usize::from(u16::from_le_bytes(*count));
+    if pairs.len() != 6 * count {
+        return None;
+    }
+    let mut record = Record {
+        generation: u32::from_le_bytes(*generation),
+        settings: Settings::default(),
+        loaded: 0,
+        refused: 0,
+    };
+    for pair in pairs.chunks_exact(6) {
+        let (key, bits) = pair.split_first_chunk::<2>()?;
+        let bits: [u8; 4] = bits.try_into().ok()?;
+        match record
+            .settings
+            .set_by_key(u16::from_le_bytes(*key), u32::from_le_bytes(bits))
+        {
+            Ok(()) => record.loaded += 1,
+            Err(_) => record.refused += 1,
+        }
+    }
+    Some(record)
+}
+
+/// What one slot holds. (No heap to box the record in; two of these live briefly on the
+/// stack at boot and during a save.)
+#[allow(clippy::large_enum_variant)]
+enum Slot {
+    Empty,
+    Damaged,
+    Record(Record),
+}
+
+async fn read_slot<S: NorFlash, C: CacheImpl<u16>>(
+    map: &mut MapStorage<u16, S, C>,
+    key: u16,
+) -> Result<Slot, StoreError> {
+    let mut buf = Buffer::new();
+    match map.fetch_item::<&[u8]>(&mut buf.0, &key).await {
+        Ok(None) => Ok(Slot::Empty),
+        Ok(Some(bytes)) => Ok(decode(bytes).map_or(Slot::Damaged, Slot::Record)),
+        Err(sequential_storage::Error::Corrupted { .. })
+        | Err(sequential_storage::Error::SerializationError(_)) => Ok(Slot::Damaged),
+        Err(_) => Err(StoreError::Flash),
+    }
+}
+
+/// Whether any old-format item (one per parameter key) is stored.
+async fn old_format_present<S: NorFlash, C: CacheImpl<u16>>(
+    map: &mut MapStorage<u16, S, C>,
+) -> bool {
+    for p in PARAMS {
+        let mut buf = Buffer::new();
+        if let Ok(Some(_)) = map.fetch_item::<u32>(&mut buf.0, &p.key).await {
+            return true;
+        }
+    }
+    false
+}
+
+/// Loads the newest whole, valid record into `settings` — or the factory set, with the
+/// reason in [`LoadReport::problem`]. `settings` is only written once the outcome is known.
 pub async fn load<S: NorFlash, C: CacheImpl<u16>>(
     map: &mut MapStorage<u16, S, C>,
     settings: &mut Settings,
 ) -> Result<LoadReport, StoreError> {
+    let [a, b] = SLOTS;
+    let slots = [read_slot(map, a).await?, read_slot(map, b).await?];
+    let damaged = slots.iter().any(|s| matches!(s, Slot::Damaged));
+    let newest = slots
+        .into_iter()
+        .filter_map(|s| match s {
+            Slot::Record(r) => Some(r),
+            _ => None,
+        })
+        .max_by_key(|r| r.generation);
     let mut report = LoadReport::default();
-    let keys: heapless::Vec<u16, { super::params::COUNT }> =
-        settings.iter().map(|(p, _)| p.key).collect();
-    for key in keys {
-        let mut buf = [0u8; FLASH_BUFFER];
-        match map.fetch_item::<u32>(&mut buf, &key).await {
-            Ok(Some(bits)) => match settings.set_by_key(key, bits) {
-                Ok(()) => report.loaded += 1,
-                Err(ParamError::OutOfRange | ParamError::Unparsable | ParamError::Unknown) => {
-                    report.refused += 1
-                }
-            },
-            Ok(None) => {}
-            Err(_) => return Err(StoreError::Flash),
-        }
+    let Some(record) = newest else {
+        *settings = Settings::default();
+        report.problem = if damaged {
+            Some(LoadProblem::Corrupt)
+        } else if old_format_present(map).await {
+            Some(LoadProblem::OldFormat)
+        } else {
+            None
+        };
+        return Ok(report);
+    };
+    if let Err(e) = record.settings.check() {
+        *settings = Settings::default();
+        report.problem = Some(LoadProblem::Invalid(e));
+        return Ok(report);
     }
+    report.loaded = record.loaded;
+    report.refused = record.refused;
+    report.generation = record.generation;
+    report.problem = if damaged {
+        Some(LoadProblem::CopyDamaged)
+    } else if record.refused > 0 {
+        Some(LoadProblem::Refused)
+    } else {
+        None
+    };
+    *settings = record.settings;
     Ok(report)
 }
 
-/// Writes the parameters whose value differs from `stored` (what flash holds now), so an
-/// unchanged setting costs no flash wear. Call only while disarmed: on the F405 a sector
-/// erase stalls instruction fetch.
+/// Writes `settings` as a new generation when it differs from `stored` (what flash holds
+/// now), into the slot not holding the newest record; returns how many parameters changed
+/// (0 = nothing written). Call only while disarmed: on the F405 a sector erase stalls
+/// instruction fetch.
 pub async fn save<S: NorFlash, C: CacheImpl<u16>>(
     map: &mut MapStorage<u16, S, C>,
     settings: &Settings,
     stored: &Settings,
 ) -> Result<u16, StoreError> {
-    let mut written = 0;
-    for ((p, value), (_, old)) in settings.iter().zip(stored.iter()) {
-        if value.to_bits() == old.to_bits() {
-            continue;
-        }
-        let mut buf = [0u8; FLASH_BUFFER];
-        map.store_item(&mut buf, &p.key, &value.to_bits())
+    let changed = settings
+        .iter()
+        .zip(stored.iter())
+        .filter(|((_, v), (_, old))| v.to_bits() != old.to_bits())
+        .count() as u16;
+    if changed == 0 {
+        return Ok(0);
+    }
+    let [a, b] = SLOTS;
+    let generation = |s: &Slot| match s {
+        Slot::Record(r) => Some(r.generation),
+        _ => None,
+    };
+    let (ga, gb) = (
+        generation(&read_slot(map, a).await?),
+        generation(&read_slot(map, b).await?),
+    );
+    // Overwrite the slot that does not hold the newest whole record.
+    let (target, newest) = match (ga, gb) {
+        (Some(x), Some(y)) if x >= y => (b, x),
+        (Some(x), None) => (b, x),
+        (_, Some(y)) => (a, y),
+        (None, None) => (a, 0),
+    };
+    let mut record = [0u8; RECORD_MAX];
+    let len = encode(settings, newest.wrapping_add(1), &mut record);
+    let record = record.get(..len).unwrap_or(&[]);
+    // First the slot without the newest record: once it is whole, the new set is committed.
+    // Then the same record into the other slot, so a damaged copy later still leaves the
+    // newest set readable instead of bringing back the previous one.
+    let other = if target == a { b } else { a };
+    for slot in [target, other] {
+        let mut buf = Buffer::new();
+        map.store_item(&mut buf.0, &slot, &record)
             .await
             .map_err(|_| StoreError::Flash)?;
-        written += 1;
     }
-    Ok(written)
+    Ok(changed)
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use embassy_futures::block_on;
-    use sequential_storage::cache::Cache;
-    use sequential_storage::map::MapConfig;
-    use sequential_storage::mock_flash::{MockFlashBase, WriteCountCheck};
-
-    type Flash = MockFlashBase<4, 4, 256>; // 4 pages of 1 KiB
-
-    fn map(flash: Flash) -> MapStorage<u16, Flash, impl CacheImpl<u16>> {
-        let config = MapConfig::try_new(Flash::FULL_FLASH_RANGE).unwrap();
-        MapStorage::new(flash, config, Cache::new_uncached())
-    }
-
-    #[test]
-    fn round_trip_and_only_changes_are_written() {
-        let mut m = map(Flash::new(WriteCountCheck::OnceOnly, None, true));
-        let defaults = Settings::default();
-        let mut s = defaults.clone();
-        s.set_text("pid.roll.kp", "0.0042").unwrap();
-        s.set_text("output.protocol", "oneshot125").unwrap();
-        assert_eq!(block_on(save(&mut m, &s, &defaults)), Ok(2));
-        assert_eq!(block_on(save(&mut m, &s, &s)), Ok(0));
-        let mut loaded = Settings::default();
-        let report = block_on(load(&mut m, &mut loaded)).unwrap();
-        assert_eq!(
-            report,
-            LoadReport {
-                loaded: 2,
-                refused: 0
-            }
-        );
-        assert_eq!(loaded, s);
-    }
-
-    #[test]
-    fn out_of_range_stored_values_keep_defaults() {
-        let mut m = map(Flash::default());
-        let mut buf = [0u8; FLASH_BUFFER];
-        // pid.roll.kp (key 300) = 7.0 is outside 0..=1; battery.cells (500) = 3 is fine.
-        block_on(m.store_item(&mut buf, &300u16, &7.0f32.to_bits())).unwrap();
-        block_on(m.store_item(&mut buf, &500u16, &3u32)).unwrap();
-        let mut s = Settings::default();
-        let report = block_on(load(&mut m, &mut s)).unwrap();
-        assert_eq!(
-            report,
-            LoadReport {
-                loaded: 1,
-                refused: 1
-            }
-        );
-        assert_eq!(s.f32("pid.roll.kp"), Settings::default().f32("pid.roll.kp"));
-        assert_eq!(s.u32("battery.cells"), 3);
-    }
-
-    /// Cuts the power after every possible number of written bytes during a save of three
-    /// changed parameters, then boots: every parameter is its old or its new value.
-    #[test]
-    fn power_cut_at_every_byte_leaves_old_or_new_values() {
-        let old = {
-            let mut s = Settings::default();
-            s.set_text("pid.roll.kp", "0.001").unwrap();
-            s.set_text("pid.pitch.kp", "0.002").unwrap();
-            s.set_text("battery.cells", "1").unwrap();
-            s
-        };
-        let mut new = old.clone();
-        new.set_text("pid.roll.kp", "0.009").unwrap();
-        new.set_text("pid.pitch.kp", "0.008").unwrap();
-        new.set_text("battery.cells", "2").unwrap();
-        let names = ["pid.roll.kp", "pid.pitch.kp", "battery.cells"];
-        let mut cut_points = 0;
-        for budget in 0..400u32 {
-            let mut m = map(Flash::new(WriteCountCheck::OnceOnly, None, true));
-            block_on(save(&mut m, &old, &Settings::default())).unwrap();
-            let (mut flash, _) = m.destroy();
-            flash.bytes_until_shutoff = Some(budget);
-            let mut m = map(flash);
-            let finished = block_on(save(&mut m, &new, &old)).is_ok();
-            let (mut flash, _) = m.destroy();
-            flash.bytes_until_shutoff = None;
-            let mut m = map(flash);
-            let mut booted = Settings::default();
-            block_on(load(&mut m, &mut booted)).unwrap();
-            for n in names {
-                let v = booted.get(n);
-                assert!(
-                    v == old.get(n) || v == new.get(n),
-                    "budget {budget}: {n} = {v:?}"
-                );
-            }
-            if finished {
-                assert_eq!(booted, new);
-                break;
-            }
-            cut_points += 1;
-        }
-        assert!(cut_points > 20, "the save was cut at {cut_points} points");
-    }
-}
+mod tests;

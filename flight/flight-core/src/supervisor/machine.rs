@@ -5,10 +5,15 @@
 //! Disarmed ─────────────────────────────────▶ Armed ─────────────────▶ Failsafe
 //!    ▲  ▲      disarm gesture / idle on ground  │   link back + sticks    │
 //!    │  └───────────────────────────────────────┘◀──────── centred ───────┤
-//!    └──────────────────── failsafe time out (landed by then) ───────────┘
+//!    └──────────────── touchdown detected (or the last resort) ──────────┘
 //! ```
 //! Motors turn only in `Armed` and `Failsafe`; in `Failsafe` the controller levels and
-//! descends at a fixed rate, ignoring the (stale) sticks.
+//! descends at a fixed rate, ignoring the (stale) sticks. Both automatic disarms — the idle
+//! disarm and the end of a failsafe — wait for the touchdown detector
+//! ([`LandingDetector`](super::LandingDetector)), so neither stops the motors in the air. The
+//! only timed cut is the failsafe's last resort ([`last_resort_ms`]), for a frame whose
+//! landing cannot be detected (no baro): long enough to descend from
+//! [`LAST_RESORT_ALTITUDE_M`] at the set rate.
 
 use super::{Gesture, GestureDetector, Sticks};
 
@@ -20,12 +25,31 @@ pub struct Settings {
     pub gesture_hold_ms: u32,
     /// Disarm after the throttle has been low this long while armed and landed.
     pub idle_disarm_ms: u32,
-    /// Disarm this long after the link failsafe began; the descent must have landed by then.
-    pub failsafe_disarm_ms: u32,
     /// Descent rate during failsafe, m/s.
     pub failsafe_descent_mps: f32,
     /// How close to centre roll/pitch/yaw must be to take control back after a failsafe.
     pub centre_deadband: f32,
+    /// Arm even when the battery is at its critical level (the pilot's explicit choice).
+    pub arm_on_critical_battery: bool,
+}
+
+/// The altitude a failsafe descent is assumed to start from at most, m, for the last-resort
+/// time limit. 200 m is the 120 m (400 ft) ceiling of EU and FAA rules with two thirds
+/// margin; a frame higher than that has usually run its battery flat before it could land.
+pub const LAST_RESORT_ALTITUDE_M: f32 = 200.0;
+
+/// How long a failsafe lasts before the motors are cut even though no touchdown was detected,
+/// ms: the time to descend [`LAST_RESORT_ALTITUDE_M`] at `descent_mps` (286 s at the factory
+/// 0.7 m/s). A documented last resort for frames whose landing cannot be detected (no
+/// vertical estimate); with one, the touchdown detector ends the failsafe long before.
+pub fn last_resort_ms(descent_mps: f32) -> u32 {
+    let rate = if descent_mps.is_finite() {
+        descent_mps.max(0.1)
+    } else {
+        0.1
+    };
+    // At most 2000 s: far below u32::MAX ms, and the cast saturates anyway.
+    (LAST_RESORT_ALTITUDE_M / rate * 1000.0).min(2_000_000.0) as u32
 }
 
 impl Default for Settings {
@@ -33,9 +57,9 @@ impl Default for Settings {
         Self {
             gesture_hold_ms: 1_000,
             idle_disarm_ms: 10_000,
-            failsafe_disarm_ms: 15_000,
             failsafe_descent_mps: 0.7,
             centre_deadband: 0.1,
+            arm_on_critical_battery: false,
         }
     }
 }
@@ -56,9 +80,11 @@ pub struct Inputs {
     pub sensors_healthy: bool,
     /// Controller gains are solved (the LQG Riccati solution runs before take-off).
     pub gains_ready: bool,
-    /// The frame rests on the ground (still, feeling 1 g). The idle disarm only counts
-    /// while it does, so a closed throttle in the air never disarms.
+    /// The touchdown detector says the frame stands on the ground. The idle disarm only
+    /// counts while it does, and a failsafe ends (disarms) only once it does.
     pub landed: bool,
+    /// The battery is at its critical level.
+    pub battery_critical: bool,
 }
 
 /// The supervisor's state.
@@ -88,6 +114,8 @@ pub enum ArmBlocker {
     SensorsUnhealthy,
     /// Gains not solved yet.
     GainsNotReady,
+    /// The battery is at its critical level (setting `arm.critical_battery` overrides).
+    BatteryCritical,
 }
 
 /// What happened this loop (for alerts and telemetry), besides the state itself.
@@ -104,8 +132,10 @@ pub enum Decision {
     DisarmedByPilot,
     /// Disarmed after idling on the ground.
     DisarmedIdle,
-    /// Disarmed at the end of a failsafe.
+    /// Disarmed at the end of a failsafe: touchdown detected.
     DisarmedFailsafe,
+    /// Disarmed by the failsafe's last-resort time limit, no touchdown detected.
+    DisarmedLastResort,
     /// Link lost while armed.
     FailsafeEntered,
     /// Link back and sticks centred: the pilot has control again.
@@ -150,7 +180,7 @@ impl Supervisor {
         matches!(self.state, State::Failsafe { .. }).then_some(self.settings.failsafe_descent_mps)
     }
 
-    fn blocker(inputs: &Inputs) -> Option<ArmBlocker> {
+    fn blocker(&self, inputs: &Inputs) -> Option<ArmBlocker> {
         if !inputs.link_up || !inputs.sticks.is_finite() {
             Some(ArmBlocker::LinkDown)
         } else if !inputs.sticks.throttle_low() {
@@ -159,6 +189,8 @@ impl Supervisor {
             Some(ArmBlocker::SensorsUnhealthy)
         } else if !inputs.gains_ready {
             Some(ArmBlocker::GainsNotReady)
+        } else if inputs.battery_critical && !self.settings.arm_on_critical_battery {
+            Some(ArmBlocker::BatteryCritical)
         } else {
             None
         }
@@ -187,7 +219,7 @@ impl Supervisor {
         };
         match self.state {
             State::Disarmed => match gesture {
-                Some(Gesture::Arm) => match Self::blocker(inputs) {
+                Some(Gesture::Arm) => match self.blocker(inputs) {
                     None => {
                         self.state = State::Armed;
                         self.throttle_low_since = Some(now);
@@ -218,9 +250,14 @@ impl Supervisor {
                 Decision::Steady
             }
             State::Failsafe { since_ms } => {
-                if now.wrapping_sub(since_ms) >= self.settings.failsafe_disarm_ms {
+                if inputs.landed {
                     self.state = State::Disarmed;
                     return Decision::DisarmedFailsafe;
+                }
+                if now.wrapping_sub(since_ms) >= last_resort_ms(self.settings.failsafe_descent_mps)
+                {
+                    self.state = State::Disarmed;
+                    return Decision::DisarmedLastResort;
                 }
                 if link_ok && gesture == Some(Gesture::Disarm) {
                     self.state = State::Disarmed;
@@ -254,6 +291,7 @@ mod tests {
             sensors_healthy: true,
             gains_ready: true,
             landed: true,
+            battery_critical: false,
         }
     }
 
@@ -332,43 +370,83 @@ mod tests {
     }
 
     #[test]
-    fn link_cut_descends_then_disarms() {
+    fn link_cut_descends_and_disarms_only_on_touchdown() {
         let s = Settings::default();
         let mut sup = armed(&s);
         assert_eq!(sup.update(&inputs(5_000, true, 0.6, 0.0)), Decision::Steady);
-        assert_eq!(
-            sup.update(&inputs(5_010, false, 0.6, 0.0)),
-            Decision::FailsafeEntered
-        );
+        let mut air = inputs(5_010, false, 0.6, 0.0);
+        air.landed = false;
+        assert_eq!(sup.update(&air), Decision::FailsafeEntered);
         assert_eq!(sup.failsafe_descent_mps(), Some(0.7));
         assert!(sup.motors_enabled(), "failsafe keeps flying to land level");
+        // 0.7 m/s from 60 m takes 86 s: still descending, never disarmed (the old code cut
+        // at 15 s).
+        for t in (5_010..91_010).step_by(10) {
+            air.now_ms = t;
+            assert_eq!(sup.update(&air), Decision::Steady, "{t}");
+        }
+        assert!(sup.motors_enabled());
+        // Touchdown detected.
         assert_eq!(
-            sup.update(&inputs(20_009, false, 0.6, 0.0)),
-            Decision::Steady
-        );
-        assert_eq!(
-            sup.update(&inputs(20_010, false, 0.6, 0.0)),
+            sup.update(&inputs(91_020, false, 0.6, 0.0)),
             Decision::DisarmedFailsafe
         );
         assert!(!sup.motors_enabled());
         // The link coming back after that does not re-arm.
         assert_eq!(
-            sup.update(&inputs(21_000, true, 0.0, 0.0)),
+            sup.update(&inputs(92_000, true, 0.0, 0.0)),
             Decision::Steady
         );
         assert_eq!(sup.state(), State::Disarmed);
     }
 
     #[test]
+    fn the_last_resort_cuts_only_after_descending_from_200_m() {
+        let s = Settings::default();
+        assert_eq!(last_resort_ms(0.7), 285_714);
+        let mut sup = armed(&s);
+        let mut air = inputs(5_000, false, 0.6, 0.0);
+        air.landed = false;
+        assert_eq!(sup.update(&air), Decision::FailsafeEntered);
+        air.now_ms = 5_000 + 285_713;
+        assert_eq!(sup.update(&air), Decision::Steady);
+        air.now_ms += 1;
+        assert_eq!(sup.update(&air), Decision::DisarmedLastResort);
+    }
+
+    #[test]
+    fn a_critical_battery_refuses_arming_unless_overridden() {
+        for (override_on, expected) in [
+            (false, Decision::ArmRefused(ArmBlocker::BatteryCritical)),
+            (true, Decision::Armed),
+        ] {
+            let s = Settings {
+                arm_on_critical_battery: override_on,
+                ..Settings::default()
+            };
+            let mut sup = Supervisor::new(s);
+            let mut low = inputs(0, true, 0.0, 1.0);
+            low.battery_critical = true;
+            sup.update(&low);
+            low.now_ms = s.gesture_hold_ms;
+            assert_eq!(sup.update(&low), expected);
+        }
+    }
+
+    #[test]
     fn control_returns_only_with_centred_sticks() {
         let s = Settings::default();
         let mut sup = armed(&s);
-        sup.update(&inputs(5_000, false, 0.6, 0.0));
+        let flying = |t, up, yaw| Inputs {
+            landed: false,
+            ..inputs(t, up, 0.6, yaw)
+        };
+        sup.update(&flying(5_000, false, 0.0));
         // Link back but yaw held over: still failsafe.
-        assert_eq!(sup.update(&inputs(6_000, true, 0.6, 0.5)), Decision::Steady);
+        assert_eq!(sup.update(&flying(6_000, true, 0.5)), Decision::Steady);
         assert!(matches!(sup.state(), State::Failsafe { .. }));
         assert_eq!(
-            sup.update(&inputs(6_100, true, 0.6, 0.05)),
+            sup.update(&flying(6_100, true, 0.05)),
             Decision::ControlRecovered
         );
         assert_eq!(sup.state(), State::Armed);
@@ -380,6 +458,7 @@ mod tests {
         let s = Settings::default();
         let mut sup = armed(&s);
         let mut bad = inputs(5_000, true, f32::NAN, 0.0);
+        bad.landed = false;
         assert_eq!(sup.update(&bad), Decision::FailsafeEntered);
         bad.now_ms = 6_000;
         assert_eq!(sup.update(&bad), Decision::Steady, "no recovery on garbage");

@@ -3,11 +3,19 @@
 //! and returns a decision; nothing here touches hardware.
 
 mod gesture;
+mod landing;
 mod machine;
 mod modes;
 
 pub use gesture::{Gesture, GestureDetector};
-pub use machine::{ArmBlocker, Decision, Inputs, Settings, State, Supervisor};
+pub use landing::{
+    LANDED_CLIMB_MPS, LANDED_HOLD_MS, LandingDetector, LandingInputs, THRUST_MARGIN,
+    landed_climb_limit,
+};
+pub use machine::{
+    ArmBlocker, Decision, Inputs, LAST_RESORT_ALTITUDE_M, Settings, State, Supervisor,
+    last_resort_ms,
+};
 pub use modes::{FlightMode, ModeSwitch};
 
 /// Stick positions as the link delivers them: throttle 0…1, the others −1…1 (centre 0).

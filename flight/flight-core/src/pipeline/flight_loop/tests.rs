@@ -178,10 +178,109 @@ fn failsafe_levels_a_rolled_quad_and_descends() {
     // Descent: total thrust below the cruise throttle of 0.6 (hover × 0.9 without a climb rate).
     let mean = thrust.iter().sum::<f32>() / 4.0;
     assert!(mean < 0.6 && mean > 0.4, "{mean}");
-    // 15 s later (default failsafe time) it disarms.
-    let out = run(&mut l, t + 4102, 7_500, &resting(0.0), &lost);
-    assert!(!out.armed);
-    assert_eq!(out.motors, [Command::Stopped; 4]);
+    // Without a climb rate a touchdown cannot be detected: 60 s later it still flies (the
+    // old code cut the motors 15 s after the failsafe began, wherever the frame was).
+    let out = run(&mut l, t + 4102, 30_000, &resting(0.0), &lost);
+    assert!(out.armed && out.failsafe);
+    assert!(!l.landed());
+}
+
+/// Runs `n` loops from `t0` ms with a climb rate, returns the last output.
+fn run_climb(
+    l: &mut FlightLoop,
+    t0: u32,
+    n: u32,
+    imu: &ImuSample,
+    link: &LinkInput,
+    climb_mps: f32,
+) -> LoopOutput {
+    let mut last = None;
+    for i in 0..n {
+        last = Some(l.step(t0 + i * 2, imu, link, Some(climb_mps)));
+    }
+    last.unwrap()
+}
+
+#[test]
+fn failsafe_descent_never_disarms_in_the_air_and_disarms_after_touchdown() {
+    let mut l = flight_loop();
+    let t = arm(&mut l);
+    // Hover at 50 % for 4 s, then the link is lost.
+    run_climb(&mut l, t, 2000, &resting(0.0), &link(0.5, 0.0), 0.0);
+    let lost = LinkInput {
+        up: false,
+        ..link(0.5, 0.0)
+    };
+    let t = t + 4000;
+    assert_eq!(
+        l.step(t, &resting(0.0), &lost, Some(0.0)).decision,
+        Decision::FailsafeEntered
+    );
+    // A steady 0.7 m/s descent from 60 m (86 s): gyro quiet, the accelerometer at 1 g, as a
+    // steady descent shows — never disarmed.
+    for k in 1..43_000 {
+        let out = l.step(t + 2 * k, &resting(0.0), &lost, Some(-0.7));
+        assert!(out.armed, "disarmed in the air at {} ms", 2 * k);
+    }
+    // Touchdown: no more descent, the descent controller winds the thrust down.
+    let touchdown = t + 86_000;
+    let mut disarmed_at = None;
+    for k in 0..2_000 {
+        let out = l.step(touchdown + 2 * k, &resting(0.0), &lost, Some(0.0));
+        if out.decision == Decision::DisarmedFailsafe {
+            disarmed_at = Some(2 * k);
+            break;
+        }
+    }
+    let after = disarmed_at.expect("disarmed after touchdown");
+    assert!(
+        (1_000..2_000).contains(&after),
+        "{after} ms after touchdown"
+    );
+}
+
+#[test]
+fn a_closed_throttle_descent_never_idle_disarms() {
+    let mut l = flight_loop();
+    let t = arm(&mut l);
+    run_climb(&mut l, t, 2000, &resting(0.0), &link(0.5, 0.0), 0.0);
+    // Throttle closed, falling steadily at 3 m/s with drag holding 1 g: still, 1 g, but in
+    // the air (the old `at_rest` check let the 10 s idle timer run here).
+    let out = run_climb(
+        &mut l,
+        t + 4000,
+        15_000,
+        &resting(0.0),
+        &link(0.0, 0.0),
+        -3.0,
+    );
+    assert!(out.armed);
+    // On the ground the idle timer runs once the touchdown is seen (here the blended climb
+    // rate needs ≈ 2.3 s to decay from −3 m/s below 0.3 m/s, as this accelerometer never
+    // felt the stop; then the 1 s hold): disarmed 10 s after that.
+    let (mut landed_at, mut disarmed_at) = (None, None);
+    for k in 0..10_000u32 {
+        let out = l.step(
+            t + 34_000 + 2 * k,
+            &resting(0.0),
+            &link(0.0, 0.0),
+            Some(0.0),
+        );
+        if l.landed() && landed_at.is_none() {
+            landed_at = Some(2 * k);
+        }
+        if out.decision == Decision::DisarmedIdle {
+            disarmed_at = Some(2 * k);
+            break;
+        }
+    }
+    let (landed_at, disarmed_at) = (landed_at.unwrap(), disarmed_at.unwrap());
+    assert!((3_000..4_000).contains(&landed_at), "{landed_at}");
+    assert_eq!(
+        disarmed_at - landed_at,
+        10_002,
+        "one loop to reach the supervisor"
+    );
 }
 
 #[test]
@@ -213,4 +312,23 @@ fn once_airborne_a_closed_throttle_keeps_stabilising() {
     let spread = thrust.iter().copied().fold(0.0f32, f32::max)
         - thrust.iter().copied().fold(1.0f32, f32::min);
     assert!(spread > 0.05, "{thrust:?}");
+}
+
+#[test]
+fn a_link_loss_just_after_a_gentle_take_off_does_not_disarm() {
+    // Take-off at 0.15 throttle (the hover estimate still near its 0.5 start value),
+    // climbing at 0.2 m/s; the link drops 0.5 s later, 10 cm up.
+    let mut l = flight_loop();
+    let t = arm(&mut l);
+    run_climb(&mut l, t, 250, &resting(0.0), &link(0.15, 0.0), 0.2);
+    assert!(!l.landed(), "airborne once the throttle left idle");
+    let lost = LinkInput {
+        up: false,
+        ..link(0.15, 0.0)
+    };
+    let out = l.step(t + 500, &resting(0.0), &lost, Some(0.2));
+    assert_eq!(out.decision, Decision::FailsafeEntered);
+    // Descending at the set rate: no disarm.
+    let out = run_climb(&mut l, t + 502, 2_000, &resting(0.0), &lost, -0.7);
+    assert!(out.armed && out.failsafe);
 }

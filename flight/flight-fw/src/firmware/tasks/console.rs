@@ -8,6 +8,7 @@ use embassy_stm32::usb::Driver;
 use embassy_usb::class::cdc_acm::{CdcAcmClass, State};
 use embassy_usb::driver::EndpointError;
 use embassy_usb::{Builder, Config};
+use flight_core::settings::LineAssembler;
 use heapless::String;
 use static_cell::StaticCell;
 
@@ -58,23 +59,18 @@ pub async fn console_task(driver: Driver<'static, USB_OTG_FS>) {
 async fn serve(
     class: &mut CdcAcmClass<'static, Driver<'static, USB_OTG_FS>>,
 ) -> Result<(), EndpointError> {
-    let mut line: String<96> = String::new();
+    let mut lines: LineAssembler<96> = LineAssembler::new();
     let mut packet = [0u8; 64];
     loop {
         let n = class.read_packet(&mut packet).await?;
         for &byte in packet.get(..n).unwrap_or(&[]) {
-            match byte {
-                b'\r' | b'\n' => {
-                    let mut reply: String<2048> = String::new();
-                    with_app(|a| a.on_console_line(line.as_str(), &mut reply));
-                    send(class, reply.as_bytes()).await?;
-                    line.clear();
-                }
-                // Overlong lines are cut; the command then fails to parse and says so.
-                b => {
-                    let _ = line.push(char::from(b));
-                }
-            }
+            // Overlong lines are refused whole, never cut (a cut line can mean something else).
+            let Some(line) = lines.push(byte) else {
+                continue;
+            };
+            let mut reply: String<2048> = String::new();
+            with_app(|a| a.on_console_input(line.as_ref().map(|l| l.as_str()), &mut reply));
+            send(class, reply.as_bytes()).await?;
         }
     }
 }

@@ -31,10 +31,15 @@ pub async fn open(flash: Bank1Region1<'static, Blocking>) -> (Option<SettingsMap
     };
     let mut map = MapStorage::new(BlockingAsync::new(flash), config, Cache::new_uncached());
     match load(&mut map, &mut settings).await {
-        Ok(report) => info!(
-            "settings: {} loaded, {} refused",
-            report.loaded, report.refused
-        ),
+        Ok(report) => {
+            info!(
+                "settings: {} loaded, {} refused, generation {}",
+                report.loaded, report.refused, report.generation
+            );
+            if let Some(problem) = report.problem {
+                warn!("settings: {}", problem);
+            }
+        }
         Err(e) => warn!("settings unreadable ({}), using defaults", e),
     }
     (Some(map), settings)
