@@ -14,6 +14,11 @@ pub use master::Master;
 pub const STREAM_TX_BYTES: usize = 1024;
 /// Telemetry bytes each end can hold received and unread.
 pub const STREAM_RX_BYTES: usize = 1024;
+/// The longest single [`Step::Listen`] either end plans. A follower acquiring dwells a whole
+/// hop cycle on one channel (660 ms at L50); it does so in windows of at most this length on
+/// the same channel, so the loop hands control back (and runs its hooks, where the firmware
+/// checks in with its watchdog) at least this often in every state and rate mode.
+pub const MAX_LISTEN_US: u64 = 50_000;
 
 /// What a link end does next, in absolute times of its clock.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
