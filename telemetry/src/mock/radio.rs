@@ -1,4 +1,4 @@
-//! A packet-level radio on the [`Medium`]: PLL settling and airtime are charged in virtual
+//! A packet-level radio on the [`Medium`]: SPI set-up, PLL settling and airtime are charged in virtual
 //! time exactly as the slot budget assumes (`link::rate`), so link timing is exercised too.
 
 use std::convert::Infallible;
@@ -7,7 +7,7 @@ use std::task::Poll;
 
 use super::executor::VirtualTime;
 use super::medium::Medium;
-use crate::link::rate::{PLL_SETTLE_US, airtime_us};
+use crate::link::rate::{PLL_SETTLE_US, TX_SETUP_US, airtime_us};
 use crate::link::{PacketRadio, RadioConfig, RateMode, RxOutcome};
 
 /// One mock radio (node) on a medium.
@@ -70,7 +70,7 @@ impl PacketRadio for MockRadio {
     }
 
     async fn transmit(&mut self, frame: &[u8]) -> Result<(), Infallible> {
-        let start = self.time.now_us() + u64::from(PLL_SETTLE_US);
+        let start = self.time.now_us() + u64::from(TX_SETUP_US + PLL_SETTLE_US);
         let end = start + u64::from(airtime_us(frame.len(), self.config.rate.bit_rate_bps()));
         self.medium
             .transmit(self.node, start, end, self.frequency_hz, frame);

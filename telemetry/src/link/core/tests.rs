@@ -93,7 +93,7 @@ fn follower_acquires_then_tracks_the_master() {
     assert!(!follower.in_failsafe());
     assert_eq!(follower.output(), &channels);
     // Tracking: the next step listens for the master's next slot on its channel, opening
-    // 100 µs before that slot starts.
+    // RX_EARLY_US before that slot starts.
     let master_next = master.slot();
     let Step::Listen {
         channel, from_us, ..
@@ -105,7 +105,7 @@ fn follower_acquires_then_tracks_the_master() {
         follower.tracked_slot().map(|(s, _)| u32::from(s)),
         Some(master_next % 256)
     );
-    assert_eq!(from_us, t - 100);
+    assert_eq!(from_us, t - super::follower::RX_EARLY_US);
     let mut m = [0u8; 64];
     match master.plan(t, &mut m) {
         Step::Transmit { channel: c, .. } | Step::Listen { channel: c, .. } => {
