@@ -19,15 +19,13 @@ use super::{MAX_LISTEN_US, STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
 
 /// Default failsafe delay.
 pub const DEFAULT_FAILSAFE_US: u64 = 250_000;
-/// The follower opens its receive window this long before the expected slot start. It
-/// absorbs clock drift between packets (40 ppm × one hop cycle at 20 ms slots ≈ 26 µs) and,
-/// mostly, the bias of the grid estimate: a packet is timestamped when the driver returns
-/// it, after the nIRQ latency and the FIFO read-out over SPI (a 64-byte frame is ~100 µs at
-/// the F405's 5.25 MHz), so the estimate runs late by ~150 µs, and the receiver's own set-up
-/// writes and PLL settle must still finish before the master's preamble. 100 µs was enough
-/// only while SPI took no time (taulink-sim, chip level: F250 1:2 lost lock every second
-/// with SPI time modelled).
-pub const RX_EARLY_US: u64 = 400;
+/// The follower opens its receive window this long before the expected slot start, to
+/// absorb clock drift between packets (40 ppm × one hop cycle at 20 ms slots ≈ 26 µs). The
+/// grid estimate also runs late by the nIRQ latency and FIFO read-out before a packet is
+/// timestamped; with SPI time modelled the receiver's set-up and PLL settle still finish
+/// before the sender's preamble (which comes after its lead and SPI set-up), so 100 µs holds
+/// (taulink-sim, chip level, F250/F500 at 1:2: no failsafe).
+pub const RX_EARLY_US: u64 = 100;
 /// Consecutive missed uplinks after which the follower gives up tracking and re-acquires:
 /// one hop cycle, i.e. every channel failed once.
 pub const RESYNC_MISSES: u32 = HOP_CHANNELS as u32;
