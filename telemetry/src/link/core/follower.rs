@@ -422,6 +422,12 @@ impl Follower {
         self.counters
     }
 
+    /// The loop met a radio error and is re-configuring the radio (counted in
+    /// [`Counters::radio_errors`]).
+    pub fn on_radio_error(&mut self) {
+        self.counters.radio_errors = self.counters.radio_errors.saturating_add(1);
+    }
+
     /// Times tracking was lost and acquisition restarted.
     pub fn resyncs(&self) -> u32 {
         self.resyncs
