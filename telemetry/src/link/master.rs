@@ -120,12 +120,19 @@ async fn run_slot<R: PacketRadio, C: LinkClock>(
         } => {
             let sent = async {
                 radio.set_channel(channel).await?;
+                // Too late for this slot (e.g. right after a radio recovery): an uplink off
+                // the grid would drag the follower's grid with it, so the slot is skipped.
+                if clock.now_us() > at_us {
+                    return Ok(false);
+                }
                 clock.sleep_until_us(at_us).await;
-                radio.transmit(buf.get(..len).unwrap_or(&[])).await
+                radio.transmit(buf.get(..len).unwrap_or(&[])).await?;
+                Ok(true)
             }
             .await;
             match sent {
-                Ok(()) => master.on_sent(),
+                Ok(true) => master.on_sent(),
+                Ok(false) => master.on_skipped(),
                 Err(e) => {
                     master.on_skipped();
                     return Err(e);

@@ -27,7 +27,8 @@ pub const MAX_CONSECUTIVE_RADIO_ERRORS: u32 = 8;
 /// at once (unpowered, browning out) is retried over ~`MAX_CONSECUTIVE_RADIO_ERRORS` × this,
 /// not in a burst of microseconds; short enough for the hooks' 50 ms cadence.
 pub const RADIO_RETRY_US: u64 = 10_000;
-/// How often the loops ask the radio to [`check_health`](crate::link::PacketRadio::check_health).
+/// How often the loops ask the radio to [`check_health`](crate::link::PacketRadio::check_health)
+/// (for a chip that reset without any operation failing).
 pub const HEALTH_CHECK_PERIOD_US: u64 = 1_000_000;
 
 /// What a link end does next, in absolute times of its clock.
