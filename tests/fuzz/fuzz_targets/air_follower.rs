@@ -51,7 +51,11 @@ fuzz_target!(|data: &[u8]| {
                     assert_eq!(follower.output(), &expected);
                     assert!(!follower.in_failsafe());
                 } else if !follower.in_failsafe() {
-                    assert_eq!(follower.output(), &before, "outputs moved without an update");
+                    assert_eq!(
+                        follower.output(),
+                        &before,
+                        "outputs moved without an update"
+                    );
                 }
             }
             2 => {

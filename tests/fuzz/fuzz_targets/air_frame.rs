@@ -7,8 +7,8 @@
 use libfuzzer_sys::fuzz_target;
 use taulink_fuzz::{Input, seal};
 use telemetry::frame::{Frame, Received, Rejection, decode, encode};
-use telemetry::link::bind::{LinkParams, is_accept_of, offered_params};
 use telemetry::link::BIND_KEY;
+use telemetry::link::bind::{LinkParams, is_accept_of, offered_params};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);

@@ -8,7 +8,9 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use module_core::hm10::at::{Action, Configurator, FACTORY_BAUD, MAX_NAME_LEN, Outcome, RELAY_BAUD};
+use module_core::hm10::at::{
+    Action, Configurator, FACTORY_BAUD, MAX_NAME_LEN, Outcome, RELAY_BAUD,
+};
 use taulink_fuzz::Input;
 
 fuzz_target!(|data: &[u8]| {
@@ -23,7 +25,11 @@ fuzz_target!(|data: &[u8]| {
         let phone = received.windows(7).any(|w| w == b"OK+CONN");
         let action = script.poll(now, received);
         if let Some(outcome) = done {
-            assert_eq!(action, Action::Done(outcome), "a finished script acted again");
+            assert_eq!(
+                action,
+                Action::Done(outcome),
+                "a finished script acted again"
+            );
             continue;
         }
         if phone {

@@ -45,7 +45,11 @@ fn lossy_link(mut input: Input) {
         let got = receiver.read(&mut out[..usize::from(flags >> 2)]);
         read.extend_from_slice(&out[..got]);
         assert!(read.len() <= written.len());
-        assert_eq!(read[..], written[..read.len()], "the stream reordered or duplicated");
+        assert_eq!(
+            read[..],
+            written[..read.len()],
+            "the stream reordered or duplicated"
+        );
         assert!(sender.acked_total() <= receiver.received_total());
     }
 }

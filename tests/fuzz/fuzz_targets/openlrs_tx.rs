@@ -97,7 +97,10 @@ fuzz_target!(|data: &[u8]| {
                 let port = handset.smartport_tick(quality, input.u8() % 4);
                 let mut decoder = sport::Decoder::new();
                 decoder.push_all(&port, |event| {
-                    assert!(!matches!(event, sport::Event::Rejected(_)), "S.Port {event:?}")
+                    assert!(
+                        !matches!(event, sport::Event::Rejected(_)),
+                        "S.Port {event:?}"
+                    )
                 });
             }
             _ => {
