@@ -135,6 +135,9 @@ fn bind_packets_match_byte_for_byte() {
         count += 1;
     }
     // Both outcomes occur (each case was checked against its own top hop above).
-    assert!(accepted > 0 && refused > 0, "{accepted} accepted, {refused} refused");
+    assert!(
+        accepted > 0 && refused > 0,
+        "{accepted} accepted, {refused} refused"
+    );
     report("bind_packets", count);
 }

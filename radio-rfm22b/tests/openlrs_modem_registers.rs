@@ -7,8 +7,8 @@
 mod openlrs_vectors;
 
 use openlrs_vectors::{bind_data, load, num, nums, report};
-use radio_rfm22b::openlrs::modem::{self, Purpose, RegOp, Script};
 use radio_rfm22b::openlrs::BindingVersion;
+use radio_rfm22b::openlrs::modem::{self, Purpose, RegOp, Script};
 use serde_json::Value;
 
 fn writes(script: &Script) -> Vec<[u64; 2]> {
