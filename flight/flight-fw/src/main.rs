@@ -14,7 +14,8 @@
 //! battery and alert tasks sound the alarms and announcements through the DAC. Every task
 //! checks in with the watchdog supervisor. The same logic flies in `tests/flight-sitl`.
 //!
-//! Release image (BrushedSparky and Sparky2 alike): 210 096 B text, 2 264 B data, 20 116 B bss.
+//! Image sizes: the table in the top-level README, written by `cargo xtask readme` and checked by
+//! `cargo xtask verify`.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
