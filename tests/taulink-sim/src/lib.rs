@@ -12,6 +12,7 @@ mod ends;
 pub mod probe;
 pub mod report;
 pub mod scenario;
+pub mod serve;
 pub mod world;
 
 pub use report::Report;

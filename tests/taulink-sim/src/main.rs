@@ -99,6 +99,9 @@ fn sweep(base: &Scenario, json: bool) {
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if let Some(("--serve", rest)) = args.split_first().map(|(a, r)| (a.as_str(), r)) {
+        std::process::exit(taulink_sim::serve::main(rest));
+    }
     let (scenario, output) = match parse_args(&args) {
         Ok(v) => v,
         Err(msg) => {
