@@ -61,7 +61,7 @@ test("connects and shows what the simulator sent", async ({ page }) => {
   await expect(page.getByLabel("Uplink LQ", { exact: true })).toHaveText(/^\d+ %$/);
 });
 
-test("a flight-mode change is spoken", async ({ page }) => {
+test("a flight-mode change is spoken; mute silences arming", async ({ page }) => {
   await page.goto("/?sim");
   await expect(page.getByLabel("Flight mode", { exact: true })).toHaveText("Attitude");
   // The scripted flight changes mode every 10 s of simulated time.
@@ -73,7 +73,10 @@ test("a flight-mode change is spoken", async ({ page }) => {
   await page.getByRole("button", { name: "Mute" }).click();
   const before = await page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.length);
   await page.waitForTimeout(11_000);
+  // The script arms at 20 s: shown, not spoken (muted), and settings are no longer offered.
+  await expect(page.getByLabel("Armed", { exact: true })).toHaveText("Yes", { timeout: 10_000 });
   expect(await page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.length)).toBe(before);
+  await expect(page.getByRole("button", { name: "Set" }).first()).toBeDisabled();
 });
 
 test("a setting change round-trips to the flight side", async ({ page }) => {

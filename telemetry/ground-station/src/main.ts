@@ -122,6 +122,14 @@ function shownValue(row: SettingRow): string {
 }
 
 function renderSettingValues(): void {
+  // The flight side refuses changes while armed; the page does not offer them then.
+  const armed = state.arm?.armed === true;
+  for (const b of document.querySelectorAll<HTMLButtonElement>("button[data-set]")) {
+    if (b.disabled !== armed) {
+      b.disabled = armed;
+      b.title = armed ? "refused while armed" : "";
+    }
+  }
   for (const row of settings) {
     const el = document.getElementById(`set-${row.id}`);
     if (el) {
