@@ -263,12 +263,12 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         }
     }
 
-    /// The receiver accepted a master's bind offer: remember the bind ID and the offer's band
-    /// and rate, so the link comes back the same after a reboot. An offer at a rate no
-    /// setting gives (F500) keeps the rate setting.
+    /// The receiver accepted a master's bind offer: remember the bind ID and the offer's band,
+    /// rate mode and telemetry ratio, so the link comes back the same after a reboot.
     pub fn on_bind_offer_accepted(&mut self, params: &telemetry::link::LinkParams) -> Action {
-        if let Some(rate) = crate::air::settings_rate(params.rate, self.settings.rate) {
-            self.settings.rate = rate;
+        self.settings.rate = params.rate;
+        if crate::settings::TELEMETRY_RATIOS.contains(&params.telemetry_ratio) {
+            self.settings.telemetry_ratio = params.telemetry_ratio;
         }
         self.settings.band = crate::air::settings_band(params.band);
         self.on_bind_complete(params.bind_id)

@@ -139,7 +139,7 @@ fn run(rate: RateMode, input: InputProtocol) -> (u64, u64) {
 #[test]
 fn failsafe_within_one_second_of_the_handset_input_stopping_and_back_after() {
     for input in [InputProtocol::Ppm, InputProtocol::Crsf] {
-        for rate in [RateMode::Bps19200, RateMode::Bps57600, RateMode::Bps125000] {
+        for rate in [RateMode::L50, RateMode::M100, RateMode::F250] {
             let (entered, left) = run(rate, input);
             let delay = entered - STOP_US;
             let back = left - RESUME_US;
