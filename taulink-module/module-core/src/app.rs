@@ -6,11 +6,15 @@ use crate::air::AirLink;
 use crate::button::ButtonEvent;
 use crate::channels::Channels;
 use crate::hm10::relay::{MAX_RECORD_LEN, Relay, RelayStats};
-use crate::ports::{HandsetOutput, LinkPort, LinkStats};
+use crate::params::{self, Commands, Effect};
+use crate::ports::{HandsetOutput, HandsetRequest, LinkPort, LinkStats};
 use crate::ppm::{self, Decoded, Decoder, DecoderConfig, Encoder, EncoderConfig};
 use crate::session::{BindOutcome, LinkStep, Session, SessionEnd};
 use crate::settings::{InputProtocol, Role, Settings};
 use crate::status::LinkState;
+use heapless::Deque;
+use telemetry::handset::crsf::address;
+use telemetry::handset::crsf::params::ParameterChunk;
 use telemetry::link::core::{Follower, Master};
 
 /// Something the firmware must do after an event.
@@ -51,6 +55,12 @@ pub struct App<L: LinkPort, H: HandsetOutput> {
     was_connected: bool,
     led: LinkState,
     input: InputStats,
+    /// The radio's parameter commands (bind, save) and what changed.
+    commands: Commands,
+    /// A setting the running link uses changed: end the session at the next poll.
+    restart_request: bool,
+    /// Actions from the JR line (a save, a bind's LED) for [`App::take_action`].
+    actions: Deque<Action, 4>,
 }
 
 impl<L: LinkPort, H: HandsetOutput> App<L, H> {
@@ -81,6 +91,9 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             was_connected: false,
             led: LinkState::NoRadio,
             input: InputStats::default(),
+            commands: Commands::default(),
+            restart_request: false,
+            actions: Deque::new(),
         })
     }
 
@@ -226,17 +239,108 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     }
 
     /// Bytes the radio sent on the JR line, the last at `now_us`: CRSF channel frames reach
-    /// the link (CRSF input only).
+    /// the link (CRSF input only); parameter reads and writes and the bind command are served
+    /// (what they ask of the firmware waits in [`App::take_action`]).
     pub fn on_handset_bytes(&mut self, now_us: u64, bytes: &[u8]) {
         if let Some(channels) = self.handset.on_line_bytes(now_us, bytes) {
             self.on_handset_channels(&channels);
         }
+        self.serve_handset_requests();
     }
 
     /// The JR line went idle at `now_us` (the radio's burst is over).
     pub fn on_handset_idle(&mut self, now_us: u64) {
         if let Some(channels) = self.handset.on_line_idle(now_us) {
             self.on_handset_channels(&channels);
+        }
+        self.serve_handset_requests();
+    }
+
+    /// The next thing the firmware must do that a JR-line request caused (save the settings,
+    /// show the binding LED); call after the `on_handset_*` methods until `None`.
+    pub fn take_action(&mut self) -> Option<Action> {
+        self.actions.pop_front()
+    }
+
+    /// The radio's parameter commands' state.
+    pub fn parameter_commands(&self) -> &Commands {
+        &self.commands
+    }
+
+    fn serve_handset_requests(&mut self) {
+        while let Some(request) = self.handset.take_request() {
+            match request {
+                HandsetRequest::Read {
+                    origin,
+                    number,
+                    chunk,
+                } => self.send_parameter(origin, number, chunk),
+                HandsetRequest::Write {
+                    origin,
+                    number,
+                    value,
+                } => {
+                    let effect =
+                        params::write(number, &value, &mut self.settings, &mut self.commands);
+                    self.apply(effect);
+                    if matches!(effect, Effect::Bind | Effect::Save | Effect::CommandStatus) {
+                        // The radio's popup waits for the command's new status.
+                        self.send_parameter(origin, number, 0);
+                    }
+                }
+                HandsetRequest::Bind => {
+                    if !self.commands.binding {
+                        self.commands.binding = true;
+                        self.commands.bind_result = None;
+                        self.apply(Effect::Bind);
+                    }
+                }
+            }
+        }
+    }
+
+    fn send_parameter(&mut self, destination: u8, number: u8, chunk: u8) {
+        let Some(entry) = params::entry(number, &self.settings, &self.commands) else {
+            return;
+        };
+        let chunk_len = self.handset.parameter_chunk_len();
+        if let Some(chunk) = ParameterChunk::of_entry(
+            &entry,
+            chunk_len,
+            chunk,
+            number,
+            destination,
+            address::TX_MODULE,
+        ) {
+            self.handset.send_parameter_chunk(chunk);
+        }
+    }
+
+    fn apply(&mut self, effect: Effect) {
+        match effect {
+            Effect::RestartLink => self.restart_request = true,
+            Effect::InputTimeout => self
+                .link
+                .set_input_timeout_ms(self.settings.input_timeout_ms),
+            Effect::PpmFailsafe => {
+                if let Ok(encoder) = Encoder::new(EncoderConfig {
+                    failsafe: self.settings.failsafe,
+                    ..EncoderConfig::default()
+                }) {
+                    self.encoder = encoder;
+                }
+            }
+            Effect::Bind => {
+                // As a long press: a deliberate act of the pilot in the radio's menu.
+                // A bind already under way (a long press) carries this one.
+                if let Some(action) = self.on_button(ButtonEvent::LongPress) {
+                    let _ = self.actions.push_back(action);
+                }
+            }
+            Effect::Save => {
+                let _ = self.actions.push_back(Action::Save(self.settings));
+            }
+            Effect::None | Effect::CommandStatus => {}
         }
     }
 
@@ -289,6 +393,12 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// While a link step runs (every `session::POLL_MS`): whether it must stop now (a long
     /// press, or the loop's hook silent for `session::HOOK_SILENCE_MS`).
     pub fn poll_session(&mut self, now_ms: u32) -> Option<SessionEnd> {
+        if self.restart_request && !self.bind_request {
+            self.restart_request = false;
+            if self.session.running() {
+                return Some(SessionEnd::SettingsChanged);
+            }
+        }
         let end = self.session.poll(now_ms, self.bind_request);
         if end == Some(SessionEnd::BindRequested) {
             self.bind_request = false;
@@ -299,6 +409,8 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// The running link step ended (as `poll_session` said, or its radio failed): nothing
     /// arrives until the next one runs.
     pub fn on_session_end(&mut self, end: SessionEnd) -> Option<Action> {
+        // Whatever ended it, the next step is built from the settings in force.
+        self.restart_request = false;
         self.link.on_link_stopped();
         self.session.on_end(end);
         self.update_led()
@@ -308,6 +420,14 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// back to the previous state.
     pub fn on_bind_outcome(&mut self, outcome: BindOutcome) -> Option<Action> {
         let offered = self.session.on_bind_done();
+        if self.commands.binding {
+            self.commands.binding = false;
+            self.commands.bind_result = Some(matches!(
+                (outcome, offered),
+                (BindOutcome::Offered { accepted: true }, Some(_))
+                    | (BindOutcome::Listened(Some(_)), _)
+            ));
+        }
         match (outcome, offered) {
             (BindOutcome::Offered { accepted: true }, Some(params)) => {
                 Some(self.on_bind_complete(params.bind_id))

@@ -65,6 +65,31 @@ pub trait LinkPort {
     }
 }
 
+/// What the radio asked of the module over the JR line (CRSF parameter protocol, bind).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum HandsetRequest {
+    /// Chunk `chunk` of parameter `number`'s description, for `origin`.
+    Read {
+        /// Who asked (the reply's destination).
+        origin: u8,
+        /// Parameter number.
+        number: u8,
+        /// Chunk index.
+        chunk: u8,
+    },
+    /// Set parameter `number` (or step a command).
+    Write {
+        /// Who wrote.
+        origin: u8,
+        /// Parameter number.
+        number: u8,
+        /// Value bytes.
+        value: heapless::Vec<u8, { telemetry::handset::crsf::params::MAX_WRITE_LEN }>,
+    },
+    /// The radio's Bind button (CRSF command 0x32 / 0x10 / 0x01).
+    Bind,
+}
+
 /// The handset side of the JR line: telemetry encoders (CRSF, S.Port or FrSky D, chosen by
 /// the settings) and, with CRSF, the decoder of the radio's frames.
 pub trait HandsetOutput {
@@ -86,4 +111,14 @@ pub trait HandsetOutput {
     fn next_line_bytes(&mut self, _now_us: u64, _out: &mut [u8]) -> usize {
         0
     }
+    /// The oldest request from the radio not yet taken.
+    fn take_request(&mut self) -> Option<HandsetRequest> {
+        None
+    }
+    /// Data bytes per parameter chunk the line carries in one reply window.
+    fn parameter_chunk_len(&self) -> usize {
+        telemetry::handset::crsf::params::MAX_CHUNK_DATA
+    }
+    /// A parameter chunk to send in the next reply window.
+    fn send_parameter_chunk(&mut self, _chunk: telemetry::handset::crsf::params::ParameterChunk) {}
 }

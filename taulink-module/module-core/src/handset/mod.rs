@@ -14,8 +14,12 @@ use telemetry::handset::frsky_d::hub::SenderConfig;
 use telemetry::handset::sport::Scheduler;
 use telemetry::handset::sport::schedule::Config as SportConfig;
 
+use heapless::Deque;
+use telemetry::handset::crsf::address;
+use telemetry::handset::crsf::params::ParameterChunk;
+
 use crate::channels::Channels;
-use crate::ports::{HandsetOutput, LinkStats};
+use crate::ports::{HandsetOutput, HandsetRequest, LinkStats};
 use crate::settings::{InputProtocol, OutputProtocol, Role, Settings};
 pub use state::FlightState;
 
@@ -73,9 +77,14 @@ enum Protocol {
 pub struct Handset {
     protocol: Protocol,
     state: FlightState,
+    /// Parameter reads/writes and bind commands waiting for the core.
+    requests: Deque<HandsetRequest, REQUESTS>,
     /// Radio frames the CRSF decoder rejected.
     pub crsf_rejected: u32,
 }
+
+/// Requests held between two core polls (the radio sends one per frame period).
+const REQUESTS: usize = 4;
 
 impl Handset {
     /// The codec the settings call for: CRSF input always answers in CRSF (EdgeTX needs the
@@ -90,10 +99,12 @@ impl Handset {
                 } else {
                     CRSF_BAUD
                 };
+                let mut info = taulink_device_info(0, 1, 0);
+                info.parameter_count = crate::params::PARAMETER_COUNT;
                 Protocol::Crsf {
                     decoder: Decoder::new(),
                     // The responder sizes its reply window from the line rate.
-                    responder: Responder::new(Config::new(baud, taulink_device_info(0, 1, 0))),
+                    responder: Responder::new(Config::new(baud, info)),
                     baud,
                 }
             }
@@ -110,6 +121,7 @@ impl Handset {
         Self {
             protocol,
             state: FlightState::new(settings.tx_power),
+            requests: Deque::new(),
             crsf_rejected: 0,
         }
     }
@@ -132,6 +144,7 @@ impl Handset {
     fn take_frames(
         feed: impl Iterator<Item = Decoded>,
         responder: &mut Responder,
+        requests: &mut Deque<HandsetRequest, REQUESTS>,
         rejected: &mut u32,
         now_us: u64,
     ) -> Option<Channels> {
@@ -139,8 +152,33 @@ impl Handset {
         for decoded in feed {
             match decoded {
                 Decoded::Frame(frame) => {
-                    if let Some(Message::RcChannels(rc)) = responder.on_frame(now_us, &frame) {
-                        channels = Some(Channels::from_values(&rc.ticks));
+                    let request = match responder.on_frame(now_us, &frame) {
+                        Some(Message::RcChannels(rc)) => {
+                            channels = Some(Channels::from_values(&rc.ticks));
+                            None
+                        }
+                        Some(Message::ParameterRead(read)) if for_us(read.destination) => {
+                            Some(HandsetRequest::Read {
+                                origin: read.origin,
+                                number: read.number,
+                                chunk: read.chunk,
+                            })
+                        }
+                        Some(Message::ParameterWrite(write)) if for_us(write.destination) => {
+                            Some(HandsetRequest::Write {
+                                origin: write.origin,
+                                number: write.number,
+                                value: write.value,
+                            })
+                        }
+                        Some(Message::Bind(bind)) if for_us(bind.destination) => {
+                            Some(HandsetRequest::Bind)
+                        }
+                        _ => None,
+                    };
+                    // Full: the radio repeats an unanswered request on its timeout.
+                    if let Some(request) = request {
+                        let _ = requests.push_back(request);
                     }
                 }
                 Decoded::Rejected(_) => *rejected = rejected.saturating_add(1),
@@ -172,6 +210,7 @@ impl HandsetOutput for Handset {
             } => Self::take_frames(
                 decoder.feed(bytes),
                 responder,
+                &mut self.requests,
                 &mut self.crsf_rejected,
                 now_us,
             ),
@@ -184,7 +223,13 @@ impl HandsetOutput for Handset {
         match &mut self.protocol {
             Protocol::Crsf {
                 decoder, responder, ..
-            } => Self::take_frames(decoder.idle(), responder, &mut self.crsf_rejected, now_us),
+            } => Self::take_frames(
+                decoder.idle(),
+                responder,
+                &mut self.requests,
+                &mut self.crsf_rejected,
+                now_us,
+            ),
             Protocol::SPort(_) | Protocol::FrskyD(_) | Protocol::Off => None,
         }
     }
@@ -204,6 +249,28 @@ impl HandsetOutput for Handset {
             Protocol::Off => 0,
         }
     }
+
+    fn take_request(&mut self) -> Option<HandsetRequest> {
+        self.requests.pop_front()
+    }
+
+    fn parameter_chunk_len(&self) -> usize {
+        match &self.protocol {
+            Protocol::Crsf { responder, .. } => responder.parameter_chunk_len(),
+            _ => telemetry::handset::crsf::params::MAX_CHUNK_DATA,
+        }
+    }
+
+    fn send_parameter_chunk(&mut self, chunk: ParameterChunk) {
+        if let Protocol::Crsf { responder, .. } = &mut self.protocol {
+            responder.queue_parameter_chunk(chunk);
+        }
+    }
+}
+
+/// Frames addressed to the module (or to everyone).
+fn for_us(destination: u8) -> bool {
+    matches!(destination, address::TX_MODULE | address::BROADCAST)
 }
 
 #[cfg(test)]

@@ -4,8 +4,11 @@
 use heapless::Vec;
 
 use super::channels::RcChannels;
-use super::device::{DeviceInfo, DevicePing, ModelSelect, TimingCorrection};
+use super::device::{
+    BindCommand, COMMAND_BIND, COMMAND_CRSF, DeviceInfo, DevicePing, ModelSelect, TimingCorrection,
+};
 use super::frame::{Error, Frame, frame_type};
+use super::params::{ParameterChunk, ParameterRead, ParameterWrite};
 use super::sensors::{Attitude, Battery, FlightMode, Gps, LinkStatistics};
 
 /// A frame of a known type, decoded.
@@ -32,6 +35,14 @@ pub enum Message {
     TimingCorrection(TimingCorrection),
     /// 0x32 / 0x10 / 0x05, radio → module.
     ModelSelect(ModelSelect),
+    /// 0x32 / 0x10 / 0x01, radio → module.
+    Bind(BindCommand),
+    /// 0x2C, radio → module.
+    ParameterRead(ParameterRead),
+    /// 0x2D, radio → module.
+    ParameterWrite(ParameterWrite),
+    /// 0x2B, module → radio.
+    ParameterChunk(ParameterChunk),
 }
 
 impl Message {
@@ -53,7 +64,21 @@ impl Message {
             frame_type::RADIO_ID => {
                 Self::TimingCorrection(TimingCorrection::from_payload(payload)?)
             }
-            frame_type::COMMAND => Self::ModelSelect(ModelSelect::from_payload(payload)?),
+            frame_type::COMMAND => match payload.get(2..4) {
+                Some([COMMAND_CRSF, COMMAND_BIND]) => {
+                    Self::Bind(BindCommand::from_payload(payload)?)
+                }
+                _ => Self::ModelSelect(ModelSelect::from_payload(payload)?),
+            },
+            frame_type::PARAMETER_READ => {
+                Self::ParameterRead(ParameterRead::from_payload(payload)?)
+            }
+            frame_type::PARAMETER_WRITE => {
+                Self::ParameterWrite(ParameterWrite::from_payload(payload)?)
+            }
+            frame_type::PARAMETER_SETTINGS_ENTRY => {
+                Self::ParameterChunk(ParameterChunk::from_payload(payload)?)
+            }
             found => return Err(Error::WrongType { found }),
         })
     }
@@ -70,7 +95,10 @@ impl Message {
             Self::DevicePing(_) => frame_type::DEVICE_PING,
             Self::DeviceInfo(_) => frame_type::DEVICE_INFO,
             Self::TimingCorrection(_) => frame_type::RADIO_ID,
-            Self::ModelSelect(_) => frame_type::COMMAND,
+            Self::ModelSelect(_) | Self::Bind(_) => frame_type::COMMAND,
+            Self::ParameterRead(_) => frame_type::PARAMETER_READ,
+            Self::ParameterWrite(_) => frame_type::PARAMETER_WRITE,
+            Self::ParameterChunk(_) => frame_type::PARAMETER_SETTINGS_ENTRY,
         }
     }
 
@@ -87,6 +115,10 @@ impl Message {
             Self::DeviceInfo(info) => info.to_payload()?,
             Self::TimingCorrection(timing) => Vec::from_iter(timing.to_payload()),
             Self::ModelSelect(command) => Vec::from_iter(command.to_payload()),
+            Self::Bind(command) => Vec::from_iter(command.to_payload()),
+            Self::ParameterRead(read) => Vec::from_iter(read.to_payload()),
+            Self::ParameterWrite(write) => write.to_payload(),
+            Self::ParameterChunk(chunk) => chunk.to_payload(),
         };
         Ok(Frame {
             address,
