@@ -27,6 +27,14 @@ pub enum Action {
     Save(Settings),
 }
 
+/// The module's supply (the radio battery on JR pin 3) counts as low below this: 1.1 V per
+/// cell of a 6-cell NiMH pack, 3.3 V per cell of a 2S Li-ion pack, both near empty.
+pub const MODULE_BATTERY_LOW_MV: u16 = 6_600;
+/// The low warning ends only above the threshold plus this (a loaded pack recovers a little).
+pub const MODULE_BATTERY_HYSTERESIS_MV: u16 = 200;
+/// Below this the reading is no battery at all (a bench supply on the debug header).
+pub const MODULE_BATTERY_ABSENT_MV: u16 = 1_000;
+
 /// Input health counters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -59,6 +67,9 @@ pub struct App<L: LinkPort, H: HandsetOutput> {
     commands: Commands,
     /// A setting the running link uses changed: end the session at the next poll.
     restart_request: bool,
+    /// The module's supply is below [`MODULE_BATTERY_LOW_MV`] (until it recovers by the
+    /// hysteresis).
+    battery_low: bool,
     /// Actions from the JR line (a save, a bind's LED) for [`App::take_action`].
     actions: Deque<Action, 4>,
 }
@@ -93,6 +104,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             input: InputStats::default(),
             commands: Commands::default(),
             restart_request: false,
+            battery_low: false,
             actions: Deque::new(),
         })
     }
@@ -212,6 +224,20 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             Role::Receiver => self.encoder.next_frame(),
             Role::Transmitter => None,
         }
+    }
+
+    /// A reading of the module's supply (the radio battery on JR pin 3): it goes to the
+    /// handset (S.Port A2) and, when low, to the LED.
+    pub fn on_module_battery(&mut self, millivolts: u16) -> Option<Action> {
+        self.handset.on_module_battery(millivolts);
+        self.battery_low = if millivolts < MODULE_BATTERY_ABSENT_MV {
+            false
+        } else if self.battery_low {
+            millivolts < MODULE_BATTERY_LOW_MV.saturating_add(MODULE_BATTERY_HYSTERESIS_MV)
+        } else {
+            millivolts < MODULE_BATTERY_LOW_MV
+        };
+        self.update_led()
     }
 
     /// The radio answered its probe (or stopped answering).
@@ -476,6 +502,9 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             LinkState::NoRadio
         } else if self.binding {
             LinkState::Binding
+        } else if self.battery_low {
+            // Above the link states: a dying radio battery ends the link soon anyway.
+            LinkState::LowBattery
         } else if self.settings.bind_id == 0 {
             LinkState::Unbound
         } else if connected {

@@ -97,6 +97,8 @@ pub trait HandsetOutput {
     fn on_telemetry(&mut self, record: &[u8]);
     /// The link's statistics, as often as they change.
     fn on_link_stats(&mut self, stats: &LinkStats);
+    /// The module's own supply voltage (the radio battery on JR pin 3), mV.
+    fn on_module_battery(&mut self, _millivolts: u16) {}
     /// Bytes the radio sent on the JR line, the last one received at `now_us`; returns the
     /// newest RC channels they completed.
     fn on_line_bytes(&mut self, _now_us: u64, _bytes: &[u8]) -> Option<Channels> {

@@ -193,6 +193,10 @@ impl HandsetOutput for Handset {
         self.state.on_record(record);
     }
 
+    fn on_module_battery(&mut self, millivolts: u16) {
+        self.state.on_module_battery(millivolts);
+    }
+
     fn on_link_stats(&mut self, stats: &LinkStats) {
         self.state.on_link_stats(stats);
         if let Protocol::Crsf { responder, .. } = &mut self.protocol {

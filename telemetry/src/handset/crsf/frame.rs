@@ -24,6 +24,10 @@ pub mod frame_type {
     pub const GPS: u8 = 0x02;
     /// Battery voltage, current, used capacity, remaining %.
     pub const BATTERY_SENSOR: u8 = 0x08;
+    /// VARIO: vertical speed, i16 cm/s (EdgeTX "VSpd").
+    pub const VARIO: u8 = 0x07;
+    /// BARO_ALTITUDE: packed altitude (EdgeTX "Alt").
+    pub const BARO_ALTITUDE: u8 = 0x09;
     /// Link RSSI / LQ / SNR both ways.
     pub const LINK_STATISTICS: u8 = 0x14;
     /// 16 RC channels × 11 bit.

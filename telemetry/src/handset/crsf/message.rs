@@ -9,7 +9,7 @@ use super::device::{
 };
 use super::frame::{Error, Frame, frame_type};
 use super::params::{ParameterChunk, ParameterRead, ParameterWrite};
-use super::sensors::{Attitude, Battery, FlightMode, Gps, LinkStatistics};
+use super::sensors::{Attitude, BaroAltitude, Battery, FlightMode, Gps, LinkStatistics, Vario};
 
 /// A frame of a known type, decoded.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -27,6 +27,10 @@ pub enum Message {
     FlightMode(FlightMode),
     /// 0x02, module → radio.
     Gps(Gps),
+    /// 0x07, module → radio.
+    Vario(Vario),
+    /// 0x09, module → radio.
+    BaroAltitude(BaroAltitude),
     /// 0x28, either way.
     DevicePing(DevicePing),
     /// 0x29, either way.
@@ -59,6 +63,8 @@ impl Message {
             frame_type::ATTITUDE => Self::Attitude(Attitude::from_payload(payload)?),
             frame_type::FLIGHT_MODE => Self::FlightMode(FlightMode::from_payload(payload)?),
             frame_type::GPS => Self::Gps(Gps::from_payload(payload)?),
+            frame_type::VARIO => Self::Vario(Vario::from_payload(payload)?),
+            frame_type::BARO_ALTITUDE => Self::BaroAltitude(BaroAltitude::from_payload(payload)?),
             frame_type::DEVICE_PING => Self::DevicePing(DevicePing::from_payload(payload)?),
             frame_type::DEVICE_INFO => Self::DeviceInfo(DeviceInfo::from_payload(payload)?),
             frame_type::RADIO_ID => {
@@ -92,6 +98,8 @@ impl Message {
             Self::Attitude(_) => frame_type::ATTITUDE,
             Self::FlightMode(_) => frame_type::FLIGHT_MODE,
             Self::Gps(_) => frame_type::GPS,
+            Self::Vario(_) => frame_type::VARIO,
+            Self::BaroAltitude(_) => frame_type::BARO_ALTITUDE,
             Self::DevicePing(_) => frame_type::DEVICE_PING,
             Self::DeviceInfo(_) => frame_type::DEVICE_INFO,
             Self::TimingCorrection(_) => frame_type::RADIO_ID,
@@ -111,6 +119,8 @@ impl Message {
             Self::Attitude(attitude) => Vec::from_iter(attitude.to_payload()),
             Self::FlightMode(mode) => mode.to_payload(),
             Self::Gps(gps) => Vec::from_iter(gps.to_payload()),
+            Self::Vario(vario) => Vec::from_iter(vario.to_payload()),
+            Self::BaroAltitude(altitude) => Vec::from_iter(altitude.to_payload()),
             Self::DevicePing(ping) => Vec::from_iter(ping.to_payload()),
             Self::DeviceInfo(info) => info.to_payload()?,
             Self::TimingCorrection(timing) => Vec::from_iter(timing.to_payload()),

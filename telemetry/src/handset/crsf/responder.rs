@@ -8,7 +8,7 @@ use super::device::{DeviceInfo, TimingCorrection};
 use super::frame::{Frame, address, frame_type};
 use super::message::Message;
 use super::params::{CHUNK_HEADER_LEN, MAX_CHUNK_DATA, ParameterChunk};
-use super::sensors::{Attitude, Battery, FlightMode, Gps, LinkStatistics};
+use super::sensors::{Attitude, BaroAltitude, Battery, FlightMode, Gps, LinkStatistics, Vario};
 use crate::handset::report::HandsetTelemetry;
 
 /// EdgeTX's receive buffer for one burst (`TELEMETRY_RX_PACKET_SIZE`).
@@ -92,10 +92,12 @@ pub struct LinkSchedule {
 }
 
 /// Telemetry kinds after LINK_STATISTICS, in rotation order.
-const SENSORS: [u8; 4] = [
+const SENSORS: [u8; 6] = [
     frame_type::BATTERY_SENSOR,
     frame_type::ATTITUDE,
+    frame_type::VARIO,
     frame_type::FLIGHT_MODE,
+    frame_type::BARO_ALTITUDE,
     frame_type::GPS,
 ];
 
@@ -326,6 +328,14 @@ impl Responder {
                     .as_ref()
                     .map(|m| Message::FlightMode(FlightMode::from(m))),
                 Some(frame_type::GPS) => telemetry.gps.as_ref().map(|g| Message::Gps(Gps::from(g))),
+                Some(frame_type::VARIO) => telemetry.vertical.map(|v| {
+                    Message::Vario(Vario {
+                        vertical_speed_cm_s: v.vario_cm_s,
+                    })
+                }),
+                Some(frame_type::BARO_ALTITUDE) => telemetry
+                    .vertical
+                    .map(|v| Message::BaroAltitude(BaroAltitude::from_cm(v.altitude_cm))),
                 _ => None,
             };
             if let Some(message) = message
