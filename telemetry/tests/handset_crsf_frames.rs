@@ -535,10 +535,12 @@ fn microseconds_survive_the_tick_round_trip() {
 #[test]
 fn power_table_and_angle_saturation() {
     use telemetry::handset::crsf::sensors::{radians_to_100urad, tx_power_index};
-    // Table 0, 10, 25, 100, 500, 1000, 2000, 250, 50 mW: largest entry not above the power.
+    // Table 0, 10, 25, 100, 500, 1000, 2000, 250, 50 mW: largest entry not above the power,
+    // never "0 mW" for a transmitter.
     for (mw, index) in [
         (0, 0),
-        (5, 0),
+        (1, 1),
+        (5, 1),
         (10, 1),
         (20, 1),
         (50, 8),
@@ -551,6 +553,13 @@ fn power_table_and_angle_saturation() {
     ] {
         assert_eq!(tx_power_index(mw), index, "{mw} mW");
     }
+    // The RFM22B's eight steps as EdgeTX decodes the index (crossfire.cpp power_values).
+    let edgetx = [0, 10, 25, 100, 500, 1000, 2000, 250, 50];
+    let shown: Vec<u16> = [1u16, 2, 3, 6, 13, 25, 50, 100]
+        .iter()
+        .map(|mw| edgetx[usize::from(tx_power_index(*mw))])
+        .collect();
+    assert_eq!(shown, [10, 10, 10, 10, 10, 25, 50, 100]);
     assert_eq!(radians_to_100urad(f32::NAN), 0);
     assert_eq!(radians_to_100urad(10.0), i16::MAX);
     assert_eq!(radians_to_100urad(-10.0), i16::MIN);

@@ -337,3 +337,27 @@ fn the_hm10_script_outcome_decides_the_relay() {
     app.on_link_record(&[4, 5, 6]);
     assert!(app.next_phone_frame(&mut frame).is_some(), "relay open");
 }
+
+#[test]
+fn a_low_module_battery_shows_on_the_led_with_hysteresis() {
+    let mut app = app(Settings {
+        bind_id: 0x0101_0101,
+        ..Settings::default()
+    });
+    assert_eq!(
+        app.on_radio_present(true),
+        Some(Action::Led(LinkState::Searching))
+    );
+    assert_eq!(app.on_module_battery(7_400), None);
+    assert_eq!(
+        app.on_module_battery(6_500),
+        Some(Action::Led(LinkState::LowBattery))
+    );
+    assert_eq!(app.on_module_battery(6_700), None, "inside the hysteresis");
+    assert_eq!(
+        app.on_module_battery(6_900),
+        Some(Action::Led(LinkState::Searching))
+    );
+    // No battery at all (a bench supply) is not a low battery.
+    assert_eq!(app.on_module_battery(300), None);
+}

@@ -52,9 +52,14 @@ pub struct LinkStatistics {
 /// The CRSF power table, milliwatts by index.
 pub const TX_POWER_TABLE_MW: [u16; 9] = [0, 10, 25, 100, 500, 1000, 2000, 250, 50];
 
-/// Index of the largest table entry not above `power_mw` (0 for < 10 mW).
+/// Index of the largest table entry not above `power_mw`; a transmitter below 10 mW reports
+/// 10 mW, EdgeTX's lowest non-zero entry (index 0 reads as 0 mW: off). The RFM22B's steps
+/// (1, 2, 3, 6, 13, 25, 50, 100 mW) thus show as 10, 10, 10, 10, 10, 25, 50, 100 mW.
 pub fn tx_power_index(power_mw: u16) -> u8 {
-    let mut best = (0u8, 0u16);
+    if power_mw == 0 {
+        return 0;
+    }
+    let mut best = (1u8, 10u16);
     for (index, &table_mw) in (0u8..).zip(TX_POWER_TABLE_MW.iter()) {
         if table_mw <= power_mw && table_mw >= best.1 {
             best = (index, table_mw);
