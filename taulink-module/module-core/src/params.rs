@@ -115,7 +115,7 @@ const TX_POWER_LABELS: [&str; 8] = [
 ];
 
 /// Band options, in `Band` order, with their legal meaning.
-const BAND_LABELS: [&str; 3] = ["433 HAM licence", "868 EU SRD", "915 US ISM"];
+const BAND_LABELS: [&str; 4] = ["433 HAM licence", "868 EU SRD", "915 US ISM", "433 ISM LPD"];
 const INPUT_LABELS: [&str; 3] = ["PPM", "CRSF 400k", "CRSF 115k"];
 const OUTPUT_LABELS: [&str; 4] = ["Off", "CRSF", "S.Port", "FrSky D"];
 const FAILSAFE_LABELS: [&str; 2] = ["Hold last", "Stop pulses"];
@@ -125,6 +125,7 @@ fn band_index(band: Band) -> u8 {
         Band::Mhz433 => 0,
         Band::Mhz868 => 1,
         Band::Mhz915 => 2,
+        Band::Ism433 => 3,
     }
 }
 
@@ -279,6 +280,7 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
             0 => Some(Band::Mhz433),
             1 => Some(Band::Mhz868),
             2 => Some(Band::Mhz915),
+            3 => Some(Band::Ism433),
             _ => None,
         }
         .map_or(Effect::None, |band| {

@@ -40,6 +40,7 @@ pub fn link_band(band: Band) -> LinkBand {
         Band::Mhz433 => LinkBand::Mhz433,
         Band::Mhz868 => LinkBand::Mhz868,
         Band::Mhz915 => LinkBand::Mhz915,
+        Band::Ism433 => LinkBand::Ism433,
     }
 }
 
@@ -49,6 +50,7 @@ pub fn settings_band(band: LinkBand) -> Band {
         LinkBand::Mhz433 => Band::Mhz433,
         LinkBand::Mhz868 => Band::Mhz868,
         LinkBand::Mhz915 => Band::Mhz915,
+        LinkBand::Ism433 => Band::Ism433,
     }
 }
 

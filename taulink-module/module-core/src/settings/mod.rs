@@ -8,7 +8,8 @@
 //! failsafe 0 hold last, 1 stop pulses; rate = `telemetry::link::RateMode::code`):
 //! `[3, role, rate, input, output, band, tx_power, failsafe, bind_id (u32 LE),
 //! input_timeout_ms (u16 LE), telemetry_ratio]`. The rate byte is the link's own rate mode,
-//! the one vocabulary the handset's "Packet Rate" shows.
+//! the one vocabulary the handset's "Packet Rate" shows. Band 0 is the 70 cm amateur plan
+//! (factory), 1 EU 868, 2 US 915, 3 (version 3 only) the 433.05–434.79 MHz ISM plan.
 //!
 //! Older records still load, every stored field with its old meaning: version 2 (14 bytes,
 //! no telemetry ratio) and version 1 (12 bytes, no input timeout either) stored the air rate
@@ -81,16 +82,18 @@ pub enum OutputProtocol {
     FrskyHub,
 }
 
-/// Frequency band of the RFM22B build.
+/// Frequency band plan (`telemetry::link::Band` says what each means legally).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Band {
-    /// 433 MHz ISM.
+    /// 430.2–439.5 MHz, the 70 cm amateur band: a licence is needed. The factory band.
     Mhz433,
-    /// 868 MHz SRD.
+    /// 863–870 MHz EU SRD (keeps no sub-band's duty cycle).
     Mhz868,
-    /// 915 MHz ISM.
+    /// 902–928 MHz US ISM.
     Mhz915,
+    /// 433.05–434.79 MHz ISM / LPD only (licence-exempt at low power).
+    Ism433,
 }
 
 /// Everything the module remembers.
@@ -302,6 +305,7 @@ impl Settings {
                 0 => Band::Mhz433,
                 1 => Band::Mhz868,
                 2 => Band::Mhz915,
+                3 if version == RECORD_VERSION => Band::Ism433,
                 _ => return Err(field(5)),
             },
             tx_power: if tx_power <= 7 {
@@ -425,6 +429,26 @@ mod tests {
                 }
             );
         }
+    }
+
+    #[test]
+    fn the_ism_433_plan_is_band_3_in_version_3_only() {
+        let ism = Settings {
+            band: Band::Ism433,
+            ..Settings::default()
+        };
+        assert_eq!(ism.to_record()[5], 3);
+        assert_eq!(Settings::from_record(&ism.to_record()), Ok(ism));
+        assert_eq!(
+            Settings::default().band,
+            Band::Mhz433,
+            "factory: the amateur plan"
+        );
+        let v2 = [2, 0, 2, 0, 2, 3, 7, 1, 1, 0, 0, 0, 0xF4, 0x01];
+        assert_eq!(
+            Settings::from_record(&v2),
+            Err(DecodeError::Field { offset: 5 })
+        );
     }
 
     #[test]
