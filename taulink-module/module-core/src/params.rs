@@ -116,7 +116,7 @@ const TX_POWER_LABELS: [&str; 8] = [
 
 /// Band options, in `Band` order, with their legal meaning.
 const BAND_LABELS: [&str; 4] = ["433 HAM licence", "868 EU SRD", "915 US ISM", "433 ISM LPD"];
-const INPUT_LABELS: [&str; 3] = ["PPM", "CRSF 400k", "CRSF 115k"];
+const INPUT_LABELS: [&str; 4] = ["PPM", "CRSF 400k", "CRSF 115k", "CRSF 921k"];
 const OUTPUT_LABELS: [&str; 4] = ["Off", "CRSF", "S.Port", "FrSky D"];
 const FAILSAFE_LABELS: [&str; 2] = ["Hold last", "Stop pulses"];
 
@@ -292,6 +292,7 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
                 0 => Some(InputProtocol::Ppm),
                 1 => Some(InputProtocol::Crsf),
                 2 => Some(InputProtocol::Crsf115200),
+                3 => Some(InputProtocol::Crsf921600),
                 _ => None,
             } {
                 settings.input = input;

@@ -90,7 +90,9 @@ fn run(rate: RateMode, input: InputProtocol) -> (u64, u64) {
     let mut world = World::with_flight_failsafe(settings, FLIGHT_FAILSAFE_US);
     match input {
         InputProtocol::Ppm => spawn_taranis(&mut world),
-        InputProtocol::Crsf | InputProtocol::Crsf115200 => spawn_crsf_radio(&mut world),
+        InputProtocol::Crsf | InputProtocol::Crsf115200 | InputProtocol::Crsf921600 => {
+            spawn_crsf_radio(&mut world)
+        }
     }
     world.run_until(STOP_US);
     let expected: Vec<u16> = WIDTHS_US.iter().map(|w| us_to_value(*w)).collect();

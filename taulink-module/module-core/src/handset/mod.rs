@@ -25,6 +25,36 @@ pub use state::FlightState;
 
 /// CRSF line rate (EdgeTX's default, 400 kBd).
 pub const CRSF_BAUD: u32 = 400_000;
+/// The fastest CRSF rate the settings offer (`InputProtocol::Crsf921600`).
+pub const CRSF_FAST_BAUD: u32 = 921_600;
+/// The UARTE's fastest rate: EdgeTX's 1.87 MBd and above cannot be offered.
+pub const UARTE_MAX_BAUD: u32 = 1_000_000;
+
+/// The nRF52840 UARTE BAUDRATE register value for `baud`: Nordic's named preset where there
+/// is one (115 200, 921 600, 1 M), else `baud · 2³² / 16 MHz` rounded to a multiple of 0x1000
+/// (which reproduces the 115 200 preset, not the 921 600 one: at that rate the product
+/// specification lists the preset's real rate as 941 176 Bd, so the register is not linear
+/// there). `None` above the UARTE's 1 MBd.
+///
+/// | CRSF rate | register | rate on the line |
+/// |---|---|---|
+/// | 115 200 | 0x01D7_E000 (the preset) | 115 108 Bd (−0.08 %, PS table) |
+/// | 400 000 | 0x0666_6000 (custom) | ≈ 399 994 Bd by the formula (−0.002 %); to be checked on a scope |
+/// | 921 600 | 0x0EBE_D000 (the preset) | 941 176 Bd (+2.1 %, PS table): within a UART's tolerance only if the radio's side is exact; unverified on hardware |
+/// | 1 870 000 | — | beyond the UARTE (max 1 MBd) |
+pub const fn uarte_baudrate(baud: u32) -> Option<u32> {
+    match baud {
+        0 => return None,
+        115_200 => return Some(0x01D7_E000),
+        921_600 => return Some(0x0EBE_D000),
+        1_000_000 => return Some(0x1000_0000),
+        b if b > UARTE_MAX_BAUD => return None,
+        _ => {}
+    }
+    let bits = ((baud as u64) << 32) / 16_000_000;
+    Some(((bits + 0x800) as u32) & 0xFFFF_F000)
+}
+
 /// The slower CRSF rate the settings offer (`InputProtocol::Crsf115200`).
 pub const CRSF_SLOW_BAUD: u32 = 115_200;
 /// S.Port push rate.
@@ -93,12 +123,14 @@ impl Handset {
     pub fn new(settings: &Settings) -> Self {
         let protocol = match (settings.role, settings.input, settings.output) {
             (Role::Receiver, _, _) => Protocol::Off,
-            (Role::Transmitter, input @ (InputProtocol::Crsf | InputProtocol::Crsf115200), _) => {
-                let baud = if input == InputProtocol::Crsf115200 {
-                    CRSF_SLOW_BAUD
-                } else {
-                    CRSF_BAUD
-                };
+            (
+                Role::Transmitter,
+                input @ (InputProtocol::Crsf
+                | InputProtocol::Crsf115200
+                | InputProtocol::Crsf921600),
+                _,
+            ) => {
+                let baud = input.crsf_baud().unwrap_or(CRSF_BAUD);
                 let mut info = taulink_device_info(0, 1, 0);
                 info.parameter_count = crate::params::PARAMETER_COUNT;
                 Protocol::Crsf {
@@ -305,8 +337,30 @@ mod tests {
             Handset::new(&settings).line_mode(),
             LineMode::Crsf { baud: 115_200 }
         );
+        settings.input = InputProtocol::Crsf921600;
+        assert_eq!(
+            Handset::new(&settings).line_mode(),
+            LineMode::Crsf { baud: 921_600 }
+        );
         settings.role = Role::Receiver;
         assert_eq!(Handset::new(&settings).line_mode(), LineMode::Off);
+    }
+
+    #[test]
+    fn uarte_registers_for_the_crsf_rates() {
+        // nRF52840 PS UARTE BAUDRATE presets: 115 200 and 921 600 are the named values.
+        assert_eq!(uarte_baudrate(115_200), Some(0x01D7_E000));
+        assert_eq!(uarte_baudrate(921_600), Some(0x0EBE_D000));
+        assert_eq!(uarte_baudrate(1_000_000), Some(0x1000_0000));
+        assert_eq!(uarte_baudrate(400_000), Some(0x0666_6000));
+        assert_eq!(uarte_baudrate(1_870_000), None);
+        for input in [
+            InputProtocol::Crsf,
+            InputProtocol::Crsf115200,
+            InputProtocol::Crsf921600,
+        ] {
+            assert!(uarte_baudrate(input.crsf_baud().unwrap()).is_some());
+        }
     }
 
     #[test]

@@ -4,7 +4,8 @@
 //! a single sequential-storage item write: after a power cut the map holds either the old
 //! or the new record (the item CRC rejects a torn write), never a mix of fields.
 //!
-//! Record layout (version 3, 15 bytes; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd;
+//! Record layout (version 3, 15 bytes; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd,
+//! 3 CRSF 921 600 Bd;
 //! failsafe 0 hold last, 1 stop pulses; rate = `telemetry::link::RateMode::code`):
 //! `[3, role, rate, input, output, band, tx_power, failsafe, bind_id (u32 LE),
 //! input_timeout_ms (u16 LE), telemetry_ratio]`. The rate byte is the link's own rate mode,
@@ -59,12 +60,26 @@ pub enum InputProtocol {
     Crsf,
     /// CRSF at 115 200 Bd, for radios or cables that cannot run 400 kBd.
     Crsf115200,
+    /// CRSF at 921 600 Bd (EdgeTX "921K"); the nRF52840 UARTE runs it at 941 176 Bd
+    /// (`handset::uarte_baudrate`).
+    Crsf921600,
 }
 
 impl InputProtocol {
-    /// CRSF at either rate.
+    /// CRSF at any rate.
     pub const fn is_crsf(self) -> bool {
-        matches!(self, InputProtocol::Crsf | InputProtocol::Crsf115200)
+        self.crsf_baud().is_some()
+    }
+
+    /// The CRSF line rate, `None` for PPM. EdgeTX's 1.87 MBd and faster are beyond the
+    /// nRF52840 UARTE's 1 MBd and not offered.
+    pub const fn crsf_baud(self) -> Option<u32> {
+        match self {
+            InputProtocol::Ppm => None,
+            InputProtocol::Crsf => Some(400_000),
+            InputProtocol::Crsf115200 => Some(115_200),
+            InputProtocol::Crsf921600 => Some(921_600),
+        }
     }
 }
 
@@ -292,6 +307,7 @@ impl Settings {
                 0 => InputProtocol::Ppm,
                 1 => InputProtocol::Crsf,
                 2 => InputProtocol::Crsf115200,
+                3 if version == RECORD_VERSION => InputProtocol::Crsf921600,
                 _ => return Err(field(3)),
             },
             output: match output {
@@ -368,6 +384,12 @@ mod tests {
         };
         assert_eq!(slow.to_record()[3], 2);
         assert_eq!(Settings::from_record(&slow.to_record()), Ok(slow));
+        let fast = Settings {
+            input: InputProtocol::Crsf921600,
+            ..settings
+        };
+        assert_eq!(fast.to_record()[3], 3);
+        assert_eq!(Settings::from_record(&fast.to_record()), Ok(fast));
     }
 
     #[test]
