@@ -242,6 +242,12 @@ pub fn entry(
         }
         SAVE => {
             let (status, info) = match (commands.save_confirming, commands.saved) {
+                // With PPM input the next power-up has no CRSF line, so no device tool: the
+                // only way back is a settings change from elsewhere. Say so before it sticks.
+                (true, _) if settings.input == InputProtocol::Ppm => (
+                    CommandStatus::ConfirmationNeeded,
+                    "Save? PPM input ends this menu",
+                ),
                 (true, _) => (CommandStatus::ConfirmationNeeded, "Save settings?"),
                 (false, true) => (CommandStatus::Ready, "Saved"),
                 (false, false) => (CommandStatus::Ready, ""),
@@ -439,5 +445,28 @@ mod tests {
             Effect::Save
         );
         assert!(commands.saved && !commands.save_confirming);
+    }
+
+    #[test]
+    fn saving_ppm_input_warns_that_the_menu_goes_away() {
+        let info = |settings: &Settings| {
+            let commands = Commands {
+                save_confirming: true,
+                ..Commands::default()
+            };
+            let entry = entry(SAVE, settings, &commands).unwrap();
+            // parent, type, "Save" NUL, status, timeout, info, NUL.
+            std::string::String::from_utf8(entry[9..entry.len() - 1].to_vec()).unwrap()
+        };
+        let crsf = Settings {
+            input: InputProtocol::Crsf,
+            ..Settings::default()
+        };
+        assert_eq!(info(&crsf), "Save settings?");
+        let ppm = Settings {
+            input: InputProtocol::Ppm,
+            ..crsf
+        };
+        assert_eq!(info(&ppm), "Save? PPM input ends this menu");
     }
 }

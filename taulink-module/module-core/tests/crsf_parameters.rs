@@ -301,6 +301,19 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
         });
     }
 
+    // The firmware's 10 Hz housekeeping (link statistics to the handset, LED).
+    {
+        let (app, time) = (app.clone(), time.clone());
+        executor.spawn(async move {
+            let mut t = 0;
+            loop {
+                t += 100_000;
+                time.sleep_until(t).await;
+                app.borrow_mut().on_tick();
+            }
+        });
+    }
+
     // The flight side: bound to the module at F250; at 3 s its owner puts it in bind mode
     // (a deliberate act on the receiver), then it follows whatever the offer said.
     let flight = Rc::new(RefCell::new(FlightSide::default()));
@@ -478,6 +491,11 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
         .count();
     eprintln!("flight side: {in_last_second} channel updates in the last second");
     assert!(in_last_second > 300, "{in_last_second} updates/s");
+
+    // The module sees the link up at F500 too (the rate code it reports to the handset).
+    let stats = module_core::ports::LinkPort::stats(app.borrow().link());
+    assert!(stats.connected);
+    assert_eq!(stats.rate_code, telemetry::link::RateMode::F500.code());
 
     // Save persisted across a power cycle: mock flash, a new core from the store.
     let to_save = saved.borrow().expect("Save asked the firmware to persist");
