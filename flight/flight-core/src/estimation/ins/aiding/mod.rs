@@ -3,6 +3,8 @@
 //! (not the sensor) is wrong, and that part of the state is reset from the measurement —
 //! PX4 EKF2's `*_control` logic, kept apart from the fusion maths as PX4 does.
 
+pub mod gps;
+
 use super::{Config, Filter, Fusion, State};
 use crate::estimation::{Error, GRAVITY_MPS2, check_finite};
 
@@ -155,14 +157,31 @@ impl Ins {
         position_ned_m: [f32; 3],
         vertical: bool,
     ) -> Result<Aided, Error> {
-        let fusion = self.filter.fuse_gps_position(position_ned_m, vertical)?;
+        let cfg = self.filter.config();
+        let var = [cfg.gps_horizontal_var_m2, cfg.gps_vertical_var_m2];
+        self.gps_position_with_variance(position_ned_m, vertical, var)
+    }
+
+    /// As [`Ins::gps_position`] with the measurement's own `[horizontal, vertical]`
+    /// variances (m²).
+    ///
+    /// # Errors
+    /// As [`Filter::fuse_gps_position_with_variance`].
+    pub fn gps_position_with_variance(
+        &mut self,
+        position_ned_m: [f32; 3],
+        vertical: bool,
+        var_m2: [f32; 2],
+    ) -> Result<Aided, Error> {
+        let fusion =
+            self.filter
+                .fuse_gps_position_with_variance(position_ned_m, vertical, var_m2)?;
         let aided = self
             .gps_position
             .record(fusion, self.aiding.gps_position_resets_after);
         if let Aided::Reset(_) = aided {
             let [n, e, d] = position_ned_m;
-            let cfg = self.filter.config();
-            let var = cfg.gps_horizontal_var_m2;
+            let [var, _] = var_m2;
             self.filter
                 .reset_position([Some(n), Some(e), vertical.then_some(d)], var);
         }
@@ -176,12 +195,26 @@ impl Ins {
     /// # Errors
     /// As [`Filter::fuse_gps_velocity`].
     pub fn gps_velocity(&mut self, velocity_ned_mps: [f32; 3]) -> Result<Aided, Error> {
-        let fusion = self.filter.fuse_gps_velocity(velocity_ned_mps)?;
+        let var = self.filter.config().gps_velocity_var_m2ps2;
+        self.gps_velocity_with_variance(velocity_ned_mps, var)
+    }
+
+    /// As [`Ins::gps_velocity`] with the measurement's own variance per axis ((m/s)²).
+    ///
+    /// # Errors
+    /// As [`Filter::fuse_gps_velocity_with_variance`].
+    pub fn gps_velocity_with_variance(
+        &mut self,
+        velocity_ned_mps: [f32; 3],
+        var: f32,
+    ) -> Result<Aided, Error> {
+        let fusion = self
+            .filter
+            .fuse_gps_velocity_with_variance(velocity_ned_mps, var)?;
         let aided = self
             .gps_velocity
             .record(fusion, self.aiding.gps_velocity_resets_after);
         if let Aided::Reset(_) = aided {
-            let var = self.filter.config().gps_velocity_var_m2ps2;
             self.filter.reset_velocity(velocity_ned_mps, var);
             let f = self.accel_lowpass_mps2;
             let norm = libm::sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
