@@ -5,6 +5,7 @@
 pub mod compare;
 pub mod magcal;
 pub mod metrics;
+pub mod noise;
 pub mod plot;
 pub mod replay;
 pub mod rng;

@@ -12,19 +12,24 @@ struct Args {
     truth: Option<String>,
     plot: Option<String>,
     declination_deg: f32,
+    noise: Option<String>,
+    tuning: Option<String>,
 }
 
-const USAGE: &str = "usage: replay SENSORS.csv --out EST.csv [--truth TRUTH.csv] [--plot DIR] [--declination-deg D]";
+const USAGE: &str = "usage: replay SENSORS.csv --out EST.csv [--truth TRUTH.csv] [--plot DIR] [--declination-deg D] [--noise gyro=G,accel=A,mag=M,baro=B,gps_pos=P,gps_alt=H,gps_vel=V] [--tuning FILE]";
 
 fn parse_args() -> Result<Args, String> {
     let mut it = std::env::args().skip(1);
     let (mut sensors, mut out, mut truth, mut plot, mut declination_deg) =
         (None, None, None, None, 0.0);
+    let (mut noise, mut tuning) = (None, None);
     while let Some(a) = it.next() {
         match a.as_str() {
             "--out" => out = it.next(),
             "--truth" => truth = it.next(),
             "--plot" => plot = it.next(),
+            "--noise" => noise = it.next(),
+            "--tuning" => tuning = it.next(),
             "--declination-deg" => {
                 declination_deg = it
                     .next()
@@ -42,6 +47,8 @@ fn parse_args() -> Result<Args, String> {
         truth,
         plot,
         declination_deg,
+        noise,
+        tuning,
     })
 }
 
@@ -60,8 +67,13 @@ fn real_main() -> Result<(), String> {
     let text =
         std::fs::read_to_string(&args.sensors).map_err(|e| format!("{}: {e}", args.sensors))?;
     let records = parse_sensors(&text).map_err(|e| format!("{}: {e}", args.sensors))?;
+    let tuning = match &args.tuning {
+        Some(path) => Some(std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?),
+        None => None,
+    };
     let options = Options {
         declination_deg: args.declination_deg,
+        noise: ins_sim::noise::combine(tuning.as_deref(), args.noise.as_deref())?,
         ..Options::default()
     };
     let rows = run(&records, &options);

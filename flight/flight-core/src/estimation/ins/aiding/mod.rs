@@ -26,6 +26,14 @@ pub struct AidingConfig {
     pub yaw_reset_std_rad: f32,
     /// Time constant of the accelerometer low-pass used for tilt re-alignment (s).
     pub accel_filter_tau_s: f32,
+    /// Seconds after the start, an alignment or an attitude reset during which the gyro
+    /// bias walks at the configured (fast) rate; afterwards it walks at
+    /// `settled_gyro_bias_walk_psd`. A fast walk lets a wrong bias be learnt quickly; once
+    /// learnt, a slow walk keeps the bias (and so the heading) quiet — the C reference's
+    /// walk is 1.5e-9 (rad/s)²/s, slow from the start, hence its slow convergence.
+    pub gyro_bias_settle_s: f32,
+    /// Gyro-bias walk PSD once settled ((rad/s)²/s); `None` keeps the configured one.
+    pub settled_gyro_bias_walk_psd: Option<f32>,
 }
 
 impl Default for AidingConfig {
@@ -38,6 +46,32 @@ impl Default for AidingConfig {
             tilt_reset_std_rad: 0.1,
             yaw_reset_std_rad: 0.1,
             accel_filter_tau_s: 0.5,
+            gyro_bias_settle_s: 30.0,
+            settled_gyro_bias_walk_psd: None,
+        }
+    }
+}
+
+impl AidingConfig {
+    /// Gyro-bias walk once settled when the sensors' noise is known (see
+    /// [`Self::for_known_noise`]), (rad/s)²/s: the bias may drift by 0.6 °/s per hour.
+    pub const KNOWN_NOISE_SETTLED_GYRO_BIAS_WALK_PSD: f32 = 1e-10;
+    /// Settling time used with known noise (s).
+    pub const KNOWN_NOISE_GYRO_BIAS_SETTLE_S: f32 = 10.0;
+
+    /// The policy for a filter told the sensors' true noise figures
+    /// ([`super::Config::with_sensor_noise`]). The default tuning's fast gyro-bias walk also
+    /// stands in for noise it does not model; with the true figures the model is right, so
+    /// the fast walk is only needed while a wrong bias is being learnt — 10 s after the
+    /// start, an alignment or an attitude reset — and the bias then walks slowly, which is
+    /// what keeps heading and attitude quiet in the steady state (tests/ins-sim
+    /// `ins_noise.rs`, README table).
+    #[must_use]
+    pub fn for_known_noise(self) -> Self {
+        Self {
+            gyro_bias_settle_s: Self::KNOWN_NOISE_GYRO_BIAS_SETTLE_S,
+            settled_gyro_bias_walk_psd: Some(Self::KNOWN_NOISE_SETTLED_GYRO_BIAS_WALK_PSD),
+            ..self
         }
     }
 }
@@ -95,6 +129,12 @@ pub struct Ins {
     gps_velocity: Streak,
     baro: Streak,
     mag: Streak,
+    /// Time since the start or the last attitude reset (s), counted until settled.
+    unsettled_s: f32,
+    /// The slow gyro-bias walk is in use.
+    settled: bool,
+    /// The configured (fast) gyro-bias walk, restored after a reset.
+    fast_gyro_bias_walk_psd: f32,
 }
 
 impl Ins {
@@ -109,6 +149,9 @@ impl Ins {
             gps_velocity: Streak::default(),
             baro: Streak::default(),
             mag: Streak::default(),
+            unsettled_s: 0.0,
+            settled: false,
+            fast_gyro_bias_walk_psd: config.gyro_bias_walk_psd,
         }
     }
 
@@ -140,6 +183,15 @@ impl Ins {
         dt_s: f32,
     ) -> Result<(), Error> {
         self.filter.predict(gyro_radps, accel_mps2, dt_s)?;
+        if !self.settled {
+            self.unsettled_s += dt_s;
+            if let Some(settled) = self.aiding.settled_gyro_bias_walk_psd
+                && self.unsettled_s >= self.aiding.gyro_bias_settle_s
+            {
+                self.filter.set_gyro_bias_walk_psd(settled);
+                self.settled = true;
+            }
+        }
         let ratio = dt_s / self.aiding.accel_filter_tau_s;
         let alpha = if ratio < 1.0 { ratio } else { 1.0 };
         for (lp, a) in self.accel_lowpass_mps2.iter_mut().zip(accel_mps2) {
@@ -264,6 +316,15 @@ impl Ins {
         let [_, _, _, gyro_bias_std, _] = self.filter.config().initial_std;
         self.filter
             .inflate_gyro_bias_variance(gyro_bias_std * gyro_bias_std);
+        self.unsettle();
+    }
+
+    /// Back to the fast gyro-bias walk for another settling period.
+    fn unsettle(&mut self) {
+        self.unsettled_s = 0.0;
+        self.settled = false;
+        self.filter
+            .set_gyro_bias_walk_psd(self.fast_gyro_bias_walk_psd);
     }
 
     /// Initial alignment from one accelerometer and magnetometer sample; see
@@ -283,6 +344,7 @@ impl Ins {
         self.filter
             .align(accel_mps2, mag_body, position_ned_m, tilt, yaw)?;
         self.accel_lowpass_mps2 = accel_mps2;
+        self.unsettle();
         Ok(())
     }
 }
