@@ -3,6 +3,10 @@
 //! navigation solution), [`config`] (boot configuration for M8 and M9/M10 with ACK/NAK
 //! follow-up). Sans-IO: the firmware moves UART bytes in and out; the estimator side of a
 //! fix is [`crate::estimation::ins::aiding::gps::GpsAiding`].
+//!
+//! Cost (m4count, `tests/m4-bench` `gps`): one 100-byte NAV-PVT through [`Parser`] and
+//! [`Message::from_frame`] is 4,241 Cortex-M4 instructions (~42 per byte); at 10 Hz that is
+//! 42 k instructions per second, 0.03 % of a 168 MHz F405 at ~1.2 cycles per instruction.
 
 pub mod config;
 pub mod frame;

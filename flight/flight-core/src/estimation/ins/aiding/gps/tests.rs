@@ -38,8 +38,16 @@ fn pvt(north_m: f64, east_m: f64, up_m: f64, vel_mps: [f64; 3]) -> NavPvt {
 
 #[test]
 fn measurement_is_ned_from_home_with_the_receivers_accuracy() {
-    let a = GpsAiding::new(GpsAidingConfig::default());
-    let m = a.measurement(&pvt(100.0, -50.0, 3.0, [1.0, -2.0, 0.5]), &HOME);
+    let mut a = GpsAiding::new(GpsAidingConfig::default());
+    assert_eq!(
+        a.measurement(&pvt(0.0, 0.0, 0.0, [0.0; 3])),
+        None,
+        "no home yet"
+    );
+    a.set_home(HOME);
+    let m = a
+        .measurement(&pvt(100.0, -50.0, 3.0, [1.0, -2.0, 0.5]))
+        .unwrap();
     let [n, e, d] = m.position_ned_m;
     assert!((n - 100.0).abs() < 0.02, "{n}");
     assert!((e + 50.0).abs() < 0.02, "{e}");
@@ -52,7 +60,7 @@ fn measurement_is_ned_from_home_with_the_receivers_accuracy() {
     let mut p = pvt(0.0, 0.0, 0.0, [0.0; 3]);
     p.h_acc_mm = 1;
     p.s_acc_mmps = 1;
-    let m = a.measurement(&p, &HOME);
+    let m = a.measurement(&p).unwrap();
     assert!((m.horizontal_var_m2 - 0.09).abs() < 1e-6);
     assert!((m.velocity_var_m2ps2 - 0.01).abs() < 1e-6);
 }
