@@ -2,7 +2,9 @@
 //! checksum; a parser that never panics and finds every good frame), [`nav_pvt`] (the
 //! navigation solution), [`config`] (boot configuration for M8 and M9/M10 with ACK/NAK
 //! follow-up). Sans-IO: the firmware moves UART bytes in and out; the estimator side of a
-//! fix is [`crate::estimation::ins::aiding::gps::GpsAiding`].
+//! fix is [`crate::estimation::ins::aiding::gps::GpsAiding`]. On the Sparky2 the receiver
+//! plugs into the Main port (USART1, PA9 TX / PA10 RX) or the Flexi port (USART3, PB10 /
+//! PB11), hardware.md §1; "UART1" in [`config`] is the *receiver's* port.
 //!
 //! Cost (m4count, `tests/m4-bench` `gps`): one 100-byte NAV-PVT through [`Parser`] and
 //! [`Message::from_frame`] is 4,241 Cortex-M4 instructions (~42 per byte); at 10 Hz that is
