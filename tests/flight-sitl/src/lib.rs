@@ -6,13 +6,16 @@
 //! deterministic virtual-time executor. See README.md.
 #![warn(missing_docs)]
 
+mod clock;
 pub mod console;
+mod flash;
+pub mod flight_end;
 pub mod metrics;
-mod module_end;
+pub mod module_end;
 pub mod scenario;
 pub mod world;
 
 pub use scenario::{
     End, FlashInjection, ImuInjection, Pilot, PilotInput, RadioInjection, Scenario,
 };
-pub use world::{Boot, BootCause, Sample, Sitl, WatchdogResets, run};
+pub use world::{Boot, BootCause, Sample, Sitl, WARMUP_S, WatchdogResets, run};
