@@ -73,21 +73,68 @@ impl SettingsFlash {
     }
 }
 
-/// Bit flips in the written bytes of both sectors, an erased stretch and a torn word.
+/// Bytes per flash page (a 16 KiB sector).
+const PAGE_BYTES: usize = 4 * 4096;
+
+/// Bit flips in the written bytes, then both sectors' state markers overwritten (a write
+/// torn by a power cut during a sector's close, flash wear): what sequential-storage can
+/// only read as a corrupted map.
 fn corrupt(flash: &mut Flash, seed: u64) {
     let mut rng = SplitMix64::new(seed ^ 0xF1A5_C0DE);
     let bytes = flash.as_bytes_mut();
-    let written: Vec<usize> = (0..bytes.len()).filter(|&i| bytes.get(i) != Some(&0xFF)).collect();
-    if written.is_empty() {
-        return;
-    }
-    for _ in 0..12 {
-        let at = written
-            .get(rng.below(written.len() as u64) as usize)
-            .copied()
-            .unwrap_or(0);
+    let written: Vec<usize> = (0..bytes.len())
+        .filter(|&i| bytes.get(i) != Some(&0xFF))
+        .collect();
+    for _ in 0..4 {
+        let Some(&at) = written.get(rng.below(written.len().max(1) as u64) as usize) else {
+            break;
+        };
         if let Some(b) = bytes.get_mut(at) {
             *b ^= 1 << rng.below(8);
+        }
+    }
+    for page in 0..2 {
+        let start = page * PAGE_BYTES;
+        for at in (start..start + 4).chain(start + PAGE_BYTES - 4..start + PAGE_BYTES) {
+            if let Some(b) = bytes.get_mut(at) {
+                *b = 0;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flight_core::settings::Value;
+
+    fn tuned() -> Settings {
+        let mut s = Settings::default();
+        let _ = s.set("pid.roll.kp", Value::F32(0.0042));
+        s
+    }
+
+    #[test]
+    fn stored_settings_load_back_whole() {
+        let mut f = SettingsFlash::new(&tuned(), FlashInjection::Stored);
+        assert_eq!(f.load(), (tuned(), None));
+    }
+
+    #[test]
+    fn an_erased_flash_is_the_factory_set_without_complaint() {
+        let mut f = SettingsFlash::new(&tuned(), FlashInjection::Erased);
+        assert_eq!(f.load(), (Settings::default(), None));
+    }
+
+    #[test]
+    fn a_corrupted_flash_is_the_factory_set_with_the_problem() {
+        for seed in 0..8 {
+            let mut f = SettingsFlash::new(&tuned(), FlashInjection::Corrupted(seed));
+            assert_eq!(
+                f.load(),
+                (Settings::default(), Some(LoadProblem::Corrupt)),
+                "seed {seed}"
+            );
         }
     }
 }

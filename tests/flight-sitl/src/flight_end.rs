@@ -138,7 +138,11 @@ async fn heartbeat_and_motors_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay)
 }
 
 /// The storage task: every 100 ms, a save the app hands out goes to the flash.
-async fn storage_task(app: Rc<RefCell<FlightApp>>, flash: &RefCell<SettingsFlash>, delay: SimDelay) {
+async fn storage_task(
+    app: Rc<RefCell<FlightApp>>,
+    flash: &RefCell<SettingsFlash>,
+    delay: SimDelay,
+) {
     loop {
         sleep_ms(&delay, 100).await;
         let request = {
@@ -214,7 +218,9 @@ pub(crate) async fn flight_board(
         if let Some(p) = problem {
             app.on_settings_problem(p);
         }
-        shared.borrow_mut().record_boot(End::Flight, cause, problem.is_some());
+        shared
+            .borrow_mut()
+            .record_boot(End::Flight, cause, problem.is_some());
         let app = Rc::new(RefCell::new(app));
         shared.borrow_mut().flight = Some((app.clone(), clock.clone()));
         let tasks = join5(
@@ -255,5 +261,9 @@ pub(crate) fn inject_radio(chip: &ChipHandle, from: RadioInjection, to: RadioInj
         // Held in reset: SPI reads nothing, nIRQ never asserts.
         RadioInjection::BrownOut => chip.set_fault(Fault::Unplugged { miso: 0x00 }),
     }
-    chip.set_spi_error_rate(if to == RadioInjection::SpiErrors { 1.0 } else { 0.0 });
+    chip.set_spi_error_rate(if to == RadioInjection::SpiErrors {
+        1.0
+    } else {
+        0.0
+    });
 }

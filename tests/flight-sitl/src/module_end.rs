@@ -9,7 +9,6 @@
 
 use std::cell::{Cell, RefCell};
 
-
 use embassy_futures::join::join5;
 use embassy_futures::select::{Either, select};
 use module_core::air::AirLink;
@@ -112,14 +111,20 @@ struct Hooks<'a>(&'a Board);
 impl MasterHooks for Hooks<'_> {
     fn on_slot(&mut self, now_us: u64, master: &mut Master) {
         let now_ms = self.0.now_ms();
-        self.0.app.borrow_mut().on_master_slot(now_us, now_ms, master);
+        self.0
+            .app
+            .borrow_mut()
+            .on_master_slot(now_us, now_ms, master);
     }
 }
 
 impl FollowerHooks for Hooks<'_> {
     fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
         let now_ms = self.0.now_ms();
-        self.0.app.borrow_mut().on_follower_step(now_us, now_ms, follower);
+        self.0
+            .app
+            .borrow_mut()
+            .on_follower_step(now_us, now_ms, follower);
     }
 }
 
@@ -193,12 +198,16 @@ async fn link_task(b: &Board, radio: &mut ModuleRadio, shared: &Shared, rate: Ra
                 failsafe_us,
             } => {
                 let mut follower = Follower::new(params, failsafe, failsafe_us);
-                let end =
-                    run(b, run_follower(radio, &mut clock, &mut follower, &mut Hooks(b))).await;
+                let end = run(
+                    b,
+                    run_follower(radio, &mut clock, &mut follower, &mut Hooks(b)),
+                )
+                .await;
                 b.app.borrow_mut().on_session_end(end)
             }
             LinkStep::BindMaster { params, timeout_us } => {
-                let accepted = keep_alive(b, bind_master(radio, &mut clock, &params, timeout_us)).await;
+                let accepted =
+                    keep_alive(b, bind_master(radio, &mut clock, &params, timeout_us)).await;
                 let outcome = BindOutcome::offered(accepted);
                 b.app.borrow_mut().on_bind_outcome(outcome)
             }
@@ -278,7 +287,9 @@ async fn hm10_task(b: &Board, shared: &Shared) {
         if let Some(change) = change {
             let mut buf = [0u8; FRAMED_MAX_BYTES];
             if let Ok(n) = encode_message(&Message::SettingChange(change), &mut buf) {
-                b.app.borrow_mut().on_phone_bytes(buf.get(..n).unwrap_or(&[]));
+                b.app
+                    .borrow_mut()
+                    .on_phone_bytes(buf.get(..n).unwrap_or(&[]));
             }
         }
         loop {

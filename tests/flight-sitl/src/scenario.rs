@@ -60,8 +60,9 @@ pub enum FlashInjection {
     /// The scenario's settings, cleanly stored.
     #[default]
     Stored,
-    /// The scenario's settings stored, then corrupted (bit flips, a torn write, an erased
-    /// page) from this seed.
+    /// The scenario's settings stored, then corrupted from this seed: a few bit flips in
+    /// the written bytes and both sectors' state markers overwritten (a torn sector close),
+    /// which sequential-storage reads as a corrupted map.
     Corrupted(u64),
     /// Erased (a new board).
     Erased,

@@ -30,9 +30,7 @@ use flight_core::pipeline::{
 use flight_core::settings::Settings;
 use flight_core::sysid::ekf::Identification;
 use quad_sim::quad::{Quad, Truth};
-use si4432_sim::{
-    RadioConfig, SPI_CLOCK_F405_HZ, SPI_CLOCK_NRF52840_HZ, Simulation,
-};
+use si4432_sim::{RadioConfig, SPI_CLOCK_F405_HZ, SPI_CLOCK_NRF52840_HZ, Simulation};
 use telemetry::channels::{CHANNEL_CENTER, Channels, MAX_CHANNELS};
 use telemetry::link::RateMode;
 use telemetry::messages::{Message, SettingChange};
