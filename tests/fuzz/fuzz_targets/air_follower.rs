@@ -134,6 +134,7 @@ fn uplink(input: &mut Input, params: &LinkParams, follower: &Follower) -> Vec<u8
         },
         report,
         save_failsafe: input.u8() < 32,
+        input_lost: input.u8() < 16,
         format: params.format,
         packed_channels: packed,
         data: input.chunk(40),

@@ -4,7 +4,7 @@
 //! Invariants: parsing never fails on anything but the command word or the word count; a
 //! `set` that is accepted leaves a value inside the parameter's range, and what `get` then
 //! prints is accepted by `set` again and gives the same value bits (console round trip);
-//! a refused `set` changes nothing.
+//! a refused `set` changes nothing; the set left always passes the whole-set check.
 #![no_main]
 
 use flight_core::settings::{Command, Settings, parse_line, write_list, write_setting};
@@ -25,6 +25,12 @@ fuzz_target!(|data: &[u8]| {
                     Err(_) => assert_eq!(settings, before, "a refused set changed something"),
                 }
             }
+            Command::SetAll(pairs) => {
+                let before = settings.clone();
+                if settings.set_text_pairs(pairs).is_err() {
+                    assert_eq!(settings, before, "a refused multi-set changed something");
+                }
+            }
             Command::Get(name) => {
                 let mut out = String::new();
                 write_setting(&mut out, &settings, name).expect("String never fails");
@@ -40,6 +46,11 @@ fuzz_target!(|data: &[u8]| {
     for (param, value) in settings.iter() {
         assert_eq!(param.check(value), Ok(value), "{} out of range", param.name);
     }
+    // The console only ever leaves a set that runs (every cross-setting rule holds).
+    assert!(
+        settings.check().is_ok(),
+        "the console accepted settings that cannot run"
+    );
 });
 
 /// `get NAME` prints `NAME = VALUE`; `set NAME VALUE` with that text must restore the value.

@@ -32,7 +32,7 @@ fuzz_target!(|data: &[u8]| {
                 }
             }
         }
-        Err(e) => assert!(e.line >= 1 && e.line <= lines, "{e}"),
+        Err(e) => assert!(e.line <= lines, "{e}"),
     }
     match parse_reference(text) {
         Ok(rows) => assert!(rows.len() <= lines),
