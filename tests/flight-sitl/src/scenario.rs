@@ -138,7 +138,9 @@ pub struct Scenario {
     pub packet_loss: f64,
     /// The link's rate mode (both ends bound at it).
     pub rate: telemetry::link::RateMode,
-    /// The module's settings (role transmitter; bind, rate and input as the scenario needs).
+    /// The module's settings (`None`: factory). The world binds them to the flight side (an
+    /// unbound module gets the flight controller's compiled-in link ID) and sets their rate
+    /// from [`Scenario::rate`].
     pub module_settings: Option<module_core::settings::Settings>,
     /// What the flight controller's settings flash holds at the first boot.
     pub flight_flash: FlashInjection,

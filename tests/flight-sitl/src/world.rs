@@ -204,18 +204,21 @@ fn battery_raw(pack_mv: f32, divider: f32) -> u16 {
     v.clamp(0.0, 4095.0) as u16
 }
 
-/// The module's settings for the scenario: the given ones, or the factory settings bound
-/// to the flight controller's compiled-in link ID at the scenario's rate.
+/// The module's settings for the scenario: the given ones (or the factory settings), bound
+/// to the flight side — an unbound module gets the flight controller's compiled-in link ID
+/// — at the scenario's rate (`Scenario::rate` decides both ends; the module's settings have
+/// no F500, so for F500 they keep their rate and the link adapter runs the master at F500).
 fn module_settings(s: &Scenario) -> module_core::settings::Settings {
-    s.module_settings.unwrap_or_else(|| {
-        let factory = module_core::settings::Settings::default();
-        module_core::settings::Settings {
-            bind_id: flight_core::app::DEFAULT_BIND_ID,
-            rate: module_core::air::settings_rate(s.rate, factory.rate)
-                .unwrap_or(module_core::settings::RateMode::Bps125000),
-            ..factory
-        }
-    })
+    let given = s.module_settings.unwrap_or_default();
+    module_core::settings::Settings {
+        bind_id: if given.bind_id == 0 {
+            flight_core::app::DEFAULT_BIND_ID
+        } else {
+            given.bind_id
+        },
+        rate: module_core::air::settings_rate(s.rate, given.rate).unwrap_or(given.rate),
+        ..given
+    }
 }
 
 /// Runs `scenario` and returns the records.
