@@ -237,3 +237,22 @@ fn radio_faults_are_ridden_through_without_a_reset() {
     assert!(s.iter().filter(|x| x.t_s > 9.5).all(|x| x.link_up));
     assert!(s.iter().filter(|x| x.t_s > 4.0).all(|x| x.altitude_m > 0.3));
 }
+
+/// The scenario's module settings are the module's own; the world binds an unbound module
+/// to the flight side at `Scenario::rate` (before, the module's factory settings — bind ID 0
+/// — waited for a bind and the link never came up).
+#[test]
+fn factory_module_settings_are_bound_at_the_scenario_rate() {
+    let (quad, settings) = default_airframe();
+    let sitl = run(Scenario {
+        rate: RateMode::M100,
+        module_settings: Some(module_core::settings::Settings::default()),
+        ..Scenario::new(settings, quad, 1.0, Box::new(|_| PilotInput::default()))
+    });
+    assert!(sitl.samples.iter().all(|x| x.link_up));
+    assert_eq!(
+        sitl.settings.u32("link.rate"),
+        1,
+        "M100 stored on the flight side"
+    );
+}
