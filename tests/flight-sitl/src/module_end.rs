@@ -21,7 +21,6 @@ use radio_rfm22b::link::LinkRadio;
 use radio_rfm22b::{Rfm22b, TxPower};
 use si4432_sim::{Medium, SimDelay, SimIrq, SimSdn, SimSpi};
 use telemetry::link::LinkClock;
-use telemetry::link::RateMode;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 use telemetry::link::master::{MasterHooks, bind_master, run_master};
@@ -162,9 +161,8 @@ async fn run<E>(
     }
 }
 
-/// The firmware's link task. `rate` is the scenario's: the module's settings have no F500
-/// (their fastest rate is 125 kbit/s, F250), so for F500 the adapter runs the master at it.
-async fn link_task(b: &Board, radio: &mut ModuleRadio, shared: &Shared, rate: RateMode, seed: u64) {
+/// The firmware's link task.
+async fn link_task(b: &Board, radio: &mut ModuleRadio, shared: &Shared, seed: u64) {
     let mut rng = SplitMix64::new(seed ^ 0x4D0D);
     let mut clock = b.clock.clone();
     loop {
@@ -184,10 +182,7 @@ async fn link_task(b: &Board, radio: &mut ModuleRadio, shared: &Shared, rate: Ra
                 let end = poll_session(b).await;
                 b.app.borrow_mut().on_session_end(end)
             }
-            LinkStep::RunMaster(mut params) => {
-                if rate == RateMode::F500 {
-                    params.rate = rate;
-                }
+            LinkStep::RunMaster(params) => {
                 let mut master = Master::new(params);
                 let end = run(b, run_master(radio, &mut clock, &mut master, &mut Hooks(b))).await;
                 b.app.borrow_mut().on_session_end(end)
@@ -335,7 +330,6 @@ pub(crate) async fn module_board(
     medium: Medium,
     delay: SimDelay,
     mut chip: ModuleChip,
-    rate: RateMode,
     seed: u64,
 ) {
     let mut cause = BootCause::PowerOn;
@@ -354,7 +348,7 @@ pub(crate) async fn module_board(
             checked_in: Cell::new(0),
         };
         let tasks = join5(
-            link_task(&board, &mut chip.radio, &shared, rate, seed),
+            link_task(&board, &mut chip.radio, &shared, seed),
             ppm_in_task(&board, &shared),
             app_task(&board, &shared),
             hm10_task(&board, &shared),

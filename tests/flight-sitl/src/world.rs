@@ -32,7 +32,6 @@ use flight_core::sysid::ekf::Identification;
 use quad_sim::quad::{Quad, Truth};
 use si4432_sim::{RadioConfig, SPI_CLOCK_F405_HZ, SPI_CLOCK_NRF52840_HZ, Simulation};
 use telemetry::channels::{CHANNEL_CENTER, Channels, MAX_CHANNELS};
-use telemetry::link::RateMode;
 use telemetry::messages::{Message, SettingChange};
 use telemetry::mock::SplitMix64;
 
@@ -206,8 +205,7 @@ fn battery_raw(pack_mv: f32, divider: f32) -> u16 {
 
 /// The module's settings for the scenario: the given ones (or the factory settings), bound
 /// to the flight side — an unbound module gets the flight controller's compiled-in link ID
-/// — at the scenario's rate (`Scenario::rate` decides both ends; the module's settings have
-/// no F500, so for F500 they keep their rate and the link adapter runs the master at F500).
+/// — at the scenario's rate (`Scenario::rate` decides both ends).
 fn module_settings(s: &Scenario) -> module_core::settings::Settings {
     let given = s.module_settings.unwrap_or_default();
     module_core::settings::Settings {
@@ -216,7 +214,7 @@ fn module_settings(s: &Scenario) -> module_core::settings::Settings {
         } else {
             given.bind_id
         },
-        rate: module_core::air::settings_rate(s.rate, given.rate).unwrap_or(given.rate),
+        rate: s.rate,
         ..given
     }
 }
@@ -238,15 +236,12 @@ pub fn run(scenario: Scenario) -> Sitl {
         mut pilot,
         setting_changes,
         packet_loss,
-        rate,
+        rate: _,
         module_settings: _,
         flight_flash,
     } = scenario;
     // The flight controller stores the module's link (as after a bind).
-    if let Some(mut link) = module_core::air::link_params(&module) {
-        if rate == RateMode::F500 {
-            link.rate = rate;
-        }
+    if let Some(link) = module_core::air::link_params(&module) {
         let _ = store_link(&mut settings, &link);
     }
     let setup = from_settings(&settings).expect("settings make a flyable setup");
@@ -285,7 +280,6 @@ pub fn run(scenario: Scenario) -> Sitl {
         medium.clone(),
         sim.delay(),
         ModuleChip::new(module_radio, module.tx_power),
-        rate,
         seed,
     ));
     sim.spawn(flight_board(
