@@ -305,6 +305,17 @@ pub async fn save<S: NorFlash, C: CacheImpl<u16>>(
     if changed == 0 {
         return Ok(0);
     }
+    save_whole(map, settings).await?;
+    Ok(changed)
+}
+
+/// Writes `settings` as a new generation whatever flash holds — after a boot-time load
+/// problem, when the stored copy is damaged or is not the set in use. Same commit order
+/// as [`save`].
+pub async fn save_whole<S: NorFlash, C: CacheImpl<u16>>(
+    map: &mut MapStorage<u16, S, C>,
+    settings: &Settings,
+) -> Result<(), StoreError> {
     let [a, b] = SLOTS;
     let generation = |s: &Slot| match s {
         Slot::Record(r) => Some(r.generation),
@@ -334,7 +345,7 @@ pub async fn save<S: NorFlash, C: CacheImpl<u16>>(
             .await
             .map_err(|_| StoreError::Flash)?;
     }
-    Ok(changed)
+    Ok(())
 }
 
 #[cfg(test)]

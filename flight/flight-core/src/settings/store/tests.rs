@@ -229,3 +229,21 @@ fn random_corruption_never_loads_a_mix() {
     assert_eq!(silent[2], 0, "a torn save brought back an older set");
     assert!(clean > 50);
 }
+
+/// After a boot-time problem the pilot's `defaults` + `save` must reach flash although the
+/// set equals what `save` believes is stored: `save_whole` writes it, and the next boot
+/// loads it cleanly instead of reporting the problem again.
+#[test]
+fn save_whole_fixes_a_problem_store_with_an_unchanged_set() {
+    let mut m = map(Flash::default());
+    let mut buf = Buffer::new();
+    block_on(m.store_item(&mut buf.0, &500u16, &3u32)).unwrap();
+    let defaults = Settings::default();
+    assert_eq!(block_on(save(&mut m, &defaults, &defaults)), Ok(0));
+    block_on(save_whole(&mut m, &defaults)).unwrap();
+    let (flash, _) = m.destroy();
+    let (s, report) = boot(flash);
+    assert_eq!(s, defaults);
+    assert_eq!(report.problem, None);
+    assert_eq!(report.generation, 1);
+}
