@@ -328,7 +328,9 @@ impl Follower {
                     now_us.saturating_sub(u64::from(self.schedule.packet_end_offset_us(len)));
                 let expected = match self.sync {
                     Sync::Acquiring { index, .. } => (up.slot % HOP_CHANNELS as u8) == index,
-                    Sync::Tracking { .. } => true,
+                    // Spec §5.3 check 4: while tracking only the slot being listened for is
+                    // accepted; a replayed frame of another slot would shift the hop phase.
+                    Sync::Tracking { slot, .. } => up.slot == slot,
                 };
                 if expected && self.schedule.kind(u32::from(up.slot)) == SlotKind::Uplink {
                     self.sync = Sync::Tracking {

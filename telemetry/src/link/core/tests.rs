@@ -321,3 +321,36 @@ fn input_lost_uplinks_put_the_follower_in_failsafe_at_once_and_keep_it_tracking(
     assert!(!follower.in_failsafe());
     assert_eq!(follower.output(), &channels);
 }
+
+#[test]
+fn tracking_follower_rejects_a_replayed_uplink_of_another_slot() {
+    let (mut master, mut follower) = pair();
+    let channels: crate::channels::Channels = core::array::from_fn(|i| 300 + i as u16);
+    master.set_channels(&channels);
+    let mut buf = [0u8; 64];
+    let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
+        panic!()
+    };
+    let mut t = 0;
+    let (first, end) = next_uplink_on(&mut master, &mut t, channel);
+    let packet = |frame: &[u8]| RxOutcome::Packet {
+        len: frame.len(),
+        rssi_dbm: -70,
+    };
+    follower.on_received(packet(&first), &first, end);
+    assert_eq!(follower.sync_state(), SyncState::Tracking);
+    let tracked = follower.tracked_slot();
+    let rejected = follower.counters().rejected;
+    let updates = follower.updates();
+
+    // An attacker replays the first (recorded) uplink into the next slot's window: its
+    // slot number is not the one expected, so it must neither update the channels nor
+    // shift the follower's hop phase.
+    let Step::Listen { .. } = follower.plan(end, &mut buf) else {
+        panic!()
+    };
+    follower.on_received(packet(&first), &first, end + SLOT_US);
+    assert_eq!(follower.counters().rejected, rejected + 1);
+    assert_eq!(follower.updates(), updates);
+    assert_eq!(follower.tracked_slot(), tracked, "hop phase unchanged");
+}
