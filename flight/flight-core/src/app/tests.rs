@@ -311,3 +311,28 @@ fn bind_is_refused_while_armed() {
     assert!(!app.on_bind_result(Some(&some_link())));
     assert_eq!(app.link_params(), None);
 }
+
+#[test]
+fn a_setting_change_over_the_link_is_refused_while_armed() {
+    use crate::report::f32_value;
+    use crate::settings::PARAMS;
+    use telemetry::messages::{Message, SettingChange, encode_message};
+    let mut app = app();
+    let Some(id) = PARAMS.iter().position(|p| p.name == "failsafe.descent_mps") else {
+        panic!("parameter exists");
+    };
+    let before = app.settings().f32("failsafe.descent_mps");
+    let change = SettingChange {
+        id: id as u16,
+        value: f32_value(before + 0.5),
+    };
+    let mut bytes = [0u8; 64];
+    let n = encode_message(&Message::SettingChange(change), &mut bytes).unwrap();
+    let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
+    armed_in_the_air(&mut app);
+    follower.uplink_stream.on_data(0, &bytes[..n]);
+    app.on_link_step(100_000, &mut follower);
+    assert!(app.armed());
+    assert_eq!(app.settings().f32("failsafe.descent_mps"), before);
+    assert_eq!(app.take_design_request(), None);
+}
