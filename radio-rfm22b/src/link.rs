@@ -64,7 +64,8 @@ pub struct LinkRadio<SPI, IRQ, SDN, D> {
 }
 
 impl<SPI, IRQ, SDN, D> LinkRadio<SPI, IRQ, SDN, D> {
-    /// Wraps a driver, transmitting at `tx_power`, with the header filter on.
+    /// Wraps a driver, transmitting at `tx_power` (bind mode: [`TxPower::MIN`]), with the
+    /// header filter on.
     pub fn new(radio: Rfm22b<SPI, IRQ, SDN, D>, tx_power: TxPower) -> Self {
         Self {
             radio,
@@ -111,7 +112,13 @@ where
         );
         chip.channel_spacing =
             ChannelSpacing::try_from_hz(config.spacing_hz).map_err(LinkRadioError::Config)?;
-        chip.tx_power = self.tx_power;
+        // Bind mode transmits at the lowest step whatever the link's power: binding is a
+        // close-range act, and a bind nobody nearby can hear cannot be overheard either.
+        chip.tx_power = if config.reduced_power {
+            TxPower::MIN
+        } else {
+            self.tx_power
+        };
         self.radio.init(chip).await.map_err(LinkRadioError::Radio)?;
         self.rate = config.rate;
         self.configured = Some(*config);

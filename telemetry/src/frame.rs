@@ -4,11 +4,15 @@
 
 use crate::channels::{ChannelFormat, Channels, unpack};
 use crate::checksum::keyed_crc16;
+use crate::link::auth::{LinkKey, TAG_BYTES};
 use crate::link::{Band, RateMode};
 
 /// Protocol version, the first byte of every frame. Bumped on any incompatible change; a
 /// receiver drops frames of other versions before looking further.
 pub const PROTOCOL_VERSION: u8 = 1;
+/// Version byte of authenticated link frames ([`seal`], [`open`]): the link CRC is replaced
+/// by a 4-byte SipHash-2-4 tag over the frame counter and the frame (spec §12).
+pub const SEALED_VERSION: u8 = 2;
 /// Bytes of every uplink/downlink frame before the optional parts: version, kind, slot,
 /// stream seq, stream ack.
 pub const LINK_HEADER_BYTES: usize = 5;
@@ -133,6 +137,9 @@ pub enum Rejection {
     Version(u8),
     /// Link CRC mismatch: corrupted, or keyed with another bind ID.
     Crc,
+    /// Authentication tag mismatch: forged, replayed under another counter, corrupted, or
+    /// of another link key.
+    Tag,
     /// Unknown kind or reserved bits set.
     UnknownKind(u8),
     /// Length or field values inconsistent with the kind.
@@ -193,13 +200,45 @@ fn put(out: &mut [u8], at: &mut usize, bytes: &[u8]) -> Result<(), EncodeError> 
 /// Encodes `frame` into `out`, with the link CRC keyed by `key` (the bind ID, or
 /// [`crate::link::BIND_KEY`] for bind frames). Returns the frame length.
 pub fn encode(frame: &Frame<'_>, key: u32, out: &mut [u8]) -> Result<usize, EncodeError> {
+    let mut at = encode_body(frame, PROTOCOL_VERSION, out)?;
+    let body = out
+        .get(..at)
+        .ok_or(EncodeError::BufferTooSmall { needed: at })?;
+    let crc = keyed_crc16(key, body);
+    put(out, &mut at, &crc.to_be_bytes())?;
+    Ok(at)
+}
+
+/// Encodes an uplink or downlink authenticated with `key` under frame counter `counter`
+/// (version [`SEALED_VERSION`], tag instead of the link CRC). Bind frames are never sealed
+/// (they precede the key); asking for one is [`EncodeError::InvalidField`].
+pub fn seal(
+    frame: &Frame<'_>,
+    key: &LinkKey,
+    counter: u64,
+    out: &mut [u8],
+) -> Result<usize, EncodeError> {
+    if matches!(frame, Frame::BindOffer(_) | Frame::BindAccept { .. }) {
+        return Err(EncodeError::InvalidField);
+    }
+    let mut at = encode_body(frame, SEALED_VERSION, out)?;
+    let body = out
+        .get(..at)
+        .ok_or(EncodeError::BufferTooSmall { needed: at })?;
+    let tag = key.tag(counter, body);
+    put(out, &mut at, &tag.to_le_bytes())?;
+    Ok(at)
+}
+
+/// The frame's bytes before its CRC or tag, with `version` in byte 0.
+fn encode_body(frame: &Frame<'_>, version: u8, out: &mut [u8]) -> Result<usize, EncodeError> {
     let mut at = 0usize;
     match frame {
         Frame::BindOffer(offer) => {
             if !valid_telemetry_ratio(offer.telemetry_ratio) {
                 return Err(EncodeError::InvalidField);
             }
-            put(out, &mut at, &[PROTOCOL_VERSION, KIND_BIND_OFFER])?;
+            put(out, &mut at, &[version, KIND_BIND_OFFER])?;
             put(out, &mut at, &offer.bind_id.to_le_bytes())?;
             let params = [
                 offer.band.code(),
@@ -210,7 +249,7 @@ pub fn encode(frame: &Frame<'_>, key: u32, out: &mut [u8]) -> Result<usize, Enco
             put(out, &mut at, &params)?;
         }
         Frame::BindAccept { bind_id } => {
-            put(out, &mut at, &[PROTOCOL_VERSION, KIND_BIND_ACCEPT])?;
+            put(out, &mut at, &[version, KIND_BIND_ACCEPT])?;
             put(out, &mut at, &bind_id.to_le_bytes())?;
         }
         Frame::Uplink(up) => {
@@ -228,7 +267,15 @@ pub fn encode(frame: &Frame<'_>, key: u32, out: &mut [u8]) -> Result<usize, Enco
             if up.input_lost {
                 flags |= FLAG_INPUT_LOST;
             }
-            put_link_header(out, &mut at, kind | flags, up.slot, up.stream, up.report)?;
+            put_link_header(
+                out,
+                &mut at,
+                version,
+                kind | flags,
+                up.slot,
+                up.stream,
+                up.report,
+            )?;
             put(out, &mut at, up.packed_channels)?;
             put(out, &mut at, up.data)?;
         }
@@ -236,6 +283,7 @@ pub fn encode(frame: &Frame<'_>, key: u32, out: &mut [u8]) -> Result<usize, Enco
             put_link_header(
                 out,
                 &mut at,
+                version,
                 KIND_DOWNLINK,
                 down.slot,
                 down.stream,
@@ -244,17 +292,13 @@ pub fn encode(frame: &Frame<'_>, key: u32, out: &mut [u8]) -> Result<usize, Enco
             put(out, &mut at, down.data)?;
         }
     }
-    let body = out
-        .get(..at)
-        .ok_or(EncodeError::BufferTooSmall { needed: at })?;
-    let crc = keyed_crc16(key, body);
-    put(out, &mut at, &crc.to_be_bytes())?;
     Ok(at)
 }
 
 fn put_link_header(
     out: &mut [u8],
     at: &mut usize,
+    version: u8,
     kind_and_flags: u8,
     slot: u8,
     stream: StreamHeader,
@@ -264,13 +308,7 @@ fn put_link_header(
     put(
         out,
         at,
-        &[
-            PROTOCOL_VERSION,
-            kind_and_flags | flag,
-            slot,
-            stream.seq,
-            stream.ack,
-        ],
+        &[version, kind_and_flags | flag, slot, stream.seq, stream.ack],
     )?;
     if let Some(r) = report {
         put(out, at, &[r.rssi_dbm.to_ne_bytes()[0], r.lq_percent])?;
@@ -302,8 +340,45 @@ fn decode_inner(packet: &[u8], key: u32) -> Result<Frame<'_>, Rejection> {
     if keyed_crc16(key, body) != u16::from_be_bytes([*c0, *c1]) {
         return Err(Rejection::Crc);
     }
+    parse_body(*kind_byte, rest)
+}
+
+/// Decodes one authenticated packet ([`seal`]): version [`SEALED_VERSION`], the tag checked
+/// with `key` under the counter the receiver expects, before any field is read. Only link
+/// frames are accepted. Never panics.
+pub fn open<'a>(packet: &'a [u8], key: &LinkKey, counter: u64) -> Received<'a> {
+    match open_inner(packet, key, counter) {
+        Ok(frame) => Received::Accepted(frame),
+        Err(why) => Received::Rejected(why),
+    }
+}
+
+fn open_inner<'a>(packet: &'a [u8], key: &LinkKey, counter: u64) -> Result<Frame<'a>, Rejection> {
+    let (body, tag) = packet
+        .split_at_checked(packet.len().saturating_sub(TAG_BYTES))
+        .ok_or(Rejection::TooShort)?;
+    let [version, kind_byte, rest @ ..] = body else {
+        return Err(Rejection::TooShort);
+    };
+    if *version != SEALED_VERSION {
+        return Err(Rejection::Version(*version));
+    }
+    let [t0, t1, t2, t3] = tag else {
+        return Err(Rejection::TooShort);
+    };
+    if !key.verify(counter, body, u32::from_le_bytes([*t0, *t1, *t2, *t3])) {
+        return Err(Rejection::Tag);
+    }
+    match parse_body(*kind_byte, rest)? {
+        frame @ (Frame::Uplink(_) | Frame::Downlink(_)) => Ok(frame),
+        _ => Err(Rejection::Malformed),
+    }
+}
+
+/// The fields after the version byte, once the CRC or tag has been checked.
+fn parse_body(kind_byte: u8, rest: &[u8]) -> Result<Frame<'_>, Rejection> {
     if kind_byte & RESERVED_MASK != 0 {
-        return Err(Rejection::UnknownKind(*kind_byte));
+        return Err(Rejection::UnknownKind(kind_byte));
     }
     let kind = kind_byte & KIND_MASK;
     let has_report = kind_byte & FLAG_REPORT != 0;

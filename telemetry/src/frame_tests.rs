@@ -216,3 +216,65 @@ fn encode_reports_needed_size() {
         Err(EncodeError::InvalidField)
     );
 }
+
+fn sealed_key() -> LinkKey {
+    LinkKey::from_bytes(core::array::from_fn(|i| 0x40 + i as u8))
+}
+
+#[test]
+fn sealed_frames_round_trip_and_carry_a_four_byte_tag() {
+    let (plain, n) = uplink_bytes(b"abc");
+    let Received::Accepted(frame) = decode(&plain[..n], KEY) else {
+        panic!()
+    };
+    let mut out = [0u8; 64];
+    let m = seal(&frame, &sealed_key(), 77, &mut out).unwrap();
+    assert_eq!(m, n + TAG_BYTES - CRC_BYTES);
+    assert_eq!(out[0], SEALED_VERSION);
+    assert_eq!(
+        open(&out[..m], &sealed_key(), 77),
+        Received::Accepted(frame)
+    );
+}
+
+#[test]
+fn sealed_frames_fail_under_another_counter_key_or_any_flipped_bit() {
+    let (plain, n) = uplink_bytes(b"");
+    let Received::Accepted(frame) = decode(&plain[..n], KEY) else {
+        panic!()
+    };
+    let mut out = [0u8; 64];
+    let m = seal(&frame, &sealed_key(), 5, &mut out).unwrap();
+    let sealed = &out[..m];
+    assert_eq!(
+        open(sealed, &sealed_key(), 5 + 256),
+        Received::Rejected(Rejection::Tag),
+        "a replay under a later counter"
+    );
+    let other = LinkKey::from_bytes([0x40; 16]);
+    assert_eq!(open(sealed, &other, 5), Received::Rejected(Rejection::Tag));
+    for bit in 8..m * 8 {
+        let mut f = sealed.to_vec();
+        f[bit / 8] ^= 1 << (bit % 8);
+        assert_eq!(
+            open(&f, &sealed_key(), 5),
+            Received::Rejected(Rejection::Tag),
+            "bit {bit}"
+        );
+    }
+    // A version 1 frame (CRC keyed with the public bind ID) is no sealed frame.
+    assert_eq!(
+        open(&plain[..n], &sealed_key(), 77),
+        Received::Rejected(Rejection::Version(PROTOCOL_VERSION))
+    );
+}
+
+#[test]
+fn bind_frames_are_never_sealed() {
+    let offer = Frame::BindAccept { bind_id: 9 };
+    let mut out = [0u8; 64];
+    assert_eq!(
+        seal(&offer, &sealed_key(), 0, &mut out),
+        Err(EncodeError::InvalidField)
+    );
+}

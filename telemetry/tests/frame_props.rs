@@ -31,6 +31,29 @@ proptest! {
     }
 
     #[test]
+    fn opener_never_panics_on_sealed_prefixes(
+        kind in any::<u8>(),
+        rest in proptest::collection::vec(any::<u8>(), 0..70),
+        key in any::<[u8; 16]>(),
+        counter in any::<u64>(),
+    ) {
+        // Version 2 with a valid tag, so the field parsers are reached; bind kinds are
+        // never accepted sealed.
+        let key = telemetry::link::LinkKey::from_bytes(key);
+        let mut bytes = vec![telemetry::frame::SEALED_VERSION, kind];
+        bytes.extend_from_slice(&rest);
+        let tag = key.tag(counter, &bytes);
+        bytes.extend_from_slice(&tag.to_le_bytes());
+        let opened = telemetry::frame::open(&bytes, &key, counter);
+        let bind = matches!(
+            opened,
+            Received::Accepted(Frame::BindOffer(_) | Frame::BindAccept { .. })
+        );
+        prop_assert!(!bind);
+        let _ = telemetry::frame::open(&bytes, &key, counter.wrapping_add(1));
+    }
+
+    #[test]
     fn message_reader_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
         let mut reader = telemetry::messages::MessageReader::new();
         for b in bytes {

@@ -70,6 +70,7 @@ impl LinkParams {
             header: self.header(),
             base_hz: self.band.grid(self.rate).0,
             spacing_hz: self.band.grid(self.rate).1,
+            reduced_power: false,
         }
     }
 
@@ -103,13 +104,14 @@ pub const OFFER_PERIOD_US: u32 = 4 * RateMode::L50.slot_us();
 pub const ACCEPT_REPEATS: u8 = 3;
 
 /// The radio configuration of bind mode in `band`: bind rate and header, channel 0 on the
-/// bind frequency.
+/// bind frequency, at reduced power (both ends bind from close by).
 pub fn bind_radio_config(band: Band) -> RadioConfig {
     RadioConfig {
         rate: BIND_RATE,
         header: BIND_HEADER,
         base_hz: band.bind_hz(),
         spacing_hz: band.grid(BIND_RATE).1,
+        reduced_power: true,
     }
 }
 

@@ -3,6 +3,7 @@
 //! machines (`core`) and the thin async loops that drive them over a [`PacketRadio`].
 //! Wire format and timing: `spec/protocol.md`.
 
+pub mod auth;
 pub mod bind;
 pub mod core;
 pub mod follower;
@@ -14,6 +15,7 @@ pub mod rate;
 pub mod schedule;
 pub mod stream;
 
+pub use auth::LinkKey;
 pub use bind::{BIND_HEADER, BIND_KEY, LinkParams};
 pub use hopping::{Band, HOP_CHANNELS, HopSequence};
 pub use radio::{LinkClock, PacketRadio, RadioConfig, RxOutcome};

@@ -18,6 +18,9 @@ pub struct RadioConfig {
     pub base_hz: u32,
     /// Channel spacing, a multiple of 10 kHz (Si4432 0x7A).
     pub spacing_hz: u32,
+    /// Transmit at the radio's lowest power step instead of the configured one: set in
+    /// bind mode, so a bind is only made (or overheard, or spoofed) at close range.
+    pub reduced_power: bool,
 }
 
 impl RadioConfig {

@@ -33,6 +33,7 @@ impl MockRadio {
                 header: [0; 4],
                 base_hz: 0,
                 spacing_hz: 0,
+                reduced_power: false,
             },
             frequency_hz: 0,
             transmitted: 0,

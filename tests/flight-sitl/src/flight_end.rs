@@ -1,6 +1,6 @@
 //! The flight controller board: boots `flight_core::app::FlightApp` from its simulated
-//! settings flash and runs the firmware's task adapters around it — link (bind window, then
-//! the follower on the real rfm22b driver over the virtual Si4432), supervisor (polls the
+//! settings flash and runs the firmware's task adapters around it — link (the follower — a
+//! bind only in a window the console opens — on the real rfm22b driver over the virtual Si4432), supervisor (polls the
 //! app's check-in policy every `FEED_PERIOD_MS` and feeds the IWDG), storage, gains and
 //! heartbeat — until its independent watchdog expires or its power goes; then it boots
 //! again. The IMU, baro, battery and alert adapters run in the world's physics task at the
@@ -11,7 +11,7 @@ use std::rc::Rc;
 
 use embassy_futures::join::join5;
 use embassy_futures::select::{Either, select};
-use flight_core::app::{BIND_WINDOW_US, FEED_PERIOD_MS, FlightApp, Task};
+use flight_core::app::{FEED_PERIOD_MS, FlightApp, Task};
 use flight_core::pipeline::{Controllers, from_settings};
 use radio_rfm22b::link::LinkRadio;
 use radio_rfm22b::{NoPin, Rfm22b, TxPower};
@@ -84,7 +84,20 @@ async fn idle(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay, ms: u64) {
     let _ = select(sleep_ms(delay, ms), keep_alive(app, delay)).await;
 }
 
-/// The firmware's link task.
+/// Resolves when the console asked for a bind, checking in every 50 ms (the firmware's
+/// `bind_requested`).
+async fn bind_requested(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay) {
+    loop {
+        if app.borrow().bind_requested() {
+            return;
+        }
+        app.borrow_mut().on_link_idle();
+        sleep_ms(delay, 50).await;
+    }
+}
+
+/// The firmware's link task: binds only inside a window the console opened, runs no link
+/// while unbound, and the follower with the app as its hooks otherwise.
 async fn link_task(
     app: Rc<RefCell<FlightApp>>,
     radio: &mut FlightRadio,
@@ -92,28 +105,36 @@ async fn link_task(
     failsafe_us: u64,
 ) {
     let delay = clock.delay().clone();
-    let mut params = app.borrow().link_params();
     loop {
-        let bind = bind_follower(radio, &mut clock, params.band, BIND_WINDOW_US);
-        match select(bind, keep_alive(&app, &delay)).await {
-            Either::First(Ok(Some(offered))) => {
-                params = offered;
-                app.borrow_mut().on_bound(&offered);
+        let request = app.borrow_mut().take_bind_request();
+        if let Some((band, window_us)) = request {
+            let bind = bind_follower(radio, &mut clock, band, window_us);
+            match select(bind, keep_alive(&app, &delay)).await {
+                Either::First(Ok(offered)) => {
+                    app.borrow_mut().on_bind_result(offered.as_ref());
+                }
+                Either::First(Err(_)) => {
+                    app.borrow_mut().on_bind_result(None);
+                    idle(&app, &delay, 1000).await;
+                }
             }
-            Either::First(Ok(None)) => {}
-            Either::First(Err(_)) => {
-                idle(&app, &delay, 1000).await;
-                continue;
-            }
+            continue;
         }
-        break;
-    }
-    loop {
+        let params = app.borrow().link_params();
+        let Some(params) = params else {
+            bind_requested(&app, &delay).await;
+            continue;
+        };
         let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
         let mut hooks = AppHooks(app.clone());
-        let Err(_) = run_follower(radio, &mut clock, &mut follower, &mut hooks).await;
-        app.borrow_mut().on_link_down();
-        idle(&app, &delay, 1000).await;
+        let run = run_follower(radio, &mut clock, &mut follower, &mut hooks);
+        match select(run, bind_requested(&app, &delay)).await {
+            Either::First(Err(_)) => {
+                app.borrow_mut().on_link_down();
+                idle(&app, &delay, 1000).await;
+            }
+            Either::Second(()) => app.borrow_mut().on_link_down(),
+        }
     }
 }
 

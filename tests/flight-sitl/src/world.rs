@@ -12,8 +12,7 @@
 //! on one virtual clock: runs are exactly repeatable.
 //!
 //! Both boards boot at virtual time 0; the scenario's time starts [`WARMUP_S`] later, when
-//! the flight side's bind window (3 s after each boot, as the firmware listens) is over and
-//! the link is up. During the warm-up the pilot's input is the one at time 0 (an arm switch
+//! both boards have booted and the link is up (both ends start bound, as after a bind). During the warm-up the pilot's input is the one at time 0 (an arm switch
 //! left on at power-up, the battery at its starting voltage). Boots during the warm-up
 //! have negative times.
 
@@ -130,8 +129,9 @@ pub enum BootCause {
     Watchdog,
 }
 
-/// Virtual time before the scenario starts, s: both boards boot at 0; the flight side
-/// listens for a bind for 3 s after its 145 ms boot, then acquires the module.
+/// Virtual time before the scenario starts, s: both boards boot at 0, the flight side takes
+/// 145 ms, then acquires the module (well under a second); the rest is margin, kept so the
+/// scenario figures stay comparable.
 pub const WARMUP_S: f64 = 4.0;
 /// Distance between the module and the flight controller, m.
 const DISTANCE_M: f64 = 100.0;
@@ -204,13 +204,15 @@ fn battery_raw(pack_mv: f32, divider: f32) -> u16 {
 }
 
 /// The module's settings for the scenario: the given ones (or the factory settings), bound
-/// to the flight side — an unbound module gets the flight controller's compiled-in link ID
-/// — at the scenario's rate (`Scenario::rate` decides both ends).
+/// to the flight side as after a bind — an unbound module gets a bind ID drawn from the
+/// seed, which the flight side then stores too — at the scenario's rate (`Scenario::rate`
+/// decides both ends).
 fn module_settings(s: &Scenario) -> module_core::settings::Settings {
     let given = s.module_settings.unwrap_or_default();
     module_core::settings::Settings {
         bind_id: if given.bind_id == 0 {
-            flight_core::app::DEFAULT_BIND_ID
+            // Never 0 (unbound): the low half is set.
+            0x7A11_0000 | ((s.seed as u32) & 0xFFFF) | 1
         } else {
             given.bind_id
         },

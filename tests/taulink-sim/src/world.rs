@@ -133,6 +133,7 @@ fn spawn_jammer(
                 header: *b"JAM!",
                 base_hz: band.base_hz(),
                 spacing_hz: band.spacing_hz(),
+                reduced_power: false,
             })
             .await;
         let mut junk = [0u8; 32];

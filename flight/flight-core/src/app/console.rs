@@ -1,6 +1,7 @@
 //! The console's behaviour: a line of `settings::console`'s command language in, the answer
 //! out. Changes go to the live settings (the gains are re-designed); `save` requests a
-//! write; `set`, `save` and `defaults` are refused while armed. The USB adapter only moves
+//! write; `bind` opens the bind window (the only way this controller binds); `set`, `save`,
+//! `defaults` and `bind` are refused while armed. The USB adapter only moves
 //! lines and bytes.
 
 use core::fmt::Write;
@@ -8,7 +9,7 @@ use core::fmt::Write;
 use super::FlightApp;
 use crate::settings::{Command, LineError, Settings, parse_line, write_list, write_setting};
 
-const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status\r\n";
+const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status | bind\r\n";
 
 impl FlightApp {
     /// Answers what the line assembler (`settings::LineAssembler`) produced: a whole line,
@@ -32,11 +33,13 @@ impl FlightApp {
             Ok(Command::Help) => out.write_str(HELP),
             Ok(Command::List(prefix)) => write_list(out, &self.live, prefix),
             Ok(Command::Get(name)) => write_setting(out, &self.live, name),
-            Ok(Command::Set { .. } | Command::SetAll(_) | Command::Save | Command::Defaults)
-                if armed =>
-            {
-                out.write_str("refused: disarm first\r\n")
-            }
+            Ok(
+                Command::Set { .. }
+                | Command::SetAll(_)
+                | Command::Save
+                | Command::Defaults
+                | Command::Bind,
+            ) if armed => out.write_str("refused: disarm first\r\n"),
             Ok(Command::Set { name, value }) => match self.live.set_text(name, value) {
                 Ok(()) => {
                     self.settings_changed();
@@ -61,6 +64,17 @@ impl FlightApp {
                 out.write_str("factory values (not saved)\r\n")
             }
             Ok(Command::Status) => self.write_status(out),
+            Ok(Command::Bind) => {
+                if self.request_bind() {
+                    write!(
+                        out,
+                        "bind window open for {} s: start the bind on the module\r\n",
+                        super::BIND_WINDOW_US / 1_000_000
+                    )
+                } else {
+                    out.write_str("refused: disarm first\r\n")
+                }
+            }
             Err(e) => write!(out, "{e}\r\n"),
         }
     }

@@ -1,30 +1,32 @@
 //! The flight side of the TauLink link: the follower's hooks (channels → the loop's
 //! `LinkInput`, failsafe counting, setting changes from the module applied while disarmed
 //! and echoed, one telemetry message per [`REPORT_PERIOD_US`] when the downlink stream is
-//! empty), the link's parameters (stored bind or [`DEFAULT_BIND_ID`]) and the bind result.
+//! empty), the link's parameters (the stored bind; an unbound controller runs no link) and
+//! the explicit bind: only the console's `bind` command, while disarmed, opens a bind window
+//! of [`BIND_WINDOW_US`], and only a bind inside that window is stored. Nothing binds at
+//! boot, and no default link ID exists that every unbound controller would share.
 //!
 //! Watchdog: every hook call checks the link task in, whatever the slot length; the
 //! follower calls its hooks at least every 50 ms in every sync state, and the adapter
 //! checks in while it waits outside the follower (bind window, retry after a radio error).
 
-use telemetry::channels::ChannelFormat;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::FollowerHooks;
-use telemetry::link::{Band, LinkParams, RateMode};
+use telemetry::link::{Band, LinkParams};
 use telemetry::messages::{
     Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, SysIdResult, encode_message,
 };
 
 use super::{FlightApp, Task};
-use crate::pipeline::{ChannelMap, store_link, stored_link};
+use crate::pipeline::{ChannelMap, bind_band, store_link, stored_link};
 use crate::report::{LinkSeen, Reporter, Snapshot, apply_setting, setting_report, sysid_messages};
 use crate::supervisor::FlightMode;
 use crate::sysid::ekf::Identification;
 
-/// How long the follower listens for a bind offer after boot, µs.
-pub const BIND_WINDOW_US: u64 = 3_000_000;
-/// The link used when nobody binds (both ends built with it).
-pub const DEFAULT_BIND_ID: u32 = 0x7A11_0001;
+/// How long the follower listens for a bind offer after the console's `bind` command, µs:
+/// long enough to walk to the handset and start its bind, short enough that a forgotten
+/// window closes by itself.
+pub const BIND_WINDOW_US: u64 = 30_000_000;
 /// The follower declares failsafe after this long without a valid packet, µs.
 pub const FAILSAFE_US: u64 = 500_000;
 /// Telemetry message period, µs.
@@ -42,6 +44,18 @@ pub(super) struct LinkSide {
     was_failsafe: bool,
     /// Identification results (roll, pitch, yaw) still to send.
     sysid: heapless::Deque<SysIdResult, 3>,
+    bind: BindState,
+}
+
+/// Where the explicit bind stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum BindState {
+    /// No bind asked for: a bind result is ignored.
+    Closed,
+    /// The console asked; the link task has not opened the window yet.
+    Requested,
+    /// The link task is listening for an offer.
+    Open,
 }
 
 impl LinkSide {
@@ -58,6 +72,7 @@ impl LinkSide {
             // The follower starts in failsafe (no link yet): that is not a failsafe event.
             was_failsafe: true,
             sysid: heapless::Deque::new(),
+            bind: BindState::Closed,
         }
     }
 
@@ -77,28 +92,60 @@ impl LinkSide {
 }
 
 impl FlightApp {
-    /// The link to run: the stored bind, else the compiled-in default.
-    pub fn link_params(&self) -> LinkParams {
-        stored_link(&self.live).unwrap_or_else(|| {
-            LinkParams::new(
-                DEFAULT_BIND_ID,
-                Band::Mhz433,
-                RateMode::F250,
-                ChannelFormat::Full16,
-                4,
-            )
-        })
+    /// The link to run: the stored bind, or `None` for a controller never bound (it runs
+    /// no link and waits for a `bind` command).
+    pub fn link_params(&self) -> Option<LinkParams> {
+        stored_link(&self.live)
     }
 
-    /// A module bound us (in the boot window, disarmed): the link goes into the settings
-    /// and a save is requested.
-    pub fn on_bound(&mut self, params: &LinkParams) {
+    /// The console's `bind`: refused while armed, else the link task is asked to open a
+    /// bind window. Returns whether it was accepted.
+    pub fn request_bind(&mut self) -> bool {
         if self.flight.armed() {
-            return;
+            return false;
+        }
+        self.link.bind = BindState::Requested;
+        true
+    }
+
+    /// A bind has been asked for and not yet started: the link task stops its follower and
+    /// calls [`FlightApp::take_bind_request`].
+    pub fn bind_requested(&self) -> bool {
+        self.link.bind == BindState::Requested
+    }
+
+    /// The link task starts a bind window if one was asked for (and we are still disarmed):
+    /// the band to listen on and the window length, µs. The task listens at the radio's
+    /// lowest power step (`RadioConfig::reduced_power`).
+    pub fn take_bind_request(&mut self) -> Option<(Band, u64)> {
+        if self.link.bind != BindState::Requested {
+            return None;
+        }
+        if self.flight.armed() {
+            self.link.bind = BindState::Closed;
+            return None;
+        }
+        self.link.bind = BindState::Open;
+        Some((bind_band(&self.live), BIND_WINDOW_US))
+    }
+
+    /// The bind window ended: `offered` is what a module bound us to, if one did. Stored
+    /// (and a save requested) only inside a window the console opened and while disarmed;
+    /// returns whether it was.
+    pub fn on_bind_result(&mut self, offered: Option<&LinkParams>) -> bool {
+        let open = self.link.bind == BindState::Open;
+        self.link.bind = BindState::Closed;
+        let Some(params) = offered else {
+            return false;
+        };
+        if !open || self.flight.armed() {
+            return false;
         }
         if store_link(&mut self.live, params).is_ok() {
             self.request_save();
+            return true;
         }
+        false
     }
 
     /// The link task is waiting outside the follower (bind window, retry): it is alive.

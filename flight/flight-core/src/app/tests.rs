@@ -1,7 +1,9 @@
 use super::*;
 use crate::supervisor::Sticks;
+use telemetry::channels::ChannelFormat;
 use telemetry::channels::FailsafeValues;
 use telemetry::link::core::Follower;
+use telemetry::link::{Band, LinkParams, RateMode};
 
 /// A level frame at rest; a tiny sample-dependent gyro wiggle like real sensor noise
 /// (bit-identical samples are the frozen-data fault).
@@ -25,6 +27,16 @@ fn sticks(throttle: f32, yaw: f32) -> LinkInput {
         arm_switch: None,
         mode_channel: -1.0,
     }
+}
+
+fn some_link() -> LinkParams {
+    LinkParams::new(
+        0x5EC0_0001,
+        Band::Mhz868,
+        RateMode::F500,
+        ChannelFormat::Full16,
+        4,
+    )
 }
 
 fn app() -> FlightApp {
@@ -193,7 +205,7 @@ fn the_watchdog_is_fed_only_when_every_task_checked_in() {
 #[test]
 fn every_link_hook_call_checks_the_link_in() {
     let mut app = app();
-    let mut follower = Follower::new(app.link_params(), FailsafeValues::default(), FAILSAFE_US);
+    let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
     for t in Task::ALL {
         if t != Task::Link {
             app.check_in(t);
@@ -273,4 +285,88 @@ fn a_settings_problem_at_boot_refuses_arming_until_a_save() {
     let (t, _) = fly(&mut app, t, 1500, sticks(0.0, 1.0));
     let _ = fly(&mut app, t, 100, sticks(0.0, 0.0));
     assert!(app.armed(), "arms once the settings are saved");
+}
+
+#[test]
+fn an_unbound_controller_runs_no_link_and_nothing_binds_it_without_the_bind_command() {
+    let mut app = app();
+    assert_eq!(app.link_params(), None, "no shared default link");
+    assert_eq!(app.take_bind_request(), None, "no bind window at boot");
+    // A bind offer heard without a window opened by the owner (the old 3 s boot window)
+    // is not stored.
+    assert!(!app.on_bind_result(Some(&some_link())));
+    assert_eq!(app.link_params(), None);
+    assert_eq!(app.take_save(), None);
+}
+
+#[test]
+fn the_bind_command_opens_one_window_and_only_its_bind_is_stored() {
+    let mut app = app();
+    let mut out = heapless::String::<256>::new();
+    let _ = app.on_console_line("bind", &mut out);
+    assert!(out.contains("bind window open for 30 s"), "{out}");
+    assert!(app.bind_requested());
+    assert_eq!(
+        app.take_bind_request(),
+        Some((Band::Mhz433, BIND_WINDOW_US))
+    );
+    assert!(!app.bind_requested());
+    assert_eq!(app.take_bind_request(), None, "one window per command");
+    assert!(app.on_bind_result(Some(&some_link())));
+    assert_eq!(app.link_params(), Some(some_link()));
+    assert!(app.take_save().is_some(), "the bind is saved");
+    // The window is closed: a second offer (a spoofer's) does not rebind.
+    let other = LinkParams::new(
+        0xBAD0_0BAD,
+        Band::Mhz433,
+        RateMode::L50,
+        ChannelFormat::Compact8,
+        2,
+    );
+    assert!(!app.on_bind_result(Some(&other)));
+    assert_eq!(app.link_params(), Some(some_link()), "stays bound");
+    // A window that times out closes too.
+    let _ = app.on_console_line("bind", &mut out);
+    assert!(app.take_bind_request().is_some());
+    assert!(!app.on_bind_result(None));
+    assert!(!app.on_bind_result(Some(&other)));
+    assert_eq!(app.link_params(), Some(some_link()));
+}
+
+#[test]
+fn bind_is_refused_while_armed() {
+    let mut app = app();
+    armed_in_the_air(&mut app);
+    let mut out = heapless::String::<256>::new();
+    let _ = app.on_console_line("bind", &mut out);
+    assert!(out.contains("refused"), "{out}");
+    assert!(!app.bind_requested());
+    assert_eq!(app.take_bind_request(), None);
+    assert!(!app.on_bind_result(Some(&some_link())));
+    assert_eq!(app.link_params(), None);
+}
+
+#[test]
+fn a_setting_change_over_the_link_is_refused_while_armed() {
+    use crate::report::f32_value;
+    use crate::settings::PARAMS;
+    use telemetry::messages::{Message, SettingChange, encode_message};
+    let mut app = app();
+    let Some(id) = PARAMS.iter().position(|p| p.name == "failsafe.descent_mps") else {
+        panic!("parameter exists");
+    };
+    let before = app.settings().f32("failsafe.descent_mps");
+    let change = SettingChange {
+        id: id as u16,
+        value: f32_value(before + 0.5),
+    };
+    let mut bytes = [0u8; 64];
+    let n = encode_message(&Message::SettingChange(change), &mut bytes).unwrap();
+    let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
+    armed_in_the_air(&mut app);
+    follower.uplink_stream.on_data(0, &bytes[..n]);
+    app.on_link_step(100_000, &mut follower);
+    assert!(app.armed());
+    assert_eq!(app.settings().f32("failsafe.descent_mps"), before);
+    assert_eq!(app.take_design_request(), None);
 }

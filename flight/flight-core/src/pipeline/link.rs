@@ -16,6 +16,14 @@ const RATES: [RateMode; 4] = [
 ];
 const FORMATS: [ChannelFormat; 2] = [ChannelFormat::Full16, ChannelFormat::Compact8];
 
+/// The band to listen for a bind offer on: the stored `link.band` (433 MHz if out of range).
+pub fn bind_band(s: &Settings) -> Band {
+    BANDS
+        .get(s.u32("link.band") as usize)
+        .copied()
+        .unwrap_or(Band::Mhz433)
+}
+
 /// The stored link, or `None` if this flight controller was never bound.
 pub fn stored_link(s: &Settings) -> Option<LinkParams> {
     let bind_id = s.u32("link.bind_id");

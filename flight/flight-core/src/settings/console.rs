@@ -40,6 +40,8 @@ pub enum Command<'a> {
     Defaults,
     /// Live status.
     Status,
+    /// Open the bind window (the deliberate act that binds this controller to a module).
+    Bind,
     /// An empty line.
     Nothing,
 }
@@ -91,7 +93,8 @@ pub fn parse_line(line: &str) -> Result<Command<'_>, ConsoleError> {
         ("save", None, None) => Ok(Command::Save),
         ("defaults", None, None) => Ok(Command::Defaults),
         ("status", None, None) => Ok(Command::Status),
-        ("help" | "list" | "get" | "set" | "save" | "defaults" | "status", _, _) => {
+        ("bind", None, None) => Ok(Command::Bind),
+        ("help" | "list" | "get" | "set" | "save" | "defaults" | "status" | "bind", _, _) => {
             Err(ConsoleError::WrongArguments)
         }
         _ => Err(ConsoleError::UnknownCommand),

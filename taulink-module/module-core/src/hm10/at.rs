@@ -6,7 +6,9 @@
 //! `OK+CONN`, and must not get an `AT`: while connected, a lone `AT` disconnects it), then
 //! probes at 115 200; if that is silent it probes at the factory 9600 and sets
 //! `AT+BAUD4` there. In both cases it sets the name and `AT+NOTI1` (connection
-//! notifications for the relay) and sends `AT+RESET`, after which the settings apply; a
+//! notifications for the relay), with a PIN ([`Configurator::with_pin`]) also `AT+PASS` and
+//! `AT+TYPE3` (pairing needs the PIN, and the phone is bonded: the factory setting lets any
+//! phone in range connect and talk to the module), and sends `AT+RESET`, after which the settings apply; a
 //! last `AT` at 115 200 Bd checks that they did.
 //! An `OK+CONN` at any point aborts the script: the phone wins.
 
@@ -27,6 +29,33 @@ const TRIES: u8 = 2;
 const LISTEN_MS: u32 = 500;
 /// `AT+RESET` reboots the module; it needs ≈ 0.5 s before it takes commands again.
 const REBOOT_MS: u32 = 1_000;
+
+/// A 6-digit HM-10 pairing PIN (000000–999999).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Pin(u32);
+
+impl Pin {
+    /// The PIN `value`, or `None` above 999 999.
+    pub const fn new(value: u32) -> Option<Self> {
+        if value <= 999_999 {
+            Some(Self(value))
+        } else {
+            None
+        }
+    }
+
+    /// The six ASCII digits `AT+PASS` takes, leading zeros included.
+    fn digits(self) -> [u8; 6] {
+        let mut out = [b'0'; 6];
+        let mut v = self.0;
+        for d in out.iter_mut().rev() {
+            *d = b'0' + (v % 10) as u8;
+            v /= 10;
+        }
+        out
+    }
+}
 
 /// How the configuration ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -65,6 +94,10 @@ pub enum Stage {
     Name,
     /// `AT+NOTI1`.
     Notifications,
+    /// `AT+PASS` with the PIN (only with a PIN).
+    Pin,
+    /// `AT+TYPE3`: PIN authentication and bonding (only with a PIN).
+    Bonding,
     /// `AT+BAUD4` (only on the factory-rate path).
     Baud,
     /// `AT+RESET`.
@@ -96,6 +129,7 @@ pub enum Action<'a> {
 #[derive(Debug)]
 pub struct Configurator {
     name: Vec<u8, MAX_NAME_LEN>,
+    pin: Option<Pin>,
     stage: Stage,
     /// The factory-rate path (needs `AT+BAUD4`).
     factory: bool,
@@ -127,6 +161,7 @@ impl Configurator {
         }
         Self {
             name: stored,
+            pin: None,
             stage: Stage::Listen,
             factory: false,
             baud: RELAY_BAUD,
@@ -138,6 +173,13 @@ impl Configurator {
             command: Vec::new(),
             outcome: None,
         }
+    }
+
+    /// Also sets the pairing PIN and requires PIN authentication with bonding
+    /// (`AT+PASS`, `AT+TYPE3`), so only the owner's phone can connect.
+    pub fn with_pin(mut self, pin: Pin) -> Self {
+        self.pin = Some(pin);
+        self
     }
 
     /// The UART rate the script currently expects.
@@ -201,7 +243,9 @@ impl Configurator {
         let expected: &[u8] = match self.stage {
             Stage::Listen | Stage::Reboot => return false,
             Stage::ProbeFast | Stage::ProbeFactory | Stage::Verify => b"OK",
-            Stage::Name | Stage::Notifications | Stage::Baud => b"OK+Set",
+            Stage::Name | Stage::Notifications | Stage::Pin | Stage::Bonding | Stage::Baud => {
+                b"OK+Set"
+            }
             Stage::Reset => b"OK+RESET",
         };
         contains(&self.reply, expected)
@@ -212,8 +256,10 @@ impl Configurator {
             Stage::Listen => Stage::ProbeFast,
             Stage::ProbeFast | Stage::ProbeFactory => Stage::Name,
             Stage::Name => Stage::Notifications,
-            Stage::Notifications if self.factory => Stage::Baud,
-            Stage::Notifications | Stage::Baud => Stage::Reset,
+            Stage::Notifications if self.pin.is_some() => Stage::Pin,
+            Stage::Pin => Stage::Bonding,
+            Stage::Notifications | Stage::Bonding if self.factory => Stage::Baud,
+            Stage::Notifications | Stage::Bonding | Stage::Baud => Stage::Reset,
             Stage::Reset => {
                 self.stage = Stage::Reboot;
                 self.deadline_ms = now_ms.wrapping_add(REBOOT_MS);
@@ -237,10 +283,13 @@ impl Configurator {
         self.tries_left = TRIES;
         self.send_pending = true;
         self.command.clear();
+        let pin = self.pin.map(Pin::digits).unwrap_or([b'0'; 6]);
         let parts: [&[u8]; 2] = match stage {
             Stage::ProbeFast | Stage::ProbeFactory | Stage::Verify => [b"AT", b""],
             Stage::Name => [b"AT+NAME", &self.name],
             Stage::Notifications => [b"AT+NOTI1", b""],
+            Stage::Pin => [b"AT+PASS", &pin],
+            Stage::Bonding => [b"AT+TYPE3", b""],
             Stage::Baud => [b"AT+BAUD4", b""],
             Stage::Reset => [b"AT+RESET", b""],
             Stage::Listen | Stage::Reboot => [b"", b""],

@@ -5,6 +5,8 @@ struct FakeHm10 {
     baud: u32,
     name: Vec<u8, 32>,
     notify: bool,
+    pin: Option<std::vec::Vec<u8>>,
+    auth_type: u8,
     /// Baud rate set by AT+BAUD4, applied at reset.
     next_baud: u32,
     answers_name: bool,
@@ -19,6 +21,8 @@ impl FakeHm10 {
             baud,
             name: Vec::new(),
             notify: false,
+            pin: None,
+            auth_type: 0,
             next_baud: baud,
             answers_name: true,
             reply: std::vec::Vec::new(),
@@ -43,6 +47,14 @@ impl FakeHm10 {
             b"AT+RESET" => {
                 self.baud = self.next_baud;
                 b"OK+RESET".to_vec()
+            }
+            b"AT+TYPE3" => {
+                self.auth_type = 3;
+                b"OK+Set:3".to_vec()
+            }
+            _ if bytes.starts_with(b"AT+PASS") && bytes.len() == 13 => {
+                self.pin = Some(bytes[7..].to_vec());
+                [b"OK+Set:".as_slice(), &bytes[7..]].concat()
             }
             _ if bytes.starts_with(b"AT+NAME") && self.answers_name => {
                 self.name = Vec::from_slice(&bytes[7..]).unwrap();
@@ -275,4 +287,36 @@ proptest::proptest! {
             proptest::prop_assert!(matches!(outcome, Outcome::PhoneConnected { .. }), "{:?}", outcome);
         }
     }
+}
+
+#[test]
+fn a_pin_sets_pass_and_bonding_on_both_paths() {
+    assert_eq!(Pin::new(1_000_000), None);
+    for baud in [FACTORY_BAUD, RELAY_BAUD] {
+        let mut module = FakeHm10::new(baud);
+        let mut script = Configurator::new("TauLink", 0).with_pin(Pin::new(4_207).unwrap());
+        let (outcome, sent) = run(&mut module, &mut script);
+        assert_eq!(
+            outcome,
+            Outcome::Configured { baud: RELAY_BAUD },
+            "{sent:?}"
+        );
+        assert_eq!(module.pin.as_deref(), Some(b"004207".as_slice()));
+        assert_eq!(module.auth_type, 3, "PIN authentication with bonding");
+        assert!(module.notify);
+        assert_eq!(module.baud, RELAY_BAUD);
+    }
+}
+
+#[test]
+fn without_a_pin_the_factory_pairing_is_left_alone() {
+    let mut module = FakeHm10::new(RELAY_BAUD);
+    let mut script = Configurator::new("TauLink", 0);
+    let (outcome, sent) = run(&mut module, &mut script);
+    assert_eq!(outcome, Outcome::Configured { baud: RELAY_BAUD });
+    assert!(
+        sent.iter()
+            .all(|(_, c)| !c.starts_with(b"AT+PASS") && !c.starts_with(b"AT+TYPE"))
+    );
+    assert_eq!(module.auth_type, 0);
 }

@@ -5,8 +5,10 @@
 
 use crate::channels::{CHANNEL_CENTER, Channels, FailsafeValues};
 use crate::frame::{
-    Downlink, Frame, LinkReport, Received, StreamHeader, decode, downlink_overhead, encode,
+    Downlink, Frame, LinkReport, Received, StreamHeader, decode, downlink_overhead, encode, open,
+    seal,
 };
+use crate::link::auth::LinkKey;
 use crate::link::bind::LinkParams;
 use crate::link::hopping::{HOP_CHANNELS, HopSequence};
 use crate::link::quality::{Counters, LqWindow, RssiFilter};
@@ -15,7 +17,7 @@ use crate::link::rate::TX_LEAD_US;
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
-use super::{MAX_LISTEN_US, STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
+use super::{MAX_LISTEN_US, STREAM_RX_BYTES, STREAM_TX_BYTES, Step, frame_counter, tag_extra};
 
 /// Default failsafe delay.
 pub const DEFAULT_FAILSAFE_US: u64 = 250_000;
@@ -75,6 +77,7 @@ pub struct Follower {
     remote: Option<LinkReport>,
     counters: Counters,
     resyncs: u32,
+    key: Option<LinkKey>,
 }
 
 impl Follower {
@@ -106,7 +109,19 @@ impl Follower {
             remote: None,
             counters: Counters::default(),
             resyncs: 0,
+            key: None,
         }
+    }
+
+    /// Authenticates the link with `key` (spec §12): only uplinks whose tag verifies are
+    /// accepted — a forger who knows the header and hop sequence but not the key moves
+    /// neither the channels, nor the failsafe values, nor the sync state — and downlinks
+    /// are sealed. Identity and hop sequence become the key's one-way derivations.
+    pub fn with_key(mut self, key: LinkKey) -> Self {
+        self.params.bind_id = key.bind_id();
+        self.hops = HopSequence::new(key.hop_seed());
+        self.key = Some(key);
+        self
     }
 
     /// Radio configuration of this link.
@@ -289,7 +304,8 @@ impl Follower {
             .params
             .rate
             .max_frame_bytes()
-            .saturating_sub(downlink_overhead(true));
+            .saturating_sub(downlink_overhead(true))
+            .saturating_sub(tag_extra(self.key.is_some()));
         let mut data = [0u8; 64];
         let data = data.get_mut(..room)?;
         let (seq, n) = self.downlink_stream.fill(data);
@@ -302,7 +318,10 @@ impl Follower {
             report: Some(report),
             data: data.get(..n)?,
         };
-        encode(&Frame::Downlink(down), self.params.bind_id, buf).ok()
+        match &self.key {
+            Some(key) => seal(&Frame::Downlink(down), key, frame_counter(slot), buf).ok(),
+            None => encode(&Frame::Downlink(down), self.params.bind_id, buf).ok(),
+        }
     }
 
     /// The downlink planned by [`Follower::plan`] has been sent.
@@ -322,13 +341,15 @@ impl Follower {
     pub fn on_received(&mut self, outcome: RxOutcome, packet: &[u8], now_us: u64) {
         if let RxOutcome::Packet { len, rssi_dbm } = outcome {
             let bytes = packet.get(..len).unwrap_or(&[]);
-            if let Received::Accepted(Frame::Uplink(up)) = decode(bytes, self.params.bind_id) {
+            if let Received::Accepted(Frame::Uplink(up)) = self.decode_uplink(bytes) {
                 // Re-time the grid: the master started this slot `packet_end_offset` ago.
                 let slot_start_us =
                     now_us.saturating_sub(u64::from(self.schedule.packet_end_offset_us(len)));
                 let expected = match self.sync {
                     Sync::Acquiring { index, .. } => (up.slot % HOP_CHANNELS as u8) == index,
-                    Sync::Tracking { .. } => true,
+                    // Spec §5.3 check 4: while tracking only the slot being listened for is
+                    // accepted; a replayed frame of another slot would shift the hop phase.
+                    Sync::Tracking { slot, .. } => up.slot == slot,
                 };
                 if expected && self.schedule.kind(u32::from(up.slot)) == SlotKind::Uplink {
                     self.sync = Sync::Tracking {
@@ -346,6 +367,20 @@ impl Follower {
             self.counters.rejected += 1;
         }
         self.check_failsafe(now_us);
+    }
+
+    /// Decodes an uplink: with a key, its tag is checked under the counter of the slot
+    /// being listened for (while acquiring, of the slot it names, whose hop index is then
+    /// checked against the dwell channel).
+    fn decode_uplink<'a>(&self, bytes: &'a [u8]) -> Received<'a> {
+        let Some(key) = &self.key else {
+            return decode(bytes, self.params.bind_id);
+        };
+        let slot = match self.sync {
+            Sync::Tracking { slot, .. } => slot,
+            Sync::Acquiring { .. } => bytes.get(2).copied().unwrap_or(0),
+        };
+        open(bytes, key, frame_counter(slot))
     }
 
     fn accept(&mut self, up: &crate::frame::Uplink<'_>, rssi_dbm: i16, now_us: u64) {

@@ -4,8 +4,9 @@
 
 use crate::channels::{CHANNEL_CENTER, Channels, pack};
 use crate::frame::{
-    Frame, LinkReport, Received, StreamHeader, Uplink, decode, encode, uplink_overhead,
+    Frame, LinkReport, Received, StreamHeader, Uplink, decode, encode, open, seal, uplink_overhead,
 };
+use crate::link::auth::LinkKey;
 use crate::link::bind::LinkParams;
 use crate::link::hopping::HopSequence;
 use crate::link::quality::{Counters, LqWindow, RssiFilter};
@@ -14,7 +15,7 @@ use crate::link::rate::TX_LEAD_US;
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
-use super::{STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
+use super::{STREAM_RX_BYTES, STREAM_TX_BYTES, Step, frame_counter, tag_extra};
 
 /// Uplinks that carry a save-failsafe request, so one lost packet does not lose it (storing
 /// twice is harmless: the follower keeps the channels of the last flagged packet).
@@ -43,6 +44,7 @@ pub struct Master {
     remote: Option<LinkReport>,
     counters: Counters,
     last_downlink_us: Option<u64>,
+    key: Option<LinkKey>,
 }
 
 impl Master {
@@ -68,7 +70,18 @@ impl Master {
             remote: None,
             counters: Counters::default(),
             last_downlink_us: None,
+            key: None,
         }
+    }
+
+    /// Authenticates the link with `key` (spec §12): every frame is sealed with a tag and
+    /// only tagged downlinks are accepted; the link identity (header) and the hop sequence
+    /// become the key's one-way derivations, replacing the bind ID's.
+    pub fn with_key(mut self, key: LinkKey) -> Self {
+        self.params.bind_id = key.bind_id();
+        self.hops = HopSequence::new(key.hop_seed());
+        self.key = Some(key);
+        self
     }
 
     /// Radio configuration of this link.
@@ -154,7 +167,8 @@ impl Master {
             .params
             .rate
             .max_frame_bytes()
-            .saturating_sub(uplink_overhead(format, report.is_some()));
+            .saturating_sub(uplink_overhead(format, report.is_some()))
+            .saturating_sub(tag_extra(self.key.is_some()));
         let mut data = [0u8; 64];
         let data = data.get_mut(..room)?;
         let (seq, n) = self.uplink_stream.fill(data);
@@ -171,8 +185,11 @@ impl Master {
             packed_channels: packed,
             data: data.get(..n)?,
         };
-        let len = encode(&Frame::Uplink(up), self.params.bind_id, buf).ok()?;
-        Some(len)
+        let len = match &self.key {
+            Some(key) => seal(&Frame::Uplink(up), key, frame_counter(up.slot), buf),
+            None => encode(&Frame::Uplink(up), self.params.bind_id, buf),
+        };
+        len.ok()
     }
 
     /// The uplink of the current slot has been sent.
@@ -189,7 +206,12 @@ impl Master {
     pub fn on_received(&mut self, outcome: RxOutcome, packet: &[u8], now_us: u64) -> bool {
         match outcome {
             RxOutcome::Packet { len, rssi_dbm } => {
-                match decode(packet.get(..len).unwrap_or(&[]), self.params.bind_id) {
+                let bytes = packet.get(..len).unwrap_or(&[]);
+                let received = match &self.key {
+                    Some(key) => open(bytes, key, frame_counter(self.slot as u8)),
+                    None => decode(bytes, self.params.bind_id),
+                };
+                match received {
                     Received::Accepted(Frame::Downlink(down)) if down.slot == self.slot as u8 => {
                         self.heard = true;
                         self.counters.received += 1;

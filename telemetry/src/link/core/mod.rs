@@ -31,6 +31,22 @@ pub const RADIO_RETRY_US: u64 = 10_000;
 /// (for a chip that reset without any operation failing).
 pub const HEALTH_CHECK_PERIOD_US: u64 = 1_000_000;
 
+/// The counter an authenticated frame of `slot` is tagged under. Version 1 of the scheme:
+/// the on-air slot only, so a frame recorded 256 slots earlier still verifies (the epoch
+/// and wrap extension of spec §12.2 is not in yet); a forger without the key never does.
+pub(crate) fn frame_counter(slot: u8) -> u64 {
+    u64::from(slot)
+}
+
+/// Extra frame bytes a tag takes over the link CRC.
+pub(crate) const fn tag_extra(keyed: bool) -> usize {
+    if keyed {
+        crate::link::auth::TAG_BYTES - crate::frame::CRC_BYTES
+    } else {
+        0
+    }
+}
+
 /// What a link end does next, in absolute times of its clock.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -321,3 +321,157 @@ fn input_lost_uplinks_put_the_follower_in_failsafe_at_once_and_keep_it_tracking(
     assert!(!follower.in_failsafe());
     assert_eq!(follower.output(), &channels);
 }
+
+#[test]
+fn tracking_follower_rejects_a_replayed_uplink_of_another_slot() {
+    let (mut master, mut follower) = pair();
+    let channels: crate::channels::Channels = core::array::from_fn(|i| 300 + i as u16);
+    master.set_channels(&channels);
+    let mut buf = [0u8; 64];
+    let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
+        panic!()
+    };
+    let mut t = 0;
+    let (first, end) = next_uplink_on(&mut master, &mut t, channel);
+    let packet = |frame: &[u8]| RxOutcome::Packet {
+        len: frame.len(),
+        rssi_dbm: -70,
+    };
+    follower.on_received(packet(&first), &first, end);
+    assert_eq!(follower.sync_state(), SyncState::Tracking);
+    let tracked = follower.tracked_slot();
+    let rejected = follower.counters().rejected;
+    let updates = follower.updates();
+
+    // An attacker replays the first (recorded) uplink into the next slot's window: its
+    // slot number is not the one expected, so it must neither update the channels nor
+    // shift the follower's hop phase.
+    let Step::Listen { .. } = follower.plan(end, &mut buf) else {
+        panic!()
+    };
+    follower.on_received(packet(&first), &first, end + SLOT_US);
+    assert_eq!(follower.counters().rejected, rejected + 1);
+    assert_eq!(follower.updates(), updates);
+    assert_eq!(follower.tracked_slot(), tracked, "hop phase unchanged");
+}
+
+fn test_key(seed: u8) -> crate::link::LinkKey {
+    crate::link::LinkKey::from_bytes(core::array::from_fn(|i| seed ^ (i as u8 * 17)))
+}
+
+fn keyed_pair() -> (Master, Follower) {
+    let (master, follower) = pair();
+    (master.with_key(test_key(1)), follower.with_key(test_key(1)))
+}
+
+#[test]
+fn keyed_ends_acquire_track_and_exchange_telemetry_with_sealed_frames() {
+    let (mut master, mut follower) = keyed_pair();
+    assert_eq!(master.radio_config(), follower.radio_config());
+    assert_eq!(master.params().bind_id, test_key(1).bind_id());
+    let channels: crate::channels::Channels = core::array::from_fn(|i| 400 + 50 * i as u16);
+    master.set_channels(&channels);
+    let mut buf = [0u8; 64];
+    let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
+        panic!()
+    };
+    let mut t = 0;
+    let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
+    assert_eq!(frame[0], crate::frame::SEALED_VERSION);
+    assert!(frame.len() <= RateMode::F250.max_frame_bytes());
+    let packet = |len| RxOutcome::Packet { len, rssi_dbm: -70 };
+    follower.on_received(packet(frame.len()), &frame, end);
+    assert_eq!(follower.sync_state(), SyncState::Tracking);
+    assert_eq!(follower.output(), &channels);
+    follower.downlink_stream.write(b"sealed");
+    for _ in 0..8 {
+        let (mut fbuf, mut mbuf) = ([0u8; 64], [0u8; 64]);
+        let f = follower.plan(t, &mut fbuf);
+        match (master.plan(t, &mut mbuf), f) {
+            (Step::Transmit { len, .. }, Step::Listen { .. }) => {
+                master.on_sent();
+                let end = t + u64::from(master.schedule().packet_end_offset_us(len));
+                follower.on_received(packet(len), &mbuf, end);
+            }
+            (Step::Listen { .. }, Step::Transmit { len, .. }) => {
+                follower.on_sent();
+                assert_eq!(fbuf[0], crate::frame::SEALED_VERSION);
+                let end = t + u64::from(master.schedule().packet_end_offset_us(len));
+                assert!(master.on_received(packet(len), &fbuf, end));
+                master.finish_listen();
+                let mut got = [0u8; 16];
+                let n = master.downlink_stream.read(&mut got);
+                assert_eq!(&got[..n], b"sealed");
+                return;
+            }
+            other => panic!("{other:?}"),
+        }
+        t += SLOT_US;
+    }
+    panic!("no downlink slot");
+}
+
+/// The review's forgery: an attacker who knows the link's identity and hop sequence (both
+/// public, heard on air) but not the key sends one uplink with full throttle and the
+/// save-failsafe flag on the channel an acquiring follower dwells on. Without
+/// authentication that one frame moved the follower to tracking, flew throttle 1811 and
+/// overwrote its stored failsafe values.
+#[test]
+fn a_forged_uplink_moves_nothing_on_an_acquiring_follower() {
+    let (_, follower) = pair();
+    let mut follower = follower.with_key(test_key(1));
+    let mut buf = [0u8; 64];
+    let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
+        panic!()
+    };
+    let hops = crate::link::HopSequence::new(test_key(1).hop_seed());
+    assert_eq!(
+        hops.channel(0),
+        channel,
+        "the attacker knows the dwell channel"
+    );
+    let bind_id = follower.params().bind_id;
+    let mut evil: crate::channels::Channels = [992; 16];
+    evil[2] = 1811;
+    let mut packed = [0u8; 22];
+    crate::channels::pack(&evil, ChannelFormat::Full16, &mut packed);
+    let up = crate::frame::Uplink {
+        slot: 0,
+        stream: crate::frame::StreamHeader::default(),
+        report: None,
+        save_failsafe: true,
+        input_lost: false,
+        format: ChannelFormat::Full16,
+        packed_channels: &packed,
+        data: &[],
+    };
+    let before = *follower.failsafe_values();
+    let frame = crate::frame::Frame::Uplink(up);
+    let mut forged = Vec::new();
+    // Keyed with the (public) bind ID, as version 1 frames are.
+    let mut b = [0u8; 64];
+    let n = crate::frame::encode(&frame, bind_id, &mut b).unwrap();
+    forged.push(b[..n].to_vec());
+    // Sealed, with guessed keys.
+    for guess in [0u8, 2, 0xFF] {
+        let n = crate::frame::seal(&frame, &test_key(guess), 0, &mut b).unwrap();
+        forged.push(b[..n].to_vec());
+    }
+    for (i, f) in forged.iter().enumerate() {
+        let t = 1_000 * (i as u64 + 1);
+        follower.on_received(
+            RxOutcome::Packet {
+                len: f.len(),
+                rssi_dbm: -40,
+            },
+            f,
+            t,
+        );
+        assert_eq!(follower.sync_state(), SyncState::Acquiring, "forgery {i}");
+        assert!(follower.in_failsafe(), "forgery {i}");
+        assert_ne!(follower.output()[2], 1811, "forgery {i}");
+        assert_eq!(follower.failsafe_values(), &before, "forgery {i}");
+    }
+    assert_eq!(follower.counters().rejected, forged.len() as u32);
+    assert_eq!(follower.updates(), 0);
+}

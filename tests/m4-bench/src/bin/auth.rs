@@ -1,0 +1,38 @@
+//! Instructions to authenticate one air frame on the Cortex-M4 (spec §12): the SipHash-2-4
+//! tag of a 16-channel F500 uplink (27 bytes before the tag, plus the 8-byte frame counter)
+//! created, then checked; the tag of F500's largest downlink (28 bytes before the tag); and,
+//! for comparison, the keyed link CRC-16 of the same uplink that the tag replaces.
+//! m4count regions: 1 = uplink tag, 3 = uplink check, 5 = downlink tag, 7 = link CRC.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(target_os = "none")]
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    use core::hint::black_box;
+    use m4_bench::{exit, m4count_marker};
+    use telemetry::checksum::keyed_crc16;
+    use telemetry::link::LinkKey;
+
+    let key = LinkKey::from_bytes(black_box(core::array::from_fn(|i| (i * 13) as u8)));
+    let uplink: [u8; 27] = black_box(core::array::from_fn(|i| (i * 5 + 1) as u8));
+    let downlink: [u8; 28] = black_box(core::array::from_fn(|i| (i * 3 + 2) as u8));
+    let counter: u64 = black_box(0x0001_0203_0405);
+
+    m4count_marker();
+    let tag = black_box(key.tag(counter, &uplink));
+    m4count_marker();
+    m4count_marker();
+    let ok = black_box(key.verify(counter, &uplink, tag));
+    m4count_marker();
+    m4count_marker();
+    let down = black_box(key.tag(counter + 3, &downlink));
+    m4count_marker();
+    m4count_marker();
+    let crc = black_box(keyed_crc16(0x1234_5678, &uplink));
+    m4count_marker();
+    black_box((ok, down, crc));
+    exit()
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {}
