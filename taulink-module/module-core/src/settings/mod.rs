@@ -12,8 +12,10 @@
 //! checked on decode; an unknown value is an error, never a guess.
 
 pub mod store;
+pub mod text;
 
 pub use store::{SettingsStore, StoreError};
+pub use text::TextError;
 
 use crate::ppm::FailsafeOutput;
 
