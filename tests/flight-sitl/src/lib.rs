@@ -9,6 +9,7 @@
 pub mod console;
 pub mod metrics;
 mod module_end;
+pub mod runner;
 pub mod scenario;
 pub mod world;
 
