@@ -24,7 +24,7 @@ pub const BOOST_END_S: f64 = 3.5;
 /// Take-off boost throttle (climbs ≈ 3.5 m/s after 1 s on the 250-class quad).
 pub const BOOST_THROTTLE: f32 = 0.17;
 /// Cruise throttle of the climb (a touch above hover: keeps climbing, slowly bleeding speed).
-pub const CRUISE_THROTTLE: f32 = 0.11;
+pub const CRUISE_THROTTLE: f32 = 0.12;
 /// Time between the pilot's glances at the frame while holding the altitude, s.
 pub const GLANCE_S: f64 = 0.5;
 /// Throttle per metre of altitude error (a 5 m error asks 0.02 more throttle).
