@@ -48,6 +48,12 @@ fn main() -> ExitCode {
         println!("{}", outcome.report.to_json());
     } else {
         print!("{}", outcome.report.to_text());
+        eprintln!(
+            "speed: {:.0} × real time ({:.1} s virtual in {:.3} s, the final run alone)",
+            outcome.plan.duration_s / outcome.wall_s.max(1e-9),
+            outcome.plan.duration_s,
+            outcome.wall_s
+        );
     }
     if let Some(path) = cli.plot.path(kind.name())
         && let Err(e) = runner::plot::figure(&outcome).save_as(&path, cli.plot.plot_format)

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 
 use telemetry::link::RateMode;
 
-use super::report::{GROUND_M, rate_name};
+use super::report::{GROUND_M, fixed, rate_name};
 use super::{Kind, Options, Outcome, Report, RunError, plan, reach_times, run_plan};
 
 /// The link-cut altitudes of the acceptance, m.
@@ -132,7 +132,7 @@ pub fn check(r: &Report) -> Vec<String> {
 }
 
 fn num(v: Option<f64>, unit: &str) -> String {
-    v.map_or("–".into(), |x| format!("{x:.2}{unit}"))
+    v.map_or("–".into(), |x| format!("{}{unit}", fixed(x, 2)))
 }
 
 /// The scenario-specific figure of a row.

@@ -207,6 +207,8 @@ pub struct Outcome {
     pub sitl: Sitl,
     /// The figures.
     pub report: Report,
+    /// Wall-clock time of the final run alone (not the probe or the glances), s.
+    pub wall_s: f64,
 }
 
 /// Seconds the pilot waits after levelling off before a fault (settled hover).
@@ -442,7 +444,14 @@ pub fn with_glances(opts: &Options, mut plan: Plan) -> Plan {
 
 /// Runs a planned scenario and measures it.
 pub fn run_plan(opts: &Options, plan: Plan) -> Outcome {
+    let started = std::time::Instant::now();
     let sitl = crate::run(scenario(opts, plan.clone()));
+    let wall_s = started.elapsed().as_secs_f64();
     let report = report::extract(&sitl, &plan);
-    Outcome { plan, sitl, report }
+    Outcome {
+        plan,
+        sitl,
+        report,
+        wall_s,
+    }
 }

@@ -205,10 +205,19 @@ pub fn rate_name(rate: RateMode) -> &'static str {
     }
 }
 
+/// `x` with `decimals`, never "-0.00" (the ground seen from a hair below).
+pub fn fixed(x: f64, decimals: usize) -> String {
+    let s = format!("{x:.decimals$}");
+    if s.starts_with('-') && s.trim_start_matches(['-', '0', '.']).is_empty() {
+        s.trim_start_matches('-').to_owned()
+    } else {
+        s
+    }
+}
+
 fn num(v: Option<f64>, decimals: usize) -> String {
     match v {
-        // + 0.0 turns −0.0 (the ground seen from below) into 0.
-        Some(x) if x.is_finite() => format!("{:.decimals$}", x + 0.0),
+        Some(x) if x.is_finite() => fixed(x, decimals),
         _ => "null".into(),
     }
 }

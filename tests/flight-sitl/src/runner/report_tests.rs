@@ -236,3 +236,12 @@ fn boots_resets_battery_and_recovery_are_reported() {
             .any(|l| l == "watchdog_resets: {flight:2,module:1}")
     );
 }
+
+#[test]
+fn numbers_never_read_minus_zero() {
+    assert_eq!(fixed(-1e-9, 2), "0.00");
+    assert_eq!(fixed(-0.0, 3), "0.000");
+    assert_eq!(fixed(-0.004, 2), "0.00");
+    assert_eq!(fixed(-0.006, 2), "-0.01");
+    assert_eq!(fixed(12.345, 1), "12.3");
+}
