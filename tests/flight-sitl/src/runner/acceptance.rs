@@ -68,6 +68,10 @@ pub fn check(r: &Report) -> Vec<String> {
                 "disarmed on the ground",
             );
             need(
+                r.disarm_reason == Some("failsafe-landed"),
+                "disarmed by the touchdown detector",
+            );
+            need(
                 r.touchdown_speed_mps
                     .is_some_and(|v| v <= MAX_TOUCHDOWN_MPS),
                 "touchdown ≤ 1.5 m/s",

@@ -54,8 +54,8 @@ pub struct Cli {
     /// applied in order, each checked with the whole set).
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = name_value)]
     pub set: Vec<(String, String)>,
-    /// A module setting NAME=VALUE (role, rate, input, output, band, tx_power, failsafe,
-    /// bind_id, input_timeout_ms; repeatable).
+    /// A module setting NAME=VALUE (role, input, output, band, tx_power, failsafe, bind_id,
+    /// input_timeout_ms; repeatable). Its air rate follows --rate.
     #[arg(long = "module-set", value_name = "NAME=VALUE", value_parser = name_value)]
     pub module_set: Vec<(String, String)>,
     /// Time of the scenario's fault, seconds of virtual time (2.5 ≤ S ≤ 3600; default: once
@@ -196,7 +196,14 @@ impl Cli {
                 .set_text(name, value)
                 .map_err(|e| format!("--set {name}={value}: {e}"))?;
         }
+        // The module's air rate follows --rate (F500 has no module setting: kept as is).
+        if let Some(r) = module_core::air::settings_rate(o.rate, o.module_settings.rate) {
+            o.module_settings.rate = r;
+        }
         for (name, value) in &self.module_set {
+            if name == "rate" {
+                return Err("--module-set rate: the link's rate mode is --rate".into());
+            }
             o.module_settings.set_text(name, value).map_err(|e| {
                 format!(
                     "--module-set {name}={value}: {e} (names: {})",
@@ -237,6 +244,10 @@ mod tests {
         assert_eq!(o.duration_s, Some(90.0));
         assert_eq!(o.settings.f32("failsafe.descent_mps"), 1.5);
         assert_eq!(o.module_settings.input_timeout_ms, 750);
+        assert_eq!(
+            o.module_settings.rate,
+            module_core::settings::RateMode::Bps19200
+        );
         assert!(cli.json);
     }
 
@@ -263,6 +274,7 @@ mod tests {
             "hover --set output.protocol=pwm",
             "hover --module-set colour=red",
             "hover --module-set tx_power=9",
+            "hover --module-set rate=19200",
             "hover --at 10",
         ] {
             let err = parse(refused).unwrap().options().unwrap_err();
