@@ -396,7 +396,14 @@ pub fn run_kind(kind: Kind, opts: &Options) -> Result<Outcome, RunError> {
     let reach = if kind == Kind::PowerCycle {
         (0.0, 0.0)
     } else {
-        reach_times(opts, &[altitude])?
+        // A pilot who holds starts easing off before the altitude (the climb takes ≈ 2 m to
+        // spend); link-cut cuts at the altitude itself.
+        let start = if kind == Kind::LinkCut {
+            altitude
+        } else {
+            (altitude - pilot::HOLD_LEAD_M).max(altitude / 2.0)
+        };
+        reach_times(opts, &[start])?
             .first()
             .copied()
             .unwrap_or((0.0, 0.0))

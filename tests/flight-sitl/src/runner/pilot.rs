@@ -35,6 +35,10 @@ pub const KD_PER_MPS: f64 = 0.012;
 /// The pilot's throttle authority around the trim while holding.
 pub const HOLD_AUTHORITY: f64 = 0.06;
 
+/// The pilot starts holding this far below the wanted altitude (from the ≈ 3.3 m/s cruise
+/// climb, the damping term spends the climb in ≈ 2 m), m.
+pub const HOLD_LEAD_M: f64 = 2.0;
+
 /// What the pilot saw at one glance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Glance {
