@@ -196,20 +196,21 @@ impl Cli {
                 .set_text(name, value)
                 .map_err(|e| format!("--set {name}={value}: {e}"))?;
         }
-        // The module's air rate follows --rate (F500 has no module setting: kept as is).
-        if let Some(r) = module_core::air::settings_rate(o.rate, o.module_settings.rate) {
-            o.module_settings.rate = r;
-        }
-        for (name, value) in &self.module_set {
-            if name == "rate" {
-                return Err("--module-set rate: the link's rate mode is --rate".into());
+        if !self.module_set.is_empty() {
+            // From the world's pairing: factory, bound, at --rate.
+            let mut m = super::bound_module_settings(o.rate);
+            for (name, value) in &self.module_set {
+                if name == "rate" {
+                    return Err("--module-set rate: the link's rate mode is --rate".into());
+                }
+                m.set_text(name, value).map_err(|e| {
+                    format!(
+                        "--module-set {name}={value}: {e} (names: {})",
+                        module_core::settings::text::NAMES.join(", ")
+                    )
+                })?;
             }
-            o.module_settings.set_text(name, value).map_err(|e| {
-                format!(
-                    "--module-set {name}={value}: {e} (names: {})",
-                    module_core::settings::text::NAMES.join(", ")
-                )
-            })?;
+            o.module_settings = Some(m);
         }
         if let Some(kind) = self.scenario.kind()
             && self.at.is_some()
@@ -243,10 +244,14 @@ mod tests {
         assert_eq!(o.altitude_m, Some(60.0));
         assert_eq!(o.duration_s, Some(90.0));
         assert_eq!(o.settings.f32("failsafe.descent_mps"), 1.5);
-        assert_eq!(o.module_settings.input_timeout_ms, 750);
+        let m = o.module_settings.unwrap();
+        assert_eq!(m.input_timeout_ms, 750);
+        assert_eq!(m.rate, module_core::settings::RateMode::Bps19200);
+        assert_eq!(m.bind_id, flight_core::app::DEFAULT_BIND_ID);
+        // Without --module-set the world pairs the ends itself.
         assert_eq!(
-            o.module_settings.rate,
-            module_core::settings::RateMode::Bps19200
+            parse("hover").unwrap().options().unwrap().module_settings,
+            None
         );
         assert!(cli.json);
     }

@@ -109,8 +109,9 @@ pub struct Options {
     pub seed: u64,
     /// Flight settings (factory unless changed).
     pub settings: Settings,
-    /// Module settings (factory unless changed).
-    pub module_settings: module_core::settings::Settings,
+    /// Module settings (None: the world's pairing — factory settings bound to the flight
+    /// side at the run's rate; see [`bound_module_settings`]).
+    pub module_settings: Option<module_core::settings::Settings>,
     /// The airframe.
     pub quad: QuadParams,
     /// The fault's time, s (None: when the pilot has levelled off at the altitude; for
@@ -131,12 +132,25 @@ impl Options {
             rate: RateMode::F250,
             seed: 7,
             settings: Settings::default(),
-            module_settings: module_core::settings::Settings::default(),
+            module_settings: None,
             quad: QuadParams::quad_x(10.0, 6.5, 0.03, &QUAD_X),
             at_s: None,
             altitude_m: None,
             duration_s: None,
         }
+    }
+}
+
+/// The module's factory settings bound to the flight side (`flight_core::app::DEFAULT_BIND_ID`)
+/// at `rate` (F500, which no module setting gives, as 125 kbit/s): what `--module-set`
+/// changes start from, as the world pairs the ends when given none.
+pub fn bound_module_settings(rate: RateMode) -> module_core::settings::Settings {
+    let factory = module_core::settings::Settings::default();
+    module_core::settings::Settings {
+        bind_id: flight_core::app::DEFAULT_BIND_ID,
+        rate: module_core::air::settings_rate(rate, factory.rate)
+            .unwrap_or(module_core::settings::RateMode::Bps125000),
+        ..factory
     }
 }
 
@@ -263,7 +277,7 @@ fn scenario(opts: &Options, plan: Plan) -> Scenario {
     );
     s.seed = opts.seed;
     s.rate = opts.rate;
-    s.module_settings = Some(opts.module_settings);
+    s.module_settings = opts.module_settings;
     if kind == Kind::SettingsCorrupt {
         s.flight_flash = FlashInjection::Corrupted(opts.seed);
     }
