@@ -225,6 +225,9 @@ pub struct Outcome {
     pub wall_s: f64,
 }
 
+/// Seconds from power back to the pilot's new arming gesture (power-cycle): boot, the
+/// 3 s bind window and link acquisition.
+pub const REARM_AFTER_POWER_S: f64 = 4.5;
 /// Seconds the pilot waits after levelling off before a fault (settled hover).
 const SETTLE_S: f64 = 3.0;
 /// Pack voltage at the start of the low-battery drain, mV, and the drain, mV/s.
@@ -347,7 +350,7 @@ pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunEr
         Kind::PowerCycle => {
             pilot.take_off = false;
             let at = opts.at_s.unwrap_or(4.0);
-            (Some(at), None, at + 15.0)
+            (Some(at), None, at + 1.0 + REARM_AFTER_POWER_S + 10.0)
         }
         Kind::HandsetUnplugged => {
             let at = opts.at_s.unwrap_or(t_reach + SETTLE_S);
@@ -381,9 +384,9 @@ pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunEr
     }
     let fault_end_s = fault_at_s.zip(kind.fault_length_s()).map(|(a, l)| a + l);
     if kind == Kind::PowerCycle {
-        // Back on the ground after the reboot: the pilot re-arms and takes off 1 s after
-        // power returns (boot and link sync).
-        pilot.rearm_s = fault_end_s.map(|e| e + 1.0);
+        // Back on the ground after the reboot: the pilot re-arms once the link is back
+        // (the flight side boots in ≈ 0.15 s, listens for a bind for 3 s, then acquires).
+        pilot.rearm_s = fault_end_s.map(|e| e + REARM_AFTER_POWER_S);
         if let Some(r) = pilot.rearm_s {
             // Hold the altitude from the end of the take-off boost.
             pilot = pilot.hold(r + pilot::BOOST_END_S, altitude);
