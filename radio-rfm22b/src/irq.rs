@@ -74,10 +74,13 @@ pub(crate) enum Wake {
     Deadline,
 }
 
-/// Waits until nIRQ is low or `deadline` completes. Both are polled on every wake-up, so a
-/// stuck-low line cannot starve the deadline; `deadline_done` records that the deadline
-/// future has completed (it must not be polled again) and makes later calls return
-/// [`Wake::Deadline`] at once if nIRQ is high.
+/// Waits until nIRQ is low or `deadline` completes. The deadline always wins: `deadline_done`
+/// records that the deadline future has completed (it must not be polled again), and once
+/// it is set every call returns [`Wake::Deadline`] at once, whatever the pin. Only the call
+/// in which the deadline completes still reports a low pin as [`Wake::Irq`], so an event
+/// that became pending right at the deadline (a packet just received) is serviced once.
+/// A line stuck low (an unpowered or browned-out module can read that way) therefore costs
+/// status reads until the deadline, never a wait past it.
 ///
 /// Cancel-safe: dropping it drops only the pin-wait future.
 pub(crate) async fn wait_for_irq<IRQ: Wait, F: Future<Output = ()>>(
@@ -85,6 +88,9 @@ pub(crate) async fn wait_for_irq<IRQ: Wait, F: Future<Output = ()>>(
     mut deadline: Pin<&mut F>,
     deadline_done: &mut bool,
 ) -> Result<Wake, IRQ::Error> {
+    if *deadline_done {
+        return Ok(Wake::Deadline);
+    }
     let mut low = pin!(irq.wait_for_low());
     poll_fn(|cx| {
         let pin = low.as_mut().poll(cx);
@@ -109,4 +115,75 @@ pub(crate) async fn read_status<SPI: SpiDevice>(
     bus.read_burst(INTERRUPT_STATUS_1, &mut s).await?;
     let [status1, status2] = s;
     Ok(Status { status1, status2 })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use core::convert::Infallible;
+
+    /// An nIRQ input that always reads low.
+    struct StuckLow;
+
+    impl embedded_hal::digital::ErrorType for StuckLow {
+        type Error = Infallible;
+    }
+
+    impl Wait for StuckLow {
+        async fn wait_for_high(&mut self) -> Result<(), Infallible> {
+            core::future::pending().await
+        }
+        async fn wait_for_low(&mut self) -> Result<(), Infallible> {
+            Ok(())
+        }
+        async fn wait_for_rising_edge(&mut self) -> Result<(), Infallible> {
+            core::future::pending().await
+        }
+        async fn wait_for_falling_edge(&mut self) -> Result<(), Infallible> {
+            core::future::pending().await
+        }
+        async fn wait_for_any_edge(&mut self) -> Result<(), Infallible> {
+            core::future::pending().await
+        }
+    }
+
+    /// A deadline that completes on its `n`th poll.
+    struct AfterPolls(u32);
+
+    impl Future for AfterPolls {
+        type Output = ();
+        fn poll(mut self: Pin<&mut Self>, _: &mut core::task::Context<'_>) -> Poll<()> {
+            self.0 = self.0.saturating_sub(1);
+            if self.0 == 0 {
+                Poll::Ready(())
+            } else {
+                Poll::Pending
+            }
+        }
+    }
+
+    #[test]
+    fn a_stuck_low_line_cannot_outlast_the_deadline() {
+        let mut irq = StuckLow;
+        let mut deadline = pin!(AfterPolls(3));
+        let mut done = false;
+        let wakes: Vec<Wake> = (0..6)
+            .map(|_| {
+                embassy_futures::block_on(wait_for_irq(&mut irq, deadline.as_mut(), &mut done))
+                    .unwrap()
+            })
+            .collect();
+        // Two interrupts before the deadline, one serviced as it expires, then the deadline.
+        assert_eq!(
+            wakes,
+            [
+                Wake::Irq,
+                Wake::Irq,
+                Wake::Irq,
+                Wake::Deadline,
+                Wake::Deadline,
+                Wake::Deadline
+            ]
+        );
+    }
 }

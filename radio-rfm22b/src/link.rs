@@ -151,4 +151,19 @@ where
             crate::RxOutcome::Timeout => RxOutcome::Timeout,
         })
     }
+
+    /// The driver's [`Rfm22b::check_health`]: a chip that lost its setup (silent reset) is
+    /// re-initialised and reported as [`Error::ChipReset`].
+    async fn check_health(&mut self) -> Result<(), Self::Error> {
+        self.radio
+            .check_health()
+            .await
+            .map_err(LinkRadioError::Radio)
+    }
+
+    /// Forgets the cached setup and initialises the chip again (reset, registers, modem).
+    async fn recover(&mut self, config: &RadioConfig) -> Result<(), Self::Error> {
+        self.configured = None;
+        self.configure(config).await
+    }
 }

@@ -22,11 +22,11 @@ const PPM_B: f64 = -3.0;
 fn skewed_link(bench: &Bench, config: radio_rfm22b::Config) -> (Node, Node) {
     let a = bench.node(RadioConfig {
         crystal_error_ppm: PPM_A,
-        ..RadioConfig::at([0.0, 0.0, 0.0])
+        ..RadioConfig::at([0.0, 0.0, 0.0]).with_instant_bus()
     });
     let b = bench.node(RadioConfig {
         crystal_error_ppm: PPM_B,
-        ..RadioConfig::at([DISTANCE_M, 0.0, 0.0])
+        ..RadioConfig::at([DISTANCE_M, 0.0, 0.0]).with_instant_bus()
     });
     bench.init(&a, config).unwrap();
     bench.init(&b, config).unwrap();
@@ -78,7 +78,7 @@ fn revisions_reset_without_sdn_and_the_temperature_sensor() {
     let bench = Bench::new(2);
     let node = bench.node(RadioConfig {
         temperature_c: 31.5,
-        ..RadioConfig::at([0.0; 3])
+        ..RadioConfig::at([0.0; 3]).with_instant_bus()
     });
     // The identification registers are read-only; poke stands in for other silicon.
     for (version, expected) in [
@@ -110,7 +110,9 @@ fn revisions_reset_without_sdn_and_the_temperature_sensor() {
     assert_eq!(elapsed, Duration::from_micros(100));
 
     // A board that ties SDN low: software reset only, chip ready after 1 ms.
-    let handle = bench.medium.add_radio(RadioConfig::at([5.0, 0.0, 0.0]));
+    let handle = bench
+        .medium
+        .add_radio(RadioConfig::at([5.0, 0.0, 0.0]).with_instant_bus());
     let mut radio = radio_rfm22b::Rfm22b::new_without_sdn(handle.spi, handle.nirq, handle.delay);
     let config = config(256_000, 150_000);
     let start = bench.now();
@@ -340,4 +342,41 @@ fn the_same_seed_gives_the_same_outcomes_twice() {
     // Another seed draws other bit errors.
     let (other, _) = lossy_run(12);
     assert_ne!(first, other);
+}
+
+/// The link's slot budget (`telemetry::link::rate::TX_SETUP_US`) charges the sender for the
+/// SPI work between deciding to send and the PLL settling: FIFO load and register writes on
+/// the real bus. Measured here on the flight board's 5.25 MHz bus: F500's largest frame
+/// (where the budget is tightest) fits it; a full 64-byte FIFO is printed for the record.
+#[cfg(feature = "telemetry")]
+#[test]
+fn transmit_set_up_on_the_spi_bus_fits_the_link_budget() {
+    use telemetry::link::RateMode;
+    use telemetry::link::rate::TX_SETUP_US;
+    let bench = Bench::new(21);
+    let a = bench.node(RadioConfig::at([0.0, 0.0, 0.0]));
+    bench.init(&a, config(256_000, 150_000)).unwrap();
+    let mut set_up = Vec::new();
+    for len in [RateMode::F500.max_frame_bytes(), 64] {
+        let called = bench.now();
+        let frame = vec![0x55; len];
+        let (sent, _) = bench.op(&a, async move |r| r.transmit(&frame, 20_000).await);
+        sent.unwrap();
+        let start = bench.last_frame().unwrap().start;
+        set_up.push(start - called - Duration::from_nanos(PLL_SETTLE_NS));
+        bench.run(bench.pause(5_000));
+    }
+    println!(
+        "transmit set-up on SPI: F500 max frame {:?}, 64 B {:?}",
+        set_up[0], set_up[1]
+    );
+    assert!(
+        set_up[0] > Duration::from_micros(50),
+        "SPI time is modelled"
+    );
+    assert!(
+        set_up[0] <= Duration::from_micros(u64::from(TX_SETUP_US)),
+        "{:?} > TX_SETUP_US",
+        set_up[0]
+    );
 }

@@ -7,8 +7,8 @@
 mod openlrs_vectors;
 
 use openlrs_vectors::{bind_data, load, num, nums, report};
+use radio_rfm22b::openlrs::BindingVersion;
 use radio_rfm22b::openlrs::modem::{self, Purpose, RegOp, Script};
-use radio_rfm22b::openlrs::{Band, BindingVersion};
 use serde_json::Value;
 
 fn writes(script: &Script) -> Vec<[u64; 2]> {
@@ -78,7 +78,8 @@ fn modem_profiles_and_register_sequences() {
         for case in cases.as_array().unwrap() {
             let data = bind_data(&case["bind_data"]);
             assert_eq!(data.modem_profile as u64, num(&case["modem_params"]));
-            let script = modem::init_script(version, Band::Mhz433, &data, Purpose::Link).unwrap();
+            let script =
+                modem::init_script(version, data.band().unwrap(), &data, Purpose::Link).unwrap();
             assert_eq!(
                 writes(&script),
                 expected_writes(&case["writes"]),

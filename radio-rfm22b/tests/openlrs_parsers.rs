@@ -57,8 +57,8 @@ fn random_bytes_are_classified_never_panic() {
             Downlink::WrongLength { len } => assert_ne!(len, 9),
             _ => assert_eq!(bytes.len(), 9),
         }
-        match receive_bind_packet(&bytes, BindingVersion::V38) {
-            BindReception::Accepted(d) => assert!(d.validate().is_ok()),
+        match receive_bind_packet(&bytes, BindingVersion::V38, Band::Mhz433) {
+            BindReception::Accepted(d) => assert!(d.validate_for(Band::Mhz433).is_ok()),
             BindReception::TooShort { len } => assert!(len < 42),
             _ => {}
         }

@@ -156,6 +156,24 @@ pub struct SettingChange {
     pub value: i32,
 }
 
+/// Barometric altitude and vertical speed (the flight side's MS5611 and vertical filter).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Vertical {
+    /// Altitude above the power-up point, cm (up positive).
+    pub altitude_cm: i32,
+    /// Vertical speed, cm/s (climb positive).
+    pub vario_cm_s: i16,
+}
+
+/// Cells in series of the flight battery, as the battery monitor detected them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Cells {
+    /// Cell count (0 = not known yet).
+    pub count: u8,
+}
+
 /// Everything the telemetry stream carries.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -176,6 +194,10 @@ pub enum Message {
     SysIdResult(SysIdResult),
     /// Setting change / report.
     SettingChange(SettingChange),
+    /// Barometric altitude and vario (appended: earlier variants keep their wire numbers).
+    Vertical(Vertical),
+    /// Flight battery cell count.
+    Cells(Cells),
 }
 
 /// Largest postcard encoding of a [`Message`].

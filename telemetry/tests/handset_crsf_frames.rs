@@ -463,14 +463,38 @@ fn model_select_with_bad_inner_crc_is_refused() {
 }
 
 #[test]
-fn worked_k_parameter_write_is_a_frame_of_unknown_type() {
+fn worked_k_parameter_write_decodes() {
     let frame = one_frame(&hex("C8 06 2D EE EF 11 01 A5"));
     assert_eq!(frame.frame_type, 0x2D);
     assert_eq!(frame.extended_addresses(), Some((0xEE, 0xEF)));
+    let Ok(Message::ParameterWrite(write)) = Message::from_frame(&frame) else {
+        panic!("a parameter write");
+    };
     assert_eq!(
-        Message::from_frame(&frame),
-        Err(Error::WrongType { found: 0x2D })
+        (write.destination, write.origin, write.number),
+        (0xEE, 0xEF, 0x11)
     );
+    assert_eq!(write.value.as_slice(), &[0x01]);
+    // Re-encoded, the same bytes.
+    let mut out = [0u8; 16];
+    let n = Message::ParameterWrite(write)
+        .encode(0xC8, &mut out)
+        .unwrap();
+    assert_eq!(&out[..n], &hex("C8 06 2D EE EF 11 01 A5")[..]);
+}
+
+#[test]
+fn bind_command_needs_its_inner_crc() {
+    // EdgeTX's Bind button: 0x32 / 0x10 / 0x01 with the poly-0xBA inner CRC.
+    let inner =
+        telemetry::handset::crsf::device::COMMAND_CRC.checksum(&[0x32, 0xEE, 0xEA, 0x10, 0x01]);
+    let frame = Frame::new(0xC8, 0x32, &[0xEE, 0xEA, 0x10, 0x01, inner]).unwrap();
+    assert!(matches!(
+        Message::from_frame(&frame),
+        Ok(Message::Bind(b)) if b.destination == 0xEE && b.origin == 0xEA
+    ));
+    let frame = Frame::new(0xC8, 0x32, &[0xEE, 0xEA, 0x10, 0x01, inner ^ 1]).unwrap();
+    assert_eq!(Message::from_frame(&frame), Err(Error::InnerCrc));
 }
 
 #[test]
@@ -511,10 +535,12 @@ fn microseconds_survive_the_tick_round_trip() {
 #[test]
 fn power_table_and_angle_saturation() {
     use telemetry::handset::crsf::sensors::{radians_to_100urad, tx_power_index};
-    // Table 0, 10, 25, 100, 500, 1000, 2000, 250, 50 mW: largest entry not above the power.
+    // Table 0, 10, 25, 100, 500, 1000, 2000, 250, 50 mW: largest entry not above the power,
+    // never "0 mW" for a transmitter.
     for (mw, index) in [
         (0, 0),
-        (5, 0),
+        (1, 1),
+        (5, 1),
         (10, 1),
         (20, 1),
         (50, 8),
@@ -527,6 +553,13 @@ fn power_table_and_angle_saturation() {
     ] {
         assert_eq!(tx_power_index(mw), index, "{mw} mW");
     }
+    // The RFM22B's eight steps as EdgeTX decodes the index (crossfire.cpp power_values).
+    let edgetx = [0, 10, 25, 100, 500, 1000, 2000, 250, 50];
+    let shown: Vec<u16> = [1u16, 2, 3, 6, 13, 25, 50, 100]
+        .iter()
+        .map(|mw| edgetx[usize::from(tx_power_index(*mw))])
+        .collect();
+    assert_eq!(shown, [10, 10, 10, 10, 10, 25, 50, 100]);
     assert_eq!(radians_to_100urad(f32::NAN), 0);
     assert_eq!(radians_to_100urad(10.0), i16::MAX);
     assert_eq!(radians_to_100urad(-10.0), i16::MIN);

@@ -78,6 +78,7 @@ fn full_telemetry() -> HandsetTelemetry {
             altitude_m: 488,
             satellites: 12,
         }),
+        ..HandsetTelemetry::default()
     }
 }
 

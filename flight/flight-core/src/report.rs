@@ -9,8 +9,8 @@
 //! every range in the table (1e-9 … 1e9 do not fit one decimal fixed point).
 
 use telemetry::messages::{
-    ArmState, Attitude, Axis, Battery, FlightMode as WireMode, LinkStats, Message, SettingChange,
-    SysIdResult,
+    ArmState, Attitude, Axis, Battery, Cells, FlightMode as WireMode, LinkStats, Message,
+    SettingChange, SysIdResult, Vertical,
 };
 
 use crate::battery::BatteryStatus;
@@ -177,6 +177,30 @@ impl Reporter {
             Kind::FlightMode => Message::FlightMode(wire_mode(snap.out.mode)),
         })
     }
+}
+
+/// Barometric altitude (m above the power-up point, e.g. `ClimbRate::altitude_m`) and
+/// vertical speed (m/s up, e.g. `FlightLoop::climb_estimate`) as a message; when to send it
+/// is the caller's cadence.
+pub fn vertical_message(altitude_m: f32, climb_mps: f32) -> Message {
+    let cm = |m: f32, limit: f32| {
+        if m.is_finite() {
+            (m * 100.0).round().clamp(-limit, limit)
+        } else {
+            0.0
+        }
+    };
+    Message::Vertical(Vertical {
+        altitude_cm: cm(altitude_m, 2.0e9) as i32,
+        vario_cm_s: cm(climb_mps, f32::from(i16::MAX)) as i16,
+    })
+}
+
+/// The flight battery's cell count as a message, once the monitor knows it.
+pub fn cells_message(battery: &BatteryStatus) -> Option<Message> {
+    (battery.cells > 0).then_some(Message::Cells(Cells {
+        count: battery.cells,
+    }))
 }
 
 /// The identification result of one axis as a message.

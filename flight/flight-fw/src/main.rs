@@ -1,20 +1,22 @@
 //! TauLink flight firmware for the STM32F405 (BrushedSparky; Sparky2 with `--features sparky2`).
 //!
-//! All behaviour lives in `flight-core`; this crate only wires the board to it. On the host
-//! it compiles to an empty program so that `cargo test --workspace` never builds a HAL.
+//! All behaviour lives in `flight-core`'s application, `flight_core::app::FlightApp`; this
+//! crate only wires the board to it: every task moves bytes or samples between a peripheral
+//! and the app (shared behind a critical-section mutex, `firmware::shared`). On the host it
+//! compiles to an empty program so that `cargo test --workspace` never builds a HAL.
 //!
-//! The pipeline: at boot the stored settings become a `pipeline::FlightSetup` and the LQG/PID
-//! gains are solved (arming waits for them). The MPU9250's data-ready edge (1 kHz) wakes the
-//! IMU task, which reads the sample, runs `FlightLoop::step` (complementary attitude filter,
-//! supervisor, flight mode, controller, mixer) and hands the commands to the motor task at
-//! once, so outputs follow each gyro sample (OneShot125 fires then). The link task runs the
-//! TauLink follower on the RFM22B and feeds the loop its sticks; telemetry (attitude,
-//! battery, link quality, mode, arm/failsafe, identification) and setting changes travel on
-//! the link's stream. The baro task supplies the climb rate for the failsafe descent; the
-//! battery and alert tasks sound the alarms and announcements through the DAC. Every task
-//! checks in with the watchdog supervisor. The same logic flies in `tests/flight-sitl`.
+//! The pipeline: at boot the stored settings are loaded and the app designs its gains
+//! (arming waits for them). The MPU9250's data-ready (1 kHz) wakes the IMU task, which reads
+//! the sample and hands it to `FlightApp::on_imu_sample` (the flight loop and the IMU fault
+//! policy) and the motor commands to the motor task at once, so outputs follow each gyro
+//! sample (OneShot125 fires then). The link task runs the TauLink follower on the RFM22B with
+//! the app as its hooks (sticks in, telemetry and setting changes over the link's stream).
+//! The baro, battery, alert, console, storage and gains tasks each call their `on_*` method;
+//! the supervisor task feeds the independent watchdog only when the app says every task
+//! checked in. The same app flies in `tests/flight-sitl`.
 //!
-//! Release image (BrushedSparky and Sparky2 alike): 210 096 B text, 2 264 B data, 20 116 B bss.
+//! Image sizes: the table in the top-level README, written by `cargo xtask readme` and checked by
+//! `cargo xtask verify`.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]

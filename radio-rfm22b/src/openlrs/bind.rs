@@ -177,8 +177,25 @@ impl BindData {
         self.flags & FLAG_DIVERSITY != 0
     }
 
-    /// Checks what the RX must be able to use: a known modem profile, a power code, a
-    /// non-empty hop list. (dRonin refuses the same things; OpenLRSng indexes blindly.)
+    /// The frequency of hop channel number `channel`: `rf_frequency + channel · spacing ·
+    /// 10 kHz`, what the Si4432 tunes from 0x75..0x77, 0x79 and 0x7A. In `u64`, so no bind
+    /// data can overflow it (the largest is about 4.9 GHz).
+    pub fn channel_frequency_hz(&self, channel: u8) -> u64 {
+        u64::from(self.rf_frequency_hz)
+            + u64::from(channel) * u64::from(self.rf_channel_spacing) * 10_000
+    }
+
+    /// The band whose plan holds the carrier (`rf_frequency_hz`), if any.
+    pub fn band(&self) -> Option<Band> {
+        Band::containing(u64::from(self.rf_frequency_hz))
+    }
+
+    /// Checks what the RX must be able to use before anything is tuned or sent: a known
+    /// modem profile, a power code, a non-empty hop list, a carrier inside one band's plan
+    /// (`MIN_RFM_FREQUENCY..=MAX_RFM_FREQUENCY`) and every hop of the list (channel ×
+    /// spacing above the carrier) inside that same band. OpenLRSng indexes and adds blindly;
+    /// dRonin checks only the first three. Without the frequency checks a bind packet that
+    /// passes could tune the radio out of its band or overflow a `u32` frequency.
     pub fn validate(&self) -> Result<(), Error> {
         if self.modem_profile >= MODEM_PROFILE_COUNT {
             return Err(Error::ModemProfile(self.modem_profile));
@@ -189,7 +206,23 @@ impl BindData {
         if self.hop_count() == 0 {
             return Err(Error::NoHopChannels);
         }
+        let band = self.band().ok_or(Error::Carrier(self.rf_frequency_hz))?;
+        for (index, &channel) in (0u8..).zip(self.hop_channels.iter().take(self.hop_count())) {
+            if !band.contains(self.channel_frequency_hz(channel)) {
+                return Err(Error::HopOutOfBand { index, channel });
+            }
+        }
         Ok(())
+    }
+
+    /// [`BindData::validate`], and the carrier in `band` (the band the module was built
+    /// for: an RFM22B matched for 433 MHz cannot use an 868 MHz link).
+    pub fn validate_for(&self, band: Band) -> Result<(), Error> {
+        self.validate()?;
+        match self.band() {
+            Some(found) if found == band => Ok(()),
+            _ => Err(Error::Carrier(self.rf_frequency_hz)),
+        }
     }
 }
 
@@ -203,6 +236,16 @@ pub enum Error {
     Power(u8),
     /// The hop list starts with 0.
     NoHopChannels,
+    /// The carrier is outside the plan of the band (of any band, for
+    /// [`BindData::validate`]).
+    Carrier(u32),
+    /// Hop `index` (channel number `channel`) lies above the carrier's band.
+    HopOutOfBand {
+        /// Index in the hop list.
+        index: u8,
+        /// Its channel number.
+        channel: u8,
+    },
 }
 
 impl core::fmt::Display for Error {
@@ -211,6 +254,13 @@ impl core::fmt::Display for Error {
             Self::ModemProfile(p) => write!(f, "modem profile {p} is not 0..4"),
             Self::Power(p) => write!(f, "rf power {p} is not 0..7"),
             Self::NoHopChannels => write!(f, "hop list is empty"),
+            Self::Carrier(hz) => write!(f, "carrier {hz} Hz is outside the band plan"),
+            Self::HopOutOfBand { index, channel } => {
+                write!(
+                    f,
+                    "hop {index} (channel {channel}) is outside the band plan"
+                )
+            }
         }
     }
 }
@@ -242,8 +292,8 @@ pub enum BindReception {
     },
 }
 
-/// Classifies a received bind-channel packet for an RX of `version`.
-pub fn receive_bind_packet(packet: &[u8], version: BindingVersion) -> BindReception {
+/// Classifies a received bind-channel packet for an RX of `version` built for `band`.
+pub fn receive_bind_packet(packet: &[u8], version: BindingVersion, band: Band) -> BindReception {
     let Some((&kind, body)) = packet.split_first() else {
         return BindReception::TooShort { len: 0 };
     };
@@ -259,7 +309,7 @@ pub fn receive_bind_packet(packet: &[u8], version: BindingVersion) -> BindRecept
             found: data.version,
         };
     }
-    match data.validate() {
+    match data.validate_for(band) {
         Ok(()) => BindReception::Accepted(data),
         Err(e) => BindReception::Invalid(e),
     }
@@ -287,16 +337,36 @@ mod tests {
     fn v38_packet_is_refused_by_v39_rx() {
         let p = BindData::defaults(BindingVersion::V38, Band::Mhz433).bind_packet();
         assert_eq!(
-            receive_bind_packet(&p, BindingVersion::V39),
+            receive_bind_packet(&p, BindingVersion::V39, Band::Mhz433),
             BindReception::WrongVersion { found: 0x38 }
         );
         assert!(matches!(
-            receive_bind_packet(&p, BindingVersion::V38),
+            receive_bind_packet(&p, BindingVersion::V38, Band::Mhz433),
             BindReception::Accepted(_)
         ));
         assert_eq!(
-            receive_bind_packet(&p[..41], BindingVersion::V38),
+            receive_bind_packet(&p[..41], BindingVersion::V38, Band::Mhz433),
             BindReception::TooShort { len: 41 }
+        );
+    }
+
+    #[test]
+    fn a_bind_for_another_band_or_leaving_the_band_is_refused() {
+        let p = BindData::defaults(BindingVersion::V38, Band::Mhz868).bind_packet();
+        assert_eq!(
+            receive_bind_packet(&p, BindingVersion::V38, Band::Mhz433),
+            BindReception::Invalid(Error::Carrier(868_000_000))
+        );
+        let mut data = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+        // 500 kHz steps: channels 10..49 land at 440..460 MHz, channel 200 at 535 MHz.
+        data.rf_channel_spacing = 50;
+        data.hop_channels[2] = 200;
+        assert_eq!(
+            receive_bind_packet(&data.bind_packet(), BindingVersion::V38, Band::Mhz433),
+            BindReception::Invalid(Error::HopOutOfBand {
+                index: 2,
+                channel: 200
+            })
         );
     }
 }

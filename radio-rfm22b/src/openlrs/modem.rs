@@ -144,10 +144,12 @@ pub fn hop_registers(data: &BindData, hop_index: u8) -> Option<[(u8, u8); 3]> {
     Some([(0x79, channel), (0x3D, magic_lsb), (0x42, magic_lsb)])
 }
 
-/// The frequency of a hop slot: `rf_frequency + channel · spacing · 10 kHz`.
+/// The frequency of a hop slot: `rf_frequency + channel · spacing · 10 kHz`. `None` past the
+/// 24-entry list, or when the sum does not fit a `u32` (bind data that
+/// [`BindData::validate`] refuses).
 pub fn hop_frequency_hz(data: &BindData, hop_index: u8) -> Option<u32> {
     let channel = *data.hop_channels.get(usize::from(hop_index))?;
-    Some(data.rf_frequency_hz + u32::from(channel) * u32::from(data.rf_channel_spacing) * 10_000)
+    u32::try_from(data.channel_frequency_hz(channel)).ok()
 }
 
 /// Appends a write, failing only if the script overflows (it is sized for the worst case).
@@ -198,7 +200,11 @@ pub fn init_script(
             band.binding_frequency_hz(),
         ),
         Purpose::Link => (
-            profile(data.modem_profile).ok_or(Error::ModemProfile(data.modem_profile))?,
+            {
+                // Never tune a carrier or a hop outside the module's band plan.
+                data.validate_for(band).map_err(Error::BindData)?;
+                profile(data.modem_profile).ok_or(Error::ModemProfile(data.modem_profile))?
+            },
             data.rf_magic,
             data.rf_power,
             data.rf_frequency_hz,
@@ -355,6 +361,8 @@ pub enum Error {
     ModemProfile(u8),
     /// The script does not fit [`SCRIPT_CAPACITY`] (a packet over 58 bytes).
     ScriptFull,
+    /// The bind data of the link fails [`BindData::validate_for`] the band.
+    BindData(super::bind::Error),
 }
 
 impl core::fmt::Display for Error {
@@ -362,6 +370,7 @@ impl core::fmt::Display for Error {
         match self {
             Self::ModemProfile(p) => write!(f, "modem profile {p} is not 0..4"),
             Self::ScriptFull => write!(f, "register script too long"),
+            Self::BindData(e) => write!(f, "bind data: {e}"),
         }
     }
 }

@@ -87,6 +87,25 @@ impl Band {
         }
     }
 
+    /// Whether `frequency_hz` lies in this band's plan (`MIN_RFM_FREQUENCY..=MAX_RFM_FREQUENCY`).
+    pub const fn contains(self, frequency_hz: u64) -> bool {
+        frequency_hz >= self.min_frequency_hz() as u64
+            && frequency_hz <= self.max_frequency_hz() as u64
+    }
+
+    /// The band whose plan holds `frequency_hz` (the three plans do not overlap).
+    pub const fn containing(frequency_hz: u64) -> Option<Self> {
+        if Self::Mhz433.contains(frequency_hz) {
+            Some(Self::Mhz433)
+        } else if Self::Mhz868.contains(frequency_hz) {
+            Some(Self::Mhz868)
+        } else if Self::Mhz915.contains(frequency_hz) {
+            Some(Self::Mhz915)
+        } else {
+            None
+        }
+    }
+
     /// The band for an `RFMTYPE` number (433, 868, 915).
     pub const fn from_rfm_type(rfm_type: u16) -> Option<Self> {
         match rfm_type {

@@ -7,7 +7,6 @@
 #![allow(dead_code, clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code
 
 use core::cell::RefCell;
-use core::convert::Infallible;
 use core::future::Future;
 use core::time::Duration;
 use std::rc::Rc;
@@ -23,7 +22,7 @@ use si4432_sim::{
 /// The driver on a virtual chip.
 pub type SimRfm = Rfm22b<SimSpi, SimIrq, SimSdn, SimDelay>;
 /// The driver's error on the virtual bus (which cannot fail).
-pub type SimError = Error<Infallible>;
+pub type SimError = Error<si4432_sim::SpiError>;
 
 /// Hop channel 0 of every test link: 433.000 MHz.
 pub const CARRIER_HZ: u32 = 433_000_000;
@@ -154,12 +153,13 @@ impl Bench {
         Self { sim, medium }
     }
 
-    /// A node at `position_m` with ideal hardware, driver built with its SDN pin.
+    /// A node at `position_m` with ideal hardware on an ideal bus (SPI and nIRQ take no
+    /// time, so tests can time the driver to the nanosecond), driver built with its SDN pin.
     pub fn node_at(&self, position_m: [f64; 3]) -> Node {
-        self.node(RadioConfig::at(position_m))
+        self.node(RadioConfig::at(position_m).with_instant_bus())
     }
 
-    /// A node with the given hardware.
+    /// A node with the given hardware (and its bus: SPI time and nIRQ latency as configured).
     pub fn node(&self, config: RadioConfig) -> Node {
         let handle = self.medium.add_radio(config);
         let radio = Rfm22b::new(handle.spi, handle.nirq, handle.sdn, handle.delay);

@@ -6,11 +6,15 @@ use crate::air::AirLink;
 use crate::button::ButtonEvent;
 use crate::channels::Channels;
 use crate::hm10::relay::{MAX_RECORD_LEN, Relay, RelayStats};
-use crate::ports::{HandsetOutput, LinkPort, LinkStats};
+use crate::params::{self, Commands, Effect};
+use crate::ports::{HandsetOutput, HandsetRequest, LinkPort, LinkStats};
 use crate::ppm::{self, Decoded, Decoder, DecoderConfig, Encoder, EncoderConfig};
 use crate::session::{BindOutcome, LinkStep, Session, SessionEnd};
 use crate::settings::{InputProtocol, Role, Settings};
 use crate::status::LinkState;
+use heapless::Deque;
+use telemetry::handset::crsf::address;
+use telemetry::handset::crsf::params::ParameterChunk;
 use telemetry::link::core::{Follower, Master};
 
 /// Something the firmware must do after an event.
@@ -22,6 +26,14 @@ pub enum Action {
     /// Persist these settings.
     Save(Settings),
 }
+
+/// The module's supply (the radio battery on JR pin 3) counts as low below this: 1.1 V per
+/// cell of a 6-cell NiMH pack, 3.3 V per cell of a 2S Li-ion pack, both near empty.
+pub const MODULE_BATTERY_LOW_MV: u16 = 6_600;
+/// The low warning ends only above the threshold plus this (a loaded pack recovers a little).
+pub const MODULE_BATTERY_HYSTERESIS_MV: u16 = 200;
+/// Below this the reading is no battery at all (a bench supply on the debug header).
+pub const MODULE_BATTERY_ABSENT_MV: u16 = 1_000;
 
 /// Input health counters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -51,6 +63,15 @@ pub struct App<L: LinkPort, H: HandsetOutput> {
     was_connected: bool,
     led: LinkState,
     input: InputStats,
+    /// The radio's parameter commands (bind, save) and what changed.
+    commands: Commands,
+    /// A setting the running link uses changed: end the session at the next poll.
+    restart_request: bool,
+    /// The module's supply is below [`MODULE_BATTERY_LOW_MV`] (until it recovers by the
+    /// hysteresis).
+    battery_low: bool,
+    /// Actions from the JR line (a save, a bind's LED) for [`App::take_action`].
+    actions: Deque<Action, 4>,
 }
 
 impl<L: LinkPort, H: HandsetOutput> App<L, H> {
@@ -81,6 +102,10 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             was_connected: false,
             led: LinkState::NoRadio,
             input: InputStats::default(),
+            commands: Commands::default(),
+            restart_request: false,
+            battery_low: false,
+            actions: Deque::new(),
         })
     }
 
@@ -201,6 +226,20 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         }
     }
 
+    /// A reading of the module's supply (the radio battery on JR pin 3): it goes to the
+    /// handset (S.Port A2) and, when low, to the LED.
+    pub fn on_module_battery(&mut self, millivolts: u16) -> Option<Action> {
+        self.handset.on_module_battery(millivolts);
+        self.battery_low = if millivolts < MODULE_BATTERY_ABSENT_MV {
+            false
+        } else if self.battery_low {
+            millivolts < MODULE_BATTERY_LOW_MV.saturating_add(MODULE_BATTERY_HYSTERESIS_MV)
+        } else {
+            millivolts < MODULE_BATTERY_LOW_MV
+        };
+        self.update_led()
+    }
+
     /// The radio answered its probe (or stopped answering).
     pub fn on_radio_present(&mut self, present: bool) -> Option<Action> {
         self.radio_present = present;
@@ -226,17 +265,108 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     }
 
     /// Bytes the radio sent on the JR line, the last at `now_us`: CRSF channel frames reach
-    /// the link (CRSF input only).
+    /// the link (CRSF input only); parameter reads and writes and the bind command are served
+    /// (what they ask of the firmware waits in [`App::take_action`]).
     pub fn on_handset_bytes(&mut self, now_us: u64, bytes: &[u8]) {
         if let Some(channels) = self.handset.on_line_bytes(now_us, bytes) {
             self.on_handset_channels(&channels);
         }
+        self.serve_handset_requests();
     }
 
     /// The JR line went idle at `now_us` (the radio's burst is over).
     pub fn on_handset_idle(&mut self, now_us: u64) {
         if let Some(channels) = self.handset.on_line_idle(now_us) {
             self.on_handset_channels(&channels);
+        }
+        self.serve_handset_requests();
+    }
+
+    /// The next thing the firmware must do that a JR-line request caused (save the settings,
+    /// show the binding LED); call after the `on_handset_*` methods until `None`.
+    pub fn take_action(&mut self) -> Option<Action> {
+        self.actions.pop_front()
+    }
+
+    /// The radio's parameter commands' state.
+    pub fn parameter_commands(&self) -> &Commands {
+        &self.commands
+    }
+
+    fn serve_handset_requests(&mut self) {
+        while let Some(request) = self.handset.take_request() {
+            match request {
+                HandsetRequest::Read {
+                    origin,
+                    number,
+                    chunk,
+                } => self.send_parameter(origin, number, chunk),
+                HandsetRequest::Write {
+                    origin,
+                    number,
+                    value,
+                } => {
+                    let effect =
+                        params::write(number, &value, &mut self.settings, &mut self.commands);
+                    self.apply(effect);
+                    if matches!(effect, Effect::Bind | Effect::Save | Effect::CommandStatus) {
+                        // The radio's popup waits for the command's new status.
+                        self.send_parameter(origin, number, 0);
+                    }
+                }
+                HandsetRequest::Bind => {
+                    if !self.commands.binding {
+                        self.commands.binding = true;
+                        self.commands.bind_result = None;
+                        self.apply(Effect::Bind);
+                    }
+                }
+            }
+        }
+    }
+
+    fn send_parameter(&mut self, destination: u8, number: u8, chunk: u8) {
+        let Some(entry) = params::entry(number, &self.settings, &self.commands) else {
+            return;
+        };
+        let chunk_len = self.handset.parameter_chunk_len();
+        if let Some(chunk) = ParameterChunk::of_entry(
+            &entry,
+            chunk_len,
+            chunk,
+            number,
+            destination,
+            address::TX_MODULE,
+        ) {
+            self.handset.send_parameter_chunk(chunk);
+        }
+    }
+
+    fn apply(&mut self, effect: Effect) {
+        match effect {
+            Effect::RestartLink => self.restart_request = true,
+            Effect::InputTimeout => self
+                .link
+                .set_input_timeout_ms(self.settings.input_timeout_ms),
+            Effect::PpmFailsafe => {
+                if let Ok(encoder) = Encoder::new(EncoderConfig {
+                    failsafe: self.settings.failsafe,
+                    ..EncoderConfig::default()
+                }) {
+                    self.encoder = encoder;
+                }
+            }
+            Effect::Bind => {
+                // As a long press: a deliberate act of the pilot in the radio's menu.
+                // A bind already under way (a long press) carries this one.
+                if let Some(action) = self.on_button(ButtonEvent::LongPress) {
+                    let _ = self.actions.push_back(action);
+                }
+            }
+            Effect::Save => {
+                let _ = self.actions.push_back(Action::Save(self.settings));
+            }
+            Effect::None | Effect::CommandStatus => {}
         }
     }
 
@@ -263,12 +393,12 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         }
     }
 
-    /// The receiver accepted a master's bind offer: remember the bind ID and the offer's band
-    /// and rate, so the link comes back the same after a reboot. An offer at a rate no
-    /// setting gives (F500) keeps the rate setting.
+    /// The receiver accepted a master's bind offer: remember the bind ID and the offer's band,
+    /// rate mode and telemetry ratio, so the link comes back the same after a reboot.
     pub fn on_bind_offer_accepted(&mut self, params: &telemetry::link::LinkParams) -> Action {
-        if let Some(rate) = crate::air::settings_rate(params.rate, self.settings.rate) {
-            self.settings.rate = rate;
+        self.settings.rate = params.rate;
+        if crate::settings::TELEMETRY_RATIOS.contains(&params.telemetry_ratio) {
+            self.settings.telemetry_ratio = params.telemetry_ratio;
         }
         self.settings.band = crate::air::settings_band(params.band);
         self.on_bind_complete(params.bind_id)
@@ -289,6 +419,12 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// While a link step runs (every `session::POLL_MS`): whether it must stop now (a long
     /// press, or the loop's hook silent for `session::HOOK_SILENCE_MS`).
     pub fn poll_session(&mut self, now_ms: u32) -> Option<SessionEnd> {
+        if self.restart_request && !self.bind_request {
+            self.restart_request = false;
+            if self.session.running() {
+                return Some(SessionEnd::SettingsChanged);
+            }
+        }
         let end = self.session.poll(now_ms, self.bind_request);
         if end == Some(SessionEnd::BindRequested) {
             self.bind_request = false;
@@ -299,6 +435,8 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// The running link step ended (as `poll_session` said, or its radio failed): nothing
     /// arrives until the next one runs.
     pub fn on_session_end(&mut self, end: SessionEnd) -> Option<Action> {
+        // Whatever ended it, the next step is built from the settings in force.
+        self.restart_request = false;
         self.link.on_link_stopped();
         self.session.on_end(end);
         self.update_led()
@@ -308,6 +446,14 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// back to the previous state.
     pub fn on_bind_outcome(&mut self, outcome: BindOutcome) -> Option<Action> {
         let offered = self.session.on_bind_done();
+        if self.commands.binding {
+            self.commands.binding = false;
+            self.commands.bind_result = Some(matches!(
+                (outcome, offered),
+                (BindOutcome::Offered { accepted: true }, Some(_))
+                    | (BindOutcome::Listened(Some(_)), _)
+            ));
+        }
         match (outcome, offered) {
             (BindOutcome::Offered { accepted: true }, Some(params)) => {
                 Some(self.on_bind_complete(params.bind_id))
@@ -356,6 +502,9 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             LinkState::NoRadio
         } else if self.binding {
             LinkState::Binding
+        } else if self.battery_low {
+            // Above the link states: a dying radio battery ends the link soon anyway.
+            LinkState::LowBattery
         } else if self.settings.bind_id == 0 {
             LinkState::Unbound
         } else if connected {

@@ -245,8 +245,31 @@ fn a_receiver_takes_band_and_rate_from_the_bind_offer() {
         panic!("bind must save");
     };
     assert_eq!(saved.bind_id, 0x0102_0304);
-    assert_eq!(saved.rate, crate::settings::RateMode::Bps57600);
+    assert_eq!(saved.rate, crate::settings::RateMode::M100);
     assert_eq!(saved.band, crate::settings::Band::Mhz868);
+    assert_eq!(crate::air::link_params(&saved), Some(offer));
+}
+
+#[test]
+fn a_receiver_takes_an_f500_offer_and_its_telemetry_ratio() {
+    // The old settings had no F500 and a fixed ratio: such an offer kept the old rate, and
+    // the saved settings then gave other link parameters than the master's.
+    let mut app = app(Settings {
+        role: Role::Receiver,
+        ..Settings::default()
+    });
+    let offer = telemetry::link::LinkParams::new(
+        0x0A0B_0C0D,
+        telemetry::link::Band::Mhz915,
+        telemetry::link::RateMode::F500,
+        telemetry::channels::ChannelFormat::Full16,
+        16,
+    );
+    let Action::Save(saved) = app.on_bind_offer_accepted(&offer) else {
+        panic!("bind must save");
+    };
+    assert_eq!(saved.rate, telemetry::link::RateMode::F500);
+    assert_eq!(saved.telemetry_ratio, 16);
     assert_eq!(crate::air::link_params(&saved), Some(offer));
 }
 
@@ -313,4 +336,28 @@ fn the_hm10_script_outcome_decides_the_relay() {
     );
     app.on_link_record(&[4, 5, 6]);
     assert!(app.next_phone_frame(&mut frame).is_some(), "relay open");
+}
+
+#[test]
+fn a_low_module_battery_shows_on_the_led_with_hysteresis() {
+    let mut app = app(Settings {
+        bind_id: 0x0101_0101,
+        ..Settings::default()
+    });
+    assert_eq!(
+        app.on_radio_present(true),
+        Some(Action::Led(LinkState::Searching))
+    );
+    assert_eq!(app.on_module_battery(7_400), None);
+    assert_eq!(
+        app.on_module_battery(6_500),
+        Some(Action::Led(LinkState::LowBattery))
+    );
+    assert_eq!(app.on_module_battery(6_700), None, "inside the hysteresis");
+    assert_eq!(
+        app.on_module_battery(6_900),
+        Some(Action::Led(LinkState::Searching))
+    );
+    // No battery at all (a bench supply) is not a low battery.
+    assert_eq!(app.on_module_battery(300), None);
 }

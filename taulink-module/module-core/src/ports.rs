@@ -65,6 +65,31 @@ pub trait LinkPort {
     }
 }
 
+/// What the radio asked of the module over the JR line (CRSF parameter protocol, bind).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum HandsetRequest {
+    /// Chunk `chunk` of parameter `number`'s description, for `origin`.
+    Read {
+        /// Who asked (the reply's destination).
+        origin: u8,
+        /// Parameter number.
+        number: u8,
+        /// Chunk index.
+        chunk: u8,
+    },
+    /// Set parameter `number` (or step a command).
+    Write {
+        /// Who wrote.
+        origin: u8,
+        /// Parameter number.
+        number: u8,
+        /// Value bytes.
+        value: heapless::Vec<u8, { telemetry::handset::crsf::params::MAX_WRITE_LEN }>,
+    },
+    /// The radio's Bind button (CRSF command 0x32 / 0x10 / 0x01).
+    Bind,
+}
+
 /// The handset side of the JR line: telemetry encoders (CRSF, S.Port or FrSky D, chosen by
 /// the settings) and, with CRSF, the decoder of the radio's frames.
 pub trait HandsetOutput {
@@ -72,6 +97,8 @@ pub trait HandsetOutput {
     fn on_telemetry(&mut self, record: &[u8]);
     /// The link's statistics, as often as they change.
     fn on_link_stats(&mut self, stats: &LinkStats);
+    /// The module's own supply voltage (the radio battery on JR pin 3), mV.
+    fn on_module_battery(&mut self, _millivolts: u16) {}
     /// Bytes the radio sent on the JR line, the last one received at `now_us`; returns the
     /// newest RC channels they completed.
     fn on_line_bytes(&mut self, _now_us: u64, _bytes: &[u8]) -> Option<Channels> {
@@ -86,4 +113,14 @@ pub trait HandsetOutput {
     fn next_line_bytes(&mut self, _now_us: u64, _out: &mut [u8]) -> usize {
         0
     }
+    /// The oldest request from the radio not yet taken.
+    fn take_request(&mut self) -> Option<HandsetRequest> {
+        None
+    }
+    /// Data bytes per parameter chunk the line carries in one reply window.
+    fn parameter_chunk_len(&self) -> usize {
+        telemetry::handset::crsf::params::MAX_CHUNK_DATA
+    }
+    /// A parameter chunk to send in the next reply window.
+    fn send_parameter_chunk(&mut self, _chunk: telemetry::handset::crsf::params::ParameterChunk) {}
 }

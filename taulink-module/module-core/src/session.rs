@@ -72,6 +72,9 @@ pub enum SessionEnd {
     RadioFailed,
     /// The loop's hook stopped running for [`HOOK_SILENCE_MS`]: probe the radio again.
     HookSilent,
+    /// A setting the running link uses changed (from the radio's device tool): start again
+    /// with the new link parameters.
+    SettingsChanged,
 }
 
 /// How a bind step ended.
@@ -190,6 +193,12 @@ impl Session {
         }
     }
 
+    /// Whether a link step (or the unbound wait) is running and would have to end for new
+    /// settings to take effect.
+    pub fn running(&self) -> bool {
+        matches!(self.state, State::Running | State::WaitingForBind)
+    }
+
     /// The running loop's hook ran at `now_ms`.
     pub fn on_hook(&mut self, now_ms: u32) {
         self.last_hook_ms = now_ms;
@@ -213,7 +222,9 @@ impl Session {
     pub fn on_end(&mut self, end: SessionEnd) {
         self.state = match end {
             SessionEnd::BindRequested => State::Bind,
-            SessionEnd::RadioFailed | SessionEnd::HookSilent => State::Probe,
+            SessionEnd::RadioFailed | SessionEnd::HookSilent | SessionEnd::SettingsChanged => {
+                State::Probe
+            }
         };
     }
 

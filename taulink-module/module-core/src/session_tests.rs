@@ -5,7 +5,7 @@ fn bound(role: Role) -> Settings {
     Settings {
         role,
         bind_id: 0x0BAD_F00D,
-        rate: RateMode::Bps57600,
+        rate: RateMode::M100,
         band: Band::Mhz868,
         ..Settings::default()
     }

@@ -17,6 +17,8 @@ pub enum LinkState {
     Connected,
     /// The link was up and is lost (failsafe).
     Failsafe,
+    /// The module's supply (the radio battery) is low: three short blinks, then a pause.
+    LowBattery,
 }
 
 impl LinkState {
@@ -31,6 +33,7 @@ impl LinkState {
             LinkState::Searching => &[500, 500],
             LinkState::Connected => &[1000],
             LinkState::Failsafe => &[100, 150, 100, 650],
+            LinkState::LowBattery => &[100, 100, 100, 100, 100, 1500],
         }
     }
 

@@ -39,7 +39,7 @@ fn press_bind(app: &mut App<AirLink, Handset>, random: u32) -> LinkStep {
 #[test]
 fn both_ends_store_the_same_link() {
     let tx_settings = Settings {
-        rate: RateMode::Bps57600,
+        rate: RateMode::M100,
         band: Band::Mhz868,
         ..Settings::default()
     };
@@ -47,7 +47,7 @@ fn both_ends_store_the_same_link() {
     // has to match (the bind frequency is per band).
     let rx_settings = Settings {
         role: Role::Receiver,
-        rate: RateMode::Bps4800,
+        rate: RateMode::L50,
         band: Band::Mhz868,
         ..Settings::default()
     };
@@ -106,7 +106,7 @@ fn both_ends_store_the_same_link() {
     let (tx_saved, rx_saved) = (settings_of("tx"), settings_of("rx"));
     assert_eq!(tx_saved.bind_id, 0x7777_1234);
     assert_eq!(rx_saved.bind_id, 0x7777_1234);
-    assert_eq!(rx_saved.rate, RateMode::Bps57600, "the offer's rate");
+    assert_eq!(rx_saved.rate, RateMode::M100, "the offer's rate");
     assert_eq!(rx_saved.role, Role::Receiver);
     let tx_link = link_params(&tx_saved).unwrap();
     assert_eq!(link_params(&rx_saved), Some(tx_link));

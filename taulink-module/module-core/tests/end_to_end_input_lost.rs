@@ -90,7 +90,9 @@ fn run(rate: RateMode, input: InputProtocol) -> (u64, u64) {
     let mut world = World::with_flight_failsafe(settings, FLIGHT_FAILSAFE_US);
     match input {
         InputProtocol::Ppm => spawn_taranis(&mut world),
-        InputProtocol::Crsf | InputProtocol::Crsf115200 => spawn_crsf_radio(&mut world),
+        InputProtocol::Crsf | InputProtocol::Crsf115200 | InputProtocol::Crsf921600 => {
+            spawn_crsf_radio(&mut world)
+        }
     }
     world.run_until(STOP_US);
     let expected: Vec<u16> = WIDTHS_US.iter().map(|w| us_to_value(*w)).collect();
@@ -139,7 +141,7 @@ fn run(rate: RateMode, input: InputProtocol) -> (u64, u64) {
 #[test]
 fn failsafe_within_one_second_of_the_handset_input_stopping_and_back_after() {
     for input in [InputProtocol::Ppm, InputProtocol::Crsf] {
-        for rate in [RateMode::Bps19200, RateMode::Bps57600, RateMode::Bps125000] {
+        for rate in [RateMode::L50, RateMode::M100, RateMode::F250] {
             let (entered, left) = run(rate, input);
             let delay = entered - STOP_US;
             let back = left - RESUME_US;

@@ -61,7 +61,7 @@ impl FollowerHooks for Receiver {
 fn run(failsafe: FailsafeOutput) -> Vec<(u64, Option<Vec<u16>>)> {
     let settings = Settings {
         role: Role::Receiver,
-        rate: RateMode::Bps57600,
+        rate: RateMode::M100,
         failsafe,
         bind_id: 0x0BAD_CAFE,
         ..Settings::default()

@@ -82,6 +82,16 @@ pub struct GpsReport {
     pub satellites: u8,
 }
 
+/// Barometric altitude and vertical speed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct VerticalReport {
+    /// Altitude above the power-up point, cm.
+    pub altitude_cm: i32,
+    /// Vertical speed, cm/s, climb positive.
+    pub vario_cm_s: i16,
+}
+
 /// Everything the handset may be told. Absent parts are simply not sent.
 #[derive(Debug, Clone, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -96,9 +106,22 @@ pub struct HandsetTelemetry {
     pub flight_mode: Option<FlightModeReport>,
     /// GPS fix.
     pub gps: Option<GpsReport>,
+    /// Barometric altitude and vario.
+    pub vertical: Option<VerticalReport>,
+    /// Flight battery cells in series (with `battery`, the per-cell voltage).
+    pub cells: Option<u8>,
+    /// The module's own supply, mV.
+    pub module_battery_mv: Option<u16>,
 }
 
 impl HandsetTelemetry {
+    /// The average cell voltage, mV, when the pack voltage and a non-zero cell count are known.
+    pub fn cell_mv(&self) -> Option<u16> {
+        let count = u32::from(self.cells.filter(|c| *c > 0)?);
+        let battery = self.battery?;
+        u16::try_from(battery.voltage_mv / count).ok()
+    }
+
     /// True if the link is up with a non-zero uplink LQ: the radio then accepts sensor values
     /// (EdgeTX drops all of them while the LQ / RSSI it sees is 0).
     pub fn link_streaming(&self) -> bool {

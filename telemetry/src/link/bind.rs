@@ -68,8 +68,8 @@ impl LinkParams {
         RadioConfig {
             rate: self.rate,
             header: self.header(),
-            base_hz: self.band.base_hz(),
-            spacing_hz: self.band.spacing_hz(),
+            base_hz: self.band.grid(self.rate).0,
+            spacing_hz: self.band.grid(self.rate).1,
         }
     }
 
@@ -109,7 +109,7 @@ pub fn bind_radio_config(band: Band) -> RadioConfig {
         rate: BIND_RATE,
         header: BIND_HEADER,
         base_hz: band.bind_hz(),
-        spacing_hz: band.spacing_hz(),
+        spacing_hz: band.grid(BIND_RATE).1,
     }
 }
 

@@ -3,7 +3,9 @@
 //! step.
 
 use super::bind::{ACCEPT_REPEATS, BIND_KEY, LinkParams, bind_radio_config, offered_params};
-use super::core::{Follower, Step};
+use super::core::{
+    Follower, HEALTH_CHECK_PERIOD_US, MAX_CONSECUTIVE_RADIO_ERRORS, RADIO_RETRY_US, Step,
+};
 use super::hopping::Band;
 use super::radio::{LinkClock, PacketRadio, RxOutcome};
 use super::rate::FIFO_BYTES;
@@ -59,45 +61,96 @@ pub trait FollowerHooks {
     fn on_step(&mut self, now_us: u64, follower: &mut Follower);
 }
 
-/// Runs the follower forever (until the radio fails).
+/// Runs the follower forever. Radio errors are ridden through: after each the radio is
+/// re-configured ([`PacketRadio::recover`]) and the session goes on (counted in
+/// `follower.counters().radio_errors`); only [`MAX_CONSECUTIVE_RADIO_ERRORS`] errors in a row
+/// end it with the last error. The radio's health is checked every
+/// [`HEALTH_CHECK_PERIOD_US`]. Failsafe follows from the silence as always.
 pub async fn run_follower<R: PacketRadio, C: LinkClock, H: FollowerHooks>(
     radio: &mut R,
     clock: &mut C,
     follower: &mut Follower,
     hooks: &mut H,
 ) -> Result<core::convert::Infallible, R::Error> {
-    radio.configure(&follower.radio_config()).await?;
+    let config = follower.radio_config();
+    radio.configure(&config).await?;
     let mut buf = [0u8; FIFO_BYTES];
+    let mut failures = 0u32;
+    let mut next_health_us = clock.now_us() + HEALTH_CHECK_PERIOD_US;
     loop {
         let step = follower.plan(clock.now_us(), &mut buf);
         // Right after planning: a packet just received and any failsafe just declared are
         // visible to the application at once, not a step later.
         hooks.on_step(clock.now_us(), follower);
-        match step {
-            Step::Transmit {
-                channel,
-                at_us,
-                len,
-            } => {
-                radio.set_channel(channel).await?;
-                clock.sleep_until_us(at_us).await;
-                radio.transmit(buf.get(..len).unwrap_or(&[])).await?;
-                follower.on_sent();
+        let mut result = run_step(radio, clock, follower, step, &mut buf).await;
+        if result.is_ok() && clock.now_us() >= next_health_us {
+            next_health_us = clock.now_us() + HEALTH_CHECK_PERIOD_US;
+            result = radio.check_health().await;
+        }
+        match result {
+            Ok(()) => failures = 0,
+            Err(e) => {
+                failures += 1;
+                follower.on_radio_error();
+                if failures >= MAX_CONSECUTIVE_RADIO_ERRORS {
+                    return Err(e);
+                }
+                clock.sleep_until_us(clock.now_us() + RADIO_RETRY_US).await;
+                if let Err(e) = radio.recover(&config).await {
+                    failures += 1;
+                    follower.on_radio_error();
+                    if failures >= MAX_CONSECUTIVE_RADIO_ERRORS {
+                        return Err(e);
+                    }
+                }
             }
-            Step::Listen {
-                channel,
-                from_us,
-                until_us,
-            } => {
-                radio.set_channel(channel).await?;
-                clock.sleep_until_us(from_us).await;
-                let timeout = until_us.saturating_sub(clock.now_us());
-                let outcome = radio
-                    .receive(&mut buf, u32::try_from(timeout).unwrap_or(u32::MAX))
-                    .await?;
-                follower.on_received(outcome, &buf, clock.now_us());
-            }
-            Step::Idle => follower.on_skipped(),
         }
     }
+}
+
+/// Carries out one planned step; on an error the follower has been moved past it.
+async fn run_step<R: PacketRadio, C: LinkClock>(
+    radio: &mut R,
+    clock: &mut C,
+    follower: &mut Follower,
+    step: Step,
+    buf: &mut [u8; FIFO_BYTES],
+) -> Result<(), R::Error> {
+    match step {
+        Step::Transmit {
+            channel,
+            at_us,
+            len,
+        } => {
+            let sent = async {
+                radio.set_channel(channel).await?;
+                clock.sleep_until_us(at_us).await;
+                radio.transmit(buf.get(..len).unwrap_or(&[])).await
+            }
+            .await;
+            match sent {
+                Ok(()) => follower.on_sent(),
+                Err(e) => {
+                    follower.on_skipped();
+                    return Err(e);
+                }
+            }
+        }
+        Step::Listen {
+            channel,
+            from_us,
+            until_us,
+        } => {
+            // A failed listen needs no bookkeeping: the next plan counts its slot as missed.
+            radio.set_channel(channel).await?;
+            clock.sleep_until_us(from_us).await;
+            let timeout = until_us.saturating_sub(clock.now_us());
+            let outcome = radio
+                .receive(buf, u32::try_from(timeout).unwrap_or(u32::MAX))
+                .await?;
+            follower.on_received(outcome, buf, clock.now_us());
+        }
+        Step::Idle => follower.on_skipped(),
+    }
+    Ok(())
 }

@@ -1,5 +1,37 @@
 //! Frequency bands, the channel grid, and the pseudo-random hop sequence derived from the
 //! bind ID: a permutation of all channels, so no channel repeats within one hop cycle.
+//!
+//! Band plans and what they mean legally (the user's call; nothing here is legal advice):
+//!
+//! * [`Band::Mhz433`] — 430.2 … 439.5 MHz, 300 kHz grid: the 70 cm **amateur** band, as
+//!   Tau Labs and OpenLRSng use it. A radio-amateur licence is needed. The factory band
+//!   (module and flight side must agree on it to bind).
+//! * [`Band::Ism433`] — only the 433.05 … 434.79 MHz ISM/LPD sub-band, licence-exempt as a
+//!   short-range device in ITU Region 1 under national rules (in the EU: ERC/REC 70-03,
+//!   10 mW e.r.p. with a duty-cycle limit). The 32 hop positions sit on a per-rate grid
+//!   whose occupied bandwidth (Carson: 2 × (deviation + bit rate / 2)) stays inside the
+//!   sub-band; neighbouring positions overlap, so the independent channels are fewer:
+//!
+//!   | mode | deviation | occupied | grid | spans (edges) | independent channels |
+//!   |---|---|---|---|---|---|
+//!   | L50 | 30 kHz | 79 kHz | 50 kHz | 433.105 … 434.735 MHz | 21 |
+//!   | M100 | 45 kHz | 148 kHz | 50 kHz | 433.071 … 434.769 MHz | 11 |
+//!   | F250 | 90 kHz | 308 kHz | 40 kHz | 433.146 … 434.694 MHz | 5 |
+//!   | F500 | 150 kHz | 556 kHz | 30 kHz | 433.177 … 434.663 MHz | 3 |
+//!
+//!   (independent channels = 1.74 MHz / occupied bandwidth, rounded down). Binding happens on
+//!   433.920 MHz, off every grid.
+//! * [`Band::Mhz868`] — 863.15 … 869.66 MHz, 210 kHz grid: the EU SRD band, across
+//!   several ERC/REC 70-03 sub-bands (863–865, 865–868, 868.0–868.6, 868.7–869.2,
+//!   869.4–869.65 MHz) whose duty-cycle limits are 0.1 … 10 %. The link hops over all of
+//!   them and transmits in up to 3 of 4 slots (the uplink), i.e. each channel at most once
+//!   per 32-slot cycle but the band as a whole far above any of those limits: it keeps
+//!   **no** sub-band's duty cycle and is not licence-exempt as it stands.
+//! * [`Band::Mhz915`] — 903.5 … 926.75 MHz, 750 kHz grid: the US 902–928 MHz ISM band
+//!   (FCC §15.247 frequency hopping; 32 channels is fewer than the 50 it asks of a
+//!   narrow-band hopper).
+
+use super::rate::RateMode;
 
 /// Channels per band and entries per hop cycle. A power of two so the 8-bit slot counter
 /// carried in every frame (which wraps at 256) always names a whole number of hop cycles.
@@ -16,31 +48,56 @@ pub enum Band {
     Mhz868,
     /// 902–928 MHz (US ISM; ExpressLRS' FCC915 grid spans the same 903.5–926.9 MHz).
     Mhz915,
+    /// 433.05–434.79 MHz only (ISM / LPD, licence-exempt at low power): a per-rate grid
+    /// ([`Band::grid`]).
+    Ism433,
 }
 
+/// Centre of the 433.05–434.79 MHz ISM sub-band.
+const ISM433_CENTRE_HZ: u32 = 433_920_000;
+
 impl Band {
-    /// Frequency of channel 0.
+    /// The hop grid at `rate`: frequency of channel 0 and channel spacing. The spacing is a
+    /// multiple of 10 kHz: the Si4432 hop step register (0x7A) counts in 10 kHz in every
+    /// band (carrier formula). Only [`Band::Ism433`] depends on the rate: its grid narrows
+    /// as the occupied bandwidth grows, centred on 433.92 MHz.
+    pub const fn grid(self, rate: RateMode) -> (u32, u32) {
+        match self {
+            Band::Mhz433 => (430_200_000, 300_000),
+            Band::Mhz868 => (863_150_000, 210_000),
+            Band::Mhz915 => (903_500_000, 750_000),
+            Band::Ism433 => {
+                let spacing = match rate {
+                    RateMode::L50 | RateMode::M100 => 50_000,
+                    RateMode::F250 => 40_000,
+                    RateMode::F500 => 30_000,
+                };
+                // Centre the 31 spacings on the sub-band's centre.
+                let half_span = spacing * (HOP_CHANNELS as u32 - 1) / 2;
+                (ISM433_CENTRE_HZ - half_span, spacing)
+            }
+        }
+    }
+
+    /// Frequency of grid channel `channel` (0..[`HOP_CHANNELS`]) at `rate`.
+    pub const fn channel_hz_at(self, channel: u8, rate: RateMode) -> u32 {
+        let (base, spacing) = self.grid(rate);
+        base + channel as u32 * spacing
+    }
+
+    /// Frequency of channel 0 at L50 (every band but [`Band::Ism433`] has only this grid).
     pub const fn base_hz(self) -> u32 {
-        match self {
-            Band::Mhz433 => 430_200_000,
-            Band::Mhz868 => 863_150_000,
-            Band::Mhz915 => 903_500_000,
-        }
+        self.grid(RateMode::L50).0
     }
 
-    /// Channel spacing. A multiple of 10 kHz: the Si4432 hop step register (0x7A) counts in
-    /// 10 kHz in every band (carrier formula).
+    /// Channel spacing at L50 (every band but [`Band::Ism433`] has only this grid).
     pub const fn spacing_hz(self) -> u32 {
-        match self {
-            Band::Mhz433 => 300_000,
-            Band::Mhz868 => 210_000,
-            Band::Mhz915 => 750_000,
-        }
+        self.grid(RateMode::L50).1
     }
 
-    /// Frequency of grid channel `channel` (0..[`HOP_CHANNELS`]).
+    /// Frequency of grid channel `channel` at L50 ([`Band::channel_hz_at`] for any rate).
     pub const fn channel_hz(self, channel: u8) -> u32 {
-        self.base_hz() + channel as u32 * self.spacing_hz()
+        self.channel_hz_at(channel, RateMode::L50)
     }
 
     /// The fixed bind frequency: mid-band, off the hop grid so bind traffic never lands on a
@@ -50,6 +107,8 @@ impl Band {
             Band::Mhz433 => 434_050_000,
             Band::Mhz868 => 868_300_000,
             Band::Mhz915 => 915_125_000,
+            // Half-way between grid positions at every rate.
+            Band::Ism433 => ISM433_CENTRE_HZ,
         }
     }
 
@@ -59,6 +118,7 @@ impl Band {
             Band::Mhz433 => 0,
             Band::Mhz868 => 1,
             Band::Mhz915 => 2,
+            Band::Ism433 => 3,
         }
     }
 
@@ -68,10 +128,14 @@ impl Band {
             0 => Some(Band::Mhz433),
             1 => Some(Band::Mhz868),
             2 => Some(Band::Mhz915),
+            3 => Some(Band::Ism433),
             _ => None,
         }
     }
 }
+
+/// Every band, in code order.
+pub const BANDS: [Band; 4] = [Band::Mhz433, Band::Mhz868, Band::Mhz915, Band::Ism433];
 
 /// SplitMix32-style mixer (Steele et al., "Fast splittable pseudorandom number generators",
 /// 2014, with 32-bit constants): every input bit affects every output bit, so IDs that differ
@@ -172,11 +236,34 @@ mod tests {
         assert!(Band::Mhz868.channel_hz(0) >= 863_000_000);
         assert!(Band::Mhz868.channel_hz(last) <= 870_000_000);
         assert_eq!(Band::Mhz915.channel_hz(last), 926_750_000);
-        for band in [Band::Mhz433, Band::Mhz868, Band::Mhz915] {
-            assert_eq!(band.spacing_hz() % 10_000, 0);
+        for band in BANDS {
             assert_eq!(Band::from_code(band.code()), Some(band));
-            let on_grid = (0..HOP_CHANNELS as u8).any(|c| band.channel_hz(c) == band.bind_hz());
-            assert!(!on_grid);
+            for rate in RateMode::ALL {
+                let (_, spacing) = band.grid(rate);
+                assert_eq!(spacing % 10_000, 0);
+                let on_grid =
+                    (0..HOP_CHANNELS as u8).any(|c| band.channel_hz_at(c, rate) == band.bind_hz());
+                assert!(!on_grid, "{band:?} {rate:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_ism_plan_keeps_the_occupied_bandwidth_inside_433_05_to_434_79() {
+        let last = (HOP_CHANNELS - 1) as u8;
+        // Deviation per mode (radio_rfm22b::link::modem_for) and Carson's bandwidth.
+        for (rate, deviation, independent) in [
+            (RateMode::L50, 30_000u32, 21u32),
+            (RateMode::M100, 45_000, 11),
+            (RateMode::F250, 90_000, 5),
+            (RateMode::F500, 150_000, 3),
+        ] {
+            let occupied = 2 * (deviation + rate.bit_rate_bps() / 2);
+            let low = Band::Ism433.channel_hz_at(0, rate) - occupied / 2;
+            let high = Band::Ism433.channel_hz_at(last, rate) + occupied / 2;
+            assert!(low >= 433_050_000, "{rate:?}: {low}");
+            assert!(high <= 434_790_000, "{rate:?}: {high}");
+            assert_eq!(1_740_000 / occupied, independent, "{rate:?}");
         }
     }
 }

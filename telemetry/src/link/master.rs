@@ -3,7 +3,9 @@
 //! and telemetry with the state machine at every slot boundary.
 
 use super::bind::{BIND_KEY, LinkParams, OFFER_PERIOD_US, bind_radio_config, is_accept_of};
-use super::core::{Master, Step};
+use super::core::{
+    HEALTH_CHECK_PERIOD_US, MAX_CONSECUTIVE_RADIO_ERRORS, Master, RADIO_RETRY_US, Step,
+};
 use super::radio::{LinkClock, PacketRadio, RxOutcome};
 use super::rate::FIFO_BYTES;
 use crate::frame::{Frame, encode};
@@ -48,17 +50,24 @@ pub trait MasterHooks {
     fn on_slot(&mut self, now_us: u64, master: &mut Master);
 }
 
-/// Runs the master forever (until the radio fails).
+/// Runs the master forever. Radio errors are ridden through as in
+/// [`run_follower`](super::follower::run_follower): the radio is re-configured and the slot
+/// grid goes on (counted in `master.counters().radio_errors`); only
+/// [`MAX_CONSECUTIVE_RADIO_ERRORS`] errors in a row end the session. The radio's health is
+/// checked every [`HEALTH_CHECK_PERIOD_US`].
 pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
     radio: &mut R,
     clock: &mut C,
     master: &mut Master,
     hooks: &mut H,
 ) -> Result<core::convert::Infallible, R::Error> {
-    radio.configure(&master.radio_config()).await?;
+    let config = master.radio_config();
+    radio.configure(&config).await?;
     let slot_us = u64::from(master.schedule().slot_us());
     let mut slot_start_us = clock.now_us();
     let mut buf = [0u8; FIFO_BYTES];
+    let mut failures = 0u32;
+    let mut next_health_us = clock.now_us() + HEALTH_CHECK_PERIOD_US;
     loop {
         // Fell behind by a whole slot (a debugger, a radio reset): skip, keep the grid.
         while clock.now_us() > slot_start_us + slot_us / 2 {
@@ -66,39 +75,95 @@ pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
             slot_start_us += slot_us;
         }
         hooks.on_slot(slot_start_us, master);
-        match master.plan(slot_start_us, &mut buf) {
-            Step::Transmit {
-                channel,
-                at_us,
-                len,
-            } => {
+        let step = master.plan(slot_start_us, &mut buf);
+        let mut result = run_slot(radio, clock, master, step, &mut buf).await;
+        if result.is_ok() && clock.now_us() >= next_health_us {
+            next_health_us = clock.now_us() + HEALTH_CHECK_PERIOD_US;
+            result = radio.check_health().await;
+        }
+        match result {
+            Ok(()) => failures = 0,
+            Err(e) => {
+                failures += 1;
+                master.on_radio_error();
+                if failures >= MAX_CONSECUTIVE_RADIO_ERRORS {
+                    return Err(e);
+                }
+                clock.sleep_until_us(clock.now_us() + RADIO_RETRY_US).await;
+                if let Err(e) = radio.recover(&config).await {
+                    failures += 1;
+                    master.on_radio_error();
+                    if failures >= MAX_CONSECUTIVE_RADIO_ERRORS {
+                        return Err(e);
+                    }
+                }
+            }
+        }
+        slot_start_us += slot_us;
+        clock.sleep_until_us(slot_start_us).await;
+    }
+}
+
+/// Carries out one slot; on an error the master has been moved past it.
+async fn run_slot<R: PacketRadio, C: LinkClock>(
+    radio: &mut R,
+    clock: &mut C,
+    master: &mut Master,
+    step: Step,
+    buf: &mut [u8; FIFO_BYTES],
+) -> Result<(), R::Error> {
+    match step {
+        Step::Transmit {
+            channel,
+            at_us,
+            len,
+        } => {
+            let sent = async {
                 radio.set_channel(channel).await?;
+                // Too late for this slot (e.g. right after a radio recovery): an uplink off
+                // the grid would drag the follower's grid with it, so the slot is skipped.
+                if clock.now_us() > at_us {
+                    return Ok(false);
+                }
                 clock.sleep_until_us(at_us).await;
                 radio.transmit(buf.get(..len).unwrap_or(&[])).await?;
-                master.on_sent();
+                Ok(true)
             }
-            Step::Listen {
-                channel,
-                from_us,
-                until_us,
-            } => {
+            .await;
+            match sent {
+                Ok(true) => master.on_sent(),
+                Ok(false) => master.on_skipped(),
+                Err(e) => {
+                    master.on_skipped();
+                    return Err(e);
+                }
+            }
+        }
+        Step::Listen {
+            channel,
+            from_us,
+            until_us,
+        } => {
+            let heard = async {
                 radio.set_channel(channel).await?;
                 clock.sleep_until_us(from_us).await;
                 // Listen on after a foreign or corrupted packet: ours may still come.
                 while clock.now_us() < until_us {
                     let timeout = until_us - clock.now_us();
                     let outcome = radio
-                        .receive(&mut buf, u32::try_from(timeout).unwrap_or(u32::MAX))
+                        .receive(buf, u32::try_from(timeout).unwrap_or(u32::MAX))
                         .await?;
-                    if master.on_received(outcome, &buf, clock.now_us()) {
+                    if master.on_received(outcome, buf, clock.now_us()) {
                         break;
                     }
                 }
-                master.finish_listen();
+                Ok(())
             }
-            Step::Idle => master.on_skipped(),
+            .await;
+            master.finish_listen();
+            heard?;
         }
-        slot_start_us += slot_us;
-        clock.sleep_until_us(slot_start_us).await;
+        Step::Idle => master.on_skipped(),
     }
+    Ok(())
 }

@@ -111,6 +111,9 @@ pub struct Counters {
     pub missed: u32,
     /// Packets that arrived but were rejected (CRC, version, kind, foreign link).
     pub rejected: u32,
+    /// Radio errors (bus, chip reset, FIFO, TX timeout) the link loop met; each was followed
+    /// by a re-configure of the radio.
+    pub radio_errors: u32,
 }
 
 #[cfg(test)]

@@ -63,6 +63,19 @@ pub trait PacketRadio {
     /// Listens for one packet for up to `timeout_us`; returns as soon as one has fully
     /// arrived (the caller timestamps it with its clock).
     async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<RxOutcome, Self::Error>;
+
+    /// Checks that the chip still holds its setup (the link loops call it every
+    /// `HEALTH_CHECK_PERIOD_US`); an error (e.g. the chip had reset) makes the loop
+    /// [`PacketRadio::recover`]. Default: nothing to check.
+    async fn check_health(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+
+    /// Brings the radio back after an error: set `config` up again from scratch, even if it
+    /// believes it is already configured. Default: [`PacketRadio::configure`].
+    async fn recover(&mut self, config: &RadioConfig) -> Result<(), Self::Error> {
+        self.configure(config).await
+    }
 }
 
 /// Microsecond time base shared by a link end (embassy-time on hardware, virtual in tests).

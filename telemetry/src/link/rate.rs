@@ -27,10 +27,22 @@ pub const PLL_SETTLE_US: u32 = 200;
 /// Time the sender waits after its slot starts before it enables TX, so a receiver whose slot
 /// estimate runs a little late is already listening; also covers SPI register writes.
 pub const TX_LEAD_US: u32 = 100;
-/// Time kept free at the end of every slot: the receiver drains the FIFO, the next slot's
-/// sender turns around (RX→TX) and retunes (mode switches are a handful of
-/// SPI writes at 4.5 MHz, well under 100 µs, plus IRQ latency).
-pub const TAIL_GUARD_US: u32 = 200;
+/// SPI work of the sender between its lead and the PLL starting to settle: loading the frame
+/// into the FIFO and the driver's register writes (abort, FIFO clear, length, interrupt
+/// enable, status clear, TX on). Measured on si4432-sim with SPI time on the F405's 5.25 MHz
+/// bus (radio-rfm22b test `transmit_set_up_on_the_spi_bus_fits_the_link_budget`): ~95 µs for
+/// F500's largest frame (32 B), 141 µs for a full 64-byte FIFO; the larger frames of the
+/// slower modes overrun it by at most ~40 µs, which their tail guard absorbs. Without this
+/// term the largest frames ended after the receiver stopped listening, and at 1:2 telemetry
+/// the follower's downlink pushed the master's next uplink later every slot until lock was
+/// lost (taulink-sim, chip level, F250).
+pub const TX_SETUP_US: u32 = 100;
+/// Time kept free at the end of every slot: the receiver drains the FIFO (nIRQ latency, status,
+/// header and FIFO reads: ~120 µs for a 32-byte frame at 5.25 MHz) and the next slot's sender
+/// turns around (RX→TX) and retunes; that sender's own [`TX_LEAD_US`] follows. 150 µs (200
+/// before [`TX_SETUP_US`] was charged separately) keeps 16 channels plus a link report in
+/// F500's uplink.
+pub const TAIL_GUARD_US: u32 = 150;
 
 /// The airtime of `frame_bytes` of our frame at `bit_rate_bps`, including everything the chip
 /// adds (preamble, sync, header, length, chip CRC), in µs, rounded up.
@@ -88,9 +100,9 @@ impl RateMode {
         1_000_000 / self.slot_us()
     }
 
-    /// Airtime left for one packet once lead, PLL settle and tail guard are paid.
+    /// Airtime left for one packet once lead, SPI set-up, PLL settle and tail guard are paid.
     pub const fn packet_budget_us(self) -> u32 {
-        self.slot_us() - TX_LEAD_US - PLL_SETTLE_US - TAIL_GUARD_US
+        self.slot_us() - TX_LEAD_US - TX_SETUP_US - PLL_SETTLE_US - TAIL_GUARD_US
     }
 
     /// The largest frame (our bytes, excluding the chip's) that fits the slot and the FIFO.
@@ -146,8 +158,11 @@ mod tests {
     fn every_mode_fits_its_largest_frame() {
         for mode in RateMode::ALL {
             let frame = mode.max_frame_bytes();
-            let used =
-                TX_LEAD_US + PLL_SETTLE_US + airtime_us(frame, mode.bit_rate_bps()) + TAIL_GUARD_US;
+            let used = TX_LEAD_US
+                + TX_SETUP_US
+                + PLL_SETTLE_US
+                + airtime_us(frame, mode.bit_rate_bps())
+                + TAIL_GUARD_US;
             assert!(
                 used <= mode.slot_us(),
                 "{mode:?}: {used} µs > {} µs",
@@ -155,6 +170,7 @@ mod tests {
             );
             // and one more byte would not fit (or the FIFO is the limit)
             let over = TX_LEAD_US
+                + TX_SETUP_US
                 + PLL_SETTLE_US
                 + airtime_us(frame + 1, mode.bit_rate_bps())
                 + TAIL_GUARD_US;
@@ -166,8 +182,8 @@ mod tests {
     fn frame_capacities() {
         assert_eq!(RateMode::L50.max_frame_bytes(), 32);
         assert_eq!(RateMode::M100.max_frame_bytes(), 54);
-        assert_eq!(RateMode::F250.max_frame_bytes(), 42);
-        assert_eq!(RateMode::F500.max_frame_bytes(), 34);
+        assert_eq!(RateMode::F250.max_frame_bytes(), 41);
+        assert_eq!(RateMode::F500.max_frame_bytes(), 32);
     }
 
     #[test]

@@ -60,8 +60,10 @@ impl VirtualTime {
             }
             s.wakeups.pop();
         }
-        match s.wakeups.pop() {
+        // Peek first: a wake-up beyond the limit stays queued for the next `run_until`.
+        match s.wakeups.peek().copied() {
             Some(Reverse(t)) if t <= limit_us => {
+                s.wakeups.pop();
                 s.now_us = t;
                 true
             }

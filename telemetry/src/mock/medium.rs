@@ -11,6 +11,7 @@ use super::executor::VirtualTime;
 use super::rng::SplitMix64;
 use crate::checksum::crc16;
 use crate::link::RateMode;
+use crate::link::rate::{PREAMBLE_BYTES, SYNC_BYTES};
 
 /// Propagation and impairment settings (shared by all nodes).
 #[derive(Clone, Copy, Debug)]
@@ -254,6 +255,36 @@ impl Medium {
         if let Some(n) = self.state.borrow_mut().nodes.get_mut(node) {
             n.seen.clear();
         }
+    }
+
+    /// When the packet `node` is in the middle of receiving ends: one on `frequency_hz`,
+    /// at its rate, over an uncut path, that started after `ready_us` and whose sync word
+    /// has arrived by now. The Si4432 driver completes such a packet past its receive
+    /// timeout (radio-rfm22b `receive`); the mock radio does the same.
+    pub(crate) fn arriving_end_us(
+        &self,
+        node: usize,
+        frequency_hz: u32,
+        ready_us: u64,
+    ) -> Option<u64> {
+        let s = self.state.borrow();
+        let now = s.time.now_us();
+        let me = s.nodes.get(node)?;
+        s.air
+            .iter()
+            .filter(|t| {
+                let sync_bits = ((PREAMBLE_BYTES + SYNC_BYTES) * 8) as u64;
+                let sync_us = (sync_bits * 1_000_000).div_ceil(u64::from(t.rate.bit_rate_bps()));
+                t.node != node
+                    && t.frequency_hz == frequency_hz
+                    && t.rate == me.rate
+                    && t.start_us >= ready_us
+                    && t.start_us + sync_us <= now
+                    && t.end_us > now
+                    && !s.cut.contains(&(node.min(t.node), node.max(t.node)))
+            })
+            .map(|t| t.end_us)
+            .max()
     }
 
     /// The first packet for `node`, listening on `frequency_hz` since `ready_us`, that has

@@ -1,4 +1,4 @@
-//! A packet-level radio on the [`Medium`]: PLL settling and airtime are charged in virtual
+//! A packet-level radio on the [`Medium`]: SPI set-up, PLL settling and airtime are charged in virtual
 //! time exactly as the slot budget assumes (`link::rate`), so link timing is exercised too.
 
 use std::convert::Infallible;
@@ -7,7 +7,7 @@ use std::task::Poll;
 
 use super::executor::VirtualTime;
 use super::medium::Medium;
-use crate::link::rate::{PLL_SETTLE_US, airtime_us};
+use crate::link::rate::{PLL_SETTLE_US, TX_SETUP_US, airtime_us};
 use crate::link::{PacketRadio, RadioConfig, RateMode, RxOutcome};
 
 /// One mock radio (node) on a medium.
@@ -70,7 +70,7 @@ impl PacketRadio for MockRadio {
     }
 
     async fn transmit(&mut self, frame: &[u8]) -> Result<(), Infallible> {
-        let start = self.time.now_us() + u64::from(PLL_SETTLE_US);
+        let start = self.time.now_us() + u64::from(TX_SETUP_US + PLL_SETTLE_US);
         let end = start + u64::from(airtime_us(frame.len(), self.config.rate.bit_rate_bps()));
         self.medium
             .transmit(self.node, start, end, self.frequency_hz, frame);
@@ -82,10 +82,11 @@ impl PacketRadio for MockRadio {
     async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<RxOutcome, Infallible> {
         let now = self.time.now_us();
         let ready = now + u64::from(PLL_SETTLE_US);
-        let deadline = now + u64::from(timeout_us);
+        let mut deadline = now + u64::from(timeout_us);
         self.medium.start_listening(self.node);
         let (medium, time, node, freq) = (&self.medium, &self.time, self.node, self.frequency_hz);
         let mut registered = false;
+        let mut extended = false;
         let outcome = poll_fn(|_| {
             if let Some(d) = medium.poll_reception(node, freq, ready) {
                 let len = d.bytes.len().min(buf.len());
@@ -98,7 +99,16 @@ impl PacketRadio for MockRadio {
                 });
             }
             if time.now_us() >= deadline {
-                return Poll::Ready(RxOutcome::Timeout);
+                // Like the driver: a packet whose sync word came in time is completed.
+                match medium.arriving_end_us(node, freq, ready) {
+                    Some(end) if !extended => {
+                        extended = true;
+                        deadline = end;
+                        time.wake_at(end);
+                        return Poll::Pending;
+                    }
+                    _ => return Poll::Ready(RxOutcome::Timeout),
+                }
             }
             if !registered {
                 time.wake_at(deadline);

@@ -73,10 +73,12 @@ fn longest_unfed_ms(rate: RateMode) -> u64 {
     *longest.borrow()
 }
 
-/// Fails until the follower calls its hooks at least every 50 ms in every sync state
-/// (H-LINK's telemetry change): today it dwells a whole channel step (660 ms at L50).
+/// The link-search reset of issue 12: while the follower dwelt a whole channel step in one
+/// listen (660 ms at L50, 330 ms at M100) its hooks — and so the link task's check-in — ran
+/// too rarely for the 250 ms watchdog (measured before the fix: L50 700 ms, M100 400 ms,
+/// F250 200 ms, F500 100 ms unfed). The follower now listens in windows of at most
+/// `MAX_LISTEN_US` (50 ms).
 #[test]
-#[ignore = "needs the follower's ≤ 50 ms hook cadence while searching (telemetry, H-LINK)"]
 fn link_search_never_starves_the_watchdog_at_any_rate() {
     let unfed = RateMode::ALL.map(|rate| (rate, longest_unfed_ms(rate)));
     println!("longest unfed (ms): {unfed:?}");

@@ -47,7 +47,7 @@ impl Chip {
 
     /// What an SPI write of `value` to `address` does.
     pub fn spi_write(&mut self, address: u8, value: u8, now_ns: u64, ctx: &mut Ctx<'_>) {
-        if self.fault != Fault::None || self.power != Power::On {
+        if matches!(self.fault, Fault::Unplugged { .. }) || self.power != Power::On {
             return;
         }
         match (address, registers::access(address)) {

@@ -33,6 +33,12 @@ pub enum Fault {
         /// What every SPI read returns.
         miso: u8,
     },
+    /// nIRQ reads low whatever the chip does (an unpowered or browned-out module, a
+    /// shorted line); SPI works.
+    NirqStuckLow,
+    /// nIRQ never goes low (a broken trace: the open-drain line stays at its pull-up);
+    /// SPI works.
+    NirqStuckHigh,
 }
 
 /// The chip's operating state as a test sees it.
@@ -163,8 +169,12 @@ impl Chip {
 
     /// The nIRQ pin: low while any enabled status bit is set.
     pub fn nirq_low(&self) -> bool {
+        match self.fault {
+            Fault::NirqStuckLow => return true,
+            Fault::NirqStuckHigh | Fault::Unplugged { .. } => return false,
+            Fault::None => {}
+        }
         self.power == Power::On
-            && self.fault == Fault::None
             && ((self.status1 & self.reg(addr::INTERRUPT_ENABLE_1))
                 | (self.status2 & self.reg(addr::INTERRUPT_ENABLE_2)))
                 != 0

@@ -44,16 +44,30 @@
 //!   a frame from an ideal transmitter in the receiver's own format (lora-rs' `inject_rx`).
 //! - **Execution** ([`Simulation`]): a deterministic single-threaded executor in virtual
 //!   time; all randomness from one seed ([`rng`]).
-//! - **Faults**: unplugged module (SPI reads all 0xFF or 0x00), power-on reset at any
-//!   moment, register corruption ([`ChipHandle`]).
+//! - **The MCU's bus** (per radio, [`RadioConfig`]): every SPI transaction takes
+//!   `spi_overhead_ns` + bytes × 8 / `spi_clock_hz` of virtual time before it acts on the
+//!   chip (async: the task sleeps and others run, as with DMA; blocking: the whole world
+//!   advances, a busy-wait). Defaults: [`SPI_CLOCK_F405_HZ`] (5.25 MHz, the flight board;
+//!   [`SPI_CLOCK_NRF52840_HZ`] = 8 MHz for the module), [`SPI_OVERHEAD_NS`] = 3 µs. nIRQ
+//!   reaches a waiting task `irq_latency_ns` ([`IRQ_LATENCY_NS`] = 5 µs) after its falling
+//!   edge; a wait that starts with the line already low returns at once.
+//!   [`RadioConfig::with_instant_bus`] turns both off (tests of the chip's own timing).
+//!   [`ChipHandle::spi_stats`] counts transactions, failures and bus time.
+//! - **Faults** ([`ChipHandle`], [`Fault`]): unplugged module (SPI reads all 0xFF or 0x00),
+//!   nIRQ stuck low or stuck high (`Fault::NirqStuckLow` / `NirqStuckHigh`), SPI bus errors
+//!   (the next N transactions, [`ChipHandle::fail_spi_transactions`], or each with a
+//!   probability from the seed, [`ChipHandle::set_spi_error_rate`]: the transaction takes its
+//!   time, reaches nothing and returns [`SpiError`]), power-on reset (brown-out) at any moment
+//!   ([`ChipHandle::power_on_reset`]; at a given time: a task that sleeps until then and
+//!   calls it), register corruption.
 //!
 //! # What is not
 //! Direct (GPIO/SDI) modulation, OOK details, low-duty-cycle mode, wake-up timer, low-battery
 //! detector, antenna diversity, auto-TX, GPIO pin functions (CCA output), the
 //! invalid-preamble and external interrupts, `irssi` on interference bursts, and the exact IF filter table. The CRC seed
 //! (0xFFFF) and the IEC-16 / Biacheva polynomials are this model's assumptions; both
-//! simulated ends agree, but they are not checked against silicon. SPI transactions take no
-//! virtual time.
+//! simulated ends agree, but they are not checked against silicon. SPI transactions all cost
+//! the same per byte (no clock stretching, no bus shared between devices).
 //!
 //! # Example
 //! Two chips 100 m apart; one sends 5 bytes with raw register writes, the other receives.
@@ -120,6 +134,10 @@ mod world;
 
 pub use chip::{ChipState, Fault, PLL_SETTLE_NS, POWER_ON_RESET_NS, XTAL_START_NS};
 pub use executor::{Simulation, Spawner, Task};
-pub use medium::{ChipHandle, Interference, Medium, MediumConfig, RadioConfig, RadioHandle};
-pub use pins::{SimDelay, SimIrq, SimSdn, SimSpi, Sleep};
+pub use medium::{
+    ChipHandle, IRQ_LATENCY_NS, Interference, Medium, MediumConfig, RadioConfig, RadioHandle,
+    SPI_CLOCK_F405_HZ, SPI_CLOCK_NRF52840_HZ, SPI_OVERHEAD_NS,
+};
+pub use pins::{SimDelay, SimIrq, SimSdn, SimSpi, Sleep, SpiError};
 pub use trace::{Outcome, RadioId, Reception, TraceFrame};
+pub use world::SpiStats;

@@ -10,6 +10,7 @@ use crate::modem::{ModemSettings, airtime_ns, bits_on_air};
 use crate::packet::PacketFormat;
 use crate::pins::{SimDelay, SimIrq, SimSdn, SimSpi};
 use crate::trace::{RadioId, TraceFrame};
+use crate::world::SpiStats;
 use crate::world::World;
 
 /// Medium-wide settings.
@@ -48,7 +49,28 @@ pub struct RadioConfig {
     pub temperature_c: f64,
     /// Supply voltage the battery monitor reports (0x1B), in V. Default 3.3.
     pub supply_v: f64,
+    /// SPI clock of the MCU's bus to this chip, Hz: every transaction takes
+    /// bytes × 8 / clock plus [`RadioConfig::spi_overhead_ns`] of virtual time. Default
+    /// [`SPI_CLOCK_F405_HZ`]; 0 makes transactions instantaneous (and drops the overhead).
+    pub spi_clock_hz: u32,
+    /// Fixed cost of one SPI transaction (nSEL, DMA set-up, the task's wake-up), ns.
+    /// Default [`SPI_OVERHEAD_NS`].
+    pub spi_overhead_ns: u64,
+    /// Time from an nIRQ falling edge to the task waiting for it running (EXTI/GPIOTE
+    /// interrupt, executor wake-up), ns. A wait that starts with the line already low
+    /// returns at once, as embassy's `wait_for_low` does. Default [`IRQ_LATENCY_NS`].
+    pub irq_latency_ns: u64,
 }
+
+/// The flight board's RFM22B bus: SPI3 at APB1 42 MHz ÷ 8 (hardware.md, flight-fw board.rs).
+pub const SPI_CLOCK_F405_HZ: u32 = 5_250_000;
+/// The module's RFM22B bus: nRF52840 SPIM at 8 MHz (hardware.md, module-fw board.rs).
+pub const SPI_CLOCK_NRF52840_HZ: u32 = 8_000_000;
+/// Default per-transaction SPI overhead: nSEL set-up/hold, DMA start and the async
+/// driver's completion wake-up, a few µs on a Cortex-M4 at 168 MHz or an nRF52840.
+pub const SPI_OVERHEAD_NS: u64 = 3_000;
+/// Default nIRQ latency: interrupt entry, the executor waking and polling the task.
+pub const IRQ_LATENCY_NS: u64 = 5_000;
 
 impl Default for RadioConfig {
     fn default() -> Self {
@@ -58,6 +80,9 @@ impl Default for RadioConfig {
             crystal_error_ppm: 0.0,
             temperature_c: 25.0,
             supply_v: 3.3,
+            spi_clock_hz: SPI_CLOCK_F405_HZ,
+            spi_overhead_ns: SPI_OVERHEAD_NS,
+            irq_latency_ns: IRQ_LATENCY_NS,
         }
     }
 }
@@ -68,6 +93,17 @@ impl RadioConfig {
         Self {
             position_m,
             ..Self::default()
+        }
+    }
+
+    /// The same radio on an ideal bus: SPI transactions and nIRQ wake-ups take no time
+    /// (tests of the chip's own timing to the nanosecond).
+    pub fn with_instant_bus(self) -> Self {
+        Self {
+            spi_clock_hz: 0,
+            spi_overhead_ns: 0,
+            irq_latency_ns: 0,
+            ..self
         }
     }
 
@@ -256,6 +292,35 @@ impl ChipHandle {
             }
             w.update_irq(self.index);
         });
+    }
+
+    /// The next `count` SPI transactions to this chip fail: they take their time, reach
+    /// nothing and return [`SpiError`] (a glitch on the bus, a DMA error).
+    pub fn fail_spi_transactions(&self, count: u32) {
+        self.with(|w| {
+            if let Some(r) = w.radios.get_mut(self.index) {
+                r.spi.fail_next = count;
+            }
+        });
+    }
+
+    /// Every SPI transaction to this chip fails with probability `p` (from the simulation's
+    /// seed, so runs repeat); 0 turns it off.
+    pub fn set_spi_error_rate(&self, p: f64) {
+        self.with(|w| {
+            if let Some(r) = w.radios.get_mut(self.index) {
+                r.spi.error_rate = p;
+            }
+        });
+    }
+
+    /// SPI statistics of this chip so far.
+    pub fn spi_stats(&self) -> SpiStats {
+        self.with(|w| {
+            w.radios
+                .get(self.index)
+                .map_or(SpiStats::default(), |r| r.spi.stats)
+        })
     }
 
     /// A power-on reset right now (brown-out): registers lost, `ipor` after the POR time.

@@ -1,9 +1,12 @@
 //! The embedded-hal endpoints of one virtual chip: SPI, nIRQ, SDN and a virtual-time delay.
 //!
-//! SPI transactions are instantaneous at the current virtual time. nIRQ is level-low: it is
-//! low while any enabled interrupt status bit is set and goes high only when 0x03/0x04 are
-//! read. `Wait` futures complete when virtual time reaches the moment the line changes; a
-//! dropped wait leaves at most a stale waker behind, which costs one spurious poll.
+//! An SPI transaction first spends its bus time (bytes × 8 at the radio's SPI clock plus a
+//! fixed overhead: the async one sleeps so other tasks run, the blocking one busy-waits),
+//! then acts on the chip at once, or fails with [`SpiError`] when a bus error was injected.
+//! nIRQ is level-low: it is low while any enabled interrupt status bit is set and goes high
+//! only when 0x03/0x04 are read. A wait for it low completes at once if the line is already
+//! low, else the interrupt latency after the falling edge; a dropped wait leaves at most a
+//! stale waker behind, which costs one spurious poll.
 
 use core::convert::Infallible;
 use core::future::Future;
@@ -32,24 +35,51 @@ impl SimSpi {
     }
 }
 
+/// An SPI transaction failed (injected with `ChipHandle::fail_spi_transactions` or
+/// `ChipHandle::set_spi_error_rate`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SpiError;
+
+impl embedded_hal::spi::Error for SpiError {
+    fn kind(&self) -> embedded_hal::spi::ErrorKind {
+        embedded_hal::spi::ErrorKind::Other
+    }
+}
+
 impl embedded_hal::spi::ErrorType for SimSpi {
-    type Error = Infallible;
+    type Error = SpiError;
 }
 
 impl embedded_hal::spi::SpiDevice for SimSpi {
-    fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), Infallible> {
-        self.world.borrow_mut().spi(self.index, operations);
-        Ok(())
+    /// Busy-waits the bus time (the whole simulation advances, no task runs), then acts.
+    fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), SpiError> {
+        let mut world = self.world.borrow_mut();
+        let cost = world.spi_cost_ns(self.index, operations);
+        let until = world.now_ns.saturating_add(cost);
+        world.advance_to(until);
+        world.spi_transaction(self.index, operations, cost)
     }
 }
 
 impl embedded_hal_async::spi::SpiDevice for SimSpi {
-    async fn transaction(
-        &mut self,
-        operations: &mut [Operation<'_, u8>],
-    ) -> Result<(), Infallible> {
-        self.world.borrow_mut().spi(self.index, operations);
-        Ok(())
+    /// Sleeps the bus time (other tasks run, as with DMA), then acts.
+    async fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), SpiError> {
+        let (cost, deadline_ns) = {
+            let world = self.world.borrow();
+            let cost = world.spi_cost_ns(self.index, operations);
+            (cost, world.now_ns.saturating_add(cost))
+        };
+        if cost > 0 {
+            Sleep {
+                world: self.world.clone(),
+                deadline_ns,
+                registered: None,
+            }
+            .await;
+        }
+        self.world
+            .borrow_mut()
+            .spi_transaction(self.index, operations, cost)
     }
 }
 
@@ -89,6 +119,7 @@ impl SimIrq {
             condition,
             falling,
             rising,
+            low_at_start: self.low(),
         }
     }
 }
@@ -150,6 +181,8 @@ struct IrqWait {
     condition: Condition,
     falling: u64,
     rising: u64,
+    /// The line was low when the wait began: a level wait for low returns at once.
+    low_at_start: bool,
 }
 
 impl Future for IrqWait {
@@ -157,22 +190,34 @@ impl Future for IrqWait {
 
     fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<()> {
         let mut world = self.world.borrow_mut();
+        let now = world.now_ns;
         let Some(radio) = world.radios.get_mut(self.index) else {
             return Poll::Ready(());
         };
+        // A falling edge since the wait began reaches the task only after the latency.
+        let woken_at = radio
+            .irq
+            .fell_at_ns
+            .saturating_add(radio.config.irq_latency_ns);
+        let fell = radio.irq.falling_edges > self.falling;
         let line = &mut radio.irq;
         let done = match self.condition {
             Condition::High => !line.low,
-            Condition::Low => line.low,
+            Condition::Low => self.low_at_start || (fell && now >= woken_at),
             Condition::Rising => line.rising_edges > self.rising,
-            Condition::Falling => line.falling_edges > self.falling,
-            Condition::AnyEdge => {
-                line.rising_edges > self.rising || line.falling_edges > self.falling
-            }
+            Condition::Falling => fell && now >= woken_at,
+            Condition::AnyEdge => line.rising_edges > self.rising || (fell && now >= woken_at),
         };
         if done {
             return Poll::Ready(());
         }
+        if fell && matches!(self.condition, Condition::Low | Condition::Falling) {
+            world.add_timer(woken_at, cx.waker().clone());
+            return Poll::Pending;
+        }
+        let Some(line) = world.radios.get_mut(self.index).map(|r| &mut r.irq) else {
+            return Poll::Ready(());
+        };
         if !line.waiters.iter().any(|w| w.will_wake(cx.waker())) {
             line.waiters.push(cx.waker().clone());
         }

@@ -2,7 +2,8 @@
 //!
 //! Time only moves forward through `advance_one`/`advance_to`, which process every chip
 //! event up to the new time in time order (ties in radio order), so when an SPI access or a
-//! task runs, every chip is exactly at `now`. SPI transactions themselves take no time.
+//! task runs, every chip is exactly at `now`. An SPI transaction costs its bus time first
+//! (`spi_cost_ns`, spent by the caller in `pins`), then acts on the chip at once.
 
 use core::cmp::Ordering;
 use core::task::Waker;
@@ -25,7 +26,28 @@ pub(crate) struct IrqLine {
     pub low: bool,
     pub falling_edges: u64,
     pub rising_edges: u64,
+    /// When the line last fell (for the interrupt latency).
+    pub fell_at_ns: u64,
     pub waiters: Vec<Waker>,
+}
+
+/// SPI bus statistics of one radio.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SpiStats {
+    /// Transactions started.
+    pub transactions: u64,
+    /// Transactions that failed (injected bus errors).
+    pub failed: u64,
+    /// Virtual time the bus was busy, ns.
+    pub busy_ns: u64,
+}
+
+/// Injected SPI faults and statistics of one radio's bus.
+#[derive(Debug, Default)]
+pub(crate) struct SpiBus {
+    pub fail_next: u32,
+    pub error_rate: f64,
+    pub stats: SpiStats,
 }
 
 #[derive(Debug)]
@@ -33,6 +55,7 @@ pub(crate) struct Radio {
     pub chip: Chip,
     pub config: RadioConfig,
     pub irq: IrqLine,
+    pub spi: SpiBus,
 }
 
 #[derive(Debug)]
@@ -102,6 +125,7 @@ impl World {
                 low,
                 ..IrqLine::default()
             },
+            spi: SpiBus::default(),
         });
         me
     }
@@ -258,6 +282,7 @@ impl World {
             radio.irq.low = low;
             if low {
                 radio.irq.falling_edges += 1;
+                radio.irq.fell_at_ns = self.now_ns;
             } else {
                 radio.irq.rising_edges += 1;
             }
@@ -272,6 +297,60 @@ impl World {
         self.radios
             .get(i)
             .map_or(0, |r| r.chip.live_rssi(&self.air, self.now_ns))
+    }
+
+    /// Bus time of `operations` on radio `i`: bytes × 8 at its SPI clock plus the
+    /// per-transaction overhead (`DelayNs` operations are spent inside [`World::spi`]).
+    pub fn spi_cost_ns(&self, i: usize, operations: &[Operation<'_, u8>]) -> u64 {
+        let Some(config) = self.radios.get(i).map(|r| r.config) else {
+            return 0;
+        };
+        if config.spi_clock_hz == 0 {
+            return 0;
+        }
+        let bytes: usize = operations
+            .iter()
+            .map(|op| match op {
+                Operation::Read(b) => b.len(),
+                Operation::Write(b) => b.len(),
+                Operation::Transfer(r, w) => r.len().max(w.len()),
+                Operation::TransferInPlace(b) => b.len(),
+                Operation::DelayNs(_) => 0,
+            })
+            .sum();
+        let bits = bytes as u64 * 8;
+        config.spi_overhead_ns + (bits * 1_000_000_000).div_ceil(u64::from(config.spi_clock_hz))
+    }
+
+    /// One SPI transaction on radio `i` whose bus time (`cost_ns`) has been spent: fails if
+    /// a bus error was injected (nothing reaches the chip), else acts on the chip.
+    pub fn spi_transaction(
+        &mut self,
+        i: usize,
+        operations: &mut [Operation<'_, u8>],
+        cost_ns: u64,
+    ) -> Result<(), crate::pins::SpiError> {
+        let Some(radio) = self.radios.get_mut(i) else {
+            return Err(crate::pins::SpiError);
+        };
+        let bus = &mut radio.spi;
+        bus.stats.transactions += 1;
+        bus.stats.busy_ns += cost_ns;
+        let fail = if bus.fail_next > 0 {
+            bus.fail_next -= 1;
+            true
+        } else {
+            // Draw only when errors are on: runs without them keep their random sequence.
+            bus.error_rate > 0.0 && self.rng.chance(bus.error_rate)
+        };
+        if fail {
+            if let Some(r) = self.radios.get_mut(i) {
+                r.spi.stats.failed += 1;
+            }
+            return Err(crate::pins::SpiError);
+        }
+        self.spi(i, operations);
+        Ok(())
     }
 
     /// One SPI transaction on radio `i` (instantaneous except for `DelayNs` operations).

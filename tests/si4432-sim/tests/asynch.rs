@@ -90,8 +90,13 @@ fn timeout_wins_when_nothing_happens_and_irq_wins_at_the_exact_moment() {
     assert!(!fired);
     assert_eq!(t_timeout, Duration::from_millis(1));
     assert!(sent);
-    // 200 µs PLL settle + 264 bits (6+4+4+1+16+2 bytes) at 57 601.93 bit/s.
-    assert_eq!(t_sent, Duration::from_nanos(200_000 + 4_583_180));
+    // The 2-byte txon write on the 5.25 MHz bus (3 µs overhead + 16 bits), 200 µs PLL
+    // settle, 264 bits (6+4+4+1+16+2 bytes) at 57 601.93 bit/s, then the 5 µs nIRQ latency.
+    let spi = si4432_sim::SPI_OVERHEAD_NS + (16_000_000_000u64).div_ceil(5_250_000);
+    assert_eq!(
+        t_sent,
+        Duration::from_nanos(spi + 200_000 + 4_583_180 + si4432_sim::IRQ_LATENCY_NS)
+    );
     assert_eq!(s1, 0x04);
 }
 
@@ -196,8 +201,10 @@ fn sdn_power_cycle_gives_a_falling_edge_at_the_end_of_the_power_on_reset() {
     });
     sim.run_for(Duration::from_millis(50));
     let (t_por, first, t_ready, second) = task.take().unwrap();
-    assert_eq!(t_por, Duration::from_millis(15));
+    // Each edge reaches the task after the nIRQ latency.
+    let latency = Duration::from_nanos(si4432_sim::IRQ_LATENCY_NS);
+    assert_eq!(t_por, Duration::from_millis(15) + latency);
     assert_eq!(first, (0x00, 0x01));
-    assert_eq!(t_ready, Duration::from_micros(15_600));
+    assert_eq!(t_ready, Duration::from_micros(15_600) + latency);
     assert_eq!(second, (0x00, 0x02));
 }

@@ -11,9 +11,12 @@ use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::spi::{Operation, SpiDevice};
 use si4432_sim::{ChipState, Fault, RadioConfig, RadioHandle, Simulation};
 
+/// One chip on an ideal bus: these tests time the chip itself to the nanosecond.
 fn one() -> (Simulation, RadioHandle) {
     let sim = Simulation::new(1);
-    let radio = sim.medium().add_radio(RadioConfig::default());
+    let radio = sim
+        .medium()
+        .add_radio(RadioConfig::default().with_instant_bus());
     (sim, radio)
 }
 

@@ -23,6 +23,8 @@ use crate::scenario::Scenario;
   taulink-sim --cut 10:12 --duration 20 --plot out failsafe and recovery after a 2 s cut,
                                                    drawn to out/link.png
   taulink-sim --sweep                              every rate mode, clean and at 10 % loss
+  taulink-sim --serve                              the web ground station on this link:
+                                                   open the printed URL
 
 Exit status: 0 if every channel output and stream byte was right, 1 if any was wrong,
 2 for a command-line error."
@@ -90,6 +92,18 @@ pub struct Cli {
     /// failsafe marked) into DIR.
     #[command(flatten)]
     pub plot: sim_plot::PlotArgs,
+    /// Serve the web ground station and this link's telemetry (what the module's HM-10 would
+    /// relay to a phone) over HTTP and a WebSocket at ADDR (default 127.0.0.1:8018), in real
+    /// time, and print the URL to open. Runs until interrupted.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8018",
+          conflicts_with_all = ["sweep", "json"])]
+    pub serve: Option<std::net::SocketAddr>,
+    /// With --serve: the built app (default: telemetry/ground-station/dist in this checkout).
+    #[arg(long, value_name = "DIR", requires = "serve")]
+    pub dist: Option<std::path::PathBuf>,
+    /// With --serve: virtual seconds per wall second (0.01..=100).
+    #[arg(long, value_name = "X", default_value_t = 1.0, value_parser = speed)]
+    pub speed: f64,
     /// Print the report as JSON on stdout (fields in the README); no status line.
     #[arg(long)]
     pub json: bool,
@@ -157,6 +171,11 @@ pub fn number_in(s: &str, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
         return Err(format!("{what} must be within {lo}..={hi}, got {s}"));
     }
     Ok(v)
+}
+
+/// A real-time speed-up factor, 0.01..=100.
+fn speed(text: &str) -> Result<f64, String> {
+    number_in(text, 0.01, 100.0, "a speed-up factor")
 }
 
 fn probability(s: &str) -> Result<f64, String> {

@@ -14,6 +14,7 @@ pub mod plot;
 pub mod probe;
 pub mod report;
 pub mod scenario;
+pub mod serve;
 pub mod world;
 
 pub use cli::Cli;

@@ -35,6 +35,12 @@ impl ClimbRate {
         }
     }
 
+    /// The tracked altitude, m (`None` before the first reading): the smoothed baro altitude
+    /// the handset shows.
+    pub fn altitude_m(&self) -> Option<f32> {
+        self.last.map(|(_, altitude)| altitude)
+    }
+
     /// Feeds the altitude (m, up) measured at `now_ms`; returns the climb rate (m/s, up) once
     /// the tracker has settled.
     pub fn update(&mut self, now_ms: u32, altitude_m: f32) -> Option<f32> {

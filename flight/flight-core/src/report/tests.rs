@@ -158,3 +158,29 @@ fn identification_becomes_three_messages() {
         (Axis::Yaw, 0.031, 25.0, 0.0)
     );
 }
+
+#[test]
+fn vertical_and_cells_messages_carry_the_flight_values() {
+    assert_eq!(
+        vertical_message(123.456, -1.234),
+        Message::Vertical(telemetry::messages::Vertical {
+            altitude_cm: 12_346,
+            vario_cm_s: -123,
+        })
+    );
+    assert_eq!(
+        vertical_message(f32::NAN, 1e9),
+        Message::Vertical(telemetry::messages::Vertical {
+            altitude_cm: 0,
+            vario_cm_s: i16::MAX,
+        })
+    );
+    let mut battery = snapshot().battery.unwrap();
+    battery.cells = 0;
+    assert_eq!(cells_message(&battery), None);
+    battery.cells = 4;
+    assert_eq!(
+        cells_message(&battery),
+        Some(Message::Cells(telemetry::messages::Cells { count: 4 }))
+    );
+}

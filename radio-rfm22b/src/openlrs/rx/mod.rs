@@ -48,7 +48,8 @@ pub struct Receiver {
 impl Receiver {
     /// A receiver with optionally stored bind data (invalid or other-version data is ignored).
     pub fn new(config: Config, stored: Option<BindData>) -> Self {
-        let data = stored.filter(|d| d.version == config.version.byte() && d.validate().is_ok());
+        let data = stored
+            .filter(|d| d.version == config.version.byte() && d.validate_for(config.band).is_ok());
         Self {
             config,
             mode: Mode::Bind { until_us: None },
@@ -266,7 +267,7 @@ impl Receiver {
     }
 
     fn on_bind_packet(&mut self, now_us: u64, packet: &[u8]) -> Reception {
-        match bind::receive_bind_packet(packet, self.config.version) {
+        match bind::receive_bind_packet(packet, self.config.version, self.config.band) {
             BindReception::Accepted(data) => Reception {
                 reply: Vec::from_slice(&[bind::BIND_ACK]).ok(),
                 command: Some(self.start_link(now_us, data)),

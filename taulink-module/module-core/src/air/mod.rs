@@ -18,17 +18,15 @@ pub mod radio;
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat};
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::rate::TX_LEAD_US;
-use telemetry::link::{Band as LinkBand, LinkParams, RateMode as LinkRate};
+use telemetry::link::{Band as LinkBand, LinkParams};
 
 use crate::channels::Channels;
 use crate::hm10::RecordQueue;
 use crate::hm10::relay::MAX_RECORD_LEN;
 use crate::ports::{AirSchedule, LinkPort, LinkStats};
 use crate::records::{MAX_STREAM_FRAME_LEN, Splitter, to_stream};
-use crate::settings::{Band, RateMode, Settings};
+use crate::settings::{Band, Settings};
 
-/// One downlink slot in this many (the link's default telemetry ratio).
-pub const TELEMETRY_RATIO: u8 = 4;
 /// The master counts the link as up while a downlink arrived within this time.
 pub const CONNECTED_TIMEOUT_US: u64 = 500_000;
 /// Records from the phone waiting for room in the uplink stream.
@@ -36,37 +34,13 @@ const UPLINK_RECORDS: usize = 8;
 /// Records received over the air waiting for the core.
 const RECEIVED_RECORDS: usize = 16;
 
-/// The link's rate mode for the settings' air rate: the three OpenLRSng-style slow rates
-/// share the link's 19.2 kbit/s long-range mode, 57.6 kbit/s is M100, 125 kbit/s F250.
-pub fn link_rate(rate: RateMode) -> LinkRate {
-    match rate {
-        RateMode::Bps4800 | RateMode::Bps9600 | RateMode::Bps19200 => LinkRate::L50,
-        RateMode::Bps57600 => LinkRate::M100,
-        RateMode::Bps125000 => LinkRate::F250,
-    }
-}
-
 /// The link's band.
 pub fn link_band(band: Band) -> LinkBand {
     match band {
         Band::Mhz433 => LinkBand::Mhz433,
         Band::Mhz868 => LinkBand::Mhz868,
         Band::Mhz915 => LinkBand::Mhz915,
-    }
-}
-
-/// The settings' rate for a link rate mode: `current` if it already gives `rate` (the three
-/// slow settings share L50), else the one setting that does; `None` for F500, which no setting
-/// gives.
-pub fn settings_rate(rate: LinkRate, current: RateMode) -> Option<RateMode> {
-    if link_rate(current) == rate {
-        return Some(current);
-    }
-    match rate {
-        LinkRate::L50 => Some(RateMode::Bps19200),
-        LinkRate::M100 => Some(RateMode::Bps57600),
-        LinkRate::F250 => Some(RateMode::Bps125000),
-        LinkRate::F500 => None,
+        Band::Ism433 => LinkBand::Ism433,
     }
 }
 
@@ -76,29 +50,31 @@ pub fn settings_band(band: LinkBand) -> Band {
         LinkBand::Mhz433 => Band::Mhz433,
         LinkBand::Mhz868 => Band::Mhz868,
         LinkBand::Mhz915 => Band::Mhz915,
+        LinkBand::Ism433 => Band::Ism433,
     }
 }
 
-/// The bound link's parameters (`None` while unbound): 16 channels, one downlink slot in
-/// [`TELEMETRY_RATIO`].
+/// The bound link's parameters (`None` while unbound): the settings' band, rate mode and
+/// telemetry ratio, 16 channels.
 pub fn link_params(settings: &Settings) -> Option<LinkParams> {
     (settings.bind_id != 0).then(|| LinkParams {
         bind_id: settings.bind_id,
         band: link_band(settings.band),
-        rate: link_rate(settings.rate),
+        rate: settings.rate,
         format: ChannelFormat::Full16,
-        telemetry_ratio: TELEMETRY_RATIO,
+        telemetry_ratio: settings.telemetry_ratio,
     })
 }
 
-/// Parameters for a new bind: the settings' band and rate with a fresh ID from `random`.
+/// Parameters for a new bind: the settings' band, rate and telemetry ratio with a fresh ID
+/// from `random`.
 pub fn new_bind_params(settings: &Settings, random: u32) -> LinkParams {
     LinkParams::new(
         random,
         link_band(settings.band),
-        link_rate(settings.rate),
+        settings.rate,
         ChannelFormat::Full16,
-        TELEMETRY_RATIO,
+        settings.telemetry_ratio,
     )
 }
 
@@ -360,28 +336,21 @@ mod tests {
         let mut settings = Settings::default();
         assert_eq!(link_params(&settings), None, "unbound");
         settings.bind_id = 0x1234_5678;
-        settings.rate = RateMode::Bps57600;
         settings.band = Band::Mhz868;
-        let params = link_params(&settings).unwrap();
-        assert_eq!(params.bind_id, 0x1234_5678);
-        assert_eq!(params.rate, LinkRate::M100);
-        assert_eq!(params.band, LinkBand::Mhz868);
-        assert_eq!(params.format, ChannelFormat::Full16);
-        assert_eq!(params.telemetry_ratio, 4);
-        assert_eq!(link_rate(RateMode::Bps4800), LinkRate::L50);
-        assert_eq!(link_rate(RateMode::Bps125000), LinkRate::F250);
-        assert_eq!(
-            settings_rate(LinkRate::L50, RateMode::Bps9600),
-            Some(RateMode::Bps9600)
-        );
-        assert_eq!(
-            settings_rate(LinkRate::L50, RateMode::Bps57600),
-            Some(RateMode::Bps19200)
-        );
-        assert_eq!(settings_rate(LinkRate::F500, RateMode::Bps9600), None);
+        settings.telemetry_ratio = 8;
+        for rate in telemetry::link::RateMode::ALL {
+            settings.rate = rate;
+            let params = link_params(&settings).unwrap();
+            assert_eq!(params.bind_id, 0x1234_5678);
+            assert_eq!(params.rate, rate);
+            assert_eq!(params.band, LinkBand::Mhz868);
+            assert_eq!(params.format, ChannelFormat::Full16);
+            assert_eq!(params.telemetry_ratio, 8);
+            let fresh = new_bind_params(&settings, 0xCAFE);
+            assert_eq!((fresh.bind_id, fresh.rate), (0xCAFE, rate));
+            assert_eq!(fresh.telemetry_ratio, 8);
+        }
         assert_eq!(settings_band(LinkBand::Mhz915), Band::Mhz915);
-        let fresh = new_bind_params(&settings, 0xCAFE);
-        assert_eq!((fresh.bind_id, fresh.rate), (0xCAFE, LinkRate::M100));
     }
 
     #[test]

@@ -14,13 +14,47 @@ use telemetry::handset::frsky_d::hub::SenderConfig;
 use telemetry::handset::sport::Scheduler;
 use telemetry::handset::sport::schedule::Config as SportConfig;
 
+use heapless::Deque;
+use telemetry::handset::crsf::address;
+use telemetry::handset::crsf::params::ParameterChunk;
+
 use crate::channels::Channels;
-use crate::ports::{HandsetOutput, LinkStats};
+use crate::ports::{HandsetOutput, HandsetRequest, LinkStats};
 use crate::settings::{InputProtocol, OutputProtocol, Role, Settings};
 pub use state::FlightState;
 
 /// CRSF line rate (EdgeTX's default, 400 kBd).
 pub const CRSF_BAUD: u32 = 400_000;
+/// The fastest CRSF rate the settings offer (`InputProtocol::Crsf921600`).
+pub const CRSF_FAST_BAUD: u32 = 921_600;
+/// The UARTE's fastest rate: EdgeTX's 1.87 MBd and above cannot be offered.
+pub const UARTE_MAX_BAUD: u32 = 1_000_000;
+
+/// The nRF52840 UARTE BAUDRATE register value for `baud`: Nordic's named preset where there
+/// is one (115 200, 921 600, 1 M), else `baud · 2³² / 16 MHz` rounded to a multiple of 0x1000
+/// (which reproduces the 115 200 preset, not the 921 600 one: at that rate the product
+/// specification lists the preset's real rate as 941 176 Bd, so the register is not linear
+/// there). `None` above the UARTE's 1 MBd.
+///
+/// | CRSF rate | register | rate on the line |
+/// |---|---|---|
+/// | 115 200 | 0x01D7_E000 (the preset) | 115 108 Bd (−0.08 %, PS table) |
+/// | 400 000 | 0x0666_6000 (custom) | ≈ 399 994 Bd by the formula (−0.002 %); to be checked on a scope |
+/// | 921 600 | 0x0EBE_D000 (the preset) | 941 176 Bd (+2.1 %, PS table): within a UART's tolerance only if the radio's side is exact; unverified on hardware |
+/// | 1 870 000 | — | beyond the UARTE (max 1 MBd) |
+pub const fn uarte_baudrate(baud: u32) -> Option<u32> {
+    match baud {
+        0 => return None,
+        115_200 => return Some(0x01D7_E000),
+        921_600 => return Some(0x0EBE_D000),
+        1_000_000 => return Some(0x1000_0000),
+        b if b > UARTE_MAX_BAUD => return None,
+        _ => {}
+    }
+    let bits = ((baud as u64) << 32) / 16_000_000;
+    Some(((bits + 0x800) as u32) & 0xFFFF_F000)
+}
+
 /// The slower CRSF rate the settings offer (`InputProtocol::Crsf115200`).
 pub const CRSF_SLOW_BAUD: u32 = 115_200;
 /// S.Port push rate.
@@ -73,9 +107,14 @@ enum Protocol {
 pub struct Handset {
     protocol: Protocol,
     state: FlightState,
+    /// Parameter reads/writes and bind commands waiting for the core.
+    requests: Deque<HandsetRequest, REQUESTS>,
     /// Radio frames the CRSF decoder rejected.
     pub crsf_rejected: u32,
 }
+
+/// Requests held between two core polls (the radio sends one per frame period).
+const REQUESTS: usize = 4;
 
 impl Handset {
     /// The codec the settings call for: CRSF input always answers in CRSF (EdgeTX needs the
@@ -84,16 +123,20 @@ impl Handset {
     pub fn new(settings: &Settings) -> Self {
         let protocol = match (settings.role, settings.input, settings.output) {
             (Role::Receiver, _, _) => Protocol::Off,
-            (Role::Transmitter, input @ (InputProtocol::Crsf | InputProtocol::Crsf115200), _) => {
-                let baud = if input == InputProtocol::Crsf115200 {
-                    CRSF_SLOW_BAUD
-                } else {
-                    CRSF_BAUD
-                };
+            (
+                Role::Transmitter,
+                input @ (InputProtocol::Crsf
+                | InputProtocol::Crsf115200
+                | InputProtocol::Crsf921600),
+                _,
+            ) => {
+                let baud = input.crsf_baud().unwrap_or(CRSF_BAUD);
+                let mut info = taulink_device_info(0, 1, 0);
+                info.parameter_count = crate::params::PARAMETER_COUNT;
                 Protocol::Crsf {
                     decoder: Decoder::new(),
                     // The responder sizes its reply window from the line rate.
-                    responder: Responder::new(Config::new(baud, taulink_device_info(0, 1, 0))),
+                    responder: Responder::new(Config::new(baud, info)),
                     baud,
                 }
             }
@@ -110,6 +153,7 @@ impl Handset {
         Self {
             protocol,
             state: FlightState::new(settings.tx_power),
+            requests: Deque::new(),
             crsf_rejected: 0,
         }
     }
@@ -132,6 +176,7 @@ impl Handset {
     fn take_frames(
         feed: impl Iterator<Item = Decoded>,
         responder: &mut Responder,
+        requests: &mut Deque<HandsetRequest, REQUESTS>,
         rejected: &mut u32,
         now_us: u64,
     ) -> Option<Channels> {
@@ -139,8 +184,33 @@ impl Handset {
         for decoded in feed {
             match decoded {
                 Decoded::Frame(frame) => {
-                    if let Some(Message::RcChannels(rc)) = responder.on_frame(now_us, &frame) {
-                        channels = Some(Channels::from_values(&rc.ticks));
+                    let request = match responder.on_frame(now_us, &frame) {
+                        Some(Message::RcChannels(rc)) => {
+                            channels = Some(Channels::from_values(&rc.ticks));
+                            None
+                        }
+                        Some(Message::ParameterRead(read)) if for_us(read.destination) => {
+                            Some(HandsetRequest::Read {
+                                origin: read.origin,
+                                number: read.number,
+                                chunk: read.chunk,
+                            })
+                        }
+                        Some(Message::ParameterWrite(write)) if for_us(write.destination) => {
+                            Some(HandsetRequest::Write {
+                                origin: write.origin,
+                                number: write.number,
+                                value: write.value,
+                            })
+                        }
+                        Some(Message::Bind(bind)) if for_us(bind.destination) => {
+                            Some(HandsetRequest::Bind)
+                        }
+                        _ => None,
+                    };
+                    // Full: the radio repeats an unanswered request on its timeout.
+                    if let Some(request) = request {
+                        let _ = requests.push_back(request);
                     }
                 }
                 Decoded::Rejected(_) => *rejected = rejected.saturating_add(1),
@@ -153,6 +223,10 @@ impl Handset {
 impl HandsetOutput for Handset {
     fn on_telemetry(&mut self, record: &[u8]) {
         self.state.on_record(record);
+    }
+
+    fn on_module_battery(&mut self, millivolts: u16) {
+        self.state.on_module_battery(millivolts);
     }
 
     fn on_link_stats(&mut self, stats: &LinkStats) {
@@ -172,6 +246,7 @@ impl HandsetOutput for Handset {
             } => Self::take_frames(
                 decoder.feed(bytes),
                 responder,
+                &mut self.requests,
                 &mut self.crsf_rejected,
                 now_us,
             ),
@@ -184,7 +259,13 @@ impl HandsetOutput for Handset {
         match &mut self.protocol {
             Protocol::Crsf {
                 decoder, responder, ..
-            } => Self::take_frames(decoder.idle(), responder, &mut self.crsf_rejected, now_us),
+            } => Self::take_frames(
+                decoder.idle(),
+                responder,
+                &mut self.requests,
+                &mut self.crsf_rejected,
+                now_us,
+            ),
             Protocol::SPort(_) | Protocol::FrskyD(_) | Protocol::Off => None,
         }
     }
@@ -204,6 +285,28 @@ impl HandsetOutput for Handset {
             Protocol::Off => 0,
         }
     }
+
+    fn take_request(&mut self) -> Option<HandsetRequest> {
+        self.requests.pop_front()
+    }
+
+    fn parameter_chunk_len(&self) -> usize {
+        match &self.protocol {
+            Protocol::Crsf { responder, .. } => responder.parameter_chunk_len(),
+            _ => telemetry::handset::crsf::params::MAX_CHUNK_DATA,
+        }
+    }
+
+    fn send_parameter_chunk(&mut self, chunk: ParameterChunk) {
+        if let Protocol::Crsf { responder, .. } = &mut self.protocol {
+            responder.queue_parameter_chunk(chunk);
+        }
+    }
+}
+
+/// Frames addressed to the module (or to everyone).
+fn for_us(destination: u8) -> bool {
+    matches!(destination, address::TX_MODULE | address::BROADCAST)
 }
 
 #[cfg(test)]
@@ -234,8 +337,30 @@ mod tests {
             Handset::new(&settings).line_mode(),
             LineMode::Crsf { baud: 115_200 }
         );
+        settings.input = InputProtocol::Crsf921600;
+        assert_eq!(
+            Handset::new(&settings).line_mode(),
+            LineMode::Crsf { baud: 921_600 }
+        );
         settings.role = Role::Receiver;
         assert_eq!(Handset::new(&settings).line_mode(), LineMode::Off);
+    }
+
+    #[test]
+    fn uarte_registers_for_the_crsf_rates() {
+        // nRF52840 PS UARTE BAUDRATE presets: 115 200 and 921 600 are the named values.
+        assert_eq!(uarte_baudrate(115_200), Some(0x01D7_E000));
+        assert_eq!(uarte_baudrate(921_600), Some(0x0EBE_D000));
+        assert_eq!(uarte_baudrate(1_000_000), Some(0x1000_0000));
+        assert_eq!(uarte_baudrate(400_000), Some(0x0666_6000));
+        assert_eq!(uarte_baudrate(1_870_000), None);
+        for input in [
+            InputProtocol::Crsf,
+            InputProtocol::Crsf115200,
+            InputProtocol::Crsf921600,
+        ] {
+            assert!(uarte_baudrate(input.crsf_baud().unwrap()).is_some());
+        }
     }
 
     #[test]

@@ -5,7 +5,7 @@
 use heapless::String;
 use telemetry::handset::HandsetTelemetry;
 use telemetry::handset::report::{
-    AttitudeReport, BatteryReport, FlightModeReport, GpsReport, LinkReport,
+    AttitudeReport, BatteryReport, FlightModeReport, GpsReport, LinkReport, VerticalReport,
 };
 use telemetry::messages::{self, GpsFix, Message};
 
@@ -44,6 +44,9 @@ pub struct FlightState {
     attitude: Option<messages::Attitude>,
     flight_mode: Option<messages::FlightMode>,
     gps: Option<messages::Gps>,
+    vertical: Option<messages::Vertical>,
+    cells: Option<u8>,
+    module_battery_mv: Option<u16>,
     /// The flight side's own view of the link (uplink RSSI/LQ), from its LinkStats message.
     flight_link: Option<messages::LinkStats>,
     /// Records that held no message this firmware knows.
@@ -78,8 +81,15 @@ impl FlightState {
             Message::FlightMode(m) => self.flight_mode = Some(m),
             Message::Gps(g) => self.gps = Some(g),
             Message::LinkStats(l) => self.flight_link = Some(l),
+            Message::Vertical(v) => self.vertical = Some(v),
+            Message::Cells(c) => self.cells = (c.count > 0).then_some(c.count),
             Message::ArmState(_) | Message::SysIdResult(_) | Message::SettingChange(_) => {}
         }
+    }
+
+    /// The module's own supply (the radio battery on JR pin 3), mV.
+    pub fn on_module_battery(&mut self, millivolts: u16) {
+        self.module_battery_mv = Some(millivolts);
     }
 
     /// The link's statistics.
@@ -141,6 +151,12 @@ impl FlightState {
                     altitude_m: g.altitude_cm / 100,
                     satellites: g.satellites,
                 }),
+            vertical: self.vertical.map(|v| VerticalReport {
+                altitude_cm: v.altitude_cm,
+                vario_cm_s: v.vario_cm_s,
+            }),
+            cells: self.cells,
+            module_battery_mv: self.module_battery_mv,
         }
     }
 }

@@ -3,9 +3,13 @@
 //! The firmware captures one edge polarity only (TIMER1 CAPTURE through PPI, toolchain.md §2),
 //! so each interval between edges is one channel *period* as EdgeTX makes it (pulse plus
 //! gap, protocols.md §2.1); the polarity of the line does not matter. An interval longer
-//! than `sync_min_us` ends a frame. Frames must be clean (every period within
-//! `channel_min_us..=channel_max_us`, 4…16 of them) and `lock_frames` consecutive clean frames
-//! with the same channel count lock the decoder (Betaflight needs 25, dRonin 10, §2.2; 5 at
+//! than `sync_min_us` ends a frame. Every period from `glitch_below_us` up to the sync gap is a
+//! channel: one outside `channel_min_us..=channel_max_us` (700…2300 µs, wider than EdgeTX's
+//! ±150 % extended limits, 732…2268 µs) is clamped to that range and counted, never dropped, so
+//! one channel out of range never costs the others their frame. A period shorter than
+//! `glitch_below_us` is not a channel at all (a spike or a split pulse: an extra edge shifts
+//! every channel after it), so that frame is dropped. Frames need 4…16 channels, and
+//! `lock_frames` consecutive clean frames with the same channel count lock the decoder (Betaflight needs 25, dRonin 10, §2.2; 5 at
 //! 22.5 ms is 112 ms). A locked decoder hands out every clean frame of its channel count; a
 //! different count must itself repeat `lock_frames` times before it replaces the old one, so
 //! one glitch never changes the channel layout.
@@ -18,9 +22,12 @@ use crate::channels::{Channels, MAX_CHANNELS, us_to_value};
 pub struct DecoderConfig {
     /// An interval longer than this ends the frame (openLRSng uses 2500 µs, §2.2).
     pub sync_min_us: u32,
-    /// Shortest accepted channel period.
+    /// A period shorter than this is a glitch (it drops the frame), not a channel. Below any
+    /// period a radio makes: EdgeTX's −150 % is 732 µs.
+    pub glitch_below_us: u32,
+    /// Channel periods below this are clamped up to it.
     pub channel_min_us: u32,
-    /// Longest accepted channel period.
+    /// Channel periods above this (up to the sync gap) are clamped down to it.
     pub channel_max_us: u32,
     /// Fewest channels a frame may carry.
     pub min_channels: usize,
@@ -34,8 +41,10 @@ impl Default for DecoderConfig {
     fn default() -> Self {
         Self {
             sync_min_us: 2500,
-            channel_min_us: 750,
-            channel_max_us: 2250,
+            glitch_below_us: 500,
+            // protocols.md §2.2: 700…2300 µs covers EdgeTX's extended limits (732…2268 µs).
+            channel_min_us: 700,
+            channel_max_us: 2300,
             min_channels: 4,
             lock_frames: 5,
             // Between ELRS' 1 s and the 100 ms an FC allows before its own failsafe (§2.2).
@@ -48,13 +57,8 @@ impl Default for DecoderConfig {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Reject {
-    /// A period shorter than the channel minimum (a glitch or a split pulse).
+    /// A period shorter than `glitch_below_us` (a spike or a split pulse).
     ShortPeriod {
-        /// The period in µs.
-        period_us: u32,
-    },
-    /// A period longer than the channel maximum but too short for a sync gap.
-    LongPeriod {
         /// The period in µs.
         period_us: u32,
     },
@@ -138,6 +142,7 @@ pub struct Decoder {
     /// A different count seen while locked, and how often in a row.
     pending: Option<(usize, u8)>,
     last_good_us: u32,
+    clamped: u32,
 }
 
 impl Decoder {
@@ -153,6 +158,7 @@ impl Decoder {
             state: State::Searching,
             pending: None,
             last_good_us: 0,
+            clamped: 0,
         }
     }
 
@@ -162,6 +168,11 @@ impl Decoder {
             State::Locked { count } => Some(count),
             _ => None,
         }
+    }
+
+    /// Channel periods clamped into `channel_min_us..=channel_max_us` so far.
+    pub fn clamped(&self) -> u32 {
+        self.clamped
     }
 
     /// Channel periods of the last frame handed out, µs (valid after a `Decoded::Frame`).
@@ -188,18 +199,21 @@ impl Decoder {
         if !self.synced || self.glitch.is_some() {
             return None;
         }
-        if period_us < self.config.channel_min_us {
+        if period_us < self.config.glitch_below_us {
             self.glitch = Some(Reject::ShortPeriod { period_us });
-        } else if period_us > self.config.channel_max_us {
-            self.glitch = Some(Reject::LongPeriod { period_us });
-        } else {
-            match self.periods_us.get_mut(self.collected) {
-                Some(slot) => {
-                    *slot = u16::try_from(period_us).unwrap_or(u16::MAX);
-                    self.collected += 1;
-                }
-                None => self.glitch = Some(Reject::TooManyChannels),
+            return None;
+        }
+        let (min, max) = (self.config.channel_min_us, self.config.channel_max_us);
+        let clamped = period_us.clamp(min, max.max(min));
+        if clamped != period_us {
+            self.clamped = self.clamped.saturating_add(1);
+        }
+        match self.periods_us.get_mut(self.collected) {
+            Some(slot) => {
+                *slot = u16::try_from(clamped).unwrap_or(u16::MAX);
+                self.collected += 1;
             }
+            None => self.glitch = Some(Reject::TooManyChannels),
         }
         None
     }

@@ -68,34 +68,58 @@ fn every_channel_count_from_4_to_16_locks() {
 }
 
 #[test]
-fn limits_750_and_2250_are_accepted_one_beyond_is_not() {
-    let inside = [750, 2250, 750, 2250];
-    let mut decoder = Decoder::new(DecoderConfig::default());
-    let frames = frames_of(&feed(&mut decoder, &edges(&inside, 20_000, 7, 0)));
-    assert_eq!(frames.len(), 1);
-    assert_eq!(frames[0].as_slice(), &[0, 2047, 0, 2047]);
+fn edgetx_extended_limits_on_one_channel_keep_every_channel() {
+    // EdgeTX at ±150 % ("extended limits"): channel outputs ±1536 on its 0.5 µs PPM timer,
+    // clamped to PPM_range = 2·768 → 1500 ± 768 µs = 732…2268 µs. One channel at each
+    // extreme, the others at ordinary values: all arrive, the extremes at the 11-bit
+    // channel range's ends (0 and 2047), the others exact.
+    for extreme in [732u16, 2268] {
+        let widths = [1500u16, extreme, 1200, 1800, 1000, 2000, 988, 2012];
+        let mut decoder = Decoder::new(DecoderConfig::default());
+        let frames = frames_of(&feed(&mut decoder, &edges(&widths, 22_500, 10, 0)));
+        assert_eq!(frames.len(), 4, "{extreme} µs");
+        let expected_extreme = if extreme < 1500 { 0 } else { 2047 };
+        for frame in &frames {
+            assert_eq!(frame.get(1), Some(expected_extreme));
+            for (index, width) in widths.iter().enumerate().filter(|(i, _)| *i != 1) {
+                assert_eq!(
+                    frame.get(index),
+                    Some(us_to_value(*width)),
+                    "channel {index}"
+                );
+            }
+        }
+    }
+}
 
+#[test]
+fn periods_outside_700_to_2300_are_clamped_not_dropped() {
+    // 600 µs and 2400 µs (still under the 2.5 ms sync) clamp to 700 / 2300 µs.
+    let widths = [600u16, 1500, 2400, 1500];
     let mut decoder = Decoder::new(DecoderConfig::default());
-    let outcomes = feed(&mut decoder, &edges(&[749, 1500, 1500, 1500], 20_000, 3, 0));
+    let frames = frames_of(&feed(&mut decoder, &edges(&widths, 20_000, 7, 0)));
+    assert_eq!(frames.len(), 1);
+    assert_eq!(decoder.last_periods_us(), &[700, 1500, 2300, 1500]);
+    assert_eq!(frames[0].as_slice(), &[0, 992, 2047, 992]);
+    assert!(decoder.clamped() >= 2 * 6, "two per frame end seen");
+    // The clamp bounds themselves pass unchanged.
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    feed(&mut decoder, &edges(&[700, 2300, 700, 2300], 20_000, 7, 0));
+    assert_eq!(decoder.last_periods_us(), &[700, 2300, 700, 2300]);
+    assert_eq!(decoder.clamped(), 0);
+    // Below the glitch threshold a period is not a channel: that frame is dropped.
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed(&mut decoder, &edges(&[499, 1500, 1500, 1500], 20_000, 3, 0));
     assert_eq!(
         outcomes[0],
-        Decoded::Rejected(Reject::ShortPeriod { period_us: 749 })
-    );
-    let mut decoder = Decoder::new(DecoderConfig::default());
-    let outcomes = feed(
-        &mut decoder,
-        &edges(&[1500, 2251, 1500, 1500], 20_000, 3, 0),
-    );
-    assert_eq!(
-        outcomes[0],
-        Decoded::Rejected(Reject::LongPeriod { period_us: 2251 })
+        Decoded::Rejected(Reject::ShortPeriod { period_us: 499 })
     );
 }
 
 #[test]
 fn sync_threshold_is_strictly_above_2500_us() {
     // 16 channels of 2012 µs need 32.2 ms; a 34.7 ms frame leaves a 2.5 ms gap: not a sync,
-    // and it is also too long for a channel, so those frames are glitches.
+    // so it reads as a 17th (clamped) channel and those frames are too long.
     let widths = [2012u16; 16];
     let mut decoder = Decoder::new(DecoderConfig::default());
     let short_rest = 16 * 2012 + 2500;

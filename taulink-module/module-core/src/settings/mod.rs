@@ -4,12 +4,21 @@
 //! a single sequential-storage item write: after a power cut the map holds either the old
 //! or the new record (the item CRC rejects a torn write), never a mix of fields.
 //!
-//! Record layout (version 2, 14 bytes; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd;
-//! failsafe 0 hold last, 1 stop pulses): `[2, role, rate, input, output, band, tx_power,
-//! failsafe, bind_id (u32 LE), input_timeout_ms (u16 LE)]`. Version 1 (12 bytes, up to
-//! `bind_id`) still loads, with the default input timeout; every stored field keeps its
-//! meaning (a stored "hold last" stays hold last, only the default changed). Every byte is
-//! checked on decode; an unknown value is an error, never a guess.
+//! Record layout (version 3, 15 bytes; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd,
+//! 3 CRSF 921 600 Bd;
+//! failsafe 0 hold last, 1 stop pulses; rate = `telemetry::link::RateMode::code`):
+//! `[3, role, rate, input, output, band, tx_power, failsafe, bind_id (u32 LE),
+//! input_timeout_ms (u16 LE), telemetry_ratio]`. The rate byte is the link's own rate mode,
+//! the one vocabulary the handset's "Packet Rate" shows. Band 0 is the 70 cm amateur plan
+//! (factory), 1 EU 868, 2 US 915, 3 (version 3 only) the 433.05–434.79 MHz ISM plan.
+//!
+//! Older records still load, every stored field with its old meaning: version 2 (14 bytes,
+//! no telemetry ratio) and version 1 (12 bytes, no input timeout either) stored the air rate
+//! in Tau Labs' bit-rate vocabulary, which maps to the link mode that rate ran as (4800,
+//! 9600 and 19 200 bit/s → L50, 57 600 → M100, 125 000 → F250); a missing field takes its
+//! default. Every byte is checked on decode; an unknown value is an error, never a guess.
+//!
+//! A later field (H-SEC's binding phrase) goes after `telemetry_ratio` in a version 4.
 
 pub mod store;
 pub mod text;
@@ -29,20 +38,18 @@ pub enum Role {
     Receiver,
 }
 
-/// Air data rate (the OpenLRSng modem profiles, radio.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum RateMode {
-    /// 4800 bit/s, longest range.
-    Bps4800,
-    /// 9600 bit/s.
-    Bps9600,
-    /// 19 200 bit/s (OpenLRSng default).
-    Bps19200,
-    /// 57 600 bit/s.
-    Bps57600,
-    /// 125 000 bit/s.
-    Bps125000,
+/// The air packet rate: the link's own rate modes (L50 … F500).
+pub use telemetry::link::RateMode;
+
+/// The link mode a version-1/2 record's bit-rate code ran as: the three slow OpenLRSng-style
+/// rates shared the link's 19.2 kbit/s L50, 57 600 bit/s was M100, 125 000 bit/s F250.
+pub const fn rate_from_old_code(code: u8) -> Option<RateMode> {
+    match code {
+        0..=2 => Some(RateMode::L50),
+        3 => Some(RateMode::M100),
+        4 => Some(RateMode::F250),
+        _ => None,
+    }
 }
 
 /// Where the channels come from in the transmitter role.
@@ -55,12 +62,26 @@ pub enum InputProtocol {
     Crsf,
     /// CRSF at 115 200 Bd, for radios or cables that cannot run 400 kBd.
     Crsf115200,
+    /// CRSF at 921 600 Bd (EdgeTX "921K"); the nRF52840 UARTE runs it at 941 176 Bd
+    /// (`handset::uarte_baudrate`).
+    Crsf921600,
 }
 
 impl InputProtocol {
-    /// CRSF at either rate.
+    /// CRSF at any rate.
     pub const fn is_crsf(self) -> bool {
-        matches!(self, InputProtocol::Crsf | InputProtocol::Crsf115200)
+        self.crsf_baud().is_some()
+    }
+
+    /// The CRSF line rate, `None` for PPM. EdgeTX's 1.87 MBd and faster are beyond the
+    /// nRF52840 UARTE's 1 MBd and not offered.
+    pub const fn crsf_baud(self) -> Option<u32> {
+        match self {
+            InputProtocol::Ppm => None,
+            InputProtocol::Crsf => Some(400_000),
+            InputProtocol::Crsf115200 => Some(115_200),
+            InputProtocol::Crsf921600 => Some(921_600),
+        }
     }
 }
 
@@ -78,16 +99,18 @@ pub enum OutputProtocol {
     FrskyHub,
 }
 
-/// Frequency band of the RFM22B build.
+/// Frequency band plan (`telemetry::link::Band` says what each means legally).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Band {
-    /// 433 MHz ISM.
+    /// 430.2–439.5 MHz, the 70 cm amateur band: a licence is needed. The factory band.
     Mhz433,
-    /// 868 MHz SRD.
+    /// 863–870 MHz EU SRD (keeps no sub-band's duty cycle).
     Mhz868,
-    /// 915 MHz ISM.
+    /// 902–928 MHz US ISM.
     Mhz915,
+    /// 433.05–434.79 MHz ISM / LPD only (licence-exempt at low power).
+    Ism433,
 }
 
 /// Everything the module remembers.
@@ -96,7 +119,7 @@ pub enum Band {
 pub struct Settings {
     /// Transmitter or receiver.
     pub role: Role,
-    /// Air data rate.
+    /// Air packet rate (the link's rate mode).
     pub rate: RateMode,
     /// Handset input.
     pub input: InputProtocol,
@@ -114,7 +137,15 @@ pub struct Settings {
     /// without a frame, ms ([`INPUT_TIMEOUT_MS`]); the link then tells the flight side to
     /// fly its failsafe instead of stale sticks.
     pub input_timeout_ms: u16,
+    /// One link slot in this many is a downlink (telemetry) slot: a power of two,
+    /// [`TELEMETRY_RATIOS`].
+    pub telemetry_ratio: u8,
 }
+
+/// The telemetry ratios the link takes (`telemetry::frame::valid_telemetry_ratio`).
+pub const TELEMETRY_RATIOS: [u8; 7] = [2, 4, 8, 16, 32, 64, 128];
+/// Factory telemetry ratio: one slot in 4.
+pub const DEFAULT_TELEMETRY_RATIO: u8 = 4;
 
 /// Range and default of [`Settings::input_timeout_ms`]: never shorter than a few frames of
 /// the slowest input (PPM 22.5 ms, CRSF at 50 Hz), never so long that stale sticks fly for
@@ -127,7 +158,7 @@ impl Default for Settings {
     fn default() -> Self {
         Self {
             role: Role::Transmitter,
-            rate: RateMode::Bps19200,
+            rate: RateMode::L50,
             input: InputProtocol::Ppm,
             output: OutputProtocol::SPort,
             band: Band::Mhz433,
@@ -136,15 +167,18 @@ impl Default for Settings {
             failsafe: FailsafeOutput::StopPulses,
             bind_id: 0,
             input_timeout_ms: DEFAULT_INPUT_TIMEOUT_MS,
+            telemetry_ratio: DEFAULT_TELEMETRY_RATIO,
         }
     }
 }
 
 /// Current record version.
-pub const RECORD_VERSION: u8 = 2;
+pub const RECORD_VERSION: u8 = 3;
 /// Record length of the current version.
-pub const RECORD_LEN: usize = 14;
-/// Record length of version 1 (no input timeout).
+pub const RECORD_LEN: usize = 15;
+/// Record length of version 2 (bit-rate codes, no telemetry ratio).
+pub const RECORD_V2_LEN: usize = 14;
+/// Record length of version 1 (bit-rate codes, no input timeout).
 pub const RECORD_V1_LEN: usize = 12;
 
 /// Why a record does not decode.
@@ -181,14 +215,14 @@ impl core::fmt::Display for DecodeError {
 impl core::error::Error for DecodeError {}
 
 impl Settings {
-    /// The current (version 2) record.
+    /// The current (version 3) record.
     pub fn to_record(&self) -> [u8; RECORD_LEN] {
         let [b0, b1, b2, b3] = self.bind_id.to_le_bytes();
         let [t0, t1] = self.input_timeout_ms.to_le_bytes();
         [
             RECORD_VERSION,
             self.role as u8,
-            self.rate as u8,
+            self.rate.code(),
             self.input as u8,
             self.output as u8,
             self.band as u8,
@@ -200,59 +234,65 @@ impl Settings {
             b3,
             t0,
             t1,
+            self.telemetry_ratio,
         ]
     }
 
-    /// Parses a record of version 1 or 2; every field is range-checked.
+    /// Parses a record of version 1, 2 or 3; every field is range-checked.
     pub fn from_record(record: &[u8]) -> Result<Self, DecodeError> {
         let Some(&version) = record.first() else {
             return Err(DecodeError::Length { found: 0 });
         };
-        let (common, input_timeout_ms) = match version {
-            1 => (
-                <[u8; RECORD_V1_LEN]>::try_from(record).ok(),
-                DEFAULT_INPUT_TIMEOUT_MS,
-            ),
-            RECORD_VERSION => {
-                let Some((common, [t0, t1])) = record
-                    .split_first_chunk::<RECORD_V1_LEN>()
-                    .and_then(|(common, rest)| Some((*common, <[u8; 2]>::try_from(rest).ok()?)))
-                else {
-                    return Err(DecodeError::Length {
-                        found: record.len(),
-                    });
-                };
-                let timeout = u16::from_le_bytes([t0, t1]);
+        let wrong_length = DecodeError::Length {
+            found: record.len(),
+        };
+        let expected = match version {
+            1 => RECORD_V1_LEN,
+            2 => RECORD_V2_LEN,
+            RECORD_VERSION => RECORD_LEN,
+            found => return Err(DecodeError::Version { found }),
+        };
+        if record.len() != expected {
+            return Err(wrong_length);
+        }
+        let (common, rest) = record
+            .split_first_chunk::<RECORD_V1_LEN>()
+            .ok_or(wrong_length)?;
+        let input_timeout_ms = match rest {
+            [t0, t1, ..] => {
+                let timeout = u16::from_le_bytes([*t0, *t1]);
                 if !INPUT_TIMEOUT_MS.contains(&timeout) {
                     return Err(DecodeError::Field {
                         offset: RECORD_V1_LEN,
                     });
                 }
-                (Some(common), timeout)
+                timeout
             }
-            found => return Err(DecodeError::Version { found }),
+            _ => DEFAULT_INPUT_TIMEOUT_MS,
         };
-        let Some(
-            [
-                _,
-                role,
-                rate,
-                input,
-                output,
-                band,
-                tx_power,
-                failsafe,
-                b0,
-                b1,
-                b2,
-                b3,
-            ],
-        ) = common
-        else {
-            return Err(DecodeError::Length {
-                found: record.len(),
-            });
+        let telemetry_ratio = match rest {
+            [_, _, ratio] if TELEMETRY_RATIOS.contains(ratio) => *ratio,
+            [_, _, _] => {
+                return Err(DecodeError::Field {
+                    offset: RECORD_V2_LEN,
+                });
+            }
+            _ => DEFAULT_TELEMETRY_RATIO,
         };
+        let [
+            _,
+            role,
+            rate,
+            input,
+            output,
+            band,
+            tx_power,
+            failsafe,
+            b0,
+            b1,
+            b2,
+            b3,
+        ] = *common;
         let field = |offset: usize| DecodeError::Field { offset };
         Ok(Self {
             role: match role {
@@ -260,18 +300,16 @@ impl Settings {
                 1 => Role::Receiver,
                 _ => return Err(field(1)),
             },
-            rate: match rate {
-                0 => RateMode::Bps4800,
-                1 => RateMode::Bps9600,
-                2 => RateMode::Bps19200,
-                3 => RateMode::Bps57600,
-                4 => RateMode::Bps125000,
-                _ => return Err(field(2)),
-            },
+            rate: match version {
+                RECORD_VERSION => RateMode::from_code(rate),
+                _ => rate_from_old_code(rate),
+            }
+            .ok_or(field(2))?,
             input: match input {
                 0 => InputProtocol::Ppm,
                 1 => InputProtocol::Crsf,
                 2 => InputProtocol::Crsf115200,
+                3 if version == RECORD_VERSION => InputProtocol::Crsf921600,
                 _ => return Err(field(3)),
             },
             output: match output {
@@ -285,6 +323,7 @@ impl Settings {
                 0 => Band::Mhz433,
                 1 => Band::Mhz868,
                 2 => Band::Mhz915,
+                3 if version == RECORD_VERSION => Band::Ism433,
                 _ => return Err(field(5)),
             },
             tx_power: if tx_power <= 7 {
@@ -299,6 +338,7 @@ impl Settings {
             },
             bind_id: u32::from_le_bytes([b0, b1, b2, b3]),
             input_timeout_ms,
+            telemetry_ratio,
         })
     }
 }
@@ -311,7 +351,7 @@ mod tests {
     fn record_round_trip_and_layout() {
         let settings = Settings {
             role: Role::Receiver,
-            rate: RateMode::Bps57600,
+            rate: RateMode::F500,
             input: InputProtocol::Crsf,
             output: OutputProtocol::FrskyHub,
             band: Band::Mhz915,
@@ -319,17 +359,26 @@ mod tests {
             failsafe: FailsafeOutput::StopPulses,
             bind_id: 0xDEAD_BEEF,
             input_timeout_ms: 750,
+            telemetry_ratio: 16,
         };
         let record = settings.to_record();
         assert_eq!(
             record,
-            [2, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02]
+            [
+                3, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16
+            ]
         );
         assert_eq!(Settings::from_record(&record), Ok(settings));
         assert_eq!(
             Settings::from_record(&Settings::default().to_record()),
             Ok(Settings::default())
         );
+        // Every link rate mode is stored as its own code.
+        for rate in RateMode::ALL {
+            let s = Settings { rate, ..settings };
+            assert_eq!(s.to_record()[2], rate.code());
+            assert_eq!(Settings::from_record(&s.to_record()), Ok(s));
+        }
         // The slower CRSF rate is input code 2 (older records never hold it).
         let slow = Settings {
             input: InputProtocol::Crsf115200,
@@ -337,6 +386,12 @@ mod tests {
         };
         assert_eq!(slow.to_record()[3], 2);
         assert_eq!(Settings::from_record(&slow.to_record()), Ok(slow));
+        let fast = Settings {
+            input: InputProtocol::Crsf921600,
+            ..settings
+        };
+        assert_eq!(fast.to_record()[3], 3);
+        assert_eq!(Settings::from_record(&fast.to_record()), Ok(fast));
     }
 
     #[test]
@@ -346,8 +401,12 @@ mod tests {
             Err(DecodeError::Length { found: 0 })
         );
         assert_eq!(
+            Settings::from_record(&[4; 15]),
+            Err(DecodeError::Version { found: 4 })
+        );
+        assert_eq!(
             Settings::from_record(&[3; 14]),
-            Err(DecodeError::Version { found: 3 })
+            Err(DecodeError::Length { found: 14 })
         );
         assert_eq!(
             Settings::from_record(&[2; 12]),
@@ -364,14 +423,15 @@ mod tests {
             Err(DecodeError::Field { offset: 6 })
         );
         record[6] = 7;
-        record[2] = 5;
+        // Rate code 4 was 125 000 bit/s in version 2; version 3 has no mode 4.
+        record[2] = 4;
         assert_eq!(
             Settings::from_record(&record),
             Err(DecodeError::Field { offset: 2 })
         );
         record[2] = 2;
         for (timeout, ok) in [(99u16, false), (100, true), (2_000, true), (2_001, false)] {
-            record[12..].copy_from_slice(&timeout.to_le_bytes());
+            record[12..14].copy_from_slice(&timeout.to_le_bytes());
             assert_eq!(
                 Settings::from_record(&record).map(|s| s.input_timeout_ms),
                 if ok {
@@ -381,18 +441,83 @@ mod tests {
                 }
             );
         }
+        record[12..14].copy_from_slice(&500u16.to_le_bytes());
+        for (ratio, ok) in [(0u8, false), (1, false), (2, true), (3, false), (128, true)] {
+            record[14] = ratio;
+            assert_eq!(
+                Settings::from_record(&record).map(|s| s.telemetry_ratio),
+                if ok {
+                    Ok(ratio)
+                } else {
+                    Err(DecodeError::Field { offset: 14 })
+                }
+            );
+        }
+    }
+
+    #[test]
+    fn the_ism_433_plan_is_band_3_in_version_3_only() {
+        let ism = Settings {
+            band: Band::Ism433,
+            ..Settings::default()
+        };
+        assert_eq!(ism.to_record()[5], 3);
+        assert_eq!(Settings::from_record(&ism.to_record()), Ok(ism));
+        assert_eq!(
+            Settings::default().band,
+            Band::Mhz433,
+            "factory: the amateur plan"
+        );
+        let v2 = [2, 0, 2, 0, 2, 3, 7, 1, 1, 0, 0, 0, 0xF4, 0x01];
+        assert_eq!(
+            Settings::from_record(&v2),
+            Err(DecodeError::Field { offset: 5 })
+        );
+    }
+
+    #[test]
+    fn old_bit_rates_map_to_the_link_mode_they_ran_as() {
+        // Version 2 records (14 bytes) in the bit-rate vocabulary: 4800/9600/19 200 → L50,
+        // 57 600 → M100, 125 000 → F250; the ratio is the factory one.
+        let v2 = |rate: u8| {
+            [
+                2, 0, rate, 0, 2, 0, 7, 1, 0x78, 0x56, 0x34, 0x12, 0xF4, 0x01,
+            ]
+        };
+        for (code, mode) in [
+            (0, RateMode::L50),
+            (1, RateMode::L50),
+            (2, RateMode::L50),
+            (3, RateMode::M100),
+            (4, RateMode::F250),
+        ] {
+            let settings = Settings::from_record(&v2(code)).unwrap();
+            assert_eq!(settings.rate, mode, "v2 code {code}");
+            assert_eq!(settings.telemetry_ratio, DEFAULT_TELEMETRY_RATIO);
+            assert_eq!(settings.input_timeout_ms, 500);
+            assert_eq!(settings.bind_id, 0x1234_5678);
+            // Re-saved as version 3, the same settings come back.
+            assert_eq!(settings.to_record()[0], 3);
+            assert_eq!(Settings::from_record(&settings.to_record()), Ok(settings));
+        }
+        assert_eq!(
+            Settings::from_record(&v2(5)),
+            Err(DecodeError::Field { offset: 2 })
+        );
     }
 
     #[test]
     fn the_factory_failsafe_stops_pulses_and_old_records_keep_their_meaning() {
         assert_eq!(Settings::default().failsafe, FailsafeOutput::StopPulses);
         assert_eq!(Settings::default().input_timeout_ms, 500);
-        // Version-1 records as the previous firmware wrote them: hold last (its default) stays
+        assert_eq!(Settings::default().rate, RateMode::L50);
+        // Version-1 records as the first firmware wrote them: hold last (its default) stays
         // hold last, stop pulses stays stop pulses, and the input timeout is the default.
         let v1_hold = [1, 0, 2, 0, 2, 0, 7, 0, 0x78, 0x56, 0x34, 0x12];
         let settings = Settings::from_record(&v1_hold).unwrap();
         assert_eq!(settings.failsafe, FailsafeOutput::HoldLast);
         assert_eq!(settings.bind_id, 0x1234_5678);
+        assert_eq!(settings.rate, RateMode::L50, "19 200 bit/s ran as L50");
         assert_eq!(settings.input_timeout_ms, DEFAULT_INPUT_TIMEOUT_MS);
         let mut v1_stop = v1_hold;
         v1_stop[7] = 1;
@@ -400,9 +525,9 @@ mod tests {
             Settings::from_record(&v1_stop).unwrap().failsafe,
             FailsafeOutput::StopPulses
         );
-        // Re-saved, they become version 2 with the same values.
+        // Re-saved, they become version 3 with the same values.
         let upgraded = settings.to_record();
-        assert_eq!(upgraded[0], 2);
+        assert_eq!(upgraded[0], 3);
         assert_eq!(Settings::from_record(&upgraded), Ok(settings));
     }
 
@@ -410,12 +535,14 @@ mod tests {
         #[test]
         fn any_bytes_decode_or_error(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..20)) {
             if let Ok(settings) = Settings::from_record(&bytes) {
-                // A current record re-encodes to itself; a version-1 record to its upgrade.
+                // A current record re-encodes to itself; an older one to its upgrade, which
+                // decodes to the same settings.
                 let record = settings.to_record();
                 if bytes.first() == Some(&RECORD_VERSION) {
                     proptest::prop_assert_eq!(&record[..], &bytes[..]);
                 } else {
-                    proptest::prop_assert_eq!(&record[1..RECORD_V1_LEN], &bytes[1..]);
+                    proptest::prop_assert_eq!(Settings::from_record(&record), Ok(settings));
+                    proptest::prop_assert_eq!(&record[3..RECORD_V1_LEN], &bytes[3..RECORD_V1_LEN]);
                 }
             }
         }

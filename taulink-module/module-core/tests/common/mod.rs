@@ -70,7 +70,7 @@ pub fn flight_gps() -> Gps {
 pub fn module_settings(input: InputProtocol, output: OutputProtocol) -> Settings {
     Settings {
         role: Role::Transmitter,
-        rate: RateMode::Bps125000,
+        rate: RateMode::F250,
         input,
         output,
         band: Band::Mhz433,

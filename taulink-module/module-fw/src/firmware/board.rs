@@ -145,11 +145,14 @@ impl JrLine {
     }
 }
 
-/// UARTE BAUDRATE register for `baud`: baud · 2³² / 16 MHz, low 12 bits cleared as the
-/// named presets do (0x0666_6000 ≈ 399 994 Bd for CRSF).
+/// UARTE BAUDRATE register for `baud` (`module_core::handset::uarte_baudrate`: 0x0666_6000
+/// ≈ 399 994 Bd for CRSF); a rate beyond the UARTE falls back to 400 kBd (the settings offer
+/// none).
 const fn baud_register(baud: u32) -> uarte::Baudrate {
-    let bits = ((baud as u64) << 32) / 16_000_000;
-    uarte::Baudrate::from_bits((bits as u32) & 0xFFFF_F000)
+    match module_core::handset::uarte_baudrate(baud) {
+        Some(bits) => uarte::Baudrate::from_bits(bits),
+        None => uarte::Baudrate::from_bits(0x0666_6000),
+    }
 }
 
 fn jr_line_config(baud: u32) -> uarte::Config {

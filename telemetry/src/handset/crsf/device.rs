@@ -12,6 +12,8 @@ pub const TIMING_SUB_TYPE: u8 = 0x10;
 pub const COMMAND_CRSF: u8 = 0x10;
 /// CRSF command: model select.
 pub const COMMAND_MODEL_SELECT: u8 = 0x05;
+/// CRSF command: bind (EdgeTX's "Bind" button on a CRSF module).
+pub const COMMAND_BIND: u8 = 0x01;
 /// Longest device name this module keeps.
 pub const DEVICE_NAME_MAX_LEN: usize = 32;
 
@@ -270,6 +272,65 @@ impl ModelSelect {
                     destination,
                     origin,
                     model_id: *model_id,
+                };
+                if command.inner_crc() == *inner_crc {
+                    Ok(command)
+                } else {
+                    Err(Error::InnerCrc)
+                }
+            }
+            [COMMAND_CRSF, sub_type, ..] | [sub_type, ..] => Err(Error::Unsupported {
+                sub_type: *sub_type,
+            }),
+            [] => Err(Error::PayloadLength {
+                frame_type: frame_type::COMMAND,
+                length: payload.len(),
+            }),
+        }
+    }
+}
+
+/// Command 0x32 / CRSF 0x10 / bind 0x01: the pilot pressed "Bind" in the radio's model setup
+/// (`C8 07 32 EE EA 10 01 <crc 0xBA> <crc>`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BindCommand {
+    /// Addressee (0xEE).
+    pub destination: u8,
+    /// Sender (0xEA).
+    pub origin: u8,
+}
+
+impl BindCommand {
+    fn inner_crc(&self) -> u8 {
+        COMMAND_CRC.checksum(&[
+            frame_type::COMMAND,
+            self.destination,
+            self.origin,
+            COMMAND_CRSF,
+            COMMAND_BIND,
+        ])
+    }
+
+    /// The 5-byte payload, inner CRC last.
+    pub fn to_payload(&self) -> [u8; 5] {
+        [
+            self.destination,
+            self.origin,
+            COMMAND_CRSF,
+            COMMAND_BIND,
+            self.inner_crc(),
+        ]
+    }
+
+    /// Reads the payload.
+    pub fn from_payload(payload: &[u8]) -> Result<Self, Error> {
+        let (destination, origin, rest) = split_addresses(frame_type::COMMAND, payload)?;
+        match rest {
+            [COMMAND_CRSF, COMMAND_BIND, inner_crc] => {
+                let command = Self {
+                    destination,
+                    origin,
                 };
                 if command.inner_crc() == *inner_crc {
                     Ok(command)

@@ -24,6 +24,10 @@ pub mod frame_type {
     pub const GPS: u8 = 0x02;
     /// Battery voltage, current, used capacity, remaining %.
     pub const BATTERY_SENSOR: u8 = 0x08;
+    /// VARIO: vertical speed, i16 cm/s (EdgeTX "VSpd").
+    pub const VARIO: u8 = 0x07;
+    /// BARO_ALTITUDE: packed altitude (EdgeTX "Alt").
+    pub const BARO_ALTITUDE: u8 = 0x09;
     /// Link RSSI / LQ / SNR both ways.
     pub const LINK_STATISTICS: u8 = 0x14;
     /// 16 RC channels × 11 bit.
@@ -38,6 +42,12 @@ pub mod frame_type {
     pub const DEVICE_INFO: u8 = 0x29;
     /// Command frame with its own inner CRC (extended header).
     pub const COMMAND: u8 = 0x32;
+    /// PARAMETER_SETTINGS_ENTRY: one chunk of a parameter's description, module → radio.
+    pub const PARAMETER_SETTINGS_ENTRY: u8 = 0x2B;
+    /// PARAMETER_READ: the radio asks for one chunk of a parameter.
+    pub const PARAMETER_READ: u8 = 0x2C;
+    /// PARAMETER_WRITE: the radio sets a parameter (or steps a command).
+    pub const PARAMETER_WRITE: u8 = 0x2D;
     /// "Radio ID" frame; sub-type 0x10 carries the timing correction (extended header).
     pub const RADIO_ID: u8 = 0x3A;
     /// First type that carries `destination, origin` before its payload.

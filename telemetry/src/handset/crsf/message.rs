@@ -4,9 +4,12 @@
 use heapless::Vec;
 
 use super::channels::RcChannels;
-use super::device::{DeviceInfo, DevicePing, ModelSelect, TimingCorrection};
+use super::device::{
+    BindCommand, COMMAND_BIND, COMMAND_CRSF, DeviceInfo, DevicePing, ModelSelect, TimingCorrection,
+};
 use super::frame::{Error, Frame, frame_type};
-use super::sensors::{Attitude, Battery, FlightMode, Gps, LinkStatistics};
+use super::params::{ParameterChunk, ParameterRead, ParameterWrite};
+use super::sensors::{Attitude, BaroAltitude, Battery, FlightMode, Gps, LinkStatistics, Vario};
 
 /// A frame of a known type, decoded.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -24,6 +27,10 @@ pub enum Message {
     FlightMode(FlightMode),
     /// 0x02, module → radio.
     Gps(Gps),
+    /// 0x07, module → radio.
+    Vario(Vario),
+    /// 0x09, module → radio.
+    BaroAltitude(BaroAltitude),
     /// 0x28, either way.
     DevicePing(DevicePing),
     /// 0x29, either way.
@@ -32,6 +39,14 @@ pub enum Message {
     TimingCorrection(TimingCorrection),
     /// 0x32 / 0x10 / 0x05, radio → module.
     ModelSelect(ModelSelect),
+    /// 0x32 / 0x10 / 0x01, radio → module.
+    Bind(BindCommand),
+    /// 0x2C, radio → module.
+    ParameterRead(ParameterRead),
+    /// 0x2D, radio → module.
+    ParameterWrite(ParameterWrite),
+    /// 0x2B, module → radio.
+    ParameterChunk(ParameterChunk),
 }
 
 impl Message {
@@ -48,12 +63,28 @@ impl Message {
             frame_type::ATTITUDE => Self::Attitude(Attitude::from_payload(payload)?),
             frame_type::FLIGHT_MODE => Self::FlightMode(FlightMode::from_payload(payload)?),
             frame_type::GPS => Self::Gps(Gps::from_payload(payload)?),
+            frame_type::VARIO => Self::Vario(Vario::from_payload(payload)?),
+            frame_type::BARO_ALTITUDE => Self::BaroAltitude(BaroAltitude::from_payload(payload)?),
             frame_type::DEVICE_PING => Self::DevicePing(DevicePing::from_payload(payload)?),
             frame_type::DEVICE_INFO => Self::DeviceInfo(DeviceInfo::from_payload(payload)?),
             frame_type::RADIO_ID => {
                 Self::TimingCorrection(TimingCorrection::from_payload(payload)?)
             }
-            frame_type::COMMAND => Self::ModelSelect(ModelSelect::from_payload(payload)?),
+            frame_type::COMMAND => match payload.get(2..4) {
+                Some([COMMAND_CRSF, COMMAND_BIND]) => {
+                    Self::Bind(BindCommand::from_payload(payload)?)
+                }
+                _ => Self::ModelSelect(ModelSelect::from_payload(payload)?),
+            },
+            frame_type::PARAMETER_READ => {
+                Self::ParameterRead(ParameterRead::from_payload(payload)?)
+            }
+            frame_type::PARAMETER_WRITE => {
+                Self::ParameterWrite(ParameterWrite::from_payload(payload)?)
+            }
+            frame_type::PARAMETER_SETTINGS_ENTRY => {
+                Self::ParameterChunk(ParameterChunk::from_payload(payload)?)
+            }
             found => return Err(Error::WrongType { found }),
         })
     }
@@ -67,10 +98,15 @@ impl Message {
             Self::Attitude(_) => frame_type::ATTITUDE,
             Self::FlightMode(_) => frame_type::FLIGHT_MODE,
             Self::Gps(_) => frame_type::GPS,
+            Self::Vario(_) => frame_type::VARIO,
+            Self::BaroAltitude(_) => frame_type::BARO_ALTITUDE,
             Self::DevicePing(_) => frame_type::DEVICE_PING,
             Self::DeviceInfo(_) => frame_type::DEVICE_INFO,
             Self::TimingCorrection(_) => frame_type::RADIO_ID,
-            Self::ModelSelect(_) => frame_type::COMMAND,
+            Self::ModelSelect(_) | Self::Bind(_) => frame_type::COMMAND,
+            Self::ParameterRead(_) => frame_type::PARAMETER_READ,
+            Self::ParameterWrite(_) => frame_type::PARAMETER_WRITE,
+            Self::ParameterChunk(_) => frame_type::PARAMETER_SETTINGS_ENTRY,
         }
     }
 
@@ -83,10 +119,16 @@ impl Message {
             Self::Attitude(attitude) => Vec::from_iter(attitude.to_payload()),
             Self::FlightMode(mode) => mode.to_payload(),
             Self::Gps(gps) => Vec::from_iter(gps.to_payload()),
+            Self::Vario(vario) => Vec::from_iter(vario.to_payload()),
+            Self::BaroAltitude(altitude) => Vec::from_iter(altitude.to_payload()),
             Self::DevicePing(ping) => Vec::from_iter(ping.to_payload()),
             Self::DeviceInfo(info) => info.to_payload()?,
             Self::TimingCorrection(timing) => Vec::from_iter(timing.to_payload()),
             Self::ModelSelect(command) => Vec::from_iter(command.to_payload()),
+            Self::Bind(command) => Vec::from_iter(command.to_payload()),
+            Self::ParameterRead(read) => Vec::from_iter(read.to_payload()),
+            Self::ParameterWrite(write) => write.to_payload(),
+            Self::ParameterChunk(chunk) => chunk.to_payload(),
         };
         Ok(Frame {
             address,

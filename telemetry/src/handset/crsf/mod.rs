@@ -36,13 +36,14 @@ pub mod device;
 pub mod frame;
 mod from_report;
 pub mod message;
+pub mod params;
 pub mod responder;
 pub mod sensors;
 
 pub use channels::RcChannels;
 pub use decoder::{Decoded, Decoder, Rejection};
-pub use device::{DeviceInfo, DevicePing, ModelSelect, TimingCorrection};
+pub use device::{BindCommand, DeviceInfo, DevicePing, ModelSelect, TimingCorrection};
 pub use frame::{Error, Frame, address, frame_type};
 pub use message::Message;
 pub use responder::Responder;
-pub use sensors::{Attitude, Battery, FlightMode, Gps, LinkStatistics};
+pub use sensors::{Attitude, BaroAltitude, Battery, FlightMode, Gps, LinkStatistics, Vario};

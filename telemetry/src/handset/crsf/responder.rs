@@ -7,7 +7,8 @@ use heapless::String;
 use super::device::{DeviceInfo, TimingCorrection};
 use super::frame::{Frame, address, frame_type};
 use super::message::Message;
-use super::sensors::{Attitude, Battery, FlightMode, Gps, LinkStatistics};
+use super::params::{CHUNK_HEADER_LEN, MAX_CHUNK_DATA, ParameterChunk};
+use super::sensors::{Attitude, BaroAltitude, Battery, FlightMode, Gps, LinkStatistics, Vario};
 use crate::handset::report::HandsetTelemetry;
 
 /// EdgeTX's receive buffer for one burst (`TELEMETRY_RX_PACKET_SIZE`).
@@ -91,10 +92,12 @@ pub struct LinkSchedule {
 }
 
 /// Telemetry kinds after LINK_STATISTICS, in rotation order.
-const SENSORS: [u8; 4] = [
+const SENSORS: [u8; 6] = [
     frame_type::BATTERY_SENSOR,
     frame_type::ATTITUDE,
+    frame_type::VARIO,
     frame_type::FLIGHT_MODE,
+    frame_type::BARO_ALTITUDE,
     frame_type::GPS,
 ];
 
@@ -117,6 +120,8 @@ pub struct Responder {
     last_sensor_us: [Option<u64>; SENSORS.len()],
     next_sensor: usize,
     model_id: Option<u8>,
+    /// A parameter chunk waiting for a reply window.
+    parameter_chunk: Option<ParameterChunk>,
 }
 
 impl Responder {
@@ -136,6 +141,7 @@ impl Responder {
             last_sensor_us: [None; SENSORS.len()],
             next_sensor: 0,
             model_id: None,
+            parameter_chunk: None,
         }
     }
 
@@ -147,6 +153,34 @@ impl Responder {
     /// The radio's frame period as last measured (or EdgeTX's default before that).
     pub fn radio_period_us(&self) -> u32 {
         self.radio_period_us
+    }
+
+    /// Sends `chunk` (a parameter description piece, or a command's new status) in the next
+    /// reply window, ahead of telemetry; a newer one replaces one not yet sent (the radio
+    /// asks again on its timeout).
+    pub fn queue_parameter_chunk(&mut self, chunk: ParameterChunk) {
+        self.parameter_chunk = Some(chunk);
+    }
+
+    /// Whether a parameter chunk still waits for a window.
+    pub fn parameter_chunk_pending(&self) -> bool {
+        self.parameter_chunk.is_some()
+    }
+
+    /// Data bytes per parameter chunk: what fits one reply window at the shortest radio
+    /// period we ask for, after a full RC channel frame (26 bytes) on the line, so a chunk
+    /// never waits for a longer window. 35 bytes at 400 kBd (2 ms), 16 at 115 200 Bd (5 ms).
+    pub fn parameter_chunk_len(&self) -> usize {
+        const RC_FRAME_LEN: usize = 26;
+        const FRAME_OVERHEAD: usize = 4;
+        let line_bytes =
+            u64::from(self.config.baud) * u64::from(self.config.min_radio_period_us()) * 87
+                / (10 * 100 * 1_000_000);
+        usize::try_from(line_bytes)
+            .unwrap_or(usize::MAX)
+            .min(MAX_REPLY_BYTES)
+            .saturating_sub(RC_FRAME_LEN + FRAME_OVERHEAD + CHUNK_HEADER_LEN)
+            .clamp(1, MAX_CHUNK_DATA)
     }
 
     /// Sets (or clears) the air schedule the radio should follow.
@@ -233,8 +267,14 @@ impl Responder {
         self.fill(now_us, telemetry, writer)
     }
 
-    /// Adds what is due after a possible DEVICE_INFO: timing, link statistics, sensors.
+    /// Adds what is due after a possible DEVICE_INFO: a parameter chunk, timing, link
+    /// statistics, sensors.
     fn fill(&mut self, now_us: u64, telemetry: &HandsetTelemetry, mut writer: Writer) -> usize {
+        if let Some(chunk) = self.parameter_chunk.take()
+            && !writer.put(&Message::ParameterChunk(chunk.clone()))
+        {
+            self.parameter_chunk = Some(chunk);
+        }
         if self.timing_due(now_us)
             && let Some(timing) = self.timing_correction()
             && writer.put(&Message::TimingCorrection(timing))
@@ -288,6 +328,14 @@ impl Responder {
                     .as_ref()
                     .map(|m| Message::FlightMode(FlightMode::from(m))),
                 Some(frame_type::GPS) => telemetry.gps.as_ref().map(|g| Message::Gps(Gps::from(g))),
+                Some(frame_type::VARIO) => telemetry.vertical.map(|v| {
+                    Message::Vario(Vario {
+                        vertical_speed_cm_s: v.vario_cm_s,
+                    })
+                }),
+                Some(frame_type::BARO_ALTITUDE) => telemetry
+                    .vertical
+                    .map(|v| Message::BaroAltitude(BaroAltitude::from_cm(v.altitude_cm))),
                 _ => None,
             };
             if let Some(message) = message

@@ -1,5 +1,6 @@
 //! Module → radio telemetry payloads: LINK_STATISTICS 0x14, BATTERY_SENSOR 0x08, ATTITUDE
-//! 0x1E, FLIGHT_MODE 0x21, GPS 0x02 (all multi-byte fields big-endian).
+//! 0x1E, FLIGHT_MODE 0x21, GPS 0x02, VARIO 0x07, BARO_ALTITUDE 0x09 (all multi-byte fields
+//! big-endian).
 
 use heapless::{String, Vec};
 
@@ -51,9 +52,14 @@ pub struct LinkStatistics {
 /// The CRSF power table, milliwatts by index.
 pub const TX_POWER_TABLE_MW: [u16; 9] = [0, 10, 25, 100, 500, 1000, 2000, 250, 50];
 
-/// Index of the largest table entry not above `power_mw` (0 for < 10 mW).
+/// Index of the largest table entry not above `power_mw`; a transmitter below 10 mW reports
+/// 10 mW, EdgeTX's lowest non-zero entry (index 0 reads as 0 mW: off). The RFM22B's steps
+/// (1, 2, 3, 6, 13, 25, 50, 100 mW) thus show as 10, 10, 10, 10, 10, 25, 50, 100 mW.
 pub fn tx_power_index(power_mw: u16) -> u8 {
-    let mut best = (0u8, 0u16);
+    if power_mw == 0 {
+        return 0;
+    }
+    let mut best = (1u8, 10u16);
     for (index, &table_mw) in (0u8..).zip(TX_POWER_TABLE_MW.iter()) {
         if table_mw <= power_mw && table_mw >= best.1 {
             best = (index, table_mw);
@@ -290,5 +296,79 @@ impl Gps {
             altitude_m_plus_1000: u16::from_be_bytes(be_bytes(&bytes, 12).ok_or(field_error)?),
             satellites,
         })
+    }
+}
+
+/// VARIO (0x07): vertical speed, i16 cm/s; EdgeTX shows it as "VSpd" in m/s with 2 decimals.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Vario {
+    /// Climb positive.
+    pub vertical_speed_cm_s: i16,
+}
+
+impl Vario {
+    /// The 2-byte payload.
+    pub fn to_payload(&self) -> [u8; 2] {
+        self.vertical_speed_cm_s.to_be_bytes()
+    }
+
+    /// Reads the payload.
+    pub fn from_payload(payload: &[u8]) -> Result<Self, Error> {
+        Ok(Self {
+            vertical_speed_cm_s: i16::from_be_bytes(exact(frame_type::VARIO, payload)?),
+        })
+    }
+}
+
+/// BARO_ALTITUDE (0x09): altitude packed in a u16 as EdgeTX unpacks it: bit 15 clear →
+/// decimetres + 10 000 (−1000.0 … +2276.7 m, 10 cm steps), bit 15 set → whole metres
+/// (0 … 32 767 m).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BaroAltitude {
+    /// The packed value.
+    pub packed: u16,
+}
+
+impl BaroAltitude {
+    /// Packs `altitude_cm` (rounded to 10 cm in the decimetre range, to 1 m above it;
+    /// clamped to −1000 m below).
+    pub fn from_cm(altitude_cm: i32) -> Self {
+        let dm = (i64::from(altitude_cm) + if altitude_cm >= 0 { 5 } else { -5 }) / 10;
+        let packed = if dm + 10_000 <= 0x7FFF {
+            (dm + 10_000).max(0) as u16
+        } else {
+            let m = (i64::from(altitude_cm) + 50) / 100;
+            0x8000 | (m.min(0x7FFF) as u16)
+        };
+        Self { packed }
+    }
+
+    /// The altitude EdgeTX shows, cm.
+    pub fn to_cm(&self) -> i32 {
+        if self.packed & 0x8000 != 0 {
+            i32::from(self.packed & 0x7FFF) * 100
+        } else {
+            (i32::from(self.packed) - 10_000) * 10
+        }
+    }
+
+    /// The 2-byte payload.
+    pub fn to_payload(&self) -> [u8; 2] {
+        self.packed.to_be_bytes()
+    }
+
+    /// Reads the payload (a trailing packed vario byte, which TBS adds, is ignored).
+    pub fn from_payload(payload: &[u8]) -> Result<Self, Error> {
+        match payload {
+            [high, low, ..] if payload.len() <= 4 => Ok(Self {
+                packed: u16::from_be_bytes([*high, *low]),
+            }),
+            _ => Err(Error::PayloadLength {
+                frame_type: frame_type::BARO_ALTITUDE,
+                length: payload.len(),
+            }),
+        }
     }
 }

@@ -28,6 +28,13 @@ pub mod id {
     pub const CURRENT: u8 = 0x28;
     /// VFAS: below 2000 in 0.1 V; from 2000 up, 0.01 V plus 2000 (EdgeTX `VFAS_D_HIPREC_OFFSET`).
     pub const VFAS: u8 = 0x39;
+    /// Barometric altitude, whole metres (signed), sent before [`BARO_ALT_AP`].
+    pub const BARO_ALT_BP: u8 = 0x10;
+    /// Barometric altitude after the point. We send decimetres (0…9): EdgeTX takes values
+    /// ≤ 9 as decimetres until it has seen one > 9, so this is never misread.
+    pub const BARO_ALT_AP: u8 = 0x21;
+    /// Vertical speed, cm/s (signed).
+    pub const VARIO: u8 = 0x30;
 }
 
 /// Offset marking a high-precision (0.01 V) VFAS value.
@@ -184,7 +191,7 @@ pub struct Sender {
     config: SenderConfig,
     last_slot_us: Option<u64>,
     slot: u8,
-    queue: Deque<u8, 32>,
+    queue: Deque<u8, 64>,
 }
 
 impl Sender {
@@ -250,7 +257,7 @@ impl Sender {
     }
 
     fn refill(&mut self, telemetry: &HandsetTelemetry) {
-        let mut records: Vec<HubRecord, 4> = Vec::new();
+        let mut records: Vec<HubRecord, 7> = Vec::new();
         if let Some(battery) = telemetry.battery {
             let _ = records.push(HubRecord::vfas_mv(battery.voltage_mv));
             let _ = records.push(HubRecord {
@@ -268,7 +275,27 @@ impl Sender {
                 value: u16::from(mode.number),
             });
         }
-        // 4 records × ≤ 7 bytes = 28 ≤ 32.
+        if let Some(vertical) = telemetry.vertical {
+            // Metres and decimetres, both carrying the sign (EdgeTX subtracts the part after
+            // the point for a negative altitude).
+            let dm = vertical.altitude_cm / 10;
+            let metres = (dm / 10).clamp(i32::from(i16::MIN), i32::from(i16::MAX));
+            let _ = records.push(HubRecord {
+                id: id::BARO_ALT_BP,
+                value: metres as i16 as u16,
+            });
+            // EdgeTX reads `100·BP ± AP`, so −0.9…−0.1 m has no encoding: it goes as 0.
+            let decimetres = if metres == 0 && dm < 0 { 0 } else { dm % 10 };
+            let _ = records.push(HubRecord {
+                id: id::BARO_ALT_AP,
+                value: decimetres.unsigned_abs() as u16,
+            });
+            let _ = records.push(HubRecord {
+                id: id::VARIO,
+                value: vertical.vario_cm_s as u16,
+            });
+        }
+        // 7 records × ≤ 7 bytes = 49 ≤ 64.
         for byte in records.iter().flat_map(HubRecord::encode) {
             let _ = self.queue.push_back(byte);
         }

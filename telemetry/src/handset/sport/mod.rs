@@ -45,6 +45,13 @@ pub mod value_id {
     pub const FUEL: u16 = 0x0600;
     /// Temperature 1 in °C.
     pub const TMP1: u16 = 0x0400;
+    /// Barometric altitude in cm (EdgeTX "Alt").
+    pub const ALT: u16 = 0x0100;
+    /// Vertical speed in cm/s (EdgeTX "VSpd").
+    pub const VARIO: u16 = 0x0110;
+    /// Cell voltages, FLVSS format (EdgeTX "Cels"): bits 0–3 first cell index, 4–7 cell
+    /// count, 8–19 and 20–31 two cells in 2 mV steps.
+    pub const CELLS: u16 = 0x0300;
     /// TauLink link quality in % (DIY range: EdgeTX lists it as "5100"; rename it "LQ" and
     /// set the unit to %).
     pub const TAULINK_LQ: u16 = 0x5100;
@@ -166,4 +173,13 @@ impl Frame {
         }
         Ok(needed)
     }
+}
+
+/// The FLVSS cell value for cells `first` and `first + 1` of `count`, each `cell_mv`
+/// (EdgeTX shows `raw / 5` hundredths of a volt, raw in 2 mV steps); the second slot is 0
+/// past the last cell.
+pub const fn flvss_value(count: u8, first: u8, cell_mv: u16) -> u32 {
+    let raw = (cell_mv / 2) as u32 & 0xFFF;
+    let second = if first + 1 < count { raw } else { 0 };
+    (first as u32 & 0x0F) | ((count as u32 & 0x0F) << 4) | (raw << 8) | (second << 20)
 }

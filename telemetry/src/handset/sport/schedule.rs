@@ -1,6 +1,9 @@
 //! Which S.Port value to push when, in PPM mode where the radio never polls (EdgeTX ≥ 2.11
 //! "SPort", OpenTX 2.2/2.3): one frame per slot, RSSI often enough to keep
-//! EdgeTX's 1 s streaming gate open, the rest by rate and age.
+//! EdgeTX's 1 s streaming gate open, the rest by rate and age: VFAS, LQ, vario (0x0110) and
+//! altitude (0x0100) at the fast rate; current, flight mode and the cells (0x0300, two per
+//! frame, each the pack's average) at the slow rate; fuel and the module's own supply (A2,
+//! raw over 13.2 V) at 1 Hz.
 
 use super::{Frame, physical_id, value_id};
 use crate::handset::report::{HandsetTelemetry, scaled_u16};
@@ -79,15 +82,23 @@ enum Item {
     Current,
     FlightMode,
     Fuel,
+    Vario,
+    Altitude,
+    Cells,
+    ModuleBattery,
 }
 
-const ITEMS: [Item; 6] = [
+const ITEMS: [Item; 10] = [
     Item::Rssi,
     Item::Vfas,
     Item::LinkQuality,
+    Item::Vario,
+    Item::Altitude,
     Item::Current,
     Item::FlightMode,
     Item::Fuel,
+    Item::Cells,
+    Item::ModuleBattery,
 ];
 
 /// The push scheduler.
@@ -96,6 +107,8 @@ pub struct Scheduler {
     config: Config,
     last_slot_us: Option<u64>,
     last_sent_us: [Option<u64>; ITEMS.len()],
+    /// First cell of the next FLVSS frame (cells go two per frame, in turn).
+    next_cell: u8,
 }
 
 impl Scheduler {
@@ -105,6 +118,7 @@ impl Scheduler {
             config,
             last_slot_us: None,
             last_sent_us: [None; ITEMS.len()],
+            next_cell: 0,
         }
     }
 
@@ -156,6 +170,14 @@ impl Scheduler {
         if let Some(slot) = self.last_sent_us.get_mut(index) {
             *slot = Some(now_us);
         }
+        if ITEMS.get(index) == Some(&Item::Cells) {
+            let count = telemetry.cells.unwrap_or(0);
+            self.next_cell = if self.next_cell + 2 < count {
+                self.next_cell + 2
+            } else {
+                0
+            };
+        }
         self.last_slot_us = Some(now_us);
         Some(frame)
     }
@@ -163,9 +185,12 @@ impl Scheduler {
     fn interval_us(&self, item: Item) -> u32 {
         match item {
             Item::Rssi => self.config.rssi_interval_us,
-            Item::Vfas | Item::LinkQuality => self.config.fast_interval_us,
-            Item::Current | Item::FlightMode => self.config.slow_interval_us,
-            Item::Fuel => self.config.fuel_interval_us,
+            Item::Vfas | Item::LinkQuality | Item::Vario | Item::Altitude => {
+                self.config.fast_interval_us
+            }
+            // Two cells per frame: a 6S pack needs three frames per round.
+            Item::Current | Item::FlightMode | Item::Cells => self.config.slow_interval_us,
+            Item::Fuel | Item::ModuleBattery => self.config.fuel_interval_us,
         }
     }
 
@@ -204,6 +229,32 @@ impl Scheduler {
             Item::FlightMode => telemetry.flight_mode.as_ref().map(|mode| {
                 Frame::data(id, self.config.flight_mode_value_id, u32::from(mode.number))
             }),
+            // Signed values travel as their 32-bit two's complement.
+            Item::Vario => telemetry
+                .vertical
+                .map(|v| Frame::data(id, value_id::VARIO, i32::from(v.vario_cm_s) as u32)),
+            Item::Altitude => telemetry
+                .vertical
+                .map(|v| Frame::data(id, value_id::ALT, v.altitude_cm as u32)),
+            // The module's own supply as A2 (raw 0…255 over EdgeTX's default 13.2 V ratio).
+            Item::ModuleBattery => telemetry.module_battery_mv.map(|mv| {
+                let raw = (u32::from(mv) * 255 / 13_200).min(255);
+                Frame::data(id, value_id::A2, raw)
+            }),
+            Item::Cells => {
+                let count = telemetry.cells.filter(|c| (1..=15).contains(c))?;
+                let first = if self.next_cell < count {
+                    self.next_cell
+                } else {
+                    0
+                };
+                let cell_mv = telemetry.cell_mv()?;
+                Some(Frame::data(
+                    id,
+                    value_id::CELLS,
+                    super::flvss_value(count, first, cell_mv),
+                ))
+            }
         }
     }
 }

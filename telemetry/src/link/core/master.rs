@@ -248,6 +248,12 @@ impl Master {
         self.counters
     }
 
+    /// The loop met a radio error and is re-configuring the radio (counted in
+    /// [`Counters::radio_errors`]).
+    pub fn on_radio_error(&mut self) {
+        self.counters.radio_errors = self.counters.radio_errors.saturating_add(1);
+    }
+
     /// Time of the last valid downlink.
     pub fn last_downlink_us(&self) -> Option<u64> {
         self.last_downlink_us

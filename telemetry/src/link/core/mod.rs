@@ -14,6 +14,22 @@ pub use master::Master;
 pub const STREAM_TX_BYTES: usize = 1024;
 /// Telemetry bytes each end can hold received and unread.
 pub const STREAM_RX_BYTES: usize = 1024;
+/// The longest single [`Step::Listen`] either end plans. A follower acquiring dwells a whole
+/// hop cycle on one channel (660 ms at L50); it does so in windows of at most this length on
+/// the same channel, so the loop hands control back (and runs its hooks, where the firmware
+/// checks in with its watchdog) at least this often in every state and rate mode.
+pub const MAX_LISTEN_US: u64 = 50_000;
+/// Consecutive radio errors (bus errors, a chip reset, FIFO errors, TX timeouts) a link
+/// session rides through — re-configuring the radio after each and carrying on — before the
+/// loop gives up and returns the error. A success resets the count.
+pub const MAX_CONSECUTIVE_RADIO_ERRORS: u32 = 8;
+/// After a radio error the loop waits this long before the next step, so a radio that fails
+/// at once (unpowered, browning out) is retried over ~`MAX_CONSECUTIVE_RADIO_ERRORS` × this,
+/// not in a burst of microseconds; short enough for the hooks' 50 ms cadence.
+pub const RADIO_RETRY_US: u64 = 10_000;
+/// How often the loops ask the radio to [`check_health`](crate::link::PacketRadio::check_health)
+/// (for a chip that reset without any operation failing).
+pub const HEALTH_CHECK_PERIOD_US: u64 = 1_000_000;
 
 /// What a link end does next, in absolute times of its clock.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -58,11 +58,29 @@ fn follower_acquires_then_tracks_the_master() {
     else {
         panic!()
     };
-    // Dwell: a whole hop cycle plus one slot.
-    assert_eq!(until_us, 33 * SLOT_US);
+    // Dwell: a whole hop cycle plus one slot on one channel, listened in windows of at most
+    // MAX_LISTEN_US (the loop's hooks run between them).
+    let dwell_end = 33 * SLOT_US;
+    assert_eq!(until_us, MAX_LISTEN_US);
+    let mut at = until_us;
+    while at < dwell_end {
+        let mut probe = [0u8; 64];
+        let Step::Listen {
+            channel: c,
+            until_us: u,
+            ..
+        } = follower.plan(at, &mut probe)
+        else {
+            panic!()
+        };
+        assert_eq!(c, channel, "same channel for the whole dwell");
+        assert!(u - at <= MAX_LISTEN_US && u <= dwell_end);
+        at = u;
+    }
+    assert_eq!(at, dwell_end);
     let mut t = 1_000;
     let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
-    assert!(end < until_us);
+    assert!(end < dwell_end);
     follower.on_received(
         RxOutcome::Packet {
             len: frame.len(),
@@ -75,7 +93,7 @@ fn follower_acquires_then_tracks_the_master() {
     assert!(!follower.in_failsafe());
     assert_eq!(follower.output(), &channels);
     // Tracking: the next step listens for the master's next slot on its channel, opening
-    // 100 µs before that slot starts.
+    // RX_EARLY_US before that slot starts.
     let master_next = master.slot();
     let Step::Listen {
         channel, from_us, ..
@@ -87,7 +105,7 @@ fn follower_acquires_then_tracks_the_master() {
         follower.tracked_slot().map(|(s, _)| u32::from(s)),
         Some(master_next % 256)
     );
-    assert_eq!(from_us, t - 100);
+    assert_eq!(from_us, t - super::follower::RX_EARLY_US);
     let mut m = [0u8; 64];
     match master.plan(t, &mut m) {
         Step::Transmit { channel: c, .. } | Step::Listen { channel: c, .. } => {

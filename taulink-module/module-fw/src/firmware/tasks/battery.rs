@@ -1,4 +1,5 @@
-//! Measures the radio battery (JR pin 3) once a second with the SAADC.
+//! Measures the radio battery (JR pin 3) once a second with the SAADC and hands it to the
+//! core (handset report, low-battery LED).
 
 use core::sync::atomic::{AtomicU16, Ordering};
 
@@ -8,6 +9,7 @@ use module_core::battery::battery_mv;
 
 use super::supervisor::{Watched, check_in};
 use crate::firmware::board::{Battery, Irqs};
+use crate::firmware::shared::{carry_out, with_app};
 
 /// Last radio battery voltage, mV (0 until the first sample).
 pub static BATTERY_MV: AtomicU16 = AtomicU16::new(0);
@@ -32,6 +34,8 @@ pub async fn battery_task(battery: Battery) {
             let [raw] = sample;
             let mv = battery_mv(raw);
             BATTERY_MV.store(mv, Ordering::Relaxed);
+            // To the handset (S.Port A2) and, when low, the LED.
+            carry_out(with_app(|app| app.on_module_battery(mv)).flatten());
             if ticks.is_multiple_of(20 * 60) {
                 defmt::info!("radio battery {} mV", mv);
             }

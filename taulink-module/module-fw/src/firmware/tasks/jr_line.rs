@@ -15,7 +15,7 @@ use module_core::handset::{LineMode, MAX_LINE_BURST};
 
 use super::supervisor::{Watched, check_in, idle};
 use crate::firmware::board::JrLine;
-use crate::firmware::shared::{now_us, with_app};
+use crate::firmware::shared::{carry_out, now_us, with_app};
 
 /// How often the push modes ask the scheduler (well under its 12 ms S.Port slot).
 const PUSH_POLL: Duration = Duration::from_millis(2);
@@ -47,6 +47,10 @@ pub async fn jr_line_task(mut line: JrLine) {
                 });
                 line.send(baud, reply.get(..length.unwrap_or(0)).unwrap_or(&[]))
                     .await;
+                // A save or bind asked for from the radio's device tool.
+                while let Some(action) = with_app(|app| app.take_action()).flatten() {
+                    carry_out(Some(action));
+                }
             }
             LineMode::Push { baud } => {
                 line.invert.set_high();

@@ -1,0 +1,472 @@
+//! The module's settings as CRSF parameters, as the radio's device tool (the ExpressLRS Lua
+//! script EdgeTX users run for any CRSF module) lists and changes them; the wire format is
+//! `telemetry::handset::crsf::params`. This module owns the table: numbers, names, options,
+//! what a write changes and which changes restart the link.
+//!
+//! Changes apply at once to the settings in RAM; the **Save** command persists them (after a
+//! confirmation). Packet rate, telemetry ratio and band restart the link (the session ends
+//! with `SessionEnd::SettingsChanged`) and the changed row then reads "(link restarted)"; the
+//! receiver learns them at the next **Bind**. Input, telemetry output and TX power are read at
+//! power-up (they would cut the JR line the tool talks over, or the radio's power is set
+//! when the chip starts), so their rows say "(on power-up)".
+//!
+//! Numbering (fixed; the radio reads 1 … [`PARAMETER_COUNT`]). H-SEC's binding phrase goes
+//! at the end as a STRING parameter (number 13), which only grows the count.
+
+use core::fmt::Write;
+
+use heapless::{String, Vec};
+use telemetry::handset::crsf::params::{CommandStatus, Entry, MAX_ENTRY_LEN};
+
+use crate::ppm::FailsafeOutput;
+use crate::settings::{
+    Band, DEFAULT_INPUT_TIMEOUT_MS, DEFAULT_TELEMETRY_RATIO, INPUT_TIMEOUT_MS, InputProtocol,
+    OutputProtocol, RateMode, Settings, TELEMETRY_RATIOS,
+};
+
+/// Packet rate (the link's rate modes).
+pub const PACKET_RATE: u8 = 1;
+/// Telemetry ratio.
+pub const TELEMETRY_RATIO: u8 = 2;
+/// TX power.
+pub const TX_POWER: u8 = 3;
+/// RF band.
+pub const BAND: u8 = 4;
+/// Folder: the JR-line side.
+pub const HANDSET_FOLDER: u8 = 5;
+/// Input (PPM / CRSF).
+pub const INPUT: u8 = 6;
+/// Telemetry output to the handset.
+pub const TELEMETRY_OUTPUT: u8 = 7;
+/// Handset input timeout.
+pub const INPUT_TIMEOUT: u8 = 8;
+/// Folder: receiver-role settings.
+pub const RECEIVER_FOLDER: u8 = 9;
+/// PPM failsafe in the receiver role.
+pub const PPM_FAILSAFE: u8 = 10;
+/// Command: bind.
+pub const BIND: u8 = 11;
+/// Command: save the settings.
+pub const SAVE: u8 = 12;
+/// Parameters the module offers (DEVICE_INFO's count).
+pub const PARAMETER_COUNT: u8 = 12;
+
+/// How often the radio polls a running command, 10 ms units.
+const POLL_10MS: u8 = 50;
+const ON_POWER_UP: &str = " (on power-up)";
+const RESTARTED: &str = " (link restarted)";
+
+/// The commands' handshake state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Commands {
+    /// A bind started from the radio is running.
+    pub binding: bool,
+    /// How the last bind from the radio ended (`Some(true)` bound).
+    pub bind_result: Option<bool>,
+    /// Save waits for the pilot's confirmation.
+    pub save_confirming: bool,
+    /// The last save from the radio was handed to the firmware.
+    pub saved: bool,
+    /// The parameter whose change last restarted the link.
+    pub restarted_by: Option<u8>,
+}
+
+/// What a write asks of the core beyond the settings change.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Effect {
+    /// Nothing (or an invalid write, ignored).
+    None,
+    /// The link must restart with the new settings.
+    RestartLink,
+    /// Apply the input timeout to the link.
+    InputTimeout,
+    /// Apply the PPM failsafe to the encoder.
+    PpmFailsafe,
+    /// Start a bind (the radio's Bind command).
+    Bind,
+    /// Persist the settings.
+    Save,
+    /// Answer with the command's entry (its new status).
+    CommandStatus,
+}
+
+/// The name the radio shows for a rate mode, with its packet rate.
+fn rate_label(rate: RateMode) -> &'static str {
+    match rate {
+        RateMode::L50 => "L50 (50 Hz)",
+        RateMode::M100 => "M100 (100 Hz)",
+        RateMode::F250 => "F250 (250 Hz)",
+        RateMode::F500 => "F500 (500 Hz)",
+    }
+}
+
+/// The RFM22B's eight power steps (`radio_rfm22b::TxPower`): nominal dBm and mW.
+const TX_POWER_LABELS: [&str; 8] = [
+    "1dBm 1mW",
+    "2dBm 2mW",
+    "5dBm 3mW",
+    "8dBm 6mW",
+    "11dBm 13mW",
+    "14dBm 25mW",
+    "17dBm 50mW",
+    "20dBm 100mW",
+];
+
+/// Band options, in `Band` order, with their legal meaning.
+const BAND_LABELS: [&str; 4] = ["433 HAM licence", "868 EU SRD", "915 US ISM", "433 ISM LPD"];
+const INPUT_LABELS: [&str; 4] = ["PPM", "CRSF 400k", "CRSF 115k", "CRSF 921k"];
+const OUTPUT_LABELS: [&str; 4] = ["Off", "CRSF", "S.Port", "FrSky D"];
+const FAILSAFE_LABELS: [&str; 2] = ["Hold last", "Stop pulses"];
+
+fn band_index(band: Band) -> u8 {
+    match band {
+        Band::Mhz433 => 0,
+        Band::Mhz868 => 1,
+        Band::Mhz915 => 2,
+        Band::Ism433 => 3,
+    }
+}
+
+fn ratio_index(ratio: u8) -> u8 {
+    TELEMETRY_RATIOS
+        .iter()
+        .position(|r| *r == ratio)
+        .and_then(|i| u8::try_from(i).ok())
+        .unwrap_or(0)
+}
+
+fn unit(commands: &Commands, number: u8, base: &'static str) -> &'static str {
+    if commands.restarted_by == Some(number) {
+        RESTARTED
+    } else {
+        base
+    }
+}
+
+/// Parameter `number`'s description for `settings`, `None` for an unknown number.
+pub fn entry(
+    number: u8,
+    settings: &Settings,
+    commands: &Commands,
+) -> Option<Vec<u8, MAX_ENTRY_LEN>> {
+    let entry = match number {
+        PACKET_RATE => {
+            let labels: Vec<&str, 8> = RateMode::ALL.iter().map(|r| rate_label(*r)).collect();
+            Entry::selection(
+                0,
+                "Packet Rate",
+                &labels,
+                settings.rate.code(),
+                RateMode::L50.code(),
+                unit(commands, number, ""),
+            )
+        }
+        TELEMETRY_RATIO => {
+            let mut texts: Vec<String<6>, 8> = Vec::new();
+            for ratio in TELEMETRY_RATIOS {
+                let mut text = String::new();
+                write!(text, "1:{ratio}").ok()?;
+                texts.push(text).ok()?;
+            }
+            let labels: Vec<&str, 8> = texts.iter().map(|t| t.as_str()).collect();
+            Entry::selection(
+                0,
+                "Telem Ratio",
+                &labels,
+                ratio_index(settings.telemetry_ratio),
+                ratio_index(DEFAULT_TELEMETRY_RATIO),
+                unit(commands, number, ""),
+            )
+        }
+        TX_POWER => Entry::selection(
+            0,
+            "TX Power",
+            &TX_POWER_LABELS,
+            settings.tx_power,
+            7,
+            ON_POWER_UP,
+        ),
+        BAND => Entry::selection(
+            0,
+            "Band",
+            &BAND_LABELS,
+            band_index(settings.band),
+            0,
+            unit(commands, number, ""),
+        ),
+        HANDSET_FOLDER => Entry::folder(0, "Handset"),
+        INPUT => Entry::selection(
+            HANDSET_FOLDER,
+            "Input",
+            &INPUT_LABELS,
+            settings.input as u8,
+            0,
+            ON_POWER_UP,
+        ),
+        TELEMETRY_OUTPUT => Entry::selection(
+            HANDSET_FOLDER,
+            "Telem Output",
+            &OUTPUT_LABELS,
+            settings.output as u8,
+            OutputProtocol::SPort as u8,
+            ON_POWER_UP,
+        ),
+        INPUT_TIMEOUT => Entry::uint16(
+            HANDSET_FOLDER,
+            "Input Timeout",
+            settings.input_timeout_ms,
+            *INPUT_TIMEOUT_MS.start(),
+            *INPUT_TIMEOUT_MS.end(),
+            DEFAULT_INPUT_TIMEOUT_MS,
+            "ms",
+        ),
+        RECEIVER_FOLDER => Entry::folder(0, "Receiver Role"),
+        PPM_FAILSAFE => Entry::selection(
+            RECEIVER_FOLDER,
+            "PPM Failsafe",
+            &FAILSAFE_LABELS,
+            settings.failsafe as u8,
+            FailsafeOutput::StopPulses as u8,
+            "",
+        ),
+        BIND => {
+            let (status, info) = match (commands.binding, commands.bind_result) {
+                (true, _) => (CommandStatus::Progress, "Binding"),
+                (false, Some(true)) => (CommandStatus::Ready, "Bound"),
+                (false, Some(false)) => (CommandStatus::Ready, "No receiver"),
+                (false, None) => (CommandStatus::Ready, ""),
+            };
+            Entry::command(0, "Bind", status, POLL_10MS, info)
+        }
+        SAVE => {
+            let (status, info) = match (commands.save_confirming, commands.saved) {
+                // With PPM input the next power-up has no CRSF line, so no device tool: the
+                // only way back is a settings change from elsewhere. Say so before it sticks.
+                (true, _) if settings.input == InputProtocol::Ppm => (
+                    CommandStatus::ConfirmationNeeded,
+                    "Save? PPM input ends this menu",
+                ),
+                (true, _) => (CommandStatus::ConfirmationNeeded, "Save settings?"),
+                (false, true) => (CommandStatus::Ready, "Saved"),
+                (false, false) => (CommandStatus::Ready, ""),
+            };
+            Entry::command(0, "Save", status, POLL_10MS, info)
+        }
+        _ => return None,
+    };
+    entry.finish().ok()
+}
+
+/// Applies a write of `value` to parameter `number`; invalid values change nothing.
+pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut Commands) -> Effect {
+    let byte = value.first().copied();
+    let before = *settings;
+    let effect = match (number, byte) {
+        (PACKET_RATE, Some(code)) => match RateMode::from_code(code) {
+            Some(rate) => {
+                settings.rate = rate;
+                Effect::RestartLink
+            }
+            None => Effect::None,
+        },
+        (TELEMETRY_RATIO, Some(index)) => match TELEMETRY_RATIOS.get(usize::from(index)) {
+            Some(ratio) => {
+                settings.telemetry_ratio = *ratio;
+                Effect::RestartLink
+            }
+            None => Effect::None,
+        },
+        (TX_POWER, Some(step @ 0..=7)) => {
+            settings.tx_power = step;
+            Effect::None
+        }
+        (BAND, Some(index)) => match index {
+            0 => Some(Band::Mhz433),
+            1 => Some(Band::Mhz868),
+            2 => Some(Band::Mhz915),
+            3 => Some(Band::Ism433),
+            _ => None,
+        }
+        .map_or(Effect::None, |band| {
+            settings.band = band;
+            Effect::RestartLink
+        }),
+        (INPUT, Some(index)) => {
+            if let Some(input) = match index {
+                0 => Some(InputProtocol::Ppm),
+                1 => Some(InputProtocol::Crsf),
+                2 => Some(InputProtocol::Crsf115200),
+                3 => Some(InputProtocol::Crsf921600),
+                _ => None,
+            } {
+                settings.input = input;
+            }
+            Effect::None
+        }
+        (TELEMETRY_OUTPUT, Some(index)) => {
+            if let Some(output) = match index {
+                0 => Some(OutputProtocol::Off),
+                1 => Some(OutputProtocol::Crsf),
+                2 => Some(OutputProtocol::SPort),
+                3 => Some(OutputProtocol::FrskyHub),
+                _ => None,
+            } {
+                settings.output = output;
+            }
+            Effect::None
+        }
+        (INPUT_TIMEOUT, _) => match value {
+            [high, low] if INPUT_TIMEOUT_MS.contains(&u16::from_be_bytes([*high, *low])) => {
+                settings.input_timeout_ms = u16::from_be_bytes([*high, *low]);
+                Effect::InputTimeout
+            }
+            _ => Effect::None,
+        },
+        (PPM_FAILSAFE, Some(index @ 0..=1)) => {
+            settings.failsafe = if index == 0 {
+                FailsafeOutput::HoldLast
+            } else {
+                FailsafeOutput::StopPulses
+            };
+            Effect::PpmFailsafe
+        }
+        (BIND, Some(step)) => match CommandStatus::from_byte(step) {
+            Some(CommandStatus::Start) if !commands.binding => {
+                commands.binding = true;
+                commands.bind_result = None;
+                Effect::Bind
+            }
+            // A cancel closes the radio's popup; a bind under way runs to its end (it cannot
+            // be half-done), and its result shows at the next read.
+            Some(_) => Effect::CommandStatus,
+            None => Effect::None,
+        },
+        (SAVE, Some(step)) => match CommandStatus::from_byte(step) {
+            Some(CommandStatus::Start) => {
+                commands.save_confirming = true;
+                commands.saved = false;
+                Effect::CommandStatus
+            }
+            Some(CommandStatus::Confirm) if commands.save_confirming => {
+                commands.save_confirming = false;
+                commands.saved = true;
+                Effect::Save
+            }
+            Some(CommandStatus::Cancel) => {
+                commands.save_confirming = false;
+                Effect::CommandStatus
+            }
+            Some(_) => Effect::CommandStatus,
+            None => Effect::None,
+        },
+        _ => Effect::None,
+    };
+    if effect == Effect::RestartLink {
+        if *settings == before {
+            // The same value again: the link keeps running.
+            return Effect::None;
+        }
+        commands.restarted_by = Some(number);
+    } else if number != BIND && number != SAVE && *settings != before {
+        commands.restarted_by = None;
+    }
+    effect
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_parameter_has_an_entry_and_no_more() {
+        let settings = Settings::default();
+        let commands = Commands::default();
+        for number in 1..=PARAMETER_COUNT {
+            assert!(entry(number, &settings, &commands).is_some(), "{number}");
+        }
+        assert!(entry(0, &settings, &commands).is_none());
+        assert!(entry(PARAMETER_COUNT + 1, &settings, &commands).is_none());
+    }
+
+    #[test]
+    fn rate_writes_restart_the_link_once() {
+        let mut settings = Settings::default();
+        let mut commands = Commands::default();
+        assert_eq!(
+            write(PACKET_RATE, &[3], &mut settings, &mut commands),
+            Effect::RestartLink
+        );
+        assert_eq!(settings.rate, RateMode::F500);
+        assert_eq!(commands.restarted_by, Some(PACKET_RATE));
+        assert_eq!(
+            write(PACKET_RATE, &[3], &mut settings, &mut commands),
+            Effect::None
+        );
+        assert_eq!(
+            write(PACKET_RATE, &[9], &mut settings, &mut commands),
+            Effect::None
+        );
+        assert_eq!(settings.rate, RateMode::F500);
+        assert_eq!(
+            write(TELEMETRY_RATIO, &[3], &mut settings, &mut commands),
+            Effect::RestartLink
+        );
+        assert_eq!(settings.telemetry_ratio, 16);
+        assert_eq!(
+            write(INPUT_TIMEOUT, &[0x03, 0x20], &mut settings, &mut commands),
+            Effect::InputTimeout
+        );
+        assert_eq!(settings.input_timeout_ms, 800);
+        assert_eq!(
+            write(INPUT_TIMEOUT, &[0x00, 0x10], &mut settings, &mut commands),
+            Effect::None
+        );
+        assert_eq!(settings.input_timeout_ms, 800);
+    }
+
+    #[test]
+    fn save_needs_a_confirmation() {
+        let mut settings = Settings::default();
+        let mut commands = Commands::default();
+        assert_eq!(
+            write(SAVE, &[4], &mut settings, &mut commands),
+            Effect::CommandStatus,
+            "a confirm without a start saves nothing"
+        );
+        assert_eq!(
+            write(SAVE, &[1], &mut settings, &mut commands),
+            Effect::CommandStatus
+        );
+        assert!(commands.save_confirming);
+        assert_eq!(
+            write(SAVE, &[4], &mut settings, &mut commands),
+            Effect::Save
+        );
+        assert!(commands.saved && !commands.save_confirming);
+    }
+
+    #[test]
+    fn saving_ppm_input_warns_that_the_menu_goes_away() {
+        let info = |settings: &Settings| {
+            let commands = Commands {
+                save_confirming: true,
+                ..Commands::default()
+            };
+            let entry = entry(SAVE, settings, &commands).unwrap();
+            // parent, type, "Save" NUL, status, timeout, info, NUL.
+            std::string::String::from_utf8(entry[9..entry.len() - 1].to_vec()).unwrap()
+        };
+        let crsf = Settings {
+            input: InputProtocol::Crsf,
+            ..Settings::default()
+        };
+        assert_eq!(info(&crsf), "Save settings?");
+        let ppm = Settings {
+            input: InputProtocol::Ppm,
+            ..crsf
+        };
+        assert_eq!(info(&ppm), "Save? PPM input ends this menu");
+    }
+}

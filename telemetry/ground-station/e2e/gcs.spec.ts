@@ -1,0 +1,137 @@
+// The ground station in Chromium against `taulink-sim --serve`: each page gets a fresh
+// simulated world (both link ends, the module's HM-10 relay, the flight side's reports);
+// `/api/sent` tells what that flight side sent and applied.
+import { readFileSync } from "node:fs";
+import { fileURLToPath } from "node:url";
+import { expect, test, type Page } from "@playwright/test";
+import { Decoder, loadWasm } from "../src/decoder";
+import * as fmt from "../src/format";
+import { parseLog } from "../src/log";
+import { MODE_NAMES, type Event, type FlightMode } from "../src/messages";
+
+interface Sent {
+  last: Record<string, Record<string, number> | string>;
+  applied: { id: number; value: number }[];
+}
+
+const sent = async (page: Page): Promise<Sent> => (await page.request.get("/api/sent")).json() as Promise<Sent>;
+const text = async (page: Page, label: string): Promise<string> =>
+  (await page.getByLabel(label, { exact: true }).textContent()) ?? "";
+
+/** The page's values next to what the flight side last sent, formatted the page's way. */
+async function compare(page: Page): Promise<[string[], string[]]> {
+  const s = (await sent(page)).last as Record<string, Record<string, number>>;
+  const shown = await Promise.all(
+    ["Battery voltage", "Uplink LQ", "Downlink LQ", "Flight mode", "Roll", "Pitch", "Heading", "Armed"].map((l) => text(page, l)),
+  );
+  const { Battery: b, LinkStats: l, Attitude: a } = s;
+  const mode = (s as unknown as Record<string, FlightMode | undefined>).FlightMode;
+  const arm = s.ArmState as unknown as { armed: boolean } | undefined;
+  const want = [
+    b ? fmt.volts(b.voltage_mv!) : "?",
+    l ? fmt.percent(l.uplink_lq!) : "?",
+    l ? fmt.percent(l.downlink_lq!) : "?",
+    mode ? MODE_NAMES[mode] : "?",
+    a ? fmt.degrees(a.roll_cdeg!) : "?",
+    a ? fmt.degrees(a.pitch_cdeg!) : "?",
+    a ? fmt.heading(a.yaw_cdeg!) : "?",
+    arm ? fmt.yesNo(arm.armed) : "?",
+  ];
+  return [shown, want];
+}
+
+test.beforeEach(async ({ page }) => {
+  await page.addInitScript(() => {
+    const spoken: string[] = [];
+    (window as unknown as { spoken: string[] }).spoken = spoken;
+    window.speechSynthesis.speak = (u: SpeechSynthesisUtterance) => void spoken.push(u.text);
+  });
+});
+
+test("connects and shows what the simulator sent", async ({ page }) => {
+  await page.goto("/?sim");
+  await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
+  await expect
+    .poll(async () => {
+      const [shown, want] = await compare(page);
+      return shown.join(" | ") === want.join(" | ") && !want.includes("?") ? "equal" : `${shown} vs ${want}`;
+    }, { timeout: 20_000 })
+    .toBe("equal");
+  await expect(page.getByLabel("Battery voltage", { exact: true })).toHaveText(/^1[56]\.\d\d V$/);
+  await expect(page.getByLabel("Uplink LQ", { exact: true })).toHaveText(/^\d+ %$/);
+});
+
+test("a flight-mode change is spoken; mute silences arming", async ({ page }) => {
+  await page.goto("/?sim");
+  await expect(page.getByLabel("Flight mode", { exact: true })).toHaveText("Attitude");
+  // The scripted flight changes mode every 10 s of simulated time.
+  await expect
+    .poll(async () => page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.join(";")), { timeout: 25_000 })
+    .toContain("Flight mode Rate");
+  await expect(page.getByLabel("Flight mode", { exact: true })).toHaveText("Rate");
+  // Mute: nothing more is spoken.
+  await page.getByRole("button", { name: "Mute" }).click();
+  const before = await page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.length);
+  await page.waitForTimeout(11_000);
+  // The script arms at 20 s: shown, not spoken (muted), and settings are no longer offered.
+  await expect(page.getByLabel("Armed", { exact: true })).toHaveText("Yes", { timeout: 10_000 });
+  expect(await page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.length)).toBe(before);
+  await expect(page.getByRole("button", { name: "Set" }).first()).toBeDisabled();
+});
+
+test("a setting change round-trips to the flight side", async ({ page }) => {
+  await page.goto("/?sim");
+  await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
+  await page.getByLabel("Filter settings").fill("pid.roll.kp");
+  await page.getByLabel("New value for pid.roll.kp").fill("0.004");
+  await page.getByRole("row", { name: /pid\.roll\.kp/ }).getByRole("button", { name: "Set" }).click();
+  // The flight side's echo, shown as the value it holds.
+  await expect(page.getByLabel("Setting pid.roll.kp")).toHaveText("0.004", { timeout: 10_000 });
+  const bits = new Int32Array(new Float32Array([0.004]).buffer)[0];
+  const applied = (await sent(page)).applied;
+  expect(applied).toHaveLength(1);
+  expect(applied[0]!.value).toBe(bits);
+});
+
+test("a recorded log replays", async ({ page, context }) => {
+  await page.goto("/?sim");
+  await expect(page.getByLabel("Battery voltage", { exact: true })).toHaveText(/V$/);
+  await page.getByRole("button", { name: "Record" }).click();
+  await page.waitForTimeout(3_000);
+  await page.getByRole("button", { name: "Record" }).click();
+  const downloading = page.waitForEvent("download");
+  await page.getByRole("button", { name: "Save log" }).click();
+  const path = await (await downloading).path();
+  const log = readFileSync(path, "utf8");
+  // What the log holds, decoded in Node by the same WebAssembly build.
+  await loadWasm(readFileSync(fileURLToPath(new URL("../src/wasm/telemetry_wasm_bg.wasm", import.meta.url))));
+  const decoder = new Decoder();
+  const last: Record<string, unknown> = {};
+  for (const c of parseLog(log)) {
+    for (const e of decoder.push(c.bytes) as Event[]) if (e !== "Dropped") Object.assign(last, e);
+  }
+  const battery = last.Battery as { voltage_mv: number };
+  const attitude = last.Attitude as { roll_cdeg: number };
+  expect(battery && attitude).toBeTruthy();
+
+  const replay = await context.newPage();
+  await replay.goto("/");
+  await replay.getByLabel("Open log").setInputFiles({ name: "flight.tlog", mimeType: "text/plain", buffer: Buffer.from(log) });
+  await expect(replay.getByRole("status", { name: "Connection status" })).toHaveText("replayed flight.tlog", { timeout: 10_000 });
+  await expect(replay.getByLabel("Battery voltage", { exact: true })).toHaveText(fmt.volts(battery.voltage_mv));
+  await expect(replay.getByLabel("Roll", { exact: true })).toHaveText(fmt.degrees(attitude.roll_cdeg));
+  await expect(replay.getByLabel("Flight mode", { exact: true })).toHaveText(MODE_NAMES[last.FlightMode as FlightMode]);
+});
+
+test("works offline after the first load", async ({ page, context }) => {
+  await page.goto("/");
+  await page.evaluate(async () => {
+    await navigator.serviceWorker.ready;
+  });
+  await page.reload();
+  await context.setOffline(true);
+  await page.reload();
+  await expect(page.getByRole("heading", { name: "TauLink" })).toBeVisible();
+  await expect(page.getByLabel("Setting pid.roll.kp")).toHaveText("—");
+  await context.setOffline(false);
+});

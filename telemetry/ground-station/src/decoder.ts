@@ -1,0 +1,59 @@
+/**
+ * The WebAssembly half (telemetry-wasm, built by scripts/build-wasm.sh into src/wasm/):
+ * loading it, and typed wrappers over its JSON answers.
+ */
+import init, {
+  Decoder as WasmDecoder,
+  encode_setting_change,
+  setting_from_wire,
+  setting_to_wire,
+  settings_table,
+} from "./wasm/telemetry_wasm.js";
+import type { Event } from "./messages";
+
+export interface SettingRow {
+  id: number;
+  name: string;
+  kind: "real" | "whole" | "choice";
+  min?: number;
+  max?: number;
+  choices?: string[];
+  default: number;
+}
+
+/** Loads the module (once; `source` lets tests hand in the bytes). */
+export async function loadWasm(source?: BufferSource): Promise<void> {
+  await init(source === undefined ? undefined : { module_or_path: source });
+}
+
+/** A stream decoder: bytes in any chunking → events. */
+export class Decoder {
+  private readonly inner = new WasmDecoder();
+
+  push(bytes: Uint8Array): Event[] {
+    return JSON.parse(this.inner.push(bytes)) as Event[];
+  }
+
+  /** The raw JSON (for the byte-identity test against the Rust reader). */
+  pushJson(bytes: Uint8Array): string {
+    return this.inner.push(bytes);
+  }
+
+  get dropped(): number {
+    return this.inner.dropped();
+  }
+}
+
+export function settingsTable(): SettingRow[] {
+  return JSON.parse(settings_table()) as SettingRow[];
+}
+
+/** The frame that asks the flight side to set `id` to `value`, or undefined if it would refuse. */
+export function settingChangeFrame(id: number, value: number): Uint8Array | undefined {
+  const wire = setting_to_wire(id, value);
+  return wire === undefined ? undefined : encode_setting_change(id, wire);
+}
+
+export function settingValue(id: number, wire: number): number | undefined {
+  return setting_from_wire(id, wire);
+}

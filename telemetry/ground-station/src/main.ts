@@ -1,0 +1,318 @@
+/**
+ * The app: connects a transport, runs every received chunk through the Rust decoder, folds
+ * the events into the model, renders it, speaks alerts, records and replays logs, and sends
+ * setting changes. No decoding or protocol logic here beyond calling the WebAssembly side.
+ */
+import "./style.css";
+import { Alerts, Speaker, armText } from "./alerts";
+import { Decoder, loadWasm, settingChangeFrame, settingValue, settingsTable, type SettingRow } from "./decoder";
+import * as fmt from "./format";
+import { type Chunk, Recorder, csvByType, parseLog } from "./log";
+import { MODE_NAMES, RATE_MODES, type Event } from "./messages";
+import { type State, apply, initialState } from "./model";
+import { type Console, type Transport, connectBluetooth, connectSerial, connectWebSocket, parseSettingLine } from "./transports";
+import { Horizon, drawStrip, drawTrack, headingDeg } from "./views";
+
+const $ = <T extends HTMLElement = HTMLElement>(id: string): T => {
+  const el = document.getElementById(id);
+  if (!el) throw new Error(`#${id} missing`);
+  return el as T;
+};
+
+let state: State = initialState();
+let decoder: Decoder;
+let transport: Transport | undefined;
+let usb: Console | undefined;
+let recorder: Recorder | undefined;
+let lastLog: string | undefined;
+let replayTimer: ReturnType<typeof setTimeout> | undefined;
+let alerts = new Alerts();
+const speaker = new Speaker();
+let horizon: Horizon;
+let settings: SettingRow[] = [];
+/** Console values by setting name (USB), shown when no link echo is there. */
+const consoleValues = new Map<string, string>();
+
+function status(text: string): void {
+  $("status").textContent = text;
+}
+
+function set(id: string, text: string, cls = ""): void {
+  const el = $(id);
+  if (el.textContent !== text) el.textContent = text;
+  el.className = `${el.classList.contains("big") ? "big " : ""}${cls}`;
+}
+
+function onBytes(bytes: Uint8Array): void {
+  recorder?.add(performance.now(), bytes);
+  const now = performance.now();
+  for (const e of decoder.push(bytes)) apply(state, e, now);
+  $("record").title = recorder ? `${recorder.chunks} chunks` : "";
+}
+
+function render(): void {
+  const now = performance.now();
+  speaker.speak(alerts.update(state, now));
+  const s = state;
+  if (s.attitude) {
+    const a = s.attitude;
+    horizon.update(a.roll_cdeg / 100, a.pitch_cdeg / 100, headingDeg(a.yaw_cdeg));
+    set("roll", fmt.degrees(a.roll_cdeg));
+    set("pitch", fmt.degrees(a.pitch_cdeg));
+    set("heading", fmt.heading(a.yaw_cdeg));
+  }
+  if (s.mode) set("mode", MODE_NAMES[s.mode]);
+  if (s.arm) {
+    set("armed", fmt.yesNo(s.arm.armed), s.arm.armed ? "warn" : "");
+    set("arm-state", armText(s));
+    set("failsafe", fmt.yesNo(s.arm.failsafe), s.arm.failsafe ? "bad" : "");
+  }
+  if (s.battery) {
+    const b = s.battery;
+    const level = alerts.batteryLevel;
+    const cls = level === "critical" ? "crit" : level === "warning" ? "warn" : "";
+    set("voltage", fmt.volts(b.voltage_mv), cls);
+    const cells = alerts.cellCount;
+    set("cell", cells ? `${fmt.volts(b.voltage_mv / cells)} (${cells}S)` : "—", cls);
+    set("current", fmt.amps(b.current_ca));
+    set("used", `${b.used_mah} mAh`);
+  }
+  if (s.link) {
+    const l = s.link;
+    set("up-lq", fmt.percent(l.uplink_lq), l.uplink_lq < 50 ? "bad" : "");
+    set("dn-lq", fmt.percent(l.downlink_lq), l.downlink_lq < 50 ? "bad" : "");
+    set("up-rssi", fmt.dbm(l.uplink_rssi_dbm));
+    set("dn-rssi", fmt.dbm(l.downlink_rssi_dbm));
+    set("rate", RATE_MODES[l.rate_mode] ?? `code ${l.rate_mode}`);
+    set("failsafes", String(l.failsafes));
+  }
+  const tEnd = s.lastMessageMs ?? now;
+  drawStrip($<HTMLCanvasElement>("chart-lq"), s.linkHistory, tEnd, [[(x) => x.upLq, "#66bb6a"], [(x) => x.dnLq, "#4fc3f7"]], [0, 100], "LQ %");
+  drawStrip($<HTMLCanvasElement>("chart-rssi"), s.linkHistory, tEnd, [[(x) => x.upRssi, "#66bb6a"], [(x) => x.dnRssi, "#4fc3f7"]], [-120, -20], "RSSI dBm");
+  if (s.gps) {
+    const g = s.gps;
+    set("position", fmt.latLon(g.latitude_e7, g.longitude_e7));
+    set("altitude", `${(g.altitude_cm / 100).toFixed(1)} m`);
+    set("speed", `${(g.ground_speed_cm_s / 100).toFixed(1)} m/s`);
+    set("fix", `${g.fix === "Fix3d" ? "3D" : g.fix === "Fix2d" ? "2D" : "none"}, ${g.satellites} sats`);
+    drawTrack($<HTMLCanvasElement>("track"), s.track);
+  }
+  renderSysid();
+  renderSettingValues();
+}
+
+function renderSysid(): void {
+  const rows = (["Roll", "Pitch", "Yaw"] as const).flatMap((axis) => {
+    const r = state.sysid[axis];
+    return r ? [`<tr><td>${axis}</td><td>${r.beta1.toFixed(0)}</td><td>${r.beta2.toFixed(0)}</td><td>${(r.tau_s * 1000).toFixed(1)}</td><td>${r.noise.toPrecision(3)}</td></tr>`] : [];
+  });
+  const html = rows.length ? rows.join("") : `<tr><td colspan="5">none yet</td></tr>`;
+  const body = $("sysid-rows");
+  if (body.innerHTML !== html) body.innerHTML = html;
+}
+
+function shownValue(row: SettingRow): string {
+  const wire = state.settings.get(row.id);
+  if (wire !== undefined) {
+    const v = settingValue(row.id, wire);
+    if (v === undefined) return "?";
+    return row.kind === "choice" ? (row.choices?.[v] ?? String(v)) : row.kind === "real" ? fmt.real(v) : String(v);
+  }
+  return consoleValues.get(row.name) ?? "—";
+}
+
+function renderSettingValues(): void {
+  // The flight side refuses changes while armed; the page does not offer them then.
+  const armed = state.arm?.armed === true;
+  for (const b of document.querySelectorAll<HTMLButtonElement>("button[data-set]")) {
+    if (b.disabled !== armed) {
+      b.disabled = armed;
+      b.title = armed ? "refused while armed" : "";
+    }
+  }
+  for (const row of settings) {
+    const el = document.getElementById(`set-${row.id}`);
+    if (el) {
+      const v = shownValue(row);
+      if (el.textContent !== v) el.textContent = v;
+    }
+  }
+}
+
+function buildSettings(): void {
+  settings = settingsTable();
+  const filter = ($<HTMLInputElement>("settings-filter").value || "").trim();
+  $("settings-rows").innerHTML = settings
+    .filter((r) => r.name.includes(filter))
+    .map((r) => {
+      const range = r.kind === "choice" ? (r.choices ?? []).map((c, i) => `${i}=${c}`).join(" ") : `${fmt.real(r.min ?? 0)}…${fmt.real(r.max ?? 0)}`;
+      return `<tr><td title="${range}">${r.name}</td><td id="set-${r.id}" aria-label="Setting ${r.name}">—</td>` +
+        `<td><input data-id="${r.id}" aria-label="New value for ${r.name}" placeholder="${range}" /></td>` +
+        `<td><button type="button" data-set="${r.id}">Set</button></td></tr>`;
+    })
+    .join("");
+  renderSettingValues();
+}
+
+async function sendSetting(row: SettingRow, text: string): Promise<void> {
+  if (usb) {
+    await usb.command(`set ${row.name} ${text}`);
+    await usb.command(`get ${row.name}`);
+    return;
+  }
+  const value = row.kind === "choice" && row.choices?.includes(text) ? row.choices.indexOf(text) : Number(text);
+  const frame = settingChangeFrame(row.id, value);
+  if (!frame) {
+    status(`${row.name}: ${text} is outside what the flight side accepts`);
+    return;
+  }
+  if (!transport) {
+    status("connect first to change settings");
+    return;
+  }
+  await transport.send(frame);
+  status(`${row.name} → ${text} sent; waiting for the flight side's report`);
+}
+
+function reset(): void {
+  if (replayTimer) clearTimeout(replayTimer);
+  replayTimer = undefined;
+  transport?.close();
+  transport = undefined;
+  state = initialState();
+  alerts = new Alerts();
+  decoder = new Decoder();
+}
+
+const sink = {
+  onBytes,
+  onClosed: (why: string) => {
+    status(why);
+    transport = undefined;
+  },
+};
+
+async function connect(how: () => Promise<Transport>): Promise<void> {
+  reset();
+  try {
+    status("connecting…");
+    transport = await how();
+    status(`connected: ${transport.name}`);
+  } catch (e) {
+    status(e instanceof Error ? e.message : String(e));
+  }
+}
+
+function replay(chunks: Chunk[], name: string): void {
+  reset();
+  status(`replaying ${name}`);
+  let i = 0;
+  const t0 = performance.now() - (chunks[0]?.t ?? 0);
+  const next = (): void => {
+    const c = chunks[i];
+    if (!c) {
+      status(`replayed ${name}`);
+      return;
+    }
+    onBytes(c.bytes);
+    i += 1;
+    const following = chunks[i];
+    replayTimer = setTimeout(next, following ? Math.max(0, following.t - (performance.now() - t0)) : 0);
+  };
+  next();
+}
+
+function download(name: string, text: string, type: string): void {
+  const a = document.createElement("a");
+  a.href = URL.createObjectURL(new Blob([text], { type }));
+  a.download = name;
+  a.click();
+  setTimeout(() => URL.revokeObjectURL(a.href), 10_000);
+}
+
+function stamp(): string {
+  return new Date().toISOString().replace(/[:.]/g, "-").slice(0, 19);
+}
+
+async function main(): Promise<void> {
+  await loadWasm();
+  decoder = new Decoder();
+  horizon = new Horizon($("horizon"));
+  buildSettings();
+  const wsUrl = `${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws`;
+  $("connect-sim").onclick = () => void connect(() => connectWebSocket(wsUrl, sink));
+  $("connect-ble").onclick = () => void connect(() => connectBluetooth(sink));
+  $("connect-serial").onclick = async () => {
+    try {
+      usb = await connectSerial(
+        (line) => {
+          const kv = parseSettingLine(line);
+          if (kv) consoleValues.set(kv[0], kv[1]);
+          else if (line.trim()) status(`USB: ${line.trim()}`);
+        },
+        (why) => {
+          usb = undefined;
+          status(why);
+        },
+      );
+      status("USB console connected");
+      await usb.command("list");
+    } catch (e) {
+      status(e instanceof Error ? e.message : String(e));
+    }
+  };
+  $("settings-read").onclick = () => void usb?.command("list");
+  $("settings-save").onclick = () => void usb?.command("save");
+  $("settings-filter").oninput = buildSettings;
+  $("settings-rows").onclick = (ev) => {
+    const id = (ev.target as HTMLElement).dataset.set;
+    const row = settings.find((r) => String(r.id) === id);
+    const input = document.querySelector<HTMLInputElement>(`input[data-id="${id}"]`);
+    if (row && input && input.value.trim()) void sendSetting(row, input.value.trim());
+  };
+  $("mute").onclick = () => {
+    speaker.muted = !speaker.muted;
+    $("mute").setAttribute("aria-pressed", String(speaker.muted));
+    if (speaker.muted) globalThis.speechSynthesis?.cancel();
+  };
+  $("record").onclick = () => {
+    if (recorder) {
+      lastLog = recorder.text();
+      recorder = undefined;
+      $("record").setAttribute("aria-pressed", "false");
+      $<HTMLButtonElement>("save-log").disabled = false;
+      $<HTMLButtonElement>("export-csv").disabled = false;
+    } else {
+      recorder = new Recorder(performance.now());
+      $("record").setAttribute("aria-pressed", "true");
+    }
+  };
+  $("save-log").onclick = () => lastLog && download(`taulink-${stamp()}.tlog`, lastLog, "text/plain");
+  $("export-csv").onclick = () => {
+    if (!lastLog) return;
+    const fresh = new Decoder();
+    for (const [kind, csv] of csvByType(parseLog(lastLog), (b) => fresh.push(b) as Event[])) {
+      download(`taulink-${stamp()}-${kind}.csv`, csv, "text/csv");
+    }
+  };
+  $<HTMLInputElement>("open-log").onchange = async (ev) => {
+    const file = (ev.target as HTMLInputElement).files?.[0];
+    if (!file) return;
+    try {
+      const text = await file.text();
+      lastLog = text;
+      $<HTMLButtonElement>("export-csv").disabled = false;
+      replay(parseLog(text), file.name);
+    } catch (e) {
+      status(e instanceof Error ? e.message : String(e));
+    }
+  };
+  setInterval(render, 100);
+  if ("serviceWorker" in navigator && location.protocol !== "file:") {
+    navigator.serviceWorker.register("./sw.js").catch(() => status("offline use unavailable (no service worker)"));
+  }
+  // Opened from the simulator: connect straight away.
+  if (new URLSearchParams(location.search).has("sim")) $("connect-sim").click();
+}
+
+void main();

@@ -1,0 +1,64 @@
+/**
+ * The telemetry messages as the WebAssembly decoder renders them: serde's JSON of
+ * `telemetry::messages::Message` (externally tagged), and "Dropped" for a frame that was
+ * corrupt, oversize or unknown. These types only describe that JSON; decoding is Rust.
+ */
+
+export interface Attitude { roll_cdeg: number; pitch_cdeg: number; yaw_cdeg: number }
+export interface Battery { voltage_mv: number; current_ca: number; used_mah: number; remaining_percent: number }
+export interface LinkStats {
+  uplink_rssi_dbm: number; uplink_lq: number; downlink_rssi_dbm: number; downlink_lq: number;
+  rate_mode: number; received: number; missed: number; failsafes: number;
+}
+export type FlightMode = "Rate" | "Attitude" | "AltitudeHold" | "PositionHold" | "ReturnToHome" | "SystemId";
+export interface ArmState { armed: boolean; failsafe: boolean; arming_blockers: number }
+export type GpsFix = "None" | "Fix2d" | "Fix3d";
+export interface Gps {
+  latitude_e7: number; longitude_e7: number; altitude_cm: number; ground_speed_cm_s: number;
+  course_cdeg: number; satellites: number; fix: GpsFix;
+}
+export type Axis = "Roll" | "Pitch" | "Yaw";
+export interface SysIdResult { axis: Axis; beta1: number; beta2: number; tau_s: number; noise: number }
+export interface SettingChange { id: number; value: number }
+
+export type Message =
+  | { Attitude: Attitude }
+  | { Battery: Battery }
+  | { LinkStats: LinkStats }
+  | { FlightMode: FlightMode }
+  | { ArmState: ArmState }
+  | { Gps: Gps }
+  | { SysIdResult: SysIdResult }
+  | { SettingChange: SettingChange };
+
+export type Event = Message | "Dropped";
+
+/** The variant name of a message ("Attitude", "Battery", ...). */
+export function kindOf(m: Message): string {
+  return Object.keys(m)[0] ?? "";
+}
+
+/** Flight mode names as a pilot says them. */
+export const MODE_NAMES: Record<FlightMode, string> = {
+  Rate: "Rate",
+  Attitude: "Attitude",
+  AltitudeHold: "Altitude hold",
+  PositionHold: "Position hold",
+  ReturnToHome: "Return to home",
+  SystemId: "System identification",
+};
+
+/** `ArmState.arming_blockers` bits (flight_core::report::blocker_bit). */
+export const ARMING_BLOCKERS: [number, string][] = [
+  [1, "link down"],
+  [2, "throttle not low"],
+  [4, "sensors unhealthy"],
+  [8, "gains not ready"],
+];
+
+export function blockerNames(bits: number): string[] {
+  return ARMING_BLOCKERS.filter(([bit]) => (bits & bit) !== 0).map(([, name]) => name);
+}
+
+/** Rate mode wire codes (`telemetry::link::RateMode::code`). */
+export const RATE_MODES = ["L50", "M100", "F250", "F500"];

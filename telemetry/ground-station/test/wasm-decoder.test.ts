@@ -1,0 +1,45 @@
+// The WebAssembly decoder against the Rust reader: telemetry/wasm/tests/streams.json holds
+// streams (in their arrival chunks) and the JSON the Rust reader made of every chunk (kept
+// current by `cargo test -p telemetry-wasm`); the wasm build must produce the same text.
+import { readFileSync } from "node:fs";
+import { fileURLToPath } from "node:url";
+import { beforeAll, describe, expect, it } from "vitest";
+import { Decoder, loadWasm, settingChangeFrame, settingValue, settingsTable } from "../src/decoder";
+import { fromHex } from "../src/log";
+
+const here = (p: string): string => fileURLToPath(new URL(p, import.meta.url));
+interface Stream { name: string; chunks: string[]; decoded: string[] }
+const streams = JSON.parse(readFileSync(here("../../wasm/tests/streams.json"), "utf8")) as Stream[];
+
+beforeAll(async () => {
+  await loadWasm(readFileSync(here("../src/wasm/telemetry_wasm_bg.wasm")));
+});
+
+describe("wasm decoder = Rust reader", () => {
+  it("covers the streams", () => expect(streams.length).toBeGreaterThanOrEqual(6));
+  for (const s of streams) {
+    it(s.name, () => {
+      const d = new Decoder();
+      const got = s.chunks.map((hex) => d.pushJson(fromHex(hex) ?? new Uint8Array()));
+      expect(got).toEqual(s.decoded);
+      const drops = s.decoded.join("").split('"Dropped"').length - 1;
+      expect(d.dropped).toBe(drops);
+    });
+  }
+});
+
+describe("settings encoders", () => {
+  it("round-trips a real setting through its frame", () => {
+    const table = settingsTable();
+    const kp = table.find((r) => r.name === "pid.roll.kp");
+    expect(kp?.kind).toBe("real");
+    const frame = settingChangeFrame(kp!.id, 0.004);
+    expect(frame?.at(-1)).toBe(0);
+    const events = new Decoder().push(frame!);
+    expect(events).toHaveLength(1);
+    const change = (events[0] as { SettingChange: { id: number; value: number } }).SettingChange;
+    expect(change.id).toBe(kp!.id);
+    expect(settingValue(kp!.id, change.value)).toBeCloseTo(0.004, 7);
+    expect(settingChangeFrame(kp!.id, 5)).toBeUndefined();
+  });
+});

@@ -1,0 +1,64 @@
+//! The ground station's Rust half: the telemetry stream reader (`telemetry::messages`) and
+//! the encoders for what the phone sends (setting changes), exported to JavaScript with
+//! wasm-bindgen so the web app decodes with exactly the code the module and the flight side
+//! run. Everything crosses the boundary as bytes or JSON text; the logic lives in
+//! [`stream`] and [`settings`], which build and test on the host too.
+
+pub mod settings;
+pub mod stream;
+
+use wasm_bindgen::prelude::wasm_bindgen;
+
+/// Stream decoder for JavaScript: feed it the bytes as they arrive (any chunking: BLE
+/// notifications, serial reads, WebSocket messages), get the decoded events as JSON.
+#[wasm_bindgen]
+#[derive(Debug, Default)]
+pub struct Decoder {
+    inner: stream::StreamDecoder,
+}
+
+#[wasm_bindgen]
+impl Decoder {
+    /// A decoder waiting for the first delimiter.
+    #[wasm_bindgen(constructor)]
+    pub fn new() -> Decoder {
+        Decoder::default()
+    }
+
+    /// Decodes `bytes`; returns a JSON array of events (see [`stream::StreamDecoder::push`]).
+    pub fn push(&mut self, bytes: &[u8]) -> String {
+        self.inner.push(bytes)
+    }
+
+    /// Frames dropped so far (corrupt, oversize or unknown).
+    pub fn dropped(&self) -> u32 {
+        self.inner.dropped()
+    }
+}
+
+/// The framed stream bytes of a setting change (`id` = index in the table,
+/// `wire` = [`setting_to_wire`]'s value): what the phone writes to the HM-10, the
+/// WebSocket or the serial port. Empty if it cannot be encoded.
+#[wasm_bindgen]
+pub fn encode_setting_change(id: u16, wire: i32) -> Vec<u8> {
+    settings::encode_change(id, wire).unwrap_or_default()
+}
+
+/// The flight side's parameter table as JSON (see [`settings::table_json`]).
+#[wasm_bindgen]
+pub fn settings_table() -> String {
+    settings::table_json()
+}
+
+/// The wire value of `value` for setting `id`, or `undefined` when the setting is unknown
+/// or the value outside its range (the flight side would refuse it).
+#[wasm_bindgen]
+pub fn setting_to_wire(id: u16, value: f64) -> Option<i32> {
+    settings::to_wire(id, value)
+}
+
+/// The number a wire value of setting `id` stands for (a choice as its index).
+#[wasm_bindgen]
+pub fn setting_from_wire(id: u16, wire: i32) -> Option<f64> {
+    settings::from_wire(id, wire)
+}

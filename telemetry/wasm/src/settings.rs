@@ -1,0 +1,136 @@
+//! The flight side's settings as the ground station sees them: the parameter table of
+//! `flight_core::settings` (index = the `SettingChange::id` on the wire), the conversion of a
+//! number to its wire value and back (`flight_core::report`: reals as IEEE-754 bits, whole
+//! numbers and choices as themselves), and the framed `SettingChange` the phone sends.
+//! Authority stays on the flight side: it refuses changes while armed and echoes what it
+//! holds, so the app shows a value only once the flight side reported it.
+
+use flight_core::settings::{Kind, PARAMS, Param, Value};
+use serde_json::json;
+use telemetry::messages::{EncodeError, FRAMED_MAX_BYTES, Message, SettingChange, encode_message};
+
+/// The framed stream bytes of `SettingChange { id, value: wire }`.
+pub fn encode_change(id: u16, wire: i32) -> Result<Vec<u8>, EncodeError> {
+    let mut out = [0u8; FRAMED_MAX_BYTES];
+    let n = encode_message(
+        &Message::SettingChange(SettingChange { id, value: wire }),
+        &mut out,
+    )?;
+    Ok(out.get(..n).unwrap_or_default().to_vec())
+}
+
+fn number(value: Value) -> f64 {
+    match value {
+        Value::F32(v) => f64::from(v),
+        Value::U32(v) => f64::from(v),
+    }
+}
+
+/// `[{"id":0,"name":"output.protocol","kind":"choice","choices":[...],"default":0}, ...]`;
+/// reals and whole numbers carry `"min"` and `"max"`.
+pub fn table_json() -> String {
+    let rows: Vec<serde_json::Value> = PARAMS
+        .iter()
+        .enumerate()
+        .map(|(id, p)| {
+            let mut row = json!({"id": id, "name": p.name, "default": number(p.default)});
+            let extra = match p.kind {
+                Kind::F32 { min, max } => {
+                    json!({"kind": "real", "min": f64::from(min), "max": f64::from(max)})
+                }
+                Kind::U32 { min, max } => json!({"kind": "whole", "min": min, "max": max}),
+                Kind::Choice(names) => json!({"kind": "choice", "choices": names}),
+            };
+            if let (Some(row), serde_json::Value::Object(extra)) = (row.as_object_mut(), extra) {
+                row.extend(extra);
+            }
+            row
+        })
+        .collect();
+    serde_json::Value::Array(rows).to_string()
+}
+
+fn param(id: u16) -> Option<&'static Param> {
+    PARAMS.get(usize::from(id))
+}
+
+/// The wire value of `value` for setting `id`; `None` for an unknown setting or a value the
+/// flight side would refuse (outside the range, not a whole number, not a choice).
+pub fn to_wire(id: u16, value: f64) -> Option<i32> {
+    let p = param(id)?;
+    let bits = match p.kind {
+        Kind::F32 { .. } => (value as f32).to_bits(),
+        Kind::U32 { .. } | Kind::Choice(_) => {
+            if value.fract() != 0.0 || !(0.0..=f64::from(u32::MAX)).contains(&value) {
+                return None;
+            }
+            value as u32
+        }
+    };
+    // The flight side's own check decides what is in range.
+    p.from_bits(bits).ok()?;
+    Some(bits as i32)
+}
+
+/// The number wire value `wire` of setting `id` stands for.
+pub fn from_wire(id: u16, wire: i32) -> Option<f64> {
+    param(id)?.from_bits(wire as u32).ok().map(number)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flight_core::report::f32_value;
+    use flight_core::settings::Settings;
+
+    fn find(name: &str) -> Option<(usize, &'static Param)> {
+        PARAMS.iter().enumerate().find(|(_, p)| p.name == name)
+    }
+
+    #[test]
+    fn wire_values_are_what_the_flight_side_applies() {
+        let (id, _) = find("pid.roll.kp").unwrap();
+        let id = id as u16;
+        let wire = to_wire(id, 0.004).unwrap();
+        assert_eq!(wire, f32_value(0.004));
+        let mut settings = Settings::default();
+        let (result, echo) =
+            flight_core::report::apply_setting(&mut settings, SettingChange { id, value: wire });
+        assert_eq!(result, Ok(()));
+        assert_eq!(
+            from_wire(id, echo.unwrap().value),
+            Some(f64::from(0.004f32))
+        );
+        // Outside the range: refused here as the flight side would.
+        assert_eq!(to_wire(id, 2.0), None);
+        let (choice, _) = find("mixer.frame").unwrap();
+        assert_eq!(to_wire(choice as u16, 1.0), Some(1));
+        assert_eq!(to_wire(choice as u16, 1.5), None);
+        assert_eq!(to_wire(choice as u16, 9.0), None);
+        assert_eq!(to_wire(u16::MAX, 1.0), None);
+    }
+
+    #[test]
+    fn table_lists_every_parameter_in_wire_order() {
+        let table: serde_json::Value = serde_json::from_str(&table_json()).unwrap();
+        let rows = table.as_array().unwrap();
+        assert_eq!(rows.len(), PARAMS.len());
+        for (id, (row, p)) in rows.iter().zip(PARAMS).enumerate() {
+            assert_eq!(row["id"], id);
+            assert_eq!(row["name"], p.name);
+        }
+    }
+
+    #[test]
+    fn a_change_is_one_stream_frame() {
+        let bytes = encode_change(3, -7).unwrap();
+        let mut reader = telemetry::messages::MessageReader::new();
+        let got: Vec<_> = bytes.iter().filter_map(|&b| reader.push(b)).collect();
+        assert_eq!(
+            got,
+            vec![telemetry::messages::Decoded::Message(
+                Message::SettingChange(SettingChange { id: 3, value: -7 })
+            )]
+        );
+    }
+}

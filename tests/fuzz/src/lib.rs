@@ -1,0 +1,89 @@
+//! What the fuzz targets share: a cursor that turns the fuzzer's bytes into typed choices,
+//! the one function that makes a fuzzed air frame pass the link's integrity check, and a
+//! `block_on` for the async flash stores.
+//!
+//! Every target lives in `fuzz_targets/` and is built by `cargo fuzz build -s none` from this
+//! directory (see README.md).
+
+use telemetry::checksum::keyed_crc16;
+use telemetry::frame::CRC_BYTES;
+
+/// Reads the fuzz input front to back; every read succeeds (zeros once it runs dry), so a
+/// harness never has to handle "not enough input" and the fuzzer's mutations stay local.
+pub struct Input<'a> {
+    data: &'a [u8],
+}
+
+impl<'a> Input<'a> {
+    /// A cursor at the start of `data`.
+    pub fn new(data: &'a [u8]) -> Self {
+        Self { data }
+    }
+
+    /// Nothing left.
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+
+    /// Up to `n` bytes (fewer at the end).
+    pub fn bytes(&mut self, n: usize) -> &'a [u8] {
+        let (head, tail) = self.data.split_at(n.min(self.data.len()));
+        self.data = tail;
+        head
+    }
+
+    /// One byte, 0 when empty.
+    pub fn u8(&mut self) -> u8 {
+        self.bytes(1).first().copied().unwrap_or(0)
+    }
+
+    /// A little-endian u16 (missing bytes are 0).
+    pub fn u16(&mut self) -> u16 {
+        let mut b = [0u8; 2];
+        for (d, s) in b.iter_mut().zip(self.bytes(2)) {
+            *d = *s;
+        }
+        u16::from_le_bytes(b)
+    }
+
+    /// A little-endian u32 (missing bytes are 0).
+    pub fn u32(&mut self) -> u32 {
+        let mut b = [0u8; 4];
+        for (d, s) in b.iter_mut().zip(self.bytes(4)) {
+            *d = *s;
+        }
+        u32::from_le_bytes(b)
+    }
+
+    /// One bit of choice.
+    pub fn bool(&mut self) -> bool {
+        self.u8() & 1 != 0
+    }
+
+    /// A length byte (mod `max + 1`) followed by that many bytes.
+    pub fn chunk(&mut self, max: usize) -> &'a [u8] {
+        let len = usize::from(self.u8()) % (max + 1);
+        self.bytes(len)
+    }
+
+    /// Everything left.
+    pub fn rest(&mut self) -> &'a [u8] {
+        self.bytes(self.data.len())
+    }
+}
+
+/// Makes a fuzzed frame body pass the receiver's integrity check, so the fuzzer explores the
+/// state machine behind it instead of the check: appends today's link check, the CRC-16
+/// keyed with the bind ID. When frames carry a MAC, this is the one function to change (it
+/// will need the link secret and the frame counter instead of `key`).
+pub fn seal(body: &[u8], key: u32) -> Vec<u8> {
+    let mut frame = Vec::with_capacity(body.len() + CRC_BYTES);
+    frame.extend_from_slice(body);
+    frame.extend_from_slice(&keyed_crc16(key, body).to_be_bytes());
+    frame
+}
+
+/// Runs a future that never waits on anything outside itself (the mock flash) to completion.
+pub fn block_on<F: core::future::Future>(future: F) -> F::Output {
+    embassy_futures::block_on(future)
+}
