@@ -3,11 +3,14 @@
 //! fields, with the same ranges the record decoder enforces, so nothing typed can make a
 //! set the module would refuse to load.
 
-use super::{Band, INPUT_TIMEOUT_MS, InputProtocol, OutputProtocol, RateMode, Role, Settings};
+use super::{
+    Band, INPUT_TIMEOUT_MS, InputProtocol, OutputProtocol, RateMode, Role, Settings,
+    TELEMETRY_RATIOS,
+};
 use crate::ppm::FailsafeOutput;
 
 /// Every setting name, in record order.
-pub const NAMES: [&str; 9] = [
+pub const NAMES: [&str; 10] = [
     "role",
     "rate",
     "input",
@@ -17,6 +20,7 @@ pub const NAMES: [&str; 9] = [
     "failsafe",
     "bind_id",
     "input_timeout_ms",
+    "telemetry_ratio",
 ];
 
 /// Why a typed setting was refused (nothing changed).
@@ -47,12 +51,10 @@ impl core::error::Error for TextError {}
 pub fn choices(name: &str) -> &'static [&'static str] {
     match name {
         "role" => &["transmitter", "receiver"],
-        "rate" => &[
-            "4800", "9600", "19200", "57600", "125000", "L50", "M100", "F250",
-        ],
-        "input" => &["ppm", "crsf", "crsf115200"],
+        "rate" => &["L50", "M100", "F250", "F500"],
+        "input" => &["ppm", "crsf", "crsf115200", "crsf921600"],
         "output" => &["off", "crsf", "sport", "frsky_hub"],
-        "band" => &["433", "868", "915"],
+        "band" => &["433", "868", "915", "ism433"],
         "failsafe" => &["hold_last", "stop_pulses"],
         _ => &[],
     }
@@ -83,9 +85,8 @@ fn number(text: &str, range: core::ops::RangeInclusive<u32>) -> Result<u32, Text
 
 impl Settings {
     /// Sets the field `name` (one of [`NAMES`]) from `text`; on an error nothing changes.
-    /// Rates are bit/s (`4800` … `125000`) or the link rate mode they give (`L50` = 19 200,
-    /// `M100` = 57 600, `F250` = 125 000, as [`crate::air::link_rate`] maps them; F500 is no
-    /// module setting).
+    /// Rates are the link's rate modes (`L50`, `M100`, `F250`, `F500`); the telemetry ratio
+    /// one of [`TELEMETRY_RATIOS`].
     pub fn set_text(&mut self, name: &str, text: &str) -> Result<(), TextError> {
         let text = text.trim();
         let words = choices(name);
@@ -97,25 +98,17 @@ impl Settings {
                     .ok_or(TextError::Unparsable)?;
             }
             "rate" => {
-                self.rate = [
-                    RateMode::Bps4800,
-                    RateMode::Bps9600,
-                    RateMode::Bps19200,
-                    RateMode::Bps57600,
-                    RateMode::Bps125000,
-                    RateMode::Bps19200,
-                    RateMode::Bps57600,
-                    RateMode::Bps125000,
-                ]
-                .get(choice(text, words)?)
-                .copied()
-                .ok_or(TextError::Unparsable)?;
+                self.rate = RateMode::ALL
+                    .get(choice(text, words)?)
+                    .copied()
+                    .ok_or(TextError::Unparsable)?;
             }
             "input" => {
                 self.input = [
                     InputProtocol::Ppm,
                     InputProtocol::Crsf,
                     InputProtocol::Crsf115200,
+                    InputProtocol::Crsf921600,
                 ]
                 .get(choice(text, words)?)
                 .copied()
@@ -133,7 +126,7 @@ impl Settings {
                 .ok_or(TextError::Unparsable)?;
             }
             "band" => {
-                self.band = [Band::Mhz433, Band::Mhz868, Band::Mhz915]
+                self.band = [Band::Mhz433, Band::Mhz868, Band::Mhz915, Band::Ism433]
                     .get(choice(text, words)?)
                     .copied()
                     .ok_or(TextError::Unparsable)?;
@@ -155,6 +148,14 @@ impl Settings {
                 self.input_timeout_ms =
                     u16::try_from(number(text, range)?).map_err(|_| TextError::OutOfRange)?;
             }
+            "telemetry_ratio" => {
+                let v = number(text, 0..=u32::from(u8::MAX))?;
+                self.telemetry_ratio = TELEMETRY_RATIOS
+                    .iter()
+                    .copied()
+                    .find(|r| u32::from(*r) == v)
+                    .ok_or(TextError::OutOfRange)?;
+            }
             _ => return Err(TextError::Unknown),
         }
         Ok(())
@@ -171,13 +172,14 @@ mod tests {
         for (name, text) in [
             ("role", "Receiver"),
             ("rate", "m100"),
-            ("input", "crsf"),
+            ("input", "crsf921600"),
             ("output", "frsky_hub"),
-            ("band", "868"),
+            ("band", "ism433"),
             ("tx_power", "3"),
             ("failsafe", "hold_last"),
             ("bind_id", "0xDEADBEEF"),
             ("input_timeout_ms", "750"),
+            ("telemetry_ratio", "16"),
         ] {
             s.set_text(name, text).unwrap();
         }
@@ -185,14 +187,15 @@ mod tests {
             s,
             Settings {
                 role: Role::Receiver,
-                rate: RateMode::Bps57600,
-                input: InputProtocol::Crsf,
+                rate: RateMode::M100,
+                input: InputProtocol::Crsf921600,
                 output: OutputProtocol::FrskyHub,
-                band: Band::Mhz868,
+                band: Band::Ism433,
                 tx_power: 3,
                 failsafe: FailsafeOutput::HoldLast,
                 bind_id: 0xDEAD_BEEF,
                 input_timeout_ms: 750,
+                telemetry_ratio: 16,
             }
         );
         assert_eq!(Settings::from_record(&s.to_record()), Ok(s));
@@ -204,7 +207,9 @@ mod tests {
         let mut s = Settings::default();
         let cases = [
             ("colour", "red", TextError::Unknown),
-            ("rate", "F500", TextError::Unparsable),
+            ("rate", "F1000", TextError::Unparsable),
+            ("telemetry_ratio", "3", TextError::OutOfRange),
+            ("telemetry_ratio", "256", TextError::OutOfRange),
             ("tx_power", "8", TextError::OutOfRange),
             ("tx_power", "-1", TextError::Unparsable),
             ("input_timeout_ms", "99", TextError::OutOfRange),

@@ -55,7 +55,7 @@ pub struct Cli {
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = name_value)]
     pub set: Vec<(String, String)>,
     /// A module setting NAME=VALUE (role, input, output, band, tx_power, failsafe, bind_id,
-    /// input_timeout_ms; repeatable). Its air rate follows --rate.
+    /// input_timeout_ms, telemetry_ratio; repeatable). Its air rate follows --rate.
     #[arg(long = "module-set", value_name = "NAME=VALUE", value_parser = name_value)]
     pub module_set: Vec<(String, String)>,
     /// Time of the scenario's fault, seconds of virtual time (2.5 ≤ S ≤ 3600; default: once
@@ -246,7 +246,7 @@ mod tests {
         assert_eq!(o.settings.f32("failsafe.descent_mps"), 1.5);
         let m = o.module_settings.unwrap();
         assert_eq!(m.input_timeout_ms, 750);
-        assert_eq!(m.rate, module_core::settings::RateMode::Bps19200);
+        assert_eq!(m.rate, RateMode::L50);
         assert_eq!(m.bind_id, flight_core::app::DEFAULT_BIND_ID);
         // Without --module-set the world pairs the ends itself.
         assert_eq!(
@@ -279,7 +279,7 @@ mod tests {
             "hover --set output.protocol=pwm",
             "hover --module-set colour=red",
             "hover --module-set tx_power=9",
-            "hover --module-set rate=19200",
+            "hover --module-set rate=M100",
             "hover --at 10",
         ] {
             let err = parse(refused).unwrap().options().unwrap_err();

@@ -142,15 +142,13 @@ impl Options {
 }
 
 /// The module's factory settings bound to the flight side (`flight_core::app::DEFAULT_BIND_ID`)
-/// at `rate` (F500, which no module setting gives, as 125 kbit/s): what `--module-set`
-/// changes start from, as the world pairs the ends when given none.
+/// at `rate`: what `--module-set` changes start from, as the world pairs the ends when given
+/// none.
 pub fn bound_module_settings(rate: RateMode) -> module_core::settings::Settings {
-    let factory = module_core::settings::Settings::default();
     module_core::settings::Settings {
         bind_id: flight_core::app::DEFAULT_BIND_ID,
-        rate: module_core::air::settings_rate(rate, factory.rate)
-            .unwrap_or(module_core::settings::RateMode::Bps125000),
-        ..factory
+        rate,
+        ..module_core::settings::Settings::default()
     }
 }
 
