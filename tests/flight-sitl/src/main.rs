@@ -48,12 +48,20 @@ fn main() -> ExitCode {
         println!("{}", outcome.report.to_json());
     } else {
         print!("{}", outcome.report.to_text());
-        eprintln!(
-            "speed: {:.0} × real time ({:.1} s virtual in {:.3} s, the final run alone)",
-            outcome.plan.duration_s / outcome.wall_s.max(1e-9),
-            outcome.plan.duration_s,
-            outcome.wall_s
-        );
+        let d = outcome.plan.duration_s;
+        if let Some(cpu) = outcome.cpu_s {
+            eprintln!(
+                "speed: {:.0} × real time on the CPU ({d:.1} s virtual in {cpu:.3} s of CPU, the final run alone; {:.0} × by the wall clock)",
+                d / cpu.max(1e-9),
+                d / outcome.wall_s.max(1e-9),
+            );
+        } else {
+            eprintln!(
+                "speed: {:.0} × real time by the wall clock ({d:.1} s virtual in {:.3} s, the final run alone)",
+                d / outcome.wall_s.max(1e-9),
+                outcome.wall_s
+            );
+        }
     }
     if let Some(path) = cli.plot.path(kind.name())
         && let Err(e) = runner::plot::figure(&outcome).save_as(&path, cli.plot.plot_format)

@@ -221,6 +221,17 @@ pub struct Outcome {
     pub report: Report,
     /// Wall-clock time of the final run alone (not the probe or the glances), s.
     pub wall_s: f64,
+    /// CPU time of the final run alone, s (Linux: this thread's scheduler run time; None
+    /// elsewhere).
+    pub cpu_s: Option<f64>,
+}
+
+/// This thread's CPU time so far, s (`/proc/thread-self/schedstat`, nanoseconds on the CPU;
+/// independent of other load on the machine).
+fn thread_cpu_s() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = stat.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-9)
 }
 
 /// Seconds from power back to the pilot's new arming gesture (power-cycle): boot, the
@@ -467,13 +478,16 @@ pub fn with_glances(opts: &Options, mut plan: Plan) -> Plan {
 /// Runs a planned scenario and measures it.
 pub fn run_plan(opts: &Options, plan: Plan) -> Outcome {
     let started = std::time::Instant::now();
+    let cpu_before = thread_cpu_s();
     let sitl = crate::run(scenario(opts, plan.clone()));
     let wall_s = started.elapsed().as_secs_f64();
+    let cpu_s = thread_cpu_s().zip(cpu_before).map(|(a, b)| a - b);
     let report = report::extract(&sitl, &plan);
     Outcome {
         plan,
         sitl,
         report,
         wall_s,
+        cpu_s,
     }
 }
