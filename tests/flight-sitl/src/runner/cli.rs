@@ -58,8 +58,9 @@ pub struct Cli {
     /// input_timeout_ms, telemetry_ratio; repeatable). Its air rate follows --rate.
     #[arg(long = "module-set", value_name = "NAME=VALUE", value_parser = name_value)]
     pub module_set: Vec<(String, String)>,
-    /// Time of the scenario's fault, seconds of virtual time (2.5 ≤ S ≤ 3600; default: once
-    /// the pilot holds the altitude, or for link-cut when the climb reaches it).
+    /// Time of the scenario's fault, seconds of virtual time (2.5 ≤ S ≤ 3600; default: 3 s
+    /// after the pilot starts holding the altitude; link-cut: when the climb reaches it;
+    /// power-cycle: 4 s).
     #[arg(long, value_name = "S", value_parser = at)]
     pub at: Option<f64>,
     /// Altitude the pilot climbs to before the fault, metres (1 ≤ M ≤ 120).

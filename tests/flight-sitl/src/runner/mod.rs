@@ -114,8 +114,8 @@ pub struct Options {
     pub module_settings: Option<module_core::settings::Settings>,
     /// The airframe.
     pub quad: QuadParams,
-    /// The fault's time, s (None: when the pilot has levelled off at the altitude; for
-    /// `link-cut`, when the climb reaches it).
+    /// The fault's time, s (None: 3 s after the pilot starts holding the altitude; for
+    /// `link-cut`, when the climb reaches it; for `power-cycle`, 4 s).
     pub at_s: Option<f64>,
     /// The altitude the pilot climbs to, m (None: the scenario's default).
     pub altitude_m: Option<f64>,
@@ -237,7 +237,7 @@ fn thread_cpu_s() -> Option<f64> {
 /// Seconds from power back to the pilot's new arming gesture (power-cycle): boot, the
 /// 3 s bind window and link acquisition.
 pub const REARM_AFTER_POWER_S: f64 = 4.5;
-/// Seconds the pilot waits after levelling off before a fault (settled hover).
+/// Seconds from the start of the pilot's hold to a fault.
 const SETTLE_S: f64 = 3.0;
 /// Pack voltage at the start of the low-battery drain, mV, and the drain, mV/s.
 const DRAIN_FROM_MV: f32 = 4_000.0;
