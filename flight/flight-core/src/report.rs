@@ -61,6 +61,7 @@ pub const fn blocker_bit(b: ArmBlocker) -> u16 {
         ArmBlocker::SensorsUnhealthy => 4,
         ArmBlocker::GainsNotReady => 8,
         ArmBlocker::BatteryCritical => 16,
+        ArmBlocker::SettingsProblem => 32,
     }
 }
 

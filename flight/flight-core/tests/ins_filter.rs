@@ -162,3 +162,64 @@ fn mag_only_moves_heading() {
         "roll {r1} pitch {p1}"
     );
 }
+
+#[test]
+fn sensor_noise_figures_set_the_noise_terms_and_keep_the_rest() {
+    use flight_core::estimation::ins::SensorNoise;
+    let base = Config::default();
+    let told = base.with_sensor_noise(
+        &SensorNoise {
+            gyro_radps: Some(1e-3),
+            accel_mps2: Some(0.05),
+            gps_velocity_mps: Some(0.2),
+            ..SensorNoise::default()
+        },
+        0.002,
+    );
+    // PSD = σ²·dt for the IMU, variance = σ² for the measurements.
+    assert!((told.gyro_noise_psd[2] - 2e-9).abs() < 1e-15);
+    assert!((told.accel_noise_psd - 5e-6).abs() < 1e-12);
+    assert!((told.gps_velocity_var_m2ps2 - 0.04).abs() < 1e-7);
+    // Figures not given keep the tuning.
+    assert_eq!(told.mag_var, base.mag_var);
+    assert_eq!(told.baro_var_m2, base.baro_var_m2);
+    assert_eq!(told.gps_horizontal_var_m2, base.gps_horizontal_var_m2);
+    assert_eq!(told.gyro_bias_walk_psd, base.gyro_bias_walk_psd);
+}
+
+#[test]
+fn gyro_bias_walk_slows_once_settled_and_reopens_after_a_reset() {
+    use flight_core::estimation::ins::Ins;
+    use flight_core::estimation::ins::aiding::{Aided, AidingConfig};
+    let aiding = AidingConfig::default().for_known_noise();
+    let fast = Config::default().gyro_bias_walk_psd;
+    let slow = AidingConfig::KNOWN_NOISE_SETTLED_GYRO_BIAS_WALK_PSD;
+    let mut ins = Ins::new(Config::default(), aiding);
+    let level = [0.0, 0.0, -G];
+    for _ in 0..(9.9 / 0.002) as usize {
+        ins.predict([0.0; 3], level, 0.002).unwrap();
+    }
+    assert_eq!(ins.filter().config().gyro_bias_walk_psd, fast);
+    for _ in 0..100 {
+        ins.predict([0.0; 3], level, 0.002).unwrap();
+    }
+    assert_eq!(ins.filter().config().gyro_bias_walk_psd, slow);
+    // Facing south while the filter believes north: rejections until a yaw reset, which
+    // re-opens the bias and brings the fast walk back.
+    let mut reset = false;
+    for _ in 0..100 {
+        ins.predict([0.0; 3], level, 0.002).unwrap();
+        if let Aided::Reset(_) = ins.mag([-400.0, 0.0, 1600.0]).unwrap() {
+            reset = true;
+            break;
+        }
+    }
+    assert!(reset);
+    assert_eq!(ins.filter().config().gyro_bias_walk_psd, fast);
+    // The default policy never slows down.
+    let mut ins = Ins::new(Config::default(), AidingConfig::default());
+    for _ in 0..(20.0 / 0.002) as usize {
+        ins.predict([0.0; 3], level, 0.002).unwrap();
+    }
+    assert_eq!(ins.filter().config().gyro_bias_walk_psd, fast);
+}

@@ -6,7 +6,8 @@
 //! compiles to an empty program so that `cargo test --workspace` never builds a HAL.
 //!
 //! The pipeline: at boot the stored settings are loaded and the app designs its gains
-//! (arming waits for them). The MPU9250's data-ready (1 kHz) wakes the IMU task, which reads
+//! (arming waits for them); a problem with the stored settings goes to the app, which
+//! refuses to arm until the pilot saves a set. The MPU9250's data-ready (1 kHz) wakes the IMU task, which reads
 //! the sample and hands it to `FlightApp::on_imu_sample` (the flight loop and the IMU fault
 //! policy) and the motor commands to the motor task at once, so outputs follow each gyro
 //! sample (OneShot125 fires then). The link task runs the TauLink follower on the RFM22B with

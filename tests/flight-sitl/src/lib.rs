@@ -1,14 +1,16 @@
-//! Software-in-the-loop flight: the flight firmware's own application
-//! (`flight_core::app::FlightApp`: flight loop, IMU fault policy, battery monitor, alert
-//! player, link hooks and telemetry) driven by simulated task adapters and fed by the
-//! TauLink follower, whose channels come over the packet-level
-//! mock air from a simulated module master, flying the quad-sim 6-DoF quadrotor — all in one
-//! deterministic virtual-time executor. See README.md.
+//! Firmware in the loop: the flight firmware's application (`flight_core::app::FlightApp`)
+//! and the module's (`module_core::App`), each driven by simulated adapters of its
+//! firmware's tasks, both ends on the real rfm22b driver over virtual Si4432 chips, with
+//! independent watchdogs, a settings flash and injectable faults, flying the quad-sim 6-DoF
+//! quadrotor — all in si4432-sim's deterministic virtual-time executor. See README.md.
 #![warn(missing_docs)]
 
+mod clock;
 pub mod console;
+mod flash;
+pub mod flight_end;
 pub mod metrics;
-mod module_end;
+pub mod module_end;
 pub mod runner;
 pub mod scenario;
 pub mod world;
@@ -16,4 +18,4 @@ pub mod world;
 pub use scenario::{
     End, FlashInjection, ImuInjection, Pilot, PilotInput, RadioInjection, Scenario,
 };
-pub use world::{Boot, BootCause, Sample, Sitl, WatchdogResets, run};
+pub use world::{Boot, BootCause, Sample, Sitl, WARMUP_S, WatchdogResets, run};

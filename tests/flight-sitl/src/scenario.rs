@@ -60,8 +60,9 @@ pub enum FlashInjection {
     /// The scenario's settings, cleanly stored.
     #[default]
     Stored,
-    /// The scenario's settings stored, then corrupted (bit flips, a torn write, an erased
-    /// page) from this seed.
+    /// The scenario's settings stored, then corrupted from this seed: a few bit flips in
+    /// the written bytes and both sectors' state markers overwritten (a torn sector close),
+    /// which sequential-storage reads as a corrupted map.
     Corrupted(u64),
     /// Erased (a new board).
     Erased,
@@ -137,7 +138,9 @@ pub struct Scenario {
     pub packet_loss: f64,
     /// The link's rate mode (both ends bound at it).
     pub rate: telemetry::link::RateMode,
-    /// The module's settings (role transmitter; bind, rate and input as the scenario needs).
+    /// The module's settings (`None`: factory). The world binds them to the flight side (an
+    /// unbound module gets the flight controller's compiled-in link ID) and sets their rate
+    /// from [`Scenario::rate`].
     pub module_settings: Option<module_core::settings::Settings>,
     /// What the flight controller's settings flash holds at the first boot.
     pub flight_flash: FlashInjection,

@@ -1,34 +1,45 @@
-//! The simulated world: a module master and the flight-side follower on the mock air, and
-//! the flight controller's own application (`flight_core::app::FlightApp`) driven by thin
-//! simulated adapters making the firmware tasks' calls — the follower's hooks go to
-//! `on_link_step`; at the gyro rate the quad's sensors go to `on_imu_sample` and its motor
-//! commands to the quad (with `quad_sim::ground` contact); the baro every 20 ms to
-//! `on_baro`, the battery ADC every 20 ms to `on_battery`, and `on_alert_tick` gives the
-//! tone — and records a [`Sample`]. One executor, one virtual clock: runs are exactly
-//! repeatable.
+//! The simulated world, firmware in the loop: both ends' own applications on virtual
+//! Si4432s. The module board (`module_end`: `module_core::App` and the module firmware's
+//! task adapters) and the flight board (`flight_end`: `flight_core::app::FlightApp` and the
+//! flight firmware's task adapters) each drive the real `radio-rfm22b` driver over
+//! `si4432-sim`'s chips — SPI transactions at each board's bus clock, nIRQ latency — through
+//! its RF medium; each end has its independent watchdog, and the flight end its settings
+//! flash (`flash`), so a missed check-in is a reset and a power cycle reloads the stored
+//! settings. The physics task steps the quad-sim 6-DoF quadrotor at the gyro rate and runs
+//! the flight firmware's IMU adapter (`on_imu_sample`, motor commands to the quad with
+//! `quad_sim::ground` contact), the baro and battery adapters every 20 ms and the alert
+//! tone, and records a [`Sample`]. Everything runs in si4432-sim's deterministic executor
+//! on one virtual clock: runs are exactly repeatable.
+//!
+//! Both boards boot at virtual time 0; the scenario's time starts [`WARMUP_S`] later, when
+//! the flight side's bind window (3 s after each boot, as the firmware listens) is over and
+//! the link is up. During the warm-up the pilot's input is the one at time 0 (an arm switch
+//! left on at power-up, the battery at its starting voltage). Boots during the warm-up
+//! have negative times.
 
 use std::cell::RefCell;
 use std::rc::Rc;
+use std::time::Duration;
 
 use flight_core::app::{FlightApp, ImuFault};
 use flight_core::battery::BatteryLevel;
 use flight_core::outputs::Command;
-use flight_core::pipeline::{ChannelMap, ImuSample, LoopOutput, channel_for, throttle_channel};
+use flight_core::pipeline::{
+    ChannelMap, ImuSample, LoopOutput, channel_for, from_settings, store_link, throttle_channel,
+};
 use flight_core::settings::Settings;
 use flight_core::sysid::ekf::Identification;
 use quad_sim::quad::{Quad, Truth};
-use telemetry::channels::{CHANNEL_CENTER, ChannelFormat, Channels, FailsafeValues, MAX_CHANNELS};
-use telemetry::link::core::{Follower, Master};
-use telemetry::link::follower::{FollowerHooks, run_follower};
-use telemetry::link::master::run_master;
-use telemetry::link::{Band, LinkClock, LinkParams, RateMode};
-use telemetry::messages::{Message, MessageReader};
-use telemetry::mock::{
-    ChannelModel, Executor, Medium, MockClock, MockRadio, Node, SplitMix64, VirtualTime,
-};
+use si4432_sim::{RadioConfig, SPI_CLOCK_F405_HZ, SPI_CLOCK_NRF52840_HZ, Simulation};
+use telemetry::channels::{CHANNEL_CENTER, Channels, MAX_CHANNELS};
+use telemetry::messages::{Message, SettingChange};
+use telemetry::mock::SplitMix64;
 
-use crate::module_end::{LinkState, MODULE_CLOCK_OFFSET_US, ModuleSide, Shared};
-use crate::scenario::{ImuInjection, PilotInput, Scenario};
+use crate::clock::{BoardClock, virtual_us};
+use crate::flash::SettingsFlash;
+use crate::flight_end::{FlightChip, flight_board, inject_radio};
+use crate::module_end::{ModuleChip, module_board};
+use crate::scenario::{End, ImuInjection, PilotInput, Scenario};
 
 const RAD_PER_DEG: f32 = core::f32::consts::PI / 180.0;
 /// Baro sampling period, ms (the firmware's baro task rate).
@@ -119,10 +130,57 @@ pub enum BootCause {
     Watchdog,
 }
 
+/// Virtual time before the scenario starts, s: both boards boot at 0; the flight side
+/// listens for a bind for 3 s after its 145 ms boot, then acquires the module.
+pub const WARMUP_S: f64 = 4.0;
+/// Distance between the module and the flight controller, m.
+const DISTANCE_M: f64 = 100.0;
+/// Attenuation of a cut link, dB.
+const CUT_DB: f64 = 300.0;
+
+/// What the boards and the physics share.
+pub(crate) struct WorldState {
+    /// The pilot and the environment now.
+    pub(crate) input: PilotInput,
+    /// The flight application while the flight board runs, and its clock.
+    pub(crate) flight: Option<(Rc<RefCell<FlightApp>>, BoardClock)>,
+    /// The flight settings when the flight board last stopped.
+    pub(crate) flight_settings: Settings,
+    /// What the module's settings flash holds.
+    pub(crate) module_flash: module_core::settings::Settings,
+    /// Messages the module relayed to the phone, with the scenario time (s).
+    pub(crate) module_rx: Vec<(f64, Message)>,
+    /// Setting changes the phone is still to send.
+    pub(crate) uplink: Vec<SettingChange>,
+    pub(crate) watchdog_resets: WatchdogResets,
+    pub(crate) boots: Vec<Boot>,
+    medium: si4432_sim::Medium,
+}
+
+impl WorldState {
+    /// Scenario time now, s.
+    pub(crate) fn scenario_s(&self) -> f64 {
+        virtual_us(&self.medium) as f64 * 1e-6 - WARMUP_S
+    }
+
+    pub(crate) fn record_boot(&mut self, end: End, cause: BootCause, settings_error: bool) {
+        let t_s = self.scenario_s();
+        self.boots.push(Boot {
+            t_s,
+            end,
+            cause,
+            settings_error,
+        });
+    }
+}
+
+pub(crate) type Shared = Rc<RefCell<WorldState>>;
+
 /// The transmitter's arm switch: channel 5 (AUX1), index 4 (`arm.channel 5` listens to it).
 const ARM_SWITCH_CHANNEL: usize = 4;
 
-fn transmitter(p: &PilotInput) -> Channels {
+/// The handset's channels for the pilot's sticks and switches.
+pub(crate) fn transmitter(p: &PilotInput) -> Channels {
     let mut ch = [CHANNEL_CENTER; MAX_CHANNELS];
     let map = ChannelMap::default();
     let mut set = |i: usize, v: u16| {
@@ -145,24 +203,32 @@ fn battery_raw(pack_mv: f32, divider: f32) -> u16 {
     v.clamp(0.0, 4095.0) as u16
 }
 
-/// The flight link task's adapter: the follower's hooks go straight into the app.
-struct AppHooks(Rc<RefCell<FlightApp>>);
-
-impl FollowerHooks for AppHooks {
-    fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
-        self.0.borrow_mut().on_link_step(now_us, follower);
+/// The module's settings for the scenario: the given ones (or the factory settings), bound
+/// to the flight side — an unbound module gets the flight controller's compiled-in link ID
+/// — at the scenario's rate (`Scenario::rate` decides both ends).
+fn module_settings(s: &Scenario) -> module_core::settings::Settings {
+    let given = s.module_settings.unwrap_or_default();
+    module_core::settings::Settings {
+        bind_id: if given.bind_id == 0 {
+            flight_core::app::DEFAULT_BIND_ID
+        } else {
+            given.bind_id
+        },
+        rate: s.rate,
+        ..given
     }
 }
 
 /// Runs `scenario` and returns the records.
 ///
 /// # Panics
-/// If the settings do not make a flyable configuration or the gains do not solve — a
-/// broken scenario, which the test should show.
+/// If the settings do not make a flyable configuration — a broken scenario, which the
+/// test should show.
 #[allow(clippy::expect_used, clippy::too_many_lines)]
 pub fn run(scenario: Scenario) -> Sitl {
+    let module = module_settings(&scenario);
     let Scenario {
-        settings,
+        mut settings,
         quad: params,
         seed,
         duration_s,
@@ -172,78 +238,67 @@ pub fn run(scenario: Scenario) -> Sitl {
         packet_loss,
         rate: _,
         module_settings: _,
-        flight_flash: _,
+        flight_flash,
     } = scenario;
-    // The application boots as the firmware's does: setup and gains solved before anything
-    // can arm.
-    let app = FlightApp::new(settings, 0).expect("settings make a setup");
-    assert!(app.setup_error().is_none(), "settings make a flyable setup");
-    let setup = *app.setup();
-    let app = Rc::new(RefCell::new(app));
+    // The flight controller stores the module's link (as after a bind).
+    if let Some(link) = module_core::air::link_params(&module) {
+        let _ = store_link(&mut settings, &link);
+    }
+    let setup = from_settings(&settings).expect("settings make a flyable setup");
     let ts_s = f64::from(setup.loop_config.ts_s);
     let period_us = (ts_s * 1e6).round() as u64;
+    let baro_every = ((f64::from(BARO_PERIOD_MS) * 1e-3 / ts_s).round() as u64).max(1);
+    let battery_every = ((f64::from(BATTERY_PERIOD_MS) * 1e-3 / ts_s).round() as u64).max(1);
 
-    let time = VirtualTime::new();
-    let channel = ChannelModel {
-        loss: packet_loss,
-        ..ChannelModel::default()
+    let sim = Simulation::new(seed);
+    let medium = sim.medium();
+    medium.set_packet_loss(packet_loss);
+    let placement = |x: f64, ppm: f64, spi_hz: u32| {
+        let mut p = RadioConfig::at([x, 0.0, 0.0]);
+        p.crystal_error_ppm = ppm;
+        p.spi_clock_hz = spi_hz;
+        p
     };
-    let medium = Medium::new(time.clone(), channel, seed);
-    let module_node = medium.add_node(Node::default());
-    let flight_node = medium.add_node(Node {
-        position_m: 100.0,
-        ..Node::default()
-    });
-    let params_link = LinkParams::new(
-        0x5EED_0000 ^ (seed as u32),
-        Band::Mhz433,
-        RateMode::F250,
-        ChannelFormat::Full16,
-        4,
-    );
-    let shared: Shared = Rc::new(RefCell::new(LinkState {
+    let module_radio = medium.add_radio(placement(0.0, 8.0, SPI_CLOCK_NRF52840_HZ));
+    let flight_radio = medium.add_radio(placement(DISTANCE_M, -6.0, SPI_CLOCK_F405_HZ));
+    let (module_id, flight_id) = (module_radio.id, flight_radio.id);
+    let (module_chip, flight_chip) = (module_radio.chip.clone(), flight_radio.chip.clone());
+    let shared: Shared = Rc::new(RefCell::new(WorldState {
+        input: PilotInput::default(),
+        flight: None,
+        flight_settings: settings.clone(),
+        module_flash: module,
+        module_rx: Vec::new(),
         uplink: setting_changes,
-        ..LinkState::default()
+        watchdog_resets: WatchdogResets::default(),
+        boots: Vec::new(),
+        medium: medium.clone(),
     }));
+    let flash = SettingsFlash::new(&settings, flight_flash);
+    sim.spawn(module_board(
+        shared.clone(),
+        medium.clone(),
+        sim.delay(),
+        ModuleChip::new(module_radio, module.tx_power),
+        seed,
+    ));
+    sim.spawn(flight_board(
+        shared.clone(),
+        medium.clone(),
+        sim.delay(),
+        FlightChip::new(flight_radio),
+        flash,
+        link_failsafe_ms * 1000,
+    ));
     let samples: Rc<RefCell<Vec<Sample>>> = Rc::new(RefCell::new(Vec::new()));
-
-    let mut ex = Executor::new(time.clone());
+    let warmup_us = (WARMUP_S * 1e6) as u64;
     {
-        let mut radio = MockRadio::new(medium.clone(), module_node);
-        let mut clock = MockClock::new(time.clone(), MODULE_CLOCK_OFFSET_US);
-        let mut hooks = ModuleSide {
-            shared: shared.clone(),
-            reader: MessageReader::new(),
-        };
-        ex.spawn(async move {
-            let mut master = Master::new(params_link);
-            let _ = run_master(&mut radio, &mut clock, &mut master, &mut hooks).await;
-        });
-    }
-    {
-        let mut radio = MockRadio::new(medium.clone(), flight_node);
-        let mut clock = MockClock::new(time.clone(), 50_000_000);
-        let mut hooks = AppHooks(app.clone());
-        ex.spawn(async move {
-            // The flight controller boots a little after the module.
-            let start = clock.now_us() + 77_777;
-            clock.sleep_until_us(start).await;
-            let mut follower = Follower::new(
-                params_link,
-                FailsafeValues::default(),
-                link_failsafe_ms * 1000,
-            );
-            let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut hooks).await;
-        });
-    }
-    {
-        let time = time.clone();
         let shared = shared.clone();
         let samples = samples.clone();
         let medium = medium.clone();
+        let delay = sim.delay();
         let divider = setup.battery.voltage_divider;
-        let app = app.clone();
-        ex.spawn(async move {
+        sim.spawn(async move {
             let mut quad = Quad::new(params, seed);
             quad_sim::ground::on_the_ground(&mut quad);
             let mut sensors = quad.sensors();
@@ -254,65 +309,114 @@ pub fn run(scenario: Scenario) -> Sitl {
                 accel_mps2: sensors.accel_mps2,
                 mag: None,
             };
-            let mut next_us = period_us;
+            let mut last_out: Option<LoopOutput> = None;
+            let mut before = PilotInput::default();
+            let mut loops_since_boot: u64 = 0;
             let mut k: u64 = 0;
-            while k as f64 * ts_s < duration_s {
-                time.sleep_until(next_us).await;
-                next_us += period_us;
+            loop {
                 k += 1;
-                let t_s = k as f64 * ts_s;
-                let now_ms = (t_s * 1000.0).round() as u32;
-                let input = pilot(t_s);
-                medium.set_cut(module_node, flight_node, input.link_cut);
-                shared.borrow_mut().tx = Some(transmitter(&input));
-                let mut app = app.borrow_mut();
-                // The baro task: MS5611 altitude at 50 Hz with 0.1 m (1σ) noise.
-                if now_ms.is_multiple_of(BARO_PERIOD_MS) {
-                    let altitude = -quad.state().position_m[2] + baro_noise.normal(BARO_NOISE_M);
-                    app.on_baro(now_ms, Some(altitude as f32));
+                let due_ns = k * period_us * 1000;
+                let now_ns = medium.now().as_nanos() as u64;
+                delay.sleep_ns(due_ns.saturating_sub(now_ns)).await;
+                let t_us = k * period_us;
+                let t_s = (t_us as f64 - warmup_us as f64) * 1e-6;
+                if t_s >= duration_s {
+                    break;
                 }
-                let link_up = app.link_input().up;
-                // The IMU task: a sample, or what the injected fault leaves of it.
-                let imu = ImuSample {
-                    gyro_radps: sensors.gyro_dps.map(|g| g * RAD_PER_DEG),
-                    accel_mps2: sensors.accel_mps2,
-                    mag: None,
+                // Before the scenario the world is as at its start (switches, battery).
+                let input = pilot(t_s.max(0.0));
+                if input.link_cut != before.link_cut {
+                    let db = if input.link_cut { CUT_DB } else { 0.0 };
+                    medium.set_attenuation(module_id, flight_id, db);
+                }
+                if input.flight_radio != before.flight_radio {
+                    inject_radio(&flight_chip, before.flight_radio, input.flight_radio);
+                }
+                if input.module_radio != before.module_radio {
+                    inject_radio(&module_chip, before.module_radio, input.module_radio);
+                }
+                before = input;
+                let flight = {
+                    let mut s = shared.borrow_mut();
+                    s.input = input;
+                    s.flight.clone()
                 };
-                let step = match input.imu {
-                    ImuInjection::Healthy => {
-                        last_good = imu;
-                        app.on_imu_sample(now_ms, &imu)
-                    }
-                    ImuInjection::Frozen => app.on_imu_sample(now_ms, &last_good),
-                    ImuInjection::AllZero => app.on_imu_sample(
-                        now_ms,
-                        &ImuSample {
-                            gyro_radps: [0.0; 3],
-                            accel_mps2: [0.0; 3],
+                let mut motors = [Command::Stopped; 4];
+                let mut record = None;
+                match &flight {
+                    Some((app, clock)) => {
+                        let mut app = app.borrow_mut();
+                        let now_ms = clock.now_ms();
+                        loops_since_boot += 1;
+                        // The baro task: MS5611 altitude at 50 Hz with 0.1 m (1σ) noise.
+                        if loops_since_boot.is_multiple_of(baro_every) {
+                            let altitude =
+                                -quad.state().position_m[2] + baro_noise.normal(BARO_NOISE_M);
+                            app.on_baro(now_ms, Some(altitude as f32));
+                        }
+                        let link_up = app.link_input().up;
+                        // The IMU task: a sample, or what the injected fault leaves of it.
+                        let imu = ImuSample {
+                            gyro_radps: sensors.gyro_dps.map(|g| g * RAD_PER_DEG),
+                            accel_mps2: sensors.accel_mps2,
                             mag: None,
-                        },
-                    ),
-                    ImuInjection::Stalled => app.on_imu_missing(now_ms, ImuFault::Stalled),
-                    ImuInjection::ReadError => app.on_imu_missing(now_ms, ImuFault::ReadError),
-                };
-                let out = app.last_output().copied();
-                let cmds = step.motors.map(|m| match m {
+                        };
+                        let step = match input.imu {
+                            ImuInjection::Healthy => {
+                                last_good = imu;
+                                app.on_imu_sample(now_ms, &imu)
+                            }
+                            ImuInjection::Frozen => app.on_imu_sample(now_ms, &last_good),
+                            ImuInjection::AllZero => app.on_imu_sample(
+                                now_ms,
+                                &ImuSample {
+                                    gyro_radps: [0.0; 3],
+                                    accel_mps2: [0.0; 3],
+                                    mag: None,
+                                },
+                            ),
+                            ImuInjection::Stalled => app.on_imu_missing(now_ms, ImuFault::Stalled),
+                            ImuInjection::ReadError => {
+                                app.on_imu_missing(now_ms, ImuFault::ReadError)
+                            }
+                        };
+                        motors = step.motors;
+                        // The battery task.
+                        if loops_since_boot.is_multiple_of(battery_every) {
+                            app.on_battery(now_ms, battery_raw(input.battery_mv, divider), None);
+                            level = app.battery().map_or(level, |b| b.level);
+                        }
+                        // The alert task.
+                        let tone_hz = app.on_alert_tick(now_ms);
+                        let identification = app.identification_finished();
+                        if let Some(out) = app.last_output().copied() {
+                            last_out = Some(out);
+                        }
+                        record = Some((
+                            link_up,
+                            tone_hz,
+                            identification,
+                            step.reprobe,
+                            app.imu_fault(),
+                        ));
+                    }
+                    None => loops_since_boot = 0,
+                }
+                let cmds = motors.map(|m| match m {
                     Command::Throttle(x) => x,
                     Command::Stopped => 0.0,
                 });
                 let (s, truth) = quad.step(ts_s, &cmds);
                 let (truth, s) = quad_sim::ground::contact(&mut quad, truth, s);
                 sensors = s;
-                // The battery task.
-                if now_ms.is_multiple_of(BATTERY_PERIOD_MS) {
-                    app.on_battery(now_ms, battery_raw(input.battery_mv, divider), None);
-                    level = app.battery().map_or(level, |b| b.level);
+                // Nothing to record before the scenario or the loop's first output.
+                let Some(out) = last_out else { continue };
+                if t_s < 0.0 {
+                    continue;
                 }
-                // The alert task.
-                let tone_hz = app.on_alert_tick(now_ms);
-                let identification = app.identification_finished();
-                // Nothing to record before the loop's first output (an IMU dead at boot).
-                let Some(out) = out else { continue };
+                let flight_up = record.is_some();
+                let (link_up, tone_hz, identification, imu_reprobe, imu_fault) =
+                    record.unwrap_or((false, 0, None, false, None));
                 samples.borrow_mut().push(Sample {
                     t_s,
                     pilot: input,
@@ -324,28 +428,32 @@ pub fn run(scenario: Scenario) -> Sitl {
                     battery: level,
                     tone_hz,
                     identification,
-                    motors: step.motors,
-                    imu_reprobe: step.reprobe,
-                    imu_fault: app.imu_fault(),
-                    flight_up: true,
+                    motors,
+                    imu_reprobe,
+                    imu_fault,
+                    flight_up,
                 });
             }
         });
     }
-    ex.run_until((duration_s * 1e6) as u64 + 2 * period_us);
-    drop(ex);
+    sim.run_for(Duration::from_micros(
+        warmup_us + (duration_s * 1e6) as u64 + 2 * period_us,
+    ));
+    drop(sim);
     let samples = Rc::try_unwrap(samples)
         .map(RefCell::into_inner)
         .unwrap_or_default();
-    let module_rx = std::mem::take(&mut shared.borrow_mut().module_rx);
-    let settings = app.borrow().settings().clone();
+    let mut s = shared.borrow_mut();
+    let settings = match &s.flight {
+        Some((app, _)) => app.borrow().settings().clone(),
+        None => s.flight_settings.clone(),
+    };
     Sitl {
         samples,
         ts_s,
-        module_rx,
+        module_rx: std::mem::take(&mut s.module_rx),
         settings,
-        // Filled once the world models the watchdog and power (issue 12).
-        watchdog_resets: WatchdogResets::default(),
-        boots: Vec::new(),
+        watchdog_resets: s.watchdog_resets,
+        boots: std::mem::take(&mut s.boots),
     }
 }

@@ -77,14 +77,12 @@ fn settings_corrupt_boots() {
 }
 
 #[test]
-#[ignore = "the world ignores handset_connected until H-WORLD's module_core::App lands"]
 fn handset_unplugged_fails_safe_within_a_second() {
     let o = accepted(Kind::HandsetUnplugged);
     assert!(o.report.failsafe_delay_s.unwrap() <= 1.0);
 }
 
 #[test]
-#[ignore = "the world ignores radio injections until H-WORLD's chip-level radios land"]
 fn radio_stuck_irq_and_brownout_fail_safe_and_recover_without_a_reset() {
     for kind in [Kind::RadioStuckIrq, Kind::RadioBrownout] {
         let o = accepted(kind);
@@ -95,7 +93,6 @@ fn radio_stuck_irq_and_brownout_fail_safe_and_recover_without_a_reset() {
 }
 
 #[test]
-#[ignore = "the world ignores flight_powered until H-WORLD's power and watchdog model lands"]
 fn power_cycle_comes_back_disarmed_and_flies_after_a_new_arm() {
     let o = accepted(Kind::PowerCycle);
     assert_eq!(o.report.flight_boots, 2);

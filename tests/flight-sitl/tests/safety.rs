@@ -197,7 +197,10 @@ fn control_returns_with_the_link_only_once_the_sticks_are_centred() {
     let waiting = window(s, link_back.t_s, 7.0);
     assert!(waiting.iter().all(|x| x.out.failsafe));
     assert!(worst(&waiting, |x| x.truth.euler_deg[0]) < 2.0);
-    assert!((7.0..7.05).contains(&recovered.t_s), "{}", recovered.t_s);
+    // The centred sticks reach the flight side through the module's PPM capture (a 22.5 ms
+    // frame) and the next uplink slot: 57 ms at F250 (was 50 ms with channels handed to
+    // the master directly).
+    assert!((7.0..7.08).contains(&recovered.t_s), "{}", recovered.t_s);
     // The recovery tune (1.5 kHz first tone) plays.
     assert_eq!(recovered.tone_hz, 1500);
     assert!(
@@ -331,7 +334,7 @@ fn an_arm_switch_arms_only_when_flicked_on_with_the_throttle_low() {
     );
     assert_eq!(d.len(), 1, "{d:?}");
     assert_eq!(d[0].1, Decision::Armed);
-    assert!((4.0..4.05).contains(&d[0].0), "{d:?}");
+    assert!((4.0..4.08).contains(&d[0].0), "{d:?}");
     // Flicked on at 2 s with the throttle at 30 %: refused; the throttle closed at 3 s with
     // the switch still on does not arm; cycled off (4 s) and on (5 s), it does.
     let sitl = fly(
@@ -362,7 +365,8 @@ fn an_arm_switch_arms_only_when_flicked_on_with_the_throttle_low() {
             Decision::Armed
         ]
     );
-    assert!((5.0..5.05).contains(&d[1].0), "{d:?}");
+    // PPM frame + uplink slot: up to ≈ 60 ms from the switch to the decision.
+    assert!((5.0..5.08).contains(&d[1].0), "{d:?}");
 }
 
 #[test]

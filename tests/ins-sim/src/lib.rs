@@ -3,7 +3,9 @@
 #![warn(missing_docs)]
 
 pub mod compare;
+pub mod magcal;
 pub mod metrics;
+pub mod noise;
 pub mod plot;
 pub mod replay;
 pub mod rng;

@@ -294,6 +294,9 @@ pub struct Options {
     pub aiding: AidingConfig,
     /// Magnetic declination (deg, east positive) used for the earth field.
     pub declination_deg: f32,
+    /// The sensors' noise figures (`--noise`, `--tuning`), if known: the filter then
+    /// derives its noise terms from them ([`crate::noise::told`]).
+    pub noise: Option<flight_core::estimation::ins::SensorNoise>,
 }
 
 impl Default for Options {
@@ -323,6 +326,7 @@ impl Default for Options {
             },
             aiding: AidingConfig::default(),
             declination_deg: 0.0,
+            noise: None,
         }
     }
 }
@@ -362,6 +366,10 @@ pub fn run_with_progress(
     options: &Options,
     mut progress: impl FnMut(usize),
 ) -> Vec<Row> {
+    let told = options
+        .noise
+        .map(|n| crate::noise::told(options, &n, records));
+    let options = told.as_ref().unwrap_or(options);
     let mut ins = Ins::new(options.config, options.aiding);
     let mut rows = Vec::new();
     let mut last_imu_us: Option<u64> = None;

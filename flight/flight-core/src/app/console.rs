@@ -86,6 +86,12 @@ impl FlightApp {
                 fault.name()
             )?;
         }
+        if let Some(p) = self.settings_problem {
+            write!(
+                out,
+                "settings problem at boot: {p}; arming refused until saved\r\n"
+            )?;
+        }
         if let Some(e) = self.setup_error {
             write!(out, "stored settings not flyable ({e}): factory setup\r\n")?;
         }

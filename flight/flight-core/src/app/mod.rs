@@ -33,7 +33,7 @@ use crate::pipeline::{
     announce_battery, from_settings, loop_alerts,
 };
 use crate::report::blocker_bit;
-use crate::settings::Settings;
+use crate::settings::{LoadProblem, Settings};
 use crate::supervisor::{ArmBlocker, Decision};
 use crate::sysid::ekf::Identification;
 
@@ -68,6 +68,7 @@ pub struct FlightApp {
     link: link::LinkSide,
     watchdog: Watchdog,
     identified: Option<Identification>,
+    settings_problem: Option<LoadProblem>,
 }
 
 /// The flight setup for `settings`, or the factory one (and why) if they do not fly.
@@ -111,6 +112,7 @@ impl FlightApp {
             },
             watchdog: Watchdog::new(now_ms),
             identified: None,
+            settings_problem: None,
         })
     }
 
@@ -166,14 +168,37 @@ impl FlightApp {
         &self.flight
     }
 
-    /// Arming blockers as telemetry's bit set; an IMU fault shows as "sensors unhealthy".
+    /// Arming blockers as telemetry's bit set; an IMU fault shows as "sensors unhealthy",
+    /// an unfixed boot-time settings problem as "settings problem", both standing (not only
+    /// after a refused arm).
     pub fn arming_blockers(&self) -> u16 {
         let imu = if self.imu.fault().is_some() {
             blocker_bit(ArmBlocker::SensorsUnhealthy)
         } else {
             0
         };
-        self.blockers | imu
+        let settings_bit = blocker_bit(ArmBlocker::SettingsProblem);
+        let settings = if self.settings_problem.is_some() {
+            settings_bit
+        } else {
+            0
+        };
+        // A refusal for the settings is over once they are saved.
+        (self.blockers & !settings_bit) | imu | settings
+    }
+
+    /// The storage adapter's boot-time load reported `problem` (`LoadReport::problem`):
+    /// the console's `status` says it, telemetry carries it as an arming blocker, and
+    /// arming is refused until the pilot saves a set (a change, or `defaults`, then
+    /// `save`). The firmware calls it right after [`FlightApp::new`].
+    pub fn on_settings_problem(&mut self, problem: LoadProblem) {
+        self.settings_problem = Some(problem);
+        self.flight.set_settings_problem(true);
+    }
+
+    /// The boot-time settings problem not yet fixed by a save.
+    pub fn settings_problem(&self) -> Option<LoadProblem> {
+        self.settings_problem
     }
 
     // ---- IMU task -------------------------------------------------------------------
@@ -313,7 +338,9 @@ impl FlightApp {
     }
 
     /// For the storage adapter: (live, stored) to write, when a save is due and the
-    /// motors are stopped (a sector erase stalls the CPU).
+    /// motors are stopped (a sector erase stalls the CPU). While a boot-time settings
+    /// problem stands, flash does not hold what `stored` says: write the whole set
+    /// (`settings::save_whole`, see [`FlightApp::save_whole`]) even if nothing changed.
     pub fn take_save(&mut self) -> Option<(Settings, Settings)> {
         if !self.save_requested || self.flight.armed() {
             return None;
@@ -322,9 +349,17 @@ impl FlightApp {
         Some((self.live.clone(), self.stored.clone()))
     }
 
-    /// The storage adapter wrote `saved`.
+    /// The save to hand out must rewrite the whole record (`settings::save_whole`): the
+    /// stored copy is damaged or not what was loaded.
+    pub fn save_whole(&self) -> bool {
+        self.settings_problem.is_some()
+    }
+
+    /// The storage adapter wrote `saved`: a boot-time settings problem is fixed.
     pub fn on_saved(&mut self, saved: Settings) {
         self.stored = saved;
+        self.settings_problem = None;
+        self.flight.set_settings_problem(false);
     }
 
     /// For the gains adapter: settings to design a setup and gains for (once per change).

@@ -240,3 +240,37 @@ fn console_changes_are_refused_while_armed_and_request_designs_and_saves_when_no
     let _ = app.on_console_line("save", &mut out);
     assert_eq!(app.take_save(), None);
 }
+
+/// A boot-time settings problem (issue 13): status says it, telemetry carries it as a
+/// standing arming blocker, the arm gesture is refused; a save fixes it.
+#[test]
+fn a_settings_problem_at_boot_refuses_arming_until_a_save() {
+    let mut app = app();
+    app.on_settings_problem(LoadProblem::Corrupt);
+    let bit = blocker_bit(ArmBlocker::SettingsProblem);
+    assert_eq!(
+        app.arming_blockers() & bit,
+        bit,
+        "standing, before any arm try"
+    );
+    let mut status = heapless::String::<512>::new();
+    let _ = app.on_console_line("status", &mut status);
+    assert!(status.contains("settings problem"), "{status}");
+    let (t, _) = fly(&mut app, 0, 1500, sticks(0.0, 1.0));
+    let (t, _) = fly(&mut app, t, 100, sticks(0.0, 0.0));
+    assert!(!app.armed(), "a corrupt store flies nothing");
+    // The pilot: `defaults`, `save`. The whole set is written though nothing changed.
+    let mut out = heapless::String::<256>::new();
+    let _ = app.on_console_line("defaults", &mut out);
+    let _ = app.on_console_line("save", &mut out);
+    assert!(app.save_whole());
+    let Some((live, _)) = app.take_save() else {
+        panic!("a save is due");
+    };
+    app.on_saved(live);
+    assert_eq!(app.arming_blockers() & bit, 0);
+    assert_eq!(app.settings_problem(), None);
+    let (t, _) = fly(&mut app, t, 1500, sticks(0.0, 1.0));
+    let _ = fly(&mut app, t, 100, sticks(0.0, 0.0));
+    assert!(app.armed(), "arms once the settings are saved");
+}

@@ -1,9 +1,11 @@
 //! Attitude and navigation estimators: a complementary attitude filter for flight without
-//! GPS, and the 14-state INS/GPS extended Kalman filter. All f32, sans-IO, no globals: every
-//! estimator is a plain value, so several can run side by side.
+//! GPS, and the 14-state INS/GPS extended Kalman filter, plus the magnetometer's hard- and
+//! soft-iron calibration they rely on. All sans-IO, no globals: every estimator is a plain
+//! value, so several can run side by side.
 
 pub mod complementary;
 pub mod ins;
+pub mod magcal;
 pub mod math;
 pub mod quaternion;
 

@@ -120,6 +120,8 @@ pub struct FlightLoop {
     landing: LandingDetector,
     /// The battery is at its critical level (arming refused).
     battery_critical: bool,
+    /// The boot-time settings load had a problem not yet fixed by a save (arming refused).
+    settings_problem: bool,
 }
 
 impl FlightLoop {
@@ -143,6 +145,7 @@ impl FlightLoop {
             identification: None,
             landing: LandingDetector::new(),
             battery_critical: false,
+            settings_problem: false,
         }
     }
 
@@ -163,6 +166,12 @@ impl FlightLoop {
     /// unless the supervisor settings override it. The firmware calls it with each reading.
     pub fn set_battery_critical(&mut self, critical: bool) {
         self.battery_critical = critical;
+    }
+
+    /// Tells the loop whether the settings loaded at boot had a problem still unfixed:
+    /// arming is refused while they do.
+    pub fn set_settings_problem(&mut self, problem: bool) {
+        self.settings_problem = problem;
     }
 
     /// Whether the touchdown detector sees the frame on the ground.
@@ -334,6 +343,7 @@ impl FlightLoop {
             gains_ready: self.controllers.is_some(),
             landed: self.landing.landed(),
             battery_critical: self.battery_critical,
+            settings_problem: self.settings_problem,
         })
     }
 

@@ -10,4 +10,4 @@ mod store;
 pub use console::{Command, ConsoleError, parse_line, write_list, write_setting};
 pub use line::{LineAssembler, LineError};
 pub use params::{Choice, Kind, MAX_PAIRS, PARAMS, Param, ParamError, Settings, Value};
-pub use store::{FLASH_BUFFER, LoadReport, StoreError, load, save};
+pub use store::{FLASH_BUFFER, LoadProblem, LoadReport, StoreError, load, save, save_whole};

@@ -228,6 +228,31 @@ async fn read_slot<S: NorFlash, C: CacheImpl<u16>>(
     }
 }
 
+/// Whether every byte of the settings area reads erased (0xFF): nothing was ever stored.
+async fn area_erased<S: NorFlash, C: CacheImpl<u16>>(
+    map: &mut MapStorage<u16, S, C>,
+) -> Result<bool, StoreError> {
+    let range = map.flash_range();
+    let mut chunk = [0u8; 64];
+    let mut address = range.start;
+    while address < range.end {
+        let n = (range.end - address).min(64);
+        // 64 and any remainder of a flash range are multiples of every read size in use.
+        let Some(buf) = chunk.get_mut(..n as usize) else {
+            return Err(StoreError::Flash);
+        };
+        map.flash()
+            .read(address, buf)
+            .await
+            .map_err(|_| StoreError::Flash)?;
+        if buf.iter().any(|&b| b != 0xFF) {
+            return Ok(false);
+        }
+        address += n;
+    }
+    Ok(true)
+}
+
 /// Whether any old-format item (one per parameter key) is stored.
 async fn old_format_present<S: NorFlash, C: CacheImpl<u16>>(
     map: &mut MapStorage<u16, S, C>,
@@ -264,6 +289,11 @@ pub async fn load<S: NorFlash, C: CacheImpl<u16>>(
             Some(LoadProblem::Corrupt)
         } else if old_format_present(map).await {
             Some(LoadProblem::OldFormat)
+        } else if !area_erased(map).await? {
+            // Written, yet no record to be found: sequential-storage skips items whose own
+            // CRC fails, so two damaged copies read as "nothing stored". Only a blank area
+            // (a new board) is the factory set without complaint.
+            Some(LoadProblem::Corrupt)
         } else {
             None
         };
@@ -305,6 +335,17 @@ pub async fn save<S: NorFlash, C: CacheImpl<u16>>(
     if changed == 0 {
         return Ok(0);
     }
+    save_whole(map, settings).await?;
+    Ok(changed)
+}
+
+/// Writes `settings` as a new generation whatever flash holds — after a boot-time load
+/// problem, when the stored copy is damaged or is not the set in use. Same commit order
+/// as [`save`].
+pub async fn save_whole<S: NorFlash, C: CacheImpl<u16>>(
+    map: &mut MapStorage<u16, S, C>,
+    settings: &Settings,
+) -> Result<(), StoreError> {
     let [a, b] = SLOTS;
     let generation = |s: &Slot| match s {
         Slot::Record(r) => Some(r.generation),
@@ -334,7 +375,7 @@ pub async fn save<S: NorFlash, C: CacheImpl<u16>>(
             .await
             .map_err(|_| StoreError::Flash)?;
     }
-    Ok(changed)
+    Ok(())
 }
 
 #[cfg(test)]

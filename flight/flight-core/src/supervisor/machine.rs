@@ -85,6 +85,9 @@ pub struct Inputs {
     pub landed: bool,
     /// The battery is at its critical level.
     pub battery_critical: bool,
+    /// The settings loaded at boot had a problem (corrupt, invalid, refused values): the
+    /// frame flies nothing until the pilot saves a set.
+    pub settings_problem: bool,
 }
 
 /// The supervisor's state.
@@ -116,6 +119,8 @@ pub enum ArmBlocker {
     GainsNotReady,
     /// The battery is at its critical level (setting `arm.critical_battery` overrides).
     BatteryCritical,
+    /// The stored settings had a problem at boot; fixed by a successful save.
+    SettingsProblem,
 }
 
 /// What happened this loop (for alerts and telemetry), besides the state itself.
@@ -191,6 +196,8 @@ impl Supervisor {
             Some(ArmBlocker::GainsNotReady)
         } else if inputs.battery_critical && !self.settings.arm_on_critical_battery {
             Some(ArmBlocker::BatteryCritical)
+        } else if inputs.settings_problem {
+            Some(ArmBlocker::SettingsProblem)
         } else {
             None
         }
@@ -292,6 +299,7 @@ mod tests {
             gains_ready: true,
             landed: true,
             battery_critical: false,
+            settings_problem: false,
         }
     }
 

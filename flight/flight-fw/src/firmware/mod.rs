@@ -27,13 +27,17 @@ async fn main(spawner: Spawner) {
 
     // Flash work first: a sector erase can stall the CPU longer than the watchdog timeout,
     // and the watchdog starts with the supervisor below.
-    let (map, settings) = tasks::storage::open(board.settings_flash).await;
+    let (map, settings, problem) = tasks::storage::open(board.settings_flash).await;
     // The application: settings → setup (factory setup if the stored one does not fly) and
     // the solved gains, before anything can arm.
-    let Some(app) = FlightApp::new(settings, shared::now_ms()) else {
+    let Some(mut app) = FlightApp::new(settings, shared::now_ms()) else {
         error!("no flyable setup, not even the factory one");
         return;
     };
+    if let Some(problem) = problem {
+        // Console, telemetry and arming all see it until the pilot saves a set.
+        app.on_settings_problem(problem);
+    }
     if let Some(e) = app.setup_error() {
         error!("stored settings not flyable ({}): factory setup", e);
     }

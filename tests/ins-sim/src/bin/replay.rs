@@ -41,6 +41,15 @@ struct Cli {
     /// Magnetic declination at the flight, degrees, east positive (-180..=180).
     #[arg(long, value_name = "DEG", default_value_t = 0.0, value_parser = declination)]
     declination_deg: f32,
+    /// The sensors' 1σ white noise, any subset: gyro=G (rad/s), accel=A (m/s²), mag=M (file
+    /// units), baro=B (m), gps_pos=P (m), gps_alt=H (m), gps_vel=V (m/s); the estimator derives
+    /// its measurement and process noise from them (the rest from the default tuning).
+    #[arg(long, value_name = "NAME=VALUE,...")]
+    noise: Option<String>,
+    /// A file with the whole noise set (the same NAME=VALUE pairs, one per line or comma
+    /// separated); `--noise` overrides single figures.
+    #[arg(long, value_name = "FILE")]
+    tuning: Option<PathBuf>,
     #[command(flatten)]
     plot: PlotArgs,
     /// No progress bar.
@@ -79,8 +88,15 @@ fn real_main(args: &Cli) -> Result<(), String> {
     let text = std::fs::read_to_string(&args.sensors)
         .map_err(|e| format!("{}: {e}", shown(&args.sensors)))?;
     let records = parse_sensors(&text).map_err(|e| format!("{}: {e}", shown(&args.sensors)))?;
+    let tuning = match &args.tuning {
+        Some(path) => {
+            Some(std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", shown(path)))?)
+        }
+        None => None,
+    };
     let options = Options {
         declination_deg: args.declination_deg,
+        noise: ins_sim::noise::combine(tuning.as_deref(), args.noise.as_deref())?,
         ..Options::default()
     };
     let bar = sim_plot::progress::bar(

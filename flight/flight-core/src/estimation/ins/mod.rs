@@ -9,11 +9,13 @@ pub mod aiding;
 mod covariance;
 pub mod equations;
 pub mod fusion;
+mod noise;
 mod predict;
 mod reset;
 
 pub use aiding::{Aided, Ins};
 pub use fusion::Fusion;
+pub use noise::SensorNoise;
 pub use reset::tilt_from_accel;
 
 use crate::estimation::quaternion::{self, Quaternion};

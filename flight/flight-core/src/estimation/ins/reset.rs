@@ -46,6 +46,15 @@ impl Filter {
         }
     }
 
+    /// Sets the gyro-bias random-walk PSD ((rad/s)²/s) used from the next predict on; the
+    /// aiding logic lowers it once the estimate has settled and restores it after a reset.
+    /// A non-finite or negative value is ignored.
+    pub fn set_gyro_bias_walk_psd(&mut self, psd: f32) {
+        if psd.is_finite() && psd >= 0.0 {
+            self.config.gyro_bias_walk_psd = psd;
+        }
+    }
+
     /// Replaces the attitude with `q`; its covariance becomes `tilt_var_rad2` about the two
     /// horizontal axes and `yaw_var_rad2` about the vertical, mapped into quaternion space by
     /// δq = ½Ξ(q)·δθ (DERIVATION.md §5).

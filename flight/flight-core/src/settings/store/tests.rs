@@ -190,6 +190,8 @@ fn random_corruption_never_loads_a_mix() {
                 flash.bytes_until_shutoff = None;
             }
         }
+        // An erased page that held everything leaves a blank area: physically a new board.
+        let blank = flash.as_bytes().iter().all(|&b| b == 0xFF);
         let mut m = map(flash);
         let mut booted = Settings::default();
         let report = match block_on(load(&mut m, &mut booted)) {
@@ -215,6 +217,12 @@ fn random_corruption_never_loads_a_mix() {
             }
             if booted == Settings::default() {
                 defaults_seen += 1;
+                // Factory settings after a save are never silent: the pilot must hear that
+                // the stored set was lost.
+                assert!(
+                    blank || report.problem.is_some(),
+                    "trial {trial} (damage {kind}): stored settings silently replaced by the factory set"
+                );
             }
         } else if report.problem.is_some() {
             newest_with_problem += 1;
@@ -228,4 +236,43 @@ fn random_corruption_never_loads_a_mix() {
     assert_eq!(silent[0], 0, "bit flips brought back an older set");
     assert_eq!(silent[2], 0, "a torn save brought back an older set");
     assert!(clean > 50);
+}
+
+/// After a boot-time problem the pilot's `defaults` + `save` must reach flash although the
+/// set equals what `save` believes is stored: `save_whole` writes it, and the next boot
+/// loads it cleanly instead of reporting the problem again.
+#[test]
+fn save_whole_fixes_a_problem_store_with_an_unchanged_set() {
+    let mut m = map(Flash::default());
+    let mut buf = Buffer::new();
+    block_on(m.store_item(&mut buf.0, &500u16, &3u32)).unwrap();
+    let defaults = Settings::default();
+    assert_eq!(block_on(save(&mut m, &defaults, &defaults)), Ok(0));
+    block_on(save_whole(&mut m, &defaults)).unwrap();
+    let (flash, _) = m.destroy();
+    let (s, report) = boot(flash);
+    assert_eq!(s, defaults);
+    assert_eq!(report.problem, None);
+    assert_eq!(report.generation, 1);
+}
+
+/// Both copies damaged so that sequential-storage skips them as if nothing were stored: the
+/// boot must report the store corrupt, not fly the factory set as if the board were new.
+#[test]
+fn two_damaged_copies_are_reported_not_taken_for_a_new_board() {
+    let mut m = map(Flash::new(WriteCountCheck::OnceOnly, None, true));
+    let first = generation_set(1);
+    block_on(save(&mut m, &first, &Settings::default())).unwrap();
+    block_on(save(&mut m, &generation_set(2), &first)).unwrap();
+    let (mut flash, _) = m.destroy();
+    // Flip one bit in every 16th byte of the written pages: every item's CRC fails.
+    let bytes = flash.as_bytes_mut();
+    for (i, b) in bytes.iter_mut().enumerate() {
+        if i % 16 == 8 && *b != 0xFF {
+            *b ^= 0x10;
+        }
+    }
+    let (s, report) = boot(flash);
+    assert_eq!(s, Settings::default());
+    assert_eq!(report.problem, Some(LoadProblem::Corrupt), "{report:?}");
 }

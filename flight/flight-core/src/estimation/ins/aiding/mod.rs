@@ -3,6 +3,8 @@
 //! (not the sensor) is wrong, and that part of the state is reset from the measurement —
 //! PX4 EKF2's `*_control` logic, kept apart from the fusion maths as PX4 does.
 
+pub mod gps;
+
 use super::{Config, Filter, Fusion, State};
 use crate::estimation::{Error, GRAVITY_MPS2, check_finite};
 
@@ -24,6 +26,14 @@ pub struct AidingConfig {
     pub yaw_reset_std_rad: f32,
     /// Time constant of the accelerometer low-pass used for tilt re-alignment (s).
     pub accel_filter_tau_s: f32,
+    /// Seconds after the start, an alignment or an attitude reset during which the gyro
+    /// bias walks at the configured (fast) rate; afterwards it walks at
+    /// `settled_gyro_bias_walk_psd`. A fast walk lets a wrong bias be learnt quickly; once
+    /// learnt, a slow walk keeps the bias (and so the heading) quiet — the C reference's
+    /// walk is 1.5e-9 (rad/s)²/s, slow from the start, hence its slow convergence.
+    pub gyro_bias_settle_s: f32,
+    /// Gyro-bias walk PSD once settled ((rad/s)²/s); `None` keeps the configured one.
+    pub settled_gyro_bias_walk_psd: Option<f32>,
 }
 
 impl Default for AidingConfig {
@@ -36,6 +46,32 @@ impl Default for AidingConfig {
             tilt_reset_std_rad: 0.1,
             yaw_reset_std_rad: 0.1,
             accel_filter_tau_s: 0.5,
+            gyro_bias_settle_s: 30.0,
+            settled_gyro_bias_walk_psd: None,
+        }
+    }
+}
+
+impl AidingConfig {
+    /// Gyro-bias walk once settled when the sensors' noise is known (see
+    /// [`Self::for_known_noise`]), (rad/s)²/s: the bias may drift by 0.6 °/s per hour.
+    pub const KNOWN_NOISE_SETTLED_GYRO_BIAS_WALK_PSD: f32 = 1e-10;
+    /// Settling time used with known noise (s).
+    pub const KNOWN_NOISE_GYRO_BIAS_SETTLE_S: f32 = 10.0;
+
+    /// The policy for a filter told the sensors' true noise figures
+    /// ([`super::Config::with_sensor_noise`]). The default tuning's fast gyro-bias walk also
+    /// stands in for noise it does not model; with the true figures the model is right, so
+    /// the fast walk is only needed while a wrong bias is being learnt — 10 s after the
+    /// start, an alignment or an attitude reset — and the bias then walks slowly, which is
+    /// what keeps heading and attitude quiet in the steady state (tests/ins-sim
+    /// `ins_noise.rs`, README table).
+    #[must_use]
+    pub fn for_known_noise(self) -> Self {
+        Self {
+            gyro_bias_settle_s: Self::KNOWN_NOISE_GYRO_BIAS_SETTLE_S,
+            settled_gyro_bias_walk_psd: Some(Self::KNOWN_NOISE_SETTLED_GYRO_BIAS_WALK_PSD),
+            ..self
         }
     }
 }
@@ -93,6 +129,12 @@ pub struct Ins {
     gps_velocity: Streak,
     baro: Streak,
     mag: Streak,
+    /// Time since the start or the last attitude reset (s), counted until settled.
+    unsettled_s: f32,
+    /// The slow gyro-bias walk is in use.
+    settled: bool,
+    /// The configured (fast) gyro-bias walk, restored after a reset.
+    fast_gyro_bias_walk_psd: f32,
 }
 
 impl Ins {
@@ -107,6 +149,9 @@ impl Ins {
             gps_velocity: Streak::default(),
             baro: Streak::default(),
             mag: Streak::default(),
+            unsettled_s: 0.0,
+            settled: false,
+            fast_gyro_bias_walk_psd: config.gyro_bias_walk_psd,
         }
     }
 
@@ -138,6 +183,15 @@ impl Ins {
         dt_s: f32,
     ) -> Result<(), Error> {
         self.filter.predict(gyro_radps, accel_mps2, dt_s)?;
+        if !self.settled {
+            self.unsettled_s += dt_s;
+            if let Some(settled) = self.aiding.settled_gyro_bias_walk_psd
+                && self.unsettled_s >= self.aiding.gyro_bias_settle_s
+            {
+                self.filter.set_gyro_bias_walk_psd(settled);
+                self.settled = true;
+            }
+        }
         let ratio = dt_s / self.aiding.accel_filter_tau_s;
         let alpha = if ratio < 1.0 { ratio } else { 1.0 };
         for (lp, a) in self.accel_lowpass_mps2.iter_mut().zip(accel_mps2) {
@@ -155,14 +209,31 @@ impl Ins {
         position_ned_m: [f32; 3],
         vertical: bool,
     ) -> Result<Aided, Error> {
-        let fusion = self.filter.fuse_gps_position(position_ned_m, vertical)?;
+        let cfg = self.filter.config();
+        let var = [cfg.gps_horizontal_var_m2, cfg.gps_vertical_var_m2];
+        self.gps_position_with_variance(position_ned_m, vertical, var)
+    }
+
+    /// As [`Ins::gps_position`] with the measurement's own `[horizontal, vertical]`
+    /// variances (m²).
+    ///
+    /// # Errors
+    /// As [`Filter::fuse_gps_position_with_variance`].
+    pub fn gps_position_with_variance(
+        &mut self,
+        position_ned_m: [f32; 3],
+        vertical: bool,
+        var_m2: [f32; 2],
+    ) -> Result<Aided, Error> {
+        let fusion =
+            self.filter
+                .fuse_gps_position_with_variance(position_ned_m, vertical, var_m2)?;
         let aided = self
             .gps_position
             .record(fusion, self.aiding.gps_position_resets_after);
         if let Aided::Reset(_) = aided {
             let [n, e, d] = position_ned_m;
-            let cfg = self.filter.config();
-            let var = cfg.gps_horizontal_var_m2;
+            let [var, _] = var_m2;
             self.filter
                 .reset_position([Some(n), Some(e), vertical.then_some(d)], var);
         }
@@ -176,12 +247,26 @@ impl Ins {
     /// # Errors
     /// As [`Filter::fuse_gps_velocity`].
     pub fn gps_velocity(&mut self, velocity_ned_mps: [f32; 3]) -> Result<Aided, Error> {
-        let fusion = self.filter.fuse_gps_velocity(velocity_ned_mps)?;
+        let var = self.filter.config().gps_velocity_var_m2ps2;
+        self.gps_velocity_with_variance(velocity_ned_mps, var)
+    }
+
+    /// As [`Ins::gps_velocity`] with the measurement's own variance per axis ((m/s)²).
+    ///
+    /// # Errors
+    /// As [`Filter::fuse_gps_velocity_with_variance`].
+    pub fn gps_velocity_with_variance(
+        &mut self,
+        velocity_ned_mps: [f32; 3],
+        var: f32,
+    ) -> Result<Aided, Error> {
+        let fusion = self
+            .filter
+            .fuse_gps_velocity_with_variance(velocity_ned_mps, var)?;
         let aided = self
             .gps_velocity
             .record(fusion, self.aiding.gps_velocity_resets_after);
         if let Aided::Reset(_) = aided {
-            let var = self.filter.config().gps_velocity_var_m2ps2;
             self.filter.reset_velocity(velocity_ned_mps, var);
             let f = self.accel_lowpass_mps2;
             let norm = libm::sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
@@ -231,6 +316,15 @@ impl Ins {
         let [_, _, _, gyro_bias_std, _] = self.filter.config().initial_std;
         self.filter
             .inflate_gyro_bias_variance(gyro_bias_std * gyro_bias_std);
+        self.unsettle();
+    }
+
+    /// Back to the fast gyro-bias walk for another settling period.
+    fn unsettle(&mut self) {
+        self.unsettled_s = 0.0;
+        self.settled = false;
+        self.filter
+            .set_gyro_bias_walk_psd(self.fast_gyro_bias_walk_psd);
     }
 
     /// Initial alignment from one accelerometer and magnetometer sample; see
@@ -250,6 +344,7 @@ impl Ins {
         self.filter
             .align(accel_mps2, mag_body, position_ned_m, tilt, yaw)?;
         self.accel_lowpass_mps2 = accel_mps2;
+        self.unsettle();
         Ok(())
     }
 }

@@ -16,12 +16,30 @@ impl Filter {
         position_ned_m: [f32; 3],
         vertical: bool,
     ) -> Result<Fusion, Error> {
-        check_finite(&position_ned_m)?;
         let cfg = self.config;
+        let var = [cfg.gps_horizontal_var_m2, cfg.gps_vertical_var_m2];
+        self.fuse_gps_position_with_variance(position_ned_m, vertical, var)
+    }
+
+    /// As [`Filter::fuse_gps_position`], with the measurement's own variances
+    /// `[horizontal, vertical]` (m²) instead of the configured ones — the receiver's
+    /// reported accuracy, as the Tau Labs firmware rescaled them at each fix.
+    ///
+    /// # Errors
+    /// As [`Filter::fuse_gps_position`]; also [`Error::NonFinite`] for a non-finite variance.
+    pub fn fuse_gps_position_with_variance(
+        &mut self,
+        position_ned_m: [f32; 3],
+        vertical: bool,
+        var_m2: [f32; 2],
+    ) -> Result<Fusion, Error> {
+        check_finite(&position_ned_m)?;
+        check_finite(&var_m2)?;
+        let [h, v] = var_m2;
         let rows = [
-            (index::POSITION, cfg.gps_horizontal_var_m2, true),
-            (index::POSITION + 1, cfg.gps_horizontal_var_m2, true),
-            (index::POSITION + 2, cfg.gps_vertical_var_m2, vertical),
+            (index::POSITION, h, true),
+            (index::POSITION + 1, h, true),
+            (index::POSITION + 2, v, vertical),
         ];
         self.fuse_direct_rows(&rows, &position_ned_m)
     }
@@ -31,8 +49,21 @@ impl Filter {
     /// # Errors
     /// As [`Filter::fuse_gps_position`].
     pub fn fuse_gps_velocity(&mut self, velocity_ned_mps: [f32; 3]) -> Result<Fusion, Error> {
-        check_finite(&velocity_ned_mps)?;
         let r = self.config.gps_velocity_var_m2ps2;
+        self.fuse_gps_velocity_with_variance(velocity_ned_mps, r)
+    }
+
+    /// As [`Filter::fuse_gps_velocity`] with the measurement's own variance per axis.
+    ///
+    /// # Errors
+    /// As [`Filter::fuse_gps_position`].
+    pub fn fuse_gps_velocity_with_variance(
+        &mut self,
+        velocity_ned_mps: [f32; 3],
+        r: f32,
+    ) -> Result<Fusion, Error> {
+        check_finite(&velocity_ned_mps)?;
+        check_finite(&[r])?;
         let rows = [
             (index::VELOCITY, r, true),
             (index::VELOCITY + 1, r, true),

@@ -1,0 +1,269 @@
+//! The flight controller board: boots `flight_core::app::FlightApp` from its simulated
+//! settings flash and runs the firmware's task adapters around it — link (bind window, then
+//! the follower on the real rfm22b driver over the virtual Si4432), supervisor (polls the
+//! app's check-in policy every `FEED_PERIOD_MS` and feeds the IWDG), storage, gains and
+//! heartbeat — until its independent watchdog expires or its power goes; then it boots
+//! again. The IMU, baro, battery and alert adapters run in the world's physics task at the
+//! same instants as the sensors (see `world`), on the app this board publishes.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use embassy_futures::join::join5;
+use embassy_futures::select::{Either, select};
+use flight_core::app::{BIND_WINDOW_US, FEED_PERIOD_MS, FlightApp, Task};
+use flight_core::pipeline::{Controllers, from_settings};
+use radio_rfm22b::link::LinkRadio;
+use radio_rfm22b::{NoPin, Rfm22b, TxPower};
+use si4432_sim::{ChipHandle, Fault, Medium, SimDelay, SimIrq, SimSpi};
+use telemetry::channels::FailsafeValues;
+use telemetry::link::core::Follower;
+use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
+
+use crate::clock::{BoardClock, sleep_ms};
+use crate::flash::SettingsFlash;
+use crate::scenario::{End, RadioInjection};
+use crate::world::{BootCause, Shared};
+
+/// Power-on to the first loop, ms, modelled as the firmware's boot at 168 MHz: clocks and
+/// PLL lock ≈ 2 ms, settings load ≈ 3 ms (two records read and CRC-checked), MPU-9250
+/// start-up ≈ 100 ms (its datasheet's start-up time after power-on; the driver waits for
+/// it), gain design ≈ 40 ms (≈ 5.5 M instructions of f64 Riccati solves).
+pub const FLIGHT_BOOT_MS: u64 = 145;
+/// The flight board's crystal error, ppm (the module's runs 40 ppm apart).
+const FLIGHT_DRIFT_PPM: f64 = -20.0;
+/// How often the stop watcher looks at power and the IWDG, ms.
+const WATCH_MS: u64 = 5;
+
+/// The flight board's RFM22B as the firmware wires it: SDN tied low, software reset only.
+pub(crate) type FlightRadio = LinkRadio<SimSpi, SimIrq, NoPin, SimDelay>;
+
+/// The flight board's radio and how to break it.
+pub(crate) struct FlightChip {
+    pub(crate) radio: FlightRadio,
+    pub(crate) chip: ChipHandle,
+}
+
+impl FlightChip {
+    pub(crate) fn new(handle: si4432_sim::RadioHandle) -> Self {
+        let radio = LinkRadio::new(
+            Rfm22b::new_without_sdn(handle.spi, handle.nirq, handle.delay),
+            TxPower::MAX,
+        );
+        Self {
+            radio,
+            chip: handle.chip,
+        }
+    }
+}
+
+/// Why a boot's tasks stopped.
+enum Stop {
+    Watchdog,
+    PowerOff,
+}
+
+/// The follower's hooks: straight into the app (the firmware's `AppHooks`).
+struct AppHooks(Rc<RefCell<FlightApp>>);
+
+impl FollowerHooks for AppHooks {
+    fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
+        self.0.borrow_mut().on_link_step(now_us, follower);
+    }
+}
+
+/// Checks the link task in every 50 ms while it waits (the firmware's `keep_alive`).
+async fn keep_alive(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay) -> core::convert::Infallible {
+    loop {
+        app.borrow_mut().on_link_idle();
+        sleep_ms(delay, 50).await;
+    }
+}
+
+async fn idle(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay, ms: u64) {
+    let _ = select(sleep_ms(delay, ms), keep_alive(app, delay)).await;
+}
+
+/// The firmware's link task.
+async fn link_task(
+    app: Rc<RefCell<FlightApp>>,
+    radio: &mut FlightRadio,
+    mut clock: BoardClock,
+    failsafe_us: u64,
+) {
+    let delay = clock.delay().clone();
+    let mut params = app.borrow().link_params();
+    loop {
+        let bind = bind_follower(radio, &mut clock, params.band, BIND_WINDOW_US);
+        match select(bind, keep_alive(&app, &delay)).await {
+            Either::First(Ok(Some(offered))) => {
+                params = offered;
+                app.borrow_mut().on_bound(&offered);
+            }
+            Either::First(Ok(None)) => {}
+            Either::First(Err(_)) => {
+                idle(&app, &delay, 1000).await;
+                continue;
+            }
+        }
+        break;
+    }
+    loop {
+        let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
+        let mut hooks = AppHooks(app.clone());
+        let Err(_) = run_follower(radio, &mut clock, &mut follower, &mut hooks).await;
+        app.borrow_mut().on_link_down();
+        idle(&app, &delay, 1000).await;
+    }
+}
+
+/// The supervisor task: polls the check-in policy every `FEED_PERIOD_MS`; the IWDG is fed
+/// inside the app's model (`Watchdog::poll`), which the stop watcher reads.
+async fn supervisor_task(app: Rc<RefCell<FlightApp>>, clock: BoardClock) {
+    loop {
+        sleep_ms(clock.delay(), u64::from(FEED_PERIOD_MS)).await;
+        let _fed = app.borrow_mut().on_watchdog_poll(clock.now_ms());
+    }
+}
+
+/// The heartbeat LED task (50 ms ticker) and the motor task's check-in (it wakes at least
+/// every 100 ms; the commands themselves go to the quad in the physics task).
+async fn heartbeat_and_motors_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay) {
+    loop {
+        sleep_ms(&delay, 50).await;
+        let mut a = app.borrow_mut();
+        a.check_in(Task::Heartbeat);
+        a.check_in(Task::Motors);
+    }
+}
+
+/// The storage task: every 100 ms, a save the app hands out goes to the flash.
+async fn storage_task(
+    app: Rc<RefCell<FlightApp>>,
+    flash: &RefCell<SettingsFlash>,
+    delay: SimDelay,
+) {
+    loop {
+        sleep_ms(&delay, 100).await;
+        let request = {
+            let mut a = app.borrow_mut();
+            a.take_save().map(|(l, s)| (l, s, a.save_whole()))
+        };
+        let Some((live, stored, whole)) = request else {
+            continue;
+        };
+        if flash.borrow_mut().save(&live, &stored, whole) {
+            app.borrow_mut().on_saved(live);
+        }
+    }
+}
+
+/// The gains task: every 100 ms, a design request is solved and handed back.
+async fn gains_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay) {
+    loop {
+        sleep_ms(&delay, 100).await;
+        let Some(settings) = app.borrow_mut().take_design_request() else {
+            continue;
+        };
+        let Ok(setup) = from_settings(&settings) else {
+            continue;
+        };
+        if let Ok(c) = Controllers::design(&setup.control) {
+            app.borrow_mut().on_designed(setup, c);
+        }
+    }
+}
+
+/// Ends a boot: the IWDG expired (no feed for `WATCHDOG_TIMEOUT_MS`) or the power went.
+async fn stop_watcher(app: &Rc<RefCell<FlightApp>>, shared: &Shared, clock: &BoardClock) -> Stop {
+    loop {
+        sleep_ms(clock.delay(), WATCH_MS).await;
+        if !shared.borrow().input.flight_powered {
+            return Stop::PowerOff;
+        }
+        if app.borrow().watchdog().expired(clock.now_ms()) {
+            return Stop::Watchdog;
+        }
+    }
+}
+
+/// The flight board, forever: power, boot, run, reset.
+pub(crate) async fn flight_board(
+    shared: Shared,
+    medium: Medium,
+    delay: SimDelay,
+    mut chip: FlightChip,
+    flash: SettingsFlash,
+    failsafe_us: u64,
+) {
+    let flash = RefCell::new(flash);
+    let mut cause = BootCause::PowerOn;
+    loop {
+        while !shared.borrow().input.flight_powered {
+            sleep_ms(&delay, WATCH_MS).await;
+        }
+        if cause == BootCause::PowerOn {
+            // The RFM22B is powered with the board.
+            chip.chip.power_on_reset();
+        }
+        sleep_ms(&delay, FLIGHT_BOOT_MS).await;
+        if !shared.borrow().input.flight_powered {
+            continue;
+        }
+        let clock = BoardClock::booting_now(medium.clone(), delay.clone(), FLIGHT_DRIFT_PPM);
+        let (settings, problem) = flash.borrow_mut().load();
+        let Some(mut app) = FlightApp::new(settings, clock.now_ms()) else {
+            return;
+        };
+        if let Some(p) = problem {
+            app.on_settings_problem(p);
+        }
+        shared
+            .borrow_mut()
+            .record_boot(End::Flight, cause, problem.is_some());
+        let app = Rc::new(RefCell::new(app));
+        shared.borrow_mut().flight = Some((app.clone(), clock.clone()));
+        let tasks = join5(
+            link_task(app.clone(), &mut chip.radio, clock.clone(), failsafe_us),
+            supervisor_task(app.clone(), clock.clone()),
+            heartbeat_and_motors_task(app.clone(), delay.clone()),
+            storage_task(app.clone(), &flash, delay.clone()),
+            gains_task(app.clone(), delay.clone()),
+        );
+        let stop = match select(tasks, stop_watcher(&app, &shared, &clock)).await {
+            Either::First(_) => Stop::PowerOff,
+            Either::Second(stop) => stop,
+        };
+        let mut s = shared.borrow_mut();
+        s.flight = None;
+        s.flight_settings = app.borrow().settings().clone();
+        cause = match stop {
+            Stop::Watchdog => {
+                s.watchdog_resets.flight += 1;
+                BootCause::Watchdog
+            }
+            Stop::PowerOff => BootCause::PowerOn,
+        };
+    }
+}
+
+/// Applies a radio injection to a chip (called when it changes).
+pub(crate) fn inject_radio(chip: &ChipHandle, from: RadioInjection, to: RadioInjection) {
+    if from == RadioInjection::BrownOut {
+        // Power back: a power-on reset, registers lost.
+        chip.set_fault(Fault::None);
+        chip.power_on_reset();
+    }
+    match to {
+        RadioInjection::Healthy | RadioInjection::SpiErrors => chip.set_fault(Fault::None),
+        RadioInjection::IrqStuckLow => chip.set_fault(Fault::NirqStuckLow),
+        RadioInjection::IrqStuckHigh => chip.set_fault(Fault::NirqStuckHigh),
+        // Held in reset: SPI reads nothing, nIRQ never asserts.
+        RadioInjection::BrownOut => chip.set_fault(Fault::Unplugged { miso: 0x00 }),
+    }
+    chip.set_spi_error_rate(if to == RadioInjection::SpiErrors {
+        1.0
+    } else {
+        0.0
+    });
+}
