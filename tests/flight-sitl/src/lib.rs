@@ -11,6 +11,7 @@ mod flash;
 pub mod flight_end;
 pub mod metrics;
 pub mod module_end;
+pub mod runner;
 pub mod scenario;
 pub mod world;
 

@@ -21,8 +21,10 @@
 //! A later field (H-SEC's binding phrase) goes after `telemetry_ratio` in a version 4.
 
 pub mod store;
+pub mod text;
 
 pub use store::{SettingsStore, StoreError};
+pub use text::TextError;
 
 use crate::ppm::FailsafeOutput;
 

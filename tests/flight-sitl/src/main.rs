@@ -1,0 +1,73 @@
+//! `cargo run --release -p flight-sitl -- SCENARIO [options]`: flies a named scenario
+//! through the firmware-in-the-loop world and prints its figures, as text or one JSON
+//! object, optionally drawn; `table` runs the acceptance set and prints it as Markdown.
+//! `--help` lists the options (`runner/cli.rs`).
+
+use std::process::ExitCode;
+
+use clap::Parser;
+use flight_sitl::runner::{self, cli::Cli};
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let opts = match cli.options() {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("flight-sitl: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let Some(kind) = cli.scenario.kind() else {
+        let show = sim_plot::progress::wanted(cli.quiet, cli.json);
+        // 4 link-cut rate modes + 9 other scenarios.
+        let bar = sim_plot::progress::bar(13, "runs", show);
+        let rows = runner::acceptance::all(|name| {
+            bar.set_message(name.to_owned());
+            bar.inc(1);
+        });
+        bar.finish_and_clear();
+        return match rows {
+            Ok(rows) => {
+                print!("{}", runner::acceptance::markdown(&rows));
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("flight-sitl: {e}");
+                ExitCode::FAILURE
+            }
+        };
+    };
+    let outcome = match runner::run_kind(kind, &opts) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("flight-sitl: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    if cli.json {
+        println!("{}", outcome.report.to_json());
+    } else {
+        print!("{}", outcome.report.to_text());
+        let d = outcome.plan.duration_s;
+        if let Some(cpu) = outcome.cpu_s {
+            eprintln!(
+                "speed: {:.0} × real time on the CPU ({d:.1} s virtual in {cpu:.3} s of CPU, the final run alone; {:.0} × by the wall clock)",
+                d / cpu.max(1e-9),
+                d / outcome.wall_s.max(1e-9),
+            );
+        } else {
+            eprintln!(
+                "speed: {:.0} × real time by the wall clock ({d:.1} s virtual in {:.3} s, the final run alone)",
+                d / outcome.wall_s.max(1e-9),
+                outcome.wall_s
+            );
+        }
+    }
+    if let Some(path) = cli.plot.path(kind.name())
+        && let Err(e) = runner::plot::figure(&outcome).save_as(&path, cli.plot.plot_format)
+    {
+        eprintln!("flight-sitl: plot {}: {e}", path.display());
+        return ExitCode::FAILURE;
+    }
+    ExitCode::SUCCESS
+}

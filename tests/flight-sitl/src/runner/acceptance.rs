@@ -1,0 +1,249 @@
+//! The acceptance runs of issues 12 and 13 and their criteria, shared by the tests
+//! (`tests/runner_*.rs`) and the `table` mode that writes the README's table: `link-cut` at
+//! every rate mode from 5, 30 and 60 m, and every failure scenario at the factory rate, all
+//! with factory settings. [`check`] says what a report must show; [`markdown`] tabulates.
+
+use std::fmt::Write as _;
+
+use telemetry::link::RateMode;
+
+use super::report::{GROUND_M, fixed, rate_name};
+use super::{Kind, Options, Outcome, Report, RunError, plan, reach_times, run_plan};
+
+/// The link-cut altitudes of the acceptance, m.
+pub const LINK_CUT_ALTITUDES_M: [f64; 3] = [5.0, 30.0, 60.0];
+/// Touchdown no harder than this, m/s.
+pub const MAX_TOUCHDOWN_MPS: f64 = 1.5;
+/// Failsafe no later than this after the handset input stops, s.
+pub const MAX_INPUT_FAILSAFE_S: f64 = 1.0;
+
+/// `link-cut` at `rate` from each of `altitudes_m` (one probe run finds every cut time).
+///
+/// # Errors
+/// If the pilot's climb does not reach an altitude.
+pub fn link_cuts(rate: RateMode, altitudes_m: &[f64]) -> Result<Vec<Outcome>, RunError> {
+    let mut opts = Options::factory();
+    opts.rate = rate;
+    let reach = reach_times(&opts, altitudes_m)?;
+    altitudes_m
+        .iter()
+        .zip(reach)
+        .map(|(&a, r)| {
+            let o = Options {
+                altitude_m: Some(a),
+                ..opts.clone()
+            };
+            Ok(run_plan(
+                &o,
+                super::with_glances(&o, plan(Kind::LinkCut, &o, r)?),
+            ))
+        })
+        .collect()
+}
+
+/// A failure scenario with factory settings at F250.
+///
+/// # Errors
+/// As [`super::run_kind`].
+pub fn scenario(kind: Kind) -> Result<Outcome, RunError> {
+    super::run_kind(kind, &Options::factory())
+}
+
+/// What `r` must show for its scenario; every failed criterion, in words.
+pub fn check(r: &Report) -> Vec<String> {
+    let mut bad = Vec::new();
+    let mut need = |ok: bool, what: &str| {
+        if !ok {
+            bad.push(what.to_owned());
+        }
+    };
+    let wd = r.watchdog_resets;
+    match r.kind {
+        Kind::LinkCut => {
+            need(wd.flight == 0 && wd.module == 0, "no watchdog reset");
+            need(r.failsafe_at_s.is_some(), "failsafe entered");
+            need(!r.motors_stopped_airborne, "motors never stopped airborne");
+            need(
+                r.disarm_height_m.is_some_and(|h| h <= GROUND_M),
+                "disarmed on the ground",
+            );
+            need(
+                r.disarm_reason == Some("failsafe-landed"),
+                "disarmed by the touchdown detector",
+            );
+            need(
+                r.touchdown_speed_mps
+                    .is_some_and(|v| v <= MAX_TOUCHDOWN_MPS),
+                "touchdown ≤ 1.5 m/s",
+            );
+        }
+        Kind::HandsetUnplugged => {
+            need(
+                r.failsafe_delay_s
+                    .is_some_and(|d| (0.0..=MAX_INPUT_FAILSAFE_S).contains(&d)),
+                "failsafe ≤ 1 s after the input stops",
+            );
+            need(!r.motors_stopped_airborne, "motors never stopped airborne");
+            need(wd.flight == 0, "no watchdog reset");
+        }
+        Kind::ImuStall | Kind::ImuFrozen => {
+            need(
+                r.disarm_reason == Some("sensor-fault"),
+                "disarmed for the sensor fault",
+            );
+            need(!r.rearmed_motors, "motors never restart without a new arm");
+            need(r.armings == 1, "no arming after the fault");
+            need(wd.flight == 0, "no watchdog reset");
+        }
+        Kind::RadioStuckIrq | Kind::RadioBrownout => {
+            // A chip held in reset loses the link: failsafe, then control back once it is
+            // up again. A stuck nIRQ may cost nothing (the driver's deadlines win and it
+            // polls the chip's status); if it does lose the link, control must come back.
+            if r.kind == Kind::RadioBrownout {
+                need(r.failsafe_at_s.is_some(), "failsafe entered");
+            }
+            need(
+                r.failsafe_at_s.is_none() || r.recovered_at_s.is_some(),
+                "control recovered after the failsafe",
+            );
+            need(r.final_state == "armed-flying", "flying at the end");
+            need(wd.flight == 0, "no watchdog reset");
+            need(r.flight_boots <= 1, "no reboot");
+            need(!r.motors_stopped_airborne, "motors never stopped airborne");
+        }
+        Kind::SettingsCorrupt => {
+            need(r.final_state != "no-record", "boots and runs its loop");
+            need(wd.flight == 0, "no watchdog reset");
+            if r.settings_error_at_boot == Some(true) {
+                need(
+                    r.armed_at_s.is_none(),
+                    "refuses to arm on fallen-back settings",
+                );
+            }
+        }
+        Kind::Hover => {
+            need(r.final_state == "armed-flying", "still flying");
+            need(!r.motors_stopped_airborne, "motors never stopped airborne");
+            need(wd.flight == 0 && wd.module == 0, "no watchdog reset");
+        }
+        Kind::PowerCycle => {
+            need(!r.rearmed_motors, "motors never run without a new arm");
+            need(r.armings == 2, "armed again by the pilot after the reboot");
+            need(r.final_state == "armed-flying", "flying after the re-arm");
+        }
+        Kind::LowBattery => {
+            need(
+                r.battery_warning_at_s
+                    .zip(r.battery_critical_at_s)
+                    .is_some_and(|(w, c)| w < c),
+                "warning, then critical",
+            );
+            need(!r.motors_stopped_airborne, "motors never stopped airborne");
+        }
+    }
+    bad
+}
+
+fn num(v: Option<f64>, unit: &str) -> String {
+    v.map_or("–".into(), |x| format!("{}{unit}", fixed(x, 2)))
+}
+
+/// The scenario-specific figure of a row.
+fn detail(r: &Report) -> String {
+    match r.kind {
+        Kind::LinkCut | Kind::HandsetUnplugged => {
+            format!("failsafe {} after the fault", num(r.failsafe_delay_s, " s"))
+        }
+        Kind::ImuStall | Kind::ImuFrozen => format!(
+            "disarm ({}) {} after the fault; motors restarted: {}",
+            r.disarm_reason.unwrap_or("–"),
+            num(r.disarmed_at_s.zip(r.fault_at_s).map(|(d, f)| d - f), " s"),
+            if r.rearmed_motors { "yes" } else { "no" }
+        ),
+        Kind::RadioStuckIrq | Kind::RadioBrownout => format!(
+            "failsafe {} after the fault, control back {} after it ends",
+            num(r.failsafe_delay_s, " s"),
+            num(
+                r.recovered_at_s.zip(r.fault_end_s).map(|(c, e)| c - e),
+                " s"
+            ),
+        ),
+        Kind::SettingsCorrupt => format!(
+            "settings error at boot: {}; armed: {}",
+            r.settings_error_at_boot
+                .map_or("not reported", |b| if b { "yes" } else { "no" }),
+            num(r.armed_at_s, " s")
+        ),
+        Kind::PowerCycle => format!("{} boots, {} armings", r.flight_boots, r.armings),
+        Kind::LowBattery => format!(
+            "warning {}, critical {}",
+            num(r.battery_warning_at_s, " s"),
+            num(r.battery_critical_at_s, " s")
+        ),
+        Kind::Hover => String::new(),
+    }
+}
+
+/// The acceptance table in Markdown: one row per report.
+pub fn markdown(rows: &[(Option<f64>, Report)]) -> String {
+    let mut t = String::from(
+        "| scenario | rate | altitude (m) | max alt. (m) | watchdog resets fl/mod | failsafe (s) | disarm (s) at height (m) | touchdown (m/s) | motors stopped airborne | final state | scenario figure | criteria |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for (altitude, r) in rows {
+        let bad = check(r);
+        let _ = writeln!(
+            t,
+            "| {} | {} | {} | {:.1} | {}/{} | {} | {} at {} | {} | {} | {} | {} | {} |",
+            r.kind.name(),
+            rate_name(r.rate),
+            altitude.map_or("–".into(), |a| format!("{a:.0}")),
+            r.max_altitude_m,
+            r.watchdog_resets.flight,
+            r.watchdog_resets.module,
+            num(r.failsafe_at_s, ""),
+            num(r.disarmed_at_s, ""),
+            num(r.disarm_height_m, ""),
+            num(r.touchdown_speed_mps, ""),
+            if r.motors_stopped_airborne {
+                "yes"
+            } else {
+                "no"
+            },
+            r.final_state,
+            detail(r),
+            if bad.is_empty() {
+                "met".to_owned()
+            } else {
+                format!("**not met**: {}", bad.join("; "))
+            }
+        );
+    }
+    t
+}
+
+/// Every acceptance run, in table order; `progress` is told each finished run's name.
+///
+/// # Errors
+/// As [`link_cuts`] and [`scenario`].
+pub fn all(mut progress: impl FnMut(&str)) -> Result<Vec<(Option<f64>, Report)>, RunError> {
+    let mut rows = Vec::new();
+    for rate in RateMode::ALL {
+        for (a, o) in LINK_CUT_ALTITUDES_M
+            .iter()
+            .zip(link_cuts(rate, &LINK_CUT_ALTITUDES_M)?)
+        {
+            rows.push((Some(*a), o.report));
+        }
+        progress(&format!("link-cut {}", rate_name(rate)));
+    }
+    for kind in Kind::ALL {
+        if kind == Kind::LinkCut {
+            continue;
+        }
+        let o = scenario(kind)?;
+        let altitude = (kind != Kind::PowerCycle).then(|| kind.default_altitude_m());
+        rows.push((altitude, o.report));
+        progress(kind.name());
+    }
+    Ok(rows)
+}

@@ -1,0 +1,290 @@
+//! The command line of `flight-sitl` (clap derive, the shared style of the host tools):
+//! every option with a sentence of help, values range-checked where they are parsed, flight
+//! settings through `Settings::set_text` and module settings through
+//! `module_core::settings::Settings::set_text`, so nonsense is refused with a clear message
+//! and a non-zero exit before anything flies. [`Cli::options`] turns it into [`Options`].
+
+use clap::{Parser, ValueEnum};
+use telemetry::link::RateMode;
+
+use super::{Kind, Options};
+
+/// The flight firmware's own application (`flight_core::app::FlightApp`) flying a simulated
+/// 250-class quad over the TauLink air link from a simulated module, in virtual time, through
+/// a named scenario; prints its figures (or JSON) and can draw them.
+#[derive(Parser, Clone, Debug)]
+#[command(
+    name = "flight-sitl",
+    version,
+    allow_negative_numbers = true,
+    after_help = "Scenarios:
+  hover               take off, climb to --altitude (5 m) and hold
+  link-cut            climb to --altitude (30 m), cut the air path for good (or at --at)
+  power-cycle         armed on the ground, flight controller off 1 s at --at (4 s); re-arm, fly
+  handset-unplugged   hovering at 10 m, the handset input stops at the module at --at
+  imu-stall           hovering, IMU data-ready stops for 1 s at --at
+  imu-frozen          hovering, IMU repeats its last sample for 1 s at --at
+  radio-stuck-irq     hovering, the flight RFM22B's nIRQ reads low for 2 s at --at
+  radio-brownout      hovering, the flight RFM22B browns out for 2 s at --at
+  settings-corrupt    the flight settings flash is corrupted at boot; the pilot tries to fly
+  low-battery         hovering, the pack falls 50 mV/s from 4.0 V from --at
+  table               the acceptance runs of issues 12/13, as a Markdown table
+
+Examples:
+  flight-sitl hover --rate F500 --json
+  flight-sitl link-cut --altitude 60 --rate L50 --plot out
+  flight-sitl link-cut --set failsafe.descent_mps=1.5 --seed 3
+  flight-sitl handset-unplugged --module-set input_timeout_ms=1000
+  flight-sitl table > acceptance.md
+
+Exit status: 0 when the run was made, 2 for a command-line error (a misspelt flag, a value
+out of range, a setting refused), 1 if the scenario could not be flown as asked."
+)]
+pub struct Cli {
+    /// The scenario to fly (list below), or `table` for the acceptance table.
+    #[arg(value_enum)]
+    pub scenario: ScenarioArg,
+    /// Link rate mode: L50 (long range), M100, F250 or F500 (fast, short range).
+    #[arg(long, value_enum, ignore_case = true, default_value_t = RateArg::F250)]
+    pub rate: RateArg,
+    /// Seed of the world's sensor noise and radio randomness; same seed, same run.
+    #[arg(long, value_name = "N", default_value_t = 7)]
+    pub seed: u64,
+    /// A flight-controller setting NAME=VALUE, as the console's `set` takes it (repeatable;
+    /// applied in order, each checked with the whole set).
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = name_value)]
+    pub set: Vec<(String, String)>,
+    /// A module setting NAME=VALUE (role, input, output, band, tx_power, failsafe, bind_id,
+    /// input_timeout_ms, telemetry_ratio; repeatable). Its air rate follows --rate.
+    #[arg(long = "module-set", value_name = "NAME=VALUE", value_parser = name_value)]
+    pub module_set: Vec<(String, String)>,
+    /// Time of the scenario's fault, seconds of virtual time (2.5 ≤ S ≤ 3600; default: 3 s
+    /// after the pilot starts holding the altitude; link-cut: when the climb reaches it;
+    /// power-cycle: 4 s).
+    #[arg(long, value_name = "S", value_parser = at)]
+    pub at: Option<f64>,
+    /// Altitude the pilot climbs to before the fault, metres (1 ≤ M ≤ 120).
+    #[arg(long, value_name = "M", value_parser = altitude)]
+    pub altitude: Option<f64>,
+    /// Virtual duration, seconds (0 < S ≤ 3600; default: long enough to play the scenario out).
+    #[arg(long, value_name = "S", value_parser = duration)]
+    pub duration: Option<f64>,
+    /// Print the figures as one JSON object on stdout (fields in the README).
+    #[arg(long)]
+    pub json: bool,
+    /// `--plot DIR`: draw altitude, attitude, motors and link state over time into DIR.
+    #[command(flatten)]
+    pub plot: sim_plot::PlotArgs,
+    /// No progress bar (the `table` mode).
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Scenario names on the command line.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(missing_docs)] // the names are the documentation (the list in --help)
+pub enum ScenarioArg {
+    Hover,
+    LinkCut,
+    PowerCycle,
+    HandsetUnplugged,
+    ImuStall,
+    ImuFrozen,
+    RadioStuckIrq,
+    RadioBrownout,
+    SettingsCorrupt,
+    LowBattery,
+    Table,
+}
+
+impl ScenarioArg {
+    /// The scenario (None for `table`).
+    pub fn kind(self) -> Option<Kind> {
+        Some(match self {
+            Self::Hover => Kind::Hover,
+            Self::LinkCut => Kind::LinkCut,
+            Self::PowerCycle => Kind::PowerCycle,
+            Self::HandsetUnplugged => Kind::HandsetUnplugged,
+            Self::ImuStall => Kind::ImuStall,
+            Self::ImuFrozen => Kind::ImuFrozen,
+            Self::RadioStuckIrq => Kind::RadioStuckIrq,
+            Self::RadioBrownout => Kind::RadioBrownout,
+            Self::SettingsCorrupt => Kind::SettingsCorrupt,
+            Self::LowBattery => Kind::LowBattery,
+            Self::Table => return None,
+        })
+    }
+}
+
+/// Rate modes as command-line words.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(missing_docs)] // the names are the documentation
+pub enum RateArg {
+    #[value(name = "L50")]
+    L50,
+    #[value(name = "M100")]
+    M100,
+    #[value(name = "F250")]
+    F250,
+    #[value(name = "F500")]
+    F500,
+}
+
+impl From<RateArg> for RateMode {
+    fn from(r: RateArg) -> Self {
+        match r {
+            RateArg::L50 => RateMode::L50,
+            RateArg::M100 => RateMode::M100,
+            RateArg::F250 => RateMode::F250,
+            RateArg::F500 => RateMode::F500,
+        }
+    }
+}
+
+/// A finite number within `lo..=hi` (`what` names it in the error).
+fn number_in(s: &str, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number"))?;
+    if !v.is_finite() || v < lo || v > hi {
+        return Err(format!("{what} must be within {lo}..={hi}, got {s}"));
+    }
+    Ok(v)
+}
+
+fn at(s: &str) -> Result<f64, String> {
+    number_in(s, super::pilot::TAKEOFF_S, 3_600.0, "the fault time (s)")
+}
+
+fn altitude(s: &str) -> Result<f64, String> {
+    number_in(s, 1.0, 120.0, "the altitude (m)")
+}
+
+fn duration(s: &str) -> Result<f64, String> {
+    let v = number_in(s, 0.0, 3_600.0, "the duration (s)")?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("the duration (s) must be greater than 0, got {s}"))
+    }
+}
+
+fn name_value(s: &str) -> Result<(String, String), String> {
+    let (n, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("{s:?}: expected NAME=VALUE, e.g. failsafe.descent_mps=1.0"))?;
+    if n.trim().is_empty() || v.trim().is_empty() {
+        return Err(format!("{s:?}: expected NAME=VALUE with both parts"));
+    }
+    Ok((n.trim().to_owned(), v.trim().to_owned()))
+}
+
+impl Cli {
+    /// The run these options describe, with every setting applied.
+    ///
+    /// # Errors
+    /// A setting name or value refused by the flight or module settings, with the reason.
+    pub fn options(&self) -> Result<Options, String> {
+        let mut o = Options::factory();
+        o.rate = self.rate.into();
+        o.seed = self.seed;
+        o.at_s = self.at;
+        o.altitude_m = self.altitude;
+        o.duration_s = self.duration;
+        for (name, value) in &self.set {
+            o.settings
+                .set_text(name, value)
+                .map_err(|e| format!("--set {name}={value}: {e}"))?;
+        }
+        if !self.module_set.is_empty() {
+            // From the world's pairing: factory, bound, at --rate.
+            let mut m = super::bound_module_settings(o.rate);
+            for (name, value) in &self.module_set {
+                if name == "rate" {
+                    return Err("--module-set rate: the link's rate mode is --rate".into());
+                }
+                m.set_text(name, value).map_err(|e| {
+                    format!(
+                        "--module-set {name}={value}: {e} (names: {})",
+                        module_core::settings::text::NAMES.join(", ")
+                    )
+                })?;
+            }
+            o.module_settings = Some(m);
+        }
+        if let Some(kind) = self.scenario.kind()
+            && self.at.is_some()
+            && !kind.has_fault_time()
+        {
+            return Err(format!("--at: {} has no fault to time", kind.name()));
+        }
+        Ok(o)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<Cli, clap::Error> {
+        Cli::try_parse_from(std::iter::once("flight-sitl").chain(s.split_whitespace()))
+    }
+
+    #[test]
+    fn parses_a_full_command_line() {
+        let cli = parse(
+            "link-cut --rate l50 --seed 3 --altitude 60 --set failsafe.descent_mps=1.5 \
+             --module-set input_timeout_ms=750 --json --duration 90",
+        )
+        .unwrap();
+        assert_eq!(cli.scenario, ScenarioArg::LinkCut);
+        let o = cli.options().unwrap();
+        assert_eq!(o.rate, RateMode::L50);
+        assert_eq!(o.seed, 3);
+        assert_eq!(o.altitude_m, Some(60.0));
+        assert_eq!(o.duration_s, Some(90.0));
+        assert_eq!(o.settings.f32("failsafe.descent_mps"), 1.5);
+        let m = o.module_settings.unwrap();
+        assert_eq!(m.input_timeout_ms, 750);
+        assert_eq!(m.rate, RateMode::L50);
+        assert_eq!(m.bind_id, flight_core::app::DEFAULT_BIND_ID);
+        // Without --module-set the world pairs the ends itself.
+        assert_eq!(
+            parse("hover").unwrap().options().unwrap().module_settings,
+            None
+        );
+        assert!(cli.json);
+    }
+
+    #[test]
+    fn nonsense_is_refused() {
+        for bad in [
+            "hover --rat F250",
+            "hover --rate F1000",
+            "hovr",
+            "link-cut --altitude 0",
+            "link-cut --altitude 500",
+            "link-cut --at 1",
+            "link-cut --at nan",
+            "hover --duration -5",
+            "hover --duration 0",
+            "hover --set failsafe.descent_mps",
+            "hover --seed -1",
+        ] {
+            assert!(parse(bad).is_err(), "{bad} accepted");
+        }
+        for refused in [
+            "hover --set no.such=1",
+            "hover --set failsafe.descent_mps=9",
+            "hover --set output.protocol=pwm",
+            "hover --module-set colour=red",
+            "hover --module-set tx_power=9",
+            "hover --module-set rate=M100",
+            "hover --at 10",
+        ] {
+            let err = parse(refused).unwrap().options().unwrap_err();
+            assert!(!err.is_empty(), "{refused}");
+        }
+    }
+}
