@@ -248,7 +248,7 @@ mod tests {
         let m = o.module_settings.unwrap();
         assert_eq!(m.input_timeout_ms, 750);
         assert_eq!(m.rate, RateMode::L50);
-        assert_eq!(m.bind_id, flight_core::app::DEFAULT_BIND_ID);
+        assert_eq!(m.bind_id, super::super::RUNNER_BIND_ID);
         // Without --module-set the world pairs the ends itself.
         assert_eq!(
             parse("hover").unwrap().options().unwrap().module_settings,

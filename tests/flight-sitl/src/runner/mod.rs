@@ -141,12 +141,14 @@ impl Options {
     }
 }
 
-/// The module's factory settings bound to the flight side (`flight_core::app::DEFAULT_BIND_ID`)
-/// at `rate`: what `--module-set` changes start from, as the world pairs the ends when given
-/// none.
+/// The bind ID the runner's pair shares, as after a bind (the world stores the module's
+/// link in the flight controller's settings; binding itself is explicit and not replayed).
+pub const RUNNER_BIND_ID: u32 = 0x7A11_0001;
+
+/// The module's factory settings bound to the flight side ([`RUNNER_BIND_ID`]) at `rate`.
 pub fn bound_module_settings(rate: RateMode) -> module_core::settings::Settings {
     module_core::settings::Settings {
-        bind_id: flight_core::app::DEFAULT_BIND_ID,
+        bind_id: RUNNER_BIND_ID,
         rate,
         ..module_core::settings::Settings::default()
     }
