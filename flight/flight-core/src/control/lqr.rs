@@ -142,7 +142,11 @@ impl LqgAxis {
         // shrinks by the rotation they will still cause.
         let mut x = now;
         let mut angle_ahead = 0.0;
-        for u in self.outputs.iter().take(self.output_delay_samples).rev() {
+        let pending = self
+            .outputs
+            .get(..self.output_delay_samples)
+            .unwrap_or_default();
+        for u in pending.iter().rev() {
             angle_ahead += self.ts_s * x.rate_dps;
             x = self.kf.predict_ahead(x, *u);
         }
@@ -164,11 +168,16 @@ impl LqgAxis {
             }
         } + x.bias;
         // NaN (never expected) clamps to NaN: fall back to 0 so the motors stay defined.
-        let out = if u.is_nan() { 0.0 } else { u.clamp(-1.0, 1.0) };
-        self.outputs.rotate_right(1);
-        if let Some(newest) = self.outputs.first_mut() {
-            *newest = out;
-        }
+        let out = if u >= -1.0 {
+            if u > 1.0 { 1.0 } else { u }
+        } else if u < -1.0 {
+            -1.0
+        } else {
+            0.0 // NaN fails both compares
+        };
+        // Shifted by hand: `rotate_right` is a `memmove` call for four floats.
+        let [o0, o1, o2, _] = self.outputs;
+        self.outputs = [out, o0, o1, o2];
         out
     }
 }
