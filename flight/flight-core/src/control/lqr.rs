@@ -111,11 +111,16 @@ impl LqgAxis {
     /// over-predicts the response: on the 6-DoF quad at 3 deg/s noise that cost 0.3–0.5 %
     /// attitude overshoot and a 35 ms instead of 24 ms rate rise.
     pub fn set_realised_output(&mut self, realised: f32) {
-        if let Some(newest) = self.outputs.first_mut()
-            && !realised.is_nan()
-        {
-            *newest = realised.clamp(-1.0, 1.0);
-        }
+        // `realised.clamp(-1.0, 1.0)` unless NaN (ignored), in two compares.
+        let clamped = if realised >= -1.0 {
+            if realised > 1.0 { 1.0 } else { realised }
+        } else if realised < -1.0 {
+            -1.0
+        } else {
+            return;
+        };
+        let [_, o1, o2, o3] = self.outputs;
+        self.outputs = [clamped, o1, o2, o3];
     }
 
     /// Restarts the estimator from a gyro sample (mode entry, arming).

@@ -117,7 +117,12 @@ impl<const N: usize> Mixer<N> {
         // min/max, not clamp: after scaling −lo and 1 − hi can cross by one ulp, and clamp
         // panics on crossed bounds.
         let t = max(min(throttle.clamp(0.0, 1.0), 1.0 - hi), -lo);
-        let motors = parts.map(|p| self.curve.command_for((t + p * scale).clamp(0.0, 1.0)));
+        let thrust = parts.map(|p| (t + p * scale).clamp(0.0, 1.0));
+        // The curve is fixed per mixer: decided once, not per motor.
+        let motors = match self.curve {
+            ThrustCurve::Linear => thrust,
+            curve => thrust.map(|x| curve.command_for(x)),
+        };
         (motors, attitude.map(|a| a * scale))
     }
 }
