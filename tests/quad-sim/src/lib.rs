@@ -6,8 +6,11 @@
 pub mod axis;
 pub mod cli;
 pub mod closed_loop;
+pub mod esc;
+pub mod experiments;
 pub mod ground;
 pub mod identify;
 pub mod plot;
 pub mod quad;
 pub mod rng;
+pub mod stats;

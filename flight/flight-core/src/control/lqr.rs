@@ -111,11 +111,16 @@ impl LqgAxis {
     /// over-predicts the response: on the 6-DoF quad at 3 deg/s noise that cost 0.3–0.5 %
     /// attitude overshoot and a 35 ms instead of 24 ms rate rise.
     pub fn set_realised_output(&mut self, realised: f32) {
-        if let Some(newest) = self.outputs.first_mut()
-            && !realised.is_nan()
-        {
-            *newest = realised.clamp(-1.0, 1.0);
-        }
+        // `realised.clamp(-1.0, 1.0)` unless NaN (ignored), in two compares.
+        let clamped = if realised >= -1.0 {
+            if realised > 1.0 { 1.0 } else { realised }
+        } else if realised < -1.0 {
+            -1.0
+        } else {
+            return;
+        };
+        let [_, o1, o2, o3] = self.outputs;
+        self.outputs = [clamped, o1, o2, o3];
     }
 
     /// Restarts the estimator from a gyro sample (mode entry, arming).
@@ -142,7 +147,11 @@ impl LqgAxis {
         // shrinks by the rotation they will still cause.
         let mut x = now;
         let mut angle_ahead = 0.0;
-        for u in self.outputs.iter().take(self.output_delay_samples).rev() {
+        let pending = self
+            .outputs
+            .get(..self.output_delay_samples)
+            .unwrap_or_default();
+        for u in pending.iter().rev() {
             angle_ahead += self.ts_s * x.rate_dps;
             x = self.kf.predict_ahead(x, *u);
         }
@@ -164,11 +173,16 @@ impl LqgAxis {
             }
         } + x.bias;
         // NaN (never expected) clamps to NaN: fall back to 0 so the motors stay defined.
-        let out = if u.is_nan() { 0.0 } else { u.clamp(-1.0, 1.0) };
-        self.outputs.rotate_right(1);
-        if let Some(newest) = self.outputs.first_mut() {
-            *newest = out;
-        }
+        let out = if u >= -1.0 {
+            if u > 1.0 { 1.0 } else { u }
+        } else if u < -1.0 {
+            -1.0
+        } else {
+            0.0 // NaN fails both compares
+        };
+        // Shifted by hand: `rotate_right` is a `memmove` call for four floats.
+        let [o0, o1, o2, _] = self.outputs;
+        self.outputs = [out, o0, o1, o2];
         out
     }
 }

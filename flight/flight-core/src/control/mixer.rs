@@ -6,6 +6,8 @@
 //! range; otherwise throttle is shifted so every motor fits. Attitude wins over throttle
 //! because losing attitude control at zero throttle is what flips a quad.
 
+use crate::estimation::math::{max, min};
+
 /// One motor's share of roll, pitch and yaw.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -102,9 +104,11 @@ impl<const N: usize> Mixer<N> {
         let parts = self
             .factors
             .map(|f| f.roll * roll + f.pitch * pitch + f.yaw * yaw);
-        let (lo, hi) = parts
-            .iter()
-            .fold((0.0f32, 0.0f32), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let (lo, hi) = parts.iter().fold((0.0f32, 0.0f32), |(lo, hi), &p| {
+            // The accumulators start at 0 and never take a NaN (a NaN part fails both
+            // compares), so plain compares give exactly `lo.min(p)` and `hi.max(p)`.
+            (if p < lo { p } else { lo }, if p > hi { p } else { hi })
+        });
         let span = hi - lo;
         // Scale the attitude part only when it alone cannot fit into [0, 1].
         let scale = if span > 1.0 { 1.0 / span } else { 1.0 };
@@ -112,8 +116,13 @@ impl<const N: usize> Mixer<N> {
         // Shift throttle so that min ≥ 0 and max ≤ 1 (both hold after scaling).
         // min/max, not clamp: after scaling −lo and 1 − hi can cross by one ulp, and clamp
         // panics on crossed bounds.
-        let t = throttle.clamp(0.0, 1.0).min(1.0 - hi).max(-lo);
-        let motors = parts.map(|p| self.curve.command_for((t + p * scale).clamp(0.0, 1.0)));
+        let t = max(min(throttle.clamp(0.0, 1.0), 1.0 - hi), -lo);
+        let thrust = parts.map(|p| (t + p * scale).clamp(0.0, 1.0));
+        // The curve is fixed per mixer: decided once, not per motor.
+        let motors = match self.curve {
+            ThrustCurve::Linear => thrust,
+            curve => thrust.map(|x| curve.command_for(x)),
+        };
         (motors, attitude.map(|a| a * scale))
     }
 }

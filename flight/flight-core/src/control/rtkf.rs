@@ -83,9 +83,21 @@ impl Rtkf {
         self.x = RateTorqueEstimate {
             rate_dps: rate_pred + l_rate * innovation,
             torque: torque_pred + l_torque * innovation,
-            bias: (bias + l_bias * innovation).clamp(-self.bias_limit, self.bias_limit),
+            bias: clamp_bias(bias + l_bias * innovation, self.bias_limit),
         };
         self.x
+    }
+}
+
+/// `bias.clamp(-limit, limit)` for the limit `Rtkf` keeps ≥ 0, without `clamp`'s
+/// crossed-bounds check (a compare and a branch to a panic on every axis, every loop).
+fn clamp_bias(bias: f32, limit: f32) -> f32 {
+    if bias < -limit {
+        -limit
+    } else if bias > limit {
+        limit
+    } else {
+        bias
     }
 }
 

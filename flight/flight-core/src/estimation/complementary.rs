@@ -89,7 +89,9 @@ impl Complementary {
             return Err(Error::InvalidTimeStep);
         }
         let cfg = self.config;
-        let r = ned_to_body(self.attitude);
+        // The rotation matrix only when a vector corrects: armed, the accelerometer is
+        // skipped on most samples and there is seldom a magnetometer sample.
+        let r = || ned_to_body(self.attitude);
         let mut correction = [0.0_f32; 3];
         let mut integral = [0.0_f32; 3];
         // Accelerometer: measured "up" (−f/|f|) against the estimated up (−third column of
@@ -102,6 +104,7 @@ impl Complementary {
             let norm = f2 * inv;
             if (norm - g).abs() < cfg.accel_trust_band * g {
                 let meas = [-ax * inv, -ay * inv, -az * inv];
+                let r = r();
                 let est = [-r[0][2], -r[1][2], -r[2][2]];
                 let e = cross(est, meas);
                 for ((c, i), e) in correction.iter_mut().zip(integral.iter_mut()).zip(e) {
@@ -119,6 +122,7 @@ impl Complementary {
                 let s = inv_sqrt(m2) * inv_sqrt(b2);
                 // sin of the angle from measured to reference, about down.
                 let yaw_error = (mn * be - me * bn) * s;
+                let r = r();
                 let down_body = [r[0][2], r[1][2], r[2][2]];
                 for ((c, i), d) in correction
                     .iter_mut()

@@ -37,11 +37,41 @@ impl core::fmt::Display for Error {
 
 impl core::error::Error for Error {}
 
+/// Whether every value is finite, with one compare: `v * 0.0` is ±0 for a finite `v` and
+/// NaN for ±∞ or NaN, and a NaN survives the sum. A test per value costs ≈ 5 instructions
+/// on the M4F (compare, flag transfer, branch); this one ≈ 1 per value.
+#[inline]
+pub(crate) fn all_finite(values: &[f32]) -> bool {
+    values.iter().fold(0.0_f32, |s, v| s + v * 0.0) == 0.0
+}
+
 /// `Ok(())` when every value is finite.
 pub(crate) fn check_finite(values: &[f32]) -> Result<(), Error> {
-    if values.iter().all(|v| v.is_finite()) {
+    if all_finite(values) {
         Ok(())
     } else {
         Err(Error::NonFinite)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn all_finite_is_false_for_any_nan_or_infinity() {
+        let finite = [0.0, -0.0, 1.0, -3.4e38, 3.4e38, 1e-45];
+        assert!(all_finite(&finite));
+        assert!(all_finite(&[]));
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            for i in 0..finite.len() {
+                let mut v = finite;
+                if let Some(x) = v.get_mut(i) {
+                    *x = bad;
+                }
+                assert!(!all_finite(&v), "{v:?}");
+                assert_eq!(check_finite(&v), Err(Error::NonFinite));
+            }
+        }
     }
 }

@@ -7,10 +7,10 @@ use super::identify::Sysid;
 use super::stages;
 use super::sticks::StickShaping;
 use crate::control::mixer::Mixer;
-use crate::estimation::GRAVITY_MPS2;
 use crate::estimation::complementary::{self, Complementary};
 use crate::estimation::math::{inv_sqrt, wrap_pi};
 use crate::estimation::quaternion::{Quaternion, body_to_ned_vector, ned_to_body};
+use crate::estimation::{GRAVITY_MPS2, all_finite};
 use crate::outputs::Command;
 use crate::supervisor::{
     Decision, FlightMode, Inputs, LandingDetector, LandingInputs, ModeSwitch,
@@ -230,6 +230,10 @@ impl FlightLoop {
 
     /// Ends a running identification, keeping its result if it saw any samples.
     fn finish_sysid(&mut self) {
+        // Checked before `take`, which would rewrite the large `Option` every loop.
+        if self.sysid.is_none() {
+            return;
+        }
         if let Some(s) = self.sysid.take() {
             let result = s.ekf.result();
             if result.samples > 0 {
@@ -261,13 +265,12 @@ impl FlightLoop {
         let climb_rate_mps = self.fuse_climb(climb_rate_mps, imu.accel_mps2);
         let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
         let failsafe = self.supervisor.failsafe_descent_mps();
-        if self.mode != FlightMode::SystemId
-            || failsafe.is_some()
-            || !self.supervisor.motors_enabled()
-        {
+        // Nothing below changes the supervisor's state: read it once.
+        let armed = self.supervisor.motors_enabled();
+        if self.mode != FlightMode::SystemId || failsafe.is_some() || !armed {
             self.finish_sysid();
         }
-        let (motors, thrust) = if self.supervisor.motors_enabled() && estimate.gyro_ok {
+        let (motors, thrust) = if armed && estimate.gyro_ok {
             let fly = Fly {
                 decision,
                 mode_changed: self.mode != previous_mode,
@@ -285,13 +288,21 @@ impl FlightLoop {
             }
             ([Command::Stopped; 4], 0.0)
         };
-        self.detect_landing(now_ms, imu, &estimate, climb_rate_mps, thrust, failsafe);
+        self.detect_landing(
+            armed,
+            now_ms,
+            imu,
+            &estimate,
+            climb_rate_mps,
+            thrust,
+            failsafe,
+        );
         LoopOutput {
             motors,
             decision,
             mode: self.mode,
             mode_changed: self.mode != previous_mode,
-            armed: self.supervisor.motors_enabled(),
+            armed,
             failsafe: failsafe.is_some(),
             attitude_deg: [roll, pitch, yaw],
         }
@@ -300,16 +311,15 @@ impl FlightLoop {
     /// Estimate stage: gyro plausibility and the attitude filter update.
     fn estimate(&mut self, imu: &ImuSample) -> Estimate {
         let gyro_dps = imu.gyro_radps.map(|g| g * DEG_PER_RAD);
-        let gyro_ok = gyro_dps
-            .iter()
-            .all(|g| g.is_finite() && g.abs() < GYRO_LIMIT_DPS);
+        // `abs() < limit` is false for NaN and ±∞: no separate finiteness test.
+        let gyro_ok = gyro_dps.iter().all(|g| g.abs() < GYRO_LIMIT_DPS);
         // A zero vector is below the filter's accelerometer threshold: gyro (and mag) only.
         let accel = if self.supervisor.motors_enabled() {
             self.accel_phase = self.accel_phase.wrapping_add(1);
             if self.accel_phase >= self.config.armed_accel_divider.max(1) {
                 self.accel_phase = 0;
                 imu.accel_mps2
-            } else if imu.accel_mps2.iter().all(|a| a.is_finite()) {
+            } else if all_finite(&imu.accel_mps2) {
                 [0.0; 3]
             } else {
                 imu.accel_mps2
@@ -348,8 +358,10 @@ impl FlightLoop {
     }
 
     /// Touchdown stage: feeds the detector while armed (the automatic disarms wait for it).
+    #[allow(clippy::too_many_arguments)]
     fn detect_landing(
         &mut self,
+        armed: bool,
         now_ms: u32,
         imu: &ImuSample,
         estimate: &Estimate,
@@ -357,7 +369,7 @@ impl FlightLoop {
         thrust: f32,
         failsafe_descent_mps: Option<f32>,
     ) {
-        if self.supervisor.motors_enabled() {
+        if armed {
             self.landing.update(&LandingInputs {
                 now_ms,
                 gyro_dps: estimate.gyro_dps,

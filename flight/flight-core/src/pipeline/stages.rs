@@ -35,12 +35,13 @@ pub(super) fn setpoint(
     gyro_dps: [f32; 3],
     [roll, pitch]: [f32; 2],
 ) -> ([f32; 3], bool) {
-    let rates = config.shaping.rates_dps(sticks);
-    let [yaw_rate] = [rates[2]];
+    // Roll and pitch rates only in the modes that fly them (attitude mode does not).
+    let rates = || config.shaping.rates_dps(sticks);
+    let yaw_rate = config.shaping.yaw_rate_dps(sticks);
     let [roll_sp, pitch_sp] = config.shaping.angles_deg(sticks);
     let errors = [roll_sp - roll, pitch_sp - pitch];
     let out = match mode {
-        FlightMode::RatePid => c.pid_rate(gyro_dps, rates),
+        FlightMode::RatePid => c.pid_rate(gyro_dps, rates()),
         // On the ground (throttle low) nothing shakes: the output is zeroed by the loop,
         // and the EKF only learns in the air.
         FlightMode::SystemId if sticks.throttle_low() => [0.0; 3],
@@ -50,7 +51,7 @@ pub(super) fn setpoint(
         }
         FlightMode::RateLqg => c.lqg(
             gyro_dps,
-            rates.map(|rate_dps| AxisSetpoint::Rate { rate_dps }),
+            rates().map(|rate_dps| AxisSetpoint::Rate { rate_dps }),
         ),
         FlightMode::Attitude if !config.attitude_uses_lqg => {
             c.pid_attitude(gyro_dps, errors, yaw_rate)
@@ -69,6 +70,7 @@ pub(super) fn setpoint(
         ),
         FlightMode::Horizon => {
             let w = config.shaping.horizon_weight(sticks);
+            let rates = rates();
             let blend = |i: usize| AxisSetpoint::Blend {
                 rate_dps: rates.get(i).copied().unwrap_or(0.0),
                 angle_error_deg: errors.get(i).copied().unwrap_or(0.0),

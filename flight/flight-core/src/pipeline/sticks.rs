@@ -1,5 +1,6 @@
 //! From stick positions to setpoints: rate (deg/s) and angle (deg) per axis, with expo.
 
+use crate::estimation::math::max;
 use crate::supervisor::Sticks;
 
 /// Stick → setpoint shaping.
@@ -30,12 +31,18 @@ impl StickShaping {
         (1.0 - self.expo) * x + self.expo * x * x * x
     }
 
+    /// Yaw rate setpoint, deg/s (half the roll/pitch rate): the only rate the attitude
+    /// modes use.
+    pub fn yaw_rate_dps(&self, s: &Sticks) -> f32 {
+        self.shape(s.yaw) * self.max_rate_dps * 0.5
+    }
+
     /// Rate setpoints (roll, pitch, yaw), deg/s.
     pub fn rates_dps(&self, s: &Sticks) -> [f32; 3] {
         [
             self.shape(s.roll) * self.max_rate_dps,
             self.shape(s.pitch) * self.max_rate_dps,
-            self.shape(s.yaw) * self.max_rate_dps * 0.5,
+            self.yaw_rate_dps(s),
         ]
     }
 
@@ -49,7 +56,7 @@ impl StickShaping {
 
     /// Horizon blend weight: 1 (attitude) at centre, 0 (rate) at full deflection.
     pub fn horizon_weight(&self, s: &Sticks) -> f32 {
-        1.0 - s.roll.abs().max(s.pitch.abs()).clamp(0.0, 1.0)
+        1.0 - max(s.roll.abs(), s.pitch.abs()).clamp(0.0, 1.0)
     }
 }
 

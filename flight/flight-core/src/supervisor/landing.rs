@@ -40,7 +40,7 @@ pub const TAKEOFF_THRUST: f32 = 0.1;
 /// The climb-rate band counted as "not descending" for a commanded descent rate: never more
 /// than half the commanded rate, so a steady descent can never look landed.
 pub fn landed_climb_limit(descent_mps: f32) -> f32 {
-    LANDED_CLIMB_MPS.min(0.5 * descent_mps.abs())
+    crate::estimation::math::min(LANDED_CLIMB_MPS, 0.5 * descent_mps.abs())
 }
 
 /// What the detector looks at each loop.
@@ -112,18 +112,17 @@ impl LandingDetector {
             }
             return self.landed;
         }
-        let still = i
-            .climb_mps
-            .is_some_and(|c| c.is_finite() && c.abs() < climb_limit);
-        let quiet = i
-            .gyro_dps
-            .iter()
-            .all(|g| g.is_finite() && g.abs() < QUIET_GYRO_DPS);
-        let [x, y, z] = i.accel_mps2;
-        let g = crate::estimation::GRAVITY_MPS2;
-        let (lo, hi) = ((1.0 - ONE_G_TOLERANCE) * g, (1.0 + ONE_G_TOLERANCE) * g);
-        let one_g = (lo * lo..hi * hi).contains(&(x * x + y * y + z * z));
-        if thrust_low && still && quiet && one_g {
+        // Evaluated lazily, cheapest and most often false first: in flight the thrust is
+        // rarely low, so the usual step ends at the first test.
+        let still = |c: Option<f32>| c.is_some_and(|c| c.is_finite() && c.abs() < climb_limit);
+        // `abs() < limit` is false for NaN and ±∞: no separate finiteness test.
+        let quiet = |gyro: &[f32; 3]| gyro.iter().all(|g| g.abs() < QUIET_GYRO_DPS);
+        let one_g = |[x, y, z]: [f32; 3]| {
+            let g = crate::estimation::GRAVITY_MPS2;
+            let (lo, hi) = ((1.0 - ONE_G_TOLERANCE) * g, (1.0 + ONE_G_TOLERANCE) * g);
+            (lo * lo..hi * hi).contains(&(x * x + y * y + z * z))
+        };
+        if thrust_low && still(i.climb_mps) && quiet(&i.gyro_dps) && one_g(i.accel_mps2) {
             let since = *self.candidate_since.get_or_insert(i.now_ms);
             if i.now_ms.wrapping_sub(since) >= LANDED_HOLD_MS {
                 self.landed = true;

@@ -45,9 +45,6 @@ impl Sticks {
 
     /// All four values are finite numbers.
     pub fn is_finite(&self) -> bool {
-        self.throttle.is_finite()
-            && self.roll.is_finite()
-            && self.pitch.is_finite()
-            && self.yaw.is_finite()
+        crate::estimation::all_finite(&[self.throttle, self.roll, self.pitch, self.yaw])
     }
 }

@@ -9,7 +9,9 @@
 //! 20 corrects the attitude) — and 9 = 20 attitude-mode steps, so one with the
 //! accelerometer correction (divide by 20 for the mean), 11 = one step of the
 //! system-identification mode (shake + 13-state EKF, switch high set to `sysid`); the even
-//! regions are setup.
+//! regions are setup. Then 13–32: twenty consecutive attitude-mode steps, one region each
+//! (markers back to back); the largest is the one on which the accelerometer corrects,
+//! the loop's worst regular step.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
@@ -66,7 +68,6 @@ fn main() -> ! {
     }
     let flying = |mode: f32| black_box(link(0.4, 0.02, mode));
     let sample = black_box(imu);
-    // The 20th armed step: the accelerometer corrects on this one.
     let attitude = flying(-1.0);
     m4count_marker();
     let out = fl.step(t, &sample, &attitude, Some(0.1));
@@ -101,22 +102,30 @@ fn main() -> ! {
     m4count_marker();
     black_box(out);
     // System identification: arm the second loop, hover, switch high, measure its 2nd step.
-    let mut t = 0u32;
+    let mut t_id = 0u32;
     for _ in 0..1200 {
-        id_loop.step(t, &imu, &link(0.0, 1.0, -1.0), None);
-        t += 1;
+        id_loop.step(t_id, &imu, &link(0.0, 1.0, -1.0), None);
+        t_id += 1;
     }
     let shake = flying(1.0);
     for _ in 0..2 {
-        id_loop.step(t, &sample, &shake, Some(0.1));
-        t += 1;
+        id_loop.step(t_id, &sample, &shake, Some(0.1));
+        t_id += 1;
     }
     m4count_marker();
-    let out = id_loop.step(t, &sample, &shake, Some(0.1));
+    let out = id_loop.step(t_id, &sample, &shake, Some(0.1));
     m4count_marker();
     black_box(out);
     if id_loop.identification_in_progress().is_none() {
         exit()
+    }
+    // Back to the first loop: twenty single steps, so one has the accelerometer correction.
+    m4count_marker();
+    for _ in 0..20 {
+        t += 1;
+        let out = fl.step(t, &sample, &attitude, Some(0.1));
+        m4count_marker();
+        black_box(out);
     }
     exit()
 }
