@@ -186,7 +186,7 @@ impl Reporter {
 pub fn vertical_message(altitude_m: f32, climb_mps: f32) -> Message {
     let cm = |m: f32, limit: f32| {
         if m.is_finite() {
-            (m * 100.0).round().clamp(-limit, limit)
+            libm::roundf(m * 100.0).clamp(-limit, limit)
         } else {
             0.0
         }
