@@ -7,8 +7,29 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use flight_sitl::runner::{self, cli::Cli};
+use quad_sim::experiments::oneshot::{OneShotArgs, run_cli};
+
+/// `flight-sitl oneshot-experiment`: the Tau Labs seed's OneShot125 experiment — the ESC
+/// time constant identified with conventional 400 Hz PWM (asynchronous to a 500 Hz loop) and
+/// with synchronous OneShot125 at 500 Hz and 1 kHz, several runs each, one-way ANOVA.
+#[derive(Parser, Debug)]
+#[command(name = "flight-sitl oneshot-experiment", version)]
+struct OneShotCli {
+    #[command(flatten)]
+    args: OneShotArgs,
+}
 
 fn main() -> ExitCode {
+    if std::env::args().nth(1).as_deref() == Some("oneshot-experiment") {
+        let cli = OneShotCli::parse_from(std::env::args().skip(1));
+        return match run_cli(&cli.args) {
+            Ok(_) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("flight-sitl oneshot-experiment: {e}");
+                ExitCode::FAILURE
+            }
+        };
+    }
     let cli = Cli::parse();
     let opts = match cli.options() {
         Ok(o) => o,

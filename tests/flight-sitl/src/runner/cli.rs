@@ -30,6 +30,9 @@ use super::{Kind, Options};
   low-battery         hovering, the pack falls 50 mV/s from 4.0 V from --at
   table               the acceptance runs of issues 12/13, as a Markdown table
 
+  oneshot-experiment  the seed's OneShot125 experiment (its own options: --runs N, --json,
+                      --plot DIR; see `flight-sitl oneshot-experiment --help`)
+
 Examples:
   flight-sitl hover --rate F500 --json
   flight-sitl link-cut --altitude 60 --rate L50 --plot out
