@@ -125,3 +125,20 @@ fn refuses_too_few_samples_and_a_wrong_header() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("header"));
 }
+
+#[test]
+fn magcal_answers_help_and_refuses_misspellings() {
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_magcal"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = run(&["--help"]);
+    assert!(out.status.success());
+    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(help.contains("--json"), "{help}");
+    let out = run(&["mag.csv", "--jsno"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("'--json'"));
+}

@@ -177,3 +177,23 @@ fn step_plot_is_written_in_the_chosen_format() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn oneshot_answers_help_and_refuses_misspellings() {
+    let oneshot = |args: &[&str]| run(env!("CARGO_BIN_EXE_oneshot"), args);
+    let out = oneshot(&["--help"]);
+    assert!(out.status.success());
+    let help = text(&out.stdout);
+    for n in ["--runs <N>", "--esc-filter <N>", "--json", "--plot <DIR>"] {
+        assert!(help.contains(n), "help lacks {n:?}:\n{help}");
+    }
+    let out = oneshot(&["--runz", "3"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("a similar argument exists: '--runs'"));
+    let out = oneshot(&["--runs", "1"]);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "one run per condition has no spread"
+    );
+}
