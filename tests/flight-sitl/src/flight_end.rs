@@ -11,7 +11,7 @@ use std::rc::Rc;
 
 use embassy_futures::join::join5;
 use embassy_futures::select::{Either, select};
-use flight_core::app::{FEED_PERIOD_MS, FlightApp, Task};
+use flight_core::app::{FEED_PERIOD_MS, FlightApp, LinkStep, Task};
 use flight_core::pipeline::{Controllers, from_settings};
 use radio_rfm22b::link::LinkRadio;
 use radio_rfm22b::{NoPin, Rfm22b, TxPower};
@@ -96,8 +96,8 @@ async fn bind_requested(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay) {
     }
 }
 
-/// The firmware's link task: binds only inside a window the console opened, runs no link
-/// while unbound, and the follower with the app as its hooks otherwise.
+/// The firmware's link task: runs what `FlightApp::next_link_step` says (a bind window the
+/// console opened, the follower on the stored link, or nothing until a bind is asked for).
 async fn link_task(
     app: Rc<RefCell<FlightApp>>,
     radio: &mut FlightRadio,
@@ -106,34 +106,31 @@ async fn link_task(
 ) {
     let delay = clock.delay().clone();
     loop {
-        let request = app.borrow_mut().take_bind_request();
-        if let Some((band, window_us)) = request {
-            let bind = bind_follower(radio, &mut clock, band, window_us);
-            match select(bind, keep_alive(&app, &delay)).await {
-                Either::First(Ok(offered)) => {
-                    app.borrow_mut().on_bind_result(offered.as_ref());
-                }
-                Either::First(Err(_)) => {
-                    app.borrow_mut().on_bind_result(None);
+        let step = app.borrow_mut().next_link_step();
+        match step {
+            LinkStep::Bind { band, window_us } => {
+                let bind = bind_follower(radio, &mut clock, band, window_us);
+                let Either::First(result) = select(bind, keep_alive(&app, &delay)).await;
+                let offered = result.as_ref().ok().copied().flatten();
+                app.borrow_mut().on_bind_result(offered.as_ref());
+                if result.is_err() {
                     idle(&app, &delay, 1000).await;
                 }
             }
-            continue;
-        }
-        let params = app.borrow().link_params();
-        let Some(params) = params else {
-            bind_requested(&app, &delay).await;
-            continue;
-        };
-        let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
-        let mut hooks = AppHooks(app.clone());
-        let run = run_follower(radio, &mut clock, &mut follower, &mut hooks);
-        match select(run, bind_requested(&app, &delay)).await {
-            Either::First(Err(_)) => {
+            LinkStep::WaitForBind => bind_requested(&app, &delay).await,
+            LinkStep::Follow(params) => {
+                let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
+                let mut hooks = AppHooks(app.clone());
+                let run = run_follower(radio, &mut clock, &mut follower, &mut hooks);
+                let failed = matches!(
+                    select(run, bind_requested(&app, &delay)).await,
+                    Either::First(Err(_))
+                );
                 app.borrow_mut().on_link_down();
-                idle(&app, &delay, 1000).await;
+                if failed {
+                    idle(&app, &delay, 1000).await;
+                }
             }
-            Either::Second(()) => app.borrow_mut().on_link_down(),
         }
     }
 }

@@ -91,7 +91,37 @@ impl LinkSide {
     }
 }
 
+/// What the link task does next ([`FlightApp::next_link_step`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LinkStep {
+    /// Listen for a bind offer on `band` for `window_us` (the console asked), at the radio's
+    /// lowest power step; then report with [`FlightApp::on_bind_result`].
+    Bind {
+        /// Where to listen.
+        band: Band,
+        /// How long, µs.
+        window_us: u64,
+    },
+    /// Run the follower on the stored link, the app as its hooks, until the radio fails or a
+    /// bind is asked for ([`FlightApp::bind_requested`]).
+    Follow(LinkParams),
+    /// Never bound: run no link; wait (checking in) until a bind is asked for.
+    WaitForBind,
+}
+
 impl FlightApp {
+    /// The link task's next step: a requested bind first, else the stored link, else
+    /// nothing until the owner binds.
+    pub fn next_link_step(&mut self) -> LinkStep {
+        if let Some((band, window_us)) = self.take_bind_request() {
+            return LinkStep::Bind { band, window_us };
+        }
+        match self.link_params() {
+            Some(params) => LinkStep::Follow(params),
+            None => LinkStep::WaitForBind,
+        }
+    }
+
     /// The link to run: the stored bind, or `None` for a controller never bound (it runs
     /// no link and waits for a `bind` command).
     pub fn link_params(&self) -> Option<LinkParams> {

@@ -22,7 +22,7 @@ mod tests;
 pub use imu::{
     CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
 };
-pub use link::{BIND_WINDOW_US, FAILSAFE_US, REPORT_PERIOD_US};
+pub use link::{BIND_WINDOW_US, FAILSAFE_US, LinkStep, REPORT_PERIOD_US};
 pub use watchdog::{FEED_PERIOD_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog};
 
 use crate::alerts::{Alert, TonePlayer};

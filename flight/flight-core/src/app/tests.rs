@@ -370,3 +370,22 @@ fn a_setting_change_over_the_link_is_refused_while_armed() {
     assert_eq!(app.settings().f32("failsafe.descent_mps"), before);
     assert_eq!(app.take_design_request(), None);
 }
+
+/// The link task's decision lives in the app: nothing while unbound, a bind window once the
+/// console asks (and only once), the stored link after a bind.
+#[test]
+fn the_link_task_is_told_what_to_do_next() {
+    let mut app = app();
+    assert_eq!(app.next_link_step(), LinkStep::WaitForBind);
+    let mut out = heapless::String::<256>::new();
+    let _ = app.on_console_line("bind", &mut out);
+    assert_eq!(
+        app.next_link_step(),
+        LinkStep::Bind {
+            band: Band::Mhz433,
+            window_us: BIND_WINDOW_US
+        }
+    );
+    assert!(app.on_bind_result(Some(&some_link())));
+    assert_eq!(app.next_link_step(), LinkStep::Follow(some_link()));
+}
