@@ -22,7 +22,11 @@ fuzz_target!(|data: &[u8]| {
         let written = settings.to_record();
         assert_eq!(Settings::from_record(&written), Ok(settings));
         if data.first() == written.first() {
-            assert_eq!(&written[..], data, "a current-version record re-encodes to itself");
+            assert_eq!(
+                &written[..],
+                data,
+                "a current-version record re-encodes to itself"
+            );
         }
     }
 
