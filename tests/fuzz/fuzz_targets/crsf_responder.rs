@@ -15,6 +15,7 @@ use telemetry::handset::crsf::responder::{
 use telemetry::handset::crsf::{Decoded, Decoder, Message};
 use telemetry::handset::report::{
     AttitudeReport, BatteryReport, FlightModeReport, GpsReport, HandsetTelemetry, LinkReport,
+    VerticalReport,
 };
 
 fuzz_target!(|data: &[u8]| {
@@ -116,5 +117,11 @@ fn telemetry(input: &mut Input) -> HandsetTelemetry {
             altitude_m: input.u32() as i32,
             satellites: input.u8(),
         }),
+        vertical: (present & 32 != 0).then(|| VerticalReport {
+            altitude_cm: input.u32() as i32,
+            vario_cm_s: input.u16() as i16,
+        }),
+        cells: (present & 64 != 0).then(|| input.u8()),
+        module_battery_mv: (present & 128 != 0).then(|| input.u16()),
     }
 }

@@ -19,6 +19,7 @@ fuzz_target!(|data: &[u8]| {
     } else {
         DecoderConfig {
             sync_min_us: u32::from(input.u16()),
+            glitch_below_us: u32::from(input.u16()),
             channel_min_us: u32::from(input.u16()),
             channel_max_us: u32::from(input.u16()),
             min_channels: usize::from(input.u8() % 20),
@@ -49,9 +50,18 @@ fuzz_target!(|data: &[u8]| {
             assert!(channels.as_slice().iter().all(|&v| v <= VALUE_MAX));
             let periods = decoder.last_periods_us();
             assert_eq!(periods.len(), count);
+            // Periods are clamped into the channel range (a fuzzed config may give an empty
+            // range, min > max: then only the upper bound is defined).
             for &p in periods {
                 let p = u32::from(p);
-                assert!(p >= config.channel_min_us && p <= config.channel_max_us);
+                assert!(p <= config.channel_max_us.max(config.channel_min_us));
+                if config.channel_min_us <= config.channel_max_us {
+                    assert!(
+                        p >= config.channel_min_us,
+                        "{p} below {}",
+                        config.channel_min_us
+                    );
+                }
             }
         }
     }
