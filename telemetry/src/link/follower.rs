@@ -3,12 +3,11 @@
 //! step.
 
 use super::bind::{ACCEPT_REPEATS, BIND_KEY, LinkParams, bind_radio_config, offered_params};
-use super::core::{
-    Follower, HEALTH_CHECK_PERIOD_US, MAX_CONSECUTIVE_RADIO_ERRORS, RADIO_RETRY_US, Step,
-};
+use super::core::{Follower, Step};
 use super::hopping::Band;
 use super::radio::{LinkClock, PacketRadio, RxOutcome};
 use super::rate::FIFO_BYTES;
+use super::recovery::Recovery;
 use crate::frame::{Frame, encode};
 
 /// Gap between receiving an offer and answering, and between repeated accepts: the master
@@ -75,36 +74,16 @@ pub async fn run_follower<R: PacketRadio, C: LinkClock, H: FollowerHooks>(
     let config = follower.radio_config();
     radio.configure(&config).await?;
     let mut buf = [0u8; FIFO_BYTES];
-    let mut failures = 0u32;
-    let mut next_health_us = clock.now_us() + HEALTH_CHECK_PERIOD_US;
+    let mut recovery = Recovery::new(clock.now_us());
     loop {
         let step = follower.plan(clock.now_us(), &mut buf);
         // Right after planning: a packet just received and any failsafe just declared are
         // visible to the application at once, not a step later.
         hooks.on_step(clock.now_us(), follower);
-        let mut result = run_step(radio, clock, follower, step, &mut buf).await;
-        if result.is_ok() && clock.now_us() >= next_health_us {
-            next_health_us = clock.now_us() + HEALTH_CHECK_PERIOD_US;
-            result = radio.check_health().await;
-        }
-        match result {
-            Ok(()) => failures = 0,
-            Err(e) => {
-                failures += 1;
-                follower.on_radio_error();
-                if failures >= MAX_CONSECUTIVE_RADIO_ERRORS {
-                    return Err(e);
-                }
-                clock.sleep_until_us(clock.now_us() + RADIO_RETRY_US).await;
-                if let Err(e) = radio.recover(&config).await {
-                    failures += 1;
-                    follower.on_radio_error();
-                    if failures >= MAX_CONSECUTIVE_RADIO_ERRORS {
-                        return Err(e);
-                    }
-                }
-            }
-        }
+        let result = run_step(radio, clock, follower, step, &mut buf).await;
+        recovery
+            .after_step(radio, clock, &config, result, || follower.on_radio_error())
+            .await?;
     }
 }
 

@@ -3,11 +3,10 @@
 //! and telemetry with the state machine at every slot boundary.
 
 use super::bind::{BIND_KEY, LinkParams, OFFER_PERIOD_US, bind_radio_config, is_accept_of};
-use super::core::{
-    HEALTH_CHECK_PERIOD_US, MAX_CONSECUTIVE_RADIO_ERRORS, Master, RADIO_RETRY_US, Step,
-};
+use super::core::{Master, Step};
 use super::radio::{LinkClock, PacketRadio, RxOutcome};
 use super::rate::FIFO_BYTES;
+use super::recovery::Recovery;
 use crate::frame::{Frame, encode};
 
 /// Bind mode on the master (started by the bind button/command): offers `params` on the
@@ -66,8 +65,7 @@ pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
     let slot_us = u64::from(master.schedule().slot_us());
     let mut slot_start_us = clock.now_us();
     let mut buf = [0u8; FIFO_BYTES];
-    let mut failures = 0u32;
-    let mut next_health_us = clock.now_us() + HEALTH_CHECK_PERIOD_US;
+    let mut recovery = Recovery::new(clock.now_us());
     loop {
         // Fell behind by a whole slot (a debugger, a radio reset): skip, keep the grid.
         while clock.now_us() > slot_start_us + slot_us / 2 {
@@ -76,29 +74,10 @@ pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
         }
         hooks.on_slot(slot_start_us, master);
         let step = master.plan(slot_start_us, &mut buf);
-        let mut result = run_slot(radio, clock, master, step, &mut buf).await;
-        if result.is_ok() && clock.now_us() >= next_health_us {
-            next_health_us = clock.now_us() + HEALTH_CHECK_PERIOD_US;
-            result = radio.check_health().await;
-        }
-        match result {
-            Ok(()) => failures = 0,
-            Err(e) => {
-                failures += 1;
-                master.on_radio_error();
-                if failures >= MAX_CONSECUTIVE_RADIO_ERRORS {
-                    return Err(e);
-                }
-                clock.sleep_until_us(clock.now_us() + RADIO_RETRY_US).await;
-                if let Err(e) = radio.recover(&config).await {
-                    failures += 1;
-                    master.on_radio_error();
-                    if failures >= MAX_CONSECUTIVE_RADIO_ERRORS {
-                        return Err(e);
-                    }
-                }
-            }
-        }
+        let result = run_slot(radio, clock, master, step, &mut buf).await;
+        recovery
+            .after_step(radio, clock, &config, result, || master.on_radio_error())
+            .await?;
         slot_start_us += slot_us;
         clock.sleep_until_us(slot_start_us).await;
     }

@@ -12,6 +12,7 @@ pub mod master;
 pub mod quality;
 pub mod radio;
 pub mod rate;
+mod recovery;
 pub mod schedule;
 pub mod stream;
 
