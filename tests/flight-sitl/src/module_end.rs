@@ -24,6 +24,8 @@ use radio_rfm22b::link::LinkRadio;
 use radio_rfm22b::{Rfm22b, TxPower};
 use si4432_sim::{Medium, SimDelay, SimIrq, SimSdn, SimSpi};
 use telemetry::handset::crsf::channels::RcChannels;
+use telemetry::handset::crsf::frame::{Frame, frame_type};
+use telemetry::handset::crsf::{ModelSelect, address};
 use telemetry::link::LinkClock;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
@@ -268,7 +270,9 @@ async fn ppm_in_task(b: &Board, shared: &Shared) {
 }
 
 /// The JR-line task (the firmware's `jr_line_task`) with EdgeTX at the other end. CRSF: the
-/// radio sends the pilot's channels every [`CRSF_PERIOD_US`]; once the frame has crossed the
+/// radio sends the pilot's channels every [`CRSF_PERIOD_US`] — in the period after its
+/// model selection (`PilotInput::radio_model`) changes, the model-select command instead,
+/// as EdgeTX does at start and on a model change; once the frame has crossed the
 /// line the module decodes it (`on_handset_bytes`, `on_handset_idle`) and its reply goes
 /// back; a save or bind the radio asked for is carried out. Push modes: the scheduler is
 /// asked every [`PUSH_POLL_MS`]. Every burst the module sends is recorded with the
@@ -278,6 +282,7 @@ async fn jr_line_task(b: &Board, shared: &Shared) {
     let mut clock = b.clock.clone();
     let mut reply = [0u8; MAX_LINE_BURST];
     let mut frame_start = clock.now_us();
+    let mut model_sent: Option<u8> = None;
     loop {
         let sent = match mode {
             LineMode::Crsf { baud } => {
@@ -285,12 +290,31 @@ async fn jr_line_task(b: &Board, shared: &Shared) {
                 let mut sent = 0;
                 if input.handset_connected {
                     let mut frame = [0u8; 64];
-                    let n = RcChannels {
-                        ticks: transmitter(&input),
-                    }
-                    .to_frame()
-                    .encode(&mut frame)
-                    .unwrap_or(0);
+                    let radio_frame = match input.radio_model {
+                        Some(model_id) if model_sent != Some(model_id) => {
+                            model_sent = Some(model_id);
+                            let select = ModelSelect {
+                                destination: address::TX_MODULE,
+                                origin: address::RADIO,
+                                model_id,
+                            };
+                            Frame::new(
+                                address::TX_MODULE,
+                                frame_type::COMMAND,
+                                &select.to_payload(),
+                            )
+                            .ok()
+                        }
+                        _ => Some(
+                            RcChannels {
+                                ticks: transmitter(&input),
+                            }
+                            .to_frame(),
+                        ),
+                    };
+                    let n = radio_frame
+                        .and_then(|f| f.encode(&mut frame).ok())
+                        .unwrap_or(0);
                     // 10 bits per byte on the line.
                     let line_us = (n as u64 * 10 * 1_000_000).div_ceil(u64::from(baud));
                     clock.sleep_until_us(frame_start + line_us).await;

@@ -247,8 +247,12 @@ pub fn run(scenario: Scenario) -> Sitl {
         module_settings: _,
         flight_flash,
     } = scenario;
-    // The flight controller stores the module's link (as after a bind).
+    // The flight controller stores the module's link (as after a bind): under model match
+    // the link of the lowest model the module records as bound.
+    let bound_model = (module.model_match && module.bound_models != 0)
+        .then(|| module.bound_models.trailing_zeros() as u8);
     if let Some(link) = module_core::air::link_params(&module) {
+        let link = bound_model.map_or(link, |m| link.for_model(m));
         let _ = store_link(&mut settings, &link);
     }
     let setup = from_settings(&settings).expect("settings make a flyable setup");
