@@ -1,8 +1,9 @@
-//! The flight side of the telemetry stream: what the loop, the battery monitor and the link
-//! follower know becomes `telemetry::messages` (attitude, battery, link statistics, flight
-//! mode, arm/failsafe state, system-identification results), one message per call in
-//! rotation so a slow downlink still carries every kind; and setting changes arriving from
-//! the module are checked against the parameter table and echoed back.
+//! The flight side of the telemetry stream: what the loop, the battery monitor, the baro and
+//! the link follower know becomes `telemetry::messages` (attitude, battery, cell count,
+//! barometric altitude and vario, link statistics, flight mode, arm/failsafe state,
+//! system-identification results), one message per call in rotation ([`ROTATION`]) so a slow
+//! downlink still carries every kind; and setting changes arriving from the module are
+//! checked against the parameter table and echoed back.
 //!
 //! Setting values on the wire (`SettingChange::value`, "the setting's own fixed-point unit"):
 //! whole numbers and choices as themselves, real numbers as their IEEE-754 bits — exact for
@@ -51,6 +52,11 @@ pub struct Snapshot {
     pub arming_blockers: u16,
     /// A fresh identification result to send once.
     pub sysid: Option<SysIdResult>,
+    /// Barometric altitude above the power-up point, m (`ClimbRate::altitude_m`), once the
+    /// baro has read.
+    pub altitude_m: Option<f32>,
+    /// Vertical speed, m/s up (`FlightLoop::climb_estimate`), once the estimator has one.
+    pub climb_mps: Option<f32>,
 }
 
 /// The bit of an arming blocker in `ArmState::arming_blockers`.
@@ -79,25 +85,47 @@ fn centidegrees(deg: f32) -> i16 {
     (deg * 100.0).clamp(-18_000.0, 18_000.0) as i16
 }
 
-/// Message kinds in rotation order; attitude goes every other message.
-const ROTATION: [Kind; 8] = [
+/// Message kinds in rotation order: attitude every other message (the phone's horizon),
+/// altitude and vario twice per pass (a vario tone wants updates more often than the
+/// battery), everything else once. At the link task's ceiling of one message per
+/// `app::REPORT_PERIOD_US` (50 /s) that is attitude 25 /s, vertical 7.1 /s, arm state,
+/// battery, link statistics, flight mode and cell count 3.6 /s each; a kind with nothing to
+/// say (no baro, no battery reading yet) gives its slot to the next one. State changes
+/// (arming, failsafe, mode) go out of turn anyway.
+pub const ROTATION: [Kind; 14] = [
     Kind::Attitude,
     Kind::ArmState,
+    Kind::Attitude,
+    Kind::Vertical,
     Kind::Attitude,
     Kind::Battery,
     Kind::Attitude,
     Kind::LinkStats,
     Kind::Attitude,
+    Kind::Vertical,
+    Kind::Attitude,
     Kind::FlightMode,
+    Kind::Attitude,
+    Kind::Cells,
 ];
 
+/// A kind of message in the [`ROTATION`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Kind {
+pub enum Kind {
+    /// `Message::Attitude`.
     Attitude,
+    /// `Message::ArmState`.
     ArmState,
+    /// `Message::Battery`.
     Battery,
+    /// `Message::LinkStats`.
     LinkStats,
+    /// `Message::FlightMode`.
     FlightMode,
+    /// `Message::Vertical` (baro altitude and vario).
+    Vertical,
+    /// `Message::Cells` (the battery monitor's cell count).
+    Cells,
 }
 
 /// Picks the next message to send.
@@ -176,6 +204,8 @@ impl Reporter {
                 })
             }
             Kind::FlightMode => Message::FlightMode(wire_mode(snap.out.mode)),
+            Kind::Vertical => vertical_message(snap.altitude_m?, snap.climb_mps?),
+            Kind::Cells => return cells_message(&snap.battery?),
         })
     }
 }

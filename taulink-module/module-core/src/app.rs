@@ -72,6 +72,8 @@ pub struct App<L: LinkPort, H: HandsetOutput> {
     battery_low: bool,
     /// Actions from the JR line (a save, a bind's LED) for [`App::take_action`].
     actions: Deque<Action, 4>,
+    /// The radio model the running link step's identity was built for (model match).
+    link_model: Option<u8>,
 }
 
 impl<L: LinkPort, H: HandsetOutput> App<L, H> {
@@ -106,6 +108,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             restart_request: false,
             battery_low: false,
             actions: Deque::new(),
+            link_model: None,
         })
     }
 
@@ -259,9 +262,31 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
 
     /// The link finished binding with `bind_id`: remember it.
     pub fn on_bind_complete(&mut self, bind_id: u32) -> Action {
+        self.bound(bind_id, None)
+    }
+
+    /// Bound with `bind_id` under radio model `model` (model match): a new ID forgets the
+    /// models bound under the old one; the model is recorded as bound.
+    fn bound(&mut self, bind_id: u32, model: Option<u8>) -> Action {
         self.binding = false;
+        if bind_id != self.settings.bind_id {
+            self.settings.bound_models = 0;
+        }
         self.settings.bind_id = bind_id;
+        if let Some(m) = model.filter(|m| *m < crate::settings::MODEL_IDS) {
+            self.settings.bound_models |= 1u64 << m;
+        }
         Action::Save(self.settings)
+    }
+
+    /// The radio model the link's identity is mixed with: the model the radio selected, with
+    /// model match on in the transmitter role; `None` otherwise (or before the radio said).
+    pub fn link_model(&self) -> Option<u8> {
+        if self.settings.model_match && self.settings.role == Role::Transmitter {
+            self.handset.model_id()
+        } else {
+            None
+        }
     }
 
     /// Bytes the radio sent on the JR line, the last at `now_us`: CRSF channel frames reach
@@ -294,6 +319,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     }
 
     fn serve_handset_requests(&mut self) {
+        self.commands.radio_model = self.handset.model_id();
         while let Some(request) = self.handset.take_request() {
             match request {
                 HandsetRequest::Read {
@@ -413,17 +439,24 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// The link task's next step (`crate::session`), at `now_ms`; `random` (hardware RNG)
     /// becomes the bind ID if a master bind is next.
     pub fn next_link_step(&mut self, now_ms: u32, random: u32) -> LinkStep {
-        self.session.next(&self.settings, now_ms, random)
+        self.link_model = self.link_model();
+        self.session
+            .next(&self.settings, self.link_model, now_ms, random)
     }
 
     /// While a link step runs (every `session::POLL_MS`): whether it must stop now (a long
-    /// press, or the loop's hook silent for `session::HOOK_SILENCE_MS`).
+    /// press, a setting the link uses changed, the radio selected another model under model
+    /// match, or the loop's hook silent for `session::HOOK_SILENCE_MS`).
     pub fn poll_session(&mut self, now_ms: u32) -> Option<SessionEnd> {
         if self.restart_request && !self.bind_request {
             self.restart_request = false;
             if self.session.running() {
                 return Some(SessionEnd::SettingsChanged);
             }
+        }
+        if !self.bind_request && self.session.running() && self.link_model() != self.link_model {
+            // The link's identity is the model's: fly the new model's link (or none).
+            return Some(SessionEnd::SettingsChanged);
         }
         let end = self.session.poll(now_ms, self.bind_request);
         if end == Some(SessionEnd::BindRequested) {
@@ -455,8 +488,8 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             ));
         }
         match (outcome, offered) {
-            (BindOutcome::Offered { accepted: true }, Some(params)) => {
-                Some(self.on_bind_complete(params.bind_id))
+            (BindOutcome::Offered { accepted: true }, Some(offer)) => {
+                Some(self.bound(offer.bind_id, offer.model))
             }
             (BindOutcome::Listened(Some(params)), _) => Some(self.on_bind_offer_accepted(&params)),
             _ => self.on_bind_failed(),

@@ -41,6 +41,8 @@ impl LinkPort for FakeLink {
 struct FakeHandset {
     telemetry: Vec<Vec<u8>>,
     stats: Vec<LinkStats>,
+    /// The radio's selected model.
+    model: Option<u8>,
 }
 
 impl HandsetOutput for FakeHandset {
@@ -49,6 +51,9 @@ impl HandsetOutput for FakeHandset {
     }
     fn on_link_stats(&mut self, stats: &LinkStats) {
         self.stats.push(*stats);
+    }
+    fn model_id(&self) -> Option<u8> {
+        self.model
     }
 }
 
@@ -360,4 +365,107 @@ fn a_low_module_battery_shows_on_the_led_with_hysteresis() {
     );
     // No battery at all (a bench supply) is not a low battery.
     assert_eq!(app.on_module_battery(300), None);
+}
+
+/// The "Model" row as the radio reads it.
+fn model_row(app: &App<FakeLink, FakeHandset>) -> String {
+    let entry = params::entry(params::MODEL, app.settings(), app.parameter_commands()).unwrap();
+    // parent, type, "Model\0", text\0
+    let text = &entry[2 + "Model".len() + 1..entry.len() - 1];
+    String::from_utf8(text.to_vec()).unwrap()
+}
+
+/// Runs the link task's steps from a probe to the running master's parameters.
+fn running_master(
+    app: &mut App<FakeLink, FakeHandset>,
+    now_ms: u32,
+) -> telemetry::link::LinkParams {
+    for _ in 0..3 {
+        match app.next_link_step(now_ms, 0x1234_5678) {
+            LinkStep::Probe => {
+                app.on_radio_present(true);
+            }
+            LinkStep::RunMaster(params) => return params,
+            other => panic!("{other:?}"),
+        }
+    }
+    panic!("no master");
+}
+
+#[test]
+fn model_match_flies_the_selected_models_identity_and_says_mismatch() {
+    let settings = Settings {
+        input: InputProtocol::Crsf,
+        bind_id: 0x0BAD_F00D,
+        model_match: true,
+        bound_models: 1 << 3,
+        ..Settings::default()
+    };
+    let base = crate::air::link_params(&settings).unwrap();
+    let mut app = app(settings);
+    // The radio selected model 3, bound: the link runs under model 3's identity.
+    app.handset_mut().model = Some(3);
+    app.on_handset_idle(0);
+    assert_eq!(running_master(&mut app, 0), base.for_model(3));
+    assert_eq!(model_row(&app), "3 bound");
+    assert_eq!(app.poll_session(50), None);
+    // The pilot selects model 5 on the radio: the link restarts under model 5's identity,
+    // which no receiver bound under model 3 hears; the row says why nothing answers.
+    app.handset_mut().model = Some(5);
+    app.on_handset_idle(100);
+    assert_eq!(app.poll_session(100), Some(SessionEnd::SettingsChanged));
+    app.on_session_end(SessionEnd::SettingsChanged);
+    assert_eq!(running_master(&mut app, 150), base.for_model(5));
+    assert_eq!(model_row(&app), "5 Model mismatch");
+    // Bind under model 5: the module keeps its ID (model 3's receiver still flies) and
+    // records model 5 as bound.
+    app.on_button(ButtonEvent::LongPress);
+    assert_eq!(app.poll_session(200), Some(SessionEnd::BindRequested));
+    app.on_session_end(SessionEnd::BindRequested);
+    let LinkStep::BindMaster { params, .. } = app.next_link_step(250, 0x9999_0001) else {
+        panic!("bind next");
+    };
+    assert_eq!(params, base.for_model(5));
+    let saved = app.on_bind_outcome(BindOutcome::Offered { accepted: true });
+    assert!(
+        matches!(saved, Some(Action::Save(s)) if s.bind_id == base.bind_id
+        && s.bound_models == (1 << 3) | (1 << 5))
+    );
+    assert_eq!(model_row(&app), "5 bound");
+}
+
+#[test]
+fn model_match_off_flies_one_identity_for_every_model() {
+    let settings = Settings {
+        input: InputProtocol::Crsf,
+        bind_id: 0x0BAD_F00D,
+        ..Settings::default()
+    };
+    let base = crate::air::link_params(&settings).unwrap();
+    let mut app = app(settings);
+    app.handset_mut().model = Some(3);
+    app.on_handset_idle(0);
+    assert_eq!(running_master(&mut app, 0), base);
+    app.handset_mut().model = Some(5);
+    app.on_handset_idle(100);
+    assert_eq!(app.poll_session(100), None, "another model changes nothing");
+    assert_eq!(model_row(&app), "any (match off)");
+    // Turned on from the radio's device tool: the link restarts under the model.
+    let effect = params::write(
+        params::MODEL_MATCH,
+        &[1],
+        &mut app.settings,
+        &mut app.commands,
+    );
+    app.apply(effect);
+    assert_eq!(app.poll_session(150), Some(SessionEnd::SettingsChanged));
+    app.on_session_end(SessionEnd::SettingsChanged);
+    assert_eq!(running_master(&mut app, 200), base.for_model(5));
+    // Without a model ID from the radio (PPM input) the link runs on the plain identity.
+    app.handset_mut().model = None;
+    app.on_handset_idle(300);
+    assert_eq!(app.poll_session(300), Some(SessionEnd::SettingsChanged));
+    app.on_session_end(SessionEnd::SettingsChanged);
+    assert_eq!(running_master(&mut app, 350), base);
+    assert_eq!(model_row(&app), "no ID from radio");
 }

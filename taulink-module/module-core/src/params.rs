@@ -10,8 +10,10 @@
 //! power-up (they would cut the JR line the tool talks over, or the radio's power is set
 //! when the chip starts), so their rows say "(on power-up)".
 //!
-//! Numbering (fixed; the radio reads 1 … [`PARAMETER_COUNT`]). H-SEC's binding phrase goes
-//! at the end as a STRING parameter (number 13), which only grows the count.
+//! Numbering (fixed; the radio reads 1 … [`PARAMETER_COUNT`]). Model match (13, restarts
+//! the link) and the "Model" row (14, INFO: the radio's model and whether a receiver was
+//! bound under it — "mismatch" tells the pilot why the link does not come up) were added
+//! at the end; later entries (the binding phrase) only grow the count.
 
 use core::fmt::Write;
 
@@ -48,8 +50,12 @@ pub const PPM_FAILSAFE: u8 = 10;
 pub const BIND: u8 = 11;
 /// Command: save the settings.
 pub const SAVE: u8 = 12;
+/// Model match on/off.
+pub const MODEL_MATCH: u8 = 13;
+/// The radio's model and whether it matches (INFO).
+pub const MODEL: u8 = 14;
 /// Parameters the module offers (DEVICE_INFO's count).
-pub const PARAMETER_COUNT: u8 = 12;
+pub const PARAMETER_COUNT: u8 = 14;
 
 /// How often the radio polls a running command, 10 ms units.
 const POLL_10MS: u8 = 50;
@@ -70,6 +76,8 @@ pub struct Commands {
     pub saved: bool,
     /// The parameter whose change last restarted the link.
     pub restarted_by: Option<u8>,
+    /// The model ID the radio last selected (CRSF model select), for the "Model" row.
+    pub radio_model: Option<u8>,
 }
 
 /// What a write asks of the core beyond the settings change.
@@ -119,6 +127,20 @@ const BAND_LABELS: [&str; 4] = ["433 HAM licence", "868 EU SRD", "915 US ISM", "
 const INPUT_LABELS: [&str; 4] = ["PPM", "CRSF 400k", "CRSF 115k", "CRSF 921k"];
 const OUTPUT_LABELS: [&str; 4] = ["Off", "CRSF", "S.Port", "FrSky D"];
 const FAILSAFE_LABELS: [&str; 2] = ["Hold last", "Stop pulses"];
+const OFF_ON_LABELS: [&str; 2] = ["Off", "On"];
+
+/// The "Model" row: with model match on, the radio's model ID and whether a receiver was
+/// bound under it ("mismatch": none was, so nothing answers until one is bound).
+fn model_text(settings: &Settings, commands: &Commands) -> Option<String<24>> {
+    let mut text = String::new();
+    match (settings.model_match, commands.radio_model) {
+        (false, _) => text.push_str("any (match off)").ok()?,
+        (true, None) => text.push_str("no ID from radio").ok()?,
+        (true, Some(m)) if settings.model_bound(m) => write!(text, "{m} bound").ok()?,
+        (true, Some(m)) => write!(text, "{m} Model mismatch").ok()?,
+    }
+    Some(text)
+}
 
 fn band_index(band: Band) -> u8 {
     match band {
@@ -254,6 +276,15 @@ pub fn entry(
             };
             Entry::command(0, "Save", status, POLL_10MS, info)
         }
+        MODEL_MATCH => Entry::selection(
+            0,
+            "Model Match",
+            &OFF_ON_LABELS,
+            u8::from(settings.model_match),
+            0,
+            unit(commands, number, ""),
+        ),
+        MODEL => Entry::info(0, "Model", &model_text(settings, commands)?),
         _ => return None,
     };
     entry.finish().ok()
@@ -343,6 +374,10 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
             Some(_) => Effect::CommandStatus,
             None => Effect::None,
         },
+        (MODEL_MATCH, Some(on @ 0..=1)) => {
+            settings.model_match = on == 1;
+            Effect::RestartLink
+        }
         (SAVE, Some(step)) => match CommandStatus::from_byte(step) {
             Some(CommandStatus::Start) => {
                 commands.save_confirming = true;

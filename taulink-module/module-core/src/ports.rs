@@ -123,4 +123,9 @@ pub trait HandsetOutput {
     }
     /// A parameter chunk to send in the next reply window.
     fn send_parameter_chunk(&mut self, _chunk: telemetry::handset::crsf::params::ParameterChunk) {}
+    /// The model ID the radio selected (CRSF model select, 0x32 / 0x10 / 0x05), `None` before
+    /// one arrived or on a line that carries none (PPM).
+    fn model_id(&self) -> Option<u8> {
+        None
+    }
 }

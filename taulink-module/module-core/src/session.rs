@@ -114,12 +114,29 @@ enum State {
     Binding,
 }
 
+/// What a master bind offered: the link on air (the model's identity under model match)
+/// and what the module stores if it is accepted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Offer {
+    /// The parameters offered on air (what the receiver stores).
+    pub params: LinkParams,
+    /// The module's own bind ID to store (before any model mix).
+    pub bind_id: u32,
+    /// The radio model the offer was made under (model match on), to record as bound.
+    pub model: Option<u8>,
+}
+
+/// The link of `params` for `model` (model match on and a model selected), else `params`.
+fn with_model(params: LinkParams, model: Option<u8>) -> LinkParams {
+    model.map_or(params, |m| params.for_model(m))
+}
+
 /// The link task's state machine (held by the core's `App`).
 #[derive(Debug, Clone)]
 pub struct Session {
     state: State,
     last_hook_ms: u32,
-    offered: Option<LinkParams>,
+    offered: Option<Offer>,
 }
 
 impl Default for Session {
@@ -143,9 +160,18 @@ impl Session {
         self.state = if present { State::Ready } else { State::Absent };
     }
 
-    /// The next step for `settings`, at `now_ms`; `random` gives a new bind ID when a master
-    /// bind is next. A step still running when this is called is abandoned: probe again.
-    pub fn next(&mut self, settings: &Settings, now_ms: u32, random: u32) -> LinkStep {
+    /// The next step for `settings`, at `now_ms`; `model` is the radio model the link's
+    /// identity is mixed with (model match on and a model selected, else `None`); `random`
+    /// gives a new bind ID when a master bind is next — except under a model, where a bound
+    /// module keeps its ID so the receivers bound under other models still fly. A step
+    /// still running when this is called is abandoned: probe again.
+    pub fn next(
+        &mut self,
+        settings: &Settings,
+        model: Option<u8>,
+        now_ms: u32,
+        random: u32,
+    ) -> LinkStep {
         match self.state {
             State::Absent => {
                 self.state = State::Probe;
@@ -160,7 +186,7 @@ impl Session {
                     self.state = State::Running;
                     self.last_hook_ms = now_ms;
                     match settings.role {
-                        Role::Transmitter => LinkStep::RunMaster(params),
+                        Role::Transmitter => LinkStep::RunMaster(with_model(params, model)),
                         Role::Receiver => LinkStep::RunFollower {
                             params,
                             failsafe: FailsafeValues([Failsafe::Hold; MAX_CHANNELS]),
@@ -173,8 +199,16 @@ impl Session {
                 self.state = State::Binding;
                 match settings.role {
                     Role::Transmitter => {
-                        let params = new_bind_params(settings, random);
-                        self.offered = Some(params);
+                        let base = match (model, link_params(settings)) {
+                            (Some(_), Some(bound)) => bound,
+                            _ => new_bind_params(settings, random),
+                        };
+                        let params = with_model(base, model);
+                        self.offered = Some(Offer {
+                            params,
+                            bind_id: base.bind_id,
+                            model,
+                        });
                         LinkStep::BindMaster {
                             params,
                             timeout_us: BIND_TIMEOUT_US,
@@ -228,9 +262,9 @@ impl Session {
         };
     }
 
-    /// A bind step ended: the radio is probed again either way. Returns the parameters this
-    /// end offered (master role).
-    pub fn on_bind_done(&mut self) -> Option<LinkParams> {
+    /// A bind step ended: the radio is probed again either way. Returns what this end
+    /// offered (master role).
+    pub fn on_bind_done(&mut self) -> Option<Offer> {
         self.state = State::Probe;
         self.offered.take()
     }

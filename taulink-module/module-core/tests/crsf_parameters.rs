@@ -143,6 +143,8 @@ fn parse_field(data: &[u8]) -> Field {
             field.info = cstr(data, &mut at);
         }
         11 => {}
+        // INFO: the text after the name.
+        12 => field.info = cstr(data, &mut at),
         other => panic!("unexpected type {other}"),
     }
     assert_eq!(at, data.len(), "{}: no trailing bytes", field.name);
@@ -358,7 +360,7 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             let name_end = info[2..].iter().position(|&b| b == 0).unwrap() + 2;
             assert_eq!(&info[2..name_end], b"TauLink");
             let count = info[name_end + 13];
-            assert_eq!(count, 12, "DEVICE_INFO's parameter count");
+            assert_eq!(count, 14, "DEVICE_INFO's parameter count");
 
             // Read every parameter.
             let mut fields = Vec::new();
@@ -384,9 +386,14 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                     "Receiver Role",
                     "PPM Failsafe",
                     "Bind",
-                    "Save"
+                    "Save",
+                    "Model Match",
+                    "Model"
                 ]
             );
+            assert_eq!(fields[12].options, ["Off", "On"]);
+            assert_eq!(fields[12].value, 0, "model match is off from the factory");
+            assert_eq!((fields[13].kind, fields[13].info.as_str()), (12, "any (match off)"));
             let rate = &fields[0];
             assert_eq!(
                 rate.options,

@@ -30,6 +30,7 @@ impl core::fmt::Debug for LinkKey {
 /// link ever reaches, so no frame tag coincides with a derived value.
 const DOMAIN_BIND_ID: &[u8] = b"TauLink/1 bind-id";
 const DOMAIN_HOP_SEED: &[u8] = b"TauLink/1 hop-seed";
+const DOMAIN_MODEL_KEY: &[u8] = b"TauLink/1 model-key";
 
 impl LinkKey {
     /// The key from its 16 bytes.
@@ -48,6 +49,24 @@ impl LinkKey {
     pub fn bind_id(&self) -> u32 {
         let id = self.prf(DOMAIN_BIND_ID) as u32;
         if id == 0 { 1 } else { id }
+    }
+
+    /// The key of radio model `model_id` (model match, spec §12.5): two PRF outputs of this
+    /// key over the model ID (halves 0 and 1), so each model's link has its own key, bind ID,
+    /// hop seed and tags, and one model's key tells nothing of this key or of another
+    /// model's. Forging under a model key is as hard as under this one (2⁻³² per frame).
+    pub fn for_model(&self, model_id: u8) -> Self {
+        let half = |n: u8| {
+            let mut h = SipHasher24::new(&self.0);
+            h.write(DOMAIN_MODEL_KEY);
+            h.write(&[model_id, n]);
+            h.finish().to_le_bytes()
+        };
+        let mut bytes = [0u8; KEY_BYTES];
+        let (lo, hi) = bytes.split_at_mut(8);
+        lo.copy_from_slice(&half(0));
+        hi.copy_from_slice(&half(1));
+        Self(bytes)
     }
 
     /// The seed of the hop sequence: a PRF of the key, independent of [`LinkKey::bind_id`].
@@ -182,6 +201,34 @@ mod tests {
         let mut h = SipHasher24::new(key);
         h.write(msg);
         h.finish()
+    }
+
+    #[test]
+    fn model_keys_are_distinct_one_way_derivations() {
+        let key = LinkKey::from_bytes(reference_key());
+        let k3 = key.for_model(3);
+        assert_eq!(k3, key.for_model(3));
+        assert_ne!(k3, key);
+        assert_ne!(k3, key.for_model(4));
+        assert_ne!(
+            k3,
+            LinkKey::from_bytes(reference_key())
+                .for_model(3)
+                .for_model(3)
+        );
+        assert_ne!(k3.bind_id(), key.bind_id());
+        assert_ne!(k3.hop_seed(), key.hop_seed());
+        // Its halves are SipHash(key, domain ‖ model ‖ half).
+        let mut msg = DOMAIN_MODEL_KEY.to_vec();
+        msg.extend([3, 0]);
+        assert_eq!(
+            k3.to_bytes()[..8],
+            siphash(&reference_key(), &msg).to_le_bytes()
+        );
+        // A tag under one model's key does not verify under another's.
+        let tag = k3.tag(9, b"frame");
+        assert!(k3.verify(9, b"frame", tag));
+        assert!(!key.for_model(4).verify(9, b"frame", tag));
     }
 
     #[test]

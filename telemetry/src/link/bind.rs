@@ -85,6 +85,23 @@ impl LinkParams {
         }
     }
 
+    /// The link of radio model `model_id` (model match, spec §12.5): the same band, rate,
+    /// format and ratio under an identity mixed from the bind ID and the model ID, so a
+    /// receiver bound under one model never hears (the chip's header check drops its
+    /// frames) nor is heard by the module flying another. The mix is keyed like
+    /// [`LinkParams::header`], never 0 or the bind key; keyed links derive their model key
+    /// with `LinkKey::for_model` instead, which the bind ID then follows.
+    pub fn for_model(&self, model_id: u8) -> Self {
+        let mixed = mix32(self.bind_id ^ mix32(0x6D0D_E100 ^ u32::from(model_id)));
+        Self {
+            bind_id: match mixed {
+                0 | BIND_KEY => mix32(mixed) | 1,
+                id => id,
+            },
+            ..*self
+        }
+    }
+
     /// Parameters from a received offer.
     pub fn from_offer(offer: &BindOffer) -> Self {
         Self {
@@ -173,5 +190,26 @@ mod tests {
         headers.dedup();
         assert_eq!(headers.len(), 2000);
         assert_ne!(params(1).header(), BIND_HEADER);
+    }
+
+    #[test]
+    fn each_model_has_its_own_identity() {
+        let p = params(0x1357_9BDF);
+        let mut ids: Vec<u32> = (0..=255u8).map(|m| p.for_model(m).bind_id).collect();
+        ids.push(p.bind_id);
+        ids.sort_unstable();
+        ids.dedup();
+        assert_eq!(
+            ids.len(),
+            257,
+            "every model differs from the others and the base"
+        );
+        let m3 = p.for_model(3);
+        assert_eq!(m3, p.for_model(3), "deterministic");
+        assert_ne!(m3.header(), p.header());
+        assert_ne!(m3.header(), p.for_model(4).header());
+        assert_eq!((m3.band, m3.rate, m3.telemetry_ratio), (p.band, p.rate, 4));
+        // A bind offer carries the model's identity; the receiver stores that.
+        assert_eq!(LinkParams::from_offer(&m3.offer()), m3);
     }
 }

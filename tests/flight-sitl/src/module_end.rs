@@ -2,24 +2,30 @@
 //! module firmware's task adapters around it — the link task carrying out the core's
 //! session steps (`next_link_step`, master loop on the real rfm22b driver over the virtual
 //! Si4432, `poll_session`, `on_session_end`, binds), the PPM capture task feeding the
-//! handset's frames as edges (`on_ppm_edge` / `on_ppm_tick`), the 10 Hz app task, the HM-10
-//! task relaying records to a connected phone (what the module received: `Sitl.module_rx`)
-//! and the phone's setting changes up, and the supervisor feeding the nRF52840 WDT (250 ms)
-//! only while every modelled task checked in. An expired WDT reboots the module.
+//! handset's frames as edges (`on_ppm_edge` / `on_ppm_tick`), the JR-line task with the
+//! radio at its other end (CRSF: the radio's channel frame every [`CRSF_PERIOD_US`], the
+//! module's reply after it; S.Port / FrSky D: the pushed frames; what the module sent:
+//! `Sitl.handset_tx`), the 10 Hz app task, the HM-10 task relaying records to a connected
+//! phone (what the module received: `Sitl.module_rx`) and the phone's setting changes up,
+//! and the supervisor feeding the nRF52840 WDT (250 ms) only while every modelled task
+//! checked in. An expired WDT reboots the module.
 
 use std::cell::{Cell, RefCell};
 
-use embassy_futures::join::join5;
+use embassy_futures::join::{join, join5};
 use embassy_futures::select::{Either, select};
 use module_core::air::AirLink;
 use module_core::app::{Action, App};
 use module_core::channels::value_to_us;
-use module_core::handset::Handset;
+use module_core::handset::{Handset, LineMode, MAX_LINE_BURST};
 use module_core::session::{BindOutcome, LinkStep, POLL_MS, SessionEnd};
 use module_core::settings::Settings as ModuleSettings;
 use radio_rfm22b::link::LinkRadio;
 use radio_rfm22b::{Rfm22b, TxPower};
 use si4432_sim::{Medium, SimDelay, SimIrq, SimSdn, SimSpi};
+use telemetry::handset::crsf::channels::RcChannels;
+use telemetry::handset::crsf::frame::{Frame, frame_type};
+use telemetry::handset::crsf::{ModelSelect, address};
 use telemetry::link::LinkClock;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
@@ -47,6 +53,11 @@ const PPM_CHANNELS: usize = 8;
 const PPM_IDLE_MS: u64 = 50;
 /// How often the HM-10 task moves bytes, ms.
 const HM10_POLL_MS: u64 = 10;
+/// The radio's CRSF channel-frame period, µs (EdgeTX's 250 Hz; this radio model does not
+/// follow the module's timing frames).
+pub const CRSF_PERIOD_US: u64 = 4_000;
+/// How often the push modes ask the scheduler, ms (the firmware's `PUSH_POLL`).
+const PUSH_POLL_MS: u64 = 2;
 
 /// The module's RFM22B: SDN wired (the nRF52840 drives it).
 pub(crate) type ModuleRadio = LinkRadio<SimSpi, SimIrq, SimSdn, SimDelay>;
@@ -258,6 +269,87 @@ async fn ppm_in_task(b: &Board, shared: &Shared) {
     }
 }
 
+/// The JR-line task (the firmware's `jr_line_task`) with EdgeTX at the other end. CRSF: the
+/// radio sends the pilot's channels every [`CRSF_PERIOD_US`] — in the period after its
+/// model selection (`PilotInput::radio_model`) changes, the model-select command instead,
+/// as EdgeTX does at start and on a model change; once the frame has crossed the
+/// line the module decodes it (`on_handset_bytes`, `on_handset_idle`) and its reply goes
+/// back; a save or bind the radio asked for is carried out. Push modes: the scheduler is
+/// asked every [`PUSH_POLL_MS`]. Every burst the module sends is recorded with the
+/// scenario time in `WorldState::handset_tx`.
+async fn jr_line_task(b: &Board, shared: &Shared) {
+    let mode = b.app.borrow().handset().line_mode();
+    let mut clock = b.clock.clone();
+    let mut reply = [0u8; MAX_LINE_BURST];
+    let mut frame_start = clock.now_us();
+    let mut model_sent: Option<u8> = None;
+    loop {
+        let sent = match mode {
+            LineMode::Crsf { baud } => {
+                let input = shared.borrow().input;
+                let mut sent = 0;
+                if input.handset_connected {
+                    let mut frame = [0u8; 64];
+                    let radio_frame = match input.radio_model {
+                        Some(model_id) if model_sent != Some(model_id) => {
+                            model_sent = Some(model_id);
+                            let select = ModelSelect {
+                                destination: address::TX_MODULE,
+                                origin: address::RADIO,
+                                model_id,
+                            };
+                            Frame::new(
+                                address::TX_MODULE,
+                                frame_type::COMMAND,
+                                &select.to_payload(),
+                            )
+                            .ok()
+                        }
+                        _ => Some(
+                            RcChannels {
+                                ticks: transmitter(&input),
+                            }
+                            .to_frame(),
+                        ),
+                    };
+                    let n = radio_frame
+                        .and_then(|f| f.encode(&mut frame).ok())
+                        .unwrap_or(0);
+                    // 10 bits per byte on the line.
+                    let line_us = (n as u64 * 10 * 1_000_000).div_ceil(u64::from(baud));
+                    clock.sleep_until_us(frame_start + line_us).await;
+                    let now = clock.now_us();
+                    let mut app = b.app.borrow_mut();
+                    app.on_handset_bytes(now, frame.get(..n).unwrap_or(&[]));
+                    app.on_handset_idle(now);
+                    sent = app.next_handset_bytes(now, &mut reply);
+                    while let Some(action) = app.take_action() {
+                        carry_out(shared, Some(action));
+                    }
+                }
+                frame_start += CRSF_PERIOD_US;
+                clock.sleep_until_us(frame_start).await;
+                sent
+            }
+            LineMode::Push { .. } => {
+                let now = clock.now_us();
+                let sent = b.app.borrow_mut().next_handset_bytes(now, &mut reply);
+                sleep_ms(b.delay(), PUSH_POLL_MS).await;
+                sent
+            }
+            LineMode::Off => {
+                sleep_ms(b.delay(), 100).await;
+                0
+            }
+        };
+        if let Some(bytes) = reply.get(..sent).filter(|r| !r.is_empty()) {
+            let mut s = shared.borrow_mut();
+            let t = s.scenario_s();
+            s.handset_tx.push((t, bytes.to_vec()));
+        }
+    }
+}
+
 /// The 10 Hz app task.
 async fn app_task(b: &Board, shared: &Shared) {
     loop {
@@ -347,12 +439,15 @@ pub(crate) async fn module_board(
             clock,
             checked_in: Cell::new(0),
         };
-        let tasks = join5(
-            link_task(&board, &mut chip.radio, &shared, seed),
-            ppm_in_task(&board, &shared),
-            app_task(&board, &shared),
-            hm10_task(&board, &shared),
-            supervisor_task(&board),
+        let tasks = join(
+            join5(
+                link_task(&board, &mut chip.radio, &shared, seed),
+                ppm_in_task(&board, &shared),
+                app_task(&board, &shared),
+                hm10_task(&board, &shared),
+                supervisor_task(&board),
+            ),
+            jr_line_task(&board, &shared),
         );
         let _ = select(tasks, watchdog(&board)).await;
         shared.borrow_mut().watchdog_resets.module += 1;

@@ -36,6 +36,9 @@ pub struct PilotInput {
     pub flight_radio: RadioInjection,
     /// The module's RFM22B.
     pub module_radio: RadioInjection,
+    /// The model selected on the radio (CRSF input: EdgeTX sends its model ID in a model-select
+    /// command at start and whenever it changes); `None`: the radio sends none.
+    pub radio_model: Option<u8>,
 }
 
 /// A fault injected at one end's radio (chip and bus of the virtual Si4432).
@@ -111,6 +114,7 @@ impl Default for PilotInput {
             flight_powered: true,
             flight_radio: RadioInjection::Healthy,
             module_radio: RadioInjection::Healthy,
+            radio_model: None,
         }
     }
 }

@@ -90,6 +90,9 @@ pub struct Sitl {
     pub ts_s: f64,
     /// Telemetry messages the module received, with the time (s).
     pub module_rx: Vec<(f64, Message)>,
+    /// What the module sent to the handset on the JR line (each burst, with the time, s): the
+    /// CRSF replies or the pushed S.Port / FrSky D frames, as the module's settings choose.
+    pub handset_tx: Vec<(f64, Vec<u8>)>,
     /// The flight side's settings at the end (after changes from the module).
     pub settings: Settings,
     /// Independent-watchdog resets of each end.
@@ -150,6 +153,8 @@ pub(crate) struct WorldState {
     pub(crate) module_flash: module_core::settings::Settings,
     /// Messages the module relayed to the phone, with the scenario time (s).
     pub(crate) module_rx: Vec<(f64, Message)>,
+    /// What the module sent on the JR line, with the scenario time (s).
+    pub(crate) handset_tx: Vec<(f64, Vec<u8>)>,
     /// Setting changes the phone is still to send.
     pub(crate) uplink: Vec<SettingChange>,
     pub(crate) watchdog_resets: WatchdogResets,
@@ -242,8 +247,12 @@ pub fn run(scenario: Scenario) -> Sitl {
         module_settings: _,
         flight_flash,
     } = scenario;
-    // The flight controller stores the module's link (as after a bind).
+    // The flight controller stores the module's link (as after a bind): under model match
+    // the link of the lowest model the module records as bound.
+    let bound_model = (module.model_match && module.bound_models != 0)
+        .then(|| module.bound_models.trailing_zeros() as u8);
     if let Some(link) = module_core::air::link_params(&module) {
+        let link = bound_model.map_or(link, |m| link.for_model(m));
         let _ = store_link(&mut settings, &link);
     }
     let setup = from_settings(&settings).expect("settings make a flyable setup");
@@ -271,6 +280,7 @@ pub fn run(scenario: Scenario) -> Sitl {
         flight_settings: settings.clone(),
         module_flash: module,
         module_rx: Vec::new(),
+        handset_tx: Vec::new(),
         uplink: setting_changes,
         watchdog_resets: WatchdogResets::default(),
         boots: Vec::new(),
@@ -454,6 +464,7 @@ pub fn run(scenario: Scenario) -> Sitl {
         samples,
         ts_s,
         module_rx: std::mem::take(&mut s.module_rx),
+        handset_tx: std::mem::take(&mut s.handset_tx),
         settings,
         watchdog_resets: s.watchdog_resets,
         boots: std::mem::take(&mut s.boots),

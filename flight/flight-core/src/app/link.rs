@@ -262,6 +262,8 @@ impl FlightApp {
             },
             arming_blockers: self.arming_blockers(),
             sysid: self.link.sysid.front().copied(),
+            altitude_m: self.baro_altitude_m(),
+            climb_mps: self.flight.climb_estimate(),
         };
         let state = (out.armed, out.failsafe, out.mode);
         let message = if let Some(c) = self.link.echo.take() {

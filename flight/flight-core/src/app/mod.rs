@@ -61,6 +61,9 @@ pub struct FlightApp {
     blockers: u16,
     climb: ClimbRate,
     climb_mps: Option<f32>,
+    /// The tracked baro altitude when the tracker first settled: the power-up point the
+    /// handset's altitude counts from (the MS5611 reads standard-atmosphere altitude).
+    baro_ground_m: Option<f32>,
     battery_monitor: BatteryMonitor,
     battery: Option<BatteryStatus>,
     player: TonePlayer,
@@ -104,6 +107,7 @@ impl FlightApp {
             blockers: 0,
             climb: ClimbRate::new(),
             climb_mps: None,
+            baro_ground_m: None,
             battery: None,
             player: TonePlayer::new(),
             link_input: LinkInput {
@@ -287,6 +291,16 @@ impl FlightApp {
     pub fn on_baro(&mut self, now_ms: u32, altitude_m: Option<f32>) {
         self.watchdog.check_in(Task::Baro);
         self.climb_mps = altitude_m.and_then(|a| self.climb.update(now_ms, a));
+        if self.climb_mps.is_some() && self.baro_ground_m.is_none() {
+            self.baro_ground_m = self.climb.altitude_m();
+        }
+    }
+
+    /// Barometric altitude above the power-up point, m (the tracked baro altitude less its
+    /// value when the tracker first settled); `None` before that or while the baro fails.
+    pub fn baro_altitude_m(&self) -> Option<f32> {
+        self.climb_mps?;
+        Some(self.climb.altitude_m()? - self.baro_ground_m?)
     }
 
     /// A battery sample (raw ADC counts) at `now_ms`.

@@ -389,3 +389,74 @@ fn the_link_task_is_told_what_to_do_next() {
     assert!(app.on_bind_result(Some(&some_link())));
     assert_eq!(app.next_link_step(), LinkStep::Follow(some_link()));
 }
+
+/// The telemetry the link carries: altitude above the power-up point (the MS5611 reads
+/// standard-atmosphere altitude, here 350 m) and the estimator's vertical speed, and the
+/// battery monitor's cell count.
+#[test]
+fn telemetry_carries_altitude_from_the_power_up_point_vario_and_cells() {
+    use telemetry::messages::{Decoded, Message, MessageReader};
+    let mut app = app();
+    let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
+    let mut reader = MessageReader::new();
+    let mut got = Vec::new();
+    let mut chunk = [0u8; 64];
+    // 1 s on the ground at 350 m, then a 1 m/s climb for 2 s, then 4 s held at 352 m.
+    let baro = |t: u32| match t {
+        0..1_000 => 350.0,
+        1_000..3_000 => 350.0 + (t - 1_000) as f32 / 1_000.0,
+        _ => 352.0,
+    };
+    for t in 0..7_000u32 {
+        app.on_imu_sample(t, &resting(t));
+        if t % 20 == 0 {
+            app.on_baro(t, Some(baro(t)));
+            // A 1S pack at ≈ 4.0 V through the default 1:2 divider.
+            app.on_battery(t, 2_500, None);
+        }
+        if t % 4 == 0 {
+            app.on_link_step(u64::from(t) * 1_000, &mut follower);
+            let (_, n) = follower.downlink_stream.fill(&mut chunk);
+            let ack = follower.downlink_stream.acked_total() as u8;
+            follower.downlink_stream.on_ack(ack.wrapping_add(n as u8));
+            for b in &chunk[..n] {
+                if let Some(Decoded::Message(m)) = reader.push(*b) {
+                    got.push((t, m));
+                }
+            }
+        }
+    }
+    let vertical: Vec<(u32, telemetry::messages::Vertical)> = got
+        .iter()
+        .filter_map(|(t, m)| match m {
+            Message::Vertical(v) => Some((*t, *v)),
+            _ => None,
+        })
+        .collect();
+    assert!(vertical.len() > 20, "{}", vertical.len());
+    // Counted from the power-up point, not from the standard atmosphere's sea level.
+    let (_, first) = vertical[0];
+    assert!(first.altitude_cm.abs() < 20, "{first:?}");
+    // The resting accelerometer never sees this climb start, so the blended estimate
+    // follows the baro rate with its 1 s time constant: most of 1 m/s by the climb's end.
+    let climbing: Vec<_> = vertical
+        .iter()
+        .filter(|(t, _)| (2_500..3_000).contains(t))
+        .collect();
+    assert!(!climbing.is_empty());
+    assert!(
+        climbing
+            .iter()
+            .all(|(_, v)| (60..=110).contains(&v.vario_cm_s)),
+        "{climbing:?}"
+    );
+    let (_, last) = vertical[vertical.len() - 1];
+    assert!((190..=210).contains(&last.altitude_cm), "{last:?}");
+    assert!(last.vario_cm_s.abs() <= 10, "{last:?}");
+    let cells = app.battery().map(|b| b.cells).unwrap_or(0);
+    assert!(cells > 0);
+    assert!(
+        got.iter()
+            .any(|(_, m)| *m == Message::Cells(telemetry::messages::Cells { count: cells }))
+    );
+}

@@ -34,6 +34,8 @@ fn snapshot() -> Snapshot {
         },
         arming_blockers: 0,
         sysid: None,
+        altitude_m: Some(12.345),
+        climb_mps: Some(-0.5),
     }
 }
 
@@ -41,13 +43,13 @@ fn snapshot() -> Snapshot {
 fn rotation_carries_every_kind_and_attitude_half_the_time() {
     let snap = snapshot();
     let mut r = Reporter::new();
-    let msgs: Vec<Message> = (0..8).map(|_| r.next(&snap)).collect();
+    let msgs: Vec<Message> = (0..ROTATION.len()).map(|_| r.next(&snap)).collect();
     let attitude = Message::Attitude(Attitude {
         roll_cdeg: 1234,
         pitch_cdeg: -18_000,
         yaw_cdeg: 17_999,
     });
-    assert_eq!(msgs.iter().filter(|m| **m == attitude).count(), 4);
+    assert_eq!(msgs.iter().filter(|m| **m == attitude).count(), 7);
     assert!(msgs.contains(&Message::ArmState(ArmState {
         armed: true,
         failsafe: false,
@@ -182,5 +184,54 @@ fn vertical_and_cells_messages_carry_the_flight_values() {
     assert_eq!(
         cells_message(&battery),
         Some(Message::Cells(telemetry::messages::Cells { count: 4 }))
+    );
+}
+
+#[test]
+fn rotation_carries_altitude_vario_and_cells() {
+    let snap = snapshot();
+    let mut r = Reporter::new();
+    let msgs: Vec<Message> = (0..2 * ROTATION.len()).map(|_| r.next(&snap)).collect();
+    let vertical = Message::Vertical(telemetry::messages::Vertical {
+        altitude_cm: 1_235,
+        vario_cm_s: -50,
+    });
+    let cells = Message::Cells(telemetry::messages::Cells { count: 1 });
+    // Two passes: vertical twice per pass, cells once, attitude every other message.
+    assert_eq!(msgs.iter().filter(|m| **m == vertical).count(), 4);
+    assert_eq!(msgs.iter().filter(|m| **m == cells).count(), 2);
+    assert_eq!(
+        msgs.iter()
+            .filter(|m| matches!(m, Message::Attitude(_)))
+            .count(),
+        ROTATION.len()
+    );
+    // No baro (or no vertical speed yet) and no battery reading: those slots go to the next
+    // kind, nothing stale or invented is sent.
+    for (altitude_m, climb_mps) in [(None, Some(1.0)), (Some(3.0), None)] {
+        let snap = Snapshot {
+            altitude_m,
+            climb_mps,
+            battery: None,
+            ..snapshot()
+        };
+        let mut r = Reporter::new();
+        let msgs: Vec<Message> = (0..2 * ROTATION.len()).map(|_| r.next(&snap)).collect();
+        assert!(
+            msgs.iter()
+                .all(|m| !matches!(m, Message::Vertical(_) | Message::Cells(_))),
+            "{msgs:?}"
+        );
+    }
+    // A battery whose cell count is not known yet sends no cells.
+    let mut snap = snapshot();
+    if let Some(b) = snap.battery.as_mut() {
+        b.cells = 0;
+    }
+    let mut r = Reporter::new();
+    assert!(
+        (0..2 * ROTATION.len())
+            .map(|_| r.next(&snap))
+            .all(|m| !matches!(m, Message::Cells(_)))
     );
 }

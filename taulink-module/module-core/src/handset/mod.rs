@@ -302,6 +302,13 @@ impl HandsetOutput for Handset {
             responder.queue_parameter_chunk(chunk);
         }
     }
+
+    fn model_id(&self) -> Option<u8> {
+        match &self.protocol {
+            Protocol::Crsf { responder, .. } => responder.model_id(),
+            _ => None,
+        }
+    }
 }
 
 /// Frames addressed to the module (or to everyone).

@@ -18,7 +18,10 @@
 //! 9600 and 19 200 bit/s → L50, 57 600 → M100, 125 000 → F250); a missing field takes its
 //! default. Every byte is checked on decode; an unknown value is an error, never a guess.
 //!
-//! A later field (H-SEC's binding phrase) goes after `telemetry_ratio` in a version 4.
+//! Version 4 (24 bytes) appends model match (spec §12.5): `[…version 3 fields, model_match
+//! (0 off, 1 on), bound_models (u64 LE: bit m set = a receiver was bound under radio model
+//! m)]`; older records load with model match off and no models bound. A later field (the
+//! binding phrase) goes after `bound_models`.
 
 pub mod store;
 pub mod text;
@@ -140,6 +143,24 @@ pub struct Settings {
     /// One link slot in this many is a downlink (telemetry) slot: a power of two,
     /// [`TELEMETRY_RATIOS`].
     pub telemetry_ratio: u8,
+    /// Model match (ExpressLRS-style, spec §12.5): the link's identity is mixed with the
+    /// model ID the radio selects (CRSF model select), so a receiver bound under one model
+    /// never flies from another; off, every model flies the receivers bound without it.
+    pub model_match: bool,
+    /// The radio models (IDs 0…63, bit m) a receiver was bound under with model match on,
+    /// since the bind ID last changed: the handset's "Model" row says "mismatch" for any
+    /// other.
+    pub bound_models: u64,
+}
+
+/// Radio model IDs model match keeps track of (EdgeTX's receiver numbers 0…63).
+pub const MODEL_IDS: u8 = 64;
+
+impl Settings {
+    /// Whether a receiver was bound under radio model `model_id` with model match on.
+    pub fn model_bound(&self, model_id: u8) -> bool {
+        model_id < MODEL_IDS && self.bound_models & (1u64 << model_id) != 0
+    }
 }
 
 /// The telemetry ratios the link takes (`telemetry::frame::valid_telemetry_ratio`).
@@ -168,14 +189,18 @@ impl Default for Settings {
             bind_id: 0,
             input_timeout_ms: DEFAULT_INPUT_TIMEOUT_MS,
             telemetry_ratio: DEFAULT_TELEMETRY_RATIO,
+            model_match: false,
+            bound_models: 0,
         }
     }
 }
 
 /// Current record version.
-pub const RECORD_VERSION: u8 = 3;
+pub const RECORD_VERSION: u8 = 4;
 /// Record length of the current version.
-pub const RECORD_LEN: usize = 15;
+pub const RECORD_LEN: usize = 24;
+/// Record length of version 3 (no model match).
+pub const RECORD_V3_LEN: usize = 15;
 /// Record length of version 2 (bit-rate codes, no telemetry ratio).
 pub const RECORD_V2_LEN: usize = 14;
 /// Record length of version 1 (bit-rate codes, no input timeout).
@@ -215,10 +240,11 @@ impl core::fmt::Display for DecodeError {
 impl core::error::Error for DecodeError {}
 
 impl Settings {
-    /// The current (version 3) record.
+    /// The current (version 4) record.
     pub fn to_record(&self) -> [u8; RECORD_LEN] {
         let [b0, b1, b2, b3] = self.bind_id.to_le_bytes();
         let [t0, t1] = self.input_timeout_ms.to_le_bytes();
+        let [m0, m1, m2, m3, m4, m5, m6, m7] = self.bound_models.to_le_bytes();
         [
             RECORD_VERSION,
             self.role as u8,
@@ -235,10 +261,19 @@ impl Settings {
             t0,
             t1,
             self.telemetry_ratio,
+            u8::from(self.model_match),
+            m0,
+            m1,
+            m2,
+            m3,
+            m4,
+            m5,
+            m6,
+            m7,
         ]
     }
 
-    /// Parses a record of version 1, 2 or 3; every field is range-checked.
+    /// Parses a record of version 1, 2, 3 or 4; every field is range-checked.
     pub fn from_record(record: &[u8]) -> Result<Self, DecodeError> {
         let Some(&version) = record.first() else {
             return Err(DecodeError::Length { found: 0 });
@@ -249,6 +284,7 @@ impl Settings {
         let expected = match version {
             1 => RECORD_V1_LEN,
             2 => RECORD_V2_LEN,
+            3 => RECORD_V3_LEN,
             RECORD_VERSION => RECORD_LEN,
             found => return Err(DecodeError::Version { found }),
         };
@@ -271,14 +307,28 @@ impl Settings {
             _ => DEFAULT_INPUT_TIMEOUT_MS,
         };
         let telemetry_ratio = match rest {
-            [_, _, ratio] if TELEMETRY_RATIOS.contains(ratio) => *ratio,
-            [_, _, _] => {
+            [_, _, ratio, ..] if TELEMETRY_RATIOS.contains(ratio) => *ratio,
+            [_, _, _, ..] => {
                 return Err(DecodeError::Field {
                     offset: RECORD_V2_LEN,
                 });
             }
             _ => DEFAULT_TELEMETRY_RATIO,
         };
+        let (model_match, bound_models) = match rest {
+            [_, _, _, on @ (0 | 1), models @ ..] => {
+                let models: [u8; 8] = models.try_into().map_err(|_| wrong_length)?;
+                (*on == 1, u64::from_le_bytes(models))
+            }
+            [_, _, _, _, ..] => {
+                return Err(DecodeError::Field {
+                    offset: RECORD_V3_LEN,
+                });
+            }
+            _ => (false, 0),
+        };
+        // Rate codes, the fastest CRSF input and the ISM plan are version 3's vocabulary.
+        let current = version >= 3;
         let [
             _,
             role,
@@ -300,16 +350,17 @@ impl Settings {
                 1 => Role::Receiver,
                 _ => return Err(field(1)),
             },
-            rate: match version {
-                RECORD_VERSION => RateMode::from_code(rate),
-                _ => rate_from_old_code(rate),
+            rate: if current {
+                RateMode::from_code(rate)
+            } else {
+                rate_from_old_code(rate)
             }
             .ok_or(field(2))?,
             input: match input {
                 0 => InputProtocol::Ppm,
                 1 => InputProtocol::Crsf,
                 2 => InputProtocol::Crsf115200,
-                3 if version == RECORD_VERSION => InputProtocol::Crsf921600,
+                3 if current => InputProtocol::Crsf921600,
                 _ => return Err(field(3)),
             },
             output: match output {
@@ -323,7 +374,7 @@ impl Settings {
                 0 => Band::Mhz433,
                 1 => Band::Mhz868,
                 2 => Band::Mhz915,
-                3 if version == RECORD_VERSION => Band::Ism433,
+                3 if current => Band::Ism433,
                 _ => return Err(field(5)),
             },
             tx_power: if tx_power <= 7 {
@@ -339,6 +390,8 @@ impl Settings {
             bind_id: u32::from_le_bytes([b0, b1, b2, b3]),
             input_timeout_ms,
             telemetry_ratio,
+            model_match,
+            bound_models,
         })
     }
 }
@@ -360,14 +413,19 @@ mod tests {
             bind_id: 0xDEAD_BEEF,
             input_timeout_ms: 750,
             telemetry_ratio: 16,
+            model_match: true,
+            bound_models: (1 << 63) | (1 << 3),
         };
         let record = settings.to_record();
         assert_eq!(
             record,
             [
-                3, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16
+                4, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16, 1, 0x08, 0, 0, 0,
+                0, 0, 0, 0x80
             ]
         );
+        assert!(settings.model_bound(3) && settings.model_bound(63));
+        assert!(!settings.model_bound(4) && !settings.model_bound(64));
         assert_eq!(Settings::from_record(&record), Ok(settings));
         assert_eq!(
             Settings::from_record(&Settings::default().to_record()),
@@ -401,9 +459,27 @@ mod tests {
             Err(DecodeError::Length { found: 0 })
         );
         assert_eq!(
-            Settings::from_record(&[4; 15]),
-            Err(DecodeError::Version { found: 4 })
+            Settings::from_record(&[5; 24]),
+            Err(DecodeError::Version { found: 5 })
         );
+        assert_eq!(
+            Settings::from_record(&[4; 15]),
+            Err(DecodeError::Length { found: 15 })
+        );
+        // Model match is 0 or 1.
+        let mut record = Settings::default().to_record();
+        record[RECORD_V3_LEN] = 2;
+        assert_eq!(
+            Settings::from_record(&record),
+            Err(DecodeError::Field {
+                offset: RECORD_V3_LEN
+            })
+        );
+        // A version 3 record loads with model match off and no models bound.
+        let mut v3 = [0u8; RECORD_V3_LEN];
+        v3.copy_from_slice(&Settings::default().to_record()[..RECORD_V3_LEN]);
+        v3[0] = 3;
+        assert_eq!(Settings::from_record(&v3), Ok(Settings::default()));
         assert_eq!(
             Settings::from_record(&[3; 14]),
             Err(DecodeError::Length { found: 14 })
@@ -496,8 +572,8 @@ mod tests {
             assert_eq!(settings.telemetry_ratio, DEFAULT_TELEMETRY_RATIO);
             assert_eq!(settings.input_timeout_ms, 500);
             assert_eq!(settings.bind_id, 0x1234_5678);
-            // Re-saved as version 3, the same settings come back.
-            assert_eq!(settings.to_record()[0], 3);
+            // Re-saved as the current version, the same settings come back.
+            assert_eq!(settings.to_record()[0], RECORD_VERSION);
             assert_eq!(Settings::from_record(&settings.to_record()), Ok(settings));
         }
         assert_eq!(
@@ -525,15 +601,15 @@ mod tests {
             Settings::from_record(&v1_stop).unwrap().failsafe,
             FailsafeOutput::StopPulses
         );
-        // Re-saved, they become version 3 with the same values.
+        // Re-saved, they become the current version with the same values.
         let upgraded = settings.to_record();
-        assert_eq!(upgraded[0], 3);
+        assert_eq!(upgraded[0], RECORD_VERSION);
         assert_eq!(Settings::from_record(&upgraded), Ok(settings));
     }
 
     proptest::proptest! {
         #[test]
-        fn any_bytes_decode_or_error(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..20)) {
+        fn any_bytes_decode_or_error(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..28)) {
             if let Ok(settings) = Settings::from_record(&bytes) {
                 // A current record re-encodes to itself; an older one to its upgrade, which
                 // decodes to the same settings.

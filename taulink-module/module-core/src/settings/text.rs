@@ -10,7 +10,7 @@ use super::{
 use crate::ppm::FailsafeOutput;
 
 /// Every setting name, in record order.
-pub const NAMES: [&str; 10] = [
+pub const NAMES: [&str; 11] = [
     "role",
     "rate",
     "input",
@@ -21,6 +21,7 @@ pub const NAMES: [&str; 10] = [
     "bind_id",
     "input_timeout_ms",
     "telemetry_ratio",
+    "model_match",
 ];
 
 /// Why a typed setting was refused (nothing changed).
@@ -56,6 +57,7 @@ pub fn choices(name: &str) -> &'static [&'static str] {
         "output" => &["off", "crsf", "sport", "frsky_hub"],
         "band" => &["433", "868", "915", "ism433"],
         "failsafe" => &["hold_last", "stop_pulses"],
+        "model_match" => &["off", "on"],
         _ => &[],
     }
 }
@@ -156,6 +158,7 @@ impl Settings {
                     .find(|r| u32::from(*r) == v)
                     .ok_or(TextError::OutOfRange)?;
             }
+            "model_match" => self.model_match = choice(text, words)? == 1,
             _ => return Err(TextError::Unknown),
         }
         Ok(())
@@ -180,6 +183,7 @@ mod tests {
             ("bind_id", "0xDEADBEEF"),
             ("input_timeout_ms", "750"),
             ("telemetry_ratio", "16"),
+            ("model_match", "On"),
         ] {
             s.set_text(name, text).unwrap();
         }
@@ -196,6 +200,8 @@ mod tests {
                 bind_id: 0xDEAD_BEEF,
                 input_timeout_ms: 750,
                 telemetry_ratio: 16,
+                model_match: true,
+                bound_models: 0,
             }
         );
         assert_eq!(Settings::from_record(&s.to_record()), Ok(s));

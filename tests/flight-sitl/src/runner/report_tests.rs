@@ -57,6 +57,7 @@ fn sitl(samples: Vec<Sample>) -> Sitl {
         samples,
         ts_s: TS,
         module_rx: Vec::new(),
+        handset_tx: Vec::new(),
         settings: flight_core::settings::Settings::default(),
         watchdog_resets: WatchdogResets::default(),
         boots: Vec::new(),

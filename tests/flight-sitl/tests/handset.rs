@@ -1,0 +1,348 @@
+//! Issue 15's acceptance, end to end at chip level: the flight application's baro altitude,
+//! vario and cell count cross the air (virtual Si4432s) to the module's application, which
+//! sends them to the handset on the JR line; decoded back out of those line bytes with
+//! EdgeTX's own rules, written here from the protocol (not with our encoders) — CRSF VARIO
+//! 0x07 and BARO_ALTITUDE 0x09 (`crossfire.cpp`), S.Port ALT 0x0100, VARIO 0x0110 and CELLS
+//! 0x0300 (`frsky_sport.cpp`), FrSky D hub BARO_ALT 0x10/0x21 and VARIO 0x30
+//! (`frsky_d.cpp`) — they are the flight side's values.
+
+#![allow(
+    clippy::unwrap_used,
+    clippy::indexing_slicing,
+    clippy::cast_precision_loss
+)]
+
+mod common;
+
+use std::collections::BTreeSet;
+
+use common::*;
+use flight_sitl::scenario::default_airframe;
+use flight_sitl::{Scenario, Sitl, run};
+use module_core::settings::{InputProtocol, OutputProtocol, Settings as ModuleSettings};
+use telemetry::messages::{Message, Vertical};
+
+/// Take-off and 6.5 s of cruise, the module's JR line speaking `input` / `output`.
+fn hover_with(input: InputProtocol, output: OutputProtocol) -> Sitl {
+    let (quad, settings) = default_airframe();
+    run(Scenario {
+        module_settings: Some(ModuleSettings {
+            input,
+            output,
+            ..ModuleSettings::default()
+        }),
+        ..Scenario::new(settings, quad, 10.0, pilot(-1.0, |_| cruise(-1.0)))
+    })
+}
+
+/// What the flight side sent (as the module received it): altitude/vario pairs, and the
+/// cell counts and pack voltages.
+fn sent(sitl: &Sitl) -> (Vec<Vertical>, BTreeSet<u8>, BTreeSet<u16>) {
+    let mut vertical = Vec::new();
+    let mut cells = BTreeSet::new();
+    let mut packs = BTreeSet::new();
+    for (_, m) in &sitl.module_rx {
+        match m {
+            Message::Vertical(v) => vertical.push(*v),
+            Message::Cells(c) => {
+                cells.insert(c.count);
+            }
+            Message::Battery(b) => {
+                packs.insert(b.voltage_mv);
+            }
+            _ => {}
+        }
+    }
+    (vertical, cells, packs)
+}
+
+/// The flight side's values are the flight's: from 5 s on (1.5 s after the take-off
+/// throttle, the quad climbing at ≈ 2.5 m/s on the cruise throttle) the altitude it sent is
+/// the quad's (within the tracker's smoothing of the baro's 0.1 m noise) and the vario its
+/// climb rate (the estimator blends the baro rate in with a 1 s time constant, so it lags a
+/// change of climb rate by up to ≈ 0.6 m/s right after the throttle step).
+fn check_sent_values_are_the_flight(sitl: &Sitl) -> Vec<Vertical> {
+    let (vertical, _, _) = sent(sitl);
+    assert!(vertical.len() > 30, "{}", vertical.len());
+    let flying: Vec<_> = sitl
+        .module_rx
+        .iter()
+        .filter_map(|(t, m)| match m {
+            Message::Vertical(v) if *t > 5.0 => Some((*t, *v)),
+            _ => None,
+        })
+        .collect();
+    assert!(flying.len() > 20, "{}", flying.len());
+    let (mut worst_alt, mut worst_vario) = (0.0f64, 0.0f64);
+    for (t, v) in &flying {
+        // The message left the flight side up to a downlink latency before the module had it.
+        let truth = sitl.samples.iter().rfind(|s| s.t_s <= *t - 0.01).unwrap();
+        worst_alt = worst_alt.max((f64::from(v.altitude_cm) / 100.0 - truth.altitude_m).abs());
+        worst_vario = worst_vario.max((f64::from(v.vario_cm_s) / 100.0 - truth.climb_mps).abs());
+    }
+    println!("sent vs truth: altitude within {worst_alt:.3} m, vario within {worst_vario:.3} m/s");
+    assert!(worst_alt < 0.3, "{worst_alt}");
+    assert!(worst_vario < 0.25, "{worst_vario}");
+    // The quad climbed: the altitudes the handset gets are not a constant.
+    let max = vertical.iter().map(|v| v.altitude_cm).max().unwrap();
+    assert!(max > 100, "{max}");
+    vertical
+}
+
+// ---- CRSF ----
+
+fn crc8_d5(bytes: &[u8]) -> u8 {
+    let mut crc = 0u8;
+    for &b in bytes {
+        crc ^= b;
+        for _ in 0..8 {
+            crc = if crc & 0x80 != 0 {
+                (crc << 1) ^ 0xD5
+            } else {
+                crc << 1
+            };
+        }
+    }
+    crc
+}
+
+/// (type, payload) of every CRSF frame in the module's replies, CRC checked.
+fn crsf_frames(sitl: &Sitl) -> Vec<(u8, Vec<u8>)> {
+    let mut frames = Vec::new();
+    for (_, burst) in &sitl.handset_tx {
+        let mut bytes = &burst[..];
+        while bytes.len() >= 4 {
+            let len = bytes[1] as usize;
+            let (frame, rest) = bytes.split_at(2 + len);
+            assert_eq!(crc8_d5(&frame[2..1 + len]), frame[1 + len], "CRSF CRC");
+            frames.push((frame[2], frame[3..1 + len].to_vec()));
+            bytes = rest;
+        }
+    }
+    frames
+}
+
+#[test]
+fn crsf_vario_and_baro_altitude_are_the_flight_sides() {
+    let sitl = hover_with(InputProtocol::Crsf, OutputProtocol::Crsf);
+    let vertical = check_sent_values_are_the_flight(&sitl);
+    let frames = crsf_frames(&sitl);
+    // EdgeTX: CF_VARIO_ID int16 BE cm/s; BARO_ALT_ID bit 15 → metres, else dm + 10 000.
+    let vspd: Vec<i32> = frames
+        .iter()
+        .filter(|(t, _)| *t == 0x07)
+        .map(|(_, p)| i32::from(i16::from_be_bytes([p[0], p[1]])))
+        .collect();
+    let alt: Vec<i32> = frames
+        .iter()
+        .filter(|(t, _)| *t == 0x09)
+        .map(|(_, p)| {
+            let v = i32::from(u16::from_be_bytes([p[0], p[1]]));
+            if v & 0x8000 != 0 {
+                (v & 0x7FFF) * 100
+            } else {
+                (v - 10_000) * 10
+            }
+        })
+        .collect();
+    println!(
+        "CRSF: {} vario, {} altitude frames from {} Vertical messages",
+        vspd.len(),
+        alt.len(),
+        vertical.len()
+    );
+    // The responder sends each sensor at 5 Hz once the flight side's values are there.
+    assert!(
+        vspd.len() > 25 && alt.len() > 25,
+        "{} {}",
+        vspd.len(),
+        alt.len()
+    );
+    let sent_vario: BTreeSet<i32> = vertical.iter().map(|v| i32::from(v.vario_cm_s)).collect();
+    assert!(vspd.iter().all(|v| sent_vario.contains(v)), "{vspd:?}");
+    // Decimetres on the wire: each shown altitude is a sent one rounded to 10 cm.
+    let sent_dm: BTreeSet<i32> = vertical
+        .iter()
+        .map(|v| (f64::from(v.altitude_cm) / 10.0).round() as i32 * 10)
+        .collect();
+    assert!(alt.iter().all(|a| sent_dm.contains(a)), "{alt:?}");
+    assert!(alt.iter().collect::<BTreeSet<_>>().len() > 5, "{alt:?}");
+}
+
+// ---- S.Port ----
+
+/// (value ID, value) of the S.Port data frames in the pushed bytes: `7E phys 10 idLo idHi
+/// v0..v3 crc`, 0x7D-stuffed, EdgeTX's checksum checked.
+fn sport_frames(sitl: &Sitl) -> Vec<(u16, u32)> {
+    let mut frames = Vec::new();
+    for (_, bytes) in &sitl.handset_tx {
+        let mut i = 0;
+        while i < bytes.len() {
+            if bytes[i] != 0x7E {
+                i += 1;
+                continue;
+            }
+            let mut body = Vec::new();
+            let mut j = i + 2;
+            while body.len() < 8 && j < bytes.len() {
+                let b = if bytes[j] == 0x7D {
+                    j += 1;
+                    bytes[j] ^ 0x20
+                } else {
+                    bytes[j]
+                };
+                body.push(b);
+                j += 1;
+            }
+            let mut sum = 0u16;
+            for b in &body {
+                sum += u16::from(*b);
+                sum += sum >> 8;
+                sum &= 0xFF;
+            }
+            assert_eq!(sum, 0xFF, "S.Port CRC");
+            assert_eq!(body[0], 0x10);
+            frames.push((
+                u16::from_le_bytes([body[1], body[2]]),
+                u32::from_le_bytes([body[3], body[4], body[5], body[6]]),
+            ));
+            i = j;
+        }
+    }
+    frames
+}
+
+#[test]
+fn sport_altitude_vario_and_cells_are_the_flight_sides() {
+    let sitl = hover_with(InputProtocol::Ppm, OutputProtocol::SPort);
+    let vertical = check_sent_values_are_the_flight(&sitl);
+    let (_, counts, packs) = sent(&sitl);
+    let frames = sport_frames(&sitl);
+    let values = |id: u16| -> Vec<u32> {
+        frames
+            .iter()
+            .filter(|(i, _)| *i == id)
+            .map(|(_, v)| *v)
+            .collect()
+    };
+    // ALT_FIRST_ID and VARIO_FIRST_ID: int32 in cm and cm/s.
+    let alt: Vec<i32> = values(0x0100).into_iter().map(|v| v as i32).collect();
+    let vspd: Vec<i32> = values(0x0110).into_iter().map(|v| v as i32).collect();
+    println!("S.Port: {} Alt, {} VSpd", alt.len(), vspd.len());
+    assert!(alt.len() > 25 && vspd.len() > 25);
+    let sent_alt: BTreeSet<i32> = vertical.iter().map(|v| v.altitude_cm).collect();
+    let sent_vario: BTreeSet<i32> = vertical.iter().map(|v| i32::from(v.vario_cm_s)).collect();
+    assert!(alt.iter().all(|a| sent_alt.contains(a)), "{alt:?}");
+    assert!(vspd.iter().all(|v| sent_vario.contains(v)), "{vspd:?}");
+    assert!(alt.iter().collect::<BTreeSet<_>>().len() > 5);
+    // CELLS_FIRST_ID, as EdgeTX unpacks it: count = bits 4–7, index = bits 0–3, two cells of
+    // 12 bits in 2 mV. The flight side's count and its pack voltage over it.
+    let cells = values(0x0300);
+    assert!(!cells.is_empty());
+    // The world's pack is a 1S (4.15 V): the battery monitor counts one cell.
+    assert_eq!(counts.iter().copied().collect::<Vec<_>>(), vec![1]);
+    for v in cells {
+        let (count, first) = ((v >> 4) & 0xF, v & 0xF);
+        assert_eq!((count, first), (1, 0));
+        let cell_mv = ((v >> 8) & 0xFFF) * 2;
+        assert!(
+            packs.iter().any(|p| u32::from(*p) / 2 * 2 == cell_mv),
+            "{cell_mv} mV of {packs:?}"
+        );
+    }
+}
+
+// ---- FrSky D ----
+
+/// EdgeTX's hub records (`5E id lo hi`, 0x5D-stuffed) out of the user frames (`7E FD n 00
+/// data… 7E`, 0x7D-stuffed) in the pushed bytes.
+fn hub_records(sitl: &Sitl) -> Vec<(u8, i16)> {
+    let mut stream = Vec::new();
+    for (_, bytes) in &sitl.handset_tx {
+        // Frames between raw 0x7E bytes (a stuffed 0x7E is `7D 5E`), then unstuffed.
+        for segment in bytes.split(|b| *b == 0x7E) {
+            let mut unstuffed = Vec::new();
+            let mut i = 0;
+            while i < segment.len() {
+                if segment[i] == 0x7D {
+                    unstuffed.push(segment[i + 1] ^ 0x20);
+                    i += 2;
+                } else {
+                    unstuffed.push(segment[i]);
+                    i += 1;
+                }
+            }
+            if unstuffed.first() == Some(&0xFD) {
+                let n = usize::from(unstuffed[1]);
+                stream.extend_from_slice(&unstuffed[3..3 + n]);
+            }
+        }
+    }
+    // EdgeTX's `parseTelemHubByte`: a raw 0x5E starts a record (also in the middle of one:
+    // a cut record is dropped), 0x5D escapes the next byte (xor 0x60), IDs above 0x3F are
+    // dropped.
+    let mut records = Vec::new();
+    let (mut at, mut escape, mut record) = (None::<usize>, false, [0u8; 3]);
+    for &raw in &stream {
+        if raw == 0x5E {
+            (at, escape) = (Some(0), false);
+            continue;
+        }
+        if raw == 0x5D {
+            escape = true;
+            continue;
+        }
+        let byte = if escape { raw ^ 0x60 } else { raw };
+        escape = false;
+        let Some(k) = at else { continue };
+        record[k] = byte;
+        at = if k == 2 {
+            if record[0] <= 0x3F {
+                records.push((record[0], i16::from_le_bytes([record[1], record[2]])));
+            }
+            None
+        } else {
+            Some(k + 1)
+        };
+    }
+    records
+}
+
+#[test]
+fn frsky_d_altitude_and_vario_are_the_flight_sides() {
+    let sitl = hover_with(InputProtocol::Ppm, OutputProtocol::FrskyHub);
+    let vertical = check_sent_values_are_the_flight(&sitl);
+    let (mut alt, mut vspd, mut bp) = (Vec::new(), Vec::new(), None);
+    for (id, value) in hub_records(&sitl) {
+        match id {
+            0x10 => bp = Some(i32::from(value)),
+            // AP ≤ 9 is decimetres: `100·BP ± AP·10` cm by the sign of BP.
+            0x21 => {
+                let bp = bp.unwrap();
+                let ap = i32::from(value) * 10;
+                alt.push(100 * bp + if bp >= 0 { ap } else { -ap });
+            }
+            0x30 => vspd.push(i32::from(value)),
+            _ => {}
+        }
+    }
+    println!("FrSky D: {} Alt, {} VSpd", alt.len(), vspd.len());
+    assert!(
+        alt.len() > 10 && vspd.len() > 10,
+        "{} {}",
+        alt.len(),
+        vspd.len()
+    );
+    let sent_vario: BTreeSet<i32> = vertical.iter().map(|v| i32::from(v.vario_cm_s)).collect();
+    assert!(vspd.iter().all(|v| sent_vario.contains(v)), "{vspd:?}");
+    // Decimetres on the wire, cut towards zero (−0.9…−0.1 m has no encoding: 0).
+    let sent_dm: BTreeSet<i32> = vertical
+        .iter()
+        .map(|v| {
+            let dm = v.altitude_cm / 10;
+            if (-9..0).contains(&dm) { 0 } else { dm * 10 }
+        })
+        .collect();
+    assert!(alt.iter().all(|a| sent_dm.contains(a)), "{alt:?}");
+    assert!(alt.iter().collect::<BTreeSet<_>>().len() > 5, "{alt:?}");
+}
