@@ -3,8 +3,9 @@
 //! session steps (`next_link_step`, master loop on the real rfm22b driver over the virtual
 //! Si4432, `poll_session`, `on_session_end`, binds), the PPM capture task feeding the
 //! handset's frames as edges (`on_ppm_edge` / `on_ppm_tick`), the 10 Hz app task, the HM-10
-//! task relaying records to a connected phone (what the module received: `Sitl.module_rx`)
-//! and the phone's setting changes up, and the supervisor feeding the nRF52840 WDT (250 ms)
+//! task relaying records to a connected phone (what the module received: `Sitl.module_rx`;
+//! the raw frames too when a page is attached) and the phone's bytes up (the scenario's
+//! setting changes, an attached page's writes), and the supervisor feeding the nRF52840 WDT (250 ms)
 //! only while every modelled task checked in. An expired WDT reboots the module.
 
 use std::cell::{Cell, RefCell};
@@ -29,7 +30,7 @@ use telemetry::mock::SplitMix64;
 
 use crate::clock::{BoardClock, sleep_ms};
 use crate::scenario::End;
-use crate::world::{BootCause, Shared, transmitter};
+use crate::world::{BootCause, Shared, TO_PHONE_MAX, transmitter};
 
 /// Power-on to the first task, ms: nRF52840 start-up and HFXO ≈ 1 ms, settings load from
 /// the NVMC ≈ 1 ms, the RFM22B probe is the link task's first step (its own POR time is
@@ -47,6 +48,9 @@ const PPM_CHANNELS: usize = 8;
 const PPM_IDLE_MS: u64 = 50;
 /// How often the HM-10 task moves bytes, ms.
 const HM10_POLL_MS: u64 = 10;
+/// Bytes of the phone's writes the HM-10 task takes per poll (the firmware's UART read
+/// buffer).
+const HM10_READ_BYTES: usize = 64;
 
 /// The module's RFM22B: SDN wired (the nRF52840 drives it).
 pub(crate) type ModuleRadio = LinkRadio<SimSpi, SimIrq, SimSdn, SimDelay>;
@@ -269,7 +273,8 @@ async fn app_task(b: &Board, shared: &Shared) {
 }
 
 /// The HM-10 task with a phone connected: records to the phone (decoded: what the module
-/// received), the scenario's setting changes from the phone.
+/// received; raw to an attached page), the scenario's setting changes and an attached
+/// page's bytes from the phone.
 async fn hm10_task(b: &Board, shared: &Shared) {
     let mut reader = MessageReader::new();
     let mut frame = [0u8; module_core::hm10::relay::MAX_FRAME_LEN];
@@ -287,11 +292,28 @@ async fn hm10_task(b: &Board, shared: &Shared) {
                     .on_phone_bytes(buf.get(..n).unwrap_or(&[]));
             }
         }
+        // An attached phone's writes, as the UART delivers them (at most a read's worth).
+        let written: Vec<u8> = match shared.borrow_mut().phone.as_mut() {
+            Some(p) => {
+                let n = p.from_phone.len().min(HM10_READ_BYTES);
+                p.from_phone.drain(..n).collect()
+            }
+            None => Vec::new(),
+        };
+        if !written.is_empty() {
+            b.app.borrow_mut().on_phone_bytes(&written);
+        }
         loop {
             let Some(n) = b.app.borrow_mut().next_phone_frame(&mut frame) else {
                 break;
             };
-            for &byte in frame.get(..n).unwrap_or(&[]) {
+            let sent = frame.get(..n).unwrap_or(&[]);
+            if let Some(p) = shared.borrow_mut().phone.as_mut() {
+                p.to_phone.extend(sent);
+                let excess = p.to_phone.len().saturating_sub(TO_PHONE_MAX);
+                p.to_phone.drain(..excess);
+            }
+            for &byte in sent {
                 if let Some(Decoded::Message(m)) = reader.push(byte) {
                     let mut s = shared.borrow_mut();
                     let t = s.scenario_s();
