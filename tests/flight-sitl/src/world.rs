@@ -81,6 +81,9 @@ pub struct Sample {
     /// The flight controller was running its application this loop (false while it is
     /// unpowered or booting; `out` is then the last output it gave, `motors` all stopped).
     pub flight_up: bool,
+    /// The flight board was held by a blocking job (a flash operation, a gain design) this
+    /// loop: no IMU sample was handled, the motors kept their last commands.
+    pub flight_busy: bool,
 }
 
 /// The run's records.
@@ -157,6 +160,9 @@ pub(crate) struct WorldState {
     pub(crate) phone: Option<PhonePipes>,
     pub(crate) watchdog_resets: WatchdogResets,
     pub(crate) boots: Vec<Boot>,
+    /// Until when (virtual ns) the flight board's one thread-mode executor is held by a
+    /// blocking job (a flash operation, a gain design).
+    pub(crate) flight_busy_until_ns: u64,
     medium: si4432_sim::Medium,
 }
 
@@ -164,6 +170,16 @@ impl WorldState {
     /// Scenario time now, s.
     pub(crate) fn scenario_s(&self) -> f64 {
         virtual_us(&self.medium) as f64 * 1e-6 - WARMUP_S
+    }
+
+    /// Virtual time now, ns.
+    pub(crate) fn now_ns(&self) -> u64 {
+        self.medium.now().as_nanos() as u64
+    }
+
+    /// The flight board is held by a flash operation or a gain design.
+    pub(crate) fn flight_busy(&self) -> bool {
+        self.now_ns() < self.flight_busy_until_ns
     }
 
     pub(crate) fn record_boot(&mut self, end: End, cause: BootCause, settings_error: bool) {
@@ -326,6 +342,7 @@ impl World {
             uplink: setting_changes,
             phone: None,
             watchdog_resets: WatchdogResets::default(),
+            flight_busy_until_ns: 0,
             boots: Vec::new(),
             medium: medium.clone(),
         }));
@@ -366,6 +383,8 @@ impl World {
                 };
                 let mut last_out: Option<LoopOutput> = None;
                 let mut before = PilotInput::default();
+                let mut held_motors = [Command::Stopped; 4];
+                let mut held_record = None;
                 let mut seen = Sight {
                     on_ground: true,
                     ..Sight::default()
@@ -395,14 +414,20 @@ impl World {
                         inject_radio(&module_chip, before.module_radio, input.module_radio);
                     }
                     before = input;
-                    let flight = {
+                    let (flight, busy) = {
                         let mut s = shared.borrow_mut();
                         s.input = input;
-                        s.flight.clone()
+                        (s.flight.clone(), s.flight_busy())
                     };
                     let mut motors = [Command::Stopped; 4];
                     let mut record = None;
                     match &flight {
+                        // The board is held by a flash operation or a gain design: no sample is
+                        // taken, the motor timers keep the last commands.
+                        Some(_) if busy => {
+                            motors = held_motors;
+                            record = held_record;
+                        }
                         Some((app, clock)) => {
                             let mut app = app.borrow_mut();
                             let now_ms = clock.now_ms();
@@ -467,6 +492,8 @@ impl World {
                         }
                         None => loops_since_boot = 0,
                     }
+                    held_motors = motors;
+                    held_record = record;
                     let cmds = motors.map(|m| match m {
                         Command::Throttle(x) => x,
                         Command::Stopped => 0.0,
@@ -498,6 +525,7 @@ impl World {
                         imu_reprobe,
                         imu_fault,
                         flight_up,
+                        flight_busy: busy && flight_up,
                     });
                 }
             });
