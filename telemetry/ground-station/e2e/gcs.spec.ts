@@ -1,6 +1,9 @@
 // The ground station in Chromium against `taulink-sim --serve`: each page gets a fresh
-// simulated world (both link ends, the module's HM-10 relay, the flight side's reports);
-// `/api/sent` tells what that flight side sent and applied.
+// firmware-in-the-loop world (flight-sitl: the flight firmware's FlightApp and the module's
+// App on virtual radios, the quad flown by a scripted pilot — on the ground until 8.5 s after
+// power-up, armed from ≈ 10 s, rate mode from 20 s to 28 s, landed and disarmed by ≈ 60 s);
+// the page is the phone on the module's HM-10. `/api/sent` tells what the server sent the
+// page (decoded) and which setting changes the FlightApp took.
 import { readFileSync } from "node:fs";
 import { fileURLToPath } from "node:url";
 import { expect, test, type Page } from "@playwright/test";
@@ -57,26 +60,30 @@ test("connects and shows what the simulator sent", async ({ page }) => {
       return shown.join(" | ") === want.join(" | ") && !want.includes("?") ? "equal" : `${shown} vs ${want}`;
     }, { timeout: 20_000 })
     .toBe("equal");
-  await expect(page.getByLabel("Battery voltage", { exact: true })).toHaveText(/^1[56]\.\d\d V$/);
+  // The BrushedSparky world's 1S pack.
+  await expect(page.getByLabel("Battery voltage", { exact: true })).toHaveText(/^4\.\d\d V$/);
   await expect(page.getByLabel("Uplink LQ", { exact: true })).toHaveText(/^\d+ %$/);
 });
 
-test("a flight-mode change is spoken; mute silences arming", async ({ page }) => {
+test("arming and a flight-mode change are spoken; mute silences the next change", async ({ page }) => {
   await page.goto("/?sim");
   await expect(page.getByLabel("Flight mode", { exact: true })).toHaveText("Attitude");
-  // The scripted flight changes mode every 10 s of simulated time.
+  // The pilot arms ≈ 10 s after power-up and flips the mode switch to rate (factory: rate
+  // PID) at 20 s.
   await expect
-    .poll(async () => page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.join(";")), { timeout: 25_000 })
+    .poll(async () => page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.join(";")), { timeout: 30_000 })
     .toContain("Flight mode Rate");
+  expect(await page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.join(";"))).toContain("Armed");
   await expect(page.getByLabel("Flight mode", { exact: true })).toHaveText("Rate");
-  // Mute: nothing more is spoken.
+  // Armed and flying: settings are no longer offered.
+  await expect(page.getByLabel("Armed", { exact: true })).toHaveText("Yes");
+  await expect(page.getByRole("button", { name: "Set" }).first()).toBeDisabled();
+  // Mute: the switch back to attitude at 28 s is shown, not spoken.
   await page.getByRole("button", { name: "Mute" }).click();
   const before = await page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.length);
-  await page.waitForTimeout(11_000);
-  // The script arms at 20 s: shown, not spoken (muted), and settings are no longer offered.
-  await expect(page.getByLabel("Armed", { exact: true })).toHaveText("Yes", { timeout: 10_000 });
+  await expect(page.getByLabel("Flight mode", { exact: true })).toHaveText("Attitude", { timeout: 15_000 });
+  await page.waitForTimeout(1_000);
   expect(await page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.length)).toBe(before);
-  await expect(page.getByRole("button", { name: "Set" }).first()).toBeDisabled();
 });
 
 test("a setting change round-trips to the flight side", async ({ page }) => {

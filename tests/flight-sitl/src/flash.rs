@@ -60,16 +60,59 @@ impl SettingsFlash {
         }
     }
 
-    /// The storage task's save (`whole` after a load problem); `true` if it succeeded.
-    pub(crate) fn save(&mut self, live: &Settings, stored: &Settings, whole: bool) -> bool {
-        let Some(map) = self.map.as_mut() else {
-            return false;
+    /// The storage task's save (`whole` after a load problem): whether it succeeded, and
+    /// what it did to the flash (sectors erased, bytes programmed).
+    pub(crate) fn save(
+        &mut self,
+        live: &Settings,
+        stored: &Settings,
+        whole: bool,
+    ) -> (bool, FlashWork) {
+        let Some(map) = self.map.take() else {
+            return (false, FlashWork::default());
         };
-        if whole {
-            block_on(save_whole(map, live)).is_ok()
+        let (flash, _) = map.destroy();
+        let before = flash.stats_snapshot();
+        let Some(mut map) = open(flash) else {
+            return (false, FlashWork::default());
+        };
+        let ok = if whole {
+            block_on(save_whole(&mut map, live)).is_ok()
         } else {
-            block_on(save(map, live, stored)).is_ok()
-        }
+            block_on(save(&mut map, live, stored)).is_ok()
+        };
+        // The uncached map can be taken apart and opened again at no cost.
+        let (flash, _) = map.destroy();
+        let done = before.compare_to(flash.stats_snapshot());
+        self.map = open(flash);
+        let work = FlashWork {
+            erases: done.erases,
+            bytes_written: done.bytes_written,
+        };
+        (ok, work)
+    }
+}
+
+/// What a save did to the flash.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) struct FlashWork {
+    /// Sectors erased.
+    pub(crate) erases: u64,
+    /// Bytes programmed.
+    pub(crate) bytes_written: u64,
+}
+
+/// STM32F405 16 KiB sector erase, typical, at ×32 parallelism (2.7–3.6 V), µs (DS8626
+/// "Flash memory programming": 250 ms typ., 500 ms max.).
+pub(crate) const F405_SECTOR_ERASE_US: u64 = 250_000;
+/// STM32F405 word (32-bit) program, typical, µs (DS8626: 16 µs typ., 100 µs max.).
+pub(crate) const F405_WORD_PROGRAM_US: u64 = 16;
+
+impl FlashWork {
+    /// How long the F405 takes for it, µs. The F405 has a single flash bank: while it
+    /// erases or programs, code fetch from flash stalls — the whole board waits.
+    pub(crate) fn f405_us(self) -> u64 {
+        self.erases * F405_SECTOR_ERASE_US + self.bytes_written.div_ceil(4) * F405_WORD_PROGRAM_US
     }
 }
 

@@ -135,31 +135,65 @@ async fn link_task(
     }
 }
 
+/// The gain design's time on the F405, µs: 5 442 348 instructions (tests/m4-bench
+/// `flight_loop`, three axes) at 1.3 cycles per instruction and 168 MHz.
+pub const DESIGN_US: u64 = 42_100;
+
+/// Holds the flight board for `us`: every flight task runs on one thread-mode executor, so
+/// a blocking job (a gain design; a flash operation, which on the single-bank F405 also
+/// stalls code fetch) keeps the others — the IMU adapter, the supervisor — from running.
+/// The radio link's timing is not held (a simplification: its slots run on).
+async fn occupy(shared: &Shared, delay: &SimDelay, us: u64) {
+    {
+        let mut s = shared.borrow_mut();
+        s.flight_busy_until_ns = s.now_ns() + us * 1000;
+    }
+    delay.sleep_ns(us * 1000).await;
+}
+
+/// Waits while the board is held by a blocking job.
+async fn wait_while_busy(shared: &Shared, delay: &SimDelay) {
+    loop {
+        let left = {
+            let s = shared.borrow();
+            s.flight_busy_until_ns.saturating_sub(s.now_ns())
+        };
+        if left == 0 {
+            return;
+        }
+        delay.sleep_ns(left).await;
+    }
+}
+
 /// The supervisor task: polls the check-in policy every `FEED_PERIOD_MS`; the IWDG is fed
 /// inside the app's model (`Watchdog::poll`), which the stop watcher reads.
-async fn supervisor_task(app: Rc<RefCell<FlightApp>>, clock: BoardClock) {
+async fn supervisor_task(app: Rc<RefCell<FlightApp>>, clock: BoardClock, shared: &Shared) {
     loop {
         sleep_ms(clock.delay(), u64::from(FEED_PERIOD_MS)).await;
+        wait_while_busy(shared, clock.delay()).await;
         let _fed = app.borrow_mut().on_watchdog_poll(clock.now_ms());
     }
 }
 
 /// The heartbeat LED task (50 ms ticker) and the motor task's check-in (it wakes at least
 /// every 100 ms; the commands themselves go to the quad in the physics task).
-async fn heartbeat_and_motors_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay) {
+async fn heartbeat_and_motors_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay, shared: &Shared) {
     loop {
         sleep_ms(&delay, 50).await;
+        wait_while_busy(shared, &delay).await;
         let mut a = app.borrow_mut();
         a.check_in(Task::Heartbeat);
         a.check_in(Task::Motors);
     }
 }
 
-/// The storage task: every 100 ms, a save the app hands out goes to the flash.
+/// The storage task: every 100 ms, a save the app hands out goes to the flash, holding the
+/// board for the flash's time (sectors erased and words programmed, `FlashWork::f405_us`).
 async fn storage_task(
     app: Rc<RefCell<FlightApp>>,
     flash: &RefCell<SettingsFlash>,
     delay: SimDelay,
+    shared: &Shared,
 ) {
     loop {
         sleep_ms(&delay, 100).await;
@@ -170,14 +204,17 @@ async fn storage_task(
         let Some((live, stored, whole)) = request else {
             continue;
         };
-        if flash.borrow_mut().save(&live, &stored, whole) {
+        let (saved, work) = flash.borrow_mut().save(&live, &stored, whole);
+        occupy(shared, &delay, work.f405_us()).await;
+        if saved {
             app.borrow_mut().on_saved(live);
         }
     }
 }
 
-/// The gains task: every 100 ms, a design request is solved and handed back.
-async fn gains_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay) {
+/// The gains task: every 100 ms, a design request is solved (holding the board for
+/// [`DESIGN_US`]) and handed back.
+async fn gains_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay, shared: &Shared) {
     loop {
         sleep_ms(&delay, 100).await;
         let Some(settings) = app.borrow_mut().take_design_request() else {
@@ -186,7 +223,9 @@ async fn gains_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay) {
         let Ok(setup) = from_settings(&settings) else {
             continue;
         };
-        if let Ok(c) = Controllers::design(&setup.control) {
+        let designed = Controllers::design(&setup.control);
+        occupy(shared, &delay, DESIGN_US).await;
+        if let Ok(c) = designed {
             app.borrow_mut().on_designed(setup, c);
         }
     }
@@ -243,10 +282,10 @@ pub(crate) async fn flight_board(
         shared.borrow_mut().flight = Some((app.clone(), clock.clone()));
         let tasks = join5(
             link_task(app.clone(), &mut chip.radio, clock.clone(), failsafe_us),
-            supervisor_task(app.clone(), clock.clone()),
-            heartbeat_and_motors_task(app.clone(), delay.clone()),
-            storage_task(app.clone(), &flash, delay.clone()),
-            gains_task(app.clone(), delay.clone()),
+            supervisor_task(app.clone(), clock.clone(), &shared),
+            heartbeat_and_motors_task(app.clone(), delay.clone(), &shared),
+            storage_task(app.clone(), &flash, delay.clone(), &shared),
+            gains_task(app.clone(), delay.clone(), &shared),
         );
         let stop = match select(tasks, stop_watcher(&app, &shared, &clock)).await {
             Either::First(_) => Stop::PowerOff,

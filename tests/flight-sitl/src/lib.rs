@@ -13,9 +13,10 @@ pub mod metrics;
 pub mod module_end;
 pub mod runner;
 pub mod scenario;
+pub mod serve;
 pub mod world;
 
 pub use scenario::{
-    End, FlashInjection, ImuInjection, Pilot, PilotInput, RadioInjection, Scenario,
+    End, FlashInjection, ImuInjection, Pilot, PilotInput, Piloting, RadioInjection, Scenario, Sight,
 };
-pub use world::{Boot, BootCause, Sample, Sitl, WARMUP_S, WatchdogResets, run};
+pub use world::{Boot, BootCause, Sample, Sitl, WARMUP_S, WatchdogResets, World, run};

@@ -1,12 +1,14 @@
 //! `cargo run --release -p flight-sitl -- SCENARIO [options]`: flies a named scenario
 //! through the firmware-in-the-loop world and prints its figures, as text or one JSON
-//! object, optionally drawn; `table` runs the acceptance set and prints it as Markdown.
+//! object, optionally drawn; `table` runs the acceptance set and prints it as Markdown;
+//! `serve [ADDR]` serves the web ground station against the world (`serve/cli.rs`).
 //! `--help` lists the options (`runner/cli.rs`).
 
 use std::process::ExitCode;
 
 use clap::Parser;
 use flight_sitl::runner::{self, cli::Cli};
+use flight_sitl::serve::cli::ServeCli;
 use quad_sim::experiments::oneshot::{OneShotArgs, run_cli};
 
 /// `flight-sitl oneshot-experiment`: the Tau Labs seed's OneShot125 experiment — the ESC
@@ -20,6 +22,16 @@ struct OneShotCli {
 }
 
 fn main() -> ExitCode {
+    if std::env::args().nth(1).as_deref() == Some("serve") {
+        let cli = ServeCli::parse_from(std::env::args().skip(1));
+        return match cli.options() {
+            Ok(o) => ExitCode::from(u8::try_from(flight_sitl::serve::main(o)).unwrap_or(1)),
+            Err(e) => {
+                eprintln!("flight-sitl serve: {e}");
+                ExitCode::from(2)
+            }
+        };
+    }
     if std::env::args().nth(1).as_deref() == Some("oneshot-experiment") {
         let cli = OneShotCli::parse_from(std::env::args().skip(1));
         return match run_cli(&cli.args) {

@@ -6,9 +6,10 @@
 //! radio at its other end (CRSF: the radio's channel frame every [`CRSF_PERIOD_US`], the
 //! module's reply after it; S.Port / FrSky D: the pushed frames; what the module sent:
 //! `Sitl.handset_tx`), the 10 Hz app task, the HM-10 task relaying records to a connected
-//! phone (what the module received: `Sitl.module_rx`) and the phone's setting changes up,
-//! and the supervisor feeding the nRF52840 WDT (250 ms) only while every modelled task
-//! checked in. An expired WDT reboots the module.
+//! phone (what the module received: `Sitl.module_rx`; the raw frames too when a page is
+//! attached) and the phone's bytes up (the scenario's setting changes, an attached page's
+//! writes), and the supervisor feeding the nRF52840 WDT (250 ms) only while every modelled
+//! task checked in. An expired WDT reboots the module.
 
 use std::cell::{Cell, RefCell};
 
@@ -35,7 +36,7 @@ use telemetry::mock::SplitMix64;
 
 use crate::clock::{BoardClock, sleep_ms};
 use crate::scenario::End;
-use crate::world::{BootCause, Shared, transmitter};
+use crate::world::{BootCause, Shared, TO_PHONE_MAX, transmitter};
 
 /// Power-on to the first task, ms: nRF52840 start-up and HFXO ≈ 1 ms, settings load from
 /// the NVMC ≈ 1 ms, the RFM22B probe is the link task's first step (its own POR time is
@@ -58,6 +59,9 @@ const HM10_POLL_MS: u64 = 10;
 pub const CRSF_PERIOD_US: u64 = 4_000;
 /// How often the push modes ask the scheduler, ms (the firmware's `PUSH_POLL`).
 const PUSH_POLL_MS: u64 = 2;
+/// Bytes of the phone's writes the HM-10 task takes per poll (the firmware's UART read
+/// buffer).
+const HM10_READ_BYTES: usize = 64;
 
 /// The module's RFM22B: SDN wired (the nRF52840 drives it).
 pub(crate) type ModuleRadio = LinkRadio<SimSpi, SimIrq, SimSdn, SimDelay>;
@@ -361,7 +365,8 @@ async fn app_task(b: &Board, shared: &Shared) {
 }
 
 /// The HM-10 task with a phone connected: records to the phone (decoded: what the module
-/// received), the scenario's setting changes from the phone.
+/// received; raw to an attached page), the scenario's setting changes and an attached
+/// page's bytes from the phone.
 async fn hm10_task(b: &Board, shared: &Shared) {
     let mut reader = MessageReader::new();
     let mut frame = [0u8; module_core::hm10::relay::MAX_FRAME_LEN];
@@ -379,11 +384,28 @@ async fn hm10_task(b: &Board, shared: &Shared) {
                     .on_phone_bytes(buf.get(..n).unwrap_or(&[]));
             }
         }
+        // An attached phone's writes, as the UART delivers them (at most a read's worth).
+        let written: Vec<u8> = match shared.borrow_mut().phone.as_mut() {
+            Some(p) => {
+                let n = p.from_phone.len().min(HM10_READ_BYTES);
+                p.from_phone.drain(..n).collect()
+            }
+            None => Vec::new(),
+        };
+        if !written.is_empty() {
+            b.app.borrow_mut().on_phone_bytes(&written);
+        }
         loop {
             let Some(n) = b.app.borrow_mut().next_phone_frame(&mut frame) else {
                 break;
             };
-            for &byte in frame.get(..n).unwrap_or(&[]) {
+            let sent = frame.get(..n).unwrap_or(&[]);
+            if let Some(p) = shared.borrow_mut().phone.as_mut() {
+                p.to_phone.extend(sent);
+                let excess = p.to_phone.len().saturating_sub(TO_PHONE_MAX);
+                p.to_phone.drain(..excess);
+            }
+            for &byte in sent {
                 if let Some(Decoded::Message(m)) = reader.push(byte) {
                     let mut s = shared.borrow_mut();
                     let t = s.scenario_s();

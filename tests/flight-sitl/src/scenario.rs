@@ -119,8 +119,39 @@ impl Default for PilotInput {
     }
 }
 
-/// The pilot: a function of simulated time (s) to the input.
+/// What the pilot sees of the aircraft at one instant: the truth, as a person at the
+/// transmitter looking at the quad (not anything the flight controller estimates).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Sight {
+    /// Height above the ground, m.
+    pub altitude_m: f64,
+    /// Climb rate, m/s (up positive).
+    pub climb_mps: f64,
+    /// Roll, pitch, yaw, deg.
+    pub attitude_deg: [f64; 3],
+    /// Sitting on the ground.
+    pub on_ground: bool,
+    /// Any propeller turning.
+    pub props_turning: bool,
+}
+
+/// The person at the transmitter: the sticks and switches (and the environment the
+/// scenario scripts with them) at scenario time `t_s`, having seen the aircraft as `sight`
+/// (its state after the previous physics step). Any `FnMut(f64) -> PilotInput` (a
+/// [`Pilot`]) flies by the clock alone.
+pub trait Piloting {
+    /// The input at `t_s`.
+    fn input(&mut self, t_s: f64, sight: &Sight) -> PilotInput;
+}
+
+/// A pilot flying by the clock alone: a function of scenario time (s) to the input.
 pub type Pilot = Box<dyn FnMut(f64) -> PilotInput>;
+
+impl<F: FnMut(f64) -> PilotInput + ?Sized> Piloting for Box<F> {
+    fn input(&mut self, t_s: f64, _sight: &Sight) -> PilotInput {
+        self(t_s)
+    }
+}
 
 /// One simulated flight.
 pub struct Scenario {
@@ -135,7 +166,7 @@ pub struct Scenario {
     /// Link failsafe time of the follower, ms.
     pub link_failsafe_ms: u64,
     /// The pilot.
-    pub pilot: Pilot,
+    pub pilot: Box<dyn Piloting>,
     /// Setting changes the module sends up (in order, as soon as the stream has room).
     pub setting_changes: Vec<SettingChange>,
     /// Extra random packet loss on the air, 0…1 (both directions).
@@ -155,13 +186,23 @@ impl Scenario {
     /// extra loss, F250, the module's factory settings bound to the flight side, settings
     /// cleanly stored.
     pub fn new(settings: Settings, quad: QuadParams, duration_s: f64, pilot: Pilot) -> Self {
+        Self::flown_by(settings, quad, duration_s, pilot)
+    }
+
+    /// [`Scenario::new`] with a pilot that looks at the aircraft.
+    pub fn flown_by(
+        settings: Settings,
+        quad: QuadParams,
+        duration_s: f64,
+        pilot: impl Piloting + 'static,
+    ) -> Self {
         Self {
             settings,
             quad,
             seed: 7,
             duration_s,
             link_failsafe_ms: 500,
-            pilot,
+            pilot: Box::new(pilot),
             setting_changes: Vec::new(),
             packet_loss: 0.0,
             rate: telemetry::link::RateMode::F250,

@@ -17,6 +17,7 @@
 //! have negative times.
 
 use std::cell::RefCell;
+use std::collections::VecDeque;
 use std::rc::Rc;
 use std::time::Duration;
 
@@ -38,7 +39,7 @@ use crate::clock::{BoardClock, virtual_us};
 use crate::flash::SettingsFlash;
 use crate::flight_end::{FlightChip, flight_board, inject_radio};
 use crate::module_end::{ModuleChip, module_board};
-use crate::scenario::{End, ImuInjection, PilotInput, Scenario};
+use crate::scenario::{End, ImuInjection, PilotInput, Scenario, Sight};
 
 const RAD_PER_DEG: f32 = core::f32::consts::PI / 180.0;
 /// Baro sampling period, ms (the firmware's baro task rate).
@@ -80,6 +81,9 @@ pub struct Sample {
     /// The flight controller was running its application this loop (false while it is
     /// unpowered or booting; `out` is then the last output it gave, `motors` all stopped).
     pub flight_up: bool,
+    /// The flight board was held by a blocking job (a flash operation, a gain design) this
+    /// loop: no IMU sample was handled, the motors kept their last commands.
+    pub flight_busy: bool,
 }
 
 /// The run's records.
@@ -157,8 +161,13 @@ pub(crate) struct WorldState {
     pub(crate) handset_tx: Vec<(f64, Vec<u8>)>,
     /// Setting changes the phone is still to send.
     pub(crate) uplink: Vec<SettingChange>,
+    /// The HM-10's phone side as raw bytes, when a page is attached ([`World::attach_phone`]).
+    pub(crate) phone: Option<PhonePipes>,
     pub(crate) watchdog_resets: WatchdogResets,
     pub(crate) boots: Vec<Boot>,
+    /// Until when (virtual ns) the flight board's one thread-mode executor is held by a
+    /// blocking job (a flash operation, a gain design).
+    pub(crate) flight_busy_until_ns: u64,
     medium: si4432_sim::Medium,
 }
 
@@ -166,6 +175,16 @@ impl WorldState {
     /// Scenario time now, s.
     pub(crate) fn scenario_s(&self) -> f64 {
         virtual_us(&self.medium) as f64 * 1e-6 - WARMUP_S
+    }
+
+    /// Virtual time now, ns.
+    pub(crate) fn now_ns(&self) -> u64 {
+        self.medium.now().as_nanos() as u64
+    }
+
+    /// The flight board is held by a flash operation or a gain design.
+    pub(crate) fn flight_busy(&self) -> bool {
+        self.now_ns() < self.flight_busy_until_ns
     }
 
     pub(crate) fn record_boot(&mut self, end: End, cause: BootCause, settings_error: bool) {
@@ -180,6 +199,19 @@ impl WorldState {
 }
 
 pub(crate) type Shared = Rc<RefCell<WorldState>>;
+
+/// Bytes the HM-10 sent to the phone and the phone has not read yet; beyond this the oldest
+/// are dropped (a stalled reader must not grow the world), as a BLE link would lose them.
+pub const TO_PHONE_MAX: usize = 64 * 1024;
+/// Bytes the phone wrote that the HM-10 task has not taken yet; beyond this a write is cut.
+pub const FROM_PHONE_MAX: usize = 4 * 1024;
+
+/// The HM-10's UART as a phone sees it: the relay's frames out, the phone's bytes in.
+#[derive(Debug, Default)]
+pub(crate) struct PhonePipes {
+    pub(crate) to_phone: VecDeque<u8>,
+    pub(crate) from_phone: VecDeque<u8>,
+}
 
 /// The transmitter's arm switch: channel 5 (AUX1), index 4 (`arm.channel 5` listens to it).
 const ARM_SWITCH_CHANNEL: usize = 4;
@@ -231,242 +263,388 @@ fn module_settings(s: &Scenario) -> module_core::settings::Settings {
 /// # Panics
 /// If the settings do not make a flyable configuration — a broken scenario, which the
 /// test should show.
-#[allow(clippy::expect_used, clippy::too_many_lines)]
 pub fn run(scenario: Scenario) -> Sitl {
-    let module = module_settings(&scenario);
-    let Scenario {
-        mut settings,
-        quad: params,
-        seed,
-        duration_s,
-        link_failsafe_ms,
-        mut pilot,
-        setting_changes,
-        packet_loss,
-        rate: _,
-        module_settings: _,
-        flight_flash,
-    } = scenario;
-    // The flight controller stores the module's link (as after a bind): under model match
-    // the link of the lowest model the module records as bound.
-    let bound_model = (module.model_match && module.bound_models != 0)
-        .then(|| module.bound_models.trailing_zeros() as u8);
-    if let Some(link) = module_core::air::link_params(&module) {
-        let link = bound_model.map_or(link, |m| link.for_model(m));
-        let _ = store_link(&mut settings, &link);
-    }
-    let setup = from_settings(&settings).expect("settings make a flyable setup");
-    let ts_s = f64::from(setup.loop_config.ts_s);
-    let period_us = (ts_s * 1e6).round() as u64;
-    let baro_every = ((f64::from(BARO_PERIOD_MS) * 1e-3 / ts_s).round() as u64).max(1);
-    let battery_every = ((f64::from(BATTERY_PERIOD_MS) * 1e-3 / ts_s).round() as u64).max(1);
+    let mut world = World::new(scenario);
+    world.run_to_end();
+    world.finish()
+}
 
-    let sim = Simulation::new(seed);
-    let medium = sim.medium();
-    medium.set_packet_loss(packet_loss);
-    let placement = |x: f64, ppm: f64, spi_hz: u32| {
-        let mut p = RadioConfig::at([x, 0.0, 0.0]);
-        p.crystal_error_ppm = ppm;
-        p.spi_clock_hz = spi_hz;
-        p
-    };
-    let module_radio = medium.add_radio(placement(0.0, 8.0, SPI_CLOCK_NRF52840_HZ));
-    let flight_radio = medium.add_radio(placement(DISTANCE_M, -6.0, SPI_CLOCK_F405_HZ));
-    let (module_id, flight_id) = (module_radio.id, flight_radio.id);
-    let (module_chip, flight_chip) = (module_radio.chip.clone(), flight_radio.chip.clone());
-    let shared: Shared = Rc::new(RefCell::new(WorldState {
-        input: PilotInput::default(),
-        flight: None,
-        flight_settings: settings.clone(),
-        module_flash: module,
-        module_rx: Vec::new(),
-        handset_tx: Vec::new(),
-        uplink: setting_changes,
-        watchdog_resets: WatchdogResets::default(),
-        boots: Vec::new(),
-        medium: medium.clone(),
-    }));
-    let flash = SettingsFlash::new(&settings, flight_flash);
-    sim.spawn(module_board(
-        shared.clone(),
-        medium.clone(),
-        sim.delay(),
-        ModuleChip::new(module_radio, module.tx_power),
-        seed,
-    ));
-    sim.spawn(flight_board(
-        shared.clone(),
-        medium.clone(),
-        sim.delay(),
-        FlightChip::new(flight_radio),
-        flash,
-        link_failsafe_ms * 1000,
-    ));
-    let samples: Rc<RefCell<Vec<Sample>>> = Rc::new(RefCell::new(Vec::new()));
-    let warmup_us = (WARMUP_S * 1e6) as u64;
-    {
-        let shared = shared.clone();
-        let samples = samples.clone();
-        let medium = medium.clone();
-        let delay = sim.delay();
-        let divider = setup.battery.voltage_divider;
-        sim.spawn(async move {
-            let mut quad = Quad::new(params, seed);
-            quad_sim::ground::on_the_ground(&mut quad);
-            let mut sensors = quad.sensors();
-            let mut baro_noise = SplitMix64::new(seed ^ 0xBA40);
-            let mut level = BatteryLevel::Ok;
-            let mut last_good = ImuSample {
-                gyro_radps: [0.0; 3],
-                accel_mps2: sensors.accel_mps2,
-                mag: None,
-            };
-            let mut last_out: Option<LoopOutput> = None;
-            let mut before = PilotInput::default();
-            let mut loops_since_boot: u64 = 0;
-            let mut k: u64 = 0;
-            loop {
-                k += 1;
-                let due_ns = k * period_us * 1000;
-                let now_ns = medium.now().as_nanos() as u64;
-                delay.sleep_ns(due_ns.saturating_sub(now_ns)).await;
-                let t_us = k * period_us;
-                let t_s = (t_us as f64 - warmup_us as f64) * 1e-6;
-                if t_s >= duration_s {
-                    break;
-                }
-                // Before the scenario the world is as at its start (switches, battery).
-                let input = pilot(t_s.max(0.0));
-                if input.link_cut != before.link_cut {
-                    let db = if input.link_cut { CUT_DB } else { 0.0 };
-                    medium.set_attenuation(module_id, flight_id, db);
-                }
-                if input.flight_radio != before.flight_radio {
-                    inject_radio(&flight_chip, before.flight_radio, input.flight_radio);
-                }
-                if input.module_radio != before.module_radio {
-                    inject_radio(&module_chip, before.module_radio, input.module_radio);
-                }
-                before = input;
-                let flight = {
-                    let mut s = shared.borrow_mut();
-                    s.input = input;
-                    s.flight.clone()
-                };
-                let mut motors = [Command::Stopped; 4];
-                let mut record = None;
-                match &flight {
-                    Some((app, clock)) => {
-                        let mut app = app.borrow_mut();
-                        let now_ms = clock.now_ms();
-                        loops_since_boot += 1;
-                        // The baro task: MS5611 altitude at 50 Hz with 0.1 m (1σ) noise.
-                        if loops_since_boot.is_multiple_of(baro_every) {
-                            let altitude =
-                                -quad.state().position_m[2] + baro_noise.normal(BARO_NOISE_M);
-                            app.on_baro(now_ms, Some(altitude as f32));
-                        }
-                        let link_up = app.link_input().up;
-                        // The IMU task: a sample, or what the injected fault leaves of it.
-                        let imu = ImuSample {
-                            gyro_radps: sensors.gyro_dps.map(|g| g * RAD_PER_DEG),
-                            accel_mps2: sensors.accel_mps2,
-                            mag: None,
-                        };
-                        let step = match input.imu {
-                            ImuInjection::Healthy => {
-                                last_good = imu;
-                                app.on_imu_sample(now_ms, &imu)
-                            }
-                            ImuInjection::Frozen => app.on_imu_sample(now_ms, &last_good),
-                            ImuInjection::AllZero => app.on_imu_sample(
-                                now_ms,
-                                &ImuSample {
-                                    gyro_radps: [0.0; 3],
-                                    accel_mps2: [0.0; 3],
-                                    mag: None,
-                                },
-                            ),
-                            ImuInjection::Stalled => app.on_imu_missing(now_ms, ImuFault::Stalled),
-                            ImuInjection::ReadError => {
-                                app.on_imu_missing(now_ms, ImuFault::ReadError)
-                            }
-                        };
-                        motors = step.motors;
-                        // The battery task.
-                        if loops_since_boot.is_multiple_of(battery_every) {
-                            app.on_battery(now_ms, battery_raw(input.battery_mv, divider), None);
-                            level = app.battery().map_or(level, |b| b.level);
-                        }
-                        // The alert task.
-                        let tone_hz = app.on_alert_tick(now_ms);
-                        let identification = app.identification_finished();
-                        if let Some(out) = app.last_output().copied() {
-                            last_out = Some(out);
-                        }
-                        record = Some((
-                            link_up,
-                            tone_hz,
-                            identification,
-                            step.reprobe,
-                            app.imu_fault(),
-                        ));
-                    }
-                    None => loops_since_boot = 0,
-                }
-                let cmds = motors.map(|m| match m {
-                    Command::Throttle(x) => x,
-                    Command::Stopped => 0.0,
-                });
-                let (s, truth) = quad.step(ts_s, &cmds);
-                let (truth, s) = quad_sim::ground::contact(&mut quad, truth, s);
-                sensors = s;
-                // Nothing to record before the scenario or the loop's first output.
-                let Some(out) = last_out else { continue };
-                if t_s < 0.0 {
-                    continue;
-                }
-                let flight_up = record.is_some();
-                let (link_up, tone_hz, identification, imu_reprobe, imu_fault) =
-                    record.unwrap_or((false, 0, None, false, None));
-                samples.borrow_mut().push(Sample {
-                    t_s,
-                    pilot: input,
-                    out,
-                    link_up,
-                    altitude_m: -truth.state.position_m[2],
-                    climb_mps: -truth.state.velocity_mps[2],
-                    truth,
-                    battery: level,
-                    tone_hz,
-                    identification,
-                    motors,
-                    imu_reprobe,
-                    imu_fault,
-                    flight_up,
-                });
-            }
-        });
+/// What the pilot sees of the quad in `truth`.
+fn sight(truth: &Truth) -> Sight {
+    let state = &truth.state;
+    Sight {
+        altitude_m: -state.position_m[2],
+        climb_mps: -state.velocity_mps[2],
+        attitude_deg: truth.euler_deg,
+        // `ground::contact` holds a landed frame at 0.
+        on_ground: state.position_m[2] >= -1e-3,
+        props_turning: state.motor.iter().any(|&m| m > 0.01),
     }
-    sim.run_for(Duration::from_micros(
-        warmup_us + (duration_s * 1e6) as u64 + 2 * period_us,
-    ));
-    drop(sim);
-    let samples = Rc::try_unwrap(samples)
-        .map(RefCell::into_inner)
-        .unwrap_or_default();
-    let mut s = shared.borrow_mut();
-    let settings = match &s.flight {
-        Some((app, _)) => app.borrow().settings().clone(),
-        None => s.flight_settings.clone(),
-    };
-    Sitl {
-        samples,
-        ts_s,
-        module_rx: std::mem::take(&mut s.module_rx),
-        handset_tx: std::mem::take(&mut s.handset_tx),
-        settings,
-        watchdog_resets: s.watchdog_resets,
-        boots: std::mem::take(&mut s.boots),
+}
+
+/// A world in the making: advanced in steps of virtual time ([`World::run_for`]), read while
+/// it runs (samples, what the module relayed, the HM-10's phone side), and closed into its
+/// records ([`World::finish`]). [`run`] is `new`, `run_to_end`, `finish`.
+pub struct World {
+    sim: Simulation,
+    shared: Shared,
+    samples: Rc<RefCell<Vec<Sample>>>,
+    ts_s: f64,
+    end: Duration,
+}
+
+impl World {
+    /// The world of `scenario`, at virtual time 0 (both boards about to power up).
+    ///
+    /// # Panics
+    /// If the settings do not make a flyable configuration — a broken scenario, which the
+    /// test should show.
+    #[allow(clippy::expect_used, clippy::too_many_lines)]
+    pub fn new(scenario: Scenario) -> Self {
+        let module = module_settings(&scenario);
+        let Scenario {
+            mut settings,
+            quad: params,
+            seed,
+            duration_s,
+            link_failsafe_ms,
+            mut pilot,
+            setting_changes,
+            packet_loss,
+            rate: _,
+            module_settings: _,
+            flight_flash,
+        } = scenario;
+        // The flight controller stores the module's link (as after a bind): under model match
+        // the link of the lowest model the module records as bound.
+        let bound_model = (module.model_match && module.bound_models != 0)
+            .then(|| module.bound_models.trailing_zeros() as u8);
+        if let Some(link) = module_core::air::link_params(&module) {
+            let link = bound_model.map_or(link, |m| link.for_model(m));
+            let _ = store_link(&mut settings, &link);
+        }
+        let setup = from_settings(&settings).expect("settings make a flyable setup");
+        let ts_s = f64::from(setup.loop_config.ts_s);
+        let period_us = (ts_s * 1e6).round() as u64;
+        let baro_every = ((f64::from(BARO_PERIOD_MS) * 1e-3 / ts_s).round() as u64).max(1);
+        let battery_every = ((f64::from(BATTERY_PERIOD_MS) * 1e-3 / ts_s).round() as u64).max(1);
+
+        let sim = Simulation::new(seed);
+        let medium = sim.medium();
+        medium.set_packet_loss(packet_loss);
+        let placement = |x: f64, ppm: f64, spi_hz: u32| {
+            let mut p = RadioConfig::at([x, 0.0, 0.0]);
+            p.crystal_error_ppm = ppm;
+            p.spi_clock_hz = spi_hz;
+            p
+        };
+        let module_radio = medium.add_radio(placement(0.0, 8.0, SPI_CLOCK_NRF52840_HZ));
+        let flight_radio = medium.add_radio(placement(DISTANCE_M, -6.0, SPI_CLOCK_F405_HZ));
+        let (module_id, flight_id) = (module_radio.id, flight_radio.id);
+        let (module_chip, flight_chip) = (module_radio.chip.clone(), flight_radio.chip.clone());
+        let shared: Shared = Rc::new(RefCell::new(WorldState {
+            input: PilotInput::default(),
+            flight: None,
+            flight_settings: settings.clone(),
+            module_flash: module,
+            module_rx: Vec::new(),
+            handset_tx: Vec::new(),
+            uplink: setting_changes,
+            phone: None,
+            watchdog_resets: WatchdogResets::default(),
+            flight_busy_until_ns: 0,
+            boots: Vec::new(),
+            medium: medium.clone(),
+        }));
+        let flash = SettingsFlash::new(&settings, flight_flash);
+        sim.spawn(module_board(
+            shared.clone(),
+            medium.clone(),
+            sim.delay(),
+            ModuleChip::new(module_radio, module.tx_power),
+            seed,
+        ));
+        sim.spawn(flight_board(
+            shared.clone(),
+            medium.clone(),
+            sim.delay(),
+            FlightChip::new(flight_radio),
+            flash,
+            link_failsafe_ms * 1000,
+        ));
+        let samples: Rc<RefCell<Vec<Sample>>> = Rc::new(RefCell::new(Vec::new()));
+        let warmup_us = (WARMUP_S * 1e6) as u64;
+        {
+            let shared = shared.clone();
+            let samples = samples.clone();
+            let medium = medium.clone();
+            let delay = sim.delay();
+            let divider = setup.battery.voltage_divider;
+            sim.spawn(async move {
+                let mut quad = Quad::new(params, seed);
+                quad_sim::ground::on_the_ground(&mut quad);
+                let mut sensors = quad.sensors();
+                let mut baro_noise = SplitMix64::new(seed ^ 0xBA40);
+                let mut level = BatteryLevel::Ok;
+                let mut last_good = ImuSample {
+                    gyro_radps: [0.0; 3],
+                    accel_mps2: sensors.accel_mps2,
+                    mag: None,
+                };
+                let mut last_out: Option<LoopOutput> = None;
+                let mut before = PilotInput::default();
+                let mut held_motors = [Command::Stopped; 4];
+                let mut held_record = None;
+                let mut seen = Sight {
+                    on_ground: true,
+                    ..Sight::default()
+                };
+                let mut loops_since_boot: u64 = 0;
+                let mut k: u64 = 0;
+                loop {
+                    k += 1;
+                    let due_ns = k * period_us * 1000;
+                    let now_ns = medium.now().as_nanos() as u64;
+                    delay.sleep_ns(due_ns.saturating_sub(now_ns)).await;
+                    let t_us = k * period_us;
+                    let t_s = (t_us as f64 - warmup_us as f64) * 1e-6;
+                    if t_s >= duration_s {
+                        break;
+                    }
+                    // Before the scenario the world is as at its start (switches, battery).
+                    let input = pilot.input(t_s.max(0.0), &seen);
+                    if input.link_cut != before.link_cut {
+                        let db = if input.link_cut { CUT_DB } else { 0.0 };
+                        medium.set_attenuation(module_id, flight_id, db);
+                    }
+                    if input.flight_radio != before.flight_radio {
+                        inject_radio(&flight_chip, before.flight_radio, input.flight_radio);
+                    }
+                    if input.module_radio != before.module_radio {
+                        inject_radio(&module_chip, before.module_radio, input.module_radio);
+                    }
+                    before = input;
+                    let (flight, busy) = {
+                        let mut s = shared.borrow_mut();
+                        s.input = input;
+                        (s.flight.clone(), s.flight_busy())
+                    };
+                    let mut motors = [Command::Stopped; 4];
+                    let mut record = None;
+                    match &flight {
+                        // The board is held by a flash operation or a gain design: no sample is
+                        // taken, the motor timers keep the last commands.
+                        Some(_) if busy => {
+                            motors = held_motors;
+                            record = held_record;
+                        }
+                        Some((app, clock)) => {
+                            let mut app = app.borrow_mut();
+                            let now_ms = clock.now_ms();
+                            loops_since_boot += 1;
+                            // The baro task: MS5611 altitude at 50 Hz with 0.1 m (1σ) noise.
+                            if loops_since_boot.is_multiple_of(baro_every) {
+                                let altitude =
+                                    -quad.state().position_m[2] + baro_noise.normal(BARO_NOISE_M);
+                                app.on_baro(now_ms, Some(altitude as f32));
+                            }
+                            let link_up = app.link_input().up;
+                            // The IMU task: a sample, or what the injected fault leaves of it.
+                            let imu = ImuSample {
+                                gyro_radps: sensors.gyro_dps.map(|g| g * RAD_PER_DEG),
+                                accel_mps2: sensors.accel_mps2,
+                                mag: None,
+                            };
+                            let step = match input.imu {
+                                ImuInjection::Healthy => {
+                                    last_good = imu;
+                                    app.on_imu_sample(now_ms, &imu)
+                                }
+                                ImuInjection::Frozen => app.on_imu_sample(now_ms, &last_good),
+                                ImuInjection::AllZero => app.on_imu_sample(
+                                    now_ms,
+                                    &ImuSample {
+                                        gyro_radps: [0.0; 3],
+                                        accel_mps2: [0.0; 3],
+                                        mag: None,
+                                    },
+                                ),
+                                ImuInjection::Stalled => {
+                                    app.on_imu_missing(now_ms, ImuFault::Stalled)
+                                }
+                                ImuInjection::ReadError => {
+                                    app.on_imu_missing(now_ms, ImuFault::ReadError)
+                                }
+                            };
+                            motors = step.motors;
+                            // The battery task.
+                            if loops_since_boot.is_multiple_of(battery_every) {
+                                app.on_battery(
+                                    now_ms,
+                                    battery_raw(input.battery_mv, divider),
+                                    None,
+                                );
+                                level = app.battery().map_or(level, |b| b.level);
+                            }
+                            // The alert task.
+                            let tone_hz = app.on_alert_tick(now_ms);
+                            let identification = app.identification_finished();
+                            if let Some(out) = app.last_output().copied() {
+                                last_out = Some(out);
+                            }
+                            record = Some((
+                                link_up,
+                                tone_hz,
+                                identification,
+                                step.reprobe,
+                                app.imu_fault(),
+                            ));
+                        }
+                        None => loops_since_boot = 0,
+                    }
+                    held_motors = motors;
+                    held_record = record;
+                    let cmds = motors.map(|m| match m {
+                        Command::Throttle(x) => x,
+                        Command::Stopped => 0.0,
+                    });
+                    let (s, truth) = quad.step(ts_s, &cmds);
+                    let (truth, s) = quad_sim::ground::contact_level(&mut quad, truth, s);
+                    sensors = s;
+                    seen = sight(&truth);
+                    // Nothing to record before the scenario or the loop's first output.
+                    let Some(out) = last_out else { continue };
+                    if t_s < 0.0 {
+                        continue;
+                    }
+                    let flight_up = record.is_some();
+                    let (link_up, tone_hz, identification, imu_reprobe, imu_fault) =
+                        record.unwrap_or((false, 0, None, false, None));
+                    samples.borrow_mut().push(Sample {
+                        t_s,
+                        pilot: input,
+                        out,
+                        link_up,
+                        altitude_m: -truth.state.position_m[2],
+                        climb_mps: -truth.state.velocity_mps[2],
+                        truth,
+                        battery: level,
+                        tone_hz,
+                        identification,
+                        motors,
+                        imu_reprobe,
+                        imu_fault,
+                        flight_up,
+                        flight_busy: busy && flight_up,
+                    });
+                }
+            });
+        }
+        // An endless scenario runs until the caller stops stepping it.
+        let end_us = warmup_us as f64 + duration_s * 1e6 + 2.0 * period_us as f64;
+        let end = Duration::from_micros(if end_us < u64::MAX as f64 {
+            end_us as u64
+        } else {
+            u64::MAX
+        });
+        Self {
+            sim,
+            shared,
+            samples,
+            ts_s,
+            end,
+        }
+    }
+
+    /// Runs `d` more of virtual time.
+    pub fn run_for(&mut self, d: Duration) {
+        self.sim.run_for(d);
+    }
+
+    /// Runs to the end of the scenario (its warm-up, duration and the last loops).
+    pub fn run_to_end(&mut self) {
+        self.run_for(self.end.saturating_sub(self.sim.now()));
+    }
+
+    /// Virtual time since power-up.
+    pub fn now(&self) -> Duration {
+        self.sim.now()
+    }
+
+    /// Scenario time now, s (negative during the warm-up).
+    pub fn scenario_s(&self) -> f64 {
+        self.shared.borrow().scenario_s()
+    }
+
+    /// The samples recorded since the last call (a long run's caller takes them as it goes).
+    pub fn take_samples(&mut self) -> Vec<Sample> {
+        std::mem::take(&mut *self.samples.borrow_mut())
+    }
+
+    /// The messages the module relayed to the phone since the last call, with the time (s).
+    pub fn take_module_rx(&mut self) -> Vec<(f64, Message)> {
+        std::mem::take(&mut self.shared.borrow_mut().module_rx)
+    }
+
+    /// The flight side's settings now: the running application's (changes from the link
+    /// applied), or those it had when its board last stopped.
+    pub fn flight_settings(&self) -> Settings {
+        let s = self.shared.borrow();
+        match &s.flight {
+            Some((app, _)) => app.borrow().settings().clone(),
+            None => s.flight_settings.clone(),
+        }
+    }
+
+    /// Connects a phone to the module's HM-10: from now on the relay's frames are kept for
+    /// [`World::phone_read`] (besides being decoded into the records) and
+    /// [`World::phone_write`] bytes reach the module's HM-10 input, as over BLE.
+    pub fn attach_phone(&mut self) {
+        self.shared.borrow_mut().phone = Some(PhonePipes::default());
+    }
+
+    /// Bytes the phone writes to the HM-10 (cut at [`FROM_PHONE_MAX`] waiting; nothing
+    /// without [`World::attach_phone`]).
+    pub fn phone_write(&mut self, bytes: &[u8]) {
+        if let Some(phone) = self.shared.borrow_mut().phone.as_mut() {
+            let room = FROM_PHONE_MAX.saturating_sub(phone.from_phone.len());
+            phone.from_phone.extend(bytes.iter().take(room));
+        }
+    }
+
+    /// Everything the HM-10 sent to the phone since the last call.
+    pub fn phone_read(&mut self) -> Vec<u8> {
+        self.shared
+            .borrow_mut()
+            .phone
+            .as_mut()
+            .map(|p| p.to_phone.drain(..).collect())
+            .unwrap_or_default()
+    }
+
+    /// The records (the samples not yet taken).
+    pub fn finish(self) -> Sitl {
+        let settings = self.flight_settings();
+        let Self {
+            sim,
+            shared,
+            samples,
+            ts_s,
+            ..
+        } = self;
+        drop(sim);
+        let samples = Rc::try_unwrap(samples)
+            .map(RefCell::into_inner)
+            .unwrap_or_default();
+        let mut s = shared.borrow_mut();
+        Sitl {
+            samples,
+            ts_s,
+            module_rx: std::mem::take(&mut s.module_rx),
+            handset_tx: std::mem::take(&mut s.handset_tx),
+            settings,
+            watchdog_resets: s.watchdog_resets,
+            boots: std::mem::take(&mut s.boots),
+        }
     }
 }

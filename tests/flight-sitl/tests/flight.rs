@@ -194,14 +194,14 @@ fn flies_through_a_lossy_link() {
         seed: 7,
         duration_s: 6.5,
         link_failsafe_ms: 500,
-        pilot: pilot(-1.0, |t| PilotInput {
+        pilot: Box::new(pilot(-1.0, |t| PilotInput {
             roll: if (5.0..6.0).contains(&t) {
                 1.0 / 3.0
             } else {
                 0.0
             },
             ..cruise(-1.0)
-        }),
+        })),
         setting_changes: Vec::new(),
         packet_loss: 0.3,
         rate: telemetry::link::RateMode::F250,

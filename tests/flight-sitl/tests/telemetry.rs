@@ -35,7 +35,7 @@ fn telemetry_reaches_the_module_and_settings_come_back() {
         seed: 3,
         duration_s: 6.0,
         link_failsafe_ms: 500,
-        pilot: pilot(-1.0, |_| cruise(-1.0)),
+        pilot: Box::new(pilot(-1.0, |_| cruise(-1.0))),
         setting_changes: vec![change],
         packet_loss: 0.0,
         rate: telemetry::link::RateMode::F250,

@@ -23,8 +23,9 @@ use crate::scenario::Scenario;
   taulink-sim --cut 10:12 --duration 20 --plot out failsafe and recovery after a 2 s cut,
                                                    drawn to out/link.png
   taulink-sim --sweep                              every rate mode, clean and at 10 % loss
-  taulink-sim --serve                              the web ground station on this link:
-                                                   open the printed URL
+  taulink-sim --serve                              the web ground station against the
+                                                   firmware-in-the-loop world (flight-sitl
+                                                   serve): open the printed URL
 
 Exit status: 0 if every channel output and stream byte was right, 1 if any was wrong,
 2 for a command-line error."
@@ -92,9 +93,10 @@ pub struct Cli {
     /// failsafe marked) into DIR.
     #[command(flatten)]
     pub plot: sim_plot::PlotArgs,
-    /// Serve the web ground station and this link's telemetry (what the module's HM-10 would
-    /// relay to a phone) over HTTP and a WebSocket at ADDR (default 127.0.0.1:8018), in real
-    /// time, and print the URL to open. Runs until interrupted.
+    /// Serve the web ground station against flight-sitl's firmware-in-the-loop world (both
+    /// ends' applications, the quad flown by a scripted pilot; --rate, --seed and --loss
+    /// apply) over HTTP and a WebSocket at ADDR (default 127.0.0.1:8018), in real time, and
+    /// print the URL to open. Runs until interrupted.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8018",
           conflicts_with_all = ["sweep", "json"])]
     pub serve: Option<std::net::SocketAddr>,

@@ -118,7 +118,7 @@ fn print_sweep(reports: &[(Report, Report)], json: bool) {
 fn main() -> ExitCode {
     // clap prints --help/--version (exit 0) and usage errors with a suggestion (exit 2).
     let cli = Cli::parse();
-    if let Some(options) = taulink_sim::serve::Options::from_cli(&cli) {
+    if let Some(options) = taulink_sim::serve::options(&cli) {
         return ExitCode::from(u8::try_from(taulink_sim::serve::main(options)).unwrap_or(1));
     }
     let scenario = cli.scenario();

@@ -1,182 +1,56 @@
-//! `taulink-sim --serve [ADDR]`: serves the web ground station (the built app, static files)
-//! and, on `/ws`, a WebSocket per page with its own simulated world ([`session`]) running in
-//! (scaled) real time: binary messages to the page carry what the module's HM-10 relay
-//! sends to a phone, binary messages from the page go into the relay towards the flight
-//! side. `/api/sent` tells what the flight side of the latest world sent and applied (for
-//! tests). Binds 127.0.0.1:8018 by default; connections, request heads, pipes and worlds are
-//! bounded.
+//! `taulink-sim --serve [ADDR]`: the web ground station against the firmware-in-the-loop
+//! world of `flight-sitl` (`flight_sitl::serve`: both ends' own applications on virtual
+//! Si4432s, the quad flown by a scripted pilot, the page as the phone on the module's
+//! HM-10) — the same server as `flight-sitl serve`. The link options that world takes
+//! (`--rate`, `--seed`, `--loss`) come from this command line; the served world places the
+//! two ends 100 m apart on 433 MHz, so the other link options do not apply to it.
 
-mod flight;
-mod http;
-mod session;
+use flight_sitl::serve::{Options, WorldOptions, default_dist};
 
-pub use flight::Sent;
-pub use session::Session;
+use crate::Cli;
 
-use std::net::{SocketAddr, TcpListener, TcpStream};
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
-
-use tungstenite::{Message as WsMessage, WebSocket};
-
-use crate::{Cli, Scenario};
-
-/// Default address: loopback only.
-pub const DEFAULT_ADDR: &str = "127.0.0.1:8018";
-/// Connections served at once (each a thread).
-const MAX_CONNECTIONS: usize = 16;
-/// Simulated worlds at once (each a WebSocket).
-const MAX_WORLDS: usize = 4;
-/// Wall-clock step of a world.
-const TICK: Duration = Duration::from_millis(20);
-/// Largest WebSocket message accepted from a page.
-const MAX_WS_MESSAGE: usize = 4096;
-
-/// What the server needs, from the command line.
-#[derive(Debug, Clone)]
-pub struct Options {
-    /// Address to bind.
-    pub addr: SocketAddr,
-    /// The built app (`telemetry/ground-station/dist`).
-    pub dist: PathBuf,
-    /// Virtual seconds per wall second.
-    pub speed: f64,
-    /// The link to simulate.
-    pub scenario: Scenario,
-}
-
-impl Options {
-    /// The server's options from the command line (`--serve [ADDR] [--dist DIR] [--speed X]`
-    /// and the scenario options); `None` without `--serve`.
-    pub fn from_cli(cli: &Cli) -> Option<Self> {
-        Some(Self {
-            addr: cli.serve?,
-            dist: cli.dist.clone().unwrap_or_else(|| {
-                PathBuf::from(concat!(
-                    env!("CARGO_MANIFEST_DIR"),
-                    "/../../telemetry/ground-station/dist"
-                ))
-            }),
-            speed: cli.speed,
-            scenario: cli.scenario(),
-        })
-    }
-}
-
-/// Shared between connections.
-struct Shared {
-    options: Options,
-    connections: AtomicUsize,
-    worlds: AtomicUsize,
-    sent: Mutex<String>,
+/// The server's options from the command line (`--serve [ADDR] [--dist DIR] [--speed X]`
+/// with `--rate`, `--seed`, `--loss`); `None` without `--serve`.
+pub fn options(cli: &Cli) -> Option<Options> {
+    Some(Options {
+        addr: cli.serve?,
+        dist: cli.dist.clone().unwrap_or_else(default_dist),
+        speed: cli.speed,
+        world: WorldOptions {
+            rate: cli.rate.into(),
+            seed: cli.seed,
+            packet_loss: cli.loss,
+            ..WorldOptions::default()
+        },
+    })
 }
 
 /// Runs the server until the process ends; returns the exit code on a startup error.
 pub fn main(options: Options) -> i32 {
-    if !options.dist.join("index.html").is_file() {
-        eprintln!(
-            "no built app in {} (cd telemetry/ground-station && npm ci && npm run wasm && npm run build)",
-            options.dist.display()
+    flight_sitl::serve::main(options)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+    use telemetry::link::RateMode;
+
+    #[test]
+    fn the_link_options_reach_the_served_world() {
+        let cli = Cli::try_parse_from(
+            "taulink-sim --serve 127.0.0.1:9001 --rate L50 --seed 9 --loss 0.2 --speed 3"
+                .split_whitespace(),
+        )
+        .unwrap();
+        let o = options(&cli).unwrap();
+        assert_eq!(o.addr.port(), 9001);
+        assert_eq!(o.speed, 3.0);
+        assert_eq!(
+            (o.world.rate, o.world.seed, o.world.packet_loss),
+            (RateMode::L50, 9, 0.2)
         );
-        return 2;
-    }
-    let listener = match TcpListener::bind(options.addr) {
-        Ok(l) => l,
-        Err(e) => {
-            eprintln!("cannot bind {}: {e}", options.addr);
-            return 1;
-        }
-    };
-    let addr = listener.local_addr().unwrap_or(options.addr);
-    println!("TauLink ground station: open http://{addr}/");
-    let shared = Arc::new(Shared {
-        options,
-        connections: AtomicUsize::new(0),
-        worlds: AtomicUsize::new(0),
-        sent: Mutex::new("{}".into()),
-    });
-    for stream in listener.incoming().flatten() {
-        if shared.connections.fetch_add(1, Ordering::SeqCst) >= MAX_CONNECTIONS {
-            shared.connections.fetch_sub(1, Ordering::SeqCst);
-            http::respond(&stream, 503, "text/plain", b"busy");
-            continue;
-        }
-        let shared = shared.clone();
-        std::thread::spawn(move || {
-            connection(&shared, stream);
-            shared.connections.fetch_sub(1, Ordering::SeqCst);
-        });
-    }
-    0
-}
-
-fn connection(shared: &Shared, stream: TcpStream) {
-    let _ = stream.set_read_timeout(Some(Duration::from_secs(10)));
-    let Some(request) = http::peek_request(&stream) else {
-        http::respond(&stream, 400, "text/plain", b"bad request");
-        return;
-    };
-    if !request.websocket {
-        http::consume(&stream, &request);
-    }
-    match (request.path.as_str(), request.websocket) {
-        ("/ws", true) => {
-            if shared.worlds.fetch_add(1, Ordering::SeqCst) >= MAX_WORLDS {
-                shared.worlds.fetch_sub(1, Ordering::SeqCst);
-                http::respond(&stream, 503, "text/plain", b"too many simulations");
-                return;
-            }
-            if let Ok(ws) = tungstenite::accept(stream) {
-                world(shared, ws);
-            }
-            shared.worlds.fetch_sub(1, Ordering::SeqCst);
-        }
-        ("/api/sent", false) => {
-            let body = shared.sent.lock().map(|s| s.clone()).unwrap_or_default();
-            http::respond(&stream, 200, "application/json", body.as_bytes());
-        }
-        (path, false) => http::serve_file(&stream, &shared.options.dist, path),
-        _ => http::respond(&stream, 400, "text/plain", b"bad request"),
-    }
-}
-
-/// Runs one world in real time (× speed) against one page.
-fn world(shared: &Shared, mut ws: WebSocket<TcpStream>) {
-    let mut session = Session::new(&shared.options.scenario);
-    let _ = ws
-        .get_ref()
-        .set_read_timeout(Some(Duration::from_millis(2)));
-    let start = Instant::now();
-    loop {
-        loop {
-            match ws.read() {
-                Ok(WsMessage::Binary(bytes)) if bytes.len() <= MAX_WS_MESSAGE => {
-                    session.from_page(&bytes)
-                }
-                Ok(WsMessage::Close(_)) => return,
-                Ok(_) => {}
-                Err(tungstenite::Error::Io(e))
-                    if matches!(
-                        e.kind(),
-                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                    ) =>
-                {
-                    break;
-                }
-                Err(_) => return,
-            }
-        }
-        let target_us = (start.elapsed().as_secs_f64() * shared.options.speed * 1e6) as u64;
-        session.run_until(target_us.max(session.now_us()));
-        let bytes = session.take_to_page();
-        if !bytes.is_empty() && ws.send(WsMessage::Binary(bytes.into())).is_err() {
-            return;
-        }
-        if let Ok(mut sent) = shared.sent.lock() {
-            *sent = session.sent.borrow().to_json();
-        }
-        std::thread::sleep(TICK);
+        let plain = Cli::try_parse_from(["taulink-sim"]).unwrap();
+        assert!(options(&plain).is_none());
     }
 }

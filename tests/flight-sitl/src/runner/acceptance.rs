@@ -33,10 +33,7 @@ pub fn link_cuts(rate: RateMode, altitudes_m: &[f64]) -> Result<Vec<Outcome>, Ru
                 altitude_m: Some(a),
                 ..opts.clone()
             };
-            Ok(run_plan(
-                &o,
-                super::with_glances(&o, plan(Kind::LinkCut, &o, r)?),
-            ))
+            Ok(run_plan(&o, plan(Kind::LinkCut, &o, r)?))
         })
         .collect()
 }

@@ -32,6 +32,9 @@ use super::{Kind, Options};
 
   oneshot-experiment  the seed's OneShot125 experiment (its own options: --runs N, --json,
                       --plot DIR; see `flight-sitl oneshot-experiment --help`)
+  serve [ADDR]        the web ground station against this world, a scripted pilot flying
+                      (its own options: --speed X, --dist DIR, --rate, --seed, --loss, --set;
+                      see `flight-sitl serve --help`)
 
 Examples:
   flight-sitl hover --rate F500 --json
@@ -145,7 +148,7 @@ impl From<RateArg> for RateMode {
 }
 
 /// A finite number within `lo..=hi` (`what` names it in the error).
-fn number_in(s: &str, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
+pub(crate) fn number_in(s: &str, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
     let v: f64 = s
         .trim()
         .parse()
@@ -173,7 +176,7 @@ fn duration(s: &str) -> Result<f64, String> {
     }
 }
 
-fn name_value(s: &str) -> Result<(String, String), String> {
+pub(crate) fn name_value(s: &str) -> Result<(String, String), String> {
     let (n, v) = s
         .split_once('=')
         .ok_or_else(|| format!("{s:?}: expected NAME=VALUE, e.g. failsafe.descent_mps=1.0"))?;

@@ -14,7 +14,9 @@ use flight_core::settings::Settings;
 use quad_sim::quad::QuadParams;
 use telemetry::link::RateMode;
 
-use crate::scenario::{FlashInjection, ImuInjection, PilotInput, RadioInjection, Scenario};
+use crate::scenario::{
+    FlashInjection, ImuInjection, PilotInput, Piloting, RadioInjection, Scenario, Sight,
+};
 use crate::world::Sitl;
 use pilot::PilotPlan;
 pub use report::Report;
@@ -249,18 +251,56 @@ fn idle(settings: &Settings) -> f32 {
     settings.f32("output.idle")
 }
 
-/// The world's scenario for `opts` with `pilot` and the fault of `plan`.
-fn scenario(opts: &Options, plan: Plan) -> Scenario {
-    let Plan {
-        kind,
-        fault_at_s,
-        fault_end_s,
-        pilot,
-        duration_s,
-        ..
-    } = plan;
-    let critical_mv = opts.settings.u32("battery.cell_critical_mv") as f32;
-    let script = move |t: f64| -> PilotInput {
+/// The runner's pilot flying a [`Plan`], with the plan's fault scripted alongside: while
+/// holding the altitude the pilot glances at the frame every [`pilot::GLANCE_S`] (from the
+/// hold's start until the fault, at most [`MAX_GLANCING_S`]) and holds the throttle chosen
+/// from what it saw until the next; after the last glance it flies the trim.
+struct PlanPilot {
+    plan: Plan,
+    glance_until_s: Option<f64>,
+    critical_mv: f32,
+}
+
+impl PlanPilot {
+    fn new(opts: &Options, mut plan: Plan) -> Self {
+        plan.pilot.glances.clear();
+        let glance_until_s = plan.pilot.hold_from_s.map(|from| {
+            match plan.fault_at_s {
+                Some(f) if f > from => f,
+                _ => from + MAX_GLANCING_S,
+            }
+            .min(plan.duration_s)
+            .min(from + MAX_GLANCING_S)
+        });
+        Self {
+            plan,
+            glance_until_s,
+            critical_mv: opts.settings.u32("battery.cell_critical_mv") as f32,
+        }
+    }
+}
+
+impl Piloting for PlanPilot {
+    fn input(&mut self, t: f64, sight: &Sight) -> PilotInput {
+        let pilot = &mut self.plan.pilot;
+        while let (Some(g), Some(until)) = (pilot.next_glance_s(), self.glance_until_s)
+            && g <= until
+            && t >= g
+        {
+            // The frame as it is now (after the last physics step): the pilot reacts from
+            // here on.
+            pilot.glances.push(pilot::Glance {
+                t_s: g,
+                altitude_m: sight.altitude_m,
+                climb_mps: sight.climb_mps,
+            });
+        }
+        let Plan {
+            kind,
+            fault_at_s,
+            fault_end_s,
+            ..
+        } = self.plan;
         let mut input = pilot.input(t);
         let on = fault_at_s.is_some_and(|a| t >= a) && fault_end_s.is_none_or(|e| t < e);
         if on {
@@ -279,15 +319,20 @@ fn scenario(opts: &Options, plan: Plan) -> Scenario {
             && t >= a
         {
             input.battery_mv =
-                (DRAIN_FROM_MV - DRAIN_MV_PER_S * (t - a) as f32).max(critical_mv - 300.0);
+                (DRAIN_FROM_MV - DRAIN_MV_PER_S * (t - a) as f32).max(self.critical_mv - 300.0);
         }
         input
-    };
-    let mut s = Scenario::new(
+    }
+}
+
+/// The world's scenario for `opts`, flown by the plan's pilot with the plan's fault.
+fn scenario(opts: &Options, plan: Plan) -> Scenario {
+    let (kind, duration_s) = (plan.kind, plan.duration_s);
+    let mut s = Scenario::flown_by(
         opts.settings.clone(),
         opts.quad.clone(),
         duration_s,
-        Box::new(script),
+        PlanPilot::new(opts, plan),
     );
     s.seed = opts.seed;
     s.rate = opts.rate;
@@ -436,46 +481,11 @@ pub fn run_kind(kind: Kind, opts: &Options) -> Result<Outcome, RunError> {
             .copied()
             .unwrap_or((0.0, 0.0))
     };
-    let plan = with_glances(opts, plan(kind, opts, reach)?);
-    Ok(run_plan(opts, plan))
+    Ok(run_plan(opts, plan(kind, opts, reach)?))
 }
 
-/// The pilot's glances at most this long after the hold starts, s (each costs a run).
+/// The pilot's glances at most this long after the hold starts, s.
 pub const MAX_GLANCING_S: f64 = 8.0;
-
-/// `plan` with the pilot's glances filled in (see [`pilot`]): from the hold's start until the
-/// fault (or, with the fault before the hold, for [`MAX_GLANCING_S`]), each from a run of
-/// the world identical to the final one up to that glance. After the last glance the pilot
-/// holds the throttle it last chose.
-pub fn with_glances(opts: &Options, mut plan: Plan) -> Plan {
-    let Some(from) = plan.pilot.hold_from_s else {
-        return plan;
-    };
-    let until = match plan.fault_at_s {
-        Some(f) if f > from => f,
-        _ => from + MAX_GLANCING_S,
-    }
-    .min(plan.duration_s)
-    .min(from + MAX_GLANCING_S);
-    plan.pilot.glances.clear();
-    while let Some(g) = plan.pilot.next_glance_s()
-        && g <= until
-    {
-        let look = Plan {
-            duration_s: g,
-            ..plan.clone()
-        };
-        let sitl = crate::run(scenario(opts, look));
-        // What the frame did up to just before the glance (the pilot reacts from it on).
-        let seen = sitl.samples.iter().rev().find(|s| s.t_s < g);
-        plan.pilot.glances.push(pilot::Glance {
-            t_s: g,
-            altitude_m: seen.map_or(0.0, |s| s.altitude_m),
-            climb_mps: seen.map_or(0.0, |s| s.climb_mps),
-        });
-    }
-    plan
-}
 
 /// Runs a planned scenario and measures it.
 pub fn run_plan(opts: &Options, plan: Plan) -> Outcome {

@@ -4,11 +4,10 @@
 //! the person at the transmitter, not firmware: nothing here decides anything the flight
 //! controller decides.
 //!
-//! The world's contract gives the pilot only the time (`Pilot = FnMut(f64) -> PilotInput`),
-//! not the altitude. The pilot therefore looks at the frame in *glances*, every
-//! [`GLANCE_S`], as a person does, and holds the throttle in between; the runner takes each
-//! glance from the record of a run of the same deterministic world that is identical up to
-//! it (`super::with_glances`): glance k comes from run k, which ran glances 0…k−1.
+//! The world shows the pilot the frame as it is (`crate::Sight`: the quad-sim truth after each
+//! physics step). The pilot looks at it in *glances*, every [`GLANCE_S`], as a person does,
+//! and holds the throttle in between; the runner's pilot (`super::PlanPilot`) records each
+//! glance into the plan as it takes it.
 
 use crate::scenario::PilotInput;
 use quad_sim::quad::QuadParams;

@@ -49,6 +49,7 @@ fn sample(t_s: f64, altitude_m: f64, climb_mps: f64, armed: bool, failsafe: bool
         imu_reprobe: false,
         imu_fault: None,
         flight_up: true,
+        flight_busy: false,
     }
 }
 

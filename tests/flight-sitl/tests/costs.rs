@@ -1,0 +1,79 @@
+//! What blocking jobs cost the flight board (issue 12: time that costs): a gain design
+//! (≈ 42 ms on the F405) and the settings flash's writes and sector erases hold its one
+//! thread-mode executor — the loop takes no IMU sample meanwhile, the supervisor does not
+//! feed the IWDG.
+
+#![allow(
+    clippy::unwrap_used,
+    clippy::indexing_slicing,
+    clippy::cast_precision_loss,
+    clippy::cast_possible_truncation
+)]
+
+use flight_core::report::f32_value;
+use flight_core::settings::PARAMS;
+use flight_sitl::scenario::default_airframe;
+use std::time::Duration;
+
+use flight_sitl::{PilotInput, Sample, Scenario, WARMUP_S, World};
+use telemetry::messages::{Message, SettingChange, encode_message};
+
+fn change(name: &str, value: f32) -> SettingChange {
+    let id = PARAMS.iter().position(|p| p.name == name).unwrap() as u16;
+    SettingChange {
+        id,
+        value: f32_value(value),
+    }
+}
+
+/// The stretches (start, length) the flight board was held, s.
+fn held(samples: &[Sample], ts_s: f64) -> Vec<(f64, f64)> {
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    let mut last = f64::NEG_INFINITY;
+    for x in samples.iter().filter(|x| x.flight_busy) {
+        match out.last_mut() {
+            Some((_, len)) if x.t_s - last < 1.5 * ts_s => *len += ts_s,
+            _ => out.push((x.t_s, ts_s)),
+        }
+        last = x.t_s;
+    }
+    out
+}
+
+/// On the ground, disarmed: the phone sends `changes` one by one from 1 s (one per
+/// 20 ms), the world runs `seconds`.
+fn on_the_ground(changes: &[SettingChange], seconds: f64) -> flight_sitl::Sitl {
+    let (quad, settings) = default_airframe();
+    let s = Scenario::new(
+        settings,
+        quad,
+        seconds,
+        Box::new(|_: f64| PilotInput::default()),
+    );
+    let mut world = World::new(s);
+    world.attach_phone();
+    world.run_for(Duration::from_secs_f64(WARMUP_S + 1.0));
+    for c in changes {
+        let mut frame = [0u8; 32];
+        let n = encode_message(&Message::SettingChange(*c), &mut frame).unwrap();
+        world.phone_write(&frame[..n]);
+        world.run_for(Duration::from_millis(20));
+    }
+    world.run_to_end();
+    world.finish()
+}
+
+#[test]
+fn a_gain_design_holds_the_board_for_42_ms() {
+    // An LQG cost from the phone, on the ground: applied, the gains re-designed, saved.
+    let sitl = on_the_ground(&[change("lqg.q_rate", 900.0)], 2.0);
+    assert_eq!(sitl.settings.f32("lqg.q_rate"), 900.0);
+    let stretches = held(&sitl.samples, sitl.ts_s);
+    println!("held: {stretches:?}");
+    let design = stretches
+        .iter()
+        .find(|(_, len)| (*len - 0.042).abs() < 0.002)
+        .copied();
+    assert!(design.is_some(), "no 42 ms design stretch in {stretches:?}");
+    assert_eq!(sitl.watchdog_resets.flight, 0);
+}
