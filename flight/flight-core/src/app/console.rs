@@ -93,6 +93,15 @@ impl FlightApp {
             )?,
             None => out.write_str("flight loop not running (IMU?)\r\n")?,
         }
+        let estimator = self.flight.estimator();
+        write!(
+            out,
+            "estimator {} (ins.mode {}), fallbacks {}, gps fix {}\r\n",
+            estimator.source().name(),
+            estimator.mode().name(),
+            estimator.fallbacks(),
+            estimator.gps_fix()
+        )?;
         if let Some(fault) = self.imu.fault() {
             write!(
                 out,

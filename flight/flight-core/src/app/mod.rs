@@ -287,6 +287,9 @@ impl FlightApp {
     pub fn on_baro(&mut self, now_ms: u32, altitude_m: Option<f32>) {
         self.watchdog.check_in(Task::Baro);
         self.climb_mps = altitude_m.and_then(|a| self.climb.update(now_ms, a));
+        if let Some(a) = altitude_m {
+            self.flight.on_baro_altitude(a);
+        }
     }
 
     /// A battery sample (raw ADC counts) at `now_ms`.

@@ -3,11 +3,13 @@
 //! stateless parts of the setpoint and mix stages live in `stages`.
 
 use super::controllers::Controllers;
+use super::estimator::{Estimator, EstimatorMode, Source};
 use super::identify::Sysid;
 use super::stages;
 use super::sticks::StickShaping;
 use crate::control::mixer::Mixer;
-use crate::estimation::complementary::{self, Complementary};
+use crate::estimation::complementary;
+use crate::estimation::ins::aiding::gps::GpsUpdate;
 use crate::estimation::math::{inv_sqrt, wrap_pi};
 use crate::estimation::quaternion::{Quaternion, body_to_ned_vector, ned_to_body};
 use crate::estimation::{GRAVITY_MPS2, all_finite};
@@ -47,6 +49,8 @@ pub struct LoopConfig {
     /// estimate (and the frame) off by degrees per second. Skipping samples divides the
     /// filter's kp and ki by this factor without touching its ground behaviour.
     pub armed_accel_divider: u16,
+    /// Which estimator flies (`ins.mode`).
+    pub estimator: EstimatorMode,
 }
 
 /// One IMU sample, body FRD axes.
@@ -90,13 +94,15 @@ pub struct LoopOutput {
     pub failsafe: bool,
     /// Estimated attitude (roll, pitch, yaw), deg.
     pub attitude_deg: [f32; 3],
+    /// The estimator that flew this loop.
+    pub estimator: Source,
 }
 
 /// The loop's state.
 #[derive(Debug, Clone)]
 pub struct FlightLoop {
     config: LoopConfig,
-    attitude: Complementary,
+    estimator: Estimator,
     supervisor: Supervisor,
     modes: ModeSwitch,
     mode: FlightMode,
@@ -130,7 +136,7 @@ impl FlightLoop {
         let modes = ModeSwitch::new(config.modes);
         Self {
             config,
-            attitude: Complementary::new(config.attitude_filter),
+            estimator: Estimator::new(config.estimator, config.attitude_filter),
             supervisor: Supervisor::new(config.supervisor),
             mode: modes.mode(),
             modes,
@@ -203,7 +209,7 @@ impl FlightLoop {
             self.climb_mps = None;
             return None;
         };
-        let [_, _, f_down] = body_to_ned_vector(self.attitude.attitude(), accel_mps2);
+        let [_, _, f_down] = body_to_ned_vector(self.estimator.attitude(), accel_mps2);
         let up_accel = -(f_down + GRAVITY_MPS2);
         let ts = self.config.ts_s;
         let k = ts / (CLIMB_BLEND_S + ts);
@@ -244,7 +250,22 @@ impl FlightLoop {
 
     /// Body → NED attitude estimate.
     pub fn attitude(&self) -> Quaternion {
-        self.attitude.attitude()
+        self.estimator.attitude()
+    }
+
+    /// The estimators and which one flies.
+    pub fn estimator(&self) -> &Estimator {
+        &self.estimator
+    }
+
+    /// A baro altitude (m, up) for the INS's next update.
+    pub fn on_baro_altitude(&mut self, altitude_m: f32) {
+        self.estimator.baro(altitude_m);
+    }
+
+    /// A NAV-PVT from the GPS, just arrived (fused while the full INS flies).
+    pub fn on_gps(&mut self, pvt: &crate::sensors::ubx::NavPvt) -> Option<GpsUpdate> {
+        self.estimator.gps(pvt)
     }
 
     /// One loop at `now_ms`. `climb_rate_mps` (up positive) comes from the INS/baro when
@@ -262,8 +283,15 @@ impl FlightLoop {
         let estimate = self.estimate(imu);
         let previous_mode = self.mode;
         let decision = self.supervise(now_ms, link, &estimate);
-        let climb_rate_mps = self.fuse_climb(climb_rate_mps, imu.accel_mps2);
-        let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
+        // The INS's vertical velocity when it flies on the baro; else the loop's own blend.
+        let climb_rate_mps = match self.estimator.vertical() {
+            Some((_, climb)) => {
+                self.climb_mps = Some(climb);
+                Some(climb)
+            }
+            None => self.fuse_climb(climb_rate_mps, imu.accel_mps2),
+        };
+        let [roll, pitch, yaw] = euler_deg(self.estimator.attitude());
         let failsafe = self.supervisor.failsafe_descent_mps();
         // Nothing below changes the supervisor's state: read it once.
         let armed = self.supervisor.motors_enabled();
@@ -305,6 +333,7 @@ impl FlightLoop {
             armed,
             failsafe: failsafe.is_some(),
             attitude_deg: [roll, pitch, yaw],
+            estimator: self.estimator.source(),
         }
     }
 
@@ -327,10 +356,7 @@ impl FlightLoop {
         } else {
             imu.accel_mps2
         };
-        let filter_ok = self
-            .attitude
-            .update(imu.gyro_radps, accel, imu.mag, self.config.ts_s)
-            .is_ok();
+        let filter_ok = self.estimator.update(imu, accel, self.config.ts_s).is_ok();
         Estimate {
             gyro_dps,
             gyro_ok,

@@ -9,6 +9,7 @@ mod announce;
 mod channels;
 mod climb;
 mod controllers;
+mod estimator;
 mod flight_loop;
 mod identify;
 mod link;
@@ -24,6 +25,9 @@ pub use channels::{
 };
 pub use climb::ClimbRate;
 pub use controllers::{ControlParams, Controllers};
+pub use estimator::{
+    Estimator, EstimatorMode, INS_START_S, PSEUDO_PERIOD_S, PSEUDO_VAR_M2PS2, Source,
+};
 pub use flight_loop::{FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
 pub use link::{bind_band, store_link, stored_link};
 pub use setup::{FlightSetup, SetupError, from_settings};

@@ -136,6 +136,9 @@ pub const CHANNEL_FORMATS: Choice = &["16", "8"];
 pub const ARM_ON_CRITICAL: Choice = &["refuse", "allow"];
 /// Gyro loop rates.
 pub const LOOP_RATES: Choice = &["500", "1000"];
+/// Estimators (`pipeline::EstimatorMode`): the complementary filter alone, the INS with
+/// GPS, the INS without GPS (horizontal velocity held by a pseudo-measurement).
+pub const INS_MODES: Choice = &["complementary", "ins", "ins_indoor"];
 
 /// Every parameter. Keys are grouped by hundreds per subsystem.
 pub const PARAMS: &[Param] = &[
@@ -203,6 +206,8 @@ pub const PARAMS: &[Param] = &[
     u(607, "arm.channel", 0, 16, 0),
     u(608, "arm.min_us", 800, 2_200, 1_750),
     u(609, "arm.max_us", 800, 2_200, 2_100),
+    // estimation (8xx). Factory: the complementary filter, as flown before the INS did.
+    c(800, "ins.mode", INS_MODES, 0),
 ];
 
 /// Number of parameters.

@@ -90,6 +90,7 @@ fn script(t_us: u64) -> (LoopOutput, BatteryStatus) {
         armed,
         failsafe: false,
         attitude_deg,
+        estimator: flight_core::pipeline::Source::Complementary,
     };
     // 16.4 V full, 40 mV less every 5 s, 12 A while armed.
     let voltage_mv = 16_400u32.saturating_sub(40 * (s / 5) as u32);
