@@ -343,7 +343,8 @@ impl FlightLoop {
         // `abs() < limit` is false for NaN and ±∞: no separate finiteness test.
         let gyro_ok = gyro_dps.iter().all(|g| g.abs() < GYRO_LIMIT_DPS);
         // A zero vector is below the filter's accelerometer threshold: gyro (and mag) only.
-        let accel = if self.supervisor.motors_enabled() {
+        let armed = self.supervisor.motors_enabled();
+        let accel = if armed {
             self.accel_phase = self.accel_phase.wrapping_add(1);
             if self.accel_phase >= self.config.armed_accel_divider.max(1) {
                 self.accel_phase = 0;
@@ -356,7 +357,10 @@ impl FlightLoop {
         } else {
             imu.accel_mps2
         };
-        let filter_ok = self.estimator.update(imu, accel, self.config.ts_s).is_ok();
+        let filter_ok = self
+            .estimator
+            .update(imu, accel, armed, self.config.ts_s)
+            .is_ok();
         Estimate {
             gyro_dps,
             gyro_ok,
