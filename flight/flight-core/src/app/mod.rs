@@ -9,9 +9,10 @@
 //! loop and its controllers; the IMU fault policy (`imu`); the baro climb rate; the
 //! battery monitor and the tone player; the link follower's hooks, bind handling and
 //! telemetry (`link`); the console's command language (`console`); the watchdog check-in
-//! policy (`watchdog`).
+//! policy (`watchdog`); the GPS port (`gps`: UBX bytes in, boot configuration out).
 
 mod console;
+mod gps;
 mod imu;
 mod link;
 mod watchdog;
@@ -19,6 +20,7 @@ mod watchdog;
 #[cfg(test)]
 mod tests;
 
+pub use gps::{GPS_BAUD, GPS_BOOT_BAUDS, GPS_REPORT_PERIOD_MS, gps_baud_messages, gps_message};
 pub use imu::{
     CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
 };
@@ -69,6 +71,7 @@ pub struct FlightApp {
     watchdog: Watchdog,
     identified: Option<Identification>,
     settings_problem: Option<LoadProblem>,
+    gps: gps::GpsPort,
 }
 
 /// The flight setup for `settings`, or the factory one (and why) if they do not fly.
@@ -113,6 +116,7 @@ impl FlightApp {
             watchdog: Watchdog::new(now_ms),
             identified: None,
             settings_problem: None,
+            gps: gps::GpsPort::new(),
         })
     }
 
