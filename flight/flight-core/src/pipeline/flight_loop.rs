@@ -4,6 +4,7 @@
 
 use super::controllers::Controllers;
 use super::estimator::{Estimator, EstimatorMode, Source};
+use super::hold::{Hold, Horizontal, Nav};
 use super::identify::Sysid;
 use super::stages;
 use super::sticks::StickShaping;
@@ -25,6 +26,10 @@ const DEG_PER_RAD: f32 = 180.0 / core::f32::consts::PI;
 const GYRO_LIMIT_DPS: f32 = 2200.0;
 /// Time constant pulling the accelerometer-integrated climb rate towards the measured one, s.
 const CLIMB_BLEND_S: f32 = 1.0;
+/// On a link failsafe with a good GPS fix the frame holds its position and altitude this
+/// long (the pilot may walk back into range, the link may return), then descends in place
+/// at the failsafe rate, still holding the position. Without a fix: the descent at once.
+pub const FAILSAFE_HOLD_MS: u32 = 30_000;
 
 /// Fixed configuration of the loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -90,7 +95,7 @@ pub struct LoopOutput {
     pub mode_changed: bool,
     /// Motors may turn.
     pub armed: bool,
-    /// Link failsafe descent active.
+    /// Link failsafe descent active (or its position hold, see [`FAILSAFE_HOLD_MS`]).
     pub failsafe: bool,
     /// Estimated attitude (roll, pitch, yaw), deg.
     pub attitude_deg: [f32; 3],
@@ -126,6 +131,10 @@ pub struct FlightLoop {
     landing: LandingDetector,
     /// The battery is at its critical level (arming refused).
     battery_critical: bool,
+    /// Altitude/position hold loops (hold modes, failsafe hold).
+    hold: Hold,
+    /// When the current link failsafe began, ms.
+    failsafe_since_ms: Option<u32>,
     /// The boot-time settings load had a problem not yet fixed by a save (arming refused).
     settings_problem: bool,
 }
@@ -151,6 +160,8 @@ impl FlightLoop {
             identification: None,
             landing: LandingDetector::new(),
             battery_critical: false,
+            hold: Hold::default(),
+            failsafe_since_ms: None,
             settings_problem: false,
         }
     }
@@ -298,6 +309,23 @@ impl FlightLoop {
         if self.mode != FlightMode::SystemId || failsafe.is_some() || !armed {
             self.finish_sysid();
         }
+        if failsafe.is_none() {
+            self.failsafe_since_ms = None;
+        } else if decision == Decision::FailsafeEntered || self.failsafe_since_ms.is_none() {
+            self.failsafe_since_ms = Some(now_ms);
+        }
+        // The navigation estimate, only where a hold loop reads it.
+        let nav = (self.mode.holds() || failsafe.is_some()).then(|| {
+            let [[r11, r12, _], _, _] = ned_to_body(self.estimator.attitude());
+            let h = r11 * r11 + r12 * r12;
+            let inv = if h > 1e-12 { inv_sqrt(h) } else { 0.0 };
+            Nav {
+                vertical: self.estimator.vertical(),
+                climb_mps: climb_rate_mps,
+                horizontal: self.estimator.horizontal(),
+                yaw_cos_sin: [r11 * inv, r12 * inv],
+            }
+        });
         let (motors, thrust) = if armed && estimate.gyro_ok {
             let fly = Fly {
                 decision,
@@ -306,9 +334,12 @@ impl FlightLoop {
                 attitude_deg: [roll, pitch],
                 failsafe_descent_mps: failsafe,
                 climb_rate_mps,
+                nav,
+                failsafe_for_ms: self.failsafe_since_ms.map(|t| now_ms.wrapping_sub(t)),
             };
             self.fly(&fly, &link.sticks)
         } else {
+            self.hold.reset();
             if let Some(c) = self.controllers.as_mut() {
                 self.airborne = false;
                 // On the ground nothing integrates.
@@ -415,7 +446,7 @@ impl FlightLoop {
     }
 
     /// Failsafe-descent stage, throttle part: PI on the climb rate around the hover value
-    /// (the attitude part levels the frame, see [`stages::level_setpoint`]).
+    /// (the attitude part levels the frame or holds the position, [`stages::angle_setpoint`]).
     fn descent_throttle(
         &mut self,
         decision: Decision,
@@ -447,9 +478,41 @@ impl FlightLoop {
         if self.controllers.is_none() {
             return ([Command::Stopped; 4], 0.0);
         }
-        let descent = fly
-            .failsafe_descent_mps
-            .map(|d| self.descent_throttle(fly.decision, d, fly.climb_rate_mps));
+        if matches!(fly.decision, Decision::Armed | Decision::FailsafeEntered) || fly.mode_changed {
+            self.hold.reset();
+        }
+        let ts = self.config.ts_s;
+        let hover = self.hover_throttle;
+        // Failsafe with a good fix: hold the position, and the altitude for the first
+        // FAILSAFE_HOLD_MS, then descend in place. Without a fix: level and descend.
+        let fix_nav = fly.nav.filter(|n| n.horizontal.is_some());
+        let failsafe_angles = match (fly.failsafe_descent_mps, fix_nav) {
+            (Some(_), Some(nav)) => self
+                .hold
+                .angles(Horizontal::PositionHold, [0.0; 2], &nav, ts),
+            _ => None,
+        };
+        let holding = fly.failsafe_for_ms.is_some_and(|t| t < FAILSAFE_HOLD_MS);
+        let descent = match (fly.failsafe_descent_mps, fix_nav) {
+            (Some(_), Some(nav)) if holding => Some(self.hold.throttle(0.5, &nav, hover, ts)),
+            (Some(d), _) => Some(self.descent_throttle(fly.decision, d, fly.climb_rate_mps)),
+            (None, _) => None,
+        };
+        // The hold modes' throttle and angles (the sticks' when their loops cannot fly).
+        let hold_out = match (descent, fly.nav) {
+            (None, Some(nav)) if self.mode.holds() => {
+                let throttle = self.hold.throttle(sticks.throttle, &nav, hover, ts);
+                let horizontal = match self.mode {
+                    FlightMode::PositionHold => Some(Horizontal::PositionHold),
+                    FlightMode::Loiter => Some(Horizontal::Loiter),
+                    _ => None,
+                };
+                let angles = horizontal
+                    .and_then(|h| self.hold.angles(h, [sticks.roll, sticks.pitch], &nav, ts));
+                Some((throttle, angles))
+            }
+            _ => None,
+        };
         let Some(c) = self.controllers.as_mut() else {
             return ([Command::Stopped; 4], 0.0);
         };
@@ -461,7 +524,10 @@ impl FlightLoop {
         let (throttle, attitude_out, shaking) = match descent {
             Some(throttle) => (
                 throttle,
-                c.lqg(gyro_dps, stages::level_setpoint(fly.attitude_deg)),
+                c.lqg(
+                    gyro_dps,
+                    stages::angle_setpoint(failsafe_angles.unwrap_or([0.0; 2]), fly.attitude_deg),
+                ),
                 false,
             ),
             None => {
@@ -473,8 +539,12 @@ impl FlightLoop {
                     sticks,
                     gyro_dps,
                     fly.attitude_deg,
+                    hold_out.and_then(|(_, angles)| angles),
                 );
-                let throttle = sticks.throttle.clamp(0.0, 1.0);
+                let throttle = match hold_out {
+                    Some((throttle, _)) => throttle,
+                    None => sticks.throttle.clamp(0.0, 1.0),
+                };
                 // Throttle at the bottom before the first take-off means sitting on the
                 // ground: the controllers neither act nor wind up, or a held arming
                 // gesture (yaw full right) would spin the frame up to full power. Once
@@ -485,8 +555,9 @@ impl FlightLoop {
                 } else {
                     out
                 };
-                // 2 s low-pass of the flying throttle: what hovering takes.
-                if throttle > 0.1 {
+                // 2 s low-pass of the flying throttle: what hovering takes (learnt from the
+                // pilot's throttle only: the hold loops fly around it).
+                if hold_out.is_none() && throttle > 0.1 {
                     self.airborne = true;
                     let k = self.config.ts_s / (2.0 + self.config.ts_s);
                     self.hover_throttle += k * (throttle - self.hover_throttle);
@@ -499,7 +570,10 @@ impl FlightLoop {
         let uses_lqg = descent.is_some()
             || match self.mode {
                 FlightMode::RateLqg | FlightMode::Horizon => true,
-                FlightMode::Attitude => self.config.attitude_uses_lqg,
+                FlightMode::Attitude
+                | FlightMode::AltitudeHold
+                | FlightMode::PositionHold
+                | FlightMode::Loiter => self.config.attitude_uses_lqg,
                 FlightMode::RatePid | FlightMode::SystemId => false,
             };
         let sysid = if shaking { self.sysid.as_mut() } else { None };
@@ -539,6 +613,10 @@ struct Fly {
     failsafe_descent_mps: Option<f32>,
     /// Blended climb rate, m/s up.
     climb_rate_mps: Option<f32>,
+    /// The navigation estimate (hold modes and failsafe only).
+    nav: Option<Nav>,
+    /// How long the link failsafe has lasted, ms.
+    failsafe_for_ms: Option<u32>,
 }
 
 /// (roll, pitch, yaw) in degrees without libm: a polynomial atan2 (error < 0.01°) on the

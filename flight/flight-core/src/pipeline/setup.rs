@@ -85,6 +85,9 @@ fn mode(index: u32) -> Result<FlightMode, SetupError> {
         2 => FlightMode::Attitude,
         3 => FlightMode::Horizon,
         4 => FlightMode::SystemId,
+        5 => FlightMode::AltitudeHold,
+        6 => FlightMode::PositionHold,
+        7 => FlightMode::Loiter,
         _ => return Err(SetupError::BadChoice),
     })
 }

@@ -125,7 +125,16 @@ pub const OUTPUT_PROTOCOLS: Choice = &["brushed", "pwm", "oneshot125"];
 /// Mixer frames.
 pub const FRAMES: Choice = &["quad-x", "quad-plus", "hex-x"];
 /// Flight modes for the three switch positions.
-pub const MODES: Choice = &["rate-pid", "rate-lqg", "attitude", "horizon", "sysid"];
+pub const MODES: Choice = &[
+    "rate-pid",
+    "rate-lqg",
+    "attitude",
+    "horizon",
+    "sysid",
+    "altitude-hold",
+    "position-hold",
+    "loiter",
+];
 /// Link bands (`telemetry::link::Band`).
 pub const BANDS: Choice = &["433", "868", "915"];
 /// Link rate modes (`telemetry::link::RateMode`).
