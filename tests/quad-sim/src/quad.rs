@@ -251,9 +251,10 @@ impl Quad {
             *g = v;
         }
         let thrust: f64 = self.state.motor.iter().map(|m| self.thrust(*m)).sum();
-        let v = self.state.velocity_mps;
-        let w = p.wind_ned_mps;
-        let drag_world = [0, 1, 2].map(|i| -p.linear_drag_n_per_mps * (v[i] - w[i]) / p.mass_kg);
+        let [vn, ve, vd] = self.state.velocity_mps;
+        let [wn, we, wd] = p.wind_ned_mps;
+        let drag_world =
+            [vn - wn, ve - we, vd - wd].map(|v| -p.linear_drag_n_per_mps * v / p.mass_kg);
         let drag_body = quat_rotate(quat_conj(self.state.attitude), drag_world);
         let f = [
             drag_body[0],
