@@ -78,6 +78,8 @@ pub const fn wire_mode(m: FlightMode) -> WireMode {
         FlightMode::RatePid | FlightMode::RateLqg => WireMode::Rate,
         FlightMode::Attitude | FlightMode::Horizon => WireMode::Attitude,
         FlightMode::SystemId => WireMode::SystemId,
+        FlightMode::AltitudeHold => WireMode::AltitudeHold,
+        FlightMode::PositionHold | FlightMode::Loiter => WireMode::PositionHold,
     }
 }
 

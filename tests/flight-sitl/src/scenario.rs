@@ -179,6 +179,8 @@ pub struct Scenario {
     pub module_settings: Option<module_core::settings::Settings>,
     /// What the flight controller's settings flash holds at the first boot.
     pub flight_flash: FlashInjection,
+    /// A GPS receiver on the flight controller's GPS port (`None`: no receiver).
+    pub gps: Option<crate::gps::GpsConfig>,
 }
 
 impl Scenario {
@@ -208,6 +210,7 @@ impl Scenario {
             rate: telemetry::link::RateMode::F250,
             module_settings: None,
             flight_flash: FlashInjection::Stored,
+            gps: None,
         }
     }
 }

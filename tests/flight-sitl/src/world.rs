@@ -314,6 +314,7 @@ impl World {
             rate: _,
             module_settings: _,
             flight_flash,
+            gps,
         } = scenario;
         // The flight controller stores the module's link (as after a bind): under model match
         // the link of the lowest model the module records as bound.
@@ -385,6 +386,7 @@ impl World {
                 quad_sim::ground::on_the_ground(&mut quad);
                 let mut sensors = quad.sensors();
                 let mut baro_noise = SplitMix64::new(seed ^ 0xBA40);
+                let mut gps = gps.map(|g| crate::gps::GpsSim::new(g, seed));
                 let mut level = BatteryLevel::Ok;
                 let mut last_good = ImuSample {
                     gyro_radps: [0.0; 3],
@@ -447,6 +449,15 @@ impl World {
                                 let altitude =
                                     -quad.state().position_m[2] + baro_noise.normal(BARO_NOISE_M);
                                 app.on_baro(now_ms, Some(altitude as f32));
+                            }
+                            // The GPS task: a NAV-PVT's bytes when the receiver has one.
+                            if let Some(g) = gps.as_mut() {
+                                let s = quad.state();
+                                if let Some(bytes) =
+                                    g.step(t_us / 1000, t_s, s.position_m, s.velocity_mps)
+                                {
+                                    app.on_gps_bytes(now_ms, &bytes);
+                                }
                             }
                             let link_up = app.link_input().up;
                             // The IMU task: a sample, or what the injected fault leaves of it.

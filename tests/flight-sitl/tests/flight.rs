@@ -207,6 +207,7 @@ fn flies_through_a_lossy_link() {
         rate: telemetry::link::RateMode::F250,
         module_settings: None,
         flight_flash: flight_sitl::FlashInjection::Stored,
+        gps: None,
     });
     let s = &sitl.samples;
     assert!(

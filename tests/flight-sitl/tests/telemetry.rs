@@ -41,6 +41,7 @@ fn telemetry_reaches_the_module_and_settings_come_back() {
         rate: telemetry::link::RateMode::F250,
         module_settings: None,
         flight_flash: flight_sitl::FlashInjection::Stored,
+        gps: None,
     });
     let rx = &sitl.module_rx;
     let per_s = rx.len() as f64 / 5.5;

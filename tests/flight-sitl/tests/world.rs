@@ -162,6 +162,7 @@ fn corrupted_settings_boot_on_factory_settings_and_refuse_to_arm() {
     let (quad, settings) = default_airframe();
     let sitl = run(Scenario {
         flight_flash: FlashInjection::Corrupted(11),
+        gps: None,
         ..Scenario::new(
             settings,
             quad,

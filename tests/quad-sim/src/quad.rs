@@ -44,8 +44,10 @@ pub struct QuadParams {
     pub yaw_drag_m: f64,
     /// Lag-free yaw torque per unit of (command − motor state), N·m (prop acceleration; β2).
     pub yaw_direct_nm: f64,
-    /// Linear air drag, N per m/s.
+    /// Linear air drag, N per m/s of airspeed.
     pub linear_drag_n_per_mps: f64,
+    /// Steady wind, NED m/s (the air's velocity: drag acts on velocity − wind).
+    pub wind_ned_mps: [f64; 3],
     /// Whole loop periods between a command and the motors seeing it.
     pub latency_samples: usize,
     /// Integration sub-steps per `step`.
@@ -94,6 +96,7 @@ impl QuadParams {
             yaw_drag_m,
             yaw_direct_nm: 0.0,
             linear_drag_n_per_mps: 0.1,
+            wind_ned_mps: [0.0; 3],
             latency_samples: 1,
             substeps: 8,
             gyro_noise_dps: 3.0,
@@ -248,10 +251,10 @@ impl Quad {
             *g = v;
         }
         let thrust: f64 = self.state.motor.iter().map(|m| self.thrust(*m)).sum();
-        let drag_world = self
-            .state
-            .velocity_mps
-            .map(|v| -p.linear_drag_n_per_mps * v / p.mass_kg);
+        let [vn, ve, vd] = self.state.velocity_mps;
+        let [wn, we, wd] = p.wind_ned_mps;
+        let drag_world =
+            [vn - wn, ve - we, vd - wd].map(|v| -p.linear_drag_n_per_mps * v / p.mass_kg);
         let drag_body = quat_rotate(quat_conj(self.state.attitude), drag_world);
         let f = [
             drag_body[0],
@@ -346,14 +349,15 @@ impl Quad {
         s.attitude = q;
         let thrust_world = quat_rotate(q, [0.0, 0.0, -total]);
         let gravity = [0.0, 0.0, GRAVITY_MPS2];
-        for (((v, pos), f), g) in s
+        for ((((v, pos), f), g), w) in s
             .velocity_mps
             .iter_mut()
             .zip(s.position_m.iter_mut())
             .zip(thrust_world)
             .zip(gravity)
+            .zip(p.wind_ned_mps)
         {
-            let a = f / p.mass_kg + g - p.linear_drag_n_per_mps * *v / p.mass_kg;
+            let a = f / p.mass_kg + g - p.linear_drag_n_per_mps * (*v - w) / p.mass_kg;
             *v += h * a;
             *pos += h * *v;
         }

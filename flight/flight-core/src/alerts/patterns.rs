@@ -136,7 +136,11 @@ impl Alert {
             Alert::Mode(m) => match m {
                 FlightMode::RatePid => MODE_1,
                 FlightMode::RateLqg => MODE_2,
-                FlightMode::Attitude => MODE_3,
+                // The hold modes fly on the attitude law: its tone.
+                FlightMode::Attitude
+                | FlightMode::AltitudeHold
+                | FlightMode::PositionHold
+                | FlightMode::Loiter => MODE_3,
                 FlightMode::Horizon => MODE_4,
                 FlightMode::SystemId => MODE_SYSID,
             },

@@ -93,6 +93,30 @@ impl FlightApp {
             )?,
             None => out.write_str("flight loop not running (IMU?)\r\n")?,
         }
+        let estimator = self.flight.estimator();
+        write!(
+            out,
+            "estimator {} (ins.mode {}), fallbacks {}, gps fix {}\r\n",
+            estimator.source().name(),
+            estimator.mode().name(),
+            estimator.fallbacks(),
+            estimator.gps_fix()
+        )?;
+        if let Some((pvt, _)) = self.gps_latest() {
+            let (generation, config) = self.gps_config_status();
+            write!(
+                out,
+                "gps {:?} sats {} hacc {} mm, receiver {:?} config {:?}\r\n",
+                pvt.fix_type, pvt.num_sv, pvt.h_acc_mm, generation, config
+            )?;
+        }
+        if let Some(home) = estimator.home() {
+            write!(
+                out,
+                "home lat {} lon {} (1e-7 deg) msl {} mm\r\n",
+                home.lat_e7, home.lon_e7, home.h_msl_mm
+            )?;
+        }
         if let Some(fault) = self.imu.fault() {
             write!(
                 out,

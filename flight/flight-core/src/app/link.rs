@@ -273,6 +273,8 @@ impl FlightApp {
         } else if self.link.last_state != Some(state) {
             self.link.last_state = Some(state);
             Reporter::state(&snap)
+        } else if let Some(gps) = self.take_gps_report() {
+            gps
         } else {
             self.link.reporter.next(&snap)
         };

@@ -9,9 +9,10 @@
 //! loop and its controllers; the IMU fault policy (`imu`); the baro climb rate; the
 //! battery monitor and the tone player; the link follower's hooks, bind handling and
 //! telemetry (`link`); the console's command language (`console`); the watchdog check-in
-//! policy (`watchdog`).
+//! policy (`watchdog`); the GPS port (`gps`: UBX bytes in, boot configuration out).
 
 mod console;
+mod gps;
 mod imu;
 mod link;
 mod watchdog;
@@ -19,6 +20,7 @@ mod watchdog;
 #[cfg(test)]
 mod tests;
 
+pub use gps::{GPS_BAUD, GPS_BOOT_BAUDS, GPS_REPORT_PERIOD_MS, gps_baud_messages, gps_message};
 pub use imu::{
     CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
 };
@@ -72,6 +74,7 @@ pub struct FlightApp {
     watchdog: Watchdog,
     identified: Option<Identification>,
     settings_problem: Option<LoadProblem>,
+    gps: gps::GpsPort,
 }
 
 /// The flight setup for `settings`, or the factory one (and why) if they do not fly.
@@ -117,6 +120,7 @@ impl FlightApp {
             watchdog: Watchdog::new(now_ms),
             identified: None,
             settings_problem: None,
+            gps: gps::GpsPort::new(),
         })
     }
 
@@ -293,6 +297,9 @@ impl FlightApp {
         self.climb_mps = altitude_m.and_then(|a| self.climb.update(now_ms, a));
         if self.climb_mps.is_some() && self.baro_ground_m.is_none() {
             self.baro_ground_m = self.climb.altitude_m();
+        }
+        if let Some(a) = altitude_m {
+            self.flight.on_baro_altitude(a);
         }
     }
 

@@ -460,3 +460,80 @@ fn telemetry_carries_altitude_from_the_power_up_point_vario_and_cells() {
             .any(|(_, m)| *m == Message::Cells(telemetry::messages::Cells { count: cells }))
     );
 }
+
+mod gps {
+    use super::*;
+    use crate::sensors::ubx::{FixType, Generation, NavPvt, Status, frame};
+    use telemetry::messages::GpsFix;
+
+    fn pvt(itow_ms: u32) -> NavPvt {
+        NavPvt {
+            itow_ms,
+            fix_type: FixType::Fix3D,
+            flags: NavPvt::FLAG_GNSS_FIX_OK,
+            num_sv: 11,
+            lon_e7: 80_123_456,
+            lat_e7: 470_654_321,
+            height_mm: 550_000,
+            h_msl_mm: 500_000,
+            h_acc_mm: 900,
+            v_acc_mm: 1_400,
+            vel_ned_mmps: [100, -200, 0],
+            g_speed_mmps: 224,
+            head_mot_e5: -6_343_000,
+            s_acc_mmps: 150,
+            p_dop_e2: 130,
+        }
+    }
+
+    fn bytes(p: &NavPvt) -> Vec<u8> {
+        frame::encode(0x01, 0x07, &p.encode()).unwrap().to_vec()
+    }
+
+    #[test]
+    fn nav_pvt_bytes_reach_the_estimator_and_telemetry_once_a_second() {
+        let mut a = app();
+        // Chopped into odd pieces, as UART reads come.
+        let b = bytes(&pvt(1_000));
+        for chunk in b.chunks(7) {
+            a.on_gps_bytes(10, chunk);
+        }
+        let (latest, _) = a.gps_latest().unwrap();
+        assert_eq!(latest, pvt(1_000));
+        let Some(telemetry::messages::Message::Gps(g)) = a.take_gps_report() else {
+            panic!("a Gps message is due");
+        };
+        assert_eq!(g.fix, GpsFix::Fix3d);
+        assert_eq!((g.latitude_e7, g.longitude_e7), (470_654_321, 80_123_456));
+        assert_eq!(g.altitude_cm, 50_000);
+        assert_eq!(g.ground_speed_cm_s, 22);
+        // headMot −63.43° → 296.57°
+        assert_eq!(g.course_cdeg, 29_657);
+        assert_eq!(g.satellites, 11);
+        // The next fix 200 ms later is not reported; one a second later is.
+        a.on_gps_bytes(210, &bytes(&pvt(1_200)));
+        assert_eq!(a.take_gps_report(), None);
+        a.on_gps_bytes(1_010, &bytes(&pvt(2_000)));
+        assert!(a.take_gps_report().is_some());
+        assert_eq!(a.gps_latest().unwrap().0.itow_ms, 2_000);
+    }
+
+    #[test]
+    fn the_receiver_is_configured_as_m9_and_as_m8_after_a_nak() {
+        let mut a = app();
+        let first = a.gps_to_send(0).unwrap().to_vec();
+        assert_eq!(&first[2..4], &[0x06, 0x8A], "CFG-VALSET first");
+        assert_eq!(a.gps_to_send(10), None, "waits for the answer");
+        // NAK of CFG-VALSET: a u-blox 8.
+        a.on_gps_bytes(50, &frame::encode(0x05, 0x00, &[0x06, 0x8A]).unwrap());
+        let next = a.gps_to_send(60).unwrap().to_vec();
+        assert_eq!(&next[2..4], &[0x06, 0x00], "CFG-PRT of the M8 sequence");
+        assert_eq!(
+            a.gps_config_status(),
+            (Generation::M8, Status::Pending { step: 0 })
+        );
+        let bauds = gps_baud_messages();
+        assert_eq!(&bauds[0][2..4], &[0x06, 0x8A]);
+        assert_eq!(&bauds[1][2..4], &[0x06, 0x00]);
+    }
+}

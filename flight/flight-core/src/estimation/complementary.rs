@@ -68,6 +68,19 @@ impl Complementary {
         self.gyro_bias_radps
     }
 
+    /// Takes over an estimate (attitude normalised, gyro bias) from another estimator, so a
+    /// hand-over to this filter continues from where the other one was instead of jumping.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`]; the estimate is unchanged then.
+    pub fn reset(&mut self, attitude: Quaternion, gyro_bias_radps: [f32; 3]) -> Result<(), Error> {
+        check_finite(&attitude)?;
+        check_finite(&gyro_bias_radps)?;
+        self.attitude = quaternion::normalized(attitude);
+        self.gyro_bias_radps = gyro_bias_radps;
+        Ok(())
+    }
+
     /// One step: gyro (rad/s), specific force (m/s², level reads [0,0,−g]), optional
     /// magnetometer (any unit), `dt_s` in seconds.
     ///

@@ -63,6 +63,7 @@ mod tests {
             armed: false,
             failsafe: false,
             attitude_deg: [0.0; 3],
+            estimator: crate::pipeline::Source::Complementary,
         }
     }
 

@@ -3,11 +3,14 @@
 //! stateless parts of the setpoint and mix stages live in `stages`.
 
 use super::controllers::Controllers;
+use super::estimator::{Estimator, EstimatorMode, Source};
+use super::hold::{Hold, Horizontal, Nav};
 use super::identify::Sysid;
 use super::stages;
 use super::sticks::StickShaping;
 use crate::control::mixer::Mixer;
-use crate::estimation::complementary::{self, Complementary};
+use crate::estimation::complementary;
+use crate::estimation::ins::aiding::gps::GpsUpdate;
 use crate::estimation::math::{inv_sqrt, wrap_pi};
 use crate::estimation::quaternion::{Quaternion, body_to_ned_vector, ned_to_body};
 use crate::estimation::{GRAVITY_MPS2, all_finite};
@@ -23,6 +26,10 @@ const DEG_PER_RAD: f32 = 180.0 / core::f32::consts::PI;
 const GYRO_LIMIT_DPS: f32 = 2200.0;
 /// Time constant pulling the accelerometer-integrated climb rate towards the measured one, s.
 const CLIMB_BLEND_S: f32 = 1.0;
+/// On a link failsafe with a good GPS fix the frame holds its position and altitude this
+/// long (the pilot may walk back into range, the link may return), then descends in place
+/// at the failsafe rate, still holding the position. Without a fix: the descent at once.
+pub const FAILSAFE_HOLD_MS: u32 = 30_000;
 
 /// Fixed configuration of the loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,6 +54,8 @@ pub struct LoopConfig {
     /// estimate (and the frame) off by degrees per second. Skipping samples divides the
     /// filter's kp and ki by this factor without touching its ground behaviour.
     pub armed_accel_divider: u16,
+    /// Which estimator flies (`ins.mode`).
+    pub estimator: EstimatorMode,
 }
 
 /// One IMU sample, body FRD axes.
@@ -86,17 +95,19 @@ pub struct LoopOutput {
     pub mode_changed: bool,
     /// Motors may turn.
     pub armed: bool,
-    /// Link failsafe descent active.
+    /// Link failsafe descent active (or its position hold, see [`FAILSAFE_HOLD_MS`]).
     pub failsafe: bool,
     /// Estimated attitude (roll, pitch, yaw), deg.
     pub attitude_deg: [f32; 3],
+    /// The estimator that flew this loop.
+    pub estimator: Source,
 }
 
 /// The loop's state.
 #[derive(Debug, Clone)]
 pub struct FlightLoop {
     config: LoopConfig,
-    attitude: Complementary,
+    estimator: Estimator,
     supervisor: Supervisor,
     modes: ModeSwitch,
     mode: FlightMode,
@@ -120,6 +131,10 @@ pub struct FlightLoop {
     landing: LandingDetector,
     /// The battery is at its critical level (arming refused).
     battery_critical: bool,
+    /// Altitude/position hold loops (hold modes, failsafe hold).
+    hold: Hold,
+    /// When the current link failsafe began, ms.
+    failsafe_since_ms: Option<u32>,
     /// The boot-time settings load had a problem not yet fixed by a save (arming refused).
     settings_problem: bool,
 }
@@ -130,7 +145,7 @@ impl FlightLoop {
         let modes = ModeSwitch::new(config.modes);
         Self {
             config,
-            attitude: Complementary::new(config.attitude_filter),
+            estimator: Estimator::new(config.estimator, config.attitude_filter),
             supervisor: Supervisor::new(config.supervisor),
             mode: modes.mode(),
             modes,
@@ -145,6 +160,8 @@ impl FlightLoop {
             identification: None,
             landing: LandingDetector::new(),
             battery_critical: false,
+            hold: Hold::default(),
+            failsafe_since_ms: None,
             settings_problem: false,
         }
     }
@@ -203,7 +220,7 @@ impl FlightLoop {
             self.climb_mps = None;
             return None;
         };
-        let [_, _, f_down] = body_to_ned_vector(self.attitude.attitude(), accel_mps2);
+        let [_, _, f_down] = body_to_ned_vector(self.estimator.attitude(), accel_mps2);
         let up_accel = -(f_down + GRAVITY_MPS2);
         let ts = self.config.ts_s;
         let k = ts / (CLIMB_BLEND_S + ts);
@@ -244,7 +261,22 @@ impl FlightLoop {
 
     /// Body → NED attitude estimate.
     pub fn attitude(&self) -> Quaternion {
-        self.attitude.attitude()
+        self.estimator.attitude()
+    }
+
+    /// The estimators and which one flies.
+    pub fn estimator(&self) -> &Estimator {
+        &self.estimator
+    }
+
+    /// A baro altitude (m, up) for the INS's next update.
+    pub fn on_baro_altitude(&mut self, altitude_m: f32) {
+        self.estimator.baro(altitude_m);
+    }
+
+    /// A NAV-PVT from the GPS, just arrived (fused while the full INS flies).
+    pub fn on_gps(&mut self, pvt: &crate::sensors::ubx::NavPvt) -> Option<GpsUpdate> {
+        self.estimator.gps(pvt)
     }
 
     /// One loop at `now_ms`. `climb_rate_mps` (up positive) comes from the INS/baro when
@@ -262,14 +294,38 @@ impl FlightLoop {
         let estimate = self.estimate(imu);
         let previous_mode = self.mode;
         let decision = self.supervise(now_ms, link, &estimate);
-        let climb_rate_mps = self.fuse_climb(climb_rate_mps, imu.accel_mps2);
-        let [roll, pitch, yaw] = euler_deg(self.attitude.attitude());
+        // The INS's vertical velocity when it flies on the baro; else the loop's own blend.
+        let climb_rate_mps = match self.estimator.vertical() {
+            Some((_, climb)) => {
+                self.climb_mps = Some(climb);
+                Some(climb)
+            }
+            None => self.fuse_climb(climb_rate_mps, imu.accel_mps2),
+        };
+        let [roll, pitch, yaw] = euler_deg(self.estimator.attitude());
         let failsafe = self.supervisor.failsafe_descent_mps();
         // Nothing below changes the supervisor's state: read it once.
         let armed = self.supervisor.motors_enabled();
         if self.mode != FlightMode::SystemId || failsafe.is_some() || !armed {
             self.finish_sysid();
         }
+        if failsafe.is_none() {
+            self.failsafe_since_ms = None;
+        } else if decision == Decision::FailsafeEntered || self.failsafe_since_ms.is_none() {
+            self.failsafe_since_ms = Some(now_ms);
+        }
+        // The navigation estimate, only where a hold loop reads it.
+        let nav = (self.mode.holds() || failsafe.is_some()).then(|| {
+            let [[r11, r12, _], _, _] = ned_to_body(self.estimator.attitude());
+            let h = r11 * r11 + r12 * r12;
+            let inv = if h > 1e-12 { inv_sqrt(h) } else { 0.0 };
+            Nav {
+                vertical: self.estimator.vertical(),
+                climb_mps: climb_rate_mps,
+                horizontal: self.estimator.horizontal(),
+                yaw_cos_sin: [r11 * inv, r12 * inv],
+            }
+        });
         let (motors, thrust) = if armed && estimate.gyro_ok {
             let fly = Fly {
                 decision,
@@ -278,9 +334,12 @@ impl FlightLoop {
                 attitude_deg: [roll, pitch],
                 failsafe_descent_mps: failsafe,
                 climb_rate_mps,
+                nav,
+                failsafe_for_ms: self.failsafe_since_ms.map(|t| now_ms.wrapping_sub(t)),
             };
             self.fly(&fly, &link.sticks)
         } else {
+            self.hold.reset();
             if let Some(c) = self.controllers.as_mut() {
                 self.airborne = false;
                 // On the ground nothing integrates.
@@ -305,6 +364,7 @@ impl FlightLoop {
             armed,
             failsafe: failsafe.is_some(),
             attitude_deg: [roll, pitch, yaw],
+            estimator: self.estimator.source(),
         }
     }
 
@@ -314,7 +374,8 @@ impl FlightLoop {
         // `abs() < limit` is false for NaN and ±∞: no separate finiteness test.
         let gyro_ok = gyro_dps.iter().all(|g| g.abs() < GYRO_LIMIT_DPS);
         // A zero vector is below the filter's accelerometer threshold: gyro (and mag) only.
-        let accel = if self.supervisor.motors_enabled() {
+        let armed = self.supervisor.motors_enabled();
+        let accel = if armed {
             self.accel_phase = self.accel_phase.wrapping_add(1);
             if self.accel_phase >= self.config.armed_accel_divider.max(1) {
                 self.accel_phase = 0;
@@ -328,8 +389,8 @@ impl FlightLoop {
             imu.accel_mps2
         };
         let filter_ok = self
-            .attitude
-            .update(imu.gyro_radps, accel, imu.mag, self.config.ts_s)
+            .estimator
+            .update(imu, accel, armed, self.config.ts_s)
             .is_ok();
         Estimate {
             gyro_dps,
@@ -385,7 +446,7 @@ impl FlightLoop {
     }
 
     /// Failsafe-descent stage, throttle part: PI on the climb rate around the hover value
-    /// (the attitude part levels the frame, see [`stages::level_setpoint`]).
+    /// (the attitude part levels the frame or holds the position, [`stages::angle_setpoint`]).
     fn descent_throttle(
         &mut self,
         decision: Decision,
@@ -417,9 +478,41 @@ impl FlightLoop {
         if self.controllers.is_none() {
             return ([Command::Stopped; 4], 0.0);
         }
-        let descent = fly
-            .failsafe_descent_mps
-            .map(|d| self.descent_throttle(fly.decision, d, fly.climb_rate_mps));
+        if matches!(fly.decision, Decision::Armed | Decision::FailsafeEntered) || fly.mode_changed {
+            self.hold.reset();
+        }
+        let ts = self.config.ts_s;
+        let hover = self.hover_throttle;
+        // Failsafe with a good fix: hold the position, and the altitude for the first
+        // FAILSAFE_HOLD_MS, then descend in place. Without a fix: level and descend.
+        let fix_nav = fly.nav.filter(|n| n.horizontal.is_some());
+        let failsafe_angles = match (fly.failsafe_descent_mps, fix_nav) {
+            (Some(_), Some(nav)) => self
+                .hold
+                .angles(Horizontal::PositionHold, [0.0; 2], &nav, ts),
+            _ => None,
+        };
+        let holding = fly.failsafe_for_ms.is_some_and(|t| t < FAILSAFE_HOLD_MS);
+        let descent = match (fly.failsafe_descent_mps, fix_nav) {
+            (Some(_), Some(nav)) if holding => Some(self.hold.throttle(0.5, &nav, hover, ts)),
+            (Some(d), _) => Some(self.descent_throttle(fly.decision, d, fly.climb_rate_mps)),
+            (None, _) => None,
+        };
+        // The hold modes' throttle and angles (the sticks' when their loops cannot fly).
+        let hold_out = match (descent, fly.nav) {
+            (None, Some(nav)) if self.mode.holds() => {
+                let throttle = self.hold.throttle(sticks.throttle, &nav, hover, ts);
+                let horizontal = match self.mode {
+                    FlightMode::PositionHold => Some(Horizontal::PositionHold),
+                    FlightMode::Loiter => Some(Horizontal::Loiter),
+                    _ => None,
+                };
+                let angles = horizontal
+                    .and_then(|h| self.hold.angles(h, [sticks.roll, sticks.pitch], &nav, ts));
+                Some((throttle, angles))
+            }
+            _ => None,
+        };
         let Some(c) = self.controllers.as_mut() else {
             return ([Command::Stopped; 4], 0.0);
         };
@@ -431,7 +524,10 @@ impl FlightLoop {
         let (throttle, attitude_out, shaking) = match descent {
             Some(throttle) => (
                 throttle,
-                c.lqg(gyro_dps, stages::level_setpoint(fly.attitude_deg)),
+                c.lqg(
+                    gyro_dps,
+                    stages::angle_setpoint(failsafe_angles.unwrap_or([0.0; 2]), fly.attitude_deg),
+                ),
                 false,
             ),
             None => {
@@ -443,8 +539,12 @@ impl FlightLoop {
                     sticks,
                     gyro_dps,
                     fly.attitude_deg,
+                    hold_out.and_then(|(_, angles)| angles),
                 );
-                let throttle = sticks.throttle.clamp(0.0, 1.0);
+                let throttle = match hold_out {
+                    Some((throttle, _)) => throttle,
+                    None => sticks.throttle.clamp(0.0, 1.0),
+                };
                 // Throttle at the bottom before the first take-off means sitting on the
                 // ground: the controllers neither act nor wind up, or a held arming
                 // gesture (yaw full right) would spin the frame up to full power. Once
@@ -455,8 +555,9 @@ impl FlightLoop {
                 } else {
                     out
                 };
-                // 2 s low-pass of the flying throttle: what hovering takes.
-                if throttle > 0.1 {
+                // 2 s low-pass of the flying throttle: what hovering takes (learnt from the
+                // pilot's throttle only: the hold loops fly around it).
+                if hold_out.is_none() && throttle > 0.1 {
                     self.airborne = true;
                     let k = self.config.ts_s / (2.0 + self.config.ts_s);
                     self.hover_throttle += k * (throttle - self.hover_throttle);
@@ -469,7 +570,10 @@ impl FlightLoop {
         let uses_lqg = descent.is_some()
             || match self.mode {
                 FlightMode::RateLqg | FlightMode::Horizon => true,
-                FlightMode::Attitude => self.config.attitude_uses_lqg,
+                FlightMode::Attitude
+                | FlightMode::AltitudeHold
+                | FlightMode::PositionHold
+                | FlightMode::Loiter => self.config.attitude_uses_lqg,
                 FlightMode::RatePid | FlightMode::SystemId => false,
             };
         let sysid = if shaking { self.sysid.as_mut() } else { None };
@@ -509,6 +613,10 @@ struct Fly {
     failsafe_descent_mps: Option<f32>,
     /// Blended climb rate, m/s up.
     climb_rate_mps: Option<f32>,
+    /// The navigation estimate (hold modes and failsafe only).
+    nav: Option<Nav>,
+    /// How long the link failsafe has lasted, ms.
+    failsafe_for_ms: Option<u32>,
 }
 
 /// (roll, pitch, yaw) in degrees without libm: a polynomial atan2 (error < 0.01°) on the

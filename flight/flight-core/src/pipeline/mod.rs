@@ -9,7 +9,9 @@ mod announce;
 mod channels;
 mod climb;
 mod controllers;
+mod estimator;
 mod flight_loop;
+mod hold;
 mod identify;
 mod link;
 mod setup;
@@ -24,7 +26,14 @@ pub use channels::{
 };
 pub use climb::ClimbRate;
 pub use controllers::{ControlParams, Controllers};
+pub use estimator::{
+    Estimator, EstimatorMode, INS_START_S, PSEUDO_PERIOD_S, PSEUDO_VAR_M2PS2, Source,
+};
 pub use flight_loop::{FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
+pub use hold::{
+    Hold, Horizontal, LOITER_SPEED_MPS, MAX_CLIMB_MPS, MAX_SPEED_MPS, MAX_TILT_DEG, Nav,
+    STICK_DEADBAND,
+};
 pub use link::{bind_band, store_link, stored_link};
 pub use setup::{FlightSetup, SetupError, from_settings};
 pub use sticks::StickShaping;

@@ -6,6 +6,7 @@
 
 use super::channels::ChannelMap;
 use super::controllers::ControlParams;
+use super::estimator::EstimatorMode;
 use super::flight_loop::LoopConfig;
 use super::sticks::StickShaping;
 use crate::battery::BatteryConfig;
@@ -84,6 +85,9 @@ fn mode(index: u32) -> Result<FlightMode, SetupError> {
         2 => FlightMode::Attitude,
         3 => FlightMode::Horizon,
         4 => FlightMode::SystemId,
+        5 => FlightMode::AltitudeHold,
+        6 => FlightMode::PositionHold,
+        7 => FlightMode::Loiter,
         _ => return Err(SetupError::BadChoice),
     })
 }
@@ -138,6 +142,12 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
         attitude_filter: complementary::Config::default(),
         // Ground kp 1 rad/s per rad → 0.05 in flight (a 20 s time constant).
         armed_accel_divider: 20,
+        estimator: match s.u32("ins.mode") {
+            0 => EstimatorMode::Complementary,
+            1 => EstimatorMode::Ins,
+            2 => EstimatorMode::InsIndoor,
+            _ => return Err(SetupError::BadChoice),
+        },
     };
     let tau_s = s.f32("lqg.tau_s");
     // The yaw entry is the yaw axis' authority (β of the drag torque, lqg.md §1); the

@@ -11,21 +11,27 @@ use crate::control::mixer::Mixer;
 use crate::outputs::Command;
 use crate::supervisor::{FlightMode, Sticks};
 
-/// Failsafe descent: level (angle error = −angle), no yaw rotation.
-pub(super) fn level_setpoint([roll, pitch]: [f32; 2]) -> [AxisSetpoint; 3] {
+/// Failsafe: roll and pitch held at the target (level without a fix, the position hold's
+/// angles with one), no yaw rotation.
+pub(super) fn angle_setpoint(
+    [roll_sp, pitch_sp]: [f32; 2],
+    [roll, pitch]: [f32; 2],
+) -> [AxisSetpoint; 3] {
     [
         AxisSetpoint::Attitude {
-            angle_error_deg: -roll,
+            angle_error_deg: roll_sp - roll,
         },
         AxisSetpoint::Attitude {
-            angle_error_deg: -pitch,
+            angle_error_deg: pitch_sp - pitch,
         },
         AxisSetpoint::Rate { rate_dps: 0.0 },
     ]
 }
 
 /// Setpoint stage: the sticks through the active mode's controller. Returns the
-/// roll/pitch/yaw demand and whether the identification shake is on.
+/// roll/pitch/yaw demand and whether the identification shake is on. `hold_angles_deg`:
+/// the hold modes' roll/pitch setpoints when their loops fly the frame (else the sticks').
+#[allow(clippy::too_many_arguments)]
 pub(super) fn setpoint(
     c: &mut Controllers,
     sysid: &mut Option<Sysid>,
@@ -34,11 +40,12 @@ pub(super) fn setpoint(
     sticks: &Sticks,
     gyro_dps: [f32; 3],
     [roll, pitch]: [f32; 2],
+    hold_angles_deg: Option<[f32; 2]>,
 ) -> ([f32; 3], bool) {
     // Roll and pitch rates only in the modes that fly them (attitude mode does not).
     let rates = || config.shaping.rates_dps(sticks);
     let yaw_rate = config.shaping.yaw_rate_dps(sticks);
-    let [roll_sp, pitch_sp] = config.shaping.angles_deg(sticks);
+    let [roll_sp, pitch_sp] = hold_angles_deg.unwrap_or_else(|| config.shaping.angles_deg(sticks));
     let errors = [roll_sp - roll, pitch_sp - pitch];
     let out = match mode {
         FlightMode::RatePid => c.pid_rate(gyro_dps, rates()),
@@ -53,10 +60,18 @@ pub(super) fn setpoint(
             gyro_dps,
             rates().map(|rate_dps| AxisSetpoint::Rate { rate_dps }),
         ),
-        FlightMode::Attitude if !config.attitude_uses_lqg => {
+        FlightMode::Attitude
+        | FlightMode::AltitudeHold
+        | FlightMode::PositionHold
+        | FlightMode::Loiter
+            if !config.attitude_uses_lqg =>
+        {
             c.pid_attitude(gyro_dps, errors, yaw_rate)
         }
-        FlightMode::Attitude => c.lqg(
+        FlightMode::Attitude
+        | FlightMode::AltitudeHold
+        | FlightMode::PositionHold
+        | FlightMode::Loiter => c.lqg(
             gyro_dps,
             [
                 AxisSetpoint::Attitude {

@@ -14,6 +14,7 @@ fn snapshot() -> Snapshot {
             armed: true,
             failsafe: false,
             attitude_deg: [12.345, -200.0, 179.99],
+            estimator: crate::pipeline::Source::Complementary,
         },
         battery: Some(BatteryStatus {
             voltage_mv: 3_987,

@@ -125,7 +125,16 @@ pub const OUTPUT_PROTOCOLS: Choice = &["brushed", "pwm", "oneshot125"];
 /// Mixer frames.
 pub const FRAMES: Choice = &["quad-x", "quad-plus", "hex-x"];
 /// Flight modes for the three switch positions.
-pub const MODES: Choice = &["rate-pid", "rate-lqg", "attitude", "horizon", "sysid"];
+pub const MODES: Choice = &[
+    "rate-pid",
+    "rate-lqg",
+    "attitude",
+    "horizon",
+    "sysid",
+    "altitude-hold",
+    "position-hold",
+    "loiter",
+];
 /// Link bands (`telemetry::link::Band`).
 pub const BANDS: Choice = &["433", "868", "915"];
 /// Link rate modes (`telemetry::link::RateMode`).
@@ -136,6 +145,9 @@ pub const CHANNEL_FORMATS: Choice = &["16", "8"];
 pub const ARM_ON_CRITICAL: Choice = &["refuse", "allow"];
 /// Gyro loop rates.
 pub const LOOP_RATES: Choice = &["500", "1000"];
+/// Estimators (`pipeline::EstimatorMode`): the complementary filter alone, the INS with
+/// GPS, the INS without GPS (horizontal velocity held by a pseudo-measurement).
+pub const INS_MODES: Choice = &["complementary", "ins", "ins_indoor"];
 
 /// Every parameter. Keys are grouped by hundreds per subsystem.
 pub const PARAMS: &[Param] = &[
@@ -203,6 +215,8 @@ pub const PARAMS: &[Param] = &[
     u(607, "arm.channel", 0, 16, 0),
     u(608, "arm.min_us", 800, 2_200, 1_750),
     u(609, "arm.max_us", 800, 2_200, 2_100),
+    // estimation (8xx). Factory: the complementary filter, as flown before the INS did.
+    c(800, "ins.mode", INS_MODES, 0),
 ];
 
 /// Number of parameters.

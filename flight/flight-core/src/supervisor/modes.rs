@@ -14,6 +14,13 @@ pub enum FlightMode {
     Horizon,
     /// System identification: the shake excitation on top of rate control.
     SystemId,
+    /// Attitude mode with the altitude held (throttle stick centred) or climbing at a rate
+    /// (deflected) on the INS vertical (`pipeline::hold`).
+    AltitudeHold,
+    /// Altitude hold, and the position held while the roll/pitch sticks are centred (GPS).
+    PositionHold,
+    /// Altitude hold, and the sticks move the held position at a bounded speed (GPS).
+    Loiter,
 }
 
 impl FlightMode {
@@ -25,6 +32,9 @@ impl FlightMode {
             FlightMode::Attitude => 2,
             FlightMode::Horizon => 3,
             FlightMode::SystemId => 4,
+            FlightMode::AltitudeHold => 5,
+            FlightMode::PositionHold => 6,
+            FlightMode::Loiter => 7,
         }
     }
 
@@ -36,7 +46,18 @@ impl FlightMode {
             FlightMode::Attitude => "ANGL",
             FlightMode::Horizon => "HOR",
             FlightMode::SystemId => "SYSID",
+            FlightMode::AltitudeHold => "ALTH",
+            FlightMode::PositionHold => "POSH",
+            FlightMode::Loiter => "LOIT",
         }
+    }
+
+    /// The throttle holds the altitude and the attitude comes from the hold loops.
+    pub const fn holds(self) -> bool {
+        matches!(
+            self,
+            FlightMode::AltitudeHold | FlightMode::PositionHold | FlightMode::Loiter
+        )
     }
 }
 

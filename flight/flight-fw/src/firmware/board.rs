@@ -24,6 +24,8 @@ use embassy_stm32::mode::Async;
 use embassy_stm32::peripherals::IWDG;
 use embassy_stm32::spi::{self, Spi};
 use embassy_stm32::time::Hertz;
+#[cfg(feature = "sparky2")]
+use embassy_stm32::usart;
 use embassy_stm32::wdg::IndependentWatchdog;
 use embassy_stm32::{
     Config, Peri, Peripherals, bind_interrupts, dma, exti, interrupt, peripherals,
@@ -59,6 +61,7 @@ bind_interrupts!(pub struct Irqs {
 });
 #[cfg(feature = "sparky2")]
 bind_interrupts!(pub struct Irqs {
+    USART1 => usart::BufferedInterruptHandler<peripherals::USART1>;
     EXTI2 => exti::InterruptHandler<interrupt::typelevel::EXTI2>;
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
@@ -198,7 +201,24 @@ pub struct Board {
     pub usb: Driver<'static, peripherals::USB_OTG_FS>,
     /// Flash sectors 0–3 (16 KiB each); settings use sectors 2–3.
     pub settings_flash: Bank1Region1<'static, Blocking>,
+    /// The GPS receiver (Sparky2 only: the BrushedSparky's PA9/PA10 select the VTX band).
+    #[cfg(feature = "sparky2")]
+    pub gps: Option<Gps>,
 }
+
+/// The u-blox receiver on the Sparky2's Main port: USART1, TX PA9, RX PA10 (hardware.md
+/// §1), interrupt-driven with a 256-byte receive buffer (2.5 NAV-PVTs; the task drains it
+/// every few ms) and 64 bytes for the configuration frames.
+#[cfg(feature = "sparky2")]
+pub struct Gps {
+    /// USART1, 8N1, at the first of `GPS_BOOT_BAUDS` until the task reconfigures it.
+    pub uart: usart::BufferedUart<'static>,
+}
+
+#[cfg(feature = "sparky2")]
+static GPS_RX: StaticCell<[u8; 256]> = StaticCell::new();
+#[cfg(feature = "sparky2")]
+static GPS_TX: StaticCell<[u8; 64]> = StaticCell::new();
 
 /// Keeps the M25P16's chip select driven for the life of the firmware (a dropped `Output`
 /// would float the pin again).
@@ -298,7 +318,29 @@ impl Board {
             .into_blocking_regions()
             .bank1_region1;
 
+        #[cfg(feature = "sparky2")]
+        let gps = {
+            let mut config = usart::Config::default();
+            config.baudrate = flight_core::app::GPS_BOOT_BAUDS[0];
+            match usart::BufferedUart::new(
+                p.USART1,
+                p.PA10,
+                p.PA9,
+                GPS_TX.init([0; 64]),
+                GPS_RX.init([0; 256]),
+                Irqs,
+                config,
+            ) {
+                Ok(uart) => Some(Gps { uart }),
+                // 9600 Bd from an 84 MHz APB2 is always reachable; should the driver still
+                // refuse, the board flies without GPS.
+                Err(_) => None,
+            }
+        };
+
         Self {
+            #[cfg(feature = "sparky2")]
+            gps,
             imu,
             baro,
             motors,

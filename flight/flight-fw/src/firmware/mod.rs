@@ -81,6 +81,11 @@ async fn main(spawner: Spawner) {
         tasks::alerts::alerts_task(board.speaker),
     );
     spawn(&spawner, "console", tasks::console::console_task(board.usb));
+    #[cfg(feature = "sparky2")]
+    match board.gps {
+        Some(gps) => spawn(&spawner, "gps", tasks::gps::gps_task(gps)),
+        None => error!("GPS port unavailable"),
+    }
 }
 
 /// The MPU9250's sample rate for the loop rate.

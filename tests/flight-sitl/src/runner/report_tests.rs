@@ -23,6 +23,7 @@ fn sample(t_s: f64, altitude_m: f64, climb_mps: f64, armed: bool, failsafe: bool
             armed,
             failsafe,
             attitude_deg: [0.0; 3],
+            estimator: flight_core::pipeline::Source::Complementary,
         },
         link_up: !failsafe,
         truth: Truth {

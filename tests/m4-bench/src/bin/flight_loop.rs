@@ -18,7 +18,9 @@
 #[cortex_m_rt::entry]
 fn main() -> ! {
     use core::hint::black_box;
-    use flight_core::pipeline::{Controllers, FlightLoop, ImuSample, LinkInput, from_settings};
+    use flight_core::pipeline::{
+        Controllers, FlightLoop, ImuSample, LinkInput, Source, from_settings,
+    };
     use flight_core::settings::Settings;
     use flight_core::supervisor::Sticks;
     use m4_bench::{exit, m4count_marker};
@@ -127,6 +129,53 @@ fn main() -> ! {
         m4count_marker();
         black_box(out);
     }
+    // The indoor INS (`ins.mode ins_indoor`, the attitude mode): armed and flying for 2.2 s
+    // so the INS has taken over (region 33, setup). Region 34: a regular step (INS predict);
+    // 36: a step that fuses a baro reading; 38: 100 steps with the baro at 50 Hz and one
+    // indoor pseudo-measurement (divide by 100 for the mean).
+    let mut settings = Settings::default();
+    if settings.set_text("ins.mode", "ins_indoor").is_err() {
+        exit()
+    }
+    let Ok(ins_setup) = from_settings(&settings) else {
+        exit()
+    };
+    let mut ins_loop = FlightLoop::new(ins_setup.loop_config, ins_setup.mixer, controllers);
+    let mut t_ins = 0u32;
+    for k in 0..2200u32 {
+        if k % 20 == 0 {
+            ins_loop.on_baro_altitude(black_box(0.0));
+        }
+        let input = if k < 1200 {
+            link(0.0, 1.0, -1.0)
+        } else {
+            link(0.4, 0.0, -1.0)
+        };
+        ins_loop.step(t_ins, &imu, &input, None);
+        t_ins += 1;
+    }
+    if ins_loop.estimator().source() != Source::Ins || !ins_loop.armed() {
+        exit()
+    }
+    m4count_marker();
+    let out = ins_loop.step(t_ins, &sample, &attitude, None);
+    m4count_marker();
+    black_box(out);
+    t_ins += 1;
+    ins_loop.on_baro_altitude(black_box(0.01));
+    m4count_marker();
+    let out = ins_loop.step(t_ins, &sample, &attitude, None);
+    m4count_marker();
+    black_box(out);
+    m4count_marker();
+    for k in 0..100u32 {
+        t_ins += 1;
+        if k % 20 == 0 {
+            ins_loop.on_baro_altitude(black_box(0.02));
+        }
+        black_box(ins_loop.step(t_ins, &sample, &attitude, None));
+    }
+    m4count_marker();
     exit()
 }
 

@@ -22,6 +22,7 @@ fn config() -> LoopConfig {
         attitude_uses_lqg: true,
         attitude_filter: complementary::Config::default(),
         armed_accel_divider: 1,
+        estimator: EstimatorMode::Complementary,
     }
 }
 

@@ -137,6 +137,49 @@ impl NavPvt {
         })
     }
 
+    /// The payload a receiver would send for these fields (the fields not read here are
+    /// zero): what the simulator's receiver writes, so the firmware path is exercised byte
+    /// for byte. `decode(&p.encode())` gives `p` back.
+    #[must_use]
+    pub fn encode(&self) -> [u8; LEN] {
+        let mut p = [0u8; LEN];
+        let fix = match self.fix_type {
+            FixType::NoFix => 0,
+            FixType::DeadReckoning => 1,
+            FixType::Fix2D => 2,
+            FixType::Fix3D => 3,
+            FixType::GnssDeadReckoning => 4,
+            FixType::TimeOnly => 5,
+            FixType::Unknown(v) => v,
+        };
+        let [v0, v1, v2] = self.vel_ned_mmps;
+        let fields: [(usize, &[u8]); 17] = [
+            (0, &self.itow_ms.to_le_bytes()),
+            (20, &[fix]),
+            (21, &[self.flags]),
+            (23, &[self.num_sv]),
+            (24, &self.lon_e7.to_le_bytes()),
+            (28, &self.lat_e7.to_le_bytes()),
+            (32, &self.height_mm.to_le_bytes()),
+            (36, &self.h_msl_mm.to_le_bytes()),
+            (40, &self.h_acc_mm.to_le_bytes()),
+            (44, &self.v_acc_mm.to_le_bytes()),
+            (48, &v0.to_le_bytes()),
+            (52, &v1.to_le_bytes()),
+            (56, &v2.to_le_bytes()),
+            (60, &self.g_speed_mmps.to_le_bytes()),
+            (64, &self.head_mot_e5.to_le_bytes()),
+            (68, &self.s_acc_mmps.to_le_bytes()),
+            (76, &self.p_dop_e2.to_le_bytes()),
+        ];
+        for (at, bytes) in fields {
+            for (dst, &src) in p.iter_mut().skip(at).zip(bytes) {
+                *dst = src;
+            }
+        }
+        p
+    }
+
     /// True for a 3-D fix (or GNSS + dead reckoning) the receiver itself calls valid
     /// (`gnssFixOK`): the only kind the INS may use for position.
     #[must_use]

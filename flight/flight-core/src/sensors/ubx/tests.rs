@@ -263,3 +263,11 @@ fn configurator_stops_on_nak() {
     assert_eq!(c.status(), Status::Refused { id: 0x8A });
     assert_eq!(c.poll(1000), None);
 }
+
+#[test]
+fn encode_round_trips_the_captures() {
+    for capture in [UBXLIB_NAV_PVT, SECOND_NAV_PVT] {
+        let pvt = pvt_of(&frames(&hex(capture))[0]);
+        assert_eq!(NavPvt::decode(&pvt.encode()), Ok(pvt));
+    }
+}

@@ -5,6 +5,8 @@ pub mod baro;
 pub mod battery;
 pub mod console;
 pub mod gains;
+#[cfg(feature = "sparky2")]
+pub mod gps;
 pub mod heartbeat;
 pub mod imu;
 pub mod link;

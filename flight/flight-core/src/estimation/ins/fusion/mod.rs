@@ -5,6 +5,7 @@
 mod baro;
 mod gps;
 mod mag;
+mod still;
 
 use super::{Filter, STATES, covariance};
 use crate::estimation::Error;
@@ -16,7 +17,8 @@ const VARIANCE_FLOOR: f32 = 1e-12;
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Fusion {
-    /// Applied. `test_ratio` is the largest ν²/(gate²·S) among its rows (≤ 1).
+    /// Applied. `test_ratio` is the largest ν²/(gate²·S) among its rows (≤ 1, except for
+    /// an ungated pseudo-measurement).
     Fused {
         /// Largest normalised innovation test ratio.
         test_ratio: f32,
