@@ -3,6 +3,7 @@
 //! 20 ms, arming / failsafe / mode changes sent out of turn, setting changes from the
 //! uplink applied to a `flight_core` settings table while disarmed and echoed — over a
 //! scripted flight instead of sensors: attitude steps every 2 s, a slowly draining 4S pack,
+//! 10 m of baro altitude while armed (0 on the ground),
 //! a flight-mode change every 10 s, armed from 20 s to 80 s of every 100 s, a GPS circle,
 //! identification results after each system-identification phase. Values hold still between
 //! steps so a test can compare the page with what was sent.
@@ -232,6 +233,9 @@ impl FollowerHooks for FlightSide {
             },
             arming_blockers: 0,
             sysid: None,
+            // A hold at 10 m while armed, on the ground otherwise (values hold still).
+            altitude_m: Some(if out.armed { 10.0 } else { 0.0 }),
+            climb_mps: Some(0.0),
         };
         let state = (out.armed, out.failsafe, out.mode);
         let message = if let Some(c) = self.echo.take() {
