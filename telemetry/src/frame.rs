@@ -25,6 +25,8 @@ const KIND_MASK: u8 = 0x07;
 const FLAG_REPORT: u8 = 0x08;
 const FLAG_SAVE_FAILSAFE: u8 = 0x10;
 const FLAG_INPUT_LOST: u8 = 0x20;
+/// Sealed downlinks only: the frame carries the follower's epoch nonce (spec §12.2).
+const FLAG_NONCE: u8 = 0x40;
 const RESERVED_MASK: u8 = 0xC0;
 
 const KIND_BIND_OFFER: u8 = 0;
@@ -83,6 +85,15 @@ pub enum Frame<'a> {
     Uplink(Uplink<'a>),
     /// Follower → master: optional report, stream data.
     Downlink(Downlink<'a>),
+    /// Follower → master, sealed links only: the epoch nonce the follower drew when it
+    /// (re)acquired, sent in its downlink slots until the master uses it (spec §12.2). A
+    /// downlink with kind bit 6 set and nothing but the slot and the nonce.
+    Nonce {
+        /// The slot it answers.
+        slot: u8,
+        /// The follower's epoch nonce (never 0).
+        nonce: u32,
+    },
 }
 
 /// An uplink (channel) frame.
@@ -200,6 +211,10 @@ fn put(out: &mut [u8], at: &mut usize, bytes: &[u8]) -> Result<(), EncodeError> 
 /// Encodes `frame` into `out`, with the link CRC keyed by `key` (the bind ID, or
 /// [`crate::link::BIND_KEY`] for bind frames). Returns the frame length.
 pub fn encode(frame: &Frame<'_>, key: u32, out: &mut [u8]) -> Result<usize, EncodeError> {
+    if matches!(frame, Frame::Nonce { .. }) {
+        // The epoch nonce exists only on authenticated links.
+        return Err(EncodeError::InvalidField);
+    }
     let mut at = encode_body(frame, PROTOCOL_VERSION, out)?;
     let body = out
         .get(..at)
@@ -291,6 +306,13 @@ fn encode_body(frame: &Frame<'_>, version: u8, out: &mut [u8]) -> Result<usize, 
             )?;
             put(out, &mut at, down.data)?;
         }
+        Frame::Nonce { slot, nonce } => {
+            if *nonce == 0 {
+                return Err(EncodeError::InvalidField);
+            }
+            put(out, &mut at, &[version, KIND_DOWNLINK | FLAG_NONCE, *slot])?;
+            put(out, &mut at, &nonce.to_le_bytes())?;
+        }
     }
     Ok(at)
 }
@@ -340,7 +362,7 @@ fn decode_inner(packet: &[u8], key: u32) -> Result<Frame<'_>, Rejection> {
     if keyed_crc16(key, body) != u16::from_be_bytes([*c0, *c1]) {
         return Err(Rejection::Crc);
     }
-    parse_body(*kind_byte, rest)
+    parse_body(*kind_byte, rest, false)
 }
 
 /// Decodes one authenticated packet ([`seal`]): version [`SEALED_VERSION`], the tag checked
@@ -369,14 +391,44 @@ fn open_inner<'a>(packet: &'a [u8], key: &LinkKey, counter: u64) -> Result<Frame
     if !key.verify(counter, body, u32::from_le_bytes([*t0, *t1, *t2, *t3])) {
         return Err(Rejection::Tag);
     }
-    match parse_body(*kind_byte, rest)? {
-        frame @ (Frame::Uplink(_) | Frame::Downlink(_)) => Ok(frame),
+    sealed_link_frame(*kind_byte, rest)
+}
+
+/// The link frame in a sealed packet, tag *not* checked: the receiver's counter for a
+/// [`Frame::Nonce`] depends on the nonce inside, and a follower takes timing (never
+/// content) from uplinks it cannot verify yet (spec §12.2). Crate-private so nothing
+/// outside the link cores can mistake it for an accepted frame.
+pub(crate) fn peek_sealed(packet: &[u8]) -> Option<Frame<'_>> {
+    let (body, _tag) = packet.split_at_checked(packet.len().checked_sub(TAG_BYTES)?)?;
+    let [version, kind_byte, rest @ ..] = body else {
+        return None;
+    };
+    if *version != SEALED_VERSION {
+        return None;
+    }
+    sealed_link_frame(*kind_byte, rest).ok()
+}
+
+fn sealed_link_frame(kind_byte: u8, rest: &[u8]) -> Result<Frame<'_>, Rejection> {
+    match parse_body(kind_byte, rest, true)? {
+        frame @ (Frame::Uplink(_) | Frame::Downlink(_) | Frame::Nonce { .. }) => Ok(frame),
         _ => Err(Rejection::Malformed),
     }
 }
 
-/// The fields after the version byte, once the CRC or tag has been checked.
-fn parse_body(kind_byte: u8, rest: &[u8]) -> Result<Frame<'_>, Rejection> {
+/// The fields after the version byte, once the CRC or tag has been checked. Kind bit 6
+/// (the epoch nonce) exists only in `sealed` frames.
+fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rejection> {
+    if sealed && kind_byte == KIND_DOWNLINK | FLAG_NONCE {
+        let [slot, a, b, c, d] = rest else {
+            return Err(Rejection::Malformed);
+        };
+        let nonce = u32::from_le_bytes([*a, *b, *c, *d]);
+        if nonce == 0 {
+            return Err(Rejection::Malformed);
+        }
+        return Ok(Frame::Nonce { slot: *slot, nonce });
+    }
     if kind_byte & RESERVED_MASK != 0 {
         return Err(Rejection::UnknownKind(kind_byte));
     }
@@ -481,6 +533,9 @@ pub const fn uplink_overhead(format: ChannelFormat, with_report: bool) -> usize 
         + format.packed_bytes()
         + CRC_BYTES
 }
+
+/// Bytes of a sealed [`Frame::Nonce`]: version, kind, slot, nonce, tag.
+pub const NONCE_FRAME_BYTES: usize = 3 + 4 + TAG_BYTES;
 
 /// Frame bytes a downlink takes before its stream data.
 pub const fn downlink_overhead(with_report: bool) -> usize {

@@ -278,3 +278,49 @@ fn bind_frames_are_never_sealed() {
         Err(EncodeError::InvalidField)
     );
 }
+
+#[test]
+fn the_epoch_nonce_travels_only_in_sealed_downlinks() {
+    let nonce = Frame::Nonce {
+        slot: 7,
+        nonce: 0xDEAD_BEEF,
+    };
+    let mut out = [0u8; 64];
+    let n = seal(&nonce, &sealed_key(), 9, &mut out).unwrap();
+    assert_eq!(n, NONCE_FRAME_BYTES);
+    assert_eq!(out[..7], [SEALED_VERSION, 0x44, 7, 0xEF, 0xBE, 0xAD, 0xDE]);
+    assert_eq!(open(&out[..n], &sealed_key(), 9), Received::Accepted(nonce));
+    assert_eq!(peek_sealed(&out[..n]), Some(nonce));
+    assert_eq!(
+        open(&out[..n], &sealed_key(), 10),
+        Received::Rejected(Rejection::Tag)
+    );
+    // Never in a version 1 frame, never 0 (the master's "no epoch").
+    assert_eq!(
+        encode(&nonce, KEY, &mut out),
+        Err(EncodeError::InvalidField)
+    );
+    let zero = Frame::Nonce { slot: 7, nonce: 0 };
+    assert_eq!(
+        seal(&zero, &sealed_key(), 9, &mut out),
+        Err(EncodeError::InvalidField)
+    );
+    // Bit 6 stays reserved in version 1 frames and in sealed uplinks.
+    let (plain, m) = uplink_bytes(b"");
+    let mut flagged = plain[..m - CRC_BYTES].to_vec();
+    flagged[1] |= 0x40;
+    let crc = crate::checksum::keyed_crc16(KEY, &flagged);
+    flagged.extend_from_slice(&crc.to_be_bytes());
+    assert!(matches!(
+        decode(&flagged, KEY),
+        Received::Rejected(Rejection::UnknownKind(_))
+    ));
+    let mut body = flagged[..m - CRC_BYTES].to_vec();
+    body[0] = SEALED_VERSION;
+    let tag = sealed_key().tag(3, &body);
+    body.extend_from_slice(&tag.to_le_bytes());
+    assert!(matches!(
+        open(&body, &sealed_key(), 3),
+        Received::Rejected(Rejection::UnknownKind(_))
+    ));
+}

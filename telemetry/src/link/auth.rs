@@ -29,6 +29,8 @@ impl core::fmt::Debug for LinkKey {
 /// tag hashes its 64-bit counter first; "TauLink/" read as a counter is above 2⁶¹, which no
 /// link ever reaches, so no frame tag coincides with a derived value.
 const DOMAIN_BIND_ID: &[u8] = b"TauLink/1 bind-id";
+/// Domain prefix of the binding-phrase hash (spec §12.2).
+const DOMAIN_PHRASE: &[u8] = b"TauLink/1 binding phrase\0";
 const DOMAIN_HOP_SEED: &[u8] = b"TauLink/1 hop-seed";
 const DOMAIN_MODEL_KEY: &[u8] = b"TauLink/1 model-key";
 
@@ -36,6 +38,20 @@ impl LinkKey {
     /// The key from its 16 bytes.
     pub const fn from_bytes(bytes: [u8; KEY_BYTES]) -> Self {
         Self(bytes)
+    }
+
+    /// The key of a binding phrase entered on both ends (ExpressLRS-style, but what it yields
+    /// is the key, never sent): `SHA-256("TauLink/1 binding phrase\0" ‖ phrase)[0..16]`.
+    pub fn from_phrase(phrase: &str) -> LinkKey {
+        let mut h = Sha256::new();
+        h.write(DOMAIN_PHRASE);
+        h.write(phrase.as_bytes());
+        let digest = h.finish();
+        let mut key = [0u8; KEY_BYTES];
+        for (k, d) in key.iter_mut().zip(digest.iter()) {
+            *k = *d;
+        }
+        Self(key)
     }
 
     /// The key's bytes (to store it).
@@ -94,6 +110,110 @@ impl LinkKey {
         let mut h = SipHasher24::new(&self.0);
         h.write(domain);
         h.finish()
+    }
+}
+
+/// SHA-256 (FIPS 180-4), fed in pieces; only for hashing a binding phrase, so written for
+/// size, not speed.
+struct Sha256 {
+    state: [u32; 8],
+    block: [u8; 64],
+    filled: usize,
+    length: u64,
+}
+
+const SHA256_K: [u32; 64] = [
+    0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4, 0xab1c5ed5,
+    0xd807aa98, 0x12835b01, 0x243185be, 0x550c7dc3, 0x72be5d74, 0x80deb1fe, 0x9bdc06a7, 0xc19bf174,
+    0xe49b69c1, 0xefbe4786, 0x0fc19dc6, 0x240ca1cc, 0x2de92c6f, 0x4a7484aa, 0x5cb0a9dc, 0x76f988da,
+    0x983e5152, 0xa831c66d, 0xb00327c8, 0xbf597fc7, 0xc6e00bf3, 0xd5a79147, 0x06ca6351, 0x14292967,
+    0x27b70a85, 0x2e1b2138, 0x4d2c6dfc, 0x53380d13, 0x650a7354, 0x766a0abb, 0x81c2c92e, 0x92722c85,
+    0xa2bfe8a1, 0xa81a664b, 0xc24b8b70, 0xc76c51a3, 0xd192e819, 0xd6990624, 0xf40e3585, 0x106aa070,
+    0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a, 0x5b9cca4f, 0x682e6ff3,
+    0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2,
+];
+
+impl Sha256 {
+    fn new() -> Self {
+        Self {
+            state: [
+                0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a, 0x510e527f, 0x9b05688c, 0x1f83d9ab,
+                0x5be0cd19,
+            ],
+            block: [0; 64],
+            filled: 0,
+            length: 0,
+        }
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            if let Some(slot) = self.block.get_mut(self.filled) {
+                *slot = b;
+            }
+            self.filled += 1;
+            self.length = self.length.wrapping_add(8);
+            if self.filled == 64 {
+                self.compress();
+            }
+        }
+    }
+
+    fn compress(&mut self) {
+        let mut w = [0u32; 64];
+        for (word, chunk) in w.iter_mut().zip(self.block.chunks_exact(4)) {
+            let mut be = [0u8; 4];
+            be.copy_from_slice(chunk);
+            *word = u32::from_be_bytes(be);
+        }
+        for i in 16..64 {
+            let at = |j: usize| w.get(j).copied().unwrap_or(0);
+            let (w16, w15, w7, w2) = (at(i - 16), at(i - 15), at(i - 7), at(i - 2));
+            let s0 = w15.rotate_right(7) ^ w15.rotate_right(18) ^ (w15 >> 3);
+            let s1 = w2.rotate_right(17) ^ w2.rotate_right(19) ^ (w2 >> 10);
+            if let Some(wi) = w.get_mut(i) {
+                *wi = w16.wrapping_add(s0).wrapping_add(w7).wrapping_add(s1);
+            }
+        }
+        let [mut a, mut b, mut c, mut d, mut e, mut f, mut g, mut h] = self.state;
+        for (k, wi) in SHA256_K.iter().zip(w.iter()) {
+            let s1 = e.rotate_right(6) ^ e.rotate_right(11) ^ e.rotate_right(25);
+            let ch = (e & f) ^ (!e & g);
+            let t1 = h
+                .wrapping_add(s1)
+                .wrapping_add(ch)
+                .wrapping_add(*k)
+                .wrapping_add(*wi);
+            let s0 = a.rotate_right(2) ^ a.rotate_right(13) ^ a.rotate_right(22);
+            let maj = (a & b) ^ (a & c) ^ (b & c);
+            let t2 = s0.wrapping_add(maj);
+            h = g;
+            g = f;
+            f = e;
+            e = d.wrapping_add(t1);
+            d = c;
+            c = b;
+            b = a;
+            a = t1.wrapping_add(t2);
+        }
+        for (s, v) in self.state.iter_mut().zip([a, b, c, d, e, f, g, h]) {
+            *s = s.wrapping_add(v);
+        }
+        self.filled = 0;
+    }
+
+    fn finish(mut self) -> [u8; 32] {
+        let length = self.length;
+        self.write(&[0x80]);
+        while self.filled != 56 {
+            self.write(&[0]);
+        }
+        self.write(&length.to_be_bytes());
+        let mut out = [0u8; 32];
+        for (chunk, s) in out.chunks_exact_mut(4).zip(self.state) {
+            chunk.copy_from_slice(&s.to_be_bytes());
+        }
+        out
     }
 }
 
@@ -269,6 +389,42 @@ mod tests {
             f[bit / 8] ^= 1 << (bit % 8);
             assert!(!key.verify(7, &f, tag), "bit {bit}");
         }
+    }
+
+    fn sha256(msg: &[u8]) -> [u8; 32] {
+        let mut h = Sha256::new();
+        h.write(msg);
+        h.finish()
+    }
+
+    fn hex(bytes: &[u8]) -> String {
+        bytes.iter().map(|b| format!("{b:02x}")).collect()
+    }
+
+    #[test]
+    fn sha256_matches_the_fips_vectors() {
+        assert_eq!(
+            hex(&sha256(b"abc")),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+        assert_eq!(
+            hex(&sha256(&[b'a'; 1000])),
+            "41edece42d63e8d9bf515a9ba6932e1c20cbc9f5a5d134645adb5db1b9737ea3"
+        );
+    }
+
+    /// Known answers from Python's hashlib:
+    /// `hashlib.sha256(b"TauLink/1 binding phrase\0" + phrase).digest()[:16]`.
+    #[test]
+    fn a_binding_phrase_gives_the_key_hashlib_computes() {
+        assert_eq!(
+            hex(&LinkKey::from_phrase("correct horse battery staple").to_bytes()),
+            "6c8c3067ce51b390ad2a8164c0352019"
+        );
+        assert_eq!(
+            hex(&LinkKey::from_phrase("").to_bytes()),
+            "ae05de4532b5d44cfd7dffc4082d46e6"
+        );
     }
 
     #[test]

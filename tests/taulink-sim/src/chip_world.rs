@@ -13,9 +13,10 @@ use telemetry::link::rate::airtime_us;
 use telemetry::link::{HOP_CHANNELS, LinkParams};
 use telemetry::mock::{MediumStats, SplitMix64};
 
+use crate::attack::{Powered, Witnessed, attacker, flight_end_powered, power_plan, victim_of};
 use crate::driver::{LinkRadio, SimClock};
 use crate::ends::{FlightStart, flight_end, module_end};
-use crate::probe::{FlightApp, ModuleApp, Now, Record, Shared};
+use crate::probe::{FlightApp, ModuleApp, Now, Record, Shared, Witness};
 use crate::scenario::Scenario;
 use crate::world::{
     FLIGHT_EPOCH_US, MODULE_EPOCH_US, Outcome, STATUS_PERIOD_US, Status, StatusTracker, params_for,
@@ -30,6 +31,7 @@ fn spawn_pair(
     x_m: (f64, f64),
     salt: u64,
     bind: bool,
+    attacker: Option<RadioId>,
 ) -> (Shared, RadioId, RadioId) {
     let record: Shared = Rc::new(RefCell::new(Record::default()));
     // Crystals a few ppm off, in opposite directions: AFC and frequency tolerance at work.
@@ -41,6 +43,7 @@ fn spawn_pair(
     let module = medium.add_radio(placement(x_m.0, 8.0));
     let flight = medium.add_radio(placement(x_m.1, -6.0));
     let ids = (module.id, flight.id);
+    let flight_chip = flight.chip.clone();
     // The MCU clocks drift too, 40 ppm apart: the follower must keep re-timing its grid.
     let module_clock = SimClock::new(medium.clone(), module.delay.clone(), MODULE_EPOCH_US, 20.0);
     let flight_clock = SimClock::new(medium.clone(), flight.delay.clone(), FLIGHT_EPOCH_US, -20.0);
@@ -52,27 +55,41 @@ fn spawn_pair(
             r.without_header_check()
         }
     };
-    let module_radio = link_radio(Rfm22b::new(
-        module.spi,
-        module.nirq,
-        module.sdn,
-        module.delay,
-    ));
-    let flight_radio = link_radio(Rfm22b::new(
-        flight.spi,
-        flight.nirq,
-        flight.sdn,
-        flight.delay,
-    ));
+    // Under attack, each end's radio notes who sent what it delivered, so the hooks can
+    // attribute the frames their core accepted.
+    let witnessed = |radio, id| Witnessed::new(radio, medium.clone(), id, attacker.is_some());
+    let module_radio = witnessed(
+        link_radio(Rfm22b::new(
+            module.spi,
+            module.nirq,
+            module.sdn,
+            module.delay,
+        )),
+        ids.0,
+    );
+    let flight_radio = witnessed(
+        link_radio(Rfm22b::new(
+            flight.spi,
+            flight.nirq,
+            flight.sdn,
+            flight.delay,
+        )),
+        ids.1,
+    );
     let m = medium.clone();
     let now: Now = Rc::new(move || m.now().as_micros() as u64);
-    let module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);
-    let flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
+    let mut module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);
+    let mut flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
+    if let Some(attacker) = attacker {
+        module_app.witness = Some(Witness::new(module_radio.last_sender(), attacker));
+        flight_app.witness = Some(Witness::new(flight_radio.last_sender(), attacker));
+    }
     sim.spawn(module_end(
         module_radio,
         module_clock,
         params,
         bind,
+        s.key,
         module_app,
     ));
     let start = FlightStart {
@@ -80,15 +97,38 @@ fn spawn_pair(
         params,
         band: s.band,
         failsafe_us: s.failsafe_ms * 1000,
+        key: s.key.map(|k| (k, s.seed ^ salt)),
     };
-    sim.spawn(flight_end(
-        flight_radio,
-        flight_clock,
-        start,
-        flight_app,
-        record.clone(),
-        SimClock::virtual_us,
-    ));
+    let plan = s
+        .attack
+        .map(|a| power_plan(a, s.duration_s))
+        .unwrap_or_default();
+    if attacker.is_some() && !plan.is_empty() {
+        let power = Powered {
+            medium: medium.clone(),
+            delay: sim.delay(),
+            chip: flight_chip,
+            plan,
+            module_params: params,
+        };
+        sim.spawn(flight_end_powered(
+            flight_radio,
+            flight_clock,
+            start,
+            flight_app,
+            record.clone(),
+            power,
+        ));
+    } else {
+        sim.spawn(flight_end(
+            flight_radio,
+            flight_clock,
+            start,
+            flight_app,
+            record.clone(),
+            SimClock::virtual_us,
+        ));
+    }
     (record, ids.0, ids.1)
 }
 
@@ -152,6 +192,12 @@ pub fn simulate_chip(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome {
     medium.set_packet_loss(s.loss);
     let mut rng = SplitMix64::new(s.seed);
     let params = params_for(s, rng.next_u64() as u32);
+    // The attacker, when there is one: near the flight side (a tenth of the link's length
+    // from it), so its frames win at the follower; at the module it is about as loud as
+    // the flight side.
+    let attacker_radio = s
+        .attack
+        .map(|_| medium.add_radio(ChipPlacement::at([0.9 * s.distance_m, 0.0, 0.0])));
     let (main, module_id, flight_id) = spawn_pair(
         &sim,
         &medium,
@@ -160,7 +206,14 @@ pub fn simulate_chip(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome {
         (0.0, s.distance_m),
         0xA11CE,
         s.bind,
+        attacker_radio.as_ref().map(|r| r.id),
     );
+    if let (Some(attack), Some(r)) = (s.attack, attacker_radio) {
+        let victim = victim_of(s, &params, s.key);
+        let clock = SimClock::new(medium.clone(), r.delay.clone(), 0, 0.0);
+        let radio = LinkRadio::new(Rfm22b::new(r.spi, r.nirq, r.sdn, r.delay), TxPower::MAX);
+        sim.spawn(attacker(attack, radio, clock, victim, main.clone(), s.seed));
+    }
     let foreign = s.foreign_link.then(|| {
         let foreign_params = params_for(s, rng.next_u64() as u32);
         let mid = s.distance_m / 2.0;
@@ -172,6 +225,7 @@ pub fn simulate_chip(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome {
             (mid - 5.0, mid + 5.0),
             0xB0B,
             false,
+            None,
         )
         .0
     });

@@ -5,9 +5,12 @@
 
 use clap::{Parser, ValueEnum};
 use telemetry::channels::ChannelFormat;
-use telemetry::link::{Band, RateMode};
+use telemetry::link::{Band, LinkKey, RateMode};
 
-use crate::scenario::Scenario;
+use crate::scenario::{Attack, Scenario};
+
+/// The binding phrase of `--attack` runs without `--phrase`.
+pub const ATTACK_PHRASE: &str = "taulink-sim attack";
 
 /// Both TauLink ends (module master and flight follower, each on the real radio driver
 /// driving a virtual Si4432) talking through a simulated RF medium in virtual time.
@@ -26,6 +29,8 @@ use crate::scenario::Scenario;
   taulink-sim --serve                              the web ground station against the
                                                    firmware-in-the-loop world (flight-sitl
                                                    serve): open the printed URL
+  taulink-sim --attack replay --json               a third radio replays every frame it
+                                                   hears; JSON counts what was accepted
 
 Exit status: 0 if every channel output and stream byte was right, 1 if any was wrong,
 2 for a command-line error."
@@ -106,6 +111,17 @@ pub struct Cli {
     /// With --serve: virtual seconds per wall second (0.01..=100).
     #[arg(long, value_name = "X", default_value_t = 1.0, value_parser = speed)]
     pub speed: f64,
+    /// Binding phrase both ends are keyed with (hashed as the firmware does): every link
+    /// frame then carries a tag, and only frames of this link are accepted (spec §12).
+    #[arg(long, value_name = "TEXT")]
+    pub phrase: Option<String>,
+    /// A third radio in the medium, nearer the flight side, attacks the keyed link for the
+    /// whole run (chip level): `forge` (knows the header and hop sequence, not the key),
+    /// `replay` (records and re-sends every frame; the flight side is power-cycled twice),
+    /// `bind-spoof` (bind offers without pause; the flight side is power-cycled every 5 s).
+    /// The report adds the attacker's frames sent and accepted (must be 0).
+    #[arg(long, value_enum, conflicts_with_all = ["sweep", "serve", "packet_level", "foreign", "ber", "no_chip_crc"])]
+    pub attack: Option<AttackArg>,
     /// Print the report as JSON on stdout (fields in the README); no status line.
     #[arg(long)]
     pub json: bool,
@@ -135,6 +151,27 @@ impl From<RateArg> for RateMode {
             RateArg::M100 => RateMode::M100,
             RateArg::F250 => RateMode::F250,
             RateArg::F500 => RateMode::F500,
+        }
+    }
+}
+
+/// Attacks as command-line words.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AttackArg {
+    /// Forged frames without the key.
+    Forge,
+    /// Recorded frames sent again.
+    Replay,
+    /// Bind offers while the flight side power-cycles.
+    BindSpoof,
+}
+
+impl From<AttackArg> for Attack {
+    fn from(a: AttackArg) -> Self {
+        match a {
+            AttackArg::Forge => Attack::Forge,
+            AttackArg::Replay => Attack::Replay,
+            AttackArg::BindSpoof => Attack::BindSpoof,
         }
     }
 }
@@ -232,6 +269,12 @@ impl Cli {
     /// the signal-to-noise ratio), so either selects it.
     #[must_use]
     pub fn scenario(&self) -> Scenario {
+        let attack: Option<Attack> = self.attack.map(Into::into);
+        // An attacked link runs keyed (the default phrase if none is given).
+        let phrase = self.phrase.as_deref().or(attack.map(|_| ATTACK_PHRASE));
+        // Stream test bytes are checked end to end; a power-cycled flight side loses its
+        // stream buffers, so runs that power-cycle it carry none.
+        let cycles_power = matches!(attack, Some(Attack::Replay | Attack::BindSpoof));
         Scenario {
             rate: self.rate.into(),
             telemetry_ratio: self.ratio,
@@ -250,11 +293,14 @@ impl Cli {
             duration_s: self.duration,
             failsafe_ms: self.failsafe_ms,
             cut_s: self.cut,
-            bind: !self.no_bind,
-            telemetry_load: !self.no_telemetry,
+            // An attacked link was bound before the run.
+            bind: !self.no_bind && attack.is_none(),
+            telemetry_load: !self.no_telemetry && !cycles_power,
             header_check: !self.no_header_check,
             chip_crc: !self.no_chip_crc,
             chip_level: !self.packet_level && self.ber == 0.0 && !self.no_chip_crc,
+            key: phrase.map(LinkKey::from_phrase),
+            attack,
         }
     }
 }
@@ -277,6 +323,18 @@ mod tests {
         assert_eq!(s.cut_s, Some((2.0, 3.5)));
         assert!(s.foreign_link && c.json && s.chip_level);
         assert!(!parse("--ber 0.001").unwrap().scenario().chip_level);
+    }
+
+    #[test]
+    fn an_attack_runs_keyed_at_chip_level() {
+        let s = parse("--attack bind-spoof").unwrap().scenario();
+        assert_eq!(s.attack, Some(Attack::BindSpoof));
+        assert_eq!(s.key, Some(LinkKey::from_phrase(ATTACK_PHRASE)));
+        assert!(s.chip_level && !s.telemetry_load && !s.bind);
+        let s = parse("--attack forge --phrase secret").unwrap().scenario();
+        assert_eq!(s.key, Some(LinkKey::from_phrase("secret")));
+        assert!(s.telemetry_load);
+        assert_eq!(parse("--phrase x").unwrap().scenario().attack, None);
     }
 
     #[test]
@@ -305,6 +363,9 @@ mod tests {
             "--band 2400",
             "--rate F1000",
             "--bogus",
+            "--attack jam",
+            "--attack forge --sweep",
+            "--attack replay --packet-level",
         ] {
             assert!(parse(bad).is_err(), "{bad} accepted");
         }

@@ -5,7 +5,7 @@ use telemetry::channels::FailsafeValues;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{bind_follower, run_follower};
 use telemetry::link::master::{bind_master, run_master};
-use telemetry::link::{Band, LinkClock, LinkParams, PacketRadio};
+use telemetry::link::{Band, LinkClock, LinkKey, LinkParams, PacketRadio};
 
 use crate::probe::{FlightApp, ModuleApp, Shared};
 use crate::world::BIND_TIMEOUT_US;
@@ -17,6 +17,7 @@ pub(crate) async fn module_end<R: PacketRadio, C: LinkClock>(
     mut clock: C,
     params: LinkParams,
     bind: bool,
+    key: Option<LinkKey>,
     mut app: ModuleApp,
 ) {
     if bind {
@@ -26,7 +27,10 @@ pub(crate) async fn module_end<R: PacketRadio, C: LinkClock>(
             return;
         };
     }
-    let mut master = Master::new(params);
+    let mut master = match key {
+        Some(key) => Master::new(params).with_key(key),
+        None => Master::new(params),
+    };
     let _ = run_master(&mut radio, &mut clock, &mut master, &mut app).await;
 }
 
@@ -40,6 +44,22 @@ pub(crate) struct FlightStart {
     pub band: Band,
     /// Failsafe time, µs.
     pub failsafe_us: u64,
+    /// Link key (keyed link), and the seed of the follower's epoch nonces (a hardware RNG
+    /// on the real controller).
+    pub key: Option<(LinkKey, u64)>,
+}
+
+/// The follower of `params`, keyed if `key` is given.
+pub(crate) fn follower_for(
+    params: LinkParams,
+    failsafe_us: u64,
+    key: Option<(LinkKey, u64)>,
+) -> Follower {
+    let follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
+    match key {
+        Some((key, seed)) => follower.with_key(key).with_nonce_seed(seed),
+        None => follower,
+    }
 }
 
 /// The flight (follower) end: binds (or boots a little later than the master, somewhere in
@@ -65,6 +85,6 @@ pub(crate) async fn flight_end<R: PacketRadio, C: LinkClock>(
     };
     record.borrow_mut().bound_us = Some(virtual_us(&clock));
     record.borrow_mut().follower_params = Some(params);
-    let mut follower = Follower::new(params, FailsafeValues::default(), start.failsafe_us);
+    let mut follower = follower_for(params, start.failsafe_us, start.key);
     let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut app).await;
 }

@@ -6,6 +6,7 @@
 //! measure, [`report`] summarises.
 #![warn(missing_docs)]
 
+pub mod attack;
 pub mod chip_world;
 pub mod cli;
 pub mod driver;

@@ -163,7 +163,7 @@ fn main() -> ExitCode {
         eprintln!("taulink-sim: plot {}: {e}", path.display());
         return ExitCode::FAILURE;
     }
-    if report.errors > 0 || report.foreign_errors > 0 {
+    if report.failed() {
         ExitCode::FAILURE
     } else {
         ExitCode::SUCCESS

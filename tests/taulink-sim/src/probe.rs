@@ -3,8 +3,10 @@
 //! and check every value), telemetry sources and sinks with known byte streams, and the
 //! shared record both ends write into.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::rc::Rc;
+
+use si4432_sim::RadioId;
 
 use telemetry::channels::{CHANNEL_MAX, ChannelFormat, Channels};
 use telemetry::link::core::follower::SyncState;
@@ -126,6 +128,15 @@ pub struct Record {
     pub uplink_lq_sum: (u64, u64),
     /// Sum and count of downlink LQ readings (one per master slot from the 100th downlink).
     pub downlink_lq_sum: (u64, u64),
+    /// Frames an attacking radio sent (`--attack`).
+    pub attacker_sent: u64,
+    /// Frames of the attacking radio that a victim's link core accepted: its count of valid
+    /// frames rose on a packet the medium delivered from the attacker (must stay 0).
+    pub attacker_accepted: u64,
+    /// Times the flight side was power-cycled.
+    pub power_cycles: u32,
+    /// Boots after which the flight side ran another link than the module's (must stay 0).
+    pub rebinds: u32,
 }
 
 impl Record {
@@ -171,6 +182,38 @@ pub struct Snapshot {
 
 /// Shared record handle.
 pub type Shared = Rc<RefCell<Record>>;
+
+/// Who sent the packet a victim's radio delivered last (from the medium's trace), and the
+/// attacker's radio: lets the hooks attribute each frame their core accepted.
+#[derive(Clone, Debug)]
+pub struct Witness {
+    /// Sender of the last packet delivered to this end's radio.
+    pub last_sender: Rc<Cell<Option<RadioId>>>,
+    /// The attacking radio.
+    pub attacker: RadioId,
+    accepted_before: u32,
+}
+
+impl Witness {
+    /// A witness of `last_sender` against `attacker`.
+    pub fn new(last_sender: Rc<Cell<Option<RadioId>>>, attacker: RadioId) -> Self {
+        Self {
+            last_sender,
+            attacker,
+            accepted_before: 0,
+        }
+    }
+
+    /// The core's count of accepted frames is now `accepted` (one receive per step or
+    /// slot ends at the first accepted frame, so a rise is the last packet delivered):
+    /// whether the frame it accepted came from the attacker.
+    fn attacker_accepted(&mut self, accepted: u32) -> bool {
+        let rose = accepted > self.accepted_before;
+        // A restarted core counts from 0 again.
+        self.accepted_before = accepted;
+        rose && self.last_sender.get() == Some(self.attacker)
+    }
+}
 /// The common time reference of a simulation (virtual µs, not either end's clock).
 pub type Now = Rc<dyn Fn() -> u64>;
 
@@ -184,6 +227,8 @@ pub struct ModuleApp {
     pub salt: u64,
     /// Keep the uplink stream saturated.
     pub telemetry_load: bool,
+    /// Under attack: attributes accepted downlinks.
+    pub witness: Option<Witness>,
     written: u64,
     read: u64,
 }
@@ -196,6 +241,7 @@ impl ModuleApp {
             record,
             salt,
             telemetry_load,
+            witness: None,
             written: 0,
             read: 0,
         }
@@ -234,6 +280,11 @@ impl MasterHooks for ModuleApp {
             rec.downlink_lq_sum.1 += 1;
         }
         rec.now.master_rssi_dbm = master.downlink_rssi_dbm();
+        if let Some(w) = &mut self.witness
+            && w.attacker_accepted(master.counters().received)
+        {
+            rec.attacker_accepted += 1;
+        }
         rec.now.downlinks_received = master.counters().received;
         rec.now.master_rejected = master.counters().rejected;
     }
@@ -249,6 +300,8 @@ pub struct FlightApp {
     pub salt: u64,
     /// Keep the downlink stream saturated.
     pub telemetry_load: bool,
+    /// Under attack: attributes accepted uplinks.
+    pub witness: Option<Witness>,
     format: ChannelFormat,
     last_updates: u32,
     last_sample: Option<u64>,
@@ -271,6 +324,7 @@ impl FlightApp {
             record,
             salt,
             telemetry_load,
+            witness: None,
             format,
             last_updates: 0,
             last_sample: None,
@@ -286,6 +340,11 @@ impl FollowerHooks for FlightApp {
         let now = (self.now)();
         let mut guard = self.record.borrow_mut();
         let rec = &mut *guard;
+        if let Some(w) = &mut self.witness
+            && w.attacker_accepted(follower.counters().received)
+        {
+            rec.attacker_accepted += 1;
+        }
         if follower.updates() != self.last_updates && !follower.in_failsafe() {
             self.last_updates = follower.updates();
             let out = follower.output();

@@ -71,6 +71,16 @@ pub struct Report {
     pub link_rejected: u64,
     /// Wrong outputs or bytes on the foreign link (must be 0).
     pub foreign_errors: u64,
+    /// The attack run (`--attack`), if any.
+    pub attack: Option<String>,
+    /// Frames the attacking radio sent.
+    pub attacker_frames_sent: u64,
+    /// Attacker frames a victim's link core accepted (must be 0).
+    pub attacker_frames_accepted: u64,
+    /// Times the flight side was power-cycled.
+    pub power_cycles: u32,
+    /// Boots after which the flight side ran a link other than the module's (must be 0).
+    pub rebinds: u32,
 }
 
 fn percentile(sorted: &[u32], p: f64) -> f64 {
@@ -141,10 +151,31 @@ pub fn summarise(s: &Scenario, o: &Outcome) -> Report {
             .foreign
             .as_ref()
             .map_or(0, |f| f.outputs_bad + f.up_bytes_bad + f.down_bytes_bad),
+        attack: s.attack.map(|a| {
+            match a {
+                crate::scenario::Attack::Forge => "forge",
+                crate::scenario::Attack::Replay => "replay",
+                crate::scenario::Attack::BindSpoof => "bind-spoof",
+            }
+            .to_string()
+        }),
+        attacker_frames_sent: m.attacker_sent,
+        attacker_frames_accepted: m.attacker_accepted,
+        power_cycles: m.power_cycles,
+        rebinds: m.rebinds,
     }
 }
 
 impl Report {
+    /// Whether the run went wrong: a wrong output or stream byte, or an attack that got
+    /// anything accepted.
+    pub fn failed(&self) -> bool {
+        self.errors > 0
+            || self.foreign_errors > 0
+            || self.attacker_frames_accepted > 0
+            || self.rebinds > 0
+    }
+
     /// One JSON object.
     pub fn to_json(&self) -> String {
         let mut j = String::from("{");
@@ -190,6 +221,19 @@ impl Report {
         field("chip_crc_rejected", self.chip_crc_rejected.to_string());
         field("link_rejected", self.link_rejected.to_string());
         field("foreign_errors", self.foreign_errors.to_string());
+        if let Some(attack) = &self.attack {
+            field("attack", format!("\"{attack}\""));
+            field(
+                "attacker_frames_sent",
+                self.attacker_frames_sent.to_string(),
+            );
+            field(
+                "attacker_frames_accepted",
+                self.attacker_frames_accepted.to_string(),
+            );
+            field("power_cycles", self.power_cycles.to_string());
+            field("rebinds", self.rebinds.to_string());
+        }
         j.push('}');
         j
     }
@@ -252,6 +296,19 @@ impl Report {
             "errors (must be 0)",
             format!("{} (foreign link: {})", self.errors, self.foreign_errors),
         );
+        if let Some(attack) = &self.attack {
+            row(
+                &format!("attack {attack}: frames sent"),
+                self.attacker_frames_sent.to_string(),
+            );
+            row(
+                "accepted / rebinds (must be 0)",
+                format!(
+                    "{} / {} ({} flight power cycles)",
+                    self.attacker_frames_accepted, self.rebinds, self.power_cycles
+                ),
+            );
+        }
         t
     }
 }

@@ -2,7 +2,22 @@
 //! that fills it is `cli.rs`).
 
 use telemetry::channels::ChannelFormat;
-use telemetry::link::{Band, RateMode};
+use telemetry::link::{Band, LinkKey, RateMode};
+
+/// What a third radio in the medium does to the link (`--attack`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Attack {
+    /// Knows the link's header and hop sequence (public), not its key: sends forged
+    /// uplinks, downlinks and nonce frames on the link's channels.
+    Forge,
+    /// Follows the link's slots, records every frame it hears and sends each again in a
+    /// later slot with the same on-air number (256·k slots on); the flight side is
+    /// power-cycled twice meanwhile.
+    Replay,
+    /// Sends bind offers on the bind channel without pause while the flight side is
+    /// power-cycled every 5 s.
+    BindSpoof,
+}
 
 /// A simulation scenario.
 #[derive(Clone, Debug)]
@@ -45,6 +60,10 @@ pub struct Scenario {
     /// Run the real RFM22b driver on virtual Si4432s (`si4432-sim`); otherwise the
     /// packet-level mock radios (faster; supports `bit_error_rate` and `chip_crc`).
     pub chip_level: bool,
+    /// Authenticate every link frame with this key (spec §12), on both ends.
+    pub key: Option<LinkKey>,
+    /// A third radio attacking the link (chip level only).
+    pub attack: Option<Attack>,
 }
 
 impl Default for Scenario {
@@ -68,6 +87,8 @@ impl Default for Scenario {
             header_check: true,
             chip_crc: true,
             chip_level: true,
+            key: None,
+            attack: None,
         }
     }
 }

@@ -90,6 +90,7 @@ fn spawn_pair<'a>(
         module_clock,
         params,
         bind,
+        s.key,
         module_app,
     ));
     let start = FlightStart {
@@ -97,6 +98,7 @@ fn spawn_pair<'a>(
         params,
         band: s.band,
         failsafe_us: s.failsafe_ms * 1000,
+        key: s.key.map(|k| (k, s.seed ^ salt)),
     };
     // Both mock clocks count the shared virtual time from their own epoch.
     ex.spawn(flight_end(

@@ -5,8 +5,8 @@
 
 use crate::channels::{CHANNEL_CENTER, Channels, FailsafeValues};
 use crate::frame::{
-    Downlink, Frame, LinkReport, Received, StreamHeader, decode, downlink_overhead, encode, open,
-    seal,
+    Downlink, Frame, LinkReport, Received, Rejection, StreamHeader, decode, downlink_overhead,
+    encode, open, peek_sealed, seal,
 };
 use crate::link::auth::LinkKey;
 use crate::link::bind::LinkParams;
@@ -17,7 +17,8 @@ use crate::link::rate::TX_LEAD_US;
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
-use super::{MAX_LISTEN_US, STREAM_RX_BYTES, STREAM_TX_BYTES, Step, frame_counter, tag_extra};
+use super::epoch::{FollowerEpoch, NonceSource, counter};
+use super::{MAX_LISTEN_US, STREAM_RX_BYTES, STREAM_TX_BYTES, Step, tag_extra};
 
 /// Default failsafe delay.
 pub const DEFAULT_FAILSAFE_US: u64 = 250_000;
@@ -51,8 +52,24 @@ enum Sync {
 pub enum SyncState {
     /// Scanning for the master.
     Acquiring,
-    /// On the master's slot grid.
+    /// Keyed links: on the master's slot grid by the timing of its uplinks, sending the
+    /// epoch nonce in downlink slots until an uplink verifies under it; nothing from the
+    /// uplinks is taken meanwhile (failsafe as while acquiring).
+    Handshake,
+    /// On the master's slot grid, taking its channels.
     Tracking,
+}
+
+/// What an uplink slot brought.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Heard {
+    /// A valid uplink, taken.
+    Accepted,
+    /// Keyed links before the epoch is in force: an uplink of the expected slot whose tag
+    /// cannot be checked yet; only its timing is taken.
+    TimingOnly,
+    /// Nothing usable.
+    Nothing,
 }
 
 /// The follower's state.
@@ -78,6 +95,11 @@ pub struct Follower {
     counters: Counters,
     resyncs: u32,
     key: Option<LinkKey>,
+    /// Keyed links: the epoch of the frame counter (spec §12.2).
+    epoch: FollowerEpoch,
+    nonces: NonceSource,
+    /// The latest time the follower was told (stirs the nonces).
+    now_us: u64,
 }
 
 impl Follower {
@@ -110,6 +132,9 @@ impl Follower {
             counters: Counters::default(),
             resyncs: 0,
             key: None,
+            epoch: FollowerEpoch::None,
+            nonces: NonceSource::new(0),
+            now_us: 0,
         }
     }
 
@@ -117,10 +142,23 @@ impl Follower {
     /// accepted — a forger who knows the header and hop sequence but not the key moves
     /// neither the channels, nor the failsafe values, nor the sync state — and downlinks
     /// are sealed. Identity and hop sequence become the key's one-way derivations.
+    ///
+    /// Tags cover a 64-bit counter whose epoch is a nonce the follower draws at every
+    /// (re)acquisition and sends in its downlink slots; until an uplink verifies under it the
+    /// follower takes only timing from uplinks (channels stay failsafe). Seed the nonces with
+    /// [`Follower::with_nonce_seed`].
     pub fn with_key(mut self, key: LinkKey) -> Self {
         self.params.bind_id = key.bind_id();
         self.hops = HopSequence::new(key.hop_seed());
         self.key = Some(key);
+        self
+    }
+
+    /// Seeds the epoch nonces (keyed links) with `seed`, which should come from a hardware
+    /// RNG at every boot: a nonce must never repeat under one key, across reboots too (each
+    /// draw is also stirred with the time, but a boot-to-lock time can repeat).
+    pub fn with_nonce_seed(mut self, seed: u64) -> Self {
+        self.nonces = NonceSource::new(seed);
         self
     }
 
@@ -178,7 +216,7 @@ impl Follower {
     }
 
     /// Moves past the tracked slot; an uplink slot passed without a packet is a miss.
-    fn advance(&mut self, heard: bool) {
+    fn advance(&mut self, heard: Heard) {
         let Sync::Tracking {
             slot,
             slot_start_us,
@@ -188,26 +226,28 @@ impl Follower {
             return;
         };
         let uplink = self.schedule.kind(u32::from(slot)) == SlotKind::Uplink;
-        let misses = if heard {
-            0
-        } else if uplink {
-            misses + 1
-        } else {
-            misses
+        let misses = match heard {
+            Heard::Accepted | Heard::TimingOnly => 0,
+            Heard::Nothing if uplink => misses + 1,
+            Heard::Nothing => misses,
         };
-        if uplink && !heard {
+        if uplink && heard != Heard::Accepted {
             self.lq.push(false);
+        }
+        if uplink && heard == Heard::Nothing {
             self.counters.missed += 1;
         }
         let next = slot.wrapping_add(1);
         self.sync = if misses >= RESYNC_MISSES {
             self.resyncs += 1;
             self.lq.reset();
+            self.epoch = FollowerEpoch::None;
             Sync::Acquiring {
                 index: next % HOP_CHANNELS as u8,
                 dwell_end_us: None,
             }
         } else {
+            self.epoch.advance(next, &mut self.nonces, self.now_us);
             Sync::Tracking {
                 slot: next,
                 slot_start_us: slot_start_us + u64::from(self.schedule.slot_us()),
@@ -219,6 +259,7 @@ impl Follower {
     /// Plans the next step at `now_us`; writes a downlink frame into `buf` when it is time
     /// to send one.
     pub fn plan(&mut self, now_us: u64, buf: &mut [u8]) -> Step {
+        self.now_us = now_us;
         self.check_failsafe(now_us);
         // Slots whose window has passed (the loop fell behind) are misses.
         while let Sync::Tracking {
@@ -230,7 +271,7 @@ impl Follower {
             if now_us < self.slot_end_us(slot, slot_start_us) {
                 break;
             }
-            self.advance(false);
+            self.advance(Heard::Nothing);
         }
         match self.sync {
             Sync::Acquiring {
@@ -296,6 +337,12 @@ impl Follower {
     }
 
     fn build_downlink(&mut self, slot: u8, buf: &mut [u8]) -> Option<usize> {
+        if let (Some(key), FollowerEpoch::Handshake { nonce }) = (&self.key, self.epoch) {
+            // The nonce goes out under `nonce ‖ 0 ‖ slot` (the master cannot know anything
+            // else yet), alone: no stream data that a replay could inject.
+            let frame = Frame::Nonce { slot, nonce };
+            return seal(&frame, key, counter(nonce, 0, slot), buf).ok();
+        }
         let report = LinkReport {
             rssi_dbm: self.rssi.report_dbm(),
             lq_percent: self.lq.percent(),
@@ -318,9 +365,10 @@ impl Follower {
             report: Some(report),
             data: data.get(..n)?,
         };
-        match &self.key {
-            Some(key) => seal(&Frame::Downlink(down), key, frame_counter(slot), buf).ok(),
-            None => encode(&Frame::Downlink(down), self.params.bind_id, buf).ok(),
+        match (&self.key, self.epoch.counter(slot)) {
+            (Some(key), Some(counter)) => seal(&Frame::Downlink(down), key, counter, buf).ok(),
+            (Some(_), None) => None,
+            (None, _) => encode(&Frame::Downlink(down), self.params.bind_id, buf).ok(),
         }
     }
 
@@ -329,22 +377,23 @@ impl Follower {
         self.counters.sent += 1;
         // Sending is not hearing: the run of missed uplinks goes on (a downlink slot is
         // neither a hit nor a miss).
-        self.advance(false);
+        self.advance(Heard::Nothing);
     }
 
     /// A planned step was not carried out (e.g. `Idle`); move on.
     pub fn on_skipped(&mut self) {
-        self.advance(false);
+        self.advance(Heard::Nothing);
     }
 
     /// The outcome of a listen, at `now_us` (for a packet: when it had fully arrived).
     pub fn on_received(&mut self, outcome: RxOutcome, packet: &[u8], now_us: u64) {
+        self.now_us = now_us;
         if let RxOutcome::Packet { len, rssi_dbm } = outcome {
             let bytes = packet.get(..len).unwrap_or(&[]);
+            // Re-time the grid: the master started this slot `packet_end_offset` ago.
+            let slot_start_us =
+                now_us.saturating_sub(u64::from(self.schedule.packet_end_offset_us(len)));
             if let Received::Accepted(Frame::Uplink(up)) = self.decode_uplink(bytes) {
-                // Re-time the grid: the master started this slot `packet_end_offset` ago.
-                let slot_start_us =
-                    now_us.saturating_sub(u64::from(self.schedule.packet_end_offset_us(len)));
                 let expected = match self.sync {
                     Sync::Acquiring { index, .. } => (up.slot % HOP_CHANNELS as u8) == index,
                     // Spec §5.3 check 4: while tracking only the slot being listened for is
@@ -357,10 +406,30 @@ impl Follower {
                         slot_start_us,
                         misses: 0,
                     };
+                    if let FollowerEpoch::Handshake { nonce } = self.epoch {
+                        // The master tags under our nonce: the epoch is in force.
+                        self.epoch = FollowerEpoch::InForce { nonce, wraps: 0 };
+                    }
                     self.accept(&up, rssi_dbm, now_us);
-                    self.advance(true);
+                    self.advance(Heard::Accepted);
                     return;
                 }
+            } else if let Some(slot) = self.timing_only(bytes) {
+                if self.epoch == FollowerEpoch::None {
+                    // Locked by timing: a fresh epoch nonce for the handshake.
+                    self.epoch = FollowerEpoch::Handshake {
+                        nonce: self.nonces.draw(now_us),
+                    };
+                }
+                self.sync = Sync::Tracking {
+                    slot,
+                    slot_start_us,
+                    misses: 0,
+                };
+                // Its content is not taken: counted as rejected.
+                self.counters.rejected += 1;
+                self.advance(Heard::TimingOnly);
+                return;
             }
             self.counters.rejected += 1;
         } else if outcome == RxOutcome::Corrupted {
@@ -370,17 +439,38 @@ impl Follower {
     }
 
     /// Decodes an uplink: with a key, its tag is checked under the counter of the slot
-    /// being listened for (while acquiring, of the slot it names, whose hop index is then
-    /// checked against the dwell channel).
+    /// being listened for in the epoch in force or being handshaken; while acquiring
+    /// nothing verifies (the epoch is the follower's fresh nonce, not yet sent).
     fn decode_uplink<'a>(&self, bytes: &'a [u8]) -> Received<'a> {
         let Some(key) = &self.key else {
             return decode(bytes, self.params.bind_id);
         };
-        let slot = match self.sync {
-            Sync::Tracking { slot, .. } => slot,
-            Sync::Acquiring { .. } => bytes.get(2).copied().unwrap_or(0),
+        let counter = match self.sync {
+            Sync::Tracking { slot, .. } => self.epoch.counter(slot),
+            Sync::Acquiring { .. } => None,
         };
-        open(bytes, key, frame_counter(slot))
+        match counter {
+            Some(counter) => open(bytes, key, counter),
+            None => Received::Rejected(Rejection::Tag),
+        }
+    }
+
+    /// Keyed links before the epoch is in force: the slot of a well-formed sealed uplink
+    /// of the expected slot (the dwell channel's while acquiring), whose timing alone the
+    /// follower may take to reach its downlink slot. A forger can at most move the grid
+    /// and so delay the handshake, as jamming can.
+    fn timing_only(&self, bytes: &[u8]) -> Option<u8> {
+        if self.key.is_none() || matches!(self.epoch, FollowerEpoch::InForce { .. }) {
+            return None;
+        }
+        let Some(Frame::Uplink(up)) = peek_sealed(bytes) else {
+            return None;
+        };
+        let expected = match self.sync {
+            Sync::Acquiring { index, .. } => (up.slot % HOP_CHANNELS as u8) == index,
+            Sync::Tracking { slot, .. } => up.slot == slot,
+        };
+        (expected && self.schedule.kind(u32::from(up.slot)) == SlotKind::Uplink).then_some(up.slot)
     }
 
     fn accept(&mut self, up: &crate::frame::Uplink<'_>, rssi_dbm: i16, now_us: u64) {
@@ -425,9 +515,10 @@ impl Follower {
 
     /// Locked to the master?
     pub fn sync_state(&self) -> SyncState {
-        match self.sync {
-            Sync::Acquiring { .. } => SyncState::Acquiring,
-            Sync::Tracking { .. } => SyncState::Tracking,
+        match (self.sync, self.epoch) {
+            (Sync::Acquiring { .. }, _) => SyncState::Acquiring,
+            (Sync::Tracking { .. }, FollowerEpoch::Handshake { .. }) => SyncState::Handshake,
+            (Sync::Tracking { .. }, _) => SyncState::Tracking,
         }
     }
 

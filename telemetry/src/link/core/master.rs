@@ -4,7 +4,8 @@
 
 use crate::channels::{CHANNEL_CENTER, Channels, pack};
 use crate::frame::{
-    Frame, LinkReport, Received, StreamHeader, Uplink, decode, encode, open, seal, uplink_overhead,
+    Frame, LinkReport, Received, StreamHeader, Uplink, decode, encode, open, peek_sealed, seal,
+    uplink_overhead,
 };
 use crate::link::auth::LinkKey;
 use crate::link::bind::LinkParams;
@@ -15,7 +16,8 @@ use crate::link::rate::TX_LEAD_US;
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
-use super::{STREAM_RX_BYTES, STREAM_TX_BYTES, Step, frame_counter, tag_extra};
+use super::epoch::{MasterEpoch, NonceVerdict, counter};
+use super::{STREAM_RX_BYTES, STREAM_TX_BYTES, Step, tag_extra};
 
 /// Uplinks that carry a save-failsafe request, so one lost packet does not lose it (storing
 /// twice is harmless: the follower keeps the channels of the last flagged packet).
@@ -45,6 +47,8 @@ pub struct Master {
     counters: Counters,
     last_downlink_us: Option<u64>,
     key: Option<LinkKey>,
+    /// Keyed links: the follower's epoch nonce in use (spec §12.2).
+    epoch: MasterEpoch,
 }
 
 impl Master {
@@ -71,12 +75,15 @@ impl Master {
             counters: Counters::default(),
             last_downlink_us: None,
             key: None,
+            epoch: MasterEpoch::new(),
         }
     }
 
     /// Authenticates the link with `key` (spec §12): every frame is sealed with a tag and
     /// only tagged downlinks are accepted; the link identity (header) and the hop sequence
-    /// become the key's one-way derivations, replacing the bind ID's.
+    /// become the key's one-way derivations, replacing the bind ID's. Tags cover a 64-bit
+    /// counter whose epoch is the follower's nonce: the master adopts a verified fresh one
+    /// from a [`Frame::Nonce`] downlink, and accepts telemetry only under it.
     pub fn with_key(mut self, key: LinkKey) -> Self {
         self.params.bind_id = key.bind_id();
         self.hops = HopSequence::new(key.hop_seed());
@@ -186,7 +193,7 @@ impl Master {
             data: data.get(..n)?,
         };
         let len = match &self.key {
-            Some(key) => seal(&Frame::Uplink(up), key, frame_counter(up.slot), buf),
+            Some(key) => seal(&Frame::Uplink(up), key, self.epoch.counter(self.slot), buf),
             None => encode(&Frame::Uplink(up), self.params.bind_id, buf),
         };
         len.ok()
@@ -197,7 +204,12 @@ impl Master {
         self.counters.sent += 1;
         self.save_failsafe = self.save_failsafe.saturating_sub(1);
         self.report_due = false;
+        self.next_slot();
+    }
+
+    fn next_slot(&mut self) {
         self.slot = self.slot.wrapping_add(1);
+        self.epoch.on_slot(self.slot);
     }
 
     /// One receive outcome in the current (downlink) slot, at `now_us`. Returns true once
@@ -208,18 +220,27 @@ impl Master {
             RxOutcome::Packet { len, rssi_dbm } => {
                 let bytes = packet.get(..len).unwrap_or(&[]);
                 let received = match &self.key {
-                    Some(key) => open(bytes, key, frame_counter(self.slot as u8)),
+                    Some(key) => self.open_downlink(key, bytes),
                     None => decode(bytes, self.params.bind_id),
                 };
                 match received {
                     Received::Accepted(Frame::Downlink(down)) if down.slot == self.slot as u8 => {
-                        self.heard = true;
-                        self.counters.received += 1;
-                        self.rssi.push(rssi_dbm);
+                        self.epoch.heard(self.slot);
+                        self.heard(rssi_dbm, now_us);
                         self.remote = down.report.or(self.remote);
                         self.uplink_stream.on_ack(down.stream.ack);
                         self.downlink_stream.on_data(down.stream.seq, down.data);
-                        self.last_downlink_us = Some(now_us);
+                    }
+                    // A verified nonce of this slot: only the epoch moves (its frame carries
+                    // nothing else, so a refused replay changes nothing).
+                    Received::Accepted(Frame::Nonce { slot, nonce }) if slot == self.slot as u8 => {
+                        let ratio = self.params.telemetry_ratio;
+                        match self.epoch.offer(nonce, self.slot, ratio) {
+                            NonceVerdict::Adopted | NonceVerdict::Repeated => {
+                                self.heard(rssi_dbm, now_us);
+                            }
+                            NonceVerdict::Refused => self.counters.rejected += 1,
+                        }
                     }
                     _ => self.counters.rejected += 1,
                 }
@@ -230,6 +251,25 @@ impl Master {
         self.heard
     }
 
+    /// Checks a sealed downlink: a nonce frame under `nonce ‖ 0 ‖ slot` (the nonce inside
+    /// picks the counter; a wrong one fails the tag), anything else under the epoch in use
+    /// (none yet: nothing verifies).
+    fn open_downlink<'a>(&self, key: &LinkKey, bytes: &'a [u8]) -> Received<'a> {
+        let counter = match peek_sealed(bytes) {
+            Some(Frame::Nonce { nonce, .. }) => counter(nonce, 0, self.slot as u8),
+            _ if self.epoch.active() => self.epoch.counter(self.slot),
+            _ => return Received::Rejected(crate::frame::Rejection::Tag),
+        };
+        open(bytes, key, counter)
+    }
+
+    fn heard(&mut self, rssi_dbm: i16, now_us: u64) {
+        self.heard = true;
+        self.counters.received += 1;
+        self.rssi.push(rssi_dbm);
+        self.last_downlink_us = Some(now_us);
+    }
+
     /// The downlink slot's listening window is over.
     pub fn finish_listen(&mut self) {
         if !self.heard {
@@ -238,7 +278,7 @@ impl Master {
         self.lq.push(self.heard);
         self.heard = false;
         self.report_due = true;
-        self.slot = self.slot.wrapping_add(1);
+        self.next_slot();
     }
 
     /// The current slot was skipped (the loop fell behind).
@@ -247,7 +287,7 @@ impl Master {
             self.lq.push(false);
             self.counters.missed += 1;
         }
-        self.slot = self.slot.wrapping_add(1);
+        self.next_slot();
     }
 
     /// Downlink LQ (% of the last 100 downlink slots that brought valid telemetry).
@@ -274,6 +314,12 @@ impl Master {
     /// [`Counters::radio_errors`]).
     pub fn on_radio_error(&mut self) {
         self.counters.radio_errors = self.counters.radio_errors.saturating_add(1);
+    }
+
+    /// Keyed links: whether a follower's epoch nonce is in use (uplinks are tagged under
+    /// it). Before the first, nothing the master sends verifies at a follower.
+    pub fn has_epoch(&self) -> bool {
+        self.epoch.active()
     }
 
     /// Time of the last valid downlink.

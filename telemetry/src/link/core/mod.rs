@@ -2,10 +2,13 @@
 //! radio did, and answer with the next [`Step`]; the async loops in `link::master` and
 //! `link::follower` only carry these steps out.
 
+mod epoch;
 pub mod follower;
 pub mod master;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_epoch;
 
 pub use follower::Follower;
 pub use master::Master;
@@ -30,13 +33,6 @@ pub const RADIO_RETRY_US: u64 = 10_000;
 /// How often the loops ask the radio to [`check_health`](crate::link::PacketRadio::check_health)
 /// (for a chip that reset without any operation failing).
 pub const HEALTH_CHECK_PERIOD_US: u64 = 1_000_000;
-
-/// The counter an authenticated frame of `slot` is tagged under. Version 1 of the scheme:
-/// the on-air slot only, so a frame recorded 256 slots earlier still verifies (the epoch
-/// and wrap extension of spec §12.2 is not in yet); a forger without the key never does.
-pub(crate) fn frame_counter(slot: u8) -> u64 {
-    u64::from(slot)
-}
 
 /// Extra frame bytes a tag takes over the link CRC.
 pub(crate) const fn tag_extra(keyed: bool) -> usize {

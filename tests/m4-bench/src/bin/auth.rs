@@ -1,8 +1,10 @@
 //! Instructions to authenticate one air frame on the Cortex-M4 (spec §12): the SipHash-2-4
-//! tag of a 16-channel F500 uplink (27 bytes before the tag, plus the 8-byte frame counter)
-//! created, then checked; the tag of F500's largest downlink (28 bytes before the tag); and,
-//! for comparison, the keyed link CRC-16 of the same uplink that the tag replaces.
-//! m4count regions: 1 = uplink tag, 3 = uplink check, 5 = downlink tag, 7 = link CRC.
+//! tag of a 16-channel F500 uplink (27 bytes before the tag, plus the 64-bit frame counter
+//! epoch₃₂ ‖ wraps₂₄ ‖ slot₈) created, then checked; the tag of F500's largest downlink (28
+//! bytes before the tag); the tag of an epoch-nonce frame (7 bytes); and, for comparison,
+//! the keyed link CRC-16 of the same uplink that the tag replaces.
+//! m4count regions: 1 = uplink tag, 3 = uplink check, 5 = downlink tag, 7 = link CRC,
+//! 9 = nonce-frame tag.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
@@ -16,7 +18,9 @@ fn main() -> ! {
     let key = LinkKey::from_bytes(black_box(core::array::from_fn(|i| (i * 13) as u8)));
     let uplink: [u8; 27] = black_box(core::array::from_fn(|i| (i * 5 + 1) as u8));
     let downlink: [u8; 28] = black_box(core::array::from_fn(|i| (i * 3 + 2) as u8));
-    let counter: u64 = black_box(0x0001_0203_0405);
+    let nonce: [u8; 7] = black_box([2, 0x44, 0x13, 0xD4, 0xC3, 0xB2, 0xA1]);
+    // Epoch 0xA1B2C3D4, 0x000102 wraps, slot 0x13.
+    let counter: u64 = black_box(0xA1B2_C3D4_0001_0213);
 
     m4count_marker();
     let tag = black_box(key.tag(counter, &uplink));
@@ -30,7 +34,10 @@ fn main() -> ! {
     m4count_marker();
     let crc = black_box(keyed_crc16(0x1234_5678, &uplink));
     m4count_marker();
-    black_box((ok, down, crc));
+    m4count_marker();
+    let hello = black_box(key.tag(counter & !0xFF_FF00, &nonce));
+    m4count_marker();
+    black_box((ok, down, crc, hello));
     exit()
 }
 

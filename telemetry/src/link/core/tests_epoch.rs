@@ -1,0 +1,470 @@
+//! The epoch of the frame counter (spec §12.2) between the two keyed state machines, run
+//! in lockstep by hand (no radio) with an attacker on the air between them who records
+//! every frame and replays, reorders or drops them.
+
+use super::follower::{DEFAULT_FAILSAFE_US, SyncState};
+use super::tests::{SLOT_US, pair, test_key};
+use super::*;
+use crate::channels::Channels;
+use crate::frame::{Frame, SEALED_VERSION, peek_sealed};
+use crate::link::radio::RxOutcome;
+use crate::link::schedule::SlotKind;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Dir {
+    Up,
+    Down,
+}
+
+/// What was sent in one slot: direction, the master's slot counter, the bytes (empty when
+/// the end due to send did not).
+#[derive(Clone, Debug)]
+struct OnAir {
+    dir: Dir,
+    slot: u32,
+    bytes: Vec<u8>,
+}
+
+/// The channels the master sends in `slot`: channel 1 names the slot, so a replayed frame
+/// that got through would show.
+fn channels_of(slot: u32) -> Channels {
+    let mut ch = [992; 16];
+    ch[0] = 200 + (slot % 1500) as u16;
+    ch
+}
+
+/// Both ends in lockstep (shared slot starts); each slot's frame goes through `air`, which
+/// returns what the receiver hears (`None`: nothing) — the attacker's hand.
+struct Link {
+    master: Master,
+    follower: Follower,
+    t: u64,
+    keyed: bool,
+}
+
+impl Link {
+    fn new(keyed: bool, seed: u64) -> Self {
+        let (master, follower) = pair();
+        let mut link = Self {
+            master,
+            follower,
+            t: 0,
+            keyed,
+        };
+        link.restart_follower(seed);
+        link.reboot_master();
+        link
+    }
+
+    fn reboot_master(&mut self) {
+        let (master, _) = pair();
+        self.master = if self.keyed {
+            master.with_key(test_key(1))
+        } else {
+            master
+        };
+    }
+
+    fn restart_follower(&mut self, seed: u64) {
+        let (_, follower) = pair();
+        self.follower = if self.keyed {
+            follower.with_key(test_key(1)).with_nonce_seed(seed)
+        } else {
+            follower
+        };
+    }
+
+    fn slot(&mut self, air: &mut impl FnMut(&OnAir) -> Option<Vec<u8>>) {
+        let (mut mb, mut fb) = ([0u8; 64], [0u8; 64]);
+        let slot = self.master.slot();
+        let t = self.t;
+        let schedule = *self.master.schedule();
+        let packet = |b: &Vec<u8>| RxOutcome::Packet {
+            len: b.len(),
+            rssi_dbm: -70,
+        };
+        let end = |b: &Vec<u8>| t + u64::from(schedule.packet_end_offset_us(b.len()));
+        self.master.set_channels(&channels_of(slot));
+        let m = self.master.plan(t, &mut mb);
+        let f = self.follower.plan(t, &mut fb);
+        match m {
+            Step::Transmit { channel, len, .. } => {
+                self.master.on_sent();
+                let heard = air(&OnAir {
+                    dir: Dir::Up,
+                    slot,
+                    bytes: mb[..len].to_vec(),
+                });
+                match f {
+                    Step::Listen { channel: c, .. } if c == channel => {
+                        if let Some(b) = heard {
+                            self.follower.on_received(packet(&b), &b, end(&b));
+                        }
+                    }
+                    Step::Listen { .. } => {}
+                    Step::Transmit { .. } => self.follower.on_sent(),
+                    Step::Idle => self.follower.on_skipped(),
+                }
+            }
+            Step::Listen { channel, .. } => {
+                let (sent, same_channel) = match f {
+                    Step::Transmit {
+                        channel: c, len, ..
+                    } => {
+                        self.follower.on_sent();
+                        (fb[..len].to_vec(), c == channel)
+                    }
+                    Step::Idle => {
+                        self.follower.on_skipped();
+                        (Vec::new(), true)
+                    }
+                    Step::Listen { .. } => (Vec::new(), true),
+                };
+                let heard = air(&OnAir {
+                    dir: Dir::Down,
+                    slot,
+                    bytes: sent,
+                });
+                if let Some(b) = heard.filter(|b| same_channel && !b.is_empty()) {
+                    self.master.on_received(packet(&b), &b, end(&b));
+                }
+                self.master.finish_listen();
+            }
+            Step::Idle => self.master.on_skipped(),
+        }
+        self.t += SLOT_US;
+    }
+
+    fn run(&mut self, slots: u32, air: &mut impl FnMut(&OnAir) -> Option<Vec<u8>>) {
+        for _ in 0..slots {
+            self.slot(air);
+        }
+    }
+
+    /// Runs clean slots until the follower tracks; returns how many it took.
+    fn until_tracking(&mut self, air: &mut impl FnMut(&OnAir) -> Option<Vec<u8>>) -> u32 {
+        for n in 0..10_000 {
+            if self.follower.sync_state() == SyncState::Tracking {
+                return n;
+            }
+            self.slot(air);
+        }
+        panic!("never tracking");
+    }
+}
+
+fn clean(frame: &OnAir) -> Option<Vec<u8>> {
+    Some(frame.bytes.clone())
+}
+
+const RATIO: u32 = 4;
+
+#[test]
+fn keyed_ends_handshake_the_epoch_then_fly_and_carry_telemetry() {
+    let mut link = Link::new(true, 1);
+    let mut states = Vec::new();
+    let mut nonce_frames = 0;
+    let mut air = |f: &OnAir| {
+        assert!(f.bytes.is_empty() || f.bytes[0] == SEALED_VERSION);
+        if f.dir == Dir::Down && matches!(peek_sealed(&f.bytes), Some(Frame::Nonce { .. })) {
+            nonce_frames += 1;
+        }
+        Some(f.bytes.clone())
+    };
+    while link.follower.sync_state() != SyncState::Tracking {
+        states.push(link.follower.sync_state());
+        // Nothing of the master's is taken before the epoch is in force.
+        assert_eq!(link.follower.updates(), 0);
+        assert!(link.follower.in_failsafe());
+        link.slot(&mut air);
+        assert!(states.len() < 200, "no lock");
+    }
+    let handshake = states
+        .iter()
+        .filter(|s| **s == SyncState::Handshake)
+        .count();
+    assert!(handshake > 0, "went through the handshake");
+    // The nonce goes out in the first downlink slot after lock, the next uplink verifies.
+    assert!(
+        handshake as u32 <= RATIO + 1,
+        "{handshake} slots of handshake"
+    );
+    assert!(nonce_frames >= 1);
+    assert!(link.master.has_epoch());
+    assert!(!link.follower.in_failsafe());
+    let slot = link.master.slot() - 1;
+    assert_eq!(link.follower.output(), &channels_of(slot));
+
+    link.follower.downlink_stream.write(b"sealed");
+    link.run(2 * RATIO, &mut clean);
+    let mut got = [0u8; 16];
+    let n = link.master.downlink_stream.read(&mut got);
+    assert_eq!(&got[..n], b"sealed");
+    assert_eq!(link.master.downlink_lq(), 100);
+}
+
+/// Records every uplink; in every third uplink slot the attacker (closer to the follower)
+/// replaces the master's frame by the one it recorded 256·k slots earlier (k = 1..4): the
+/// same slot number, the same hop channel, a valid tag under the on-air slot alone. None
+/// verifies; the legitimate frames between keep flying.
+#[test]
+fn a_frame_recorded_256_or_256k_slots_earlier_never_verifies() {
+    let mut link = Link::new(true, 2);
+    let recorded = core::cell::RefCell::new(Vec::<Vec<u8>>::new());
+    let rec = |f: &OnAir| {
+        let mut r = recorded.borrow_mut();
+        if r.len() <= f.slot as usize {
+            r.resize(f.slot as usize + 1, Vec::new());
+        }
+        r[f.slot as usize] = f.bytes.clone();
+        Some(f.bytes.clone())
+    };
+    link.until_tracking(&mut { rec });
+    link.run(1100, &mut { rec });
+    let (mut replayed, mut flown) = (0, 0);
+    for _ in 0..600 {
+        let slot = link.master.slot();
+        let k = 1 + (slot / 3) % 4;
+        let replay =
+            slot.is_multiple_of(3) && link.master.schedule().kind(slot) == SlotKind::Uplink;
+        let old = recorded.borrow()[(slot - 256 * k) as usize].clone();
+        let (updates, rejected) = (link.follower.updates(), link.follower.counters().rejected);
+        link.slot(&mut |f: &OnAir| {
+            rec(f);
+            if f.dir == Dir::Up && replay {
+                assert_eq!(old[2], f.bytes[2], "same on-air slot");
+                Some(old.clone())
+            } else {
+                Some(f.bytes.clone())
+            }
+        });
+        if replay {
+            replayed += 1;
+            assert_eq!(
+                link.follower.updates(),
+                updates,
+                "replay of slot {slot} - 256·{k} flown"
+            );
+            assert_eq!(link.follower.counters().rejected, rejected + 1);
+        } else if link.master.schedule().kind(slot) == SlotKind::Uplink {
+            flown += 1;
+            assert_eq!(link.follower.updates(), updates + 1);
+            assert_eq!(link.follower.output(), &channels_of(slot));
+        }
+    }
+    assert!(replayed > 100 && flown > 200, "{replayed} {flown}");
+    assert_eq!(link.follower.sync_state(), SyncState::Tracking);
+}
+
+/// A frame held back one slot (or one downlink period) and delivered in the next: the
+/// counter has moved on, so its tag fails, in both directions.
+#[test]
+fn reordered_frames_are_rejected() {
+    let mut link = Link::new(true, 3);
+    link.until_tracking(&mut clean);
+    link.run(50, &mut clean);
+    let mut held_up: Option<Vec<u8>> = None;
+    let mut held_down: Option<Vec<u8>> = None;
+    let before = (
+        link.follower.counters().rejected,
+        link.master.counters().rejected,
+    );
+    let mut updates = link.follower.updates();
+    for _ in 0..64 {
+        let slot = link.master.slot();
+        link.slot(&mut |f: &OnAir| {
+            let held = if f.dir == Dir::Up {
+                &mut held_up
+            } else {
+                &mut held_down
+            };
+            // Each frame is delivered one frame late: the previous one of its direction.
+            held.replace(f.bytes.clone())
+        });
+        if link.master.schedule().kind(slot) == SlotKind::Uplink {
+            assert_eq!(
+                link.follower.updates(),
+                updates,
+                "late uplink of slot {slot} flown"
+            );
+        }
+        updates = link.follower.updates();
+    }
+    assert!(link.follower.counters().rejected > before.0 + 20);
+    assert!(link.master.counters().rejected > before.1 + 10);
+    assert!(link.master.downlink_lq() < 100);
+}
+
+/// The follower restarts (a new nonce): every frame recorded before, uplinks and the old
+/// handshake's nonce downlinks alike, replayed in a slot with the same on-air number, fails;
+/// the master refuses the old nonce, so the link keeps flying between the replays.
+#[test]
+fn frames_recorded_before_a_follower_restart_never_verify_after_it() {
+    let mut link = Link::new(true, 4);
+    let mut before: Vec<OnAir> = Vec::new();
+    let mut rec = |f: &OnAir| {
+        if !f.bytes.is_empty() {
+            before.push(f.clone());
+        }
+        Some(f.bytes.clone())
+    };
+    link.until_tracking(&mut rec);
+    link.run(1000, &mut rec);
+    let old_nonces: Vec<&OnAir> = before
+        .iter()
+        .filter(|f| matches!(peek_sealed(&f.bytes), Some(Frame::Nonce { .. })))
+        .collect();
+    assert!(!old_nonces.is_empty());
+
+    link.restart_follower(5);
+    link.until_tracking(&mut clean);
+    let master_rejected = link.master.counters().rejected;
+    let (mut replayed_up, mut replayed_nonce) = (0, 0);
+    for _ in 0..1024 {
+        let slot = link.master.slot();
+        let uplink = link.master.schedule().kind(slot) == SlotKind::Uplink;
+        // The latest recording of this on-air slot and direction, if any.
+        let dir = if uplink { Dir::Up } else { Dir::Down };
+        let old = before
+            .iter()
+            .rev()
+            .find(|f| f.dir == dir && f.slot % 256 == slot % 256)
+            .map(|f| f.bytes.clone());
+        let is_nonce = old
+            .as_ref()
+            .is_some_and(|b| matches!(peek_sealed(b), Some(Frame::Nonce { .. })));
+        let old_nonce = old_nonces
+            .iter()
+            .find(|f| f.slot % 256 == slot % 256)
+            .map(|f| f.bytes.clone());
+        let replay = if uplink {
+            old.filter(|_| slot.is_multiple_of(3))
+        } else {
+            old_nonce.or(old.filter(|_| is_nonce))
+        };
+        let updates = link.follower.updates();
+        let replaying = replay.is_some();
+        link.slot(&mut |f: &OnAir| replay.clone().or(Some(f.bytes.clone())));
+        if replaying && uplink {
+            replayed_up += 1;
+            assert_eq!(link.follower.updates(), updates, "old uplink flown");
+        } else if replaying {
+            replayed_nonce += 1;
+        } else if uplink {
+            assert_eq!(link.follower.updates(), updates + 1, "slot {slot}");
+        }
+    }
+    assert!(replayed_up > 200, "{replayed_up}");
+    assert!(replayed_nonce >= 1, "{replayed_nonce}");
+    assert!(link.master.counters().rejected >= master_rejected + replayed_nonce);
+    assert_eq!(link.follower.sync_state(), SyncState::Tracking);
+    assert_eq!(link.follower.resyncs(), 0, "never lost the link");
+}
+
+/// Slots from a master reboot (at a new phase of the hop sequence) until the follower flies
+/// its channels again.
+fn recovery_after_master_reboot(keyed: bool) -> u32 {
+    let mut link = Link::new(keyed, 6);
+    link.until_tracking(&mut clean);
+    // The same moment of the old grid for both runs, so both re-acquire alike.
+    while link.master.slot() < 400 {
+        link.slot(&mut clean);
+    }
+    link.reboot_master();
+    let updates = link.follower.updates();
+    for n in 1..10_000 {
+        link.slot(&mut clean);
+        if link.follower.updates() > updates {
+            return n;
+        }
+    }
+    panic!("never recovered");
+}
+
+/// A rebooted master has no epoch: the follower's tags stop verifying, it re-acquires after
+/// `RESYNC_MISSES` and hands over a new nonce. The handshake adds at most one downlink
+/// period (ratio + 1 slots) to what an unkeyed link needs to re-acquire.
+#[test]
+fn a_rebooted_master_is_back_within_one_downlink_period_of_an_unkeyed_reacquisition() {
+    let keyed = recovery_after_master_reboot(true);
+    let unkeyed = recovery_after_master_reboot(false);
+    println!("master reboot → channels again: keyed {keyed} slots, unkeyed {unkeyed} slots");
+    assert!(
+        keyed <= unkeyed + RATIO + 1,
+        "keyed {keyed}, unkeyed {unkeyed}"
+    );
+    // Resync (32 missed uplinks = 43 slots at 1:4), at most one dwell (33 slots), the
+    // downlink slot and the next uplink.
+    assert!(keyed <= 43 + 33 + RATIO + 1, "{keyed}");
+    // At F250 that is within the failsafe period plus a dwell and a downlink period.
+    let us = u64::from(keyed) * SLOT_US;
+    assert!(us <= DEFAULT_FAILSAFE_US + 33 * SLOT_US + u64::from(RATIO + 1) * SLOT_US);
+}
+
+/// Both ends rebooted (the master remembers no nonce): the attacker replays the nonce
+/// downlink of the previous session in its slot, and the master adopts it. That only
+/// delays: the follower takes nothing under that epoch, its own nonce follows in the next
+/// downlink slot and is adopted (the old epoch was never heard), and the link flies.
+#[test]
+fn a_replayed_nonce_only_delays_the_handshake() {
+    let mut link = Link::new(true, 7);
+    let mut old_nonce: Option<OnAir> = None;
+    link.until_tracking(&mut |f: &OnAir| {
+        if matches!(peek_sealed(&f.bytes), Some(Frame::Nonce { .. })) {
+            old_nonce = Some(f.clone());
+        }
+        Some(f.bytes.clone())
+    });
+    let old = old_nonce.expect("a nonce frame");
+    link.run(100, &mut clean);
+
+    link.reboot_master();
+    link.restart_follower(8);
+    let mut replayed_at = None;
+    let mut slots = 0;
+    while link.follower.sync_state() != SyncState::Tracking {
+        let slot = link.master.slot();
+        let replay = slot % 256 == old.slot % 256 && replayed_at.is_none();
+        if replay {
+            replayed_at = Some(slots);
+        }
+        link.slot(&mut |f: &OnAir| {
+            if f.dir == Dir::Down && replay {
+                Some(old.bytes.clone())
+            } else {
+                Some(f.bytes.clone())
+            }
+        });
+        if replay {
+            assert!(
+                link.master.has_epoch(),
+                "the fresh master adopted the replayed nonce"
+            );
+        }
+        if replayed_at.is_some() && link.follower.sync_state() != SyncState::Tracking {
+            assert_eq!(link.follower.updates(), 0, "flown under the replayed epoch");
+        }
+        slots += 1;
+        assert!(slots < 1000);
+    }
+    let replayed_at = replayed_at.expect("replayed");
+    let delay = slots - replayed_at;
+    println!("replayed nonce at slot {replayed_at}; link in force {delay} slots later");
+    assert!(delay <= 2 * RATIO + 1, "{delay}");
+    link.run(20, &mut clean);
+    assert!(link.follower.updates() > 10);
+    assert!(!link.follower.in_failsafe());
+}
+
+#[test]
+fn unkeyed_ends_have_no_handshake_and_take_the_first_uplink() {
+    let mut link = Link::new(false, 0);
+    let mut states = Vec::new();
+    while link.follower.updates() == 0 {
+        states.push(link.follower.sync_state());
+        link.slot(&mut clean);
+    }
+    assert!(!states.contains(&SyncState::Handshake));
+    assert_eq!(link.follower.sync_state(), SyncState::Tracking);
+    assert!(!link.master.has_epoch());
+}

@@ -1,0 +1,487 @@
+//! `--attack`: a third radio in the chip-level medium that hears everything on air and
+//! attacks the keyed link (spec §12) — forging, replaying, or spoofing binds while the flight
+//! side power-cycles — and the means to count what the victims accepted: a radio wrapper
+//! that asks the medium who sent each packet it delivered ([`Witnessed`]), so the ends'
+//! hooks can attribute every frame their link core accepted.
+//!
+//! The attackers are the attacker's behaviour, not the link's: the victims run the real
+//! link cores (and, for the flight side's boot decision, the real `flight_core` app).
+
+use std::cell::Cell;
+use std::future::Future;
+use std::pin::pin;
+use std::rc::Rc;
+use std::task::Poll;
+
+use si4432_sim::{ChipHandle, Medium, Outcome as ChipOutcome, RadioId, SimDelay};
+use telemetry::channels::{ChannelFormat, Channels, pack};
+use telemetry::frame::{BindOffer, Downlink, Frame, StreamHeader, Uplink, encode, seal};
+use telemetry::link::bind::bind_radio_config;
+use telemetry::link::follower::{bind_follower, run_follower};
+use telemetry::link::{
+    BIND_KEY, HOP_CHANNELS, HopSequence, LinkClock, LinkKey, LinkParams, PacketRadio, RadioConfig,
+    RateMode, RxOutcome, Schedule,
+};
+use telemetry::mock::SplitMix64;
+
+use crate::driver::SimClock;
+use crate::ends::{FlightStart, follower_for};
+use crate::probe::{FlightApp, Shared};
+use crate::scenario::{Attack, Scenario};
+use crate::world::BIND_TIMEOUT_US;
+
+/// Throttle the forger tries to fly.
+pub const FORGED_THROTTLE: u16 = 1811;
+/// Bind ID of the spoofed bind offers.
+const SPOOF_BIND_ID: u32 = 0xBAD_B1D5;
+/// Gap between spoofed bind offers: four times the module's offer rate.
+const SPOOF_PERIOD_US: u64 = 20_000;
+/// How long a power-cycled flight side stays off.
+const POWER_OFF_US: u64 = 300_000;
+
+/// A radio that, on every packet delivered, notes which radio sent it (from the medium's
+/// trace).
+pub struct Witnessed<R> {
+    inner: R,
+    medium: Medium,
+    me: RadioId,
+    last_sender: Rc<Cell<Option<RadioId>>>,
+    enabled: bool,
+}
+
+impl<R> Witnessed<R> {
+    /// `inner`, the radio `me` in `medium`; looks senders up only when `enabled`.
+    pub fn new(inner: R, medium: Medium, me: RadioId, enabled: bool) -> Self {
+        Self {
+            inner,
+            medium,
+            me,
+            last_sender: Rc::new(Cell::new(None)),
+            enabled,
+        }
+    }
+
+    /// Where the sender of the last delivered packet is kept.
+    pub fn last_sender(&self) -> Rc<Cell<Option<RadioId>>> {
+        self.last_sender.clone()
+    }
+}
+
+impl<R: PacketRadio> PacketRadio for Witnessed<R> {
+    type Error = R::Error;
+
+    async fn configure(&mut self, config: &RadioConfig) -> Result<(), Self::Error> {
+        self.inner.configure(config).await
+    }
+
+    async fn set_channel(&mut self, channel: u8) -> Result<(), Self::Error> {
+        self.inner.set_channel(channel).await
+    }
+
+    async fn transmit(&mut self, frame: &[u8]) -> Result<(), Self::Error> {
+        self.inner.transmit(frame).await
+    }
+
+    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<RxOutcome, Self::Error> {
+        let outcome = self.inner.receive(buf, timeout_us).await?;
+        if self.enabled && matches!(outcome, RxOutcome::Packet { .. }) {
+            let me = self.me;
+            let sender = self.medium.with_trace(|frames| {
+                frames
+                    .iter()
+                    .rev()
+                    .find(|f| {
+                        f.receptions.iter().any(|r| {
+                            r.radio == me && matches!(r.outcome, ChipOutcome::Delivered { .. })
+                        })
+                    })
+                    .map(|f| f.radio)
+            });
+            self.last_sender.set(sender);
+        }
+        Ok(outcome)
+    }
+
+    async fn check_health(&mut self) -> Result<(), Self::Error> {
+        self.inner.check_health().await
+    }
+
+    async fn recover(&mut self, config: &RadioConfig) -> Result<(), Self::Error> {
+        self.inner.recover(config).await
+    }
+}
+
+/// Runs `work` until it ends or `stop` completes first (then `work` is dropped, as power
+/// loss would stop it).
+async fn until<T>(work: impl Future<Output = T>, stop: impl Future<Output = ()>) -> Option<T> {
+    let mut work = pin!(work);
+    let mut stop = pin!(stop);
+    std::future::poll_fn(|cx| {
+        if let Poll::Ready(v) = work.as_mut().poll(cx) {
+            return Poll::Ready(Some(v));
+        }
+        if stop.as_mut().poll(cx).is_ready() {
+            return Poll::Ready(None);
+        }
+        Poll::Pending
+    })
+    .await
+}
+
+/// When the flight side is switched off and on again (virtual µs) under `attack`.
+pub fn power_plan(attack: Attack, duration_s: f64) -> Vec<(u64, u64)> {
+    let end_us = (duration_s * 1e6) as u64;
+    let offs: Vec<u64> = match attack {
+        Attack::Forge => Vec::new(),
+        Attack::Replay => vec![end_us / 3, 2 * end_us / 3],
+        Attack::BindSpoof => (1..)
+            .map(|k| k * 5_000_000)
+            .take_while(|t| *t < end_us)
+            .collect(),
+    };
+    offs.into_iter().map(|t| (t, t + POWER_OFF_US)).collect()
+}
+
+/// How the power-cycled flight side runs.
+pub(crate) struct Powered {
+    /// Virtual time (for the power plan).
+    pub medium: Medium,
+    /// Sleeps in virtual time.
+    pub delay: SimDelay,
+    /// The flight side's radio chip (it loses power too).
+    pub chip: ChipHandle,
+    /// (off, on) virtual µs.
+    pub plan: Vec<(u64, u64)>,
+    /// The module's link (the flight side must never run another).
+    pub module_params: LinkParams,
+}
+
+impl Powered {
+    async fn sleep_until_virtual(&self, t_us: u64) {
+        let now_ns = self.medium.now().as_nanos() as u64;
+        self.delay
+            .sleep_ns((t_us * 1000).saturating_sub(now_ns))
+            .await;
+    }
+}
+
+/// The flight end of an attacked run: bound before the run (its flash holds the module's
+/// link), it boots, asks the real flight application what to run — `flight_core`'s explicit
+/// bind: a bind only after the console's command, so never here — and runs it, until the
+/// power plan switches it off; then again from boot, with a fresh nonce seed as a hardware
+/// RNG would give.
+pub(crate) async fn flight_end_powered<R: PacketRadio>(
+    mut radio: R,
+    mut clock: SimClock,
+    start: FlightStart,
+    mut app: FlightApp,
+    record: Shared,
+    power: Powered,
+) {
+    let mut flash = flight_core::settings::Settings::default();
+    if flight_core::pipeline::store_link(&mut flash, &start.params).is_err() {
+        return;
+    }
+    let boot_delay = clock.now_us() + 123_457;
+    clock.sleep_until_us(boot_delay).await;
+    let mut plan = power.plan.iter().copied();
+    for boot in 0u64.. {
+        let off = plan.next();
+        let session = async {
+            let Some(mut fc) = flight_core::app::FlightApp::new(flash.clone(), 0) else {
+                return;
+            };
+            let params = if matches!(fc.next_link_step(), flight_core::app::LinkStep::Bind { .. }) {
+                bind_follower(&mut radio, &mut clock, start.band, BIND_TIMEOUT_US)
+                    .await
+                    .ok()
+                    .flatten()
+            } else {
+                fc.link_params()
+            };
+            let Some(params) = params else {
+                return;
+            };
+            {
+                let mut rec = record.borrow_mut();
+                if params != power.module_params {
+                    rec.rebinds += 1;
+                }
+                rec.follower_params = Some(params);
+                rec.bound_us
+                    .get_or_insert(power.medium.now().as_micros() as u64);
+            }
+            let key = start
+                .key
+                .map(|(k, seed)| (k, seed ^ boot.wrapping_mul(0x9E37)));
+            let mut follower = follower_for(params, start.failsafe_us, key);
+            let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut app).await;
+        };
+        let Some((off_us, on_us)) = off else {
+            session.await;
+            return;
+        };
+        if until(session, power.sleep_until_virtual(off_us))
+            .await
+            .is_some()
+        {
+            return;
+        }
+        record.borrow_mut().power_cycles += 1;
+        power.sleep_until_virtual(on_us).await;
+        power.chip.power_on_reset();
+    }
+}
+
+/// What the attacker knows of the victim link: public values only.
+pub(crate) struct Victim {
+    /// The link's public identity (bind ID), heard in the header.
+    pub bind_id: u32,
+    /// The link's radio configuration (header from the public bind ID).
+    pub config: RadioConfig,
+    /// The hop sequence (heard on air).
+    pub hops: HopSequence,
+    /// Rate and telemetry ratio (heard on air).
+    pub schedule: Schedule,
+    /// Band (for bind spoofing).
+    pub band: telemetry::link::Band,
+    /// Channel format.
+    pub format: ChannelFormat,
+}
+
+/// The victim link as an attacker sees it: everything derived from `params` and the key's
+/// public derivations, never the key.
+pub(crate) fn victim_of(s: &Scenario, params: &LinkParams, key: Option<LinkKey>) -> Victim {
+    let (bind_id, hop_seed) = key.map_or((params.bind_id, params.bind_id), |k| {
+        (k.bind_id(), k.hop_seed())
+    });
+    let public = LinkParams { bind_id, ..*params };
+    Victim {
+        bind_id,
+        config: public.radio_config(),
+        hops: HopSequence::new(hop_seed),
+        schedule: Schedule {
+            rate: s.rate,
+            telemetry_ratio: s.telemetry_ratio,
+        },
+        band: s.band,
+        format: s.format,
+    }
+}
+
+/// Runs the attacker of `attack` on `radio` until the simulation ends.
+pub(crate) async fn attacker<R: PacketRadio>(
+    attack: Attack,
+    radio: R,
+    clock: SimClock,
+    victim: Victim,
+    record: Shared,
+    seed: u64,
+) {
+    let _ = match attack {
+        Attack::Forge => forge(radio, clock, &victim, &record, seed).await,
+        Attack::Replay => replay(radio, clock, &victim, &record).await,
+        Attack::BindSpoof => bind_spoof(radio, clock, &victim, &record).await,
+    };
+}
+
+/// Forged frames on the victim's hop channels, one every ¾ slot, walking the slot numbers:
+/// uplinks with full throttle and the save-failsafe flag (sealed under a guessed key with a
+/// guessed counter, or as version 1 frames with the public bind ID's CRC), downlinks and
+/// epoch-nonce frames under guessed keys.
+async fn forge<R: PacketRadio>(
+    mut radio: R,
+    mut clock: SimClock,
+    victim: &Victim,
+    record: &Shared,
+    seed: u64,
+) -> Result<(), R::Error> {
+    radio.configure(&victim.config).await?;
+    let mut rng = SplitMix64::new(seed ^ 0xF0F6_E000);
+    let mut evil: Channels = [992; 16];
+    evil[2] = FORGED_THROTTLE;
+    let mut packed = [0u8; 22];
+    let Some(packed) = packed.get_mut(..victim.format.packed_bytes()) else {
+        return Ok(());
+    };
+    pack(&evil, victim.format, packed);
+    let gap = u64::from(victim.schedule.slot_us()) * 3 / 4;
+    for n in 0u64.. {
+        let slot = (n % 256) as u8;
+        let guess = LinkKey::from_bytes(core::array::from_fn(|_| rng.next_u64() as u8));
+        let counter = rng.next_u64();
+        let mut buf = [0u8; 64];
+        let up = Frame::Uplink(Uplink {
+            slot,
+            stream: StreamHeader::default(),
+            report: None,
+            save_failsafe: true,
+            input_lost: false,
+            format: victim.format,
+            packed_channels: packed,
+            data: &[],
+        });
+        let len = match n % 4 {
+            0 => seal(&up, &guess, counter, &mut buf),
+            1 => encode(&up, victim.bind_id, &mut buf),
+            2 => seal(
+                &Frame::Downlink(Downlink {
+                    slot,
+                    stream: StreamHeader::default(),
+                    report: None,
+                    data: b"setting!",
+                }),
+                &guess,
+                counter,
+                &mut buf,
+            ),
+            _ => seal(
+                &Frame::Nonce {
+                    slot,
+                    nonce: (rng.next_u64() as u32) | 1,
+                },
+                &guess,
+                counter,
+                &mut buf,
+            ),
+        };
+        if let Some(frame) = len.ok().and_then(|len| buf.get(..len)) {
+            radio
+                .set_channel(victim.hops.channel(usize::from(slot) % HOP_CHANNELS))
+                .await?;
+            radio.transmit(frame).await?;
+            record.borrow_mut().attacker_sent += 1;
+        }
+        let next = clock.now_us() + gap;
+        clock.sleep_until_us(next).await;
+    }
+    Ok(())
+}
+
+/// Follows the victim's slots (slot number and timing from the uplinks, which carry the
+/// slot in clear) and alternates by wrap of the 8-bit slot counter: in even wraps it
+/// listens and records every frame; in odd wraps it sends recordings again in slots with
+/// the same on-air number — the same channel, the right time, a tag that was valid 256·k
+/// slots earlier (older recordings in turn, so frames from before a flight restart too) —
+/// in one slot in five, and in every slot whose recordings include an epoch-nonce frame.
+async fn replay<R: PacketRadio>(
+    mut radio: R,
+    mut clock: SimClock,
+    victim: &Victim,
+    record: &Shared,
+) -> Result<(), R::Error> {
+    radio.configure(&victim.config).await?;
+    let schedule = victim.schedule;
+    let slot_us = u64::from(schedule.slot_us());
+    let mut recordings: Vec<Vec<Vec<u8>>> = vec![Vec::new(); 256];
+    let mut buf = [0u8; 64];
+    loop {
+        // Acquire: dwell on one channel until an uplink names its slot.
+        radio.set_channel(victim.hops.channel(0)).await?;
+        let timeout = u32::try_from(2 * (HOP_CHANNELS as u64 + 1) * slot_us).unwrap_or(u32::MAX);
+        let RxOutcome::Packet { len, .. } = radio.receive(&mut buf, timeout).await? else {
+            continue;
+        };
+        if !is_uplink(buf.get(..len).unwrap_or(&[])) {
+            continue;
+        }
+        let mut anchor = (
+            u64::from(buf[2]),
+            clock
+                .now_us()
+                .saturating_sub(u64::from(schedule.packet_end_offset_us(len))),
+        );
+        let mut k = anchor.0 + 1;
+        let mut heard_this_wrap = true;
+        loop {
+            let start = anchor.1 + (k - anchor.0) * slot_us;
+            if clock.now_us() + 50 > start {
+                k += 1;
+                continue;
+            }
+            let on_air = (k % 256) as usize;
+            if on_air == 0 {
+                if !heard_this_wrap && (k / 256) % 2 == 1 {
+                    break; // lost the grid: acquire again
+                }
+                heard_this_wrap = false;
+            }
+            radio
+                .set_channel(victim.hops.channel_for_slot(k as u32))
+                .await?;
+            if (k / 256) % 2 == 0 {
+                clock.sleep_until_us(start.saturating_sub(100)).await;
+                let until = start + u64::from(schedule.listen_end_offset_us());
+                let timeout = u32::try_from(until.saturating_sub(clock.now_us())).unwrap_or(0);
+                if let RxOutcome::Packet { len, .. } = radio.receive(&mut buf, timeout).await?
+                    && buf.get(2) == Some(&(on_air as u8))
+                {
+                    heard_this_wrap = true;
+                    let frame = buf.get(..len).unwrap_or(&[]);
+                    if let Some(r) = recordings.get_mut(on_air) {
+                        r.push(frame.to_vec());
+                    }
+                    if is_uplink(frame) {
+                        anchor = (
+                            k,
+                            clock
+                                .now_us()
+                                .saturating_sub(u64::from(schedule.packet_end_offset_us(len))),
+                        );
+                    }
+                }
+            } else if let Some(old) = recordings.get(on_air).filter(|r| !r.is_empty()) {
+                let has_nonce = old.iter().any(|f| f.get(1).is_some_and(|k| k & 0x40 != 0));
+                if k % 5 == 0 || has_nonce {
+                    let pick = if has_nonce {
+                        old.iter()
+                            .rposition(|f| f.get(1).is_some_and(|k| k & 0x40 != 0))
+                    } else {
+                        Some((k / 512) as usize % old.len())
+                    };
+                    if let Some(frame) = pick.and_then(|i| old.get(i)) {
+                        // A lead shorter than the sender's: the replay's sync word arrives
+                        // first and, louder, captures the receiver.
+                        clock.sleep_until_us(start).await;
+                        radio.transmit(frame).await?;
+                        record.borrow_mut().attacker_sent += 1;
+                    }
+                }
+            }
+            k += 1;
+        }
+    }
+}
+
+fn is_uplink(frame: &[u8]) -> bool {
+    frame.get(1).is_some_and(|k| matches!(k & 0x07, 2 | 3))
+}
+
+/// Bind offers of the attacker's own link on the band's bind channel, every 20 ms.
+async fn bind_spoof<R: PacketRadio>(
+    mut radio: R,
+    mut clock: SimClock,
+    victim: &Victim,
+    record: &Shared,
+) -> Result<(), R::Error> {
+    radio.configure(&bind_radio_config(victim.band)).await?;
+    radio.set_channel(0).await?;
+    let offer = Frame::BindOffer(BindOffer {
+        bind_id: SPOOF_BIND_ID,
+        band: victim.band,
+        rate: RateMode::F500,
+        format: ChannelFormat::Full16,
+        telemetry_ratio: 4,
+    });
+    let mut buf = [0u8; 32];
+    let Ok(len) = encode(&offer, BIND_KEY, &mut buf) else {
+        return Ok(());
+    };
+    let frame = buf.get(..len).unwrap_or(&[]);
+    loop {
+        radio.transmit(frame).await?;
+        record.borrow_mut().attacker_sent += 1;
+        let next = clock.now_us() + SPOOF_PERIOD_US;
+        clock.sleep_until_us(next).await;
+    }
+}
