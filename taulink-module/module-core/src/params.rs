@@ -11,7 +11,14 @@
 //! when the chip starts), so their rows say "(on power-up)".
 //!
 //! Numbering (fixed; the radio reads 1 … [`PARAMETER_COUNT`]). H-SEC's binding phrase goes
-//! at the end as a STRING parameter (number 13), which only grows the count.
+//! at the end as a STRING parameter, which only grows the count.
+//!
+//! **Protocol** (13) picks the air protocol; its OpenLRSng options say "(no auth)" because
+//! OpenLRSng frames carry no authentication. The **OpenLRSng** folder (14) holds the
+//! OpenLRSng transmitter's bind parameters (modem rate, channel mode, telemetry); the carrier
+//! and the hop seed are set from the other settings paths (`settings::text`). Any write after
+//! which the set would not run (`Settings::validate`: an OpenLRSng link outside the band
+//! plan, OpenLRSng in the receiver role) is refused and changes nothing.
 
 use core::fmt::Write;
 
@@ -19,9 +26,10 @@ use heapless::{String, Vec};
 use telemetry::handset::crsf::params::{CommandStatus, Entry, MAX_ENTRY_LEN};
 
 use crate::ppm::FailsafeOutput;
+use crate::settings::openlrs::{CHANNEL_MODES, DEFAULT_CHANNEL_MODE, DEFAULT_PROFILE};
 use crate::settings::{
     Band, DEFAULT_INPUT_TIMEOUT_MS, DEFAULT_TELEMETRY_RATIO, INPUT_TIMEOUT_MS, InputProtocol,
-    OutputProtocol, RateMode, Settings, TELEMETRY_RATIOS,
+    LinkProtocol, OutputProtocol, RateMode, Settings, TELEMETRY_RATIOS,
 };
 
 /// Packet rate (the link's rate modes).
@@ -48,8 +56,18 @@ pub const PPM_FAILSAFE: u8 = 10;
 pub const BIND: u8 = 11;
 /// Command: save the settings.
 pub const SAVE: u8 = 12;
+/// Link protocol (TauLink / OpenLRSng 3.8 / 3.9).
+pub const PROTOCOL: u8 = 13;
+/// Folder: the OpenLRSng transmitter's bind parameters.
+pub const OPENLRS_FOLDER: u8 = 14;
+/// OpenLRSng modem rate (profile 0..4).
+pub const OPENLRS_RATE: u8 = 15;
+/// OpenLRSng channel mode.
+pub const OPENLRS_CHANNELS: u8 = 16;
+/// OpenLRSng telemetry on/off.
+pub const OPENLRS_TELEMETRY: u8 = 17;
 /// Parameters the module offers (DEVICE_INFO's count).
-pub const PARAMETER_COUNT: u8 = 12;
+pub const PARAMETER_COUNT: u8 = 17;
 
 /// How often the radio polls a running command, 10 ms units.
 const POLL_10MS: u8 = 50;
@@ -119,6 +137,13 @@ const BAND_LABELS: [&str; 4] = ["433 HAM licence", "868 EU SRD", "915 US ISM", "
 const INPUT_LABELS: [&str; 4] = ["PPM", "CRSF 400k", "CRSF 115k", "CRSF 921k"];
 const OUTPUT_LABELS: [&str; 4] = ["Off", "CRSF", "S.Port", "FrSky D"];
 const FAILSAFE_LABELS: [&str; 2] = ["Hold last", "Stop pulses"];
+/// Protocol options, in `LinkProtocol` order: the OpenLRSng ones say they are unauthenticated.
+const PROTOCOL_LABELS: [&str; 3] = ["TauLink", "OLRSng3.8 (no auth)", "OLRSng3.9 (no auth)"];
+/// OpenLRSng's modem profiles.
+const OPENLRS_RATE_LABELS: [&str; 5] = ["4800bps", "9600bps", "19k2bps", "57k6bps", "125kbps"];
+/// OpenLRSng's channel modes 1..6.
+const OPENLRS_CHANNEL_LABELS: [&str; 6] = ["4+4", "8", "8+4", "12", "12+4", "16"];
+const OFF_ON_LABELS: [&str; 2] = ["Off", "On"];
 
 fn band_index(band: Band) -> u8 {
     match band {
@@ -254,6 +279,42 @@ pub fn entry(
             };
             Entry::command(0, "Save", status, POLL_10MS, info)
         }
+        PROTOCOL => Entry::selection(
+            0,
+            "Protocol",
+            &PROTOCOL_LABELS,
+            settings.protocol.code(),
+            LinkProtocol::TauLink.code(),
+            unit(commands, number, ""),
+        ),
+        OPENLRS_FOLDER => Entry::folder(0, "OpenLRSng"),
+        OPENLRS_RATE => Entry::selection(
+            OPENLRS_FOLDER,
+            "OLRS Rate",
+            &OPENLRS_RATE_LABELS,
+            settings.openlrs.profile,
+            DEFAULT_PROFILE,
+            unit(commands, number, ""),
+        ),
+        OPENLRS_CHANNELS => Entry::selection(
+            OPENLRS_FOLDER,
+            "OLRS Channels",
+            &OPENLRS_CHANNEL_LABELS,
+            settings
+                .openlrs
+                .channel_mode
+                .saturating_sub(*CHANNEL_MODES.start()),
+            DEFAULT_CHANNEL_MODE - CHANNEL_MODES.start(),
+            unit(commands, number, ""),
+        ),
+        OPENLRS_TELEMETRY => Entry::selection(
+            OPENLRS_FOLDER,
+            "OLRS Telem",
+            &OFF_ON_LABELS,
+            u8::from(settings.openlrs.telemetry),
+            1,
+            unit(commands, number, ""),
+        ),
         _ => return None,
     };
     entry.finish().ok()
@@ -343,6 +404,25 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
             Some(_) => Effect::CommandStatus,
             None => Effect::None,
         },
+        (PROTOCOL, Some(code)) => match LinkProtocol::from_code(code) {
+            Some(protocol) => {
+                settings.protocol = protocol;
+                Effect::RestartLink
+            }
+            None => Effect::None,
+        },
+        (OPENLRS_RATE, Some(profile)) if usize::from(profile) < OPENLRS_RATE_LABELS.len() => {
+            settings.openlrs.profile = profile;
+            openlrs_change(settings)
+        }
+        (OPENLRS_CHANNELS, Some(index)) if usize::from(index) < OPENLRS_CHANNEL_LABELS.len() => {
+            settings.openlrs.channel_mode = CHANNEL_MODES.start() + index;
+            openlrs_change(settings)
+        }
+        (OPENLRS_TELEMETRY, Some(on @ 0..=1)) => {
+            settings.openlrs.telemetry = on == 1;
+            openlrs_change(settings)
+        }
         (SAVE, Some(step)) => match CommandStatus::from_byte(step) {
             Some(CommandStatus::Start) => {
                 commands.save_confirming = true;
@@ -363,6 +443,11 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
         },
         _ => Effect::None,
     };
+    if settings.validate().is_err() {
+        // The set would not run (an OpenLRSng link outside the band plan): nothing changes.
+        *settings = before;
+        return Effect::None;
+    }
     if effect == Effect::RestartLink {
         if *settings == before {
             // The same value again: the link keeps running.
@@ -373,6 +458,15 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
         commands.restarted_by = None;
     }
     effect
+}
+
+/// An OpenLRSng parameter changed: the running link restarts only if it is OpenLRSng.
+fn openlrs_change(settings: &Settings) -> Effect {
+    if settings.protocol.openlrs_version().is_some() {
+        Effect::RestartLink
+    } else {
+        Effect::None
+    }
 }
 
 #[cfg(test)]
@@ -424,6 +518,83 @@ mod tests {
             Effect::None
         );
         assert_eq!(settings.input_timeout_ms, 800);
+    }
+
+    /// The entry's option text (a SELECT's options follow its name).
+    fn entry_text(number: u8, settings: &Settings) -> std::string::String {
+        let entry = entry(number, settings, &Commands::default()).unwrap();
+        std::string::String::from_utf8_lossy(&entry).into_owned()
+    }
+
+    #[test]
+    fn the_protocol_choice_labels_openlrsng_unauthenticated_and_restarts_the_link() {
+        let text = entry_text(PROTOCOL, &Settings::default());
+        assert!(text.contains("Protocol"), "{text}");
+        assert!(
+            text.contains("TauLink;OLRSng3.8 (no auth);OLRSng3.9 (no auth)"),
+            "{text}"
+        );
+        let mut settings = Settings::default();
+        let mut commands = Commands::default();
+        assert_eq!(
+            write(PROTOCOL, &[2], &mut settings, &mut commands),
+            Effect::RestartLink
+        );
+        assert_eq!(settings.protocol, LinkProtocol::OpenLrs39);
+        assert_eq!(commands.restarted_by, Some(PROTOCOL));
+        assert_eq!(
+            write(PROTOCOL, &[3], &mut settings, &mut commands),
+            Effect::None
+        );
+        assert_eq!(settings.protocol, LinkProtocol::OpenLrs39);
+        // The bind parameters: 125 kbit/s, 16 channels, telemetry off.
+        for (number, value) in [
+            (OPENLRS_RATE, 4),
+            (OPENLRS_CHANNELS, 5),
+            (OPENLRS_TELEMETRY, 0),
+        ] {
+            assert_eq!(
+                write(number, &[value], &mut settings, &mut commands),
+                Effect::RestartLink
+            );
+        }
+        assert_eq!(settings.openlrs.profile, 4);
+        assert_eq!(settings.openlrs.channel_mode, 6);
+        assert!(!settings.openlrs.telemetry);
+        for (number, value) in [
+            (OPENLRS_RATE, 5),
+            (OPENLRS_CHANNELS, 6),
+            (OPENLRS_TELEMETRY, 2),
+        ] {
+            let before = settings;
+            assert_eq!(
+                write(number, &[value], &mut settings, &mut commands),
+                Effect::None
+            );
+            assert_eq!(settings, before);
+        }
+        // The 433 ISM sub-band cannot hold OpenLRSng's bind channel: the band write is
+        // refused while OpenLRSng is selected, and OpenLRSng while on that band.
+        assert_eq!(
+            write(BAND, &[3], &mut settings, &mut commands),
+            Effect::None
+        );
+        assert_eq!(settings.band, Band::Mhz433);
+        let mut ism = Settings {
+            band: Band::Ism433,
+            ..Settings::default()
+        };
+        assert_eq!(write(PROTOCOL, &[1], &mut ism, &mut commands), Effect::None);
+        assert_eq!(ism.protocol, LinkProtocol::TauLink);
+        // With TauLink flying, an OpenLRSng parameter does not restart the link.
+        let mut taulink = Settings::default();
+        assert_eq!(
+            write(OPENLRS_RATE, &[4], &mut taulink, &mut commands),
+            Effect::None
+        );
+        assert_eq!(taulink.openlrs.profile, 4);
+        let rate = entry_text(OPENLRS_RATE, &taulink);
+        assert!(rate.contains("125kbps"), "{rate}");
     }
 
     #[test]

@@ -358,7 +358,7 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             let name_end = info[2..].iter().position(|&b| b == 0).unwrap() + 2;
             assert_eq!(&info[2..name_end], b"TauLink");
             let count = info[name_end + 13];
-            assert_eq!(count, 12, "DEVICE_INFO's parameter count");
+            assert_eq!(count, 17, "DEVICE_INFO's parameter count");
 
             // Read every parameter.
             let mut fields = Vec::new();
@@ -384,9 +384,22 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                     "Receiver Role",
                     "PPM Failsafe",
                     "Bind",
-                    "Save"
+                    "Save",
+                    "Protocol",
+                    "OpenLRSng",
+                    "OLRS Rate",
+                    "OLRS Channels",
+                    "OLRS Telem"
                 ]
             );
+            assert_eq!(
+                fields[12].options,
+                ["TauLink", "OLRSng3.8 (no auth)", "OLRSng3.9 (no auth)"]
+            );
+            assert_eq!(fields[12].options[fields[12].value as usize], "TauLink");
+            assert_eq!(fields[14].parent, 14, "OLRS Rate sits in the OpenLRSng folder");
+            assert_eq!(fields[14].options[fields[14].value as usize], "19k2bps");
+            assert_eq!(fields[15].options[fields[15].value as usize], "8");
             let rate = &fields[0];
             assert_eq!(
                 rate.options,

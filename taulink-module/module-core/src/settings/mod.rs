@@ -4,7 +4,7 @@
 //! a single sequential-storage item write: after a power cut the map holds either the old
 //! or the new record (the item CRC rejects a torn write), never a mix of fields.
 //!
-//! Record layout (version 3, 15 bytes; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd,
+//! Record layout (version 3, 15 bytes, and version 4 below; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd,
 //! 3 CRSF 921 600 Bd;
 //! failsafe 0 hold last, 1 stop pulses; rate = `telemetry::link::RateMode::code`):
 //! `[3, role, rate, input, output, band, tx_power, failsafe, bind_id (u32 LE),
@@ -18,11 +18,17 @@
 //! 9600 and 19 200 bit/s → L50, 57 600 → M100, 125 000 → F250); a missing field takes its
 //! default. Every byte is checked on decode; an unknown value is an error, never a guess.
 //!
-//! A later field (H-SEC's binding phrase) goes after `telemetry_ratio` in a version 4.
+//! Version 4 (27 bytes) appends the link protocol and the OpenLRSng bind parameters
+//! (`settings::openlrs`): `[.. version 3 fields .., protocol (0 TauLink, 1 OpenLRSng 3.8,
+//! 2 OpenLRSng 3.9), olrs_profile, olrs_channel_mode, olrs_telemetry, olrs_frequency_hz
+//! (u32 LE, 0 = band default), olrs_hop_seed (u32 LE)]`. Older records load as TauLink with
+//! OpenLRSng's factory parameters.
 
+pub mod openlrs;
 pub mod store;
 pub mod text;
 
+pub use openlrs::{LinkProtocol, OpenLrsError, OpenLrsSettings};
 pub use store::{SettingsStore, StoreError};
 pub use text::TextError;
 
@@ -140,6 +146,10 @@ pub struct Settings {
     /// One link slot in this many is a downlink (telemetry) slot: a power of two,
     /// [`TELEMETRY_RATIOS`].
     pub telemetry_ratio: u8,
+    /// The air protocol: TauLink (factory) or OpenLRSng 3.8 / 3.9 (unauthenticated).
+    pub protocol: LinkProtocol,
+    /// The OpenLRSng transmitter's bind parameters (used when `protocol` is OpenLRSng).
+    pub openlrs: OpenLrsSettings,
 }
 
 /// The telemetry ratios the link takes (`telemetry::frame::valid_telemetry_ratio`).
@@ -168,14 +178,18 @@ impl Default for Settings {
             bind_id: 0,
             input_timeout_ms: DEFAULT_INPUT_TIMEOUT_MS,
             telemetry_ratio: DEFAULT_TELEMETRY_RATIO,
+            protocol: LinkProtocol::TauLink,
+            openlrs: OpenLrsSettings::default(),
         }
     }
 }
 
 /// Current record version.
-pub const RECORD_VERSION: u8 = 3;
+pub const RECORD_VERSION: u8 = 4;
 /// Record length of the current version.
-pub const RECORD_LEN: usize = 15;
+pub const RECORD_LEN: usize = 27;
+/// Record length of version 3 (no link protocol).
+pub const RECORD_V3_LEN: usize = 15;
 /// Record length of version 2 (bit-rate codes, no telemetry ratio).
 pub const RECORD_V2_LEN: usize = 14;
 /// Record length of version 1 (bit-rate codes, no input timeout).
@@ -215,10 +229,12 @@ impl core::fmt::Display for DecodeError {
 impl core::error::Error for DecodeError {}
 
 impl Settings {
-    /// The current (version 3) record.
+    /// The current (version 4) record.
     pub fn to_record(&self) -> [u8; RECORD_LEN] {
         let [b0, b1, b2, b3] = self.bind_id.to_le_bytes();
         let [t0, t1] = self.input_timeout_ms.to_le_bytes();
+        let [f0, f1, f2, f3] = self.openlrs.frequency_hz.to_le_bytes();
+        let [s0, s1, s2, s3] = self.openlrs.hop_seed.to_le_bytes();
         [
             RECORD_VERSION,
             self.role as u8,
@@ -235,10 +251,22 @@ impl Settings {
             t0,
             t1,
             self.telemetry_ratio,
+            self.protocol.code(),
+            self.openlrs.profile,
+            self.openlrs.channel_mode,
+            u8::from(self.openlrs.telemetry),
+            f0,
+            f1,
+            f2,
+            f3,
+            s0,
+            s1,
+            s2,
+            s3,
         ]
     }
 
-    /// Parses a record of version 1, 2 or 3; every field is range-checked.
+    /// Parses a record of version 1 … 4; every field is range-checked.
     pub fn from_record(record: &[u8]) -> Result<Self, DecodeError> {
         let Some(&version) = record.first() else {
             return Err(DecodeError::Length { found: 0 });
@@ -249,6 +277,7 @@ impl Settings {
         let expected = match version {
             1 => RECORD_V1_LEN,
             2 => RECORD_V2_LEN,
+            3 => RECORD_V3_LEN,
             RECORD_VERSION => RECORD_LEN,
             found => return Err(DecodeError::Version { found }),
         };
@@ -270,6 +299,8 @@ impl Settings {
             }
             _ => DEFAULT_INPUT_TIMEOUT_MS,
         };
+        let (rest, link) = rest.split_at(rest.len().min(RECORD_V3_LEN - RECORD_V1_LEN));
+        let (protocol, openlrs) = decode_link(link)?;
         let telemetry_ratio = match rest {
             [_, _, ratio] if TELEMETRY_RATIOS.contains(ratio) => *ratio,
             [_, _, _] => {
@@ -301,7 +332,7 @@ impl Settings {
                 _ => return Err(field(1)),
             },
             rate: match version {
-                RECORD_VERSION => RateMode::from_code(rate),
+                3 | RECORD_VERSION => RateMode::from_code(rate),
                 _ => rate_from_old_code(rate),
             }
             .ok_or(field(2))?,
@@ -309,7 +340,7 @@ impl Settings {
                 0 => InputProtocol::Ppm,
                 1 => InputProtocol::Crsf,
                 2 => InputProtocol::Crsf115200,
-                3 if version == RECORD_VERSION => InputProtocol::Crsf921600,
+                3 if version >= 3 => InputProtocol::Crsf921600,
                 _ => return Err(field(3)),
             },
             output: match output {
@@ -323,7 +354,7 @@ impl Settings {
                 0 => Band::Mhz433,
                 1 => Band::Mhz868,
                 2 => Band::Mhz915,
-                3 if version == RECORD_VERSION => Band::Ism433,
+                3 if version >= 3 => Band::Ism433,
                 _ => return Err(field(5)),
             },
             tx_power: if tx_power <= 7 {
@@ -339,8 +370,65 @@ impl Settings {
             bind_id: u32::from_le_bytes([b0, b1, b2, b3]),
             input_timeout_ms,
             telemetry_ratio,
+            protocol,
+            openlrs,
         })
     }
+
+    /// Whether the whole set runs (`openlrs::check`: an OpenLRSng link's carrier and hops
+    /// inside the band plan, transmitter role). Every settings path checks it before a
+    /// change sticks.
+    pub fn validate(&self) -> Result<(), OpenLrsError> {
+        openlrs::check(self)
+    }
+}
+
+/// The version-4 tail (empty for older records: TauLink, OpenLRSng factory parameters).
+fn decode_link(link: &[u8]) -> Result<(LinkProtocol, OpenLrsSettings), DecodeError> {
+    let [
+        protocol,
+        profile,
+        mode,
+        telemetry,
+        f0,
+        f1,
+        f2,
+        f3,
+        s0,
+        s1,
+        s2,
+        s3,
+    ] = *link
+    else {
+        return Ok((LinkProtocol::TauLink, OpenLrsSettings::default()));
+    };
+    let field = |offset: usize| DecodeError::Field { offset };
+    let protocol = LinkProtocol::from_code(protocol).ok_or(field(RECORD_V3_LEN))?;
+    if profile >= radio_rfm22b::openlrs::bind::MODEM_PROFILE_COUNT {
+        return Err(field(RECORD_V3_LEN + 1));
+    }
+    if !openlrs::CHANNEL_MODES.contains(&mode) {
+        return Err(field(RECORD_V3_LEN + 2));
+    }
+    let telemetry = match telemetry {
+        0 => false,
+        1 => true,
+        _ => return Err(field(RECORD_V3_LEN + 3)),
+    };
+    let frequency_hz = u32::from_le_bytes([f0, f1, f2, f3]);
+    if !openlrs::carrier_in_range(frequency_hz) {
+        return Err(field(RECORD_V3_LEN + 4));
+    }
+    Ok((
+        protocol,
+        OpenLrsSettings {
+            frequency_hz,
+            profile,
+            channel_mode: mode,
+            telemetry,
+            hop_seed: u32::from_le_bytes([s0, s1, s2, s3]),
+        },
+    ))
 }
 
 #[cfg(test)]
@@ -360,12 +448,21 @@ mod tests {
             bind_id: 0xDEAD_BEEF,
             input_timeout_ms: 750,
             telemetry_ratio: 16,
+            protocol: LinkProtocol::OpenLrs39,
+            openlrs: OpenLrsSettings {
+                frequency_hz: 0x3456_7890,
+                profile: 4,
+                channel_mode: 6,
+                telemetry: false,
+                hop_seed: 0xCAFE_F00D,
+            },
         };
         let record = settings.to_record();
         assert_eq!(
             record,
             [
-                3, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16
+                4, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16, 2, 4, 6, 0, 0x90,
+                0x78, 0x56, 0x34, 0x0D, 0xF0, 0xFE, 0xCA
             ]
         );
         assert_eq!(Settings::from_record(&record), Ok(settings));
@@ -401,8 +498,12 @@ mod tests {
             Err(DecodeError::Length { found: 0 })
         );
         assert_eq!(
+            Settings::from_record(&[5; 27]),
+            Err(DecodeError::Version { found: 5 })
+        );
+        assert_eq!(
             Settings::from_record(&[4; 15]),
-            Err(DecodeError::Version { found: 4 })
+            Err(DecodeError::Length { found: 15 })
         );
         assert_eq!(
             Settings::from_record(&[3; 14]),
@@ -456,6 +557,44 @@ mod tests {
     }
 
     #[test]
+    fn version_3_records_load_as_taulink_and_the_link_tail_is_checked() {
+        // A version-3 record as the previous firmware wrote it.
+        let v3 = [
+            3, 0, 3, 1, 2, 1, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16,
+        ];
+        let settings = Settings::from_record(&v3).unwrap();
+        assert_eq!(settings.protocol, LinkProtocol::TauLink);
+        assert_eq!(settings.openlrs, OpenLrsSettings::default());
+        assert_eq!(
+            (settings.rate, settings.band),
+            (RateMode::F500, Band::Mhz868)
+        );
+        // Re-saved, every version-3 field keeps its byte.
+        assert_eq!(settings.to_record()[1..RECORD_V3_LEN], v3[1..]);
+        let mut record = Settings {
+            protocol: LinkProtocol::OpenLrs38,
+            ..Settings::default()
+        }
+        .to_record();
+        assert_eq!(record[RECORD_V3_LEN..RECORD_V3_LEN + 4], [1, 2, 2, 1]);
+        for (offset, bad) in [(15, 3u8), (16, 5), (17, 0), (17, 7), (18, 2)] {
+            let mut r = record;
+            r[offset] = bad;
+            assert_eq!(
+                Settings::from_record(&r),
+                Err(DecodeError::Field { offset }),
+                "byte {offset} = {bad}"
+            );
+        }
+        // A carrier outside every OpenLRSng module range (1 GHz) is refused; 0 (band
+        // default) and 868 MHz load.
+        for (hz, ok) in [(1_000_000_000u32, false), (0, true), (868_000_000, true)] {
+            record[19..23].copy_from_slice(&hz.to_le_bytes());
+            assert_eq!(Settings::from_record(&record).is_ok(), ok, "{hz}");
+        }
+    }
+
+    #[test]
     fn the_ism_433_plan_is_band_3_in_version_3_only() {
         let ism = Settings {
             band: Band::Ism433,
@@ -497,7 +636,7 @@ mod tests {
             assert_eq!(settings.input_timeout_ms, 500);
             assert_eq!(settings.bind_id, 0x1234_5678);
             // Re-saved as version 3, the same settings come back.
-            assert_eq!(settings.to_record()[0], 3);
+            assert_eq!(settings.to_record()[0], RECORD_VERSION);
             assert_eq!(Settings::from_record(&settings.to_record()), Ok(settings));
         }
         assert_eq!(
@@ -527,7 +666,7 @@ mod tests {
         );
         // Re-saved, they become version 3 with the same values.
         let upgraded = settings.to_record();
-        assert_eq!(upgraded[0], 3);
+        assert_eq!(upgraded[0], RECORD_VERSION);
         assert_eq!(Settings::from_record(&upgraded), Ok(settings));
     }
 
