@@ -8,12 +8,13 @@
 //! Owned here: the live and stored settings and the setup derived from them; the flight
 //! loop and its controllers; the IMU fault policy (`imu`); the baro climb rate; the
 //! battery monitor and the tone player; the link follower's hooks, bind handling and
-//! telemetry (`link`); the console's command language (`console`); the watchdog check-in
+//! telemetry (`link`), the same over OpenLRSng (`openlrs`); the console's command language (`console`); the watchdog check-in
 //! policy (`watchdog`).
 
 mod console;
 mod imu;
 mod link;
+mod openlrs;
 mod watchdog;
 
 #[cfg(test)]
@@ -23,6 +24,7 @@ pub use imu::{
     CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
 };
 pub use link::{BIND_WINDOW_US, FAILSAFE_US, LinkStep, REPORT_PERIOD_US};
+pub use openlrs::{OPENLRS_FAILSAFE_DELAY, OPENLRS_RATE_CODE_BASE};
 pub use watchdog::{FEED_PERIOD_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog};
 
 use crate::alerts::{Alert, TonePlayer};

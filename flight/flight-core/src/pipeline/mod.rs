@@ -25,7 +25,10 @@ pub use channels::{
 pub use climb::ClimbRate;
 pub use controllers::{ControlParams, Controllers};
 pub use flight_loop::{FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
-pub use link::{bind_band, store_link, stored_link};
+pub use link::{
+    Protocol, bind_band, openlrs_band, protocol, store_link, store_openlrs, stored_link,
+    stored_openlrs,
+};
 pub use setup::{FlightSetup, SetupError, from_settings};
 pub use sticks::StickShaping;
 pub use validate::{InvalidSettings, validate};
