@@ -24,7 +24,9 @@ pub use imu::{
     CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
 };
 pub use link::{BIND_WINDOW_US, FAILSAFE_US, LinkStep, REPORT_PERIOD_US};
-pub use openlrs::{OPENLRS_FAILSAFE_DELAY, OPENLRS_RATE_CODE_BASE};
+pub use openlrs::{
+    OPENLRS_FAILSAFE_DELAY, OPENLRS_RATE_CODE_BASE, openlrs_bind_window, run_openlrs_receiver,
+};
 pub use watchdog::{FEED_PERIOD_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog};
 
 use crate::alerts::{Alert, TonePlayer};

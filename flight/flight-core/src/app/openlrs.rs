@@ -17,11 +17,15 @@
 //! transmitter sent is stored (`link.olrs_*`) only inside that window and while disarmed.
 //! Never bound over OpenLRSng (`link.olrs_magic` 0), the link task runs nothing.
 
+use embedded_hal_async::delay::DelayNs;
+use embedded_hal_async::digital::Wait;
+use embedded_hal_async::spi::SpiDevice;
 use heapless::Deque;
 use radio_rfm22b::measure::rssi_dbm;
+use radio_rfm22b::openlrs::radio::{Clock, Error as RadioError, Radio};
 use radio_rfm22b::openlrs::channels::bits_to_us;
 use radio_rfm22b::openlrs::downlink::SERIAL_QUEUE_LEN;
-use radio_rfm22b::openlrs::roles::RxEvent;
+use radio_rfm22b::openlrs::roles::{RxEvent, rx_start, rx_step};
 use radio_rfm22b::openlrs::rx::{Config, Receiver};
 use radio_rfm22b::openlrs::{BindData, BindingVersion};
 use telemetry::channels::MAX_CHANNELS;
@@ -192,6 +196,75 @@ impl FlightApp {
             self.link.openlrs.idle_replies = 0;
         }
     }
+}
+
+/// Events one `rx_step` can report (a packet's output, then failsafe).
+const STEP_EVENTS: usize = 4;
+
+/// The link task's OpenLRSng receiver, shared by the firmware and the simulator so neither
+/// re-implements it: the crate's role loop (`rx_start`, then `rx_step` forever), with
+/// `on_step(now_us, rx, events)` after every step — the firmware passes
+/// [`FlightApp::on_openlrs_step`] through its app lock. Returns only on a radio error.
+/// A step waits at most one hop cycle (longer than the watchdog period at the slow
+/// profiles), so the caller races this against its 50 ms check-in, as for TauLink.
+pub async fn run_openlrs_receiver<SPI, IRQ, D, C>(
+    radio: &mut Radio<SPI, IRQ, D, C>,
+    rx: &mut Receiver,
+    mut on_step: impl FnMut(u64, &mut Receiver, &[RxEvent]),
+) -> RadioError<SPI::Error, IRQ::Error>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    D: DelayNs,
+    C: Clock,
+{
+    if let Err(e) = rx_start(radio, rx).await {
+        return e;
+    }
+    loop {
+        let mut events: heapless::Vec<RxEvent, STEP_EVENTS> = heapless::Vec::new();
+        let step = rx_step(radio, rx, &mut |event| {
+            let _ = events.push(event);
+        })
+        .await;
+        if let Err(e) = step {
+            return e;
+        }
+        let now = radio.now_us();
+        on_step(now, rx, &events);
+    }
+}
+
+/// The OpenLRSng bind window ([`LinkStep::BindOpenLrs`]): a receiver without bind data
+/// listens on OpenLRSng's bind frequency until a transmitter's bind packet is accepted
+/// (answered `'B'`, returned) or `window_us` passes (`None`).
+pub async fn openlrs_bind_window<SPI, IRQ, D, C>(
+    radio: &mut Radio<SPI, IRQ, D, C>,
+    config: Config,
+    window_us: u64,
+) -> Result<Option<BindData>, RadioError<SPI::Error, IRQ::Error>>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    D: DelayNs,
+    C: Clock,
+{
+    let mut rx = Receiver::new(config, None);
+    let until = radio.now_us().saturating_add(window_us);
+    rx_start(radio, &mut rx).await?;
+    while radio.now_us() < until {
+        let mut bound = None;
+        rx_step(radio, &mut rx, &mut |event| {
+            if let RxEvent::Bound(data) = event {
+                bound = Some(data);
+            }
+        })
+        .await?;
+        if bound.is_some() {
+            return Ok(bound);
+        }
+    }
+    Ok(None)
 }
 
 #[cfg(test)]
