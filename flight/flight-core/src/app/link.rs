@@ -6,6 +6,10 @@
 //! of [`BIND_WINDOW_US`], and only a bind inside that window is stored. Nothing binds at
 //! boot, and no default link ID exists that every unbound controller would share.
 //!
+//! The air protocol is the setting `link.protocol`: `taulink` (factory), or `olrs38` /
+//! `olrs39` to obey an existing OpenLRSng transmitter (`super::openlrs`; OpenLRSng frames
+//! cannot be authenticated). The loop sees both the same way (`on_link_channels`).
+//!
 //! Watchdog: every hook call checks the link task in, whatever the slot length; the
 //! follower calls its hooks at least every 50 ms in every sync state, and the adapter
 //! checks in while it waits outside the follower (bind window, retry after a radio error).
