@@ -443,8 +443,10 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
         },
         _ => Effect::None,
     };
-    if settings.validate().is_err() {
-        // The set would not run (an OpenLRSng link outside the band plan): nothing changes.
+    if settings.validate().is_err() && before.validate().is_ok() {
+        // The change would make the set unusable (an OpenLRSng link outside the band plan):
+        // nothing changes. A set that was already unusable (a damaged record) stays
+        // editable, so the pilot can repair it from the radio.
         *settings = before;
         return Effect::None;
     }
@@ -595,6 +597,19 @@ mod tests {
         assert_eq!(taulink.openlrs.profile, 4);
         let rate = entry_text(OPENLRS_RATE, &taulink);
         assert!(rate.contains("125kbps"), "{rate}");
+        // A set that is already unusable (only a damaged record can hold OpenLRSng on the
+        // ISM sub-band) stays editable: moving to a usable band is taken.
+        let mut broken = Settings {
+            band: Band::Ism433,
+            protocol: LinkProtocol::OpenLrs39,
+            ..Settings::default()
+        };
+        assert!(broken.validate().is_err());
+        assert_eq!(
+            write(BAND, &[0], &mut broken, &mut commands),
+            Effect::RestartLink
+        );
+        assert!(broken.validate().is_ok());
     }
 
     #[test]

@@ -110,7 +110,10 @@ impl Settings {
     pub fn set_text(&mut self, name: &str, text: &str) -> Result<(), TextError> {
         let mut candidate = *self;
         candidate.set_text_unchecked(name, text)?;
-        candidate.validate().map_err(|_| TextError::Invalid)?;
+        // Only a change that breaks a usable set is refused (a damaged one stays editable).
+        if candidate.validate().is_err() && self.validate().is_ok() {
+            return Err(TextError::Invalid);
+        }
         *self = candidate;
         Ok(())
     }
