@@ -598,13 +598,18 @@ mod tests {
         let rate = entry_text(OPENLRS_RATE, &taulink);
         assert!(rate.contains("125kbps"), "{rate}");
         // A set that is already unusable (only a damaged record can hold OpenLRSng on the
-        // ISM sub-band) stays editable: moving to a usable band is taken.
+        // ISM sub-band) stays editable: an unrelated change is taken, then the repair.
         let mut broken = Settings {
             band: Band::Ism433,
             protocol: LinkProtocol::OpenLrs39,
             ..Settings::default()
         };
         assert!(broken.validate().is_err());
+        assert_eq!(
+            write(TX_POWER, &[2], &mut broken, &mut commands),
+            Effect::None
+        );
+        assert_eq!(broken.tx_power, 2, "editable while broken");
         assert_eq!(
             write(BAND, &[0], &mut broken, &mut commands),
             Effect::RestartLink
