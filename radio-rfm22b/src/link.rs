@@ -82,6 +82,12 @@ impl<SPI, IRQ, SDN, D> LinkRadio<SPI, IRQ, SDN, D> {
         self
     }
 
+    /// Gives the driver back (to run the chip another way, e.g. the OpenLRSng roles over its
+    /// parts, `Rfm22b::release`).
+    pub fn release(self) -> Rfm22b<SPI, IRQ, SDN, D> {
+        self.radio
+    }
+
     /// The driver itself (probe and reset between link sessions).
     pub fn driver(&mut self) -> &mut Rfm22b<SPI, IRQ, SDN, D> {
         // Whoever touches the chip directly invalidates our idea of its setup.

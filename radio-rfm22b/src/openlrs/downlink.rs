@@ -39,6 +39,12 @@ impl DownlinkSender {
             .count()
     }
 
+    /// Bytes [`DownlinkSender::queue_serial`] still takes whole (so a caller can keep a
+    /// framed message in one piece).
+    pub fn serial_free(&self) -> usize {
+        self.serial_out.capacity() - self.serial_out.len()
+    }
+
     /// An uplink serial packet arrived: `true` if it is new data (bit 7 differs from our
     /// acknowledge bit), which then flips so the next frame acknowledges it.
     pub fn accept_uplink_serial(&mut self, uplink_header: u8) -> bool {
@@ -89,7 +95,9 @@ mod tests {
             link_quality: 15,
         };
         let mut d = DownlinkSender::new();
+        assert_eq!(d.serial_free(), SERIAL_QUEUE_LEN);
         assert_eq!(d.queue_serial(b"xy"), 0);
+        assert_eq!(d.serial_free(), SERIAL_QUEUE_LEN - 2);
         let first = d.reply(0x00, &info);
         assert_eq!(&first[..3], &[0x40 | (0x38 + 1), b'x', b'y']);
         // TX has not copied bit 6 yet: the same frame again.

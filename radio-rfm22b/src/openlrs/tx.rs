@@ -192,6 +192,11 @@ impl Transmitter {
             .count()
     }
 
+    /// Bytes [`Transmitter::queue_serial`] still takes whole.
+    pub fn serial_free(&self) -> usize {
+        self.serial_in.capacity() - self.serial_in.len()
+    }
+
     /// Downlink link quality 0..15 (replies heard over the last 15 completed slots).
     pub fn link_quality(&self) -> u8 {
         self.quality.tx_quality()

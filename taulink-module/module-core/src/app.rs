@@ -479,13 +479,22 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// back to the previous state.
     pub fn on_bind_outcome(&mut self, outcome: BindOutcome) -> Option<Action> {
         let offered = self.session.on_bind_done();
+        let seed = self.session.take_offered_seed();
+        let accepted = matches!(
+            (outcome, offered, seed),
+            (BindOutcome::Offered { accepted: true }, Some(_), _)
+                | (BindOutcome::Offered { accepted: true }, _, Some(_))
+                | (BindOutcome::Listened(Some(_)), _, _)
+        );
         if self.commands.binding {
             self.commands.binding = false;
-            self.commands.bind_result = Some(matches!(
-                (outcome, offered),
-                (BindOutcome::Offered { accepted: true }, Some(_))
-                    | (BindOutcome::Listened(Some(_)), _)
-            ));
+            self.commands.bind_result = Some(accepted);
+        }
+        if let (BindOutcome::Offered { accepted: true }, Some(seed)) = (outcome, seed) {
+            // An OpenLRSng receiver took the bind data: its seed is the link from now on.
+            self.binding = false;
+            self.settings.openlrs.hop_seed = seed;
+            return Some(Action::Save(self.settings));
         }
         match (outcome, offered) {
             (BindOutcome::Offered { accepted: true }, Some(offer)) => {
@@ -538,7 +547,8 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         } else if self.battery_low {
             // Above the link states: a dying radio battery ends the link soon anyway.
             LinkState::LowBattery
-        } else if self.settings.bind_id == 0 {
+        } else if self.settings.bind_id == 0 && self.settings.protocol.openlrs_version().is_none() {
+            // An OpenLRSng transmitter flies its bind data from the start, bound or not.
             LinkState::Unbound
         } else if connected {
             LinkState::Connected
@@ -560,6 +570,25 @@ impl<H: HandsetOutput> App<AirLink, H> {
     pub fn on_master_slot(&mut self, now_us: u64, now_ms: u32, master: &mut Master) {
         self.session.on_hook(now_ms);
         self.link.on_master_slot(now_us, master);
+        self.poll_link();
+    }
+
+    /// Right before each OpenLRSng packet (`air::openlrs::run_openlrs_transmitter`).
+    pub fn on_openlrs_send(&mut self, tx: &mut radio_rfm22b::openlrs::tx::Transmitter) {
+        self.link.on_openlrs_send(tx);
+    }
+
+    /// After each OpenLRSng transmitter step at `now_us` (link clock) and `now_ms` (the
+    /// session's clock): telemetry out to the handset and the phone, statistics.
+    pub fn on_openlrs_step(
+        &mut self,
+        now_us: u64,
+        now_ms: u32,
+        tx: &radio_rfm22b::openlrs::tx::Transmitter,
+        events: &[radio_rfm22b::openlrs::roles::TxEvent],
+    ) {
+        self.session.on_hook(now_ms);
+        self.link.on_openlrs_step(now_us, tx, events);
         self.poll_link();
     }
 

@@ -13,7 +13,14 @@
 //! Numbering (fixed; the radio reads 1 … [`PARAMETER_COUNT`]). Model match (13, restarts
 //! the link) and the "Model" row (14, INFO: the radio's model and whether a receiver was
 //! bound under it — "mismatch" tells the pilot why the link does not come up) were added
-//! at the end; later entries (the binding phrase) only grow the count.
+//! at the end.
+//!
+//! **Protocol** (15) picks the air protocol; its OpenLRSng options say "(no auth)" because
+//! OpenLRSng frames carry no authentication. The **OpenLRSng** folder (16) holds the
+//! OpenLRSng transmitter's bind parameters (modem rate, channel mode, telemetry); the carrier
+//! and the hop seed are set from the other settings paths (`settings::text`). Any write after
+//! which the set would not run (`Settings::validate`: an OpenLRSng link outside the band
+//! plan, OpenLRSng in the receiver role) is refused and changes nothing.
 
 use core::fmt::Write;
 
@@ -21,9 +28,10 @@ use heapless::{String, Vec};
 use telemetry::handset::crsf::params::{CommandStatus, Entry, MAX_ENTRY_LEN};
 
 use crate::ppm::FailsafeOutput;
+use crate::settings::openlrs::{CHANNEL_MODES, DEFAULT_CHANNEL_MODE, DEFAULT_PROFILE};
 use crate::settings::{
     Band, DEFAULT_INPUT_TIMEOUT_MS, DEFAULT_TELEMETRY_RATIO, INPUT_TIMEOUT_MS, InputProtocol,
-    OutputProtocol, RateMode, Settings, TELEMETRY_RATIOS,
+    LinkProtocol, OutputProtocol, RateMode, Settings, TELEMETRY_RATIOS,
 };
 
 /// Packet rate (the link's rate modes).
@@ -54,8 +62,18 @@ pub const SAVE: u8 = 12;
 pub const MODEL_MATCH: u8 = 13;
 /// The radio's model and whether it matches (INFO).
 pub const MODEL: u8 = 14;
+/// Link protocol (TauLink / OpenLRSng 3.8 / 3.9).
+pub const PROTOCOL: u8 = 15;
+/// Folder: the OpenLRSng transmitter's bind parameters.
+pub const OPENLRS_FOLDER: u8 = 16;
+/// OpenLRSng modem rate (profile 0..4).
+pub const OPENLRS_RATE: u8 = 17;
+/// OpenLRSng channel mode.
+pub const OPENLRS_CHANNELS: u8 = 18;
+/// OpenLRSng telemetry on/off.
+pub const OPENLRS_TELEMETRY: u8 = 19;
 /// Parameters the module offers (DEVICE_INFO's count).
-pub const PARAMETER_COUNT: u8 = 14;
+pub const PARAMETER_COUNT: u8 = 19;
 
 /// How often the radio polls a running command, 10 ms units.
 const POLL_10MS: u8 = 50;
@@ -141,6 +159,12 @@ fn model_text(settings: &Settings, commands: &Commands) -> Option<String<24>> {
     }
     Some(text)
 }
+/// Protocol options, in `LinkProtocol` order: the OpenLRSng ones say they are unauthenticated.
+const PROTOCOL_LABELS: [&str; 3] = ["TauLink", "OLRSng3.8 (no auth)", "OLRSng3.9 (no auth)"];
+/// OpenLRSng's modem profiles.
+const OPENLRS_RATE_LABELS: [&str; 5] = ["4800bps", "9600bps", "19k2bps", "57k6bps", "125kbps"];
+/// OpenLRSng's channel modes 1..6.
+const OPENLRS_CHANNEL_LABELS: [&str; 6] = ["4+4", "8", "8+4", "12", "12+4", "16"];
 
 fn band_index(band: Band) -> u8 {
     match band {
@@ -285,6 +309,42 @@ pub fn entry(
             unit(commands, number, ""),
         ),
         MODEL => Entry::info(0, "Model", &model_text(settings, commands)?),
+        PROTOCOL => Entry::selection(
+            0,
+            "Protocol",
+            &PROTOCOL_LABELS,
+            settings.protocol.code(),
+            LinkProtocol::TauLink.code(),
+            unit(commands, number, ""),
+        ),
+        OPENLRS_FOLDER => Entry::folder(0, "OpenLRSng"),
+        OPENLRS_RATE => Entry::selection(
+            OPENLRS_FOLDER,
+            "OLRS Rate",
+            &OPENLRS_RATE_LABELS,
+            settings.openlrs.profile,
+            DEFAULT_PROFILE,
+            unit(commands, number, ""),
+        ),
+        OPENLRS_CHANNELS => Entry::selection(
+            OPENLRS_FOLDER,
+            "OLRS Channels",
+            &OPENLRS_CHANNEL_LABELS,
+            settings
+                .openlrs
+                .channel_mode
+                .saturating_sub(*CHANNEL_MODES.start()),
+            DEFAULT_CHANNEL_MODE - CHANNEL_MODES.start(),
+            unit(commands, number, ""),
+        ),
+        OPENLRS_TELEMETRY => Entry::selection(
+            OPENLRS_FOLDER,
+            "OLRS Telem",
+            &OFF_ON_LABELS,
+            u8::from(settings.openlrs.telemetry),
+            1,
+            unit(commands, number, ""),
+        ),
         _ => return None,
     };
     entry.finish().ok()
@@ -378,6 +438,25 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
             settings.model_match = on == 1;
             Effect::RestartLink
         }
+        (PROTOCOL, Some(code)) => match LinkProtocol::from_code(code) {
+            Some(protocol) => {
+                settings.protocol = protocol;
+                Effect::RestartLink
+            }
+            None => Effect::None,
+        },
+        (OPENLRS_RATE, Some(profile)) if usize::from(profile) < OPENLRS_RATE_LABELS.len() => {
+            settings.openlrs.profile = profile;
+            openlrs_change(settings)
+        }
+        (OPENLRS_CHANNELS, Some(index)) if usize::from(index) < OPENLRS_CHANNEL_LABELS.len() => {
+            settings.openlrs.channel_mode = CHANNEL_MODES.start() + index;
+            openlrs_change(settings)
+        }
+        (OPENLRS_TELEMETRY, Some(on @ 0..=1)) => {
+            settings.openlrs.telemetry = on == 1;
+            openlrs_change(settings)
+        }
         (SAVE, Some(step)) => match CommandStatus::from_byte(step) {
             Some(CommandStatus::Start) => {
                 commands.save_confirming = true;
@@ -398,6 +477,13 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
         },
         _ => Effect::None,
     };
+    if settings.validate().is_err() && before.validate().is_ok() {
+        // The change would make the set unusable (an OpenLRSng link outside the band plan):
+        // nothing changes. A set that was already unusable (a damaged record) stays
+        // editable, so the pilot can repair it from the radio.
+        *settings = before;
+        return Effect::None;
+    }
     if effect == Effect::RestartLink {
         if *settings == before {
             // The same value again: the link keeps running.
@@ -408,6 +494,15 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
         commands.restarted_by = None;
     }
     effect
+}
+
+/// An OpenLRSng parameter changed: the running link restarts only if it is OpenLRSng.
+fn openlrs_change(settings: &Settings) -> Effect {
+    if settings.protocol.openlrs_version().is_some() {
+        Effect::RestartLink
+    } else {
+        Effect::None
+    }
 }
 
 #[cfg(test)]
@@ -459,6 +554,101 @@ mod tests {
             Effect::None
         );
         assert_eq!(settings.input_timeout_ms, 800);
+    }
+
+    /// The entry's option text (a SELECT's options follow its name).
+    fn entry_text(number: u8, settings: &Settings) -> std::string::String {
+        let entry = entry(number, settings, &Commands::default()).unwrap();
+        std::string::String::from_utf8_lossy(&entry).into_owned()
+    }
+
+    #[test]
+    fn the_protocol_choice_labels_openlrsng_unauthenticated_and_restarts_the_link() {
+        let text = entry_text(PROTOCOL, &Settings::default());
+        assert!(text.contains("Protocol"), "{text}");
+        assert!(
+            text.contains("TauLink;OLRSng3.8 (no auth);OLRSng3.9 (no auth)"),
+            "{text}"
+        );
+        let mut settings = Settings::default();
+        let mut commands = Commands::default();
+        assert_eq!(
+            write(PROTOCOL, &[2], &mut settings, &mut commands),
+            Effect::RestartLink
+        );
+        assert_eq!(settings.protocol, LinkProtocol::OpenLrs39);
+        assert_eq!(commands.restarted_by, Some(PROTOCOL));
+        assert_eq!(
+            write(PROTOCOL, &[3], &mut settings, &mut commands),
+            Effect::None
+        );
+        assert_eq!(settings.protocol, LinkProtocol::OpenLrs39);
+        // The bind parameters: 125 kbit/s, 16 channels, telemetry off.
+        for (number, value) in [
+            (OPENLRS_RATE, 4),
+            (OPENLRS_CHANNELS, 5),
+            (OPENLRS_TELEMETRY, 0),
+        ] {
+            assert_eq!(
+                write(number, &[value], &mut settings, &mut commands),
+                Effect::RestartLink
+            );
+        }
+        assert_eq!(settings.openlrs.profile, 4);
+        assert_eq!(settings.openlrs.channel_mode, 6);
+        assert!(!settings.openlrs.telemetry);
+        for (number, value) in [
+            (OPENLRS_RATE, 5),
+            (OPENLRS_CHANNELS, 6),
+            (OPENLRS_TELEMETRY, 2),
+        ] {
+            let before = settings;
+            assert_eq!(
+                write(number, &[value], &mut settings, &mut commands),
+                Effect::None
+            );
+            assert_eq!(settings, before);
+        }
+        // The 433 ISM sub-band cannot hold OpenLRSng's bind channel: the band write is
+        // refused while OpenLRSng is selected, and OpenLRSng while on that band.
+        assert_eq!(
+            write(BAND, &[3], &mut settings, &mut commands),
+            Effect::None
+        );
+        assert_eq!(settings.band, Band::Mhz433);
+        let mut ism = Settings {
+            band: Band::Ism433,
+            ..Settings::default()
+        };
+        assert_eq!(write(PROTOCOL, &[1], &mut ism, &mut commands), Effect::None);
+        assert_eq!(ism.protocol, LinkProtocol::TauLink);
+        // With TauLink flying, an OpenLRSng parameter does not restart the link.
+        let mut taulink = Settings::default();
+        assert_eq!(
+            write(OPENLRS_RATE, &[4], &mut taulink, &mut commands),
+            Effect::None
+        );
+        assert_eq!(taulink.openlrs.profile, 4);
+        let rate = entry_text(OPENLRS_RATE, &taulink);
+        assert!(rate.contains("125kbps"), "{rate}");
+        // A set that is already unusable (only a damaged record can hold OpenLRSng on the
+        // ISM sub-band) stays editable: an unrelated change is taken, then the repair.
+        let mut broken = Settings {
+            band: Band::Ism433,
+            protocol: LinkProtocol::OpenLrs39,
+            ..Settings::default()
+        };
+        assert!(broken.validate().is_err());
+        assert_eq!(
+            write(TX_POWER, &[2], &mut broken, &mut commands),
+            Effect::None
+        );
+        assert_eq!(broken.tx_power, 2, "editable while broken");
+        assert_eq!(
+            write(BAND, &[0], &mut broken, &mut commands),
+            Effect::RestartLink
+        );
+        assert!(broken.validate().is_ok());
     }
 
     #[test]

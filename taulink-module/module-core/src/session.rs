@@ -8,8 +8,10 @@ use telemetry::channels::{Failsafe, FailsafeValues, MAX_CHANNELS};
 use telemetry::link::core::follower::DEFAULT_FAILSAFE_US;
 use telemetry::link::{Band as LinkBand, LinkParams};
 
+use radio_rfm22b::openlrs::BindData;
+
 use crate::air::{link_band, link_params, new_bind_params};
-use crate::settings::{Role, Settings};
+use crate::settings::{Role, Settings, openlrs};
 
 /// How long one bind attempt lasts.
 pub const BIND_TIMEOUT_US: u64 = 10_000_000;
@@ -50,6 +52,18 @@ pub enum LinkStep {
     BindMaster {
         /// What is offered.
         params: LinkParams,
+        /// How long to offer.
+        timeout_us: u64,
+    },
+    /// Run the OpenLRSng transmitter (`settings.protocol` OpenLRSng) on this bind data,
+    /// `crate::air::openlrs::run_openlrs_transmitter` with the core's `on_openlrs_*` hooks.
+    RunOpenLrsTx(BindData),
+    /// OpenLRSng's bind procedure: send `data`'s bind packet (every 200 ms, at the bind
+    /// power, `radio_rfm22b::openlrs::roles::tx_bind`) until a receiver answers or the
+    /// timeout passes; report with `App::on_bind_outcome(BindOutcome::Offered { .. })`.
+    BindOpenLrsTx {
+        /// The bind data offered (with the hop seed the bind gives the link).
+        data: BindData,
         /// How long to offer.
         timeout_us: u64,
     },
@@ -137,6 +151,7 @@ pub struct Session {
     state: State,
     last_hook_ms: u32,
     offered: Option<Offer>,
+    offered_seed: Option<u32>,
 }
 
 impl Default for Session {
@@ -152,6 +167,7 @@ impl Session {
             state: State::Probe,
             last_hook_ms: 0,
             offered: None,
+            offered_seed: None,
         }
     }
 
@@ -177,6 +193,21 @@ impl Session {
                 self.state = State::Probe;
                 LinkStep::Wait { ms: PROBE_RETRY_MS }
             }
+            State::Ready if settings.protocol.openlrs_version().is_some() => {
+                match openlrs::bind_data(settings) {
+                    Ok(data) => {
+                        self.state = State::Running;
+                        self.last_hook_ms = now_ms;
+                        LinkStep::RunOpenLrsTx(data)
+                    }
+                    // Settings that make no OpenLRSng link (only a damaged record can hold
+                    // them): nothing goes on air until they change.
+                    Err(_) => {
+                        self.state = State::WaitingForBind;
+                        LinkStep::WaitForBind
+                    }
+                }
+            }
             State::Ready => match link_params(settings) {
                 None => {
                     self.state = State::WaitingForBind;
@@ -195,6 +226,30 @@ impl Session {
                     }
                 }
             },
+            State::Bind if settings.protocol.openlrs_version().is_some() => {
+                // The first bind gives the link its own magic and hop channels: OpenLRSng's
+                // factory ones are every unbound transmitter's.
+                let seed = match settings.openlrs.hop_seed {
+                    0 => random.max(1),
+                    seed => seed,
+                };
+                let mut with_seed = *settings;
+                with_seed.openlrs.hop_seed = seed;
+                match openlrs::bind_data(&with_seed) {
+                    Ok(data) => {
+                        self.state = State::Binding;
+                        self.offered_seed = Some(seed);
+                        LinkStep::BindOpenLrsTx {
+                            data,
+                            timeout_us: BIND_TIMEOUT_US,
+                        }
+                    }
+                    Err(_) => {
+                        self.state = State::WaitingForBind;
+                        LinkStep::WaitForBind
+                    }
+                }
+            }
             State::Bind => {
                 self.state = State::Binding;
                 match settings.role {
@@ -267,6 +322,11 @@ impl Session {
     pub fn on_bind_done(&mut self) -> Option<Offer> {
         self.state = State::Probe;
         self.offered.take()
+    }
+
+    /// The hop seed the last OpenLRSng bind offered (taken once, after `on_bind_done`).
+    pub fn take_offered_seed(&mut self) -> Option<u32> {
+        self.offered_seed.take()
     }
 }
 

@@ -360,7 +360,7 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             let name_end = info[2..].iter().position(|&b| b == 0).unwrap() + 2;
             assert_eq!(&info[2..name_end], b"TauLink");
             let count = info[name_end + 13];
-            assert_eq!(count, 14, "DEVICE_INFO's parameter count");
+            assert_eq!(count, 19, "DEVICE_INFO's parameter count");
 
             // Read every parameter.
             let mut fields = Vec::new();
@@ -388,12 +388,25 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                     "Bind",
                     "Save",
                     "Model Match",
-                    "Model"
+                    "Model",
+                    "Protocol",
+                    "OpenLRSng",
+                    "OLRS Rate",
+                    "OLRS Channels",
+                    "OLRS Telem"
                 ]
             );
             assert_eq!(fields[12].options, ["Off", "On"]);
             assert_eq!(fields[12].value, 0, "model match is off from the factory");
             assert_eq!((fields[13].kind, fields[13].info.as_str()), (12, "any (match off)"));
+            assert_eq!(
+                fields[14].options,
+                ["TauLink", "OLRSng3.8 (no auth)", "OLRSng3.9 (no auth)"]
+            );
+            assert_eq!(fields[14].options[fields[14].value as usize], "TauLink");
+            assert_eq!(fields[16].parent, 16, "OLRS Rate sits in the OpenLRSng folder");
+            assert_eq!(fields[16].options[fields[16].value as usize], "19k2bps");
+            assert_eq!(fields[17].options[fields[17].value as usize], "8");
             let rate = &fields[0];
             assert_eq!(
                 rate.options,

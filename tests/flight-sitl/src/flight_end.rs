@@ -1,6 +1,8 @@
 //! The flight controller board: boots `flight_core::app::FlightApp` from its simulated
-//! settings flash and runs the firmware's task adapters around it — link (the follower — a
-//! bind only in a window the console opens — on the real rfm22b driver over the virtual Si4432), supervisor (polls the
+//! settings flash and runs the firmware's task adapters around it — link (the TauLink
+//! follower or, with `link.protocol` OpenLRSng, `flight_core::app::run_openlrs_receiver` —
+//! a bind only in a window the console opens — on the real rfm22b driver over the virtual
+//! Si4432), supervisor (polls the
 //! app's check-in policy every `FEED_PERIOD_MS` and feeds the IWDG), storage, gains and
 //! heartbeat — until its independent watchdog expires or its power goes; then it boots
 //! again. The IMU, baro, battery and alert adapters run in the world's physics task at the
@@ -11,12 +13,17 @@ use std::rc::Rc;
 
 use embassy_futures::join::join5;
 use embassy_futures::select::{Either, select};
-use flight_core::app::{FEED_PERIOD_MS, FlightApp, LinkStep, Task};
+use flight_core::app::{
+    FEED_PERIOD_MS, FlightApp, LinkStep, Task, openlrs_bind_window, run_openlrs_receiver,
+};
 use flight_core::pipeline::{Controllers, from_settings};
 use radio_rfm22b::link::LinkRadio;
+use radio_rfm22b::openlrs::radio::Radio as OpenLrsRadio;
+use radio_rfm22b::openlrs::rx::{Config as OpenLrsConfig, Receiver};
 use radio_rfm22b::{NoPin, Rfm22b, TxPower};
 use si4432_sim::{ChipHandle, Fault, Medium, SimDelay, SimIrq, SimSpi};
 use telemetry::channels::FailsafeValues;
+use telemetry::link::LinkClock;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 
@@ -38,9 +45,11 @@ const WATCH_MS: u64 = 5;
 /// The flight board's RFM22B as the firmware wires it: SDN tied low, software reset only.
 pub(crate) type FlightRadio = LinkRadio<SimSpi, SimIrq, NoPin, SimDelay>;
 
-/// The flight board's radio and how to break it.
+/// The flight board's radio and how to break it. The link task lends the driver's parts
+/// to the OpenLRSng roles while they run (the firmware's `link_task` does the same), so the
+/// slot is empty only inside such a step.
 pub(crate) struct FlightChip {
-    pub(crate) radio: FlightRadio,
+    pub(crate) radio: Option<FlightRadio>,
     pub(crate) chip: ChipHandle,
 }
 
@@ -51,7 +60,7 @@ impl FlightChip {
             TxPower::MAX,
         );
         Self {
-            radio,
+            radio: Some(radio),
             chip: handle.chip,
         }
     }
@@ -96,17 +105,80 @@ async fn bind_requested(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay) {
     }
 }
 
+/// The OpenLRSng steps (the firmware's `openlrs_step`): the driver's parts become an
+/// OpenLRSng radio for the step, and go back after it.
+async fn openlrs_step(
+    app: &Rc<RefCell<FlightApp>>,
+    slot: &mut Option<FlightRadio>,
+    clock: &BoardClock,
+    config: OpenLrsConfig,
+    step: LinkStep,
+) {
+    let delay = clock.delay().clone();
+    let Some(link) = slot.take() else {
+        return;
+    };
+    let (spi, irq, _, chip_delay) = link.release().release();
+    let now = clock.clone();
+    let mut radio = OpenLrsRadio::new(
+        spi,
+        irq,
+        chip_delay,
+        move || now.now_us(),
+        config.version,
+        config.band,
+    );
+    let failed = match step {
+        LinkStep::BindOpenLrs { window_us, .. } => {
+            let bind = openlrs_bind_window(&mut radio, config, window_us);
+            let Either::First(result) = select(bind, keep_alive(app, &delay)).await;
+            let bound = result.as_ref().ok().copied().flatten();
+            app.borrow_mut().on_openlrs_bind_result(bound.as_ref());
+            result.is_err()
+        }
+        LinkStep::FollowOpenLrs { data, .. } => {
+            let mut rx = Receiver::new(config, Some(data));
+            let on_step = |now_us: u64, rx: &mut Receiver, events: &[_]| {
+                app.borrow_mut().on_openlrs_step(now_us, rx, events);
+            };
+            let run = run_openlrs_receiver(&mut radio, &mut rx, on_step);
+            // Racing the check-in too: a slow profile's lost-link dwell outlasts the IWDG.
+            let waits = select(bind_requested(app, &delay), keep_alive(app, &delay));
+            let failed = matches!(select(run, waits).await, Either::First(_));
+            app.borrow_mut().on_link_down();
+            failed
+        }
+        _ => false,
+    };
+    let (spi, irq, chip_delay, _) = radio.release();
+    *slot = Some(LinkRadio::new(
+        Rfm22b::new_without_sdn(spi, irq, chip_delay),
+        TxPower::MAX,
+    ));
+    if failed {
+        idle(app, &delay, 1000).await;
+    }
+}
+
 /// The firmware's link task: runs what `FlightApp::next_link_step` says (a bind window the
 /// console opened, the follower on the stored link, or nothing until a bind is asked for).
 async fn link_task(
     app: Rc<RefCell<FlightApp>>,
-    radio: &mut FlightRadio,
+    slot: &mut Option<FlightRadio>,
     mut clock: BoardClock,
     failsafe_us: u64,
 ) {
     let delay = clock.delay().clone();
     loop {
         let step = app.borrow_mut().next_link_step();
+        if let LinkStep::BindOpenLrs { config, .. } | LinkStep::FollowOpenLrs { config, .. } = step
+        {
+            openlrs_step(&app, slot, &clock, config, step).await;
+            continue;
+        }
+        let Some(radio) = slot.as_mut() else {
+            return;
+        };
         match step {
             LinkStep::Bind { band, window_us } => {
                 let bind = bind_follower(radio, &mut clock, band, window_us);
@@ -131,6 +203,7 @@ async fn link_task(
                     idle(&app, &delay, 1000).await;
                 }
             }
+            LinkStep::BindOpenLrs { .. } | LinkStep::FollowOpenLrs { .. } => {}
         }
     }
 }

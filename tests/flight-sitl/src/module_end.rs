@@ -1,7 +1,8 @@
 //! The TauLink module board: boots `module_core::App` with its stored settings and runs the
 //! module firmware's task adapters around it — the link task carrying out the core's
 //! session steps (`next_link_step`, master loop on the real rfm22b driver over the virtual
-//! Si4432, `poll_session`, `on_session_end`, binds), the PPM capture task feeding the
+//! Si4432 — or, with the OpenLRSng protocol,
+//! `module_core::air::openlrs::run_openlrs_transmitter` over the same chip — `poll_session`, `on_session_end`, binds), the PPM capture task feeding the
 //! handset's frames as edges (`on_ppm_edge` / `on_ppm_tick`), the JR-line task with the
 //! radio at its other end (CRSF: the radio's channel frame every [`CRSF_PERIOD_US`], the
 //! module's reply after it; S.Port / FrSky D: the pushed frames; what the module sent:
@@ -16,12 +17,17 @@ use std::cell::{Cell, RefCell};
 use embassy_futures::join::{join, join5};
 use embassy_futures::select::{Either, select};
 use module_core::air::AirLink;
+use module_core::air::openlrs::run_openlrs_transmitter;
 use module_core::app::{Action, App};
 use module_core::channels::value_to_us;
 use module_core::handset::{Handset, LineMode, MAX_LINE_BURST};
 use module_core::session::{BindOutcome, LinkStep, POLL_MS, SessionEnd};
 use module_core::settings::Settings as ModuleSettings;
 use radio_rfm22b::link::LinkRadio;
+use radio_rfm22b::openlrs::radio::Radio as OpenLrsRadio;
+use radio_rfm22b::openlrs::roles::tx_bind;
+use radio_rfm22b::openlrs::tx::Transmitter;
+use radio_rfm22b::openlrs::{Band as OpenLrsBand, BindingVersion};
 use radio_rfm22b::{Rfm22b, TxPower};
 use si4432_sim::{Medium, SimDelay, SimIrq, SimSdn, SimSpi};
 use telemetry::handset::crsf::channels::RcChannels;
@@ -66,19 +72,78 @@ const HM10_READ_BYTES: usize = 64;
 /// The module's RFM22B: SDN wired (the nRF52840 drives it).
 pub(crate) type ModuleRadio = LinkRadio<SimSpi, SimIrq, SimSdn, SimDelay>;
 
-/// The module's radio (its faults are injected through the world's chip handle).
+/// The module's radio (its faults are injected through the world's chip handle). The link
+/// task lends the driver's parts to the OpenLRSng roles while they run (as the firmware's
+/// does), so the slot is empty only inside such a step.
 pub(crate) struct ModuleChip {
-    pub(crate) radio: ModuleRadio,
+    pub(crate) radio: Option<ModuleRadio>,
+    power: TxPower,
 }
 
 impl ModuleChip {
     pub(crate) fn new(handle: si4432_sim::RadioHandle, tx_power: u8) -> Self {
+        let power = TxPower::from_step(tx_power);
         let radio = LinkRadio::new(
             Rfm22b::new(handle.spi, handle.nirq, handle.sdn, handle.delay),
-            TxPower::from_step(tx_power),
+            power,
         );
-        Self { radio }
+        Self {
+            radio: Some(radio),
+            power,
+        }
     }
+}
+
+/// The OpenLRSng steps (the firmware's `openlrs_step`): the driver's parts become an
+/// OpenLRSng radio for the step and go back after it.
+async fn openlrs_step(b: &Board, chip: &mut ModuleChip, step: LinkStep) -> Option<Action> {
+    let (LinkStep::RunOpenLrsTx(data) | LinkStep::BindOpenLrsTx { data, .. }) = step else {
+        return None;
+    };
+    let link = chip.radio.take()?;
+    let (spi, irq, sdn, chip_delay) = link.release().release();
+    let version = BindingVersion::from_byte(data.version).unwrap_or(BindingVersion::V39);
+    let band = data.band().unwrap_or(OpenLrsBand::Mhz433);
+    let clock = b.clock.clone();
+    let mut radio = OpenLrsRadio::new(spi, irq, chip_delay, move || clock.now_us(), version, band);
+    let action = match step {
+        LinkStep::BindOpenLrsTx { data, timeout_us } => {
+            let until = radio.now_us().saturating_add(timeout_us);
+            let accepted = keep_alive(b, tx_bind(&mut radio, &data, until)).await;
+            b.app
+                .borrow_mut()
+                .on_bind_outcome(BindOutcome::offered(accepted))
+        }
+        _ => {
+            let end = match Transmitter::new(data, radio.now_us()) {
+                Ok(tx) => {
+                    let mut tx = tx.with_stale_input_stop();
+                    let run = run_openlrs_transmitter(
+                        &mut radio,
+                        &mut tx,
+                        |tx| b.app.borrow_mut().on_openlrs_send(tx),
+                        |now_us, tx, events| {
+                            b.app
+                                .borrow_mut()
+                                .on_openlrs_step(now_us, b.now_ms(), tx, events)
+                        },
+                    );
+                    match select(run, poll_session(b)).await {
+                        Either::First(_) => SessionEnd::RadioFailed,
+                        Either::Second(end) => end,
+                    }
+                }
+                Err(_) => poll_session(b).await,
+            };
+            b.app.borrow_mut().on_session_end(end)
+        }
+    };
+    let (spi, irq, chip_delay, _) = radio.release();
+    chip.radio = Some(LinkRadio::new(
+        Rfm22b::new(spi, irq, sdn, chip_delay),
+        chip.power,
+    ));
+    action
 }
 
 type ModuleApp = App<AirLink, Handset>;
@@ -177,13 +242,24 @@ async fn run<E>(
 }
 
 /// The firmware's link task.
-async fn link_task(b: &Board, radio: &mut ModuleRadio, shared: &Shared, seed: u64) {
+async fn link_task(b: &Board, chip: &mut ModuleChip, shared: &Shared, seed: u64) {
     let mut rng = SplitMix64::new(seed ^ 0x4D0D);
     let mut clock = b.clock.clone();
     loop {
         b.check_in(Watched::Radio);
         let random = rng.next_u64() as u32;
         let step = b.app.borrow_mut().next_link_step(b.now_ms(), random);
+        if matches!(
+            step,
+            LinkStep::RunOpenLrsTx(_) | LinkStep::BindOpenLrsTx { .. }
+        ) {
+            let action = openlrs_step(b, chip, step).await;
+            carry_out(shared, action);
+            continue;
+        }
+        let Some(radio) = chip.radio.as_mut() else {
+            return;
+        };
         let action = match step {
             LinkStep::Probe => {
                 let present = radio.driver().reset().await.is_ok();
@@ -226,6 +302,7 @@ async fn link_task(b: &Board, radio: &mut ModuleRadio, shared: &Shared, seed: u6
                 let outcome = BindOutcome::listened(offer);
                 b.app.borrow_mut().on_bind_outcome(outcome)
             }
+            LinkStep::RunOpenLrsTx(_) | LinkStep::BindOpenLrsTx { .. } => None,
         };
         carry_out(shared, action);
     }
@@ -463,7 +540,7 @@ pub(crate) async fn module_board(
         };
         let tasks = join(
             join5(
-                link_task(&board, &mut chip.radio, &shared, seed),
+                link_task(&board, &mut chip, &shared, seed),
                 ppm_in_task(&board, &shared),
                 app_task(&board, &shared),
                 hm10_task(&board, &shared),

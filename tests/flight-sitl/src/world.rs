@@ -25,7 +25,8 @@ use flight_core::app::{FlightApp, ImuFault};
 use flight_core::battery::BatteryLevel;
 use flight_core::outputs::Command;
 use flight_core::pipeline::{
-    ChannelMap, ImuSample, LoopOutput, channel_for, from_settings, store_link, throttle_channel,
+    ChannelMap, ImuSample, LoopOutput, channel_for, from_settings, store_link, store_openlrs,
+    throttle_channel,
 };
 use flight_core::settings::Settings;
 use flight_core::sysid::ekf::Identification;
@@ -254,6 +255,15 @@ fn module_settings(s: &Scenario) -> module_core::settings::Settings {
             given.bind_id
         },
         rate: s.rate,
+        openlrs: module_core::settings::OpenLrsSettings {
+            // An OpenLRSng link of its own, as after the module's first bind.
+            hop_seed: if given.openlrs.hop_seed == 0 {
+                0x0A15_0000 | ((s.seed as u32) & 0xFFFF) | 1
+            } else {
+                given.openlrs.hop_seed
+            },
+            ..given.openlrs
+        },
         ..given
     }
 }
@@ -323,6 +333,10 @@ impl World {
         if let Some(link) = module_core::air::link_params(&module) {
             let link = bound_model.map_or(link, |m| link.for_model(m));
             let _ = store_link(&mut settings, &link);
+        }
+        // With the OpenLRSng protocol, the bind data the module's OpenLRSng bind would send.
+        if let Ok(data) = module_core::settings::openlrs::bind_data(&module) {
+            let _ = store_openlrs(&mut settings, &data);
         }
         let setup = from_settings(&settings).expect("settings make a flyable setup");
         let ts_s = f64::from(setup.loop_config.ts_s);

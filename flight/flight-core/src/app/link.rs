@@ -6,10 +6,16 @@
 //! of [`BIND_WINDOW_US`], and only a bind inside that window is stored. Nothing binds at
 //! boot, and no default link ID exists that every unbound controller would share.
 //!
+//! The air protocol is the setting `link.protocol`: `taulink` (factory), or `olrs38` /
+//! `olrs39` to obey an existing OpenLRSng transmitter (`super::openlrs`; OpenLRSng frames
+//! cannot be authenticated). The loop sees both the same way (`on_link_channels`).
+//!
 //! Watchdog: every hook call checks the link task in, whatever the slot length; the
 //! follower calls its hooks at least every 50 ms in every sync state, and the adapter
 //! checks in while it waits outside the follower (bind window, retry after a radio error).
 
+use radio_rfm22b::openlrs::BindData;
+use radio_rfm22b::openlrs::rx::Config as OpenLrsConfig;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::FollowerHooks;
 use telemetry::link::{Band, LinkParams};
@@ -18,7 +24,7 @@ use telemetry::messages::{
 };
 
 use super::{FlightApp, Task};
-use crate::pipeline::{ChannelMap, bind_band, store_link, stored_link};
+use crate::pipeline::{ChannelMap, Protocol, bind_band, protocol, store_link, stored_link};
 use crate::report::{LinkSeen, Reporter, Snapshot, apply_setting, setting_report, sysid_messages};
 use crate::supervisor::FlightMode;
 use crate::sysid::ekf::Identification;
@@ -44,12 +50,14 @@ pub(super) struct LinkSide {
     was_failsafe: bool,
     /// Identification results (roll, pitch, yaw) still to send.
     sysid: heapless::Deque<SysIdResult, 3>,
-    bind: BindState,
+    pub(super) bind: BindState,
+    /// The OpenLRSng side's state (channels, downlink bytes waiting for room).
+    pub(super) openlrs: super::openlrs::OpenLrsSide,
 }
 
 /// Where the explicit bind stands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum BindState {
+pub(super) enum BindState {
     /// No bind asked for: a bind result is ignored.
     Closed,
     /// The console asked; the link task has not opened the window yet.
@@ -73,6 +81,7 @@ impl LinkSide {
             was_failsafe: true,
             sysid: heapless::Deque::new(),
             bind: BindState::Closed,
+            openlrs: super::openlrs::OpenLrsSide::new(),
         }
     }
 
@@ -107,12 +116,33 @@ pub enum LinkStep {
     Follow(LinkParams),
     /// Never bound: run no link; wait (checking in) until a bind is asked for.
     WaitForBind,
+    /// `link.protocol` is OpenLRSng: listen for an OpenLRSng transmitter's bind packets for
+    /// `window_us` with a receiver that has no bind data (`Receiver::new(config, None)`),
+    /// answering at the bind power; then report with [`FlightApp::on_openlrs_bind_result`].
+    BindOpenLrs {
+        /// Binding version and band (the bind frequency).
+        config: OpenLrsConfig,
+        /// How long, µs.
+        window_us: u64,
+    },
+    /// `link.protocol` is OpenLRSng: run its receiver role on the stored bind data, feeding
+    /// the app with [`FlightApp::on_openlrs_step`] after every `rx_step`, until the radio
+    /// fails or a bind is asked for.
+    FollowOpenLrs {
+        /// Binding version, band, failsafe delay; no bind window at start.
+        config: OpenLrsConfig,
+        /// What the transmitter sent when binding.
+        data: BindData,
+    },
 }
 
 impl FlightApp {
     /// The link task's next step: a requested bind first, else the stored link, else
     /// nothing until the owner binds.
     pub fn next_link_step(&mut self) -> LinkStep {
+        if let Protocol::OpenLrs(version) = protocol(&self.live) {
+            return self.next_openlrs_step(version);
+        }
         if let Some((band, window_us)) = self.take_bind_request() {
             return LinkStep::Bind { band, window_us };
         }
@@ -191,34 +221,51 @@ impl FlightApp {
 
     /// The follower's hook, after every step (`now_us` on the link's clock).
     pub fn on_link_step(&mut self, now_us: u64, follower: &mut Follower) {
-        self.watchdog.check_in(Task::Link);
-        let failsafe = follower.in_failsafe();
-        if failsafe && !self.link.was_failsafe {
-            self.link.failsafes = self.link.failsafes.saturating_add(1);
-        }
-        self.link.was_failsafe = failsafe;
-        self.link_input = self.link.map.link_input(follower.output(), !failsafe);
+        self.on_link_channels(follower.output(), follower.in_failsafe());
         let mut buf = [0u8; 32];
         loop {
             let n = follower.uplink_stream.read(&mut buf);
             if n == 0 {
                 break;
             }
-            for b in buf.iter().take(n) {
-                if let Some(Decoded::Message(Message::SettingChange(c))) = self.link.reader.push(*b)
-                {
-                    self.apply_link_change(c);
-                }
+            self.on_uplink_bytes(buf.get(..n).unwrap_or_default());
+        }
+        if self.report_due(now_us) {
+            self.report(follower);
+        }
+    }
+
+    /// What every link protocol hands the loop after each step, the one interface the
+    /// flight logic sees: the channels (CRSF scale) and whether the link is in failsafe.
+    /// Checks the link task in and counts failsafe events.
+    pub(super) fn on_link_channels(&mut self, channels: &[u16], failsafe: bool) {
+        self.watchdog.check_in(Task::Link);
+        if failsafe && !self.link.was_failsafe {
+            self.link.failsafes = self.link.failsafes.saturating_add(1);
+        }
+        self.link.was_failsafe = failsafe;
+        self.link_input = self.link.map.link_input(channels, !failsafe);
+    }
+
+    /// Bytes of the module's message stream (setting changes).
+    pub(super) fn on_uplink_bytes(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            if let Some(Decoded::Message(Message::SettingChange(c))) = self.link.reader.push(*b) {
+                self.apply_link_change(c);
             }
         }
+    }
+
+    /// Whether a telemetry message is due at `now_us` (then the period restarts).
+    pub(super) fn report_due(&mut self, now_us: u64) -> bool {
         let due = self
             .link
             .last_report_us
             .is_none_or(|t| now_us.saturating_sub(t) >= REPORT_PERIOD_US);
         if due {
             self.link.last_report_us = Some(now_us);
-            self.report(follower);
         }
+        due
     }
 
     /// A setting change from the module: applied while disarmed; the resulting (or,
@@ -242,24 +289,39 @@ impl FlightApp {
         if stream.pending() > 0 || stream.free() < FRAMED_MAX_BYTES {
             return; // one message in flight at most: stale telemetry helps nobody
         }
-        let Some(out) = self.last_out else {
-            return;
-        };
         let counters = follower.counters();
+        let seen = LinkSeen {
+            rssi_dbm: follower
+                .uplink_rssi_dbm()
+                .map_or(0, |r| i8::try_from(r).unwrap_or(i8::MIN)),
+            lq_percent: follower.uplink_lq(),
+            downlink: follower.remote_report().map(|r| (r.rssi_dbm, r.lq_percent)),
+            rate_mode: follower.params().rate.code(),
+            received: counters.received,
+            missed: counters.missed,
+            failsafes: self.link.failsafes,
+        };
+        let mut buf = [0u8; FRAMED_MAX_BYTES];
+        if let Some(n) = self.next_report(seen, &mut buf) {
+            follower
+                .downlink_stream
+                .write(buf.get(..n).unwrap_or_default());
+        }
+    }
+
+    /// The next telemetry message, framed into `buf`, with `seen` as the link's figures:
+    /// a setting echo, then an identification result, then a state change out of turn,
+    /// else the rotation. `None` before the loop has run.
+    pub(super) fn next_report(
+        &mut self,
+        seen: LinkSeen,
+        buf: &mut [u8; FRAMED_MAX_BYTES],
+    ) -> Option<usize> {
+        let out = self.last_out?;
         let snap = Snapshot {
             out,
             battery: self.battery,
-            link: LinkSeen {
-                rssi_dbm: follower
-                    .uplink_rssi_dbm()
-                    .map_or(0, |r| i8::try_from(r).unwrap_or(i8::MIN)),
-                lq_percent: follower.uplink_lq(),
-                downlink: follower.remote_report().map(|r| (r.rssi_dbm, r.lq_percent)),
-                rate_mode: follower.params().rate.code(),
-                received: counters.received,
-                missed: counters.missed,
-                failsafes: self.link.failsafes,
-            },
+            link: seen,
             arming_blockers: self.arming_blockers(),
             sysid: self.link.sysid.front().copied(),
             altitude_m: self.baro_altitude_m(),
@@ -278,12 +340,7 @@ impl FlightApp {
         } else {
             self.link.reporter.next(&snap)
         };
-        let mut buf = [0u8; FRAMED_MAX_BYTES];
-        if let Ok(n) = encode_message(&message, &mut buf) {
-            follower
-                .downlink_stream
-                .write(buf.get(..n).unwrap_or_default());
-        }
+        encode_message(&message, buf).ok()
     }
 
     /// Link failsafe events since boot.

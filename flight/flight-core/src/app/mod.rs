@@ -8,13 +8,15 @@
 //! Owned here: the live and stored settings and the setup derived from them; the flight
 //! loop and its controllers; the IMU fault policy (`imu`); the baro climb rate; the
 //! battery monitor and the tone player; the link follower's hooks, bind handling and
-//! telemetry (`link`); the console's command language (`console`); the watchdog check-in
-//! policy (`watchdog`); the GPS port (`gps`: UBX bytes in, boot configuration out).
+//! telemetry (`link`), the same over OpenLRSng (`openlrs`); the console's command language
+//! (`console`); the watchdog check-in policy (`watchdog`); the GPS port (`gps`: UBX bytes in,
+//! boot configuration out).
 
 mod console;
 mod gps;
 mod imu;
 mod link;
+mod openlrs;
 mod watchdog;
 
 #[cfg(test)]
@@ -25,6 +27,9 @@ pub use imu::{
     CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
 };
 pub use link::{BIND_WINDOW_US, FAILSAFE_US, LinkStep, REPORT_PERIOD_US};
+pub use openlrs::{
+    OPENLRS_FAILSAFE_DELAY, OPENLRS_RATE_CODE_BASE, openlrs_bind_window, run_openlrs_receiver,
+};
 pub use watchdog::{FEED_PERIOD_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog};
 
 use crate::alerts::{Alert, TonePlayer};

@@ -7,7 +7,7 @@ use telemetry::link::{Band, LinkParams, RateMode};
 
 /// A level frame at rest; a tiny sample-dependent gyro wiggle like real sensor noise
 /// (bit-identical samples are the frozen-data fault).
-fn resting(i: u32) -> ImuSample {
+pub(super) fn resting(i: u32) -> ImuSample {
     let wiggle = (i % 13) as f32 * 1e-4;
     ImuSample {
         gyro_radps: [wiggle, -wiggle, 0.0],

@@ -1,7 +1,10 @@
 //! The bound link's parameters in the settings: written after an over-the-air bind so the
 //! flight controller finds its module again after a power cycle (the ≥ 32-bit bind ID and
-//! what the module offered with it).
+//! what the module offered with it), and the air protocol (`link.protocol`): TauLink, or
+//! OpenLRSng 3.8 / 3.9 with the bind data an OpenLRSng transmitter sent (`link.olrs_*`).
 
+use radio_rfm22b::openlrs::bind::{BindData, MAX_HOPS};
+use radio_rfm22b::openlrs::{Band as OlrsBand, BindingVersion};
 use telemetry::channels::ChannelFormat;
 use telemetry::link::{Band, LinkParams, RateMode};
 
@@ -69,6 +72,110 @@ pub fn store_link(s: &mut Settings, link: &LinkParams) -> Result<(), ParamError>
     ])
 }
 
+/// The air protocol the flight controller's link speaks (`link.protocol`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Protocol {
+    /// TauLink (the factory choice; authenticated bind).
+    TauLink,
+    /// OpenLRSng with this binding version (0x38 or 0x39); unauthenticated.
+    OpenLrs(BindingVersion),
+}
+
+/// The stored `link.protocol` (TauLink if out of range).
+pub fn protocol(s: &Settings) -> Protocol {
+    match s.u32("link.protocol") {
+        1 => Protocol::OpenLrs(BindingVersion::V38),
+        2 => Protocol::OpenLrs(BindingVersion::V39),
+        _ => Protocol::TauLink,
+    }
+}
+
+/// The OpenLRSng module variant for the stored `link.band` (the bind frequency).
+pub fn openlrs_band(s: &Settings) -> OlrsBand {
+    match bind_band(s) {
+        Band::Mhz868 => OlrsBand::Mhz868,
+        Band::Mhz915 => OlrsBand::Mhz915,
+        Band::Mhz433 | Band::Ism433 => OlrsBand::Mhz433,
+    }
+}
+
+const HOP_WORDS: [&str; MAX_HOPS / 4] = [
+    "link.olrs_hops_0",
+    "link.olrs_hops_1",
+    "link.olrs_hops_2",
+    "link.olrs_hops_3",
+    "link.olrs_hops_4",
+    "link.olrs_hops_5",
+];
+
+/// The stored OpenLRSng bind data, whether or not `link.protocol` selects it; `None` when
+/// never bound over OpenLRSng (magic 0) or when it would not run on this module's band
+/// (`BindData::validate_for`: profile, power, hops and carrier inside the band's range).
+pub fn stored_openlrs(s: &Settings, version: BindingVersion) -> Option<BindData> {
+    let magic = s.u32("link.olrs_magic");
+    if magic == 0 {
+        return None;
+    }
+    let mut data = BindData::defaults(version, openlrs_band(s));
+    data.rf_magic = magic;
+    data.rf_frequency_hz = s.u32("link.olrs_frequency_hz");
+    let [spacing, profile, flags, power] = s.u32("link.olrs_modem").to_le_bytes();
+    data.rf_channel_spacing = spacing;
+    data.modem_profile = profile;
+    data.flags = flags;
+    data.rf_power = power;
+    for (chunk, name) in data.hop_channels.chunks_mut(4).zip(HOP_WORDS) {
+        for (slot, byte) in chunk.iter_mut().zip(s.u32(name).to_le_bytes()) {
+            *slot = byte;
+        }
+    }
+    data.validate_for(openlrs_band(s)).ok()?;
+    Some(data)
+}
+
+/// Writes bind data an OpenLRSng transmitter sent into `s` (in RAM): all of it or nothing.
+/// The bytes OpenLRSng keeps for the RX's UART rate are not stored (the link never uses
+/// them); `data.to_bytes()` of the stored link therefore differs there only.
+pub fn store_openlrs(s: &mut Settings, data: &BindData) -> Result<(), ParamError> {
+    let mut changes: heapless::Vec<(&str, Value), 16> = heapless::Vec::new();
+    let mut push = |name: &'static str, v: u32| {
+        changes
+            .push((name, Value::U32(v)))
+            .map_err(|_| ParamError::OutOfRange)
+    };
+    push("link.olrs_magic", data.rf_magic)?;
+    push("link.olrs_frequency_hz", data.rf_frequency_hz)?;
+    push(
+        "link.olrs_modem",
+        u32::from_le_bytes([
+            data.rf_channel_spacing,
+            data.modem_profile,
+            data.flags,
+            data.rf_power,
+        ]),
+    )?;
+    for (chunk, name) in data.hop_channels.chunks(4).zip(HOP_WORDS) {
+        let mut word = [0u8; 4];
+        for (slot, byte) in word.iter_mut().zip(chunk) {
+            *slot = *byte;
+        }
+        push(name, u32::from_le_bytes(word))?;
+    }
+    s.set_many(&changes)
+}
+
+/// The whole-set check of the OpenLRSng link: once bound over OpenLRSng and selected, the
+/// stored bind data must run on the band.
+pub fn openlrs_valid(s: &Settings) -> bool {
+    match protocol(s) {
+        Protocol::TauLink => true,
+        Protocol::OpenLrs(version) => {
+            s.u32("link.olrs_magic") == 0 || stored_openlrs(s, version).is_some()
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -104,5 +211,41 @@ mod tests {
         };
         assert!(store_link(&mut s, &three).is_err());
         assert_eq!(stored_link(&s), Some(link), "the old link, whole");
+    }
+
+    #[test]
+    fn openlrs_bind_data_round_trips_and_defaults_are_openlrsngs() {
+        let mut s = Settings::default();
+        assert_eq!(protocol(&s), Protocol::TauLink);
+        assert_eq!(stored_openlrs(&s, BindingVersion::V39), None, "never bound");
+        // The factory rows are OpenLRSng's bindInitDefaults() (magic aside: 0 = unbound).
+        s.set("link.olrs_magic", Value::U32(0xDEAD_FEED)).unwrap();
+        assert_eq!(
+            stored_openlrs(&s, BindingVersion::V38),
+            Some(BindData::defaults(BindingVersion::V38, OlrsBand::Mhz433))
+        );
+        let mut data = BindData::defaults(BindingVersion::V39, OlrsBand::Mhz868);
+        data.rf_magic = 0x1234_5678;
+        data.rf_frequency_hz = 866_000_000;
+        data.modem_profile = 4;
+        data.flags = 0x06 | 0x18;
+        data.hop_channels = [0; MAX_HOPS];
+        for (i, slot) in data.hop_channels.iter_mut().take(23).enumerate() {
+            *slot = i as u8 * 3 + 1;
+        }
+        s.set_text("link.band", "868").unwrap();
+        store_openlrs(&mut s, &data).unwrap();
+        s.set_text("link.protocol", "olrs39").unwrap();
+        assert_eq!(protocol(&s), Protocol::OpenLrs(BindingVersion::V39));
+        assert_eq!(stored_openlrs(&s, BindingVersion::V39), Some(data));
+        assert_eq!(data.to_bytes()[0], 0x39);
+        // A carrier of the other band cannot be stored while that data is selected.
+        let mut wrong = data;
+        wrong.rf_frequency_hz = 435_000_000;
+        let before = s.clone();
+        assert!(store_openlrs(&mut s, &wrong).is_err());
+        assert_eq!(s, before, "nothing of it stored");
+        // Nor can the band change under it.
+        assert!(s.set_text("link.band", "433").is_err());
     }
 }

@@ -34,7 +34,10 @@ pub use hold::{
     Hold, Horizontal, LOITER_SPEED_MPS, MAX_CLIMB_MPS, MAX_SPEED_MPS, MAX_TILT_DEG, Nav,
     STICK_DEADBAND,
 };
-pub use link::{bind_band, store_link, stored_link};
+pub use link::{
+    Protocol, bind_band, openlrs_band, protocol, store_link, store_openlrs, stored_link,
+    stored_openlrs,
+};
 pub use setup::{FlightSetup, SetupError, from_settings};
 pub use sticks::StickShaping;
 pub use validate::{InvalidSettings, validate};

@@ -7,7 +7,7 @@
 
 use telemetry::frame::valid_telemetry_ratio;
 
-use super::link::stored_link;
+use super::link::{openlrs_valid, stored_link};
 use super::setup::{FlightSetup, SetupError, from_settings};
 use crate::board::MOTOR_TIMER_CLOCKS;
 use crate::outputs::OutputError;
@@ -32,7 +32,9 @@ impl core::fmt::Display for InvalidSettings {
         match self {
             InvalidSettings::Setup(e) => write!(f, "{e}"),
             InvalidSettings::Output(e) => write!(f, "outputs: {e}"),
-            InvalidSettings::Link => f.write_str("link: telemetry ratio must be 2, 4, … 128"),
+            InvalidSettings::Link => f.write_str(
+                "link: telemetry ratio must be 2, 4, … 128, OpenLRSng bind data in band",
+            ),
         }
     }
 }
@@ -54,6 +56,9 @@ pub fn validate(s: &Settings) -> Result<FlightSetup, InvalidSettings> {
         return Err(InvalidSettings::Link);
     }
     if s.u32("link.bind_id") != 0 && stored_link(s).is_none() {
+        return Err(InvalidSettings::Link);
+    }
+    if !openlrs_valid(s) {
         return Err(InvalidSettings::Link);
     }
     Ok(setup)

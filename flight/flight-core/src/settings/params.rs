@@ -141,6 +141,9 @@ pub const BANDS: Choice = &["433", "868", "915"];
 pub const RATES: Choice = &["l50", "m100", "f250", "f500"];
 /// Uplink channel formats (`telemetry::channels::ChannelFormat`).
 pub const CHANNEL_FORMATS: Choice = &["16", "8"];
+/// Air protocols (`link.protocol`): TauLink, OpenLRSng 3.8, OpenLRSng 3.9. OpenLRSng frames
+/// carry no authentication.
+pub const PROTOCOLS: Choice = &["taulink", "olrs38", "olrs39"];
 /// Arming at a critical battery: refused (factory) or allowed.
 pub const ARM_ON_CRITICAL: Choice = &["refuse", "allow"];
 /// Gyro loop rates.
@@ -217,6 +220,28 @@ pub const PARAMS: &[Param] = &[
     u(609, "arm.max_us", 800, 2_200, 2_100),
     // estimation (8xx). Factory: the complementary filter, as flown before the INS did.
     c(800, "ins.mode", INS_MODES, 0),
+    // The air protocol and the OpenLRSng bind data (7xx, appended): `link.olrs_*` are what
+    // an OpenLRSng transmitter sent in its bind packet, with OpenLRSng's factory values
+    // (`bindInitDefaults()`) as defaults; magic 0 = never bound over OpenLRSng. Packed so
+    // the flash record grows little: `olrs_modem` is channel spacing (10 kHz units), modem
+    // profile, flags and power code, one byte each from the low end; hop channels travel
+    // four to a word, first in the low byte (`pipeline::stored_openlrs` checks them all).
+    c(705, "link.protocol", PROTOCOLS, 0),
+    u(706, "link.olrs_magic", 0, u32::MAX, 0),
+    u(
+        707,
+        "link.olrs_frequency_hz",
+        413_000_000,
+        935_000_000,
+        435_000_000,
+    ),
+    u(708, "link.olrs_modem", 0, u32::MAX, 0x070A_0205),
+    u(709, "link.olrs_hops_0", 0, u32::MAX, 0x2213_0A16),
+    u(710, "link.olrs_hops_1", 0, u32::MAX, 0x0000_2931),
+    u(711, "link.olrs_hops_2", 0, u32::MAX, 0),
+    u(712, "link.olrs_hops_3", 0, u32::MAX, 0),
+    u(713, "link.olrs_hops_4", 0, u32::MAX, 0),
+    u(714, "link.olrs_hops_5", 0, u32::MAX, 0),
 ];
 
 /// Number of parameters.

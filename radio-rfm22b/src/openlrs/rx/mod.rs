@@ -160,6 +160,11 @@ impl Receiver {
         self.downlink.queue_serial(data)
     }
 
+    /// Bytes [`Receiver::queue_serial`] still takes whole.
+    pub fn serial_free(&self) -> usize {
+        self.downlink.serial_free()
+    }
+
     /// When [`Receiver::poll`] next has something to do.
     pub fn next_deadline_us(&self) -> Option<u64> {
         match self.mode {

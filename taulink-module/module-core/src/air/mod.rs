@@ -13,6 +13,7 @@
 //! Records travel in the link's telemetry stream as `telemetry::framing` frames
 //! (`crate::records`); a record that does not fit the stream now waits in a bounded queue.
 
+pub mod openlrs;
 pub mod radio;
 
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat};
@@ -97,6 +98,10 @@ pub struct AirLink {
     bind_requested: bool,
     follower_updates: u32,
     rejected_records: u32,
+    /// OpenLRSng: when the last downlink frame arrived.
+    last_downlink_us: Option<u64>,
+    /// OpenLRSng: the receiver's last link report (RSSI dBm, LQ %).
+    openlrs_remote: Option<(i16, u8)>,
 }
 
 impl Default for AirLink {
@@ -132,6 +137,8 @@ impl AirLink {
             bind_requested: false,
             follower_updates: 0,
             rejected_records: 0,
+            last_downlink_us: None,
+            openlrs_remote: None,
         }
     }
 
@@ -316,6 +323,8 @@ impl LinkPort for AirLink {
             ..LinkStats::default()
         };
         self.received_channels = None;
+        self.last_downlink_us = None;
+        self.openlrs_remote = None;
     }
 
     fn take_received_record(&mut self, out: &mut [u8]) -> Option<usize> {

@@ -4,7 +4,7 @@
 //! a single sequential-storage item write: after a power cut the map holds either the old
 //! or the new record (the item CRC rejects a torn write), never a mix of fields.
 //!
-//! Record layout (version 3, 15 bytes; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd,
+//! Record layout (version 3, 15 bytes, and versions 4 and 5 below; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd,
 //! 3 CRSF 921 600 Bd;
 //! failsafe 0 hold last, 1 stop pulses; rate = `telemetry::link::RateMode::code`):
 //! `[3, role, rate, input, output, band, tx_power, failsafe, bind_id (u32 LE),
@@ -18,14 +18,21 @@
 //! 9600 and 19 200 bit/s → L50, 57 600 → M100, 125 000 → F250); a missing field takes its
 //! default. Every byte is checked on decode; an unknown value is an error, never a guess.
 //!
-//! Version 4 (24 bytes) appends model match (spec §12.5): `[…version 3 fields, model_match
+//! Version 4 (24 bytes) appends model match (spec §12.6): `[…version 3 fields, model_match
 //! (0 off, 1 on), bound_models (u64 LE: bit m set = a receiver was bound under radio model
-//! m)]`; older records load with model match off and no models bound. A later field (the
-//! binding phrase) goes after `bound_models`.
+//! m)]`; older records load with model match off and no models bound.
+//!
+//! Version 5 (36 bytes) appends the link protocol and the OpenLRSng bind parameters
+//! (`settings::openlrs`): `[.. version 4 fields .., protocol (0 TauLink, 1 OpenLRSng 3.8,
+//! 2 OpenLRSng 3.9), olrs_profile, olrs_channel_mode, olrs_telemetry, olrs_frequency_hz
+//! (u32 LE, 0 = band default), olrs_hop_seed (u32 LE)]`. Older records load as TauLink with
+//! OpenLRSng's factory parameters.
 
+pub mod openlrs;
 pub mod store;
 pub mod text;
 
+pub use openlrs::{LinkProtocol, OpenLrsError, OpenLrsSettings};
 pub use store::{SettingsStore, StoreError};
 pub use text::TextError;
 
@@ -143,7 +150,7 @@ pub struct Settings {
     /// One link slot in this many is a downlink (telemetry) slot: a power of two,
     /// [`TELEMETRY_RATIOS`].
     pub telemetry_ratio: u8,
-    /// Model match (ExpressLRS-style, spec §12.5): the link's identity is mixed with the
+    /// Model match (ExpressLRS-style, spec §12.6): the link's identity is mixed with the
     /// model ID the radio selects (CRSF model select), so a receiver bound under one model
     /// never flies from another; off, every model flies the receivers bound without it.
     pub model_match: bool,
@@ -151,6 +158,10 @@ pub struct Settings {
     /// since the bind ID last changed: the handset's "Model" row says "mismatch" for any
     /// other.
     pub bound_models: u64,
+    /// The air protocol: TauLink (factory) or OpenLRSng 3.8 / 3.9 (unauthenticated).
+    pub protocol: LinkProtocol,
+    /// The OpenLRSng transmitter's bind parameters (used when `protocol` is OpenLRSng).
+    pub openlrs: OpenLrsSettings,
 }
 
 /// Radio model IDs model match keeps track of (EdgeTX's receiver numbers 0…63).
@@ -191,14 +202,18 @@ impl Default for Settings {
             telemetry_ratio: DEFAULT_TELEMETRY_RATIO,
             model_match: false,
             bound_models: 0,
+            protocol: LinkProtocol::TauLink,
+            openlrs: OpenLrsSettings::default(),
         }
     }
 }
 
 /// Current record version.
-pub const RECORD_VERSION: u8 = 4;
+pub const RECORD_VERSION: u8 = 5;
 /// Record length of the current version.
-pub const RECORD_LEN: usize = 24;
+pub const RECORD_LEN: usize = 36;
+/// Record length of version 4 (model match, no link protocol).
+pub const RECORD_V4_LEN: usize = 24;
 /// Record length of version 3 (no model match).
 pub const RECORD_V3_LEN: usize = 15;
 /// Record length of version 2 (bit-rate codes, no telemetry ratio).
@@ -240,11 +255,13 @@ impl core::fmt::Display for DecodeError {
 impl core::error::Error for DecodeError {}
 
 impl Settings {
-    /// The current (version 4) record.
+    /// The current (version 5) record.
     pub fn to_record(&self) -> [u8; RECORD_LEN] {
         let [b0, b1, b2, b3] = self.bind_id.to_le_bytes();
         let [t0, t1] = self.input_timeout_ms.to_le_bytes();
         let [m0, m1, m2, m3, m4, m5, m6, m7] = self.bound_models.to_le_bytes();
+        let [f0, f1, f2, f3] = self.openlrs.frequency_hz.to_le_bytes();
+        let [s0, s1, s2, s3] = self.openlrs.hop_seed.to_le_bytes();
         [
             RECORD_VERSION,
             self.role as u8,
@@ -270,10 +287,22 @@ impl Settings {
             m5,
             m6,
             m7,
+            self.protocol.code(),
+            self.openlrs.profile,
+            self.openlrs.channel_mode,
+            u8::from(self.openlrs.telemetry),
+            f0,
+            f1,
+            f2,
+            f3,
+            s0,
+            s1,
+            s2,
+            s3,
         ]
     }
 
-    /// Parses a record of version 1, 2, 3 or 4; every field is range-checked.
+    /// Parses a record of version 1 … 5; every field is range-checked.
     pub fn from_record(record: &[u8]) -> Result<Self, DecodeError> {
         let Some(&version) = record.first() else {
             return Err(DecodeError::Length { found: 0 });
@@ -285,6 +314,7 @@ impl Settings {
             1 => RECORD_V1_LEN,
             2 => RECORD_V2_LEN,
             3 => RECORD_V3_LEN,
+            4 => RECORD_V4_LEN,
             RECORD_VERSION => RECORD_LEN,
             found => return Err(DecodeError::Version { found }),
         };
@@ -306,6 +336,9 @@ impl Settings {
             }
             _ => DEFAULT_INPUT_TIMEOUT_MS,
         };
+        let (rest, tail) = rest.split_at(rest.len().min(RECORD_V3_LEN - RECORD_V1_LEN));
+        let (models, link) = tail.split_at(tail.len().min(RECORD_V4_LEN - RECORD_V3_LEN));
+        let (protocol, openlrs) = decode_link(link)?;
         let telemetry_ratio = match rest {
             [_, _, ratio, ..] if TELEMETRY_RATIOS.contains(ratio) => *ratio,
             [_, _, _, ..] => {
@@ -315,17 +348,17 @@ impl Settings {
             }
             _ => DEFAULT_TELEMETRY_RATIO,
         };
-        let (model_match, bound_models) = match rest {
-            [_, _, _, on @ (0 | 1), models @ ..] => {
+        let (model_match, bound_models) = match models {
+            [on @ (0 | 1), models @ ..] => {
                 let models: [u8; 8] = models.try_into().map_err(|_| wrong_length)?;
                 (*on == 1, u64::from_le_bytes(models))
             }
-            [_, _, _, _, ..] => {
+            [_, ..] => {
                 return Err(DecodeError::Field {
                     offset: RECORD_V3_LEN,
                 });
             }
-            _ => (false, 0),
+            [] => (false, 0),
         };
         // Rate codes, the fastest CRSF input and the ISM plan are version 3's vocabulary.
         let current = version >= 3;
@@ -392,8 +425,65 @@ impl Settings {
             telemetry_ratio,
             model_match,
             bound_models,
+            protocol,
+            openlrs,
         })
     }
+
+    /// Whether the whole set runs (`openlrs::check`: an OpenLRSng link's carrier and hops
+    /// inside the band plan, transmitter role). Every settings path checks it before a
+    /// change sticks.
+    pub fn validate(&self) -> Result<(), OpenLrsError> {
+        openlrs::check(self)
+    }
+}
+
+/// The version-5 tail (empty for older records: TauLink, OpenLRSng factory parameters).
+fn decode_link(link: &[u8]) -> Result<(LinkProtocol, OpenLrsSettings), DecodeError> {
+    let [
+        protocol,
+        profile,
+        mode,
+        telemetry,
+        f0,
+        f1,
+        f2,
+        f3,
+        s0,
+        s1,
+        s2,
+        s3,
+    ] = *link
+    else {
+        return Ok((LinkProtocol::TauLink, OpenLrsSettings::default()));
+    };
+    let field = |offset: usize| DecodeError::Field { offset };
+    let protocol = LinkProtocol::from_code(protocol).ok_or(field(RECORD_V4_LEN))?;
+    if profile >= radio_rfm22b::openlrs::bind::MODEM_PROFILE_COUNT {
+        return Err(field(RECORD_V4_LEN + 1));
+    }
+    if !openlrs::CHANNEL_MODES.contains(&mode) {
+        return Err(field(RECORD_V4_LEN + 2));
+    }
+    let telemetry = match telemetry {
+        0 => false,
+        1 => true,
+        _ => return Err(field(RECORD_V4_LEN + 3)),
+    };
+    let frequency_hz = u32::from_le_bytes([f0, f1, f2, f3]);
+    if !openlrs::carrier_in_range(frequency_hz) {
+        return Err(field(RECORD_V4_LEN + 4));
+    }
+    Ok((
+        protocol,
+        OpenLrsSettings {
+            frequency_hz,
+            profile,
+            channel_mode: mode,
+            telemetry,
+            hop_seed: u32::from_le_bytes([s0, s1, s2, s3]),
+        },
+    ))
 }
 
 #[cfg(test)]
@@ -415,13 +505,21 @@ mod tests {
             telemetry_ratio: 16,
             model_match: true,
             bound_models: (1 << 63) | (1 << 3),
+            protocol: LinkProtocol::OpenLrs39,
+            openlrs: OpenLrsSettings {
+                frequency_hz: 0x3456_7890,
+                profile: 4,
+                channel_mode: 6,
+                telemetry: false,
+                hop_seed: 0xCAFE_F00D,
+            },
         };
         let record = settings.to_record();
         assert_eq!(
             record,
             [
-                4, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16, 1, 0x08, 0, 0, 0,
-                0, 0, 0, 0x80
+                5, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16, 1, 0x08, 0, 0, 0,
+                0, 0, 0, 0x80, 2, 4, 6, 0, 0x90, 0x78, 0x56, 0x34, 0x0D, 0xF0, 0xFE, 0xCA
             ]
         );
         assert!(settings.model_bound(3) && settings.model_bound(63));
@@ -459,8 +557,12 @@ mod tests {
             Err(DecodeError::Length { found: 0 })
         );
         assert_eq!(
+            Settings::from_record(&[6; 36]),
+            Err(DecodeError::Version { found: 6 })
+        );
+        assert_eq!(
             Settings::from_record(&[5; 24]),
-            Err(DecodeError::Version { found: 5 })
+            Err(DecodeError::Length { found: 24 })
         );
         assert_eq!(
             Settings::from_record(&[4; 15]),
@@ -528,6 +630,44 @@ mod tests {
                     Err(DecodeError::Field { offset: 14 })
                 }
             );
+        }
+    }
+
+    #[test]
+    fn version_3_records_load_as_taulink_and_the_link_tail_is_checked() {
+        // A version-3 record as the previous firmware wrote it.
+        let v3 = [
+            3, 0, 3, 1, 2, 1, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16,
+        ];
+        let settings = Settings::from_record(&v3).unwrap();
+        assert_eq!(settings.protocol, LinkProtocol::TauLink);
+        assert_eq!(settings.openlrs, OpenLrsSettings::default());
+        assert_eq!(
+            (settings.rate, settings.band),
+            (RateMode::F500, Band::Mhz868)
+        );
+        // Re-saved, every version-3 field keeps its byte.
+        assert_eq!(settings.to_record()[1..RECORD_V3_LEN], v3[1..]);
+        let mut record = Settings {
+            protocol: LinkProtocol::OpenLrs38,
+            ..Settings::default()
+        }
+        .to_record();
+        assert_eq!(record[RECORD_V4_LEN..RECORD_V4_LEN + 4], [1, 2, 2, 1]);
+        for (offset, bad) in [(24, 3u8), (25, 5), (26, 0), (26, 7), (27, 2)] {
+            let mut r = record;
+            r[offset] = bad;
+            assert_eq!(
+                Settings::from_record(&r),
+                Err(DecodeError::Field { offset }),
+                "byte {offset} = {bad}"
+            );
+        }
+        // A carrier outside every OpenLRSng module range (1 GHz) is refused; 0 (band
+        // default) and 868 MHz load.
+        for (hz, ok) in [(1_000_000_000u32, false), (0, true), (868_000_000, true)] {
+            record[28..32].copy_from_slice(&hz.to_le_bytes());
+            assert_eq!(Settings::from_record(&record).is_ok(), ok, "{hz}");
         }
     }
 

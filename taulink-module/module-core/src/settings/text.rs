@@ -1,16 +1,19 @@
 //! Settings by name and text (`rate=M100`, `input_timeout_ms=750`): the one place that maps
 //! the words a person types (a host tool's `--module-set`, a console) onto [`Settings`]
 //! fields, with the same ranges the record decoder enforces, so nothing typed can make a
-//! set the module would refuse to load.
+//! set the module would refuse to load. A value that leaves the whole set unusable
+//! ([`Settings::validate`]: an OpenLRSng carrier or hop outside the band plan) is refused
+//! too, except while several values are typed together (see [`Settings::set_text`]).
 
+use super::openlrs::CHANNEL_MODES;
 use super::{
-    Band, INPUT_TIMEOUT_MS, InputProtocol, OutputProtocol, RateMode, Role, Settings,
+    Band, INPUT_TIMEOUT_MS, InputProtocol, LinkProtocol, OutputProtocol, RateMode, Role, Settings,
     TELEMETRY_RATIOS,
 };
 use crate::ppm::FailsafeOutput;
 
 /// Every setting name, in record order.
-pub const NAMES: [&str; 11] = [
+pub const NAMES: [&str; 17] = [
     "role",
     "rate",
     "input",
@@ -22,6 +25,12 @@ pub const NAMES: [&str; 11] = [
     "input_timeout_ms",
     "telemetry_ratio",
     "model_match",
+    "protocol",
+    "olrs_profile",
+    "olrs_channels",
+    "olrs_telemetry",
+    "olrs_frequency_hz",
+    "olrs_hop_seed",
 ];
 
 /// Why a typed setting was refused (nothing changed).
@@ -34,6 +43,9 @@ pub enum TextError {
     Unparsable,
     /// A number outside the setting's range.
     OutOfRange,
+    /// The value is fine alone, but the set would not run (an OpenLRSng carrier or hop
+    /// outside the band plan, OpenLRSng in the receiver role).
+    Invalid,
 }
 
 impl core::fmt::Display for TextError {
@@ -42,6 +54,7 @@ impl core::fmt::Display for TextError {
             Self::Unknown => "no such module setting",
             Self::Unparsable => "cannot read that value",
             Self::OutOfRange => "value out of range",
+            Self::Invalid => "refused: the OpenLRSng link would leave the band plan",
         })
     }
 }
@@ -58,6 +71,10 @@ pub fn choices(name: &str) -> &'static [&'static str] {
         "band" => &["433", "868", "915", "ism433"],
         "failsafe" => &["hold_last", "stop_pulses"],
         "model_match" => &["off", "on"],
+        "protocol" => &["taulink", "openlrs38", "openlrs39"],
+        "olrs_profile" => &["4800", "9600", "19200", "57600", "125000"],
+        "olrs_channels" => &["4+4", "8", "8+4", "12", "12+4", "16"],
+        "olrs_telemetry" => &["off", "on"],
         _ => &[],
     }
 }
@@ -88,8 +105,23 @@ fn number(text: &str, range: core::ops::RangeInclusive<u32>) -> Result<u32, Text
 impl Settings {
     /// Sets the field `name` (one of [`NAMES`]) from `text`; on an error nothing changes.
     /// Rates are the link's rate modes (`L50`, `M100`, `F250`, `F500`); the telemetry ratio
-    /// one of [`TELEMETRY_RATIOS`].
+    /// one of [`TELEMETRY_RATIOS`]. A change after which the set would not run
+    /// ([`Settings::validate`]) is refused with [`TextError::Invalid`]; to change the band
+    /// and the OpenLRSng carrier together, use [`Settings::set_text_unchecked`] for each and
+    /// [`Settings::validate`] once.
     pub fn set_text(&mut self, name: &str, text: &str) -> Result<(), TextError> {
+        let mut candidate = *self;
+        candidate.set_text_unchecked(name, text)?;
+        // Only a change that breaks a usable set is refused (a damaged one stays editable).
+        if candidate.validate().is_err() && self.validate().is_ok() {
+            return Err(TextError::Invalid);
+        }
+        *self = candidate;
+        Ok(())
+    }
+
+    /// [`Settings::set_text`] without the whole-set check (ranges still apply).
+    pub fn set_text_unchecked(&mut self, name: &str, text: &str) -> Result<(), TextError> {
         let text = text.trim();
         let words = choices(name);
         match name {
@@ -159,6 +191,34 @@ impl Settings {
                     .ok_or(TextError::OutOfRange)?;
             }
             "model_match" => self.model_match = choice(text, words)? == 1,
+            "protocol" => {
+                self.protocol = [
+                    LinkProtocol::TauLink,
+                    LinkProtocol::OpenLrs38,
+                    LinkProtocol::OpenLrs39,
+                ]
+                .get(choice(text, words)?)
+                .copied()
+                .ok_or(TextError::Unparsable)?;
+            }
+            "olrs_profile" => {
+                self.openlrs.profile =
+                    u8::try_from(choice(text, words)?).map_err(|_| TextError::Unparsable)?;
+            }
+            "olrs_channels" => {
+                let index =
+                    u8::try_from(choice(text, words)?).map_err(|_| TextError::Unparsable)?;
+                self.openlrs.channel_mode = CHANNEL_MODES.start() + index;
+            }
+            "olrs_telemetry" => self.openlrs.telemetry = choice(text, words)? == 1,
+            "olrs_frequency_hz" => {
+                let hz = number(text, 0..=u32::MAX)?;
+                if !super::openlrs::carrier_in_range(hz) {
+                    return Err(TextError::OutOfRange);
+                }
+                self.openlrs.frequency_hz = hz;
+            }
+            "olrs_hop_seed" => self.openlrs.hop_seed = number(text, 0..=u32::MAX)?,
             _ => return Err(TextError::Unknown),
         }
         Ok(())
@@ -177,24 +237,32 @@ mod tests {
             ("rate", "m100"),
             ("input", "crsf921600"),
             ("output", "frsky_hub"),
-            ("band", "ism433"),
+            ("band", "868"),
             ("tx_power", "3"),
             ("failsafe", "hold_last"),
             ("bind_id", "0xDEADBEEF"),
             ("input_timeout_ms", "750"),
             ("telemetry_ratio", "16"),
             ("model_match", "On"),
+            ("olrs_profile", "125000"),
+            ("olrs_channels", "16"),
+            ("olrs_telemetry", "off"),
+            ("olrs_frequency_hz", "866000000"),
+            ("olrs_hop_seed", "77"),
+            // Last: OpenLRSng runs in the transmitter role only.
+            ("role", "transmitter"),
+            ("protocol", "OpenLRS39"),
         ] {
             s.set_text(name, text).unwrap();
         }
         assert_eq!(
             s,
             Settings {
-                role: Role::Receiver,
+                role: Role::Transmitter,
                 rate: RateMode::M100,
                 input: InputProtocol::Crsf921600,
                 output: OutputProtocol::FrskyHub,
-                band: Band::Ism433,
+                band: Band::Mhz868,
                 tx_power: 3,
                 failsafe: FailsafeOutput::HoldLast,
                 bind_id: 0xDEAD_BEEF,
@@ -202,8 +270,17 @@ mod tests {
                 telemetry_ratio: 16,
                 model_match: true,
                 bound_models: 0,
+                protocol: LinkProtocol::OpenLrs39,
+                openlrs: super::super::OpenLrsSettings {
+                    frequency_hz: 866_000_000,
+                    profile: 4,
+                    channel_mode: 6,
+                    telemetry: false,
+                    hop_seed: 77,
+                },
             }
         );
+        assert!(s.validate().is_ok());
         assert_eq!(Settings::from_record(&s.to_record()), Ok(s));
         assert!(NAMES.iter().all(|n| s.clone().set_text(n, "?").is_err()));
     }
@@ -221,10 +298,35 @@ mod tests {
             ("input_timeout_ms", "99", TextError::OutOfRange),
             ("input_timeout_ms", "2001", TextError::OutOfRange),
             ("bind_id", "4294967296", TextError::Unparsable),
+            ("protocol", "openlrs", TextError::Unparsable),
+            ("olrs_channels", "20", TextError::Unparsable),
+            ("olrs_frequency_hz", "1000000000", TextError::OutOfRange),
         ];
         for (name, text, error) in cases {
             assert_eq!(s.set_text(name, text), Err(error), "{name}={text}");
             assert_eq!(s, Settings::default());
         }
+        // OpenLRSng on the EU plan needs an 868 MHz carrier: typed one by one, the band
+        // change alone is refused; typed together and checked once, it is taken.
+        let mut s = Settings {
+            protocol: LinkProtocol::OpenLrs38,
+            ..Settings::default()
+        };
+        assert_eq!(
+            s.set_text("olrs_frequency_hz", "868000000"),
+            Err(TextError::Invalid)
+        );
+        // Inside OpenLRSng's 433 module range, outside the amateur band plan.
+        assert_eq!(
+            s.set_text("olrs_frequency_hz", "420000000"),
+            Err(TextError::Invalid)
+        );
+        assert_eq!(s.openlrs.frequency_hz, 0);
+        let mut both = s;
+        both.set_text_unchecked("band", "868").unwrap();
+        both.set_text_unchecked("olrs_frequency_hz", "0").unwrap();
+        assert!(both.validate().is_ok());
+        assert_eq!(s.set_text("role", "receiver"), Err(TextError::Invalid));
+        assert_eq!(s.role, Role::Transmitter);
     }
 }

@@ -24,6 +24,15 @@ pub const MAX_INPUT_FAILSAFE_S: f64 = 1.0;
 pub fn link_cuts(rate: RateMode, altitudes_m: &[f64]) -> Result<Vec<Outcome>, RunError> {
     let mut opts = Options::factory();
     opts.rate = rate;
+    link_cuts_with(&opts, altitudes_m)
+}
+
+/// [`link_cuts`] with any options (another link protocol, module settings).
+///
+/// # Errors
+/// As [`super::run_kind`].
+pub fn link_cuts_with(opts: &Options, altitudes_m: &[f64]) -> Result<Vec<Outcome>, RunError> {
+    let opts = opts.clone();
     let reach = reach_times(&opts, altitudes_m)?;
     altitudes_m
         .iter()

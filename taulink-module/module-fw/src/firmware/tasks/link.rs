@@ -1,13 +1,26 @@
 //! Owns the RFM22B and carries out the module core's link steps (`module_core::session`):
-//! probe the chip, run the master or follower loop with the core as its hook, bind. What to
-//! do next, when to stop and what a bind means are the core's decisions.
+//! probe the chip, run the master or follower loop with the core as its hook, bind — or,
+//! with the OpenLRSng protocol, the core's OpenLRSng transmitter loop
+//! (`module_core::air::openlrs::run_openlrs_transmitter`) and OpenLRSng's bind, the driver's
+//! parts lent to an OpenLRSng radio for the step. What to do next, when to stop and what a
+//! bind means are the core's decisions.
 
+use embassy_futures::select::{Either, select};
 use embassy_nrf::rng::Rng;
-use embassy_time::{Delay, Timer};
+use embassy_time::{Delay, Instant, Timer};
+use embedded_hal::digital::OutputPin;
+use embedded_hal_async::digital::Wait;
+use embedded_hal_async::spi::SpiDevice;
 use embedded_hal_bus::spi::ExclusiveDevice;
+use module_core::air::openlrs::run_openlrs_transmitter;
 use module_core::air::radio::LinkRadio;
-use module_core::session::{BindOutcome, LinkStep, POLL_MS};
+use module_core::app::Action;
+use module_core::session::{BindOutcome, LinkStep, POLL_MS, SessionEnd};
 use module_core::settings::Settings;
+use radio_rfm22b::openlrs::radio::Radio as OpenLrsRadio;
+use radio_rfm22b::openlrs::roles::tx_bind;
+use radio_rfm22b::openlrs::tx::Transmitter;
+use radio_rfm22b::openlrs::{Band as OpenLrsBand, BindingVersion};
 use radio_rfm22b::{Rfm22b, TxPower};
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{bind_follower, run_follower};
@@ -23,13 +36,25 @@ pub async fn link_task(radio: Radio, boot_settings: Settings) {
     let Ok(device) = ExclusiveDevice::new_no_delay(radio.spim, radio.nsel);
     let mut rng = Rng::new_blocking(radio.rng);
     let power = TxPower::from_step(boot_settings.tx_power);
-    let mut chip = LinkRadio::new(Rfm22b::new(device, radio.nirq, radio.sdn, Delay), power);
-    let (chip, clock, hooks) = (&mut chip, &mut EmbassyClock, &mut Hooks);
+    let mut slot = Some(LinkRadio::new(
+        Rfm22b::new(device, radio.nirq, radio.sdn, Delay),
+        power,
+    ));
+    let (clock, hooks) = (&mut EmbassyClock, &mut Hooks);
     loop {
         check_in(Watched::Radio);
         let random = rng.blocking_next_u32();
         let step = with_app(|app| app.next_link_step(now_ms(), random));
-        let action = match step.unwrap_or(LinkStep::Wait { ms: POLL_MS }) {
+        let step = step.unwrap_or(LinkStep::Wait { ms: POLL_MS });
+        if let LinkStep::RunOpenLrsTx(_) | LinkStep::BindOpenLrsTx { .. } = step {
+            let action = openlrs_step(&mut slot, power, step).await;
+            carry_out(action.flatten());
+            continue;
+        }
+        let Some(chip) = slot.as_mut() else {
+            return;
+        };
+        let action = match step {
             LinkStep::Probe => {
                 let present = chip.driver().reset().await.inspect_err(log).is_ok();
                 with_app(|app| app.on_radio_present(present))
@@ -65,7 +90,69 @@ pub async fn link_task(radio: Radio, boot_settings: Settings) {
                 let outcome = BindOutcome::listened(offer.inspect_err(log));
                 with_app(|app| app.on_bind_outcome(outcome))
             }
+            LinkStep::RunOpenLrsTx(_) | LinkStep::BindOpenLrsTx { .. } => None,
         };
         carry_out(action.flatten());
     }
+}
+
+/// An OpenLRSng step: the driver's parts become an OpenLRSng radio for the step (the
+/// OpenLRSng role programs the chip its own way) and go back afterwards.
+async fn openlrs_step<SPI, IRQ, SDN>(
+    slot: &mut Option<LinkRadio<SPI, IRQ, SDN, Delay>>,
+    power: TxPower,
+    step: LinkStep,
+) -> Option<Option<Action>>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    SDN: OutputPin,
+    radio_rfm22b::openlrs::radio::Error<SPI::Error, IRQ::Error>: defmt::Format,
+{
+    let (LinkStep::RunOpenLrsTx(data) | LinkStep::BindOpenLrsTx { data, .. }) = step else {
+        return None;
+    };
+    let link = slot.take()?;
+    let (spi, irq, sdn, delay) = link.release().release();
+    let version = BindingVersion::from_byte(data.version).unwrap_or(BindingVersion::V39);
+    let band = data.band().unwrap_or(OpenLrsBand::Mhz433);
+    let now = || Instant::now().as_micros();
+    let mut radio = OpenLrsRadio::new(spi, irq, delay, now, version, band);
+    let action = match step {
+        LinkStep::BindOpenLrsTx { data, timeout_us } => {
+            let until = radio.now_us().saturating_add(timeout_us);
+            let accepted = keep_alive(tx_bind(&mut radio, &data, until)).await;
+            let outcome = BindOutcome::offered(accepted.inspect_err(log));
+            with_app(|app| app.on_bind_outcome(outcome))
+        }
+        _ => {
+            let end = match Transmitter::new(data, radio.now_us()) {
+                Ok(tx) => {
+                    let mut tx = tx.with_stale_input_stop();
+                    let run = run_openlrs_transmitter(
+                        &mut radio,
+                        &mut tx,
+                        |tx| {
+                            with_app(|app| app.on_openlrs_send(tx));
+                        },
+                        |now_us, tx, events| {
+                            with_app(|app| app.on_openlrs_step(now_us, now_ms(), tx, events));
+                        },
+                    );
+                    match select(run, poll_session()).await {
+                        Either::First(e) => {
+                            log(&e);
+                            SessionEnd::RadioFailed
+                        }
+                        Either::Second(end) => end,
+                    }
+                }
+                Err(_) => poll_session().await,
+            };
+            with_app(|app| app.on_session_end(end))
+        }
+    };
+    let (spi, irq, delay, _) = radio.release();
+    *slot = Some(LinkRadio::new(Rfm22b::new(spi, irq, sdn, delay), power));
+    Some(action.flatten())
 }

@@ -1,0 +1,143 @@
+//! The module as an OpenLRSng transmitter (`settings.protocol` OpenLRSng): the same
+//! [`AirLink`] the TauLink master feeds, here fed by `radio_rfm22b::openlrs`'s TX role.
+//! Before each packet the handset's channels (10-bit OpenLRSng values) and queued phone
+//! records go into the [`Transmitter`]; after each step the downlink comes out: OpenLRSng's
+//! link-info frames become the link statistics the handset shows (CRSF link statistics,
+//! S.Port RSSI) and its serial passthrough bytes the telemetry records (the flight side
+//! sends TauLink's message stream through it, `flight_core::app::openlrs`).
+//!
+//! Input loss: the transmitter stops sending once the handset's channels are older than the
+//! input timeout (`Transmitter::with_stale_input_stop`: OpenLRSng's `ppmAge`), so the
+//! receiver flies its failsafe instead of stale sticks. OpenLRSng frames carry no
+//! authentication.
+//!
+//! [`run_openlrs_transmitter`] is the role loop the firmware and the simulator share.
+
+use embedded_hal_async::delay::DelayNs;
+use embedded_hal_async::digital::Wait;
+use embedded_hal_async::spi::SpiDevice;
+use radio_rfm22b::measure::rssi_dbm;
+use radio_rfm22b::openlrs::channels::us_to_bits;
+use radio_rfm22b::openlrs::radio::{Clock, Error as RadioError, Radio};
+use radio_rfm22b::openlrs::roles::{TxEvent, tx_start, tx_step};
+use radio_rfm22b::openlrs::tx::{Received, Transmitter};
+
+use super::{AirLink, CONNECTED_TIMEOUT_US};
+use crate::channels::{MAX_CHANNELS, value_to_us};
+use crate::ports::LinkStats;
+use crate::records::MAX_STREAM_FRAME_LEN;
+
+/// OpenLRSng programs 0x35 = 0x2A: `rssi_off` 2 (about 8 dB), for the dBm conversion.
+const RSSI_OFFSET: u8 = 2;
+/// `LinkStats::rate_code` of an OpenLRSng link: this plus the modem profile (0..4), clear of
+/// TauLink's rate codes (the flight side's `OPENLRS_RATE_CODE_BASE`).
+pub const OPENLRS_RATE_CODE_BASE: u8 = 0x10;
+/// Events one `tx_step` can report.
+const STEP_EVENTS: usize = 2;
+
+/// The quality OpenLRSng counts in 15 slots, as a percentage.
+fn percent(quality_of_15: u8) -> u8 {
+    u8::try_from(u16::from(quality_of_15.min(15)) * 100 / 15).unwrap_or(100)
+}
+
+impl AirLink {
+    /// Right before an OpenLRSng packet is built: fresh handset channels (none once the
+    /// input is lost, so the transmitter goes quiet) and phone records for the serial uplink.
+    pub fn on_openlrs_send(&mut self, tx: &mut Transmitter) {
+        if let Some(channels) = self.channels.filter(|_| !self.input_lost) {
+            let mut bits = [0u16; MAX_CHANNELS];
+            for (slot, value) in bits.iter_mut().zip(channels.as_slice()) {
+                *slot = us_to_bits(value_to_us(*value));
+            }
+            tx.set_channels(bits.get(..channels.as_slice().len()).unwrap_or(&bits));
+        }
+        while tx.serial_free() >= MAX_STREAM_FRAME_LEN {
+            let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
+            let Some(len) = self.pop_uplink_frame(&mut frame) else {
+                break;
+            };
+            tx.queue_serial(frame.get(..len).unwrap_or(&[]));
+        }
+    }
+
+    /// After an OpenLRSng step at `now_us` with what it reported: input freshness, telemetry
+    /// bytes to records, and the link statistics.
+    pub fn on_openlrs_step(&mut self, now_us: u64, tx: &Transmitter, events: &[TxEvent]) {
+        self.update_input(now_us);
+        let mut rssi = None;
+        for event in events {
+            if let TxEvent::Downlink {
+                received,
+                rssi: raw,
+            } = event
+            {
+                self.last_downlink_us = Some(now_us);
+                rssi = Some(rssi_dbm(*raw, RSSI_OFFSET));
+                match received {
+                    Received::LinkInfo(info) => {
+                        self.openlrs_remote =
+                            Some((rssi_dbm(info.rssi, RSSI_OFFSET), percent(info.link_quality)));
+                    }
+                    Received::Serial(bytes) => {
+                        let mut bytes = bytes.iter().copied();
+                        self.read_stream(|buf| {
+                            let mut n = 0;
+                            for (slot, byte) in buf.iter_mut().zip(bytes.by_ref()) {
+                                *slot = byte;
+                                n += 1;
+                            }
+                            n
+                        });
+                    }
+                    Received::Duplicate | Received::Invalid(_) => {}
+                }
+            }
+        }
+        let connected = self
+            .last_downlink_us
+            .is_some_and(|t| now_us.saturating_sub(t) < CONNECTED_TIMEOUT_US);
+        let remote = self.openlrs_remote.filter(|_| connected);
+        self.stats = LinkStats {
+            connected,
+            rssi_dbm: rssi.unwrap_or(self.stats.rssi_dbm),
+            link_quality_percent: percent(tx.link_quality()),
+            remote_rssi_dbm: remote.map_or(0, |(dbm, _)| dbm),
+            remote_link_quality_percent: remote.map(|(_, lq)| lq),
+            rate_code: OPENLRS_RATE_CODE_BASE + tx.bind_data().modem_profile,
+            schedule: None,
+        };
+    }
+}
+
+/// The module's OpenLRSng transmitter loop, shared by the firmware and the simulator: the
+/// crate's `tx_start`, then `tx_step` forever, `before_send` right before each packet
+/// ([`AirLink::on_openlrs_send`] through the app) and `on_step(now_us, tx, events)` after
+/// each step ([`crate::app::App::on_openlrs_step`]). Returns only on a radio error.
+pub async fn run_openlrs_transmitter<SPI, IRQ, D, C>(
+    radio: &mut Radio<SPI, IRQ, D, C>,
+    tx: &mut Transmitter,
+    mut before_send: impl FnMut(&mut Transmitter),
+    mut on_step: impl FnMut(u64, &Transmitter, &[TxEvent]),
+) -> RadioError<SPI::Error, IRQ::Error>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    D: DelayNs,
+    C: Clock,
+{
+    if let Err(e) = tx_start(radio, tx).await {
+        return e;
+    }
+    loop {
+        let mut events: heapless::Vec<TxEvent, STEP_EVENTS> = heapless::Vec::new();
+        let step = tx_step(radio, tx, &mut before_send, &mut |event| {
+            let _ = events.push(event);
+        })
+        .await;
+        if let Err(e) = step {
+            return e;
+        }
+        let now = radio.now_us();
+        on_step(now, tx, &events);
+    }
+}
