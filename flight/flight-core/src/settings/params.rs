@@ -129,9 +129,9 @@ pub const MODES: Choice = &["rate-pid", "rate-lqg", "attitude", "horizon", "sysi
 /// Link bands (`telemetry::link::Band`).
 pub const BANDS: Choice = &["433", "868", "915"];
 /// Link rate modes (`telemetry::link::RateMode`).
-pub const RATES: Choice = &["l50", "m100", "f250", "f500"];
+pub const RATES: Choice = &["l50", "m100", "f250", "f500", "f700"];
 /// Uplink channel formats (`telemetry::channels::ChannelFormat`).
-pub const CHANNEL_FORMATS: Choice = &["16", "8"];
+pub const CHANNEL_FORMATS: Choice = &["16", "8", "16-sticks"];
 /// Arming at a critical battery: refused (factory) or allowed.
 pub const ARM_ON_CRITICAL: Choice = &["refuse", "allow"];
 /// Gyro loop rates.
