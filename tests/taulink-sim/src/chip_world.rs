@@ -66,7 +66,13 @@ fn spawn_pair(
     ));
     let m = medium.clone();
     let now: Now = Rc::new(move || m.now().as_micros() as u64);
-    let module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);
+    let module_app = ModuleApp::new(
+        now.clone(),
+        record.clone(),
+        salt,
+        s.telemetry_load,
+        s.handset,
+    );
     let flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
     sim.spawn(module_end(
         module_radio,

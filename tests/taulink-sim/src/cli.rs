@@ -7,6 +7,7 @@ use clap::{Parser, ValueEnum};
 use telemetry::channels::ChannelFormat;
 use telemetry::link::{Band, RateMode};
 
+use crate::handset::HandsetKind;
 use crate::scenario::Scenario;
 
 /// Both TauLink ends (module master and flight follower, each on the real radio driver
@@ -23,6 +24,7 @@ use crate::scenario::Scenario;
   taulink-sim --cut 10:12 --duration 20 --plot out failsafe and recovery after a 2 s cut,
                                                    drawn to out/link.png
   taulink-sim --sweep                              every rate mode, clean and at 10 % loss
+  taulink-sim --rate F700 --ratio 8 --handset ppm  the stick mode fed by free-running PPM
   taulink-sim --serve                              the web ground station on this link:
                                                    open the printed URL
 
@@ -30,7 +32,8 @@ Exit status: 0 if every channel output and stream byte was right, 1 if any was w
 2 for a command-line error."
 )]
 pub struct Cli {
-    /// Rate mode: L50 (long range), M100, F250 or F500 (fast, short range).
+    /// Rate mode: L50 (long range), M100, F250, F500 (fast, short range) or F700 (the stick
+    /// mode: sticks in every packet, aux channels round-robin; best at --ratio 8).
     #[arg(long, value_enum, ignore_case = true, default_value_t = RateArg::F250)]
     pub rate: RateArg,
     /// Telemetry ratio: one downlink slot in N (a power of two, 2..=128).
@@ -39,6 +42,13 @@ pub struct Cli {
     /// Carry 8 channels per uplink instead of 16 (more room for uplink telemetry).
     #[arg(long)]
     pub compact8: bool,
+    /// What feeds the module: crsf-synced (EdgeTX on CRSF at 400 kBd following the module's
+    /// timing frames), crsf (EdgeTX ignoring them: every 4 ms of its own crystal), ppm
+    /// (free-running 22.5 ms frames), free-1k (a 1 kHz sample stream, the figures measured
+    /// before handsets were modelled). Latency is from the handset's frame generation to the
+    /// flight side's output (ppm: from the end of the frame).
+    #[arg(long, value_enum, default_value_t = HandsetArg::CrsfSynced)]
+    pub handset: HandsetArg,
     /// Frequency band in MHz.
     #[arg(long, value_enum, default_value_t = BandArg::Mhz433)]
     pub band: BandArg,
@@ -124,6 +134,33 @@ pub enum RateArg {
     F250,
     #[value(name = "F500")]
     F500,
+    #[value(name = "F700")]
+    F700,
+}
+
+/// Handsets as command-line words.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(missing_docs)] // the names are the documentation
+pub enum HandsetArg {
+    #[value(name = "crsf-synced")]
+    CrsfSynced,
+    #[value(name = "crsf")]
+    Crsf,
+    #[value(name = "ppm")]
+    Ppm,
+    #[value(name = "free-1k")]
+    Free1k,
+}
+
+impl From<HandsetArg> for HandsetKind {
+    fn from(h: HandsetArg) -> Self {
+        match h {
+            HandsetArg::CrsfSynced => HandsetKind::CrsfSynced,
+            HandsetArg::Crsf => HandsetKind::Crsf,
+            HandsetArg::Ppm => HandsetKind::Ppm,
+            HandsetArg::Free1k => HandsetKind::Free1k,
+        }
+    }
 }
 
 impl From<RateArg> for RateMode {
@@ -133,6 +170,7 @@ impl From<RateArg> for RateMode {
             RateArg::M100 => RateMode::M100,
             RateArg::F250 => RateMode::F250,
             RateArg::F500 => RateMode::F500,
+            RateArg::F700 => RateMode::F700,
         }
     }
 }
@@ -230,14 +268,17 @@ impl Cli {
     /// the signal-to-noise ratio), so either selects it.
     #[must_use]
     pub fn scenario(&self) -> Scenario {
+        let rate = self.rate.into();
+        let format = if self.compact8 {
+            ChannelFormat::Compact8
+        } else {
+            ChannelFormat::Full16
+        };
         Scenario {
-            rate: self.rate.into(),
+            rate,
             telemetry_ratio: self.ratio,
-            format: if self.compact8 {
-                ChannelFormat::Compact8
-            } else {
-                ChannelFormat::Full16
-            },
+            // F700 carries 16 channels in its stick format.
+            format: telemetry::link::bind::format_for(rate, format),
             band: self.band.into(),
             distance_m: self.distance,
             loss: self.loss,
@@ -253,6 +294,7 @@ impl Cli {
             header_check: !self.no_header_check,
             chip_crc: !self.no_chip_crc,
             chip_level: !self.packet_level && self.ber == 0.0 && !self.no_chip_crc,
+            handset: self.handset.into(),
         }
     }
 }
@@ -302,6 +344,7 @@ mod tests {
             "--failsafe-ms 0",
             "--band 2400",
             "--rate F1000",
+            "--handset sbus",
             "--bogus",
         ] {
             assert!(parse(bad).is_err(), "{bad} accepted");
