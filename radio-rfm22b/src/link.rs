@@ -4,13 +4,14 @@
 //!
 //! The chip setup is what the link's airtime budget (`telemetry::link::rate`) assumes:
 //! preamble of `PREAMBLE_BYTES` with 20-bit detection, sync `2D D4`, the link's four header
-//! bytes sent and all 32 bits checked, CRC-CCITT, variable length.
+//! bytes sent and all 32 bits checked (none at F700, `RateMode::chip_header_bytes`: the
+//! keyed link CRC identifies its packets), CRC-CCITT, variable length.
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal_async::delay::DelayNs;
 use embedded_hal_async::digital::Wait;
 use embedded_hal_async::spi::SpiDevice;
-use telemetry::link::rate::{PREAMBLE_BYTES, airtime_us};
+use telemetry::link::rate::PREAMBLE_BYTES;
 use telemetry::link::{PacketRadio, RadioConfig, RateMode, RxOutcome};
 
 use crate::{
@@ -26,7 +27,7 @@ pub fn modem_for(rate: RateMode) -> Result<ModemConfig, ConfigError> {
         RateMode::L50 => 30_000,
         RateMode::M100 => 45_000,
         RateMode::F250 => 90_000,
-        RateMode::F500 => 150_000,
+        RateMode::F500 | RateMode::F700 => 150_000,
     };
     ModemConfig::try_new(rate.bit_rate_bps(), deviation_hz)
 }
@@ -42,6 +43,21 @@ pub fn packet_config(header: [u8; 4], check_header: bool) -> PacketConfig {
         .with_header(header, 4)
         .with_header_check(header, [0xFF; 4], checked, 0)
         .with_crc(Crc::Ccitt)
+}
+
+/// The packet handler for a link at `rate`: [`packet_config`], or without any hardware
+/// header where the mode sends none (`RateMode::chip_header_bytes`, F700: the keyed link
+/// CRC is its identity check).
+pub fn packet_config_for(rate: RateMode, header: [u8; 4], check_header: bool) -> PacketConfig {
+    if rate.chip_header_bytes() == 0 {
+        let nibbles = (PREAMBLE_BYTES * 2) as u16;
+        PacketConfig::new()
+            .with_preamble(nibbles, 5)
+            .with_sync_word([0x2D, 0xD4, 0, 0], 2)
+            .with_crc(Crc::Ccitt)
+    } else {
+        packet_config(header, check_header)
+    }
 }
 
 /// Why the link's radio failed.
@@ -113,7 +129,7 @@ where
         let carrier = Carrier::try_new(config.base_hz).map_err(LinkRadioError::Config)?;
         let mut chip = Config::new(
             modem,
-            packet_config(config.header, self.check_header),
+            packet_config_for(config.rate, config.header, self.check_header),
             carrier,
         );
         chip.channel_spacing =
@@ -140,7 +156,7 @@ where
 
     async fn transmit(&mut self, frame: &[u8]) -> Result<(), Self::Error> {
         // Twice the airtime plus the PLL settle: a chip that has not sent by then is stuck.
-        let timeout_us = 2 * airtime_us(frame.len(), self.rate.bit_rate_bps()) + 1_000;
+        let timeout_us = 2 * self.rate.airtime_us(frame.len()) + 1_000;
         self.radio
             .transmit(frame, timeout_us)
             .await

@@ -347,7 +347,8 @@ fn the_same_seed_gives_the_same_outcomes_twice() {
 /// The link's slot budget (`telemetry::link::rate::TX_SETUP_US`) charges the sender for the
 /// SPI work between deciding to send and the PLL settling: FIFO load and register writes on
 /// the real bus. Measured here on the flight board's 5.25 MHz bus: F500's largest frame
-/// (where the budget is tightest) fits it; a full 64-byte FIFO is printed for the record.
+/// (where the budget is tightest) fits it, F700's 21-byte frame fits its 80 µs; a full
+/// 64-byte FIFO is printed for the record.
 #[cfg(feature = "telemetry")]
 #[test]
 fn transmit_set_up_on_the_spi_bus_fits_the_link_budget() {
@@ -357,7 +358,11 @@ fn transmit_set_up_on_the_spi_bus_fits_the_link_budget() {
     let a = bench.node(RadioConfig::at([0.0, 0.0, 0.0]));
     bench.init(&a, config(256_000, 150_000)).unwrap();
     let mut set_up = Vec::new();
-    for len in [RateMode::F500.max_frame_bytes(), 64] {
+    for len in [
+        RateMode::F500.max_frame_bytes(),
+        64,
+        RateMode::F700.max_frame_bytes(),
+    ] {
         let called = bench.now();
         let frame = vec![0x55; len];
         let (sent, _) = bench.op(&a, async move |r| r.transmit(&frame, 20_000).await);
@@ -367,8 +372,14 @@ fn transmit_set_up_on_the_spi_bus_fits_the_link_budget() {
         bench.run(bench.pause(5_000));
     }
     println!(
-        "transmit set-up on SPI: F500 max frame {:?}, 64 B {:?}",
-        set_up[0], set_up[1]
+        "transmit set-up on SPI: F500 max frame {:?}, 64 B {:?}, F700 max frame {:?}",
+        set_up[0], set_up[1], set_up[2]
+    );
+    // F700 charges less for its smaller frame (`RateMode::tx_setup_us`).
+    assert!(
+        set_up[2] <= Duration::from_micros(u64::from(RateMode::F700.tx_setup_us())),
+        "{:?} > F700's set-up",
+        set_up[2]
     );
     assert!(
         set_up[0] > Duration::from_micros(50),

@@ -2,7 +2,7 @@
 //! buffer; decoding borrows from the received buffer and never panics — a bad packet is a
 //! [`Received::Rejected`] outcome. Layout and rationale: `spec/protocol.md` §5.
 
-use crate::channels::{ChannelFormat, Channels, unpack};
+use crate::channels::{ChannelFormat, Channels, unpack, unpack_mask};
 use crate::checksum::keyed_crc16;
 use crate::link::auth::{LinkKey, TAG_BYTES};
 use crate::link::{Band, RateMode};
@@ -34,6 +34,7 @@ const KIND_BIND_ACCEPT: u8 = 1;
 const KIND_RC16: u8 = 2;
 const KIND_RC8: u8 = 3;
 const KIND_DOWNLINK: u8 = 4;
+const KIND_RC_STICKS: u8 = 5;
 
 /// Telemetry-stream position carried by every link frame (see `link::stream`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -122,6 +123,12 @@ impl Uplink<'_> {
     /// Unpacks the channels into `channels` (the compact format leaves 8..15 unchanged).
     pub fn channels_into(&self, channels: &mut Channels) -> bool {
         unpack(self.packed_channels, self.format, channels)
+    }
+
+    /// [`Uplink::channels_into`], answering which channels were refreshed (bit `i` =
+    /// channel `i`; [`ChannelFormat::Sticks16`]: the sticks and one aux group).
+    pub fn channels_into_mask(&self, channels: &mut Channels) -> Option<u16> {
+        unpack_mask(self.packed_channels, self.format, channels)
     }
 }
 
@@ -274,6 +281,7 @@ fn encode_body(frame: &Frame<'_>, version: u8, out: &mut [u8]) -> Result<usize, 
             let kind = match up.format {
                 ChannelFormat::Full16 => KIND_RC16,
                 ChannelFormat::Compact8 => KIND_RC8,
+                ChannelFormat::Sticks16 => KIND_RC_STICKS,
             };
             let mut flags = 0;
             if up.save_failsafe {
@@ -464,7 +472,7 @@ fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rej
                 bind_id: u32::from_le_bytes([*a, *b, *c, *d]),
             })
         }
-        KIND_RC16 | KIND_RC8 | KIND_DOWNLINK => {
+        KIND_RC16 | KIND_RC8 | KIND_RC_STICKS | KIND_DOWNLINK => {
             let [slot, seq, ack, rest @ ..] = rest else {
                 return Err(Rejection::Malformed);
             };
@@ -503,14 +511,20 @@ fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rej
                     data: rest,
                 }));
             }
-            let format = if kind == KIND_RC16 {
-                ChannelFormat::Full16
-            } else {
-                ChannelFormat::Compact8
+            let format = match kind {
+                KIND_RC16 => ChannelFormat::Full16,
+                KIND_RC8 => ChannelFormat::Compact8,
+                _ => ChannelFormat::Sticks16,
             };
             let (packed_channels, data) = rest
                 .split_at_checked(format.packed_bytes())
                 .ok_or(Rejection::Malformed)?;
+            // The stick format's reserved bit (the last of its packed bytes' top bit).
+            if format == ChannelFormat::Sticks16
+                && packed_channels.last().is_some_and(|b| b & 0x80 != 0)
+            {
+                return Err(Rejection::Malformed);
+            }
             Ok(Frame::Uplink(Uplink {
                 slot: *slot,
                 stream,

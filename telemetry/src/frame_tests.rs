@@ -324,3 +324,55 @@ fn the_epoch_nonce_travels_only_in_sealed_downlinks() {
         Received::Rejected(Rejection::UnknownKind(_))
     ));
 }
+
+#[test]
+fn stick_uplinks_are_kind_5_and_fit_f700_with_a_report() {
+    let mut ch = [0u16; 16];
+    for (i, c) in ch.iter_mut().enumerate() {
+        *c = 100 + i as u16 * 97;
+    }
+    let mut packed = [0u8; 10];
+    assert!(crate::channels::pack_group(
+        &ch,
+        ChannelFormat::Sticks16,
+        2,
+        &mut packed
+    ));
+    let up = Uplink {
+        slot: 9,
+        stream: StreamHeader::default(),
+        report: Some(LinkReport {
+            rssi_dbm: -60,
+            lq_percent: 100,
+        }),
+        save_failsafe: false,
+        input_lost: false,
+        format: ChannelFormat::Sticks16,
+        packed_channels: &packed,
+        data: b"ab",
+    };
+    let mut out = [0u8; 64];
+    let n = encode(&Frame::Uplink(up), KEY, &mut out).unwrap();
+    // 5 header + 2 report + 10 channels + 2 stream + 2 CRC: F700's 21-byte frame.
+    assert_eq!(n, crate::link::RateMode::F700.max_frame_bytes());
+    assert_eq!(out[1] & KIND_MASK, KIND_RC_STICKS);
+    let Received::Accepted(Frame::Uplink(got)) = decode(&out[..n], KEY) else {
+        panic!("not accepted");
+    };
+    let mut output = [0u16; 16];
+    assert_eq!(
+        got.channels_into_mask(&mut output),
+        Some(0x000F | 0b111 << 10)
+    );
+    assert_eq!(&output[..4], &ch[..4]);
+    assert_eq!(&output[10..13], &ch[10..13]);
+    // The reserved bit set (CRC recomputed): malformed.
+    out[5 + 2 + 9] |= 0x80;
+    let body = n - CRC_BYTES;
+    let crc = keyed_crc16(KEY, &out[..body]).to_be_bytes();
+    out[body..n].copy_from_slice(&crc);
+    assert_eq!(
+        decode(&out[..n], KEY),
+        Received::Rejected(Rejection::Malformed)
+    );
+}

@@ -86,6 +86,13 @@ fn responder(baud: u32) -> Responder {
     Responder::new(Config::new(baud, taulink_device_info(0, 1, 0)))
 }
 
+/// A responder asking for the 1 ms lead the timing tests below were worked out with.
+fn responder_lead_1ms(baud: u32) -> Responder {
+    let mut config = Config::new(baud, taulink_device_info(0, 1, 0));
+    config.timing_lead_us = 1_000;
+    Responder::new(config)
+}
+
 /// Runs `seconds` of radio frames every `period_us`, returns every reply's messages.
 fn run(
     responder: &mut Responder,
@@ -294,7 +301,7 @@ fn timing_offset_by_hand() {
     // Air packets at k · 20 ms, lead 1 ms: channel frames should end at 19 ms (mod 20).
     // A frame ending at 5 ms is 6 ms late for the 19 ms slot before it (−1 ms):
     // offset = ((19 000 − 5 000) mod 20 000) = 14 000 ≥ 10 000 → −6 000 µs = −60 000 × 0.1 µs.
-    let mut responder = responder(400_000);
+    let mut responder = responder_lead_1ms(400_000);
     responder.set_link_schedule(Some(LinkSchedule {
         period_us: 20_000,
         phase_us: 0,
@@ -321,7 +328,7 @@ fn timing_offset_by_hand() {
 /// shifts its next frame by the offset (positive = it was early, so it waits longer).
 #[test]
 fn radio_locks_onto_the_air_schedule() {
-    let mut responder = responder(400_000);
+    let mut responder = responder_lead_1ms(400_000);
     let schedule = LinkSchedule {
         period_us: 10_000,
         phase_us: 3_000,

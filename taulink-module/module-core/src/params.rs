@@ -125,6 +125,7 @@ fn rate_label(rate: RateMode) -> &'static str {
         RateMode::M100 => "M100 (100 Hz)",
         RateMode::F250 => "F250 (250 Hz)",
         RateMode::F500 => "F500 (500 Hz)",
+        RateMode::F700 => "F700 (700 Hz)",
     }
 }
 

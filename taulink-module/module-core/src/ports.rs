@@ -12,7 +12,8 @@ use crate::channels::Channels;
 pub struct AirSchedule {
     /// Slot length (one packet per slot).
     pub period_us: u32,
-    /// Start of one uplink transmission.
+    /// When one uplink's channels are latched (`telemetry::link::master::LATCH_BEFORE_TX_US`
+    /// before its transmission): the instant the handset's channel frame must be in by.
     pub phase_us: u64,
 }
 

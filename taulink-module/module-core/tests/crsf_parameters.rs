@@ -410,7 +410,13 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             let rate = &fields[0];
             assert_eq!(
                 rate.options,
-                ["L50 (50 Hz)", "M100 (100 Hz)", "F250 (250 Hz)", "F500 (500 Hz)"]
+                [
+                    "L50 (50 Hz)",
+                    "M100 (100 Hz)",
+                    "F250 (250 Hz)",
+                    "F500 (500 Hz)",
+                    "F700 (700 Hz)"
+                ]
             );
             assert_eq!(rate.options[rate.value as usize], "F250 (250 Hz)");
             assert_eq!(fields[1].options[fields[1].value as usize], "1:4");

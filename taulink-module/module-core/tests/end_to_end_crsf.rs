@@ -276,10 +276,12 @@ fn the_timing_frame_pulls_the_radio_onto_the_air_packets() {
     let stats = module_core::ports::LinkPort::stats(world.app.borrow().link());
     let schedule = stats.schedule.unwrap();
     assert_eq!(schedule.period_us, 4_000);
-    // Where each frame ended relative to "1 ms before an air packet", wrapped to ±P/2.
+    // Where each frame ended relative to "the timing lead before an uplink's channels are
+    // latched", wrapped to ±P/2.
     let period = i64::from(schedule.period_us);
     let error = |end_us: u64| {
-        let target = schedule.phase_us as i64 - 1_000;
+        let lead = telemetry::handset::crsf::responder::DEFAULT_TIMING_LEAD_US;
+        let target = schedule.phase_us as i64 - i64::from(lead);
         let e = (end_us as i64 - target).rem_euclid(period);
         if e >= period / 2 { e - period } else { e }
     };

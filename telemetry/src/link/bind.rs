@@ -30,7 +30,9 @@ pub struct LinkParams {
 
 impl LinkParams {
     /// A new link with a bind ID from `random` (an injected random 32-bit value; the module
-    /// draws it from its hardware RNG). 0 and the bind key are avoided.
+    /// draws it from its hardware RNG). 0 and the bind key are avoided. A `format` whose
+    /// uplink does not fit the mode's frame is replaced by the stick format
+    /// ([`format_for`]: 16 channels at F700 travel as [`ChannelFormat::Sticks16`]).
     pub fn new(
         random: u32,
         band: Band,
@@ -46,7 +48,7 @@ impl LinkParams {
             bind_id,
             band,
             rate,
-            format,
+            format: format_for(rate, format),
             telemetry_ratio,
         }
     }
@@ -114,6 +116,18 @@ impl LinkParams {
     }
 }
 
+/// The channel format a link at `rate` carries when `format` is asked for: `format` itself
+/// if an uplink of it with a link report fits the mode's largest frame, else
+/// [`ChannelFormat::Sticks16`] (F700's 21-byte frame has no room for 22 bytes of channels;
+/// every other mode keeps what it is asked for).
+pub const fn format_for(rate: RateMode, format: ChannelFormat) -> ChannelFormat {
+    if crate::frame::uplink_overhead(format, true) <= rate.max_frame_bytes() {
+        format
+    } else {
+        ChannelFormat::Sticks16
+    }
+}
+
 /// Bind-mode timing: the master offers every `OFFER_PERIOD_US` and listens in between.
 pub const OFFER_PERIOD_US: u32 = 4 * RateMode::L50.slot_us();
 /// The follower answers an offer this many times, one L50 slot apart, so one lost accept
@@ -148,6 +162,30 @@ pub fn offered_params(packet: &[u8]) -> Option<LinkParams> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_f700_swaps_a_format_that_does_not_fit() {
+        for rate in [
+            RateMode::L50,
+            RateMode::M100,
+            RateMode::F250,
+            RateMode::F500,
+        ] {
+            for format in [ChannelFormat::Full16, ChannelFormat::Compact8] {
+                assert_eq!(format_for(rate, format), format, "{rate:?}");
+            }
+        }
+        assert_eq!(
+            format_for(RateMode::F700, ChannelFormat::Full16),
+            ChannelFormat::Sticks16
+        );
+        assert_eq!(
+            format_for(RateMode::F700, ChannelFormat::Compact8),
+            ChannelFormat::Compact8
+        );
+        let params = LinkParams::new(7, Band::Mhz433, RateMode::F700, ChannelFormat::Full16, 8);
+        assert_eq!(params.format, ChannelFormat::Sticks16);
+    }
     use crate::frame::encode;
 
     fn params(id: u32) -> LinkParams {

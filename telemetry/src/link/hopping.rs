@@ -70,7 +70,7 @@ impl Band {
                 let spacing = match rate {
                     RateMode::L50 | RateMode::M100 => 50_000,
                     RateMode::F250 => 40_000,
-                    RateMode::F500 => 30_000,
+                    RateMode::F500 | RateMode::F700 => 30_000,
                 };
                 // Centre the 31 spacings on the sub-band's centre.
                 let half_span = spacing * (HOP_CHANNELS as u32 - 1) / 2;
@@ -257,6 +257,7 @@ mod tests {
             (RateMode::M100, 45_000, 11),
             (RateMode::F250, 90_000, 5),
             (RateMode::F500, 150_000, 3),
+            (RateMode::F700, 150_000, 3),
         ] {
             let occupied = 2 * (deviation + rate.bit_rate_bps() / 2);
             let low = Band::Ism433.channel_hz_at(0, rate) - occupied / 2;

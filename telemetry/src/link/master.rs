@@ -7,6 +7,7 @@ use super::core::{Master, Step};
 use super::radio::{LinkClock, PacketRadio, RxOutcome};
 use super::rate::FIFO_BYTES;
 use super::recovery::Recovery;
+use super::schedule::SlotKind;
 use crate::frame::{Frame, encode};
 
 /// Bind mode on the master (started by the bind button/command): offers `params` on the
@@ -43,7 +44,14 @@ pub async fn bind_master<R: PacketRadio, C: LinkClock>(
     Ok(false)
 }
 
-/// The application side of a master: called at the start of every slot.
+/// How long before an uplink's transmission the application is asked for its channels and
+/// the frame is built: room for building it (pack, CRC: tens of µs on the nRF52840) and the
+/// hop-register write before the transmission starts.
+pub const LATCH_BEFORE_TX_US: u32 = 30;
+
+/// The application side of a master: called once per slot — at the start of a downlink slot,
+/// and [`LATCH_BEFORE_TX_US`] before the transmission of an uplink, so the channels it sets
+/// are as fresh as the slot allows.
 pub trait MasterHooks {
     /// Feed channels and telemetry into `master`, read telemetry and stats out.
     fn on_slot(&mut self, now_us: u64, master: &mut Master);
@@ -71,6 +79,13 @@ pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
         while clock.now_us() > slot_start_us + slot_us / 2 {
             master.on_skipped();
             slot_start_us += slot_us;
+        }
+        // Channels are latched right before the uplink is built and sent, not at the slot
+        // start: every uplink then carries the freshest handset input the slot allows.
+        if master.schedule().kind(master.slot()) == SlotKind::Uplink {
+            let tx_lead = master.schedule().rate.tx_lead_us();
+            let latch = slot_start_us + u64::from(tx_lead.saturating_sub(LATCH_BEFORE_TX_US));
+            clock.sleep_until_us(latch).await;
         }
         hooks.on_slot(slot_start_us, master);
         let step = master.plan(slot_start_us, &mut buf);

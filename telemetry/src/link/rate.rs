@@ -15,7 +15,8 @@ pub const HEADER_BYTES: usize = 4;
 pub const LENGTH_BYTES: usize = 1;
 /// The chip's own CRC-16 (0x30 = 0x8C: CRC on, CCITT polynomial).
 pub const CHIP_CRC_BYTES: usize = 2;
-/// Everything the chip adds around our frame.
+/// Everything the chip adds around our frame (in the modes that send the hardware header;
+/// [`RateMode::chip_overhead_bytes`] gives each mode's).
 pub const CHIP_OVERHEAD_BYTES: usize =
     PREAMBLE_BYTES + SYNC_BYTES + HEADER_BYTES + LENGTH_BYTES + CHIP_CRC_BYTES;
 /// The Si4432 FIFO is 64 bytes; our frames are loaded in one go, never refilled mid-packet.
@@ -45,12 +46,37 @@ pub const TX_SETUP_US: u32 = 100;
 pub const TAIL_GUARD_US: u32 = 150;
 
 /// The airtime of `frame_bytes` of our frame at `bit_rate_bps`, including everything the chip
-/// adds (preamble, sync, header, length, chip CRC), in µs, rounded up.
+/// adds with the hardware header (preamble, sync, header, length, chip CRC), in µs, rounded
+/// up. [`RateMode::airtime_us`] is the mode-aware form (F700 sends no hardware header).
 pub const fn airtime_us(frame_bytes: usize, bit_rate_bps: u32) -> u32 {
-    let bits = ((frame_bytes + CHIP_OVERHEAD_BYTES) * 8) as u64;
+    on_air_us(frame_bytes + CHIP_OVERHEAD_BYTES, bit_rate_bps)
+}
+
+/// Airtime of `bytes` on air at `bit_rate_bps`, µs, rounded up.
+const fn on_air_us(bytes: usize, bit_rate_bps: u32) -> u32 {
+    let bits = (bytes * 8) as u64;
     let rate = bit_rate_bps as u64;
     (bits * 1_000_000).div_ceil(rate) as u32
 }
+
+/// F700's slot: 1 428 µs, 700 slots/s. At 1:8 telemetry that is 612.5 uplinks/s, each with
+/// the four sticks (spec §4.1 derives it).
+const F700_SLOT_US: u32 = 1_428;
+/// F700's TX lead. The follower opens its window [`RX_EARLY_US`] before the slot anyway, so
+/// the lead only has to cover building the frame and the hop-register write (channels are
+/// latched right before transmission, `link::master::LATCH_BEFORE_TX_US`).
+///
+/// [`RX_EARLY_US`]: crate::link::core::follower::RX_EARLY_US
+const F700_TX_LEAD_US: u32 = 30;
+/// F700's SPI set-up: its largest frame is 21 bytes, 11 fewer than F500's 32 (≈ 17 µs less
+/// FIFO burst at 5.25 MHz); measured by radio-rfm22b's
+/// `transmit_set_up_on_the_spi_bus_fits_the_link_budget`.
+const F700_TX_SETUP_US: u32 = 80;
+/// F700's tail guard, what is left of its slot (the other modes keep 150 µs): the receiver
+/// drains a 21-byte FIFO and the sender of the next slot turns around. After a downlink slot
+/// the master must have read the follower's frame — which ends late by the follower's own
+/// read-out, since it re-times its grid when its read ends — before its next uplink.
+const F700_TAIL_GUARD_US: u32 = 149;
 
 /// A packet-rate mode: bit rate and slot length. One packet per slot, in one direction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -64,15 +90,22 @@ pub enum RateMode {
     F250,
     /// 500 slots/s at 256 kbps, the Si4432's fastest rate.
     F500,
+    /// 700 slots/s at 256 kbps: the stick mode. Four sticks (11 bit) in every uplink, the
+    /// twelve aux channels three at a time round-robin ([`ChannelFormat::Sticks16`]), no
+    /// hardware header (the keyed link CRC is the identity check), tighter turnarounds.
+    ///
+    /// [`ChannelFormat::Sticks16`]: crate::channels::ChannelFormat::Sticks16
+    F700,
 }
 
 impl RateMode {
     /// All modes, slowest first.
-    pub const ALL: [RateMode; 4] = [
+    pub const ALL: [RateMode; 5] = [
         RateMode::L50,
         RateMode::M100,
         RateMode::F250,
         RateMode::F500,
+        RateMode::F700,
     ];
 
     /// Air bit rate.
@@ -81,7 +114,7 @@ impl RateMode {
             RateMode::L50 => 19_200,
             RateMode::M100 => 57_600,
             RateMode::F250 => 128_000,
-            RateMode::F500 => 256_000,
+            RateMode::F500 | RateMode::F700 => 256_000,
         }
     }
 
@@ -92,6 +125,7 @@ impl RateMode {
             RateMode::M100 => 10_000,
             RateMode::F250 => 4_000,
             RateMode::F500 => 2_000,
+            RateMode::F700 => F700_SLOT_US,
         }
     }
 
@@ -100,16 +134,69 @@ impl RateMode {
         1_000_000 / self.slot_us()
     }
 
+    /// How long the sender waits after its slot starts before it sends ([`TX_LEAD_US`]; F700
+    /// 30 µs).
+    pub const fn tx_lead_us(self) -> u32 {
+        match self {
+            RateMode::F700 => F700_TX_LEAD_US,
+            _ => TX_LEAD_US,
+        }
+    }
+
+    /// SPI set-up charged to the sender ([`TX_SETUP_US`]; F700 80 µs for its smaller frame).
+    pub const fn tx_setup_us(self) -> u32 {
+        match self {
+            RateMode::F700 => F700_TX_SETUP_US,
+            _ => TX_SETUP_US,
+        }
+    }
+
+    /// Time kept free at the end of the slot ([`TAIL_GUARD_US`]; F700 149 µs).
+    pub const fn tail_guard_us(self) -> u32 {
+        match self {
+            RateMode::F700 => F700_TAIL_GUARD_US,
+            _ => TAIL_GUARD_US,
+        }
+    }
+
+    /// Hardware header bytes sent: [`HEADER_BYTES`], or none at F700, where the keyed link
+    /// CRC (spec §5.3) is the only identity check: the 4 bytes would cost 125 µs per packet
+    /// to repeat what that CRC already proves, and drop foreign packets a little earlier.
+    pub const fn chip_header_bytes(self) -> usize {
+        match self {
+            RateMode::F700 => 0,
+            _ => HEADER_BYTES,
+        }
+    }
+
+    /// Everything the chip adds around our frame in this mode.
+    pub const fn chip_overhead_bytes(self) -> usize {
+        PREAMBLE_BYTES + SYNC_BYTES + self.chip_header_bytes() + LENGTH_BYTES + CHIP_CRC_BYTES
+    }
+
+    /// The airtime of `frame_bytes` of our frame in this mode, chip overhead included, µs.
+    pub const fn airtime_us(self, frame_bytes: usize) -> u32 {
+        on_air_us(
+            frame_bytes + self.chip_overhead_bytes(),
+            self.bit_rate_bps(),
+        )
+    }
+
+    /// Lead, SPI set-up, PLL settle and tail guard: the part of a slot that is not packet.
+    pub const fn slot_overhead_us(self) -> u32 {
+        self.tx_lead_us() + self.tx_setup_us() + PLL_SETTLE_US + self.tail_guard_us()
+    }
+
     /// Airtime left for one packet once lead, SPI set-up, PLL settle and tail guard are paid.
     pub const fn packet_budget_us(self) -> u32 {
-        self.slot_us() - TX_LEAD_US - TX_SETUP_US - PLL_SETTLE_US - TAIL_GUARD_US
+        self.slot_us() - self.slot_overhead_us()
     }
 
     /// The largest frame (our bytes, excluding the chip's) that fits the slot and the FIFO.
     pub const fn max_frame_bytes(self) -> usize {
         let budget_bits = self.packet_budget_us() as u64 * self.bit_rate_bps() as u64 / 1_000_000;
         let on_air = (budget_bits / 8) as usize;
-        let frame = on_air.saturating_sub(CHIP_OVERHEAD_BYTES);
+        let frame = on_air.saturating_sub(self.chip_overhead_bytes());
         if frame > FIFO_BYTES {
             FIFO_BYTES
         } else {
@@ -124,6 +211,7 @@ impl RateMode {
             RateMode::M100 => 1,
             RateMode::F250 => 2,
             RateMode::F500 => 3,
+            RateMode::F700 => 4,
         }
     }
 
@@ -134,6 +222,7 @@ impl RateMode {
             1 => Some(RateMode::M100),
             2 => Some(RateMode::F250),
             3 => Some(RateMode::F500),
+            4 => Some(RateMode::F700),
             _ => None,
         }
     }
@@ -158,22 +247,22 @@ mod tests {
     fn every_mode_fits_its_largest_frame() {
         for mode in RateMode::ALL {
             let frame = mode.max_frame_bytes();
-            let used = TX_LEAD_US
-                + TX_SETUP_US
+            let used = mode.tx_lead_us()
+                + mode.tx_setup_us()
                 + PLL_SETTLE_US
-                + airtime_us(frame, mode.bit_rate_bps())
-                + TAIL_GUARD_US;
+                + mode.airtime_us(frame)
+                + mode.tail_guard_us();
             assert!(
                 used <= mode.slot_us(),
                 "{mode:?}: {used} µs > {} µs",
                 mode.slot_us()
             );
             // and one more byte would not fit (or the FIFO is the limit)
-            let over = TX_LEAD_US
-                + TX_SETUP_US
+            let over = mode.tx_lead_us()
+                + mode.tx_setup_us()
                 + PLL_SETTLE_US
-                + airtime_us(frame + 1, mode.bit_rate_bps())
-                + TAIL_GUARD_US;
+                + mode.airtime_us(frame + 1)
+                + mode.tail_guard_us();
             assert!(over > mode.slot_us() || frame == FIFO_BYTES);
         }
     }
@@ -184,6 +273,35 @@ mod tests {
         assert_eq!(RateMode::M100.max_frame_bytes(), 54);
         assert_eq!(RateMode::F250.max_frame_bytes(), 41);
         assert_eq!(RateMode::F500.max_frame_bytes(), 32);
+        assert_eq!(RateMode::F700.max_frame_bytes(), 21);
+    }
+
+    #[test]
+    fn the_old_modes_keep_their_timing() {
+        for mode in [
+            RateMode::L50,
+            RateMode::M100,
+            RateMode::F250,
+            RateMode::F500,
+        ] {
+            assert_eq!(mode.slot_overhead_us(), 550);
+            assert_eq!(mode.chip_overhead_bytes(), CHIP_OVERHEAD_BYTES);
+            assert_eq!(mode.airtime_us(29), airtime_us(29, mode.bit_rate_bps()));
+        }
+    }
+
+    #[test]
+    fn f700_is_header_less_and_fits_the_stick_uplink_and_12_bytes_of_downlink() {
+        let mode = RateMode::F700;
+        assert_eq!(mode.slot_rate_hz(), 700);
+        assert_eq!(mode.chip_overhead_bytes(), 10);
+        // 21-byte frame + 10 chip bytes = 31 bytes = 968.75 µs
+        assert_eq!(mode.airtime_us(21), 969);
+        assert_eq!(mode.slot_overhead_us(), 459);
+        // An uplink of 5 header + 10 channel + 2 CRC bytes leaves 4 for the stream (2 with a
+        // report); a downlink (header, report, CRC: 9 bytes) carries 12 stream bytes.
+        assert_eq!(mode.max_frame_bytes() - 17, 4);
+        assert_eq!(mode.max_frame_bytes() - 9, 12);
     }
 
     #[test]
@@ -191,6 +309,6 @@ mod tests {
         for mode in RateMode::ALL {
             assert_eq!(RateMode::from_code(mode.code()), Some(mode));
         }
-        assert_eq!(RateMode::from_code(4), None);
+        assert_eq!(RateMode::from_code(5), None);
     }
 }

@@ -3,7 +3,7 @@
 //! uplink (channels, master → follower) slot otherwise. See `spec/protocol.md` §4 for why
 //! a downlink replaces an uplink instead of sharing its slot.
 
-use super::rate::{PLL_SETTLE_US, RateMode, TAIL_GUARD_US, TX_LEAD_US, TX_SETUP_US, airtime_us};
+use super::rate::{PLL_SETTLE_US, RateMode};
 
 /// Direction of one slot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,12 +48,15 @@ impl Schedule {
 
     /// When, after its slot starts, a packet of `frame_bytes` has fully arrived.
     pub const fn packet_end_offset_us(&self, frame_bytes: usize) -> u32 {
-        TX_LEAD_US + TX_SETUP_US + PLL_SETTLE_US + airtime_us(frame_bytes, self.rate.bit_rate_bps())
+        self.rate.tx_lead_us()
+            + self.rate.tx_setup_us()
+            + PLL_SETTLE_US
+            + self.rate.airtime_us(frame_bytes)
     }
 
     /// When, after its slot starts, a receiver stops waiting for this slot's packet.
     pub const fn listen_end_offset_us(&self) -> u32 {
-        self.slot_us() - TAIL_GUARD_US / 2
+        self.slot_us() - self.rate.tail_guard_us() / 2
     }
 }
 

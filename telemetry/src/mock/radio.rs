@@ -7,7 +7,7 @@ use std::task::Poll;
 
 use super::executor::VirtualTime;
 use super::medium::Medium;
-use crate::link::rate::{PLL_SETTLE_US, TX_SETUP_US, airtime_us};
+use crate::link::rate::PLL_SETTLE_US;
 use crate::link::{PacketRadio, RadioConfig, RateMode, RxOutcome};
 
 /// One mock radio (node) on a medium.
@@ -71,8 +71,9 @@ impl PacketRadio for MockRadio {
     }
 
     async fn transmit(&mut self, frame: &[u8]) -> Result<(), Infallible> {
-        let start = self.time.now_us() + u64::from(TX_SETUP_US + PLL_SETTLE_US);
-        let end = start + u64::from(airtime_us(frame.len(), self.config.rate.bit_rate_bps()));
+        let rate = self.config.rate;
+        let start = self.time.now_us() + u64::from(rate.tx_setup_us() + PLL_SETTLE_US);
+        let end = start + u64::from(rate.airtime_us(frame.len()));
         self.medium
             .transmit(self.node, start, end, self.frequency_hz, frame);
         self.transmitted += 1;

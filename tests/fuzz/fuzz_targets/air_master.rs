@@ -22,8 +22,8 @@ fuzz_target!(|data: &[u8]| {
     let params = LinkParams {
         bind_id: input.u32(),
         band: Band::from_code(input.u8() % 3).unwrap_or(Band::Mhz433),
-        rate: RateMode::from_code(input.u8() % 4).unwrap_or(RateMode::F500),
-        format: ChannelFormat::from_code(input.u8() % 2).unwrap_or(ChannelFormat::Full16),
+        rate: RateMode::from_code(input.u8() % 5).unwrap_or(RateMode::F500),
+        format: ChannelFormat::from_code(input.u8() % 3).unwrap_or(ChannelFormat::Full16),
         telemetry_ratio: 2 << (input.u8() % 7),
     };
     let mut master = Master::new(params);

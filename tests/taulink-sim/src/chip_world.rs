@@ -78,7 +78,13 @@ fn spawn_pair(
     );
     let m = medium.clone();
     let now: Now = Rc::new(move || m.now().as_micros() as u64);
-    let mut module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);
+    let mut module_app = ModuleApp::new(
+        now.clone(),
+        record.clone(),
+        salt,
+        s.telemetry_load,
+        s.handset,
+    );
     let mut flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
     if let Some(attacker) = attacker {
         module_app.witness = Some(Witness::new(module_radio.last_sender(), attacker));

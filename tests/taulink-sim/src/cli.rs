@@ -7,6 +7,7 @@ use clap::{Parser, ValueEnum};
 use telemetry::channels::ChannelFormat;
 use telemetry::link::{Band, LinkKey, RateMode};
 
+use crate::handset::HandsetKind;
 use crate::scenario::{Attack, Scenario};
 
 /// The binding phrase of `--attack` runs without `--phrase`.
@@ -26,6 +27,7 @@ pub const ATTACK_PHRASE: &str = "taulink-sim attack";
   taulink-sim --cut 10:12 --duration 20 --plot out failsafe and recovery after a 2 s cut,
                                                    drawn to out/link.png
   taulink-sim --sweep                              every rate mode, clean and at 10 % loss
+  taulink-sim --rate F700 --ratio 8 --handset ppm  the stick mode fed by free-running PPM
   taulink-sim --serve                              the web ground station against the
                                                    firmware-in-the-loop world (flight-sitl
                                                    serve): open the printed URL
@@ -36,7 +38,8 @@ Exit status: 0 if every channel output and stream byte was right, 1 if any was w
 2 for a command-line error."
 )]
 pub struct Cli {
-    /// Rate mode: L50 (long range), M100, F250 or F500 (fast, short range).
+    /// Rate mode: L50 (long range), M100, F250, F500 (fast, short range) or F700 (the stick
+    /// mode: sticks in every packet, aux channels round-robin; best at --ratio 8).
     #[arg(long, value_enum, ignore_case = true, default_value_t = RateArg::F250)]
     pub rate: RateArg,
     /// Telemetry ratio: one downlink slot in N (a power of two, 2..=128).
@@ -45,6 +48,13 @@ pub struct Cli {
     /// Carry 8 channels per uplink instead of 16 (more room for uplink telemetry).
     #[arg(long)]
     pub compact8: bool,
+    /// What feeds the module: crsf-synced (EdgeTX on CRSF at 400 kBd following the module's
+    /// timing frames), crsf (EdgeTX ignoring them: every 4 ms of its own crystal), ppm
+    /// (free-running 22.5 ms frames), free-1k (a 1 kHz sample stream, the figures measured
+    /// before handsets were modelled). Latency is from the handset's frame generation to the
+    /// flight side's output (ppm: from the end of the frame).
+    #[arg(long, value_enum, default_value_t = HandsetArg::CrsfSynced)]
+    pub handset: HandsetArg,
     /// Frequency band in MHz.
     #[arg(long, value_enum, default_value_t = BandArg::Mhz433)]
     pub band: BandArg,
@@ -142,6 +152,33 @@ pub enum RateArg {
     F250,
     #[value(name = "F500")]
     F500,
+    #[value(name = "F700")]
+    F700,
+}
+
+/// Handsets as command-line words.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(missing_docs)] // the names are the documentation
+pub enum HandsetArg {
+    #[value(name = "crsf-synced")]
+    CrsfSynced,
+    #[value(name = "crsf")]
+    Crsf,
+    #[value(name = "ppm")]
+    Ppm,
+    #[value(name = "free-1k")]
+    Free1k,
+}
+
+impl From<HandsetArg> for HandsetKind {
+    fn from(h: HandsetArg) -> Self {
+        match h {
+            HandsetArg::CrsfSynced => HandsetKind::CrsfSynced,
+            HandsetArg::Crsf => HandsetKind::Crsf,
+            HandsetArg::Ppm => HandsetKind::Ppm,
+            HandsetArg::Free1k => HandsetKind::Free1k,
+        }
+    }
 }
 
 impl From<RateArg> for RateMode {
@@ -151,6 +188,7 @@ impl From<RateArg> for RateMode {
             RateArg::M100 => RateMode::M100,
             RateArg::F250 => RateMode::F250,
             RateArg::F500 => RateMode::F500,
+            RateArg::F700 => RateMode::F700,
         }
     }
 }
@@ -275,14 +313,17 @@ impl Cli {
         // Stream test bytes are checked end to end; a power-cycled flight side loses its
         // stream buffers, so runs that power-cycle it carry none.
         let cycles_power = matches!(attack, Some(Attack::Replay | Attack::BindSpoof));
+        let rate = self.rate.into();
+        let format = if self.compact8 {
+            ChannelFormat::Compact8
+        } else {
+            ChannelFormat::Full16
+        };
         Scenario {
-            rate: self.rate.into(),
+            rate,
             telemetry_ratio: self.ratio,
-            format: if self.compact8 {
-                ChannelFormat::Compact8
-            } else {
-                ChannelFormat::Full16
-            },
+            // F700 carries 16 channels in its stick format.
+            format: telemetry::link::bind::format_for(rate, format),
             band: self.band.into(),
             distance_m: self.distance,
             loss: self.loss,
@@ -301,6 +342,7 @@ impl Cli {
             chip_level: !self.packet_level && self.ber == 0.0 && !self.no_chip_crc,
             key: phrase.map(LinkKey::from_phrase),
             attack,
+            handset: self.handset.into(),
         }
     }
 }
@@ -362,6 +404,7 @@ mod tests {
             "--failsafe-ms 0",
             "--band 2400",
             "--rate F1000",
+            "--handset sbus",
             "--bogus",
             "--attack jam",
             "--attack forge --sweep",

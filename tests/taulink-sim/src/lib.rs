@@ -11,6 +11,7 @@ pub mod chip_world;
 pub mod cli;
 pub mod driver;
 mod ends;
+pub mod handset;
 pub mod plot;
 pub mod probe;
 pub mod report;

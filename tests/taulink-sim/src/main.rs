@@ -55,6 +55,12 @@ fn sweep(base: &Scenario, progress: bool) -> Vec<(Report, Report)> {
         if s.rate == telemetry::link::RateMode::L50 {
             s.format = telemetry::channels::ChannelFormat::Compact8;
         }
+        // F700 is the stick mode: its 16 channels travel in the stick format, at the 1:8
+        // telemetry ratio it is laid out for (spec §4.1), whatever --ratio says.
+        if s.rate == telemetry::link::RateMode::F700 {
+            s.format = telemetry::channels::ChannelFormat::Sticks16;
+            s.telemetry_ratio = 8;
+        }
         let mut one = |loss: f64| {
             bar.set_message(format!("{mode:?} loss {:.0} %", loss * 100.0));
             #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
@@ -87,17 +93,23 @@ fn print_sweep(reports: &[(Report, Report)], json: bool) {
         println!("[{}]", items.join(",\n "));
         return;
     }
+    if let Some((c, _)) = reports.first() {
+        println!("handset: {}", c.handset);
+    }
     println!(
-        "mode  bit rate  slots  ch  updates/s  latency mean/p99 ms   mean LQ up/down clean | 10%     goodput up/down B/s clean | 10%"
+        "mode  bit rate  slots  ch ratio updates/s  sticks/s  all ch/s  latency mean/p99 ms   mean LQ up/down clean | 10%     goodput up/down B/s clean | 10%"
     );
     for (c, l) in reports {
         println!(
-            "{:<5} {:>8}  {:>5}  {:>2}  {:>9.1}  {:>8.2} / {:<8.2}  {:>5.1} / {:<5.1} | {:>5.1} / {:<5.1}  {:>5.0} / {:<5.0} | {:>5.0} / {:<5.0}",
+            "{:<5} {:>8}  {:>5}  {:>2}  1:{:<3} {:>8.1}  {:>8.1}  {:>8.1}  {:>8.2} / {:<8.2}  {:>5.1} / {:<5.1} | {:>5.1} / {:<5.1}  {:>5.0} / {:<5.0} | {:>5.0} / {:<5.0}",
             c.rate,
             c.bit_rate_bps,
             c.slot_rate_hz,
             c.channels,
+            c.telemetry_ratio,
             c.update_rate_hz,
+            c.stick_updates_per_s,
+            c.all_channel_updates_per_s,
             c.latency_mean_ms,
             c.latency_p99_ms,
             c.uplink_lq_mean,

@@ -1,28 +1,29 @@
-//! The application ends of the simulated link: a handset that produces a new channel sample
-//! every millisecond (stamped inside the channels, so the flight side can measure latency
-//! and check every value), telemetry sources and sinks with known byte streams, and the
-//! shared record both ends write into.
+//! The application ends of the simulated link: the handset's channel frames (`handset`:
+//! each frame's sample index stamped inside the sticks, so the flight side can measure
+//! latency and check every value), telemetry sources and sinks with known byte streams, and
+//! the shared record both ends write into.
 
 use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 
 use si4432_sim::RadioId;
 
-use telemetry::channels::{CHANNEL_MAX, ChannelFormat, Channels};
+use telemetry::channels::{CHANNEL_MAX, ChannelFormat, Channels, MAX_CHANNELS};
 use telemetry::link::core::follower::SyncState;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::FollowerHooks;
 use telemetry::link::master::MasterHooks;
+use telemetry::link::schedule::SlotKind;
 
-/// Handset sample period: about 1 kHz from the handset's own crystal, so its phase drifts
-/// against the module's slots (1 µs per ms) and latency sees every alignment.
-pub const SAMPLE_PERIOD_US: u64 = 1_001;
-/// Samples more than this far behind are not counted as latency (the link was down: that
-/// time shows up as failsafe, not as latency).
-const MAX_BACKLOG_SAMPLES: u64 = 1_000;
-/// Channels that carry the sample stamp, low and high 11 bits (present in both formats).
-const STAMP_LOW: usize = 6;
-const STAMP_HIGH: usize = 7;
+use crate::handset::{Handset, HandsetKind};
+
+/// Samples older than this at their output are not counted as latency (the link was down:
+/// that time shows up as failsafe, not as latency).
+const MAX_BACKLOG_US: u64 = 1_000_000;
+/// Channels that carry the sample stamp, low and high 11 bits: two sticks, present in every
+/// packet of every format.
+const STAMP_LOW: usize = 0;
+const STAMP_HIGH: usize = 1;
 /// Hop records kept for the hop-sequence check.
 const HOP_RECORDS: usize = 20_000;
 
@@ -100,6 +101,12 @@ pub struct Record {
     pub follower_params: Option<telemetry::link::LinkParams>,
     /// Uplink latencies input → output, µs.
     pub latencies_us: Vec<u32>,
+    /// Generation time (virtual µs) of each handset frame, by sample index.
+    pub generated_us: Vec<u64>,
+    /// Per channel: outputs that refreshed it with its right value.
+    pub channel_updates: [u64; MAX_CHANNELS],
+    /// Timing frames the handset followed.
+    pub handset_corrections: u32,
     /// Channel outputs that matched their sample exactly.
     pub outputs_ok: u64,
     /// Channel outputs that did not (must stay 0).
@@ -229,19 +236,27 @@ pub struct ModuleApp {
     pub telemetry_load: bool,
     /// Under attack: attributes accepted downlinks.
     pub witness: Option<Witness>,
+    handset: Handset,
     written: u64,
     read: u64,
 }
 
 impl ModuleApp {
-    /// A module application.
-    pub fn new(now: Now, record: Shared, salt: u64, telemetry_load: bool) -> Self {
+    /// A module application fed by a handset of `handset` kind.
+    pub fn new(
+        now: Now,
+        record: Shared,
+        salt: u64,
+        telemetry_load: bool,
+        handset: HandsetKind,
+    ) -> Self {
         Self {
             now,
             record,
             salt,
             telemetry_load,
             witness: None,
+            handset: Handset::new(handset, salt),
             written: 0,
             read: 0,
         }
@@ -251,7 +266,31 @@ impl ModuleApp {
 impl MasterHooks for ModuleApp {
     fn on_slot(&mut self, _now_us: u64, master: &mut Master) {
         let now = (self.now)();
-        master.set_channels(&sample_channels(self.salt, now / SAMPLE_PERIOD_US));
+        // The loop calls in when an uplink's channels are latched: that instant, on the slot
+        // grid, is what module-core hands its CRSF responder.
+        // (module-core's `AirLink` reports the latch of the telemetry cycle's first slot.)
+        let schedule = *master.schedule();
+        if schedule.kind(master.slot()) == SlotKind::Uplink {
+            let into_cycle = master.slot() % u32::from(schedule.telemetry_ratio.max(1));
+            let cycle_latch = now.saturating_sub(u64::from(into_cycle * schedule.slot_us()));
+            self.handset.set_schedule(schedule.slot_us(), cycle_latch);
+        }
+        let latest = {
+            let mut rec = self.record.borrow_mut();
+            let frame = self
+                .handset
+                .advance(now, |f| rec.generated_us.push(f.generated_us));
+            rec.handset_corrections = self.handset.corrections();
+            frame
+        };
+        match latest {
+            Some(frame) => {
+                master.set_input_lost(false);
+                master.set_channels(&sample_channels(self.salt, frame.k));
+            }
+            // Nothing from the handset yet: the module says so (the follower flies failsafe).
+            None => master.set_input_lost(true),
+        }
         if self.telemetry_load {
             let free = master.uplink_stream.free();
             feed(self.salt ^ 0x0F, &mut self.written, free, |b| {
@@ -350,19 +389,38 @@ impl FollowerHooks for FlightApp {
             let out = follower.output();
             let k = stamp(out);
             let expected = sample_channels(self.salt, k);
-            let n = self.format.count();
-            if out.get(..n) == expected.get(..n) {
+            // The channels this update refreshed (all the format carries, or the sticks and
+            // one aux group) must be sample k's.
+            let carried = (1u32 << self.format.count()) - 1;
+            let mask = u32::from(follower.updated_channels()) & carried;
+            let right = (0..MAX_CHANNELS)
+                .filter(|i| mask & (1 << i) != 0)
+                .all(|i| out.get(i) == expected.get(i));
+            if right && mask != 0 {
                 rec.outputs_ok += 1;
                 rec.last_output_us = now;
-                // Input → output: every handset sample since the previous output (a stick
-                // movement at that sample) first shows at the output now.
+                for (i, n) in rec.channel_updates.iter_mut().enumerate() {
+                    if mask & (1 << i) != 0 {
+                        *n += 1;
+                    }
+                }
+                // Frame generation → output: every handset frame since the previous output
+                // (a stick movement the handset sampled then) first shows at the output now;
+                // a frame superseded before it was sent counts with the later one's output.
+                // (A frame output again — the handset is slower than the link — is no news.)
                 let first = match self.last_sample {
-                    Some(last) if k > last && k - last <= MAX_BACKLOG_SAMPLES => last + 1,
-                    _ => k,
+                    Some(last) if k <= last => k + 1,
+                    Some(last) => last + 1,
+                    None => k,
                 };
                 for j in first..=k {
-                    rec.latencies_us
-                        .push(now.saturating_sub(j * SAMPLE_PERIOD_US) as u32);
+                    let Some(&generated) = rec.generated_us.get(j as usize) else {
+                        continue;
+                    };
+                    let latency = now.saturating_sub(generated);
+                    if latency <= MAX_BACKLOG_US {
+                        rec.latencies_us.push(latency as u32);
+                    }
                 }
                 self.last_sample = Some(k);
             } else {

@@ -3,8 +3,6 @@
 
 use std::fmt::Write;
 
-use telemetry::link::rate::airtime_us;
-
 use crate::scenario::Scenario;
 use crate::world::Outcome;
 
@@ -15,8 +13,10 @@ pub struct Report {
     pub rate: String,
     /// Telemetry ratio.
     pub telemetry_ratio: u8,
-    /// Channels per uplink.
+    /// Channels the link carries.
     pub channels: usize,
+    /// What fed the module (`--handset`).
+    pub handset: String,
     /// Air bit rate.
     pub bit_rate_bps: u32,
     /// Slots per second.
@@ -35,6 +35,12 @@ pub struct Report {
     pub latency_mean_ms: f64,
     /// 99th percentile uplink latency, ms.
     pub latency_p99_ms: f64,
+    /// Updates per second of the least updated stick (channels 1–4) at the flight side.
+    pub stick_updates_per_s: f64,
+    /// Updates per second of the least updated of all channels the link carries.
+    pub all_channel_updates_per_s: f64,
+    /// Timing frames the handset followed (crsf-synced).
+    pub handset_corrections: u32,
     /// Uplink LQ at the end (follower).
     pub uplink_lq: u8,
     /// Mean uplink LQ over the run.
@@ -104,19 +110,25 @@ pub fn summarise(s: &Scenario, o: &Outcome) -> Report {
         lat.iter().map(|&v| f64::from(v)).sum::<f64>() / lat.len() as f64
     };
     let frame = telemetry::frame::uplink_overhead(s.format, false);
+    let per_s = |n: u64| n as f64 / active_s;
+    let carried = m.channel_updates.iter().take(s.format.count());
     Report {
         rate: format!("{:?}", s.rate),
         telemetry_ratio: s.telemetry_ratio,
         channels: s.format.count(),
+        handset: s.handset.name().to_string(),
         bit_rate_bps: s.rate.bit_rate_bps(),
         slot_rate_hz: s.rate.slot_rate_hz(),
-        uplink_airtime_us: airtime_us(frame, s.rate.bit_rate_bps()),
+        uplink_airtime_us: s.rate.airtime_us(frame),
         duration_s: s.duration_s,
         loss: s.loss,
         bound_s: bound_us as f64 / 1e6,
         update_rate_hz: m.outputs_ok as f64 / active_s,
         latency_mean_ms: mean / 1000.0,
         latency_p99_ms: percentile(&lat, 0.99) / 1000.0,
+        stick_updates_per_s: per_s(m.channel_updates.iter().take(4).copied().min().unwrap_or(0)),
+        all_channel_updates_per_s: per_s(carried.copied().min().unwrap_or(0)),
+        handset_corrections: m.handset_corrections,
         uplink_lq: m.now.uplink_lq,
         uplink_lq_mean: m.uplink_lq_mean(),
         downlink_lq_mean: m.downlink_lq_mean(),
@@ -188,6 +200,7 @@ impl Report {
         field("rate", format!("\"{}\"", self.rate));
         field("telemetry_ratio", self.telemetry_ratio.to_string());
         field("channels", self.channels.to_string());
+        field("handset", format!("\"{}\"", self.handset));
         field("bit_rate_bps", self.bit_rate_bps.to_string());
         field("slot_rate_hz", self.slot_rate_hz.to_string());
         field("uplink_airtime_us", self.uplink_airtime_us.to_string());
@@ -197,6 +210,15 @@ impl Report {
         field("update_rate_hz", format!("{:.1}", self.update_rate_hz));
         field("latency_mean_ms", format!("{:.3}", self.latency_mean_ms));
         field("latency_p99_ms", format!("{:.3}", self.latency_p99_ms));
+        field(
+            "stick_updates_per_s",
+            format!("{:.1}", self.stick_updates_per_s),
+        );
+        field(
+            "all_channel_updates_per_s",
+            format!("{:.1}", self.all_channel_updates_per_s),
+        );
+        field("handset_corrections", self.handset_corrections.to_string());
         field("uplink_lq", self.uplink_lq.to_string());
         field("downlink_lq", self.downlink_lq.to_string());
         field("uplink_lq_mean", format!("{:.1}", self.uplink_lq_mean));
@@ -259,7 +281,14 @@ impl Report {
         row("bound after", format!("{:.3} s", self.bound_s));
         row("channel updates", format!("{:.1} /s", self.update_rate_hz));
         row(
-            "latency input→output",
+            "sticks / every channel",
+            format!(
+                "{:.1} / {:.1} updates/s",
+                self.stick_updates_per_s, self.all_channel_updates_per_s
+            ),
+        );
+        row(
+            &format!("latency ({})", self.handset),
             format!(
                 "mean {:.2} ms, p99 {:.2} ms",
                 self.latency_mean_ms, self.latency_p99_ms

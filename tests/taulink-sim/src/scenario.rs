@@ -19,6 +19,8 @@ pub enum Attack {
     BindSpoof,
 }
 
+use crate::handset::HandsetKind;
+
 /// A simulation scenario.
 #[derive(Clone, Debug)]
 pub struct Scenario {
@@ -57,6 +59,8 @@ pub struct Scenario {
     /// Chip CRC on the receivers (off exposes corrupted packets to the link CRC; packet
     /// level only).
     pub chip_crc: bool,
+    /// What feeds the module's channel input.
+    pub handset: HandsetKind,
     /// Run the real RFM22b driver on virtual Si4432s (`si4432-sim`); otherwise the
     /// packet-level mock radios (faster; supports `bit_error_rate` and `chip_crc`).
     pub chip_level: bool,
@@ -89,11 +93,12 @@ impl Default for Scenario {
             chip_level: true,
             key: None,
             attack: None,
+            handset: HandsetKind::CrsfSynced,
         }
     }
 }
 
-/// Parses a rate mode name (`L50`, `M100`, `F250`, `F500`, case-insensitive).
+/// Parses a rate mode name (`L50`, `M100`, `F250`, `F500`, `F700`, case-insensitive).
 pub fn parse_rate(s: &str) -> Option<RateMode> {
     RateMode::ALL
         .into_iter()

@@ -83,7 +83,13 @@ fn spawn_pair<'a>(
     let flight_clock = MockClock::new(time.clone(), FLIGHT_EPOCH_US);
     let t = time.clone();
     let now: Now = Rc::new(move || t.now_us());
-    let module_app = ModuleApp::new(now.clone(), record.clone(), salt, s.telemetry_load);
+    let module_app = ModuleApp::new(
+        now.clone(),
+        record.clone(),
+        salt,
+        s.telemetry_load,
+        s.handset,
+    );
     let flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
     ex.spawn(module_end(
         module_radio,

@@ -11,13 +11,18 @@ use telemetry::link::{Band, LinkParams, RateMode};
 use crate::settings::{ParamError, Settings, Value};
 
 const BANDS: [Band; 3] = [Band::Mhz433, Band::Mhz868, Band::Mhz915];
-const RATES: [RateMode; 4] = [
+const RATES: [RateMode; 5] = [
     RateMode::L50,
     RateMode::M100,
     RateMode::F250,
     RateMode::F500,
+    RateMode::F700,
 ];
-const FORMATS: [ChannelFormat; 2] = [ChannelFormat::Full16, ChannelFormat::Compact8];
+const FORMATS: [ChannelFormat; 3] = [
+    ChannelFormat::Full16,
+    ChannelFormat::Compact8,
+    ChannelFormat::Sticks16,
+];
 
 /// The band to listen for a bind offer on: the stored `link.band` (433 MHz if out of range).
 pub fn bind_band(s: &Settings) -> Band {

@@ -138,9 +138,9 @@ pub const MODES: Choice = &[
 /// Link bands (`telemetry::link::Band`).
 pub const BANDS: Choice = &["433", "868", "915"];
 /// Link rate modes (`telemetry::link::RateMode`).
-pub const RATES: Choice = &["l50", "m100", "f250", "f500"];
+pub const RATES: Choice = &["l50", "m100", "f250", "f500", "f700"];
 /// Uplink channel formats (`telemetry::channels::ChannelFormat`).
-pub const CHANNEL_FORMATS: Choice = &["16", "8"];
+pub const CHANNEL_FORMATS: Choice = &["16", "8", "16-sticks"];
 /// Air protocols (`link.protocol`): TauLink, OpenLRSng 3.8, OpenLRSng 3.9. OpenLRSng frames
 /// carry no authentication.
 pub const PROTOCOLS: Choice = &["taulink", "olrs38", "olrs39"];

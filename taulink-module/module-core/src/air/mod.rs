@@ -18,6 +18,8 @@ pub mod radio;
 
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat};
 use telemetry::link::core::{Follower, Master};
+use telemetry::link::master::LATCH_BEFORE_TX_US;
+#[cfg(test)]
 use telemetry::link::rate::TX_LEAD_US;
 use telemetry::link::{Band as LinkBand, LinkParams};
 
@@ -62,7 +64,8 @@ pub fn link_params(settings: &Settings) -> Option<LinkParams> {
         bind_id: settings.bind_id,
         band: link_band(settings.band),
         rate: settings.rate,
-        format: ChannelFormat::Full16,
+        // 16 channels; at F700 in its stick format (as the bind offered them).
+        format: telemetry::link::bind::format_for(settings.rate, ChannelFormat::Full16),
         telemetry_ratio: settings.telemetry_ratio,
     })
 }
@@ -211,7 +214,16 @@ impl AirLink {
             rate_code: rate.code(),
             schedule: Some(AirSchedule {
                 period_us: rate.slot_us(),
-                phase_us: now_us + u64::from(TX_LEAD_US),
+                // When the channels of the first uplink of this telemetry cycle are latched:
+                // the instant the handset's frame must have arrived by. The cycle's first
+                // slot is always an uplink, so a radio asked for every other slot (the CRSF
+                // line's minimum period) lands on uplinks only, never on the downlink hole.
+                phase_us: (now_us
+                    + u64::from(rate.tx_lead_us().saturating_sub(LATCH_BEFORE_TX_US)))
+                .saturating_sub(
+                    u64::from(master.slot() % u32::from(master.params().telemetry_ratio.max(1)))
+                        * u64::from(rate.slot_us()),
+                ),
             }),
         };
     }
@@ -341,6 +353,32 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_schedule_names_the_latch_of_the_telemetry_cycles_first_slot() {
+        use telemetry::link::RateMode;
+        use telemetry::link::core::Step;
+        let params = LinkParams::new(
+            7,
+            LinkBand::Mhz433,
+            RateMode::F700,
+            ChannelFormat::Full16,
+            8,
+        );
+        let mut master = Master::new(params);
+        let mut buf = [0u8; 64];
+        // Slots 0, 1 and 2 (uplinks) go out; the hook then runs for slot 3 at 100 ms.
+        for _ in 0..3 {
+            assert!(matches!(master.plan(0, &mut buf), Step::Transmit { .. }));
+            master.on_sent();
+        }
+        let mut link = AirLink::new();
+        link.on_master_slot(100_000, &mut master);
+        let schedule = link.stats().schedule.unwrap();
+        assert_eq!(schedule.period_us, 1_428);
+        // F700 latches at its slot start (30 µs lead, 30 µs latch): three slots back.
+        assert_eq!(schedule.phase_us, 100_000 - 3 * 1_428);
+    }
+
+    #[test]
     fn settings_map_to_link_parameters() {
         let mut settings = Settings::default();
         assert_eq!(link_params(&settings), None, "unbound");
@@ -353,7 +391,13 @@ mod tests {
             assert_eq!(params.bind_id, 0x1234_5678);
             assert_eq!(params.rate, rate);
             assert_eq!(params.band, LinkBand::Mhz868);
-            assert_eq!(params.format, ChannelFormat::Full16);
+            let format = if rate == telemetry::link::RateMode::F700 {
+                ChannelFormat::Sticks16
+            } else {
+                ChannelFormat::Full16
+            };
+            assert_eq!(params.format, format);
+            assert_eq!(new_bind_params(&settings, 1).format, format);
             assert_eq!(params.telemetry_ratio, 8);
             let fresh = new_bind_params(&settings, 0xCAFE);
             assert_eq!((fresh.bind_id, fresh.rate), (0xCAFE, rate));
@@ -393,7 +437,7 @@ mod tests {
         assert_eq!(stats.schedule.unwrap().period_us, 20_000);
         assert_eq!(
             stats.schedule.unwrap().phase_us,
-            4_000 + u64::from(TX_LEAD_US)
+            4_000 + u64::from(TX_LEAD_US - LATCH_BEFORE_TX_US)
         );
         link.start_bind();
         assert!(link.take_bind_request());

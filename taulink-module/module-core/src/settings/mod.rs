@@ -601,8 +601,11 @@ mod tests {
             Err(DecodeError::Field { offset: 6 })
         );
         record[6] = 7;
-        // Rate code 4 was 125 000 bit/s in version 2; version 3 has no mode 4.
+        // Rate code 4 was 125 000 bit/s in version 2; in version 3 it is F700, and there is
+        // no mode 5.
         record[2] = 4;
+        assert_eq!(Settings::from_record(&record).unwrap().rate, RateMode::F700);
+        record[2] = 5;
         assert_eq!(
             Settings::from_record(&record),
             Err(DecodeError::Field { offset: 2 })

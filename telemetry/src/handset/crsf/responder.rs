@@ -35,6 +35,13 @@ pub fn taulink_device_info(major: u8, minor: u8, patch: u8) -> DeviceInfo {
     }
 }
 
+/// How long before the link latches an uplink's channels the radio's channel frame should
+/// have ended: EdgeTX's frames leave ±50 µs around their tick (its mixer run), and the
+/// module needs some tens of µs to parse one; ExpressLRS keeps 100 µs
+/// (`OpenTXsyncOffsetSafeMargin`). Every µs of it is a µs of stick latency (it was 1 ms:
+/// taulink-sim measured F700's synced p99 at 3.5 ms with it, issue 17).
+pub const DEFAULT_TIMING_LEAD_US: u32 = 200;
+
 /// Reply timing and rates.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Config {
@@ -53,7 +60,7 @@ pub struct Config {
 }
 
 impl Config {
-    /// Defaults for `baud`: 10 Hz link statistics, 5 Hz sensors, 5 Hz timing, 1 ms lead.
+    /// Defaults for `baud`: 10 Hz link statistics, 5 Hz sensors, 5 Hz timing, 200 µs lead.
     pub fn new(baud: u32, device_info: DeviceInfo) -> Self {
         Self {
             baud,
@@ -61,7 +68,7 @@ impl Config {
             link_statistics_interval_us: 100_000,
             sensor_interval_us: 200_000,
             timing_interval_us: 200_000,
-            timing_lead_us: 1_000,
+            timing_lead_us: DEFAULT_TIMING_LEAD_US,
         }
     }
 

@@ -13,7 +13,6 @@ use crate::link::bind::LinkParams;
 use crate::link::hopping::{HOP_CHANNELS, HopSequence};
 use crate::link::quality::{Counters, LqWindow, RssiFilter};
 use crate::link::radio::{RadioConfig, RxOutcome};
-use crate::link::rate::TX_LEAD_US;
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
@@ -85,6 +84,7 @@ pub struct Follower {
     output: Channels,
     last_valid_us: Option<u64>,
     updates: u32,
+    updated_mask: u16,
     /// Telemetry towards the master.
     pub downlink_stream: StreamSender<STREAM_TX_BYTES>,
     /// Telemetry from the master.
@@ -124,6 +124,7 @@ impl Follower {
             output,
             last_valid_us: None,
             updates: 0,
+            updated_mask: 0,
             downlink_stream: StreamSender::new(),
             uplink_stream: StreamReceiver::new(),
             lq: LqWindow::new(),
@@ -211,7 +212,7 @@ impl Follower {
     fn slot_end_us(&self, slot: u8, slot_start_us: u64) -> u64 {
         match self.schedule.kind(u32::from(slot)) {
             SlotKind::Uplink => slot_start_us + u64::from(self.schedule.listen_end_offset_us()),
-            SlotKind::Downlink => slot_start_us + u64::from(TX_LEAD_US),
+            SlotKind::Downlink => slot_start_us + u64::from(self.schedule.rate.tx_lead_us()),
         }
     }
 
@@ -326,7 +327,7 @@ impl Follower {
                     SlotKind::Downlink => match self.build_downlink(slot, buf) {
                         Some(len) => Step::Transmit {
                             channel,
-                            at_us: slot_start_us + u64::from(TX_LEAD_US),
+                            at_us: slot_start_us + u64::from(self.schedule.rate.tx_lead_us()),
                             len,
                         },
                         None => Step::Idle,
@@ -486,7 +487,7 @@ impl Follower {
                 self.failsafe_values.apply(&mut self.output);
             }
         } else {
-            up.channels_into(&mut self.output);
+            self.updated_mask = up.channels_into_mask(&mut self.output).unwrap_or(0);
             if up.save_failsafe {
                 self.failsafe_values = FailsafeValues::from_channels(&self.output);
             }
@@ -506,6 +507,14 @@ impl Follower {
     /// Number of channel updates received so far (changes when `output` was refreshed).
     pub fn updates(&self) -> u32 {
         self.updates
+    }
+
+    /// Which channels the latest update refreshed (bit `i` = channel `i`): all carried ones,
+    /// or with [`ChannelFormat::Sticks16`] the four sticks and one aux group.
+    ///
+    /// [`ChannelFormat::Sticks16`]: crate::channels::ChannelFormat::Sticks16
+    pub fn updated_channels(&self) -> u16 {
+        self.updated_mask
     }
 
     /// In failsafe?

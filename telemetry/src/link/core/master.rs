@@ -2,7 +2,7 @@
 //! for anyone — every slot it either sends channels or listens for telemetry, on the hop
 //! channel of that slot, whether or not the follower is there.
 
-use crate::channels::{CHANNEL_CENTER, Channels, pack};
+use crate::channels::{CHANNEL_CENTER, Channels, pack_group};
 use crate::frame::{
     Frame, LinkReport, Received, StreamHeader, Uplink, decode, encode, open, peek_sealed, seal,
     uplink_overhead,
@@ -12,7 +12,6 @@ use crate::link::bind::LinkParams;
 use crate::link::hopping::HopSequence;
 use crate::link::quality::{Counters, LqWindow, RssiFilter};
 use crate::link::radio::{RadioConfig, RxOutcome};
-use crate::link::rate::TX_LEAD_US;
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
@@ -35,6 +34,11 @@ pub struct Master {
     save_failsafe: u8,
     /// Uplinks carry the input-lost flag (the application has no fresh channels).
     input_lost: bool,
+    /// The aux group the next uplink carries ([`ChannelFormat::Sticks16`]; cycles per
+    /// uplink sent).
+    ///
+    /// [`ChannelFormat::Sticks16`]: crate::channels::ChannelFormat::Sticks16
+    aux_group: u8,
     report_due: bool,
     heard: bool,
     /// Telemetry towards the follower.
@@ -65,6 +69,7 @@ impl Master {
             channels: [CHANNEL_CENTER; 16],
             save_failsafe: 0,
             input_lost: false,
+            aux_group: 0,
             report_due: false,
             heard: false,
             uplink_stream: StreamSender::new(),
@@ -148,7 +153,7 @@ impl Master {
             SlotKind::Uplink => match self.build_uplink(buf) {
                 Some(len) => Step::Transmit {
                     channel,
-                    at_us: slot_start_us + u64::from(TX_LEAD_US),
+                    at_us: slot_start_us + u64::from(self.schedule.rate.tx_lead_us()),
                     len,
                 },
                 // Only with a buffer smaller than max_frame_bytes: skip the slot, never panic.
@@ -169,7 +174,7 @@ impl Master {
         };
         let mut packed = [0u8; 22];
         let packed = packed.get_mut(..format.packed_bytes())?;
-        pack(&self.channels, format, packed);
+        pack_group(&self.channels, format, self.aux_group, packed);
         let room = self
             .params
             .rate
@@ -202,6 +207,7 @@ impl Master {
     /// The uplink of the current slot has been sent.
     pub fn on_sent(&mut self) {
         self.counters.sent += 1;
+        self.aux_group = (self.aux_group + 1) % self.params.format.groups();
         self.save_failsafe = self.save_failsafe.saturating_sub(1);
         self.report_due = false;
         self.next_slot();

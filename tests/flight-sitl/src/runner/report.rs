@@ -202,6 +202,7 @@ pub fn rate_name(rate: RateMode) -> &'static str {
         RateMode::M100 => "M100",
         RateMode::F250 => "F250",
         RateMode::F500 => "F500",
+        RateMode::F700 => "F700",
     }
 }
 
