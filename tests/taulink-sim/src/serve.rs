@@ -1,5 +1,5 @@
 //! `taulink-sim --serve [ADDR]`: serves the web ground station (the built app, static files)
-//! and, on `/ws`, a WebSocket per page with its own simulated world ([`session`]) running in
+//! and, on `/ws`, a WebSocket per page with its own simulated world ([`Session`]) running in
 //! (scaled) real time: binary messages to the page carry what the module's HM-10 relay
 //! sends to a phone, binary messages from the page go into the relay towards the flight
 //! side. `/api/sent` tells what the flight side of the latest world sent and applied (for
