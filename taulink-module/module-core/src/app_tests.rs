@@ -1,9 +1,9 @@
 use super::*;
 use crate::channels::{us_to_value, value_to_us};
-use crate::hm10::cobs;
 use crate::hm10::relay::MAX_FRAME_LEN;
 use crate::ppm::FailsafeOutput;
 use crate::ppm::waveform::edges;
+use telemetry::cobs;
 
 #[derive(Default)]
 struct FakeLink {
