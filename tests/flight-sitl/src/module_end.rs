@@ -13,7 +13,7 @@ use embassy_futures::join::join5;
 use embassy_futures::select::{Either, select};
 use module_core::air::AirLink;
 use module_core::app::{Action, App};
-use module_core::channels::value_to_us;
+use module_core::channels::ticks_to_us;
 use module_core::handset::Handset;
 use module_core::session::{BindOutcome, LinkStep, POLL_MS, SessionEnd};
 use module_core::settings::Settings as ModuleSettings;
@@ -251,7 +251,7 @@ async fn ppm_in_task(b: &Board, shared: &Shared) {
             }
             b.check_in(Watched::PpmIn);
             if let Some(v) = ch.get(i) {
-                edge += u64::from(value_to_us(*v));
+                edge += u64::from(ticks_to_us(*v));
             }
         }
         frame_start += PPM_FRAME_US;
