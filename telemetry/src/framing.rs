@@ -1,11 +1,11 @@
-//! Byte-stream framing for the telemetry stream and the phone relay: COBS (Cheshire &
-//! Baker, "Consistent Overhead Byte Stuffing", 1999) with a 0x00 delimiter, so a receiver
-//! that joins mid-stream or loses bytes resynchronises at the next zero, and a CRC-16 inside
-//! each frame, so a frame damaged outside the link (a UART, a BLE bridge) is dropped.
+//! Byte-stream framing for the telemetry stream and the phone relay: COBS ([`crate::cobs`])
+//! with a 0x00 delimiter, so a receiver that joins mid-stream or loses bytes resynchronises
+//! at the next zero, and a CRC-16 inside each frame, so a frame damaged outside the link (a UART, a BLE bridge) is dropped.
 //!
 //! Frame on the wire: `COBS(payload ‖ crc16_be(payload)) ‖ 0x00`.
 
 use crate::checksum::crc16;
+use crate::cobs;
 
 /// Framing failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,49 +33,18 @@ impl core::error::Error for FramingError {}
 /// Worst-case framed size of a `payload_len`-byte payload: COBS adds one byte per 254 plus
 /// one, the CRC two, the delimiter one.
 pub const fn framed_len(payload_len: usize) -> usize {
-    let body = payload_len + 2;
-    body + body / 254 + 1 + 1
+    cobs::max_encoded_len(payload_len + 2) + 1
 }
 
 /// Frames `payload` into `out`; returns the framed length (delimiter included).
 pub fn frame(payload: &[u8], out: &mut [u8]) -> Result<usize, FramingError> {
     let crc = crc16(payload).to_be_bytes();
     let needed = framed_len(payload.len());
-    if out.len() < needed {
-        return Err(FramingError::BufferTooSmall { needed });
-    }
-    // COBS: each block starts with a code byte = distance to the next zero (or 0xFF for a
-    // full 254-byte block with no zero).
-    let mut code_at = 0usize;
-    let mut at = 1usize;
-    let mut code = 1u8;
-    for &b in payload.iter().chain(crc.iter()) {
-        if b == 0 {
-            set(out, code_at, code);
-            code_at = at;
-            at += 1;
-            code = 1;
-        } else {
-            set(out, at, b);
-            at += 1;
-            code += 1;
-            if code == 0xFF {
-                set(out, code_at, code);
-                code_at = at;
-                at += 1;
-                code = 1;
-            }
-        }
-    }
-    set(out, code_at, code);
-    set(out, at, 0);
-    Ok(at + 1)
-}
-
-fn set(out: &mut [u8], at: usize, value: u8) {
-    if let Some(slot) = out.get_mut(at) {
-        *slot = value;
-    }
+    let too_small = FramingError::BufferTooSmall { needed };
+    let body = out.get_mut(..needed - 1).ok_or(too_small)?;
+    let encoded = cobs::encode_parts(&[payload, &crc], body).map_err(|_| too_small)?;
+    *out.get_mut(encoded).ok_or(too_small)? = 0;
+    Ok(encoded + 1)
 }
 
 /// What the deframer made of one delimited frame.
@@ -151,25 +120,7 @@ impl<const N: usize> Deframer<N> {
 
     /// COBS-decodes `buf[..len]` in place (output never outruns input); checks the CRC.
     fn decode_in_place(&mut self, len: usize) -> Option<usize> {
-        let mut read = 0usize;
-        let mut write = 0usize;
-        while read < len {
-            let code = usize::from(*self.buf.get(read)?);
-            if code == 0 || read + code > len {
-                return None;
-            }
-            read += 1;
-            for _ in 1..code {
-                let b = *self.buf.get(read)?;
-                *self.buf.get_mut(write)? = b;
-                read += 1;
-                write += 1;
-            }
-            if code != 0xFF && read < len {
-                *self.buf.get_mut(write)? = 0;
-                write += 1;
-            }
-        }
+        let write = cobs::decode_in_place(self.buf.get_mut(..len)?).ok()?;
         let body_len = write.checked_sub(2)?;
         let (body, crc) = self.buf.get(..write)?.split_at_checked(body_len)?;
         let [c0, c1] = crc else {
@@ -229,6 +180,23 @@ mod tests {
         assert_eq!(&out[..3], &[0x02, 0x11, 0x04]);
         assert_eq!(&out[3..6], &[0x22, crc[0], crc[1]]);
         assert_eq!((n, out[6]), (7, 0));
+    }
+
+    #[test]
+    fn a_body_ending_on_a_full_block_gets_no_empty_block() {
+        // payload ‖ crc of 254 non-zero bytes is one full block: 0xFF, the 254 bytes, the
+        // delimiter, the same bytes the module's relay sends for that record. (The framing's
+        // own COBS used to add an empty block, 0x01, before the delimiter.)
+        let (payload, crc) = (1..=255u8)
+            .map(|fill| ([fill; 252], crc16(&[fill; 252]).to_be_bytes()))
+            .find(|(_, crc)| !crc.contains(&0))
+            .unwrap();
+        let mut out = [0u8; 300];
+        let n = frame(&payload, &mut out).unwrap();
+        assert_eq!(n, 256);
+        assert_eq!(out[0], 0xFF);
+        assert_eq!(&out[1..253], &payload);
+        assert_eq!(&out[253..256], &[crc[0], crc[1], 0]);
     }
 
     #[test]

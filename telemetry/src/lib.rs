@@ -8,6 +8,7 @@
 
 pub mod channels;
 pub mod checksum;
+pub mod cobs;
 pub mod frame;
 pub mod framing;
 pub mod handset;

@@ -46,7 +46,8 @@ enum Task {
     /// Build one firmware image (release) and print the ELF's path.
     #[command(subcommand)]
     Build(Image),
-    /// Build every variant and write dist/NAME.{elf,bin,hex[,uf2][,tlfw]}.
+    /// Build every variant and write dist/NAME.elf, .bin and .hex (and .uf2, .tlfw where the
+    /// image has them).
     Dist,
     /// Print text/data/bss of the ELFs in dist/.
     Size,

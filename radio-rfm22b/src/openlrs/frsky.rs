@@ -5,14 +5,15 @@
 //! of a hub user frame (`7E FD n 00 d0..d5 7E` when n < 6) and S.Port value bytes v1..v3.
 //! We send 0x00 in those places, as the vectors (built with zeroed locals) do.
 
+use ::telemetry::handset::stuffing;
 use heapless::{Deque, Vec};
 
 use super::telemetry;
 
 /// Frame delimiter of both protocols.
-pub const FRAME_START: u8 = 0x7E;
-/// Byte-stuffing escape: 0x7E/0x7D go out as 0x7D, x ^ 0x20.
-pub const ESCAPE: u8 = 0x7D;
+pub const FRAME_START: u8 = stuffing::FRAME;
+/// Byte-stuffing escape: 0x7E/0x7D go out as 0x7D, x ^ 0x20 ([`stuffing::escaped`]).
+pub const ESCAPE: u8 = stuffing::ESCAPE;
 /// Hub link frame type (A1, A2, RSSI).
 pub const HUB_LINK: u8 = 0xFE;
 /// Hub user-data frame type.
@@ -41,10 +42,13 @@ pub type Output = Vec<u8, 24>;
 
 fn push_stuffed(out: &mut Output, byte: u8) {
     // Capacity covers every frame built here fully stuffed; a failed push cannot happen.
-    if byte == FRAME_START || byte == ESCAPE {
-        let _ = out.extend_from_slice(&[ESCAPE, byte ^ 0x20]);
-    } else {
-        let _ = out.push(byte);
+    match stuffing::escaped(byte) {
+        Some(pair) => {
+            let _ = out.extend_from_slice(&pair);
+        }
+        None => {
+            let _ = out.push(byte);
+        }
     }
 }
 
@@ -116,7 +120,8 @@ pub fn smartport_slot(slot: u8, inputs: &SmartPortInputs) -> Output {
         1 => smartport_frame(SENSOR_RSSI, (u16::from(inputs.rssi) * 100 / 256) as u8),
         2 => smartport_frame(SENSOR_BATT, inputs.a1),
         3 => smartport_frame(SENSOR_A2, inputs.a2),
-        _ => Vec::from_slice(&[FRAME_START]).unwrap_or_default(),
+        // A one-byte array into a 24-byte Vec: the capacity is checked at compile time.
+        _ => Vec::from_array([FRAME_START]),
     }
 }
 

@@ -1,9 +1,9 @@
 use super::*;
-use crate::channels::{us_to_value, value_to_us};
-use crate::hm10::cobs;
+use crate::channels::{ticks_to_us, us_to_ticks};
 use crate::hm10::relay::MAX_FRAME_LEN;
 use crate::ppm::FailsafeOutput;
 use crate::ppm::waveform::edges;
+use telemetry::cobs;
 
 #[derive(Default)]
 struct FakeLink {
@@ -79,7 +79,7 @@ fn taranis_ppm_reaches_the_link() {
     // 20 frames: 18 frame ends, the first 4 acquire the lock.
     let sent = &app.link().channels;
     assert_eq!(sent.len(), 14);
-    let expected: Vec<u16> = widths.iter().map(|w| us_to_value(*w)).collect();
+    let expected: Vec<u16> = widths.iter().map(|w| us_to_ticks(*w)).collect();
     assert!(sent.iter().all(|ch| ch.as_slice() == expected.as_slice()));
     assert_eq!(app.input_stats().frames, 14);
     app.on_ppm_tick(7 + 19 * 22_500 + 250_001);
@@ -88,7 +88,7 @@ fn taranis_ppm_reaches_the_link() {
 
 #[test]
 fn crsf_channels_go_to_the_link_only_in_crsf_mode() {
-    let channels = Channels::from_values(&[172, 992, 1811, 992]);
+    let channels = Channels::from_ticks(&[172, 992, 1811, 992]);
     let mut ppm_mode = app(Settings::default());
     ppm_mode.on_handset_channels(&channels);
     assert!(ppm_mode.link().channels.is_empty());
@@ -151,12 +151,12 @@ fn receiver_role_outputs_ppm_and_stops_on_failsafe() {
     app.on_tick();
     let values: Vec<u16> = [1100u16, 1200, 1300, 1400, 1500, 1600, 1700, 1800]
         .iter()
-        .map(|w| us_to_value(*w))
+        .map(|w| us_to_ticks(*w))
         .collect();
-    app.on_link_channels(&Channels::from_values(&values));
+    app.on_link_channels(&Channels::from_ticks(&values));
     let frame = app.next_ppm_frame().unwrap();
     let widths: Vec<u16> = frame.slots()[..8].iter().map(|s| s.period_us).collect();
-    let expected: Vec<u16> = values.iter().map(|v| value_to_us(*v)).collect();
+    let expected: Vec<u16> = values.iter().map(|v| ticks_to_us(*v)).collect();
     assert_eq!(widths, expected);
     assert_eq!(frame.length_us(), 22_500);
     app.link.stats.connected = false;
@@ -175,7 +175,7 @@ fn a_factory_receiver_stops_pulses_on_failsafe_and_the_link_gets_the_input_timeo
     assert_eq!(app.link().input_timeout_ms, 500);
     app.link.stats.connected = true;
     app.on_tick();
-    app.on_link_channels(&Channels::from_values(&[us_to_value(1600); 8]));
+    app.on_link_channels(&Channels::from_ticks(&[us_to_ticks(1600); 8]));
     assert!(app.next_ppm_frame().is_some());
     app.link.stats.connected = false;
     app.on_tick();

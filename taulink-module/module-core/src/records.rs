@@ -143,7 +143,7 @@ impl Splitter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hm10::cobs;
+    use telemetry::cobs;
     use telemetry::messages::{Battery, FlightMode, encode_message};
 
     fn battery() -> Message {

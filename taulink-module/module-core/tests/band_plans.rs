@@ -55,7 +55,7 @@ fn every_rate_mode_runs_inside_the_ism_sub_band() {
         let flight = world.flight.borrow();
         let (_, last_out) = flight.outputs.last().expect("channels arrived");
         for (i, w) in widths.iter().enumerate() {
-            let us = module_core::channels::value_to_us(last_out[i]);
+            let us = module_core::channels::ticks_to_us(last_out[i]);
             assert!(us.abs_diff(*w) <= 1, "{rate:?} ch{i}: {us}");
         }
     }

@@ -22,7 +22,7 @@ use embedded_hal_async::delay::DelayNs;
 use module_core::air::radio::LinkRadio;
 use module_core::air::{AirLink, link_params};
 use module_core::app::App;
-use module_core::channels::us_to_value;
+use module_core::channels::us_to_ticks;
 use module_core::handset::Handset;
 use module_core::hm10::relay::MAX_FRAME_LEN;
 use module_core::settings::{InputProtocol, OutputProtocol};
@@ -181,7 +181,7 @@ fn ppm_over_the_driver_on_virtual_si4432s() {
         .last()
         .expect("the flight side heard the module");
     for (channel, &width) in WIDTHS_US.iter().enumerate() {
-        assert_eq!(output[channel], us_to_value(width), "channel {channel}");
+        assert_eq!(output[channel], us_to_ticks(width), "channel {channel}");
     }
     let after_lock = flight.outputs.iter().filter(|(t, _)| *t > 500_000).count();
     assert!(after_lock > 200, "{after_lock} uplinks in 1.5 s");

@@ -15,7 +15,7 @@
 mod common;
 
 use common::{World, module_now, module_settings};
-use module_core::channels::us_to_value;
+use module_core::channels::us_to_ticks;
 use module_core::ports::LinkPort;
 use module_core::settings::{InputProtocol, OutputProtocol, RateMode};
 use telemetry::handset::crsf::{Message, RcChannels, address};
@@ -95,7 +95,7 @@ fn run(rate: RateMode, input: InputProtocol) -> (u64, u64) {
         }
     }
     world.run_until(STOP_US);
-    let expected: Vec<u16> = WIDTHS_US.iter().map(|w| us_to_value(*w)).collect();
+    let expected: Vec<u16> = WIDTHS_US.iter().map(|w| us_to_ticks(*w)).collect();
     {
         let flight = world.flight.borrow();
         let (_, flying) = flight.outputs.last().expect("channels before the stop");

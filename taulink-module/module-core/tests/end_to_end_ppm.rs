@@ -18,7 +18,7 @@ mod common;
 use common::{
     FlightSide, World, flight_attitude, flight_battery, flight_gps, module_now, module_settings,
 };
-use module_core::channels::{us_to_value, value_to_us};
+use module_core::channels::{ticks_to_us, us_to_ticks};
 use module_core::hm10::relay::MAX_FRAME_LEN;
 use module_core::ports::LinkPort;
 use module_core::settings::{InputProtocol, OutputProtocol};
@@ -123,11 +123,11 @@ fn ppm_to_flight_and_telemetry_back_as_sport_and_hm10() {
     let flight = world.flight.borrow();
     let output = last_output(&flight);
     for (channel, &width) in WIDTHS_US.iter().enumerate() {
-        assert_eq!(output[channel], us_to_value(width), "channel {channel}");
+        assert_eq!(output[channel], us_to_ticks(width), "channel {channel}");
         assert!(
-            value_to_us(output[channel]).abs_diff(width) <= 1,
+            ticks_to_us(output[channel]).abs_diff(width) <= 1,
             "channel {channel}: {width} µs came out as {} µs",
-            value_to_us(output[channel])
+            ticks_to_us(output[channel])
         );
     }
     // Channels the PPM stream does not carry stay centred.
@@ -293,5 +293,5 @@ fn ppm_mode_fallback_frsky_d_hub_decodes_to_the_flight_values() {
     assert_eq!(value(hub::id::TEMP1), Some(2), "flight mode number");
     // Channels arrive on this path too.
     let flight = world.flight.borrow();
-    assert_eq!(last_output(&flight)[0], us_to_value(WIDTHS_US[0]));
+    assert_eq!(last_output(&flight)[0], us_to_ticks(WIDTHS_US[0]));
 }

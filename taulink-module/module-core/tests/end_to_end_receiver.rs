@@ -10,7 +10,7 @@ use std::rc::Rc;
 
 use module_core::air::{AirLink, link_params};
 use module_core::app::App;
-use module_core::channels::us_to_value;
+use module_core::channels::us_to_ticks;
 use module_core::handset::Handset;
 use module_core::ppm::FailsafeOutput;
 use module_core::session::LinkStep;
@@ -37,7 +37,7 @@ impl MasterHooks for Transmitter {
     fn on_slot(&mut self, _now_us: u64, master: &mut Master) {
         let mut channels = [CHANNEL_CENTER; MAX_CHANNELS];
         for (slot, width) in channels.iter_mut().zip(WIDTHS_US) {
-            *slot = us_to_value(width);
+            *slot = us_to_ticks(width);
         }
         master.set_channels(&channels);
     }

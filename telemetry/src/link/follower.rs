@@ -62,9 +62,9 @@ pub trait FollowerHooks {
 
 /// Runs the follower forever. Radio errors are ridden through: after each the radio is
 /// re-configured ([`PacketRadio::recover`]) and the session goes on (counted in
-/// `follower.counters().radio_errors`); only [`MAX_CONSECUTIVE_RADIO_ERRORS`] errors in a row
+/// `follower.counters().radio_errors`); only [`MAX_CONSECUTIVE_RADIO_ERRORS`](super::core::MAX_CONSECUTIVE_RADIO_ERRORS) errors in a row
 /// end it with the last error. The radio's health is checked every
-/// [`HEALTH_CHECK_PERIOD_US`]. Failsafe follows from the silence as always.
+/// [`HEALTH_CHECK_PERIOD_US`](super::core::HEALTH_CHECK_PERIOD_US). Failsafe follows from the silence as always.
 pub async fn run_follower<R: PacketRadio, C: LinkClock, H: FollowerHooks>(
     radio: &mut R,
     clock: &mut C,

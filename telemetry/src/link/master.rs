@@ -60,8 +60,8 @@ pub trait MasterHooks {
 /// Runs the master forever. Radio errors are ridden through as in
 /// [`run_follower`](super::follower::run_follower): the radio is re-configured and the slot
 /// grid goes on (counted in `master.counters().radio_errors`); only
-/// [`MAX_CONSECUTIVE_RADIO_ERRORS`] errors in a row end the session. The radio's health is
-/// checked every [`HEALTH_CHECK_PERIOD_US`].
+/// [`MAX_CONSECUTIVE_RADIO_ERRORS`](super::core::MAX_CONSECUTIVE_RADIO_ERRORS) errors in a row end the session. The radio's health is
+/// checked every [`HEALTH_CHECK_PERIOD_US`](super::core::HEALTH_CHECK_PERIOD_US).
 pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
     radio: &mut R,
     clock: &mut C,

@@ -8,10 +8,10 @@ use std::collections::{HashSet, VecDeque};
 use std::rc::Rc;
 
 use super::executor::VirtualTime;
-use super::rng::SplitMix64;
 use crate::checksum::crc16;
 use crate::link::RateMode;
 use crate::link::rate::{PREAMBLE_BYTES, SYNC_BYTES};
+use sim_rng::SplitMix64;
 
 /// Propagation and impairment settings (shared by all nodes).
 #[derive(Clone, Copy, Debug)]

@@ -6,9 +6,8 @@
 pub mod executor;
 pub mod medium;
 pub mod radio;
-pub mod rng;
 
 pub use executor::{Executor, MockClock, VirtualTime};
 pub use medium::{ChannelModel, Medium, MediumStats, Node};
 pub use radio::MockRadio;
-pub use rng::SplitMix64;
+pub use sim_rng::SplitMix64;

@@ -19,7 +19,7 @@ use embassy_futures::select::{Either, select};
 use module_core::air::AirLink;
 use module_core::air::openlrs::run_openlrs_transmitter;
 use module_core::app::{Action, App};
-use module_core::channels::value_to_us;
+use module_core::channels::ticks_to_us;
 use module_core::handset::{Handset, LineMode, MAX_LINE_BURST};
 use module_core::session::{BindOutcome, LinkStep, POLL_MS, SessionEnd};
 use module_core::settings::Settings as ModuleSettings;
@@ -343,7 +343,7 @@ async fn ppm_in_task(b: &Board, shared: &Shared) {
             }
             b.check_in(Watched::PpmIn);
             if let Some(v) = ch.get(i) {
-                edge += u64::from(value_to_us(*v));
+                edge += u64::from(ticks_to_us(*v));
             }
         }
         frame_start += PPM_FRAME_US;

@@ -2,27 +2,15 @@
 //! options, a misspelt flag or scenario is refused with a suggestion (exit 2), nonsense
 //! values and refused settings exit 2 with the reason before anything flies.
 
-#![allow(clippy::unwrap_used)]
+use cli_test::Run;
 
-use std::process::{Command, Output};
-
-fn sitl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_flight-sitl"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
+fn sitl(args: &[&str]) -> Run {
+    cli_test::run(env!("CARGO_BIN_EXE_flight-sitl"), args)
 }
 
 #[test]
 fn help_lists_scenarios_and_options() {
-    let out = sitl(&["--help"]);
-    assert!(out.status.success());
-    let help = text(&out.stdout);
-    for n in [
+    sitl(&["--help"]).assert_lists(&[
         "link-cut",
         "imu-stall",
         "settings-corrupt",
@@ -31,30 +19,14 @@ fn help_lists_scenarios_and_options() {
         "--module-set <NAME=VALUE>",
         "--json",
         "Examples:",
-    ] {
-        assert!(help.contains(n), "help lacks {n:?}:\n{help}");
-    }
-    let out = sitl(&["oneshot-experiment", "--help"]);
-    assert!(out.status.success());
-    assert!(text(&out.stdout).contains("--runs <N>"));
+    ]);
+    sitl(&["oneshot-experiment", "--help"]).assert_lists(&["--runs <N>"]);
 }
 
 #[test]
 fn misspellings_and_nonsense_exit_2_with_the_reason() {
-    let out = sitl(&["link-cut", "--altitud", "30"]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(
-        text(&out.stderr).contains("'--altitude'"),
-        "{}",
-        text(&out.stderr)
-    );
-    let out = sitl(&["link-cutt"]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(
-        text(&out.stderr).contains("link-cut"),
-        "{}",
-        text(&out.stderr)
-    );
+    sitl(&["link-cut", "--altitud", "30"]).assert_refused("'--altitude'");
+    sitl(&["link-cutt"]).assert_refused("link-cut");
     for args in [
         &["link-cut", "--altitude", "nan"][..],
         &["hover", "--duration", "-5"],
@@ -62,12 +34,7 @@ fn misspellings_and_nonsense_exit_2_with_the_reason() {
         &["hover", "--set", "no.such=1"],
     ] {
         let out = sitl(args);
-        assert_eq!(
-            out.status.code(),
-            Some(2),
-            "{args:?}: {}",
-            text(&out.stderr)
-        );
-        assert!(!text(&out.stderr).is_empty());
+        assert_eq!(out.code, Some(2), "{args:?}: {}", out.stderr);
+        assert!(!out.stderr.is_empty());
     }
 }

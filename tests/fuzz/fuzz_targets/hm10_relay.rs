@@ -9,7 +9,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use module_core::hm10::cobs;
+use telemetry::cobs;
 use module_core::hm10::relay::{MAX_FRAME_LEN, MAX_RECORD_LEN, PhoneEvent, PhoneReader, Relay};
 use taulink_fuzz::Input;
 

@@ -8,7 +8,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use module_core::channels::{MAX_CHANNELS, VALUE_MAX};
+use module_core::channels::{MAX_CHANNELS, TICKS_MAX};
 use module_core::ppm::{Decoded, Decoder, DecoderConfig};
 use taulink_fuzz::Input;
 
@@ -47,7 +47,7 @@ fuzz_target!(|data: &[u8]| {
             let count = decoder.locked_count().expect("frames only when locked");
             assert_eq!(channels.count(), count);
             assert!(count <= MAX_CHANNELS && count >= config.min_channels);
-            assert!(channels.as_slice().iter().all(|&v| v <= VALUE_MAX));
+            assert!(channels.as_slice().iter().all(|&v| v <= TICKS_MAX));
             let periods = decoder.last_periods_us();
             assert_eq!(periods.len(), count);
             // Periods are clamped into the channel range (a fuzzed config may give an empty

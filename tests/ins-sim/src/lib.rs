@@ -8,7 +8,6 @@ pub mod metrics;
 pub mod noise;
 pub mod plot;
 pub mod replay;
-pub mod rng;
 pub mod scenario;
 pub mod sensors;
 pub mod trajectory;

@@ -4,9 +4,9 @@
 
 use flight_core::estimation::ins::{Aided, Ins};
 
-use crate::rng::Rng;
 use crate::sensors::{BaroModel, Bias, GpsModel, ImuModel, MagModel, Readings};
 use crate::trajectory::{Motion, Trajectory, Truth};
+use sim_rng::{GOLDEN_GAMMA, SplitMix64};
 
 /// Everything that defines a simulated run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,7 +104,7 @@ pub struct StepOutcomes {
 pub struct Simulation {
     scenario: Scenario,
     trajectory: Trajectory,
-    rng: Rng,
+    rng: SplitMix64,
     step: u64,
 }
 
@@ -131,7 +131,7 @@ impl Simulation {
         Self {
             scenario,
             trajectory,
-            rng: Rng::new(scenario.seed),
+            rng: SplitMix64::new(scenario.seed ^ GOLDEN_GAMMA),
             step: 0,
         }
     }

@@ -1,9 +1,9 @@
 //! Sensor models: truth plus bias (optionally stepping at a given time), scale error and
 //! white noise, each at its own rate. Everything is deterministic given the seed.
 
-use crate::rng::Rng;
 use crate::trajectory::{Truth, rotate_to_body};
 use crate::zip3;
+use sim_rng::SplitMix64;
 
 /// A bias that may change once, at `step_time_s`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -122,13 +122,22 @@ fn to_f32(v: [f64; 3]) -> [f32; 3] {
     v.map(|c| c as f32)
 }
 
+/// Three independent normals scaled by `std`.
+fn normal3(rng: &mut SplitMix64, std: f64) -> [f64; 3] {
+    [
+        rng.gaussian() * std,
+        rng.gaussian() * std,
+        rng.gaussian() * std,
+    ]
+}
+
 impl ImuModel {
     /// Reading for `truth`.
-    pub fn read(&self, truth: &Truth, rng: &mut Rng) -> ([f32; 3], [f32; 3]) {
+    pub fn read(&self, truth: &Truth, rng: &mut SplitMix64) -> ([f32; 3], [f32; 3]) {
         let gb = self.gyro_bias.at(truth.time_s);
         let ab = self.accel_bias.at(truth.time_s);
-        let ng = rng.normal3(self.gyro_noise);
-        let na = rng.normal3(self.accel_noise);
+        let ng = normal3(rng, self.gyro_noise);
+        let na = normal3(rng, self.accel_noise);
         let gyro = zip3(
             zip3(truth.gyro_radps, gb, |t, b| t * self.gyro_scale + b),
             ng,
@@ -145,27 +154,27 @@ impl ImuModel {
 
 impl MagModel {
     /// Reading for `truth`.
-    pub fn read(&self, truth: &Truth, rng: &mut Rng) -> [f32; 3] {
+    pub fn read(&self, truth: &Truth, rng: &mut SplitMix64) -> [f32; 3] {
         let body = self
             .fixed_body
             .unwrap_or_else(|| rotate_to_body(truth.attitude, self.earth_field_ned));
-        let n = rng.normal3(self.noise);
+        let n = normal3(rng, self.noise);
         to_f32(zip3(zip3(body, self.scale, |b, s| b * s), n, |a, n| a + n))
     }
 }
 
 impl BaroModel {
     /// Reading for `truth`.
-    pub fn read(&self, truth: &Truth, rng: &mut Rng) -> f32 {
-        (-truth.position_ned_m[2] + self.offset_m + rng.normal() * self.noise_m) as f32
+    pub fn read(&self, truth: &Truth, rng: &mut SplitMix64) -> f32 {
+        (-truth.position_ned_m[2] + self.offset_m + rng.gaussian() * self.noise_m) as f32
     }
 }
 
 impl GpsModel {
     /// Reading for `truth`.
-    pub fn read(&self, truth: &Truth, rng: &mut Rng) -> ([f32; 3], [f32; 3]) {
-        let np = rng.normal3(self.position_noise_m);
-        let nv = rng.normal3(self.velocity_noise_mps);
+    pub fn read(&self, truth: &Truth, rng: &mut SplitMix64) -> ([f32; 3], [f32; 3]) {
+        let np = normal3(rng, self.position_noise_m);
+        let nv = normal3(rng, self.velocity_noise_mps);
         (
             to_f32(zip3(truth.position_ned_m, np, |a, n| a + n)),
             to_f32(zip3(truth.velocity_ned_mps, nv, |a, n| a + n)),

@@ -6,8 +6,8 @@
 //! `latency_samples = 0` the output computed from sample k acts during [t_k, t_k+1); every
 //! extra latency sample shifts it one period later.
 
-use crate::rng::Rng;
 use flight_core::model::{AxisModel, LqrMatrices};
+use sim_rng::{GOLDEN_GAMMA, SplitMix64};
 use std::collections::VecDeque;
 
 /// Plant configuration.
@@ -65,7 +65,7 @@ pub struct AxisPlant {
     m: LqrMatrices<f64>,
     truth: AxisTruth,
     queue: VecDeque<f64>,
-    rng: Rng,
+    rng: SplitMix64,
 }
 
 impl AxisPlant {
@@ -76,7 +76,7 @@ impl AxisPlant {
             m: LqrMatrices::new(&cfg.model, cfg.ts_s),
             truth: AxisTruth::default(),
             queue,
-            rng: Rng::new(cfg.seed),
+            rng: SplitMix64::new(cfg.seed ^ GOLDEN_GAMMA),
             cfg,
         }
     }

@@ -14,8 +14,8 @@
 //! τ, authority β), integrated exactly (ZOH) over ticks of [`TICK_US`] µs; each axis has its
 //! own pulse (a motor pair's differential command), all on one timer.
 
-use crate::rng::Rng;
 use flight_core::model::{AxisModel, LqrMatrices};
+use sim_rng::{GOLDEN_GAMMA, SplitMix64};
 use std::collections::VecDeque;
 
 /// Simulation tick, µs: pulse edges are placed on this grid (±2.5 µs).
@@ -120,7 +120,7 @@ pub struct EscPlant {
     /// Constant input disturbance of every axis (actuator units).
     disturbance: f64,
     gyro_noise_dps: f64,
-    rng: Rng,
+    rng: SplitMix64,
 }
 
 impl EscPlant {
@@ -149,14 +149,14 @@ impl EscPlant {
                 first_drive_tick: None,
             })
             .collect();
-        let mut rng = Rng::new(seed);
+        let mut rng = SplitMix64::new(seed ^ GOLDEN_GAMMA);
         let period = Self::period_ticks(cfg.timing);
         #[allow(
             clippy::cast_possible_truncation,
             clippy::cast_sign_loss,
             clippy::cast_precision_loss
         )]
-        let phase = (rng.uniform() * period as f64) as u64 % period.max(1);
+        let phase = (rng.open_unit() * period as f64) as u64 % period.max(1);
         Self {
             cfg,
             axes,

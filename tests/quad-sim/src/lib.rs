@@ -12,5 +12,4 @@ pub mod ground;
 pub mod identify;
 pub mod plot;
 pub mod quad;
-pub mod rng;
 pub mod stats;

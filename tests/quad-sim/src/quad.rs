@@ -7,8 +7,8 @@
 //! Frames: NED world, FRD body; the attitude quaternion rotates body → world. A motor at
 //! body position (x, y) pushing −z with thrust T gives torque (−y·T, x·T, 0).
 
-use crate::rng::Rng;
 use flight_core::control::mixer::MotorFactors;
+use sim_rng::{GOLDEN_GAMMA, SplitMix64};
 use std::collections::VecDeque;
 use std::f64::consts::PI;
 
@@ -173,7 +173,7 @@ pub struct Quad {
     params: QuadParams,
     state: QuadState,
     queue: VecDeque<Vec<f64>>,
-    rng: Rng,
+    rng: SplitMix64,
 }
 
 fn quat_rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
@@ -217,7 +217,7 @@ impl Quad {
             params,
             state,
             queue,
-            rng: Rng::new(seed),
+            rng: SplitMix64::new(seed ^ GOLDEN_GAMMA),
         }
     }
 

@@ -10,9 +10,9 @@
 use crate::air::Air;
 use crate::fifo::Fifo;
 use crate::registers::{self, addr, irq2, mode1};
-use crate::rng::Rng;
 use crate::rx::RxState;
 use crate::tx::TxState;
+use sim_rng::SplitMix64;
 
 /// Crystal start-up, STANDBY → READY (datasheet: 600 µs typical).
 pub const XTAL_START_NS: u64 = 600_000;
@@ -97,7 +97,7 @@ pub(crate) const EZMAC_PKSENT: u8 = 1 << 0;
 /// What the chip needs from the rest of the world while it changes state.
 pub(crate) struct Ctx<'a> {
     pub air: &'a mut Air,
-    pub rng: &'a mut Rng,
+    pub rng: &'a mut SplitMix64,
     pub radio_count: usize,
 }
 

@@ -43,7 +43,7 @@
 //!   frame with every receiver's outcome ([`TraceFrame`]). [`Medium::inject_packet`] plays
 //!   a frame from an ideal transmitter in the receiver's own format (lora-rs' `inject_rx`).
 //! - **Execution** ([`Simulation`]): a deterministic single-threaded executor in virtual
-//!   time; all randomness from one seed ([`rng`]).
+//!   time; all randomness from one seed ([`sim_rng::SplitMix64`]).
 //! - **The MCU's bus** (per radio, [`RadioConfig`]): every SPI transaction takes
 //!   `spi_overhead_ns` + bytes × 8 / `spi_clock_hz` of virtual time before it acts on the
 //!   chip (async: the task sleeps and others run, as with DMA; blocking: the whole world
@@ -126,7 +126,6 @@ pub mod packet;
 mod pins;
 pub mod propagation;
 pub mod registers;
-pub mod rng;
 mod rx;
 mod trace;
 mod tx;

@@ -295,7 +295,7 @@ impl ChipHandle {
     }
 
     /// The next `count` SPI transactions to this chip fail: they take their time, reach
-    /// nothing and return [`SpiError`] (a glitch on the bus, a DMA error).
+    /// nothing and return [`SpiError`](crate::SpiError) (a glitch on the bus, a DMA error).
     pub fn fail_spi_transactions(&self, count: u32) {
         self.with(|w| {
             if let Some(r) = w.radios.get_mut(self.index) {

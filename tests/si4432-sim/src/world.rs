@@ -15,7 +15,7 @@ use crate::air::Air;
 use crate::chip::{Chip, Ctx, Fault};
 use crate::medium::{MediumConfig, RadioConfig};
 use crate::propagation::path_loss_db;
-use crate::rng::Rng;
+use sim_rng::SplitMix64;
 
 /// Safety net: more chip steps than this at one instant means a model bug; stop, don't hang.
 const MAX_STEPS_PER_INSTANT: usize = 1_000_000;
@@ -86,7 +86,7 @@ impl Ord for Timer {
 #[derive(Debug)]
 pub(crate) struct World {
     pub now_ns: u64,
-    pub rng: Rng,
+    pub rng: SplitMix64,
     pub radios: Vec<Radio>,
     pub air: Air,
     pub attenuation_db: HashMap<(usize, usize), f64>,
@@ -105,7 +105,7 @@ impl World {
     pub fn new(seed: u64, config: MediumConfig) -> Self {
         Self {
             now_ns: 0,
-            rng: Rng::new(seed),
+            rng: SplitMix64::new(seed),
             radios: Vec::new(),
             air: Air::new(config),
             attenuation_db: HashMap::new(),

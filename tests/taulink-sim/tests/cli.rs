@@ -4,25 +4,15 @@
 
 #![allow(clippy::unwrap_used)] // test helpers
 
-use std::process::{Command, Output};
+use cli_test::Run;
 
-fn sim(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_taulink-sim"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
+fn sim(args: &[&str]) -> Run {
+    cli_test::run(env!("CARGO_BIN_EXE_taulink-sim"), args)
 }
 
 #[test]
 fn help_describes_every_option_and_exits_0() {
-    let out = sim(&["--help"]);
-    assert!(out.status.success());
-    let help = text(&out.stdout);
-    for needle in [
+    sim(&["--help"]).assert_lists(&[
         "--rate",
         "Rate mode: L50",
         "--loss <P>",
@@ -35,21 +25,21 @@ fn help_describes_every_option_and_exits_0() {
         "--quiet",
         "Examples:",
         "Exit status",
-    ] {
-        assert!(help.contains(needle), "--help lacks {needle:?}:\n{help}");
-    }
+    ]);
     let v = sim(&["--version"]);
-    assert!(v.status.success());
-    assert!(text(&v.stdout).starts_with("taulink-sim 0."));
+    assert!(v.success());
+    assert!(v.stdout.starts_with("taulink-sim 0."));
 }
 
 #[test]
 fn misspelt_flag_is_refused_with_a_suggestion() {
     let out = sim(&["--durration", "5"]);
-    assert_eq!(out.status.code(), Some(2));
-    let err = text(&out.stderr);
-    assert!(err.contains("unexpected argument '--durration'"), "{err}");
-    assert!(err.contains("--duration"), "no suggestion: {err}");
+    out.assert_refused("unexpected argument '--durration'");
+    assert!(
+        out.stderr.contains("--duration"),
+        "no suggestion: {}",
+        out.stderr
+    );
 }
 
 #[test]
@@ -64,29 +54,22 @@ fn nonsense_values_are_refused_with_the_reason() {
         (&["--cut", "5:2"], "end after it starts"),
         (&["--rate", "F1000"], "possible values"),
     ] {
-        let out = sim(args);
-        let err = text(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{args:?} accepted: {err}");
-        assert!(err.contains(says), "{args:?}: {err}");
+        sim(args).assert_refused(says);
     }
 }
 
 #[test]
 fn short_run_prints_the_documented_json() {
     let out = sim(&["--duration", "0.5", "--packet-level", "--no-bind", "--json"]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    let json = text(&out.stdout);
-    // Quiet on stderr: no status line with --json.
-    assert!(out.stderr.is_empty(), "{}", text(&out.stderr));
-    for field in [
+    out.assert_lists(&[
         "\"rate\": \"F250\"",
         "\"duration_s\": 0.500",
         "\"update_rate_hz\"",
         "\"latency_p99_ms\"",
         "\"errors\": 0",
-    ] {
-        assert!(json.contains(field), "{field} missing: {json}");
-    }
+    ]);
+    // Quiet on stderr: no status line with --json.
+    assert!(out.stderr.is_empty(), "{}", out.stderr);
 }
 
 #[test]
@@ -106,7 +89,7 @@ fn plot_draws_the_link_figure_and_refuses_a_sweep() {
         "--plot-format",
         "svg",
     ]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(out.success(), "{}", out.stderr);
     let svg = std::fs::read_to_string(dir.join("link.svg")).unwrap();
     for label in [
         "LQ (%)",
@@ -119,11 +102,5 @@ fn plot_draws_the_link_figure_and_refuses_a_sweep() {
         assert!(svg.contains(label), "{label} missing");
     }
     let _ = std::fs::remove_dir_all(&dir);
-    let out = sim(&["--sweep", "--plot", d]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(
-        text(&out.stderr).contains("cannot be used with"),
-        "{}",
-        text(&out.stderr)
-    );
+    sim(&["--sweep", "--plot", d]).assert_refused("cannot be used with");
 }

@@ -3,7 +3,7 @@
 //!
 //! With x = Ts/τ and e = exp(−x) the exact ZOH matrices need φ1 = 1 − e, φ2 = x − 1 + e and
 //! φ3 = x²/2 − x + 1 − e. Written out directly, φ2 and φ3 are differences of nearly equal
-//! numbers (φ3 ≈ x³/6); at τ = 80 ms and Ts = 1 ms the naive f32 LQR B[0] is 10 % wrong. Here
+//! numbers (φ3 ≈ x³/6); at τ = 80 ms and Ts = 1 ms the naive f32 LQR `B[0]` is 10 % wrong. Here
 //! φ1 comes from `expm1` and φ2, φ3 from their alternating Taylor series for x < 1, where every
 //! term is smaller than the previous one and nothing cancels. Generic over f32 (flight) and
 //! f64 (gain design).
@@ -131,17 +131,17 @@ impl<T: Real> Phi<T> {
 }
 
 /// The RTKF model for x = (ω, ν, b), input u, exact ZOH (lqg.md §1):
-/// A = [[1, d·τ·φ1, −B0], [0, e, −φ1], [0, 0, 1]], B = [B0, φ1, 0].
+/// `A = [[1, d·τ·φ1, −B0], [0, e, −φ1], [0, 0, 1]]`, `B = [B0, φ1, 0]`.
 /// Only the entries that are not 0 or 1 are stored; the bias column is −B.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EstimatorMatrices<T> {
-    /// A[0][1] = (β1 − β2)·τ·φ1: rate gained per sample from the torque state.
+    /// `A[0][1] = (β1 − β2)·τ·φ1`: rate gained per sample from the torque state.
     pub a_rate_torque: T,
-    /// A[1][1] = e.
+    /// `A[1][1] = e`.
     pub e: T,
-    /// B[0] = β2·Ts + (β1 − β2)·τ·φ2.
+    /// `B[0] = β2·Ts + (β1 − β2)·τ·φ2`.
     pub b_rate: T,
-    /// B[1] = φ1.
+    /// `B[1] = φ1`.
     pub b_torque: T,
 }
 
@@ -178,17 +178,17 @@ impl<T: Real> EstimatorMatrices<T> {
 }
 
 /// The LQR model for x = (θ, ω, ν), exact ZOH (lqg.md §1):
-/// A = [[1, Ts, d·τ²·φ2], [0, 1, d·τ·φ1], [0, 0, e]],
-/// B = [β2·Ts²/2 + d·τ²·φ3, β2·Ts + d·τ·φ2, φ1].
+/// `A = [[1, Ts, d·τ²·φ2], [0, 1, d·τ·φ1], [0, 0, e]]`,
+/// `B = [β2·Ts²/2 + d·τ²·φ3, β2·Ts + d·τ·φ2, φ1]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LqrMatrices<T> {
-    /// Loop period Ts (A[0][1]).
+    /// Loop period Ts (`A[0][1]`).
     pub ts: T,
-    /// A[0][2] = d·τ²·φ2.
+    /// `A[0][2] = d·τ²·φ2`.
     pub a_angle_torque: T,
-    /// A[1][2] = d·τ·φ1.
+    /// `A[1][2] = d·τ·φ1`.
     pub a_rate_torque: T,
-    /// A[2][2] = e.
+    /// `A[2][2] = e`.
     pub e: T,
     /// B = (angle, rate, torque) response to one sample of u.
     pub b: [T; 3],

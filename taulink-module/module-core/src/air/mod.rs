@@ -236,7 +236,7 @@ impl AirLink {
             let count = follower.params().format.count();
             let output = follower.output();
             self.received_channels =
-                Some(Channels::from_values(output.get(..count).unwrap_or(output)));
+                Some(Channels::from_ticks(output.get(..count).unwrap_or(output)));
         }
         while follower.downlink_stream.free() >= MAX_STREAM_FRAME_LEN {
             let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
@@ -459,7 +459,7 @@ mod tests {
         );
         link.on_master_slot(0, &mut master);
         assert!(master.input_lost(), "nothing from the handset yet");
-        link.send_channels(&Channels::from_values(&[1500; 8]));
+        link.send_channels(&Channels::from_ticks(&[1500; 8]));
         link.on_master_slot(20_000, &mut master);
         assert!(!master.input_lost());
         // Fresh as of the slot that saw them: lost exactly one timeout later.
@@ -468,7 +468,7 @@ mod tests {
         link.on_master_slot(120_000, &mut master);
         assert!(master.input_lost() && link.input_lost());
         assert_eq!(link.input_losses(), 1);
-        link.send_channels(&Channels::from_values(&[1500; 8]));
+        link.send_channels(&Channels::from_ticks(&[1500; 8]));
         link.on_master_slot(140_000, &mut master);
         assert!(!master.input_lost());
         assert_eq!(link.input_losses(), 1);

@@ -23,7 +23,7 @@ use radio_rfm22b::openlrs::roles::{TxEvent, tx_start, tx_step};
 use radio_rfm22b::openlrs::tx::{Received, Transmitter};
 
 use super::{AirLink, CONNECTED_TIMEOUT_US};
-use crate::channels::{MAX_CHANNELS, value_to_us};
+use crate::channels::{MAX_CHANNELS, ticks_to_us};
 use crate::ports::LinkStats;
 use crate::records::MAX_STREAM_FRAME_LEN;
 
@@ -47,7 +47,7 @@ impl AirLink {
         if let Some(channels) = self.channels.filter(|_| !self.input_lost) {
             let mut bits = [0u16; MAX_CHANNELS];
             for (slot, value) in bits.iter_mut().zip(channels.as_slice()) {
-                *slot = us_to_bits(value_to_us(*value));
+                *slot = us_to_bits(ticks_to_us(*value));
             }
             tx.set_channels(bits.get(..channels.as_slice().len()).unwrap_or(&bits));
         }

@@ -186,7 +186,7 @@ impl Handset {
                 Decoded::Frame(frame) => {
                     let request = match responder.on_frame(now_us, &frame) {
                         Some(Message::RcChannels(rc)) => {
-                            channels = Some(Channels::from_values(&rc.ticks));
+                            channels = Some(Channels::from_ticks(&rc.ticks));
                             None
                         }
                         Some(Message::ParameterRead(read)) if for_us(read.destination) => {

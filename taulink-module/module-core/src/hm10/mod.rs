@@ -4,12 +4,12 @@
 //! ## Framing on the phone side
 //! The HM-10 chops its UART stream into ≤ 20-byte BLE notifications at arbitrary points, so
 //! the stream carries its own frames: every record (one telemetry record as the link hands
-//! it to the module, or one record from the phone for the flight side) is COBS-encoded and
-//! followed by a single 0x00. A reader resynchronises at the next 0x00 after any loss. Drops
-//! always remove whole records, never parts of one.
+//! it to the module, or one record from the phone for the flight side) is COBS-encoded
+//! ([`telemetry::cobs`], the same COBS as the telemetry stream's framing) and followed by a
+//! single 0x00. A reader resynchronises at the next 0x00 after any loss. Drops always remove
+//! whole records, never parts of one.
 
 pub mod at;
-pub mod cobs;
 pub mod queue;
 pub mod relay;
 

@@ -6,8 +6,8 @@
 //! records for the phone are only sent while connected; a disconnect clears what waits for
 //! the phone (stale telemetry is worthless and counted as dropped).
 
-use super::cobs;
 use super::queue::{DropStats, RecordQueue};
+use telemetry::cobs;
 
 /// Longest record relayed (a CRSF frame is at most 64 bytes; link records are smaller).
 pub const MAX_RECORD_LEN: usize = 64;

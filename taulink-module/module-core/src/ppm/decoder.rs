@@ -14,7 +14,7 @@
 //! different count must itself repeat `lock_frames` times before it replaces the old one, so
 //! one glitch never changes the channel layout.
 
-use crate::channels::{Channels, MAX_CHANNELS, us_to_value};
+use crate::channels::{Channels, MAX_CHANNELS, us_to_ticks};
 
 /// Decoder timing limits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -293,7 +293,7 @@ impl Decoder {
         self.last_good_us = timestamp_us;
         let mut channels = Channels::centered(count);
         for (index, period_us) in self.periods_us.iter().take(count).enumerate() {
-            channels.set(index, us_to_value(*period_us));
+            channels.set(index, us_to_ticks(*period_us));
         }
         Decoded::Frame(channels)
     }

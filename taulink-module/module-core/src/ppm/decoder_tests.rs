@@ -1,5 +1,5 @@
 use super::*;
-use crate::channels::{us_to_value, value_to_us};
+use crate::channels::{ticks_to_us, us_to_ticks};
 use crate::ppm::waveform::{edges, edgetx_frame_us};
 
 fn feed(decoder: &mut Decoder, timestamps: &[u32]) -> Vec<Decoded> {
@@ -62,7 +62,7 @@ fn every_channel_count_from_4_to_16_locks() {
         assert_eq!(frames.len(), 2, "{count} channels");
         assert_eq!(frames[0].count(), count);
         for (value, width) in frames[1].as_slice().iter().zip(&widths) {
-            assert!(value_to_us(*value).abs_diff(*width) <= 1);
+            assert!(ticks_to_us(*value).abs_diff(*width) <= 1);
         }
     }
 }
@@ -84,7 +84,7 @@ fn edgetx_extended_limits_on_one_channel_keep_every_channel() {
             for (index, width) in widths.iter().enumerate().filter(|(i, _)| *i != 1) {
                 assert_eq!(
                     frame.get(index),
-                    Some(us_to_value(*width)),
+                    Some(us_to_ticks(*width)),
                     "channel {index}"
                 );
             }
@@ -143,7 +143,7 @@ fn jitter_of_two_microseconds_keeps_lock_and_values() {
     for frame in &frames {
         for (value, width) in frame.as_slice().iter().zip(&EIGHT) {
             // ±2 µs on each edge is at most ±4 µs on a period, ≈ 6.4 value steps.
-            assert!(value_to_us(*value).abs_diff(*width) <= 4);
+            assert!(ticks_to_us(*value).abs_diff(*width) <= 4);
         }
     }
 }
@@ -298,7 +298,7 @@ mod properties {
             for frame in decoded {
                 for (value, width) in frame.as_slice().iter().zip(&widths) {
                     // ±4 µs per edge is ±8 µs per period, 1.6 value steps per µs.
-                    prop_assert!(value.abs_diff(us_to_value(*width)) <= 13);
+                    prop_assert!(value.abs_diff(us_to_ticks(*width)) <= 13);
                 }
             }
         }
@@ -323,7 +323,7 @@ mod properties {
             for frame in decoded {
                 prop_assert_eq!(frame.count(), widths.len());
                 for (value, width) in frame.as_slice().iter().zip(&widths) {
-                    prop_assert_eq!(*value, us_to_value(*width));
+                    prop_assert_eq!(*value, us_to_ticks(*width));
                 }
             }
         }

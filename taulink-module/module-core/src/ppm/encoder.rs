@@ -9,7 +9,7 @@
 //! "longer than 2.5–4 ms"). New channel values are latched only when the firmware asks for
 //! the next frame, so a frame is never a mix of old and new values.
 
-use crate::channels::{Channels, MAX_CHANNELS, value_to_us};
+use crate::channels::{Channels, MAX_CHANNELS, ticks_to_us};
 
 /// What the output does while the link is in failsafe.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -216,7 +216,7 @@ impl Encoder {
         for (index, slot) in frame.slots.iter_mut().take(config.channels).enumerate() {
             let width_us = channels
                 .get(index)
-                .map_or(1_500, value_to_us)
+                .map_or(1_500, ticks_to_us)
                 .clamp(config.min_width_us, config.max_width_us);
             channels_us += u32::from(width_us);
             *slot = Slot {

@@ -153,3 +153,37 @@ impl RcChannels {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nominal_points_map_exactly() {
+        assert_eq!(us_to_ticks(988), 172);
+        assert_eq!(us_to_ticks(1500), 992);
+        assert_eq!(us_to_ticks(2012), 1811);
+        assert_eq!(ticks_to_us(172), 988);
+        assert_eq!(ticks_to_us(992), 1500);
+        assert_eq!(ticks_to_us(1811), 2012);
+    }
+
+    #[test]
+    fn extended_limits_saturate_at_eleven_bits() {
+        assert_eq!(us_to_ticks(750), 0);
+        assert_eq!(us_to_ticks(732), 0);
+        assert_eq!(us_to_ticks(2250), 2047);
+        // 881 µs is the last width above zero: 172 + (881 − 988)·1639/1024 = 0.7 → 1.
+        assert_eq!(us_to_ticks(881), 1);
+        assert_eq!(ticks_to_us(0), 881);
+        assert_eq!(ticks_to_us(2047), 2159);
+    }
+
+    #[test]
+    fn round_trip_within_one_microsecond() {
+        for us in 881..=2159u16 {
+            let back = ticks_to_us(us_to_ticks(us));
+            assert!(back.abs_diff(us) <= 1, "{us} µs came back as {back}");
+        }
+    }
+}

@@ -6,8 +6,8 @@ use super::STATES;
 use crate::estimation::math::inv_sqrt;
 use crate::estimation::quaternion::{Quaternion, ned_to_body};
 
-/// ẋ = f(x, u) (DERIVATION.md §1): ṗ = v, v̇ = R_beᵀ(q)(f − [0,0,ab_z]) + [0,0,g],
-/// q̇ = ½ q ⊗ [0, ω − b_g], constant biases.
+/// ẋ = f(x, u) (DERIVATION.md §1): `ṗ = v`, `v̇ = R_beᵀ(q)(f − [0,0,ab_z]) + [0,0,g]`,
+/// `q̇ = ½ q ⊗ [0, ω − b_g]`, constant biases.
 #[must_use]
 pub fn derivative(
     x: &[f32; STATES],

@@ -2,6 +2,13 @@
 //! 0x00 from a record so 0x00 can delimit frames. Each block starts with a code byte
 //! `n` = 1 + the number of non-zero bytes that follow; a block with `n` < 0xFF stands for
 //! those bytes plus one zero (except the last block, whose zero is implied by the frame end).
+//!
+//! The one COBS of the workspace: the telemetry stream's framing ([`crate::framing`]) and the
+//! module's HM-10 phone relay both use it, so a relayed record is the link frame byte for
+//! byte. The encoding is the canonical one (no empty block after a record that ends on a
+//! full 254-byte run; the empty record is `[0x01]`). Not the `cobs` crate that postcard
+//! brings in: it encodes the empty record as nothing, decodes a frame with a 0x00 inside up
+//! to that zero as a good one, and its errors are not `Copy`.
 
 /// Why a COBS frame could not be decoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -37,7 +44,14 @@ pub const fn max_encoded_len(len: usize) -> usize {
 
 /// Encodes `record` into `out` (no trailing delimiter); returns the encoded length.
 pub fn encode(record: &[u8], out: &mut [u8]) -> Result<usize, Error> {
-    let needed = max_encoded_len(record.len());
+    encode_parts(&[record], out)
+}
+
+/// Encodes the concatenation of `parts` as one record, e.g. a payload and its CRC without
+/// copying them together first; returns the encoded length (no trailing delimiter).
+pub fn encode_parts(parts: &[&[u8]], out: &mut [u8]) -> Result<usize, Error> {
+    let record_len = parts.iter().map(|part| part.len()).sum();
+    let needed = max_encoded_len(record_len);
     if out.len() < needed {
         return Err(Error::BufferTooSmall { needed });
     }
@@ -49,7 +63,7 @@ pub fn encode(record: &[u8], out: &mut [u8]) -> Result<usize, Error> {
             *slot = value;
         }
     };
-    for &byte in record {
+    for &byte in parts.iter().flat_map(|part| part.iter()) {
         // A full block (254 data bytes) is closed only when more input follows, so a record
         // ending on a full block gets no empty trailing block (the canonical encoding).
         if code == 0xFF {
@@ -164,6 +178,19 @@ mod tests {
         #[test]
         fn any_record_round_trips(record in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..700)) {
             round_trip(&record);
+        }
+
+        #[test]
+        fn parts_encode_as_their_concatenation(
+            head in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..300),
+            tail in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..300),
+        ) {
+            let whole = [head.as_slice(), tail.as_slice()].concat();
+            let mut expected = vec![0u8; max_encoded_len(whole.len())];
+            let n = encode(&whole, &mut expected).unwrap();
+            let mut got = vec![0u8; max_encoded_len(whole.len())];
+            let m = encode_parts(&[&head, &tail], &mut got).unwrap();
+            proptest::prop_assert_eq!(&got[..m], &expected[..n]);
         }
 
         #[test]
