@@ -25,16 +25,91 @@ impl core::fmt::Debug for LinkKey {
     }
 }
 
+#[cfg(feature = "defmt")]
+impl defmt::Format for LinkKey {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "LinkKey(..)");
+    }
+}
+
+/// Longest binding phrase, bytes of UTF-8.
+pub const PHRASE_MAX_BYTES: usize = 64;
+
+/// Domain prefix of the phrase hash (spec §12); the NUL ends it, so no phrase can extend it.
+const DOMAIN_PHRASE: &[u8] = b"TauLink/1 binding phrase\0";
+
+/// Why a binding phrase was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PhraseError {
+    /// Longer than [`PHRASE_MAX_BYTES`] bytes.
+    TooLong,
+    /// Holds a control character (a phrase must be typeable the same on both ends).
+    NotPrintable,
+}
+
+impl core::fmt::Display for PhraseError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            PhraseError::TooLong => "binding phrase longer than 64 bytes",
+            PhraseError::NotPrintable => "binding phrase holds a control character",
+        })
+    }
+}
+
+impl core::error::Error for PhraseError {}
+
+/// The key of a binding phrase as a person typed it, the one rule both ends (and the
+/// ground station) apply: leading and trailing white space is dropped; what is left must be
+/// at most [`PHRASE_MAX_BYTES`] bytes of printable UTF-8 (spaces inside are part of it).
+/// `Ok(None)`: no phrase (empty), the link runs unauthenticated.
+pub fn key_for_phrase(text: &str) -> Result<Option<LinkKey>, PhraseError> {
+    let phrase = text.trim();
+    if phrase.is_empty() {
+        return Ok(None);
+    }
+    if phrase.len() > PHRASE_MAX_BYTES {
+        return Err(PhraseError::TooLong);
+    }
+    if phrase.chars().any(char::is_control) {
+        return Err(PhraseError::NotPrintable);
+    }
+    Ok(Some(LinkKey::from_phrase(phrase)))
+}
+
 /// Domain separation of the derivations: each use of the key hashes its own prefix. A frame
 /// tag hashes its 64-bit counter first; "TauLink/" read as a counter is above 2⁶¹, which no
 /// link ever reaches, so no frame tag coincides with a derived value.
 const DOMAIN_BIND_ID: &[u8] = b"TauLink/1 bind-id";
 const DOMAIN_HOP_SEED: &[u8] = b"TauLink/1 hop-seed";
+const DOMAIN_FINGERPRINT: &[u8] = b"TauLink/1 fingerprint";
 
 impl LinkKey {
     /// The key from its 16 bytes.
     pub const fn from_bytes(bytes: [u8; KEY_BYTES]) -> Self {
         Self(bytes)
+    }
+
+    /// The key of a binding phrase: `SHA-256("TauLink/1 binding phrase\0" ‖ phrase)`, its
+    /// first 16 bytes (spec §12). The phrase's bytes are hashed as given; people's input goes
+    /// through [`key_for_phrase`], which trims and checks it first.
+    pub fn from_phrase(phrase: &str) -> LinkKey {
+        let mut h = super::sha256::Sha256::new();
+        h.write(DOMAIN_PHRASE);
+        h.write(phrase.as_bytes());
+        let digest = h.finish();
+        let mut key = [0u8; KEY_BYTES];
+        for (k, d) in key.iter_mut().zip(digest) {
+            *k = d;
+        }
+        LinkKey(key)
+    }
+
+    /// A short public check value of the key, for a person to compare both ends (console,
+    /// handset menu, ground station): the low 32 bits of SipHash-2-4(key,
+    /// "TauLink/1 fingerprint"). One-way like the bind ID, and a different value from it.
+    pub fn fingerprint(&self) -> u32 {
+        self.prf(DOMAIN_FINGERPRINT) as u32
     }
 
     /// The key's bytes (to store it).
@@ -222,6 +297,73 @@ mod tests {
             f[bit / 8] ^= 1 << (bit % 8);
             assert!(!key.verify(7, &f, tag), "bit {bit}");
         }
+    }
+
+    fn bytes(hex: &str) -> [u8; 16] {
+        core::array::from_fn(|i| u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).unwrap())
+    }
+
+    #[test]
+    fn a_phrase_gives_the_key_of_the_spec() {
+        // Expected keys from Python, not from this code:
+        // hashlib.sha256(b"TauLink/1 binding phrase\0" + p).hexdigest()[:32]
+        for (phrase, key) in [
+            (
+                "correct horse battery staple",
+                "6c8c3067ce51b390ad2a8164c0352019",
+            ),
+            ("a", "6882b94b07dd0f2059789153d1c32eb0"),
+            ("Grüezi Säntis 2026", "474c6b9d03a2946f351696fdb431fdef"),
+            (
+                "xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+                "29b16b08d9347165626b1aa44e39481d",
+            ),
+        ] {
+            assert_eq!(
+                LinkKey::from_phrase(phrase).to_bytes(),
+                bytes(key),
+                "{phrase}"
+            );
+            assert_eq!(
+                key_for_phrase(&format!("  {phrase}\t")),
+                Ok(Some(LinkKey::from_bytes(bytes(key)))),
+                "typed with white space around it"
+            );
+        }
+    }
+
+    #[test]
+    fn phrase_rules_one_to_64_printable_bytes_empty_is_none() {
+        assert_eq!(key_for_phrase(""), Ok(None));
+        assert_eq!(key_for_phrase("   "), Ok(None));
+        assert!(
+            key_for_phrase(&"é".repeat(32)).unwrap().is_some(),
+            "64 bytes"
+        );
+        assert_eq!(
+            key_for_phrase(&"é".repeat(32).replace('é', "ée")),
+            Err(PhraseError::TooLong)
+        );
+        assert_eq!(key_for_phrase(&"x".repeat(65)), Err(PhraseError::TooLong));
+        assert_eq!(
+            key_for_phrase("bell\u{7}ring"),
+            Err(PhraseError::NotPrintable)
+        );
+        assert_eq!(key_for_phrase("two\nlines"), Err(PhraseError::NotPrintable));
+        // Inner spaces and case count.
+        assert_ne!(key_for_phrase("a b"), key_for_phrase("ab"));
+        assert_ne!(key_for_phrase("A"), key_for_phrase("a"));
+    }
+
+    #[test]
+    fn the_fingerprint_is_one_more_separate_value() {
+        let key = LinkKey::from_phrase("correct horse battery staple");
+        assert_ne!(key.fingerprint(), key.bind_id());
+        assert_ne!(key.fingerprint(), key.hop_seed());
+        assert_ne!(
+            key.fingerprint(),
+            LinkKey::from_phrase("correct horse battery stapler").fingerprint()
+        );
     }
 
     #[test]
