@@ -32,6 +32,17 @@ impl defmt::Format for LinkKey {
     }
 }
 
+/// A key's fingerprint ([`LinkKey::fingerprint`]); shown as `1a2b-3c4d`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Fingerprint(pub u32);
+
+impl core::fmt::Display for Fingerprint {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{:04x}-{:04x}", self.0 >> 16, self.0 & 0xFFFF)
+    }
+}
+
 /// Longest binding phrase, bytes of UTF-8.
 pub const PHRASE_MAX_BYTES: usize = 64;
 
@@ -108,8 +119,8 @@ impl LinkKey {
     /// A short public check value of the key, for a person to compare both ends (console,
     /// handset menu, ground station): the low 32 bits of SipHash-2-4(key,
     /// "TauLink/1 fingerprint"). One-way like the bind ID, and a different value from it.
-    pub fn fingerprint(&self) -> u32 {
-        self.prf(DOMAIN_FINGERPRINT) as u32
+    pub fn fingerprint(&self) -> Fingerprint {
+        Fingerprint(self.prf(DOMAIN_FINGERPRINT) as u32)
     }
 
     /// The key's bytes (to store it).
@@ -358,12 +369,13 @@ mod tests {
     #[test]
     fn the_fingerprint_is_one_more_separate_value() {
         let key = LinkKey::from_phrase("correct horse battery staple");
-        assert_ne!(key.fingerprint(), key.bind_id());
-        assert_ne!(key.fingerprint(), key.hop_seed());
+        assert_ne!(key.fingerprint().0, key.bind_id());
+        assert_ne!(key.fingerprint().0, key.hop_seed());
         assert_ne!(
             key.fingerprint(),
             LinkKey::from_phrase("correct horse battery stapler").fingerprint()
         );
+        assert_eq!(format!("{}", Fingerprint(0x1a2b_003d)), "1a2b-003d");
     }
 
     #[test]

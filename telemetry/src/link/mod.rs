@@ -17,7 +17,7 @@ pub mod schedule;
 mod sha256;
 pub mod stream;
 
-pub use auth::{LinkKey, PhraseError, key_for_phrase};
+pub use auth::{Fingerprint, LinkKey, PhraseError, key_for_phrase};
 pub use bind::{BIND_HEADER, BIND_KEY, LinkParams};
 pub use hopping::{Band, HOP_CHANNELS, HopSequence};
 pub use radio::{LinkClock, PacketRadio, RadioConfig, RxOutcome};

@@ -16,7 +16,6 @@ use flight_core::pipeline::{Controllers, from_settings};
 use radio_rfm22b::link::LinkRadio;
 use radio_rfm22b::{NoPin, Rfm22b, TxPower};
 use si4432_sim::{ChipHandle, Fault, Medium, SimDelay, SimIrq, SimSpi};
-use telemetry::channels::FailsafeValues;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 
@@ -84,11 +83,11 @@ async fn idle(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay, ms: u64) {
     let _ = select(sleep_ms(delay, ms), keep_alive(app, delay)).await;
 }
 
-/// Resolves when the console asked for a bind, checking in every 50 ms (the firmware's
-/// `bind_requested`).
-async fn bind_requested(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay) {
+/// Resolves when the link must restart (a bind asked for, the binding phrase changed),
+/// checking in every 50 ms (the firmware's `restart_due`).
+async fn restart_due(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay) {
     loop {
-        if app.borrow().bind_requested() {
+        if app.borrow().link_restart_due() {
             return;
         }
         app.borrow_mut().on_link_idle();
@@ -117,13 +116,13 @@ async fn link_task(
                     idle(&app, &delay, 1000).await;
                 }
             }
-            LinkStep::WaitForBind => bind_requested(&app, &delay).await,
+            LinkStep::WaitForBind => restart_due(&app, &delay).await,
             LinkStep::Follow(params) => {
-                let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
+                let mut follower = app.borrow().follower(params, failsafe_us);
                 let mut hooks = AppHooks(app.clone());
                 let run = run_follower(radio, &mut clock, &mut follower, &mut hooks);
                 let failed = matches!(
-                    select(run, bind_requested(&app, &delay)).await,
+                    select(run, restart_due(&app, &delay)).await,
                     Either::First(Err(_))
                 );
                 app.borrow_mut().on_link_down();

@@ -6,10 +6,16 @@
 //! of [`BIND_WINDOW_US`], and only a bind inside that window is stored. Nothing binds at
 //! boot, and no default link ID exists that every unbound controller would share.
 //!
+//! The link key (spec §12, from the binding phrase the console's `phrase` sets) is applied
+//! here too: [`FlightApp::follower`] builds the follower keyed when a key is stored, and a
+//! key change asks the link task to restart its follower at once
+//! ([`FlightApp::link_restart_due`]), so the new key is in force without a reboot.
+//!
 //! Watchdog: every hook call checks the link task in, whatever the slot length; the
 //! follower calls its hooks at least every 50 ms in every sync state, and the adapter
 //! checks in while it waits outside the follower (bind window, retry after a radio error).
 
+use telemetry::channels::FailsafeValues;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::FollowerHooks;
 use telemetry::link::{Band, LinkParams};
@@ -45,6 +51,8 @@ pub(super) struct LinkSide {
     /// Identification results (roll, pitch, yaw) still to send.
     sysid: heapless::Deque<SysIdResult, 3>,
     bind: BindState,
+    /// The link key changed since the running follower was built: restart it.
+    key_changed: bool,
 }
 
 /// Where the explicit bind stands.
@@ -73,6 +81,7 @@ impl LinkSide {
             was_failsafe: true,
             sysid: heapless::Deque::new(),
             bind: BindState::Closed,
+            key_changed: false,
         }
     }
 
@@ -113,6 +122,8 @@ impl FlightApp {
     /// The link task's next step: a requested bind first, else the stored link, else
     /// nothing until the owner binds.
     pub fn next_link_step(&mut self) -> LinkStep {
+        // Whatever comes next is built from the key in force now.
+        self.link.key_changed = false;
         if let Some((band, window_us)) = self.take_bind_request() {
             return LinkStep::Bind { band, window_us };
         }
@@ -120,6 +131,29 @@ impl FlightApp {
             Some(params) => LinkStep::Follow(params),
             None => LinkStep::WaitForBind,
         }
+    }
+
+    /// The follower for `params` (from [`LinkStep::Follow`]) with the stored link key, if
+    /// there is one (`Follower::with_key`: only uplinks sealed with the key are accepted,
+    /// identity and hop sequence derived from it), else unkeyed as before spec §12.
+    /// `failsafe_us`: the silence after which it flies failsafe ([`FAILSAFE_US`]).
+    pub fn follower(&self, params: LinkParams, failsafe_us: u64) -> Follower {
+        let follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
+        match self.live.link_key() {
+            Some(key) => follower.with_key(key),
+            None => follower,
+        }
+    }
+
+    /// The link task must end what it runs (a follower, a wait for a bind) and ask
+    /// [`FlightApp::next_link_step`] again: a bind was asked for, or the link key changed.
+    pub fn link_restart_due(&self) -> bool {
+        self.link.bind == BindState::Requested || self.link.key_changed
+    }
+
+    /// The link key in force changed (the console's `phrase`): the link restarts with it.
+    pub(super) fn on_link_key_changed(&mut self) {
+        self.link.key_changed = true;
     }
 
     /// The link to run: the stored bind, or `None` for a controller never bound (it runs

@@ -17,6 +17,8 @@ mod link;
 mod watchdog;
 
 #[cfg(test)]
+mod phrase_tests;
+#[cfg(test)]
 mod tests;
 
 pub use imu::{

@@ -1,7 +1,8 @@
 //! Owns the RFM22B and runs what `FlightApp::next_link_step` says: a bind window the console
 //! opened (the result to `on_bind_result`), the TauLink follower with the app as its hooks
-//! (`on_link_step`: channels, setting changes, telemetry, check-in) until the radio fails or
-//! a bind is asked for, or — never bound — nothing until the owner binds.
+//! (`on_link_step`: channels, setting changes, telemetry, check-in; keyed when a binding
+//! phrase is stored) until the radio fails, a bind is asked for or the phrase changes, or —
+//! never bound — nothing until the owner binds.
 
 use defmt::{info, warn};
 use embassy_futures::select::{Either, select};
@@ -9,12 +10,11 @@ use embassy_time::{Delay, Duration};
 use embedded_hal_bus::spi::ExclusiveDevice;
 use flight_core::app::{FAILSAFE_US, LinkStep};
 use radio_rfm22b::{Rfm22b, TxPower};
-use telemetry::channels::FailsafeValues;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 
 use crate::firmware::board::Radio;
-use crate::firmware::link_radio::{EmbassyClock, LinkRadio, bind_requested, idle, keep_alive};
+use crate::firmware::link_radio::{EmbassyClock, LinkRadio, idle, keep_alive, restart_due};
 use crate::firmware::shared::with_app;
 
 /// The follower's hooks: straight into the app.
@@ -49,12 +49,16 @@ pub async fn link_task(radio: Radio) {
                     idle(Duration::from_secs(1)).await;
                 }
             }
-            LinkStep::WaitForBind => bind_requested().await,
+            LinkStep::WaitForBind => restart_due().await,
             LinkStep::Follow(params) => {
-                let mut follower = Follower::new(params, FailsafeValues::default(), FAILSAFE_US);
+                // Keyed with the binding phrase's key when one is stored.
+                let Some(mut follower) = with_app(|a| a.follower(params, FAILSAFE_US)) else {
+                    idle(Duration::from_secs(1)).await;
+                    continue;
+                };
                 let mut hooks = AppHooks;
                 let run = run_follower(&mut radio, &mut clock, &mut follower, &mut hooks);
-                let failed = matches!(select(run, bind_requested()).await, Either::First(Err(_)));
+                let failed = matches!(select(run, restart_due()).await, Either::First(Err(_)));
                 with_app(|a| a.on_link_down());
                 if failed {
                     // The radio failed (unplugged, bus fault): retry in a second.
