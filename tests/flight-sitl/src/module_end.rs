@@ -183,7 +183,7 @@ async fn link_task(b: &Board, radio: &mut ModuleRadio, shared: &Shared, seed: u6
                 b.app.borrow_mut().on_session_end(end)
             }
             LinkStep::RunMaster(params) => {
-                let mut master = Master::new(params);
+                let mut master = b.app.borrow().master(params);
                 let end = run(b, run_master(radio, &mut clock, &mut master, &mut Hooks(b))).await;
                 b.app.borrow_mut().on_session_end(end)
             }
@@ -192,7 +192,7 @@ async fn link_task(b: &Board, radio: &mut ModuleRadio, shared: &Shared, seed: u6
                 failsafe,
                 failsafe_us,
             } => {
-                let mut follower = Follower::new(params, failsafe, failsafe_us);
+                let mut follower = b.app.borrow().follower(params, failsafe, failsafe_us);
                 let end = run(
                     b,
                     run_follower(radio, &mut clock, &mut follower, &mut Hooks(b)),

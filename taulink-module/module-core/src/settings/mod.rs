@@ -4,21 +4,25 @@
 //! a single sequential-storage item write: after a power cut the map holds either the old
 //! or the new record (the item CRC rejects a torn write), never a mix of fields.
 //!
-//! Record layout (version 3, 15 bytes; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd,
+//! Record layout (version 4, 36 bytes; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd,
 //! 3 CRSF 921 600 Bd;
 //! failsafe 0 hold last, 1 stop pulses; rate = `telemetry::link::RateMode::code`):
-//! `[3, role, rate, input, output, band, tx_power, failsafe, bind_id (u32 LE),
-//! input_timeout_ms (u16 LE), telemetry_ratio]`. The rate byte is the link's own rate mode,
+//! `[4, role, rate, input, output, band, tx_power, failsafe, bind_id (u32 LE),
+//! input_timeout_ms (u16 LE), telemetry_ratio, key_flag, key (16 bytes), ble_pin (u32 LE)]`.
+//! The key is the link key derived from the binding phrase (spec §12; flag 0 = no phrase, the
+//! key bytes then all 0; the phrase itself is never stored); `ble_pin` is the HM-10 pairing
+//! PIN, 0…999 999, or `u32::MAX` for the factory PIN derived from the chip's unique ID
+//! ([`Pin::factory`]). The rate byte is the link's own rate mode,
 //! the one vocabulary the handset's "Packet Rate" shows. Band 0 is the 70 cm amateur plan
 //! (factory), 1 EU 868, 2 US 915, 3 (version 3 only) the 433.05–434.79 MHz ISM plan.
 //!
-//! Older records still load, every stored field with its old meaning: version 2 (14 bytes,
+//! Older records still load, every stored field with its old meaning: version 3 (15 bytes,
+//! up to the telemetry ratio) has no phrase and the factory PIN; version 2 (14 bytes,
 //! no telemetry ratio) and version 1 (12 bytes, no input timeout either) stored the air rate
 //! in Tau Labs' bit-rate vocabulary, which maps to the link mode that rate ran as (4800,
 //! 9600 and 19 200 bit/s → L50, 57 600 → M100, 125 000 → F250); a missing field takes its
 //! default. Every byte is checked on decode; an unknown value is an error, never a guess.
 //!
-//! A later field (H-SEC's binding phrase) goes after `telemetry_ratio` in a version 4.
 
 pub mod store;
 pub mod text;
@@ -26,6 +30,9 @@ pub mod text;
 pub use store::{SettingsStore, StoreError};
 pub use text::TextError;
 
+use telemetry::link::LinkKey;
+
+use crate::hm10::at::Pin;
 use crate::ppm::FailsafeOutput;
 
 /// Which end of the link the module is.
@@ -140,6 +147,12 @@ pub struct Settings {
     /// One link slot in this many is a downlink (telemetry) slot: a power of two,
     /// [`TELEMETRY_RATIOS`].
     pub telemetry_ratio: u8,
+    /// The link key derived from the binding phrase (spec §12); `None`: no phrase, the link
+    /// runs unauthenticated. Set with `set_text("phrase", …)`.
+    pub link_key: Option<LinkKey>,
+    /// The HM-10 pairing PIN; `None`: the factory PIN derived from the chip's unique ID
+    /// ([`Pin::factory`]), never the HM-10's own 000000.
+    pub ble_pin: Option<Pin>,
 }
 
 /// The telemetry ratios the link takes (`telemetry::frame::valid_telemetry_ratio`).
@@ -168,14 +181,20 @@ impl Default for Settings {
             bind_id: 0,
             input_timeout_ms: DEFAULT_INPUT_TIMEOUT_MS,
             telemetry_ratio: DEFAULT_TELEMETRY_RATIO,
+            link_key: None,
+            ble_pin: None,
         }
     }
 }
 
 /// Current record version.
-pub const RECORD_VERSION: u8 = 3;
+pub const RECORD_VERSION: u8 = 4;
 /// Record length of the current version.
-pub const RECORD_LEN: usize = 15;
+pub const RECORD_LEN: usize = 36;
+/// Record length of version 3 (no phrase, no PIN).
+pub const RECORD_V3_LEN: usize = 15;
+/// The stored `ble_pin` that means "the factory PIN".
+const FACTORY_PIN: u32 = u32::MAX;
 /// Record length of version 2 (bit-rate codes, no telemetry ratio).
 pub const RECORD_V2_LEN: usize = 14;
 /// Record length of version 1 (bit-rate codes, no input timeout).
@@ -215,11 +234,17 @@ impl core::fmt::Display for DecodeError {
 impl core::error::Error for DecodeError {}
 
 impl Settings {
-    /// The current (version 3) record.
+    /// The current (version 4) record.
     pub fn to_record(&self) -> [u8; RECORD_LEN] {
+        let mut record = [0u8; RECORD_LEN];
         let [b0, b1, b2, b3] = self.bind_id.to_le_bytes();
         let [t0, t1] = self.input_timeout_ms.to_le_bytes();
-        [
+        let (flag, key) = match self.link_key {
+            Some(key) => (1, key.to_bytes()),
+            None => (0, [0; 16]),
+        };
+        let pin = self.ble_pin.map_or(FACTORY_PIN, Pin::value).to_le_bytes();
+        let fields = [
             RECORD_VERSION,
             self.role as u8,
             self.rate.code(),
@@ -235,10 +260,16 @@ impl Settings {
             t0,
             t1,
             self.telemetry_ratio,
-        ]
+            flag,
+        ];
+        let bytes = fields.iter().chain(key.iter()).chain(pin.iter());
+        for (slot, byte) in record.iter_mut().zip(bytes) {
+            *slot = *byte;
+        }
+        record
     }
 
-    /// Parses a record of version 1, 2 or 3; every field is range-checked.
+    /// Parses a record of version 1 … 4; every field is range-checked.
     pub fn from_record(record: &[u8]) -> Result<Self, DecodeError> {
         let Some(&version) = record.first() else {
             return Err(DecodeError::Length { found: 0 });
@@ -249,12 +280,15 @@ impl Settings {
         let expected = match version {
             1 => RECORD_V1_LEN,
             2 => RECORD_V2_LEN,
+            3 => RECORD_V3_LEN,
             RECORD_VERSION => RECORD_LEN,
             found => return Err(DecodeError::Version { found }),
         };
         if record.len() != expected {
             return Err(wrong_length);
         }
+        // Rate codes, the 921 600 Bd input and the ISM band are version 3 on.
+        let modern = version >= 3;
         let (common, rest) = record
             .split_first_chunk::<RECORD_V1_LEN>()
             .ok_or(wrong_length)?;
@@ -271,13 +305,17 @@ impl Settings {
             _ => DEFAULT_INPUT_TIMEOUT_MS,
         };
         let telemetry_ratio = match rest {
-            [_, _, ratio] if TELEMETRY_RATIOS.contains(ratio) => *ratio,
-            [_, _, _] => {
+            [_, _, ratio, ..] if TELEMETRY_RATIOS.contains(ratio) => *ratio,
+            [_, _, _, ..] => {
                 return Err(DecodeError::Field {
                     offset: RECORD_V2_LEN,
                 });
             }
             _ => DEFAULT_TELEMETRY_RATIO,
+        };
+        let (link_key, ble_pin) = match rest.get(RECORD_V3_LEN - RECORD_V1_LEN..) {
+            Some([flag, tail @ ..]) if !tail.is_empty() => decode_security(*flag, tail)?,
+            _ => (None, None),
         };
         let [
             _,
@@ -300,16 +338,16 @@ impl Settings {
                 1 => Role::Receiver,
                 _ => return Err(field(1)),
             },
-            rate: match version {
-                RECORD_VERSION => RateMode::from_code(rate),
-                _ => rate_from_old_code(rate),
+            rate: match modern {
+                true => RateMode::from_code(rate),
+                false => rate_from_old_code(rate),
             }
             .ok_or(field(2))?,
             input: match input {
                 0 => InputProtocol::Ppm,
                 1 => InputProtocol::Crsf,
                 2 => InputProtocol::Crsf115200,
-                3 if version == RECORD_VERSION => InputProtocol::Crsf921600,
+                3 if modern => InputProtocol::Crsf921600,
                 _ => return Err(field(3)),
             },
             output: match output {
@@ -323,7 +361,7 @@ impl Settings {
                 0 => Band::Mhz433,
                 1 => Band::Mhz868,
                 2 => Band::Mhz915,
-                3 if version == RECORD_VERSION => Band::Ism433,
+                3 if modern => Band::Ism433,
                 _ => return Err(field(5)),
             },
             tx_power: if tx_power <= 7 {
@@ -339,8 +377,33 @@ impl Settings {
             bind_id: u32::from_le_bytes([b0, b1, b2, b3]),
             input_timeout_ms,
             telemetry_ratio,
+            link_key,
+            ble_pin,
         })
     }
+}
+
+/// Version 4's key flag (at [`RECORD_V3_LEN`]) and what follows it: the key bytes (all 0
+/// without a key, so every byte has one meaning) and the PIN.
+fn decode_security(flag: u8, tail: &[u8]) -> Result<(Option<LinkKey>, Option<Pin>), DecodeError> {
+    let field = |offset: usize| DecodeError::Field { offset };
+    let (key, pin) = tail.split_first_chunk::<16>().ok_or(DecodeError::Length {
+        found: RECORD_V3_LEN + 1 + tail.len(),
+    })?;
+    let pin: [u8; 4] = pin.try_into().map_err(|_| DecodeError::Length {
+        found: RECORD_V3_LEN + 1 + tail.len(),
+    })?;
+    let link_key = match flag {
+        0 if key.iter().all(|b| *b == 0) => None,
+        0 => return Err(field(RECORD_V3_LEN + 1)),
+        1 => Some(LinkKey::from_bytes(*key)),
+        _ => return Err(field(RECORD_V3_LEN)),
+    };
+    let ble_pin = match u32::from_le_bytes(pin) {
+        FACTORY_PIN => None,
+        value => Some(Pin::new(value).ok_or(field(RECORD_V3_LEN + 17))?),
+    };
+    Ok((link_key, ble_pin))
 }
 
 #[cfg(test)]
@@ -360,14 +423,23 @@ mod tests {
             bind_id: 0xDEAD_BEEF,
             input_timeout_ms: 750,
             telemetry_ratio: 16,
+            link_key: Some(LinkKey::from_bytes(core::array::from_fn(|i| {
+                0xA0 + i as u8
+            }))),
+            ble_pin: Pin::new(42_917),
         };
         let record = settings.to_record();
         assert_eq!(
-            record,
+            record[..16],
             [
-                3, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16
+                4, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16, 1
             ]
         );
+        assert_eq!(
+            record[16..32],
+            core::array::from_fn::<u8, 16, _>(|i| 0xA0 + i as u8)
+        );
+        assert_eq!(record[32..], 42_917u32.to_le_bytes());
         assert_eq!(Settings::from_record(&record), Ok(settings));
         assert_eq!(
             Settings::from_record(&Settings::default().to_record()),
@@ -401,8 +473,12 @@ mod tests {
             Err(DecodeError::Length { found: 0 })
         );
         assert_eq!(
+            Settings::from_record(&[5; 36]),
+            Err(DecodeError::Version { found: 5 })
+        );
+        assert_eq!(
             Settings::from_record(&[4; 15]),
-            Err(DecodeError::Version { found: 4 })
+            Err(DecodeError::Length { found: 15 })
         );
         assert_eq!(
             Settings::from_record(&[3; 14]),
@@ -496,8 +572,8 @@ mod tests {
             assert_eq!(settings.telemetry_ratio, DEFAULT_TELEMETRY_RATIO);
             assert_eq!(settings.input_timeout_ms, 500);
             assert_eq!(settings.bind_id, 0x1234_5678);
-            // Re-saved as version 3, the same settings come back.
-            assert_eq!(settings.to_record()[0], 3);
+            // Re-saved as the current version, the same settings come back.
+            assert_eq!(settings.to_record()[0], RECORD_VERSION);
             assert_eq!(Settings::from_record(&settings.to_record()), Ok(settings));
         }
         assert_eq!(
@@ -525,15 +601,72 @@ mod tests {
             Settings::from_record(&v1_stop).unwrap().failsafe,
             FailsafeOutput::StopPulses
         );
-        // Re-saved, they become version 3 with the same values.
+        // Re-saved, they become the current version with the same values.
         let upgraded = settings.to_record();
-        assert_eq!(upgraded[0], 3);
+        assert_eq!(upgraded[0], RECORD_VERSION);
         assert_eq!(Settings::from_record(&upgraded), Ok(settings));
+    }
+
+    #[test]
+    fn a_version_3_record_loads_with_no_phrase_and_the_factory_pin() {
+        let v3 = [
+            3, 1, 3, 1, 3, 3, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16,
+        ];
+        let settings = Settings::from_record(&v3).unwrap();
+        assert_eq!(settings.link_key, None);
+        assert_eq!(settings.ble_pin, None);
+        assert_eq!(
+            (
+                settings.rate,
+                settings.band,
+                settings.bind_id,
+                settings.telemetry_ratio
+            ),
+            (RateMode::F500, Band::Ism433, 0xDEAD_BEEF, 16)
+        );
+        let upgraded = settings.to_record();
+        assert_eq!(upgraded[0], 4);
+        assert_eq!(upgraded[1..15], v3[1..]);
+        assert_eq!(Settings::from_record(&upgraded), Ok(settings));
+    }
+
+    #[test]
+    fn the_phrase_and_pin_fields_take_only_what_a_writer_produces() {
+        let keyed = Settings {
+            link_key: Some(LinkKey::from_phrase("a")),
+            ..Settings::default()
+        };
+        let mut record = keyed.to_record();
+        assert_eq!(Settings::from_record(&record), Ok(keyed));
+        record[15] = 2;
+        assert_eq!(
+            Settings::from_record(&record),
+            Err(DecodeError::Field { offset: 15 })
+        );
+        // No key, yet key bytes: not a record any writer makes.
+        record[15] = 0;
+        assert_eq!(
+            Settings::from_record(&record),
+            Err(DecodeError::Field { offset: 16 })
+        );
+        let mut record = Settings::default().to_record();
+        assert_eq!(record[32..], [0xFF; 4], "the factory PIN");
+        record[32..].copy_from_slice(&1_000_000u32.to_le_bytes());
+        assert_eq!(
+            Settings::from_record(&record),
+            Err(DecodeError::Field { offset: 32 })
+        );
+        record[32..].copy_from_slice(&0u32.to_le_bytes());
+        assert_eq!(
+            Settings::from_record(&record).map(|s| s.ble_pin),
+            Ok(Pin::new(0)),
+            "000000 set on purpose stays possible"
+        );
     }
 
     proptest::proptest! {
         #[test]
-        fn any_bytes_decode_or_error(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..20)) {
+        fn any_bytes_decode_or_error(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..40)) {
             if let Ok(settings) = Settings::from_record(&bytes) {
                 // A current record re-encodes to itself; an older one to its upgrade, which
                 // decodes to the same settings.

@@ -2,15 +2,22 @@
 //! the words a person types (a host tool's `--module-set`, a console) onto [`Settings`]
 //! fields, with the same ranges the record decoder enforces, so nothing typed can make a
 //! set the module would refuse to load.
+//!
+//! `phrase` takes the binding phrase (spec §12: 1–64 printable bytes, white space at the
+//! ends dropped; empty clears it) and stores only the key derived from it; `ble_pin` takes
+//! six digits or `factory`.
+
+use telemetry::link::key_for_phrase;
 
 use super::{
     Band, INPUT_TIMEOUT_MS, InputProtocol, OutputProtocol, RateMode, Role, Settings,
     TELEMETRY_RATIOS,
 };
+use crate::hm10::at::Pin;
 use crate::ppm::FailsafeOutput;
 
 /// Every setting name, in record order.
-pub const NAMES: [&str; 10] = [
+pub const NAMES: [&str; 12] = [
     "role",
     "rate",
     "input",
@@ -21,6 +28,8 @@ pub const NAMES: [&str; 10] = [
     "bind_id",
     "input_timeout_ms",
     "telemetry_ratio",
+    "phrase",
+    "ble_pin",
 ];
 
 /// Why a typed setting was refused (nothing changed).
@@ -33,6 +42,8 @@ pub enum TextError {
     Unparsable,
     /// A number outside the setting's range.
     OutOfRange,
+    /// A binding phrase longer than 64 bytes or with a control character.
+    BadPhrase,
 }
 
 impl core::fmt::Display for TextError {
@@ -41,6 +52,7 @@ impl core::fmt::Display for TextError {
             Self::Unknown => "no such module setting",
             Self::Unparsable => "cannot read that value",
             Self::OutOfRange => "value out of range",
+            Self::BadPhrase => "binding phrase: 1-64 printable bytes",
         })
     }
 }
@@ -156,6 +168,18 @@ impl Settings {
                     .find(|r| u32::from(*r) == v)
                     .ok_or(TextError::OutOfRange)?;
             }
+            "phrase" => {
+                self.link_key = key_for_phrase(text).map_err(|_| TextError::BadPhrase)?;
+            }
+            "ble_pin" => {
+                self.ble_pin = if text.eq_ignore_ascii_case("factory") {
+                    None
+                } else if text.len() == 6 && text.bytes().all(|b| b.is_ascii_digit()) {
+                    Some(Pin::new(number(text, 0..=999_999)?).ok_or(TextError::OutOfRange)?)
+                } else {
+                    return Err(TextError::Unparsable);
+                };
+            }
             _ => return Err(TextError::Unknown),
         }
         Ok(())
@@ -180,6 +204,8 @@ mod tests {
             ("bind_id", "0xDEADBEEF"),
             ("input_timeout_ms", "750"),
             ("telemetry_ratio", "16"),
+            ("phrase", " correct horse battery staple "),
+            ("ble_pin", "042917"),
         ] {
             s.set_text(name, text).unwrap();
         }
@@ -196,10 +222,24 @@ mod tests {
                 bind_id: 0xDEAD_BEEF,
                 input_timeout_ms: 750,
                 telemetry_ratio: 16,
+                link_key: Some(telemetry::link::LinkKey::from_phrase(
+                    "correct horse battery staple"
+                )),
+                ble_pin: Pin::new(42_917),
             }
         );
         assert_eq!(Settings::from_record(&s.to_record()), Ok(s));
-        assert!(NAMES.iter().all(|n| s.clone().set_text(n, "?").is_err()));
+        // "?" is a valid phrase; nothing else takes it.
+        assert!(
+            NAMES
+                .iter()
+                .filter(|n| **n != "phrase")
+                .all(|n| s.clone().set_text(n, "?").is_err())
+        );
+        s.set_text("phrase", "").unwrap();
+        assert_eq!(s.link_key, None, "an empty phrase clears it");
+        s.set_text("ble_pin", "Factory").unwrap();
+        assert_eq!(s.ble_pin, None);
     }
 
     #[test]
@@ -215,6 +255,11 @@ mod tests {
             ("input_timeout_ms", "99", TextError::OutOfRange),
             ("input_timeout_ms", "2001", TextError::OutOfRange),
             ("bind_id", "4294967296", TextError::Unparsable),
+            ("phrase", &"x".repeat(65), TextError::BadPhrase),
+            ("phrase", "tab\tinside", TextError::BadPhrase),
+            ("ble_pin", "12345", TextError::Unparsable),
+            ("ble_pin", "1234567", TextError::Unparsable),
+            ("ble_pin", "12a456", TextError::Unparsable),
         ];
         for (name, text, error) in cases {
             assert_eq!(s.set_text(name, text), Err(error), "{name}={text}");
