@@ -157,7 +157,7 @@ impl LinkKey {
         (self.tag(counter, frame) ^ tag) == 0
     }
 
-    fn prf(&self, domain: &[u8]) -> u64 {
+    pub(crate) fn prf(&self, domain: &[u8]) -> u64 {
         let mut h = SipHasher24::new(&self.0);
         h.write(domain);
         h.finish()
@@ -165,7 +165,7 @@ impl LinkKey {
 }
 
 /// SipHash-2-4 with a 64-bit output, fed in pieces.
-struct SipHasher24 {
+pub(crate) struct SipHasher24 {
     v: [u64; 4],
     tail: u64,
     ntail: usize,
@@ -173,7 +173,7 @@ struct SipHasher24 {
 }
 
 impl SipHasher24 {
-    fn new(key: &[u8; KEY_BYTES]) -> Self {
+    pub(crate) fn new(key: &[u8; KEY_BYTES]) -> Self {
         let (k0, k1) = key.split_at(8);
         let k0 = u64::from_le_bytes(k0.try_into().unwrap_or([0; 8]));
         let k1 = u64::from_le_bytes(k1.try_into().unwrap_or([0; 8]));
@@ -211,7 +211,7 @@ impl SipHasher24 {
         self.v[0] ^= m;
     }
 
-    fn write(&mut self, bytes: &[u8]) {
+    pub(crate) fn write(&mut self, bytes: &[u8]) {
         self.length = self.length.wrapping_add(bytes.len());
         let mut rest = bytes;
         // Top up a partial word byte by byte, then whole words at once (the frame counter
@@ -244,7 +244,7 @@ impl SipHasher24 {
         }
     }
 
-    fn finish(mut self) -> u64 {
+    pub(crate) fn finish(mut self) -> u64 {
         let last = ((self.length as u64 & 0xFF) << 56) | self.tail;
         self.compress(last);
         self.v[2] ^= 0xFF;

@@ -235,6 +235,10 @@ pub(crate) async fn flight_board(
         if let Some(p) = problem {
             app.on_settings_problem(p);
         }
+        // The firmware's RNG at boot: a fresh session nonce for the phone's changes every
+        // boot (the virtual time of the boot stands in for the hardware's entropy).
+        let boot_us = crate::clock::virtual_us(&medium);
+        app.seed_change_session(telemetry::mock::SplitMix64::new(boot_us).next_u64() as u32);
         shared
             .borrow_mut()
             .record_boot(End::Flight, cause, problem.is_some());

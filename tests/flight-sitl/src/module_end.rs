@@ -20,11 +20,14 @@ use module_core::settings::Settings as ModuleSettings;
 use radio_rfm22b::link::LinkRadio;
 use radio_rfm22b::{Rfm22b, TxPower};
 use si4432_sim::{Medium, SimDelay, SimIrq, SimSdn, SimSpi};
+use telemetry::change_auth::Signer;
 use telemetry::link::LinkClock;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 use telemetry::link::master::{MasterHooks, bind_master, run_master};
-use telemetry::messages::{Decoded, FRAMED_MAX_BYTES, Message, MessageReader, encode_message};
+use telemetry::messages::{
+    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, encode_message,
+};
 use telemetry::mock::SplitMix64;
 
 use crate::clock::{BoardClock, sleep_ms};
@@ -268,10 +271,22 @@ async fn app_task(b: &Board, shared: &Shared) {
     }
 }
 
+/// A message from the phone, as the HM-10 hands its bytes to the module.
+fn send_to_flight(b: &Board, message: &Message) {
+    let mut buf = [0u8; FRAMED_MAX_BYTES];
+    if let Ok(n) = encode_message(message, &mut buf) {
+        b.app
+            .borrow_mut()
+            .on_phone_bytes(buf.get(..n).unwrap_or(&[]));
+    }
+}
+
 /// The HM-10 task with a phone connected: records to the phone (decoded: what the module
 /// received), the scenario's setting changes from the phone.
 async fn hm10_task(b: &Board, shared: &Shared) {
     let mut reader = MessageReader::new();
+    let mut phone = shared.borrow().phone_key.map(|k| Signer::new(&k));
+    let mut pending: Option<SettingChange> = None;
     let mut frame = [0u8; module_core::hm10::relay::MAX_FRAME_LEN];
     loop {
         b.check_in(Watched::Hm10);
@@ -280,12 +295,15 @@ async fn hm10_task(b: &Board, shared: &Shared) {
             (!s.uplink.is_empty()).then(|| s.uplink.remove(0))
         };
         if let Some(change) = change {
-            let mut buf = [0u8; FRAMED_MAX_BYTES];
-            if let Ok(n) = encode_message(&Message::SettingChange(change), &mut buf) {
-                b.app
-                    .borrow_mut()
-                    .on_phone_bytes(buf.get(..n).unwrap_or(&[]));
-            }
+            // The pilot typed the same phrase into the phone (the ground station signs in
+            // WASM with `change_auth::Signer`); without a phrase the change goes unsigned
+            // and the flight side refuses it.
+            let message = match phone.as_mut() {
+                Some(signer) => Message::SignedChange(signer.sign(change)),
+                None => Message::SettingChange(change),
+            };
+            pending = Some(change);
+            send_to_flight(b, &message);
         }
         loop {
             let Some(n) = b.app.borrow_mut().next_phone_frame(&mut frame) else {
@@ -293,6 +311,13 @@ async fn hm10_task(b: &Board, shared: &Shared) {
             };
             for &byte in frame.get(..n).unwrap_or(&[]) {
                 if let Some(Decoded::Message(m)) = reader.push(byte) {
+                    // A refusal for want of the session: sign the change again, once.
+                    if let (Message::ChangeRefused(r), Some(signer), Some(change)) =
+                        (&m, phone.as_mut(), pending)
+                        && signer.on_refused(r)
+                    {
+                        send_to_flight(b, &Message::SignedChange(signer.sign(change)));
+                    }
                     let mut s = shared.borrow_mut();
                     let t = s.scenario_s();
                     s.module_rx.push((t, m));

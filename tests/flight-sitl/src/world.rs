@@ -152,6 +152,8 @@ pub(crate) struct WorldState {
     pub(crate) module_rx: Vec<(f64, Message)>,
     /// Setting changes the phone is still to send.
     pub(crate) uplink: Vec<SettingChange>,
+    /// The link key the phone knows (the pilot typed the flight side's phrase into it).
+    pub(crate) phone_key: Option<telemetry::link::LinkKey>,
     pub(crate) watchdog_resets: WatchdogResets,
     pub(crate) boots: Vec<Boot>,
     medium: si4432_sim::Medium,
@@ -272,6 +274,7 @@ pub fn run(scenario: Scenario) -> Sitl {
         module_flash: module,
         module_rx: Vec::new(),
         uplink: setting_changes,
+        phone_key: settings.link_key(),
         watchdog_resets: WatchdogResets::default(),
         boots: Vec::new(),
         medium: medium.clone(),

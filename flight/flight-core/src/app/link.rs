@@ -1,6 +1,7 @@
 //! The flight side of the TauLink link: the follower's hooks (channels → the loop's
-//! `LinkInput`, failsafe counting, setting changes from the module applied while disarmed
-//! and echoed, one telemetry message per [`REPORT_PERIOD_US`] when the downlink stream is
+//! `LinkInput`, failsafe counting, setting changes from the phone checked by
+//! `authority::ChangeGate` — signed with the phrase's key, fresh, disarmed — then applied and
+//! echoed, or refused with the reason, one telemetry message per [`REPORT_PERIOD_US`] when the downlink stream is
 //! empty), the link's parameters (the stored bind; an unbound controller runs no link) and
 //! the explicit bind: only the console's `bind` command, while disarmed, opens a bind window
 //! of [`BIND_WINDOW_US`], and only a bind inside that window is stored. Nothing binds at
@@ -20,12 +21,13 @@ use telemetry::link::core::Follower;
 use telemetry::link::follower::FollowerHooks;
 use telemetry::link::{Band, LinkParams};
 use telemetry::messages::{
-    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, SysIdResult, encode_message,
+    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SysIdResult, encode_message,
 };
 
 use super::{FlightApp, Task};
+use crate::authority::{ChangeGate, Reply};
 use crate::pipeline::{ChannelMap, bind_band, store_link, stored_link};
-use crate::report::{LinkSeen, Reporter, Snapshot, apply_setting, setting_report, sysid_messages};
+use crate::report::{LinkSeen, Reporter, Snapshot, sysid_messages};
 use crate::supervisor::FlightMode;
 use crate::sysid::ekf::Identification;
 
@@ -43,7 +45,9 @@ pub(super) struct LinkSide {
     map: ChannelMap,
     reporter: Reporter,
     reader: MessageReader,
-    echo: Option<SettingChange>,
+    /// The answer to the last change from the phone, still to send.
+    reply: Option<Message>,
+    gate: ChangeGate,
     last_report_us: Option<u64>,
     last_state: Option<(bool, bool, FlightMode)>,
     failsafes: u16,
@@ -73,7 +77,9 @@ impl LinkSide {
             map,
             reporter: Reporter::new(),
             reader: MessageReader::new(),
-            echo: None,
+            reply: None,
+            // Seeded by the firmware's RNG (`FlightApp::seed_change_session`).
+            gate: ChangeGate::new(0),
             last_report_us: None,
             last_state: None,
             failsafes: 0,
@@ -239,9 +245,8 @@ impl FlightApp {
                 break;
             }
             for b in buf.iter().take(n) {
-                if let Some(Decoded::Message(Message::SettingChange(c))) = self.link.reader.push(*b)
-                {
-                    self.apply_link_change(c);
+                if let Some(Decoded::Message(m)) = self.link.reader.push(*b) {
+                    self.apply_link_change(&m);
                 }
             }
         }
@@ -255,18 +260,29 @@ impl FlightApp {
         }
     }
 
-    /// A setting change from the module: applied while disarmed; the resulting (or,
-    /// refused, the unchanged) value is echoed.
-    fn apply_link_change(&mut self, change: SettingChange) {
-        if self.flight.armed() {
-            self.link.echo = setting_report(&self.live, change.id);
+    /// A message from the phone (relayed by the module): a setting change goes through the
+    /// gate (signed, fresh, disarmed); the applied value is echoed, a refusal answered with
+    /// its reason and the session to sign the next one with.
+    fn apply_link_change(&mut self, message: &Message) {
+        let armed = self.flight.armed();
+        let key = self.live.link_key();
+        let Some(reply) = self
+            .link
+            .gate
+            .on_message(message, &mut self.live, key, armed)
+        else {
             return;
-        }
-        let (result, echo) = apply_setting(&mut self.live, change);
-        if result.is_ok() {
+        };
+        if matches!(reply, Reply::Applied(_)) {
             self.settings_changed();
         }
-        self.link.echo = echo;
+        self.link.reply = Some(reply.message());
+    }
+
+    /// The session nonce of this boot's phone changes, from the firmware's RNG at boot
+    /// (spec §12.5: a change recorded in an earlier boot then never verifies again).
+    pub fn seed_change_session(&mut self, random: u32) {
+        self.link.gate = ChangeGate::new(random);
     }
 
     /// One telemetry message when the downlink stream is empty: a setting echo, then an
@@ -298,8 +314,8 @@ impl FlightApp {
             sysid: self.link.sysid.front().copied(),
         };
         let state = (out.armed, out.failsafe, out.mode);
-        let message = if let Some(c) = self.link.echo.take() {
-            Message::SettingChange(c)
+        let message = if let Some(reply) = self.link.reply.take() {
+            reply
         } else if let Some(r) = self.link.sysid.pop_front() {
             Message::SysIdResult(r)
         } else if self.link.last_state != Some(state) {

@@ -101,3 +101,47 @@ fn factory_defaults_drop_the_key_and_restart_the_link() {
     assert_eq!(app.settings().link_key(), None);
     assert!(app.link_restart_due());
 }
+
+/// Feeds `message` into the app as the follower's uplink stream delivers it.
+fn uplink(app: &mut FlightApp, message: &telemetry::messages::Message, at_us: u64) {
+    use telemetry::channels::FailsafeValues;
+    use telemetry::link::core::Follower;
+    let mut bytes = [0u8; 64];
+    let n = telemetry::messages::encode_message(message, &mut bytes).unwrap();
+    let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
+    follower.uplink_stream.on_data(0, &bytes[..n]);
+    app.on_link_step(at_us, &mut follower);
+}
+
+/// Before spec §12.5 any `SettingChange` on the uplink was applied while disarmed (so
+/// anyone who could inject into the stream could change gains and the failsafe): now only a
+/// change signed with the phrase's key is.
+#[test]
+fn an_unsigned_change_is_refused_and_a_signed_one_applied() {
+    use crate::report::f32_value;
+    use crate::settings::PARAMS;
+    use telemetry::change_auth::ChangeKey;
+    use telemetry::messages::{Message, SettingChange};
+    let mut app = bound_app();
+    console(&mut app, &format!("phrase {PHRASE}"));
+    app.seed_change_session(0xABCD_0001);
+    let _ = app.take_design_request();
+    let id = PARAMS
+        .iter()
+        .position(|p| p.name == "failsafe.descent_mps")
+        .unwrap() as u16;
+    let change = SettingChange {
+        id,
+        value: f32_value(0.9),
+    };
+    let before = app.settings().f32("failsafe.descent_mps");
+    uplink(&mut app, &Message::SettingChange(change), 100_000);
+    assert_eq!(app.settings().f32("failsafe.descent_mps"), before);
+    assert_eq!(app.take_design_request(), None);
+
+    let key = ChangeKey::from_link_key(&LinkKey::from_phrase(PHRASE));
+    let signed = key.sign(0xABCD_0001, 1, change);
+    uplink(&mut app, &Message::SignedChange(signed), 200_000);
+    assert_eq!(app.settings().f32("failsafe.descent_mps"), 0.9);
+    assert!(app.take_design_request().is_some());
+}
