@@ -11,6 +11,7 @@ use embassy_stm32::peripherals::{TIM3, TIM9};
 use embassy_stm32::timer::Channel;
 use embassy_stm32::timer::low_level::Timer;
 use embassy_stm32::timer::simple_pwm::PwmPin;
+use embassy_stm32::rng::{self, Rng};
 use embassy_stm32::usb::{self, Driver};
 use flight_core::alerts::{DAC_SAMPLES_PER_CYCLE, sine_table};
 use flight_core::outputs::{OutputError, Protocol};
@@ -48,6 +49,7 @@ bind_interrupts!(pub struct Irqs {
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
+    RNG => rng::InterruptHandler<peripherals::RNG>;
     DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
     DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
     DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
@@ -63,6 +65,7 @@ bind_interrupts!(pub struct Irqs {
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
+    RNG => rng::InterruptHandler<peripherals::RNG>;
     DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
     DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
     DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
@@ -198,6 +201,9 @@ pub struct Board {
     pub usb: Driver<'static, peripherals::USB_OTG_FS>,
     /// Flash sectors 0–3 (16 KiB each); settings use sectors 2–3.
     pub settings_flash: Bank1Region1<'static, Blocking>,
+    /// The true RNG (clocked from the 48 MHz PLL Q the USB uses): seeds the session of the
+    /// phone's authenticated setting changes at boot.
+    pub rng: Rng<'static, peripherals::RNG>,
 }
 
 /// Keeps the M25P16's chip select driven for the life of the firmware (a dropped `Output`
@@ -306,6 +312,7 @@ impl Board {
             speaker,
             usb,
             settings_flash,
+            rng: Rng::new(p.RNG, Irqs),
             heartbeat_led: Output::new(p.PB5, Level::High, Speed::Low),
             watchdog: IndependentWatchdog::new(p.IWDG, WATCHDOG_TIMEOUT_US),
             radio: Radio {

@@ -38,6 +38,9 @@ async fn main(spawner: Spawner) {
         // Console, telemetry and arming all see it until the pilot saves a set.
         app.on_settings_problem(problem);
     }
+    // A fresh session for the phone's signed setting changes every boot (spec §12.5).
+    let mut rng = board.rng;
+    app.seed_change_session(rng.next_u32());
     if let Some(e) = app.setup_error() {
         error!("stored settings not flyable ({}): factory setup", e);
     }
