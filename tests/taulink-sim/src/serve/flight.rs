@@ -5,25 +5,27 @@
 //! scripted flight instead of sensors: attitude steps every 2 s, a slowly draining 4S pack,
 //! a flight-mode change every 10 s, armed from 20 s to 80 s of every 100 s, a GPS circle,
 //! identification results after each system-identification phase. Values hold still between
-//! steps so a test can compare the page with what was sent.
+//! steps so a test can compare the page with what was sent. Changes from the page pass
+//! `flight_core::authority::ChangeGate` as on the flight controller: signed with the served
+//! world's phrase, fresh, disarmed — else refused with the reason.
 
 use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::rc::Rc;
 
+use flight_core::authority::{ChangeGate, Reply};
 use flight_core::battery::{BatteryLevel, BatteryStatus};
 use flight_core::outputs::Command;
 use flight_core::pipeline::LoopOutput;
-use flight_core::report::{
-    LinkSeen, Reporter, Snapshot, apply_setting, setting_report, sysid_message,
-};
+use flight_core::report::{LinkSeen, Reporter, Snapshot, sysid_message};
 use flight_core::settings::Settings;
 use flight_core::supervisor::{Decision, FlightMode};
+use telemetry::link::LinkKey;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::FollowerHooks;
 use telemetry::messages::{
-    Axis, Decoded, FRAMED_MAX_BYTES, Gps, GpsFix, Message, MessageReader, SettingChange,
-    encode_message,
+    Axis, ChangeRefused, Decoded, FRAMED_MAX_BYTES, Gps, GpsFix, Message, MessageReader,
+    SettingChange, encode_message,
 };
 
 /// Telemetry message period (flight-fw's `REPORT_PERIOD_US`).
@@ -46,6 +48,8 @@ pub struct Sent {
     pub last: BTreeMap<String, serde_json::Value>,
     /// Changes applied to the settings table (id, wire value).
     pub applied: Vec<SettingChange>,
+    /// Changes refused (unsigned, wrong phrase, replayed, armed, invalid).
+    pub refused: Vec<ChangeRefused>,
 }
 
 impl Sent {
@@ -56,14 +60,20 @@ impl Sent {
         }
     }
 
-    /// As JSON: `{"last": {...}, "applied": [{"id":..,"value":..}]}`.
+    /// As JSON: `{"last": {...}, "applied": [{"id":..,"value":..}], "refused":
+    /// [{"id":..,"reason":".."}]}`.
     pub fn to_json(&self) -> String {
         let applied: Vec<_> = self
             .applied
             .iter()
             .map(|c| serde_json::json!({"id": c.id, "value": c.value}))
             .collect();
-        serde_json::json!({"last": self.last, "applied": applied}).to_string()
+        let refused: Vec<_> = self
+            .refused
+            .iter()
+            .map(|r| serde_json::json!({"id": r.id, "reason": format!("{:?}", r.reason)}))
+            .collect();
+        serde_json::json!({"last": self.last, "applied": applied, "refused": refused}).to_string()
     }
 }
 
@@ -127,7 +137,9 @@ pub struct FlightSide {
     reporter: Reporter,
     reader: MessageReader,
     settings: Settings,
-    echo: Option<SettingChange>,
+    key: LinkKey,
+    gate: ChangeGate,
+    reply: Option<Message>,
     last_state: Option<(bool, bool, FlightMode)>,
     last_report_us: u64,
     last_gps_us: u64,
@@ -138,14 +150,19 @@ pub struct FlightSide {
 }
 
 impl FlightSide {
-    /// A flight side recording into `sent`.
-    pub fn new(sent: Rc<RefCell<Sent>>) -> Self {
+    /// A flight side recording into `sent`, its link keyed with `key` (the phone's changes
+    /// are signed under it), `session` its boot's session nonce.
+    pub fn new(sent: Rc<RefCell<Sent>>, key: LinkKey, session: u32) -> Self {
+        let mut settings = Settings::default();
+        settings.set_link_key(Some(key));
         Self {
             sent,
             reporter: Reporter::new(),
             reader: MessageReader::new(),
-            settings: Settings::default(),
-            echo: None,
+            settings,
+            key,
+            gate: ChangeGate::new(session),
+            reply: None,
             last_state: None,
             last_report_us: 0,
             last_gps_us: 0,
@@ -183,18 +200,19 @@ impl FollowerHooks for FlightSide {
                 break;
             }
             for &b in buf.iter().take(n) {
-                if let Some(Decoded::Message(Message::SettingChange(c))) = self.reader.push(b) {
-                    // The firmware's authority rule: no changes while armed, only the
-                    // current value echoed.
-                    self.echo = if out.armed {
-                        setting_report(&self.settings, c.id)
-                    } else {
-                        let (result, echo) = apply_setting(&mut self.settings, c);
-                        if result.is_ok() {
-                            self.sent.borrow_mut().applied.push(c);
-                        }
-                        echo
-                    };
+                if let Some(Decoded::Message(m)) = self.reader.push(b) {
+                    // The flight controller's gate: signed, fresh, disarmed.
+                    let reply =
+                        self.gate
+                            .on_message(&m, &mut self.settings, Some(self.key), out.armed);
+                    match reply {
+                        Some(Reply::Applied(c)) => self.sent.borrow_mut().applied.push(c),
+                        Some(Reply::Refused(r)) => self.sent.borrow_mut().refused.push(r),
+                        None => {}
+                    }
+                    if let Some(reply) = reply {
+                        self.reply = Some(reply.message());
+                    }
                 }
             }
         }
@@ -234,8 +252,8 @@ impl FollowerHooks for FlightSide {
             sysid: None,
         };
         let state = (out.armed, out.failsafe, out.mode);
-        let message = if let Some(c) = self.echo.take() {
-            Message::SettingChange(c)
+        let message = if let Some(reply) = self.reply.take() {
+            reply
         } else if !self.sysid_pending.is_empty() {
             self.sysid_pending.remove(0)
         } else if self.last_state != Some(state) {

@@ -13,6 +13,7 @@ use module_core::hm10::Relay;
 use module_core::hm10::relay::{MAX_FRAME_LEN, MAX_RECORD_LEN};
 use module_core::records::{self, MAX_STREAM_FRAME_LEN, Splitter};
 use telemetry::channels::{CHANNEL_MAX, FailsafeValues};
+use telemetry::link::LinkKey;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::run_follower;
 use telemetry::link::master::{MasterHooks, run_master};
@@ -23,6 +24,10 @@ use telemetry::mock::{
 use super::flight::{FlightSide, Sent};
 use crate::Scenario;
 use crate::world::params_for;
+
+/// The binding phrase both ends of a served world carry (spec §12): the page signs setting
+/// changes with it. Printed with the URL; a demo value, public by design.
+pub const SERVE_PHRASE: &str = "taulink demo";
 
 /// Bytes waiting for the page; beyond this the oldest are dropped (a stalled page must not
 /// grow the server).
@@ -127,16 +132,21 @@ impl Session {
         executor.spawn(async move {
             let mut radio = MockRadio::new(m_medium, module_node);
             let mut clock = MockClock::new(m_time, 1_234_567);
-            let mut master = Master::new(params);
+            let mut master = Master::new(params).with_key(LinkKey::from_phrase(SERVE_PHRASE));
             let _ = run_master(&mut radio, &mut clock, &mut master, &mut module).await;
         });
-        let mut flight = FlightSide::new(sent.clone());
+        let mut flight = FlightSide::new(
+            sent.clone(),
+            LinkKey::from_phrase(SERVE_PHRASE),
+            SplitMix64::new(s.seed ^ 0x5E55).next_u64() as u32,
+        );
         let failsafe_us = s.failsafe_ms * 1000;
         let f_time = time.clone();
         executor.spawn(async move {
             let mut radio = MockRadio::new(medium, flight_node);
             let mut clock = MockClock::new(f_time, 0);
-            let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
+            let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us)
+                .with_key(LinkKey::from_phrase(SERVE_PHRASE));
             let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut flight).await;
         });
         Self {
