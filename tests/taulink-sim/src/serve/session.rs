@@ -183,7 +183,8 @@ impl Session {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use telemetry::messages::{Decoded, Message, MessageReader, encode_message};
+    use telemetry::change_auth::Signer;
+    use telemetry::messages::{Decoded, Message, MessageReader, RefuseReason, encode_message};
 
     fn page_messages(session: &Session, reader: &mut MessageReader) -> Vec<Message> {
         session
@@ -237,31 +238,51 @@ mod tests {
             sent
         );
 
-        // pid.roll.kp to 0.004, written by the page as its frame.
+        // pid.roll.kp to 0.004, unsigned: refused, nothing applied.
         let change = kp(0.004);
-        let mut frame = [0u8; 32];
-        let n = encode_message(&Message::SettingChange(change), &mut frame).unwrap();
-        session.from_page(&frame[..n]);
+        let send = |session: &mut Session, message: Message| {
+            let mut frame = [0u8; 32];
+            let n = encode_message(&message, &mut frame).unwrap();
+            session.from_page(&frame[..n]);
+        };
+        send(&mut session, Message::SettingChange(change));
         session.run_until(4_000_000);
+        assert!(session.sent.borrow().applied.is_empty());
+        let answer = page_messages(&session, &mut reader);
+        let Some(Message::ChangeRefused(refused)) = answer
+            .iter()
+            .find(|m| matches!(m, Message::ChangeRefused(_)))
+        else {
+            panic!("no refusal in {answer:?}");
+        };
+        assert_eq!(refused.reason, RefuseReason::NotAuthenticated);
+        // Signed with the served world's phrase, after learning the session: applied.
+        let mut phone = Signer::new(&LinkKey::from_phrase(SERVE_PHRASE));
+        assert!(phone.on_refused(refused));
+        send(&mut session, Message::SignedChange(phone.sign(change)));
+        session.run_until(5_000_000);
         assert_eq!(session.sent.borrow().applied, vec![change]);
         let echoed = page_messages(&session, &mut reader);
         assert!(echoed.contains(&Message::SettingChange(change)), "no echo");
     }
 
     #[test]
-    fn while_armed_a_change_is_refused_and_the_held_value_echoed() {
+    fn while_armed_a_change_is_refused_with_the_reason() {
         let mut session = Session::new(&Scenario::default());
         let mut reader = MessageReader::new();
         // The script arms at 20 s.
         session.run_until(21_000_000);
         let _ = page_messages(&session, &mut reader);
-        let change = kp(0.004);
+        let mut phone = Signer::new(&LinkKey::from_phrase(SERVE_PHRASE));
         let mut frame = [0u8; 32];
-        let n = encode_message(&Message::SettingChange(change), &mut frame).unwrap();
+        let n = encode_message(&Message::SignedChange(phone.sign(kp(0.004))), &mut frame).unwrap();
         session.from_page(&frame[..n]);
         session.run_until(22_000_000);
         assert!(session.sent.borrow().applied.is_empty());
-        let held = kp(0.003);
-        assert!(page_messages(&session, &mut reader).contains(&Message::SettingChange(held)));
+        assert!(
+            page_messages(&session, &mut reader)
+                .iter()
+                .any(|m| matches!(m, Message::ChangeRefused(r) if r.reason == RefuseReason::Armed))
+        );
     }
 }
