@@ -6,6 +6,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod change_auth;
 pub mod channels;
 pub mod checksum;
 pub mod cobs;

@@ -174,6 +174,51 @@ pub struct Cells {
     pub count: u8,
 }
 
+/// A setting change from the phone, authenticated (spec §12.5, [`crate::change_auth`]):
+/// `tag` is the MAC of the flight side's session, `counter` and the change under the key
+/// derived from the link key. The only change from the phone the flight side applies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SignedChange {
+    /// The change.
+    pub change: SettingChange,
+    /// Above every counter the flight side accepted in this session.
+    pub counter: u32,
+    /// SipHash-2-4 tag (`change_auth::ChangeKey::tag`).
+    pub tag: [u8; 8],
+}
+
+/// Why the flight side refused a change from the phone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RefuseReason {
+    /// The motors are armed: no change in flight.
+    Armed,
+    /// No valid tag (another phrase, a forgery, or no signature at all).
+    NotAuthenticated,
+    /// The counter is not above the highest accepted (a replay, or a stale session).
+    Replayed,
+    /// The flight side has no binding phrase: nothing can be authenticated.
+    NoPhrase,
+    /// Authenticated, but the value is out of range or the set would not run.
+    Invalid,
+}
+
+/// The flight side's answer to a refused change, with what a fresh one must carry: its
+/// session (drawn at boot) and the highest counter accepted so far.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ChangeRefused {
+    /// The setting the refused change named.
+    pub id: u16,
+    /// Why.
+    pub reason: RefuseReason,
+    /// The flight side's session nonce for this boot.
+    pub session: u32,
+    /// The highest counter accepted in the session (sign with a greater one).
+    pub counter: u32,
+}
+
 /// Everything the telemetry stream carries.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -198,6 +243,11 @@ pub enum Message {
     Vertical(Vertical),
     /// Flight battery cell count.
     Cells(Cells),
+    /// An authenticated setting change (phone → flight).
+    SignedChange(SignedChange),
+    /// A refused change, with the session and counter to sign the next one with
+    /// (flight → phone).
+    ChangeRefused(ChangeRefused),
 }
 
 /// Largest postcard encoding of a [`Message`].

@@ -7,6 +7,7 @@
 
 pub mod alerts;
 pub mod app;
+pub mod authority;
 pub mod battery;
 pub mod board;
 pub mod control;

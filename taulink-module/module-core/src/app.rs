@@ -1,6 +1,12 @@
 //! The application core: input source → link → fan-out to the handset and the HM-10, and
 //! link → PPM output in the receiver role. A pure struct: the firmware calls the `on_*`
 //! methods from its tasks and carries out what they return.
+//!
+//! Security (spec §12): the link loops are built here ([`App::master`], [`App::follower`]),
+//! keyed with the binding phrase's key when the settings hold one; a phrase set through the
+//! text settings ([`App::set_setting_text`]) restarts the link with it. The HM-10's boot
+//! script ([`App::hm10_script`]) always sets a pairing PIN with bonding: the one set in
+//! `ble_pin`, else this chip's factory PIN.
 
 use crate::air::AirLink;
 use crate::button::ButtonEvent;
@@ -13,9 +19,14 @@ use crate::session::{BindOutcome, LinkStep, Session, SessionEnd};
 use crate::settings::{InputProtocol, Role, Settings};
 use crate::status::LinkState;
 use heapless::Deque;
+use telemetry::channels::FailsafeValues;
 use telemetry::handset::crsf::address;
 use telemetry::handset::crsf::params::ParameterChunk;
+use telemetry::link::LinkParams;
 use telemetry::link::core::{Follower, Master};
+
+use crate::hm10::at::{Configurator, Pin};
+use crate::settings::TextError;
 
 /// Something the firmware must do after an event.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -74,6 +85,10 @@ pub struct App<L: LinkPort, H: HandsetOutput> {
     actions: Deque<Action, 4>,
     /// The radio model the running link step's identity was built for (model match).
     link_model: Option<u8>,
+    /// The chip's unique ID (for the factory PIN), once the HM-10 script asked for it.
+    unique_id: Option<u64>,
+    /// Seeds a receiver-role follower's epoch nonces (spec §12.2), from the RNG at boot.
+    nonce_seed: u64,
 }
 
 impl<L: LinkPort, H: HandsetOutput> App<L, H> {
@@ -109,7 +124,86 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             battery_low: false,
             actions: Deque::new(),
             link_model: None,
+            unique_id: None,
+            nonce_seed: 0,
         })
+    }
+
+    /// The master for `params` (from `LinkStep::RunMaster`), keyed with the binding
+    /// phrase's key when one is set (`Master::with_key`: every frame sealed, only verified
+    /// downlinks taken, identity and hop sequence derived from the key), else unkeyed.
+    pub fn master(&self, params: LinkParams) -> Master {
+        let master = Master::new(params);
+        match self.settings.link_key {
+            Some(key) => master.with_key(key),
+            None => master,
+        }
+    }
+
+    /// The seed of a receiver-role follower's epoch nonces (spec §12.2), from the nRF52840's
+    /// RNG at boot: a keyed follower's nonce must never repeat, across reboots too.
+    pub fn seed_link_nonces(&mut self, random: u64) {
+        self.nonce_seed = random;
+    }
+
+    /// The follower for `LinkStep::RunFollower`'s fields, keyed as [`App::master`].
+    pub fn follower(
+        &self,
+        params: LinkParams,
+        failsafe: FailsafeValues,
+        failsafe_us: u64,
+    ) -> Follower {
+        let follower = Follower::new(params, failsafe, failsafe_us);
+        match self.settings.link_key {
+            Some(key) => follower.with_key(key).with_nonce_seed(self.nonce_seed),
+            None => follower,
+        }
+    }
+
+    /// Changes the setting `name` from `text` (`settings::text`: e.g. `phrase`, `ble_pin`,
+    /// `rate`) — the module's text settings path (a console, a host tool). What the link
+    /// runs on (key, rate, band, ratio, bind, role) restarts the link at the next
+    /// [`App::poll_session`]; the returned action saves the new set. On an error nothing
+    /// changes. The PIN reaches the HM-10 at the next power-up (its boot script).
+    pub fn set_setting_text(&mut self, name: &str, text: &str) -> Result<Action, TextError> {
+        let before = self.settings;
+        self.settings.set_text(name, text)?;
+        let after = self.settings;
+        let link_changed = crate::air::link_params(&before) != crate::air::link_params(&after)
+            || before.link_key != after.link_key
+            || before.role != after.role;
+        if link_changed {
+            self.restart_request = true;
+        }
+        if before.input_timeout_ms != after.input_timeout_ms {
+            self.apply(Effect::InputTimeout);
+        }
+        if before.failsafe != after.failsafe {
+            self.apply(Effect::PpmFailsafe);
+        }
+        if let Some(id) = self.unique_id {
+            self.commands.ble_pin = Some(self.pin_for(id));
+        }
+        Ok(Action::Save(self.settings))
+    }
+
+    fn pin_for(&self, unique_id: u64) -> Pin {
+        self.settings
+            .ble_pin
+            .unwrap_or_else(|| Pin::factory(unique_id))
+    }
+
+    /// The HM-10's boot script, started at `now_ms`: the BLE name, notifications, and the
+    /// pairing PIN with bonding (`AT+PASS`, `AT+TYPE3`) — the `ble_pin` setting, else the
+    /// factory PIN of the chip whose unique ID is `unique_id` (`Pin::factory`; the nRF52840's
+    /// FICR DEVICEID). Never the HM-10's factory no-PIN state. The PIN also shows in the
+    /// radio's device tool ("BLE PIN").
+    pub fn hm10_script(&mut self, now_ms: u32, unique_id: u64) -> Configurator {
+        self.unique_id = Some(unique_id);
+        let pin = self.pin_for(unique_id);
+        self.commands.ble_pin = Some(pin);
+        // "TauLink": the BLE name the phone app filters on.
+        Configurator::new("TauLink", now_ms).with_pin(pin)
     }
 
     /// The settings in force.

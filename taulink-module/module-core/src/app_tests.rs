@@ -469,3 +469,64 @@ fn model_match_off_flies_one_identity_for_every_model() {
     assert_eq!(running_master(&mut app, 350), base);
     assert_eq!(model_row(&app), "no ID from radio");
 }
+
+#[test]
+fn the_phrase_keys_the_link_ends_and_a_new_phrase_restarts_the_link() {
+    use crate::session::{LinkStep, SessionEnd};
+    use telemetry::link::LinkKey;
+    let mut app = app(Settings {
+        bind_id: 0x0101_0101,
+        ..Settings::default()
+    });
+    app.on_radio_present(true);
+    let LinkStep::RunMaster(params) = app.next_link_step(0, 7) else {
+        panic!("bound: the master runs");
+    };
+    assert_eq!(app.master(params).params().bind_id, 0x0101_0101, "unkeyed");
+    assert_eq!(app.poll_session(50), None);
+
+    let Ok(Action::Save(saved)) = app.set_setting_text("phrase", "correct horse battery staple")
+    else {
+        panic!("a valid phrase is taken and saved");
+    };
+    let key = LinkKey::from_phrase("correct horse battery staple");
+    assert_eq!(saved.link_key, Some(key));
+    assert_eq!(
+        app.poll_session(100),
+        Some(SessionEnd::SettingsChanged),
+        "the running master stops"
+    );
+    app.on_session_end(SessionEnd::SettingsChanged);
+    assert_eq!(app.next_link_step(150, 7), LinkStep::Probe);
+    app.on_radio_present(true);
+    let LinkStep::RunMaster(params) = app.next_link_step(200, 7) else {
+        panic!("the master runs again");
+    };
+    // Keyed: the identity on air is the key's, not the stored bind ID.
+    assert_eq!(app.master(params).params().bind_id, key.bind_id());
+    let follower = app.follower(params, FailsafeValues::default(), 250_000);
+    assert_eq!(follower.params().bind_id, key.bind_id());
+
+    // A bad phrase changes nothing and restarts nothing.
+    assert_eq!(
+        app.set_setting_text("phrase", &"x".repeat(65)),
+        Err(TextError::BadPhrase)
+    );
+    assert_eq!(app.settings().link_key, Some(key));
+    assert_eq!(app.poll_session(250), None);
+}
+
+#[test]
+fn the_hm10_always_gets_a_pin_the_factory_one_from_the_chip_id() {
+    let mut app = app(Settings::default());
+    let script = app.hm10_script(0, 0x1234_5678_9ABC_DEF0);
+    let factory = Pin::factory(0x1234_5678_9ABC_DEF0);
+    assert_eq!(script.pin(), Some(factory));
+    assert!((100_000..=999_999).contains(&factory.value()));
+    assert_ne!(factory, Pin::factory(0x1234_5678_9ABC_DEF1), "per chip");
+    assert_eq!(app.parameter_commands().ble_pin, Some(factory), "shown");
+    // Set by the owner: that one, shown at once, applied at the next boot's script.
+    app.set_setting_text("ble_pin", "271828").unwrap();
+    assert_eq!(app.parameter_commands().ble_pin, Pin::new(271_828));
+    assert_eq!(app.hm10_script(0, 1).pin(), Pin::new(271_828));
+}

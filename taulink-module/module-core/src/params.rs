@@ -21,6 +21,12 @@
 //! and the hop seed are set from the other settings paths (`settings::text`). Any write after
 //! which the set would not run (`Settings::validate`: an OpenLRSng link outside the band
 //! plan, OpenLRSng in the receiver role) is refused and changes nothing.
+//!
+//! The binding phrase and the
+//! HM-10 PIN are read-only INFO rows at the end (20, 21): the phrase shows as its key's
+//! fingerprint, to compare with the flight console's, or "none - UNAUTHENTICATED" (ASCII:
+//! EdgeTX's fonts lack the dash); it is typed elsewhere (the module's text settings), since a
+//! handset's scroll wheel is no way to enter a 64-byte secret.
 
 use core::fmt::Write;
 
@@ -72,8 +78,15 @@ pub const OPENLRS_RATE: u8 = 17;
 pub const OPENLRS_CHANNELS: u8 = 18;
 /// OpenLRSng telemetry on/off.
 pub const OPENLRS_TELEMETRY: u8 = 19;
+/// Info: the binding phrase's fingerprint.
+pub const BIND_PHRASE: u8 = 20;
+/// Info: the HM-10 pairing PIN in force.
+pub const BLE_PIN: u8 = 21;
 /// Parameters the module offers (DEVICE_INFO's count).
-pub const PARAMETER_COUNT: u8 = 19;
+pub const PARAMETER_COUNT: u8 = 21;
+
+/// The phrase row without a phrase.
+pub const NO_PHRASE: &str = "none - UNAUTHENTICATED";
 
 /// How often the radio polls a running command, 10 ms units.
 const POLL_10MS: u8 = 50;
@@ -96,6 +109,9 @@ pub struct Commands {
     pub restarted_by: Option<u8>,
     /// The model ID the radio last selected (CRSF model select), for the "Model" row.
     pub radio_model: Option<u8>,
+    /// The HM-10 PIN in force (the set one, or the factory one of this chip), for its row;
+    /// the core fills it in (`App::set_unique_id`). `None`: not known yet.
+    pub ble_pin: Option<crate::hm10::at::Pin>,
 }
 
 /// What a write asks of the core beyond the settings change.
@@ -346,6 +362,26 @@ pub fn entry(
             1,
             unit(commands, number, ""),
         ),
+        BIND_PHRASE => {
+            let mut text: String<24> = String::new();
+            match settings.link_key {
+                Some(key) => write!(text, "{}", key.fingerprint()).ok()?,
+                None => text.push_str(NO_PHRASE).ok()?,
+            }
+            Entry::info(0, "Bind Phrase", &text)
+        }
+        BLE_PIN => {
+            let mut text: String<8> = String::new();
+            match commands.ble_pin {
+                Some(pin) => {
+                    for d in pin.digits() {
+                        text.push(char::from(d)).ok()?;
+                    }
+                }
+                None => text.push('?').ok()?,
+            }
+            Entry::info(0, "BLE PIN", &text)
+        }
         _ => return None,
     };
     entry.finish().ok()
@@ -650,6 +686,39 @@ mod tests {
             Effect::RestartLink
         );
         assert!(broken.validate().is_ok());
+    }
+
+    fn info_text(entry: &[u8]) -> std::string::String {
+        // parent, type, name NUL, text NUL.
+        let name_end = entry[2..].iter().position(|b| *b == 0).unwrap() + 2;
+        std::string::String::from_utf8(entry[name_end + 1..entry.len() - 1].to_vec()).unwrap()
+    }
+
+    #[test]
+    fn the_phrase_row_shows_the_fingerprint_or_says_unauthenticated() {
+        let commands = Commands::default();
+        let plain = entry(BIND_PHRASE, &Settings::default(), &commands).unwrap();
+        assert_eq!(info_text(&plain), NO_PHRASE);
+        let key = telemetry::link::LinkKey::from_phrase("correct horse battery staple");
+        let keyed = Settings {
+            link_key: Some(key),
+            ..Settings::default()
+        };
+        let row = entry(BIND_PHRASE, &keyed, &commands).unwrap();
+        assert_eq!(info_text(&row), key.fingerprint().to_string());
+        // Read-only: a write changes nothing.
+        let mut settings = keyed;
+        let mut commands = Commands::default();
+        assert_eq!(
+            write(BIND_PHRASE, &[0], &mut settings, &mut commands),
+            Effect::None
+        );
+        assert_eq!(settings, keyed);
+        let pin = Commands {
+            ble_pin: crate::hm10::at::Pin::new(4_217),
+            ..Commands::default()
+        };
+        assert_eq!(info_text(&entry(BLE_PIN, &keyed, &pin).unwrap()), "004217");
     }
 
     #[test]

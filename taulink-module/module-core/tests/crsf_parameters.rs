@@ -26,7 +26,7 @@ use module_core::session::{BindOutcome, LinkStep, POLL_MS};
 use module_core::settings::{InputProtocol, OutputProtocol, RateMode, SettingsStore};
 use sequential_storage::mock_flash::{MockFlashBase, WriteCountCheck};
 use telemetry::channels::FailsafeValues;
-use telemetry::link::core::{Follower, Master};
+use telemetry::link::core::Follower;
 use telemetry::link::follower::{bind_follower, run_follower};
 use telemetry::link::master::{bind_master, run_master};
 use telemetry::link::{Band, LinkParams};
@@ -285,7 +285,7 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                         app.borrow_mut().on_radio_present(true);
                     }
                     LinkStep::RunMaster(params) => {
-                        let mut master = Master::new(params);
+                        let mut master = app.borrow().master(params);
                         let mut hooks = ModuleHooks { app: app.clone() };
                         let run = run_master(&mut radio, &mut clock, &mut master, &mut hooks);
                         // The master loop only returns on a radio error (none here).
@@ -360,7 +360,7 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             let name_end = info[2..].iter().position(|&b| b == 0).unwrap() + 2;
             assert_eq!(&info[2..name_end], b"TauLink");
             let count = info[name_end + 13];
-            assert_eq!(count, 19, "DEVICE_INFO's parameter count");
+            assert_eq!(count, 21, "DEVICE_INFO's parameter count");
 
             // Read every parameter.
             let mut fields = Vec::new();
@@ -393,7 +393,9 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                     "OpenLRSng",
                     "OLRS Rate",
                     "OLRS Channels",
-                    "OLRS Telem"
+                    "OLRS Telem",
+                    "Bind Phrase",
+                    "BLE PIN"
                 ]
             );
             assert_eq!(fields[12].options, ["Off", "On"]);
@@ -407,6 +409,10 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             assert_eq!(fields[16].parent, 16, "OLRS Rate sits in the OpenLRSng folder");
             assert_eq!(fields[16].options[fields[16].value as usize], "19k2bps");
             assert_eq!(fields[17].options[fields[17].value as usize], "8");
+            assert_eq!(
+                fields[19].info, "none - UNAUTHENTICATED",
+                "no phrase: the menu says so"
+            );
             let rate = &fields[0];
             assert_eq!(
                 rate.options,

@@ -15,6 +15,7 @@ import { MODE_NAMES, type Event, type FlightMode } from "../src/messages";
 interface Sent {
   last: Record<string, Record<string, number> | string>;
   applied: { id: number; value: number }[];
+  refused: { id: number; reason: string }[];
 }
 
 const sent = async (page: Page): Promise<Sent> => (await page.request.get("/api/sent")).json() as Promise<Sent>;
@@ -86,9 +87,15 @@ test("arming and a flight-mode change are spoken; mute silences the next change"
   expect(await page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.length)).toBe(before);
 });
 
+/** The binding phrase both simulated ends carry (`taulink-sim --serve` prints it). */
+const SERVE_PHRASE = "taulink demo";
+
 test("a setting change round-trips to the flight side", async ({ page }) => {
   await page.goto("/?sim");
   await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
+  await page.getByLabel("Binding phrase").fill(SERVE_PHRASE);
+  await page.getByRole("button", { name: "Use phrase" }).click();
+  await expect(page.getByLabel("Phrase fingerprint")).not.toHaveText("none");
   await page.getByLabel("Filter settings").fill("pid.roll.kp");
   await page.getByLabel("New value for pid.roll.kp").fill("0.004");
   await page.getByRole("row", { name: /pid\.roll\.kp/ }).getByRole("button", { name: "Set" }).click();
@@ -98,6 +105,25 @@ test("a setting change round-trips to the flight side", async ({ page }) => {
   const applied = (await sent(page)).applied;
   expect(applied).toHaveLength(1);
   expect(applied[0]!.value).toBe(bits);
+});
+
+test("a setting change signed with a wrong phrase is refused and shown as refused", async ({ page }) => {
+  await page.goto("/?sim");
+  await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
+  await page.getByLabel("Binding phrase").fill("not the demo phrase");
+  await page.getByRole("button", { name: "Use phrase" }).click();
+  await page.getByLabel("Filter settings").fill("pid.roll.kp");
+  await page.getByLabel("New value for pid.roll.kp").fill("0.004");
+  await page.getByRole("row", { name: /pid\.roll\.kp/ }).getByRole("button", { name: "Set" }).click();
+  await expect(page.getByRole("status", { name: "Settings status" })).toHaveText(
+    "pid.roll.kp refused: wrong binding phrase",
+    { timeout: 10_000 },
+  );
+  await expect(page.getByLabel("Setting pid.roll.kp")).toHaveText("—");
+  const log = await sent(page);
+  expect(log.applied).toHaveLength(0);
+  expect(log.refused.length).toBeGreaterThan(0);
+  expect(log.refused.every((r) => r.reason === "NotAuthenticated")).toBe(true);
 });
 
 test("a recorded log replays", async ({ page, context }) => {

@@ -4,6 +4,7 @@
  */
 import init, {
   Decoder as WasmDecoder,
+  Phone as WasmPhone,
   encode_setting_change,
   setting_from_wire,
   setting_to_wire,
@@ -56,4 +57,32 @@ export function settingChangeFrame(id: number, value: number): Uint8Array | unde
 
 export function settingValue(id: number, wire: number): number | undefined {
   return setting_from_wire(id, wire);
+}
+
+/**
+ * The phone's signing half (Rust, telemetry::change_auth via telemetry-wasm): holds the key
+ * derived from the binding phrase in memory only. Throws for an empty or unusable phrase.
+ */
+export class Phone {
+  private readonly inner: WasmPhone;
+
+  constructor(phrase: string) {
+    this.inner = new WasmPhone(phrase);
+  }
+
+  get fingerprint(): string {
+    return this.inner.fingerprint();
+  }
+
+  /** The signed change frame of `id` to `value`, or undefined if the flight side would refuse the value. */
+  signChange(id: number, value: number): Uint8Array | undefined {
+    const wire = setting_to_wire(id, value);
+    return wire === undefined ? undefined : this.inner.sign_change(id, wire);
+  }
+
+  /** A refusal from the flight side: the frame to send again, or undefined (the refusal stands). */
+  onRefused(refused: unknown): Uint8Array | undefined {
+    const frame = this.inner.on_refused(JSON.stringify(refused));
+    return frame.length ? frame : undefined;
+  }
 }

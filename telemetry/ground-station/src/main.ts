@@ -5,10 +5,10 @@
  */
 import "./style.css";
 import { Alerts, Speaker, armText } from "./alerts";
-import { Decoder, loadWasm, settingChangeFrame, settingValue, settingsTable, type SettingRow } from "./decoder";
+import { Decoder, Phone, loadWasm, settingValue, settingsTable, type SettingRow } from "./decoder";
 import * as fmt from "./format";
 import { type Chunk, Recorder, csvByType, parseLog } from "./log";
-import { MODE_NAMES, RATE_MODES, type Event } from "./messages";
+import { MODE_NAMES, RATE_MODES, type Event, type RefuseReason } from "./messages";
 import { type State, apply, initialState } from "./model";
 import { type Console, type Transport, connectBluetooth, connectSerial, connectWebSocket, parseSettingLine } from "./transports";
 import { Horizon, drawStrip, drawTrack, headingDeg } from "./views";
@@ -30,6 +30,8 @@ let alerts = new Alerts();
 const speaker = new Speaker();
 let horizon: Horizon;
 let settings: SettingRow[] = [];
+/** The binding phrase's signer (in memory only: gone with the page). */
+let phone: Phone | undefined;
 /** Console values by setting name (USB), shown when no link echo is there. */
 const consoleValues = new Map<string, string>();
 
@@ -46,7 +48,17 @@ function set(id: string, text: string, cls = ""): void {
 function onBytes(bytes: Uint8Array): void {
   recorder?.add(performance.now(), bytes);
   const now = performance.now();
-  for (const e of decoder.push(bytes)) apply(state, e, now);
+  for (const e of decoder.push(bytes)) {
+    // A refusal that only taught the phone the flight side's session: signed again, once.
+    if (typeof e === "object" && "ChangeRefused" in e) {
+      const again = phone?.onRefused(e.ChangeRefused);
+      if (again && transport) {
+        void transport.send(again);
+        continue;
+      }
+    }
+    apply(state, e, now);
+  }
   $("record").title = recorder ? `${recorder.chunks} chunks` : "";
 }
 
@@ -121,7 +133,18 @@ function shownValue(row: SettingRow): string {
   return consoleValues.get(row.name) ?? "—";
 }
 
+const REFUSALS: Record<RefuseReason, string> = {
+  Armed: "refused: armed",
+  NotAuthenticated: "refused: wrong binding phrase",
+  Replayed: "refused: replayed",
+  NoPhrase: "refused: the flight side has no binding phrase",
+  Invalid: "refused: value not accepted",
+};
+
 function renderSettingValues(): void {
+  const r = state.refused;
+  const name = r ? (settings.find((row) => row.id === r.id)?.name ?? `#${r.id}`) : "";
+  set("settings-status", r ? `${name} ${REFUSALS[r.reason]}` : "", r ? "bad" : "");
   // The flight side refuses changes while armed; the page does not offer them then.
   const armed = state.arm?.armed === true;
   for (const b of document.querySelectorAll<HTMLButtonElement>("button[data-set]")) {
@@ -161,7 +184,11 @@ async function sendSetting(row: SettingRow, text: string): Promise<void> {
     return;
   }
   const value = row.kind === "choice" && row.choices?.includes(text) ? row.choices.indexOf(text) : Number(text);
-  const frame = settingChangeFrame(row.id, value);
+  if (!phone) {
+    status("enter the binding phrase first: the flight side only takes signed changes");
+    return;
+  }
+  const frame = phone.signChange(row.id, value);
   if (!frame) {
     status(`${row.name}: ${text} is outside what the flight side accepts`);
     return;
@@ -260,6 +287,19 @@ async function main(): Promise<void> {
     } catch (e) {
       status(e instanceof Error ? e.message : String(e));
     }
+  };
+  $("phrase-use").onclick = () => {
+    const input = $<HTMLInputElement>("phrase");
+    try {
+      phone = new Phone(input.value);
+      set("phrase-fingerprint", phone.fingerprint);
+      status("binding phrase set (in memory only); compare the fingerprint with the flight console's");
+    } catch (e) {
+      phone = undefined;
+      set("phrase-fingerprint", "none");
+      status(e instanceof Error ? e.message : String(e));
+    }
+    input.value = "";
   };
   $("settings-read").onclick = () => void usb?.command("list");
   $("settings-save").onclick = () => void usb?.command("save");

@@ -20,6 +20,9 @@ export interface Gps {
 export type Axis = "Roll" | "Pitch" | "Yaw";
 export interface SysIdResult { axis: Axis; beta1: number; beta2: number; tau_s: number; noise: number }
 export interface SettingChange { id: number; value: number }
+export interface SignedChange { change: SettingChange; counter: number; tag: number[] }
+export type RefuseReason = "Armed" | "NotAuthenticated" | "Replayed" | "NoPhrase" | "Invalid";
+export interface ChangeRefused { id: number; reason: RefuseReason; session: number; counter: number }
 
 export type Message =
   | { Attitude: Attitude }
@@ -29,7 +32,9 @@ export type Message =
   | { ArmState: ArmState }
   | { Gps: Gps }
   | { SysIdResult: SysIdResult }
-  | { SettingChange: SettingChange };
+  | { SettingChange: SettingChange }
+  | { SignedChange: SignedChange }
+  | { ChangeRefused: ChangeRefused };
 
 export type Event = Message | "Dropped";
 

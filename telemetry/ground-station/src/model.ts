@@ -3,7 +3,7 @@
  * bounded histories behind the strip charts and the GPS track, and the settings the flight
  * side reported. Pure: `apply` folds one decoded event in at a given time.
  */
-import type { ArmState, Attitude, Axis, Battery, Event, FlightMode, Gps, LinkStats, SysIdResult } from "./messages";
+import type { ArmState, Attitude, Axis, Battery, ChangeRefused, Event, FlightMode, Gps, LinkStats, SysIdResult } from "./messages";
 
 /** Strip charts show this much history. */
 export const HISTORY_MS = 5 * 60_000;
@@ -25,6 +25,8 @@ export interface State {
   sysid: Partial<Record<Axis, SysIdResult>>;
   /** Setting id → wire value the flight side reported. */
   settings: Map<number, number>;
+  /** The flight side's last refusal of a change from this page (cleared by an applied one). */
+  refused?: ChangeRefused;
   linkHistory: LinkSample[];
   track: TrackPoint[];
   /** Time of the last message (ms), for "telemetry lost". */
@@ -59,7 +61,10 @@ export function apply(s: State, event: Event, tMs: number): State {
   else if ("FlightMode" in event) s.mode = event.FlightMode;
   else if ("ArmState" in event) s.arm = event.ArmState;
   else if ("SysIdResult" in event) s.sysid[event.SysIdResult.axis] = event.SysIdResult;
-  else if ("SettingChange" in event) s.settings.set(event.SettingChange.id, event.SettingChange.value);
+  else if ("SettingChange" in event) {
+    s.settings.set(event.SettingChange.id, event.SettingChange.value);
+    if (s.refused?.id === event.SettingChange.id) s.refused = undefined;
+  } else if ("ChangeRefused" in event) s.refused = event.ChangeRefused;
   else if ("LinkStats" in event) {
     const l = event.LinkStats;
     s.link = l;

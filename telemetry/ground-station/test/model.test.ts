@@ -20,6 +20,17 @@ describe("model", () => {
     expect([s.messages, s.dropped, s.lastMessageMs]).toEqual([3, 1, 4]);
   });
 
+  it("keeps the flight side's last refusal until that setting is applied", () => {
+    const s = initialState();
+    const refused = { id: 4, reason: "NotAuthenticated" as const, session: 7, counter: 0 };
+    apply(s, { ChangeRefused: refused }, 1);
+    expect(s.refused).toEqual(refused);
+    apply(s, { SettingChange: { id: 5, value: 1 } }, 2);
+    expect(s.refused).toEqual(refused);
+    apply(s, { SettingChange: { id: 4, value: 9 } }, 3);
+    expect(s.refused).toBeUndefined();
+  });
+
   it("keeps only the last HISTORY_MS of link samples", () => {
     const s = initialState();
     for (let t = 0; t <= 2 * HISTORY_MS; t += 1000) apply(s, link(90), t);

@@ -4,7 +4,7 @@
 import { readFileSync } from "node:fs";
 import { fileURLToPath } from "node:url";
 import { beforeAll, describe, expect, it } from "vitest";
-import { Decoder, loadWasm, settingChangeFrame, settingValue, settingsTable } from "../src/decoder";
+import { Decoder, Phone, loadWasm, settingChangeFrame, settingValue, settingsTable } from "../src/decoder";
 import { fromHex } from "../src/log";
 
 const here = (p: string): string => fileURLToPath(new URL(p, import.meta.url));
@@ -41,5 +41,23 @@ describe("settings encoders", () => {
     expect(change.id).toBe(kp!.id);
     expect(settingValue(kp!.id, change.value)).toBeCloseTo(0.004, 7);
     expect(settingChangeFrame(kp!.id, 5)).toBeUndefined();
+  });
+});
+
+describe("the phone's signer", () => {
+  it("signs a change, shows the fingerprint and refuses an empty phrase", () => {
+    const kp = settingsTable().find((r) => r.name === "pid.roll.kp")!;
+    const phone = new Phone("taulink demo");
+    expect(phone.fingerprint).toMatch(/^[0-9a-f]{4}-[0-9a-f]{4}$/);
+    const events = new Decoder().push(phone.signChange(kp.id, 0.004)!);
+    const signed = (events[0] as { SignedChange: { change: { id: number }; counter: number; tag: number[] } }).SignedChange;
+    expect(signed.change.id).toBe(kp.id);
+    expect(signed.counter).toBe(1);
+    expect(signed.tag).toHaveLength(8);
+    expect(phone.signChange(kp.id, 5)).toBeUndefined();
+    // A refusal naming an unknown session: one more signed try.
+    const again = phone.onRefused({ id: kp.id, reason: "NotAuthenticated", session: 42, counter: 0 });
+    expect(again).toBeDefined();
+    expect(() => new Phone("  ")).toThrow();
   });
 });

@@ -25,14 +25,77 @@ impl core::fmt::Debug for LinkKey {
     }
 }
 
+#[cfg(feature = "defmt")]
+impl defmt::Format for LinkKey {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "LinkKey(..)");
+    }
+}
+
+/// A key's fingerprint ([`LinkKey::fingerprint`]); shown as `1a2b-3c4d`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Fingerprint(pub u32);
+
+impl core::fmt::Display for Fingerprint {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{:04x}-{:04x}", self.0 >> 16, self.0 & 0xFFFF)
+    }
+}
+
+/// Longest binding phrase, bytes of UTF-8.
+pub const PHRASE_MAX_BYTES: usize = 64;
+
+/// Domain prefix of the phrase hash (spec §12); the NUL ends it, so no phrase can extend it.
+const DOMAIN_PHRASE: &[u8] = b"TauLink/1 binding phrase\0";
+
+/// Why a binding phrase was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PhraseError {
+    /// Longer than [`PHRASE_MAX_BYTES`] bytes.
+    TooLong,
+    /// Holds a control character (a phrase must be typeable the same on both ends).
+    NotPrintable,
+}
+
+impl core::fmt::Display for PhraseError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            PhraseError::TooLong => "binding phrase longer than 64 bytes",
+            PhraseError::NotPrintable => "binding phrase holds a control character",
+        })
+    }
+}
+
+impl core::error::Error for PhraseError {}
+
+/// The key of a binding phrase as a person typed it, the one rule both ends (and the
+/// ground station) apply: leading and trailing white space is dropped; what is left must be
+/// at most [`PHRASE_MAX_BYTES`] bytes of printable UTF-8 (spaces inside are part of it).
+/// `Ok(None)`: no phrase (empty), the link runs unauthenticated.
+pub fn key_for_phrase(text: &str) -> Result<Option<LinkKey>, PhraseError> {
+    let phrase = text.trim();
+    if phrase.is_empty() {
+        return Ok(None);
+    }
+    if phrase.len() > PHRASE_MAX_BYTES {
+        return Err(PhraseError::TooLong);
+    }
+    if phrase.chars().any(char::is_control) {
+        return Err(PhraseError::NotPrintable);
+    }
+    Ok(Some(LinkKey::from_phrase(phrase)))
+}
+
 /// Domain separation of the derivations: each use of the key hashes its own prefix. A frame
 /// tag hashes its 64-bit counter first; "TauLink/" read as a counter is above 2⁶¹, which no
 /// link ever reaches, so no frame tag coincides with a derived value.
 const DOMAIN_BIND_ID: &[u8] = b"TauLink/1 bind-id";
 /// Domain prefix of the binding-phrase hash (spec §12.2).
-const DOMAIN_PHRASE: &[u8] = b"TauLink/1 binding phrase\0";
 const DOMAIN_HOP_SEED: &[u8] = b"TauLink/1 hop-seed";
 const DOMAIN_MODEL_KEY: &[u8] = b"TauLink/1 model-key";
+const DOMAIN_FINGERPRINT: &[u8] = b"TauLink/1 fingerprint";
 
 impl LinkKey {
     /// The key from its 16 bytes.
@@ -40,18 +103,26 @@ impl LinkKey {
         Self(bytes)
     }
 
-    /// The key of a binding phrase entered on both ends (ExpressLRS-style, but what it yields
-    /// is the key, never sent): `SHA-256("TauLink/1 binding phrase\0" ‖ phrase)[0..16]`.
+    /// The key of a binding phrase: `SHA-256("TauLink/1 binding phrase\0" ‖ phrase)`, its
+    /// first 16 bytes (spec §12). The phrase's bytes are hashed as given; people's input goes
+    /// through [`key_for_phrase`], which trims and checks it first.
     pub fn from_phrase(phrase: &str) -> LinkKey {
-        let mut h = Sha256::new();
+        let mut h = super::sha256::Sha256::new();
         h.write(DOMAIN_PHRASE);
         h.write(phrase.as_bytes());
         let digest = h.finish();
         let mut key = [0u8; KEY_BYTES];
-        for (k, d) in key.iter_mut().zip(digest.iter()) {
-            *k = *d;
+        for (k, d) in key.iter_mut().zip(digest) {
+            *k = d;
         }
-        Self(key)
+        LinkKey(key)
+    }
+
+    /// A short public check value of the key, for a person to compare both ends (console,
+    /// handset menu, ground station): the low 32 bits of SipHash-2-4(key,
+    /// "TauLink/1 fingerprint"). One-way like the bind ID, and a different value from it.
+    pub fn fingerprint(&self) -> Fingerprint {
+        Fingerprint(self.prf(DOMAIN_FINGERPRINT) as u32)
     }
 
     /// The key's bytes (to store it).
@@ -67,7 +138,7 @@ impl LinkKey {
         if id == 0 { 1 } else { id }
     }
 
-    /// The key of radio model `model_id` (model match, spec §12.5): two PRF outputs of this
+    /// The key of radio model `model_id` (model match, spec §12.6): two PRF outputs of this
     /// key over the model ID (halves 0 and 1), so each model's link has its own key, bind ID,
     /// hop seed and tags, and one model's key tells nothing of this key or of another
     /// model's. Forging under a model key is as hard as under this one (2⁻³² per frame).
@@ -106,119 +177,15 @@ impl LinkKey {
         (self.tag(counter, frame) ^ tag) == 0
     }
 
-    fn prf(&self, domain: &[u8]) -> u64 {
+    pub(crate) fn prf(&self, domain: &[u8]) -> u64 {
         let mut h = SipHasher24::new(&self.0);
         h.write(domain);
         h.finish()
     }
 }
 
-/// SHA-256 (FIPS 180-4), fed in pieces; only for hashing a binding phrase, so written for
-/// size, not speed.
-struct Sha256 {
-    state: [u32; 8],
-    block: [u8; 64],
-    filled: usize,
-    length: u64,
-}
-
-const SHA256_K: [u32; 64] = [
-    0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4, 0xab1c5ed5,
-    0xd807aa98, 0x12835b01, 0x243185be, 0x550c7dc3, 0x72be5d74, 0x80deb1fe, 0x9bdc06a7, 0xc19bf174,
-    0xe49b69c1, 0xefbe4786, 0x0fc19dc6, 0x240ca1cc, 0x2de92c6f, 0x4a7484aa, 0x5cb0a9dc, 0x76f988da,
-    0x983e5152, 0xa831c66d, 0xb00327c8, 0xbf597fc7, 0xc6e00bf3, 0xd5a79147, 0x06ca6351, 0x14292967,
-    0x27b70a85, 0x2e1b2138, 0x4d2c6dfc, 0x53380d13, 0x650a7354, 0x766a0abb, 0x81c2c92e, 0x92722c85,
-    0xa2bfe8a1, 0xa81a664b, 0xc24b8b70, 0xc76c51a3, 0xd192e819, 0xd6990624, 0xf40e3585, 0x106aa070,
-    0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a, 0x5b9cca4f, 0x682e6ff3,
-    0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2,
-];
-
-impl Sha256 {
-    fn new() -> Self {
-        Self {
-            state: [
-                0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a, 0x510e527f, 0x9b05688c, 0x1f83d9ab,
-                0x5be0cd19,
-            ],
-            block: [0; 64],
-            filled: 0,
-            length: 0,
-        }
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            if let Some(slot) = self.block.get_mut(self.filled) {
-                *slot = b;
-            }
-            self.filled += 1;
-            self.length = self.length.wrapping_add(8);
-            if self.filled == 64 {
-                self.compress();
-            }
-        }
-    }
-
-    fn compress(&mut self) {
-        let mut w = [0u32; 64];
-        for (word, chunk) in w.iter_mut().zip(self.block.chunks_exact(4)) {
-            let mut be = [0u8; 4];
-            be.copy_from_slice(chunk);
-            *word = u32::from_be_bytes(be);
-        }
-        for i in 16..64 {
-            let at = |j: usize| w.get(j).copied().unwrap_or(0);
-            let (w16, w15, w7, w2) = (at(i - 16), at(i - 15), at(i - 7), at(i - 2));
-            let s0 = w15.rotate_right(7) ^ w15.rotate_right(18) ^ (w15 >> 3);
-            let s1 = w2.rotate_right(17) ^ w2.rotate_right(19) ^ (w2 >> 10);
-            if let Some(wi) = w.get_mut(i) {
-                *wi = w16.wrapping_add(s0).wrapping_add(w7).wrapping_add(s1);
-            }
-        }
-        let [mut a, mut b, mut c, mut d, mut e, mut f, mut g, mut h] = self.state;
-        for (k, wi) in SHA256_K.iter().zip(w.iter()) {
-            let s1 = e.rotate_right(6) ^ e.rotate_right(11) ^ e.rotate_right(25);
-            let ch = (e & f) ^ (!e & g);
-            let t1 = h
-                .wrapping_add(s1)
-                .wrapping_add(ch)
-                .wrapping_add(*k)
-                .wrapping_add(*wi);
-            let s0 = a.rotate_right(2) ^ a.rotate_right(13) ^ a.rotate_right(22);
-            let maj = (a & b) ^ (a & c) ^ (b & c);
-            let t2 = s0.wrapping_add(maj);
-            h = g;
-            g = f;
-            f = e;
-            e = d.wrapping_add(t1);
-            d = c;
-            c = b;
-            b = a;
-            a = t1.wrapping_add(t2);
-        }
-        for (s, v) in self.state.iter_mut().zip([a, b, c, d, e, f, g, h]) {
-            *s = s.wrapping_add(v);
-        }
-        self.filled = 0;
-    }
-
-    fn finish(mut self) -> [u8; 32] {
-        let length = self.length;
-        self.write(&[0x80]);
-        while self.filled != 56 {
-            self.write(&[0]);
-        }
-        self.write(&length.to_be_bytes());
-        let mut out = [0u8; 32];
-        for (chunk, s) in out.chunks_exact_mut(4).zip(self.state) {
-            chunk.copy_from_slice(&s.to_be_bytes());
-        }
-        out
-    }
-}
-
 /// SipHash-2-4 with a 64-bit output, fed in pieces.
-struct SipHasher24 {
+pub(crate) struct SipHasher24 {
     v: [u64; 4],
     tail: u64,
     ntail: usize,
@@ -226,7 +193,7 @@ struct SipHasher24 {
 }
 
 impl SipHasher24 {
-    fn new(key: &[u8; KEY_BYTES]) -> Self {
+    pub(crate) fn new(key: &[u8; KEY_BYTES]) -> Self {
         let (k0, k1) = key.split_at(8);
         let k0 = u64::from_le_bytes(k0.try_into().unwrap_or([0; 8]));
         let k1 = u64::from_le_bytes(k1.try_into().unwrap_or([0; 8]));
@@ -264,7 +231,7 @@ impl SipHasher24 {
         self.v[0] ^= m;
     }
 
-    fn write(&mut self, bytes: &[u8]) {
+    pub(crate) fn write(&mut self, bytes: &[u8]) {
         self.length = self.length.wrapping_add(bytes.len());
         let mut rest = bytes;
         // Top up a partial word byte by byte, then whole words at once (the frame counter
@@ -297,7 +264,7 @@ impl SipHasher24 {
         }
     }
 
-    fn finish(mut self) -> u64 {
+    pub(crate) fn finish(mut self) -> u64 {
         let last = ((self.length as u64 & 0xFF) << 56) | self.tail;
         self.compress(last);
         self.v[2] ^= 0xFF;
@@ -391,40 +358,72 @@ mod tests {
         }
     }
 
-    fn sha256(msg: &[u8]) -> [u8; 32] {
-        let mut h = Sha256::new();
-        h.write(msg);
-        h.finish()
-    }
-
-    fn hex(bytes: &[u8]) -> String {
-        bytes.iter().map(|b| format!("{b:02x}")).collect()
+    fn bytes(hex: &str) -> [u8; 16] {
+        core::array::from_fn(|i| u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).unwrap())
     }
 
     #[test]
-    fn sha256_matches_the_fips_vectors() {
-        assert_eq!(
-            hex(&sha256(b"abc")),
-            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
-        );
-        assert_eq!(
-            hex(&sha256(&[b'a'; 1000])),
-            "41edece42d63e8d9bf515a9ba6932e1c20cbc9f5a5d134645adb5db1b9737ea3"
-        );
+    fn a_phrase_gives_the_key_of_the_spec() {
+        // Expected keys from Python, not from this code:
+        // hashlib.sha256(b"TauLink/1 binding phrase\0" + p).hexdigest()[:32]
+        for (phrase, key) in [
+            (
+                "correct horse battery staple",
+                "6c8c3067ce51b390ad2a8164c0352019",
+            ),
+            ("a", "6882b94b07dd0f2059789153d1c32eb0"),
+            ("Grüezi Säntis 2026", "474c6b9d03a2946f351696fdb431fdef"),
+            (
+                "xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
+                "29b16b08d9347165626b1aa44e39481d",
+            ),
+        ] {
+            assert_eq!(
+                LinkKey::from_phrase(phrase).to_bytes(),
+                bytes(key),
+                "{phrase}"
+            );
+            assert_eq!(
+                key_for_phrase(&format!("  {phrase}\t")),
+                Ok(Some(LinkKey::from_bytes(bytes(key)))),
+                "typed with white space around it"
+            );
+        }
     }
 
-    /// Known answers from Python's hashlib:
-    /// `hashlib.sha256(b"TauLink/1 binding phrase\0" + phrase).digest()[:16]`.
     #[test]
-    fn a_binding_phrase_gives_the_key_hashlib_computes() {
-        assert_eq!(
-            hex(&LinkKey::from_phrase("correct horse battery staple").to_bytes()),
-            "6c8c3067ce51b390ad2a8164c0352019"
+    fn phrase_rules_one_to_64_printable_bytes_empty_is_none() {
+        assert_eq!(key_for_phrase(""), Ok(None));
+        assert_eq!(key_for_phrase("   "), Ok(None));
+        assert!(
+            key_for_phrase(&"é".repeat(32)).unwrap().is_some(),
+            "64 bytes"
         );
         assert_eq!(
-            hex(&LinkKey::from_phrase("").to_bytes()),
-            "ae05de4532b5d44cfd7dffc4082d46e6"
+            key_for_phrase(&"é".repeat(32).replace('é', "ée")),
+            Err(PhraseError::TooLong)
         );
+        assert_eq!(key_for_phrase(&"x".repeat(65)), Err(PhraseError::TooLong));
+        assert_eq!(
+            key_for_phrase("bell\u{7}ring"),
+            Err(PhraseError::NotPrintable)
+        );
+        assert_eq!(key_for_phrase("two\nlines"), Err(PhraseError::NotPrintable));
+        // Inner spaces and case count.
+        assert_ne!(key_for_phrase("a b"), key_for_phrase("ab"));
+        assert_ne!(key_for_phrase("A"), key_for_phrase("a"));
+    }
+
+    #[test]
+    fn the_fingerprint_is_one_more_separate_value() {
+        let key = LinkKey::from_phrase("correct horse battery staple");
+        assert_ne!(key.fingerprint().0, key.bind_id());
+        assert_ne!(key.fingerprint().0, key.hop_seed());
+        assert_ne!(
+            key.fingerprint(),
+            LinkKey::from_phrase("correct horse battery stapler").fingerprint()
+        );
+        assert_eq!(format!("{}", Fingerprint(0x1a2b_003d)), "1a2b-003d");
     }
 
     #[test]

@@ -87,7 +87,7 @@ impl LinkParams {
         }
     }
 
-    /// The link of radio model `model_id` (model match, spec §12.5): the same band, rate,
+    /// The link of radio model `model_id` (model match, spec §12.6): the same band, rate,
     /// format and ratio under an identity mixed from the bind ID and the model ID, so a
     /// receiver bound under one model never hears (the chip's header check drops its
     /// frames) nor is heard by the module flying another. The mix is keyed like

@@ -14,9 +14,10 @@ pub mod radio;
 pub mod rate;
 mod recovery;
 pub mod schedule;
+mod sha256;
 pub mod stream;
 
-pub use auth::LinkKey;
+pub use auth::{Fingerprint, LinkKey, PhraseError, key_for_phrase};
 pub use bind::{BIND_HEADER, BIND_KEY, LinkParams};
 pub use hopping::{Band, HOP_CHANNELS, HopSequence};
 pub use radio::{LinkClock, PacketRadio, RadioConfig, RxOutcome};

@@ -62,3 +62,37 @@ pub fn setting_to_wire(id: u16, value: f64) -> Option<i32> {
 pub fn setting_from_wire(id: u16, wire: i32) -> Option<f64> {
     settings::from_wire(id, wire)
 }
+
+/// The phone's signing half for JavaScript (see [`settings::Phone`]): built from the binding
+/// phrase the pilot types into the settings view, held in memory only.
+#[wasm_bindgen]
+#[derive(Debug)]
+pub struct Phone {
+    inner: settings::Phone,
+}
+
+#[wasm_bindgen]
+impl Phone {
+    /// The phone for `phrase`; throws for an empty or unusable phrase, with the reason.
+    #[wasm_bindgen(constructor)]
+    pub fn new(phrase: &str) -> Result<Phone, wasm_bindgen::JsError> {
+        settings::Phone::new(phrase)
+            .map(|inner| Phone { inner })
+            .map_err(|e| wasm_bindgen::JsError::new(&e))
+    }
+
+    /// The key's fingerprint (`1a2b-3c4d`), to compare with the flight console's.
+    pub fn fingerprint(&self) -> String {
+        self.inner.fingerprint().to_owned()
+    }
+
+    /// The framed, signed change of setting `id` to `wire` ([`setting_to_wire`]).
+    pub fn sign_change(&mut self, id: u16, wire: i32) -> Vec<u8> {
+        self.inner.sign_change(id, wire).unwrap_or_default()
+    }
+
+    /// A `ChangeRefused` event's body as JSON: the frame to send again, or empty.
+    pub fn on_refused(&mut self, refused_json: &str) -> Vec<u8> {
+        self.inner.on_refused(refused_json)
+    }
+}

@@ -2,12 +2,76 @@
 //! `flight_core::settings` (index = the `SettingChange::id` on the wire), the conversion of a
 //! number to its wire value and back (`flight_core::report`: reals as IEEE-754 bits, whole
 //! numbers and choices as themselves), and the framed `SettingChange` the phone sends.
-//! Authority stays on the flight side: it refuses changes while armed and echoes what it
-//! holds, so the app shows a value only once the flight side reported it.
+//! Authority stays on the flight side: it applies only changes signed with the binding
+//! phrase's key (spec §12.5) and never while armed, and echoes what it holds, so the app
+//! shows a value only once the flight side reported it. [`Phone`] is the signing half: the
+//! key derived from the phrase the pilot typed (kept in this object, in memory only), the
+//! counter, and the session learnt from the flight side's refusals.
 
 use flight_core::settings::{Kind, PARAMS, Param, Value};
 use serde_json::json;
-use telemetry::messages::{EncodeError, FRAMED_MAX_BYTES, Message, SettingChange, encode_message};
+use telemetry::change_auth::Signer;
+use telemetry::link::key_for_phrase;
+use telemetry::messages::{
+    ChangeRefused, EncodeError, FRAMED_MAX_BYTES, Message, SettingChange, encode_message,
+};
+
+/// The phone's signing state for one binding phrase.
+#[derive(Debug, Clone)]
+pub struct Phone {
+    signer: Signer,
+    fingerprint: String,
+    pending: Option<SettingChange>,
+}
+
+impl Phone {
+    /// The phone for `phrase` (the rules of `telemetry::link::key_for_phrase`); an error
+    /// text for an empty or unusable phrase.
+    pub fn new(phrase: &str) -> Result<Self, String> {
+        let key = key_for_phrase(phrase)
+            .map_err(|e| e.to_string())?
+            .ok_or_else(|| "no binding phrase: the flight side refuses every change".to_owned())?;
+        Ok(Self {
+            signer: Signer::new(&key),
+            fingerprint: key.fingerprint().to_string(),
+            pending: None,
+        })
+    }
+
+    /// The key's fingerprint, as the flight console and the module show it.
+    pub fn fingerprint(&self) -> &str {
+        &self.fingerprint
+    }
+
+    /// The framed, signed change of setting `id` to `wire`.
+    pub fn sign_change(&mut self, id: u16, wire: i32) -> Result<Vec<u8>, EncodeError> {
+        let change = SettingChange { id, value: wire };
+        self.pending = Some(change);
+        encode(&Message::SignedChange(self.signer.sign(change)))
+    }
+
+    /// The flight side refused a change (the `ChangeRefused` event's JSON body): the frame
+    /// to send again if the refusal was only for a session or counter this phone did not
+    /// know yet (empty: none — the refusal stands and the app shows it).
+    pub fn on_refused(&mut self, refused_json: &str) -> Vec<u8> {
+        let Ok(refused) = serde_json::from_str::<ChangeRefused>(refused_json) else {
+            return Vec::new();
+        };
+        let retry = self.signer.on_refused(&refused);
+        match self.pending.take() {
+            Some(change) if retry && change.id == refused.id => self
+                .sign_change(change.id, change.value)
+                .unwrap_or_default(),
+            _ => Vec::new(),
+        }
+    }
+}
+
+fn encode(message: &Message) -> Result<Vec<u8>, EncodeError> {
+    let mut out = [0u8; FRAMED_MAX_BYTES];
+    let n = encode_message(message, &mut out)?;
+    Ok(out.get(..n).unwrap_or_default().to_vec())
+}
 
 /// The framed stream bytes of `SettingChange { id, value: wire }`.
 pub fn encode_change(id: u16, wire: i32) -> Result<Vec<u8>, EncodeError> {
@@ -80,6 +144,61 @@ pub fn from_wire(id: u16, wire: i32) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flight_core::authority::{ChangeGate, Reply};
+    use telemetry::messages::{Decoded, MessageReader};
+
+    fn decode(bytes: &[u8]) -> Message {
+        let mut reader = MessageReader::new();
+        let got: Vec<_> = bytes.iter().filter_map(|&b| reader.push(b)).collect();
+        match got.as_slice() {
+            [Decoded::Message(m)] => *m,
+            other => panic!("one message expected: {other:?}"),
+        }
+    }
+
+    /// The page against the flight side's own gate: the right phrase gets its change applied
+    /// after one refusal that tells it the session; a wrong phrase is refused and not
+    /// retried.
+    #[test]
+    fn the_page_signs_changes_the_flight_side_accepts_only_with_the_right_phrase() {
+        let phrase = "correct horse battery staple";
+        let (id, _) = find("pid.roll.kp").unwrap();
+        let wire = to_wire(id as u16, 0.004).unwrap();
+        for (typed, applied) in [(phrase, true), ("a wrong phrase", false)] {
+            let mut flight = flight_core::settings::Settings::default();
+            flight.set_link_key(Some(telemetry::link::LinkKey::from_phrase(phrase)));
+            let key = flight.link_key();
+            let mut gate = ChangeGate::new(0x1234_5678);
+            let mut phone = Phone::new(typed).unwrap();
+            let mut frame = phone.sign_change(id as u16, wire).unwrap();
+            let mut answers = Vec::new();
+            while !frame.is_empty() && answers.len() < 5 {
+                let reply = gate
+                    .on_message(&decode(&frame), &mut flight, key, false)
+                    .unwrap();
+                answers.push(reply);
+                frame = match reply {
+                    Reply::Refused(r) => phone.on_refused(&serde_json::to_string(&r).unwrap()),
+                    Reply::Applied(_) => Vec::new(),
+                };
+            }
+            let last = answers.last().copied().unwrap();
+            assert_eq!(
+                matches!(last, Reply::Applied(_)),
+                applied,
+                "{typed}: {answers:?}"
+            );
+            assert_eq!(answers.len(), 2, "one refusal, one more try: {answers:?}");
+            assert_eq!(flight.f32("pid.roll.kp") == 0.004, applied);
+        }
+        assert!(Phone::new("").is_err());
+        assert_eq!(
+            Phone::new(phrase).unwrap().fingerprint(),
+            telemetry::link::LinkKey::from_phrase(phrase)
+                .fingerprint()
+                .to_string()
+        );
+    }
     use flight_core::report::f32_value;
     use flight_core::settings::Settings;
 

@@ -22,7 +22,6 @@ use radio_rfm22b::openlrs::radio::Radio as OpenLrsRadio;
 use radio_rfm22b::openlrs::rx::{Config as OpenLrsConfig, Receiver};
 use radio_rfm22b::{NoPin, Rfm22b, TxPower};
 use si4432_sim::{ChipHandle, Fault, Medium, SimDelay, SimIrq, SimSpi};
-use telemetry::channels::FailsafeValues;
 use telemetry::link::LinkClock;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
@@ -93,11 +92,11 @@ async fn idle(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay, ms: u64) {
     let _ = select(sleep_ms(delay, ms), keep_alive(app, delay)).await;
 }
 
-/// Resolves when the console asked for a bind, checking in every 50 ms (the firmware's
-/// `bind_requested`).
-async fn bind_requested(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay) {
+/// Resolves when the link must restart (a bind asked for, the binding phrase changed),
+/// checking in every 50 ms (the firmware's `restart_due`).
+async fn restart_due(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay) {
     loop {
-        if app.borrow().bind_requested() {
+        if app.borrow().link_restart_due() {
             return;
         }
         app.borrow_mut().on_link_idle();
@@ -143,7 +142,7 @@ async fn openlrs_step(
             };
             let run = run_openlrs_receiver(&mut radio, &mut rx, on_step);
             // Racing the check-in too: a slow profile's lost-link dwell outlasts the IWDG.
-            let waits = select(bind_requested(app, &delay), keep_alive(app, &delay));
+            let waits = select(restart_due(app, &delay), keep_alive(app, &delay));
             let failed = matches!(select(run, waits).await, Either::First(_));
             app.borrow_mut().on_link_down();
             failed
@@ -189,13 +188,13 @@ async fn link_task(
                     idle(&app, &delay, 1000).await;
                 }
             }
-            LinkStep::WaitForBind => bind_requested(&app, &delay).await,
+            LinkStep::WaitForBind => restart_due(&app, &delay).await,
             LinkStep::Follow(params) => {
-                let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
+                let mut follower = app.borrow().follower(params, failsafe_us);
                 let mut hooks = AppHooks(app.clone());
                 let run = run_follower(radio, &mut clock, &mut follower, &mut hooks);
                 let failed = matches!(
-                    select(run, bind_requested(&app, &delay)).await,
+                    select(run, restart_due(&app, &delay)).await,
                     Either::First(Err(_))
                 );
                 app.borrow_mut().on_link_down();
@@ -348,6 +347,12 @@ pub(crate) async fn flight_board(
         if let Some(p) = problem {
             app.on_settings_problem(p);
         }
+        // The firmware's RNG at boot: a fresh session nonce for the phone's changes every
+        // boot (the virtual time of the boot stands in for the hardware's entropy).
+        let boot_us = crate::clock::virtual_us(&medium);
+        let mut boot_rng = telemetry::mock::SplitMix64::new(boot_us);
+        app.seed_change_session(boot_rng.next_u64() as u32);
+        app.seed_link_nonces(boot_rng.next_u64());
         shared
             .borrow_mut()
             .record_boot(End::Flight, cause, problem.is_some());

@@ -30,6 +30,7 @@ use radio_rfm22b::openlrs::tx::Transmitter;
 use radio_rfm22b::openlrs::{Band as OpenLrsBand, BindingVersion};
 use radio_rfm22b::{Rfm22b, TxPower};
 use si4432_sim::{Medium, SimDelay, SimIrq, SimSdn, SimSpi};
+use telemetry::change_auth::Signer;
 use telemetry::handset::crsf::channels::RcChannels;
 use telemetry::handset::crsf::frame::{Frame, frame_type};
 use telemetry::handset::crsf::{ModelSelect, address};
@@ -37,7 +38,9 @@ use telemetry::link::LinkClock;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 use telemetry::link::master::{MasterHooks, bind_master, run_master};
-use telemetry::messages::{Decoded, FRAMED_MAX_BYTES, Message, MessageReader, encode_message};
+use telemetry::messages::{
+    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, encode_message,
+};
 use telemetry::mock::SplitMix64;
 
 use crate::clock::{BoardClock, sleep_ms};
@@ -274,7 +277,7 @@ async fn link_task(b: &Board, chip: &mut ModuleChip, shared: &Shared, seed: u64)
                 b.app.borrow_mut().on_session_end(end)
             }
             LinkStep::RunMaster(params) => {
-                let mut master = Master::new(params);
+                let mut master = b.app.borrow().master(params);
                 let end = run(b, run_master(radio, &mut clock, &mut master, &mut Hooks(b))).await;
                 b.app.borrow_mut().on_session_end(end)
             }
@@ -283,7 +286,7 @@ async fn link_task(b: &Board, chip: &mut ModuleChip, shared: &Shared, seed: u64)
                 failsafe,
                 failsafe_us,
             } => {
-                let mut follower = Follower::new(params, failsafe, failsafe_us);
+                let mut follower = b.app.borrow().follower(params, failsafe, failsafe_us);
                 let end = run(
                     b,
                     run_follower(radio, &mut clock, &mut follower, &mut Hooks(b)),
@@ -441,11 +444,23 @@ async fn app_task(b: &Board, shared: &Shared) {
     }
 }
 
+/// A message from the phone, as the HM-10 hands its bytes to the module.
+fn send_to_flight(b: &Board, message: &Message) {
+    let mut buf = [0u8; FRAMED_MAX_BYTES];
+    if let Ok(n) = encode_message(message, &mut buf) {
+        b.app
+            .borrow_mut()
+            .on_phone_bytes(buf.get(..n).unwrap_or(&[]));
+    }
+}
+
 /// The HM-10 task with a phone connected: records to the phone (decoded: what the module
 /// received; raw to an attached page), the scenario's setting changes and an attached
 /// page's bytes from the phone.
 async fn hm10_task(b: &Board, shared: &Shared) {
     let mut reader = MessageReader::new();
+    let mut phone = shared.borrow().phone_key.map(|k| Signer::new(&k));
+    let mut pending: Option<SettingChange> = None;
     let mut frame = [0u8; module_core::hm10::relay::MAX_FRAME_LEN];
     loop {
         b.check_in(Watched::Hm10);
@@ -454,12 +469,15 @@ async fn hm10_task(b: &Board, shared: &Shared) {
             (!s.uplink.is_empty()).then(|| s.uplink.remove(0))
         };
         if let Some(change) = change {
-            let mut buf = [0u8; FRAMED_MAX_BYTES];
-            if let Ok(n) = encode_message(&Message::SettingChange(change), &mut buf) {
-                b.app
-                    .borrow_mut()
-                    .on_phone_bytes(buf.get(..n).unwrap_or(&[]));
-            }
+            // The pilot typed the same phrase into the phone (the ground station signs in
+            // WASM with `change_auth::Signer`); without a phrase the change goes unsigned
+            // and the flight side refuses it.
+            let message = match phone.as_mut() {
+                Some(signer) => Message::SignedChange(signer.sign(change)),
+                None => Message::SettingChange(change),
+            };
+            pending = Some(change);
+            send_to_flight(b, &message);
         }
         // An attached phone's writes, as the UART delivers them (at most a read's worth).
         let written: Vec<u8> = match shared.borrow_mut().phone.as_mut() {
@@ -484,6 +502,13 @@ async fn hm10_task(b: &Board, shared: &Shared) {
             }
             for &byte in sent {
                 if let Some(Decoded::Message(m)) = reader.push(byte) {
+                    // A refusal for want of the session: sign the change again, once.
+                    if let (Message::ChangeRefused(r), Some(signer), Some(change)) =
+                        (&m, phone.as_mut(), pending)
+                        && signer.on_refused(r)
+                    {
+                        send_to_flight(b, &Message::SignedChange(signer.sign(change)));
+                    }
                     let mut s = shared.borrow_mut();
                     let t = s.scenario_s();
                     s.module_rx.push((t, m));
@@ -527,9 +552,11 @@ pub(crate) async fn module_board(
     loop {
         sleep_ms(&delay, MODULE_BOOT_MS).await;
         let settings: ModuleSettings = shared.borrow().module_flash;
-        let Ok(app) = App::new(settings, AirLink::new(), Handset::new(&settings), true) else {
+        let Ok(mut app) = App::new(settings, AirLink::new(), Handset::new(&settings), true) else {
             return;
         };
+        // The firmware's RNG at boot seeds a receiver-role follower's epoch nonces.
+        app.seed_link_nonces(SplitMix64::new(seed ^ crate::clock::virtual_us(&medium)).next_u64());
         shared.borrow_mut().record_boot(End::Module, cause, false);
         let clock = BoardClock::booting_now(medium.clone(), delay.clone(), MODULE_DRIFT_PPM);
         let board = Board {

@@ -82,6 +82,10 @@ pub fn main(options: Options) -> i32 {
     };
     let addr = listener.local_addr().unwrap_or(options.addr);
     println!("TauLink ground station: open http://{addr}/");
+    println!(
+        "binding phrase of both simulated ends (the settings view asks for it): {}",
+        session::SERVE_PHRASE
+    );
     let shared = Arc::new(Shared {
         options,
         connections: AtomicUsize::new(0),

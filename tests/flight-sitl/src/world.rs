@@ -164,6 +164,8 @@ pub(crate) struct WorldState {
     pub(crate) uplink: Vec<SettingChange>,
     /// The HM-10's phone side as raw bytes, when a page is attached ([`World::attach_phone`]).
     pub(crate) phone: Option<PhonePipes>,
+    /// The link key the phone knows (the pilot typed the flight side's phrase into it).
+    pub(crate) phone_key: Option<telemetry::link::LinkKey>,
     pub(crate) watchdog_resets: WatchdogResets,
     pub(crate) boots: Vec<Boot>,
     /// Until when (virtual ns) the flight board's one thread-mode executor is held by a
@@ -366,6 +368,7 @@ impl World {
             handset_tx: Vec::new(),
             uplink: setting_changes,
             phone: None,
+            phone_key: settings.link_key(),
             watchdog_resets: WatchdogResets::default(),
             flight_busy_until_ns: 0,
             boots: Vec::new(),

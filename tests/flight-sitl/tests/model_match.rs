@@ -1,4 +1,4 @@
-//! Model match at chip level (spec §12.5): the module's application with CRSF input, the
+//! Model match at chip level (spec §12.6): the module's application with CRSF input, the
 //! radio sending its model ID (model-select command) as EdgeTX does, the flight
 //! application bound under one model. The model it was bound under flies; another model
 //! never gets channels to it (the flight side never hears that model's link); with model

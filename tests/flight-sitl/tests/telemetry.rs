@@ -29,6 +29,10 @@ fn telemetry_reaches_the_module_and_settings_come_back() {
         id,
         value: f32_value(0.9),
     };
+    // Both ends and the phone share a binding phrase: the phone signs its change.
+    let key = telemetry::link::LinkKey::from_phrase("correct horse battery staple");
+    let mut settings = settings;
+    settings.set_link_key(Some(key));
     let sitl = run(Scenario {
         settings,
         quad,
@@ -39,7 +43,10 @@ fn telemetry_reaches_the_module_and_settings_come_back() {
         setting_changes: vec![change],
         packet_loss: 0.0,
         rate: telemetry::link::RateMode::F250,
-        module_settings: None,
+        module_settings: Some(module_core::settings::Settings {
+            link_key: Some(key),
+            ..module_core::settings::Settings::default()
+        }),
         flight_flash: flight_sitl::FlashInjection::Stored,
         gps: None,
     });

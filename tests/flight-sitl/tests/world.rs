@@ -108,12 +108,19 @@ fn a_power_cycle_boots_again_from_the_stored_settings() {
     use flight_core::report::f32_value;
     use flight_core::settings::PARAMS;
     use telemetry::messages::SettingChange;
-    let (quad, settings) = default_airframe();
+    let (quad, mut settings) = default_airframe();
     let id = PARAMS
         .iter()
         .position(|p| p.name == "failsafe.descent_mps")
         .unwrap() as u16;
+    // Both ends and the phone share a binding phrase: the phone signs its change.
+    let key = telemetry::link::LinkKey::from_phrase("correct horse battery staple");
+    settings.set_link_key(Some(key));
     let sitl = run(Scenario {
+        module_settings: Some(module_core::settings::Settings {
+            link_key: Some(key),
+            ..module_core::settings::Settings::default()
+        }),
         setting_changes: vec![SettingChange {
             id,
             value: f32_value(0.9),

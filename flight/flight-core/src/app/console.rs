@@ -1,15 +1,20 @@
 //! The console's behaviour: a line of `settings::console`'s command language in, the answer
 //! out. Changes go to the live settings (the gains are re-designed); `save` requests a
-//! write; `bind` opens the bind window (the only way this controller binds); `set`, `save`,
-//! `defaults` and `bind` are refused while armed. The USB adapter only moves
+//! write; `bind` opens the bind window (the only way this controller binds); `phrase` sets
+//! or clears the binding phrase (spec §12: the key derived from it is stored and saved at
+//! once, the phrase itself is neither kept nor ever printed; its fingerprint is shown so
+//! the pilot can compare both ends) and restarts the link with it; `set`, `save`,
+//! `defaults`, `bind` and `phrase` are refused while armed. The USB adapter only moves
 //! lines and bytes.
 
 use core::fmt::Write;
 
 use super::FlightApp;
+use telemetry::link::{LinkKey, key_for_phrase};
+
 use crate::settings::{Command, LineError, Settings, parse_line, write_list, write_setting};
 
-const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status | bind\r\n";
+const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status | bind | phrase [TEXT|clear]\r\n";
 
 impl FlightApp {
     /// Answers what the line assembler (`settings::LineAssembler`) produced: a whole line,
@@ -38,7 +43,9 @@ impl FlightApp {
                 | Command::SetAll(_)
                 | Command::Save
                 | Command::Defaults
-                | Command::Bind,
+                | Command::Bind
+                | Command::Phrase(_)
+                | Command::PhraseClear,
             ) if armed => out.write_str("refused: disarm first\r\n"),
             Ok(Command::Set { name, value }) => match self.live.set_text(name, value) {
                 Ok(()) => {
@@ -59,7 +66,11 @@ impl FlightApp {
                 out.write_str("saving\r\n")
             }
             Ok(Command::Defaults) => {
+                let key = self.live.link_key();
                 self.live = Settings::default();
+                if key.is_some() {
+                    self.on_link_key_changed();
+                }
                 self.settings_changed();
                 out.write_str("factory values (not saved)\r\n")
             }
@@ -75,8 +86,25 @@ impl FlightApp {
                     out.write_str("refused: disarm first\r\n")
                 }
             }
+            Ok(Command::Phrase(text)) => match key_for_phrase(text) {
+                Ok(Some(key)) => self.set_link_key(Some(key), out),
+                Ok(None) => out.write_str("refused: empty phrase (phrase clear removes it)\r\n"),
+                Err(e) => write!(out, "refused: {e}\r\n"),
+            },
+            Ok(Command::PhraseClear) => self.set_link_key(None, out),
+            Ok(Command::PhraseShow) => write_phrase_state(out, self.live.link_key()),
             Err(e) => write!(out, "{e}\r\n"),
         }
+    }
+
+    /// Stores `key` (a phrase's, or none), saves it and restarts the link with it. The save
+    /// writes the live set, so other unsaved changes go to flash with it (the answer says so).
+    fn set_link_key<W: Write>(&mut self, key: Option<LinkKey>, out: &mut W) -> core::fmt::Result {
+        self.live.set_link_key(key);
+        self.on_link_key_changed();
+        self.request_save();
+        write_phrase_state(out, key)?;
+        out.write_str("saving (with any other unsaved change); the link restarts\r\n")
     }
 
     fn write_status<W: Write>(&self, out: &mut W) -> core::fmt::Result {
@@ -133,6 +161,7 @@ impl FlightApp {
         if let Some(e) = self.setup_error {
             write!(out, "stored settings not flyable ({e}): factory setup\r\n")?;
         }
+        write_phrase_state(out, self.live.link_key())?;
         let armed = self.flight.armed();
         match self.battery {
             Some(b) => write!(
@@ -142,5 +171,17 @@ impl FlightApp {
             ),
             None => write!(out, "armed {armed}, battery unknown\r\n"),
         }
+    }
+}
+
+/// The phrase's state as the console shows it: the fingerprint, never the key or phrase.
+fn write_phrase_state<W: Write>(out: &mut W, key: Option<LinkKey>) -> core::fmt::Result {
+    match key {
+        Some(key) => write!(
+            out,
+            "binding phrase set, fingerprint {} (the module must show the same)\r\n",
+            key.fingerprint()
+        ),
+        None => out.write_str("no binding phrase: link unauthenticated\r\n"),
     }
 }

@@ -1,6 +1,7 @@
 //! The flight side of the TauLink link: the follower's hooks (channels → the loop's
-//! `LinkInput`, failsafe counting, setting changes from the module applied while disarmed
-//! and echoed, one telemetry message per [`REPORT_PERIOD_US`] when the downlink stream is
+//! `LinkInput`, failsafe counting, setting changes from the phone checked by
+//! `authority::ChangeGate` — signed with the phrase's key, fresh, disarmed — then applied and
+//! echoed, or refused with the reason, one telemetry message per [`REPORT_PERIOD_US`] when the downlink stream is
 //! empty), the link's parameters (the stored bind; an unbound controller runs no link) and
 //! the explicit bind: only the console's `bind` command, while disarmed, opens a bind window
 //! of [`BIND_WINDOW_US`], and only a bind inside that window is stored. Nothing binds at
@@ -10,22 +11,29 @@
 //! `olrs39` to obey an existing OpenLRSng transmitter (`super::openlrs`; OpenLRSng frames
 //! cannot be authenticated). The loop sees both the same way (`on_link_channels`).
 //!
+//! The link key (spec §12, from the binding phrase the console's `phrase` sets) is applied
+//! here too: [`FlightApp::follower`] builds the follower keyed when a key is stored, and a
+//! key change asks the link task to restart its follower at once
+//! ([`FlightApp::link_restart_due`]), so the new key is in force without a reboot.
+//!
 //! Watchdog: every hook call checks the link task in, whatever the slot length; the
 //! follower calls its hooks at least every 50 ms in every sync state, and the adapter
 //! checks in while it waits outside the follower (bind window, retry after a radio error).
 
 use radio_rfm22b::openlrs::BindData;
 use radio_rfm22b::openlrs::rx::Config as OpenLrsConfig;
+use telemetry::channels::FailsafeValues;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::FollowerHooks;
 use telemetry::link::{Band, LinkParams};
 use telemetry::messages::{
-    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, SysIdResult, encode_message,
+    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SysIdResult, encode_message,
 };
 
 use super::{FlightApp, Task};
+use crate::authority::{ChangeGate, Reply};
 use crate::pipeline::{ChannelMap, Protocol, bind_band, protocol, store_link, stored_link};
-use crate::report::{LinkSeen, Reporter, Snapshot, apply_setting, setting_report, sysid_messages};
+use crate::report::{LinkSeen, Reporter, Snapshot, sysid_messages};
 use crate::supervisor::FlightMode;
 use crate::sysid::ekf::Identification;
 
@@ -43,7 +51,11 @@ pub(super) struct LinkSide {
     map: ChannelMap,
     reporter: Reporter,
     reader: MessageReader,
-    echo: Option<SettingChange>,
+    /// The answer to the last change from the phone, still to send.
+    reply: Option<Message>,
+    gate: ChangeGate,
+    /// Seeds the follower's epoch nonces (spec §12.2), from the firmware's RNG at boot.
+    nonce_seed: u64,
     last_report_us: Option<u64>,
     last_state: Option<(bool, bool, FlightMode)>,
     failsafes: u16,
@@ -53,6 +65,8 @@ pub(super) struct LinkSide {
     pub(super) bind: BindState,
     /// The OpenLRSng side's state (channels, downlink bytes waiting for room).
     pub(super) openlrs: super::openlrs::OpenLrsSide,
+    /// The link key changed since the running follower was built: restart it.
+    key_changed: bool,
 }
 
 /// Where the explicit bind stands.
@@ -73,7 +87,10 @@ impl LinkSide {
             map,
             reporter: Reporter::new(),
             reader: MessageReader::new(),
-            echo: None,
+            reply: None,
+            // Seeded by the firmware's RNG (`FlightApp::seed_change_session`).
+            gate: ChangeGate::new(0),
+            nonce_seed: 0,
             last_report_us: None,
             last_state: None,
             failsafes: 0,
@@ -82,6 +99,7 @@ impl LinkSide {
             sysid: heapless::Deque::new(),
             bind: BindState::Closed,
             openlrs: super::openlrs::OpenLrsSide::new(),
+            key_changed: false,
         }
     }
 
@@ -140,6 +158,8 @@ impl FlightApp {
     /// The link task's next step: a requested bind first, else the stored link, else
     /// nothing until the owner binds.
     pub fn next_link_step(&mut self) -> LinkStep {
+        // Whatever comes next is built from the key in force now.
+        self.link.key_changed = false;
         if let Protocol::OpenLrs(version) = protocol(&self.live) {
             return self.next_openlrs_step(version);
         }
@@ -150,6 +170,29 @@ impl FlightApp {
             Some(params) => LinkStep::Follow(params),
             None => LinkStep::WaitForBind,
         }
+    }
+
+    /// The follower for `params` (from [`LinkStep::Follow`]) with the stored link key, if
+    /// there is one (`Follower::with_key`: only uplinks sealed with the key are accepted,
+    /// identity and hop sequence derived from it), else unkeyed as before spec §12.
+    /// `failsafe_us`: the silence after which it flies failsafe ([`FAILSAFE_US`]).
+    pub fn follower(&self, params: LinkParams, failsafe_us: u64) -> Follower {
+        let follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
+        match self.live.link_key() {
+            Some(key) => follower.with_key(key).with_nonce_seed(self.link.nonce_seed),
+            None => follower,
+        }
+    }
+
+    /// The link task must end what it runs (a follower, a wait for a bind) and ask
+    /// [`FlightApp::next_link_step`] again: a bind was asked for, or the link key changed.
+    pub fn link_restart_due(&self) -> bool {
+        self.link.bind == BindState::Requested || self.link.key_changed
+    }
+
+    /// The link key in force changed (the console's `phrase`): the link restarts with it.
+    pub(super) fn on_link_key_changed(&mut self) {
+        self.link.key_changed = true;
     }
 
     /// The link to run: the stored bind, or `None` for a controller never bound (it runs
@@ -247,11 +290,11 @@ impl FlightApp {
         self.link_input = self.link.map.link_input(channels, !failsafe);
     }
 
-    /// Bytes of the module's message stream (setting changes).
+    /// Bytes of the module's message stream (the phone's setting changes, signed).
     pub(super) fn on_uplink_bytes(&mut self, bytes: &[u8]) {
         for b in bytes {
-            if let Some(Decoded::Message(Message::SettingChange(c))) = self.link.reader.push(*b) {
-                self.apply_link_change(c);
+            if let Some(Decoded::Message(m)) = self.link.reader.push(*b) {
+                self.apply_link_change(&m);
             }
         }
     }
@@ -268,18 +311,36 @@ impl FlightApp {
         due
     }
 
-    /// A setting change from the module: applied while disarmed; the resulting (or,
-    /// refused, the unchanged) value is echoed.
-    fn apply_link_change(&mut self, change: SettingChange) {
-        if self.flight.armed() {
-            self.link.echo = setting_report(&self.live, change.id);
+    /// A message from the phone (relayed by the module): a setting change goes through the
+    /// gate (signed, fresh, disarmed); the applied value is echoed, a refusal answered with
+    /// its reason and the session to sign the next one with.
+    fn apply_link_change(&mut self, message: &Message) {
+        let armed = self.flight.armed();
+        let key = self.live.link_key();
+        let Some(reply) = self
+            .link
+            .gate
+            .on_message(message, &mut self.live, key, armed)
+        else {
             return;
-        }
-        let (result, echo) = apply_setting(&mut self.live, change);
-        if result.is_ok() {
+        };
+        if matches!(reply, Reply::Applied(_)) {
             self.settings_changed();
         }
-        self.link.echo = echo;
+        self.link.reply = Some(reply.message());
+    }
+
+    /// The session nonce of this boot's phone changes, from the firmware's RNG at boot
+    /// (spec §12.5: a change recorded in an earlier boot then never verifies again).
+    pub fn seed_change_session(&mut self, random: u32) {
+        self.link.gate = ChangeGate::new(random);
+    }
+
+    /// The seed of the link follower's epoch nonces (spec §12.2), from the firmware's RNG at
+    /// every boot: a keyed follower's nonce must never repeat under one key, across reboots
+    /// too, or frames recorded before a reboot could verify again.
+    pub fn seed_link_nonces(&mut self, random: u64) {
+        self.link.nonce_seed = random;
     }
 
     /// One telemetry message when the downlink stream is empty: a setting echo, then an
@@ -328,8 +389,8 @@ impl FlightApp {
             climb_mps: self.flight.climb_estimate(),
         };
         let state = (out.armed, out.failsafe, out.mode);
-        let message = if let Some(c) = self.link.echo.take() {
-            Message::SettingChange(c)
+        let message = if let Some(reply) = self.link.reply.take() {
+            reply
         } else if let Some(r) = self.link.sysid.pop_front() {
             Message::SysIdResult(r)
         } else if self.link.last_state != Some(state) {

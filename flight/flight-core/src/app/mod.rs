@@ -20,6 +20,8 @@ mod openlrs;
 mod watchdog;
 
 #[cfg(test)]
+mod phrase_tests;
+#[cfg(test)]
 mod tests;
 
 pub use gps::{GPS_BAUD, GPS_BOOT_BAUDS, GPS_REPORT_PERIOD_MS, gps_baud_messages, gps_message};

@@ -29,7 +29,7 @@ fn sticks(throttle: f32, yaw: f32) -> LinkInput {
     }
 }
 
-fn some_link() -> LinkParams {
+pub(super) fn some_link() -> LinkParams {
     LinkParams::new(
         0x5EC0_0001,
         Band::Mhz868,
@@ -60,7 +60,7 @@ fn fly(app: &mut FlightApp, t0: u32, n: u32, link: LinkInput) -> (u32, ImuStep) 
 }
 
 /// Arms with the yaw gesture and brings the throttle up to hover; returns the time.
-fn armed_in_the_air(app: &mut FlightApp) -> u32 {
+pub(super) fn armed_in_the_air(app: &mut FlightApp) -> u32 {
     let (t, _) = fly(app, 0, 1500, sticks(0.0, 1.0));
     let (t, _) = fly(app, t, 100, sticks(0.0, 0.0));
     assert!(app.armed());

@@ -9,6 +9,11 @@
 //! save                      write changed settings to flash (refused while armed)
 //! defaults                  factory values (in RAM until saved)
 //! status                    arm state, link, battery, mode
+//! bind                      open the bind window (refused while armed)
+//! phrase TEXT…              set the binding phrase (the rest of the line, spaces inside
+//!                           count; refused while armed; saved at once, never shown again)
+//! phrase clear              remove it: the link runs unauthenticated
+//! phrase                    show the key's fingerprint (to compare with the module)
 //! ```
 
 use core::fmt::Write;
@@ -42,6 +47,13 @@ pub enum Command<'a> {
     Status,
     /// Open the bind window (the deliberate act that binds this controller to a module).
     Bind,
+    /// Set the binding phrase: the rest of the line, trimmed (not yet checked: see
+    /// `telemetry::link::key_for_phrase`).
+    Phrase(&'a str),
+    /// Remove the binding phrase.
+    PhraseClear,
+    /// Show the binding phrase's fingerprint.
+    PhraseShow,
     /// An empty line.
     Nothing,
 }
@@ -79,6 +91,15 @@ pub fn parse_line(line: &str) -> Result<Command<'_>, ConsoleError> {
         if count > 2 && count % 2 == 0 && count <= 2 * super::params::MAX_PAIRS {
             return Ok(Command::SetAll(pairs));
         }
+    }
+    if word == "phrase" {
+        // The phrase is the rest of the line, spaces inside included.
+        let rest = line.trim_start().get(6..).unwrap_or("").trim();
+        return Ok(match rest {
+            "" => Command::PhraseShow,
+            "clear" => Command::PhraseClear,
+            phrase => Command::Phrase(phrase),
+        });
     }
     let a = words.next();
     let b = words.next();
@@ -156,6 +177,13 @@ mod tests {
             "at most eight pairs"
         );
         assert_eq!(parse_line("rm -rf"), Err(ConsoleError::UnknownCommand));
+        assert_eq!(
+            parse_line("  phrase  correct horse  battery staple "),
+            Ok(Command::Phrase("correct horse  battery staple"))
+        );
+        assert_eq!(parse_line("phrase clear"), Ok(Command::PhraseClear));
+        assert_eq!(parse_line("phrase"), Ok(Command::PhraseShow));
+        assert_eq!(parse_line("phrases x"), Err(ConsoleError::UnknownCommand));
     }
 
     #[test]

@@ -4,6 +4,8 @@
 //! so is any change after which the whole set would not run
 //! ([`crate::pipeline::validate`]): a change leaves the set valid or untouched.
 
+use telemetry::link::LinkKey;
+
 use crate::pipeline::{InvalidSettings, validate};
 
 /// A parameter's value.
@@ -293,10 +295,14 @@ impl Param {
     }
 }
 
-/// The current value of every parameter.
+/// The current value of every parameter, and the link key.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Settings {
     values: [Value; COUNT],
+    /// The link key derived from the binding phrase (spec §12), outside the table: it is
+    /// no parameter a `list`, `get` or `SettingChange` can read, only the console's `phrase`
+    /// sets it. `None`: no phrase, the link runs unauthenticated.
+    link_key: Option<LinkKey>,
 }
 
 impl Default for Settings {
@@ -305,11 +311,25 @@ impl Default for Settings {
         for (v, p) in values.iter_mut().zip(PARAMS) {
             *v = p.default;
         }
-        Self { values }
+        Self {
+            values,
+            link_key: None,
+        }
     }
 }
 
 impl Settings {
+    /// The link key (from the binding phrase), if one is set.
+    pub fn link_key(&self) -> Option<LinkKey> {
+        self.link_key
+    }
+
+    /// Sets or clears the link key (the console's `phrase`; the key only, never the
+    /// phrase, is kept).
+    pub fn set_link_key(&mut self, key: Option<LinkKey>) {
+        self.link_key = key;
+    }
+
     /// Value by name.
     pub fn get(&self, name: &str) -> Option<Value> {
         let (i, _) = find(name)?;

@@ -19,10 +19,17 @@
 //! The old format (one map item per parameter, before this record) is not migrated: such a
 //! store loads as factory settings with [`LoadProblem::OldFormat`], and the next save writes
 //! the record format.
+//!
+//! Record versions: 3 (now) ends its pairs with the link key — a flag byte (0 none, 1 a key)
+//! and, with 1, the 16 key bytes (derived from the binding phrase; the phrase itself is never
+//! stored); 2 has no key and loads as "no phrase", its pairs unchanged.
 
 use embedded_storage_async::nor_flash::NorFlash;
 use sequential_storage::cache::CacheImpl;
 use sequential_storage::map::MapStorage;
+
+use telemetry::link::LinkKey;
+use telemetry::link::auth::KEY_BYTES;
 
 use super::params::{PARAMS, Settings};
 use crate::pipeline::InvalidSettings;
@@ -45,9 +52,11 @@ impl Buffer {
 /// The two slots' map keys (parameter keys are 100…999, the old format's item keys).
 const SLOTS: [u16; 2] = [0xFE00, 0xFE01];
 /// Record format version.
-const VERSION: u8 = 2;
-/// Longest record: version, generation, count, pairs, CRC.
-const RECORD_MAX: usize = 1 + 4 + 2 + 6 * super::params::COUNT + 4;
+const VERSION: u8 = 3;
+/// The version before the link key, still loaded (no key).
+const VERSION_NO_KEY: u8 = 2;
+/// Longest record: version, generation, count, pairs, key flag and key, CRC.
+const RECORD_MAX: usize = 1 + 4 + 2 + 6 * super::params::COUNT + 1 + KEY_BYTES + 4;
 
 /// A storage failure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -149,6 +158,13 @@ fn encode(settings: &Settings, generation: u32, out: &mut [u8; RECORD_MAX]) -> u
         put(&p.key.to_le_bytes());
         put(&v.to_bits().to_le_bytes());
     }
+    match settings.link_key() {
+        Some(key) => {
+            put(&[1]);
+            put(&key.to_bytes());
+        }
+        None => put(&[0]),
+    }
     let body = at;
     let crc = crc32(out.get(..body).unwrap_or(&[]));
     let mut at2 = body;
@@ -176,21 +192,25 @@ fn decode(bytes: &[u8]) -> Option<Record> {
         return None;
     }
     let (&version, rest) = body.split_first()?;
-    if version != VERSION {
+    if version != VERSION && version != VERSION_NO_KEY {
         return None;
     }
     let (generation, rest) = rest.split_first_chunk::<4>()?;
-    let (count, pairs) = rest.split_first_chunk::<2>()?;
+    let (count, rest) = rest.split_first_chunk::<2>()?;
     let count = usize::from(u16::from_le_bytes(*count));
-    if pairs.len() != 6 * count {
-        return None;
-    }
+    let (pairs, key) = rest.split_at_checked(6 * count)?;
+    let link_key = match (version, key) {
+        (VERSION_NO_KEY, []) | (VERSION, [0]) => None,
+        (VERSION, [1, key @ ..]) => Some(LinkKey::from_bytes(key.try_into().ok()?)),
+        _ => return None,
+    };
     let mut record = Record {
         generation: u32::from_le_bytes(*generation),
         settings: Settings::default(),
         loaded: 0,
         refused: 0,
     };
+    record.settings.set_link_key(link_key);
     for pair in pairs.chunks_exact(6) {
         let (key, bits) = pair.split_first_chunk::<2>()?;
         let bits: [u8; 4] = bits.try_into().ok()?;
@@ -320,7 +340,7 @@ pub async fn load<S: NorFlash, C: CacheImpl<u16>>(
 
 /// Writes `settings` as a new generation when it differs from `stored` (what flash holds
 /// now), into the slot not holding the newest record; returns how many parameters changed
-/// (0 = nothing written). Call only while disarmed: on the F405 a sector erase stalls
+/// (the link key counts as one; 0 = nothing written). Call only while disarmed: on the F405 a sector erase stalls
 /// instruction fetch.
 pub async fn save<S: NorFlash, C: CacheImpl<u16>>(
     map: &mut MapStorage<u16, S, C>,
@@ -331,7 +351,8 @@ pub async fn save<S: NorFlash, C: CacheImpl<u16>>(
         .iter()
         .zip(stored.iter())
         .filter(|((_, v), (_, old))| v.to_bits() != old.to_bits())
-        .count() as u16;
+        .count() as u16
+        + u16::from(settings.link_key() != stored.link_key());
     if changed == 0 {
         return Ok(0);
     }

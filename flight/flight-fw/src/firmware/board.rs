@@ -8,6 +8,7 @@ use embassy_stm32::flash::{Bank1Region1, Blocking, Flash};
 use embassy_stm32::gpio::{Level, Output, OutputType, Pull, Speed};
 use embassy_stm32::i2c::{self, I2c};
 use embassy_stm32::peripherals::{TIM3, TIM9};
+use embassy_stm32::rng::{self, Rng};
 use embassy_stm32::timer::Channel;
 use embassy_stm32::timer::low_level::Timer;
 use embassy_stm32::timer::simple_pwm::PwmPin;
@@ -50,6 +51,7 @@ bind_interrupts!(pub struct Irqs {
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
+    RNG => rng::InterruptHandler<peripherals::RNG>;
     DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
     DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
     DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
@@ -66,6 +68,7 @@ bind_interrupts!(pub struct Irqs {
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
+    RNG => rng::InterruptHandler<peripherals::RNG>;
     DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
     DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
     DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
@@ -204,6 +207,9 @@ pub struct Board {
     /// The GPS receiver (Sparky2 only: the BrushedSparky's PA9/PA10 select the VTX band).
     #[cfg(feature = "sparky2")]
     pub gps: Option<Gps>,
+    /// The true RNG (clocked from the 48 MHz PLL Q the USB uses): seeds the session of the
+    /// phone's authenticated setting changes at boot.
+    pub rng: Rng<'static, peripherals::RNG>,
 }
 
 /// The u-blox receiver on the Sparky2's Main port: USART1, TX PA9, RX PA10 (hardware.md
@@ -348,6 +354,7 @@ impl Board {
             speaker,
             usb,
             settings_flash,
+            rng: Rng::new(p.RNG, Irqs),
             heartbeat_led: Output::new(p.PB5, Level::High, Speed::Low),
             watchdog: IndependentWatchdog::new(p.IWDG, WATCHDOG_TIMEOUT_US),
             radio: Radio {

@@ -36,10 +36,11 @@ pub async fn keep_alive() -> core::convert::Infallible {
     }
 }
 
-/// Resolves when the console asked for a bind (polled every 50 ms, checking in).
-pub async fn bind_requested() {
+/// Resolves when the link must restart: the console asked for a bind or changed the binding
+/// phrase (`FlightApp::link_restart_due`, polled every 50 ms, checking in).
+pub async fn restart_due() {
     loop {
-        if with_app(|a| a.bind_requested()).unwrap_or(false) {
+        if with_app(|a| a.link_restart_due()).unwrap_or(false) {
             return;
         }
         with_app(|a| a.on_link_idle());

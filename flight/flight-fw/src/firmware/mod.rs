@@ -38,6 +38,11 @@ async fn main(spawner: Spawner) {
         // Console, telemetry and arming all see it until the pilot saves a set.
         app.on_settings_problem(problem);
     }
+    // A fresh session for the phone's signed setting changes every boot (spec §12.5).
+    let mut rng = board.rng;
+    app.seed_change_session(rng.next_u32());
+    // And a fresh seed for the link's epoch nonces (spec §12.2).
+    app.seed_link_nonces(u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32()));
     if let Some(e) = app.setup_error() {
         error!("stored settings not flyable ({}): factory setup", e);
     }

@@ -83,7 +83,11 @@ impl FlightState {
             Message::LinkStats(l) => self.flight_link = Some(l),
             Message::Vertical(v) => self.vertical = Some(v),
             Message::Cells(c) => self.cells = (c.count > 0).then_some(c.count),
-            Message::ArmState(_) | Message::SysIdResult(_) | Message::SettingChange(_) => {}
+            Message::ArmState(_)
+            | Message::SysIdResult(_)
+            | Message::SettingChange(_)
+            | Message::SignedChange(_)
+            | Message::ChangeRefused(_) => {}
         }
     }
 

@@ -45,8 +45,26 @@ impl Pin {
         }
     }
 
+    /// The PIN as a number.
+    pub const fn value(self) -> u32 {
+        self.0
+    }
+
+    /// The module's factory PIN: six digits (100 000 … 999 999, so never the HM-10's
+    /// 000000 and no leading zero to get wrong) from a one-way mix of the chip's unique ID
+    /// (the nRF52840's FICR DEVICEID, injected), so no two modules share one and none is
+    /// public. Printed on the module's label / read with the radio's device tool.
+    pub const fn factory(unique_id: u64) -> Self {
+        // SplitMix64's finaliser: every ID bit moves about half the output bits.
+        let mut z = unique_id.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        Self(100_000 + (z % 900_000) as u32)
+    }
+
     /// The six ASCII digits `AT+PASS` takes, leading zeros included.
-    fn digits(self) -> [u8; 6] {
+    pub fn digits(self) -> [u8; 6] {
         let mut out = [b'0'; 6];
         let mut v = self.0;
         for d in out.iter_mut().rev() {
@@ -180,6 +198,11 @@ impl Configurator {
     pub fn with_pin(mut self, pin: Pin) -> Self {
         self.pin = Some(pin);
         self
+    }
+
+    /// The PIN the script sets, if any.
+    pub fn pin(&self) -> Option<Pin> {
+        self.pin
     }
 
     /// The UART rate the script currently expects.

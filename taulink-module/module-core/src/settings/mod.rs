@@ -4,15 +4,20 @@
 //! a single sequential-storage item write: after a power cut the map holds either the old
 //! or the new record (the item CRC rejects a torn write), never a mix of fields.
 //!
-//! Record layout (version 3, 15 bytes, and versions 4 and 5 below; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd,
+//! Record layout (version 3, 15 bytes, and versions 4 to 6 below; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd,
 //! 3 CRSF 921 600 Bd;
 //! failsafe 0 hold last, 1 stop pulses; rate = `telemetry::link::RateMode::code`):
-//! `[3, role, rate, input, output, band, tx_power, failsafe, bind_id (u32 LE),
-//! input_timeout_ms (u16 LE), telemetry_ratio]`. The rate byte is the link's own rate mode,
+//! `[4, role, rate, input, output, band, tx_power, failsafe, bind_id (u32 LE),
+//! input_timeout_ms (u16 LE), telemetry_ratio, key_flag, key (16 bytes), ble_pin (u32 LE)]`.
+//! The key is the link key derived from the binding phrase (spec §12; flag 0 = no phrase, the
+//! key bytes then all 0; the phrase itself is never stored); `ble_pin` is the HM-10 pairing
+//! PIN, 0…999 999, or `u32::MAX` for the factory PIN derived from the chip's unique ID
+//! ([`Pin::factory`]). The rate byte is the link's own rate mode,
 //! the one vocabulary the handset's "Packet Rate" shows. Band 0 is the 70 cm amateur plan
 //! (factory), 1 EU 868, 2 US 915, 3 (version 3 only) the 433.05–434.79 MHz ISM plan.
 //!
-//! Older records still load, every stored field with its old meaning: version 2 (14 bytes,
+//! Older records still load, every stored field with its old meaning: version 3 (15 bytes,
+//! up to the telemetry ratio) has no phrase and the factory PIN; version 2 (14 bytes,
 //! no telemetry ratio) and version 1 (12 bytes, no input timeout either) stored the air rate
 //! in Tau Labs' bit-rate vocabulary, which maps to the link mode that rate ran as (4800,
 //! 9600 and 19 200 bit/s → L50, 57 600 → M100, 125 000 → F250); a missing field takes its
@@ -27,6 +32,13 @@
 //! 2 OpenLRSng 3.9), olrs_profile, olrs_channel_mode, olrs_telemetry, olrs_frequency_hz
 //! (u32 LE, 0 = band default), olrs_hop_seed (u32 LE)]`. Older records load as TauLink with
 //! OpenLRSng's factory parameters.
+//!
+//! Version 6 (57 bytes) appends the link key and the BLE PIN: `[.. version 5 fields ..,
+//! key_flag, key (16 bytes), ble_pin (u32 LE)]`. The key is the link key derived from the
+//! binding phrase (spec §12; flag 0 = no phrase, the key bytes then all 0; the phrase itself
+//! is never stored); `ble_pin` is the HM-10 pairing PIN, 0…999 999, or `u32::MAX` for the
+//! factory PIN derived from the chip's unique ID ([`Pin::factory`]). Older records load with
+//! no phrase and the factory PIN.
 
 pub mod openlrs;
 pub mod store;
@@ -36,6 +48,9 @@ pub use openlrs::{LinkProtocol, OpenLrsError, OpenLrsSettings};
 pub use store::{SettingsStore, StoreError};
 pub use text::TextError;
 
+use telemetry::link::LinkKey;
+
+use crate::hm10::at::Pin;
 use crate::ppm::FailsafeOutput;
 
 /// Which end of the link the module is.
@@ -162,6 +177,12 @@ pub struct Settings {
     pub protocol: LinkProtocol,
     /// The OpenLRSng transmitter's bind parameters (used when `protocol` is OpenLRSng).
     pub openlrs: OpenLrsSettings,
+    /// The link key derived from the binding phrase (spec §12); `None`: no phrase, the link
+    /// runs unauthenticated. Set with `set_text("phrase", …)`.
+    pub link_key: Option<LinkKey>,
+    /// The HM-10 pairing PIN; `None`: the factory PIN derived from the chip's unique ID
+    /// ([`Pin::factory`]), never the HM-10's own 000000.
+    pub ble_pin: Option<Pin>,
 }
 
 /// Radio model IDs model match keeps track of (EdgeTX's receiver numbers 0…63).
@@ -204,18 +225,24 @@ impl Default for Settings {
             bound_models: 0,
             protocol: LinkProtocol::TauLink,
             openlrs: OpenLrsSettings::default(),
+            link_key: None,
+            ble_pin: None,
         }
     }
 }
 
 /// Current record version.
-pub const RECORD_VERSION: u8 = 5;
+pub const RECORD_VERSION: u8 = 6;
 /// Record length of the current version.
-pub const RECORD_LEN: usize = 36;
+pub const RECORD_LEN: usize = 57;
+/// Record length of version 5 (link protocol, no phrase or PIN).
+pub const RECORD_V5_LEN: usize = 36;
 /// Record length of version 4 (model match, no link protocol).
 pub const RECORD_V4_LEN: usize = 24;
 /// Record length of version 3 (no model match).
 pub const RECORD_V3_LEN: usize = 15;
+/// The stored `ble_pin` that means "the factory PIN".
+const FACTORY_PIN: u32 = u32::MAX;
 /// Record length of version 2 (bit-rate codes, no telemetry ratio).
 pub const RECORD_V2_LEN: usize = 14;
 /// Record length of version 1 (bit-rate codes, no input timeout).
@@ -255,14 +282,20 @@ impl core::fmt::Display for DecodeError {
 impl core::error::Error for DecodeError {}
 
 impl Settings {
-    /// The current (version 5) record.
+    /// The current (version 6) record.
     pub fn to_record(&self) -> [u8; RECORD_LEN] {
         let [b0, b1, b2, b3] = self.bind_id.to_le_bytes();
         let [t0, t1] = self.input_timeout_ms.to_le_bytes();
         let [m0, m1, m2, m3, m4, m5, m6, m7] = self.bound_models.to_le_bytes();
         let [f0, f1, f2, f3] = self.openlrs.frequency_hz.to_le_bytes();
         let [s0, s1, s2, s3] = self.openlrs.hop_seed.to_le_bytes();
-        [
+        let (flag, key) = match self.link_key {
+            Some(key) => (1, key.to_bytes()),
+            None => (0, [0; 16]),
+        };
+        let pin = self.ble_pin.map_or(FACTORY_PIN, Pin::value).to_le_bytes();
+        let mut record = [0u8; RECORD_LEN];
+        let fields = [
             RECORD_VERSION,
             self.role as u8,
             self.rate.code(),
@@ -299,10 +332,16 @@ impl Settings {
             s1,
             s2,
             s3,
-        ]
+            flag,
+        ];
+        let bytes = fields.iter().chain(key.iter()).chain(pin.iter());
+        for (slot, byte) in record.iter_mut().zip(bytes) {
+            *slot = *byte;
+        }
+        record
     }
 
-    /// Parses a record of version 1 … 5; every field is range-checked.
+    /// Parses a record of version 1 … 6; every field is range-checked.
     pub fn from_record(record: &[u8]) -> Result<Self, DecodeError> {
         let Some(&version) = record.first() else {
             return Err(DecodeError::Length { found: 0 });
@@ -315,6 +354,7 @@ impl Settings {
             2 => RECORD_V2_LEN,
             3 => RECORD_V3_LEN,
             4 => RECORD_V4_LEN,
+            5 => RECORD_V5_LEN,
             RECORD_VERSION => RECORD_LEN,
             found => return Err(DecodeError::Version { found }),
         };
@@ -338,7 +378,12 @@ impl Settings {
         };
         let (rest, tail) = rest.split_at(rest.len().min(RECORD_V3_LEN - RECORD_V1_LEN));
         let (models, link) = tail.split_at(tail.len().min(RECORD_V4_LEN - RECORD_V3_LEN));
+        let (link, security) = link.split_at(link.len().min(RECORD_V5_LEN - RECORD_V4_LEN));
         let (protocol, openlrs) = decode_link(link)?;
+        let (link_key, ble_pin) = match security {
+            [flag, tail @ ..] => decode_security(*flag, tail)?,
+            [] => (None, None),
+        };
         let telemetry_ratio = match rest {
             [_, _, ratio, ..] if TELEMETRY_RATIOS.contains(ratio) => *ratio,
             [_, _, _, ..] => {
@@ -427,6 +472,8 @@ impl Settings {
             bound_models,
             protocol,
             openlrs,
+            link_key,
+            ble_pin,
         })
     }
 
@@ -486,6 +533,29 @@ fn decode_link(link: &[u8]) -> Result<(LinkProtocol, OpenLrsSettings), DecodeErr
     ))
 }
 
+/// Version 6's key flag (at [`RECORD_V5_LEN`]) and what follows it: the key bytes (all 0
+/// without a key, so every byte has one meaning) and the PIN.
+fn decode_security(flag: u8, tail: &[u8]) -> Result<(Option<LinkKey>, Option<Pin>), DecodeError> {
+    let field = |offset: usize| DecodeError::Field { offset };
+    let (key, pin) = tail.split_first_chunk::<16>().ok_or(DecodeError::Length {
+        found: RECORD_V5_LEN + 1 + tail.len(),
+    })?;
+    let pin: [u8; 4] = pin.try_into().map_err(|_| DecodeError::Length {
+        found: RECORD_V5_LEN + 1 + tail.len(),
+    })?;
+    let link_key = match flag {
+        0 if key.iter().all(|b| *b == 0) => None,
+        0 => return Err(field(RECORD_V5_LEN + 1)),
+        1 => Some(LinkKey::from_bytes(*key)),
+        _ => return Err(field(RECORD_V5_LEN)),
+    };
+    let ble_pin = match u32::from_le_bytes(pin) {
+        FACTORY_PIN => None,
+        value => Some(Pin::new(value).ok_or(field(RECORD_V5_LEN + 17))?),
+    };
+    Ok((link_key, ble_pin))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -513,17 +583,26 @@ mod tests {
                 telemetry: false,
                 hop_seed: 0xCAFE_F00D,
             },
+            link_key: Some(LinkKey::from_bytes(core::array::from_fn(|i| {
+                0xA0 + i as u8
+            }))),
+            ble_pin: Pin::new(42_917),
         };
         let record = settings.to_record();
         assert_eq!(
-            record,
+            record[..RECORD_V5_LEN],
             [
-                5, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16, 1, 0x08, 0, 0, 0,
+                6, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16, 1, 0x08, 0, 0, 0,
                 0, 0, 0, 0x80, 2, 4, 6, 0, 0x90, 0x78, 0x56, 0x34, 0x0D, 0xF0, 0xFE, 0xCA
             ]
         );
         assert!(settings.model_bound(3) && settings.model_bound(63));
         assert!(!settings.model_bound(4) && !settings.model_bound(64));
+        assert_eq!(
+            record[RECORD_V5_LEN..RECORD_V5_LEN + 1 + 16],
+            core::array::from_fn::<u8, 17, _>(|i| if i == 0 { 1 } else { 0xA0 + i as u8 - 1 })
+        );
+        assert_eq!(record[RECORD_V5_LEN + 17..], 42_917u32.to_le_bytes());
         assert_eq!(Settings::from_record(&record), Ok(settings));
         assert_eq!(
             Settings::from_record(&Settings::default().to_record()),
@@ -557,8 +636,12 @@ mod tests {
             Err(DecodeError::Length { found: 0 })
         );
         assert_eq!(
+            Settings::from_record(&[7; 57]),
+            Err(DecodeError::Version { found: 7 })
+        );
+        assert_eq!(
             Settings::from_record(&[6; 36]),
-            Err(DecodeError::Version { found: 6 })
+            Err(DecodeError::Length { found: 36 })
         );
         assert_eq!(
             Settings::from_record(&[5; 24]),
@@ -750,9 +833,66 @@ mod tests {
         assert_eq!(Settings::from_record(&upgraded), Ok(settings));
     }
 
+    #[test]
+    fn a_version_3_record_loads_with_no_phrase_and_the_factory_pin() {
+        let v3 = [
+            3, 1, 3, 1, 3, 3, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16,
+        ];
+        let settings = Settings::from_record(&v3).unwrap();
+        assert_eq!(settings.link_key, None);
+        assert_eq!(settings.ble_pin, None);
+        assert_eq!(
+            (
+                settings.rate,
+                settings.band,
+                settings.bind_id,
+                settings.telemetry_ratio
+            ),
+            (RateMode::F500, Band::Ism433, 0xDEAD_BEEF, 16)
+        );
+        let upgraded = settings.to_record();
+        assert_eq!(upgraded[0], 4);
+        assert_eq!(upgraded[1..15], v3[1..]);
+        assert_eq!(Settings::from_record(&upgraded), Ok(settings));
+    }
+
+    #[test]
+    fn the_phrase_and_pin_fields_take_only_what_a_writer_produces() {
+        let keyed = Settings {
+            link_key: Some(LinkKey::from_phrase("a")),
+            ..Settings::default()
+        };
+        let mut record = keyed.to_record();
+        assert_eq!(Settings::from_record(&record), Ok(keyed));
+        record[15] = 2;
+        assert_eq!(
+            Settings::from_record(&record),
+            Err(DecodeError::Field { offset: 15 })
+        );
+        // No key, yet key bytes: not a record any writer makes.
+        record[15] = 0;
+        assert_eq!(
+            Settings::from_record(&record),
+            Err(DecodeError::Field { offset: 16 })
+        );
+        let mut record = Settings::default().to_record();
+        assert_eq!(record[32..], [0xFF; 4], "the factory PIN");
+        record[32..].copy_from_slice(&1_000_000u32.to_le_bytes());
+        assert_eq!(
+            Settings::from_record(&record),
+            Err(DecodeError::Field { offset: 32 })
+        );
+        record[32..].copy_from_slice(&0u32.to_le_bytes());
+        assert_eq!(
+            Settings::from_record(&record).map(|s| s.ble_pin),
+            Ok(Pin::new(0)),
+            "000000 set on purpose stays possible"
+        );
+    }
+
     proptest::proptest! {
         #[test]
-        fn any_bytes_decode_or_error(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..28)) {
+        fn any_bytes_decode_or_error(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..64)) {
             if let Ok(settings) = Settings::from_record(&bytes) {
                 // A current record re-encodes to itself; an older one to its upgrade, which
                 // decodes to the same settings.

@@ -84,7 +84,7 @@ impl<E> From<sequential_storage::Error<E>> for StoreError<E> {
 
 /// A word-aligned work buffer: the key, the record and the item header, rounded up.
 #[repr(align(4))]
-struct WorkBuffer([u8; 32]);
+struct WorkBuffer([u8; 64]);
 
 /// Where the live settings are: the key and its generation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -107,7 +107,7 @@ impl<S: MultiwriteNorFlash> SettingsStore<S> {
         let config = MapConfig::try_new(range).map_err(|_| StoreError::BadRange)?;
         Ok(Self {
             map: MapStorage::new(flash, config, Cache::new_uncached()),
-            buffer: WorkBuffer([0; 32]),
+            buffer: WorkBuffer([0; 64]),
             live: None,
         })
     }

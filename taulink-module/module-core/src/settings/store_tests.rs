@@ -243,7 +243,7 @@ fn a_record_of_the_first_firmware_loads_and_is_replaced_by_the_next_save() {
         // What the first firmware wrote: a version-1 record under key 1, no generation.
         let mut map: Map<Flash> =
             MapStorage::new(flash(), MapConfig::new(RANGE), Cache::new_uncached());
-        let mut buffer = WorkBuffer([0; 32]);
+        let mut buffer = WorkBuffer([0; 64]);
         let v1 = [1, 0, 2, 0, 2, 0, 7, 0, 0x78, 0x56, 0x34, 0x12];
         map.store_item(&mut buffer.0, &LEGACY_KEY, &&v1[..])
             .await

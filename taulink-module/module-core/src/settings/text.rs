@@ -4,16 +4,23 @@
 //! set the module would refuse to load. A value that leaves the whole set unusable
 //! ([`Settings::validate`]: an OpenLRSng carrier or hop outside the band plan) is refused
 //! too, except while several values are typed together (see [`Settings::set_text`]).
+//!
+//! `phrase` takes the binding phrase (spec §12: 1–64 printable bytes, white space at the
+//! ends dropped; empty clears it) and stores only the key derived from it; `ble_pin` takes
+//! six digits or `factory`.
+
+use telemetry::link::key_for_phrase;
 
 use super::openlrs::CHANNEL_MODES;
 use super::{
     Band, INPUT_TIMEOUT_MS, InputProtocol, LinkProtocol, OutputProtocol, RateMode, Role, Settings,
     TELEMETRY_RATIOS,
 };
+use crate::hm10::at::Pin;
 use crate::ppm::FailsafeOutput;
 
 /// Every setting name, in record order.
-pub const NAMES: [&str; 17] = [
+pub const NAMES: [&str; 19] = [
     "role",
     "rate",
     "input",
@@ -31,6 +38,8 @@ pub const NAMES: [&str; 17] = [
     "olrs_telemetry",
     "olrs_frequency_hz",
     "olrs_hop_seed",
+    "phrase",
+    "ble_pin",
 ];
 
 /// Why a typed setting was refused (nothing changed).
@@ -46,6 +55,8 @@ pub enum TextError {
     /// The value is fine alone, but the set would not run (an OpenLRSng carrier or hop
     /// outside the band plan, OpenLRSng in the receiver role).
     Invalid,
+    /// A binding phrase longer than 64 bytes or with a control character.
+    BadPhrase,
 }
 
 impl core::fmt::Display for TextError {
@@ -55,6 +66,7 @@ impl core::fmt::Display for TextError {
             Self::Unparsable => "cannot read that value",
             Self::OutOfRange => "value out of range",
             Self::Invalid => "refused: the OpenLRSng link would leave the band plan",
+            Self::BadPhrase => "binding phrase: 1-64 printable bytes",
         })
     }
 }
@@ -219,6 +231,18 @@ impl Settings {
                 self.openlrs.frequency_hz = hz;
             }
             "olrs_hop_seed" => self.openlrs.hop_seed = number(text, 0..=u32::MAX)?,
+            "phrase" => {
+                self.link_key = key_for_phrase(text).map_err(|_| TextError::BadPhrase)?;
+            }
+            "ble_pin" => {
+                self.ble_pin = if text.eq_ignore_ascii_case("factory") {
+                    None
+                } else if text.len() == 6 && text.bytes().all(|b| b.is_ascii_digit()) {
+                    Some(Pin::new(number(text, 0..=999_999)?).ok_or(TextError::OutOfRange)?)
+                } else {
+                    return Err(TextError::Unparsable);
+                };
+            }
             _ => return Err(TextError::Unknown),
         }
         Ok(())
@@ -249,6 +273,8 @@ mod tests {
             ("olrs_telemetry", "off"),
             ("olrs_frequency_hz", "866000000"),
             ("olrs_hop_seed", "77"),
+            ("phrase", " correct horse battery staple "),
+            ("ble_pin", "042917"),
             // Last: OpenLRSng runs in the transmitter role only.
             ("role", "transmitter"),
             ("protocol", "OpenLRS39"),
@@ -278,11 +304,25 @@ mod tests {
                     telemetry: false,
                     hop_seed: 77,
                 },
+                link_key: Some(telemetry::link::LinkKey::from_phrase(
+                    "correct horse battery staple"
+                )),
+                ble_pin: Pin::new(42_917),
             }
         );
         assert!(s.validate().is_ok());
         assert_eq!(Settings::from_record(&s.to_record()), Ok(s));
-        assert!(NAMES.iter().all(|n| s.clone().set_text(n, "?").is_err()));
+        // "?" is a valid phrase; nothing else takes it.
+        assert!(
+            NAMES
+                .iter()
+                .filter(|n| **n != "phrase")
+                .all(|n| s.clone().set_text(n, "?").is_err())
+        );
+        s.set_text("phrase", "").unwrap();
+        assert_eq!(s.link_key, None, "an empty phrase clears it");
+        s.set_text("ble_pin", "Factory").unwrap();
+        assert_eq!(s.ble_pin, None);
     }
 
     #[test]
@@ -301,6 +341,11 @@ mod tests {
             ("protocol", "openlrs", TextError::Unparsable),
             ("olrs_channels", "20", TextError::Unparsable),
             ("olrs_frequency_hz", "1000000000", TextError::OutOfRange),
+            ("phrase", &"x".repeat(65), TextError::BadPhrase),
+            ("phrase", "tab\tinside", TextError::BadPhrase),
+            ("ble_pin", "12345", TextError::Unparsable),
+            ("ble_pin", "1234567", TextError::Unparsable),
+            ("ble_pin", "12a456", TextError::Unparsable),
         ];
         for (name, text, error) in cases {
             assert_eq!(s.set_text(name, text), Err(error), "{name}={text}");

@@ -225,8 +225,8 @@ impl World<'_> {
         let mut hooks = ModuleHooks { app: app.clone() };
         let mut radio = MockRadio::new(medium.clone(), module_node);
         let mut clock = MockClock::new(time.clone(), MODULE_EPOCH_US);
+        let mut master = app.borrow().master(params);
         executor.spawn(async move {
-            let mut master = Master::new(params);
             let _ = run_master(&mut radio, &mut clock, &mut master, &mut hooks).await;
         });
         let mut hooks = FlightHooks {

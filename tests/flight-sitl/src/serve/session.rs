@@ -7,6 +7,7 @@
 
 use std::collections::VecDeque;
 use std::time::Duration;
+use telemetry::link::LinkKey;
 
 use flight_core::report::setting_report;
 use flight_core::settings::{PARAMS, Settings};
@@ -67,9 +68,19 @@ pub fn scenario(o: &WorldOptions) -> Scenario {
     s.seed = o.seed;
     s.rate = o.rate;
     s.packet_loss = o.packet_loss;
-    s.module_settings = Some(crate::runner::bound_module_settings(o.rate));
+    // Both ends carry the served world's binding phrase (spec §12): the page signs its
+    // setting changes with it, as a pilot's phone would.
+    let key = LinkKey::from_phrase(SERVE_PHRASE);
+    let _ = s.settings.set_link_key(Some(key));
+    let mut module = crate::runner::bound_module_settings(o.rate);
+    module.link_key = Some(key);
+    s.module_settings = Some(module);
     s
 }
+
+/// The binding phrase both ends of a served world carry (spec §12): the page signs setting
+/// changes with it. Printed with the URL; a demo value, public by design.
+pub const SERVE_PHRASE: &str = "taulink demo";
 
 /// What the page was sent (the last message of each kind, as serde renders it) and the
 /// setting changes the flight application took, for `/api/sent`.

@@ -294,3 +294,78 @@ fn two_damaged_copies_are_reported_not_taken_for_a_new_board() {
     assert_eq!(s, Settings::default());
     assert_eq!(report.problem, Some(LoadProblem::Corrupt), "{report:?}");
 }
+
+#[test]
+fn the_link_key_is_saved_and_loaded_and_a_key_change_alone_is_a_change() {
+    let mut m = map(Flash::new(WriteCountCheck::OnceOnly, None, true));
+    let defaults = Settings::default();
+    let mut s = defaults.clone();
+    s.set_link_key(Some(LinkKey::from_phrase("correct horse battery staple")));
+    assert_eq!(block_on(save(&mut m, &s, &defaults)), Ok(1), "only the key");
+    let (flash, _) = m.destroy();
+    let (loaded, report) = boot(flash);
+    assert_eq!(report.problem, None);
+    assert_eq!(
+        loaded.link_key(),
+        Some(LinkKey::from_phrase("correct horse battery staple"))
+    );
+    assert_eq!(loaded, s);
+    // Cleared again: a change too, and it loads as no key.
+    let mut m = map(flash_of(&s));
+    let mut cleared = s.clone();
+    cleared.set_link_key(None);
+    assert_eq!(block_on(save(&mut m, &cleared, &s)), Ok(1));
+    let (flash, _) = m.destroy();
+    assert_eq!(boot(flash).0.link_key(), None);
+}
+
+fn flash_of(s: &Settings) -> Flash {
+    let mut m = map(Flash::default());
+    block_on(save_whole(&mut m, s)).unwrap();
+    m.destroy().0
+}
+
+/// A record as version 2 wrote it (no key field): what a controller updated to this
+/// firmware finds in flash.
+fn version_2_record(settings: &Settings, generation: u32) -> Vec<u8> {
+    let mut body = vec![2u8];
+    body.extend(generation.to_le_bytes());
+    body.extend((PARAMS.len() as u16).to_le_bytes());
+    for (p, v) in settings.iter() {
+        body.extend(p.key.to_le_bytes());
+        body.extend(v.to_bits().to_le_bytes());
+    }
+    let crc = crc32(&body);
+    body.extend(crc.to_le_bytes());
+    body
+}
+
+#[test]
+fn a_version_2_record_loads_whole_with_no_key() {
+    let old = generation_set(3);
+    let record = version_2_record(&old, 9);
+    let mut m = map(Flash::default());
+    let mut buf = Buffer::new();
+    block_on(m.store_item(&mut buf.0, &SLOTS[0], &&record[..])).unwrap();
+    let (flash, _) = m.destroy();
+    let (loaded, report) = boot(flash);
+    assert_eq!(report.problem, None);
+    assert_eq!(report.generation, 9);
+    assert_eq!(loaded, old, "every pair as stored");
+    assert_eq!(loaded.link_key(), None);
+    // A key field in a version-2 record, or a bad flag in version 3, is no record.
+    let mut with_key = version_2_record(&old, 9);
+    with_key.truncate(with_key.len() - 4);
+    with_key.push(0);
+    let crc = crc32(&with_key);
+    with_key.extend(crc.to_le_bytes());
+    assert!(decode(&with_key).is_none());
+    let mut record = [0u8; RECORD_MAX];
+    let len = encode(&old, 1, &mut record);
+    let flag = len - 5;
+    assert_eq!(record[flag], 0);
+    record[flag] = 2;
+    let crc = crc32(&record[..len - 4]);
+    record[len - 4..len].copy_from_slice(&crc.to_le_bytes());
+    assert!(decode(&record[..len]).is_none());
+}

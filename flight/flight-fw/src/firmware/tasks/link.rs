@@ -1,7 +1,8 @@
 //! Owns the RFM22B and runs what `FlightApp::next_link_step` says: a bind window the console
 //! opened (the result to `on_bind_result`), the TauLink follower with the app as its hooks
-//! (`on_link_step`: channels, setting changes, telemetry, check-in) until the radio fails or
-//! a bind is asked for, or — never bound — nothing until the owner binds. With
+//! (`on_link_step`: channels, setting changes, telemetry, check-in; keyed when a binding
+//! phrase is stored) until the radio fails, a bind is asked for or the phrase changes, or —
+//! never bound — nothing until the owner binds. With
 //! `link.protocol` OpenLRSng the same, through flight-core's OpenLRSng receiver loops
 //! (`run_openlrs_receiver` → `on_openlrs_step`, `openlrs_bind_window` →
 //! `on_openlrs_bind_result`), the driver's parts lent to an OpenLRSng radio for the step.
@@ -14,12 +15,11 @@ use flight_core::app::{FAILSAFE_US, LinkStep, openlrs_bind_window, run_openlrs_r
 use radio_rfm22b::openlrs::radio::Radio as OpenLrsRadio;
 use radio_rfm22b::openlrs::rx::Receiver;
 use radio_rfm22b::{Rfm22b, TxPower};
-use telemetry::channels::FailsafeValues;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 
 use crate::firmware::board::Radio;
-use crate::firmware::link_radio::{EmbassyClock, LinkRadio, bind_requested, idle, keep_alive};
+use crate::firmware::link_radio::{EmbassyClock, LinkRadio, idle, keep_alive, restart_due};
 use crate::firmware::shared::with_app;
 
 /// The follower's hooks: straight into the app.
@@ -65,12 +65,16 @@ pub async fn link_task(radio: Radio) {
                     idle(Duration::from_secs(1)).await;
                 }
             }
-            LinkStep::WaitForBind => bind_requested().await,
+            LinkStep::WaitForBind => restart_due().await,
             LinkStep::Follow(params) => {
-                let mut follower = Follower::new(params, FailsafeValues::default(), FAILSAFE_US);
+                // Keyed with the binding phrase's key when one is stored.
+                let Some(mut follower) = with_app(|a| a.follower(params, FAILSAFE_US)) else {
+                    idle(Duration::from_secs(1)).await;
+                    continue;
+                };
                 let mut hooks = AppHooks;
                 let run = run_follower(radio, &mut clock, &mut follower, &mut hooks);
-                let failed = matches!(select(run, bind_requested()).await, Either::First(Err(_)));
+                let failed = matches!(select(run, restart_due()).await, Either::First(Err(_)));
                 with_app(|a| a.on_link_down());
                 if failed {
                     // The radio failed (unplugged, bus fault): retry in a second.
@@ -122,7 +126,7 @@ async fn openlrs_step<SPI, IRQ>(
             };
             let run = run_openlrs_receiver(&mut radio, &mut rx, on_step);
             // The check-in races too: a slow profile's lost-link dwell outlasts the IWDG.
-            let waits = select(bind_requested(), keep_alive());
+            let waits = select(restart_due(), keep_alive());
             let failed = matches!(select(run, waits).await, Either::First(_));
             with_app(|a| a.on_link_down());
             failed

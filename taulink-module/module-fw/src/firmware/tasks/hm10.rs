@@ -1,11 +1,11 @@
-//! The HM-10 on UARTE1: the boot-time AT script of `module_core::hm10::at` (the UARTE re-opened
-//! at each baud rate it asks for), then the relay of records both ways through the core, whose
+//! The HM-10 on UARTE1: the boot-time AT script the core builds (`App::hm10_script`: with the
+//! pairing PIN; the UARTE re-opened at each baud rate it asks for), then the relay of records both ways through the core, whose
 //! bounded queues are all the phone side touches, so it cannot stall the radio.
 
 use embassy_futures::join::join;
 use embassy_nrf::uarte::UarteTx;
 use embassy_time::{Duration, Timer, with_timeout};
-use module_core::hm10::at::{Action, Configurator};
+use module_core::hm10::at::Action;
 use module_core::hm10::relay::MAX_FRAME_LEN;
 
 use super::supervisor::{Watched, check_in, idle};
@@ -14,8 +14,11 @@ use crate::firmware::shared::{now_ms, with_app};
 
 #[embassy_executor::task]
 pub async fn hm10_task(mut hm10: Hm10) {
-    // "TauLink": the BLE name the phone app filters on.
-    let mut script = Configurator::new("TauLink", now_ms());
+    // The core's script: name, notifications and the pairing PIN with bonding (the set PIN,
+    // else this chip's factory PIN from its FICR DEVICEID).
+    let Some(mut script) = with_app(|app| app.hm10_script(now_ms(), device_id())) else {
+        idle(Watched::Hm10).await
+    };
     let outcome = 'script: loop {
         let baud = script.baud();
         let (mut tx, mut rx) = hm10.open(baud);
@@ -70,6 +73,14 @@ pub async fn hm10_task(mut hm10: Hm10) {
         }
     };
     join(receive, send).await;
+}
+
+/// The nRF52840's 64-bit unique device ID (FICR DEVICEID[0..2]), programmed at the factory.
+fn device_id() -> u64 {
+    let ficr = embassy_nrf::pac::FICR;
+    let low = ficr.deviceid(0).read();
+    let high = ficr.deviceid(1).read();
+    (u64::from(high) << 32) | u64::from(low)
 }
 
 async fn write(tx: &mut UarteTx<'_>, bytes: &[u8]) {

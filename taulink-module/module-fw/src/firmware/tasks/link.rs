@@ -22,7 +22,6 @@ use radio_rfm22b::openlrs::roles::tx_bind;
 use radio_rfm22b::openlrs::tx::Transmitter;
 use radio_rfm22b::openlrs::{Band as OpenLrsBand, BindingVersion};
 use radio_rfm22b::{Rfm22b, TxPower};
-use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{bind_follower, run_follower};
 use telemetry::link::master::{bind_master, run_master};
 
@@ -40,6 +39,9 @@ pub async fn link_task(radio: Radio, boot_settings: Settings) {
         Rfm22b::new(device, radio.nirq, radio.sdn, Delay),
         power,
     ));
+    // A receiver-role follower's epoch nonces (spec §12.2): a fresh seed every boot.
+    let seed = u64::from(rng.blocking_next_u32()) << 32 | u64::from(rng.blocking_next_u32());
+    with_app(|app| app.seed_link_nonces(seed));
     let (clock, hooks) = (&mut EmbassyClock, &mut Hooks);
     loop {
         check_in(Watched::Radio);
@@ -67,19 +69,25 @@ pub async fn link_task(radio: Radio, boot_settings: Settings) {
                 let end = poll_session().await;
                 with_app(|app| app.on_session_end(end))
             }
-            LinkStep::RunMaster(params) => {
-                let end = run(run_master(chip, clock, &mut Master::new(params), hooks)).await;
-                with_app(|app| app.on_session_end(end))
-            }
+            // The core builds the loops: keyed with the binding phrase's key when one is set.
+            LinkStep::RunMaster(params) => match with_app(|app| app.master(params)) {
+                Some(mut master) => {
+                    let end = run(run_master(chip, clock, &mut master, hooks)).await;
+                    with_app(|app| app.on_session_end(end))
+                }
+                None => None,
+            },
             LinkStep::RunFollower {
                 params,
                 failsafe,
                 failsafe_us,
-            } => {
-                let mut follower = Follower::new(params, failsafe, failsafe_us);
-                let end = run(run_follower(chip, clock, &mut follower, hooks)).await;
-                with_app(|app| app.on_session_end(end))
-            }
+            } => match with_app(|app| app.follower(params, failsafe, failsafe_us)) {
+                Some(mut follower) => {
+                    let end = run(run_follower(chip, clock, &mut follower, hooks)).await;
+                    with_app(|app| app.on_session_end(end))
+                }
+                None => None,
+            },
             LinkStep::BindMaster { params, timeout_us } => {
                 let accepted = keep_alive(bind_master(chip, clock, &params, timeout_us)).await;
                 let outcome = BindOutcome::offered(accepted.inspect_err(log));
