@@ -640,6 +640,14 @@ impl World {
         }
     }
 
+    /// The simulated phone sends `change` now (the HM-10 task takes it at its next poll):
+    /// signed with the flight side's phrase when the scenario gives one (re-signed once after
+    /// the refusal that names the session), unsigned otherwise — as the scenario's
+    /// `setting_changes` are.
+    pub fn phone_change(&mut self, change: SettingChange) {
+        self.shared.borrow_mut().uplink.push(change);
+    }
+
     /// Everything the HM-10 sent to the phone since the last call.
     pub fn phone_read(&mut self) -> Vec<u8> {
         self.shared

@@ -16,7 +16,8 @@ use flight_sitl::scenario::default_airframe;
 use std::time::Duration;
 
 use flight_sitl::{PilotInput, Sample, Scenario, WARMUP_S, World};
-use telemetry::messages::{Message, SettingChange, encode_message};
+use telemetry::link::LinkKey;
+use telemetry::messages::SettingChange;
 
 fn change(name: &str, value: f32) -> SettingChange {
     let id = PARAMS.iter().position(|p| p.name == name).unwrap() as u16;
@@ -43,20 +44,24 @@ fn held(samples: &[Sample], ts_s: f64) -> Vec<(f64, f64)> {
 /// On the ground, disarmed: the phone sends `changes` one by one from 1 s (one per
 /// 20 ms), the world runs `seconds`.
 fn on_the_ground(changes: &[SettingChange], seconds: f64) -> flight_sitl::Sitl {
-    let (quad, settings) = default_airframe();
-    let s = Scenario::new(
+    let (quad, mut settings) = default_airframe();
+    // Changes from the phone are signed with the binding phrase both ends carry (spec §12.5).
+    let key = LinkKey::from_phrase("costs of blocking jobs");
+    settings.set_link_key(Some(key));
+    let mut s = Scenario::new(
         settings,
         quad,
         seconds,
         Box::new(|_: f64| PilotInput::default()),
     );
+    s.module_settings = Some(module_core::settings::Settings {
+        link_key: Some(key),
+        ..Default::default()
+    });
     let mut world = World::new(s);
-    world.attach_phone();
     world.run_for(Duration::from_secs_f64(WARMUP_S + 1.0));
     for c in changes {
-        let mut frame = [0u8; 32];
-        let n = encode_message(&Message::SettingChange(*c), &mut frame).unwrap();
-        world.phone_write(&frame[..n]);
+        world.phone_change(*c);
         world.run_for(Duration::from_millis(20));
     }
     world.run_to_end();

@@ -851,7 +851,7 @@ mod tests {
             (RateMode::F500, Band::Ism433, 0xDEAD_BEEF, 16)
         );
         let upgraded = settings.to_record();
-        assert_eq!(upgraded[0], 4);
+        assert_eq!(upgraded[0], RECORD_VERSION);
         assert_eq!(upgraded[1..15], v3[1..]);
         assert_eq!(Settings::from_record(&upgraded), Ok(settings));
     }
@@ -864,25 +864,26 @@ mod tests {
         };
         let mut record = keyed.to_record();
         assert_eq!(Settings::from_record(&record), Ok(keyed));
-        record[15] = 2;
+        let (flag, pin) = (RECORD_V5_LEN, RECORD_V5_LEN + 17);
+        record[flag] = 2;
         assert_eq!(
             Settings::from_record(&record),
-            Err(DecodeError::Field { offset: 15 })
+            Err(DecodeError::Field { offset: flag })
         );
         // No key, yet key bytes: not a record any writer makes.
-        record[15] = 0;
+        record[flag] = 0;
         assert_eq!(
             Settings::from_record(&record),
-            Err(DecodeError::Field { offset: 16 })
+            Err(DecodeError::Field { offset: flag + 1 })
         );
         let mut record = Settings::default().to_record();
-        assert_eq!(record[32..], [0xFF; 4], "the factory PIN");
-        record[32..].copy_from_slice(&1_000_000u32.to_le_bytes());
+        assert_eq!(record[pin..], [0xFF; 4], "the factory PIN");
+        record[pin..].copy_from_slice(&1_000_000u32.to_le_bytes());
         assert_eq!(
             Settings::from_record(&record),
-            Err(DecodeError::Field { offset: 32 })
+            Err(DecodeError::Field { offset: pin })
         );
-        record[32..].copy_from_slice(&0u32.to_le_bytes());
+        record[pin..].copy_from_slice(&0u32.to_le_bytes());
         assert_eq!(
             Settings::from_record(&record).map(|s| s.ble_pin),
             Ok(Pin::new(0)),

@@ -191,7 +191,8 @@ impl Session {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use telemetry::messages::encode_message;
+    use telemetry::change_auth::Signer;
+    use telemetry::messages::{RefuseReason, encode_message};
 
     fn page_messages(session: &mut Session, reader: &mut MessageReader) -> Vec<Message> {
         session
@@ -214,9 +215,9 @@ mod tests {
         }
     }
 
-    fn send(session: &mut Session, change: SettingChange) {
-        let mut frame = [0u8; 32];
-        let n = encode_message(&Message::SettingChange(change), &mut frame).unwrap();
+    fn send(session: &mut Session, message: Message) {
+        let mut frame = [0u8; 48];
+        let n = encode_message(&message, &mut frame).unwrap();
         session.from_page(&frame[..n]);
     }
 
@@ -251,9 +252,24 @@ mod tests {
 
         // pid.roll.kp to 0.004, written by the page as its frame: FlightApp takes it (on
         // the ground, disarmed) and echoes it.
+        // Unsigned first: refused, nothing applied (spec §12.5).
         let change = kp(0.004);
-        send(&mut session, change);
-        session.run_until(s(4.0));
+        send(&mut session, Message::SettingChange(change));
+        session.run_until(s(3.5));
+        assert!(session.sent.applied.is_empty());
+        let answer = page_messages(&mut session, &mut reader);
+        let Some(Message::ChangeRefused(refused)) = answer
+            .iter()
+            .find(|m| matches!(m, Message::ChangeRefused(_)))
+        else {
+            panic!("no refusal in {answer:?}");
+        };
+        assert_eq!(refused.reason, RefuseReason::NotAuthenticated);
+        // Signed with the served world's phrase, after learning the session: applied.
+        let mut phone = Signer::new(&LinkKey::from_phrase(SERVE_PHRASE));
+        assert!(phone.on_refused(refused));
+        send(&mut session, Message::SignedChange(phone.sign(change)));
+        session.run_until(s(4.5));
         assert_eq!(session.sent.applied, vec![change]);
         assert!((session.world.flight_settings().f32("pid.roll.kp") - 0.004).abs() < 1e-7);
         let echoed = page_messages(&mut session, &mut reader);
@@ -335,12 +351,15 @@ mod tests {
             .any(|m| matches!(m, Message::Attitude(a) if a.roll_cdeg.unsigned_abs() > 500));
         assert!(roll_seen, "the 15° roll step never showed");
 
-        // A change while armed: refused, the held value echoed.
-        send(&mut session, kp(0.004));
+        // A signed change while armed: refused with the reason.
+        let mut phone = Signer::new(&LinkKey::from_phrase(SERVE_PHRASE));
+        send(&mut session, Message::SignedChange(phone.sign(kp(0.004))));
         session.run_until(s(warmup + RATE_TO_S));
         assert!(session.sent.applied.is_empty());
         assert!(
-            page_messages(&mut session, &mut reader).contains(&Message::SettingChange(kp(0.003)))
+            page_messages(&mut session, &mut reader)
+                .iter()
+                .any(|m| matches!(m, Message::ChangeRefused(r) if r.reason == RefuseReason::Armed))
         );
     }
 }
