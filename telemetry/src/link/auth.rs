@@ -107,10 +107,11 @@ impl LinkKey {
     /// first 16 bytes (spec §12). The phrase's bytes are hashed as given; people's input goes
     /// through [`key_for_phrase`], which trims and checks it first.
     pub fn from_phrase(phrase: &str) -> LinkKey {
-        let mut h = super::sha256::Sha256::new();
-        h.write(DOMAIN_PHRASE);
-        h.write(phrase.as_bytes());
-        let digest = h.finish();
+        use sha2::Digest;
+        let mut h = sha2::Sha256::new();
+        h.update(DOMAIN_PHRASE);
+        h.update(phrase.as_bytes());
+        let digest: [u8; 32] = h.finalize().into();
         let mut key = [0u8; KEY_BYTES];
         for (k, d) in key.iter_mut().zip(digest) {
             *k = d;

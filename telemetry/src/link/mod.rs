@@ -14,7 +14,6 @@ pub mod radio;
 pub mod rate;
 mod recovery;
 pub mod schedule;
-mod sha256;
 pub mod stream;
 
 pub use auth::{Fingerprint, LinkKey, PhraseError, key_for_phrase};
