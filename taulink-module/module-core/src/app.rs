@@ -255,11 +255,22 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         }
     }
 
-    /// PPM loss detection, on the TIMER1 clock.
+    /// PPM frame release and loss detection, on the TIMER1 clock: a locked frame goes out
+    /// once the line has been quiet for a sync gap after its last channel
+    /// ([`App::ppm_deadline_us`]), not at the next frame's first edge.
     pub fn on_ppm_tick(&mut self, now_us: u32) {
+        if let Some(Decoded::Frame(channels)) = self.decoder.release_due(now_us) {
+            self.forward(&channels);
+        }
         if self.decoder.on_tick(now_us).is_some() {
             self.input.losses = self.input.losses.saturating_add(1);
         }
+    }
+
+    /// When the PPM capture task should call [`App::on_ppm_tick`] if no edge comes first
+    /// (TIMER1 clock): the frame in progress is then complete. `None`: nothing pending.
+    pub fn ppm_deadline_us(&self) -> Option<u32> {
+        self.decoder.release_deadline_us()
     }
 
     /// Channels decoded from the handset's CRSF RC frames (the CRSF codec calls this).

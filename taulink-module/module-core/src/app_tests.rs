@@ -73,16 +73,25 @@ fn cobs_frame(record: &[u8]) -> Vec<u8> {
 fn taranis_ppm_reaches_the_link() {
     let mut app = app(Settings::default());
     let widths = [1500u16, 1500, 988, 1500, 2012, 1000, 1750, 1250];
-    for t in edges(&widths, 22_500, 20, 7) {
+    let stream = edges(&widths, 22_500, 20, 7);
+    // As the capture task: a tick after each edge, and one at the release deadline when
+    // no edge comes before it.
+    for (i, &t) in stream.iter().enumerate() {
         app.on_ppm_edge(t);
+        app.on_ppm_tick(t);
+        let next = stream.get(i + 1).copied().unwrap_or(u32::MAX);
+        if let Some(deadline) = app.ppm_deadline_us().filter(|d| *d < next) {
+            app.on_ppm_tick(deadline);
+        }
     }
-    // 20 frames: 18 frame ends, the first 4 acquire the lock.
+    // 20 frames: 19 frame ends (18 sync edges, and the last frame's quiet line after it),
+    // the first 4 acquire the lock; the fifth locks at its sync edge, the rest go out early.
     let sent = &app.link().channels;
-    assert_eq!(sent.len(), 14);
+    assert_eq!(sent.len(), 15);
     let expected: Vec<u16> = widths.iter().map(|w| us_to_ticks(*w)).collect();
     assert!(sent.iter().all(|ch| ch.as_slice() == expected.as_slice()));
-    assert_eq!(app.input_stats().frames, 14);
-    app.on_ppm_tick(7 + 19 * 22_500 + 250_001);
+    assert_eq!(app.input_stats().frames, 15);
+    app.on_ppm_tick(7 + 20 * 22_500 + 250_001);
     assert_eq!(app.input_stats().losses, 1);
 }
 

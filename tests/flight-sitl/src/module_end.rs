@@ -320,7 +320,8 @@ fn carry_out(shared: &Shared, action: Option<Action>) {
 }
 
 /// The PPM capture task: the handset's frame as falling edges, each stamped (by the
-/// capture timer, exact to 1 µs) and handed to the core; without edges, the idle tick.
+/// capture timer, exact to 1 µs) and handed to the core; a tick at the core's frame
+/// release deadline (`App::ppm_deadline_us`); without edges, the idle tick.
 async fn ppm_in_task(b: &Board, shared: &Shared) {
     let mut clock = b.clock.clone();
     let mut frame_start = clock.now_us();
@@ -345,9 +346,21 @@ async fn ppm_in_task(b: &Board, shared: &Shared) {
                 app.on_ppm_tick(t);
             }
             b.check_in(Watched::PpmIn);
-            if let Some(v) = ch.get(i) {
-                edge += u64::from(ticks_to_us(*v));
+            let next = match ch.get(i).filter(|_| i < PPM_CHANNELS) {
+                Some(v) => edge + u64::from(ticks_to_us(*v)),
+                None => frame_start + PPM_FRAME_US,
+            };
+            // The firmware task also wakes at the core's release deadline when no edge
+            // comes first (the frame's sync gap proven after its last channel).
+            let deadline = b.app.borrow().ppm_deadline_us();
+            if let Some(d) = deadline {
+                let at = edge + u64::from(d.wrapping_sub(t));
+                if at < next {
+                    clock.sleep_until_us(at).await;
+                    b.app.borrow_mut().on_ppm_tick(d);
+                }
             }
+            edge = next;
         }
         frame_start += PPM_FRAME_US;
     }

@@ -132,10 +132,17 @@ fn reaches_commanded_angles_in_attitude_mode() {
         .find(|x| (x.truth.euler_deg[0] - 15.0).abs() < 1.0)
         .map(|x| x.t_s - 5.0)
         .unwrap();
+    // The stick's way to the motors (PPM capture, uplink, loop): the first roll rate of
+    // 5 °/s.
+    let moving = w
+        .iter()
+        .find(|x| x.truth.rate_dps[0] > 5.0)
+        .map(|x| x.t_s - 5.0)
+        .unwrap();
     let back = window(&sitl.samples, 6.4, 6.5);
     let level = worst(&back, |x| x.truth.euler_deg[0]);
     println!(
-        "attitude 15° step: {m:?}, within 1° after {within:.3} s, back to {level:.2}° 0.4 s after release"
+        "attitude 15° step: {m:?}, rolling at 5 °/s after {moving:.3} s, within 1° after {within:.3} s, back to {level:.2}° 0.4 s after release"
     );
     assert!(within < 0.4, "{within}");
     assert!(m.overshoot_pct < 10.0, "{m:?}");

@@ -337,7 +337,8 @@ impl FlightLoop {
                 nav,
                 failsafe_for_ms: self.failsafe_since_ms.map(|t| now_ms.wrapping_sub(t)),
             };
-            self.fly(&fly, &link.sticks)
+            let sticks = stages::flown_sticks(&link.sticks, link.arm_switch.is_some());
+            self.fly(&fly, &sticks)
         } else {
             self.hold.reset();
             if let Some(c) = self.controllers.as_mut() {
@@ -413,6 +414,7 @@ impl FlightLoop {
             sensors_healthy: estimate.gyro_ok && estimate.filter_ok,
             gains_ready: self.controllers.is_some(),
             landed: self.landing.landed(),
+            landing_detectable: self.climb_mps.is_some(),
             battery_critical: self.battery_critical,
             settings_problem: self.settings_problem,
         })
@@ -545,11 +547,13 @@ impl FlightLoop {
                     Some((throttle, _)) => throttle,
                     None => sticks.throttle.clamp(0.0, 1.0),
                 };
-                // Throttle at the bottom before the first take-off means sitting on the
-                // ground: the controllers neither act nor wind up, or a held arming
-                // gesture (yaw full right) would spin the frame up to full power. Once
-                // airborne, a closed throttle keeps full stabilisation (air mode).
-                let out = if sticks.throttle_low() && !self.airborne {
+                // Throttle at the bottom before the first take-off, or after the touchdown
+                // detector saw the frame land, means sitting on the ground: the
+                // controllers neither act nor wind up (motors at idle), or a held arm or
+                // disarm gesture would spin the frame up and lift it. In the air a closed
+                // throttle keeps full stabilisation (air mode) until that touchdown.
+                let on_ground = !self.airborne || self.landing.landed();
+                let out = if sticks.throttle_low() && on_ground {
                     c.reset(gyro_dps);
                     [0.0; 3]
                 } else {

@@ -11,6 +11,22 @@ use crate::control::mixer::Mixer;
 use crate::outputs::Command;
 use crate::supervisor::{FlightMode, Sticks};
 
+/// The sticks as the setpoint stage flies them. With stick arming (no arm switch) and the
+/// throttle low, the yaw stick is the arm/disarm gesture, not a yaw demand (Betaflight
+/// gives stick armers the same yaw deadband): in air mode a full yaw demand spins the
+/// motors up to make room for it, and on the ground after a landing that lifted the frame
+/// before the disarm gesture's hold completed. Roll and pitch stay flown (air mode).
+pub(super) fn flown_sticks(sticks: &Sticks, arm_switch: bool) -> Sticks {
+    if !arm_switch && sticks.throttle_low() {
+        Sticks {
+            yaw: 0.0,
+            ..*sticks
+        }
+    } else {
+        *sticks
+    }
+}
+
 /// Failsafe: roll and pitch held at the target (level without a fix, the position hold's
 /// angles with one), no yaw rotation.
 pub(super) fn angle_setpoint(

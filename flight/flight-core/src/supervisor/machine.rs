@@ -80,9 +80,15 @@ pub struct Inputs {
     pub sensors_healthy: bool,
     /// Controller gains are solved (the LQG Riccati solution runs before take-off).
     pub gains_ready: bool,
-    /// The touchdown detector says the frame stands on the ground. The idle disarm only
-    /// counts while it does, and a failsafe ends (disarms) only once it does.
+    /// The touchdown detector says the frame stands on the ground. The idle disarm and the
+    /// stick disarm gesture only count while it does, and a failsafe ends (disarms) only
+    /// once it does.
     pub landed: bool,
+    /// A vertical estimate exists, so `landed` can become true again after a take-off.
+    /// Without one the stick disarm cannot wait for a touchdown and counts whenever the
+    /// throttle is low (the loop does not fly the yaw stick then, so the gesture cannot
+    /// lift the frame).
+    pub landing_detectable: bool,
     /// The battery is at its critical level.
     pub battery_critical: bool,
     /// The settings loaded at boot had a problem (corrupt, invalid, refused values): the
@@ -218,9 +224,13 @@ impl Supervisor {
     pub fn update(&mut self, inputs: &Inputs) -> Decision {
         let now = inputs.now_ms;
         let link_ok = inputs.link_up && inputs.sticks.is_finite();
+        // The stick disarm only on the ground: in the air the same stick position is a pilot
+        // yawing with the throttle closed, and disarming there drops the frame.
+        let stick_disarm = inputs.landed || !inputs.landing_detectable;
         // Gestures only count while the link delivers real sticks.
         let gesture = if link_ok {
-            self.gestures.update(now, &inputs.sticks, inputs.arm_switch)
+            self.gestures
+                .update(now, &inputs.sticks, inputs.arm_switch, stick_disarm)
         } else {
             None
         };
@@ -298,6 +308,7 @@ mod tests {
             sensors_healthy: true,
             gains_ready: true,
             landed: true,
+            landing_detectable: true,
             battery_critical: false,
             settings_problem: false,
         }
@@ -375,6 +386,50 @@ mod tests {
             sup.update(&inputs(70_000, true, 0.0, 0.0)),
             Decision::DisarmedIdle
         );
+    }
+
+    #[test]
+    fn the_stick_disarm_counts_only_on_the_ground() {
+        let s = Settings::default();
+        let mut sup = armed(&s);
+        // Yaw full left at a closed throttle in the air, for 5 s: no disarm.
+        for t in (2_000..7_000).step_by(10) {
+            let mut air = inputs(t, true, 0.0, -1.0);
+            air.landed = false;
+            assert_eq!(sup.update(&air), Decision::Steady, "{t}");
+        }
+        // Touchdown seen at 7 s, the stick still held: disarmed a full hold later.
+        assert_eq!(
+            sup.update(&inputs(7_000, true, 0.0, -1.0)),
+            Decision::Steady
+        );
+        assert_eq!(
+            sup.update(&inputs(7_999, true, 0.0, -1.0)),
+            Decision::Steady
+        );
+        assert_eq!(
+            sup.update(&inputs(8_000, true, 0.0, -1.0)),
+            Decision::DisarmedByPilot
+        );
+        // Without a vertical estimate the touchdown cannot be seen: the gesture counts.
+        let mut sup = armed(&s);
+        let blind = |t| Inputs {
+            landed: false,
+            landing_detectable: false,
+            ..inputs(t, true, 0.0, -1.0)
+        };
+        assert_eq!(sup.update(&blind(2_000)), Decision::Steady);
+        assert_eq!(sup.update(&blind(3_000)), Decision::DisarmedByPilot);
+        // An arm switch disarms anywhere.
+        let mut sup = Supervisor::new(s);
+        let switch = |t, on| Inputs {
+            arm_switch: Some(on),
+            landed: false,
+            ..inputs(t, true, 0.0, 0.0)
+        };
+        sup.update(&switch(0, false));
+        assert_eq!(sup.update(&switch(10, true)), Decision::Armed);
+        assert_eq!(sup.update(&switch(20, false)), Decision::DisarmedByPilot);
     }
 
     #[test]

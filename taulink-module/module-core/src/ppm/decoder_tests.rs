@@ -237,6 +237,83 @@ fn loss_after_timeout_reported_once_then_relock() {
     assert_eq!(frames_of(&feed(&mut decoder, &again)).len(), 3);
 }
 
+/// Feeds `timestamps`, ticking after each edge as the capture task does and at every
+/// release deadline that comes before the next edge; returns (time, outcome) pairs.
+fn feed_timed(decoder: &mut Decoder, timestamps: &[u32]) -> Vec<(u32, Decoded)> {
+    let mut out = Vec::new();
+    for (i, &t) in timestamps.iter().enumerate() {
+        if let Some(d) = decoder.on_edge(t) {
+            out.push((t, d));
+        }
+        assert!(decoder.release_due(t).is_none(), "not at the closing edge");
+        // After the last edge the line stays quiet.
+        let next = timestamps
+            .get(i + 1)
+            .map_or(u32::MAX, |n| n.wrapping_sub(t));
+        if let Some(deadline) = decoder.release_deadline_us()
+            && deadline.wrapping_sub(t) < next
+        {
+            assert!(decoder.release_due(deadline.wrapping_sub(1)).is_none());
+            if let Some(d) = decoder.release_due(deadline) {
+                out.push((deadline, d));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn a_locked_frame_goes_out_a_sync_gap_after_its_last_channel_once() {
+    let stream = edges(&EIGHT, 22_500, 10, 1_000);
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed_timed(&mut decoder, &stream);
+    let frames: Vec<(u32, Channels)> = outcomes
+        .iter()
+        .filter_map(|(t, o)| match o {
+            Decoded::Frame(ch) => Some((*t, *ch)),
+            _ => None,
+        })
+        .collect();
+    // Locked at the 5th frame end (its sync edge, as before); frames 6–10 then each go out
+    // early, once: five frames, the last one (no sync edge after it) included.
+    assert_eq!(frames.len(), 5, "{outcomes:?}");
+    let sync_ended = feed(&mut Decoder::new(DecoderConfig::default()), &stream);
+    assert_eq!(frames_of(&sync_ended).len(), 4);
+    for (k, (t, ch)) in frames.iter().enumerate().skip(1) {
+        // Frame f starts at 1 000 + 22 500·f; its last channel closes after the 8 widths.
+        let f = 5 + k as u32;
+        let closed = 1_000 + 22_500 * f + EIGHT.iter().map(|w| u32::from(*w)).sum::<u32>();
+        assert_eq!(*t, closed + 2_501, "frame {f}");
+        // 8 ms before the next frame's first edge, where the sync-edge release came.
+        assert_eq!(1_000 + 22_500 * (f + 1) - t, 7_999);
+        assert_eq!(ch.as_slice(), &[172, 992, 1811, 511, 1472, 191, 1792, 992]);
+    }
+}
+
+#[test]
+fn a_split_pulse_in_the_last_channel_is_never_released_early() {
+    let mut stream = edges(&EIGHT, 22_500, 7, 0);
+    // Frame 6, the first after the lock: channel 8 (1 500 µs) split into 800 + 700 by an extra edge, so the
+    // frame has nine periods: at its sync edge a count mismatch, as without early release.
+    let eighth = 22_500 * 6 + EIGHT[..7].iter().map(|w| u32::from(*w)).sum::<u32>();
+    let pos = stream.iter().position(|t| *t == eighth).unwrap();
+    stream.insert(pos + 1, eighth + 800);
+    stream.push(22_500 * 7);
+    let mut decoder = Decoder::new(DecoderConfig::default());
+    let outcomes = feed_timed(&mut decoder, &stream);
+    let late: Vec<_> = outcomes.iter().filter(|(t, _)| *t > eighth).collect();
+    assert_eq!(
+        late,
+        vec![&(
+            22_500 * 7,
+            Decoded::Rejected(Reject::CountMismatch {
+                locked: 8,
+                count: 9
+            })
+        )]
+    );
+}
+
 #[test]
 fn too_few_and_too_many_channels_are_rejected() {
     let mut decoder = Decoder::new(DecoderConfig::default());

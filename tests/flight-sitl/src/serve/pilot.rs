@@ -39,10 +39,9 @@ const LEVEL_MAX: f64 = 0.2;
 const DESCEND_S: f64 = 30.0;
 const DESCENT_MPS: f64 = 0.5;
 // Once down the pilot closes the throttle and leaves the sticks alone: the flight side
-// disarms on its idle timeout (`arm.idle_disarm_ms`, 10 s). Not the disarming gesture: on
-// the ground after a flight, full yaw at closed throttle is still flown (air mode), and in
-// this world it lifts the frame to 11 m at 7.6 m/s before the gesture's 1 s hold disarms
-// it in the air (see the README's findings).
+// disarms on its idle timeout (`arm.idle_disarm_ms`, 10 s). (The disarm gesture once lifted
+// the frame here — full yaw at a closed throttle flown in air mode after the landing; since
+// the fix it disarms on the ground, `tests/disarm_gesture.rs`; this pilot still idles.)
 
 /// The pilot of the served world.
 #[derive(Debug, Clone)]

@@ -333,3 +333,95 @@ fn a_link_loss_just_after_a_gentle_take_off_does_not_disarm() {
     let out = run_climb(&mut l, t + 502, 2_000, &resting(0.0), &lost, -0.7);
     assert!(out.armed && out.failsafe);
 }
+
+/// Motor thrust spread (largest − smallest command).
+fn spread(motors: &[Command; 4]) -> f32 {
+    let thrust = motors.map(|m| match m {
+        Command::Throttle(x) => x,
+        Command::Stopped => 0.0,
+    });
+    thrust.iter().copied().fold(0.0f32, f32::max) - thrust.iter().copied().fold(1.0f32, f32::min)
+}
+
+#[test]
+fn after_a_touchdown_a_closed_throttle_idles_and_the_disarm_gesture_disarms_on_the_ground() {
+    let mut l = flight_loop();
+    let t = arm(&mut l);
+    // Flying at 0.4 for 4 s.
+    run_climb(&mut l, t, 2000, &resting(0.0), &link(0.4, 0.0), 0.0);
+    assert!(!l.landed());
+    // Touchdown: throttle closed and the disarm gesture held at once. The old loop flew it
+    // as a full yaw demand (air mode) and the frame lifted before the hold completed.
+    let t = t + 4000;
+    let mut landed_at = None;
+    let mut disarmed_at = None;
+    for k in 0..2_000u32 {
+        let out = l.step(t + 2 * k, &resting(0.0), &link(0.0, -1.0), Some(0.0));
+        if out.decision == Decision::DisarmedByPilot {
+            disarmed_at = Some(2 * k);
+            break;
+        }
+        assert!(out.armed);
+        if landed_at.is_some() {
+            assert_eq!(
+                out.motors,
+                [Command::Throttle(0.05); 4],
+                "idle on the ground"
+            );
+        } else {
+            assert!(
+                spread(&out.motors) < 0.02,
+                "{:?} at {} ms",
+                out.motors,
+                2 * k
+            );
+        }
+        if l.landed() && landed_at.is_none() {
+            landed_at = Some(2 * k);
+        }
+    }
+    let (landed_at, disarmed_at) = (landed_at.unwrap(), disarmed_at.unwrap());
+    // The touchdown detector's 1 s hold, then the gesture's full second from there.
+    assert!((1_000..1_100).contains(&landed_at), "{landed_at}");
+    assert!(
+        (landed_at + 1_000..landed_at + 1_010).contains(&disarmed_at),
+        "{disarmed_at}"
+    );
+}
+
+#[test]
+fn in_the_air_a_closed_throttle_flies_roll_but_not_the_stick_armers_yaw() {
+    let airborne = |arm_switch| {
+        let mut l = flight_loop();
+        let t = match arm_switch {
+            None => arm(&mut l),
+            Some(()) => {
+                let mut off = link(0.0, 0.0);
+                off.arm_switch = Some(false);
+                run(&mut l, 0, 10, &resting(0.0), &off);
+                off.arm_switch = Some(true);
+                assert!(run(&mut l, 20, 10, &resting(0.0), &off).armed);
+                100
+            }
+        };
+        let mut flying = link(0.4, 0.0);
+        flying.arm_switch = arm_switch.map(|()| true);
+        run_climb(&mut l, t, 500, &resting(0.0), &flying, 1.0);
+        (l, t + 1000, flying.arm_switch)
+    };
+    // Stick arming: yaw full left at a closed throttle is the gesture's position, no demand.
+    let (mut l, t, _) = airborne(None);
+    let out = run_climb(&mut l, t, 20, &resting(0.0), &link(0.0, -1.0), -2.0);
+    assert!(out.armed && spread(&out.motors) < 0.01, "{:?}", out.motors);
+    // Roll is still flown (air mode): a 22.5° roll demand.
+    let mut roll = link(0.0, 0.0);
+    roll.sticks.roll = 0.5;
+    let out = run_climb(&mut l, t + 40, 20, &resting(0.0), &roll, -2.0);
+    assert!(spread(&out.motors) > 0.05, "{:?}", out.motors);
+    // With an arm switch the yaw stick is always flown.
+    let (mut l, t, switch) = airborne(Some(()));
+    let mut yaw = link(0.0, -1.0);
+    yaw.arm_switch = switch;
+    let out = run_climb(&mut l, t, 20, &resting(0.0), &yaw, -2.0);
+    assert!(out.armed && spread(&out.motors) > 0.05, "{:?}", out.motors);
+}

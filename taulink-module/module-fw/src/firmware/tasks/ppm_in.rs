@@ -3,6 +3,9 @@
 //! 1 µs whatever the interrupt latency; the task only reads CC[0] after the edge and hands
 //! it to the decoder in the module core. Edges come at least every 2.25 ms inside a frame,
 //! far slower than the wake-up, so CC[0] is read before the next capture overwrites it.
+//! When the core has a frame waiting for its sync gap to be proven (`App::ppm_deadline_us`)
+//! the task also wakes at that deadline, so the frame goes out ≈ 8 ms before the next
+//! frame's first edge would have released it.
 
 use embassy_nrf::gpio::Pull;
 use embassy_nrf::gpiote::{InputChannel, InputChannelPolarity};
@@ -37,7 +40,17 @@ pub async fn ppm_in_task(ppm: PpmIn) {
     timer.start();
     loop {
         check_in(Watched::PpmIn);
-        match with_timeout(IDLE_TICK, edge.wait()).await {
+        // Until the release deadline (TIMER1 clock, wrapping) if one is due before the idle
+        // tick; a deadline already passed wakes at once.
+        let wait = with_app(|app| app.ppm_deadline_us())
+            .flatten()
+            .map(|deadline| {
+                let left = deadline.wrapping_sub(timer.cc(1).capture());
+                if left > u32::MAX / 2 { 0 } else { left }
+            })
+            .filter(|us| u64::from(*us) < IDLE_TICK.as_micros())
+            .map_or(IDLE_TICK, |us| Duration::from_micros(u64::from(us)));
+        match with_timeout(wait, edge.wait()).await {
             Ok(()) => {
                 let timestamp_us = timer.cc(0).read();
                 with_app(|app| {
