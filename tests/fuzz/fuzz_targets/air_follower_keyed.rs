@@ -4,14 +4,16 @@
 //! reports it expects (`Follower::frame_counter`), so channels, flags, failsafe values and the
 //! stream are reached; the rest are tagged under other counters, untagged, raw, or replays of
 //! earlier frames, to fuzz the rejection paths. Interleaved with planning, sending, runs of
-//! skipped slots (past wraps of the slot counter and into resync) and stream use.
+//! skipped slots (into resync), clean stretches of link (past wraps of the slot counter) and
+//! stream use.
 //!
 //! Invariants: a frame is taken (channels, flags, failsafe values, stream, report) only if it
 //! verifies as an uplink of the tracked slot under the counter reported before it arrived —
 //! never while acquiring, never with another tag; no counter is taken twice (no replay); no
 //! channels before the handshake completes; an unverified frame never moves the grid of an
 //! epoch in force nor ends a handshake; the counter rises by exactly one per slot within an
-//! epoch; every planned downlink verifies under the reported counter, is a nonce frame
+//! epoch, and a true uplink of the tracked slot under the reported counter is always taken;
+//! every planned downlink verifies under the reported counter, is a nonce frame
 //! carrying the epoch's nonce during the handshake and a downlink of the tracked slot after
 //! it, and no two sent under one nonce share a counter; outputs 11-bit, LQ a percentage.
 #![no_main]
@@ -25,7 +27,9 @@ use telemetry::frame::{
 use telemetry::link::auth::TAG_BYTES;
 use telemetry::link::core::follower::SyncState;
 use telemetry::link::core::{Follower, STREAM_RX_BYTES, Step, frame_counter};
-use telemetry::link::{Band, HOP_CHANNELS, LinkKey, LinkParams, RateMode, RxOutcome};
+use telemetry::link::{
+    Band, HOP_CHANNELS, LinkKey, LinkParams, RateMode, RxOutcome, Schedule, SlotKind,
+};
 
 /// Frames kept for replays.
 const REPLAYS: usize = 16;
@@ -45,7 +49,7 @@ fuzz_target!(|data: &[u8]| {
     let mut last_sent: Option<u64> = None;
     while !input.is_empty() {
         now = now.saturating_add(u64::from(input.u16()));
-        match input.u8() % 8 {
+        match input.u8() % 9 {
             0..=2 => {
                 let expected = follower.frame_counter();
                 let frame = match input.u8() % 8 {
@@ -142,6 +146,7 @@ fuzz_target!(|data: &[u8]| {
                 }
                 assert_eq!(follower.updates(), updates);
             }
+            7 => clean_run(&mut follower, &key, &params, &mut input, now),
             _ => {
                 follower.downlink_stream.write(input.chunk(64));
                 let mut out = [0u8; 64];
@@ -267,6 +272,63 @@ fn receive(
         } else {
             assert_eq!(follower.failsafe_values(), &failsafe);
         }
+    }
+}
+
+/// A clean stretch of link: in each of up to 600 slots, an uplink slot brings the master's
+/// frame of that slot sealed under the counter the follower reports — which must be taken,
+/// moving the counter on by one — and a downlink slot is skipped. The way to the wraps of the
+/// slot counter under an epoch in force.
+fn clean_run(
+    follower: &mut Follower,
+    key: &LinkKey,
+    params: &LinkParams,
+    input: &mut Input,
+    now: u64,
+) {
+    let schedule = Schedule {
+        rate: params.rate,
+        telemetry_ratio: params.telemetry_ratio,
+    };
+    let mut packed = [0u8; 22];
+    for byte in packed.iter_mut() {
+        *byte = input.u8();
+    }
+    let packed = &packed[..params.format.packed_bytes()];
+    for _ in 0..input.u16() % 600 {
+        let Some((slot, _)) = follower.tracked_slot() else {
+            return;
+        };
+        if schedule.kind(u32::from(slot)) == SlotKind::Downlink {
+            follower.on_skipped();
+            continue;
+        }
+        let counter = follower.frame_counter().expect("an epoch on the grid");
+        let up = Uplink {
+            slot,
+            stream: StreamHeader { seq: 0, ack: 0 },
+            report: None,
+            save_failsafe: false,
+            input_lost: false,
+            format: params.format,
+            packed_channels: packed,
+            data: &[],
+        };
+        let mut buf = [0u8; 64];
+        let n = seal(&Frame::Uplink(up), key, counter, &mut buf).expect("fits 64 bytes");
+        let updates = follower.updates();
+        let outcome = RxOutcome::Packet {
+            len: n,
+            rssi_dbm: -60,
+        };
+        follower.on_received(outcome, &buf[..n], now);
+        assert_eq!(
+            follower.updates(),
+            updates.wrapping_add(1),
+            "a true uplink refused"
+        );
+        assert_eq!(follower.sync_state(), SyncState::Tracking);
+        assert_eq!(follower.frame_counter(), Some(counter + 1));
     }
 }
 
