@@ -1,12 +1,14 @@
 //! What the fuzz targets share: a cursor that turns the fuzzer's bytes into typed choices,
-//! the one function that makes a fuzzed air frame pass the link's integrity check, and a
-//! `block_on` for the async flash stores.
+//! the two functions that make a fuzzed air frame pass the link's integrity check (the keyed
+//! CRC of unkeyed ends, the tag of keyed ones), and a `block_on` for the async flash stores.
 //!
 //! Every target lives in `fuzz_targets/` and is built by `cargo fuzz build -s none` from this
 //! directory (see README.md).
 
 use telemetry::checksum::keyed_crc16;
 use telemetry::frame::CRC_BYTES;
+use telemetry::link::LinkKey;
+use telemetry::link::auth::TAG_BYTES;
 
 /// Reads the fuzz input front to back; every read succeeds (zeros once it runs dry), so a
 /// harness never has to handle "not enough input" and the fuzzer's mutations stay local.
@@ -74,13 +76,37 @@ impl<'a> Input<'a> {
 
 /// Makes a fuzzed frame body pass the receiver's integrity check, so the fuzzer explores the
 /// state machine behind it instead of the check: appends today's link check, the CRC-16
-/// keyed with the bind ID. When frames carry a MAC, this is the one function to change (it
-/// will need the link secret and the frame counter instead of `key`).
+/// keyed with the bind ID (unkeyed ends, protocol version 1). Keyed ends: [`seal_tagged`].
 pub fn seal(body: &[u8], key: u32) -> Vec<u8> {
     let mut frame = Vec::with_capacity(body.len() + CRC_BYTES);
     frame.extend_from_slice(body);
     frame.extend_from_slice(&keyed_crc16(key, body).to_be_bytes());
     frame
+}
+
+/// Makes a fuzzed frame body pass a keyed end's tag check (spec §12.2): appends the 4-byte
+/// tag of `body` under `key` and frame counter `counter` — the counter the receiver reports
+/// it expects (`Master::frame_counter`, `Follower::frame_counter`, or
+/// `link::core::frame_counter(nonce, 0, slot)` for a nonce frame). Any other counter or key
+/// gives a frame that must be refused.
+pub fn seal_tagged(body: &[u8], key: &LinkKey, counter: u64) -> Vec<u8> {
+    let mut frame = Vec::with_capacity(body.len() + TAG_BYTES);
+    frame.extend_from_slice(body);
+    frame.extend_from_slice(&key.tag(counter, body).to_le_bytes());
+    frame
+}
+
+/// A link key from the input: mostly one of four fixed keys (so the fuzzer's corpus entries
+/// stay comparable), sometimes 16 fuzzed bytes.
+pub fn link_key(input: &mut Input) -> LinkKey {
+    let choice = input.u8();
+    let mut bytes = [choice; 16];
+    if choice >= 4 {
+        for (b, s) in bytes.iter_mut().zip(input.bytes(16)) {
+            *b = *s;
+        }
+    }
+    LinkKey::from_bytes(bytes)
 }
 
 /// Runs a future that never waits on anything outside itself (the mock flash) to completion.

@@ -16,8 +16,9 @@ pub(crate) const WRAPS_LIMIT: u32 = 1 << 24;
 /// session is refused.
 const RECENT_NONCES: usize = 8;
 
-/// The frame counter of `slot` in wrap `wraps` of epoch `nonce`.
-pub(crate) const fn counter(nonce: u32, wraps: u32, slot: u8) -> u64 {
+/// The frame counter of `slot` in wrap `wraps` of epoch `nonce`: `nonce₃₂ ‖ wraps₂₄ ‖ slot₈`.
+/// A [`Frame::Nonce`](crate::frame::Frame::Nonce) is tagged under `counter(nonce, 0, slot)`.
+pub const fn counter(nonce: u32, wraps: u32, slot: u8) -> u64 {
     ((nonce as u64) << 32) | (((wraps & (WRAPS_LIMIT - 1)) as u64) << 8) | slot as u64
 }
 

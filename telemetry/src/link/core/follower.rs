@@ -446,11 +446,7 @@ impl Follower {
         let Some(key) = &self.key else {
             return decode(bytes, self.params.bind_id);
         };
-        let counter = match self.sync {
-            Sync::Tracking { slot, .. } => self.epoch.counter(slot),
-            Sync::Acquiring { .. } => None,
-        };
-        match counter {
+        match self.frame_counter() {
             Some(counter) => open(bytes, key, counter),
             None => Received::Rejected(Rejection::Tag),
         }
@@ -537,6 +533,22 @@ impl Follower {
             Sync::Tracking { slot, .. } => {
                 Some((slot, self.hops.channel_for_slot(u32::from(slot))))
             }
+            Sync::Acquiring { .. } => None,
+        }
+    }
+
+    /// Keyed links: the 64-bit frame counter (spec §12.2) of the tracked slot, under which
+    /// an uplink of that slot must verify and the follower's downlink of it is tagged — the
+    /// handshake's `nonce ‖ 0 ‖ slot` or the epoch in force's. None while acquiring or
+    /// without an epoch (nothing verifies then).
+    ///
+    /// Public information, not a secret: the nonce travels in clear in nonce frames and the
+    /// slot and its wraps are counted on the grid both ends share; only the key makes a tag.
+    /// Read by diagnostics and by the fuzz harnesses (`tests/fuzz`), which seal fuzzed
+    /// uplinks under it so they reach channels, flags and the stream.
+    pub fn frame_counter(&self) -> Option<u64> {
+        match self.sync {
+            Sync::Tracking { slot, .. } => self.epoch.counter(slot),
             Sync::Acquiring { .. } => None,
         }
     }

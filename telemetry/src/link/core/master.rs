@@ -198,7 +198,7 @@ impl Master {
             data: data.get(..n)?,
         };
         let len = match &self.key {
-            Some(key) => seal(&Frame::Uplink(up), key, self.epoch.counter(self.slot), buf),
+            Some(key) => seal(&Frame::Uplink(up), key, self.frame_counter(), buf),
             None => encode(&Frame::Uplink(up), self.params.bind_id, buf),
         };
         len.ok()
@@ -263,7 +263,7 @@ impl Master {
     fn open_downlink<'a>(&self, key: &LinkKey, bytes: &'a [u8]) -> Received<'a> {
         let counter = match peek_sealed(bytes) {
             Some(Frame::Nonce { nonce, .. }) => counter(nonce, 0, self.slot as u8),
-            _ if self.epoch.active() => self.epoch.counter(self.slot),
+            _ if self.epoch.active() => self.frame_counter(),
             _ => return Received::Rejected(crate::frame::Rejection::Tag),
         };
         open(bytes, key, counter)
@@ -326,6 +326,19 @@ impl Master {
     /// it). Before the first, nothing the master sends verifies at a follower.
     pub fn has_epoch(&self) -> bool {
         self.epoch.active()
+    }
+
+    /// The 64-bit frame counter of the current slot (spec §12.2): the planned uplink is
+    /// tagged, and a downlink other than a nonce frame is checked, under it (a nonce frame
+    /// under [`frame_counter`](super::frame_counter)`(nonce, 0, slot)`). Before any epoch it
+    /// is the bare slot, under which no follower verifies anything (its nonces are never 0).
+    ///
+    /// Public information, not a secret: the nonce travels in clear in nonce frames and the
+    /// slot and its wraps are counted on the grid both ends share; only the key makes a tag.
+    /// Read by diagnostics and by the fuzz harnesses (`tests/fuzz`), which seal fuzzed
+    /// frames under it so they reach the state machine behind the tag check.
+    pub fn frame_counter(&self) -> u64 {
+        self.epoch.counter(self.slot)
     }
 
     /// Time of the last valid downlink.

@@ -10,6 +10,7 @@ mod tests;
 #[cfg(test)]
 mod tests_epoch;
 
+pub use epoch::counter as frame_counter;
 pub use follower::Follower;
 pub use master::Master;
 

@@ -468,3 +468,72 @@ fn unkeyed_ends_have_no_handshake_and_take_the_first_uplink() {
     assert_eq!(link.follower.sync_state(), SyncState::Tracking);
     assert!(!link.master.has_epoch());
 }
+
+/// The read-only counters the fuzz harnesses seal under (`Master::frame_counter`,
+/// `Follower::frame_counter`) are the ones each end really uses: both ends name the same
+/// counter for every slot once the epoch is in force, across a wrap of the slot counter; a
+/// frame sealed under the follower's counter is what it accepts, under any other it is not.
+#[test]
+fn both_ends_report_the_counter_they_tag_and_check_under() {
+    let mut link = Link::new(true, 5);
+    assert_eq!(
+        link.follower.frame_counter(),
+        None,
+        "acquiring: nothing verifies"
+    );
+    assert_eq!(link.master.frame_counter() >> 32, 0, "no epoch yet");
+    link.until_tracking(&mut clean);
+    for _ in 0..300 {
+        let master = link.master.frame_counter();
+        let (follower_slot, _) = link.follower.tracked_slot().expect("tracking");
+        assert_eq!(follower_slot, link.master.slot() as u8);
+        assert_eq!(link.follower.frame_counter(), Some(master));
+        assert_ne!(master >> 32, 0, "the follower's nonce is the epoch");
+        assert_eq!(
+            master,
+            frame_counter(
+                (master >> 32) as u32,
+                ((master >> 8) & 0xFF_FFFF) as u32,
+                master as u8
+            )
+        );
+        link.slot(&mut clean);
+    }
+    let wraps = (link.master.frame_counter() >> 8) & 0xFF_FFFF;
+    assert!(wraps >= 1, "ran past a wrap of the slot counter");
+
+    // Forge an uplink of the tracked slot with the key, under the reported counter and
+    // under its neighbours: only the first is taken.
+    while link.master.schedule().kind(link.master.slot()) != SlotKind::Uplink {
+        link.slot(&mut clean);
+    }
+    let take = |counter: u64, link: &mut Link| {
+        let (slot, _) = link.follower.tracked_slot().expect("tracking");
+        let packed = [0u8; 22];
+        let up = crate::frame::Uplink {
+            slot,
+            stream: crate::frame::StreamHeader { seq: 0, ack: 0 },
+            report: None,
+            save_failsafe: false,
+            input_lost: false,
+            format: crate::channels::ChannelFormat::Full16,
+            packed_channels: &packed,
+            data: &[],
+        };
+        let mut buf = [0u8; 64];
+        let len =
+            crate::frame::seal(&Frame::Uplink(up), &test_key(1), counter, &mut buf).expect("fits");
+        let before = link.follower.updates();
+        link.follower.on_received(
+            RxOutcome::Packet { len, rssi_dbm: -70 },
+            &buf[..len],
+            link.t + 1_000,
+        );
+        link.follower.updates() != before
+    };
+    let expected = link.follower.frame_counter().expect("in force");
+    for wrong in [expected ^ 1 << 8, expected ^ 1 << 32, expected + 256] {
+        assert!(!take(wrong, &mut link), "accepted under {wrong:#x}");
+    }
+    assert!(take(expected, &mut link), "refused under its own counter");
+}

@@ -1,0 +1,399 @@
+//! Sealed uplinks into a keyed follower (`Follower::with_key`, spec §12.2), through
+//! acquisition, the epoch handshake (timing-only lock, nonce frames in its downlink slots) and
+//! tracking under the epoch in force. Most frames are tagged under the counter the follower
+//! reports it expects (`Follower::frame_counter`), so channels, flags, failsafe values and the
+//! stream are reached; the rest are tagged under other counters, untagged, raw, or replays of
+//! earlier frames, to fuzz the rejection paths. Interleaved with planning, sending, runs of
+//! skipped slots (into resync), clean stretches of link (past wraps of the slot counter) and
+//! stream use.
+//!
+//! Invariants: a frame is taken (channels, flags, failsafe values, stream, report) only if it
+//! verifies as an uplink of the tracked slot under the counter reported before it arrived —
+//! never while acquiring, never with another tag; no counter is taken twice (no replay); no
+//! channels before the handshake completes; an unverified frame never moves the grid of an
+//! epoch in force nor ends a handshake; the counter rises by exactly one per slot within an
+//! epoch, and a true uplink of the tracked slot under the reported counter is always taken;
+//! every planned downlink verifies under the reported counter, is a nonce frame
+//! carrying the epoch's nonce during the handshake and a downlink of the tracked slot after
+//! it, and no two sent under one nonce share a counter; outputs 11-bit, LQ a percentage.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use taulink_fuzz::{Input, link_key, seal_tagged};
+use telemetry::channels::{CHANNEL_MAX, ChannelFormat, FailsafeValues};
+use telemetry::frame::{
+    Frame, LinkReport, Received, SEALED_VERSION, StreamHeader, Uplink, open, seal,
+};
+use telemetry::link::auth::TAG_BYTES;
+use telemetry::link::core::follower::SyncState;
+use telemetry::link::core::{Follower, STREAM_RX_BYTES, Step, frame_counter};
+use telemetry::link::{
+    Band, HOP_CHANNELS, LinkKey, LinkParams, RateMode, RxOutcome, Schedule, SlotKind,
+};
+
+/// Frames kept for replays.
+const REPLAYS: usize = 16;
+
+fuzz_target!(|data: &[u8]| {
+    let mut input = Input::new(data);
+    let key = link_key(&mut input);
+    let params = params(&mut input);
+    let failsafe_us = u64::from(input.u16()) * 16;
+    let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us)
+        .with_key(key)
+        .with_nonce_seed(u64::from(input.u32()));
+    let mut now = 0u64;
+    let mut buf = [0u8; 64];
+    let mut heard: Vec<Vec<u8>> = Vec::new();
+    let mut taken: Vec<u64> = Vec::new();
+    let mut last_sent: Option<u64> = None;
+    while !input.is_empty() {
+        now = now.saturating_add(u64::from(input.u16()));
+        match input.u8() % 9 {
+            0..=2 => {
+                let expected = follower.frame_counter();
+                let frame = match input.u8() % 8 {
+                    0..=3 => uplink(&mut input, &params, &follower, &key),
+                    4 => {
+                        let counter = expected.unwrap_or_else(|| any_counter(&mut input));
+                        seal_tagged(input.chunk(40), &key, counter)
+                    }
+                    5 if !heard.is_empty() => {
+                        let at = usize::from(input.u8()) % heard.len();
+                        heard.get(at).cloned().unwrap_or_default()
+                    }
+                    6 => {
+                        let counter = any_counter(&mut input);
+                        seal_tagged(input.chunk(40), &key, counter)
+                    }
+                    _ => input.chunk(40).to_vec(),
+                };
+                if heard.len() == REPLAYS {
+                    heard.remove(0);
+                }
+                heard.push(frame.clone());
+                receive(&mut follower, &key, &frame, &mut input, now, &mut taken);
+            }
+            3 => {
+                let outcome = if input.bool() {
+                    RxOutcome::Corrupted
+                } else {
+                    RxOutcome::Timeout
+                };
+                let (updates, slot) = (follower.updates(), follower.tracked_slot());
+                let state = follower.sync_state();
+                follower.on_received(outcome, &[], now);
+                assert_eq!(follower.updates(), updates);
+                if state == SyncState::Tracking {
+                    assert_eq!(follower.tracked_slot(), slot);
+                }
+            }
+            4 | 5 => match follower.plan(now, &mut buf) {
+                Step::Transmit { channel, len, .. } => {
+                    assert!(usize::from(channel) < HOP_CHANNELS);
+                    assert!(len <= params.rate.max_frame_bytes());
+                    let frame = &buf[..len];
+                    assert_eq!(frame.first(), Some(&SEALED_VERSION));
+                    let counter = follower.frame_counter().expect("sends only with an epoch");
+                    let (slot, _) = follower.tracked_slot().expect("sends only when tracking");
+                    match (open(frame, &key, counter), follower.sync_state()) {
+                        (
+                            Received::Accepted(Frame::Nonce { slot: s, nonce }),
+                            SyncState::Handshake,
+                        ) => {
+                            assert_eq!(s, slot);
+                            assert_eq!(counter, frame_counter(nonce, 0, slot));
+                        }
+                        (Received::Accepted(Frame::Downlink(down)), SyncState::Tracking) => {
+                            assert_eq!(down.slot, slot);
+                            assert!(down.report.is_some_and(|r| r.lq_percent <= 100));
+                        }
+                        (other, state) => panic!("planned {other:?} in {state:?}"),
+                    }
+                    if input.bool() {
+                        if let Some(last) = last_sent
+                            && last >> 32 == counter >> 32
+                        {
+                            assert!(counter > last, "two downlinks under counter {counter:#x}");
+                        }
+                        last_sent = Some(counter);
+                        follower.on_sent();
+                    } else {
+                        follower.on_skipped();
+                    }
+                }
+                Step::Listen {
+                    channel,
+                    from_us,
+                    until_us,
+                } => {
+                    assert!(usize::from(channel) < HOP_CHANNELS);
+                    assert!(until_us >= from_us || until_us >= now);
+                }
+                Step::Idle => follower.on_skipped(),
+            },
+            6 => {
+                // The loop fell behind: a run of skipped slots (past a wrap, or into resync).
+                let updates = follower.updates();
+                for _ in 0..input.u16() % 600 {
+                    let before = follower.frame_counter();
+                    follower.on_skipped();
+                    if let (Some(b), Some(a)) = (before, follower.frame_counter())
+                        && a >> 32 == b >> 32
+                    {
+                        assert_eq!(a, b + 1, "the counter moves one per slot");
+                    }
+                }
+                assert_eq!(follower.updates(), updates);
+            }
+            7 => clean_run(&mut follower, &key, &params, &mut input, now),
+            _ => {
+                follower.downlink_stream.write(input.chunk(64));
+                let mut out = [0u8; 64];
+                follower.uplink_stream.read(&mut out);
+            }
+        }
+        assert!(follower.output().iter().all(|&v| v <= CHANNEL_MAX));
+        assert!(follower.uplink_lq() <= 100);
+        assert!(follower.uplink_stream.available() <= STREAM_RX_BYTES);
+        if follower.updates() == 0 {
+            assert!(
+                follower.in_failsafe(),
+                "channels before any verified uplink"
+            );
+        }
+        match follower.sync_state() {
+            SyncState::Acquiring => assert_eq!(follower.frame_counter(), None),
+            SyncState::Handshake | SyncState::Tracking => {
+                let counter = follower.frame_counter().expect("an epoch");
+                let (slot, channel) = follower.tracked_slot().expect("on the grid");
+                assert_eq!(counter as u8, slot);
+                assert_ne!(counter >> 32, 0, "nonces are never 0");
+                assert!(usize::from(channel) < HOP_CHANNELS);
+            }
+        }
+        if let Some(report) = follower.remote_report() {
+            assert!(report.lq_percent <= 100);
+        }
+    }
+});
+
+/// Feeds one packet and checks that whatever it changed is explained by a verified uplink.
+fn receive(
+    follower: &mut Follower,
+    key: &LinkKey,
+    frame: &[u8],
+    input: &mut Input,
+    now: u64,
+    taken: &mut Vec<u64>,
+) {
+    let expected = follower.frame_counter();
+    let state = follower.sync_state();
+    let slot = follower.tracked_slot();
+    let (updates, received) = (follower.updates(), follower.counters().received);
+    let output = *follower.output();
+    let failsafe = *follower.failsafe_values();
+    let available = follower.uplink_stream.available();
+    let remote = follower.remote_report();
+    let outcome = RxOutcome::Packet {
+        len: frame.len(),
+        rssi_dbm: i16::from(input.u8() as i8),
+    };
+    follower.on_received(outcome, frame, now);
+
+    if follower.counters().received == received {
+        assert_eq!(follower.updates(), updates, "channels from a refused frame");
+        assert_eq!(follower.failsafe_values(), &failsafe);
+        assert_eq!(follower.uplink_stream.available(), available);
+        assert_eq!(follower.remote_report(), remote);
+        if !follower.in_failsafe() {
+            assert_eq!(
+                follower.output(),
+                &output,
+                "outputs moved without an update"
+            );
+        }
+        if state != SyncState::Tracking {
+            assert_ne!(
+                follower.sync_state(),
+                SyncState::Tracking,
+                "handshake ended unverified"
+            );
+        } else {
+            assert_eq!(
+                follower.tracked_slot(),
+                slot,
+                "an unverified frame moved the grid"
+            );
+            assert_eq!(follower.frame_counter(), expected);
+        }
+        return;
+    }
+
+    // Taken: it must verify under the counter reported before it arrived.
+    let counter = expected.expect("a frame taken while acquiring");
+    let (body, tag) = frame.split_at(frame.len() - TAG_BYTES);
+    let tag = u32::from_le_bytes(tag.try_into().expect("4 bytes"));
+    assert!(key.verify(counter, body, tag), "taken with a wrong tag");
+    let Received::Accepted(Frame::Uplink(up)) = open(frame, key, counter) else {
+        panic!("taken but no uplink");
+    };
+    // A replay is a frame whose counter was taken before: never twice. (Only a repeated
+    // 32-bit nonce, probability 2⁻³² per pair of epochs, could make this fire legitimately.)
+    assert!(
+        !taken.contains(&counter),
+        "counter {counter:#x} taken twice"
+    );
+    taken.push(counter);
+    let (slot, _) = slot.expect("tracking or handshaking");
+    assert_eq!(up.slot, slot);
+    assert_eq!(follower.sync_state(), SyncState::Tracking);
+    let now_counter = follower.frame_counter().expect("in force");
+    assert_eq!(
+        now_counter >> 32,
+        counter >> 32,
+        "the handshake's nonce is the epoch"
+    );
+    assert_eq!(now_counter, counter + 1);
+    if up.input_lost {
+        assert_eq!(follower.updates(), updates);
+        assert!(follower.in_failsafe());
+    } else {
+        let mut channels = output;
+        assert!(up.channels_into(&mut channels));
+        assert_eq!(follower.output(), &channels);
+        assert_eq!(follower.updates(), updates.wrapping_add(1));
+        assert!(!follower.in_failsafe());
+        if up.save_failsafe {
+            assert_eq!(
+                follower.failsafe_values(),
+                &FailsafeValues::from_channels(&channels)
+            );
+        } else {
+            assert_eq!(follower.failsafe_values(), &failsafe);
+        }
+    }
+}
+
+/// A clean stretch of link: in each of up to 600 slots, an uplink slot brings the master's
+/// frame of that slot sealed under the counter the follower reports — which must be taken,
+/// moving the counter on by one — and a downlink slot is skipped. The way to the wraps of the
+/// slot counter under an epoch in force.
+fn clean_run(
+    follower: &mut Follower,
+    key: &LinkKey,
+    params: &LinkParams,
+    input: &mut Input,
+    now: u64,
+) {
+    let schedule = Schedule {
+        rate: params.rate,
+        telemetry_ratio: params.telemetry_ratio,
+    };
+    let mut packed = [0u8; 22];
+    for byte in packed.iter_mut() {
+        *byte = input.u8();
+    }
+    let packed = &packed[..params.format.packed_bytes()];
+    for _ in 0..input.u16() % 600 {
+        let Some((slot, _)) = follower.tracked_slot() else {
+            return;
+        };
+        if schedule.kind(u32::from(slot)) == SlotKind::Downlink {
+            follower.on_skipped();
+            continue;
+        }
+        let counter = follower.frame_counter().expect("an epoch on the grid");
+        let up = Uplink {
+            slot,
+            stream: StreamHeader { seq: 0, ack: 0 },
+            report: None,
+            save_failsafe: false,
+            input_lost: false,
+            format: params.format,
+            packed_channels: packed,
+            data: &[],
+        };
+        let mut buf = [0u8; 64];
+        let n = seal(&Frame::Uplink(up), key, counter, &mut buf).expect("fits 64 bytes");
+        let updates = follower.updates();
+        let outcome = RxOutcome::Packet {
+            len: n,
+            rssi_dbm: -60,
+        };
+        follower.on_received(outcome, &buf[..n], now);
+        assert_eq!(
+            follower.updates(),
+            updates.wrapping_add(1),
+            "a true uplink refused"
+        );
+        assert_eq!(follower.sync_state(), SyncState::Tracking);
+        assert_eq!(follower.frame_counter(), Some(counter + 1));
+    }
+}
+
+/// Any counter: one of an arbitrary epoch's, or 64 fuzzed bits.
+fn any_counter(input: &mut Input) -> u64 {
+    if input.bool() {
+        frame_counter(input.u32(), u32::from(input.u8()), input.u8())
+    } else {
+        u64::from(input.u32()) << 32 | u64::from(input.u32())
+    }
+}
+
+/// A well-formed sealed uplink: slot mostly the tracked one (while acquiring: 0 or fuzzed, so
+/// the dwell channel's slot is found), tagged mostly under the follower's counter, fuzzed
+/// fields and stream data, then up to two fuzzed byte flips.
+fn uplink(input: &mut Input, params: &LinkParams, follower: &Follower, key: &LinkKey) -> Vec<u8> {
+    let slot = match (input.u8(), follower.tracked_slot()) {
+        (0..=191, Some((slot, _))) => slot,
+        (0..=127, None) => 0,
+        (_, _) => input.u8(),
+    };
+    let counter = match (input.u8(), follower.frame_counter()) {
+        (0..=223, Some(counter)) => counter,
+        _ => any_counter(input),
+    };
+    let mut packed = [0u8; 22];
+    let packed = &mut packed[..params.format.packed_bytes()];
+    for byte in packed.iter_mut() {
+        *byte = input.u8();
+    }
+    let report = input.bool().then(|| LinkReport {
+        rssi_dbm: input.u8() as i8,
+        lq_percent: input.u8() % 101,
+    });
+    let up = Uplink {
+        slot,
+        stream: StreamHeader {
+            seq: input.u8(),
+            ack: input.u8(),
+        },
+        report,
+        save_failsafe: input.u8() < 32,
+        input_lost: input.u8() < 16,
+        format: params.format,
+        packed_channels: packed,
+        data: input.chunk(40),
+    };
+    let mut buf = [0u8; 128];
+    let n = seal(&Frame::Uplink(up), key, counter, &mut buf).expect("fits 128 bytes");
+    let frame = &mut buf[..n];
+    for _ in 0..input.u8() % 3 {
+        let at = usize::from(input.u8()) % frame.len();
+        frame[at] ^= input.u8();
+    }
+    frame.to_vec()
+}
+
+/// Link parameters from the input: every band, rate, format and ratio (the bind ID is
+/// replaced by the key's).
+fn params(input: &mut Input) -> LinkParams {
+    LinkParams {
+        bind_id: input.u32(),
+        band: Band::from_code(input.u8() % 3).unwrap_or(Band::Mhz433),
+        rate: RateMode::from_code(input.u8() % 4).unwrap_or(RateMode::F500),
+        format: ChannelFormat::from_code(input.u8() % 2).unwrap_or(ChannelFormat::Full16),
+        telemetry_ratio: 2 << (input.u8() % 7),
+    }
+}
