@@ -1,15 +1,18 @@
 //! The console's behaviour: a line of `settings::console`'s command language in, the answer
 //! out. Changes go to the live settings (the gains are re-designed); `save` requests a
 //! write; `bind` opens the bind window (the only way this controller binds); `set`, `save`,
-//! `defaults` and `bind` are refused while armed. The USB adapter only moves
-//! lines and bytes.
+//! `defaults` and `bind` are refused while armed; `magcal` runs the magnetometer
+//! calibration (`super::magcal`), disarmed only. The USB adapter only moves lines and
+//! bytes.
 
 use core::fmt::Write;
 
 use super::FlightApp;
-use crate::settings::{Command, LineError, Settings, parse_line, write_list, write_setting};
+use crate::settings::{
+    Command, LineError, MagcalAction, Settings, parse_line, write_list, write_setting,
+};
 
-const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status | bind\r\n";
+const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status | bind | magcal start|status|save|cancel\r\n";
 
 impl FlightApp {
     /// Answers what the line assembler (`settings::LineAssembler`) produced: a whole line,
@@ -38,8 +41,10 @@ impl FlightApp {
                 | Command::SetAll(_)
                 | Command::Save
                 | Command::Defaults
-                | Command::Bind,
+                | Command::Bind
+                | Command::Magcal(_),
             ) if armed => out.write_str("refused: disarm first\r\n"),
+            Ok(Command::Magcal(action)) => self.on_magcal(action, out),
             Ok(Command::Set { name, value }) => match self.live.set_text(name, value) {
                 Ok(()) => {
                     self.settings_changed();
@@ -77,6 +82,61 @@ impl FlightApp {
             }
             Err(e) => write!(out, "{e}\r\n"),
         }
+    }
+
+    fn on_magcal<W: Write>(&mut self, action: MagcalAction, out: &mut W) -> core::fmt::Result {
+        match action {
+            MagcalAction::Start => {
+                self.magcal.start();
+                out.write_str(
+                    "magcal: turn the frame through every orientation (each axis up and down), then magcal status / magcal save\r\n",
+                )
+            }
+            MagcalAction::Cancel => {
+                self.magcal.cancel();
+                out.write_str("magcal: cancelled, nothing stored\r\n")
+            }
+            MagcalAction::Status => {
+                self.write_magcal_samples(out)?;
+                match self.magcal.fit() {
+                    Ok(cal) => {
+                        write_calibration(out, &cal)?;
+                        out.write_str("checks pass: magcal save stores it\r\n")
+                    }
+                    Err(e) => write!(out, "not yet: {e}\r\n"),
+                }
+            }
+            MagcalAction::Save => {
+                if !self.magcal.collecting() {
+                    return out.write_str("refused: magcal start first\r\n");
+                }
+                let cal = match self.magcal.fit() {
+                    Ok(cal) => cal,
+                    Err(e) => return write!(out, "refused: {e}; nothing stored\r\n"),
+                };
+                let mut changed = self.live.clone();
+                if let Err(e) = super::magcal::store(&mut changed, &cal) {
+                    return write!(out, "refused: {e}; nothing stored\r\n");
+                }
+                self.live = changed;
+                self.magcal.cancel();
+                self.settings_changed();
+                self.request_save();
+                write_calibration(out, &cal)?;
+                out.write_str("stored, saving\r\n")
+            }
+        }
+    }
+
+    fn write_magcal_samples<W: Write>(&self, out: &mut W) -> core::fmt::Result {
+        let m = &self.magcal;
+        write!(
+            out,
+            "magcal {}: {} readings{}\r\n",
+            if m.collecting() { "collecting" } else { "idle" },
+            m.len(),
+            if m.is_full() { " (full)" } else { "" }
+        )
     }
 
     fn write_status<W: Write>(&self, out: &mut W) -> core::fmt::Result {
@@ -143,4 +203,17 @@ impl FlightApp {
             None => write!(out, "armed {armed}, battery unknown\r\n"),
         }
     }
+}
+
+/// The fit and its checks, one line each.
+fn write_calibration<W: Write>(
+    out: &mut W,
+    cal: &crate::estimation::magcal::MagCalibration,
+) -> core::fmt::Result {
+    let [[xx, xy, xz], [_, yy, yz], [_, _, zz]] = cal.matrix;
+    write!(
+        out,
+        "offset {:?}\r\nmatrix xx {xx} yy {yy} zz {zz} xy {xy} xz {xz} yz {yz}\r\nfield {}, residual {:.2} % (round: < 3 %), coverage {:.2} (≥ 0.3)\r\n",
+        cal.offset, cal.field, cal.residual_pct, cal.coverage
+    )
 }
