@@ -52,8 +52,8 @@ fn main() -> ExitCode {
     };
     let Some(kind) = cli.scenario.kind() else {
         let show = sim_plot::progress::wanted(cli.quiet, cli.json);
-        // 4 link-cut rate modes + 9 other scenarios.
-        let bar = sim_plot::progress::bar(13, "runs", show);
+        // 4 link-cut rate modes, the link cut with a fix, 12 other scenarios.
+        let bar = sim_plot::progress::bar(17, "runs", show);
         let rows = runner::acceptance::all(|name| {
             bar.set_message(name.to_owned());
             bar.inc(1);

@@ -40,7 +40,12 @@ fuzz_target!(|data: &[u8]| {
                 write_list(&mut out, &settings, prefix).expect("String never fails");
             }
             Command::Defaults => settings = Settings::default(),
-            Command::Help | Command::Save | Command::Status | Command::Bind | Command::Nothing => {}
+            Command::Help
+            | Command::Save
+            | Command::Status
+            | Command::Bind
+            | Command::Magcal(_)
+            | Command::Nothing => {}
         }
     }
     for (param, value) in settings.iter() {

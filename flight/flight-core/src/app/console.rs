@@ -4,17 +4,19 @@
 //! or clears the binding phrase (spec §12: the key derived from it is stored and saved at
 //! once, the phrase itself is neither kept nor ever printed; its fingerprint is shown so
 //! the pilot can compare both ends) and restarts the link with it; `set`, `save`,
-//! `defaults`, `bind` and `phrase` are refused while armed. The USB adapter only moves
-//! lines and bytes.
+//! `defaults`, `bind` and `phrase` are refused while armed; `magcal` runs the magnetometer
+//! calibration (`super::magcal`), disarmed only. The USB adapter only moves lines and bytes.
 
 use core::fmt::Write;
 
 use super::FlightApp;
 use telemetry::link::{LinkKey, key_for_phrase};
 
-use crate::settings::{Command, LineError, Settings, parse_line, write_list, write_setting};
+use crate::settings::{
+    Command, LineError, MagcalAction, Settings, parse_line, write_list, write_setting,
+};
 
-const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status | bind | phrase [TEXT|clear]\r\n";
+const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status | bind | phrase [TEXT|clear] | magcal start|status|save|cancel\r\n";
 
 impl FlightApp {
     /// Answers what the line assembler (`settings::LineAssembler`) produced: a whole line,
@@ -45,8 +47,10 @@ impl FlightApp {
                 | Command::Defaults
                 | Command::Bind
                 | Command::Phrase(_)
-                | Command::PhraseClear,
+                | Command::PhraseClear
+                | Command::Magcal(_),
             ) if armed => out.write_str("refused: disarm first\r\n"),
+            Ok(Command::Magcal(action)) => self.on_magcal(action, out),
             Ok(Command::Set { name, value }) => match self.live.set_text(name, value) {
                 Ok(()) => {
                     self.settings_changed();
@@ -105,6 +109,61 @@ impl FlightApp {
         self.request_save();
         write_phrase_state(out, key)?;
         out.write_str("saving (with any other unsaved change); the link restarts\r\n")
+    }
+
+    fn on_magcal<W: Write>(&mut self, action: MagcalAction, out: &mut W) -> core::fmt::Result {
+        match action {
+            MagcalAction::Start => {
+                self.magcal.start();
+                out.write_str(
+                    "magcal: turn the frame through every orientation (each axis up and down), then magcal status / magcal save\r\n",
+                )
+            }
+            MagcalAction::Cancel => {
+                self.magcal.cancel();
+                out.write_str("magcal: cancelled, nothing stored\r\n")
+            }
+            MagcalAction::Status => {
+                self.write_magcal_samples(out)?;
+                match self.magcal.fit() {
+                    Ok(cal) => {
+                        write_calibration(out, &cal)?;
+                        out.write_str("checks pass: magcal save stores it\r\n")
+                    }
+                    Err(e) => write!(out, "not yet: {e}\r\n"),
+                }
+            }
+            MagcalAction::Save => {
+                if !self.magcal.collecting() {
+                    return out.write_str("refused: magcal start first\r\n");
+                }
+                let cal = match self.magcal.fit() {
+                    Ok(cal) => cal,
+                    Err(e) => return write!(out, "refused: {e}; nothing stored\r\n"),
+                };
+                let mut changed = self.live.clone();
+                if let Err(e) = super::magcal::store(&mut changed, &cal) {
+                    return write!(out, "refused: {e}; nothing stored\r\n");
+                }
+                self.live = changed;
+                self.magcal.cancel();
+                self.settings_changed();
+                self.request_save();
+                write_calibration(out, &cal)?;
+                out.write_str("stored, saving\r\n")
+            }
+        }
+    }
+
+    fn write_magcal_samples<W: Write>(&self, out: &mut W) -> core::fmt::Result {
+        let m = &self.magcal;
+        write!(
+            out,
+            "magcal {}: {} readings{}\r\n",
+            if m.collecting() { "collecting" } else { "idle" },
+            m.len(),
+            if m.is_full() { " (full)" } else { "" }
+        )
     }
 
     fn write_status<W: Write>(&self, out: &mut W) -> core::fmt::Result {
@@ -184,4 +243,17 @@ fn write_phrase_state<W: Write>(out: &mut W, key: Option<LinkKey>) -> core::fmt:
         ),
         None => out.write_str("no binding phrase: link unauthenticated\r\n"),
     }
+}
+
+/// The fit and its checks, one line each.
+fn write_calibration<W: Write>(
+    out: &mut W,
+    cal: &crate::estimation::magcal::MagCalibration,
+) -> core::fmt::Result {
+    let [[xx, xy, xz], [_, yy, yz], [_, _, zz]] = cal.matrix;
+    write!(
+        out,
+        "offset {:?}\r\nmatrix xx {xx} yy {yy} zz {zz} xy {xy} xz {xz} yz {yz}\r\nfield {}, residual {:.2} % (round: < 3 %), coverage {:.2} (≥ 0.3)\r\n",
+        cal.offset, cal.field, cal.residual_pct, cal.coverage
+    )
 }

@@ -10,15 +10,19 @@
 //! battery monitor and the tone player; the link follower's hooks, bind handling and
 //! telemetry (`link`), the same over OpenLRSng (`openlrs`); the console's command language
 //! (`console`); the watchdog check-in policy (`watchdog`); the GPS port (`gps`: UBX bytes in,
-//! boot configuration out).
+//! boot configuration out); the magnetometer calibration (`magcal`: collected from the
+//! console, applied to every reading).
 
 mod console;
 mod gps;
 mod imu;
 mod link;
+mod magcal;
 mod openlrs;
 mod watchdog;
 
+#[cfg(test)]
+mod magcal_tests;
 #[cfg(test)]
 mod phrase_tests;
 #[cfg(test)]
@@ -29,6 +33,7 @@ pub use imu::{
     CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
 };
 pub use link::{BIND_WINDOW_US, FAILSAFE_US, LinkStep, REPORT_PERIOD_US};
+pub use magcal::{MagcalSession, calibration as mag_calibration};
 pub use openlrs::{
     OPENLRS_FAILSAFE_DELAY, OPENLRS_RATE_CODE_BASE, openlrs_bind_window, run_openlrs_receiver,
 };
@@ -82,6 +87,9 @@ pub struct FlightApp {
     identified: Option<Identification>,
     settings_problem: Option<LoadProblem>,
     gps: gps::GpsPort,
+    magcal: MagcalSession,
+    /// The magnetometer calibration in force (from the live settings).
+    mag_cal: crate::estimation::magcal::MagCalibration,
 }
 
 /// The flight setup for `settings`, or the factory one (and why) if they do not fly.
@@ -101,6 +109,7 @@ impl FlightApp {
         let (setup, setup_error) = setup_for(&stored);
         let setup = setup?;
         let controllers = Controllers::design(&setup.control).ok();
+        let mag_cal = magcal::calibration(&stored);
         Some(Self {
             link: link::LinkSide::new(setup.channels),
             live: stored.clone(),
@@ -128,6 +137,8 @@ impl FlightApp {
             identified: None,
             settings_problem: None,
             gps: gps::GpsPort::new(),
+            magcal: MagcalSession::default(),
+            mag_cal,
         })
     }
 
@@ -238,6 +249,18 @@ impl FlightApp {
             // Good data again, not yet for long enough to trust: stay disarmed.
             return self.ride_through(now_ms);
         }
+        // The raw reading to a calibration being collected (never while armed: arming
+        // ends it), the calibrated one to the estimator.
+        if self.flight.armed() && self.magcal.collecting() {
+            self.magcal.cancel();
+        }
+        if let Some(raw) = sample.mag {
+            self.magcal.offer(now_ms, raw);
+        }
+        let sample = &ImuSample {
+            mag: sample.mag.map(|m| self.mag_cal.apply(m)),
+            ..*sample
+        };
         let out = self
             .flight
             .step(now_ms, sample, &self.link_input, self.climb_mps);
@@ -358,6 +381,12 @@ impl FlightApp {
     /// A setting changed: the gains adapter re-derives the setup and re-solves the gains.
     fn settings_changed(&mut self) {
         self.design_requested = true;
+        self.mag_cal = magcal::calibration(&self.live);
+    }
+
+    /// The magnetometer calibration session (console `magcal`).
+    pub fn magcal(&self) -> &MagcalSession {
+        &self.magcal
     }
 
     /// Asks for the live settings to be saved.

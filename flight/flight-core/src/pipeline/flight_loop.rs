@@ -4,7 +4,7 @@
 
 use super::controllers::Controllers;
 use super::estimator::{Estimator, EstimatorMode, Source};
-use super::hold::{Hold, Horizontal, Nav};
+use super::hold::{DescentHold, Hold, Horizontal, Nav};
 use super::identify::Sysid;
 use super::stages;
 use super::sticks::StickShaping;
@@ -133,8 +133,18 @@ pub struct FlightLoop {
     battery_critical: bool,
     /// Altitude/position hold loops (hold modes, failsafe hold).
     hold: Hold,
+    /// Whether the failsafe descent (with a fix) still holds the position.
+    descent_hold: DescentHold,
     /// When the current link failsafe began, ms.
     failsafe_since_ms: Option<u32>,
+    /// The touchdown detector had the frame in the air when the current failsafe began:
+    /// only then does a failsafe with a fix hold the altitude first (on the ground it
+    /// descends, i.e. stays, and disarms at once as without a fix).
+    failsafe_airborne: bool,
+    /// This loop the failsafe held the altitude (with a fix): the touchdown detector is held
+    /// off — a held altitude shows "not descending" by design, and the thrust against a
+    /// stale hover estimate (learnt in a climb) proves nothing.
+    failsafe_holds_altitude: bool,
     /// The boot-time settings load had a problem not yet fixed by a save (arming refused).
     settings_problem: bool,
 }
@@ -161,7 +171,10 @@ impl FlightLoop {
             landing: LandingDetector::new(),
             battery_critical: false,
             hold: Hold::default(),
+            descent_hold: DescentHold::Idle,
             failsafe_since_ms: None,
+            failsafe_airborne: false,
+            failsafe_holds_altitude: false,
             settings_problem: false,
         }
     }
@@ -311,8 +324,10 @@ impl FlightLoop {
         }
         if failsafe.is_none() {
             self.failsafe_since_ms = None;
+            self.failsafe_airborne = false;
         } else if decision == Decision::FailsafeEntered || self.failsafe_since_ms.is_none() {
             self.failsafe_since_ms = Some(now_ms);
+            self.failsafe_airborne = !self.landing.landed();
         }
         // The navigation estimate, only where a hold loop reads it.
         let nav = (self.mode.holds() || failsafe.is_some()).then(|| {
@@ -336,11 +351,13 @@ impl FlightLoop {
                 climb_rate_mps,
                 nav,
                 failsafe_for_ms: self.failsafe_since_ms.map(|t| now_ms.wrapping_sub(t)),
+                failsafe_airborne: self.failsafe_airborne,
             };
             let sticks = stages::flown_sticks(&link.sticks, link.arm_switch.is_some());
             self.fly(&fly, &sticks)
         } else {
             self.hold.reset();
+            self.failsafe_holds_altitude = false;
             if let Some(c) = self.controllers.as_mut() {
                 self.airborne = false;
                 // On the ground nothing integrates.
@@ -432,7 +449,9 @@ impl FlightLoop {
         thrust: f32,
         failsafe_descent_mps: Option<f32>,
     ) {
-        if armed {
+        if armed && self.failsafe_holds_altitude {
+            self.landing.hold_off();
+        } else if armed {
             self.landing.update(&LandingInputs {
                 now_ms,
                 gyro_dps: estimate.gyro_dps,
@@ -477,6 +496,7 @@ impl FlightLoop {
     /// Armed with a plausible gyro: failsafe descent or the pilot's setpoint, then the mix.
     /// Returns the motor commands and the collective throttle they carry.
     fn fly(&mut self, fly: &Fly, sticks: &Sticks) -> ([Command; 4], f32) {
+        self.failsafe_holds_altitude = false;
         if self.controllers.is_none() {
             return ([Command::Stopped; 4], 0.0);
         }
@@ -488,18 +508,33 @@ impl FlightLoop {
         // Failsafe with a good fix: hold the position, and the altitude for the first
         // FAILSAFE_HOLD_MS, then descend in place. Without a fix: level and descend.
         let fix_nav = fly.nav.filter(|n| n.horizontal.is_some());
+        let holding =
+            fly.failsafe_airborne && fly.failsafe_for_ms.is_some_and(|t| t < FAILSAFE_HOLD_MS);
+        // In the descent the position is held until the frame stops descending (the
+        // ground; `DescentHold`).
+        self.descent_hold = match (fly.failsafe_descent_mps, fly.failsafe_for_ms) {
+            (Some(d), Some(t)) if !holding => {
+                let descending = fly
+                    .climb_rate_mps
+                    .is_some_and(|c| c < -crate::supervisor::landed_climb_limit(d));
+                self.descent_hold.update(descending, t)
+            }
+            _ => DescentHold::Idle,
+        };
         let failsafe_angles = match (fly.failsafe_descent_mps, fix_nav) {
-            (Some(_), Some(nav)) => self
-                .hold
-                .angles(Horizontal::PositionHold, [0.0; 2], &nav, ts),
+            (Some(_), Some(nav)) if self.descent_hold.holds() => {
+                self.hold
+                    .angles(Horizontal::PositionHold, [0.0; 2], &nav, ts)
+            }
             _ => None,
         };
-        let holding = fly.failsafe_for_ms.is_some_and(|t| t < FAILSAFE_HOLD_MS);
         let descent = match (fly.failsafe_descent_mps, fix_nav) {
             (Some(_), Some(nav)) if holding => Some(self.hold.throttle(0.5, &nav, hover, ts)),
             (Some(d), _) => Some(self.descent_throttle(fly.decision, d, fly.climb_rate_mps)),
             (None, _) => None,
         };
+        self.failsafe_holds_altitude =
+            holding && fly.failsafe_descent_mps.is_some() && fix_nav.is_some();
         // The hold modes' throttle and angles (the sticks' when their loops cannot fly).
         let hold_out = match (descent, fly.nav) {
             (None, Some(nav)) if self.mode.holds() => {
@@ -621,6 +656,8 @@ struct Fly {
     nav: Option<Nav>,
     /// How long the link failsafe has lasted, ms.
     failsafe_for_ms: Option<u32>,
+    /// The frame was in the air when the failsafe began.
+    failsafe_airborne: bool,
 }
 
 /// (roll, pitch, yaw) in degrees without libm: a polynomial atan2 (error < 0.01°) on the

@@ -19,6 +19,11 @@
 //! velocity (the integral learns the wind's drag) → NED acceleration → roll/pitch angles
 //! (small-angle thrust tilt, ≤ [`MAX_TILT_DEG`]). Without a good fix position hold and
 //! loiter fly attitude mode on the sticks (altitude still held).
+//!
+//! **Failsafe descent with a fix** ([`DescentHold`]): the position is held while the frame
+//! descends, and given up (level) once it has stopped descending for [`STOPPED_MS`] — the
+//! ground: pressed against it, the position loop's tilt demands rock the frame, the gyro
+//! never goes quiet and the touchdown detector could never end the failsafe.
 
 use crate::estimation::math::{max, min};
 
@@ -32,6 +37,10 @@ pub const LOITER_SPEED_MPS: f32 = 3.0;
 pub const MAX_SPEED_MPS: f32 = 3.0;
 /// Largest tilt the position loop asks for, deg.
 pub const MAX_TILT_DEG: f32 = 25.0;
+
+/// Failsafe descent: not seen descending this long, the frame is levelled for good, ms
+/// (the descent builds up within ≈ 1 s; on the ground the detector then needs its 1 s).
+pub const STOPPED_MS: u32 = 2_000;
 
 /// Altitude error → climb rate, (m/s)/m.
 const ALTITUDE_KP: f32 = 1.0;
@@ -209,6 +218,41 @@ impl Hold {
     }
 }
 
+/// Whether the failsafe descent (with a fix) still holds the position: see the module
+/// documentation. Starts as "not yet descending" at the descent's start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DescentHold {
+    /// Not in the descent (before it, or no failsafe).
+    #[default]
+    Idle,
+    /// Descending: the position is held.
+    Descending,
+    /// Not descending since this time (ms, the caller's clock); still holding.
+    Stopped(u32),
+    /// Stopped descending for [`STOPPED_MS`]: level until the descent ends.
+    Level,
+}
+
+impl DescentHold {
+    /// The next state at `now_ms` in the descent, the frame seen `descending` or not.
+    pub fn update(self, descending: bool, now_ms: u32) -> Self {
+        match (self, descending) {
+            (Self::Level, _) => Self::Level,
+            (_, true) => Self::Descending,
+            (Self::Idle | Self::Descending, false) => Self::Stopped(now_ms),
+            (Self::Stopped(since), false) if now_ms.wrapping_sub(since) >= STOPPED_MS => {
+                Self::Level
+            }
+            (stopped, false) => stopped,
+        }
+    }
+
+    /// Whether the position is still held.
+    pub fn holds(self) -> bool {
+        self != Self::Level
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -299,5 +343,36 @@ mod tests {
             .angles(Horizontal::Loiter, [0.0, -1.0], &n, 0.001)
             .unwrap();
         assert!(pitch < -10.0, "nose down to go forward: {pitch}");
+    }
+
+    #[test]
+    fn the_failsafe_descent_gives_up_the_position_once_stopped_for_two_seconds() {
+        let mut d = DescentHold::Idle;
+        // The descent builds up: not yet descending, still holding.
+        d = d.update(false, 1_000);
+        assert_eq!(d, DescentHold::Stopped(1_000));
+        d = d.update(false, 2_500);
+        assert!(d.holds());
+        d = d.update(true, 2_600);
+        assert_eq!(d, DescentHold::Descending);
+        // A gust: a moment without descent keeps the hold.
+        d = d
+            .update(false, 10_000)
+            .update(false, 11_900)
+            .update(true, 11_950);
+        assert!(d.holds());
+        // Touchdown: level after 2 s, and for good.
+        d = d.update(false, 20_000).update(false, 21_999);
+        assert!(d.holds());
+        d = d.update(false, 22_000);
+        assert_eq!(d, DescentHold::Level);
+        assert!(!d.update(true, 23_000).holds());
+        // Never descending at all (a failsafe on the ground): level after 2 s too.
+        assert!(
+            !DescentHold::Idle
+                .update(false, 0)
+                .update(false, 2_000)
+                .holds()
+        );
     }
 }

@@ -29,10 +29,10 @@ pub use controllers::{ControlParams, Controllers};
 pub use estimator::{
     Estimator, EstimatorMode, INS_START_S, PSEUDO_PERIOD_S, PSEUDO_VAR_M2PS2, Source,
 };
-pub use flight_loop::{FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
+pub use flight_loop::{FAILSAFE_HOLD_MS, FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
 pub use hold::{
-    Hold, Horizontal, LOITER_SPEED_MPS, MAX_CLIMB_MPS, MAX_SPEED_MPS, MAX_TILT_DEG, Nav,
-    STICK_DEADBAND,
+    DescentHold, Hold, Horizontal, LOITER_SPEED_MPS, MAX_CLIMB_MPS, MAX_SPEED_MPS, MAX_TILT_DEG,
+    Nav, STICK_DEADBAND,
 };
 pub use link::{
     Protocol, bind_band, openlrs_band, protocol, store_link, store_openlrs, stored_link,

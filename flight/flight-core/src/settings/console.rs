@@ -14,6 +14,9 @@
 //!                           count; refused while armed; saved at once, never shown again)
 //! phrase clear              remove it: the link runs unauthenticated
 //! phrase                    show the key's fingerprint (to compare with the module)
+//! magcal start|status|save|cancel   magnetometer calibration (disarmed): collect while the
+//!                           frame is turned, show the fit and its checks, store it if
+//!                           they pass, or drop it
 //! ```
 
 use core::fmt::Write;
@@ -54,8 +57,24 @@ pub enum Command<'a> {
     PhraseClear,
     /// Show the binding phrase's fingerprint.
     PhraseShow,
+    /// Magnetometer calibration.
+    Magcal(MagcalAction),
     /// An empty line.
     Nothing,
+}
+
+/// What `magcal` is asked to do.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MagcalAction {
+    /// Start collecting magnetometer readings (drops any earlier ones).
+    Start,
+    /// Show the readings collected and the fit's checks.
+    Status,
+    /// Fit, check and, if the checks pass, store in the settings (and save).
+    Save,
+    /// Stop and drop the readings.
+    Cancel,
 }
 
 /// Why a line was not understood.
@@ -115,9 +134,18 @@ pub fn parse_line(line: &str) -> Result<Command<'_>, ConsoleError> {
         ("defaults", None, None) => Ok(Command::Defaults),
         ("status", None, None) => Ok(Command::Status),
         ("bind", None, None) => Ok(Command::Bind),
-        ("help" | "list" | "get" | "set" | "save" | "defaults" | "status" | "bind", _, _) => {
-            Err(ConsoleError::WrongArguments)
-        }
+        ("magcal", Some(action), None) => match action {
+            "start" => Ok(Command::Magcal(MagcalAction::Start)),
+            "status" => Ok(Command::Magcal(MagcalAction::Status)),
+            "save" => Ok(Command::Magcal(MagcalAction::Save)),
+            "cancel" => Ok(Command::Magcal(MagcalAction::Cancel)),
+            _ => Err(ConsoleError::WrongArguments),
+        },
+        (
+            "help" | "list" | "get" | "set" | "save" | "defaults" | "status" | "bind" | "magcal",
+            _,
+            _,
+        ) => Err(ConsoleError::WrongArguments),
         _ => Err(ConsoleError::UnknownCommand),
     }
 }

@@ -7,7 +7,7 @@ mod line;
 mod params;
 mod store;
 
-pub use console::{Command, ConsoleError, parse_line, write_list, write_setting};
+pub use console::{Command, ConsoleError, MagcalAction, parse_line, write_list, write_setting};
 pub use line::{LineAssembler, LineError};
 pub use params::{Choice, Kind, MAX_PAIRS, PARAMS, Param, ParamError, Settings, Value};
 pub use store::{FLASH_BUFFER, LoadProblem, LoadReport, StoreError, load, save, save_whole};

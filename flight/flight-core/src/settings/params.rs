@@ -244,6 +244,18 @@ pub const PARAMS: &[Param] = &[
     u(712, "link.olrs_hops_3", 0, u32::MAX, 0),
     u(713, "link.olrs_hops_4", 0, u32::MAX, 0),
     u(714, "link.olrs_hops_5", 0, u32::MAX, 0),
+    // Magnetometer calibration (`magcal save`; `estimation::magcal`): calibrated =
+    // matrix · (raw − offset), raw in the sensor's unit; the matrix symmetric. Factory: none
+    // (zero offset, identity).
+    f(801, "mag.offset_x", -10_000.0, 10_000.0, 0.0),
+    f(802, "mag.offset_y", -10_000.0, 10_000.0, 0.0),
+    f(803, "mag.offset_z", -10_000.0, 10_000.0, 0.0),
+    f(804, "mag.xx", -10.0, 10.0, 1.0),
+    f(805, "mag.yy", -10.0, 10.0, 1.0),
+    f(806, "mag.zz", -10.0, 10.0, 1.0),
+    f(807, "mag.xy", -10.0, 10.0, 0.0),
+    f(808, "mag.xz", -10.0, 10.0, 0.0),
+    f(809, "mag.yz", -10.0, 10.0, 0.0),
 ];
 
 /// Number of parameters.

@@ -90,6 +90,13 @@ impl LandingDetector {
         *self = Self::new();
     }
 
+    /// A loop holds the altitude (the failsafe's hold with a GPS fix): "not descending" is
+    /// then by design and proves nothing, so no touchdown is concluded — the candidate is
+    /// dropped and the state kept.
+    pub fn hold_off(&mut self) {
+        self.candidate_since = None;
+    }
+
     /// Whether the frame stands on the ground.
     pub fn landed(&self) -> bool {
         self.landed
@@ -250,5 +257,30 @@ mod tests {
         let mut knocked = ground;
         knocked.climb_mps = Some(-1.5);
         assert!(!d.update(&knocked));
+    }
+
+    #[test]
+    fn a_held_altitude_never_lands_and_the_count_starts_over_after_it() {
+        // GIVEN a frame in the air whose loop holds the altitude on a hover estimate 0.15
+        // too high (thrust "low", not descending, quiet, 1 g: every touchdown condition)
+        let mut d = airborne();
+        let held = |k| {
+            let mut s = descending(k, 0.0);
+            s.hover_thrust = 0.65;
+            s
+        };
+        // WHEN the hold holds the detector off for a minute, with a step now and then
+        for k in 0..60_000 {
+            if k % 700 == 0 {
+                assert!(!d.update(&held(k)));
+            } else {
+                d.hold_off();
+            }
+        }
+        // THEN it never lands, and after the hold the full second is needed again
+        assert!(!d.landed());
+        assert!(!d.update(&held(60_000)));
+        assert!(!d.update(&held(60_999)));
+        assert!(d.update(&held(61_000)));
     }
 }

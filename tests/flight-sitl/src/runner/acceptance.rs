@@ -1,7 +1,9 @@
-//! The acceptance runs of issues 12 and 13 and their criteria, shared by the tests
+//! The acceptance runs of issues 12, 13 and 16 and their criteria, shared by the tests
 //! (`tests/runner_*.rs`) and the `table` mode that writes the README's table: `link-cut` at
-//! every rate mode from 5, 30 and 60 m, and every failure scenario at the factory rate, all
-//! with factory settings. [`check`] says what a report must show; [`markdown`] tabulates.
+//! every rate mode from 5, 30 and 60 m, every failure scenario at the factory rate, all
+//! with factory settings, and the INS holds (factory settings plus the scenario's INS and
+//! hold mode: [`Options::for_kind`]) with `position-hold` in a 3 m/s wind and a `link-cut`
+//! with a GPS fix. [`check`] says what a report must show; [`markdown`] tabulates.
 
 use std::fmt::Write as _;
 
@@ -16,6 +18,23 @@ pub const LINK_CUT_ALTITUDES_M: [f64; 3] = [5.0, 30.0, 60.0];
 pub const MAX_TOUCHDOWN_MPS: f64 = 1.5;
 /// Failsafe no later than this after the handset input stops, s.
 pub const MAX_INPUT_FAILSAFE_S: f64 = 1.0;
+/// Altitude hold: within this of the held altitude over the measured minute, m.
+pub const MAX_ALTITUDE_HOLD_ERROR_M: f64 = 0.5;
+/// Position hold: 2σ horizontal error at most this, m …
+pub const MAX_POSITION_HOLD_2SIGMA_M: f64 = 1.5;
+/// … in this wind, m/s.
+pub const POSITION_HOLD_WIND_MPS: f64 = 3.0;
+/// Loiter: the pilot's push moves the frame at least this far, m …
+pub const MIN_LOITER_MOVE_M: f64 = 2.0;
+/// … and the new position is kept within this, m.
+pub const MAX_LOITER_DRIFT_M: f64 = 1.5;
+/// Link cut with a fix: the failsafe's hold keeps the position within this, m …
+pub const MAX_FAILSAFE_DRIFT_M: f64 = 2.0;
+/// … and the altitude within this, m.
+pub const MAX_FAILSAFE_ALTITUDE_CHANGE_M: f64 = 1.0;
+/// The altitudes of the acceptance's link cut with a fix, m (from 5 m the cut comes
+/// straight after the take-off boost, on a hover estimate learnt in the climb).
+pub const GPS_LINK_CUT_ALTITUDES_M: [f64; 3] = [5.0, 10.0, 30.0];
 
 /// `link-cut` at `rate` from each of `altitudes_m` (one probe run finds every cut time).
 ///
@@ -24,6 +43,15 @@ pub const MAX_INPUT_FAILSAFE_S: f64 = 1.0;
 pub fn link_cuts(rate: RateMode, altitudes_m: &[f64]) -> Result<Vec<Outcome>, RunError> {
     let mut opts = Options::factory();
     opts.rate = rate;
+    link_cuts_with(&opts, altitudes_m)
+}
+
+/// `link-cut` at F250 with a GPS receiver from each of `altitudes_m`.
+///
+/// # Errors
+/// As [`link_cuts`].
+pub fn link_cuts_with_fix(altitudes_m: &[f64]) -> Result<Vec<Outcome>, RunError> {
+    let opts = Options::for_kind(Kind::LinkCut, true).map_err(RunError::Settings)?;
     link_cuts_with(&opts, altitudes_m)
 }
 
@@ -47,12 +75,17 @@ pub fn link_cuts_with(opts: &Options, altitudes_m: &[f64]) -> Result<Vec<Outcome
         .collect()
 }
 
-/// A failure scenario with factory settings at F250.
+/// A failure scenario with factory settings at F250 (a hold scenario: plus its needs, and
+/// position hold in the acceptance's wind).
 ///
 /// # Errors
 /// As [`super::run_kind`].
 pub fn scenario(kind: Kind) -> Result<Outcome, RunError> {
-    super::run_kind(kind, &Options::factory())
+    let mut o = Options::for_kind(kind, false).map_err(RunError::Settings)?;
+    if kind == Kind::PositionHold {
+        o.wind_mps = POSITION_HOLD_WIND_MPS;
+    }
+    super::run_kind(kind, &o)
 }
 
 /// What `r` must show for its scenario; every failed criterion, in words.
@@ -64,8 +97,21 @@ pub fn check(r: &Report) -> Vec<String> {
         }
     };
     let wd = r.watchdog_resets;
+    let h = &r.hold;
     match r.kind {
         Kind::LinkCut => {
+            if r.gps {
+                need(
+                    h.held_position_drift_m
+                        .is_some_and(|d| d <= MAX_FAILSAFE_DRIFT_M),
+                    "the failsafe holds the position within 2 m",
+                );
+                need(
+                    h.altitude_error_max_m
+                        .is_some_and(|d| d <= MAX_FAILSAFE_ALTITUDE_CHANGE_M),
+                    "the failsafe holds the altitude within 1 m",
+                );
+            }
             need(wd.flight == 0 && wd.module == 0, "no watchdog reset");
             need(r.failsafe_at_s.is_some(), "failsafe entered");
             need(!r.motors_stopped_airborne, "motors never stopped airborne");
@@ -146,6 +192,37 @@ pub fn check(r: &Report) -> Vec<String> {
             );
             need(!r.motors_stopped_airborne, "motors never stopped airborne");
         }
+        Kind::AltitudeHold | Kind::PositionHold | Kind::Loiter => {
+            need(h.engaged_at_s.is_some(), "the hold engaged");
+            need(r.final_state == "armed-flying", "still flying");
+            need(!r.motors_stopped_airborne, "motors never stopped airborne");
+            need(wd.flight == 0 && wd.module == 0, "no watchdog reset");
+            if r.kind == Kind::AltitudeHold {
+                need(
+                    h.altitude_error_max_m
+                        .is_some_and(|e| e <= MAX_ALTITUDE_HOLD_ERROR_M),
+                    "altitude within ±0.5 m",
+                );
+            }
+            if r.kind == Kind::PositionHold {
+                need(
+                    h.position_error_2sigma_m
+                        .is_some_and(|e| e <= MAX_POSITION_HOLD_2SIGMA_M),
+                    "position within 1.5 m (2σ)",
+                );
+            }
+            if r.kind == Kind::Loiter {
+                need(
+                    h.loiter_moved_m.is_some_and(|m| m >= MIN_LOITER_MOVE_M),
+                    "the push moved the frame ≥ 2 m",
+                );
+                need(
+                    h.held_position_drift_m
+                        .is_some_and(|d| d <= MAX_LOITER_DRIFT_M),
+                    "the new position held within 1.5 m",
+                );
+            }
+        }
     }
     bad
 }
@@ -157,9 +234,32 @@ fn num(v: Option<f64>, unit: &str) -> String {
 /// The scenario-specific figure of a row.
 fn detail(r: &Report) -> String {
     match r.kind {
+        Kind::LinkCut if r.gps => format!(
+            "GPS fix: failsafe {} after the fault; its hold drifted {}, altitude {}",
+            num(r.failsafe_delay_s, " s"),
+            num(r.hold.held_position_drift_m, " m"),
+            num(r.hold.altitude_error_max_m, " m"),
+        ),
         Kind::LinkCut | Kind::HandsetUnplugged => {
             format!("failsafe {} after the fault", num(r.failsafe_delay_s, " s"))
         }
+        Kind::AltitudeHold => format!(
+            "altitude error ≤ {} over 60 s",
+            num(r.hold.altitude_error_max_m, " m")
+        ),
+        Kind::PositionHold => format!(
+            "wind {} m/s: position error 2σ {} (worst {}), altitude ≤ {}",
+            fixed(r.wind_mps, 1),
+            num(r.hold.position_error_2sigma_m, " m"),
+            num(r.hold.position_error_max_m, " m"),
+            num(r.hold.altitude_error_max_m, " m"),
+        ),
+        Kind::Loiter => format!(
+            "moved {}; new position held within {} (2σ {})",
+            num(r.hold.loiter_moved_m, " m"),
+            num(r.hold.held_position_drift_m, " m"),
+            num(r.hold.position_error_2sigma_m, " m"),
+        ),
         Kind::ImuStall | Kind::ImuFrozen => format!(
             "disarm ({}) {} after the fault; motors restarted: {}",
             r.disarm_reason.unwrap_or("–"),
@@ -199,8 +299,13 @@ pub fn markdown(rows: &[(Option<f64>, Report)]) -> String {
         let bad = check(r);
         let _ = writeln!(
             t,
-            "| {} | {} | {} | {:.1} | {}/{} | {} | {} at {} | {} | {} | {} | {} | {} |",
+            "| {}{} | {} | {} | {:.1} | {}/{} | {} | {} at {} | {} | {} | {} | {} | {} |",
             r.kind.name(),
+            if r.gps && !r.kind.needs_gps() {
+                " --gps"
+            } else {
+                ""
+            },
             rate_name(r.rate),
             altitude.map_or("–".into(), |a| format!("{a:.0}")),
             r.max_altitude_m,
@@ -242,6 +347,13 @@ pub fn all(mut progress: impl FnMut(&str)) -> Result<Vec<(Option<f64>, Report)>,
         }
         progress(&format!("link-cut {}", rate_name(rate)));
     }
+    for (a, o) in GPS_LINK_CUT_ALTITUDES_M
+        .iter()
+        .zip(link_cuts_with_fix(&GPS_LINK_CUT_ALTITUDES_M)?)
+    {
+        rows.push((Some(*a), o.report));
+    }
+    progress("link-cut --gps");
     for kind in Kind::ALL {
         if kind == Kind::LinkCut {
             continue;

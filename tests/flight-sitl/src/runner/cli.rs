@@ -28,7 +28,12 @@ use super::{Kind, Options};
   radio-brownout      hovering, the flight RFM22B browns out for 2 s at --at
   settings-corrupt    the flight settings flash is corrupted at boot; the pilot tries to fly
   low-battery         hovering, the pack falls 50 mV/s from 4.0 V from --at
-  table               the acceptance runs of issues 12/13, as a Markdown table
+  altitude-hold       hovering at --altitude (10 m), the mode switch goes to altitude hold,
+                      throttle centred, for a minute (indoor INS on the baro; --gps: full INS)
+  position-hold       as altitude-hold in position hold, with a GPS receiver (--wind M/S)
+  loiter              position hold in loiter; the pilot pushes pitch forward (half stick)
+                      for 3 s and releases: how far it moved, how well the new spot is held
+  table               the acceptance runs of issues 12/13/16, as a Markdown table
 
   oneshot-experiment  the seed's OneShot125 experiment (its own options: --runs N, --json,
                       --plot DIR; see `flight-sitl oneshot-experiment --help`)
@@ -40,6 +45,8 @@ Examples:
   flight-sitl hover --rate F500 --json
   flight-sitl link-cut --altitude 60 --rate L50 --plot out
   flight-sitl link-cut --set failsafe.descent_mps=1.5 --seed 3
+  flight-sitl link-cut --gps              (the failsafe holds position 30 s, then descends)
+  flight-sitl position-hold --wind 3 --json
   flight-sitl handset-unplugged --module-set input_timeout_ms=1000
   flight-sitl table > acceptance.md
 
@@ -75,6 +82,13 @@ pub struct Cli {
     /// Virtual duration, seconds (0 < S ≤ 3600; default: long enough to play the scenario out).
     #[arg(long, value_name = "S", value_parser = duration)]
     pub duration: Option<f64>,
+    /// A simulated GPS receiver on the flight controller (5 Hz, 100 ms latency, 0.5 m
+    /// noise) and the full INS (`ins.mode ins`); position-hold and loiter always have one.
+    #[arg(long)]
+    pub gps: bool,
+    /// A steady wind from the north, m/s (0 ≤ M/S ≤ 15).
+    #[arg(long, value_name = "M/S", value_parser = wind, default_value_t = 0.0)]
+    pub wind: f64,
     /// Print the figures as one JSON object on stdout (fields in the README).
     #[arg(long)]
     pub json: bool,
@@ -100,6 +114,9 @@ pub enum ScenarioArg {
     RadioBrownout,
     SettingsCorrupt,
     LowBattery,
+    AltitudeHold,
+    PositionHold,
+    Loiter,
     Table,
 }
 
@@ -117,6 +134,9 @@ impl ScenarioArg {
             Self::RadioBrownout => Kind::RadioBrownout,
             Self::SettingsCorrupt => Kind::SettingsCorrupt,
             Self::LowBattery => Kind::LowBattery,
+            Self::AltitudeHold => Kind::AltitudeHold,
+            Self::PositionHold => Kind::PositionHold,
+            Self::Loiter => Kind::Loiter,
             Self::Table => return None,
         })
     }
@@ -167,6 +187,10 @@ fn altitude(s: &str) -> Result<f64, String> {
     number_in(s, 1.0, 120.0, "the altitude (m)")
 }
 
+fn wind(s: &str) -> Result<f64, String> {
+    number_in(s, 0.0, 15.0, "the wind (m/s)")
+}
+
 fn duration(s: &str) -> Result<f64, String> {
     let v = number_in(s, 0.0, 3_600.0, "the duration (s)")?;
     if v > 0.0 {
@@ -192,7 +216,12 @@ impl Cli {
     /// # Errors
     /// A setting name or value refused by the flight or module settings, with the reason.
     pub fn options(&self) -> Result<Options, String> {
-        let mut o = Options::factory();
+        // The scenario's own needs (INS mode, hold mode, receiver) first; --set may change them.
+        let mut o = match self.scenario.kind() {
+            Some(kind) => Options::for_kind(kind, self.gps)?,
+            None => Options::factory(),
+        };
+        o.wind_mps = self.wind;
         o.rate = self.rate.into();
         o.seed = self.seed;
         o.at_s = self.at;
@@ -263,6 +292,41 @@ mod tests {
         assert!(cli.json);
     }
 
+    /// The index of choice `text` of setting `name`.
+    fn choice(name: &str, text: &str) -> u32 {
+        let mut s = flight_core::settings::Settings::default();
+        s.set_text(name, text).unwrap();
+        s.u32(name)
+    }
+
+    #[test]
+    fn hold_scenarios_bring_their_settings_and_receiver() {
+        let o = parse("position-hold --wind 3").unwrap().options().unwrap();
+        assert!(o.gps);
+        assert_eq!(o.wind_mps, 3.0);
+        assert_eq!(o.settings.u32("ins.mode"), choice("ins.mode", "ins"));
+        assert_eq!(
+            o.settings.u32("mode.switch_high"),
+            choice("mode.switch_high", "position-hold")
+        );
+        let a = parse("altitude-hold").unwrap().options().unwrap();
+        assert!(!a.gps);
+        assert_eq!(a.settings.u32("ins.mode"), choice("ins.mode", "ins_indoor"));
+        let c = parse("link-cut --gps").unwrap().options().unwrap();
+        assert!(c.gps);
+        assert_eq!(c.settings.u32("ins.mode"), choice("ins.mode", "ins"));
+        // Plain link-cut: factory settings, no receiver.
+        let plain = parse("link-cut").unwrap().options().unwrap();
+        assert!(!plain.gps);
+        assert_eq!(plain.settings, Options::factory().settings);
+        // --set comes after the scenario's needs.
+        let l = parse("loiter --set ins.mode=ins_indoor")
+            .unwrap()
+            .options()
+            .unwrap();
+        assert_eq!(l.settings.u32("ins.mode"), choice("ins.mode", "ins_indoor"));
+    }
+
     #[test]
     fn nonsense_is_refused() {
         for bad in [
@@ -277,6 +341,8 @@ mod tests {
             "hover --duration 0",
             "hover --set failsafe.descent_mps",
             "hover --seed -1",
+            "position-hold --wind 20",
+            "position-hold --wind -1",
         ] {
             assert!(parse(bad).is_err(), "{bad} accepted");
         }
@@ -288,6 +354,7 @@ mod tests {
             "hover --module-set tx_power=9",
             "hover --module-set rate=M100",
             "hover --at 10",
+            "loiter --at 10",
         ] {
             let err = parse(refused).unwrap().options().unwrap_err();
             assert!(!err.is_empty(), "{refused}");

@@ -1,11 +1,13 @@
 //! The scenario runner behind the `flight-sitl` binary: named failure scenarios
 //! ([`Kind`]) flown by a scripted pilot ([`pilot`]) through the world ([`crate::run`]),
 //! reduced to the figures of [`report`], drawn by [`plot`], and the acceptance set of
-//! issues 12 and 13 ([`acceptance`]). Tests call [`run_kind`] directly, without spawning
-//! the binary.
+//! issues 12 and 13 ([`acceptance`]), and the INS hold modes of issue 16 (`altitude-hold`,
+//! `position-hold`, `loiter`, `link-cut --gps`; [`hold`] measures them). Tests call
+//! [`run_kind`] directly, without spawning the binary.
 
 pub mod acceptance;
 pub mod cli;
+pub mod hold;
 pub mod pilot;
 pub mod plot;
 pub mod report;
@@ -45,11 +47,17 @@ pub enum Kind {
     SettingsCorrupt,
     /// Hovering, the pack voltage falls 50 mV/s from 4.0 V until below critical.
     LowBattery,
+    /// Hovering, the mode switch goes to altitude hold (throttle centred) for a minute.
+    AltitudeHold,
+    /// Hovering with a GPS fix, the mode switch goes to position hold (sticks centred).
+    PositionHold,
+    /// Position hold in loiter: the pilot pushes pitch forward for a while and releases.
+    Loiter,
 }
 
 impl Kind {
     /// Every scenario, in the order of the README.
-    pub const ALL: [Kind; 10] = [
+    pub const ALL: [Kind; 13] = [
         Kind::Hover,
         Kind::LinkCut,
         Kind::PowerCycle,
@@ -60,6 +68,9 @@ impl Kind {
         Kind::RadioBrownout,
         Kind::SettingsCorrupt,
         Kind::LowBattery,
+        Kind::AltitudeHold,
+        Kind::PositionHold,
+        Kind::Loiter,
     ];
 
     /// The command-line name.
@@ -75,6 +86,9 @@ impl Kind {
             Kind::RadioBrownout => "radio-brownout",
             Kind::SettingsCorrupt => "settings-corrupt",
             Kind::LowBattery => "low-battery",
+            Kind::AltitudeHold => "altitude-hold",
+            Kind::PositionHold => "position-hold",
+            Kind::Loiter => "loiter",
         }
     }
 
@@ -82,7 +96,7 @@ impl Kind {
     pub fn default_altitude_m(self) -> f64 {
         match self {
             Kind::LinkCut => 30.0,
-            Kind::HandsetUnplugged => 10.0,
+            Kind::HandsetUnplugged | Kind::AltitudeHold | Kind::PositionHold | Kind::Loiter => 10.0,
             _ => 5.0,
         }
     }
@@ -98,7 +112,27 @@ impl Kind {
 
     /// Whether the fault is a scripted event in time (`--at` applies).
     pub fn has_fault_time(self) -> bool {
-        !matches!(self, Kind::Hover | Kind::SettingsCorrupt)
+        !matches!(self, Kind::Hover | Kind::SettingsCorrupt) && !self.is_hold()
+    }
+
+    /// Whether the scenario flies one of the INS hold modes (mode switch high).
+    pub fn is_hold(self) -> bool {
+        matches!(self, Kind::AltitudeHold | Kind::PositionHold | Kind::Loiter)
+    }
+
+    /// Whether the scenario always has a GPS receiver (position hold and loiter need one).
+    pub fn needs_gps(self) -> bool {
+        matches!(self, Kind::PositionHold | Kind::Loiter)
+    }
+
+    /// The hold mode on the switch's high position (`mode.switch_high`), if any.
+    fn hold_mode(self) -> Option<&'static str> {
+        match self {
+            Kind::AltitudeHold => Some("altitude-hold"),
+            Kind::PositionHold => Some("position-hold"),
+            Kind::Loiter => Some("loiter"),
+            _ => None,
+        }
     }
 }
 
@@ -123,6 +157,11 @@ pub struct Options {
     pub altitude_m: Option<f64>,
     /// Virtual duration, s (None: long enough for the scenario to play out).
     pub duration_s: Option<f64>,
+    /// A GPS receiver on the flight controller (`crate::gps::GpsConfig::default()`: 5 Hz,
+    /// 100 ms latency, noise). Set by [`Options::for_kind`] with the settings it needs.
+    pub gps: bool,
+    /// Steady wind from the north, m/s.
+    pub wind_mps: f64,
 }
 
 impl Options {
@@ -139,7 +178,40 @@ impl Options {
             at_s: None,
             altitude_m: None,
             duration_s: None,
+            gps: false,
+            wind_mps: 0.0,
         }
+    }
+
+    /// [`Options::factory`] plus what `kind` needs, with a GPS receiver if `gps` (or the
+    /// scenario needs one): the full INS (`ins.mode ins`) with a receiver, the indoor INS
+    /// (`ins_indoor`, baro) for altitude hold without one, and the scenario's hold mode on
+    /// the mode switch's high position.
+    ///
+    /// # Errors
+    /// Never for the factory settings (a refused setting names itself).
+    pub fn for_kind(kind: Kind, gps: bool) -> Result<Self, String> {
+        let mut o = Self::factory();
+        o.gps = gps || kind.needs_gps();
+        let ins = if o.gps {
+            Some("ins")
+        } else if kind.is_hold() {
+            Some("ins_indoor")
+        } else {
+            None
+        };
+        let mut set = |name: &str, value: &str| {
+            o.settings
+                .set_text(name, value)
+                .map_err(|e| format!("{name}={value}: {e}"))
+        };
+        if let Some(ins) = ins {
+            set("ins.mode", ins)?;
+        }
+        if let Some(mode) = kind.hold_mode() {
+            set("mode.switch_high", mode)?;
+        }
+        Ok(o)
     }
 }
 
@@ -175,6 +247,10 @@ pub struct Plan {
     pub duration_s: f64,
     /// The pilot.
     pub pilot: PilotPlan,
+    /// A GPS receiver flew.
+    pub gps: bool,
+    /// The wind from the north, m/s.
+    pub wind_mps: f64,
 }
 
 /// Why a run could not be made.
@@ -192,6 +268,8 @@ pub enum RunError {
         /// Asked, s.
         at_s: f64,
     },
+    /// A setting the scenario needs was refused.
+    Settings(String),
 }
 
 impl core::fmt::Display for RunError {
@@ -209,6 +287,7 @@ impl core::fmt::Display for RunError {
                 "--at {at_s} s is before the take-off at {} s",
                 pilot::TAKEOFF_S
             ),
+            Self::Settings(e) => write!(f, "the scenario's settings: {e}"),
         }
     }
 }
@@ -312,7 +391,12 @@ impl Piloting for PlanPilot {
                 Kind::ImuFrozen => input.imu = ImuInjection::Frozen,
                 Kind::RadioStuckIrq => input.flight_radio = RadioInjection::IrqStuckLow,
                 Kind::RadioBrownout => input.flight_radio = RadioInjection::BrownOut,
-                Kind::Hover | Kind::SettingsCorrupt | Kind::LowBattery => {}
+                Kind::Hover
+                | Kind::SettingsCorrupt
+                | Kind::LowBattery
+                | Kind::AltitudeHold
+                | Kind::PositionHold
+                | Kind::Loiter => {}
             }
         }
         if let (Kind::LowBattery, Some(a)) = (kind, fault_at_s)
@@ -336,6 +420,8 @@ fn scenario(opts: &Options, plan: Plan) -> Scenario {
     );
     s.seed = opts.seed;
     s.rate = opts.rate;
+    s.gps = opts.gps.then(crate::gps::GpsConfig::default);
+    s.quad.wind_ned_mps = [opts.wind_mps, 0.0, 0.0];
     s.module_settings = opts.module_settings;
     if kind == Kind::SettingsCorrupt {
         s.flight_flash = FlashInjection::Corrupted(opts.seed);
@@ -365,6 +451,8 @@ pub fn reach_times(opts: &Options, altitudes_m: &[f64]) -> Result<Vec<(f64, f64)
         hold_from_s: None,
         duration_s,
         pilot: plan,
+        gps: opts.gps,
+        wind_mps: opts.wind_mps,
     };
     let sitl = crate::run(scenario(opts, probe));
     let reached_m = sitl
@@ -401,7 +489,13 @@ pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunEr
             // Climb on to the cut; failsafe after 0.5 s; the descent from the peak (the
             // climb coasts ≈ 1 m on), touchdown and its detection.
             let top = altitude.max(2.5 * (at - pilot::TAKEOFF_S)) + 5.0;
-            (Some(at), None, at + top / descent + 12.0)
+            // With a fix the failsafe first holds the position and altitude.
+            let held = if opts.gps {
+                f64::from(flight_core::pipeline::FAILSAFE_HOLD_MS) / 1_000.0
+            } else {
+                0.0
+            };
+            (Some(at), None, at + held + top / descent + 12.0)
         }
         Kind::PowerCycle => {
             pilot.take_off = false;
@@ -427,6 +521,12 @@ pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunEr
         Kind::ImuStall | Kind::ImuFrozen | Kind::RadioStuckIrq | Kind::RadioBrownout => {
             let at = opts.at_s.unwrap_or(t_reach + SETTLE_S);
             (Some(at), Some(t_reach), at + 8.0)
+        }
+        Kind::AltitudeHold | Kind::PositionHold | Kind::Loiter => {
+            let timeline = hold::Timeline::of(kind, t_reach);
+            pilot.engage_s = Some(timeline.engage_s);
+            pilot.push = timeline.push;
+            (None, Some(t_reach), timeline.end_s)
         }
     };
     if let Some(at) = fault_at_s
@@ -457,6 +557,8 @@ pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunEr
         hold_from_s,
         duration_s: opts.duration_s.unwrap_or(duration_s),
         pilot,
+        gps: opts.gps,
+        wind_mps: opts.wind_mps,
     })
 }
 

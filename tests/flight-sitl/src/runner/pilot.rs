@@ -8,6 +8,11 @@
 //! physics step). The pilot looks at it in *glances*, every [`GLANCE_S`], as a person does,
 //! and holds the throttle in between; the runner's pilot (`super::PlanPilot`) records each
 //! glance into the plan as it takes it.
+//!
+//! In the hold scenarios the pilot, once settled at the altitude, flicks the mode switch high
+//! ([`PilotPlan::engage_s`]) and centres the throttle stick: from then on the flight
+//! controller holds, and the pilot only moves the pitch stick when the plan says
+//! ([`PilotPlan::push`]).
 
 use crate::scenario::PilotInput;
 use quad_sim::quad::QuadParams;
@@ -71,6 +76,22 @@ pub struct PilotPlan {
     pub hands_off_s: Option<f64>,
     /// From this time the pilot starts over (arms again and takes off), s.
     pub rearm_s: Option<f64>,
+    /// From this time the mode switch is high and the throttle stick centred (a hold mode
+    /// flies), s.
+    pub engage_s: Option<f64>,
+    /// The pitch stick held at `pitch` over [from, to) s while engaged (loiter).
+    pub push: Option<Push>,
+}
+
+/// The pilot holding the pitch stick for a while.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Push {
+    /// From, s.
+    pub from_s: f64,
+    /// To, s.
+    pub to_s: f64,
+    /// Stick, −1…1 (negative: forward, nose down).
+    pub pitch: f32,
 }
 
 impl PilotPlan {
@@ -90,6 +111,8 @@ impl PilotPlan {
             trim: trim as f32,
             hands_off_s: None,
             rearm_s: None,
+            engage_s: None,
+            push: None,
         }
     }
 
@@ -152,6 +175,21 @@ impl PilotPlan {
         if !self.take_off || t < TAKEOFF_S {
             return arming;
         }
+        if let Some(e) = self.engage_s
+            && t_s >= e
+        {
+            let pitch = self
+                .push
+                .filter(|p| (p.from_s..p.to_s).contains(&t_s))
+                .map_or(0.0, |p| p.pitch);
+            return PilotInput {
+                throttle: 0.5,
+                mode_switch: 1.0,
+                pitch,
+                yaw: 0.0,
+                ..arming
+            };
+        }
         let throttle = if t < BOOST_END_S {
             BOOST_THROTTLE
         } else {
@@ -212,6 +250,27 @@ mod tests {
             ..plan
         };
         assert_eq!(hands_off.input(12.5), PilotInput::default());
+    }
+
+    #[test]
+    fn an_engaged_pilot_centres_the_throttle_flicks_the_switch_and_pushes_when_told() {
+        let quad = QuadParams::quad_x(10.0, 6.5, 0.03, &QUAD_X);
+        let plan = PilotPlan {
+            engage_s: Some(10.0),
+            push: Some(Push {
+                from_s: 12.0,
+                to_s: 13.0,
+                pitch: -0.5,
+            }),
+            ..PilotPlan::climb(&quad, 0.05).hold(8.0, 5.0)
+        };
+        let before = plan.input(9.9);
+        assert_eq!((before.mode_switch, before.pitch), (-1.0, 0.0));
+        let on = plan.input(10.0);
+        assert_eq!((on.throttle, on.mode_switch, on.pitch), (0.5, 1.0, 0.0));
+        assert_eq!(plan.input(12.5).pitch, -0.5);
+        assert_eq!(plan.input(13.0).pitch, 0.0);
+        assert_eq!(plan.input(13.0).mode_switch, 1.0);
     }
 
     #[test]

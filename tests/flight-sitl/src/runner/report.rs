@@ -67,6 +67,13 @@ pub struct Report {
     pub battery_warning_at_s: Option<f64>,
     /// The battery reached critical, s.
     pub battery_critical_at_s: Option<f64>,
+    /// A GPS receiver flew.
+    pub gps: bool,
+    /// The wind from the north, m/s.
+    pub wind_mps: f64,
+    /// The hold scenarios' figures, and for a link cut with a fix the failsafe's hold
+    /// (`held_position_drift_m`, `altitude_error_max_m`).
+    pub hold: super::hold::Figures,
 }
 
 fn stopped(s: &Sample) -> bool {
@@ -164,6 +171,22 @@ pub fn extract(sitl: &Sitl, plan: &Plan) -> Report {
         .find(|x| x.out.decision == Decision::ControlRecovered && after_fault(x.t_s))
         .map(|x| x.t_s);
     let level = |l: BatteryLevel| s.iter().find(|x| x.battery == l).map(|x| x.t_s);
+    let hold = match (plan.kind, plan.hold_from_s) {
+        (k, Some(from)) if k.is_hold() => {
+            let timeline = super::hold::Timeline::of(k, from);
+            super::hold::measure(sitl, k, &timeline, plan.duration_s)
+        }
+        (Kind::LinkCut, _) if plan.gps => {
+            let hold_s = f64::from(flight_core::pipeline::FAILSAFE_HOLD_MS) / 1_000.0;
+            let held = failsafe_at_s.and_then(|f| super::hold::failsafe_hold(sitl, f, hold_s));
+            super::hold::Figures {
+                held_position_drift_m: held.map(|h| h.0),
+                altitude_error_max_m: held.map(|h| h.1),
+                ..super::hold::Figures::default()
+            }
+        }
+        _ => super::hold::Figures::default(),
+    };
     Report {
         kind: plan.kind,
         rate: plan.rate,
@@ -192,6 +215,9 @@ pub fn extract(sitl: &Sitl, plan: &Plan) -> Report {
             .map(|b| b.settings_error),
         battery_warning_at_s: level(BatteryLevel::Warning),
         battery_critical_at_s: level(BatteryLevel::Critical),
+        gps: plan.gps,
+        wind_mps: plan.wind_mps,
+        hold,
     }
 }
 
@@ -227,6 +253,7 @@ impl Report {
     /// The fields that only some scenarios carry, as (name, JSON value).
     fn extras(&self) -> Vec<(&'static str, String)> {
         let mut e = Vec::new();
+        let h = &self.hold;
         let fault = |e: &mut Vec<_>| {
             e.push(("fault_at_s", num(self.fault_at_s, 3)));
             e.push(("fault_end_s", num(self.fault_end_s, 3)));
@@ -236,6 +263,11 @@ impl Report {
             Kind::LinkCut => {
                 e.push(("cut_at_s", num(self.fault_at_s, 3)));
                 e.push(("failsafe_delay_s", num(self.failsafe_delay_s, 3)));
+                e.push(("gps", self.gps.to_string()));
+                if self.gps {
+                    e.push(("held_position_drift_m", num(h.held_position_drift_m, 2)));
+                    e.push(("altitude_error_max_m", num(h.altitude_error_max_m, 2)));
+                }
             }
             Kind::PowerCycle => {
                 e.push(("power_off_at_s", num(self.fault_at_s, 3)));
@@ -270,6 +302,22 @@ impl Report {
                 e.push(("drain_from_s", num(self.fault_at_s, 3)));
                 e.push(("battery_warning_at_s", num(self.battery_warning_at_s, 3)));
                 e.push(("battery_critical_at_s", num(self.battery_critical_at_s, 3)));
+            }
+            Kind::AltitudeHold | Kind::PositionHold | Kind::Loiter => {
+                e.push(("gps", self.gps.to_string()));
+                e.push(("wind_mps", fixed(self.wind_mps, 1)));
+                e.push(("hold_engaged_at_s", num(h.engaged_at_s, 3)));
+                e.push(("altitude_error_max_m", num(h.altitude_error_max_m, 2)));
+                if self.kind != Kind::AltitudeHold {
+                    e.push(("position_error_2sigma_m", num(h.position_error_2sigma_m, 2)));
+                }
+                if self.kind == Kind::PositionHold {
+                    e.push(("position_error_max_m", num(h.position_error_max_m, 2)));
+                }
+                if self.kind == Kind::Loiter {
+                    e.push(("loiter_moved_m", num(h.loiter_moved_m, 2)));
+                    e.push(("held_position_drift_m", num(h.held_position_drift_m, 2)));
+                }
             }
         }
         e

@@ -78,6 +78,8 @@ fn plan(kind: Kind, fault_at_s: Option<f64>) -> Plan {
         hold_from_s: None,
         duration_s: 10.0,
         pilot: PilotPlan::climb(&quad, 0.05),
+        gps: false,
+        wind_mps: 0.0,
     }
 }
 
@@ -247,4 +249,50 @@ fn numbers_never_read_minus_zero() {
     assert_eq!(fixed(-0.004, 2), "0.00");
     assert_eq!(fixed(-0.006, 2), "-0.01");
     assert_eq!(fixed(12.345, 1), "12.3");
+}
+
+#[test]
+fn the_hold_figures_measure_the_truth_against_what_was_held() {
+    // GIVEN a loiter: engaged at 10 s at 10 m, pushed north 15–18 s, then settled at
+    // 5 m north and wandering ±0.5 m east (and 0.2 m in height) around it
+    let timeline = crate::runner::hold::Timeline::of(Kind::Loiter, 5.0);
+    assert_eq!(timeline.engage_s, 10.0);
+    let push = timeline.push.unwrap();
+    assert_eq!((push.from_s, push.to_s), (20.0, 23.0));
+    assert_eq!(timeline.measure_from_s, 31.0);
+    let mut v = Vec::new();
+    for k in 0..600 {
+        let t = f64::from(k) * TS;
+        let north = ((t - 20.0) / 3.0).clamp(0.0, 1.0) * 5.0;
+        let east = if t >= 31.0 && k % 2 == 1 { 0.5 } else { 0.0 };
+        let up = if t >= 31.0 && k % 2 == 1 { 10.2 } else { 10.0 };
+        let mut s = sample(t, up, 0.0, true, false);
+        s.truth.state.position_m = [north, east, -up];
+        if t >= 10.05 {
+            s.out.mode = FlightMode::Loiter;
+        }
+        v.push(s);
+    }
+    // WHEN measured
+    let f = crate::runner::hold::measure(&sitl(v), Kind::Loiter, &timeline, 60.0);
+    // THEN the engagement is the first loop in the mode, the move is 5 m, the new position
+    // held within 0.5 m (2σ: twice the RMS of 0 and 0.5 alternating = 0.71 m), and the
+    // height within 0.2 m of the engagement's
+    assert!((f.engaged_at_s.unwrap() - 10.1).abs() < 1e-9);
+    assert!((f.loiter_moved_m.unwrap() - 5.0).abs() < 1e-9);
+    assert!((f.held_position_drift_m.unwrap() - 0.5).abs() < 1e-9);
+    let two_sigma = f.position_error_2sigma_m.unwrap();
+    assert!(
+        (two_sigma - 2.0 * 0.125f64.sqrt()).abs() < 0.01,
+        "{two_sigma}"
+    );
+    assert!((f.altitude_error_max_m.unwrap() - 0.2).abs() < 1e-9);
+    // A hold the flight controller never entered has no figures.
+    let never = crate::runner::hold::measure(
+        &sitl(vec![sample(11.0, 10.0, 0.0, true, false)]),
+        Kind::Loiter,
+        &timeline,
+        60.0,
+    );
+    assert_eq!(never, crate::runner::hold::Figures::default());
 }
