@@ -71,7 +71,7 @@ pub fn scenario(o: &WorldOptions) -> Scenario {
     // Both ends carry the served world's binding phrase (spec §12): the page signs its
     // setting changes with it, as a pilot's phone would.
     let key = LinkKey::from_phrase(SERVE_PHRASE);
-    let _ = s.settings.set_link_key(Some(key));
+    s.settings.set_link_key(Some(key));
     let mut module = crate::runner::bound_module_settings(o.rate);
     module.link_key = Some(key);
     s.module_settings = Some(module);
