@@ -40,6 +40,16 @@ fuzz_target!(|data: &[u8]| {
                 write_list(&mut out, &settings, prefix).expect("String never fails");
             }
             Command::Defaults => settings = Settings::default(),
+            // A phrase the rules refuse leaves the key as it was; one they take keys the set.
+            Command::Phrase(text) => {
+                let before = settings.link_key();
+                match telemetry::link::key_for_phrase(text) {
+                    Ok(key) => settings.set_link_key(key),
+                    Err(_) => assert_eq!(settings.link_key(), before),
+                }
+            }
+            Command::PhraseClear => settings.set_link_key(None),
+            Command::PhraseShow => {}
             Command::Help
             | Command::Save
             | Command::Status

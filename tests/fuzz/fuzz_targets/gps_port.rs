@@ -13,7 +13,9 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     let mut settings = Settings::default();
-    settings.set_text("ins.mode", "ins").expect("a factory choice");
+    settings
+        .set_text("ins.mode", "ins")
+        .expect("a factory choice");
     let Some(mut app) = FlightApp::new(settings, 0) else {
         return;
     };
@@ -36,7 +38,10 @@ fuzz_target!(|data: &[u8]| {
         let (chunk, tail) = rest.split_at(n.min(rest.len()));
         app.on_gps_bytes(t, chunk);
         if let Some(frame) = app.gps_to_send(t) {
-            assert!(frame.len() >= 8 && frame[0] == 0xB5 && frame[1] == 0x62, "{frame:?}");
+            assert!(
+                frame.len() >= 8 && frame[0] == 0xB5 && frame[1] == 0x62,
+                "{frame:?}"
+            );
         }
         for _ in 0..5 {
             app.on_imu_sample(t, &level(t));

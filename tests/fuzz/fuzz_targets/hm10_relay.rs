@@ -9,9 +9,9 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use telemetry::cobs;
 use module_core::hm10::relay::{MAX_FRAME_LEN, MAX_RECORD_LEN, PhoneEvent, PhoneReader, Relay};
 use taulink_fuzz::Input;
+use telemetry::cobs;
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
