@@ -286,7 +286,10 @@ fn sender_never_cuts_a_record() {
     let records = stream.iter().filter_map(|&b| hub.push(b)).count();
     assert!(records > 100, "{records}");
     // Every record started was completed, but perhaps the last one still queued.
-    assert!(starts - records <= 1, "{starts} started, {records} complete");
+    assert!(
+        starts - records <= 1,
+        "{starts} started, {records} complete"
+    );
 }
 
 #[test]
@@ -299,7 +302,11 @@ fn sender_never_cuts_a_record_when_the_link_drops() {
     let mut stream = Vec::new();
     for slot in 0..400u64 {
         // The link comes and goes at odd moments.
-        let telemetry = if slot % 7 == 3 || slot % 11 == 5 { &down } else { &full_telemetry() };
+        let telemetry = if slot % 7 == 3 || slot % 11 == 5 {
+            &down
+        } else {
+            &full_telemetry()
+        };
         if let Some(Frame::User(data)) = sender.next_frame(slot * 30_000, telemetry) {
             stream.extend_from_slice(&data);
         }
@@ -308,7 +315,10 @@ fn sender_never_cuts_a_record_when_the_link_drops() {
     let mut hub = HubDecoder::new();
     let records = stream.iter().filter_map(|&b| hub.push(b)).count();
     assert!(records > 50, "{records}");
-    assert!(starts - records <= 1, "{starts} started, {records} complete");
+    assert!(
+        starts - records <= 1,
+        "{starts} started, {records} complete"
+    );
 }
 
 /// EdgeTX `processHubPacket`, VOLTS_ID: index = bits 4–7, the 12-bit 1/500 V value's top
@@ -344,9 +354,15 @@ fn sender_sends_every_cell_in_turn() {
         .collect();
     // 11.104 V over 3 cells = 3701 mV → 3700 in 2 mV steps, for each of cells 0, 1, 2.
     assert!(cells.len() > 20, "{}", cells.len());
-    assert!(cells.iter().all(|&(i, mv)| i < 3 && mv == 3_700), "{cells:?}");
+    assert!(
+        cells.iter().all(|&(i, mv)| i < 3 && mv == 3_700),
+        "{cells:?}"
+    );
     for index in 0..3 {
-        assert!(cells.iter().filter(|c| c.0 == index).count() > 5, "{cells:?}");
+        assert!(
+            cells.iter().filter(|c| c.0 == index).count() > 5,
+            "{cells:?}"
+        );
     }
 }
 

@@ -343,7 +343,11 @@ impl Sender {
             // EdgeTX has 4 bits of index: a pack above 16S is not sent.
             if (1..=16).contains(&count) {
                 for _ in 0..CELLS_PER_ROUND.min(count) {
-                    let index = if self.next_cell < count { self.next_cell } else { 0 };
+                    let index = if self.next_cell < count {
+                        self.next_cell
+                    } else {
+                        0
+                    };
                     let _ = records.push(HubRecord::cell(index, cell_mv));
                     self.next_cell = index + 1;
                 }
