@@ -10,7 +10,7 @@ use telemetry::handset::frsky_d::hub::{SenderConfig, id};
 use telemetry::handset::frsky_d::{
     self, Decoder, Event, Frame, HubDecoder, HubRecord, LinkFrame, Rejection, Sender,
 };
-use telemetry::handset::report::{BatteryReport, FlightModeReport, LinkReport};
+use telemetry::handset::report::{BatteryReport, FlightModeReport, LinkReport, VerticalReport};
 
 fn hex(text: &str) -> Vec<u8> {
     let text: String = text.split_whitespace().collect();
@@ -248,6 +248,120 @@ fn sender_without_hub_data_sends_link_frames() {
                 rssi: 90,
                 tx_rssi: 97
             })
+        );
+    }
+}
+
+/// Everything the hub carries, a 3S pack included: more than five user frames per round.
+fn full_telemetry() -> HandsetTelemetry {
+    HandsetTelemetry {
+        vertical: Some(VerticalReport {
+            altitude_cm: -1_234,
+            vario_cm_s: -56,
+        }),
+        cells: Some(3),
+        ..telemetry()
+    }
+}
+
+/// The hub stream (user-frame data, in order) of `slots` slots.
+fn hub_stream(sender: &mut Sender, telemetry: &HandsetTelemetry, slots: u64) -> Vec<u8> {
+    let mut stream = Vec::new();
+    for slot in 0..slots {
+        if let Some(Frame::User(data)) = sender.next_frame(slot * 30_000, telemetry) {
+            stream.extend_from_slice(&data);
+        }
+    }
+    stream
+}
+
+#[test]
+fn sender_never_cuts_a_record() {
+    // The link frame every sixth slot used to clear the queue, cutting the record in flight
+    // (EdgeTX then drops it at the next 0x5E).
+    let mut sender = Sender::new(SenderConfig::default());
+    let stream = hub_stream(&mut sender, &full_telemetry(), 600);
+    let starts = stream.iter().filter(|&&b| b == 0x5E).count();
+    let mut hub = HubDecoder::new();
+    let records = stream.iter().filter_map(|&b| hub.push(b)).count();
+    assert!(records > 100, "{records}");
+    // Every record started was completed, but perhaps the last one still queued.
+    assert!(
+        starts - records <= 1,
+        "{starts} started, {records} complete"
+    );
+}
+
+#[test]
+fn sender_never_cuts_a_record_when_the_link_drops() {
+    let mut sender = Sender::new(SenderConfig::default());
+    let down = HandsetTelemetry {
+        link: None,
+        ..full_telemetry()
+    };
+    let mut stream = Vec::new();
+    for slot in 0..400u64 {
+        // The link comes and goes at odd moments.
+        let telemetry = if slot % 7 == 3 || slot % 11 == 5 {
+            &down
+        } else {
+            &full_telemetry()
+        };
+        if let Some(Frame::User(data)) = sender.next_frame(slot * 30_000, telemetry) {
+            stream.extend_from_slice(&data);
+        }
+    }
+    let starts = stream.iter().filter(|&&b| b == 0x5E).count();
+    let mut hub = HubDecoder::new();
+    let records = stream.iter().filter_map(|&b| hub.push(b)).count();
+    assert!(records > 50, "{records}");
+    assert!(
+        starts - records <= 1,
+        "{starts} started, {records} complete"
+    );
+}
+
+/// EdgeTX `processHubPacket`, VOLTS_ID: index = bits 4–7, the 12-bit 1/500 V value's top
+/// nibble in bits 0–3 and its low byte in bits 8–15. Returns (index, mV).
+fn edgetx_cell(value: u16) -> (u16, u16) {
+    let index = (value & 0x00F0) >> 4;
+    let raw = ((value & 0xFF00) >> 8) + ((value & 0x000F) << 8);
+    (index, raw * 2)
+}
+
+#[test]
+fn cell_records_follow_edgetx() {
+    // 4.2 V = 2100 · 2 mV = 0x834: low byte 0x34 in the high byte, top nibble 8 in bits 0–3.
+    let record = HubRecord::cell(5, 4_200);
+    assert_eq!(record.id, id::CELLS);
+    assert_eq!(record.value, 0x3458);
+    assert_eq!(edgetx_cell(record.value), (5, 4_200));
+    // Odd millivolts go down to the 2 mV step; above 8.19 V saturates at 12 bits.
+    assert_eq!(edgetx_cell(HubRecord::cell(0, 3_701).value), (0, 3_700));
+    assert_eq!(edgetx_cell(HubRecord::cell(15, 9_000).value), (15, 8_190));
+}
+
+#[test]
+fn sender_sends_every_cell_in_turn() {
+    let mut sender = Sender::new(SenderConfig::default());
+    let stream = hub_stream(&mut sender, &full_telemetry(), 300);
+    let mut hub = HubDecoder::new();
+    let cells: Vec<(u16, u16)> = stream
+        .iter()
+        .filter_map(|&b| hub.push(b))
+        .filter(|r| r.id == id::CELLS)
+        .map(|r| edgetx_cell(r.value))
+        .collect();
+    // 11.104 V over 3 cells = 3701 mV → 3700 in 2 mV steps, for each of cells 0, 1, 2.
+    assert!(cells.len() > 20, "{}", cells.len());
+    assert!(
+        cells.iter().all(|&(i, mv)| i < 3 && mv == 3_700),
+        "{cells:?}"
+    );
+    for index in 0..3 {
+        assert!(
+            cells.iter().filter(|c| c.0 == index).count() > 5,
+            "{cells:?}"
         );
     }
 }

@@ -3,8 +3,9 @@
 //! sends them to the handset on the JR line; decoded back out of those line bytes with
 //! EdgeTX's own rules, written here from the protocol (not with our encoders) — CRSF VARIO
 //! 0x07 and BARO_ALTITUDE 0x09 (`crossfire.cpp`), S.Port ALT 0x0100, VARIO 0x0110 and CELLS
-//! 0x0300 (`frsky_sport.cpp`), FrSky D hub BARO_ALT 0x10/0x21 and VARIO 0x30
-//! (`frsky_d.cpp`) — they are the flight side's values.
+//! 0x0300 (`frsky_sport.cpp`), FrSky D hub BARO_ALT 0x10/0x21, VARIO 0x30 and CELLS 0x06
+//! (`frsky_d.cpp`) — they are the flight side's values. CRSF has no per-cell frame (EdgeTX
+//! shows CRSF cells only through the BATTERY frame's pack voltage).
 
 #![allow(
     clippy::unwrap_used,
@@ -309,12 +310,20 @@ fn hub_records(sitl: &Sitl) -> Vec<(u8, i16)> {
 }
 
 #[test]
-fn frsky_d_altitude_and_vario_are_the_flight_sides() {
+fn frsky_d_altitude_vario_and_cells_are_the_flight_sides() {
     let sitl = hover_with(InputProtocol::Ppm, OutputProtocol::FrskyHub);
     let vertical = check_sent_values_are_the_flight(&sitl);
-    let (mut alt, mut vspd, mut bp) = (Vec::new(), Vec::new(), None);
+    let (_, counts, packs) = sent(&sitl);
+    let (mut alt, mut vspd, mut bp, mut cells) = (Vec::new(), Vec::new(), None, Vec::new());
     for (id, value) in hub_records(&sitl) {
         match id {
+            // CELLS_ID as EdgeTX's `processHubPacket` unpacks it: index = bits 4–7, the
+            // 1/500 V value = bits 8–15 plus bits 0–3 as its top nibble.
+            0x06 => {
+                let v = value as u16;
+                let raw = u32::from((v >> 8) + ((v & 0x0F) << 8));
+                cells.push(((v >> 4) & 0x0F, raw * 2));
+            }
             0x10 => bp = Some(i32::from(value)),
             // AP ≤ 9 is decimetres: `100·BP ± AP·10` cm by the sign of BP.
             0x21 => {
@@ -345,4 +354,16 @@ fn frsky_d_altitude_and_vario_are_the_flight_sides() {
         .collect();
     assert!(alt.iter().all(|a| sent_dm.contains(a)), "{alt:?}");
     assert!(alt.iter().collect::<BTreeSet<_>>().len() > 5, "{alt:?}");
+    // The world's pack is a 1S: EdgeTX counts cells by the highest index (+ 1), so every
+    // index is 0, and each cell is the flight side's pack voltage over its count, in 2 mV.
+    println!("FrSky D: {} Cels", cells.len());
+    assert!(cells.len() > 10, "{}", cells.len());
+    assert_eq!(counts.iter().copied().collect::<Vec<_>>(), vec![1]);
+    for (index, cell_mv) in cells {
+        assert_eq!(index, 0);
+        assert!(
+            packs.iter().any(|p| u32::from(*p) / 2 * 2 == cell_mv),
+            "{cell_mv} mV of {packs:?}"
+        );
+    }
 }

@@ -35,7 +35,12 @@ pub mod id {
     pub const BARO_ALT_AP: u8 = 0x21;
     /// Vertical speed, cm/s (signed).
     pub const VARIO: u8 = 0x30;
+    /// One cell (EdgeTX `VOLTS_ID`, "Cels"): see [`super::HubRecord::cell`].
+    pub const CELLS: u8 = 0x06;
 }
+
+/// Largest 12-bit cell value (1/500 V steps): 8.19 V.
+pub const CELL_RAW_MAX: u16 = 0x0FFF;
 
 /// Offset marking a high-precision (0.01 V) VFAS value.
 pub const VFAS_HIGH_PRECISION_OFFSET: u16 = 2000;
@@ -57,6 +62,18 @@ impl HubRecord {
         Self {
             id: id::VFAS,
             value: centivolts + VFAS_HIGH_PRECISION_OFFSET,
+        }
+    }
+
+    /// Cell `index` (0…15) at `cell_mv`, as EdgeTX's `processHubPacket` unpacks VOLTS_ID:
+    /// the index in bits 4–7, the voltage in 1/500 V (12 bits, cut to the 2 mV step) with its
+    /// top nibble in bits 0–3 and its low byte in bits 8–15. EdgeTX counts the cells from the
+    /// highest index it has seen.
+    pub fn cell(index: u8, cell_mv: u16) -> Self {
+        let raw = (cell_mv / 2).min(CELL_RAW_MAX);
+        Self {
+            id: id::CELLS,
+            value: ((raw & 0xFF) << 8) | (u16::from(index & 0x0F) << 4) | (raw >> 8),
         }
     }
 
@@ -185,14 +202,21 @@ impl Default for SenderConfig {
 
 /// Produces one frame per slot: link frames (A1 = battery, A2 = uplink LQ, RSSI = downlink
 /// LQ, TX RSSI = uplink LQ; RSSI 0 with no link) and, while the link streams, user frames
-/// with VFAS, current, fuel and the flight-mode number in Temp1.
+/// with VFAS, current, fuel, the flight-mode number in Temp1, baro altitude, vario and the
+/// cells (two per round, in turn). Records run on across link frames and are never cut.
 #[derive(Debug, Clone)]
 pub struct Sender {
     config: SenderConfig,
     last_slot_us: Option<u64>,
     slot: u8,
     queue: Deque<u8, 64>,
+    /// The next cell to send (cells go [`CELLS_PER_ROUND`] per refill, in turn).
+    next_cell: u8,
 }
+
+/// Cell records per refill: a 6S pack's cells take three rounds, and a round (9 records of
+/// at most 7 bytes) fits the queue.
+pub const CELLS_PER_ROUND: u8 = 2;
 
 impl Sender {
     /// A sender that has sent nothing.
@@ -202,6 +226,7 @@ impl Sender {
             last_slot_us: None,
             slot: 0,
             queue: Deque::new(),
+            next_cell: 0,
         }
     }
 
@@ -215,8 +240,13 @@ impl Sender {
         self.last_slot_us = Some(now_us);
         let slot = self.slot;
         self.slot = (slot + 1) % self.config.link_every.max(1);
-        if slot == 0 || !telemetry.link_streaming() {
-            self.queue.clear();
+        if !telemetry.link_streaming() {
+            self.drop_unstarted_records();
+            return Some(Frame::Link(self.link_frame(telemetry)));
+        }
+        if slot == 0 {
+            // The queue carries over: EdgeTX parses the hub stream across user frames, and a
+            // record cut here would be dropped at the next 0x5E.
             return Some(Frame::Link(self.link_frame(telemetry)));
         }
         if self.queue.is_empty() {
@@ -234,6 +264,20 @@ impl Sender {
             let _ = data.push(byte);
         }
         Some(Frame::User(data))
+    }
+
+    /// Drops the queued records not yet begun (their values are stale once the link is
+    /// back) but keeps the rest of the one in flight, so that no record is ever cut. A raw
+    /// 0x5E only ever starts a record (stuffing escapes it elsewhere).
+    fn drop_unstarted_records(&mut self) {
+        let begun = self
+            .queue
+            .iter()
+            .position(|&byte| byte == HUB_START)
+            .unwrap_or(self.queue.len());
+        while self.queue.len() > begun {
+            let _ = self.queue.pop_back();
+        }
     }
 
     fn link_frame(&self, telemetry: &HandsetTelemetry) -> LinkFrame {
@@ -257,7 +301,7 @@ impl Sender {
     }
 
     fn refill(&mut self, telemetry: &HandsetTelemetry) {
-        let mut records: Vec<HubRecord, 7> = Vec::new();
+        let mut records: Vec<HubRecord, 9> = Vec::new();
         if let Some(battery) = telemetry.battery {
             let _ = records.push(HubRecord::vfas_mv(battery.voltage_mv));
             let _ = records.push(HubRecord {
@@ -295,7 +339,21 @@ impl Sender {
                 value: vertical.vario_cm_s as u16,
             });
         }
-        // 7 records × ≤ 7 bytes = 49 ≤ 64.
+        if let (Some(count), Some(cell_mv)) = (telemetry.cells, telemetry.cell_mv()) {
+            // EdgeTX has 4 bits of index: a pack above 16S is not sent.
+            if (1..=16).contains(&count) {
+                for _ in 0..CELLS_PER_ROUND.min(count) {
+                    let index = if self.next_cell < count {
+                        self.next_cell
+                    } else {
+                        0
+                    };
+                    let _ = records.push(HubRecord::cell(index, cell_mv));
+                    self.next_cell = index + 1;
+                }
+            }
+        }
+        // 9 records × ≤ 7 bytes = 63 ≤ 64.
         for byte in records.iter().flat_map(HubRecord::encode) {
             let _ = self.queue.push_back(byte);
         }
