@@ -219,6 +219,21 @@ pub struct ChangeRefused {
     pub counter: u32,
 }
 
+/// The home: where the flight side's GNSS position is measured from (its first usable fix,
+/// or one set explicitly), and where a return-to-home flies to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Home {
+    /// Latitude, 1e-7 degrees.
+    pub latitude_e7: i32,
+    /// Longitude, 1e-7 degrees.
+    pub longitude_e7: i32,
+    /// Altitude above mean sea level, cm.
+    pub altitude_cm: i32,
+    /// Whether a home is set (false: the position fields mean nothing).
+    pub set: bool,
+}
+
 /// Everything the telemetry stream carries.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -248,6 +263,8 @@ pub enum Message {
     /// A refused change, with the session and counter to sign the next one with
     /// (flight → phone).
     ChangeRefused(ChangeRefused),
+    /// The home position (flight → ground; appended: earlier variants keep their numbers).
+    Home(Home),
 }
 
 /// Largest postcard encoding of a [`Message`].
@@ -325,7 +342,7 @@ impl MessageReader {
 mod tests {
     use super::*;
 
-    fn samples() -> [Message; 8] {
+    fn samples() -> [Message; 9] {
         [
             Message::Attitude(Attitude {
                 roll_cdeg: -1234,
@@ -371,6 +388,12 @@ mod tests {
                 noise: 0.01,
             }),
             Message::SettingChange(SettingChange { id: 42, value: -7 }),
+            Message::Home(Home {
+                latitude_e7: -338_568_100,
+                longitude_e7: 1_512_152_970,
+                altitude_cm: -1_250,
+                set: true,
+            }),
         ]
     }
 
@@ -397,6 +420,20 @@ mod tests {
         assert_eq!(n, 1 + 2 + 2 + 3 + 2 + 1 + 1);
         // Largest: GPS, tag + 3 × i32 varint (5) + 2 × u16 (3) + u8 + fix tag.
         assert_eq!(MESSAGE_MAX_BYTES, 24);
+    }
+
+    #[test]
+    fn home_keeps_the_wire_number_after_every_earlier_variant() {
+        let m = Message::Home(Home {
+            latitude_e7: 1,
+            longitude_e7: -1,
+            altitude_cm: 2,
+            set: true,
+        });
+        let mut buf = [0u8; MESSAGE_MAX_BYTES];
+        let bytes = postcard::to_slice(&m, &mut buf).unwrap();
+        // Tag 12 (after ChangeRefused = 11), zig-zag 1, -1, 2, then true.
+        assert_eq!(bytes, &[12, 2, 1, 4, 1]);
     }
 
     #[test]

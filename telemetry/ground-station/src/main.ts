@@ -109,6 +109,9 @@ function render(): void {
     set("fix", `${g.fix === "Fix3d" ? "3D" : g.fix === "Fix2d" ? "2D" : "none"}, ${g.satellites} sats`);
     drawTrack($<HTMLCanvasElement>("track"), s.track);
   }
+  if (s.home) {
+    set("home", `${fmt.latLon(s.home.latitude_e7, s.home.longitude_e7)}, ${(s.home.altitude_cm / 100).toFixed(1)} m`);
+  }
   renderSysid();
   renderSettingValues();
 }

@@ -17,6 +17,8 @@ export interface Gps {
   latitude_e7: number; longitude_e7: number; altitude_cm: number; ground_speed_cm_s: number;
   course_cdeg: number; satellites: number; fix: GpsFix;
 }
+/** The flight side's home (first usable fix); `set` false: the position means nothing. */
+export interface Home { latitude_e7: number; longitude_e7: number; altitude_cm: number; set: boolean }
 export type Axis = "Roll" | "Pitch" | "Yaw";
 export interface SysIdResult { axis: Axis; beta1: number; beta2: number; tau_s: number; noise: number }
 export interface SettingChange { id: number; value: number }
@@ -34,7 +36,8 @@ export type Message =
   | { SysIdResult: SysIdResult }
   | { SettingChange: SettingChange }
   | { SignedChange: SignedChange }
-  | { ChangeRefused: ChangeRefused };
+  | { ChangeRefused: ChangeRefused }
+  | { Home: Home };
 
 export type Event = Message | "Dropped";
 

@@ -3,7 +3,7 @@
  * bounded histories behind the strip charts and the GPS track, and the settings the flight
  * side reported. Pure: `apply` folds one decoded event in at a given time.
  */
-import type { ArmState, Attitude, Axis, Battery, ChangeRefused, Event, FlightMode, Gps, LinkStats, SysIdResult } from "./messages";
+import type { ArmState, Attitude, Axis, Battery, ChangeRefused, Event, FlightMode, Gps, Home, LinkStats, SysIdResult } from "./messages";
 
 /** Strip charts show this much history. */
 export const HISTORY_MS = 5 * 60_000;
@@ -22,6 +22,8 @@ export interface State {
   mode?: FlightMode;
   arm?: ArmState;
   gps?: Gps;
+  /** The flight side's home, once it reported one set. */
+  home?: Home;
   sysid: Partial<Record<Axis, SysIdResult>>;
   /** Setting id → wire value the flight side reported. */
   settings: Map<number, number>;
@@ -73,6 +75,8 @@ export function apply(s: State, event: Event, tMs: number): State {
     let drop = 0;
     while (drop < s.linkHistory.length && (s.linkHistory[drop]?.t ?? tMs) < oldest) drop += 1;
     if (drop > 0) s.linkHistory.splice(0, drop);
+  } else if ("Home" in event) {
+    s.home = event.Home.set ? event.Home : undefined;
   } else if ("Gps" in event) {
     const g = event.Gps;
     s.gps = g;

@@ -20,6 +20,15 @@ describe("model", () => {
     expect([s.messages, s.dropped, s.lastMessageMs]).toEqual([3, 1, 4]);
   });
 
+  it("keeps the home the flight side reports set", () => {
+    const s = initialState();
+    const home = { latitude_e7: 470_654_321, longitude_e7: 80_123_456, altitude_cm: 50_000, set: true };
+    apply(s, { Home: home }, 1);
+    expect(s.home).toEqual(home);
+    apply(s, { Home: { ...home, set: false } }, 2);
+    expect(s.home).toBeUndefined();
+  });
+
   it("keeps the flight side's last refusal until that setting is applied", () => {
     const s = initialState();
     const refused = { id: 4, reason: "NotAuthenticated" as const, session: 7, counter: 0 };

@@ -10,7 +10,7 @@ use module_core::hm10::Relay;
 use module_core::hm10::relay::MAX_FRAME_LEN;
 use module_core::records;
 use telemetry::messages::{
-    ArmState, Attitude, Axis, Battery, Decoded, FRAMED_MAX_BYTES, FlightMode, Gps, GpsFix,
+    ArmState, Attitude, Axis, Battery, Decoded, FRAMED_MAX_BYTES, FlightMode, Gps, GpsFix, Home,
     LinkStats, Message, MessageReader, SettingChange, SysIdResult, encode_message,
 };
 use telemetry_wasm::stream::StreamDecoder;
@@ -159,6 +159,16 @@ fn streams() -> Vec<(&'static str, Vec<Vec<u8>>)> {
         ("damaged, joined mid-frame", chunked(&damaged, 20, &mut rng)),
         ("garbage", chunked(&garbage, 32, &mut rng)),
         ("oversize frame then a good one", vec![oversize]),
+        // Appended after the random streams (their RNG draws stay the same).
+        (
+            "home",
+            vec![framed(&Message::Home(Home {
+                latitude_e7: 470_654_321,
+                longitude_e7: -80_123_456,
+                altitude_cm: 50_000,
+                set: true,
+            }))],
+        ),
     ]
 }
 
@@ -229,6 +239,11 @@ fn the_streams_exercise_messages_and_drops() {
             "oversize frame then a good one" => {
                 assert!(all.starts_with("[\"Dropped\",{\"Attitude\""), "{name}")
             }
+            "home" => assert_eq!(
+                all,
+                "[{\"Home\":{\"altitude_cm\":50000,\"latitude_e7\":470654321,\"longitude_e7\":-80123456,\"set\":true}}]",
+                "{name}: the JSON the ground station's `Home` type describes"
+            ),
             "damaged, joined mid-frame" => {
                 assert!(kind("Dropped") >= 20 && kind("{\"") >= 180, "{name}")
             }

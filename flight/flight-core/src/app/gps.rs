@@ -1,6 +1,8 @@
 //! The GPS port: what the firmware's GPS task moves between the receiver's UART and the
 //! app. Bytes in go through the UBX parser; a NAV-PVT goes to the estimator (fused while the
 //! full INS flies, `ins.mode ins`) and, once a second, to telemetry as the `Gps` message;
+//! the estimator's home goes to telemetry as the `Home` message at once when it is set or
+//! moves, then every [`HOME_REPORT_PERIOD_MS`] (a ground station that joins late learns it);
 //! ACK/NAKs go to the boot configuration, whose frames the task writes back.
 //!
 //! Boot, as the task runs it: at each baud a receiver may be at on power-up
@@ -13,10 +15,10 @@
 //! not reset a flying frame; its loss shows as a lost fix.
 
 use heapless::Vec;
-use telemetry::messages::{Gps, GpsFix, Message as WireMessage};
+use telemetry::messages::{Gps, GpsFix, Home as WireHome, Message as WireMessage};
 
 use super::FlightApp;
-use crate::estimation::ins::aiding::gps::GpsUpdate;
+use crate::estimation::ins::aiding::gps::{GpsUpdate, Home};
 use crate::sensors::ubx::config::{self, Bytes};
 use crate::sensors::ubx::{Configurator, FixType, Generation, Message, NavPvt, Parser, Status};
 
@@ -27,6 +29,9 @@ pub const GPS_BAUD: u32 = 115_200;
 pub const GPS_BOOT_BAUDS: [u32; 3] = [9_600, 38_400, GPS_BAUD];
 /// Period of the telemetry `Gps` message, ms.
 pub const GPS_REPORT_PERIOD_MS: u32 = 1_000;
+/// Period of the telemetry `Home` message once the home is known, ms (a change goes out at
+/// once): the home rarely moves, so a slow repeat is enough for a late listener.
+pub const HOME_REPORT_PERIOD_MS: u32 = 5_000;
 
 /// The receiver settings asked for: [`GPS_BAUD`], 5 Hz, airborne < 2 g.
 fn receiver_settings() -> config::Settings {
@@ -57,6 +62,9 @@ pub(super) struct GpsPort {
     last_report_ms: Option<u32>,
     report: Option<Gps>,
     last_update: Option<GpsUpdate>,
+    /// The home last queued for telemetry, and when.
+    last_home: Option<(Home, u32)>,
+    home_report: Option<WireHome>,
 }
 
 impl GpsPort {
@@ -69,12 +77,36 @@ impl GpsPort {
             last_report_ms: None,
             report: None,
             last_update: None,
+            last_home: None,
+            home_report: None,
         }
     }
 
     /// The `Gps` telemetry message due, once.
     pub(super) fn take_report(&mut self) -> Option<Gps> {
         self.report.take()
+    }
+
+    /// Queues the `Home` message if `home` is new or moved, or the period ran out.
+    pub(super) fn on_home(&mut self, now_ms: u32, home: Option<Home>) {
+        let Some(home) = home else { return };
+        let due = self.last_home.is_none_or(|(last, t)| {
+            last != home || now_ms.wrapping_sub(t) >= HOME_REPORT_PERIOD_MS
+        });
+        if due {
+            self.last_home = Some((home, now_ms));
+            self.home_report = Some(home_message(&home));
+        }
+    }
+}
+
+/// The wire's `Home` message for the estimator's home.
+pub fn home_message(home: &Home) -> WireHome {
+    WireHome {
+        latitude_e7: home.lat_e7,
+        longitude_e7: home.lon_e7,
+        altitude_cm: home.h_msl_mm / 10,
+        set: true,
     }
 }
 
@@ -131,6 +163,8 @@ impl FlightApp {
                 self.gps.last_report_ms = Some(now_ms);
                 self.gps.report = Some(gps_message(pvt));
             }
+            let home = self.flight.estimator().home();
+            self.gps.on_home(now_ms, home);
         }
     }
 
@@ -160,5 +194,11 @@ impl FlightApp {
     /// takes it).
     pub(super) fn take_gps_report(&mut self) -> Option<WireMessage> {
         self.gps.take_report().map(WireMessage::Gps)
+    }
+
+    /// The `Home` message, due when the home is set or moves and then every
+    /// [`HOME_REPORT_PERIOD_MS`] (the link's report takes it).
+    pub(super) fn take_home_report(&mut self) -> Option<WireMessage> {
+        self.gps.home_report.take().map(WireMessage::Home)
     }
 }

@@ -371,8 +371,8 @@ impl FlightApp {
     }
 
     /// The next telemetry message, framed into `buf`, with `seen` as the link's figures:
-    /// a setting echo, then an identification result, then a state change out of turn,
-    /// else the rotation. `None` before the loop has run.
+    /// a setting echo, then an identification result, then a state change out of turn, then
+    /// the home and the GPS fix when due, else the rotation. `None` before the loop has run.
     pub(super) fn next_report(
         &mut self,
         seen: LinkSeen,
@@ -396,6 +396,8 @@ impl FlightApp {
         } else if self.link.last_state != Some(state) {
             self.link.last_state = Some(state);
             Reporter::state(&snap)
+        } else if let Some(home) = self.take_home_report() {
+            home
         } else if let Some(gps) = self.take_gps_report() {
             gps
         } else {

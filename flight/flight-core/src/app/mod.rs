@@ -28,7 +28,10 @@ mod phrase_tests;
 #[cfg(test)]
 mod tests;
 
-pub use gps::{GPS_BAUD, GPS_BOOT_BAUDS, GPS_REPORT_PERIOD_MS, gps_baud_messages, gps_message};
+pub use gps::{
+    GPS_BAUD, GPS_BOOT_BAUDS, GPS_REPORT_PERIOD_MS, HOME_REPORT_PERIOD_MS, gps_baud_messages,
+    gps_message, home_message,
+};
 pub use imu::{
     CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
 };

@@ -519,6 +519,66 @@ mod gps {
     }
 
     #[test]
+    fn the_home_goes_to_telemetry_once_set_then_every_five_seconds() {
+        // The home is the full INS's (`ins.mode ins`), once it runs.
+        let mut settings = Settings::default();
+        settings.set_text("ins.mode", "ins").unwrap();
+        let mut a = FlightApp::new(settings, 0).unwrap();
+        fly(&mut a, 0, 3_000, sticks(0.0, 0.0));
+        assert_eq!(a.take_home_report(), None, "no fix, no home");
+        a.on_gps_bytes(10, &bytes(&pvt(1_000)));
+        let home = a.flight.estimator().home().expect("the first fix is home");
+        // The link's report queue sends it (after the state change out of turn).
+        let mut reader = telemetry::messages::MessageReader::new();
+        let mut sent = Vec::new();
+        for _ in 0..3 {
+            let mut buf = [0u8; telemetry::messages::FRAMED_MAX_BYTES];
+            let n = a
+                .next_report(crate::report::LinkSeen::default(), &mut buf)
+                .unwrap();
+            sent.extend(buf[..n].iter().filter_map(|&b| reader.push(b)));
+        }
+        let Some(telemetry::messages::Decoded::Message(telemetry::messages::Message::Home(h))) =
+            sent.into_iter().find(|d| {
+                matches!(
+                    d,
+                    telemetry::messages::Decoded::Message(telemetry::messages::Message::Home(_))
+                )
+            })
+        else {
+            panic!("a Home message is sent once the home is set");
+        };
+        assert_eq!(
+            h,
+            telemetry::messages::Home {
+                latitude_e7: 470_654_321,
+                longitude_e7: 80_123_456,
+                altitude_cm: 50_000,
+                set: true,
+            }
+        );
+        assert_eq!((home.lat_e7, home.lon_e7), (h.latitude_e7, h.longitude_e7));
+        // Not repeated before the period; repeated after it.
+        a.on_gps_bytes(1_010, &bytes(&pvt(2_000)));
+        assert_eq!(a.take_home_report(), None);
+        a.on_gps_bytes(10 + HOME_REPORT_PERIOD_MS, &bytes(&pvt(6_000)));
+        assert_eq!(
+            a.take_home_report(),
+            Some(telemetry::messages::Message::Home(h))
+        );
+        // A home that moves goes out at once, period or not.
+        let moved = crate::estimation::ins::aiding::gps::Home {
+            lat_e7: home.lat_e7 + 100,
+            ..home
+        };
+        a.gps.on_home(20 + HOME_REPORT_PERIOD_MS, Some(moved));
+        let Some(telemetry::messages::Message::Home(m)) = a.take_home_report() else {
+            panic!("a moved home is reported at once");
+        };
+        assert_eq!(m.latitude_e7, 470_654_421);
+    }
+
+    #[test]
     fn the_receiver_is_configured_as_m9_and_as_m8_after_a_nak() {
         let mut a = app();
         let first = a.gps_to_send(0).unwrap().to_vec();

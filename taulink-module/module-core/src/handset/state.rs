@@ -87,7 +87,9 @@ impl FlightState {
             | Message::SysIdResult(_)
             | Message::SettingChange(_)
             | Message::SignedChange(_)
-            | Message::ChangeRefused(_) => {}
+            | Message::ChangeRefused(_)
+            // No handset protocol here carries a home (CRSF, S.Port, FrSky D); the phone does.
+            | Message::Home(_) => {}
         }
     }
 
