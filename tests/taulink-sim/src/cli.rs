@@ -36,6 +36,9 @@ pub const ATTACK_PHRASE: &str = "taulink-sim attack";
                                                    serve): open the printed URL
   taulink-sim --attack replay --json               a third radio replays every frame it
                                                    hears; JSON counts what was accepted
+  taulink-sim --protocol openlrs38 --cut 10:12     the crate's OpenLRSng TX and RX roles
+                                                   on the virtual chips (--olrs-profile,
+                                                   --olrs-16ch), same figures
 
 Exit status: 0 if every channel output and stream byte was right, 1 if any was wrong,
 2 for a command-line error."
