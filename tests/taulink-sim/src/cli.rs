@@ -7,7 +7,10 @@ use clap::{Parser, ValueEnum};
 use telemetry::channels::ChannelFormat;
 use telemetry::link::{Band, LinkKey, RateMode};
 
+use radio_rfm22b::openlrs::BindingVersion;
+
 use crate::handset::HandsetKind;
+use crate::openlrs::OpenLrsScenario;
 use crate::scenario::{Attack, Scenario};
 
 /// The binding phrase of `--attack` runs without `--phrase`.
@@ -33,11 +36,25 @@ pub const ATTACK_PHRASE: &str = "taulink-sim attack";
                                                    serve): open the printed URL
   taulink-sim --attack replay --json               a third radio replays every frame it
                                                    hears; JSON counts what was accepted
+  taulink-sim --protocol openlrs38 --cut 10:12     the crate's OpenLRSng TX and RX roles
+                                                   on the virtual chips (--olrs-profile,
+                                                   --olrs-16ch), same figures
 
 Exit status: 0 if every channel output and stream byte was right, 1 if any was wrong,
 2 for a command-line error."
 )]
 pub struct Cli {
+    /// Link protocol: taulink, or OpenLRSng (binding version 3.8 or 3.9: the crate's
+    /// OpenLRSng TX role flying its RX role on the virtual chips; --olrs-profile and
+    /// --olrs-16ch choose the air profile; TauLink-only options are refused).
+    #[arg(long, value_enum, default_value_t = ProtocolArg::Taulink)]
+    pub protocol: ProtocolArg,
+    /// OpenLRSng modem profile: 0..=4 = 4800, 9600, 19200 (the default), 57600, 125000 bit/s.
+    #[arg(long, value_name = "N", default_value_t = 2, value_parser = clap::value_parser!(u8).range(0..=4))]
+    pub olrs_profile: u8,
+    /// OpenLRSng: 16 channels per packet instead of 8.
+    #[arg(long)]
+    pub olrs_16ch: bool,
     /// Rate mode: L50 (long range), M100, F250, F500 (fast, short range) or F700 (the stick
     /// mode: sticks in every packet, aux channels round-robin; best at --ratio 8).
     #[arg(long, value_enum, ignore_case = true, default_value_t = RateArg::F250)]
@@ -154,6 +171,18 @@ pub enum RateArg {
     F500,
     #[value(name = "F700")]
     F700,
+}
+
+/// Link protocols as command-line words.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(missing_docs)] // the names are the documentation
+pub enum ProtocolArg {
+    #[value(name = "taulink")]
+    Taulink,
+    #[value(name = "openlrs38")]
+    Openlrs38,
+    #[value(name = "openlrs39")]
+    Openlrs39,
 }
 
 /// Handsets as command-line words.
@@ -302,6 +331,72 @@ fn cut(s: &str) -> Result<(f64, f64), String> {
 }
 
 impl Cli {
+    /// The OpenLRSng scenario these options describe: `Ok(None)` for `--protocol taulink`,
+    /// an error naming the first option that has no meaning for OpenLRSng (the TauLink
+    /// rate, keying, attacks, handset models, packet-level medium, sweeps, plots, serve).
+    pub fn openlrs(&self) -> Result<Option<OpenLrsScenario>, String> {
+        let version = match self.protocol {
+            ProtocolArg::Taulink => {
+                if self.olrs_profile != 2 || self.olrs_16ch {
+                    return Err(
+                        "--olrs-profile and --olrs-16ch need --protocol openlrs38|openlrs39".into(),
+                    );
+                }
+                return Ok(None);
+            }
+            ProtocolArg::Openlrs38 => BindingVersion::V38,
+            ProtocolArg::Openlrs39 => BindingVersion::V39,
+        };
+        let refused = [
+            (
+                self.rate != RateArg::F250,
+                "--rate (OpenLRSng: --olrs-profile)",
+            ),
+            (self.ratio != 4, "--ratio"),
+            (
+                self.compact8,
+                "--compact8 (OpenLRSng carries 8 channels unless --olrs-16ch)",
+            ),
+            (self.handset != HandsetArg::CrsfSynced, "--handset"),
+            (self.band != BandArg::Mhz433, "--band"),
+            (self.ber > 0.0, "--ber"),
+            (self.interference > 0.0, "--interference"),
+            (self.foreign, "--foreign"),
+            (
+                self.failsafe_ms != 250,
+                "--failsafe-ms (OpenLRSng's failsafe delay is in its bind data)",
+            ),
+            (self.no_bind, "--no-bind"),
+            (self.no_telemetry, "--no-telemetry"),
+            (self.no_header_check, "--no-header-check"),
+            (self.no_chip_crc, "--no-chip-crc"),
+            (self.packet_level, "--packet-level"),
+            (self.sweep, "--sweep"),
+            (self.plot.plot.is_some(), "--plot"),
+            (self.serve.is_some(), "--serve"),
+            (
+                self.phrase.is_some(),
+                "--phrase (OpenLRSng frames carry no key)",
+            ),
+            (self.attack.is_some(), "--attack"),
+        ];
+        if let Some((_, name)) = refused.iter().find(|(given, _)| *given) {
+            return Err(format!(
+                "{name} has no meaning with --protocol openlrs38|openlrs39"
+            ));
+        }
+        Ok(Some(OpenLrsScenario {
+            version,
+            modem_profile: self.olrs_profile,
+            sixteen_channels: self.olrs_16ch,
+            distance_m: self.distance,
+            loss: self.loss,
+            seed: self.seed,
+            duration_s: self.duration,
+            cut_s: self.cut,
+        }))
+    }
+
     /// The scenario these options describe. Injected bit errors and a disabled chip CRC
     /// exist only in the packet-level medium (the chip simulator derives bit errors from
     /// the signal-to-noise ratio), so either selects it.

@@ -130,6 +130,30 @@ fn print_sweep(reports: &[(Report, Report)], json: bool) {
 fn main() -> ExitCode {
     // clap prints --help/--version (exit 0) and usage errors with a suggestion (exit 2).
     let cli = Cli::parse();
+    match cli.openlrs() {
+        Err(e) => {
+            eprintln!("taulink-sim: error: {e}");
+            return ExitCode::from(2);
+        }
+        Ok(Some(olrs)) => {
+            let report = taulink_sim::openlrs::run(&olrs);
+            if cli.json {
+                println!("{}", report.to_json());
+            } else {
+                println!(
+                    "OpenLRSng simulation, {:.1} s virtual, seed {}",
+                    olrs.duration_s, olrs.seed
+                );
+                print!("{}", report.table());
+            }
+            return if report.failed() {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+        Ok(None) => {}
+    }
     if let Some(options) = taulink_sim::serve::options(&cli) {
         return ExitCode::from(u8::try_from(taulink_sim::serve::main(options)).unwrap_or(1));
     }

@@ -104,3 +104,25 @@ fn plot_draws_the_link_figure_and_refuses_a_sweep() {
     let _ = std::fs::remove_dir_all(&dir);
     sim(&["--sweep", "--plot", d]).assert_refused("cannot be used with");
 }
+
+#[test]
+fn openlrs_runs_print_json_and_refuse_taulink_options() {
+    let out = sim(&["--protocol", "openlrs39", "--duration", "3", "--json"]);
+    out.assert_lists(&[
+        "\"protocol\": \"openlrs39\"",
+        "\"bound\": true",
+        "\"update_rate_hz\"",
+        "\"errors\": 0",
+    ]);
+    assert_eq!(out.code, Some(0), "{}", out.stderr);
+    for (args, says) in [
+        (
+            &["--protocol", "openlrs38", "--attack", "forge"][..],
+            "--attack has no meaning",
+        ),
+        (&["--protocol", "openlrs38", "--phrase", "x"], "--phrase"),
+        (&["--protocol", "openlrs39", "--rate", "F700"], "--rate"),
+    ] {
+        sim(args).assert_refused(says);
+    }
+}
