@@ -229,7 +229,7 @@ pub enum DescentHold {
     Descending,
     /// Not descending since this time (ms, the caller's clock); still holding.
     Stopped(u32),
-    /// Stopped descending for [`STOPPED_MS`]: level until the descent ends.
+    /// Stopped descending for `STOPPED_MS`: level until the descent ends.
     Level,
 }
 
