@@ -20,7 +20,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use taulink_fuzz::{Input, link_key, seal_tagged};
-use telemetry::channels::{CHANNEL_MAX, ChannelFormat, Channels};
+use telemetry::channels::{ChannelFormat, Channels};
 use telemetry::frame::{
     CRC_BYTES, Downlink, Frame, LinkReport, NONCE_FRAME_BYTES, Received, SEALED_VERSION,
     StreamHeader, open, seal, uplink_overhead,
@@ -151,12 +151,7 @@ fuzz_target!(|data: &[u8]| {
                         );
                         assert_eq!(up.slot, slot as u8);
                         assert_eq!(up.format, params.format);
-                        let mut sent = [0u16; 16];
-                        assert!(up.channels_into(&mut sent));
-                        let n = params.format.count();
-                        let expected: Vec<u16> =
-                            channels[..n].iter().map(|&v| v.min(CHANNEL_MAX)).collect();
-                        assert_eq!(&sent[..n], &expected[..]);
+                        taulink_fuzz::assert_uplink_channels(&up, &channels);
                         if input.bool() {
                             if let Some(last) = last_sent
                                 && last >> 32 == counter >> 32

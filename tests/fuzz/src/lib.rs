@@ -113,3 +113,20 @@ pub fn link_key(input: &mut Input) -> LinkKey {
 pub fn block_on<F: core::future::Future>(future: F) -> F::Output {
     embassy_futures::block_on(future)
 }
+
+/// Checks that a planned uplink carries the channels the master was given: every channel the
+/// frame's format updates in this packet (all of them for the full formats; the sticks and
+/// one aux group for `Sticks16`) equals the input, clamped to the 11-bit range.
+pub fn assert_uplink_channels(up: &telemetry::frame::Uplink<'_>, channels: &[u16; 16]) {
+    let mut sent = [0u16; 16];
+    let mask = up
+        .channels_into_mask(&mut sent)
+        .expect("a planned uplink's channels unpack");
+    assert_ne!(mask, 0, "an uplink that updates no channel");
+    for (i, (&got, &given)) in sent.iter().zip(channels.iter()).enumerate() {
+        if mask & (1 << i) != 0 {
+            let expected = given.min(telemetry::channels::CHANNEL_MAX);
+            assert_eq!(got, expected, "channel {i}");
+        }
+    }
+}
