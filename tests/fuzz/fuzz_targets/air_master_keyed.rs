@@ -112,7 +112,15 @@ fuzz_target!(|data: &[u8]| {
                     heard.remove(0);
                 }
                 heard.push(frame.clone());
+                let epoch = master.frame_counter() >> 32;
                 receive(&mut master, &mut model, &key, &frame, &mut input, now);
+                // A new epoch: counters start again under its nonce. The master remembers
+                // only its last 8 nonces (spec §12.7), so a nonce older than that can be
+                // adopted again and its counters repeat — the documented limit, not checked
+                // here; within one adoption every counter is new.
+                if master.frame_counter() >> 32 != epoch {
+                    last_sent = None;
+                }
             }
             3 => {
                 let outcome = if input.bool() {
