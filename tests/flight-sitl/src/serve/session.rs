@@ -90,7 +90,13 @@ pub struct Sent {
     pub last: serde_json::Map<String, serde_json::Value>,
     /// Changes of the flight side's settings table since boot (id, wire value), in order.
     pub applied: Vec<SettingChange>,
+    /// The flight side's refusals sent to the page (reason and all), in order, at most
+    /// [`MAX_REFUSALS`] (the oldest dropped).
+    pub refused: Vec<serde_json::Value>,
 }
+
+/// Refusals `/api/sent` keeps.
+pub const MAX_REFUSALS: usize = 32;
 
 impl Sent {
     fn record(&mut self, message: &Message) {
@@ -98,16 +104,25 @@ impl Sent {
         if let Ok(serde_json::Value::Object(map)) = serde_json::to_value(message) {
             self.last.extend(map);
         }
+        if let Message::ChangeRefused(r) = message
+            && let Ok(v) = serde_json::to_value(r)
+        {
+            if self.refused.len() == MAX_REFUSALS {
+                self.refused.remove(0);
+            }
+            self.refused.push(v);
+        }
     }
 
-    /// As JSON: `{"last": {...}, "applied": [{"id":..,"value":..}]}`.
+    /// As JSON: `{"last": {...}, "applied": [{"id":..,"value":..}], "refused": [{..}]}`.
     pub fn to_json(&self) -> String {
         let applied: Vec<_> = self
             .applied
             .iter()
             .map(|c| serde_json::json!({"id": c.id, "value": c.value}))
             .collect();
-        serde_json::json!({"last": self.last, "applied": applied}).to_string()
+        serde_json::json!({"last": self.last, "applied": applied, "refused": self.refused})
+            .to_string()
     }
 }
 
