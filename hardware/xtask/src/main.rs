@@ -8,9 +8,11 @@
 //! cargo xtask size                                       # text/data/bss of what dist/ holds
 //! cargo xtask verify                                     # each file against its boot contract
 //! cargo xtask readme                                     # the README's sizes table from dist/
+//! cargo xtask figures [--check | --write]                # the docs' M4 instruction figures
 //! ```
 
 mod elf;
+mod figures;
 mod formats;
 mod layout;
 mod tlfw;
@@ -56,6 +58,17 @@ enum Task {
     Verify,
     /// Rewrite the README's sizes table from the ELFs in dist/.
     Readme,
+    /// Build the m4-bench programs, count their instructions under QEMU (m4count) and print
+    /// the named figures; with --check fail when a figure marked `<!-- m4:NAME -->` in a
+    /// Markdown file differs, with --write rewrite them.
+    Figures {
+        /// Fail (exit 1) when a marked figure in the docs is stale.
+        #[arg(long, conflicts_with = "write")]
+        check: bool,
+        /// Rewrite every marked figure in the docs.
+        #[arg(long)]
+        write: bool,
+    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -176,6 +189,20 @@ fn build(package: &str, features: &[&str]) -> Result<PathBuf, String> {
         return Err(format!("building {package} failed"));
     }
     Ok(target_dir().join(TARGET).join("release").join(package))
+}
+
+/// Builds every m4-bench program (release, for the M4).
+fn build_benches() -> Result<(), String> {
+    let cargo = env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let status = Command::new(cargo)
+        .current_dir(workspace_root())
+        .args(["build", "--release", "--target", TARGET, "-p", "m4-bench"])
+        .status()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    if !status.success() {
+        return Err("building m4-bench failed".into());
+    }
+    Ok(())
 }
 
 fn write_outputs(variant: &Variant, elf_path: &Path, dist: &Path) -> Result<(), String> {
@@ -373,6 +400,16 @@ fn run(task: &Task) -> Result<(), String> {
         Task::Size => size(),
         Task::Verify => verify(),
         Task::Readme => readme(),
+        Task::Figures { check, write } => {
+            let mode = match (check, write) {
+                (true, _) => figures::Mode::Check,
+                (_, true) => figures::Mode::Write,
+                _ => figures::Mode::Print,
+            };
+            build_benches()?;
+            let elf_dir = target_dir().join(TARGET).join("release");
+            figures::run(&workspace_root(), &elf_dir, mode)
+        }
     }
 }
 
