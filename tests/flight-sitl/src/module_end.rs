@@ -321,12 +321,17 @@ fn carry_out(shared: &Shared, action: Option<Action>) {
 
 /// The PPM capture task: the handset's frame as falling edges, each stamped (by the
 /// capture timer, exact to 1 µs) and handed to the core; a tick at the core's frame
-/// release deadline (`App::ppm_deadline_us`); without edges, the idle tick.
+/// release deadline (`App::ppm_deadline_us`); without edges, the idle tick. The handset
+/// encodes each frame from the sticks as they are at the frame's first edge.
 async fn ppm_in_task(b: &Board, shared: &Shared) {
     let mut clock = b.clock.clone();
     let mut frame_start = clock.now_us();
     loop {
         b.check_in(Watched::PpmIn);
+        // Not earlier: read at the previous frame's release (8.5 ms before this frame
+        // started), the sticks reached the air a whole frame late whenever they moved in
+        // between.
+        clock.sleep_until_us(frame_start).await;
         let input = shared.borrow().input;
         if !input.handset_connected {
             sleep_ms(b.delay(), PPM_IDLE_MS).await;

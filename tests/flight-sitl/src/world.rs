@@ -29,6 +29,7 @@ use flight_core::pipeline::{
     throttle_channel,
 };
 use flight_core::settings::Settings;
+use flight_core::supervisor::Sticks;
 use flight_core::sysid::ekf::Identification;
 use quad_sim::quad::{Quad, Truth};
 use si4432_sim::{RadioConfig, SPI_CLOCK_F405_HZ, SPI_CLOCK_NRF52840_HZ, Simulation};
@@ -61,6 +62,10 @@ pub struct Sample {
     pub out: LoopOutput,
     /// The link delivered fresh channels this loop.
     pub link_up: bool,
+    /// The sticks the flight application held from the link this loop (what the loop flew
+    /// on; the failsafe values in failsafe): a stick's move shows here when its uplink
+    /// arrived at the flight controller.
+    pub link_sticks: Sticks,
     /// Ground truth (Euler angles deg, rates deg/s, state).
     pub truth: Truth,
     /// Altitude above ground, m.
@@ -476,7 +481,7 @@ impl World {
                                     app.on_gps_bytes(now_ms, &bytes);
                                 }
                             }
-                            let link_up = app.link_input().up;
+                            let link = app.link_input();
                             // The IMU task: a sample, or what the injected fault leaves of it.
                             let imu = ImuSample {
                                 gyro_radps: sensors.gyro_dps.map(|g| g * RAD_PER_DEG),
@@ -521,7 +526,8 @@ impl World {
                                 last_out = Some(out);
                             }
                             record = Some((
-                                link_up,
+                                link.up,
+                                link.sticks,
                                 tone_hz,
                                 identification,
                                 step.reprobe,
@@ -546,13 +552,14 @@ impl World {
                         continue;
                     }
                     let flight_up = record.is_some();
-                    let (link_up, tone_hz, identification, imu_reprobe, imu_fault) =
-                        record.unwrap_or((false, 0, None, false, None));
+                    let (link_up, link_sticks, tone_hz, identification, imu_reprobe, imu_fault) =
+                        record.unwrap_or((false, Sticks::default(), 0, None, false, None));
                     samples.borrow_mut().push(Sample {
                         t_s,
                         pilot: input,
                         out,
                         link_up,
+                        link_sticks,
                         altitude_m: -truth.state.position_m[2],
                         climb_mps: -truth.state.velocity_mps[2],
                         truth,

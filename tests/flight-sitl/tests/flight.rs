@@ -139,12 +139,26 @@ fn reaches_commanded_angles_in_attitude_mode() {
         .find(|x| x.truth.rate_dps[0] > 5.0)
         .map(|x| x.t_s - 5.0)
         .unwrap();
+    // The setpoint's arrival at the flight controller: the first loop flying the new stick.
+    let arrived = w
+        .iter()
+        .find(|x| x.link_sticks.roll > 0.3)
+        .map(|x| x.t_s - 5.0)
+        .unwrap();
     let back = window(&sitl.samples, 6.4, 6.5);
     let level = worst(&back, |x| x.truth.euler_deg[0]);
     println!(
-        "attitude 15° step: {m:?}, rolling at 5 °/s after {moving:.3} s, within 1° after {within:.3} s, back to {level:.2}° 0.4 s after release"
+        "attitude 15° step: {m:?}, setpoint at the flight controller after {arrived:.4} s, rolling at 5 °/s after {moving:.3} s, within 1° after {within:.3} s from the stick ({:.3} s from the setpoint's arrival), back to {level:.2}° 0.4 s after release",
+        within - arrived
     );
     assert!(within < 0.4, "{within}");
+    // The stick's way (at F250): the next PPM frame starts (0–22.5 ms by phase), that frame
+    // is released once its sync gap is proven (≈ 14 ms), the next uplink latches it (0–8 ms
+    // at 1:4), it is on the air and read out (≈ 3 ms), the loop flies it (≤ 1 ms).
+    assert!(arrived < 0.05, "{arrived}");
+    // From the setpoint's arrival, the loop's own response: as fast as the stick's whole way
+    // was when the world handed the channels to the master directly (0.154 s).
+    assert!(within - arrived < 0.16, "{within} {arrived}");
     assert!(m.overshoot_pct < 10.0, "{m:?}");
     assert!((m.final_value - 15.0).abs() < 1.0, "{m:?}");
     assert!(level < 2.0, "{level}");

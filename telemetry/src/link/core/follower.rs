@@ -1,6 +1,6 @@
 //! The follower's (flight side's) link logic, sans IO: acquisition (dwell on one hop channel
 //! for a whole hop cycle until the master's packet lands there, listened in windows of at
-//! most [`MAX_LISTEN_US`]), tracking (re-timing the
+//! most [`MAX_LISTEN_US`], never on a channel the master only listens on), tracking (re-timing the
 //! slot grid on every packet heard), failsafe after a configurable silence, and resync.
 
 use crate::channels::{CHANNEL_CENTER, Channels, FailsafeValues};
@@ -178,6 +178,31 @@ impl Follower {
         (HOP_CHANNELS as u64 + 1) * u64::from(self.schedule.slot_us())
     }
 
+    /// Whether the master never sends an uplink at hop index `index`: when the telemetry
+    /// ratio N divides the hop cycle, the slots on index `i` all have the same `s mod N`,
+    /// so every index with `i mod N = N − 1` carries downlink slots only (8 of the 32 at
+    /// the factory 1:4). A dwell there would wait a whole cycle for nothing.
+    fn downlink_only(&self, index: u8) -> bool {
+        let n = usize::from(self.schedule.telemetry_ratio);
+        n >= 2
+            && HOP_CHANNELS.is_multiple_of(n)
+            && self.schedule.kind(u32::from(index)) == SlotKind::Downlink
+    }
+
+    /// The first hop index from `index` on (wrapping) that carries uplinks.
+    fn uplink_index(&self, index: u8) -> u8 {
+        let cycle = HOP_CHANNELS as u8;
+        let mut i = index % cycle;
+        // At most N − 1 steps: index N·k is never downlink-only (the loop is bounded anyway).
+        for _ in 0..HOP_CHANNELS {
+            if !self.downlink_only(i) {
+                break;
+            }
+            i = (i + 1) % cycle;
+        }
+        i
+    }
+
     /// When failsafe will be declared if nothing arrives (None while in failsafe).
     fn failsafe_deadline_us(&self) -> Option<u64> {
         if self.in_failsafe {
@@ -282,7 +307,7 @@ impl Follower {
                 let end = match dwell_end_us {
                     Some(end) if now_us < end => end,
                     Some(_) => {
-                        let next = (index + 1) % HOP_CHANNELS as u8;
+                        let next = self.uplink_index(index.wrapping_add(1));
                         self.sync = Sync::Acquiring {
                             index: next,
                             dwell_end_us: Some(now_us + self.dwell_us()),
@@ -290,8 +315,10 @@ impl Follower {
                         now_us + self.dwell_us()
                     }
                     None => {
+                        // A resync starts at the slot after the last one tracked, which may
+                        // be a downlink-only index.
                         self.sync = Sync::Acquiring {
-                            index,
+                            index: self.uplink_index(index),
                             dwell_end_us: Some(now_us + self.dwell_us()),
                         };
                         now_us + self.dwell_us()

@@ -4,6 +4,7 @@
 use super::follower::{DEFAULT_FAILSAFE_US, RESYNC_MISSES, SyncState};
 use super::*;
 use crate::channels::{ChannelFormat, FailsafeValues};
+use crate::link::hopping::HOP_CHANNELS;
 use crate::link::radio::RxOutcome;
 use crate::link::{Band, LinkParams, RateMode};
 
@@ -424,4 +425,101 @@ fn a_forged_uplink_moves_nothing_on_an_acquiring_follower() {
     }
     assert_eq!(follower.counters().rejected, forged.len() as u32);
     assert_eq!(follower.updates(), 0);
+}
+
+/// The hop channels the master sends uplinks on (the others carry only its listening).
+fn uplink_channels(master: &mut Master) -> Vec<u8> {
+    let mut t = 0;
+    let mut channels = Vec::new();
+    for _ in 0..HOP_CHANNELS {
+        let mut buf = [0u8; 64];
+        match master.plan(t, &mut buf) {
+            Step::Transmit { channel, .. } => {
+                master.on_sent();
+                channels.push(channel);
+            }
+            _ => master.finish_listen(),
+        }
+        t += SLOT_US;
+    }
+    channels
+}
+
+#[test]
+fn acquisition_dwells_only_on_channels_the_master_sends_on() {
+    // At 1:4 the hop indices 3, 7, …, 31 are downlink slots in every cycle (4 divides 32):
+    // a dwell there waited 33 slots for nothing.
+    let (mut master, mut follower) = pair();
+    let uplinks = uplink_channels(&mut master);
+    assert_eq!(uplinks.len(), 24);
+    let mut buf = [0u8; 64];
+    let mut dwelt = Vec::new();
+    let mut t = 0;
+    for _ in 0..HOP_CHANNELS {
+        let Step::Listen { channel, .. } = follower.plan(t, &mut buf) else {
+            panic!()
+        };
+        dwelt.push(channel);
+        t += 33 * SLOT_US;
+    }
+    for c in &dwelt {
+        assert!(uplinks.contains(c), "dwelt on {c}, never an uplink channel");
+    }
+    for c in &uplinks {
+        assert!(dwelt.contains(c), "uplink channel {c} never dwelt on");
+    }
+}
+
+#[test]
+fn the_link_returns_within_one_dwell_of_the_path_whatever_the_phase() {
+    // Both ends in lockstep. The follower starts (a flight controller booting) at master slot
+    // `start` with the path cut; it scans, and the path returns `cut` slots later. Over every
+    // phase of the scan against the master's hop cycle it takes the master's channels within
+    // one dwell (33 slots) and the skipped downlink slot of the path's return, counting the
+    // slot that carried them; before, a dwell on a downlink-only channel could come first
+    // (66 slots).
+    let mut worst = 0;
+    for start in 0..HOP_CHANNELS as u32 {
+        for cut in [1, 40, 90, 150, 210] {
+            let (mut master, _) = pair();
+            let (_, mut follower) = pair();
+            let mut t = 0;
+            let mut back = None;
+            for n in 0..start + cut + 100 {
+                let (mut mb, mut fb) = ([0u8; 64], [0u8; 64]);
+                let m = master.plan(t, &mut mb);
+                let f = (n >= start).then(|| follower.plan(t, &mut fb));
+                if let Step::Transmit { .. } = m {
+                    master.on_sent();
+                } else {
+                    master.finish_listen();
+                }
+                match (m, f) {
+                    (
+                        Step::Transmit { channel, len, .. },
+                        Some(Step::Listen { channel: c, .. }),
+                    ) if c == channel && n >= start + cut => {
+                        let end = t + u64::from(master.schedule().packet_end_offset_us(len));
+                        let packet = RxOutcome::Packet { len, rssi_dbm: -70 };
+                        follower.on_received(packet, &mb[..len], end);
+                    }
+                    (_, Some(Step::Transmit { .. })) => follower.on_sent(),
+                    (_, Some(Step::Idle)) => follower.on_skipped(),
+                    _ => {}
+                }
+                t += SLOT_US;
+                if n >= start + cut && back.is_none() && !follower.in_failsafe() {
+                    back = Some(n + 1 - (start + cut));
+                }
+            }
+            let back = back.expect("link back");
+            assert!(
+                back <= 34,
+                "start {start}, cut {cut}: back after {back} slots"
+            );
+            worst = worst.max(back);
+        }
+    }
+    // The scan does reach its worst case of one dwell.
+    assert!(worst > 24, "{worst}");
 }

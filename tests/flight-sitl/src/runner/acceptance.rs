@@ -32,6 +32,13 @@ pub const MAX_LOITER_DRIFT_M: f64 = 1.5;
 pub const MAX_FAILSAFE_DRIFT_M: f64 = 2.0;
 /// … and the altitude within this, m.
 pub const MAX_FAILSAFE_ALTITUDE_CHANGE_M: f64 = 1.0;
+/// Attitude step: the stick's way to the flight controller at most this, s (at F250: the
+/// next PPM frame 0–22.5 ms, its release ≈ 14 ms, the next uplink 0–8 ms, air ≈ 3 ms) …
+pub const MAX_STEP_TRANSPORT_S: f64 = 0.05;
+/// … the roll within 1° of the target this soon after the stick, s …
+pub const MAX_STEP_WITHIN_1DEG_S: f64 = 0.4;
+/// … overshooting it by less than this, %.
+pub const MAX_STEP_OVERSHOOT_PCT: f64 = 10.0;
 /// The altitudes of the acceptance's link cut with a fix, m (from 5 m the cut comes
 /// straight after the take-off boost, on a hover estimate learnt in the climb).
 pub const GPS_LINK_CUT_ALTITUDES_M: [f64; 3] = [5.0, 10.0, 30.0];
@@ -173,6 +180,24 @@ pub fn check(r: &Report) -> Vec<String> {
                 );
             }
         }
+        Kind::AttitudeStep => {
+            let f = r.step.unwrap_or_default();
+            need(
+                f.setpoint_arrival_s
+                    .is_some_and(|a| a < MAX_STEP_TRANSPORT_S),
+                "setpoint at the flight controller within 50 ms",
+            );
+            need(
+                f.within_1deg_s.is_some_and(|w| w < MAX_STEP_WITHIN_1DEG_S),
+                "within 1° in 0.4 s",
+            );
+            need(
+                f.overshoot_pct.is_some_and(|o| o < MAX_STEP_OVERSHOOT_PCT),
+                "overshoot below 10 %",
+            );
+            need(r.final_state == "armed-flying", "still flying");
+            need(wd.flight == 0 && wd.module == 0, "no watchdog reset");
+        }
         Kind::Hover => {
             need(r.final_state == "armed-flying", "still flying");
             need(!r.motors_stopped_airborne, "motors never stopped airborne");
@@ -286,6 +311,18 @@ fn detail(r: &Report) -> String {
             num(r.battery_warning_at_s, " s"),
             num(r.battery_critical_at_s, " s")
         ),
+        Kind::AttitudeStep => {
+            let f = r.step.unwrap_or_default();
+            let ms = |v: Option<f64>| v.map_or("–".into(), |x| format!("{} s", fixed(x, 3)));
+            format!(
+                "{}° roll: setpoint at the FC after {}, within 1° after {} ({} from the setpoint), overshoot {} %",
+                fixed(f.target_deg, 0),
+                ms(f.setpoint_arrival_s),
+                ms(f.within_1deg_s),
+                ms(f.within_1deg_from_setpoint_s),
+                f.overshoot_pct.map_or("–".into(), |o| fixed(o, 1)),
+            )
+        }
         Kind::Hover => String::new(),
     }
 }

@@ -117,6 +117,7 @@ pub enum ScenarioArg {
     AltitudeHold,
     PositionHold,
     Loiter,
+    AttitudeStep,
     Table,
 }
 
@@ -137,6 +138,7 @@ impl ScenarioArg {
             Self::AltitudeHold => Kind::AltitudeHold,
             Self::PositionHold => Kind::PositionHold,
             Self::Loiter => Kind::Loiter,
+            Self::AttitudeStep => Kind::AttitudeStep,
             Self::Table => return None,
         })
     }

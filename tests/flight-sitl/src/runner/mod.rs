@@ -53,11 +53,14 @@ pub enum Kind {
     PositionHold,
     /// Position hold in loiter: the pilot pushes pitch forward for a while and releases.
     Loiter,
+    /// Hovering in attitude mode, the pilot rolls to 15° (stick 1/3) for 1 s: the stick's way
+    /// to the motors and the attitude loop's response.
+    AttitudeStep,
 }
 
 impl Kind {
     /// Every scenario, in the order of the README.
-    pub const ALL: [Kind; 13] = [
+    pub const ALL: [Kind; 14] = [
         Kind::Hover,
         Kind::LinkCut,
         Kind::PowerCycle,
@@ -71,6 +74,7 @@ impl Kind {
         Kind::AltitudeHold,
         Kind::PositionHold,
         Kind::Loiter,
+        Kind::AttitudeStep,
     ];
 
     /// The command-line name.
@@ -89,6 +93,7 @@ impl Kind {
             Kind::AltitudeHold => "altitude-hold",
             Kind::PositionHold => "position-hold",
             Kind::Loiter => "loiter",
+            Kind::AttitudeStep => "attitude-step",
         }
     }
 
@@ -104,7 +109,7 @@ impl Kind {
     /// How long the fault lasts (None: for good, or no fault), s.
     fn fault_length_s(self) -> Option<f64> {
         match self {
-            Kind::PowerCycle | Kind::ImuStall | Kind::ImuFrozen => Some(1.0),
+            Kind::PowerCycle | Kind::ImuStall | Kind::ImuFrozen | Kind::AttitudeStep => Some(1.0),
             Kind::RadioStuckIrq | Kind::RadioBrownout => Some(2.0),
             _ => None,
         }
@@ -322,6 +327,8 @@ fn thread_cpu_s() -> Option<f64> {
 pub const REARM_AFTER_POWER_S: f64 = 4.5;
 /// Seconds from the start of the pilot's hold to a fault.
 const SETTLE_S: f64 = 3.0;
+/// The `attitude-step` roll stick: 1/3 of full deflection, 15° at the factory 45° limit.
+pub const STEP_ROLL_STICK: f32 = 1.0 / 3.0;
 /// Pack voltage at the start of the low-battery drain, mV, and the drain, mV/s.
 const DRAIN_FROM_MV: f32 = 4_000.0;
 const DRAIN_MV_PER_S: f32 = 50.0;
@@ -391,6 +398,7 @@ impl Piloting for PlanPilot {
                 Kind::ImuFrozen => input.imu = ImuInjection::Frozen,
                 Kind::RadioStuckIrq => input.flight_radio = RadioInjection::IrqStuckLow,
                 Kind::RadioBrownout => input.flight_radio = RadioInjection::BrownOut,
+                Kind::AttitudeStep => input.roll = STEP_ROLL_STICK,
                 Kind::Hover
                 | Kind::SettingsCorrupt
                 | Kind::LowBattery
@@ -517,6 +525,10 @@ pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunEr
             let critical = opts.settings.u32("battery.cell_critical_mv") as f64;
             let drain = (f64::from(DRAIN_FROM_MV) - critical) / f64::from(DRAIN_MV_PER_S);
             (Some(at), Some(t_reach), at + drain + 3.0)
+        }
+        Kind::AttitudeStep => {
+            let at = opts.at_s.unwrap_or(t_reach + SETTLE_S);
+            (Some(at), Some(t_reach), at + 3.0)
         }
         Kind::ImuStall | Kind::ImuFrozen | Kind::RadioStuckIrq | Kind::RadioBrownout => {
             let at = opts.at_s.unwrap_or(t_reach + SETTLE_S);

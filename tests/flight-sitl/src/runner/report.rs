@@ -74,6 +74,55 @@ pub struct Report {
     /// The hold scenarios' figures, and for a link cut with a fix the failsafe's hold
     /// (`held_position_drift_m`, `altitude_error_max_m`).
     pub hold: super::hold::Figures,
+    /// `attitude-step`: the stick's way and the attitude loop's response.
+    pub step: Option<StepFigures>,
+}
+
+/// The `attitude-step` figures, all from the stick's move (the step's `fault_at_s`) unless
+/// named otherwise.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StepFigures {
+    /// The commanded roll, deg (the stick × `attitude.max_deg`).
+    pub target_deg: f64,
+    /// The transport: until the first loop that flies the new stick (the setpoint's
+    /// arrival at the flight controller: PPM frame, module, uplink, follower), s.
+    pub setpoint_arrival_s: Option<f64>,
+    /// Until the true roll rate first exceeds 5 °/s, s.
+    pub rolling_s: Option<f64>,
+    /// Until the true roll is first within 1° of the target, s (what a pilot feels).
+    pub within_1deg_s: Option<f64>,
+    /// The same from the setpoint's arrival, s (the attitude loop alone; comparable with
+    /// figures measured with the channels handed to the link directly).
+    pub within_1deg_from_setpoint_s: Option<f64>,
+    /// Peak roll beyond the target while the stick is held, % of the target.
+    pub overshoot_pct: Option<f64>,
+}
+
+/// The step's figures from the samples between the stick's move `at_s` and its release
+/// `end_s`, for a roll target of `target_deg`.
+fn step_figures(s: &[Sample], at_s: f64, end_s: f64, target_deg: f64) -> StepFigures {
+    let held: Vec<&Sample> = s
+        .iter()
+        .filter(|x| x.t_s >= at_s && x.t_s < end_s)
+        .collect();
+    let first = |f: &dyn Fn(&Sample) -> bool| held.iter().find(|x| f(x)).map(|x| x.t_s - at_s);
+    let stick = f64::from(super::STEP_ROLL_STICK);
+    let setpoint_arrival_s = first(&|x| f64::from(x.link_sticks.roll) > stick * 0.9);
+    let within_1deg_s = first(&|x| (x.truth.euler_deg[0] - target_deg).abs() < 1.0);
+    let peak = held
+        .iter()
+        .map(|x| x.truth.euler_deg[0])
+        .fold(f64::NEG_INFINITY, f64::max);
+    StepFigures {
+        target_deg,
+        setpoint_arrival_s,
+        rolling_s: first(&|x| x.truth.rate_dps[0] > 5.0),
+        within_1deg_s,
+        within_1deg_from_setpoint_s: within_1deg_s.zip(setpoint_arrival_s).map(|(w, a)| w - a),
+        overshoot_pct: peak
+            .is_finite()
+            .then(|| ((peak - target_deg) / target_deg * 100.0).max(0.0)),
+    }
 }
 
 fn stopped(s: &Sample) -> bool {
@@ -187,6 +236,14 @@ pub fn extract(sitl: &Sitl, plan: &Plan) -> Report {
         }
         _ => super::hold::Figures::default(),
     };
+    let step = match (plan.kind, plan.fault_at_s, plan.fault_end_s) {
+        (Kind::AttitudeStep, Some(at), Some(end)) => {
+            let max_deg = f64::from(sitl.settings.f32("attitude.max_deg"));
+            let target = f64::from(super::STEP_ROLL_STICK) * max_deg;
+            Some(step_figures(s, at, end, target))
+        }
+        _ => None,
+    };
     Report {
         kind: plan.kind,
         rate: plan.rate,
@@ -218,6 +275,7 @@ pub fn extract(sitl: &Sitl, plan: &Plan) -> Report {
         gps: plan.gps,
         wind_mps: plan.wind_mps,
         hold,
+        step,
     }
 }
 
@@ -260,6 +318,19 @@ impl Report {
         };
         match self.kind {
             Kind::Hover => {}
+            Kind::AttitudeStep => {
+                let f = self.step.unwrap_or_default();
+                e.push(("step_at_s", num(self.fault_at_s, 3)));
+                e.push(("target_deg", num(Some(f.target_deg), 1)));
+                e.push(("setpoint_arrival_s", num(f.setpoint_arrival_s, 4)));
+                e.push(("rolling_s", num(f.rolling_s, 3)));
+                e.push(("within_1deg_s", num(f.within_1deg_s, 3)));
+                e.push((
+                    "within_1deg_from_setpoint_s",
+                    num(f.within_1deg_from_setpoint_s, 3),
+                ));
+                e.push(("overshoot_pct", num(f.overshoot_pct, 1)));
+            }
             Kind::LinkCut => {
                 e.push(("cut_at_s", num(self.fault_at_s, 3)));
                 e.push(("failsafe_delay_s", num(self.failsafe_delay_s, 3)));

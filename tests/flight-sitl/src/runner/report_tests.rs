@@ -26,6 +26,7 @@ fn sample(t_s: f64, altitude_m: f64, climb_mps: f64, armed: bool, failsafe: bool
             estimator: flight_core::pipeline::Source::Complementary,
         },
         link_up: !failsafe,
+        link_sticks: flight_core::supervisor::Sticks::default(),
         truth: Truth {
             state: QuadState {
                 position_m: [0.0, 0.0, -altitude_m],
