@@ -168,8 +168,10 @@ impl Handset {
         self.next_k += 1;
         let (arrived, period_local) = match self.kind {
             HandsetKind::Free1k => (tick, FREE_PERIOD_US),
-            // The decoder has the frame once its last pulse ended: that is "generation" for
-            // PPM (what comes before is the handset's own business, and ≥ a frame long).
+            // Handed to the link code at the frame's last channel edge: that is "generation"
+            // for PPM (what comes before is the handset's own business, and ≥ a frame long).
+            // The module's decoder releases a locked frame only a sync gap (2 501 µs) after
+            // that edge; that proof is not modelled here (spec §10 gives the figure with it).
             HandsetKind::Ppm => (tick, PPM_PERIOD_US),
             HandsetKind::Crsf | HandsetKind::CrsfSynced => {
                 let (lo, hi) = MIXER_RUN_US;

@@ -147,13 +147,20 @@ impl LqgAxis {
         // shrinks by the rotation they will still cause.
         let mut x = now;
         let mut angle_ahead = 0.0;
-        let pending = self
-            .outputs
-            .get(..self.output_delay_samples)
-            .unwrap_or_default();
-        for u in pending.iter().rev() {
+        if self.output_delay_samples == 1 {
+            // The factory delay, straight-line: the same sums as the loop below.
+            let [pending, ..] = self.outputs;
             angle_ahead += self.ts_s * x.rate_dps;
-            x = self.kf.predict_ahead(x, *u);
+            x = self.kf.predict_ahead(x, pending);
+        } else {
+            let pending = self
+                .outputs
+                .get(..self.output_delay_samples)
+                .unwrap_or_default();
+            for u in pending.iter().rev() {
+                angle_ahead += self.ts_s * x.rate_dps;
+                x = self.kf.predict_ahead(x, *u);
+            }
         }
         let [kw_r, kn_r] = self.gains.rate;
         let [ka, kw_a, kn_a] = self.gains.attitude;

@@ -107,6 +107,7 @@ impl Complementary {
         let r = || ned_to_body(self.attitude);
         let mut correction = [0.0_f32; 3];
         let mut integral = [0.0_f32; 3];
+        let mut corrected = false;
         // Accelerometer: measured "up" (−f/|f|) against the estimated up (−third column of
         // R_be); their cross product is the rotation error in body axes.
         let [ax, ay, az] = accel_mps2;
@@ -120,6 +121,7 @@ impl Complementary {
                 let r = r();
                 let est = [-r[0][2], -r[1][2], -r[2][2]];
                 let e = cross(est, meas);
+                corrected = true;
                 for ((c, i), e) in correction.iter_mut().zip(integral.iter_mut()).zip(e) {
                     *c += cfg.accel_kp * e;
                     *i += cfg.accel_ki * e;
@@ -137,6 +139,7 @@ impl Complementary {
                 let yaw_error = (mn * be - me * bn) * s;
                 let r = r();
                 let down_body = [r[0][2], r[1][2], r[2][2]];
+                corrected = true;
                 for ((c, i), d) in correction
                     .iter_mut()
                     .zip(integral.iter_mut())
@@ -147,8 +150,11 @@ impl Complementary {
                 }
             }
         }
-        for (b, i) in self.gyro_bias_radps.iter_mut().zip(integral) {
-            *b -= i * dt_s;
+        // No vector corrected this sample (armed, most samples): the bias stays as it is.
+        if corrected {
+            for (b, i) in self.gyro_bias_radps.iter_mut().zip(integral) {
+                *b -= i * dt_s;
+            }
         }
         let omega: [f32; 3] = core::array::from_fn(|k| {
             gyro_radps.get(k).copied().unwrap_or(0.0)

@@ -21,9 +21,9 @@
 //! fallbacks.
 //!
 //! Cost (m4count, `tests/m4-bench` `flight_loop` regions 34–38, one whole attitude-mode
-//! `FlightLoop::step` at 1 kHz): 5 123 instructions with the INS predicting (1 248 with the
-//! complementary filter), 6 245 on a step that also fuses a baro reading, 5 222 on average
-//! over 100 steps with the baro at 50 Hz and one pseudo-measurement. At 1.3 cycles per
+//! `FlightLoop::step` at 1 kHz): 5 237 instructions with the INS predicting (1 329 with the
+//! complementary filter, region 3), 6 360 on a step that also fuses a baro reading, 5 336 on
+//! average over 100 steps with the baro at 50 Hz and one pseudo-measurement. At 1.3 cycles per
 //! instruction on the 168 MHz F405 that is 40 µs, **4.0 % of the CPU at 1 kHz**, so the INS
 //! predicts on every sample; a step that also fuses a magnetometer reading (≈ 3 500) and a
 //! GPS fix (≈ 8 100, `gps` bench) stays under 18 000 (≈ 140 µs).

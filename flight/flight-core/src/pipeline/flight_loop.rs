@@ -12,7 +12,7 @@ use crate::control::mixer::Mixer;
 use crate::estimation::complementary;
 use crate::estimation::ins::aiding::gps::GpsUpdate;
 use crate::estimation::math::{inv_sqrt, wrap_pi};
-use crate::estimation::quaternion::{Quaternion, body_to_ned_vector, ned_to_body};
+use crate::estimation::quaternion::{Quaternion, ned_to_body};
 use crate::estimation::{GRAVITY_MPS2, all_finite};
 use crate::outputs::Command;
 use crate::supervisor::{
@@ -228,12 +228,22 @@ impl FlightLoop {
     /// the baro/INS rate with a 1 s time constant. The accelerometer gives the bandwidth the
     /// failsafe's climb-rate loop needs; the slow baro rate (α-β tracked, ≈ 0.2 s lag) only
     /// removes the drift, so a 0.1 m/s² accelerometer bias leaves 0.1 m/s.
-    fn fuse_climb(&mut self, measured_mps: Option<f32>, accel_mps2: [f32; 3]) -> Option<f32> {
+    /// `r` is the attitude's rotation matrix (`ned_to_body`).
+    fn fuse_climb(
+        &mut self,
+        measured_mps: Option<f32>,
+        accel_mps2: [f32; 3],
+        r: &[[f32; 3]; 3],
+    ) -> Option<f32> {
         let Some(measured) = measured_mps.filter(|m| m.is_finite()) else {
             self.climb_mps = None;
             return None;
         };
-        let [_, _, f_down] = body_to_ned_vector(self.estimator.attitude(), accel_mps2);
+        // NED down of the body-axis specific force: the third row of Rᵀ, as
+        // `body_to_ned_vector` computes it.
+        let [[_, _, r13], [_, _, r23], [_, _, r33]] = *r;
+        let [x, y, z] = accel_mps2;
+        let f_down = r13 * x + r23 * y + r33 * z;
         let up_accel = -(f_down + GRAVITY_MPS2);
         let ts = self.config.ts_s;
         let k = ts / (CLIMB_BLEND_S + ts);
@@ -308,14 +318,17 @@ impl FlightLoop {
         let previous_mode = self.mode;
         let decision = self.supervise(now_ms, link, &estimate);
         // The INS's vertical velocity when it flies on the baro; else the loop's own blend.
+        // The rotation matrix once per step: the climb blend, the Euler angles and the
+        // hold loops' heading all read it.
+        let r = ned_to_body(self.estimator.attitude());
         let climb_rate_mps = match self.estimator.vertical() {
             Some((_, climb)) => {
                 self.climb_mps = Some(climb);
                 Some(climb)
             }
-            None => self.fuse_climb(climb_rate_mps, imu.accel_mps2),
+            None => self.fuse_climb(climb_rate_mps, imu.accel_mps2, &r),
         };
-        let [roll, pitch, yaw] = euler_deg(self.estimator.attitude());
+        let [roll, pitch, yaw] = euler_deg(&r);
         let failsafe = self.supervisor.failsafe_descent_mps();
         // Nothing below changes the supervisor's state: read it once.
         let armed = self.supervisor.motors_enabled();
@@ -331,7 +344,7 @@ impl FlightLoop {
         }
         // The navigation estimate, only where a hold loop reads it.
         let nav = (self.mode.holds() || failsafe.is_some()).then(|| {
-            let [[r11, r12, _], _, _] = ned_to_body(self.estimator.attitude());
+            let [[r11, r12, _], _, _] = r;
             let h = r11 * r11 + r12 * r12;
             let inv = if h > 1e-12 { inv_sqrt(h) } else { 0.0 };
             Nav {
@@ -661,9 +674,9 @@ struct Fly {
 }
 
 /// (roll, pitch, yaw) in degrees without libm: a polynomial atan2 (error < 0.01°) on the
-/// rotation matrix, so the loop never calls soft-double trigonometry on the M4F.
-fn euler_deg(q: Quaternion) -> [f32; 3] {
-    let [[r11, r12, r13], [_, _, r23], [_, _, r33]] = ned_to_body(q);
+/// rotation matrix (`ned_to_body`), so the loop never calls soft-double trigonometry on the M4F.
+fn euler_deg(r: &[[f32; 3]; 3]) -> [f32; 3] {
+    let [[r11, r12, r13], [_, _, r23], [_, _, r33]] = *r;
     let horizontal = r23 * r23 + r33 * r33;
     let cos_pitch = if horizontal > 0.0 {
         horizontal * inv_sqrt(horizontal)
