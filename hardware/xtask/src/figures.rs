@@ -251,11 +251,14 @@ fn documents(root: &Path) -> Result<Vec<PathBuf>, String> {
     if !out.status.success() {
         return Err("git ls-files failed".into());
     }
-    Ok(String::from_utf8_lossy(&out.stdout)
+    // A file in conflict is listed once per index stage: once is enough.
+    let mut files: Vec<PathBuf> = String::from_utf8_lossy(&out.stdout)
         .lines()
         .filter(|l| !l.contains("node_modules/"))
         .map(|l| root.join(l))
-        .collect())
+        .collect();
+    files.dedup();
+    Ok(files)
 }
 
 /// Where m4count is: `$M4COUNT`, or `../shared/tools/m4count/m4count` beside the checkout.
