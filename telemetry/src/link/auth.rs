@@ -95,6 +95,7 @@ const DOMAIN_BIND_ID: &[u8] = b"TauLink/1 bind-id";
 /// Domain prefix of the binding-phrase hash (spec §12.2).
 const DOMAIN_HOP_SEED: &[u8] = b"TauLink/1 hop-seed";
 const DOMAIN_MODEL_KEY: &[u8] = b"TauLink/1 model-key";
+const DOMAIN_EPOCH_KEY: &[u8] = b"TauLink/1 epoch-key";
 const DOMAIN_FINGERPRINT: &[u8] = b"TauLink/1 fingerprint";
 
 impl LinkKey {
@@ -148,6 +149,27 @@ impl LinkKey {
             let mut h = SipHasher24::new(&self.0);
             h.write(DOMAIN_MODEL_KEY);
             h.write(&[model_id, n]);
+            h.finish().to_le_bytes()
+        };
+        let mut bytes = [0u8; KEY_BYTES];
+        let (lo, hi) = bytes.split_at_mut(8);
+        lo.copy_from_slice(&half(0));
+        hi.copy_from_slice(&half(1));
+        Self(bytes)
+    }
+
+    /// The key of one epoch (spec §12.2): two PRF outputs of this key over the follower's
+    /// nonce and the master's (halves 0 and 1). Every frame of the epoch is tagged with it,
+    /// so an epoch's tags repeat only if *both* nonces repeat: a replayed old follower nonce
+    /// meets a fresh master nonce (and the other way round), and nothing recorded under an
+    /// earlier epoch verifies. Derived once per handshake; the per-frame tag costs the same.
+    pub fn epoch_key(&self, follower_nonce: u32, master_nonce: u32) -> Self {
+        let half = |n: u8| {
+            let mut h = SipHasher24::new(&self.0);
+            h.write(DOMAIN_EPOCH_KEY);
+            h.write(&follower_nonce.to_le_bytes());
+            h.write(&master_nonce.to_le_bytes());
+            h.write(&[n]);
             h.finish().to_le_bytes()
         };
         let mut bytes = [0u8; KEY_BYTES];

@@ -184,13 +184,18 @@ fn keyed_ends_handshake_the_epoch_then_fly_and_carry_telemetry() {
         .filter(|s| **s == SyncState::Handshake)
         .count();
     assert!(handshake > 0, "went through the handshake");
-    // The nonce goes out in the first downlink slot after lock, the next uplink verifies.
+    // The nonce goes out in the first downlink slot after lock, the master's nonce comes
+    // back in the next uplink: the epoch is in force.
     assert!(
         handshake as u32 <= RATIO + 1,
         "{handshake} slots of handshake"
     );
     assert!(nonce_frames >= 1);
     assert!(link.master.has_epoch());
+    assert_eq!(link.follower.epoch_nonces(), link.master.epoch_nonces());
+    // The master's nonce frame carries no channels: they come with the next uplink.
+    assert_eq!(link.follower.updates(), 0);
+    link.slot(&mut clean);
     assert!(!link.follower.in_failsafe());
     let slot = link.master.slot() - 1;
     assert_eq!(link.follower.output(), &channels_of(slot));
@@ -521,8 +526,10 @@ fn both_ends_report_the_counter_they_tag_and_check_under() {
             data: &[],
         };
         let mut buf = [0u8; 64];
+        let (n, m) = link.follower.epoch_nonces().expect("in force");
+        let epoch_key = test_key(1).epoch_key(n, m);
         let len =
-            crate::frame::seal(&Frame::Uplink(up), &test_key(1), counter, &mut buf).expect("fits");
+            crate::frame::seal(&Frame::Uplink(up), &epoch_key, counter, &mut buf).expect("fits");
         let before = link.follower.updates();
         link.follower.on_received(
             RxOutcome::Packet { len, rssi_dbm: -70 },
