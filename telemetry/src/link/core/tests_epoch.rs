@@ -604,7 +604,9 @@ fn record_first_epoch(link: &mut Link) -> Recording {
 /// position in its epoch. Returns (whether the master adopted the old nonce, how many of the
 /// old downlinks it took).
 fn replay_old_epoch(link: &mut Link, rec: &Recording) -> (bool, usize) {
-    let old = u64::from(u32::from_le_bytes(rec.nonce.bytes[3..7].try_into().unwrap()));
+    let old = u64::from(u32::from_le_bytes(
+        rec.nonce.bytes[3..7].try_into().unwrap(),
+    ));
     let mut target = link.master.slot() + RATIO + 1;
     while target % 256 != rec.nonce.slot % 256 {
         target += 1;
@@ -664,7 +666,10 @@ fn a_nonce_replayed_after_nine_reacquisitions_never_makes_an_earlier_downlink_ve
     epochs.dedup();
     assert_eq!(epochs.len(), 10, "nine re-acquisitions, nine new epochs");
     let (adopted, taken) = replay_old_epoch(&mut link, &rec);
-    assert!(adopted, "the attack reached the master: the old nonce was adopted");
+    assert!(
+        adopted,
+        "the attack reached the master: the old nonce was adopted"
+    );
     assert_eq!(taken, 0, "old downlinks verified again");
 }
 
@@ -675,7 +680,10 @@ fn a_nonce_replayed_to_a_rebooted_master_never_makes_an_earlier_downlink_verify(
     let rec = record_first_epoch(&mut link);
     link.reboot_master();
     let (adopted, taken) = replay_old_epoch(&mut link, &rec);
-    assert!(adopted, "the attack reached the master: the old nonce was adopted");
+    assert!(
+        adopted,
+        "the attack reached the master: the old nonce was adopted"
+    );
     assert_eq!(taken, 0, "old downlinks verified again");
 }
 
