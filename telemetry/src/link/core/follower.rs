@@ -492,7 +492,16 @@ impl Follower {
             return decode(bytes, self.params.bind_id);
         };
         match (self.epoch.key(link), self.frame_counter()) {
-            (Some(key), Some(counter)) => open(bytes, key, counter),
+            (Some(key), Some(counter)) => match (open(bytes, key, counter), self.epoch) {
+                // The handshake's counter with the link key is the master's nonce's alone:
+                // nothing else is taken under it (the master sends channels only under the
+                // epoch key), so no frame can give channels before the epoch is in force.
+                (
+                    Received::Accepted(Frame::Uplink(_) | Frame::Downlink(_) | Frame::Nonce { .. }),
+                    FollowerEpoch::Handshake { .. },
+                ) => Received::Rejected(Rejection::Malformed),
+                (received, _) => received,
+            },
             _ => Received::Rejected(Rejection::Tag),
         }
     }

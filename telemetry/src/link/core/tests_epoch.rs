@@ -766,3 +766,46 @@ fn a_restarted_follower_is_back_within_a_downlink_period_and_a_slot_of_an_unkeye
         "keyed {keyed}, unkeyed {unkeyed}"
     );
 }
+
+/// During the handshake the follower checks uplinks with the link key under its nonce's
+/// counter, which only the master's nonce frame is sent under: a channel uplink sealed
+/// there (only a holder of the key could make one) is still not taken — channels come only
+/// under the epoch key. (Found by `air_follower_keyed`.)
+#[test]
+fn in_the_handshake_only_the_master_nonce_is_taken_under_the_handshake_counter() {
+    let mut link = Link::new(true, 17);
+    while link.follower.sync_state() != SyncState::Handshake {
+        link.slot(&mut clean);
+    }
+    while link.master.schedule().kind(link.master.slot()) != SlotKind::Uplink
+        || link.follower.sync_state() != SyncState::Handshake
+    {
+        link.slot(&mut clean);
+    }
+    let (slot, _) = link.follower.tracked_slot().expect("on the grid");
+    let counter = link.follower.frame_counter().expect("handshake counter");
+    let packed = [0u8; 22];
+    let up = crate::frame::Uplink {
+        slot,
+        stream: crate::frame::StreamHeader { seq: 0, ack: 0 },
+        report: None,
+        save_failsafe: true,
+        input_lost: false,
+        format: crate::channels::ChannelFormat::Full16,
+        packed_channels: &packed,
+        data: b"inject",
+    };
+    let mut buf = [0u8; 64];
+    let len = crate::frame::seal(&Frame::Uplink(up), &test_key(1), counter, &mut buf).unwrap();
+    let failsafe = *link.follower.failsafe_values();
+    link.follower.on_received(
+        RxOutcome::Packet { len, rssi_dbm: -70 },
+        &buf[..len],
+        link.t + 1_000,
+    );
+    assert_eq!(link.follower.updates(), 0);
+    assert_eq!(link.follower.failsafe_values(), &failsafe);
+    assert_eq!(link.follower.uplink_stream.available(), 0);
+    assert_eq!(link.follower.counters().received, 0);
+    assert_ne!(link.follower.sync_state(), SyncState::Tracking);
+}
