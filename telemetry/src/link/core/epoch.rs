@@ -71,7 +71,7 @@ pub(crate) enum FollowerEpoch {
     /// Not on the grid: no nonce.
     None,
     /// On the master's grid by timing only; `nonce` is sent in every downlink slot of the
-    /// current wrap (wraps 0) until an uplink verifies under it.
+    /// current wrap (wraps 0) until the master's nonce comes back under it.
     Handshake { nonce: u32 },
     /// Both nonces known: frames are tagged with `key`, the epoch key of (`nonce`, the
     /// master's nonce); `wraps` slot-counter wraps since the handshake's.
