@@ -11,8 +11,11 @@ use crate::link::{Band, RateMode};
 /// receiver drops frames of other versions before looking further.
 pub const PROTOCOL_VERSION: u8 = 1;
 /// Version byte of authenticated link frames ([`seal`], [`open`]): the link CRC is replaced
-/// by a 4-byte SipHash-2-4 tag over the frame counter and the frame (spec §12).
-pub const SEALED_VERSION: u8 = 2;
+/// by a 4-byte SipHash-2-4 tag over the frame counter and the frame (spec §12). Version 3:
+/// the epoch has the master's nonce in it ([`Frame::MasterNonce`]) and a frame without
+/// stream data carries no stream-seq byte (spec §5.1, §12.2); version 2 ends (the follower's
+/// nonce alone) are refused at this byte.
+pub const SEALED_VERSION: u8 = 3;
 /// Bytes of every uplink/downlink frame before the optional parts: version, kind, slot,
 /// stream seq, stream ack.
 pub const LINK_HEADER_BYTES: usize = 5;
@@ -25,8 +28,12 @@ const KIND_MASK: u8 = 0x07;
 const FLAG_REPORT: u8 = 0x08;
 const FLAG_SAVE_FAILSAFE: u8 = 0x10;
 const FLAG_INPUT_LOST: u8 = 0x20;
-/// Sealed downlinks only: the frame carries the follower's epoch nonce (spec §12.2).
+/// Sealed frames only: the frame carries an epoch nonce (spec §12.2), kind byte exactly
+/// `0x44` (the follower's, downlink) or `0x46` (the master's, uplink).
 const FLAG_NONCE: u8 = 0x40;
+/// Sealed frames only: no stream data, and no stream-seq byte (it would name no byte). What
+/// lets a keyed 16-channel uplink with the master's report fit a 32-byte frame (§4.1).
+const FLAG_NO_STREAM: u8 = 0x80;
 const RESERVED_MASK: u8 = 0xC0;
 
 const KIND_BIND_OFFER: u8 = 0;
@@ -35,6 +42,8 @@ const KIND_RC16: u8 = 2;
 const KIND_RC8: u8 = 3;
 const KIND_DOWNLINK: u8 = 4;
 const KIND_RC_STICKS: u8 = 5;
+/// Sealed uplinks only, with [`FLAG_NONCE`]: the master's epoch nonce.
+const KIND_MASTER_NONCE: u8 = 6;
 
 /// Telemetry-stream position carried by every link frame (see `link::stream`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -93,6 +102,17 @@ pub enum Frame<'a> {
         /// The slot it answers.
         slot: u8,
         /// The follower's epoch nonce (never 0).
+        nonce: u32,
+    },
+    /// Master → follower, sealed links only: the master's epoch nonce, drawn when it adopted
+    /// the follower's, tagged under the follower's nonce (the one counter the follower can
+    /// check before the epoch is in force) and sent instead of channels in the first uplink
+    /// after each of the follower's nonce frames (spec §12.2). Kind byte `0x46`, then
+    /// nothing but the slot and the nonce.
+    MasterNonce {
+        /// The master's slot counter (mod 256).
+        slot: u8,
+        /// The master's epoch nonce (never 0).
         nonce: u32,
     },
 }
@@ -218,8 +238,8 @@ fn put(out: &mut [u8], at: &mut usize, bytes: &[u8]) -> Result<(), EncodeError> 
 /// Encodes `frame` into `out`, with the link CRC keyed by `key` (the bind ID, or
 /// [`crate::link::BIND_KEY`] for bind frames). Returns the frame length.
 pub fn encode(frame: &Frame<'_>, key: u32, out: &mut [u8]) -> Result<usize, EncodeError> {
-    if matches!(frame, Frame::Nonce { .. }) {
-        // The epoch nonce exists only on authenticated links.
+    if matches!(frame, Frame::Nonce { .. } | Frame::MasterNonce { .. }) {
+        // The epoch nonces exist only on authenticated links.
         return Err(EncodeError::InvalidField);
     }
     let mut at = encode_body(frame, PROTOCOL_VERSION, out)?;
@@ -290,39 +310,48 @@ fn encode_body(frame: &Frame<'_>, version: u8, out: &mut [u8]) -> Result<usize, 
             if up.input_lost {
                 flags |= FLAG_INPUT_LOST;
             }
-            put_link_header(
-                out,
-                &mut at,
-                version,
-                kind | flags,
-                up.slot,
-                up.stream,
-                up.report,
-            )?;
+            let seq = stream_seq(version, up.stream, up.data);
+            put_link_header(out, &mut at, version, kind | flags, up.slot, seq, up.report)?;
             put(out, &mut at, up.packed_channels)?;
             put(out, &mut at, up.data)?;
         }
         Frame::Downlink(down) => {
+            let seq = stream_seq(version, down.stream, down.data);
             put_link_header(
                 out,
                 &mut at,
                 version,
                 KIND_DOWNLINK,
                 down.slot,
-                down.stream,
+                seq,
                 down.report,
             )?;
             put(out, &mut at, down.data)?;
         }
-        Frame::Nonce { slot, nonce } => {
+        Frame::Nonce { slot, nonce } | Frame::MasterNonce { slot, nonce } => {
             if *nonce == 0 {
                 return Err(EncodeError::InvalidField);
             }
-            put(out, &mut at, &[version, KIND_DOWNLINK | FLAG_NONCE, *slot])?;
+            let kind = match frame {
+                Frame::MasterNonce { .. } => KIND_MASTER_NONCE,
+                _ => KIND_DOWNLINK,
+            };
+            put(out, &mut at, &[version, kind | FLAG_NONCE, *slot])?;
             put(out, &mut at, &nonce.to_le_bytes())?;
         }
     }
     Ok(at)
+}
+
+/// The stream header as it goes on air: a sealed frame without stream data drops the seq
+/// byte (`None`: [`FLAG_NO_STREAM`]); version 1 frames always carry it.
+fn stream_seq(version: u8, stream: StreamHeader, data: &[u8]) -> (Option<u8>, u8) {
+    let seq = if version == SEALED_VERSION && data.is_empty() {
+        None
+    } else {
+        Some(stream.seq)
+    };
+    (seq, stream.ack)
 }
 
 fn put_link_header(
@@ -331,15 +360,18 @@ fn put_link_header(
     version: u8,
     kind_and_flags: u8,
     slot: u8,
-    stream: StreamHeader,
+    (seq, ack): (Option<u8>, u8),
     report: Option<LinkReport>,
 ) -> Result<(), EncodeError> {
     let flag = if report.is_some() { FLAG_REPORT } else { 0 };
-    put(
-        out,
-        at,
-        &[version, kind_and_flags | flag, slot, stream.seq, stream.ack],
-    )?;
+    match seq {
+        Some(seq) => put(out, at, &[version, kind_and_flags | flag, slot, seq, ack])?,
+        None => put(
+            out,
+            at,
+            &[version, kind_and_flags | flag | FLAG_NO_STREAM, slot, ack],
+        )?,
+    }
     if let Some(r) = report {
         put(out, at, &[r.rssi_dbm.to_ne_bytes()[0], r.lq_percent])?;
     }
@@ -419,15 +451,20 @@ pub(crate) fn peek_sealed(packet: &[u8]) -> Option<Frame<'_>> {
 
 fn sealed_link_frame(kind_byte: u8, rest: &[u8]) -> Result<Frame<'_>, Rejection> {
     match parse_body(kind_byte, rest, true)? {
-        frame @ (Frame::Uplink(_) | Frame::Downlink(_) | Frame::Nonce { .. }) => Ok(frame),
+        frame @ (Frame::Uplink(_)
+        | Frame::Downlink(_)
+        | Frame::Nonce { .. }
+        | Frame::MasterNonce { .. }) => Ok(frame),
         _ => Err(Rejection::Malformed),
     }
 }
 
 /// The fields after the version byte, once the CRC or tag has been checked. Kind bit 6
-/// (the epoch nonce) exists only in `sealed` frames.
+/// (an epoch nonce) and bit 7 (no stream data) exist only in `sealed` frames.
 fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rejection> {
-    if sealed && kind_byte == KIND_DOWNLINK | FLAG_NONCE {
+    if sealed
+        && (kind_byte == KIND_DOWNLINK | FLAG_NONCE || kind_byte == KIND_MASTER_NONCE | FLAG_NONCE)
+    {
         let [slot, a, b, c, d] = rest else {
             return Err(Rejection::Malformed);
         };
@@ -435,8 +472,18 @@ fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rej
         if nonce == 0 {
             return Err(Rejection::Malformed);
         }
-        return Ok(Frame::Nonce { slot: *slot, nonce });
+        return Ok(if kind_byte & KIND_MASK == KIND_MASTER_NONCE {
+            Frame::MasterNonce { slot: *slot, nonce }
+        } else {
+            Frame::Nonce { slot: *slot, nonce }
+        });
     }
+    let no_stream = sealed && kind_byte & FLAG_NO_STREAM != 0;
+    let kind_byte = if sealed {
+        kind_byte & !FLAG_NO_STREAM
+    } else {
+        kind_byte
+    };
     if kind_byte & RESERVED_MASK != 0 {
         return Err(Rejection::UnknownKind(kind_byte));
     }
@@ -445,7 +492,9 @@ fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rej
     let save_failsafe = kind_byte & FLAG_SAVE_FAILSAFE != 0;
     let input_lost = kind_byte & FLAG_INPUT_LOST != 0;
     match kind {
-        KIND_BIND_OFFER | KIND_BIND_ACCEPT if has_report || save_failsafe || input_lost => {
+        KIND_BIND_OFFER | KIND_BIND_ACCEPT
+            if has_report || save_failsafe || input_lost || no_stream =>
+        {
             Err(Rejection::Malformed)
         }
         KIND_BIND_OFFER => {
@@ -473,12 +522,18 @@ fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rej
             })
         }
         KIND_RC16 | KIND_RC8 | KIND_RC_STICKS | KIND_DOWNLINK => {
-            let [slot, seq, ack, rest @ ..] = rest else {
-                return Err(Rejection::Malformed);
-            };
-            let stream = StreamHeader {
-                seq: *seq,
-                ack: *ack,
+            // Without stream data (sealed frames, bit 7) there is no seq byte; it reads 0.
+            let (slot, stream, rest) = match (no_stream, rest) {
+                (false, [slot, seq, ack, rest @ ..]) => (
+                    slot,
+                    StreamHeader {
+                        seq: *seq,
+                        ack: *ack,
+                    },
+                    rest,
+                ),
+                (true, [slot, ack, rest @ ..]) => (slot, StreamHeader { seq: 0, ack: *ack }, rest),
+                _ => return Err(Rejection::Malformed),
             };
             let (report, rest) = if has_report {
                 let (r, rest) = rest
@@ -501,7 +556,7 @@ fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rej
                 (None, rest)
             };
             if kind == KIND_DOWNLINK {
-                if save_failsafe || input_lost {
+                if save_failsafe || input_lost || (no_stream && !rest.is_empty()) {
                     return Err(Rejection::Malformed);
                 }
                 return Ok(Frame::Downlink(Downlink {
@@ -523,6 +578,9 @@ fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rej
             if format == ChannelFormat::Sticks16
                 && packed_channels.last().is_some_and(|b| b & 0x80 != 0)
             {
+                return Err(Rejection::Malformed);
+            }
+            if no_stream && !data.is_empty() {
                 return Err(Rejection::Malformed);
             }
             Ok(Frame::Uplink(Uplink {
@@ -548,7 +606,15 @@ pub const fn uplink_overhead(format: ChannelFormat, with_report: bool) -> usize 
         + CRC_BYTES
 }
 
-/// Bytes of a sealed [`Frame::Nonce`]: version, kind, slot, nonce, tag.
+/// Bytes of a sealed uplink of `format`, with or without the report, carrying `data` stream
+/// bytes: the tag instead of the CRC, and no seq byte without stream data (spec §5.1).
+pub const fn sealed_uplink_bytes(format: ChannelFormat, with_report: bool, data: usize) -> usize {
+    let seq_dropped = if data == 0 { 1 } else { 0 };
+    uplink_overhead(format, with_report) - CRC_BYTES + TAG_BYTES - seq_dropped + data
+}
+
+/// Bytes of a sealed [`Frame::Nonce`] or [`Frame::MasterNonce`]: version, kind, slot, nonce,
+/// tag.
 pub const NONCE_FRAME_BYTES: usize = 3 + 4 + TAG_BYTES;
 
 /// Frame bytes a downlink takes before its stream data.

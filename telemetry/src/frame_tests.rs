@@ -376,3 +376,71 @@ fn stick_uplinks_are_kind_5_and_fit_f700_with_a_report() {
         Received::Rejected(Rejection::Malformed)
     );
 }
+
+/// Sealed frames without stream data carry no seq byte (kind bit 7; it reads 0): the keyed
+/// 16-channel uplink with the report is 32 bytes, F500's frame (spec §4.1, §12.7). Version 1
+/// frames keep it, and a sealed frame with the flag and stream bytes is malformed.
+#[test]
+fn sealed_frames_without_stream_data_drop_the_seq_byte() {
+    let (plain, n) = uplink_bytes(b"");
+    assert_eq!(n, 31, "version 1 keeps the seq byte");
+    let Received::Accepted(Frame::Uplink(up)) = decode(&plain[..n], KEY) else {
+        panic!()
+    };
+    let mut out = [0u8; 64];
+    let m = seal(&Frame::Uplink(up), &sealed_key(), 5, &mut out).unwrap();
+    assert_eq!(m, 32);
+    assert_eq!(m, sealed_uplink_bytes(ChannelFormat::Full16, true, 0));
+    assert_eq!(out[1] & 0x80, 0x80);
+    assert_eq!(out[3], 250, "the ack follows the slot");
+    let expected = Uplink {
+        stream: StreamHeader { seq: 0, ack: 250 },
+        ..up
+    };
+    assert_eq!(
+        open(&out[..m], &sealed_key(), 5),
+        Received::Accepted(Frame::Uplink(expected))
+    );
+    // With stream data the seq byte is there and the flag is not.
+    let data = Uplink { data: b"xy", ..up };
+    let k = seal(&Frame::Uplink(data), &sealed_key(), 5, &mut out).unwrap();
+    assert_eq!(k, 35);
+    assert_eq!(out[1] & 0x80, 0);
+    assert_eq!(
+        open(&out[..k], &sealed_key(), 5),
+        Received::Accepted(Frame::Uplink(data))
+    );
+    // The flag with stream bytes after the channels: malformed.
+    let mut body = out[..k - TAG_BYTES].to_vec();
+    body[1] |= 0x80;
+    body.remove(3);
+    let tag = sealed_key().tag(5, &body);
+    body.extend_from_slice(&tag.to_le_bytes());
+    assert_eq!(
+        open(&body, &sealed_key(), 5),
+        Received::Rejected(Rejection::Malformed)
+    );
+}
+
+#[test]
+fn the_master_nonce_travels_only_in_sealed_frames_as_kind_0x46() {
+    let nonce = Frame::MasterNonce {
+        slot: 8,
+        nonce: 0x0102_0304,
+    };
+    let mut out = [0u8; 64];
+    let n = seal(&nonce, &sealed_key(), 9, &mut out).unwrap();
+    assert_eq!(n, NONCE_FRAME_BYTES);
+    assert_eq!(out[..7], [SEALED_VERSION, 0x46, 8, 4, 3, 2, 1]);
+    assert_eq!(open(&out[..n], &sealed_key(), 9), Received::Accepted(nonce));
+    assert_eq!(peek_sealed(&out[..n]), Some(nonce));
+    assert_eq!(
+        encode(&nonce, KEY, &mut out),
+        Err(EncodeError::InvalidField)
+    );
+    let zero = Frame::MasterNonce { slot: 8, nonce: 0 };
+    assert_eq!(
+        seal(&zero, &sealed_key(), 9, &mut out),
+        Err(EncodeError::InvalidField)
+    );
+}

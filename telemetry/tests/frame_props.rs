@@ -37,7 +37,7 @@ proptest! {
         key in any::<[u8; 16]>(),
         counter in any::<u64>(),
     ) {
-        // Version 2 with a valid tag, so the field parsers are reached; bind kinds are
+        // The sealed version with a valid tag, so the field parsers are reached; bind kinds are
         // never accepted sealed.
         let key = telemetry::link::LinkKey::from_bytes(key);
         let mut bytes = vec![telemetry::frame::SEALED_VERSION, kind];

@@ -47,6 +47,7 @@ const FIGURES: &[(&str, &str, Select)] = &[
     ("auth.downlink_tag", "auth", Select::Region(5)),
     ("auth.link_crc", "auth", Select::Region(7)),
     ("auth.nonce_tag", "auth", Select::Region(9)),
+    ("auth.epoch_key", "auth", Select::Region(11)),
     ("loop.design", "flight_loop", Select::Region(1)),
     ("loop.attitude", "flight_loop", Select::Region(3)),
     ("loop.rate_pid", "flight_loop", Select::Region(5)),

@@ -135,13 +135,14 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     pub fn master(&self, params: LinkParams) -> Master {
         let master = Master::new(params);
         match self.settings.link_key {
-            Some(key) => master.with_key(key),
+            Some(key) => master.with_key(key).with_nonce_seed(self.nonce_seed),
             None => master,
         }
     }
 
-    /// The seed of a receiver-role follower's epoch nonces (spec §12.2), from the nRF52840's
-    /// RNG at boot: a keyed follower's nonce must never repeat, across reboots too.
+    /// The seed of the link's epoch nonces (spec §12.2) — the master's own nonce, or a
+    /// receiver-role follower's — from the nRF52840's RNG at boot: a keyed end's nonce must
+    /// never repeat, across reboots too.
     pub fn seed_link_nonces(&mut self, random: u64) {
         self.nonce_seed = random;
     }

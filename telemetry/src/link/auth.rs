@@ -95,6 +95,7 @@ const DOMAIN_BIND_ID: &[u8] = b"TauLink/1 bind-id";
 /// Domain prefix of the binding-phrase hash (spec §12.2).
 const DOMAIN_HOP_SEED: &[u8] = b"TauLink/1 hop-seed";
 const DOMAIN_MODEL_KEY: &[u8] = b"TauLink/1 model-key";
+const DOMAIN_EPOCH_KEY: &[u8] = b"TauLink/1 epoch-key";
 const DOMAIN_FINGERPRINT: &[u8] = b"TauLink/1 fingerprint";
 
 impl LinkKey {
@@ -157,6 +158,27 @@ impl LinkKey {
         Self(bytes)
     }
 
+    /// The key of one epoch (spec §12.2): two PRF outputs of this key over the follower's
+    /// nonce and the master's (halves 0 and 1). Every frame of the epoch is tagged with it,
+    /// so an epoch's tags repeat only if *both* nonces repeat: a replayed old follower nonce
+    /// meets a fresh master nonce (and the other way round), and nothing recorded under an
+    /// earlier epoch verifies. Derived once per handshake; the per-frame tag costs the same.
+    pub fn epoch_key(&self, follower_nonce: u32, master_nonce: u32) -> Self {
+        let half = |n: u8| {
+            let mut h = SipHasher24::new(&self.0);
+            h.write(DOMAIN_EPOCH_KEY);
+            h.write(&follower_nonce.to_le_bytes());
+            h.write(&master_nonce.to_le_bytes());
+            h.write(&[n]);
+            h.finish().to_le_bytes()
+        };
+        let mut bytes = [0u8; KEY_BYTES];
+        let (lo, hi) = bytes.split_at_mut(8);
+        lo.copy_from_slice(&half(0));
+        hi.copy_from_slice(&half(1));
+        Self(bytes)
+    }
+
     /// The seed of the hop sequence: a PRF of the key, independent of [`LinkKey::bind_id`].
     pub fn hop_seed(&self) -> u32 {
         self.prf(DOMAIN_HOP_SEED) as u32
@@ -194,6 +216,7 @@ pub(crate) struct SipHasher24 {
 }
 
 impl SipHasher24 {
+    #[inline(always)]
     pub(crate) fn new(key: &[u8; KEY_BYTES]) -> Self {
         let (k0, k1) = key.split_at(8);
         let k0 = u64::from_le_bytes(k0.try_into().unwrap_or([0; 8]));
@@ -211,6 +234,7 @@ impl SipHasher24 {
         }
     }
 
+    #[inline(always)]
     fn round(v: &mut [u64; 4]) {
         let [v0, v1, v2, v3] = v;
         *v0 = v0.wrapping_add(*v1);
@@ -225,6 +249,7 @@ impl SipHasher24 {
         *v2 = v2.rotate_left(32);
     }
 
+    #[inline(always)]
     fn compress(&mut self, m: u64) {
         self.v[3] ^= m;
         Self::round(&mut self.v);
@@ -232,6 +257,7 @@ impl SipHasher24 {
         self.v[0] ^= m;
     }
 
+    #[inline(always)]
     pub(crate) fn write(&mut self, bytes: &[u8]) {
         self.length = self.length.wrapping_add(bytes.len());
         let mut rest = bytes;
@@ -255,6 +281,7 @@ impl SipHasher24 {
         }
     }
 
+    #[inline(always)]
     fn push_byte(&mut self, b: u8) {
         self.tail |= u64::from(b) << (8 * self.ntail);
         self.ntail += 1;
@@ -265,6 +292,7 @@ impl SipHasher24 {
         }
     }
 
+    #[inline(always)]
     pub(crate) fn finish(mut self) -> u64 {
         let last = ((self.length as u64 & 0xFF) << 56) | self.tail;
         self.compress(last);

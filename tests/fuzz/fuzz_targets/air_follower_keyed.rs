@@ -7,15 +7,23 @@
 //! skipped slots (into resync), clean stretches of link (past wraps of the slot counter) and
 //! stream use.
 //!
+//! The handshake ends with the master's nonce ([`Frame::MasterNonce`], link key, under the
+//! follower's `nonce ‖ 0 ‖ slot`); the harness sends it (fuzzed nonce, mostly under the right
+//! counter), then uplinks mostly with that epoch's key.
+//!
 //! Invariants: a frame is taken (channels, flags, failsafe values, stream, report) only if it
-//! verifies as an uplink of the tracked slot under the counter reported before it arrived —
-//! never while acquiring, never with another tag; no counter is taken twice (no replay); no
-//! channels before the handshake completes; an unverified frame never moves the grid of an
-//! epoch in force nor ends a handshake; the counter rises by exactly one per slot within an
-//! epoch, and a true uplink of the tracked slot under the reported counter is always taken;
-//! every planned downlink verifies under the reported counter, is a nonce frame
-//! carrying the epoch's nonce during the handshake and a downlink of the tracked slot after
-//! it, and no two sent under one nonce share a counter; outputs 11-bit, LQ a percentage.
+//! verifies as an uplink of the tracked slot with the epoch key under the counter reported
+//! before it arrived — never while acquiring or handshaking, never with another tag; the
+//! handshake ends only on a master nonce of the tracked slot verified under the handshake's
+//! counter, which carries nothing else, and the epoch is then that of both nonces; no
+//! (epoch, counter) is taken twice (no replay); no channels before the handshake completes;
+//! an unverified frame never moves the grid of an epoch in force nor ends a handshake; the
+//! counter rises by exactly one per slot within an epoch, and a true uplink of the tracked
+//! slot under the reported counter is always taken; every planned downlink fits the mode's
+//! frame and verifies under the reported counter, is a nonce frame carrying the epoch's
+//! nonce (link key) during the handshake and a downlink of the tracked slot (epoch key)
+//! after it, and no two sent under one epoch share a counter; outputs 11-bit, LQ a
+//! percentage.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -45,14 +53,17 @@ fuzz_target!(|data: &[u8]| {
     let mut now = 0u64;
     let mut buf = [0u8; 64];
     let mut heard: Vec<Vec<u8>> = Vec::new();
-    let mut taken: Vec<u64> = Vec::new();
-    let mut last_sent: Option<u64> = None;
+    let mut taken: Vec<(Option<(u32, u32)>, u64)> = Vec::new();
+    let mut last_sent: Option<(Option<(u32, u32)>, u64)> = None;
     while !input.is_empty() {
         now = now.saturating_add(u64::from(input.u16()));
         match input.u8() % 9 {
             0..=2 => {
                 let expected = follower.frame_counter();
                 let frame = match input.u8() % 8 {
+                    0 if follower.sync_state() == SyncState::Handshake => {
+                        master_nonce(&mut input, &follower, &key)
+                    }
                     0..=3 => uplink(&mut input, &params, &follower, &key),
                     4 => {
                         let counter = expected.unwrap_or_else(|| any_counter(&mut input));
@@ -96,7 +107,9 @@ fuzz_target!(|data: &[u8]| {
                     assert_eq!(frame.first(), Some(&SEALED_VERSION));
                     let counter = follower.frame_counter().expect("sends only with an epoch");
                     let (slot, _) = follower.tracked_slot().expect("sends only when tracking");
-                    match (open(frame, &key, counter), follower.sync_state()) {
+                    let epoch = follower.epoch_nonces();
+                    let tag_key = epoch_key(&key, &follower);
+                    match (open(frame, &tag_key, counter), follower.sync_state()) {
                         (
                             Received::Accepted(Frame::Nonce { slot: s, nonce }),
                             SyncState::Handshake,
@@ -111,12 +124,13 @@ fuzz_target!(|data: &[u8]| {
                         (other, state) => panic!("planned {other:?} in {state:?}"),
                     }
                     if input.bool() {
-                        if let Some(last) = last_sent
+                        if let Some((last_epoch, last)) = last_sent
+                            && last_epoch == epoch
                             && last >> 32 == counter >> 32
                         {
                             assert!(counter > last, "two downlinks under counter {counter:#x}");
                         }
-                        last_sent = Some(counter);
+                        last_sent = Some((epoch, counter));
                         follower.on_sent();
                     } else {
                         follower.on_skipped();
@@ -137,9 +151,11 @@ fuzz_target!(|data: &[u8]| {
                 let updates = follower.updates();
                 for _ in 0..input.u16() % 600 {
                     let before = follower.frame_counter();
+                    let epoch = follower.epoch_nonces();
                     follower.on_skipped();
                     if let (Some(b), Some(a)) = (before, follower.frame_counter())
                         && a >> 32 == b >> 32
+                        && epoch == follower.epoch_nonces()
                     {
                         assert_eq!(a, b + 1, "the counter moves one per slot");
                     }
@@ -185,9 +201,11 @@ fn receive(
     frame: &[u8],
     input: &mut Input,
     now: u64,
-    taken: &mut Vec<u64>,
+    taken: &mut Vec<(Option<(u32, u32)>, u64)>,
 ) {
     let expected = follower.frame_counter();
+    let tag_key = epoch_key(key, follower);
+    let epoch = follower.epoch_nonces();
     let state = follower.sync_state();
     let slot = follower.tracked_slot();
     let (updates, received) = (follower.updates(), follower.counters().received);
@@ -234,17 +252,34 @@ fn receive(
     let counter = expected.expect("a frame taken while acquiring");
     let (body, tag) = frame.split_at(frame.len() - TAG_BYTES);
     let tag = u32::from_le_bytes(tag.try_into().expect("4 bytes"));
-    assert!(key.verify(counter, body, tag), "taken with a wrong tag");
-    let Received::Accepted(Frame::Uplink(up)) = open(frame, key, counter) else {
+    assert!(tag_key.verify(counter, body, tag), "taken with a wrong tag");
+    if state == SyncState::Handshake {
+        // Only the master's nonce ends a handshake, and it carries nothing else.
+        let Received::Accepted(Frame::MasterNonce { slot: s, nonce: m }) =
+            open(frame, key, counter)
+        else {
+            panic!("taken in the handshake but no master nonce");
+        };
+        assert_eq!(slot.map(|(t, _)| t), Some(s));
+        assert_eq!(follower.sync_state(), SyncState::Tracking);
+        assert_eq!(follower.epoch_nonces(), Some(((counter >> 32) as u32, m)));
+        assert_eq!(follower.updates(), updates);
+        assert_eq!(follower.failsafe_values(), &failsafe);
+        assert_eq!(follower.uplink_stream.available(), available);
+        assert_eq!(follower.remote_report(), remote);
+        assert_eq!(follower.frame_counter(), Some(counter + 1));
+        return;
+    }
+    let Received::Accepted(Frame::Uplink(up)) = open(frame, &tag_key, counter) else {
         panic!("taken but no uplink");
     };
-    // A replay is a frame whose counter was taken before: never twice. (Only a repeated
-    // 32-bit nonce, probability 2⁻³² per pair of epochs, could make this fire legitimately.)
+    // A replay is a frame whose (epoch, counter) was taken before: never twice. (Only a
+    // repeated pair of 32-bit nonces could make this fire legitimately.)
     assert!(
-        !taken.contains(&counter),
+        !taken.contains(&(epoch, counter)),
         "counter {counter:#x} taken twice"
     );
-    taken.push(counter);
+    taken.push((epoch, counter));
     let (slot, _) = slot.expect("tracking or handshaking");
     assert_eq!(up.slot, slot);
     assert_eq!(follower.sync_state(), SyncState::Tracking);
@@ -254,6 +289,7 @@ fn receive(
         counter >> 32,
         "the handshake's nonce is the epoch"
     );
+    assert_eq!(follower.epoch_nonces(), epoch);
     assert_eq!(now_counter, counter + 1);
     if up.input_lost {
         assert_eq!(follower.updates(), updates);
@@ -304,6 +340,32 @@ fn clean_run(
             continue;
         }
         let counter = follower.frame_counter().expect("an epoch on the grid");
+        if follower.sync_state() == SyncState::Handshake {
+            // The master's nonce under ours ends the handshake, whatever its value.
+            let nonce = input.u32().max(1);
+            let mut buf = [0u8; 64];
+            let n =
+                seal(&Frame::MasterNonce { slot, nonce }, key, counter, &mut buf).expect("fits");
+            let outcome = RxOutcome::Packet {
+                len: n,
+                rssi_dbm: -60,
+            };
+            let updates = follower.updates();
+            follower.on_received(outcome, &buf[..n], now);
+            assert_eq!(
+                follower.sync_state(),
+                SyncState::Tracking,
+                "true master nonce refused"
+            );
+            assert_eq!(
+                follower.epoch_nonces(),
+                Some(((counter >> 32) as u32, nonce))
+            );
+            assert_eq!(follower.updates(), updates);
+            assert_eq!(follower.frame_counter(), Some(counter + 1));
+            continue;
+        }
+        let tag_key = epoch_key(key, follower);
         let up = Uplink {
             slot,
             stream: StreamHeader { seq: 0, ack: 0 },
@@ -315,7 +377,7 @@ fn clean_run(
             data: &[],
         };
         let mut buf = [0u8; 64];
-        let n = seal(&Frame::Uplink(up), key, counter, &mut buf).expect("fits 64 bytes");
+        let n = seal(&Frame::Uplink(up), &tag_key, counter, &mut buf).expect("fits 64 bytes");
         let updates = follower.updates();
         let outcome = RxOutcome::Packet {
             len: n,
@@ -330,6 +392,36 @@ fn clean_run(
         assert_eq!(follower.sync_state(), SyncState::Tracking);
         assert_eq!(follower.frame_counter(), Some(counter + 1));
     }
+}
+
+/// The key the follower's frames of the moment are tagged with: the epoch key once in force,
+/// the link key before.
+fn epoch_key(key: &LinkKey, follower: &Follower) -> LinkKey {
+    follower
+        .epoch_nonces()
+        .map_or(*key, |(n, m)| key.epoch_key(n, m))
+}
+
+/// A sealed master nonce: slot mostly the tracked one, tagged with the link key mostly under
+/// the follower's handshake counter, then up to one fuzzed byte flip.
+fn master_nonce(input: &mut Input, follower: &Follower, key: &LinkKey) -> Vec<u8> {
+    let slot = match (input.u8(), follower.tracked_slot()) {
+        (0..=223, Some((slot, _))) => slot,
+        _ => input.u8(),
+    };
+    let counter = match (input.u8(), follower.frame_counter()) {
+        (0..=223, Some(counter)) => counter,
+        _ => any_counter(input),
+    };
+    let nonce = input.u32().max(1);
+    let mut buf = [0u8; 64];
+    let n = seal(&Frame::MasterNonce { slot, nonce }, key, counter, &mut buf).expect("fits");
+    let frame = &mut buf[..n];
+    if input.u8() < 16 {
+        let at = usize::from(input.u8()) % frame.len();
+        frame[at] ^= input.u8();
+    }
+    frame.to_vec()
 }
 
 /// Any counter: one of an arbitrary epoch's, or 64 fuzzed bits.
@@ -376,8 +468,12 @@ fn uplink(input: &mut Input, params: &LinkParams, follower: &Follower, key: &Lin
         packed_channels: packed,
         data: input.chunk(40),
     };
+    let tag_key = match input.u8() {
+        0..=239 => epoch_key(key, follower),
+        _ => *key,
+    };
     let mut buf = [0u8; 128];
-    let n = seal(&Frame::Uplink(up), key, counter, &mut buf).expect("fits 128 bytes");
+    let n = seal(&Frame::Uplink(up), &tag_key, counter, &mut buf).expect("fits 128 bytes");
     let frame = &mut buf[..n];
     for _ in 0..input.u8() % 3 {
         let at = usize::from(input.u8()) % frame.len();

@@ -7,25 +7,31 @@
 //! (past wraps of the slot counter), new channel values, save-failsafe requests and streams.
 //!
 //! Invariants: the master counts a frame only if it verifies — a downlink of the current slot
-//! under the reported counter while an epoch is in use, or a nonce frame of the current slot
-//! under its nonce's counter; the telemetry stream and the remote report move only on such a
-//! downlink; the epoch follows the spec's adoption rules exactly (a model of §12.2 in this
-//! file: fresh nonces adopted, with wrap 0 the wrap of the slot; the current one only repeated
-//! within its wrap 0; the last 8 used ones, and any while the current epoch was heard in the
-//! last downlink period, refused); the reported counter is `nonce ‖ wraps ‖ slot` of that
-//! model (the bare slot before any epoch); every planned uplink verifies under it, carries
-//! the current slot and exactly the channels set, and no two sent under one epoch share a
-//! counter; LQ and the remote report stay percentages.
+//! with the epoch key under the reported counter while an epoch is in use, or a nonce frame
+//! of the current slot with the link key under its nonce's counter; the telemetry stream and
+//! the remote report move only on such a downlink; the epoch follows the spec's adoption
+//! rules exactly (a model of §12.2 in this file: fresh follower nonces adopted, with wrap 0
+//! the wrap of the slot, each adoption with a master nonce never used with that follower
+//! nonce before; the current one only repeated within its wrap 0; the last 8 used ones, and
+//! any while the current epoch was heard in the last downlink period, refused); the reported
+//! counter is `nonce ‖ wraps ‖ slot` of that model (the bare slot before any epoch); after
+//! an adoption or a repeat the next uplink sent in the nonce's wrap is the master's nonce
+//! (link key, `nonce ‖ 0 ‖ slot`), every other planned uplink verifies with the epoch key
+//! under the reported counter, carries the current slot and exactly the channels set, and
+//! fits the mode's frame; no counter is sent twice under one epoch key *across* adoptions
+//! (a replayed old follower nonce meets a fresh master nonce); LQ and the remote report
+//! stay percentages.
 #![no_main]
+
+use std::collections::HashSet;
 
 use libfuzzer_sys::fuzz_target;
 use taulink_fuzz::{Input, link_key, seal_tagged};
 use telemetry::channels::{ChannelFormat, Channels};
 use telemetry::frame::{
-    CRC_BYTES, Downlink, Frame, LinkReport, NONCE_FRAME_BYTES, Received, SEALED_VERSION,
-    StreamHeader, open, seal, uplink_overhead,
+    Downlink, Frame, LinkReport, NONCE_FRAME_BYTES, Received, SEALED_VERSION, StreamHeader, open,
+    seal,
 };
-use telemetry::link::auth::TAG_BYTES;
 use telemetry::link::core::{Master, STREAM_RX_BYTES, Step, frame_counter};
 use telemetry::link::{Band, HOP_CHANNELS, LinkKey, LinkParams, RateMode, RxOutcome};
 
@@ -43,6 +49,13 @@ struct Model {
     retired: Vec<u32>,
     /// Master slot of the last downlink verified under `current`.
     last_heard: Option<u32>,
+    /// The master's nonce of the current epoch (read from the master at adoption: drawn
+    /// from its seed and the time, not modelled).
+    master_nonce: u32,
+    /// The master's nonce is due in the next uplink of the nonce's wrap.
+    due: bool,
+    /// Every (follower nonce, master nonce) adopted so far.
+    epochs: HashSet<(u32, u32)>,
 }
 
 impl Model {
@@ -51,7 +64,9 @@ impl Model {
         if let Some((current, base)) = self.current
             && current == nonce
         {
-            return slot.wrapping_sub(base) < 256;
+            let repeated = slot.wrapping_sub(base) < 256;
+            self.due |= repeated;
+            return repeated;
         }
         let live = self
             .last_heard
@@ -65,7 +80,14 @@ impl Model {
         }
         self.current = Some((nonce, slot & !0xFF));
         self.last_heard = None;
+        self.due = true;
         true
+    }
+
+    /// The master's nonce frame is due in `slot`: the counter it goes under.
+    fn master_nonce_due(&self, slot: u32) -> Option<u64> {
+        let (nonce, base) = self.current?;
+        (self.due && slot.wrapping_sub(base) < 256).then(|| frame_counter(nonce, 0, slot as u8))
     }
 
     fn counter(&self, slot: u32) -> u64 {
@@ -87,13 +109,16 @@ fuzz_target!(|data: &[u8]| {
         telemetry_ratio: 2 << (input.u8() % 7),
     };
     let pool: [u32; 4] = core::array::from_fn(|i| input.u32().max(i as u32 + 1));
-    let mut master = Master::new(params).with_key(key);
+    let mut master = Master::new(params)
+        .with_key(key)
+        .with_nonce_seed(u64::from(input.u32()));
     let mut model = Model::default();
     let mut channels: Channels = [992; 16];
     let mut now = 0u64;
     let mut buf = [0u8; 64];
     let mut heard: Vec<Vec<u8>> = Vec::new();
-    let mut last_sent: Option<u64> = None;
+    // (follower nonce, master nonce, counter) of every uplink sent under an epoch key.
+    let mut sent: HashSet<(u32, u32, u64)> = HashSet::new();
     while !input.is_empty() {
         now = now.saturating_add(u64::from(input.u16()));
         match input.u8() % 9 {
@@ -112,15 +137,7 @@ fuzz_target!(|data: &[u8]| {
                     heard.remove(0);
                 }
                 heard.push(frame.clone());
-                let epoch = master.frame_counter() >> 32;
                 receive(&mut master, &mut model, &key, &frame, &mut input, now);
-                // A new epoch: counters start again under its nonce. The master remembers
-                // only its last 8 nonces (spec §12.7), so a nonce older than that can be
-                // adopted again and its counters repeat — the documented limit, not checked
-                // here; within one adoption every counter is new.
-                if master.frame_counter() >> 32 != epoch {
-                    last_sent = None;
-                }
             }
             3 => {
                 let outcome = if input.bool() {
@@ -139,35 +156,47 @@ fuzz_target!(|data: &[u8]| {
                         assert!(usize::from(channel) < HOP_CHANNELS);
                         let frame = &buf[..len];
                         assert_eq!(frame.first(), Some(&SEALED_VERSION));
-                        let counter = master.frame_counter();
-                        let Received::Accepted(Frame::Uplink(up)) = open(frame, &key, counter)
-                        else {
-                            panic!("the master planned a frame that does not verify");
-                        };
-                        // KNOWN DEFECT, found by this target and left to the frame layout's
-                        // owner: a keyed 16-channel uplink carrying the master's report is
-                        // 5 + 2 + 22 + 4 = 33 bytes, one over L50's and F500's 32-byte frame
-                        // (§4.1), so it overruns the slot's airtime budget. Tolerated only in
-                        // exactly that shape (no stream data); anything else over is a crash.
-                        let bare = uplink_overhead(params.format, true) - CRC_BYTES + TAG_BYTES;
                         assert!(
-                            len <= params.rate.max_frame_bytes()
-                                || (up.report.is_some() && up.data.is_empty() && len == bare),
+                            len <= params.rate.max_frame_bytes(),
                             "{len}-byte uplink at {:?} {:?}",
                             params.rate,
                             params.format
                         );
+                        let counter = master.frame_counter();
+                        let epoch = master.epoch_nonces();
+                        if let Some(nonce_counter) = model.master_nonce_due(slot) {
+                            // The master's nonce, with the link key under the follower's.
+                            let (_, m) = epoch.expect("an epoch");
+                            assert_eq!(
+                                open(frame, &key, nonce_counter),
+                                Received::Accepted(Frame::MasterNonce {
+                                    slot: slot as u8,
+                                    nonce: m
+                                })
+                            );
+                            if input.bool() {
+                                model.due = false;
+                                master.on_sent();
+                            } else {
+                                master.on_skipped();
+                            }
+                            continue;
+                        }
+                        let tag_key = epoch.map_or(key, |(n, m)| key.epoch_key(n, m));
+                        let Received::Accepted(Frame::Uplink(up)) = open(frame, &tag_key, counter)
+                        else {
+                            panic!("the master planned a frame that does not verify");
+                        };
                         assert_eq!(up.slot, slot as u8);
                         assert_eq!(up.format, params.format);
                         taulink_fuzz::assert_uplink_channels(&up, &channels);
                         if input.bool() {
-                            if let Some(last) = last_sent
-                                && last >> 32 == counter >> 32
-                                && counter >> 32 != 0
-                            {
-                                assert!(counter > last, "two uplinks under counter {counter:#x}");
+                            if let Some((n, m)) = epoch {
+                                assert!(
+                                    sent.insert((n, m, counter)),
+                                    "two uplinks under counter {counter:#x} of epoch ({n:#x}, {m:#x})"
+                                );
                             }
-                            last_sent = Some(counter);
                             master.on_sent();
                         } else {
                             master.on_skipped();
@@ -211,6 +240,10 @@ fuzz_target!(|data: &[u8]| {
             }
         }
         assert_eq!(master.has_epoch(), model.current.is_some());
+        assert_eq!(
+            master.epoch_nonces(),
+            model.current.map(|(n, _)| (n, model.master_nonce))
+        );
         assert_eq!(master.frame_counter(), model.counter(master.slot()));
         assert!(master.downlink_lq() <= 100);
         assert!(master.downlink_stream.available() <= STREAM_RX_BYTES);
@@ -248,14 +281,26 @@ fn receive(
         Some(nonce) => match open(frame, key, frame_counter(nonce, 0, slot as u8)) {
             Received::Accepted(Frame::Nonce { slot: s, nonce: n }) if s == slot as u8 => {
                 assert_eq!(n, nonce);
-                Some(model.offer(nonce, slot, ratio))
+                let before = model.current;
+                let taken = model.offer(nonce, slot, ratio);
+                if model.current != before {
+                    // Adopted: the master's own nonce is new with this follower nonce.
+                    let (n, m) = master.epoch_nonces().expect("adopted");
+                    assert_eq!(n, nonce);
+                    assert!(
+                        model.epochs.insert((n, m)),
+                        "epoch ({n:#x}, {m:#x}) adopted twice"
+                    );
+                    model.master_nonce = m;
+                }
+                Some(taken)
             }
             _ => None,
         },
         None => None,
     };
     let downlink = match (nonce, model.current) {
-        (None, Some(_)) => match open(frame, key, counter) {
+        (None, Some((n, _))) => match open(frame, &key.epoch_key(n, model.master_nonce), counter) {
             Received::Accepted(Frame::Downlink(down)) if down.slot == slot as u8 => Some(down),
             _ => None,
         },
@@ -322,8 +367,9 @@ fn nonce_frame(input: &mut Input, master: &Master, key: &LinkKey, pool: &[u32; 4
     frame.to_vec()
 }
 
-/// A well-formed sealed downlink: slot mostly the master's current one, tagged mostly under
-/// the master's counter, fuzzed report and stream, then up to two fuzzed byte flips.
+/// A well-formed sealed downlink: slot mostly the master's current one, tagged mostly with
+/// the epoch key under the master's counter, fuzzed report and stream, then up to two fuzzed
+/// byte flips.
 fn downlink(input: &mut Input, params: &LinkParams, master: &Master, key: &LinkKey) -> Vec<u8> {
     let slot = if input.u8() < 192 {
         master.slot() as u8
@@ -334,6 +380,10 @@ fn downlink(input: &mut Input, params: &LinkParams, master: &Master, key: &LinkK
         master.frame_counter()
     } else {
         u64::from(input.u32()) << 32 | u64::from(input.u32())
+    };
+    let key = match (master.epoch_nonces(), input.u8()) {
+        (Some((n, m)), 0..=239) => key.epoch_key(n, m),
+        _ => *key,
     };
     let report = input.bool().then(|| LinkReport {
         rssi_dbm: input.u8() as i8,
@@ -349,7 +399,7 @@ fn downlink(input: &mut Input, params: &LinkParams, master: &Master, key: &LinkK
         data: input.chunk(params.rate.max_frame_bytes()),
     };
     let mut buf = [0u8; 128];
-    let n = seal(&Frame::Downlink(down), key, counter, &mut buf).expect("fits 128 bytes");
+    let n = seal(&Frame::Downlink(down), &key, counter, &mut buf).expect("fits 128 bytes");
     let frame = &mut buf[..n];
     for _ in 0..input.u8() % 3 {
         let at = usize::from(input.u8()) % frame.len();

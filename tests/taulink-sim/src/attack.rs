@@ -321,7 +321,7 @@ async fn forge<R: PacketRadio>(
             packed_channels: packed,
             data: &[],
         });
-        let len = match n % 4 {
+        let len = match n % 5 {
             0 => seal(&up, &guess, counter, &mut buf),
             1 => encode(&up, victim.bind_id, &mut buf),
             2 => seal(
@@ -335,8 +335,17 @@ async fn forge<R: PacketRadio>(
                 counter,
                 &mut buf,
             ),
-            _ => seal(
+            3 => seal(
                 &Frame::Nonce {
+                    slot,
+                    nonce: (rng.next_u64() as u32) | 1,
+                },
+                &guess,
+                counter,
+                &mut buf,
+            ),
+            _ => seal(
+                &Frame::MasterNonce {
                     slot,
                     nonce: (rng.next_u64() as u32) | 1,
                 },

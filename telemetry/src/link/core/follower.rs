@@ -52,8 +52,8 @@ pub enum SyncState {
     /// Scanning for the master.
     Acquiring,
     /// Keyed links: on the master's slot grid by the timing of its uplinks, sending the
-    /// epoch nonce in downlink slots until an uplink verifies under it; nothing from the
-    /// uplinks is taken meanwhile (failsafe as while acquiring).
+    /// epoch nonce in downlink slots until the master's nonce comes back under it; nothing
+    /// from the uplinks is taken meanwhile (failsafe as while acquiring).
     Handshake,
     /// On the master's slot grid, taking its channels.
     Tracking,
@@ -144,9 +144,11 @@ impl Follower {
     /// neither the channels, nor the failsafe values, nor the sync state — and downlinks
     /// are sealed. Identity and hop sequence become the key's one-way derivations.
     ///
-    /// Tags cover a 64-bit counter whose epoch is a nonce the follower draws at every
-    /// (re)acquisition and sends in its downlink slots; until an uplink verifies under it the
-    /// follower takes only timing from uplinks (channels stay failsafe). Seed the nonces with
+    /// Tags cover a 64-bit counter in an epoch of both ends' nonces: the follower draws its
+    /// nonce at every (re)acquisition and sends it in its downlink slots; until the master's
+    /// nonce comes back in a [`Frame::MasterNonce`] uplink tagged under it, the follower
+    /// takes only timing from uplinks (channels stay failsafe); from then every frame is
+    /// tagged with the epoch key ([`LinkKey::epoch_key`]). Seed the nonces with
     /// [`Follower::with_nonce_seed`].
     pub fn with_key(mut self, key: LinkKey) -> Self {
         self.params.bind_id = key.bind_id();
@@ -393,10 +395,13 @@ impl Follower {
             report: Some(report),
             data: data.get(..n)?,
         };
-        match (&self.key, self.epoch.counter(slot)) {
-            (Some(key), Some(counter)) => seal(&Frame::Downlink(down), key, counter, buf).ok(),
-            (Some(_), None) => None,
-            (None, _) => encode(&Frame::Downlink(down), self.params.bind_id, buf).ok(),
+        match &self.key {
+            Some(link) => {
+                let key = self.epoch.key(link)?;
+                let counter = self.epoch.counter(slot)?;
+                seal(&Frame::Downlink(down), key, counter, buf).ok()
+            }
+            None => encode(&Frame::Downlink(down), self.params.bind_id, buf).ok(),
         }
     }
 
@@ -421,7 +426,13 @@ impl Follower {
             // Re-time the grid: the master started this slot `packet_end_offset` ago.
             let slot_start_us =
                 now_us.saturating_sub(u64::from(self.schedule.packet_end_offset_us(len)));
-            if let Received::Accepted(Frame::Uplink(up)) = self.decode_uplink(bytes) {
+            let received = self.decode_uplink(bytes);
+            if let Received::Accepted(Frame::MasterNonce { slot, nonce }) = received
+                && self.take_master_nonce(slot, nonce, rssi_dbm, slot_start_us)
+            {
+                return;
+            }
+            if let Received::Accepted(Frame::Uplink(up)) = received {
                 let expected = match self.sync {
                     Sync::Acquiring { index, .. } => (up.slot % HOP_CHANNELS as u8) == index,
                     // Spec §5.3 check 4: while tracking only the slot being listened for is
@@ -434,10 +445,6 @@ impl Follower {
                         slot_start_us,
                         misses: 0,
                     };
-                    if let FollowerEpoch::Handshake { nonce } = self.epoch {
-                        // The master tags under our nonce: the epoch is in force.
-                        self.epoch = FollowerEpoch::InForce { nonce, wraps: 0 };
-                    }
                     self.accept(&up, rssi_dbm, now_us);
                     self.advance(Heard::Accepted);
                     return;
@@ -466,16 +473,63 @@ impl Follower {
         self.check_failsafe(now_us);
     }
 
+    /// The master's nonce, verified under the handshake's counter of the tracked slot: the
+    /// epoch of both nonces is in force from now on. The frame carries nothing else (no
+    /// channels, flags or stream); it counts as a packet heard. False if it is not for the
+    /// slot being listened for.
+    fn take_master_nonce(
+        &mut self,
+        slot: u8,
+        master_nonce: u32,
+        rssi_dbm: i16,
+        slot_start_us: u64,
+    ) -> bool {
+        let (Some(link), FollowerEpoch::Handshake { nonce }, Sync::Tracking { slot: tracked, .. }) =
+            (&self.key, self.epoch, self.sync)
+        else {
+            return false;
+        };
+        if slot != tracked || self.schedule.kind(u32::from(slot)) != SlotKind::Uplink {
+            return false;
+        }
+        self.epoch = FollowerEpoch::InForce {
+            nonce,
+            master_nonce,
+            key: link.epoch_key(nonce, master_nonce),
+            wraps: 0,
+        };
+        self.sync = Sync::Tracking {
+            slot,
+            slot_start_us,
+            misses: 0,
+        };
+        self.counters.received += 1;
+        self.lq.push(true);
+        self.rssi.push(rssi_dbm);
+        self.advance(Heard::Accepted);
+        true
+    }
+
     /// Decodes an uplink: with a key, its tag is checked under the counter of the slot
-    /// being listened for in the epoch in force or being handshaken; while acquiring
-    /// nothing verifies (the epoch is the follower's fresh nonce, not yet sent).
+    /// being listened for — with the epoch key once the epoch is in force; during the
+    /// handshake only the master's nonce verifies (the link key, under our nonce); while
+    /// acquiring nothing verifies (the follower's fresh nonce is not yet sent).
     fn decode_uplink<'a>(&self, bytes: &'a [u8]) -> Received<'a> {
-        let Some(key) = &self.key else {
+        let Some(link) = &self.key else {
             return decode(bytes, self.params.bind_id);
         };
-        match self.frame_counter() {
-            Some(counter) => open(bytes, key, counter),
-            None => Received::Rejected(Rejection::Tag),
+        match (self.epoch.key(link), self.frame_counter()) {
+            (Some(key), Some(counter)) => match (open(bytes, key, counter), self.epoch) {
+                // The handshake's counter with the link key is the master's nonce's alone:
+                // nothing else is taken under it (the master sends channels only under the
+                // epoch key), so no frame can give channels before the epoch is in force.
+                (
+                    Received::Accepted(Frame::Uplink(_) | Frame::Downlink(_) | Frame::Nonce { .. }),
+                    FollowerEpoch::Handshake { .. },
+                ) => Received::Rejected(Rejection::Malformed),
+                (received, _) => received,
+            },
+            _ => Received::Rejected(Rejection::Tag),
         }
     }
 
@@ -487,14 +541,16 @@ impl Follower {
         if self.key.is_none() || matches!(self.epoch, FollowerEpoch::InForce { .. }) {
             return None;
         }
-        let Some(Frame::Uplink(up)) = peek_sealed(bytes) else {
-            return None;
+        let slot = match peek_sealed(bytes)? {
+            Frame::Uplink(up) => up.slot,
+            Frame::MasterNonce { slot, .. } => slot,
+            _ => return None,
         };
         let expected = match self.sync {
-            Sync::Acquiring { index, .. } => (up.slot % HOP_CHANNELS as u8) == index,
-            Sync::Tracking { slot, .. } => up.slot == slot,
+            Sync::Acquiring { index, .. } => (slot % HOP_CHANNELS as u8) == index,
+            Sync::Tracking { slot: tracked, .. } => slot == tracked,
         };
-        (expected && self.schedule.kind(u32::from(up.slot)) == SlotKind::Uplink).then_some(up.slot)
+        (expected && self.schedule.kind(u32::from(slot)) == SlotKind::Uplink).then_some(slot)
     }
 
     fn accept(&mut self, up: &crate::frame::Uplink<'_>, rssi_dbm: i16, now_us: u64) {
@@ -564,10 +620,26 @@ impl Follower {
         }
     }
 
+    /// Keyed links: the epoch in force as (the follower's nonce, the master's nonce) —
+    /// public values (both travel in clear); frames are tagged with
+    /// [`LinkKey::epoch_key`]`(follower, master)` of the link key. None during the handshake
+    /// and while acquiring.
+    pub fn epoch_nonces(&self) -> Option<(u32, u32)> {
+        match self.epoch {
+            FollowerEpoch::InForce {
+                nonce,
+                master_nonce,
+                ..
+            } => Some((nonce, master_nonce)),
+            _ => None,
+        }
+    }
+
     /// Keyed links: the 64-bit frame counter (spec §12.2) of the tracked slot, under which
     /// an uplink of that slot must verify and the follower's downlink of it is tagged — the
-    /// handshake's `nonce ‖ 0 ‖ slot` or the epoch in force's. None while acquiring or
-    /// without an epoch (nothing verifies then).
+    /// handshake's `nonce ‖ 0 ‖ slot` (link key: the master's nonce in, ours out) or the
+    /// epoch in force's (epoch key). None while acquiring or without an epoch (nothing
+    /// verifies then).
     ///
     /// Public information, not a secret: the nonce travels in clear in nonce frames and the
     /// slot and its wraps are counted on the grid both ends share; only the key makes a tag.

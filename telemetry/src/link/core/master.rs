@@ -51,8 +51,13 @@ pub struct Master {
     counters: Counters,
     last_downlink_us: Option<u64>,
     key: Option<LinkKey>,
-    /// Keyed links: the follower's epoch nonce in use (spec §12.2).
+    /// Keyed links: the epoch in use (spec §12.2).
     epoch: MasterEpoch,
+    /// Keyed links: the next uplink carries the master's nonce instead of channels (set at
+    /// adoption and at every repeat of the follower's nonce, which says it has not got it).
+    master_nonce_due: bool,
+    /// The uplink planned in this slot is the master's nonce.
+    planned_nonce: bool,
 }
 
 impl Master {
@@ -80,19 +85,32 @@ impl Master {
             counters: Counters::default(),
             last_downlink_us: None,
             key: None,
-            epoch: MasterEpoch::new(),
+            epoch: MasterEpoch::new(0),
+            master_nonce_due: false,
+            planned_nonce: false,
         }
     }
 
     /// Authenticates the link with `key` (spec §12): every frame is sealed with a tag and
     /// only tagged downlinks are accepted; the link identity (header) and the hop sequence
     /// become the key's one-way derivations, replacing the bind ID's. Tags cover a 64-bit
-    /// counter whose epoch is the follower's nonce: the master adopts a verified fresh one
-    /// from a [`Frame::Nonce`] downlink, and accepts telemetry only under it.
+    /// counter in an epoch of both ends' nonces: the master adopts a verified fresh follower
+    /// nonce from a [`Frame::Nonce`] downlink, answers with its own in a
+    /// [`Frame::MasterNonce`] uplink, and from then tags and accepts frames only with the
+    /// epoch's key. Seed its nonces with [`Master::with_nonce_seed`].
     pub fn with_key(mut self, key: LinkKey) -> Self {
         self.params.bind_id = key.bind_id();
         self.hops = HopSequence::new(key.hop_seed());
         self.key = Some(key);
+        self
+    }
+
+    /// Seeds the master's epoch nonces (keyed links) with `seed`, which should come from a
+    /// hardware RNG at every boot: the master's nonce is what keeps a replayed follower nonce
+    /// from restarting an old epoch's counters, across reboots too (each draw is also stirred
+    /// with the time).
+    pub fn with_nonce_seed(mut self, seed: u64) -> Self {
+        self.epoch = MasterEpoch::new(seed);
         self
     }
 
@@ -163,6 +181,19 @@ impl Master {
     }
 
     fn build_uplink(&mut self, buf: &mut [u8]) -> Option<usize> {
+        self.planned_nonce = false;
+        if let (Some(key), true) = (&self.key, self.master_nonce_due)
+            && let Some((nonce, counter)) = self.epoch.master_nonce_for(self.slot)
+        {
+            // The follower is still in its handshake: the master's nonce, alone, under the
+            // follower's nonce (the only counter it can check yet); no channels to take.
+            let frame = Frame::MasterNonce {
+                slot: self.slot as u8,
+                nonce,
+            };
+            self.planned_nonce = true;
+            return seal(&frame, key, counter, buf).ok();
+        }
         let format = self.params.format;
         let report = if self.report_due {
             Some(LinkReport {
@@ -197,9 +228,14 @@ impl Master {
             packed_channels: packed,
             data: data.get(..n)?,
         };
-        let len = match &self.key {
-            Some(key) => seal(&Frame::Uplink(up), key, self.frame_counter(), buf),
-            None => encode(&Frame::Uplink(up), self.params.bind_id, buf),
+        let len = match (&self.key, self.epoch.key()) {
+            (Some(_), Some(epoch_key)) => {
+                seal(&Frame::Uplink(up), epoch_key, self.frame_counter(), buf)
+            }
+            // No epoch yet: tagged with the link key under the bare slot, which no follower
+            // checks anything under (its nonces are never 0) — it gives timing only.
+            (Some(key), None) => seal(&Frame::Uplink(up), key, self.frame_counter(), buf),
+            (None, _) => encode(&Frame::Uplink(up), self.params.bind_id, buf),
         };
         len.ok()
     }
@@ -207,6 +243,13 @@ impl Master {
     /// The uplink of the current slot has been sent.
     pub fn on_sent(&mut self) {
         self.counters.sent += 1;
+        if self.planned_nonce {
+            // It carried neither channels nor flags nor the report.
+            self.planned_nonce = false;
+            self.master_nonce_due = false;
+            self.next_slot();
+            return;
+        }
         self.aux_group = (self.aux_group + 1) % self.params.format.groups();
         self.save_failsafe = self.save_failsafe.saturating_sub(1);
         self.report_due = false;
@@ -241,8 +284,15 @@ impl Master {
                     // nothing else, so a refused replay changes nothing).
                     Received::Accepted(Frame::Nonce { slot, nonce }) if slot == self.slot as u8 => {
                         let ratio = self.params.telemetry_ratio;
-                        match self.epoch.offer(nonce, self.slot, ratio) {
+                        let verdict = match &self.key {
+                            Some(key) => self.epoch.offer(nonce, self.slot, ratio, key, now_us),
+                            None => NonceVerdict::Refused,
+                        };
+                        match verdict {
                             NonceVerdict::Adopted | NonceVerdict::Repeated => {
+                                // (Again) the follower has not got our nonce: it goes out
+                                // in the next uplink.
+                                self.master_nonce_due = true;
                                 self.heard(rssi_dbm, now_us);
                             }
                             NonceVerdict::Refused => self.counters.rejected += 1,
@@ -257,16 +307,17 @@ impl Master {
         self.heard
     }
 
-    /// Checks a sealed downlink: a nonce frame under `nonce ‖ 0 ‖ slot` (the nonce inside
-    /// picks the counter; a wrong one fails the tag), anything else under the epoch in use
-    /// (none yet: nothing verifies).
+    /// Checks a sealed downlink: a nonce frame with the link key under `nonce ‖ 0 ‖ slot`
+    /// (the nonce inside picks the counter; a wrong one fails the tag), anything else with
+    /// the epoch key under the epoch's counter (no epoch yet: nothing verifies).
     fn open_downlink<'a>(&self, key: &LinkKey, bytes: &'a [u8]) -> Received<'a> {
-        let counter = match peek_sealed(bytes) {
-            Some(Frame::Nonce { nonce, .. }) => counter(nonce, 0, self.slot as u8),
-            _ if self.epoch.active() => self.frame_counter(),
-            _ => return Received::Rejected(crate::frame::Rejection::Tag),
-        };
-        open(bytes, key, counter)
+        match (peek_sealed(bytes), self.epoch.key()) {
+            (Some(Frame::Nonce { nonce, .. }), _) => {
+                open(bytes, key, counter(nonce, 0, self.slot as u8))
+            }
+            (_, Some(epoch_key)) => open(bytes, epoch_key, self.frame_counter()),
+            (_, None) => Received::Rejected(crate::frame::Rejection::Tag),
+        }
     }
 
     fn heard(&mut self, rssi_dbm: i16, now_us: u64) {
@@ -322,16 +373,25 @@ impl Master {
         self.counters.radio_errors = self.counters.radio_errors.saturating_add(1);
     }
 
-    /// Keyed links: whether a follower's epoch nonce is in use (uplinks are tagged under
-    /// it). Before the first, nothing the master sends verifies at a follower.
+    /// Keyed links: whether an epoch is in use (uplinks are tagged with its key). Before
+    /// the first, nothing the master sends verifies at a follower.
     pub fn has_epoch(&self) -> bool {
         self.epoch.active()
     }
 
+    /// Keyed links: the epoch in use as (the follower's nonce, the master's nonce) — public
+    /// values (both travel in clear); the epoch key is
+    /// [`LinkKey::epoch_key`]`(follower, master)` of the link key.
+    pub fn epoch_nonces(&self) -> Option<(u32, u32)> {
+        self.epoch.nonces()
+    }
+
     /// The 64-bit frame counter of the current slot (spec §12.2): the planned uplink is
-    /// tagged, and a downlink other than a nonce frame is checked, under it (a nonce frame
-    /// under [`frame_counter`](super::frame_counter)`(nonce, 0, slot)`). Before any epoch it
-    /// is the bare slot, under which no follower verifies anything (its nonces are never 0).
+    /// tagged, and a downlink other than a nonce frame is checked, under it with the epoch
+    /// key (a nonce frame either way with the link key under
+    /// [`frame_counter`](super::frame_counter)`(follower's nonce, 0, slot)`). Before any
+    /// epoch it is the bare slot, under which no follower verifies anything (its nonces are
+    /// never 0).
     ///
     /// Public information, not a secret: the nonce travels in clear in nonce frames and the
     /// slot and its wraps are counted on the grid both ends share; only the key makes a tag.

@@ -8,6 +8,8 @@ pub mod master;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
+mod tests_budget;
+#[cfg(test)]
 mod tests_epoch;
 
 pub use epoch::counter as frame_counter;

@@ -184,13 +184,18 @@ fn keyed_ends_handshake_the_epoch_then_fly_and_carry_telemetry() {
         .filter(|s| **s == SyncState::Handshake)
         .count();
     assert!(handshake > 0, "went through the handshake");
-    // The nonce goes out in the first downlink slot after lock, the next uplink verifies.
+    // The nonce goes out in the first downlink slot after lock, the master's nonce comes
+    // back in the next uplink: the epoch is in force.
     assert!(
         handshake as u32 <= RATIO + 1,
         "{handshake} slots of handshake"
     );
     assert!(nonce_frames >= 1);
     assert!(link.master.has_epoch());
+    assert_eq!(link.follower.epoch_nonces(), link.master.epoch_nonces());
+    // The master's nonce frame carries no channels: they come with the next uplink.
+    assert_eq!(link.follower.updates(), 0);
+    link.slot(&mut clean);
     assert!(!link.follower.in_failsafe());
     let slot = link.master.slot() - 1;
     assert_eq!(link.follower.output(), &channels_of(slot));
@@ -521,8 +526,10 @@ fn both_ends_report_the_counter_they_tag_and_check_under() {
             data: &[],
         };
         let mut buf = [0u8; 64];
+        let (n, m) = link.follower.epoch_nonces().expect("in force");
+        let epoch_key = test_key(1).epoch_key(n, m);
         let len =
-            crate::frame::seal(&Frame::Uplink(up), &test_key(1), counter, &mut buf).expect("fits");
+            crate::frame::seal(&Frame::Uplink(up), &epoch_key, counter, &mut buf).expect("fits");
         let before = link.follower.updates();
         link.follower.on_received(
             RxOutcome::Packet { len, rssi_dbm: -70 },
@@ -536,4 +543,269 @@ fn both_ends_report_the_counter_they_tag_and_check_under() {
         assert!(!take(wrong, &mut link), "accepted under {wrong:#x}");
     }
     assert!(take(expected, &mut link), "refused under its own counter");
+}
+
+/// One keyed session as an eavesdropper recorded it: the follower's nonce frame that the
+/// master adopted, and every downlink of that epoch with its master slot counted from the
+/// epoch's wrap 0 (where a master that adopts the nonce again would tag it).
+struct Recording {
+    nonce: OnAir,
+    downlinks: Vec<(u32, Vec<u8>)>,
+    master_nonces: Vec<OnAir>,
+    epoch: Option<(u32, u32)>,
+}
+
+fn is_nonce(bytes: &[u8]) -> bool {
+    matches!(peek_sealed(bytes), Some(Frame::Nonce { .. }))
+}
+
+fn is_master_nonce(bytes: &[u8]) -> bool {
+    matches!(peek_sealed(bytes), Some(Frame::MasterNonce { .. }))
+}
+
+fn record_first_epoch(link: &mut Link) -> Recording {
+    let mut nonces = Vec::new();
+    let mut master_nonces = Vec::new();
+    link.until_tracking(&mut |f: &OnAir| {
+        if f.dir == Dir::Down && is_nonce(&f.bytes) {
+            nonces.push(f.clone());
+        }
+        if f.dir == Dir::Up && is_master_nonce(&f.bytes) {
+            master_nonces.push(f.clone());
+        }
+        Some(f.bytes.clone())
+    });
+    let epoch = link.master.frame_counter() >> 32;
+    let nonce = nonces
+        .into_iter()
+        .rev()
+        .find(|f| u64::from(u32::from_le_bytes(f.bytes[3..7].try_into().unwrap())) == epoch)
+        .expect("the adopted nonce frame");
+    let base = nonce.slot & !0xFF;
+    let mut downlinks = Vec::new();
+    link.run(700, &mut |f: &OnAir| {
+        if f.dir == Dir::Down && !f.bytes.is_empty() && !is_nonce(&f.bytes) {
+            downlinks.push((f.slot - base, f.bytes.clone()));
+        }
+        Some(f.bytes.clone())
+    });
+    assert!(downlinks.len() > 150, "{}", downlinks.len());
+    Recording {
+        nonce,
+        downlinks,
+        master_nonces,
+        epoch: link.master.epoch_nonces(),
+    }
+}
+
+/// The attacker jams the follower's downlinks for more than a downlink period (so the
+/// master no longer hears its epoch), replays the recorded nonce frame in a slot with the
+/// same on-air number, and then, in every downlink slot, the recorded downlink of the same
+/// position in its epoch. Returns (whether the master adopted the old nonce, how many of the
+/// old downlinks it took).
+fn replay_old_epoch(link: &mut Link, rec: &Recording) -> (bool, usize) {
+    let old = u64::from(u32::from_le_bytes(
+        rec.nonce.bytes[3..7].try_into().unwrap(),
+    ));
+    let mut target = link.master.slot() + RATIO + 1;
+    while target % 256 != rec.nonce.slot % 256 {
+        target += 1;
+    }
+    while link.master.slot() < target {
+        link.slot(&mut |f: &OnAir| (f.dir == Dir::Up).then(|| f.bytes.clone()));
+    }
+    link.slot(&mut |f: &OnAir| match f.dir {
+        Dir::Down => Some(rec.nonce.bytes.clone()),
+        Dir::Up => Some(f.bytes.clone()),
+    });
+    let adopted = link.master.frame_counter() >> 32 == old;
+    let base = target & !0xFF;
+    let mut taken = 0;
+    for _ in 0..700 {
+        let slot = link.master.slot();
+        let recorded = rec
+            .downlinks
+            .iter()
+            .find(|(at, _)| *at == slot - base)
+            .map(|(_, b)| b.clone());
+        let received = link.master.counters().received;
+        let available = link.master.downlink_stream.available();
+        link.slot(&mut |f: &OnAir| match f.dir {
+            Dir::Down => recorded.clone(),
+            Dir::Up => Some(f.bytes.clone()),
+        });
+        if recorded.is_some() && link.master.counters().received > received {
+            taken += 1;
+        } else {
+            assert_eq!(
+                link.master.downlink_stream.available(),
+                available,
+                "stream from a refused frame"
+            );
+        }
+    }
+    (adopted, taken)
+}
+
+/// The master remembered only its last 8 follower nonces (spec §12.7): after nine
+/// re-acquisitions a recorded nonce frame was adopted again with its old counters, and the
+/// downlinks recorded in that epoch verified again. With the master's own nonce in the epoch
+/// the old nonce is still adopted (nothing remembers it), but under a fresh epoch key: none
+/// of the old downlinks verifies. (Fails on the code before the master's nonce: 170+ taken.)
+#[test]
+fn a_nonce_replayed_after_nine_reacquisitions_never_makes_an_earlier_downlink_verify() {
+    let mut link = Link::new(true, 11);
+    let rec = record_first_epoch(&mut link);
+    let mut epochs = vec![link.master.frame_counter() >> 32];
+    for i in 0..9 {
+        link.restart_follower(100 + i);
+        link.until_tracking(&mut clean);
+        link.run(50, &mut clean);
+        epochs.push(link.master.frame_counter() >> 32);
+    }
+    epochs.dedup();
+    assert_eq!(epochs.len(), 10, "nine re-acquisitions, nine new epochs");
+    let (adopted, taken) = replay_old_epoch(&mut link, &rec);
+    assert!(
+        adopted,
+        "the attack reached the master: the old nonce was adopted"
+    );
+    assert_eq!(taken, 0, "old downlinks verified again");
+}
+
+/// The same replay to a master that has just rebooted (it remembers no nonce at all).
+#[test]
+fn a_nonce_replayed_to_a_rebooted_master_never_makes_an_earlier_downlink_verify() {
+    let mut link = Link::new(true, 12);
+    let rec = record_first_epoch(&mut link);
+    link.reboot_master();
+    let (adopted, taken) = replay_old_epoch(&mut link, &rec);
+    assert!(
+        adopted,
+        "the attack reached the master: the old nonce was adopted"
+    );
+    assert_eq!(taken, 0, "old downlinks verified again");
+}
+
+/// A restarted follower (new nonce) is in its handshake; the attacker jams every master
+/// nonce frame of the new handshake and replays the one recorded in the first session in
+/// its slot: it never verifies (it is tagged under the old follower nonce), so the follower
+/// never goes in force under the old epoch and takes nothing; once the jamming stops it is
+/// in force under the new epoch, the master's.
+#[test]
+fn a_replayed_master_nonce_never_puts_a_follower_in_force_under_an_old_epoch() {
+    let mut link = Link::new(true, 13);
+    let rec = record_first_epoch(&mut link);
+    assert!(!rec.master_nonces.is_empty());
+    link.restart_follower(14);
+    let mut delivered = 0;
+    for _ in 0..1024 {
+        let slot = link.master.slot();
+        let old = rec
+            .master_nonces
+            .iter()
+            .find(|f| f.slot % 256 == slot % 256)
+            .map(|f| f.bytes.clone());
+        let handshaking = link.follower.sync_state() == SyncState::Handshake;
+        let mut replayed = false;
+        link.slot(&mut |f: &OnAir| {
+            if f.dir == Dir::Up && old.is_some() {
+                replayed = true;
+                return old.clone();
+            }
+            if f.dir == Dir::Up && is_master_nonce(&f.bytes) {
+                return None;
+            }
+            Some(f.bytes.clone())
+        });
+        if replayed && handshaking {
+            delivered += 1;
+        }
+        assert_ne!(link.follower.sync_state(), SyncState::Tracking);
+        assert_eq!(link.follower.epoch_nonces(), None);
+        assert_eq!(link.follower.updates(), 0, "channels before the epoch");
+        assert_eq!(link.follower.uplink_stream.available(), 0);
+        assert!(link.follower.in_failsafe());
+    }
+    assert!(delivered >= 1, "{delivered}");
+    link.until_tracking(&mut clean);
+    assert_eq!(link.follower.epoch_nonces(), link.master.epoch_nonces());
+    assert_ne!(link.follower.epoch_nonces(), rec.epoch);
+    link.run(8, &mut clean);
+    assert!(link.follower.updates() > 0);
+}
+
+/// Slots from a follower restart (at a new phase of its clock) until it flies the master's
+/// channels again.
+fn recovery_after_follower_restart(keyed: bool) -> u32 {
+    let mut link = Link::new(keyed, 15);
+    link.until_tracking(&mut clean);
+    while link.master.slot() < 400 {
+        link.slot(&mut clean);
+    }
+    link.restart_follower(16);
+    for n in 1..10_000 {
+        link.slot(&mut clean);
+        if link.follower.updates() > 0 {
+            return n;
+        }
+    }
+    panic!("never recovered");
+}
+
+/// A restarted follower acquires like an unkeyed one and then hands over its nonce: the
+/// handshake (its nonce in the next downlink slot, the master's in the next uplink) adds at
+/// most a downlink period and one slot.
+#[test]
+fn a_restarted_follower_is_back_within_a_downlink_period_and_a_slot_of_an_unkeyed_one() {
+    let keyed = recovery_after_follower_restart(true);
+    let unkeyed = recovery_after_follower_restart(false);
+    println!("follower restart → channels again: keyed {keyed} slots, unkeyed {unkeyed} slots");
+    assert!(
+        keyed <= unkeyed + RATIO + 2,
+        "keyed {keyed}, unkeyed {unkeyed}"
+    );
+}
+
+/// During the handshake the follower checks uplinks with the link key under its nonce's
+/// counter, which only the master's nonce frame is sent under: a channel uplink sealed
+/// there (only a holder of the key could make one) is still not taken — channels come only
+/// under the epoch key. (Found by `air_follower_keyed`.)
+#[test]
+fn in_the_handshake_only_the_master_nonce_is_taken_under_the_handshake_counter() {
+    let mut link = Link::new(true, 17);
+    while link.follower.sync_state() != SyncState::Handshake {
+        link.slot(&mut clean);
+    }
+    while link.master.schedule().kind(link.master.slot()) != SlotKind::Uplink
+        || link.follower.sync_state() != SyncState::Handshake
+    {
+        link.slot(&mut clean);
+    }
+    let (slot, _) = link.follower.tracked_slot().expect("on the grid");
+    let counter = link.follower.frame_counter().expect("handshake counter");
+    let packed = [0u8; 22];
+    let up = crate::frame::Uplink {
+        slot,
+        stream: crate::frame::StreamHeader { seq: 0, ack: 0 },
+        report: None,
+        save_failsafe: true,
+        input_lost: false,
+        format: crate::channels::ChannelFormat::Full16,
+        packed_channels: &packed,
+        data: b"inject",
+    };
+    let mut buf = [0u8; 64];
+    let len = crate::frame::seal(&Frame::Uplink(up), &test_key(1), counter, &mut buf).unwrap();
+    let failsafe = *link.follower.failsafe_values();
+    link.follower.on_received(
+        RxOutcome::Packet { len, rssi_dbm: -70 },
+        &buf[..len],
+        link.t + 1_000,
+    );
+    assert_eq!(link.follower.updates(), 0);
+    assert_eq!(link.follower.failsafe_values(), &failsafe);
+    assert_eq!(link.follower.uplink_stream.available(), 0);
+    assert_eq!(link.follower.counters().received, 0);
+    assert_ne!(link.follower.sync_state(), SyncState::Tracking);
 }
