@@ -1,5 +1,5 @@
 //! The flight side of an OpenLRSng link (`link.protocol` = `olrs38` / `olrs39`): the link
-//! task runs `radio_rfm22b::openlrs`'s receiver role and hands the app what each `rx_step`
+//! task runs `openlrs`'s receiver role and hands the app what each `rx_step`
 //! reported; the app turns it into the same thing the TauLink follower gives the loop
 //! (channels on the CRSF scale, failsafe, failsafe counting, watchdog check-in,
 //! `FlightApp::on_link_channels`), so the flight logic never knows which link runs.
@@ -21,13 +21,13 @@ use embedded_hal_async::delay::DelayNs;
 use embedded_hal_async::digital::Wait;
 use embedded_hal_async::spi::SpiDevice;
 use heapless::Deque;
+use openlrs::channels::bits_to_us;
+use openlrs::downlink::SERIAL_QUEUE_LEN;
+use openlrs::radio::{Clock, Error as RadioError, Radio};
+use openlrs::roles::{RxEvent, rx_start, rx_step};
+use openlrs::rx::{Config, Receiver};
+use openlrs::{BindData, BindingVersion};
 use radio_rfm22b::measure::rssi_dbm;
-use radio_rfm22b::openlrs::channels::bits_to_us;
-use radio_rfm22b::openlrs::downlink::SERIAL_QUEUE_LEN;
-use radio_rfm22b::openlrs::radio::{Clock, Error as RadioError, Radio};
-use radio_rfm22b::openlrs::roles::{RxEvent, rx_start, rx_step};
-use radio_rfm22b::openlrs::rx::{Config, Receiver};
-use radio_rfm22b::openlrs::{BindData, BindingVersion};
 use telemetry::channels::MAX_CHANNELS;
 use telemetry::handset::crsf::channels::us_to_ticks;
 use telemetry::messages::FRAMED_MAX_BYTES;
@@ -83,7 +83,7 @@ impl OpenLrsSide {
 
 /// The receiver configuration the link task uses for `version` on `band`: OpenLRSng's, with
 /// the TauLink failsafe delay and no bind window at start (binding is the console's).
-fn config(version: BindingVersion, band: radio_rfm22b::openlrs::Band) -> Config {
+fn config(version: BindingVersion, band: openlrs::Band) -> Config {
     Config {
         failsafe_delay: OPENLRS_FAILSAFE_DELAY,
         bind_window_us: None,

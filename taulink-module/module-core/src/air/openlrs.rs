@@ -1,5 +1,5 @@
 //! The module as an OpenLRSng transmitter (`settings.protocol` OpenLRSng): the same
-//! [`AirLink`] the TauLink master feeds, here fed by `radio_rfm22b::openlrs`'s TX role.
+//! [`AirLink`] the TauLink master feeds, here fed by `openlrs`'s TX role.
 //! Before each packet the handset's channels (10-bit OpenLRSng values) and queued phone
 //! records go into the [`Transmitter`]; after each step the downlink comes out: OpenLRSng's
 //! link-info frames become the link statistics the handset shows (CRSF link statistics,
@@ -16,11 +16,11 @@
 use embedded_hal_async::delay::DelayNs;
 use embedded_hal_async::digital::Wait;
 use embedded_hal_async::spi::SpiDevice;
+use openlrs::channels::us_to_bits;
+use openlrs::radio::{Clock, Error as RadioError, Radio};
+use openlrs::roles::{TxEvent, tx_start, tx_step};
+use openlrs::tx::{Received, Transmitter};
 use radio_rfm22b::measure::rssi_dbm;
-use radio_rfm22b::openlrs::channels::us_to_bits;
-use radio_rfm22b::openlrs::radio::{Clock, Error as RadioError, Radio};
-use radio_rfm22b::openlrs::roles::{TxEvent, tx_start, tx_step};
-use radio_rfm22b::openlrs::tx::{Received, Transmitter};
 
 use super::{AirLink, CONNECTED_TIMEOUT_US};
 use crate::channels::{MAX_CHANNELS, ticks_to_us};
