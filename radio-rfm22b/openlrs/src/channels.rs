@@ -1,5 +1,9 @@
 //! RC channel values: the 10-bit "bits" scale and its µs mapping, the 2-bit switch channels,
-//! and the channel packing of modes 0..7 (`packChannels`/`unpackChannels`).
+//! the channel packing of modes 0..7 (`packChannels`/`unpackChannels`), and the one mapping
+//! between OpenLRSng's values and TauLink's channels (CRSF ticks, `telemetry::channels`),
+//! which both TauLink ends use when they speak OpenLRSng.
+
+use telemetry::handset::crsf::channels::{ticks_to_us, us_to_ticks};
 
 /// Most channels any mode carries (dRonin's mode 7, 16 + 4).
 pub const MAX_CHANNELS: usize = 20;
@@ -77,6 +81,18 @@ pub const fn bits_to_us(bits: u16) -> u16 {
     } else {
         2192
     }
+}
+
+/// A TauLink channel value (CRSF ticks, 172..1811 = 988..2012 µs) as OpenLRSng sends it:
+/// through its pulse width, so a stick at 1500 µs is 1500 µs at both ends.
+pub fn ticks_to_bits(ticks: u16) -> u16 {
+    us_to_bits(ticks_to_us(ticks))
+}
+
+/// An OpenLRSng channel value as a TauLink channel (CRSF ticks), through its pulse width;
+/// the inverse of [`ticks_to_bits`] for every value inside CRSF's range (881..2159 µs).
+pub fn bits_to_ticks(bits: u16) -> u16 {
+    us_to_ticks(bits_to_us(bits))
 }
 
 /// `twoBitfy`: a channel quantised to a 3-position-plus switch (0..3).
@@ -200,6 +216,26 @@ mod tests {
         assert_eq!(sizes, [6, 7, 11, 12, 16, 17, 21, 22]);
         let counts: [usize; 8] = core::array::from_fn(|m| ChannelMode(m as u8).channel_count());
         assert_eq!(counts, [4, 8, 8, 12, 12, 16, 16, 20]);
+    }
+
+    #[test]
+    fn taulink_channels_map_through_microseconds() {
+        use telemetry::handset::crsf::channels::{
+            TICKS_CENTRE, TICKS_MAX_NOMINAL, TICKS_MIN_NOMINAL,
+        };
+        assert_eq!(bits_to_ticks(CENTER_BITS), TICKS_CENTRE);
+        assert_eq!(ticks_to_bits(TICKS_CENTRE), CENTER_BITS);
+        // ±100 % (988 / 2012 µs) fall in OpenLRSng's 16 µs steps outside 1000..1999 µs:
+        // they come back as 984 and 2016 µs.
+        assert_eq!(bits_to_us(ticks_to_bits(TICKS_MIN_NOMINAL)), 984);
+        assert_eq!(bits_to_us(ticks_to_bits(TICKS_MAX_NOMINAL)), 2016);
+        assert_eq!(bits_to_ticks(12), us_to_ticks(1000));
+        // Every OpenLRSng value CRSF can express survives the round trip.
+        for bits in 0..1024 {
+            if (881..=2159).contains(&bits_to_us(bits)) {
+                assert_eq!(ticks_to_bits(bits_to_ticks(bits)), bits, "{bits}");
+            }
+        }
     }
 
     #[test]

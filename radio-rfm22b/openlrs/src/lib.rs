@@ -7,7 +7,8 @@
 //! every constant). The layers are:
 //! - [`version`], [`bind`], [`random`]: who may talk to whom (binding version, bind data);
 //! - [`modem`], [`hopping`], [`timing`]: how the Si4432 is programmed and when it hops;
-//! - [`channels`], [`uplink`], [`telemetry`], [`downlink`]: what the packets carry;
+//! - [`channels`], [`uplink`], [`telemetry`], [`downlink`]: what the packets carry, and
+//!   [`quality`]: their signal figures in dBm and percent;
 //! - [`frsky`], [`ppm`], [`crc16`]: the TX's wired interfaces to the handset;
 //! - [`rx`], [`tx`]: the two roles as state machines taking `now_us` and events;
 //! - [`radio`], [`roles`]: the IO edge — OpenLRSng's register scripts run over the driver's
@@ -31,6 +32,7 @@ pub mod guide;
 pub mod hopping;
 pub mod modem;
 pub mod ppm;
+pub mod quality;
 pub mod radio;
 pub mod random;
 pub mod roles;
