@@ -1,6 +1,4 @@
-// The README is the front page. Its `[guide]` links point at `src/guide.md` for readers of
-// the repository; the definition put first here wins in rustdoc and makes them intra-doc links.
-#![doc = concat!("[guide]: crate::guide\n\n", include_str!("../README.md"))]
+#![doc = include_str!("../README.md")]
 #![cfg_attr(not(test), no_std)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(unsafe_code)]
@@ -15,7 +13,6 @@ mod control;
 mod error;
 pub mod fifo;
 pub mod gpio;
-pub mod guide;
 pub mod if_filter;
 pub mod irq;
 #[cfg(feature = "telemetry")]
@@ -26,9 +23,6 @@ pub mod link;
 pub mod linux;
 pub mod measure;
 pub mod modem;
-#[cfg(feature = "openlrs")]
-#[cfg_attr(docsrs, doc(cfg(feature = "openlrs")))]
-pub mod openlrs;
 pub mod packet;
 pub mod power;
 mod probe;
@@ -47,6 +41,6 @@ pub use if_filter::IfFilter;
 pub use modem::{ModemConfig, ModemSettings, Modulation};
 pub use packet::{Crc, PacketConfig, PacketLength};
 pub use power::{CrystalLoad, TxPower};
-pub use probe::{ChipInfo, Version};
+pub use probe::{ChipInfo, Version, check_identity};
 pub use rfm22b::{NoPin, Rfm22b};
 pub use rx::{RxOutcome, RxPacket, RxSignal};

@@ -160,7 +160,7 @@ pub fn open_nirq(chip_path: &str, line: u32) -> Result<PolledIrq<CdevPin>, OpenE
 }
 
 /// Microseconds since the first call in this process: the clock for
-/// `openlrs::radio::Radio::new` (pass `radio_rfm22b::linux::monotonic_us`).
+/// `openlrs-ng`'s `openlrs::radio::Radio::new` (pass `radio_rfm22b::linux::monotonic_us`).
 pub fn monotonic_us() -> u64 {
     static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
     let start = *START.get_or_init(Instant::now);

@@ -1,6 +1,7 @@
 //! Identification: is there an Si4432 on the bus, and which silicon revision (0x00/0x01).
-//! Shared by [`Rfm22b::probe`](crate::Rfm22b::probe) and the OpenLRSng radio layer, so both
-//! report an absent chip the same way.
+//! Shared by [`Rfm22b::probe`](crate::Rfm22b::probe) and radio layers that run their own
+//! register scripts over [`Bus`](crate::Bus) (the `openlrs-ng` crate), so all of them report
+//! an absent chip the same way.
 
 use crate::Error;
 use crate::registers::DEVICE_TYPE_SI443X;
@@ -38,10 +39,11 @@ pub struct ChipInfo {
     pub version: Version,
 }
 
-/// The device-type check on what 0x00/0x01 read. A bus with no chip on it reads all 0x00 or
-/// all 0xFF, so it fails here instead of passing unnoticed. Synchronous on purpose: an
+/// The device-type check on what 0x00/0x01 read (`[device type, version]`, one burst). A
+/// bus with no chip on it reads all 0x00 or all 0xFF, so it fails here instead of passing
+/// unnoticed. Synchronous on purpose: an
 /// extra nested future in `Rfm22b::probe` cost its `init` 65 instructions on the M4.
-pub(crate) fn check_identity<E>([device_type, version]: [u8; 2]) -> Result<ChipInfo, Error<E>> {
+pub fn check_identity<E>([device_type, version]: [u8; 2]) -> Result<ChipInfo, Error<E>> {
     if device_type & 0x1F != DEVICE_TYPE_SI443X {
         return Err(Error::NotAnSi4432 {
             device_type,

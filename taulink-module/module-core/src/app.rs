@@ -680,7 +680,7 @@ impl<H: HandsetOutput> App<AirLink, H> {
     }
 
     /// Right before each OpenLRSng packet (`air::openlrs::run_openlrs_transmitter`).
-    pub fn on_openlrs_send(&mut self, tx: &mut radio_rfm22b::openlrs::tx::Transmitter) {
+    pub fn on_openlrs_send(&mut self, tx: &mut openlrs::tx::Transmitter) {
         self.link.on_openlrs_send(tx);
     }
 
@@ -690,8 +690,8 @@ impl<H: HandsetOutput> App<AirLink, H> {
         &mut self,
         now_us: u64,
         now_ms: u32,
-        tx: &radio_rfm22b::openlrs::tx::Transmitter,
-        events: &[radio_rfm22b::openlrs::roles::TxEvent],
+        tx: &openlrs::tx::Transmitter,
+        events: &[openlrs::roles::TxEvent],
     ) {
         self.session.on_hook(now_ms);
         self.link.on_openlrs_step(now_us, tx, events);

@@ -8,7 +8,7 @@ use telemetry::channels::{Failsafe, FailsafeValues, MAX_CHANNELS};
 use telemetry::link::core::follower::DEFAULT_FAILSAFE_US;
 use telemetry::link::{Band as LinkBand, LinkParams};
 
-use radio_rfm22b::openlrs::BindData;
+use ::openlrs::BindData;
 
 use crate::air::{link_band, link_params, new_bind_params};
 use crate::settings::{Role, Settings, openlrs};
@@ -59,7 +59,7 @@ pub enum LinkStep {
     /// `crate::air::openlrs::run_openlrs_transmitter` with the core's `on_openlrs_*` hooks.
     RunOpenLrsTx(BindData),
     /// OpenLRSng's bind procedure: send `data`'s bind packet (every 200 ms, at the bind
-    /// power, `radio_rfm22b::openlrs::roles::tx_bind`) until a receiver answers or the
+    /// power, `openlrs::roles::tx_bind`) until a receiver answers or the
     /// timeout passes; report with `App::on_bind_outcome(BindOutcome::Offered { .. })`.
     BindOpenLrsTx {
         /// The bind data offered (with the hop seed the bind gives the link).

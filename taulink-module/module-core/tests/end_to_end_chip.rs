@@ -1,5 +1,5 @@
 //! The PPM end-to-end path one rung lower: the module core drives the link master through
-//! its own driver adapter (`module_core::air::radio::LinkRadio`, what the firmware runs) on
+//! the driver's link adapter (`radio_rfm22b::link::LinkRadio`, what the firmware runs) on
 //! the real `radio-rfm22b` driver over a virtual Si4432 (`si4432-sim`, register level); the
 //! flight side runs the follower the same way on a second virtual chip.
 //! Channels must arrive exactly; the flight battery must come back as S.Port VFAS and on the
@@ -19,7 +19,6 @@ use common::{
     module_settings,
 };
 use embedded_hal_async::delay::DelayNs;
-use module_core::air::radio::LinkRadio;
 use module_core::air::{AirLink, link_params};
 use module_core::app::App;
 use module_core::channels::us_to_ticks;
@@ -28,6 +27,7 @@ use module_core::hm10::relay::MAX_FRAME_LEN;
 use module_core::settings::{InputProtocol, OutputProtocol};
 use radio_rfm22b::Rfm22b;
 use radio_rfm22b::TxPower;
+use radio_rfm22b::link::LinkRadio;
 use si4432_sim::{Medium, RadioConfig as Placement, SimDelay, Simulation};
 use telemetry::channels::FailsafeValues;
 use telemetry::handset::sport::{self, value_id};

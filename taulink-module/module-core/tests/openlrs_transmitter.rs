@@ -15,12 +15,12 @@ use module_core::channels::{Channels, us_to_ticks};
 use module_core::ports::{HandsetOutput, LinkPort, LinkStats};
 use module_core::session::{BindOutcome, LinkStep, SessionEnd};
 use module_core::settings::{InputProtocol, LinkProtocol, OpenLrsSettings, Settings};
-use radio_rfm22b::openlrs::bind::DEFAULT_RF_MAGIC;
-use radio_rfm22b::openlrs::channels::bits_to_us;
-use radio_rfm22b::openlrs::roles::TxEvent;
-use radio_rfm22b::openlrs::rx::{Config, Output, Receiver};
-use radio_rfm22b::openlrs::tx::Transmitter;
-use radio_rfm22b::openlrs::{Band, BindingVersion};
+use openlrs::bind::DEFAULT_RF_MAGIC;
+use openlrs::channels::bits_to_us;
+use openlrs::roles::TxEvent;
+use openlrs::rx::{Config, Output, Receiver};
+use openlrs::tx::Transmitter;
+use openlrs::{Band, BindingVersion};
 
 #[derive(Default)]
 struct Handset {
@@ -62,7 +62,7 @@ fn stream_frame(record: &[u8]) -> Vec<u8> {
 
 /// Binds the module (long press) with a receiver that has no bind data; returns the link
 /// the module flies afterwards.
-fn bind(app: &mut Module, version: BindingVersion) -> radio_rfm22b::openlrs::BindData {
+fn bind(app: &mut Module, version: BindingVersion) -> openlrs::BindData {
     app.on_radio_present(true);
     let LinkStep::RunOpenLrsTx(factory) = app.next_link_step(0, 7) else {
         panic!("an OpenLRSng transmitter flies from the start");

@@ -2,7 +2,7 @@
 //! 0x7E, and a 0x7E or 0x7D inside one is sent as 0x7D followed by the byte XOR 0x20.
 //!
 //! The one definition of it: the handset codecs here and the OpenLRSng TX's handset output
-//! (`radio_rfm22b::openlrs::frsky`) both stuff with [`escaped`].
+//! (`openlrs-ng`'s `openlrs::frsky`) both stuff with [`escaped`].
 
 /// Frame delimiter (FrSky D) / start byte (S.Port).
 pub const FRAME: u8 = 0x7E;

@@ -17,9 +17,9 @@ use flight_core::app::{
     FEED_PERIOD_MS, FlightApp, LinkStep, Task, openlrs_bind_window, run_openlrs_receiver,
 };
 use flight_core::pipeline::{Controllers, from_settings};
+use openlrs::radio::Radio as OpenLrsRadio;
+use openlrs::rx::{Config as OpenLrsConfig, Receiver};
 use radio_rfm22b::link::LinkRadio;
-use radio_rfm22b::openlrs::radio::Radio as OpenLrsRadio;
-use radio_rfm22b::openlrs::rx::{Config as OpenLrsConfig, Receiver};
 use radio_rfm22b::{NoPin, Rfm22b, TxPower};
 use si4432_sim::{ChipHandle, Fault, Medium, SimDelay, SimIrq, SimSpi};
 use telemetry::link::LinkClock;

@@ -1,4 +1,4 @@
-//! OpenLRSng bind packets (`radio_rfm22b::openlrs::bind`) as an RX of either generation and
+//! OpenLRSng bind packets (`openlrs::bind`) as an RX of either generation and
 //! any band classifies them, and what an accepted bind then drives: the hop schedule, the
 //! link's register script, the packet interval and a TX built on it.
 //!
@@ -8,11 +8,9 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use radio_rfm22b::openlrs::bind::{
-    BIND_DATA_LEN, BIND_PACKET_LEN, BindData, BindReception, receive_bind_packet,
-};
-use radio_rfm22b::openlrs::modem::{self, Purpose};
-use radio_rfm22b::openlrs::{Band, BindingVersion, hopping, timing, tx::Transmitter};
+use openlrs::bind::{BIND_DATA_LEN, BIND_PACKET_LEN, BindData, BindReception, receive_bind_packet};
+use openlrs::modem::{self, Purpose};
+use openlrs::{Band, BindingVersion, hopping, timing, tx::Transmitter};
 
 fuzz_target!(|packet: &[u8]| {
     if let Some(bytes) = packet.first_chunk::<BIND_DATA_LEN>() {

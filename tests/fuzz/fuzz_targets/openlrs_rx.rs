@@ -1,4 +1,4 @@
-//! The OpenLRSng receiver role (`radio_rfm22b::openlrs::rx::Receiver`): stored bind data and
+//! The OpenLRSng receiver role (`openlrs::rx::Receiver`): stored bind data and
 //! settings from the fuzz bytes, then packets (bind and link, as the radio hands them over
 //! after its header and CRC checks), timer polls, RSSI samples and serial input.
 //!
@@ -9,10 +9,10 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use radio_rfm22b::openlrs::bind::{BIND_ACK, BIND_DATA_LEN, BindData};
-use radio_rfm22b::openlrs::rx::{Command, Config, Output, Receiver};
-use radio_rfm22b::openlrs::telemetry::{self, DOWNLINK_FRAME_LEN, Downlink};
-use radio_rfm22b::openlrs::{Band, BindingVersion};
+use openlrs::bind::{BIND_ACK, BIND_DATA_LEN, BindData};
+use openlrs::rx::{Command, Config, Output, Receiver};
+use openlrs::telemetry::{self, DOWNLINK_FRAME_LEN, Downlink};
+use openlrs::{Band, BindingVersion};
 use taulink_fuzz::Input;
 
 fuzz_target!(|data: &[u8]| {

@@ -1,4 +1,4 @@
-//! The OpenLRSng transmitter role (`radio_rfm22b::openlrs::tx`): downlink frames as the RX
+//! The OpenLRSng transmitter role (`openlrs::tx`): downlink frames as the RX
 //! (or anyone on the channel) sends them, fed to the TX with its own polls, channel input,
 //! serial input and failsafe button; what it learns goes on to the handset encoders
 //! (`frsky::HandsetTelemetry`); and bind-mode replies into the `BindBeacon`.
@@ -10,12 +10,12 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use radio_rfm22b::openlrs::bind::{BIND_ACK, BindData};
-use radio_rfm22b::openlrs::channels::MAX_CHANNELS;
-use radio_rfm22b::openlrs::frsky::HandsetTelemetry;
-use radio_rfm22b::openlrs::tx::{BindBeacon, Received, Transmitter};
-use radio_rfm22b::openlrs::uplink::{self, Uplink};
-use radio_rfm22b::openlrs::{Band, BindingVersion};
+use openlrs::bind::{BIND_ACK, BindData};
+use openlrs::channels::MAX_CHANNELS;
+use openlrs::frsky::HandsetTelemetry;
+use openlrs::tx::{BindBeacon, Received, Transmitter};
+use openlrs::uplink::{self, Uplink};
+use openlrs::{Band, BindingVersion};
 use taulink_fuzz::Input;
 use telemetry::handset::{frsky_d, sport};
 

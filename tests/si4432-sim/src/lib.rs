@@ -14,7 +14,7 @@
 //! si4432-sim = { path = "../taulink/tests/si4432-sim" }
 //! ```
 //! It needs `std` and nothing of TauLink's: any Si4432 driver on embedded-hal 1.0 (blocking or
-//! async) runs on it. The radio-rfm22b crate's `guide` module has a complete host test of an
+//! async) runs on it. The openlrs-ng crate's `guide` module has a complete host test of an
 //! OpenLRSng link written against it.
 //!
 //! # What is modelled

@@ -7,7 +7,7 @@ use clap::{Parser, ValueEnum};
 use telemetry::channels::ChannelFormat;
 use telemetry::link::{Band, LinkKey, RateMode};
 
-use radio_rfm22b::openlrs::BindingVersion;
+use openlrs::BindingVersion;
 
 use crate::handset::HandsetKind;
 use crate::openlrs::OpenLrsScenario;

@@ -1,5 +1,5 @@
 //! `--protocol openlrs38|openlrs39`: the crate's OpenLRSng TX role flying its RX role
-//! (`radio_rfm22b::openlrs::roles`, the state machines and register scripts the firmware
+//! (`openlrs::roles`, the state machines and register scripts the firmware
 //! runs) on two virtual Si4432s, with the figures the TauLink report has: channel updates/s,
 //! latency (handset value change → receiver output), LQ both ways, failsafe and recovery
 //! time after a cut. The ends bind over the air first, as a fresh pair would.
@@ -8,12 +8,12 @@ use core::cell::RefCell;
 use core::time::Duration;
 use std::rc::Rc;
 
-use radio_rfm22b::openlrs::modem::PROFILES;
-use radio_rfm22b::openlrs::radio::Radio;
-use radio_rfm22b::openlrs::roles::{RxEvent, rx_start, rx_step, tx_bind, tx_start, tx_step};
-use radio_rfm22b::openlrs::rx::{Config, Receiver};
-use radio_rfm22b::openlrs::tx::Transmitter;
-use radio_rfm22b::openlrs::{Band, BindData, BindingVersion, timing};
+use openlrs::modem::PROFILES;
+use openlrs::radio::Radio;
+use openlrs::roles::{RxEvent, rx_start, rx_step, tx_bind, tx_start, tx_step};
+use openlrs::rx::{Config, Receiver};
+use openlrs::tx::Transmitter;
+use openlrs::{Band, BindData, BindingVersion, timing};
 use si4432_sim::{Medium, Outcome, RadioConfig, RadioHandle, RadioId, Simulation};
 
 /// The virtual chips' power-on reset time, waited before the first register access.

@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 
 use clap::Parser;
-use radio_rfm22b::openlrs::BindingVersion;
+use openlrs::BindingVersion;
 use taulink_sim::Cli;
 use taulink_sim::openlrs::{OpenLrsScenario, run};
 

@@ -20,8 +20,8 @@
 //! follower calls its hooks at least every 50 ms in every sync state, and the adapter
 //! checks in while it waits outside the follower (bind window, retry after a radio error).
 
-use radio_rfm22b::openlrs::BindData;
-use radio_rfm22b::openlrs::rx::Config as OpenLrsConfig;
+use openlrs::BindData;
+use openlrs::rx::Config as OpenLrsConfig;
 use telemetry::channels::FailsafeValues;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::FollowerHooks;

@@ -1,5 +1,5 @@
 //! The flight side of an OpenLRSng link (`link.protocol` = `olrs38` / `olrs39`): the link
-//! task runs `radio_rfm22b::openlrs`'s receiver role and hands the app what each `rx_step`
+//! task runs `openlrs`'s receiver role and hands the app what each `rx_step`
 //! reported; the app turns it into the same thing the TauLink follower gives the loop
 //! (channels on the CRSF scale, failsafe, failsafe counting, watchdog check-in,
 //! `FlightApp::on_link_channels`), so the flight logic never knows which link runs.
@@ -21,15 +21,14 @@ use embedded_hal_async::delay::DelayNs;
 use embedded_hal_async::digital::Wait;
 use embedded_hal_async::spi::SpiDevice;
 use heapless::Deque;
-use radio_rfm22b::measure::rssi_dbm;
-use radio_rfm22b::openlrs::channels::bits_to_us;
-use radio_rfm22b::openlrs::downlink::SERIAL_QUEUE_LEN;
-use radio_rfm22b::openlrs::radio::{Clock, Error as RadioError, Radio};
-use radio_rfm22b::openlrs::roles::{RxEvent, rx_start, rx_step};
-use radio_rfm22b::openlrs::rx::{Config, Receiver};
-use radio_rfm22b::openlrs::{BindData, BindingVersion};
+use openlrs::channels::bits_to_ticks;
+use openlrs::downlink::SERIAL_QUEUE_LEN;
+use openlrs::quality::{quality_percent, rssi_dbm};
+use openlrs::radio::{Clock, Error as RadioError, Radio};
+use openlrs::roles::{RxEvent, rx_start, rx_step};
+use openlrs::rx::{Config, Receiver};
+use openlrs::{BindData, BindingVersion};
 use telemetry::channels::MAX_CHANNELS;
-use telemetry::handset::crsf::channels::us_to_ticks;
 use telemetry::messages::FRAMED_MAX_BYTES;
 
 use super::FlightApp;
@@ -40,8 +39,6 @@ use crate::report::LinkSeen;
 /// The receiver's failsafe delay in OpenLRSng's `delayInMs` code: 5 = 500 ms, the same as
 /// the TauLink follower's [`super::FAILSAFE_US`] (OpenLRSng's own default is 1 s).
 pub const OPENLRS_FAILSAFE_DELAY: u8 = 5;
-/// OpenLRSng programs 0x35 = 0x2A: `rssi_off` 2 (about 8 dB), for the dBm conversion.
-const RSSI_OFFSET: u8 = 2;
 /// Telemetry's `rate_mode` for an OpenLRSng link: this plus the modem profile (0..4), clear
 /// of TauLink's rate codes.
 pub const OPENLRS_RATE_CODE_BASE: u8 = 0x10;
@@ -83,7 +80,7 @@ impl OpenLrsSide {
 
 /// The receiver configuration the link task uses for `version` on `band`: OpenLRSng's, with
 /// the TauLink failsafe delay and no bind window at start (binding is the console's).
-fn config(version: BindingVersion, band: radio_rfm22b::openlrs::Band) -> Config {
+fn config(version: BindingVersion, band: openlrs::Band) -> Config {
     Config {
         failsafe_delay: OPENLRS_FAILSAFE_DELAY,
         bind_window_us: None,
@@ -135,7 +132,7 @@ impl FlightApp {
             match event {
                 RxEvent::Channels { channels_bits, .. } => {
                     for (slot, bits) in self.link.openlrs.channels.iter_mut().zip(channels_bits) {
-                        *slot = us_to_ticks(bits_to_us(*bits));
+                        *slot = bits_to_ticks(*bits);
                     }
                     self.link.openlrs.has_channels = true;
                     self.link.openlrs.received = self.link.openlrs.received.saturating_add(1);
@@ -179,8 +176,8 @@ impl FlightApp {
             return;
         }
         let seen = LinkSeen {
-            rssi_dbm: i8::try_from(rssi_dbm(rx.smoothed_rssi(), RSSI_OFFSET)).unwrap_or(i8::MIN),
-            lq_percent: u8::try_from(u16::from(rx.link_quality()) * 100 / 15).unwrap_or(100),
+            rssi_dbm: i8::try_from(rssi_dbm(rx.smoothed_rssi())).unwrap_or(i8::MIN),
+            lq_percent: quality_percent(rx.link_quality()),
             downlink: None,
             rate_mode: OPENLRS_RATE_CODE_BASE + data.modem_profile,
             received: self.link.openlrs.received,

@@ -5,10 +5,10 @@
 use super::*;
 use crate::app::{BIND_WINDOW_US, Task};
 use crate::settings::Settings;
-use radio_rfm22b::openlrs::Band;
-use radio_rfm22b::openlrs::channels::us_to_bits;
-use radio_rfm22b::openlrs::rx::Output;
-use radio_rfm22b::openlrs::tx::{Received, Transmitter};
+use openlrs::Band;
+use openlrs::channels::us_to_bits;
+use openlrs::rx::Output;
+use openlrs::tx::{Received, Transmitter};
 use telemetry::messages::{Decoded, MessageReader};
 
 fn openlrs_app(protocol: &str) -> FlightApp {

@@ -3,8 +3,8 @@
 //! what the module offered with it), and the air protocol (`link.protocol`): TauLink, or
 //! OpenLRSng 3.8 / 3.9 with the bind data an OpenLRSng transmitter sent (`link.olrs_*`).
 
-use radio_rfm22b::openlrs::bind::{BindData, MAX_HOPS};
-use radio_rfm22b::openlrs::{Band as OlrsBand, BindingVersion};
+use openlrs::bind::{BindData, MAX_HOPS};
+use openlrs::{Band as OlrsBand, BindingVersion};
 use telemetry::channels::ChannelFormat;
 use telemetry::link::{Band, LinkParams, RateMode};
 

@@ -14,7 +14,6 @@
 //! (`crate::records`); a record that does not fit the stream now waits in a bounded queue.
 
 pub mod openlrs;
-pub mod radio;
 
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat};
 use telemetry::link::core::{Follower, Master};

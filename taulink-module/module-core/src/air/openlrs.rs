@@ -1,5 +1,5 @@
 //! The module as an OpenLRSng transmitter (`settings.protocol` OpenLRSng): the same
-//! [`AirLink`] the TauLink master feeds, here fed by `radio_rfm22b::openlrs`'s TX role.
+//! [`AirLink`] the TauLink master feeds, here fed by `openlrs`'s TX role.
 //! Before each packet the handset's channels (10-bit OpenLRSng values) and queued phone
 //! records go into the [`Transmitter`]; after each step the downlink comes out: OpenLRSng's
 //! link-info frames become the link statistics the handset shows (CRSF link statistics,
@@ -16,29 +16,22 @@
 use embedded_hal_async::delay::DelayNs;
 use embedded_hal_async::digital::Wait;
 use embedded_hal_async::spi::SpiDevice;
-use radio_rfm22b::measure::rssi_dbm;
-use radio_rfm22b::openlrs::channels::us_to_bits;
-use radio_rfm22b::openlrs::radio::{Clock, Error as RadioError, Radio};
-use radio_rfm22b::openlrs::roles::{TxEvent, tx_start, tx_step};
-use radio_rfm22b::openlrs::tx::{Received, Transmitter};
+use openlrs::channels::ticks_to_bits;
+use openlrs::quality::{quality_percent, rssi_dbm};
+use openlrs::radio::{Clock, Error as RadioError, Radio};
+use openlrs::roles::{TxEvent, tx_start, tx_step};
+use openlrs::tx::{Received, Transmitter};
 
 use super::{AirLink, CONNECTED_TIMEOUT_US};
-use crate::channels::{MAX_CHANNELS, ticks_to_us};
+use crate::channels::MAX_CHANNELS;
 use crate::ports::LinkStats;
 use crate::records::MAX_STREAM_FRAME_LEN;
 
-/// OpenLRSng programs 0x35 = 0x2A: `rssi_off` 2 (about 8 dB), for the dBm conversion.
-const RSSI_OFFSET: u8 = 2;
 /// `LinkStats::rate_code` of an OpenLRSng link: this plus the modem profile (0..4), clear of
 /// TauLink's rate codes (the flight side's `OPENLRS_RATE_CODE_BASE`).
 pub const OPENLRS_RATE_CODE_BASE: u8 = 0x10;
 /// Events one `tx_step` can report.
 const STEP_EVENTS: usize = 2;
-
-/// The quality OpenLRSng counts in 15 slots, as a percentage.
-fn percent(quality_of_15: u8) -> u8 {
-    u8::try_from(u16::from(quality_of_15.min(15)) * 100 / 15).unwrap_or(100)
-}
 
 impl AirLink {
     /// Right before an OpenLRSng packet is built: fresh handset channels (none once the
@@ -47,7 +40,7 @@ impl AirLink {
         if let Some(channels) = self.channels.filter(|_| !self.input_lost) {
             let mut bits = [0u16; MAX_CHANNELS];
             for (slot, value) in bits.iter_mut().zip(channels.as_slice()) {
-                *slot = us_to_bits(ticks_to_us(*value));
+                *slot = ticks_to_bits(*value);
             }
             tx.set_channels(bits.get(..channels.as_slice().len()).unwrap_or(&bits));
         }
@@ -72,11 +65,11 @@ impl AirLink {
             } = event
             {
                 self.last_downlink_us = Some(now_us);
-                rssi = Some(rssi_dbm(*raw, RSSI_OFFSET));
+                rssi = Some(rssi_dbm(*raw));
                 match received {
                     Received::LinkInfo(info) => {
                         self.openlrs_remote =
-                            Some((rssi_dbm(info.rssi, RSSI_OFFSET), percent(info.link_quality)));
+                            Some((rssi_dbm(info.rssi), quality_percent(info.link_quality)));
                     }
                     Received::Serial(bytes) => {
                         let mut bytes = bytes.iter().copied();
@@ -100,7 +93,7 @@ impl AirLink {
         self.stats = LinkStats {
             connected,
             rssi_dbm: rssi.unwrap_or(self.stats.rssi_dbm),
-            link_quality_percent: percent(tx.link_quality()),
+            link_quality_percent: quality_percent(tx.link_quality()),
             remote_rssi_dbm: remote.map_or(0, |(dbm, _)| dbm),
             remote_link_quality_percent: remote.map(|(_, lq)| lq),
             rate_code: OPENLRS_RATE_CODE_BASE + tx.bind_data().modem_profile,

@@ -506,7 +506,7 @@ fn decode_link(link: &[u8]) -> Result<(LinkProtocol, OpenLrsSettings), DecodeErr
     };
     let field = |offset: usize| DecodeError::Field { offset };
     let protocol = LinkProtocol::from_code(protocol).ok_or(field(RECORD_V4_LEN))?;
-    if profile >= radio_rfm22b::openlrs::bind::MODEM_PROFILE_COUNT {
+    if profile >= ::openlrs::bind::MODEM_PROFILE_COUNT {
         return Err(field(RECORD_V4_LEN + 1));
     }
     if !openlrs::CHANNEL_MODES.contains(&mode) {

@@ -2,7 +2,7 @@
 //! speaks (TauLink, or OpenLRSng 3.8 / 3.9 to fly existing OpenLRSng receivers) and the
 //! settings an OpenLRSng transmitter keeps (carrier, modem profile, channel mode, telemetry,
 //! hop channels), with OpenLRSng's factory values, turned into the 41-byte bind data the
-//! `radio_rfm22b::openlrs` TX role flies and sends when binding.
+//! `openlrs` TX role flies and sends when binding.
 //!
 //! OpenLRSng frames carry no authentication: anyone who hears the bind packet (or guesses
 //! the 4-byte magic) can fly or jam the link. TauLink is the default for that reason; the
@@ -14,9 +14,9 @@
 //! channels that all lie inside the band plan the module is set to. A bind draws a fresh
 //! seed while it is still 0, so a bound link has its own identity.
 
-use radio_rfm22b::openlrs::bind::{self, BindData, MODEM_PROFILE_COUNT, TelemetryMode};
-use radio_rfm22b::openlrs::random::bind_randomize;
-use radio_rfm22b::openlrs::{Band as OlrsBand, BindingVersion};
+use openlrs::bind::{self, BindData, MODEM_PROFILE_COUNT, TelemetryMode};
+use openlrs::random::bind_randomize;
+use openlrs::{Band as OlrsBand, BindingVersion};
 
 use super::{Band, OutputProtocol, Role, Settings};
 
@@ -233,7 +233,7 @@ pub fn check(settings: &Settings) -> Result<(), OpenLrsError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use radio_rfm22b::openlrs::bind::{DEFAULT_HOP_LIST, DEFAULT_RF_MAGIC};
+    use openlrs::bind::{DEFAULT_HOP_LIST, DEFAULT_RF_MAGIC};
 
     fn olrs(protocol: LinkProtocol) -> Settings {
         Settings {

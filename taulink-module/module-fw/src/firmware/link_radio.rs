@@ -1,6 +1,6 @@
 //! The link loop's embassy plumbing for the link task: embassy-time as the link's
 //! `LinkClock`, the loops' hook into the module core, and the wrappers that keep the task
-//! checked in while a link step runs (the driver adapter is `module_core::air::radio::LinkRadio`).
+//! checked in while a link step runs (the driver adapter is `radio_rfm22b::link::LinkRadio`).
 
 use core::convert::Infallible;
 

@@ -13,14 +13,14 @@ use embedded_hal_async::digital::Wait;
 use embedded_hal_async::spi::SpiDevice;
 use embedded_hal_bus::spi::ExclusiveDevice;
 use module_core::air::openlrs::run_openlrs_transmitter;
-use module_core::air::radio::LinkRadio;
 use module_core::app::Action;
 use module_core::session::{BindOutcome, LinkStep, POLL_MS, SessionEnd};
 use module_core::settings::Settings;
-use radio_rfm22b::openlrs::radio::Radio as OpenLrsRadio;
-use radio_rfm22b::openlrs::roles::tx_bind;
-use radio_rfm22b::openlrs::tx::Transmitter;
-use radio_rfm22b::openlrs::{Band as OpenLrsBand, BindingVersion};
+use openlrs::radio::Radio as OpenLrsRadio;
+use openlrs::roles::tx_bind;
+use openlrs::tx::Transmitter;
+use openlrs::{Band as OpenLrsBand, BindingVersion};
+use radio_rfm22b::link::LinkRadio;
 use radio_rfm22b::{Rfm22b, TxPower};
 use telemetry::link::follower::{bind_follower, run_follower};
 use telemetry::link::master::{bind_master, run_master};
@@ -115,7 +115,7 @@ where
     SPI: SpiDevice,
     IRQ: Wait,
     SDN: OutputPin,
-    radio_rfm22b::openlrs::radio::Error<SPI::Error, IRQ::Error>: defmt::Format,
+    openlrs::radio::Error<SPI::Error, IRQ::Error>: defmt::Format,
 {
     let (LinkStep::RunOpenLrsTx(data) | LinkStep::BindOpenLrsTx { data, .. }) = step else {
         return None;
