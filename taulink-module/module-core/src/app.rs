@@ -531,7 +531,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         if crate::settings::TELEMETRY_RATIOS.contains(&params.telemetry_ratio) {
             self.settings.telemetry_ratio = params.telemetry_ratio;
         }
-        self.settings.band = crate::air::settings_band(params.band);
+        self.settings.band = params.band;
         self.on_bind_complete(params.bind_id)
     }
 

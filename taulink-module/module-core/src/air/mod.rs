@@ -17,18 +17,18 @@ pub mod openlrs;
 pub mod radio;
 
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat};
+use telemetry::link::LinkParams;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::master::LATCH_BEFORE_TX_US;
 #[cfg(test)]
 use telemetry::link::rate::TX_LEAD_US;
-use telemetry::link::{Band as LinkBand, LinkParams};
 
 use crate::channels::Channels;
 use crate::hm10::RecordQueue;
 use crate::hm10::relay::MAX_RECORD_LEN;
 use crate::ports::{AirSchedule, LinkPort, LinkStats};
 use crate::records::{MAX_STREAM_FRAME_LEN, Splitter, to_stream};
-use crate::settings::{Band, Settings};
+use crate::settings::Settings;
 
 /// The master counts the link as up while a downlink arrived within this time.
 pub const CONNECTED_TIMEOUT_US: u64 = 500_000;
@@ -37,32 +37,12 @@ const UPLINK_RECORDS: usize = 8;
 /// Records received over the air waiting for the core.
 const RECEIVED_RECORDS: usize = 16;
 
-/// The link's band.
-pub fn link_band(band: Band) -> LinkBand {
-    match band {
-        Band::Mhz433 => LinkBand::Mhz433,
-        Band::Mhz868 => LinkBand::Mhz868,
-        Band::Mhz915 => LinkBand::Mhz915,
-        Band::Ism433 => LinkBand::Ism433,
-    }
-}
-
-/// The settings' band for a link band.
-pub fn settings_band(band: LinkBand) -> Band {
-    match band {
-        LinkBand::Mhz433 => Band::Mhz433,
-        LinkBand::Mhz868 => Band::Mhz868,
-        LinkBand::Mhz915 => Band::Mhz915,
-        LinkBand::Ism433 => Band::Ism433,
-    }
-}
-
 /// The bound link's parameters (`None` while unbound): the settings' band, rate mode and
 /// telemetry ratio, 16 channels.
 pub fn link_params(settings: &Settings) -> Option<LinkParams> {
     (settings.bind_id != 0).then(|| LinkParams {
         bind_id: settings.bind_id,
-        band: link_band(settings.band),
+        band: settings.band,
         rate: settings.rate,
         // 16 channels; at F700 in its stick format (as the bind offered them).
         format: telemetry::link::bind::format_for(settings.rate, ChannelFormat::Full16),
@@ -75,7 +55,7 @@ pub fn link_params(settings: &Settings) -> Option<LinkParams> {
 pub fn new_bind_params(settings: &Settings, random: u32) -> LinkParams {
     LinkParams::new(
         random,
-        link_band(settings.band),
+        settings.band,
         settings.rate,
         ChannelFormat::Full16,
         settings.telemetry_ratio,
@@ -358,7 +338,7 @@ mod tests {
         use telemetry::link::core::Step;
         let params = LinkParams::new(
             7,
-            LinkBand::Mhz433,
+            telemetry::link::Band::Mhz433,
             RateMode::F700,
             ChannelFormat::Full16,
             8,
@@ -383,14 +363,14 @@ mod tests {
         let mut settings = Settings::default();
         assert_eq!(link_params(&settings), None, "unbound");
         settings.bind_id = 0x1234_5678;
-        settings.band = Band::Mhz868;
+        settings.band = telemetry::link::Band::Mhz868;
         settings.telemetry_ratio = 8;
         for rate in telemetry::link::RateMode::ALL {
             settings.rate = rate;
             let params = link_params(&settings).unwrap();
             assert_eq!(params.bind_id, 0x1234_5678);
             assert_eq!(params.rate, rate);
-            assert_eq!(params.band, LinkBand::Mhz868);
+            assert_eq!(params.band, telemetry::link::Band::Mhz868);
             let format = if rate == telemetry::link::RateMode::F700 {
                 ChannelFormat::Sticks16
             } else {
@@ -403,7 +383,6 @@ mod tests {
             assert_eq!((fresh.bind_id, fresh.rate), (0xCAFE, rate));
             assert_eq!(fresh.telemetry_ratio, 8);
         }
-        assert_eq!(settings_band(LinkBand::Mhz915), Band::Mhz915);
     }
 
     #[test]
