@@ -18,17 +18,18 @@
 
 use std::time::Duration;
 
+use radio_rfm22b::RfmType;
 use radio_rfm22b::linux::{StdDelay, monotonic_us, open_nirq, open_spidev};
+use radio_rfm22b::openlrs::BindingVersion;
 use radio_rfm22b::openlrs::channels::bits_to_us;
 use radio_rfm22b::openlrs::radio::Radio;
 use radio_rfm22b::openlrs::roles::{RxEvent, run_receiver};
 use radio_rfm22b::openlrs::rx::{Config, Receiver};
-use radio_rfm22b::openlrs::{Band, BindingVersion};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let spi = open_spidev("/dev/spidev0.0", 4_000_000)?;
     let nirq = open_nirq("/dev/gpiochip0", 25)?;
-    let (version, band) = (BindingVersion::V38, Band::Mhz433);
+    let (version, band) = (BindingVersion::V38, RfmType::Mhz433);
     let mut radio = Radio::new(spi, nirq, StdDelay, monotonic_us, version, band);
     let mut rx = Receiver::new(Config::new(version, band), None);
     loop {

@@ -25,11 +25,12 @@ mod app {
     use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
     use embassy_time::{Delay, Instant, Timer};
     use embedded_hal_bus::spi::ExclusiveDevice;
+    use radio_rfm22b::RfmType;
+    use radio_rfm22b::openlrs::BindingVersion;
     use radio_rfm22b::openlrs::channels::bits_to_us;
     use radio_rfm22b::openlrs::radio::Radio;
     use radio_rfm22b::openlrs::roles::{RxEvent, run_receiver};
     use radio_rfm22b::openlrs::rx::{Config, Receiver};
-    use radio_rfm22b::openlrs::{Band, BindingVersion};
     use {defmt_rtt as _, panic_probe as _};
 
     bind_interrupts!(struct Irqs {
@@ -68,7 +69,7 @@ mod app {
             Err(e) => warn!("PPM task not started: {}", e),
         }
 
-        let (version, band) = (BindingVersion::V38, Band::Mhz433);
+        let (version, band) = (BindingVersion::V38, RfmType::Mhz433);
         let mut radio = Radio::new(device, nirq, Delay, now_us as fn() -> u64, version, band);
         let mut rx = Receiver::new(Config::new(version, band), None);
         let mut failsafe_us = [0u16; PPM_CHANNELS]; // 0 = hold the last value

@@ -26,13 +26,14 @@ mod app {
     use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
     use embassy_time::{Delay, Instant, Timer};
     use embedded_hal_bus::spi::ExclusiveDevice;
+    use radio_rfm22b::RfmType;
     use radio_rfm22b::openlrs::channels::CENTER_BITS;
     use radio_rfm22b::openlrs::ppm::{DEFAULT_MIN_CHANNELS, PPM_CHANNELS, PpmDecoder, Pulse};
     use radio_rfm22b::openlrs::radio::Radio;
     use radio_rfm22b::openlrs::random::bind_randomize;
     use radio_rfm22b::openlrs::roles::{TxEvent, tx_bind, tx_start, tx_step};
     use radio_rfm22b::openlrs::tx::{Received, Transmitter};
-    use radio_rfm22b::openlrs::{Band, BindData, BindingVersion};
+    use radio_rfm22b::openlrs::{BindData, BindingVersion};
     use {defmt_rtt as _, panic_probe as _};
 
     bind_interrupts!(struct Irqs {
@@ -70,7 +71,7 @@ mod app {
             Err(e) => warn!("PPM task not started: {}", e),
         }
 
-        let (version, band) = (BindingVersion::V38, Band::Mhz433);
+        let (version, band) = (BindingVersion::V38, RfmType::Mhz433);
         let defaults = BindData::defaults(version, band);
         let mut data = defaults;
         bind_randomize(

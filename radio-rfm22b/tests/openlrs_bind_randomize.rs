@@ -4,15 +4,16 @@
 mod openlrs_vectors;
 
 use openlrs_vectors::{load, num, nums, report};
+use radio_rfm22b::RfmType;
 use radio_rfm22b::openlrs::random::{AvrRandom, bind_randomize, choose_channels_per_rssi};
-use radio_rfm22b::openlrs::{Band, BindData, BindingVersion};
+use radio_rfm22b::openlrs::{BindData, BindingVersion};
 
 #[test]
 fn randomisation_matches() {
     let v = load("bind_randomize.json");
     let mut count = 0;
     for variant in v["variants"].as_array().unwrap() {
-        let band = Band::from_rfm_type(num(&variant["rfmtype"]) as u16).unwrap();
+        let band = RfmType::from_rfm_type(num(&variant["rfmtype"]) as u16).unwrap();
         for case in variant["avr_random"].as_array().unwrap() {
             let mut rng = AvrRandom::new(num(&case["seed"]) as u32);
             let got: Vec<u64> = (0..12).map(|_| u64::from(rng.next_u31())).collect();

@@ -5,9 +5,10 @@
 // The helpers below are test code too.
 #![allow(clippy::unwrap_used, clippy::collapsible_if)]
 
+use radio_rfm22b::RfmType;
 use radio_rfm22b::openlrs::rx::{self, Command, Output, Receiver};
 use radio_rfm22b::openlrs::tx::{BindBeacon, Received, Transmitter};
-use radio_rfm22b::openlrs::{Band, BindData, BindingVersion, timing};
+use radio_rfm22b::openlrs::{BindData, BindingVersion, timing};
 
 const STEP_US: u64 = 100;
 
@@ -33,7 +34,7 @@ fn bind(
     rx_version: BindingVersion,
     data: BindData,
 ) -> (Receiver, Option<BindData>, Vec<Output>) {
-    let mut rx = Receiver::new(rx::Config::new(rx_version, Band::Mhz433), None);
+    let mut rx = Receiver::new(rx::Config::new(rx_version, RfmType::Mhz433), None);
     let mut listening = Listening::Bind;
     apply(Some(rx.start(0)), &mut listening);
     let mut data = data;
@@ -147,7 +148,7 @@ fn run_link(
 }
 
 fn sixteen_channel_data() -> BindData {
-    let mut d = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+    let mut d = BindData::defaults(BindingVersion::V38, RfmType::Mhz433);
     d.flags = 0x0E; // 16 channels, serial telemetry
     d
 }

@@ -2,13 +2,14 @@
 //! panic and are classified, and packing round-trips for every mode (deterministic xorshift
 //! inputs, so a failure reproduces).
 
+use radio_rfm22b::RfmType;
 use radio_rfm22b::openlrs::bind::{BindReception, receive_bind_packet};
 use radio_rfm22b::openlrs::channels::{self, ChannelMode};
 use radio_rfm22b::openlrs::rx::{Config, Receiver};
 use radio_rfm22b::openlrs::telemetry::{self, Downlink};
 use radio_rfm22b::openlrs::tx::{Received, Transmitter};
 use radio_rfm22b::openlrs::uplink::{self, Uplink};
-use radio_rfm22b::openlrs::{Band, BindData, BindingVersion};
+use radio_rfm22b::openlrs::{BindData, BindingVersion};
 
 struct XorShift(u32);
 
@@ -57,8 +58,8 @@ fn random_bytes_are_classified_never_panic() {
             Downlink::WrongLength { len } => assert_ne!(len, 9),
             _ => assert_eq!(bytes.len(), 9),
         }
-        match receive_bind_packet(&bytes, BindingVersion::V38, Band::Mhz433) {
-            BindReception::Accepted(d) => assert!(d.validate_for(Band::Mhz433).is_ok()),
+        match receive_bind_packet(&bytes, BindingVersion::V38, RfmType::Mhz433) {
+            BindReception::Accepted(d) => assert!(d.validate_for(RfmType::Mhz433).is_ok()),
             BindReception::TooShort { len } => assert!(len < 42),
             _ => {}
         }
@@ -70,11 +71,11 @@ fn random_bytes_are_classified_never_panic() {
 #[test]
 fn state_machines_survive_random_packets() {
     let mut rng = XorShift(42);
-    let data = BindData::defaults(BindingVersion::V39, Band::Mhz915);
+    let data = BindData::defaults(BindingVersion::V39, RfmType::Mhz915);
     let mut rx = Receiver::new(
         Config {
             bind_window_us: None,
-            ..Config::new(BindingVersion::V39, Band::Mhz915)
+            ..Config::new(BindingVersion::V39, RfmType::Mhz915)
         },
         Some(data),
     );

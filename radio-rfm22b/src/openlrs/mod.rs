@@ -35,4 +35,4 @@ pub mod uplink;
 pub mod version;
 
 pub use bind::BindData;
-pub use version::{Band, BindingVersion};
+pub use version::BindingVersion;

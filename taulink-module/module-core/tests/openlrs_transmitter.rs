@@ -15,12 +15,13 @@ use module_core::channels::{Channels, us_to_ticks};
 use module_core::ports::{HandsetOutput, LinkPort, LinkStats};
 use module_core::session::{BindOutcome, LinkStep, SessionEnd};
 use module_core::settings::{InputProtocol, LinkProtocol, OpenLrsSettings, Settings};
+use radio_rfm22b::RfmType;
+use radio_rfm22b::openlrs::BindingVersion;
 use radio_rfm22b::openlrs::bind::DEFAULT_RF_MAGIC;
 use radio_rfm22b::openlrs::channels::bits_to_us;
 use radio_rfm22b::openlrs::roles::TxEvent;
 use radio_rfm22b::openlrs::rx::{Config, Output, Receiver};
 use radio_rfm22b::openlrs::tx::Transmitter;
-use radio_rfm22b::openlrs::{Band, BindingVersion};
 
 #[derive(Default)]
 struct Handset {
@@ -84,7 +85,7 @@ fn bind(app: &mut Module, version: BindingVersion) -> radio_rfm22b::openlrs::Bin
         data.rf_magic, DEFAULT_RF_MAGIC,
         "the bind gives the link its own magic"
     );
-    let mut rx = Receiver::new(Config::new(version, Band::Mhz433), None);
+    let mut rx = Receiver::new(Config::new(version, RfmType::Mhz433), None);
     rx.start(0);
     let reception = rx.on_packet(1_000, &data.bind_packet());
     assert_eq!(reception.output, Output::Bound(data));
@@ -129,7 +130,7 @@ fn the_module_binds_and_flies_an_openlrsng_receiver() {
             let mut rx = Receiver::new(
                 Config {
                     bind_window_us: None,
-                    ..Config::new(version, Band::Mhz433)
+                    ..Config::new(version, RfmType::Mhz433)
                 },
                 Some(data),
             );

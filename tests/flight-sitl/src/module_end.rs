@@ -23,11 +23,12 @@ use module_core::channels::ticks_to_us;
 use module_core::handset::{Handset, LineMode, MAX_LINE_BURST};
 use module_core::session::{BindOutcome, LinkStep, POLL_MS, SessionEnd};
 use module_core::settings::Settings as ModuleSettings;
+use radio_rfm22b::RfmType;
 use radio_rfm22b::link::LinkRadio;
+use radio_rfm22b::openlrs::BindingVersion;
 use radio_rfm22b::openlrs::radio::Radio as OpenLrsRadio;
 use radio_rfm22b::openlrs::roles::tx_bind;
 use radio_rfm22b::openlrs::tx::Transmitter;
-use radio_rfm22b::openlrs::{Band as OpenLrsBand, BindingVersion};
 use radio_rfm22b::{Rfm22b, TxPower};
 use si4432_sim::{Medium, SimDelay, SimIrq, SimSdn, SimSpi};
 use telemetry::change_auth::Signer;
@@ -106,7 +107,7 @@ async fn openlrs_step(b: &Board, chip: &mut ModuleChip, step: LinkStep) -> Optio
     let link = chip.radio.take()?;
     let (spi, irq, sdn, chip_delay) = link.release().release();
     let version = BindingVersion::from_byte(data.version).unwrap_or(BindingVersion::V39);
-    let band = data.band().unwrap_or(OpenLrsBand::Mhz433);
+    let band = data.band().unwrap_or(RfmType::Mhz433);
     let clock = b.clock.clone();
     let mut radio = OpenLrsRadio::new(spi, irq, chip_delay, move || clock.now_us(), version, band);
     let action = match step {

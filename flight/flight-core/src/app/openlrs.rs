@@ -83,7 +83,7 @@ impl OpenLrsSide {
 
 /// The receiver configuration the link task uses for `version` on `band`: OpenLRSng's, with
 /// the TauLink failsafe delay and no bind window at start (binding is the console's).
-fn config(version: BindingVersion, band: radio_rfm22b::openlrs::Band) -> Config {
+fn config(version: BindingVersion, band: radio_rfm22b::RfmType) -> Config {
     Config {
         failsafe_delay: OPENLRS_FAILSAFE_DELAY,
         bind_window_us: None,
