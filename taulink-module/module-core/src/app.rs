@@ -10,7 +10,7 @@
 
 use crate::air::AirLink;
 use crate::button::ButtonEvent;
-use crate::channels::Channels;
+use crate::channels::ChannelFrame;
 use crate::hm10::relay::{MAX_RECORD_LEN, Relay, RelayStats};
 use crate::params::{self, Commands, Effect};
 use crate::ports::{HandsetOutput, HandsetRequest, LinkPort, LinkStats};
@@ -274,14 +274,14 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     }
 
     /// Channels decoded from the handset's CRSF RC frames (the CRSF codec calls this).
-    pub fn on_handset_channels(&mut self, channels: &Channels) {
+    pub fn on_handset_channels(&mut self, channels: &ChannelFrame) {
         if self.settings.role == Role::Transmitter && self.settings.input.is_crsf() {
             self.forward(channels);
         }
     }
 
     /// Channels received over the link (receiver role): they go to the PPM output.
-    pub fn on_link_channels(&mut self, channels: &Channels) {
+    pub fn on_link_channels(&mut self, channels: &ChannelFrame) {
         if self.settings.role == Role::Receiver {
             self.encoder.set_channels(channels);
         }
@@ -626,7 +626,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         self.update_led()
     }
 
-    fn forward(&mut self, channels: &Channels) {
+    fn forward(&mut self, channels: &ChannelFrame) {
         self.input.frames = self.input.frames.saturating_add(1);
         self.link.send_channels(channels);
     }

@@ -11,7 +11,7 @@ use module_core::air::AirLink;
 use module_core::air::openlrs::OPENLRS_RATE_CODE_BASE;
 use module_core::app::{Action, App};
 use module_core::button::ButtonEvent;
-use module_core::channels::{Channels, us_to_ticks};
+use module_core::channels::{ChannelFrame, us_to_ticks};
 use module_core::ports::{HandsetOutput, LinkPort, LinkStats};
 use module_core::session::{BindOutcome, LinkStep, SessionEnd};
 use module_core::settings::{InputProtocol, LinkProtocol, OpenLrsSettings, Settings};
@@ -135,7 +135,7 @@ fn the_module_binds_and_flies_an_openlrsng_receiver() {
                 Some(data),
             );
             rx.start(0);
-            let sticks = Channels::from_ticks(&handset_us().map(us_to_ticks));
+            let sticks = ChannelFrame::from_ticks(&handset_us().map(us_to_ticks));
             let telemetry = record();
             let mut heard = Vec::new();
             let input_until = 3_000_000u64;

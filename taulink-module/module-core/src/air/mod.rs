@@ -23,7 +23,7 @@ use telemetry::link::master::LATCH_BEFORE_TX_US;
 #[cfg(test)]
 use telemetry::link::rate::TX_LEAD_US;
 
-use crate::channels::Channels;
+use crate::channels::ChannelFrame;
 use crate::hm10::RecordQueue;
 use crate::hm10::relay::MAX_RECORD_LEN;
 use crate::ports::{AirSchedule, LinkPort, LinkStats};
@@ -65,7 +65,7 @@ pub fn new_bind_params(settings: &Settings, random: u32) -> LinkParams {
 /// The link as the core sees it; filled and drained by the link loop's hook.
 #[derive(Debug)]
 pub struct AirLink {
-    channels: Option<Channels>,
+    channels: Option<ChannelFrame>,
     /// Channels arrived since the last master slot.
     input_fresh: bool,
     /// Slot start (link clock) at which the newest channels were first seen.
@@ -75,7 +75,7 @@ pub struct AirLink {
     input_losses: u32,
     uplink: RecordQueue<512, UPLINK_RECORDS>,
     received: RecordQueue<1024, RECEIVED_RECORDS>,
-    received_channels: Option<Channels>,
+    received_channels: Option<ChannelFrame>,
     splitter: Splitter,
     stats: LinkStats,
     bind_requested: bool,
@@ -215,8 +215,9 @@ impl AirLink {
             self.follower_updates = follower.updates();
             let count = follower.params().format.count();
             let output = follower.output();
-            self.received_channels =
-                Some(Channels::from_ticks(output.get(..count).unwrap_or(output)));
+            self.received_channels = Some(ChannelFrame::from_ticks(
+                output.get(..count).unwrap_or(output),
+            ));
         }
         while follower.downlink_stream.free() >= MAX_STREAM_FRAME_LEN {
             let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
@@ -284,7 +285,7 @@ impl AirLink {
 }
 
 impl LinkPort for AirLink {
-    fn send_channels(&mut self, channels: &Channels) {
+    fn send_channels(&mut self, channels: &ChannelFrame) {
         self.channels = Some(*channels);
         self.input_fresh = true;
     }
@@ -323,7 +324,7 @@ impl LinkPort for AirLink {
         self.received.pop_into(out).ok().flatten()
     }
 
-    fn take_received_channels(&mut self) -> Option<Channels> {
+    fn take_received_channels(&mut self) -> Option<ChannelFrame> {
         self.received_channels.take()
     }
 }
@@ -438,7 +439,7 @@ mod tests {
         );
         link.on_master_slot(0, &mut master);
         assert!(master.input_lost(), "nothing from the handset yet");
-        link.send_channels(&Channels::from_ticks(&[1500; 8]));
+        link.send_channels(&ChannelFrame::from_ticks(&[1500; 8]));
         link.on_master_slot(20_000, &mut master);
         assert!(!master.input_lost());
         // Fresh as of the slot that saw them: lost exactly one timeout later.
@@ -447,7 +448,7 @@ mod tests {
         link.on_master_slot(120_000, &mut master);
         assert!(master.input_lost() && link.input_lost());
         assert_eq!(link.input_losses(), 1);
-        link.send_channels(&Channels::from_ticks(&[1500; 8]));
+        link.send_channels(&ChannelFrame::from_ticks(&[1500; 8]));
         link.on_master_slot(140_000, &mut master);
         assert!(!master.input_lost());
         assert_eq!(link.input_losses(), 1);
