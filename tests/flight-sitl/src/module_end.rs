@@ -35,7 +35,6 @@ use telemetry::change_auth::Signer;
 use telemetry::handset::crsf::channels::RcChannels;
 use telemetry::handset::crsf::frame::{Frame, frame_type};
 use telemetry::handset::crsf::{ModelSelect, address};
-use telemetry::link::LinkClock;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 use telemetry::link::master::{MasterHooks, bind_master, run_master};
@@ -44,9 +43,10 @@ use telemetry::messages::{
 };
 use telemetry::mock::SplitMix64;
 
-use crate::clock::{BoardClock, sleep_ms};
+use crate::clock::sleep_ms;
 use crate::scenario::End;
 use crate::world::{BootCause, Shared, TO_PHONE_MAX, transmitter};
+use si4432_sim::SimClock;
 
 /// Power-on to the first task, ms: nRF52840 start-up and HFXO ≈ 1 ms, settings load from
 /// the NVMC ≈ 1 ms, the RFM22B probe is the link task's first step (its own POR time is
@@ -169,7 +169,7 @@ const EXPECTED: u32 =
 /// One boot's context.
 struct Board {
     app: RefCell<ModuleApp>,
-    clock: BoardClock,
+    clock: SimClock,
     checked_in: Cell<u32>,
     last_feed_ms: Cell<u32>,
 }
@@ -572,7 +572,7 @@ pub(crate) async fn module_board(
         // The firmware's RNG at boot seeds a receiver-role follower's epoch nonces.
         app.seed_link_nonces(SplitMix64::new(seed ^ crate::clock::virtual_us(&medium)).next_u64());
         shared.borrow_mut().record_boot(End::Module, cause, false);
-        let clock = BoardClock::booting_now(medium.clone(), delay.clone(), MODULE_DRIFT_PPM);
+        let clock = SimClock::booting_now(medium.clone(), delay.clone(), MODULE_DRIFT_PPM);
         let board = Board {
             app: RefCell::new(app),
             last_feed_ms: Cell::new(clock.now_ms()),
