@@ -4,6 +4,7 @@
 //! code 2 before anything runs. [`Cli::scenario`] turns it into a [`Scenario`].
 
 use clap::{Parser, ValueEnum};
+use flight_sitl::runner::cli::number_in;
 use telemetry::channels::ChannelFormat;
 use telemetry::link::{Band, LinkKey, RateMode};
 
@@ -237,18 +238,6 @@ impl From<BandArg> for Band {
             BandArg::Mhz915 => Band::Mhz915,
         }
     }
-}
-
-/// A finite number within `lo..=hi` (`what` names it in the error).
-pub fn number_in(s: &str, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("{s:?} is not a number"))?;
-    if !v.is_finite() || v < lo || v > hi {
-        return Err(format!("{what} must be within {lo}..={hi}, got {s}"));
-    }
-    Ok(v)
 }
 
 /// A real-time speed-up factor, 0.01..=100.

@@ -142,8 +142,9 @@ impl ScenarioArg {
     }
 }
 
-/// A finite number within `lo..=hi` (`what` names it in the error).
-pub(crate) fn number_in(s: &str, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
+/// A finite number within `lo..=hi` (`what` names it in the error): the number parse of
+/// flight-sitl's and taulink-sim's command lines.
+pub fn number_in(s: &str, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
     let v: f64 = s
         .trim()
         .parse()
