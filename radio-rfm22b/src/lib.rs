@@ -28,6 +28,7 @@ pub mod power;
 mod probe;
 pub mod registers;
 mod rfm22b;
+mod rfm_type;
 mod rx;
 mod tx;
 
@@ -42,5 +43,6 @@ pub use modem::{ModemConfig, ModemSettings, Modulation};
 pub use packet::{Crc, PacketConfig, PacketLength};
 pub use power::{CrystalLoad, TxPower};
 pub use probe::{ChipInfo, Version, check_identity};
+pub use rfm_type::RfmType;
 pub use rfm22b::{NoPin, Rfm22b};
 pub use rx::{RxOutcome, RxPacket, RxSignal};

@@ -12,8 +12,8 @@ use telemetry::handset::crsf::device::COMMAND_CRC;
 use telemetry::handset::crsf::frame::FRAME_CRC;
 use telemetry::handset::crsf::responder::taulink_device_info;
 use telemetry::handset::crsf::{
-    Attitude, Battery, Decoded, Decoder, DeviceInfo, DevicePing, Error, FlightMode, Frame, Gps,
-    LinkStatistics, Message, ModelSelect, TimingCorrection,
+    Attitude, Battery, Decoded, Decoder, DeviceInfo, DevicePing, Error, FlightModeFrame, Frame,
+    Gps, LinkStatistics, Message, ModelSelect, TimingCorrection,
 };
 
 fn hex(text: &str) -> Vec<u8> {
@@ -250,20 +250,23 @@ fn worked_d_flight_mode() {
     let bytes = hex("C8 07 21 41 43 52 4F 00 80");
     assert_eq!(
         one_message(&bytes),
-        Message::FlightMode(FlightMode::new("ACRO").unwrap())
+        Message::FlightMode(FlightModeFrame::new("ACRO").unwrap())
     );
 }
 
 #[test]
 fn flight_mode_errors() {
-    assert_eq!(FlightMode::from_payload(b"ANGL"), Err(Error::Unterminated));
     assert_eq!(
-        FlightMode::from_payload(b"12345678901234567\0"),
+        FlightModeFrame::from_payload(b"ANGL"),
+        Err(Error::Unterminated)
+    );
+    assert_eq!(
+        FlightModeFrame::from_payload(b"12345678901234567\0"),
         Err(Error::BadString)
     );
-    assert_eq!(FlightMode::new("A\0B"), Err(Error::BadString));
+    assert_eq!(FlightModeFrame::new("A\0B"), Err(Error::BadString));
     assert_eq!(
-        FlightMode::from_payload(&[0xFF, 0xFE, 0]),
+        FlightModeFrame::from_payload(&[0xFF, 0xFE, 0]),
         Err(Error::BadString)
     );
 }

@@ -26,13 +26,13 @@ mod pi {
     use openlrs::radio::Radio;
     use openlrs::roles::{RxEvent, run_receiver};
     use openlrs::rx::{Config, Receiver};
-    use openlrs::{Band, BindingVersion};
+    use openlrs::{BindingVersion, RfmType};
     use radio_rfm22b::linux::{StdDelay, monotonic_us, open_nirq, open_spidev};
 
     pub fn main() -> Result<(), Box<dyn std::error::Error>> {
         let spi = open_spidev("/dev/spidev0.0", 4_000_000)?;
         let nirq = open_nirq("/dev/gpiochip0", 25)?;
-        let (version, band) = (BindingVersion::V38, Band::Mhz433);
+        let (version, band) = (BindingVersion::V38, RfmType::Mhz433);
         let mut radio = Radio::new(spi, nirq, StdDelay, monotonic_us, version, band);
         let mut rx = Receiver::new(Config::new(version, band), None);
         loop {

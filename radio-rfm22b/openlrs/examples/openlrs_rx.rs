@@ -29,7 +29,7 @@ mod app {
     use openlrs::radio::Radio;
     use openlrs::roles::{RxEvent, run_receiver};
     use openlrs::rx::{Config, Receiver};
-    use openlrs::{Band, BindingVersion};
+    use openlrs::{BindingVersion, RfmType};
     use {defmt_rtt as _, panic_probe as _};
 
     bind_interrupts!(struct Irqs {
@@ -68,7 +68,7 @@ mod app {
             Err(e) => warn!("PPM task not started: {}", e),
         }
 
-        let (version, band) = (BindingVersion::V38, Band::Mhz433);
+        let (version, band) = (BindingVersion::V38, RfmType::Mhz433);
         let mut radio = Radio::new(device, nirq, Delay, now_us as fn() -> u64, version, band);
         let mut rx = Receiver::new(Config::new(version, band), None);
         let mut failsafe_us = [0u16; PPM_CHANNELS]; // 0 = hold the last value

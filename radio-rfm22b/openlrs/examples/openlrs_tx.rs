@@ -32,7 +32,7 @@ mod app {
     use openlrs::random::bind_randomize;
     use openlrs::roles::{TxEvent, tx_bind, tx_start, tx_step};
     use openlrs::tx::{Received, Transmitter};
-    use openlrs::{Band, BindData, BindingVersion};
+    use openlrs::{BindData, BindingVersion, RfmType};
     use {defmt_rtt as _, panic_probe as _};
 
     bind_interrupts!(struct Irqs {
@@ -70,7 +70,7 @@ mod app {
             Err(e) => warn!("PPM task not started: {}", e),
         }
 
-        let (version, band) = (BindingVersion::V38, Band::Mhz433);
+        let (version, band) = (BindingVersion::V38, RfmType::Mhz433);
         let defaults = BindData::defaults(version, band);
         let mut data = defaults;
         bind_randomize(

@@ -2,7 +2,8 @@
 //! TX's 42-byte `'b'` packet and the RX's 1-byte `'B'` reply.
 
 use super::channels::ChannelMode;
-use super::version::{Band, BindingVersion};
+use super::version::BindingVersion;
+use crate::RfmType;
 
 /// Size of the packed `struct bind_data`.
 pub const BIND_DATA_LEN: usize = 41;
@@ -66,7 +67,7 @@ pub const FLAG_TELEMETRY_MASK: u8 = 0x18;
 
 impl BindData {
     /// `bindInitDefaults()` for a band and a binding version.
-    pub const fn defaults(version: BindingVersion, band: Band) -> Self {
+    pub const fn defaults(version: BindingVersion, band: RfmType) -> Self {
         let [h0, h1, h2, h3, h4, h5] = DEFAULT_HOP_LIST;
         #[rustfmt::skip]
         let hop_channels = [
@@ -186,8 +187,8 @@ impl BindData {
     }
 
     /// The band whose plan holds the carrier (`rf_frequency_hz`), if any.
-    pub fn band(&self) -> Option<Band> {
-        Band::containing(u64::from(self.rf_frequency_hz))
+    pub fn band(&self) -> Option<RfmType> {
+        RfmType::containing(u64::from(self.rf_frequency_hz))
     }
 
     /// Checks what the RX must be able to use before anything is tuned or sent: a known
@@ -217,7 +218,7 @@ impl BindData {
 
     /// [`BindData::validate`], and the carrier in `band` (the band the module was built
     /// for: an RFM22B matched for 433 MHz cannot use an 868 MHz link).
-    pub fn validate_for(&self, band: Band) -> Result<(), Error> {
+    pub fn validate_for(&self, band: RfmType) -> Result<(), Error> {
         self.validate()?;
         match self.band() {
             Some(found) if found == band => Ok(()),
@@ -293,7 +294,7 @@ pub enum BindReception {
 }
 
 /// Classifies a received bind-channel packet for an RX of `version` built for `band`.
-pub fn receive_bind_packet(packet: &[u8], version: BindingVersion, band: Band) -> BindReception {
+pub fn receive_bind_packet(packet: &[u8], version: BindingVersion, band: RfmType) -> BindReception {
     let Some((&kind, body)) = packet.split_first() else {
         return BindReception::TooShort { len: 0 };
     };
@@ -326,7 +327,7 @@ mod tests {
 
     #[test]
     fn default_packet_matches_reference_bytes() {
-        let p = BindData::defaults(BindingVersion::V38, Band::Mhz433).bind_packet();
+        let p = BindData::defaults(BindingVersion::V38, RfmType::Mhz433).bind_packet();
         assert_eq!(&p[..6], &[0x62, 0x38, 0x00, 0xC2, 0x01, 0x00]);
         assert_eq!(&p[6..14], &[0xC0, 0x92, 0xED, 0x19, 0xED, 0xFE, 0xAD, 0xDE]);
         assert_eq!(p[40], 2);
@@ -335,34 +336,34 @@ mod tests {
 
     #[test]
     fn v38_packet_is_refused_by_v39_rx() {
-        let p = BindData::defaults(BindingVersion::V38, Band::Mhz433).bind_packet();
+        let p = BindData::defaults(BindingVersion::V38, RfmType::Mhz433).bind_packet();
         assert_eq!(
-            receive_bind_packet(&p, BindingVersion::V39, Band::Mhz433),
+            receive_bind_packet(&p, BindingVersion::V39, RfmType::Mhz433),
             BindReception::WrongVersion { found: 0x38 }
         );
         assert!(matches!(
-            receive_bind_packet(&p, BindingVersion::V38, Band::Mhz433),
+            receive_bind_packet(&p, BindingVersion::V38, RfmType::Mhz433),
             BindReception::Accepted(_)
         ));
         assert_eq!(
-            receive_bind_packet(&p[..41], BindingVersion::V38, Band::Mhz433),
+            receive_bind_packet(&p[..41], BindingVersion::V38, RfmType::Mhz433),
             BindReception::TooShort { len: 41 }
         );
     }
 
     #[test]
     fn a_bind_for_another_band_or_leaving_the_band_is_refused() {
-        let p = BindData::defaults(BindingVersion::V38, Band::Mhz868).bind_packet();
+        let p = BindData::defaults(BindingVersion::V38, RfmType::Mhz868).bind_packet();
         assert_eq!(
-            receive_bind_packet(&p, BindingVersion::V38, Band::Mhz433),
+            receive_bind_packet(&p, BindingVersion::V38, RfmType::Mhz433),
             BindReception::Invalid(Error::Carrier(868_000_000))
         );
-        let mut data = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+        let mut data = BindData::defaults(BindingVersion::V38, RfmType::Mhz433);
         // 500 kHz steps: channels 10..49 land at 440..460 MHz, channel 200 at 535 MHz.
         data.rf_channel_spacing = 50;
         data.hop_channels[2] = 200;
         assert_eq!(
-            receive_bind_packet(&data.bind_packet(), BindingVersion::V38, Band::Mhz433),
+            receive_bind_packet(&data.bind_packet(), BindingVersion::V38, RfmType::Mhz433),
             BindReception::Invalid(Error::HopOutOfBand {
                 index: 2,
                 channel: 200

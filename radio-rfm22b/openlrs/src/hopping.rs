@@ -65,11 +65,11 @@ impl Iterator for Schedule<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Band, BindingVersion};
+    use crate::{BindingVersion, RfmType};
 
     #[test]
     fn default_schedule_wraps_after_six() {
-        let d = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+        let d = BindData::defaults(BindingVersion::V38, RfmType::Mhz433);
         let ch: [u8; 8] = {
             let mut s = Schedule::new(&d);
             core::array::from_fn(|_| s.next().unwrap().channel)

@@ -44,4 +44,6 @@ pub mod uplink;
 pub mod version;
 
 pub use bind::BindData;
-pub use version::{Band, BindingVersion};
+/// The RFM22B module variant (the band its filter is built for), from the driver.
+pub use radio_rfm22b::RfmType;
+pub use version::BindingVersion;

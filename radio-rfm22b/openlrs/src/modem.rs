@@ -6,7 +6,8 @@
 use heapless::Vec;
 
 use super::bind::BindData;
-use super::version::{Band, BindingVersion};
+use super::version::BindingVersion;
+use crate::RfmType;
 
 /// Registers a modem profile sets, in the order `setModemRegs()` writes them.
 pub const MODEM_REGISTERS: [u8; 15] = [
@@ -188,7 +189,7 @@ fn header_writes(script: &mut Script, magic: u32) -> Result<(), Error> {
 /// models as not set. Both use an 80-bit preamble (0x34 = 0x14) with diversity.
 pub fn init_script(
     version: BindingVersion,
-    band: Band,
+    band: RfmType,
     data: &BindData,
     purpose: Purpose,
 ) -> Result<Script, Error> {

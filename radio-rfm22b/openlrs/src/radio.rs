@@ -14,7 +14,8 @@ use heapless::Vec;
 
 use super::bind::BindData;
 use super::modem::{self, Purpose, RegOp};
-use super::version::{Band, BindingVersion};
+use super::version::BindingVersion;
+use crate::RfmType;
 use radio_rfm22b::{Bus, ChipInfo};
 
 /// Interrupt status 1: packet sent.
@@ -96,7 +97,7 @@ pub struct Radio<SPI, IRQ, D, C> {
     delay: D,
     clock: C,
     version: BindingVersion,
-    band: Band,
+    band: RfmType,
     diversity: bool,
 }
 
@@ -115,7 +116,7 @@ where
         delay: D,
         clock: C,
         version: BindingVersion,
-        band: Band,
+        band: RfmType,
     ) -> Self {
         Self {
             bus: Bus::new(spi),
@@ -139,7 +140,7 @@ where
     }
 
     /// The module band.
-    pub fn band(&self) -> Band {
+    pub fn band(&self) -> RfmType {
         self.band
     }
 

@@ -63,11 +63,11 @@ pub const fn delay_in_ms_long(d: u8) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Band, BindingVersion};
+    use crate::{BindingVersion, RfmType};
 
     #[test]
     fn default_link_is_40_hz() {
-        let d = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+        let d = BindData::defaults(BindingVersion::V38, RfmType::Mhz433);
         assert_eq!(interval_us(&d), Some(25_000));
         assert_eq!(delay_in_ms(10), 1000);
         assert_eq!(delay_in_ms_long(0), 10_000);

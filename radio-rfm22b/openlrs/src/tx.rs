@@ -320,11 +320,11 @@ impl Transmitter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Band, BindingVersion};
+    use crate::{BindingVersion, RfmType};
 
     fn link() -> Transmitter {
         // 8 channels + serial telemetry, 25 ms.
-        Transmitter::new(BindData::defaults(BindingVersion::V38, Band::Mhz433), 0).unwrap()
+        Transmitter::new(BindData::defaults(BindingVersion::V38, RfmType::Mhz433), 0).unwrap()
     }
 
     fn reply(tx: &mut Transmitter, header: u8) -> Received {

@@ -4,10 +4,10 @@
 
 use openlrs::bind::BindData;
 use openlrs::modem;
-use openlrs::{Band, BindingVersion};
+use openlrs::{BindingVersion, RfmType};
 
 fn defaults() -> BindData {
-    BindData::defaults(BindingVersion::V38, Band::Mhz433)
+    BindData::defaults(BindingVersion::V38, RfmType::Mhz433)
 }
 
 #[test]
@@ -44,7 +44,7 @@ fn a_carrier_outside_every_band_is_refused() {
 
 #[test]
 fn every_band_default_is_valid() {
-    for band in [Band::Mhz433, Band::Mhz868, Band::Mhz915] {
+    for band in [RfmType::Mhz433, RfmType::Mhz868, RfmType::Mhz915] {
         for version in [BindingVersion::V38, BindingVersion::V39] {
             assert_eq!(BindData::defaults(version, band).validate(), Ok(()));
         }
@@ -59,18 +59,18 @@ fn the_link_is_never_configured_outside_the_band() {
     assert!(
         modem::init_script(
             BindingVersion::V38,
-            Band::Mhz433,
+            RfmType::Mhz433,
             &data,
             modem::Purpose::Link
         )
         .is_err()
     );
     // A valid 868 MHz link is refused by a 433 MHz module.
-    let data = BindData::defaults(BindingVersion::V38, Band::Mhz868);
+    let data = BindData::defaults(BindingVersion::V38, RfmType::Mhz868);
     assert!(
         modem::init_script(
             BindingVersion::V38,
-            Band::Mhz433,
+            RfmType::Mhz433,
             &data,
             modem::Purpose::Link
         )
@@ -79,7 +79,7 @@ fn the_link_is_never_configured_outside_the_band() {
     assert!(
         modem::init_script(
             BindingVersion::V38,
-            Band::Mhz868,
+            RfmType::Mhz868,
             &data,
             modem::Purpose::Link
         )

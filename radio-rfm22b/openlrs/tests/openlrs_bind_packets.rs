@@ -5,7 +5,7 @@ mod openlrs_vectors;
 
 use openlrs::bind::{self, BindReception, receive_bind_packet};
 use openlrs::modem::{self, Purpose, RegOp};
-use openlrs::{Band, BindingVersion, timing};
+use openlrs::{BindingVersion, RfmType, timing};
 use openlrs_vectors::{bind_data, hex, load, num, report};
 
 #[test]
@@ -16,7 +16,7 @@ fn bind_packets_match_byte_for_byte() {
     let mut refused = 0;
     for variant in v["variants"].as_array().unwrap() {
         let version = BindingVersion::from_byte(num(&variant["binding_version"]) as u8).unwrap();
-        let band = Band::from_rfm_type(num(&variant["rfmtype"]) as u16).unwrap();
+        let band = RfmType::from_rfm_type(num(&variant["rfmtype"]) as u16).unwrap();
         assert_eq!(u64::from(version.bind_magic()), num(&variant["bind_magic"]));
         assert_eq!(
             u64::from(band.binding_frequency_hz()),

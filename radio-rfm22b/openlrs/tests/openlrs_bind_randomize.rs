@@ -4,7 +4,7 @@
 mod openlrs_vectors;
 
 use openlrs::random::{AvrRandom, bind_randomize, choose_channels_per_rssi};
-use openlrs::{Band, BindData, BindingVersion};
+use openlrs::{BindData, BindingVersion, RfmType};
 use openlrs_vectors::{load, num, nums, report};
 
 #[test]
@@ -12,7 +12,7 @@ fn randomisation_matches() {
     let v = load("bind_randomize.json");
     let mut count = 0;
     for variant in v["variants"].as_array().unwrap() {
-        let band = Band::from_rfm_type(num(&variant["rfmtype"]) as u16).unwrap();
+        let band = RfmType::from_rfm_type(num(&variant["rfmtype"]) as u16).unwrap();
         for case in variant["avr_random"].as_array().unwrap() {
             let mut rng = AvrRandom::new(num(&case["seed"]) as u32);
             let got: Vec<u64> = (0..12).map(|_| u64::from(rng.next_u31())).collect();

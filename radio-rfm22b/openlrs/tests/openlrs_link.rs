@@ -7,7 +7,7 @@
 
 use openlrs::rx::{self, Command, Output, Receiver};
 use openlrs::tx::{BindBeacon, Received, Transmitter};
-use openlrs::{Band, BindData, BindingVersion, timing};
+use openlrs::{BindData, BindingVersion, RfmType, timing};
 
 const STEP_US: u64 = 100;
 
@@ -33,7 +33,7 @@ fn bind(
     rx_version: BindingVersion,
     data: BindData,
 ) -> (Receiver, Option<BindData>, Vec<Output>) {
-    let mut rx = Receiver::new(rx::Config::new(rx_version, Band::Mhz433), None);
+    let mut rx = Receiver::new(rx::Config::new(rx_version, RfmType::Mhz433), None);
     let mut listening = Listening::Bind;
     apply(Some(rx.start(0)), &mut listening);
     let mut data = data;
@@ -145,7 +145,7 @@ fn run_link(
 }
 
 fn sixteen_channel_data() -> BindData {
-    let mut d = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+    let mut d = BindData::defaults(BindingVersion::V38, RfmType::Mhz433);
     d.flags = 0x0E; // 16 channels, serial telemetry
     d
 }

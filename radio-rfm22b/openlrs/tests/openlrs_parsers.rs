@@ -8,7 +8,7 @@ use openlrs::rx::{Config, Receiver};
 use openlrs::telemetry::{self, Downlink};
 use openlrs::tx::{Received, Transmitter};
 use openlrs::uplink::{self, Uplink};
-use openlrs::{Band, BindData, BindingVersion};
+use openlrs::{BindData, BindingVersion, RfmType};
 
 struct XorShift(u32);
 
@@ -57,8 +57,8 @@ fn random_bytes_are_classified_never_panic() {
             Downlink::WrongLength { len } => assert_ne!(len, 9),
             _ => assert_eq!(bytes.len(), 9),
         }
-        match receive_bind_packet(&bytes, BindingVersion::V38, Band::Mhz433) {
-            BindReception::Accepted(d) => assert!(d.validate_for(Band::Mhz433).is_ok()),
+        match receive_bind_packet(&bytes, BindingVersion::V38, RfmType::Mhz433) {
+            BindReception::Accepted(d) => assert!(d.validate_for(RfmType::Mhz433).is_ok()),
             BindReception::TooShort { len } => assert!(len < 42),
             _ => {}
         }
@@ -70,11 +70,11 @@ fn random_bytes_are_classified_never_panic() {
 #[test]
 fn state_machines_survive_random_packets() {
     let mut rng = XorShift(42);
-    let data = BindData::defaults(BindingVersion::V39, Band::Mhz915);
+    let data = BindData::defaults(BindingVersion::V39, RfmType::Mhz915);
     let mut rx = Receiver::new(
         Config {
             bind_window_us: None,
-            ..Config::new(BindingVersion::V39, Band::Mhz915)
+            ..Config::new(BindingVersion::V39, RfmType::Mhz915)
         },
         Some(data),
     );

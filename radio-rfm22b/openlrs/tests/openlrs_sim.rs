@@ -12,7 +12,7 @@ use openlrs::radio::Radio;
 use openlrs::roles::{RxEvent, TxEvent, rx_start, rx_step, tx_bind, tx_start, tx_step};
 use openlrs::rx::{Config, Receiver};
 use openlrs::tx::{Received, Transmitter};
-use openlrs::{Band, BindData, BindingVersion, timing};
+use openlrs::{BindData, BindingVersion, RfmType, timing};
 use si4432_sim::{Medium, Outcome, RadioConfig, RadioHandle, RadioId, Simulation};
 
 /// Let the virtual chip finish its power-on reset before we touch it.
@@ -31,7 +31,7 @@ fn radio(handle: RadioHandle, medium: &Medium, version: BindingVersion) -> SimRa
         handle.delay,
         clock,
         version,
-        Band::Mhz433,
+        RfmType::Mhz433,
     )
 }
 
@@ -81,7 +81,7 @@ fn start(
     let mut power_up = sim.delay();
     sim.spawn(async move {
         embedded_hal_async::delay::DelayNs::delay_us(&mut power_up, POWER_UP_US).await;
-        let mut rx = Receiver::new(Config::new(rx_version, Band::Mhz433), None);
+        let mut rx = Receiver::new(Config::new(rx_version, RfmType::Mhz433), None);
         rx_start(&mut rx_radio, &mut rx).await.unwrap();
         loop {
             let mut on_event = |event| {
@@ -147,7 +147,7 @@ fn start(
 }
 
 fn sixteen_channels() -> (BindData, Vec<u16>) {
-    let mut data = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+    let mut data = BindData::defaults(BindingVersion::V38, RfmType::Mhz433);
     data.rf_magic = 0x1234_5678;
     data.hop_channels = [0; 24];
     data.hop_channels[..8].copy_from_slice(&[7, 63, 21, 49, 35, 14, 56, 28]);
@@ -289,7 +289,7 @@ fn adaptive_channel_scan_picks_the_quiet_channels() {
     let handle = medium.add_radio(RadioConfig::at([0.0, 0.0, 0.0]));
     // 413 MHz + ch · 250 kHz: channels 1..200 lie below the 463 MHz limit, and the 250 kHz
     // step is wider than the 19200 profile's IF filter, so channels do not bleed together.
-    let mut data = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+    let mut data = BindData::defaults(BindingVersion::V38, RfmType::Mhz433);
     data.rf_frequency_hz = 413_000_000;
     data.rf_channel_spacing = 25;
     let quiet = [17u8, 50, 83, 116, 149, 182];
@@ -306,7 +306,7 @@ fn adaptive_channel_scan_picks_the_quiet_channels() {
     let mut power_up = sim.delay();
     let task = sim.spawn(async move {
         embedded_hal_async::delay::DelayNs::delay_us(&mut power_up, POWER_UP_US).await;
-        scan_hop_channels(&mut r, &mut data, 1_000, Band::Mhz433.max_frequency_hz())
+        scan_hop_channels(&mut r, &mut data, 1_000, RfmType::Mhz433.max_frequency_hz())
             .await
             .unwrap();
         data
@@ -341,7 +341,7 @@ fn an_absent_module_is_reported_as_not_an_si4432() {
         let mut power_up = sim.delay();
         let rx_task = sim.spawn(async move {
             embedded_hal_async::delay::DelayNs::delay_us(&mut power_up, POWER_UP_US).await;
-            let mut rx = Receiver::new(Config::new(BindingVersion::V38, Band::Mhz433), None);
+            let mut rx = Receiver::new(Config::new(BindingVersion::V38, RfmType::Mhz433), None);
             let mut events = 0;
             let error = run_receiver(&mut rx_radio, &mut rx, |_| events += 1).await;
             (error, events)
@@ -350,7 +350,7 @@ fn an_absent_module_is_reported_as_not_an_si4432() {
         let mut power_up = sim.delay();
         let tx_task = sim.spawn(async move {
             embedded_hal_async::delay::DelayNs::delay_us(&mut power_up, POWER_UP_US).await;
-            let data = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+            let data = BindData::defaults(BindingVersion::V38, RfmType::Mhz433);
             let until = tx_radio.now_us() + BIND_WINDOW_US;
             tx_bind(&mut tx_radio, &data, until).await
         });
@@ -388,7 +388,10 @@ fn a_module_lost_mid_link_gives_failsafe_then_not_an_si4432() {
     let mut power_up = sim.delay();
     let rx_task = sim.spawn(async move {
         embedded_hal_async::delay::DelayNs::delay_us(&mut power_up, POWER_UP_US).await;
-        let mut rx = Receiver::new(Config::new(BindingVersion::V38, Band::Mhz433), Some(data));
+        let mut rx = Receiver::new(
+            Config::new(BindingVersion::V38, RfmType::Mhz433),
+            Some(data),
+        );
         rx_start(&mut rx_radio, &mut rx).await.unwrap();
         loop {
             let mut on_event = |event: RxEvent| {

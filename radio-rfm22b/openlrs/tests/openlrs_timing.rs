@@ -3,7 +3,7 @@
 
 mod openlrs_vectors;
 
-use openlrs::{Band, BindData, BindingVersion, modem, timing};
+use openlrs::{BindData, BindingVersion, RfmType, modem, timing};
 use openlrs_vectors::{load, num, nums, report};
 
 #[test]
@@ -11,7 +11,7 @@ fn intervals_and_delays_match() {
     let v = load("timing.json");
     let mut count = 0;
     for case in v["getInterval"].as_array().unwrap() {
-        let mut data = BindData::defaults(BindingVersion::V38, Band::Mhz433);
+        let mut data = BindData::defaults(BindingVersion::V38, RfmType::Mhz433);
         data.modem_profile = num(&case["modem_params"]) as u8;
         data.flags = num(&case["flags"]) as u8;
         assert_eq!(

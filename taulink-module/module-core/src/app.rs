@@ -10,7 +10,7 @@
 
 use crate::air::AirLink;
 use crate::button::ButtonEvent;
-use crate::channels::Channels;
+use crate::channels::ChannelFrame;
 use crate::hm10::relay::{MAX_RECORD_LEN, Relay, RelayStats};
 use crate::params::{self, Commands, Effect};
 use crate::ports::{HandsetOutput, HandsetRequest, LinkPort, LinkStats};
@@ -275,14 +275,14 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     }
 
     /// Channels decoded from the handset's CRSF RC frames (the CRSF codec calls this).
-    pub fn on_handset_channels(&mut self, channels: &Channels) {
+    pub fn on_handset_channels(&mut self, channels: &ChannelFrame) {
         if self.settings.role == Role::Transmitter && self.settings.input.is_crsf() {
             self.forward(channels);
         }
     }
 
     /// Channels received over the link (receiver role): they go to the PPM output.
-    pub fn on_link_channels(&mut self, channels: &Channels) {
+    pub fn on_link_channels(&mut self, channels: &ChannelFrame) {
         if self.settings.role == Role::Receiver {
             self.encoder.set_channels(channels);
         }
@@ -532,7 +532,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         if crate::settings::TELEMETRY_RATIOS.contains(&params.telemetry_ratio) {
             self.settings.telemetry_ratio = params.telemetry_ratio;
         }
-        self.settings.band = crate::air::settings_band(params.band);
+        self.settings.band = params.band;
         self.on_bind_complete(params.bind_id)
     }
 
@@ -627,7 +627,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         self.update_led()
     }
 
-    fn forward(&mut self, channels: &Channels) {
+    fn forward(&mut self, channels: &ChannelFrame) {
         self.input.frames = self.input.frames.saturating_add(1);
         self.link.send_channels(channels);
     }

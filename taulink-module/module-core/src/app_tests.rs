@@ -7,7 +7,7 @@ use telemetry::cobs;
 
 #[derive(Default)]
 struct FakeLink {
-    channels: Vec<Channels>,
+    channels: Vec<ChannelFrame>,
     records: Vec<Vec<u8>>,
     room: usize,
     stats: LinkStats,
@@ -16,7 +16,7 @@ struct FakeLink {
 }
 
 impl LinkPort for FakeLink {
-    fn send_channels(&mut self, channels: &Channels) {
+    fn send_channels(&mut self, channels: &ChannelFrame) {
         self.channels.push(*channels);
     }
     fn set_input_timeout_ms(&mut self, timeout_ms: u16) {
@@ -97,7 +97,7 @@ fn taranis_ppm_reaches_the_link() {
 
 #[test]
 fn crsf_channels_go_to_the_link_only_in_crsf_mode() {
-    let channels = Channels::from_ticks(&[172, 992, 1811, 992]);
+    let channels = ChannelFrame::from_ticks(&[172, 992, 1811, 992]);
     let mut ppm_mode = app(Settings::default());
     ppm_mode.on_handset_channels(&channels);
     assert!(ppm_mode.link().channels.is_empty());
@@ -162,7 +162,7 @@ fn receiver_role_outputs_ppm_and_stops_on_failsafe() {
         .iter()
         .map(|w| us_to_ticks(*w))
         .collect();
-    app.on_link_channels(&Channels::from_ticks(&values));
+    app.on_link_channels(&ChannelFrame::from_ticks(&values));
     let frame = app.next_ppm_frame().unwrap();
     let widths: Vec<u16> = frame.slots()[..8].iter().map(|s| s.period_us).collect();
     let expected: Vec<u16> = values.iter().map(|v| ticks_to_us(*v)).collect();
@@ -184,7 +184,7 @@ fn a_factory_receiver_stops_pulses_on_failsafe_and_the_link_gets_the_input_timeo
     assert_eq!(app.link().input_timeout_ms, 500);
     app.link.stats.connected = true;
     app.on_tick();
-    app.on_link_channels(&Channels::from_ticks(&[us_to_ticks(1600); 8]));
+    app.on_link_channels(&ChannelFrame::from_ticks(&[us_to_ticks(1600); 8]));
     assert!(app.next_ppm_frame().is_some());
     app.link.stats.connected = false;
     app.on_tick();

@@ -11,18 +11,21 @@ pub use telemetry::handset::crsf::channels::{
     TICKS_CENTRE, TICKS_MAX, TICKS_MAX_NOMINAL, TICKS_MIN_NOMINAL, ticks_to_us, us_to_ticks,
 };
 
-/// Most channels a frame carries (PPM's 16-channel maximum, CRSF's 16 channels).
-pub const MAX_CHANNELS: usize = 16;
+/// Most channels a frame carries (PPM's 16-channel maximum, CRSF's 16 channels): the
+/// link's 16.
+pub use telemetry::channels::MAX_CHANNELS;
 
-/// One frame of channel values in ticks, 1…16 of them, each 0…2047.
+/// One frame of channel values in ticks as a handset protocol (PPM, CRSF) or the PPM output
+/// carries it: 1…16 of them, each 0…2047, with the count the frame had. The link itself
+/// always carries all 16 (`telemetry::channels::Channels`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Channels {
+pub struct ChannelFrame {
     ticks: [u16; MAX_CHANNELS],
     count: u8,
 }
 
-impl Channels {
+impl ChannelFrame {
     /// `count` channels (clipped to 16), all centred.
     pub fn centered(count: usize) -> Self {
         Self {
@@ -74,12 +77,12 @@ mod tests {
 
     #[test]
     fn channels_clip_and_bound() {
-        let mut ch = Channels::from_ticks(&[0, 3000, 992]);
+        let mut ch = ChannelFrame::from_ticks(&[0, 3000, 992]);
         assert_eq!(ch.as_slice(), &[0, 2047, 992]);
         assert!(ch.set(1, 1000));
         assert!(!ch.set(3, 1000));
         assert_eq!(ch.get(1), Some(1000));
         assert_eq!(ch.get(3), None);
-        assert_eq!(Channels::centered(20).count(), 16);
+        assert_eq!(ChannelFrame::centered(20).count(), 16);
     }
 }

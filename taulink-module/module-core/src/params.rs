@@ -183,15 +183,6 @@ const OPENLRS_RATE_LABELS: [&str; 5] = ["4800bps", "9600bps", "19k2bps", "57k6bp
 /// OpenLRSng's channel modes 1..6.
 const OPENLRS_CHANNEL_LABELS: [&str; 6] = ["4+4", "8", "8+4", "12", "12+4", "16"];
 
-fn band_index(band: Band) -> u8 {
-    match band {
-        Band::Mhz433 => 0,
-        Band::Mhz868 => 1,
-        Band::Mhz915 => 2,
-        Band::Ism433 => 3,
-    }
-}
-
 fn ratio_index(ratio: u8) -> u8 {
     TELEMETRY_RATIOS
         .iter()
@@ -255,7 +246,7 @@ pub fn entry(
             0,
             "Band",
             &BAND_LABELS,
-            band_index(settings.band),
+            Band::code(settings.band),
             0,
             unit(commands, number, ""),
         ),
@@ -410,14 +401,7 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
             settings.tx_power = step;
             Effect::None
         }
-        (BAND, Some(index)) => match index {
-            0 => Some(Band::Mhz433),
-            1 => Some(Band::Mhz868),
-            2 => Some(Band::Mhz915),
-            3 => Some(Band::Ism433),
-            _ => None,
-        }
-        .map_or(Effect::None, |band| {
+        (BAND, Some(index)) => Band::from_code(index).map_or(Effect::None, |band| {
             settings.band = band;
             Effect::RestartLink
         }),

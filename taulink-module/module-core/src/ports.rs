@@ -3,7 +3,7 @@
 //! encoders (telemetry crate's `handset`: CRSF, S.Port, FrSky D; [`crate::handset::Handset`]).
 //! The core only ever talks to these traits.
 
-use crate::channels::Channels;
+use crate::channels::ChannelFrame;
 
 /// When the link sends its uplink packets, on the firmware's µs clock: at `phase_us + k ·
 /// period_us`. The CRSF timing frame pulls the radio's channel frames onto this grid.
@@ -40,7 +40,7 @@ pub struct LinkStats {
 /// The air link as the module core sees it.
 pub trait LinkPort {
     /// Channels for the next uplink packet (transmitter role), as the handset delivers them.
-    fn send_channels(&mut self, channels: &Channels);
+    fn send_channels(&mut self, channels: &ChannelFrame);
     /// After this long without [`LinkPort::send_channels`] the handset input counts as lost
     /// and the link must stop flying the last channels (it makes the other end fly its
     /// failsafe). The core sets it from the settings when it is built.
@@ -61,7 +61,7 @@ pub trait LinkPort {
         None
     }
     /// Channels received over the air since the last call (receiver role).
-    fn take_received_channels(&mut self) -> Option<Channels> {
+    fn take_received_channels(&mut self) -> Option<ChannelFrame> {
         None
     }
 }
@@ -102,11 +102,11 @@ pub trait HandsetOutput {
     fn on_module_battery(&mut self, _millivolts: u16) {}
     /// Bytes the radio sent on the JR line, the last one received at `now_us`; returns the
     /// newest RC channels they completed.
-    fn on_line_bytes(&mut self, _now_us: u64, _bytes: &[u8]) -> Option<Channels> {
+    fn on_line_bytes(&mut self, _now_us: u64, _bytes: &[u8]) -> Option<ChannelFrame> {
         None
     }
     /// The JR line went idle at `now_us` (end of the radio's burst).
-    fn on_line_idle(&mut self, _now_us: u64) -> Option<Channels> {
+    fn on_line_idle(&mut self, _now_us: u64) -> Option<ChannelFrame> {
         None
     }
     /// What to send on the JR line at `now_us` into `out` (≥ 128 bytes); 0 = nothing. The

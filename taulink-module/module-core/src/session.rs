@@ -6,11 +6,11 @@
 
 use telemetry::channels::{Failsafe, FailsafeValues, MAX_CHANNELS};
 use telemetry::link::core::follower::DEFAULT_FAILSAFE_US;
-use telemetry::link::{Band as LinkBand, LinkParams};
+use telemetry::link::{Band, LinkParams};
 
 use ::openlrs::BindData;
 
-use crate::air::{link_band, link_params, new_bind_params};
+use crate::air::{link_params, new_bind_params};
 use crate::settings::{Role, Settings, openlrs};
 
 /// How long one bind attempt lasts.
@@ -70,7 +70,7 @@ pub enum LinkStep {
     /// Listen for a master's offer on `band`.
     BindFollower {
         /// The band's bind channel.
-        band: LinkBand,
+        band: Band,
         /// How long to listen.
         timeout_us: u64,
     },
@@ -270,7 +270,7 @@ impl Session {
                         }
                     }
                     Role::Receiver => LinkStep::BindFollower {
-                        band: link_band(settings.band),
+                        band: settings.band,
                         timeout_us: BIND_TIMEOUT_US,
                     },
                 }

@@ -1,5 +1,5 @@
 use super::*;
-use crate::settings::{Band, RateMode};
+use crate::settings::RateMode;
 
 fn bound(role: Role) -> Settings {
     Settings {
@@ -102,7 +102,7 @@ fn a_receiver_follows_with_every_channel_held_and_binds_on_its_band() {
     assert_eq!(
         session.next(&settings, None, 10, 1),
         LinkStep::BindFollower {
-            band: LinkBand::Mhz868,
+            band: Band::Mhz868,
             timeout_us: BIND_TIMEOUT_US
         }
     );

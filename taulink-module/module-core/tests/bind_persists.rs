@@ -5,7 +5,7 @@
 use embassy_futures::block_on;
 use module_core::app::{Action, App};
 use module_core::button::ButtonEvent;
-use module_core::channels::Channels;
+use module_core::channels::ChannelFrame;
 use module_core::ports::{HandsetOutput, LinkPort, LinkStats};
 use module_core::settings::{Settings, SettingsStore};
 use module_core::status::LinkState;
@@ -20,7 +20,7 @@ struct Link {
 }
 
 impl LinkPort for Link {
-    fn send_channels(&mut self, _channels: &Channels) {}
+    fn send_channels(&mut self, _channels: &ChannelFrame) {}
     fn set_input_timeout_ms(&mut self, _timeout_ms: u16) {}
     fn can_send_record(&self) -> bool {
         false

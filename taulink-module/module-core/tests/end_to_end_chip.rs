@@ -28,10 +28,9 @@ use module_core::settings::{InputProtocol, OutputProtocol};
 use radio_rfm22b::Rfm22b;
 use radio_rfm22b::TxPower;
 use radio_rfm22b::link::LinkRadio;
-use si4432_sim::{Medium, RadioConfig as Placement, SimDelay, Simulation};
+use si4432_sim::{RadioConfig as Placement, SimClock, Simulation};
 use telemetry::channels::FailsafeValues;
 use telemetry::handset::sport::{self, value_id};
-use telemetry::link::LinkClock;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::run_follower;
 use telemetry::link::master::run_master;
@@ -39,26 +38,6 @@ use telemetry::messages::{Decoded, Message, MessageReader};
 
 const WIDTHS_US: [u16; 8] = [1005, 1500, 1995, 1250, 1750, 1111, 1888, 1600];
 const RUN_US: u64 = 2_000_000;
-
-/// A link clock on the simulator's virtual time, offset like a separately booted MCU.
-struct SimClock {
-    medium: Medium,
-    delay: SimDelay,
-    epoch_us: u64,
-}
-
-impl LinkClock for SimClock {
-    fn now_us(&self) -> u64 {
-        self.medium.now().as_micros() as u64 + self.epoch_us
-    }
-
-    async fn sleep_until_us(&mut self, deadline_us: u64) {
-        let wait_us = deadline_us.saturating_sub(self.now_us());
-        if wait_us > 0 {
-            self.delay.sleep_ns(wait_us * 1_000).await;
-        }
-    }
-}
 
 #[test]
 fn ppm_over_the_driver_on_virtual_si4432s() {
@@ -72,11 +51,12 @@ fn ppm_over_the_driver_on_virtual_si4432s() {
     let app = Rc::new(RefCell::new(
         App::new(settings, AirLink::new(), Handset::new(&settings), true).unwrap(),
     ));
-    let mut module_clock = SimClock {
-        medium: medium.clone(),
-        delay: module_chip.delay.clone(),
-        epoch_us: MODULE_EPOCH_US,
-    };
+    let mut module_clock = SimClock::new(
+        medium.clone(),
+        module_chip.delay.clone(),
+        MODULE_EPOCH_US,
+        0.0,
+    );
     let mut module_radio = LinkRadio::new(
         Rfm22b::new(
             module_chip.spi,
@@ -100,11 +80,12 @@ fn ppm_over_the_driver_on_virtual_si4432s() {
     });
 
     let flight = Rc::new(RefCell::new(FlightSide::default()));
-    let mut flight_clock = SimClock {
-        medium: medium.clone(),
-        delay: flight_chip.delay.clone(),
-        epoch_us: FLIGHT_EPOCH_US,
-    };
+    let mut flight_clock = SimClock::new(
+        medium.clone(),
+        flight_chip.delay.clone(),
+        FLIGHT_EPOCH_US,
+        0.0,
+    );
     let mut flight_radio = LinkRadio::new(
         Rfm22b::new(
             flight_chip.spi,

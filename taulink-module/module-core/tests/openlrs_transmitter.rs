@@ -11,16 +11,17 @@ use module_core::air::AirLink;
 use module_core::air::openlrs::OPENLRS_RATE_CODE_BASE;
 use module_core::app::{Action, App};
 use module_core::button::ButtonEvent;
-use module_core::channels::{Channels, us_to_ticks};
+use module_core::channels::{ChannelFrame, us_to_ticks};
 use module_core::ports::{HandsetOutput, LinkPort, LinkStats};
 use module_core::session::{BindOutcome, LinkStep, SessionEnd};
 use module_core::settings::{InputProtocol, LinkProtocol, OpenLrsSettings, Settings};
+use openlrs::BindingVersion;
 use openlrs::bind::DEFAULT_RF_MAGIC;
 use openlrs::channels::bits_to_us;
 use openlrs::roles::TxEvent;
 use openlrs::rx::{Config, Output, Receiver};
 use openlrs::tx::Transmitter;
-use openlrs::{Band, BindingVersion};
+use radio_rfm22b::RfmType;
 
 #[derive(Default)]
 struct Handset {
@@ -84,7 +85,7 @@ fn bind(app: &mut Module, version: BindingVersion) -> openlrs::BindData {
         data.rf_magic, DEFAULT_RF_MAGIC,
         "the bind gives the link its own magic"
     );
-    let mut rx = Receiver::new(Config::new(version, Band::Mhz433), None);
+    let mut rx = Receiver::new(Config::new(version, RfmType::Mhz433), None);
     rx.start(0);
     let reception = rx.on_packet(1_000, &data.bind_packet());
     assert_eq!(reception.output, Output::Bound(data));
@@ -129,12 +130,12 @@ fn the_module_binds_and_flies_an_openlrsng_receiver() {
             let mut rx = Receiver::new(
                 Config {
                     bind_window_us: None,
-                    ..Config::new(version, Band::Mhz433)
+                    ..Config::new(version, RfmType::Mhz433)
                 },
                 Some(data),
             );
             rx.start(0);
-            let sticks = Channels::from_ticks(&handset_us().map(us_to_ticks));
+            let sticks = ChannelFrame::from_ticks(&handset_us().map(us_to_ticks));
             let telemetry = record();
             let mut heard = Vec::new();
             let input_until = 3_000_000u64;

@@ -9,7 +9,7 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 use module_core::app::App;
-use module_core::channels::Channels;
+use module_core::channels::ChannelFrame;
 use module_core::handset::{FlightState, Handset, MAX_LINE_BURST};
 use module_core::hm10::relay::MAX_RECORD_LEN;
 use module_core::ports::{LinkPort, LinkStats};
@@ -45,11 +45,11 @@ fn chunks<'a>(bytes: &'a [u8], cuts: &[usize]) -> Vec<&'a [u8]> {
 
 #[derive(Default)]
 struct Link {
-    channels: Vec<Channels>,
+    channels: Vec<ChannelFrame>,
 }
 
 impl LinkPort for Link {
-    fn send_channels(&mut self, channels: &Channels) {
+    fn send_channels(&mut self, channels: &ChannelFrame) {
         self.channels.push(*channels);
     }
     fn set_input_timeout_ms(&mut self, _timeout_ms: u16) {}

@@ -1,12 +1,16 @@
 //! The flight side's vario, barometric altitude and cell count, and the module's own supply,
 //! through the module's handset codecs (`handset::Handset`, as the JR-line task drives it) and
-//! back out of the line bytes with EdgeTX's own decoding rules, written here from the
-//! protocol (not with our encoders): CRSF 0x07 / 0x09 (`crossfire.cpp`), S.Port ALT 0x0100,
-//! VARIO 0x0110, CELLS 0x0300 and A2 (`frsky_sport.cpp`), FrSky D hub BARO_ALT 0x10/0x21 and
-//! VARIO 0x30 (`frsky_d.cpp`).
+//! back out of the line bytes with EdgeTX's own decoding rules (`edgetx-decode`, written from
+//! the protocol, not with our encoders): CRSF 0x07 / 0x09 (`crossfire.cpp`), S.Port ALT
+//! 0x0100, VARIO 0x0110, CELLS 0x0300 and A2 (`frsky_sport.cpp`), FrSky D hub BARO_ALT
+//! 0x10/0x21 and VARIO 0x30 (`frsky_d.cpp`).
 
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
+use edgetx_decode::{
+    crc8_d5, crsf_baro_altitude_cm, crsf_frames, crsf_vario_cm_s, hub_altitude_cm, hub_records,
+    hub_stream, sport_cells, sport_frames,
+};
 use module_core::handset::{Handset, MAX_LINE_BURST};
 use module_core::ports::{HandsetOutput, LinkStats};
 use module_core::records;
@@ -57,21 +61,6 @@ fn handset(input: InputProtocol, output: OutputProtocol, altitude_cm: i32) -> Ha
 
 // ---- CRSF ----
 
-fn crc8_d5(bytes: &[u8]) -> u8 {
-    let mut crc = 0u8;
-    for &b in bytes {
-        crc ^= b;
-        for _ in 0..8 {
-            crc = if crc & 0x80 != 0 {
-                (crc << 1) ^ 0xD5
-            } else {
-                crc << 1
-            };
-        }
-    }
-    crc
-}
-
 fn rc_frame() -> Vec<u8> {
     let mut frame = vec![0xEE, 24, 0x16];
     frame.extend([0u8; 22]);
@@ -89,27 +78,12 @@ fn crsf_values(altitude_cm: i32) -> (Vec<i32>, Vec<i32>) {
         let now = 10_000 + k * 4_000;
         handset.on_line_bytes(now, &rc_frame());
         let n = handset.next_line_bytes(now + 20, &mut out);
-        let mut bytes = &out[..n];
-        while bytes.len() >= 4 {
-            let len = bytes[1] as usize;
-            let (frame, rest) = bytes.split_at(2 + len);
-            assert_eq!(crc8_d5(&frame[2..1 + len]), frame[1 + len]);
-            let payload = &frame[3..1 + len];
-            match frame[2] {
-                // CF_VARIO_ID: int16 BE at byte 3 → VSpd (cm/s).
-                0x07 => vspd.push(i32::from(i16::from_be_bytes([payload[0], payload[1]]))),
-                // BARO_ALT_ID: bit 15 → metres, else decimetres + 10 000.
-                0x09 => {
-                    let v = i32::from(u16::from_be_bytes([payload[0], payload[1]]));
-                    alt.push(if v & 0x8000 != 0 {
-                        (v & 0x7FFF) * 100
-                    } else {
-                        (v - 10_000) * 10
-                    });
-                }
+        for (kind, payload) in crsf_frames(&out[..n]) {
+            match kind {
+                0x07 => vspd.push(crsf_vario_cm_s(&payload)),
+                0x09 => alt.push(crsf_baro_altitude_cm(&payload)),
                 _ => {}
             }
-            bytes = rest;
         }
     }
     (vspd, alt)
@@ -130,45 +104,6 @@ fn crsf_vario_and_baro_altitude_decode_back() {
 }
 
 // ---- S.Port ----
-
-/// S.Port frames from a push stream: `7E phys 10 idLo idHi v0..v3 crc`, 0x7D-stuffed.
-fn sport_frames(bytes: &[u8]) -> Vec<(u16, u32)> {
-    let mut frames = Vec::new();
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] != 0x7E {
-            i += 1;
-            continue;
-        }
-        let mut body = Vec::new();
-        let mut j = i + 2;
-        while body.len() < 8 && j < bytes.len() {
-            let b = if bytes[j] == 0x7D {
-                j += 1;
-                bytes[j] ^ 0x20
-            } else {
-                bytes[j]
-            };
-            body.push(b);
-            j += 1;
-        }
-        // EdgeTX's check: the byte sum folded, crc included, is 0xFF.
-        let mut sum = 0u16;
-        for b in &body {
-            sum += u16::from(*b);
-            sum += sum >> 8;
-            sum &= 0xFF;
-        }
-        assert_eq!(sum, 0xFF, "S.Port CRC");
-        assert_eq!(body[0], 0x10);
-        frames.push((
-            u16::from_le_bytes([body[1], body[2]]),
-            u32::from_le_bytes([body[3], body[4], body[5], body[6]]),
-        ));
-        i = j;
-    }
-    frames
-}
 
 #[test]
 fn sport_altitude_vario_cells_and_module_battery_decode_back() {
@@ -196,11 +131,11 @@ fn sport_altitude_vario_cells_and_module_battery_decode_back() {
     // 12 bits each in 2 mV, shown as raw / 5 in 0.01 V.
     let mut cells = std::collections::BTreeMap::new();
     for v in values(0x0300) {
-        let (count, first) = ((v >> 4) & 0xF, v & 0xF);
+        let (count, first, [a, b]) = sport_cells(v);
         assert_eq!(count, u32::from(CELLS));
-        cells.insert(first, ((v >> 8) & 0xFFF) / 5);
+        cells.insert(first, a / 5);
         if first + 1 < count {
-            cells.insert(first + 1, ((v >> 20) & 0xFFF) / 5);
+            cells.insert(first + 1, b / 5);
         }
     }
     let per_cell_cv = u32::from(PACK_MV / u16::from(CELLS)) / 10;
@@ -217,55 +152,6 @@ fn sport_altitude_vario_cells_and_module_battery_decode_back() {
 
 // ---- FrSky D hub ----
 
-/// The hub byte stream of the user frames (`7E FD n 00 data… 7E`, 0x7D-stuffed) in a push
-/// stream.
-fn hub_stream(bytes: &[u8], stream: &mut Vec<u8>) {
-    let mut unstuffed = Vec::new();
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == 0x7D {
-            unstuffed.push(bytes[i + 1] ^ 0x20);
-            i += 2;
-        } else {
-            unstuffed.push(bytes[i]);
-            i += 1;
-        }
-    }
-    if unstuffed.first() == Some(&0x7E) && unstuffed.get(1) == Some(&0xFD) {
-        let n = usize::from(unstuffed[2]);
-        stream.extend_from_slice(&unstuffed[4..4 + n]);
-    }
-}
-
-/// EdgeTX's hub records: `5E id lo hi`, 0x5D-stuffed (xor 0x60).
-fn hub_records(stream: &[u8]) -> Vec<(u8, i16)> {
-    let mut records = Vec::new();
-    let mut bytes = Vec::new();
-    let mut i = 0;
-    while i < stream.len() {
-        if stream[i] == 0x5D {
-            bytes.push(stream[i + 1] ^ 0x60);
-            i += 2;
-        } else {
-            bytes.push(stream[i]);
-            i += 1;
-        }
-    }
-    let mut k = 0;
-    while k + 3 < bytes.len() {
-        if bytes[k] == 0x5E && bytes[k + 1] != 0x5E {
-            records.push((
-                bytes[k + 1],
-                i16::from_le_bytes([bytes[k + 2], bytes[k + 3]]),
-            ));
-            k += 4;
-        } else {
-            k += 1;
-        }
-    }
-    records
-}
-
 fn hub_altitudes(altitude_cm: i32) -> (Vec<i32>, Vec<i32>) {
     let mut handset = handset(InputProtocol::Ppm, OutputProtocol::FrskyHub, altitude_cm);
     let mut out = [0u8; MAX_LINE_BURST];
@@ -277,13 +163,8 @@ fn hub_altitudes(altitude_cm: i32) -> (Vec<i32>, Vec<i32>) {
     let (mut alt, mut vspd, mut bp) = (Vec::new(), Vec::new(), None);
     for (id, value) in hub_records(&stream) {
         match id {
-            0x10 => bp = Some(i32::from(value)),
-            // AP ≤ 9 is decimetres (×10 → cm); `100·BP ± AP` by the sign of BP.
-            0x21 => {
-                let bp = bp.unwrap();
-                let ap = i32::from(value) * 10;
-                alt.push(100 * bp + if bp >= 0 { ap } else { -ap });
-            }
+            0x10 => bp = Some(value),
+            0x21 => alt.push(hub_altitude_cm(bp.unwrap(), value)),
             0x30 => vspd.push(i32::from(value)),
             _ => {}
         }

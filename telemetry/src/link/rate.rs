@@ -226,6 +226,48 @@ impl RateMode {
             _ => None,
         }
     }
+
+    /// The mode's name, as the handset's Packet Rate row, the settings text and the tools'
+    /// command lines spell it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            RateMode::L50 => "L50",
+            RateMode::M100 => "M100",
+            RateMode::F250 => "F250",
+            RateMode::F500 => "F500",
+            RateMode::F700 => "F700",
+        }
+    }
+}
+
+impl core::fmt::Display for RateMode {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A name that is no rate mode ([`RateMode`]'s `FromStr`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct UnknownRateMode;
+
+impl core::fmt::Display for UnknownRateMode {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("not a rate mode (L50, M100, F250, F500 or F700)")
+    }
+}
+
+impl core::error::Error for UnknownRateMode {}
+
+impl core::str::FromStr for RateMode {
+    type Err = UnknownRateMode;
+
+    /// A mode by its [`RateMode::name`], in any letter case (`f500` is `F500`).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        RateMode::ALL
+            .into_iter()
+            .find(|mode| mode.name().eq_ignore_ascii_case(s))
+            .ok_or(UnknownRateMode)
+    }
 }
 
 /// The rate mode bind packets travel at: the most robust one.
@@ -308,7 +350,11 @@ mod tests {
     fn codes_round_trip() {
         for mode in RateMode::ALL {
             assert_eq!(RateMode::from_code(mode.code()), Some(mode));
+            assert_eq!(mode.to_string().parse(), Ok(mode));
+            assert_eq!(mode.name().to_ascii_lowercase().parse(), Ok(mode));
         }
         assert_eq!(RateMode::from_code(5), None);
+        assert_eq!("F1000".parse::<RateMode>(), Err(UnknownRateMode));
+        assert_eq!("".parse::<RateMode>(), Err(UnknownRateMode));
     }
 }

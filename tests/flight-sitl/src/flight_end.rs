@@ -22,14 +22,14 @@ use openlrs::rx::{Config as OpenLrsConfig, Receiver};
 use radio_rfm22b::link::LinkRadio;
 use radio_rfm22b::{NoPin, Rfm22b, TxPower};
 use si4432_sim::{ChipHandle, Fault, Medium, SimDelay, SimIrq, SimSpi};
-use telemetry::link::LinkClock;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 
-use crate::clock::{BoardClock, sleep_ms};
+use crate::clock::sleep_ms;
 use crate::flash::SettingsFlash;
 use crate::scenario::{End, RadioInjection};
 use crate::world::{BootCause, Shared};
+use si4432_sim::SimClock;
 
 /// Power-on to the first loop, ms, modelled as the firmware's boot at 168 MHz: clocks and
 /// PLL lock ≈ 2 ms, settings load ≈ 3 ms (two records read and CRC-checked), MPU-9250
@@ -109,7 +109,7 @@ async fn restart_due(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay) {
 async fn openlrs_step(
     app: &Rc<RefCell<FlightApp>>,
     slot: &mut Option<FlightRadio>,
-    clock: &BoardClock,
+    clock: &SimClock,
     config: OpenLrsConfig,
     step: LinkStep,
 ) {
@@ -164,7 +164,7 @@ async fn openlrs_step(
 async fn link_task(
     app: Rc<RefCell<FlightApp>>,
     slot: &mut Option<FlightRadio>,
-    mut clock: BoardClock,
+    mut clock: SimClock,
     failsafe_us: u64,
 ) {
     let delay = clock.delay().clone();
@@ -240,7 +240,7 @@ async fn wait_while_busy(shared: &Shared, delay: &SimDelay) {
 
 /// The supervisor task: polls the check-in policy every `FEED_PERIOD_MS`; the IWDG is fed
 /// inside the app's model (`Watchdog::poll`), which the stop watcher reads.
-async fn supervisor_task(app: Rc<RefCell<FlightApp>>, clock: BoardClock, shared: &Shared) {
+async fn supervisor_task(app: Rc<RefCell<FlightApp>>, clock: SimClock, shared: &Shared) {
     loop {
         sleep_ms(clock.delay(), u64::from(FEED_PERIOD_MS)).await;
         wait_while_busy(shared, clock.delay()).await;
@@ -305,7 +305,7 @@ async fn gains_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay, shared: &Share
 }
 
 /// Ends a boot: the IWDG expired (no feed for `WATCHDOG_TIMEOUT_MS`) or the power went.
-async fn stop_watcher(app: &Rc<RefCell<FlightApp>>, shared: &Shared, clock: &BoardClock) -> Stop {
+async fn stop_watcher(app: &Rc<RefCell<FlightApp>>, shared: &Shared, clock: &SimClock) -> Stop {
     loop {
         sleep_ms(clock.delay(), WATCH_MS).await;
         if !shared.borrow().input.flight_powered {
@@ -340,7 +340,7 @@ pub(crate) async fn flight_board(
         if !shared.borrow().input.flight_powered {
             continue;
         }
-        let clock = BoardClock::booting_now(medium.clone(), delay.clone(), FLIGHT_DRIFT_PPM);
+        let clock = SimClock::booting_now(medium.clone(), delay.clone(), FLIGHT_DRIFT_PPM);
         let (settings, problem) = flash.borrow_mut().load();
         let Some(mut app) = FlightApp::new(settings, clock.now_ms()) else {
             return;

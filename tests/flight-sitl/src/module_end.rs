@@ -23,10 +23,11 @@ use module_core::channels::ticks_to_us;
 use module_core::handset::{Handset, LineMode, MAX_LINE_BURST};
 use module_core::session::{BindOutcome, LinkStep, POLL_MS, SessionEnd};
 use module_core::settings::Settings as ModuleSettings;
+use openlrs::BindingVersion;
 use openlrs::radio::Radio as OpenLrsRadio;
 use openlrs::roles::tx_bind;
 use openlrs::tx::Transmitter;
-use openlrs::{Band as OpenLrsBand, BindingVersion};
+use radio_rfm22b::RfmType;
 use radio_rfm22b::link::LinkRadio;
 use radio_rfm22b::{Rfm22b, TxPower};
 use si4432_sim::{Medium, SimDelay, SimIrq, SimSdn, SimSpi};
@@ -34,7 +35,6 @@ use telemetry::change_auth::Signer;
 use telemetry::handset::crsf::channels::RcChannels;
 use telemetry::handset::crsf::frame::{Frame, frame_type};
 use telemetry::handset::crsf::{ModelSelect, address};
-use telemetry::link::LinkClock;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 use telemetry::link::master::{MasterHooks, bind_master, run_master};
@@ -43,9 +43,10 @@ use telemetry::messages::{
 };
 use telemetry::mock::SplitMix64;
 
-use crate::clock::{BoardClock, sleep_ms};
+use crate::clock::sleep_ms;
 use crate::scenario::End;
 use crate::world::{BootCause, Shared, TO_PHONE_MAX, transmitter};
+use si4432_sim::SimClock;
 
 /// Power-on to the first task, ms: nRF52840 start-up and HFXO ≈ 1 ms, settings load from
 /// the NVMC ≈ 1 ms, the RFM22B probe is the link task's first step (its own POR time is
@@ -106,7 +107,7 @@ async fn openlrs_step(b: &Board, chip: &mut ModuleChip, step: LinkStep) -> Optio
     let link = chip.radio.take()?;
     let (spi, irq, sdn, chip_delay) = link.release().release();
     let version = BindingVersion::from_byte(data.version).unwrap_or(BindingVersion::V39);
-    let band = data.band().unwrap_or(OpenLrsBand::Mhz433);
+    let band = data.band().unwrap_or(RfmType::Mhz433);
     let clock = b.clock.clone();
     let mut radio = OpenLrsRadio::new(spi, irq, chip_delay, move || clock.now_us(), version, band);
     let action = match step {
@@ -168,7 +169,7 @@ const EXPECTED: u32 =
 /// One boot's context.
 struct Board {
     app: RefCell<ModuleApp>,
-    clock: BoardClock,
+    clock: SimClock,
     checked_in: Cell<u32>,
     last_feed_ms: Cell<u32>,
 }
@@ -576,7 +577,7 @@ pub(crate) async fn module_board(
         // The firmware's RNG at boot seeds a receiver-role follower's epoch nonces.
         app.seed_link_nonces(SplitMix64::new(seed ^ crate::clock::virtual_us(&medium)).next_u64());
         shared.borrow_mut().record_boot(End::Module, cause, false);
-        let clock = BoardClock::booting_now(medium.clone(), delay.clone(), MODULE_DRIFT_PPM);
+        let clock = SimClock::booting_now(medium.clone(), delay.clone(), MODULE_DRIFT_PPM);
         let board = Board {
             app: RefCell::new(app),
             last_feed_ms: Cell::new(clock.now_ms()),

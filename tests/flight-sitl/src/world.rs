@@ -37,11 +37,12 @@ use telemetry::channels::{CHANNEL_CENTER, Channels, MAX_CHANNELS};
 use telemetry::messages::{Message, SettingChange};
 use telemetry::mock::SplitMix64;
 
-use crate::clock::{BoardClock, virtual_us};
+use crate::clock::virtual_us;
 use crate::flash::SettingsFlash;
 use crate::flight_end::{FlightChip, flight_board, inject_radio};
 use crate::module_end::{ModuleChip, module_board};
 use crate::scenario::{End, ImuInjection, PilotInput, Scenario, Sight};
+use si4432_sim::SimClock;
 
 const RAD_PER_DEG: f32 = core::f32::consts::PI / 180.0;
 /// Baro sampling period, ms (the firmware's baro task rate).
@@ -156,7 +157,7 @@ pub(crate) struct WorldState {
     /// The pilot and the environment now.
     pub(crate) input: PilotInput,
     /// The flight application while the flight board runs, and its clock.
-    pub(crate) flight: Option<(Rc<RefCell<FlightApp>>, BoardClock)>,
+    pub(crate) flight: Option<(Rc<RefCell<FlightApp>>, SimClock)>,
     /// The flight settings when the flight board last stopped.
     pub(crate) flight_settings: Settings,
     /// What the module's settings flash holds.

@@ -1,7 +1,7 @@
 //! Issue 15's acceptance, end to end at chip level: the flight application's baro altitude,
 //! vario and cell count cross the air (virtual Si4432s) to the module's application, which
 //! sends them to the handset on the JR line; decoded back out of those line bytes with
-//! EdgeTX's own rules, written here from the protocol (not with our encoders) — CRSF VARIO
+//! EdgeTX's own rules (`edgetx-decode`, written from the protocol, not with our encoders) — CRSF VARIO
 //! 0x07 and BARO_ALTITUDE 0x09 (`crossfire.cpp`), S.Port ALT 0x0100, VARIO 0x0110 and CELLS
 //! 0x0300 (`frsky_sport.cpp`), FrSky D hub BARO_ALT 0x10/0x21, VARIO 0x30 and CELLS 0x06
 //! (`frsky_d.cpp`) — they are the flight side's values. CRSF has no per-cell frame (EdgeTX
@@ -18,6 +18,9 @@ mod common;
 use std::collections::BTreeSet;
 
 use common::*;
+use edgetx_decode::{
+    crsf_baro_altitude_cm, crsf_vario_cm_s, hub_altitude_cm, hub_cell, hub_stream, sport_cells,
+};
 use flight_sitl::scenario::default_airframe;
 use flight_sitl::{Scenario, Sitl, run};
 use module_core::settings::{InputProtocol, OutputProtocol, Settings as ModuleSettings};
@@ -92,33 +95,11 @@ fn check_sent_values_are_the_flight(sitl: &Sitl) -> Vec<Vertical> {
 
 // ---- CRSF ----
 
-fn crc8_d5(bytes: &[u8]) -> u8 {
-    let mut crc = 0u8;
-    for &b in bytes {
-        crc ^= b;
-        for _ in 0..8 {
-            crc = if crc & 0x80 != 0 {
-                (crc << 1) ^ 0xD5
-            } else {
-                crc << 1
-            };
-        }
-    }
-    crc
-}
-
 /// (type, payload) of every CRSF frame in the module's replies, CRC checked.
 fn crsf_frames(sitl: &Sitl) -> Vec<(u8, Vec<u8>)> {
     let mut frames = Vec::new();
     for (_, burst) in &sitl.handset_tx {
-        let mut bytes = &burst[..];
-        while bytes.len() >= 4 {
-            let len = bytes[1] as usize;
-            let (frame, rest) = bytes.split_at(2 + len);
-            assert_eq!(crc8_d5(&frame[2..1 + len]), frame[1 + len], "CRSF CRC");
-            frames.push((frame[2], frame[3..1 + len].to_vec()));
-            bytes = rest;
-        }
+        frames.extend(edgetx_decode::crsf_frames(burst));
     }
     frames
 }
@@ -132,19 +113,12 @@ fn crsf_vario_and_baro_altitude_are_the_flight_sides() {
     let vspd: Vec<i32> = frames
         .iter()
         .filter(|(t, _)| *t == 0x07)
-        .map(|(_, p)| i32::from(i16::from_be_bytes([p[0], p[1]])))
+        .map(|(_, p)| crsf_vario_cm_s(p))
         .collect();
     let alt: Vec<i32> = frames
         .iter()
         .filter(|(t, _)| *t == 0x09)
-        .map(|(_, p)| {
-            let v = i32::from(u16::from_be_bytes([p[0], p[1]]));
-            if v & 0x8000 != 0 {
-                (v & 0x7FFF) * 100
-            } else {
-                (v - 10_000) * 10
-            }
-        })
+        .map(|(_, p)| crsf_baro_altitude_cm(p))
         .collect();
     println!(
         "CRSF: {} vario, {} altitude frames from {} Vertical messages",
@@ -177,38 +151,7 @@ fn crsf_vario_and_baro_altitude_are_the_flight_sides() {
 fn sport_frames(sitl: &Sitl) -> Vec<(u16, u32)> {
     let mut frames = Vec::new();
     for (_, bytes) in &sitl.handset_tx {
-        let mut i = 0;
-        while i < bytes.len() {
-            if bytes[i] != 0x7E {
-                i += 1;
-                continue;
-            }
-            let mut body = Vec::new();
-            let mut j = i + 2;
-            while body.len() < 8 && j < bytes.len() {
-                let b = if bytes[j] == 0x7D {
-                    j += 1;
-                    bytes[j] ^ 0x20
-                } else {
-                    bytes[j]
-                };
-                body.push(b);
-                j += 1;
-            }
-            let mut sum = 0u16;
-            for b in &body {
-                sum += u16::from(*b);
-                sum += sum >> 8;
-                sum &= 0xFF;
-            }
-            assert_eq!(sum, 0xFF, "S.Port CRC");
-            assert_eq!(body[0], 0x10);
-            frames.push((
-                u16::from_le_bytes([body[1], body[2]]),
-                u32::from_le_bytes([body[3], body[4], body[5], body[6]]),
-            ));
-            i = j;
-        }
+        frames.extend(edgetx_decode::sport_frames(bytes));
     }
     frames
 }
@@ -243,9 +186,9 @@ fn sport_altitude_vario_and_cells_are_the_flight_sides() {
     // The world's pack is a 1S (4.15 V): the battery monitor counts one cell.
     assert_eq!(counts.iter().copied().collect::<Vec<_>>(), vec![1]);
     for v in cells {
-        let (count, first) = ((v >> 4) & 0xF, v & 0xF);
+        let (count, first, [cell, _]) = sport_cells(v);
         assert_eq!((count, first), (1, 0));
-        let cell_mv = ((v >> 8) & 0xFFF) * 2;
+        let cell_mv = cell * 2;
         assert!(
             packs.iter().any(|p| u32::from(*p) / 2 * 2 == cell_mv),
             "{cell_mv} mV of {packs:?}"
@@ -260,53 +203,9 @@ fn sport_altitude_vario_and_cells_are_the_flight_sides() {
 fn hub_records(sitl: &Sitl) -> Vec<(u8, i16)> {
     let mut stream = Vec::new();
     for (_, bytes) in &sitl.handset_tx {
-        // Frames between raw 0x7E bytes (a stuffed 0x7E is `7D 5E`), then unstuffed.
-        for segment in bytes.split(|b| *b == 0x7E) {
-            let mut unstuffed = Vec::new();
-            let mut i = 0;
-            while i < segment.len() {
-                if segment[i] == 0x7D {
-                    unstuffed.push(segment[i + 1] ^ 0x20);
-                    i += 2;
-                } else {
-                    unstuffed.push(segment[i]);
-                    i += 1;
-                }
-            }
-            if unstuffed.first() == Some(&0xFD) {
-                let n = usize::from(unstuffed[1]);
-                stream.extend_from_slice(&unstuffed[3..3 + n]);
-            }
-        }
+        hub_stream(bytes, &mut stream);
     }
-    // EdgeTX's `parseTelemHubByte`: a raw 0x5E starts a record (also in the middle of one:
-    // a cut record is dropped), 0x5D escapes the next byte (xor 0x60), IDs above 0x3F are
-    // dropped.
-    let mut records = Vec::new();
-    let (mut at, mut escape, mut record) = (None::<usize>, false, [0u8; 3]);
-    for &raw in &stream {
-        if raw == 0x5E {
-            (at, escape) = (Some(0), false);
-            continue;
-        }
-        if raw == 0x5D {
-            escape = true;
-            continue;
-        }
-        let byte = if escape { raw ^ 0x60 } else { raw };
-        escape = false;
-        let Some(k) = at else { continue };
-        record[k] = byte;
-        at = if k == 2 {
-            if record[0] <= 0x3F {
-                records.push((record[0], i16::from_le_bytes([record[1], record[2]])));
-            }
-            None
-        } else {
-            Some(k + 1)
-        };
-    }
-    records
+    edgetx_decode::hub_records(&stream)
 }
 
 #[test]
@@ -319,18 +218,9 @@ fn frsky_d_altitude_vario_and_cells_are_the_flight_sides() {
         match id {
             // CELLS_ID as EdgeTX's `processHubPacket` unpacks it: index = bits 4–7, the
             // 1/500 V value = bits 8–15 plus bits 0–3 as its top nibble.
-            0x06 => {
-                let v = value as u16;
-                let raw = u32::from((v >> 8) + ((v & 0x0F) << 8));
-                cells.push(((v >> 4) & 0x0F, raw * 2));
-            }
-            0x10 => bp = Some(i32::from(value)),
-            // AP ≤ 9 is decimetres: `100·BP ± AP·10` cm by the sign of BP.
-            0x21 => {
-                let bp = bp.unwrap();
-                let ap = i32::from(value) * 10;
-                alt.push(100 * bp + if bp >= 0 { ap } else { -ap });
-            }
+            0x06 => cells.push(hub_cell(value)),
+            0x10 => bp = Some(value),
+            0x21 => alt.push(hub_altitude_cm(bp.unwrap(), value)),
             0x30 => vspd.push(i32::from(value)),
             _ => {}
         }

@@ -7,7 +7,6 @@
 #![allow(clippy::unwrap_used)]
 
 use flight_sitl::runner::acceptance::{LINK_CUT_ALTITUDES_M, check, link_cuts};
-use flight_sitl::runner::report::rate_name;
 use telemetry::link::RateMode;
 
 fn link_cut_at(rate: RateMode) {
@@ -15,7 +14,7 @@ fn link_cut_at(rate: RateMode) {
     let mut failed = Vec::new();
     for (altitude, o) in LINK_CUT_ALTITUDES_M.iter().zip(&outcomes) {
         let r = &o.report;
-        println!("{} from {altitude} m: {}", rate_name(rate), r.to_json());
+        println!("{} from {altitude} m: {}", rate.name(), r.to_json());
         // The cut comes at the altitude (the climb reaches it on the sample of the cut).
         let cut = o.plan.fault_at_s.unwrap();
         let at_cut = o.sitl.samples.iter().find(|s| s.t_s >= cut).unwrap();
@@ -29,7 +28,7 @@ fn link_cut_at(rate: RateMode) {
             failed.push(format!("{altitude} m: {}", bad.join("; ")));
         }
     }
-    assert!(failed.is_empty(), "{}: {failed:?}", rate_name(rate));
+    assert!(failed.is_empty(), "{}: {failed:?}", rate.name());
 }
 
 #[test]

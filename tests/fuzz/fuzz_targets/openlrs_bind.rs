@@ -8,16 +8,19 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use openlrs::bind::{BIND_DATA_LEN, BIND_PACKET_LEN, BindData, BindReception, receive_bind_packet};
+use openlrs::bind::{
+    BIND_DATA_LEN, BIND_PACKET_LEN, BindData, BindReception, receive_bind_packet,
+};
 use openlrs::modem::{self, Purpose};
-use openlrs::{Band, BindingVersion, hopping, timing, tx::Transmitter};
+use openlrs::{BindingVersion, hopping, timing, tx::Transmitter};
+use radio_rfm22b::RfmType;
 
 fuzz_target!(|packet: &[u8]| {
     if let Some(bytes) = packet.first_chunk::<BIND_DATA_LEN>() {
         assert_eq!(&BindData::from_bytes(bytes).to_bytes(), bytes);
     }
     for version in [BindingVersion::V38, BindingVersion::V39] {
-        for band in [Band::Mhz433, Band::Mhz868, Band::Mhz915] {
+        for band in [RfmType::Mhz433, RfmType::Mhz868, RfmType::Mhz915] {
             match receive_bind_packet(packet, version, band) {
                 BindReception::Accepted(data) => accepted(&data, packet, version, band),
                 BindReception::TooShort { len } => assert!(len < BIND_PACKET_LEN),
@@ -28,7 +31,7 @@ fuzz_target!(|packet: &[u8]| {
     }
 });
 
-fn accepted(data: &BindData, packet: &[u8], version: BindingVersion, band: Band) {
+fn accepted(data: &BindData, packet: &[u8], version: BindingVersion, band: RfmType) {
     assert_eq!(&data.bind_packet()[..], &packet[..BIND_PACKET_LEN]);
     assert_eq!(data.version, version.byte());
     let hops = data.hop_count();

@@ -12,7 +12,8 @@ use libfuzzer_sys::fuzz_target;
 use openlrs::bind::{BIND_ACK, BIND_DATA_LEN, BindData};
 use openlrs::rx::{Command, Config, Output, Receiver};
 use openlrs::telemetry::{self, DOWNLINK_FRAME_LEN, Downlink};
-use openlrs::{Band, BindingVersion};
+use openlrs::BindingVersion;
+use radio_rfm22b::RfmType;
 use taulink_fuzz::Input;
 
 fuzz_target!(|data: &[u8]| {
@@ -22,7 +23,7 @@ fuzz_target!(|data: &[u8]| {
     } else {
         BindingVersion::V39
     };
-    let band = [Band::Mhz433, Band::Mhz868, Band::Mhz915][usize::from(input.u8() % 3)];
+    let band = [RfmType::Mhz433, RfmType::Mhz868, RfmType::Mhz915][usize::from(input.u8() % 3)];
     let config = Config {
         version,
         band,
@@ -86,7 +87,7 @@ fuzz_target!(|data: &[u8]| {
     }
 });
 
-fn check_command(rx: &Receiver, command: Option<Command>, band: Band) {
+fn check_command(rx: &Receiver, command: Option<Command>, band: RfmType) {
     match command {
         Some(Command::StartLink(data)) => assert_eq!(data.validate_for(band), Ok(())),
         Some(Command::Hop(index)) => {

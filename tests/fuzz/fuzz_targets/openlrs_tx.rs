@@ -15,7 +15,8 @@ use openlrs::channels::MAX_CHANNELS;
 use openlrs::frsky::HandsetTelemetry;
 use openlrs::tx::{BindBeacon, Received, Transmitter};
 use openlrs::uplink::{self, Uplink};
-use openlrs::{Band, BindingVersion};
+use openlrs::BindingVersion;
+use radio_rfm22b::RfmType;
 use taulink_fuzz::Input;
 use telemetry::handset::{frsky_d, sport};
 
@@ -26,7 +27,7 @@ fuzz_target!(|data: &[u8]| {
     } else {
         BindingVersion::V39
     };
-    let band = [Band::Mhz433, Band::Mhz868, Band::Mhz915][usize::from(input.u8() % 3)];
+    let band = [RfmType::Mhz433, RfmType::Mhz868, RfmType::Mhz915][usize::from(input.u8() % 3)];
     let mut bind = BindData::defaults(version, band);
     bind.flags = input.u8();
     bind.modem_profile = input.u8() % 5;

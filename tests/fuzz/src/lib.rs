@@ -110,6 +110,8 @@ pub fn link_key(input: &mut Input) -> LinkKey {
 }
 
 /// Runs a future that never waits on anything outside itself (the mock flash) to completion.
+/// embassy-futures' poll loop, not si4432-sim's `Simulation`: nothing here needs virtual
+/// time, and the fuzz crate is its own workspace, kept to the crates its targets exercise.
 pub fn block_on<F: core::future::Future>(future: F) -> F::Output {
     embassy_futures::block_on(future)
 }

@@ -117,6 +117,7 @@ mod access;
 mod acquire;
 mod air;
 mod chip;
+mod clock;
 mod executor;
 pub mod fifo;
 mod inject;
@@ -132,6 +133,7 @@ mod tx;
 mod world;
 
 pub use chip::{ChipState, Fault, PLL_SETTLE_NS, POWER_ON_RESET_NS, XTAL_START_NS};
+pub use clock::SimClock;
 pub use executor::{Simulation, Spawner, Task};
 pub use medium::{
     ChipHandle, IRQ_LATENCY_NS, Interference, Medium, MediumConfig, RadioConfig, RadioHandle,

@@ -19,8 +19,8 @@ use telemetry::frame::{BindOffer, Downlink, Frame, StreamHeader, Uplink, encode,
 use telemetry::link::bind::bind_radio_config;
 use telemetry::link::follower::{bind_follower, run_follower};
 use telemetry::link::{
-    BIND_KEY, HOP_CHANNELS, HopSequence, LinkClock, LinkKey, LinkParams, PacketRadio, RadioConfig,
-    RateMode, RxOutcome, Schedule,
+    BIND_KEY, HOP_CHANNELS, HopSequence, LinkKey, LinkParams, PacketRadio, RadioConfig, RateMode,
+    RxOutcome, Schedule,
 };
 use telemetry::mock::SplitMix64;
 

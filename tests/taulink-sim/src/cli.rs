@@ -4,6 +4,7 @@
 //! code 2 before anything runs. [`Cli::scenario`] turns it into a [`Scenario`].
 
 use clap::{Parser, ValueEnum};
+use flight_sitl::runner::cli::number_in;
 use telemetry::channels::ChannelFormat;
 use telemetry::link::{Band, LinkKey, RateMode};
 
@@ -57,8 +58,8 @@ pub struct Cli {
     pub olrs_16ch: bool,
     /// Rate mode: L50 (long range), M100, F250, F500 (fast, short range) or F700 (the stick
     /// mode: sticks in every packet, aux channels round-robin; best at --ratio 8).
-    #[arg(long, value_enum, ignore_case = true, default_value_t = RateArg::F250)]
-    pub rate: RateArg,
+    #[arg(long, default_value_t = RateMode::F250)]
+    pub rate: RateMode,
     /// Telemetry ratio: one downlink slot in N (a power of two, 2..=128).
     #[arg(long, value_name = "N", default_value_t = 4, value_parser = ratio)]
     pub ratio: u8,
@@ -157,22 +158,6 @@ pub struct Cli {
     pub quiet: bool,
 }
 
-/// Rate modes as command-line words.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-#[allow(missing_docs)] // the names are the documentation
-pub enum RateArg {
-    #[value(name = "L50")]
-    L50,
-    #[value(name = "M100")]
-    M100,
-    #[value(name = "F250")]
-    F250,
-    #[value(name = "F500")]
-    F500,
-    #[value(name = "F700")]
-    F700,
-}
-
 /// Link protocols as command-line words.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 #[allow(missing_docs)] // the names are the documentation
@@ -206,18 +191,6 @@ impl From<HandsetArg> for HandsetKind {
             HandsetArg::Crsf => HandsetKind::Crsf,
             HandsetArg::Ppm => HandsetKind::Ppm,
             HandsetArg::Free1k => HandsetKind::Free1k,
-        }
-    }
-}
-
-impl From<RateArg> for RateMode {
-    fn from(r: RateArg) -> Self {
-        match r {
-            RateArg::L50 => RateMode::L50,
-            RateArg::M100 => RateMode::M100,
-            RateArg::F250 => RateMode::F250,
-            RateArg::F500 => RateMode::F500,
-            RateArg::F700 => RateMode::F700,
         }
     }
 }
@@ -265,18 +238,6 @@ impl From<BandArg> for Band {
             BandArg::Mhz915 => Band::Mhz915,
         }
     }
-}
-
-/// A finite number within `lo..=hi` (`what` names it in the error).
-pub fn number_in(s: &str, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("{s:?} is not a number"))?;
-    if !v.is_finite() || v < lo || v > hi {
-        return Err(format!("{what} must be within {lo}..={hi}, got {s}"));
-    }
-    Ok(v)
 }
 
 /// A real-time speed-up factor, 0.01..=100.
@@ -349,7 +310,7 @@ impl Cli {
         };
         let refused = [
             (
-                self.rate != RateArg::F250,
+                self.rate != RateMode::F250,
                 "--rate (OpenLRSng: --olrs-profile)",
             ),
             (self.ratio != 4, "--ratio"),
@@ -408,7 +369,7 @@ impl Cli {
         // Stream test bytes are checked end to end; a power-cycled flight side loses its
         // stream buffers, so runs that power-cycle it carry none.
         let cycles_power = matches!(attack, Some(Attack::Replay | Attack::BindSpoof));
-        let rate = self.rate.into();
+        let rate = self.rate;
         let format = if self.compact8 {
             ChannelFormat::Compact8
         } else {

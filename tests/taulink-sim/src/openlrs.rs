@@ -13,7 +13,8 @@ use openlrs::radio::Radio;
 use openlrs::roles::{RxEvent, rx_start, rx_step, tx_bind, tx_start, tx_step};
 use openlrs::rx::{Config, Receiver};
 use openlrs::tx::Transmitter;
-use openlrs::{Band, BindData, BindingVersion, timing};
+use openlrs::{BindData, BindingVersion, timing};
+use radio_rfm22b::RfmType;
 use si4432_sim::{Medium, Outcome, RadioConfig, RadioHandle, RadioId, Simulation};
 
 /// The virtual chips' power-on reset time, waited before the first register access.
@@ -161,7 +162,7 @@ fn radio(handle: RadioHandle, medium: &Medium, version: BindingVersion) -> SimRa
         handle.delay,
         clock,
         version,
-        Band::Mhz433,
+        RfmType::Mhz433,
     )
 }
 
@@ -194,7 +195,7 @@ fn us(s: f64) -> u64 {
 /// Runs the scenario and summarises it.
 #[must_use]
 pub fn run(s: &OpenLrsScenario) -> OpenLrsReport {
-    let mut data = BindData::defaults(s.version, Band::Mhz433);
+    let mut data = BindData::defaults(s.version, RfmType::Mhz433);
     data.rf_magic = 0x1234_5678 ^ u32::try_from(s.seed & 0xFFFF).unwrap_or(0);
     data.modem_profile = s.modem_profile;
     // 8 channels + passthrough telemetry (the default) or 16 channels + telemetry.
@@ -219,7 +220,7 @@ pub fn run(s: &OpenLrsScenario) -> OpenLrsReport {
     let mut power_up = sim.delay();
     sim.spawn(async move {
         embedded_hal_async::delay::DelayNs::delay_us(&mut power_up, POWER_UP_US).await;
-        let mut rx = Receiver::new(Config::new(version, Band::Mhz433), None);
+        let mut rx = Receiver::new(Config::new(version, RfmType::Mhz433), None);
         if rx_start(&mut rx_radio, &mut rx).await.is_err() {
             return;
         }

@@ -17,7 +17,7 @@ pub fn options(cli: &Cli) -> Option<Options> {
         dist: cli.dist.clone().unwrap_or_else(default_dist),
         speed: cli.speed,
         world: WorldOptions {
-            rate: cli.rate.into(),
+            rate: cli.rate,
             seed: cli.seed,
             packet_loss: cli.loss,
             ..WorldOptions::default()

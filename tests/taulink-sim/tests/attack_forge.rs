@@ -19,7 +19,7 @@ use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{FollowerHooks, run_follower};
 use telemetry::link::master::{MasterHooks, run_master};
 use telemetry::link::{
-    Band, HOP_CHANNELS, HopSequence, LinkClock, LinkKey, LinkParams, PacketRadio, RateMode,
+    Band, HOP_CHANNELS, HopSequence, LinkKey, LinkParams, PacketRadio, RateMode,
 };
 
 const FORGED_THROTTLE: u16 = 1811;

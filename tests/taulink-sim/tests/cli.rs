@@ -52,7 +52,7 @@ fn nonsense_values_are_refused_with_the_reason() {
         (&["--distance", "nan"], "the distance (m)"),
         (&["--ratio", "3"], "power of two"),
         (&["--cut", "5:2"], "end after it starts"),
-        (&["--rate", "F1000"], "possible values"),
+        (&["--rate", "F1000"], "L50, M100, F250, F500 or F700"),
     ] {
         sim(args).assert_refused(says);
     }

@@ -80,7 +80,7 @@ impl OpenLrsSide {
 
 /// The receiver configuration the link task uses for `version` on `band`: OpenLRSng's, with
 /// the TauLink failsafe delay and no bind window at start (binding is the console's).
-fn config(version: BindingVersion, band: openlrs::Band) -> Config {
+fn config(version: BindingVersion, band: ::openlrs::RfmType) -> Config {
     Config {
         failsafe_delay: OPENLRS_FAILSAFE_DELAY,
         bind_window_us: None,

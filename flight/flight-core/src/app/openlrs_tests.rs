@@ -5,7 +5,7 @@
 use super::*;
 use crate::app::{BIND_WINDOW_US, Task};
 use crate::settings::Settings;
-use openlrs::Band;
+use ::openlrs::RfmType;
 use openlrs::channels::us_to_bits;
 use openlrs::rx::Output;
 use openlrs::tx::{Received, Transmitter};
@@ -19,7 +19,7 @@ fn openlrs_app(protocol: &str) -> FlightApp {
 
 /// The transmitter's bind data: 16 channels, telemetry, the given profile.
 fn tx_data(version: BindingVersion, profile: u8) -> BindData {
-    let mut data = BindData::defaults(version, Band::Mhz433);
+    let mut data = BindData::defaults(version, RfmType::Mhz433);
     data.rf_magic = 0x1357_9BDF;
     data.modem_profile = profile;
     data.flags = 0x06 | 0x08;

@@ -3,8 +3,9 @@
 //! what the module offered with it), and the air protocol (`link.protocol`): TauLink, or
 //! OpenLRSng 3.8 / 3.9 with the bind data an OpenLRSng transmitter sent (`link.olrs_*`).
 
+use openlrs::BindingVersion;
+use openlrs::RfmType;
 use openlrs::bind::{BindData, MAX_HOPS};
-use openlrs::{Band as OlrsBand, BindingVersion};
 use telemetry::channels::ChannelFormat;
 use telemetry::link::{Band, LinkParams, RateMode};
 
@@ -97,12 +98,8 @@ pub fn protocol(s: &Settings) -> Protocol {
 }
 
 /// The OpenLRSng module variant for the stored `link.band` (the bind frequency).
-pub fn openlrs_band(s: &Settings) -> OlrsBand {
-    match bind_band(s) {
-        Band::Mhz868 => OlrsBand::Mhz868,
-        Band::Mhz915 => OlrsBand::Mhz915,
-        Band::Mhz433 | Band::Ism433 => OlrsBand::Mhz433,
-    }
+pub fn openlrs_band(s: &Settings) -> RfmType {
+    RfmType::for_band(bind_band(s))
 }
 
 const HOP_WORDS: [&str; MAX_HOPS / 4] = [
@@ -227,9 +224,9 @@ mod tests {
         s.set("link.olrs_magic", Value::U32(0xDEAD_FEED)).unwrap();
         assert_eq!(
             stored_openlrs(&s, BindingVersion::V38),
-            Some(BindData::defaults(BindingVersion::V38, OlrsBand::Mhz433))
+            Some(BindData::defaults(BindingVersion::V38, RfmType::Mhz433))
         );
-        let mut data = BindData::defaults(BindingVersion::V39, OlrsBand::Mhz868);
+        let mut data = BindData::defaults(BindingVersion::V39, RfmType::Mhz868);
         data.rf_magic = 0x1234_5678;
         data.rf_frequency_hz = 866_000_000;
         data.modem_profile = 4;

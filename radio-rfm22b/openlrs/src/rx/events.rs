@@ -3,11 +3,12 @@
 
 use heapless::Vec;
 
+use crate::RfmType;
 use crate::bind::{BindData, BindReception};
 use crate::channels::MAX_CHANNELS;
 use crate::telemetry;
 use crate::uplink::Uplink;
-use crate::version::{Band, BindingVersion};
+use crate::version::BindingVersion;
 
 /// Receiver settings (the parts of OpenLRSng's `rx_config` the link logic uses).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -16,7 +17,7 @@ pub struct Config {
     /// Generation to bind with; bind packets of the other one are refused.
     pub version: BindingVersion,
     /// Module band (binding frequency).
-    pub band: Band,
+    pub band: RfmType,
     /// `failsafeDelay` in `delayInMs` code (default 10 = 1 s); 0 never applies failsafe.
     pub failsafe_delay: u8,
     /// Bind listening at boot when already bound (`ALWAYS_BIND`: 500 ms); `None` skips it.
@@ -25,7 +26,7 @@ pub struct Config {
 
 impl Config {
     /// OpenLRSng's defaults: failsafe after 1 s, a 500 ms bind window at boot.
-    pub const fn new(version: BindingVersion, band: Band) -> Self {
+    pub const fn new(version: BindingVersion, band: RfmType) -> Self {
         Self {
             version,
             band,

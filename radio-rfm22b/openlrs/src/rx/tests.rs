@@ -4,10 +4,10 @@
 use super::*;
 use heapless::Vec;
 
-use crate::{Band, BindingVersion};
+use crate::{BindingVersion, RfmType};
 
 fn bound() -> BindData {
-    BindData::defaults(BindingVersion::V38, Band::Mhz433)
+    BindData::defaults(BindingVersion::V38, RfmType::Mhz433)
 }
 
 fn rc_packet(header: u8) -> Vec<u8, 11> {
@@ -20,7 +20,7 @@ fn rc_packet(header: u8) -> Vec<u8, 11> {
 #[test]
 fn stored_bind_data_gets_a_500_ms_bind_window_then_the_link() {
     let mut rx = Receiver::new(
-        Config::new(BindingVersion::V38, Band::Mhz433),
+        Config::new(BindingVersion::V38, RfmType::Mhz433),
         Some(bound()),
     );
     assert_eq!(rx.start(1_000), Command::ListenBind);
@@ -37,7 +37,10 @@ fn stored_bind_data_gets_a_500_ms_bind_window_then_the_link() {
 fn other_generation_or_invalid_stored_data_means_binding_forever() {
     let mut other = bound();
     other.version = 0x39;
-    let mut rx = Receiver::new(Config::new(BindingVersion::V38, Band::Mhz433), Some(other));
+    let mut rx = Receiver::new(
+        Config::new(BindingVersion::V38, RfmType::Mhz433),
+        Some(other),
+    );
     assert_eq!(rx.start(0), Command::ListenBind);
     assert_eq!(rx.next_deadline_us(), None);
     assert_eq!(rx.poll(10_000_000).command, None);
@@ -47,7 +50,7 @@ fn other_generation_or_invalid_stored_data_means_binding_forever() {
 fn save_failsafe_is_reported_once_per_press_and_lost_packets_hop_on_the_grid() {
     let config = Config {
         bind_window_us: None,
-        ..Config::new(BindingVersion::V38, Band::Mhz433)
+        ..Config::new(BindingVersion::V38, RfmType::Mhz433)
     };
     let mut rx = Receiver::new(config, Some(bound()));
     assert_eq!(rx.start(0), Command::StartLink(bound()));

@@ -16,18 +16,18 @@
 pub mod openlrs;
 
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat};
+use telemetry::link::LinkParams;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::master::LATCH_BEFORE_TX_US;
 #[cfg(test)]
 use telemetry::link::rate::TX_LEAD_US;
-use telemetry::link::{Band as LinkBand, LinkParams};
 
-use crate::channels::Channels;
+use crate::channels::ChannelFrame;
 use crate::hm10::RecordQueue;
 use crate::hm10::relay::MAX_RECORD_LEN;
 use crate::ports::{AirSchedule, LinkPort, LinkStats};
 use crate::records::{MAX_STREAM_FRAME_LEN, Splitter, to_stream};
-use crate::settings::{Band, Settings};
+use crate::settings::Settings;
 
 /// The master counts the link as up while a downlink arrived within this time.
 pub const CONNECTED_TIMEOUT_US: u64 = 500_000;
@@ -36,32 +36,12 @@ const UPLINK_RECORDS: usize = 8;
 /// Records received over the air waiting for the core.
 const RECEIVED_RECORDS: usize = 16;
 
-/// The link's band.
-pub fn link_band(band: Band) -> LinkBand {
-    match band {
-        Band::Mhz433 => LinkBand::Mhz433,
-        Band::Mhz868 => LinkBand::Mhz868,
-        Band::Mhz915 => LinkBand::Mhz915,
-        Band::Ism433 => LinkBand::Ism433,
-    }
-}
-
-/// The settings' band for a link band.
-pub fn settings_band(band: LinkBand) -> Band {
-    match band {
-        LinkBand::Mhz433 => Band::Mhz433,
-        LinkBand::Mhz868 => Band::Mhz868,
-        LinkBand::Mhz915 => Band::Mhz915,
-        LinkBand::Ism433 => Band::Ism433,
-    }
-}
-
 /// The bound link's parameters (`None` while unbound): the settings' band, rate mode and
 /// telemetry ratio, 16 channels.
 pub fn link_params(settings: &Settings) -> Option<LinkParams> {
     (settings.bind_id != 0).then(|| LinkParams {
         bind_id: settings.bind_id,
-        band: link_band(settings.band),
+        band: settings.band,
         rate: settings.rate,
         // 16 channels; at F700 in its stick format (as the bind offered them).
         format: telemetry::link::bind::format_for(settings.rate, ChannelFormat::Full16),
@@ -74,7 +54,7 @@ pub fn link_params(settings: &Settings) -> Option<LinkParams> {
 pub fn new_bind_params(settings: &Settings, random: u32) -> LinkParams {
     LinkParams::new(
         random,
-        link_band(settings.band),
+        settings.band,
         settings.rate,
         ChannelFormat::Full16,
         settings.telemetry_ratio,
@@ -84,7 +64,7 @@ pub fn new_bind_params(settings: &Settings, random: u32) -> LinkParams {
 /// The link as the core sees it; filled and drained by the link loop's hook.
 #[derive(Debug)]
 pub struct AirLink {
-    channels: Option<Channels>,
+    channels: Option<ChannelFrame>,
     /// Channels arrived since the last master slot.
     input_fresh: bool,
     /// Slot start (link clock) at which the newest channels were first seen.
@@ -94,7 +74,7 @@ pub struct AirLink {
     input_losses: u32,
     uplink: RecordQueue<512, UPLINK_RECORDS>,
     received: RecordQueue<1024, RECEIVED_RECORDS>,
-    received_channels: Option<Channels>,
+    received_channels: Option<ChannelFrame>,
     splitter: Splitter,
     stats: LinkStats,
     bind_requested: bool,
@@ -234,8 +214,9 @@ impl AirLink {
             self.follower_updates = follower.updates();
             let count = follower.params().format.count();
             let output = follower.output();
-            self.received_channels =
-                Some(Channels::from_ticks(output.get(..count).unwrap_or(output)));
+            self.received_channels = Some(ChannelFrame::from_ticks(
+                output.get(..count).unwrap_or(output),
+            ));
         }
         while follower.downlink_stream.free() >= MAX_STREAM_FRAME_LEN {
             let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
@@ -303,7 +284,7 @@ impl AirLink {
 }
 
 impl LinkPort for AirLink {
-    fn send_channels(&mut self, channels: &Channels) {
+    fn send_channels(&mut self, channels: &ChannelFrame) {
         self.channels = Some(*channels);
         self.input_fresh = true;
     }
@@ -342,7 +323,7 @@ impl LinkPort for AirLink {
         self.received.pop_into(out).ok().flatten()
     }
 
-    fn take_received_channels(&mut self) -> Option<Channels> {
+    fn take_received_channels(&mut self) -> Option<ChannelFrame> {
         self.received_channels.take()
     }
 }
@@ -357,7 +338,7 @@ mod tests {
         use telemetry::link::core::Step;
         let params = LinkParams::new(
             7,
-            LinkBand::Mhz433,
+            telemetry::link::Band::Mhz433,
             RateMode::F700,
             ChannelFormat::Full16,
             8,
@@ -382,14 +363,14 @@ mod tests {
         let mut settings = Settings::default();
         assert_eq!(link_params(&settings), None, "unbound");
         settings.bind_id = 0x1234_5678;
-        settings.band = Band::Mhz868;
+        settings.band = telemetry::link::Band::Mhz868;
         settings.telemetry_ratio = 8;
         for rate in telemetry::link::RateMode::ALL {
             settings.rate = rate;
             let params = link_params(&settings).unwrap();
             assert_eq!(params.bind_id, 0x1234_5678);
             assert_eq!(params.rate, rate);
-            assert_eq!(params.band, LinkBand::Mhz868);
+            assert_eq!(params.band, telemetry::link::Band::Mhz868);
             let format = if rate == telemetry::link::RateMode::F700 {
                 ChannelFormat::Sticks16
             } else {
@@ -402,7 +383,6 @@ mod tests {
             assert_eq!((fresh.bind_id, fresh.rate), (0xCAFE, rate));
             assert_eq!(fresh.telemetry_ratio, 8);
         }
-        assert_eq!(settings_band(LinkBand::Mhz915), Band::Mhz915);
     }
 
     #[test]
@@ -458,7 +438,7 @@ mod tests {
         );
         link.on_master_slot(0, &mut master);
         assert!(master.input_lost(), "nothing from the handset yet");
-        link.send_channels(&Channels::from_ticks(&[1500; 8]));
+        link.send_channels(&ChannelFrame::from_ticks(&[1500; 8]));
         link.on_master_slot(20_000, &mut master);
         assert!(!master.input_lost());
         // Fresh as of the slot that saw them: lost exactly one timeout later.
@@ -467,7 +447,7 @@ mod tests {
         link.on_master_slot(120_000, &mut master);
         assert!(master.input_lost() && link.input_lost());
         assert_eq!(link.input_losses(), 1);
-        link.send_channels(&Channels::from_ticks(&[1500; 8]));
+        link.send_channels(&ChannelFrame::from_ticks(&[1500; 8]));
         link.on_master_slot(140_000, &mut master);
         assert!(!master.input_lost());
         assert_eq!(link.input_losses(), 1);

@@ -18,7 +18,7 @@ use heapless::Deque;
 use telemetry::handset::crsf::address;
 use telemetry::handset::crsf::params::ParameterChunk;
 
-use crate::channels::Channels;
+use crate::channels::ChannelFrame;
 use crate::ports::{HandsetOutput, HandsetRequest, LinkStats};
 use crate::settings::{InputProtocol, OutputProtocol, Role, Settings};
 pub use state::FlightState;
@@ -179,14 +179,14 @@ impl Handset {
         requests: &mut Deque<HandsetRequest, REQUESTS>,
         rejected: &mut u32,
         now_us: u64,
-    ) -> Option<Channels> {
+    ) -> Option<ChannelFrame> {
         let mut channels = None;
         for decoded in feed {
             match decoded {
                 Decoded::Frame(frame) => {
                     let request = match responder.on_frame(now_us, &frame) {
                         Some(Message::RcChannels(rc)) => {
-                            channels = Some(Channels::from_ticks(&rc.ticks));
+                            channels = Some(ChannelFrame::from_ticks(&rc.ticks));
                             None
                         }
                         Some(Message::ParameterRead(read)) if for_us(read.destination) => {
@@ -239,7 +239,7 @@ impl HandsetOutput for Handset {
         }
     }
 
-    fn on_line_bytes(&mut self, now_us: u64, bytes: &[u8]) -> Option<Channels> {
+    fn on_line_bytes(&mut self, now_us: u64, bytes: &[u8]) -> Option<ChannelFrame> {
         match &mut self.protocol {
             Protocol::Crsf {
                 decoder, responder, ..
@@ -255,7 +255,7 @@ impl HandsetOutput for Handset {
         }
     }
 
-    fn on_line_idle(&mut self, now_us: u64) -> Option<Channels> {
+    fn on_line_idle(&mut self, now_us: u64) -> Option<ChannelFrame> {
         match &mut self.protocol {
             Protocol::Crsf {
                 decoder, responder, ..

@@ -22,7 +22,7 @@
 //! keeps every check of the sync-edge release: an extra period (a split pulse, a longer
 //! frame) arrives within the gap's first 2.5 ms and holds the frame for the usual end.
 
-use crate::channels::{Channels, MAX_CHANNELS, us_to_ticks};
+use crate::channels::{ChannelFrame, MAX_CHANNELS, us_to_ticks};
 
 /// Decoder timing limits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -91,7 +91,7 @@ pub enum Reject {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Decoded {
     /// A clean frame while locked: the channels, mapped to link values.
-    Frame(Channels),
+    Frame(ChannelFrame),
     /// A clean frame on the way to a lock.
     Acquiring {
         /// Its channel count.
@@ -346,7 +346,7 @@ impl Decoder {
 
     fn accept(&mut self, timestamp_us: u32, count: usize) -> Decoded {
         self.last_good_us = timestamp_us;
-        let mut channels = Channels::centered(count);
+        let mut channels = ChannelFrame::centered(count);
         for (index, period_us) in self.periods_us.iter().take(count).enumerate() {
             channels.set(index, us_to_ticks(*period_us));
         }

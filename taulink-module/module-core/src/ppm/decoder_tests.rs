@@ -9,7 +9,7 @@ fn feed(decoder: &mut Decoder, timestamps: &[u32]) -> Vec<Decoded> {
         .collect()
 }
 
-fn frames_of(outcomes: &[Decoded]) -> Vec<Channels> {
+fn frames_of(outcomes: &[Decoded]) -> Vec<ChannelFrame> {
     outcomes
         .iter()
         .filter_map(|o| match o {
@@ -267,7 +267,7 @@ fn a_locked_frame_goes_out_a_sync_gap_after_its_last_channel_once() {
     let stream = edges(&EIGHT, 22_500, 10, 1_000);
     let mut decoder = Decoder::new(DecoderConfig::default());
     let outcomes = feed_timed(&mut decoder, &stream);
-    let frames: Vec<(u32, Channels)> = outcomes
+    let frames: Vec<(u32, ChannelFrame)> = outcomes
         .iter()
         .filter_map(|(t, o)| match o {
             Decoded::Frame(ch) => Some((*t, *ch)),

@@ -9,7 +9,7 @@
 //! "longer than 2.5–4 ms"). New channel values are latched only when the firmware asks for
 //! the next frame, so a frame is never a mix of old and new values.
 
-use crate::channels::{Channels, MAX_CHANNELS, ticks_to_us};
+use crate::channels::{ChannelFrame, MAX_CHANNELS, ticks_to_us};
 
 /// What the output does while the link is in failsafe.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -145,8 +145,8 @@ impl Frame {
 #[derive(Debug, Clone)]
 pub struct Encoder {
     config: EncoderConfig,
-    current: Option<Channels>,
-    pending: Option<Channels>,
+    current: Option<ChannelFrame>,
+    pending: Option<ChannelFrame>,
     failsafe: bool,
 }
 
@@ -183,7 +183,7 @@ impl Encoder {
 
     /// New values from the link; they take effect at the next frame boundary. Fresh values
     /// end a failsafe.
-    pub fn set_channels(&mut self, channels: &Channels) {
+    pub fn set_channels(&mut self, channels: &ChannelFrame) {
         self.pending = Some(*channels);
         self.failsafe = false;
     }
@@ -206,7 +206,7 @@ impl Encoder {
         self.current.as_ref().map(|channels| self.build(channels))
     }
 
-    fn build(&self, channels: &Channels) -> Frame {
+    fn build(&self, channels: &ChannelFrame) -> Frame {
         let config = &self.config;
         let mut frame = Frame {
             slots: [Slot::default(); MAX_CHANNELS + 2],

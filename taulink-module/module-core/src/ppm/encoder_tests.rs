@@ -2,9 +2,9 @@ use super::*;
 use crate::channels::us_to_ticks;
 use crate::ppm::decoder::{Decoded, Decoder, DecoderConfig};
 
-fn channels_us(widths: &[u16]) -> Channels {
+fn channels_us(widths: &[u16]) -> ChannelFrame {
     let values: Vec<u16> = widths.iter().map(|w| us_to_ticks(*w)).collect();
-    Channels::from_ticks(&values)
+    ChannelFrame::from_ticks(&values)
 }
 
 /// Edge timestamps of the pulse starts (what the decoder captures) for consecutive frames.
@@ -77,7 +77,7 @@ fn default_frame_is_22_5_ms_with_eight_channels() {
 fn full_deflection_keeps_a_sync_of_at_least_4_5_ms() {
     let config = EncoderConfig::default();
     let mut encoder = Encoder::new(config).unwrap();
-    encoder.set_channels(&Channels::from_ticks(&[2047; 8]));
+    encoder.set_channels(&ChannelFrame::from_ticks(&[2047; 8]));
     let frame = encoder.next_frame().unwrap();
     check_invariants(&frame, &config);
     // 2047 → 2159 µs, clipped to 2100: 16 800 µs of channels, 5 700 µs of sync.
@@ -89,7 +89,7 @@ fn full_deflection_keeps_a_sync_of_at_least_4_5_ms() {
         ..config
     };
     let mut encoder = Encoder::new(tight).unwrap();
-    encoder.set_channels(&Channels::from_ticks(&[2047; 8]));
+    encoder.set_channels(&ChannelFrame::from_ticks(&[2047; 8]));
     let frame = encoder.next_frame().unwrap();
     assert_eq!(frame.length_us(), 16_800 + 4_500);
 }
@@ -155,7 +155,7 @@ fn decoder_reads_back_what_the_encoder_sends() {
     encoder.set_channels(&channels_us(&widths));
     let frames: Vec<Frame> = (0..8).map(|_| encoder.next_frame().unwrap()).collect();
     let mut decoder = Decoder::new(DecoderConfig::default());
-    let decoded: Vec<Channels> = pulse_edges(&frames)
+    let decoded: Vec<ChannelFrame> = pulse_edges(&frames)
         .into_iter()
         .filter_map(|t| match decoder.on_edge(t) {
             Some(Decoded::Frame(ch)) => Some(ch),
@@ -210,7 +210,7 @@ proptest::proptest! {
     fn any_values_keep_the_invariants(values in proptest::collection::vec(0u16..4096, 8)) {
         let config = EncoderConfig::default();
         let mut encoder = Encoder::new(config).unwrap();
-        encoder.set_channels(&Channels::from_ticks(&values));
+        encoder.set_channels(&ChannelFrame::from_ticks(&values));
         let frame = encoder.next_frame().unwrap();
         check_invariants(&frame, &config);
         proptest::prop_assert_eq!(frame.length_us(), 22_500);

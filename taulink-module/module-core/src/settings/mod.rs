@@ -124,19 +124,9 @@ pub enum OutputProtocol {
     FrskyHub,
 }
 
-/// Frequency band plan (`telemetry::link::Band` says what each means legally).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Band {
-    /// 430.2–439.5 MHz, the 70 cm amateur band: a licence is needed. The factory band.
-    Mhz433,
-    /// 863–870 MHz EU SRD (keeps no sub-band's duty cycle).
-    Mhz868,
-    /// 902–928 MHz US ISM.
-    Mhz915,
-    /// 433.05–434.79 MHz ISM / LPD only (licence-exempt at low power).
-    Ism433,
-}
+/// Frequency band plan: the link's own type (`telemetry::link::Band` says what each means
+/// legally); the record stores its [`Band::code`].
+pub use telemetry::link::Band;
 
 /// Everything the module remembers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -301,7 +291,7 @@ impl Settings {
             self.rate.code(),
             self.input as u8,
             self.output as u8,
-            self.band as u8,
+            self.band.code(),
             self.tx_power,
             self.failsafe as u8,
             b0,
@@ -448,12 +438,11 @@ impl Settings {
                 3 => OutputProtocol::FrskyHub,
                 _ => return Err(field(4)),
             },
-            band: match band {
-                0 => Band::Mhz433,
-                1 => Band::Mhz868,
-                2 => Band::Mhz915,
-                3 if current => Band::Ism433,
-                _ => return Err(field(5)),
+            band: match Band::from_code(band) {
+                // The ISM plan came with version 3.
+                Some(Band::Ism433) if !current => return Err(field(5)),
+                Some(band) => band,
+                None => return Err(field(5)),
             },
             tx_power: if tx_power <= 7 {
                 tx_power

@@ -14,9 +14,10 @@
 //! channels that all lie inside the band plan the module is set to. A bind draws a fresh
 //! seed while it is still 0, so a bound link has its own identity.
 
+use ::openlrs::RfmType;
+use openlrs::BindingVersion;
 use openlrs::bind::{self, BindData, MODEM_PROFILE_COUNT, TelemetryMode};
 use openlrs::random::bind_randomize;
-use openlrs::{Band as OlrsBand, BindingVersion};
 
 use super::{Band, OutputProtocol, Role, Settings};
 
@@ -128,15 +129,6 @@ impl core::fmt::Display for OpenLrsError {
 
 impl core::error::Error for OpenLrsError {}
 
-/// The Si4432 band variant a band plan needs.
-pub const fn olrs_band(band: Band) -> OlrsBand {
-    match band {
-        Band::Mhz433 | Band::Ism433 => OlrsBand::Mhz433,
-        Band::Mhz868 => OlrsBand::Mhz868,
-        Band::Mhz915 => OlrsBand::Mhz915,
-    }
-}
-
 /// The frequencies the band plan allows, Hz (inclusive): the same legal limits as the
 /// TauLink plans (`telemetry::link::Band`), not OpenLRSng's wider module ranges.
 pub const fn plan_hz(band: Band) -> (u32, u32) {
@@ -156,14 +148,14 @@ pub const fn default_carrier_hz(band: Band) -> u32 {
     match band {
         Band::Ism433 => 433_100_000,
         Band::Mhz868 => 865_000_000,
-        _ => olrs_band(band).default_carrier_frequency_hz(),
+        _ => RfmType::for_band(band).default_carrier_frequency_hz(),
     }
 }
 
 /// Whether a stored carrier can be valid anywhere (record decoding: 0 or inside one of
 /// OpenLRSng's module ranges).
 pub fn carrier_in_range(frequency_hz: u32) -> bool {
-    frequency_hz == 0 || OlrsBand::containing(u64::from(frequency_hz)).is_some()
+    frequency_hz == 0 || RfmType::containing(u64::from(frequency_hz)).is_some()
 }
 
 /// The bind data the OpenLRSng transmitter flies and sends when binding, from `settings`:
@@ -184,7 +176,7 @@ pub fn bind_data(settings: &Settings) -> Result<BindData, OpenLrsError> {
     if o.profile >= MODEM_PROFILE_COUNT || !CHANNEL_MODES.contains(&o.channel_mode) {
         return Err(OpenLrsError::Field);
     }
-    let band = olrs_band(settings.band);
+    let band = RfmType::for_band(settings.band);
     let (low_hz, high_hz) = plan_hz(settings.band);
     let mut data = BindData::defaults(version, band);
     data.rf_frequency_hz = match o.frequency_hz {
@@ -259,7 +251,7 @@ mod tests {
             };
             let data = bind_data(&settings).unwrap();
             // Exactly bindInitDefaults(): the bind packet an OpenLRSng TX sends fresh.
-            assert_eq!(data, BindData::defaults(version, OlrsBand::Mhz433));
+            assert_eq!(data, BindData::defaults(version, RfmType::Mhz433));
             assert_eq!(data.rf_magic, DEFAULT_RF_MAGIC);
             assert_eq!(data.hop_channels[..6], DEFAULT_HOP_LIST);
             assert_eq!(data.channel_mode().channel_count(), 8);

@@ -1,7 +1,9 @@
 //! Conversions from the plain-unit reports to CRSF payloads (rounding and saturation here,
 //! once).
 
-use super::sensors::{Attitude, Battery, FLIGHT_MODE_VISIBLE_LEN, FlightMode, Gps, LinkStatistics};
+use super::sensors::{
+    Attitude, Battery, FLIGHT_MODE_VISIBLE_LEN, FlightModeFrame, Gps, LinkStatistics,
+};
 use super::sensors::{radians_to_100urad, tx_power_index};
 use crate::handset::report::{
     AttitudeReport, BatteryReport, FlightModeReport, GpsReport, LinkReport, scaled_u16,
@@ -49,7 +51,7 @@ impl From<&AttitudeReport> for Attitude {
     }
 }
 
-impl From<&FlightModeReport> for FlightMode {
+impl From<&FlightModeReport> for FlightModeFrame {
     /// Keeps the characters EdgeTX can show (13 bytes, cut at a character boundary).
     fn from(mode: &FlightModeReport) -> Self {
         let mut name = heapless::String::new();

@@ -9,7 +9,9 @@ use super::device::{
 };
 use super::frame::{Error, Frame, frame_type};
 use super::params::{ParameterChunk, ParameterRead, ParameterWrite};
-use super::sensors::{Attitude, BaroAltitude, Battery, FlightMode, Gps, LinkStatistics, Vario};
+use super::sensors::{
+    Attitude, BaroAltitude, Battery, FlightModeFrame, Gps, LinkStatistics, Vario,
+};
 
 /// A frame of a known type, decoded.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -24,7 +26,7 @@ pub enum Message {
     /// 0x1E, module → radio.
     Attitude(Attitude),
     /// 0x21, module → radio.
-    FlightMode(FlightMode),
+    FlightMode(FlightModeFrame),
     /// 0x02, module → radio.
     Gps(Gps),
     /// 0x07, module → radio.
@@ -61,7 +63,7 @@ impl Message {
             }
             frame_type::BATTERY_SENSOR => Self::Battery(Battery::from_payload(payload)?),
             frame_type::ATTITUDE => Self::Attitude(Attitude::from_payload(payload)?),
-            frame_type::FLIGHT_MODE => Self::FlightMode(FlightMode::from_payload(payload)?),
+            frame_type::FLIGHT_MODE => Self::FlightMode(FlightModeFrame::from_payload(payload)?),
             frame_type::GPS => Self::Gps(Gps::from_payload(payload)?),
             frame_type::VARIO => Self::Vario(Vario::from_payload(payload)?),
             frame_type::BARO_ALTITUDE => Self::BaroAltitude(BaroAltitude::from_payload(payload)?),

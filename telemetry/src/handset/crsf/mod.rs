@@ -46,4 +46,4 @@ pub use device::{BindCommand, DeviceInfo, DevicePing, ModelSelect, TimingCorrect
 pub use frame::{Error, Frame, address, frame_type};
 pub use message::Message;
 pub use responder::Responder;
-pub use sensors::{Attitude, BaroAltitude, Battery, FlightMode, Gps, LinkStatistics, Vario};
+pub use sensors::{Attitude, BaroAltitude, Battery, FlightModeFrame, Gps, LinkStatistics, Vario};

@@ -8,7 +8,9 @@ use super::device::{DeviceInfo, TimingCorrection};
 use super::frame::{Frame, address, frame_type};
 use super::message::Message;
 use super::params::{CHUNK_HEADER_LEN, MAX_CHUNK_DATA, ParameterChunk};
-use super::sensors::{Attitude, BaroAltitude, Battery, FlightMode, Gps, LinkStatistics, Vario};
+use super::sensors::{
+    Attitude, BaroAltitude, Battery, FlightModeFrame, Gps, LinkStatistics, Vario,
+};
 use crate::handset::report::HandsetTelemetry;
 
 /// EdgeTX's receive buffer for one burst (`TELEMETRY_RX_PACKET_SIZE`).
@@ -333,7 +335,7 @@ impl Responder {
                 Some(frame_type::FLIGHT_MODE) => telemetry
                     .flight_mode
                     .as_ref()
-                    .map(|m| Message::FlightMode(FlightMode::from(m))),
+                    .map(|m| Message::FlightMode(FlightModeFrame::from(m))),
                 Some(frame_type::GPS) => telemetry.gps.as_ref().map(|g| Message::Gps(Gps::from(g))),
                 Some(frame_type::VARIO) => telemetry.vertical.map(|v| {
                     Message::Vario(Vario {

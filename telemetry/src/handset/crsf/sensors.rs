@@ -207,12 +207,12 @@ impl Attitude {
 /// FLIGHT_MODE (0x21): NUL-terminated text.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct FlightMode {
+pub struct FlightModeFrame {
     /// The mode name (no NUL inside).
     pub name: String<FLIGHT_MODE_MAX_LEN>,
 }
 
-impl FlightMode {
+impl FlightModeFrame {
     /// From text; fails on an interior NUL or more than 16 bytes.
     pub fn new(name: &str) -> Result<Self, Error> {
         if name.contains('\0') {

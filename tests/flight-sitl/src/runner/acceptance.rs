@@ -9,7 +9,7 @@ use std::fmt::Write as _;
 
 use telemetry::link::RateMode;
 
-use super::report::{GROUND_M, fixed, rate_name};
+use super::report::{GROUND_M, fixed};
 use super::{Kind, Options, Outcome, Report, RunError, plan, reach_times, run_plan};
 
 /// The link-cut altitudes of the acceptance, m.
@@ -343,7 +343,7 @@ pub fn markdown(rows: &[(Option<f64>, Report)]) -> String {
             } else {
                 ""
             },
-            rate_name(r.rate),
+            r.rate.name(),
             altitude.map_or("–".into(), |a| format!("{a:.0}")),
             r.max_altitude_m,
             r.watchdog_resets.flight,
@@ -382,7 +382,7 @@ pub fn all(mut progress: impl FnMut(&str)) -> Result<Vec<(Option<f64>, Report)>,
         {
             rows.push((Some(*a), o.report));
         }
-        progress(&format!("link-cut {}", rate_name(rate)));
+        progress(&format!("link-cut {}", rate.name()));
     }
     for (a, o) in GPS_LINK_CUT_ALTITUDES_M
         .iter()

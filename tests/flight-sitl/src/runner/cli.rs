@@ -57,9 +57,9 @@ pub struct Cli {
     /// The scenario to fly (list below), or `table` for the acceptance table.
     #[arg(value_enum)]
     pub scenario: ScenarioArg,
-    /// Link rate mode: L50 (long range), M100, F250 or F500 (fast, short range).
-    #[arg(long, value_enum, ignore_case = true, default_value_t = RateArg::F250)]
-    pub rate: RateArg,
+    /// Link rate mode: L50 (long range), M100, F250, F500 or F700 (fast, short range).
+    #[arg(long, default_value_t = RateMode::F250)]
+    pub rate: RateMode,
     /// Seed of the world's sensor noise and radio randomness; same seed, same run.
     #[arg(long, value_name = "N", default_value_t = 7)]
     pub seed: u64,
@@ -144,33 +144,9 @@ impl ScenarioArg {
     }
 }
 
-/// Rate modes as command-line words.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-#[allow(missing_docs)] // the names are the documentation
-pub enum RateArg {
-    #[value(name = "L50")]
-    L50,
-    #[value(name = "M100")]
-    M100,
-    #[value(name = "F250")]
-    F250,
-    #[value(name = "F500")]
-    F500,
-}
-
-impl From<RateArg> for RateMode {
-    fn from(r: RateArg) -> Self {
-        match r {
-            RateArg::L50 => RateMode::L50,
-            RateArg::M100 => RateMode::M100,
-            RateArg::F250 => RateMode::F250,
-            RateArg::F500 => RateMode::F500,
-        }
-    }
-}
-
-/// A finite number within `lo..=hi` (`what` names it in the error).
-pub(crate) fn number_in(s: &str, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
+/// A finite number within `lo..=hi` (`what` names it in the error): the number parse of
+/// flight-sitl's and taulink-sim's command lines.
+pub fn number_in(s: &str, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
     let v: f64 = s
         .trim()
         .parse()
@@ -224,7 +200,7 @@ impl Cli {
             None => Options::factory(),
         };
         o.wind_mps = self.wind;
-        o.rate = self.rate.into();
+        o.rate = self.rate;
         o.seed = self.seed;
         o.at_s = self.at;
         o.altitude_m = self.altitude;

@@ -6,7 +6,6 @@ use flight_core::outputs::Command;
 use sim_plot::{Event, Figure, Panel, Series};
 
 use super::Outcome;
-use super::report::rate_name;
 use crate::world::Sample;
 
 fn series(samples: &[Sample], name: &str, f: impl Fn(&Sample) -> f64) -> Series {
@@ -50,7 +49,7 @@ pub fn figure(o: &Outcome) -> Figure {
     Figure::new(format!(
         "flight-sitl {} at {}, seed {}",
         r.kind.name(),
-        rate_name(r.rate),
+        r.rate.name(),
         r.seed
     ))
     .x_label("time (s)")

@@ -279,17 +279,6 @@ pub fn extract(sitl: &Sitl, plan: &Plan) -> Report {
     }
 }
 
-/// The rate mode's command-line name.
-pub fn rate_name(rate: RateMode) -> &'static str {
-    match rate {
-        RateMode::L50 => "L50",
-        RateMode::M100 => "M100",
-        RateMode::F250 => "F250",
-        RateMode::F500 => "F500",
-        RateMode::F700 => "F700",
-    }
-}
-
 /// `x` with `decimals`, never "-0.00" (the ground seen from a hair below).
 pub fn fixed(x: f64, decimals: usize) -> String {
     let s = format!("{x:.decimals$}");
@@ -401,7 +390,7 @@ impl Report {
             o,
             "\"scenario\":\"{}\",\"rate\":\"{}\",\"seed\":{},\"watchdog_resets\":{{\"flight\":{},\"module\":{}}},\"max_altitude_m\":{},\"failsafe_at_s\":{},\"disarmed_at_s\":{},\"disarm_reason\":{},\"disarm_height_m\":{},\"touchdown_speed_mps\":{},\"motors_stopped_airborne\":{},\"final_state\":\"{}\"",
             self.kind.name(),
-            rate_name(self.rate),
+            self.rate.name(),
             self.seed,
             self.watchdog_resets.flight,
             self.watchdog_resets.module,

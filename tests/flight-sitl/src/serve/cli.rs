@@ -6,9 +6,10 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 
 use clap::Parser;
+use telemetry::link::RateMode;
 
 use super::{DEFAULT_ADDR, Options, SPEEDS, WorldOptions, default_dist};
-use crate::runner::cli::{RateArg, name_value, number_in};
+use crate::runner::cli::{name_value, number_in};
 
 /// Serves the web ground station against the firmware-in-the-loop world: each page that
 /// connects gets its own world (both ends' applications on virtual Si4432s, the quad flown
@@ -36,9 +37,9 @@ pub struct ServeCli {
     /// Virtual seconds per wall second (0.01..=100).
     #[arg(long, value_name = "X", default_value_t = 1.0, value_parser = speed)]
     pub speed: f64,
-    /// Link rate mode: L50 (long range), M100, F250 or F500 (fast, short range).
-    #[arg(long, value_enum, ignore_case = true, default_value_t = RateArg::F250)]
-    pub rate: RateArg,
+    /// Link rate mode: L50 (long range), M100, F250, F500 or F700 (fast, short range).
+    #[arg(long, default_value_t = RateMode::F250)]
+    pub rate: RateMode,
     /// Seed of the world's sensor noise and radio randomness.
     #[arg(long, value_name = "N", default_value_t = 7)]
     pub seed: u64,
@@ -65,7 +66,7 @@ impl ServeCli {
     /// A setting name or value refused by the flight settings, with the reason.
     pub fn options(&self) -> Result<Options, String> {
         let mut world = WorldOptions {
-            rate: self.rate.into(),
+            rate: self.rate,
             seed: self.seed,
             packet_loss: self.loss,
             ..WorldOptions::default()
@@ -88,7 +89,6 @@ impl ServeCli {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use telemetry::link::RateMode;
 
     fn parse(s: &str) -> Result<ServeCli, clap::Error> {
         ServeCli::try_parse_from(std::iter::once("serve").chain(s.split_whitespace()))

@@ -16,11 +16,11 @@ use module_core::air::openlrs::run_openlrs_transmitter;
 use module_core::app::Action;
 use module_core::session::{BindOutcome, LinkStep, POLL_MS, SessionEnd};
 use module_core::settings::Settings;
+use openlrs::BindingVersion;
 use openlrs::radio::Radio as OpenLrsRadio;
 use openlrs::roles::tx_bind;
 use openlrs::tx::Transmitter;
-use openlrs::{Band as OpenLrsBand, BindingVersion};
-use radio_rfm22b::link::LinkRadio;
+use radio_rfm22b::RfmType;
 use radio_rfm22b::{Rfm22b, TxPower};
 use telemetry::link::follower::{bind_follower, run_follower};
 use telemetry::link::master::{bind_master, run_master};
@@ -123,7 +123,7 @@ where
     let link = slot.take()?;
     let (spi, irq, sdn, delay) = link.release().release();
     let version = BindingVersion::from_byte(data.version).unwrap_or(BindingVersion::V39);
-    let band = data.band().unwrap_or(OpenLrsBand::Mhz433);
+    let band = data.band().unwrap_or(RfmType::Mhz433);
     let now = || Instant::now().as_micros();
     let mut radio = OpenLrsRadio::new(spi, irq, delay, now, version, band);
     let action = match step {
