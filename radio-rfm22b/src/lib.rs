@@ -12,6 +12,9 @@ pub mod carrier;
 mod config;
 mod config_error;
 mod control;
+#[cfg(all(feature = "telemetry", feature = "openlrs"))]
+#[cfg_attr(docsrs, doc(cfg(all(feature = "telemetry", feature = "openlrs"))))]
+pub mod dual;
 mod error;
 pub mod fifo;
 pub mod gpio;

@@ -64,7 +64,9 @@ impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
         Self::build(spi, irq, sdn, true, delay)
     }
 
-    fn build(spi: SPI, irq: IRQ, sdn: SDN, sdn_present: bool, delay: D) -> Self {
+    /// A driver over `sdn`, which is a real pin only when `sdn_present` (else the
+    /// `new_without_sdn` behaviour): for adapters that take a driver apart and rebuild it.
+    pub(crate) fn build(spi: SPI, irq: IRQ, sdn: SDN, sdn_present: bool, delay: D) -> Self {
         Self {
             bus: Bus::new(spi),
             irq,
@@ -90,6 +92,11 @@ impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
     /// Gives the parts back.
     pub fn release(self) -> (SPI, IRQ, SDN, D) {
         (self.bus.release(), self.irq, self.sdn, self.delay)
+    }
+
+    /// Whether SDN is a pin the MCU drives (built with [`Rfm22b::new`]).
+    pub(crate) fn sdn_present(&self) -> bool {
+        self.sdn_present
     }
 
     /// The configuration programmed by [`Rfm22b::init`].
