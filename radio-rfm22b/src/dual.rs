@@ -49,6 +49,20 @@ where
         }
     }
 
+    /// Gives the driver and the clock back (taken back from OpenLRSng if it was lent).
+    /// `None` never happens outside a move.
+    pub fn release(self) -> Option<(Rfm22b<SPI, IRQ, SDN, D>, C)> {
+        match self.holder {
+            Holder::TauLink(link, clock) => Some((link.release(), clock)),
+            Holder::OpenLrs(radio, sdn) => {
+                let (spi, irq, delay, clock) = radio.release();
+                let driver = Rfm22b::build(spi, irq, sdn, self.sdn_present, delay);
+                Some((driver, clock))
+            }
+            Holder::Moving => None,
+        }
+    }
+
     /// The chip as TauLink's radio (taken back from OpenLRSng if it was lent; the link
     /// configures it again on its first use). `None` never happens outside a move.
     pub fn taulink(&mut self) -> Option<&mut LinkRadio<SPI, IRQ, SDN, D>> {

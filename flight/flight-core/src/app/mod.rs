@@ -8,7 +8,8 @@
 //! Owned here: the live and stored settings and the setup derived from them; the flight
 //! loop and its controllers; the IMU fault policy (`imu`); the baro climb rate; the
 //! battery monitor and the tone player; the link follower's hooks, bind handling and
-//! telemetry (`link`), the same over OpenLRSng (`openlrs`); the console's command language
+//! telemetry (`link`), the same over OpenLRSng (`openlrs`), and the link task's body the
+//! firmware and the simulator share (`link_task`); the console's command language
 //! (`console`); the watchdog check-in policy (`watchdog`); the GPS port (`gps`: UBX bytes in,
 //! boot configuration out); the magnetometer calibration (`magcal`: collected from the
 //! console, applied to every reading).
@@ -17,6 +18,7 @@ mod console;
 mod gps;
 mod imu;
 mod link;
+pub mod link_task;
 mod magcal;
 mod openlrs;
 mod watchdog;
