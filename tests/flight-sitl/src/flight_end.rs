@@ -156,28 +156,29 @@ async fn heartbeat_and_motors_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay,
     }
 }
 
-/// The storage task: every 100 ms, a save the app hands out goes to the flash, holding the
-/// board for the flash's time (sectors erased and words programmed, `FlashWork::f405_us`).
+/// The storage task: every 100 ms, a save job the app hands out goes to the flash, with
+/// the watchdog stretched to the job's period (unless the world turned that off), holding
+/// the board for the flash's time (sectors erased and words programmed, `FlashWork::f405_us`).
 async fn storage_task(
     app: Rc<RefCell<FlightApp>>,
     flash: &RefCell<SettingsFlash>,
-    delay: SimDelay,
+    clock: BoardClock,
     shared: &Shared,
 ) {
+    let delay = clock.delay().clone();
     loop {
         sleep_ms(&delay, 100).await;
-        let request = {
-            let mut a = app.borrow_mut();
-            a.take_save().map(|(l, s)| (l, s, a.save_whole()))
-        };
-        let Some((live, stored, whole)) = request else {
+        let Some(job) = app.borrow_mut().take_save_job() else {
             continue;
         };
-        let (saved, work) = flash.borrow_mut().save(&live, &stored, whole);
-        occupy(shared, &delay, work.f405_us()).await;
-        if saved {
-            app.borrow_mut().on_saved(live);
+        if shared.borrow().save_stretch {
+            app.borrow_mut()
+                .on_watchdog_stretched(clock.now_ms(), job.watchdog_ms);
         }
+        let (saved, work) = flash.borrow_mut().save(&job);
+        occupy(shared, &delay, work.f405_us()).await;
+        let saved = saved.then(|| job.live.clone());
+        app.borrow_mut().on_save_done(clock.now_ms(), saved);
     }
 }
 
@@ -261,7 +262,7 @@ pub(crate) async fn flight_board(
             link_task(app.clone(), &radio, clock.clone(), failsafe_us),
             supervisor_task(app.clone(), clock.clone(), &shared),
             heartbeat_and_motors_task(app.clone(), delay.clone(), &shared),
-            storage_task(app.clone(), &flash, delay.clone(), &shared),
+            storage_task(app.clone(), &flash, clock.clone(), &shared),
             gains_task(app.clone(), delay.clone(), &shared),
         );
         let stop = match select(tasks, stop_watcher(&app, &shared, &clock)).await {

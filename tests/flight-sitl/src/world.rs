@@ -171,6 +171,9 @@ pub(crate) struct WorldState {
     /// Until when (virtual ns) the flight board's one thread-mode executor is held by a
     /// blocking job (a flash operation, a gain design).
     pub(crate) flight_busy_until_ns: u64,
+    /// The flight storage adapter stretches the watchdog around a save as the app's job
+    /// asks (`false`: [`World::without_save_watchdog_stretch`]).
+    pub(crate) save_stretch: bool,
     medium: si4432_sim::Medium,
 }
 
@@ -371,6 +374,7 @@ impl World {
             phone_key: settings.link_key(),
             watchdog_resets: WatchdogResets::default(),
             flight_busy_until_ns: 0,
+            save_stretch: true,
             boots: Vec::new(),
             medium: medium.clone(),
         }));
@@ -582,6 +586,25 @@ impl World {
             ts_s,
             end,
         }
+    }
+
+    /// Types `bytes` at the running flight controller's USB console (`console`); one reply
+    /// per finished line, none while the board is down.
+    pub fn type_at_flight_console(&mut self, bytes: &[u8]) -> Vec<String> {
+        let app = self
+            .shared
+            .borrow()
+            .flight
+            .as_ref()
+            .map(|(app, _)| app.clone());
+        app.map(|app| crate::console::type_into_console(&mut app.borrow_mut(), bytes))
+            .unwrap_or_default()
+    }
+
+    /// The flight storage adapter no longer stretches the watchdog around a save (the app's
+    /// `SaveJob::watchdog_ms` ignored): what the stretch is for, shown.
+    pub fn without_save_watchdog_stretch(&mut self) {
+        self.shared.borrow_mut().save_stretch = false;
     }
 
     /// Runs `d` more of virtual time.

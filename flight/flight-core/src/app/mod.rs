@@ -10,7 +10,8 @@
 //! battery monitor and the tone player; the link follower's hooks, bind handling and
 //! telemetry (`link`), the same over OpenLRSng (`openlrs`), and the link task's body the
 //! firmware and the simulator share (`link_task`); the console's command language
-//! (`console`); the watchdog check-in policy (`watchdog`); the GPS port (`gps`: UBX bytes in,
+//! (`console`); the watchdog check-in policy (`watchdog`) and the stretch around settings
+//! saves (`save`); the GPS port (`gps`: UBX bytes in,
 //! boot configuration out); the magnetometer calibration (`magcal`: collected from the
 //! console, applied to every reading).
 
@@ -21,6 +22,7 @@ mod link;
 pub mod link_task;
 mod magcal;
 mod openlrs;
+mod save;
 mod watchdog;
 
 #[cfg(test)]
@@ -42,6 +44,7 @@ pub use magcal::{MagcalSession, calibration as mag_calibration};
 pub use openlrs::{
     OPENLRS_FAILSAFE_DELAY, OPENLRS_RATE_CODE_BASE, openlrs_bind_window, run_openlrs_receiver,
 };
+pub use save::{SAVE_WATCHDOG_MS, SaveJob};
 pub use watchdog::{FEED_PERIOD_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog};
 
 use crate::alerts::{Alert, TonePlayer};
