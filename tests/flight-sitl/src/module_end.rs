@@ -193,11 +193,44 @@ impl<C: Clock> Drop for GiveBack<'_, C> {
     }
 }
 
-/// The firmware's `carry_out`: a save goes to the module's settings flash (kept by the
-/// world across resets); the LED is not modelled.
+/// The firmware's `carry_out`: a save goes to the settings task (the firmware's `SAVE`
+/// signal: the newest wins); the LED is not modelled.
 fn carry_out(shared: &Shared, action: Option<Action>) {
     if let Some(Action::Save(settings)) = action {
-        shared.borrow_mut().module_flash = settings;
+        shared.borrow_mut().module_save = Some(settings);
+    }
+}
+
+/// The settings task (the firmware's `settings_task`): every 50 ms, a pending save goes
+/// through module-core's `SettingsStore` to the module's flash, halting the board for the
+/// NVMC's time (`module_flash::nrf52840_us`: pages erased, words written).
+async fn settings_task(b: &Board, shared: &Shared) {
+    loop {
+        sleep_ms(b.delay(), 50).await;
+        let pending = shared.borrow_mut().module_save.take();
+        let Some(settings) = pending else {
+            continue;
+        };
+        let (_saved, us) = shared.borrow_mut().module_flash.save(&settings);
+        {
+            let mut s = shared.borrow_mut();
+            s.module_busy_until_ns = s.now_ns() + us * 1000;
+        }
+        b.delay().sleep_ns(us * 1000).await;
+    }
+}
+
+/// Waits while the module's CPU is halted by its NVMC.
+async fn wait_while_halted(shared: &Shared, delay: &SimDelay) {
+    loop {
+        let left = {
+            let s = shared.borrow();
+            s.module_busy_until_ns.saturating_sub(s.now_ns())
+        };
+        if left == 0 {
+            return;
+        }
+        delay.sleep_ns(left).await;
     }
 }
 
@@ -414,10 +447,12 @@ async fn hm10_task(b: &Board, shared: &Shared) {
     }
 }
 
-/// The supervisor: every 100 ms, fed if every expected task checked in.
-async fn supervisor_task(b: &Board) {
+/// The supervisor: every 100 ms, fed if every expected task checked in (not while the
+/// NVMC halts the CPU).
+async fn supervisor_task(b: &Board, shared: &Shared) {
     loop {
         sleep_ms(b.delay(), 100).await;
+        wait_while_halted(shared, b.delay()).await;
         if b.checked_in.get() & EXPECTED == EXPECTED {
             b.checked_in.set(0);
             b.last_feed_ms.set(b.now_ms());
@@ -447,7 +482,7 @@ pub(crate) async fn module_board(
     let mut cause = BootCause::PowerOn;
     loop {
         sleep_ms(&delay, MODULE_BOOT_MS).await;
-        let settings: ModuleSettings = shared.borrow().module_flash;
+        let settings: ModuleSettings = shared.borrow_mut().module_flash.load();
         let Ok(mut app) = App::new(settings, AirLink::new(), Handset::new(&settings), true) else {
             return;
         };
@@ -467,9 +502,12 @@ pub(crate) async fn module_board(
                 ppm_in_task(&board, &shared),
                 app_task(&board, &shared),
                 hm10_task(&board, &shared),
-                supervisor_task(&board),
+                supervisor_task(&board, &shared),
             ),
-            jr_line_task(&board, &shared),
+            join(
+                jr_line_task(&board, &shared),
+                settings_task(&board, &shared),
+            ),
         );
         let _ = select(tasks, watchdog(&board)).await;
         shared.borrow_mut().watchdog_resets.module += 1;

@@ -154,8 +154,12 @@ pub(crate) struct WorldState {
     pub(crate) flight: Option<(Rc<RefCell<FlightApp>>, BoardClock)>,
     /// The flight settings when the flight board last stopped.
     pub(crate) flight_settings: Settings,
-    /// What the module's settings flash holds.
-    pub(crate) module_flash: module_core::settings::Settings,
+    /// The module's settings flash (kept across its resets).
+    pub(crate) module_flash: crate::module_flash::ModuleFlash,
+    /// A save the module core asked for, waiting for the module's settings task.
+    pub(crate) module_save: Option<module_core::settings::Settings>,
+    /// Until when (virtual ns) the module's CPU is halted by its NVMC (a settings save).
+    pub(crate) module_busy_until_ns: u64,
     /// Messages the module relayed to the phone, with the scenario time (s).
     pub(crate) module_rx: Vec<(f64, Message)>,
     /// What the module sent on the JR line, with the scenario time (s).
@@ -366,7 +370,9 @@ impl World {
             input: PilotInput::default(),
             flight: None,
             flight_settings: settings.clone(),
-            module_flash: module,
+            module_flash: crate::module_flash::ModuleFlash::new(&module),
+            module_save: None,
+            module_busy_until_ns: 0,
             module_rx: Vec::new(),
             handset_tx: Vec::new(),
             uplink: setting_changes,
