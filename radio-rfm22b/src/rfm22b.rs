@@ -95,6 +95,7 @@ impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
     }
 
     /// Whether SDN is a pin the MCU drives (built with [`Rfm22b::new`]).
+    #[cfg(all(feature = "telemetry", feature = "openlrs"))]
     pub(crate) fn sdn_present(&self) -> bool {
         self.sdn_present
     }
