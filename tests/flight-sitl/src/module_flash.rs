@@ -82,7 +82,7 @@ mod tests {
         assert!(ok);
         // At least one word written; no page full yet, so no erase.
         assert!(
-            us >= NRF52840_WORD_WRITE_US && us < NRF52840_PAGE_ERASE_US,
+            (NRF52840_WORD_WRITE_US..NRF52840_PAGE_ERASE_US).contains(&us),
             "{us} µs"
         );
         assert_eq!(flash.load(), changed);
