@@ -61,10 +61,13 @@ pub struct Rfm22b<SPI, IRQ, SDN, D> {
 impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
     /// A driver for a chip whose SDN pin the MCU drives (hard reset possible).
     pub fn new(spi: SPI, irq: IRQ, sdn: SDN, delay: D) -> Self {
-        Self::build(spi, irq, sdn, true, delay)
+        Self::from_parts(spi, irq, sdn, true, delay)
     }
 
-    fn build(spi: SPI, irq: IRQ, sdn: SDN, sdn_present: bool, delay: D) -> Self {
+    /// A driver over `sdn`, which is a real pin only when `sdn_present` (else the
+    /// `new_without_sdn` behaviour): for adapters that take a driver apart with
+    /// [`Rfm22b::release`] and rebuild it (the OpenLRSng crate's `DualRadio`).
+    pub fn from_parts(spi: SPI, irq: IRQ, sdn: SDN, sdn_present: bool, delay: D) -> Self {
         Self {
             bus: Bus::new(spi),
             irq,
@@ -82,7 +85,7 @@ impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
 impl<SPI, IRQ, D> Rfm22b<SPI, IRQ, NoPin, D> {
     /// A driver for a board that ties SDN low (software reset only).
     pub fn new_without_sdn(spi: SPI, irq: IRQ, delay: D) -> Self {
-        Self::build(spi, irq, NoPin, false, delay)
+        Self::from_parts(spi, irq, NoPin, false, delay)
     }
 }
 
@@ -90,6 +93,11 @@ impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
     /// Gives the parts back.
     pub fn release(self) -> (SPI, IRQ, SDN, D) {
         (self.bus.release(), self.irq, self.sdn, self.delay)
+    }
+
+    /// Whether SDN is a pin the MCU drives (built with [`Rfm22b::new`]).
+    pub fn sdn_present(&self) -> bool {
+        self.sdn_present
     }
 
     /// The configuration programmed by [`Rfm22b::init`].

@@ -27,6 +27,7 @@ pub mod bind;
 pub mod channels;
 pub mod crc16;
 pub mod downlink;
+pub mod dual;
 pub mod frsky;
 pub mod guide;
 pub mod hopping;

@@ -12,6 +12,7 @@ pub mod button;
 pub mod channels;
 pub mod handset;
 pub mod hm10;
+pub mod link_task;
 pub mod params;
 pub mod ports;
 pub mod ppm;

@@ -5,7 +5,8 @@
 //! [`FlashInjection`].
 
 use embassy_futures::block_on;
-use flight_core::settings::{LoadProblem, Settings, load, save, save_whole};
+use flight_core::app::SaveJob;
+use flight_core::settings::{LoadProblem, Settings, Value, load, save, save_whole};
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
 use sequential_storage::mock_flash::{MockFlashBase, WriteCountCheck};
@@ -37,6 +38,11 @@ impl SettingsFlash {
         {
             let _ = block_on(save_whole(m, settings));
         }
+        if injection == FlashInjection::NearlyFull
+            && let Some(m) = map.take()
+        {
+            map = fill_until_erase_due(m, settings);
+        }
         if let FlashInjection::Corrupted(seed) = injection
             && let Some(m) = map.take()
         {
@@ -60,14 +66,9 @@ impl SettingsFlash {
         }
     }
 
-    /// The storage task's save (`whole` after a load problem): whether it succeeded, and
-    /// what it did to the flash (sectors erased, bytes programmed).
-    pub(crate) fn save(
-        &mut self,
-        live: &Settings,
-        stored: &Settings,
-        whole: bool,
-    ) -> (bool, FlashWork) {
+    /// The storage task's save of the app's job (`SaveJob::write`, as the firmware's):
+    /// whether it succeeded, and what it did to the flash (sectors erased, bytes programmed).
+    pub(crate) fn save(&mut self, job: &SaveJob) -> (bool, FlashWork) {
         let Some(map) = self.map.take() else {
             return (false, FlashWork::default());
         };
@@ -76,11 +77,7 @@ impl SettingsFlash {
         let Some(mut map) = open(flash) else {
             return (false, FlashWork::default());
         };
-        let ok = if whole {
-            block_on(save_whole(&mut map, live)).is_ok()
-        } else {
-            block_on(save(&mut map, live, stored)).is_ok()
-        };
+        let ok = block_on(job.write(&mut map)).is_ok();
         // The uncached map can be taken apart and opened again at no cost.
         let (flash, _) = map.destroy();
         let done = before.compare_to(flash.stats_snapshot());
@@ -103,9 +100,12 @@ pub(crate) struct FlashWork {
 }
 
 /// STM32F405 16 KiB sector erase, typical, at ×32 parallelism (2.7–3.6 V), µs (DS8626
-/// "Flash memory programming": 250 ms typ., 500 ms max.).
+/// table "Flash memory programming", t_ERASE16KB: 250 ms typ., 500 ms max. at ×32; 400 /
+/// 800 ms at ×8). ×32 is what embassy-stm32 (0.6, `flash/f4.rs`: `PSIZE32`) programs for
+/// both erase and write.
 pub(crate) const F405_SECTOR_ERASE_US: u64 = 250_000;
-/// STM32F405 word (32-bit) program, typical, µs (DS8626: 16 µs typ., 100 µs max.).
+/// STM32F405 word (32-bit) program, typical, µs (DS8626 same table, t_prog: 16 µs typ.,
+/// 100 µs max.).
 pub(crate) const F405_WORD_PROGRAM_US: u64 = 16;
 
 impl FlashWork {
@@ -114,6 +114,45 @@ impl FlashWork {
     pub(crate) fn f405_us(self) -> u64 {
         self.erases * F405_SECTOR_ERASE_US + self.bytes_written.div_ceil(4) * F405_WORD_PROGRAM_US
     }
+}
+
+/// The parameter the fill toggles (any one-parameter change makes a record of one size).
+const FILLER: &str = "lqg.q_torque";
+
+/// `settings` with [`FILLER`] changed.
+fn with_filler_changed(settings: &Settings) -> Settings {
+    let mut changed = settings.clone();
+    let v = settings.f32(FILLER);
+    let _ = changed.set(FILLER, Value::F32(if v > 1.0 { v * 0.5 } else { v + 1.0 }));
+    changed
+}
+
+/// Whether saving `live` over `stored` on (a copy of) `flash` would erase a sector.
+fn save_would_erase(flash: &Flash, live: &Settings, stored: &Settings) -> bool {
+    let before = flash.stats_snapshot();
+    let Some(mut trial) = open(flash.clone()) else {
+        return false;
+    };
+    let _ = block_on(save(&mut trial, live, stored));
+    let (after, _) = trial.destroy();
+    before.compare_to(after.stats_snapshot()).erases > 0
+}
+
+/// Saves `settings`' [`FILLER`] changed and back, pair after pair, until a one-parameter
+/// save would erase a sector; flash then holds `settings` again.
+fn fill_until_erase_due(map: Map, settings: &Settings) -> Option<Map> {
+    let changed = with_filler_changed(settings);
+    let (mut flash, _) = map.destroy();
+    for _ in 0..10_000 {
+        if save_would_erase(&flash, &changed, settings) {
+            break;
+        }
+        let mut map = open(flash)?;
+        let _ = block_on(save(&mut map, &changed, settings));
+        let _ = block_on(save(&mut map, settings, &changed));
+        flash = map.destroy().0;
+    }
+    open(flash)
 }
 
 /// Bytes per flash page (a 16 KiB sector).
@@ -161,6 +200,26 @@ mod tests {
     fn stored_settings_load_back_whole() {
         let mut f = SettingsFlash::new(&tuned(), FlashInjection::Stored);
         assert_eq!(f.load(), (tuned(), None));
+    }
+
+    /// A nearly full flash loads the scenario's settings, and the next one-parameter save
+    /// erases a sector: a stall of at least the F405's sector erase.
+    #[test]
+    fn a_nearly_full_flash_erases_on_the_next_save() {
+        let mut f = SettingsFlash::new(&tuned(), FlashInjection::NearlyFull);
+        assert_eq!(f.load(), (tuned(), None));
+        let mut live = tuned();
+        let _ = live.set("pid.roll.kp", Value::F32(0.005));
+        let job = SaveJob {
+            live,
+            stored: tuned(),
+            whole: false,
+            watchdog_ms: flight_core::app::SAVE_WATCHDOG_MS,
+        };
+        let (saved, work) = f.save(&job);
+        assert!(saved);
+        assert_eq!(work.erases, 1, "{work:?}");
+        assert!(work.f405_us() >= F405_SECTOR_ERASE_US);
     }
 
     #[test]

@@ -1,8 +1,8 @@
 //! The flight controller board: boots `flight_core::app::FlightApp` from its simulated
-//! settings flash and runs the firmware's task adapters around it — link (the TauLink
-//! follower or, with `link.protocol` OpenLRSng, `flight_core::app::run_openlrs_receiver` —
-//! a bind only in a window the console opens — on the real rfm22b driver over the virtual
-//! Si4432), supervisor (polls the
+//! settings flash and runs the firmware's task adapters around it — link (the firmware's
+//! own task body, `flight_core::app::link_task::run_link_step`: the TauLink follower or,
+//! with `link.protocol` OpenLRSng, the OpenLRSng receiver — a bind only in a window the
+//! console opens — on the real rfm22b driver over the virtual Si4432), supervisor (polls the
 //! app's check-in policy every `FEED_PERIOD_MS` and feeds the IWDG), storage, gains and
 //! heartbeat — until its independent watchdog expires or its power goes; then it boots
 //! again. The IMU, baro, battery and alert adapters run in the world's physics task at the
@@ -13,17 +13,13 @@ use std::rc::Rc;
 
 use embassy_futures::join::join5;
 use embassy_futures::select::{Either, select};
-use flight_core::app::{
-    FEED_PERIOD_MS, FlightApp, LinkStep, Task, openlrs_bind_window, run_openlrs_receiver,
-};
+use flight_core::app::link_task::run_link_step;
+use flight_core::app::{FEED_PERIOD_MS, FlightApp, Task};
 use flight_core::pipeline::{Controllers, from_settings};
-use openlrs::radio::Radio as OpenLrsRadio;
-use openlrs::rx::{Config as OpenLrsConfig, Receiver};
-use radio_rfm22b::link::LinkRadio;
+use openlrs::dual::DualRadio;
+use openlrs::radio::Clock;
 use radio_rfm22b::{NoPin, Rfm22b, TxPower};
 use si4432_sim::{ChipHandle, Fault, Medium, SimDelay, SimIrq, SimSpi};
-use telemetry::link::core::Follower;
-use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 
 use crate::clock::sleep_ms;
 use crate::flash::SettingsFlash;
@@ -42,24 +38,24 @@ const FLIGHT_DRIFT_PPM: f64 = -20.0;
 const WATCH_MS: u64 = 5;
 
 /// The flight board's RFM22B as the firmware wires it: SDN tied low, software reset only.
-pub(crate) type FlightRadio = LinkRadio<SimSpi, SimIrq, NoPin, SimDelay>;
+pub(crate) type FlightDriver = Rfm22b<SimSpi, SimIrq, NoPin, SimDelay>;
 
-/// The flight board's radio and how to break it. The link task lends the driver's parts
-/// to the OpenLRSng roles while they run (the firmware's `link_task` does the same), so the
-/// slot is empty only inside such a step.
+/// The flight board's radio and how to break it. Each boot's link task runs it as the
+/// firmware's does (`openlrs::dual::DualRadio` on that boot's clock); the slot is
+/// empty only while a boot runs.
 pub(crate) struct FlightChip {
-    pub(crate) radio: Option<FlightRadio>,
+    pub(crate) radio: Option<FlightDriver>,
     pub(crate) chip: ChipHandle,
 }
 
 impl FlightChip {
     pub(crate) fn new(handle: si4432_sim::RadioHandle) -> Self {
-        let radio = LinkRadio::new(
-            Rfm22b::new_without_sdn(handle.spi, handle.nirq, handle.delay),
-            TxPower::MAX,
-        );
         Self {
-            radio: Some(radio),
+            radio: Some(Rfm22b::new_without_sdn(
+                handle.spi,
+                handle.nirq,
+                handle.delay,
+            )),
             chip: handle.chip,
         }
     }
@@ -71,138 +67,39 @@ enum Stop {
     PowerOff,
 }
 
-/// The follower's hooks: straight into the app (the firmware's `AppHooks`).
-struct AppHooks(Rc<RefCell<FlightApp>>);
-
-impl FollowerHooks for AppHooks {
-    fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
-        self.0.borrow_mut().on_link_step(now_us, follower);
-    }
-}
-
-/// Checks the link task in every 50 ms while it waits (the firmware's `keep_alive`).
-async fn keep_alive(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay) -> core::convert::Infallible {
-    loop {
-        app.borrow_mut().on_link_idle();
-        sleep_ms(delay, 50).await;
-    }
-}
-
-async fn idle(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay, ms: u64) {
-    let _ = select(sleep_ms(delay, ms), keep_alive(app, delay)).await;
-}
-
-/// Resolves when the link must restart (a bind asked for, the binding phrase changed),
-/// checking in every 50 ms (the firmware's `restart_due`).
-async fn restart_due(app: &Rc<RefCell<FlightApp>>, delay: &SimDelay) {
-    loop {
-        if app.borrow().link_restart_due() {
-            return;
-        }
-        app.borrow_mut().on_link_idle();
-        sleep_ms(delay, 50).await;
-    }
-}
-
-/// The OpenLRSng steps (the firmware's `openlrs_step`): the driver's parts become an
-/// OpenLRSng radio for the step, and go back after it.
-async fn openlrs_step(
-    app: &Rc<RefCell<FlightApp>>,
-    slot: &mut Option<FlightRadio>,
-    clock: &SimClock,
-    config: OpenLrsConfig,
-    step: LinkStep,
-) {
-    let delay = clock.delay().clone();
-    let Some(link) = slot.take() else {
-        return;
-    };
-    let (spi, irq, _, chip_delay) = link.release().release();
-    let now = clock.clone();
-    let mut radio = OpenLrsRadio::new(
-        spi,
-        irq,
-        chip_delay,
-        move || now.now_us(),
-        config.version,
-        config.band,
-    );
-    let failed = match step {
-        LinkStep::BindOpenLrs { window_us, .. } => {
-            let bind = openlrs_bind_window(&mut radio, config, window_us);
-            let Either::First(result) = select(bind, keep_alive(app, &delay)).await;
-            let bound = result.as_ref().ok().copied().flatten();
-            app.borrow_mut().on_openlrs_bind_result(bound.as_ref());
-            result.is_err()
-        }
-        LinkStep::FollowOpenLrs { data, .. } => {
-            let mut rx = Receiver::new(config, Some(data));
-            let on_step = |now_us: u64, rx: &mut Receiver, events: &[_]| {
-                app.borrow_mut().on_openlrs_step(now_us, rx, events);
-            };
-            let run = run_openlrs_receiver(&mut radio, &mut rx, on_step);
-            // Racing the check-in too: a slow profile's lost-link dwell outlasts the IWDG.
-            let waits = select(restart_due(app, &delay), keep_alive(app, &delay));
-            let failed = matches!(select(run, waits).await, Either::First(_));
-            app.borrow_mut().on_link_down();
-            failed
-        }
-        _ => false,
-    };
-    let (spi, irq, chip_delay, _) = radio.release();
-    *slot = Some(LinkRadio::new(
-        Rfm22b::new_without_sdn(spi, irq, chip_delay),
-        TxPower::MAX,
-    ));
-    if failed {
-        idle(app, &delay, 1000).await;
-    }
-}
-
-/// The firmware's link task: runs what `FlightApp::next_link_step` says (a bind window the
-/// console opened, the follower on the stored link, or nothing until a bind is asked for).
+/// The firmware's link task: `flight_core::app::link_task::run_link_step` in a loop, on
+/// the board's driver lent to a `DualRadio` for this boot (given back when the boot ends).
 async fn link_task(
     app: Rc<RefCell<FlightApp>>,
-    slot: &mut Option<FlightRadio>,
+    slot: &RefCell<Option<FlightDriver>>,
     mut clock: SimClock,
     failsafe_us: u64,
 ) {
-    let delay = clock.delay().clone();
+    let Some(driver) = slot.borrow_mut().take() else {
+        return;
+    };
+    let now = clock.clone();
+    let chip = DualRadio::new(driver, TxPower::MAX, move || now.now_us());
+    // The driver goes back to the board when this task is dropped (a reset, a power cut).
+    let mut chip = GiveBack(Some(chip), slot);
     loop {
-        let step = app.borrow_mut().next_link_step();
-        if let LinkStep::BindOpenLrs { config, .. } | LinkStep::FollowOpenLrs { config, .. } = step
-        {
-            openlrs_step(&app, slot, &clock, config, step).await;
-            continue;
-        }
-        let Some(radio) = slot.as_mut() else {
+        let Some(chip) = chip.0.as_mut() else {
             return;
         };
-        match step {
-            LinkStep::Bind { band, window_us } => {
-                let bind = bind_follower(radio, &mut clock, band, window_us);
-                let Either::First(result) = select(bind, keep_alive(&app, &delay)).await;
-                let offered = result.as_ref().ok().copied().flatten();
-                app.borrow_mut().on_bind_result(offered.as_ref());
-                if result.is_err() {
-                    idle(&app, &delay, 1000).await;
-                }
-            }
-            LinkStep::WaitForBind => restart_due(&app, &delay).await,
-            LinkStep::Follow(params) => {
-                let mut follower = app.borrow().follower(params, failsafe_us);
-                let mut hooks = AppHooks(app.clone());
-                let run = run_follower(radio, &mut clock, &mut follower, &mut hooks);
-                let failed = matches!(
-                    select(run, restart_due(&app, &delay)).await,
-                    Either::First(Err(_))
-                );
-                app.borrow_mut().on_link_down();
-                if failed {
-                    idle(&app, &delay, 1000).await;
-                }
-            }
-            LinkStep::BindOpenLrs { .. } | LinkStep::FollowOpenLrs { .. } => {}
+        run_link_step(&*app, chip, &mut clock, failsafe_us).await;
+    }
+}
+
+/// Puts the driver back in the board's slot when the boot's link task ends.
+struct GiveBack<'a, C: Clock>(
+    Option<DualRadio<SimSpi, SimIrq, NoPin, SimDelay, C>>,
+    &'a RefCell<Option<FlightDriver>>,
+);
+
+impl<C: Clock> Drop for GiveBack<'_, C> {
+    fn drop(&mut self) {
+        if let Some((driver, _)) = self.0.take().and_then(|chip| chip.release()) {
+            *self.1.borrow_mut() = Some(driver);
         }
     }
 }
@@ -260,28 +157,29 @@ async fn heartbeat_and_motors_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay,
     }
 }
 
-/// The storage task: every 100 ms, a save the app hands out goes to the flash, holding the
-/// board for the flash's time (sectors erased and words programmed, `FlashWork::f405_us`).
+/// The storage task: every 100 ms, a save job the app hands out goes to the flash, with
+/// the watchdog stretched to the job's period (unless the world turned that off), holding
+/// the board for the flash's time (sectors erased and words programmed, `FlashWork::f405_us`).
 async fn storage_task(
     app: Rc<RefCell<FlightApp>>,
     flash: &RefCell<SettingsFlash>,
-    delay: SimDelay,
+    clock: SimClock,
     shared: &Shared,
 ) {
+    let delay = clock.delay().clone();
     loop {
         sleep_ms(&delay, 100).await;
-        let request = {
-            let mut a = app.borrow_mut();
-            a.take_save().map(|(l, s)| (l, s, a.save_whole()))
-        };
-        let Some((live, stored, whole)) = request else {
+        let Some(job) = app.borrow_mut().take_save_job() else {
             continue;
         };
-        let (saved, work) = flash.borrow_mut().save(&live, &stored, whole);
-        occupy(shared, &delay, work.f405_us()).await;
-        if saved {
-            app.borrow_mut().on_saved(live);
+        if shared.borrow().save_stretch {
+            app.borrow_mut()
+                .on_watchdog_stretched(clock.now_ms(), job.watchdog_ms);
         }
+        let (saved, work) = flash.borrow_mut().save(&job);
+        occupy(shared, &delay, work.f405_us()).await;
+        let saved = saved.then(|| job.live.clone());
+        app.borrow_mut().on_save_done(clock.now_ms(), saved);
     }
 }
 
@@ -322,11 +220,13 @@ pub(crate) async fn flight_board(
     shared: Shared,
     medium: Medium,
     delay: SimDelay,
-    mut chip: FlightChip,
+    chip: FlightChip,
     flash: SettingsFlash,
     failsafe_us: u64,
 ) {
     let flash = RefCell::new(flash);
+    let radio = RefCell::new(chip.radio);
+    let chip = chip.chip;
     let mut cause = BootCause::PowerOn;
     loop {
         while !shared.borrow().input.flight_powered {
@@ -334,7 +234,7 @@ pub(crate) async fn flight_board(
         }
         if cause == BootCause::PowerOn {
             // The RFM22B is powered with the board.
-            chip.chip.power_on_reset();
+            chip.power_on_reset();
         }
         sleep_ms(&delay, FLIGHT_BOOT_MS).await;
         if !shared.borrow().input.flight_powered {
@@ -360,10 +260,10 @@ pub(crate) async fn flight_board(
         let app = Rc::new(RefCell::new(app));
         shared.borrow_mut().flight = Some((app.clone(), clock.clone()));
         let tasks = join5(
-            link_task(app.clone(), &mut chip.radio, clock.clone(), failsafe_us),
+            link_task(app.clone(), &radio, clock.clone(), failsafe_us),
             supervisor_task(app.clone(), clock.clone(), &shared),
             heartbeat_and_motors_task(app.clone(), delay.clone(), &shared),
-            storage_task(app.clone(), &flash, delay.clone(), &shared),
+            storage_task(app.clone(), &flash, clock.clone(), &shared),
             gains_task(app.clone(), delay.clone(), &shared),
         );
         let stop = match select(tasks, stop_watcher(&app, &shared, &clock)).await {

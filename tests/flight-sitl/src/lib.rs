@@ -12,6 +12,7 @@ pub mod flight_end;
 pub mod gps;
 pub mod metrics;
 pub mod module_end;
+mod module_flash;
 pub mod runner;
 pub mod scenario;
 pub mod serve;

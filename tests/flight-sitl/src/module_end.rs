@@ -1,8 +1,8 @@
 //! The TauLink module board: boots `module_core::App` with its stored settings and runs the
-//! module firmware's task adapters around it — the link task carrying out the core's
-//! session steps (`next_link_step`, master loop on the real rfm22b driver over the virtual
-//! Si4432 — or, with the OpenLRSng protocol,
-//! `module_core::air::openlrs::run_openlrs_transmitter` over the same chip — `poll_session`, `on_session_end`, binds), the PPM capture task feeding the
+//! module firmware's task adapters around it — the link task (the firmware's own body,
+//! `module_core::link_task::run_link_step`: the core's session steps, the master loop — or,
+//! with the OpenLRSng protocol, OpenLRSng's transmitter — and the binds on the real rfm22b
+//! driver over the virtual Si4432), the PPM capture task feeding the
 //! handset's frames as edges (`on_ppm_edge` / `on_ppm_tick`), the JR-line task with the
 //! radio at its other end (CRSF: the radio's channel frame every [`CRSF_PERIOD_US`], the
 //! module's reply after it; S.Port / FrSky D: the pushed frames; what the module sent:
@@ -15,29 +15,21 @@
 use std::cell::{Cell, RefCell};
 
 use embassy_futures::join::{join, join5};
-use embassy_futures::select::{Either, select};
+use embassy_futures::select::select;
 use module_core::air::AirLink;
-use module_core::air::openlrs::run_openlrs_transmitter;
 use module_core::app::{Action, App};
 use module_core::channels::ticks_to_us;
 use module_core::handset::{Handset, LineMode, MAX_LINE_BURST};
-use module_core::session::{BindOutcome, LinkStep, POLL_MS, SessionEnd};
+use module_core::link_task::{LinkPorts, run_link_step};
 use module_core::settings::Settings as ModuleSettings;
-use openlrs::BindingVersion;
-use openlrs::radio::Radio as OpenLrsRadio;
-use openlrs::roles::tx_bind;
-use openlrs::tx::Transmitter;
-use radio_rfm22b::RfmType;
-use radio_rfm22b::link::LinkRadio;
+use openlrs::dual::DualRadio;
+use openlrs::radio::Clock;
 use radio_rfm22b::{Rfm22b, TxPower};
 use si4432_sim::{Medium, SimDelay, SimIrq, SimSdn, SimSpi};
 use telemetry::change_auth::Signer;
 use telemetry::handset::crsf::channels::RcChannels;
 use telemetry::handset::crsf::frame::{Frame, frame_type};
 use telemetry::handset::crsf::{ModelSelect, address};
-use telemetry::link::core::{Follower, Master};
-use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
-use telemetry::link::master::{MasterHooks, bind_master, run_master};
 use telemetry::messages::{
     Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, encode_message,
 };
@@ -74,80 +66,28 @@ const PUSH_POLL_MS: u64 = 2;
 const HM10_READ_BYTES: usize = 64;
 
 /// The module's RFM22B: SDN wired (the nRF52840 drives it).
-pub(crate) type ModuleRadio = LinkRadio<SimSpi, SimIrq, SimSdn, SimDelay>;
+pub(crate) type ModuleDriver = Rfm22b<SimSpi, SimIrq, SimSdn, SimDelay>;
 
-/// The module's radio (its faults are injected through the world's chip handle). The link
-/// task lends the driver's parts to the OpenLRSng roles while they run (as the firmware's
-/// does), so the slot is empty only inside such a step.
+/// The module's radio (its faults are injected through the world's chip handle). Each
+/// boot's link task runs it as the firmware's does (`openlrs::dual::DualRadio` on that
+/// boot's clock); the slot is empty only while a boot runs.
 pub(crate) struct ModuleChip {
-    pub(crate) radio: Option<ModuleRadio>,
+    pub(crate) radio: Option<ModuleDriver>,
     power: TxPower,
 }
 
 impl ModuleChip {
     pub(crate) fn new(handle: si4432_sim::RadioHandle, tx_power: u8) -> Self {
-        let power = TxPower::from_step(tx_power);
-        let radio = LinkRadio::new(
-            Rfm22b::new(handle.spi, handle.nirq, handle.sdn, handle.delay),
-            power,
-        );
         Self {
-            radio: Some(radio),
-            power,
+            radio: Some(Rfm22b::new(
+                handle.spi,
+                handle.nirq,
+                handle.sdn,
+                handle.delay,
+            )),
+            power: TxPower::from_step(tx_power),
         }
     }
-}
-
-/// The OpenLRSng steps (the firmware's `openlrs_step`): the driver's parts become an
-/// OpenLRSng radio for the step and go back after it.
-async fn openlrs_step(b: &Board, chip: &mut ModuleChip, step: LinkStep) -> Option<Action> {
-    let (LinkStep::RunOpenLrsTx(data) | LinkStep::BindOpenLrsTx { data, .. }) = step else {
-        return None;
-    };
-    let link = chip.radio.take()?;
-    let (spi, irq, sdn, chip_delay) = link.release().release();
-    let version = BindingVersion::from_byte(data.version).unwrap_or(BindingVersion::V39);
-    let band = data.band().unwrap_or(RfmType::Mhz433);
-    let clock = b.clock.clone();
-    let mut radio = OpenLrsRadio::new(spi, irq, chip_delay, move || clock.now_us(), version, band);
-    let action = match step {
-        LinkStep::BindOpenLrsTx { data, timeout_us } => {
-            let until = radio.now_us().saturating_add(timeout_us);
-            let accepted = keep_alive(b, tx_bind(&mut radio, &data, until)).await;
-            b.app
-                .borrow_mut()
-                .on_bind_outcome(BindOutcome::offered(accepted))
-        }
-        _ => {
-            let end = match Transmitter::new(data, radio.now_us()) {
-                Ok(tx) => {
-                    let mut tx = tx.with_stale_input_stop();
-                    let run = run_openlrs_transmitter(
-                        &mut radio,
-                        &mut tx,
-                        |tx| b.app.borrow_mut().on_openlrs_send(tx),
-                        |now_us, tx, events| {
-                            b.app
-                                .borrow_mut()
-                                .on_openlrs_step(now_us, b.now_ms(), tx, events)
-                        },
-                    );
-                    match select(run, poll_session(b)).await {
-                        Either::First(_) => SessionEnd::RadioFailed,
-                        Either::Second(end) => end,
-                    }
-                }
-                Err(_) => poll_session(b).await,
-            };
-            b.app.borrow_mut().on_session_end(end)
-        }
-    };
-    let (spi, irq, chip_delay, _) = radio.release();
-    chip.radio = Some(LinkRadio::new(
-        Rfm22b::new(spi, irq, sdn, chip_delay),
-        chip.power,
-    ));
-    action
 }
 
 type ModuleApp = App<AirLink, Handset>;
@@ -188,135 +128,109 @@ impl Board {
     }
 }
 
-/// The loops' hook into the core (the firmware's `Hooks`).
-struct Hooks<'a>(&'a Board);
+/// The board as the link task's body sees it (the firmware's `Ports`).
+struct Ports<'a> {
+    b: &'a Board,
+    shared: &'a Shared,
+}
 
-impl MasterHooks for Hooks<'_> {
-    fn on_slot(&mut self, now_us: u64, master: &mut Master) {
-        let now_ms = self.0.now_ms();
-        self.0
-            .app
-            .borrow_mut()
-            .on_master_slot(now_us, now_ms, master);
+impl LinkPorts for Ports<'_> {
+    type Handset = Handset;
+
+    fn with_app<R>(&self, f: impl FnOnce(&mut ModuleApp) -> R) -> Option<R> {
+        self.b.app.try_borrow_mut().ok().map(|mut app| f(&mut app))
+    }
+
+    fn check_in(&self) {
+        self.b.check_in(Watched::Radio);
+    }
+
+    fn now_ms(&self) -> u32 {
+        self.b.now_ms()
+    }
+
+    fn carry_out(&self, action: Action) {
+        carry_out(self.shared, Some(action));
     }
 }
 
-impl FollowerHooks for Hooks<'_> {
-    fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
-        let now_ms = self.0.now_ms();
-        self.0
-            .app
-            .borrow_mut()
-            .on_follower_step(now_us, now_ms, follower);
-    }
-}
-
-async fn poll_session(b: &Board) -> SessionEnd {
-    loop {
-        b.check_in(Watched::Radio);
-        if let Some(end) = b.app.borrow_mut().poll_session(b.now_ms()) {
-            return end;
-        }
-        sleep_ms(b.delay(), POLL_MS.into()).await;
-    }
-}
-
-async fn keep_alive<T>(b: &Board, step: impl Future<Output = T>) -> T {
-    let ticking = async {
-        loop {
-            b.check_in(Watched::Radio);
-            sleep_ms(b.delay(), POLL_MS.into()).await;
-        }
-    };
-    match select(step, ticking).await {
-        Either::First(v) => v,
-        Either::Second(never) => never,
-    }
-}
-
-async fn run<E>(
-    b: &Board,
-    link: impl Future<Output = Result<core::convert::Infallible, E>>,
-) -> SessionEnd {
-    match select(link, poll_session(b)).await {
-        Either::First(Err(_)) => SessionEnd::RadioFailed,
-        Either::First(Ok(never)) => match never {},
-        Either::Second(end) => end,
-    }
-}
-
-/// The firmware's link task.
-async fn link_task(b: &Board, chip: &mut ModuleChip, shared: &Shared, seed: u64) {
+/// The firmware's link task: `module_core::link_task::run_link_step` in a loop, on the
+/// board's driver lent to a `DualRadio` for this boot (given back when the boot ends).
+async fn link_task(b: &Board, chip: &RefCell<ModuleChip>, shared: &Shared, seed: u64) {
     let mut rng = SplitMix64::new(seed ^ 0x4D0D);
     let mut clock = b.clock.clone();
+    let (driver, power) = {
+        let mut c = chip.borrow_mut();
+        (c.radio.take(), c.power)
+    };
+    let Some(driver) = driver else {
+        return;
+    };
+    let now = clock.clone();
+    let radio = DualRadio::new(driver, power, move || now.now_us());
+    let mut radio = GiveBack(Some(radio), chip);
+    let ports = Ports { b, shared };
     loop {
-        b.check_in(Watched::Radio);
-        let random = rng.next_u64() as u32;
-        let step = b.app.borrow_mut().next_link_step(b.now_ms(), random);
-        if matches!(
-            step,
-            LinkStep::RunOpenLrsTx(_) | LinkStep::BindOpenLrsTx { .. }
-        ) {
-            let action = openlrs_step(b, chip, step).await;
-            carry_out(shared, action);
-            continue;
-        }
-        let Some(radio) = chip.radio.as_mut() else {
+        let Some(radio) = radio.0.as_mut() else {
             return;
         };
-        let action = match step {
-            LinkStep::Probe => {
-                let present = radio.driver().reset().await.is_ok();
-                b.app.borrow_mut().on_radio_present(present)
-            }
-            LinkStep::Wait { ms } => {
-                keep_alive(b, sleep_ms(b.delay(), ms.into())).await;
-                None
-            }
-            LinkStep::WaitForBind => {
-                let end = poll_session(b).await;
-                b.app.borrow_mut().on_session_end(end)
-            }
-            LinkStep::RunMaster(params) => {
-                let mut master = b.app.borrow().master(params);
-                let end = run(b, run_master(radio, &mut clock, &mut master, &mut Hooks(b))).await;
-                b.app.borrow_mut().on_session_end(end)
-            }
-            LinkStep::RunFollower {
-                params,
-                failsafe,
-                failsafe_us,
-            } => {
-                let mut follower = b.app.borrow().follower(params, failsafe, failsafe_us);
-                let end = run(
-                    b,
-                    run_follower(radio, &mut clock, &mut follower, &mut Hooks(b)),
-                )
-                .await;
-                b.app.borrow_mut().on_session_end(end)
-            }
-            LinkStep::BindMaster { params, timeout_us } => {
-                let accepted =
-                    keep_alive(b, bind_master(radio, &mut clock, &params, timeout_us)).await;
-                let outcome = BindOutcome::offered(accepted);
-                b.app.borrow_mut().on_bind_outcome(outcome)
-            }
-            LinkStep::BindFollower { band, timeout_us } => {
-                let offer = keep_alive(b, bind_follower(radio, &mut clock, band, timeout_us)).await;
-                let outcome = BindOutcome::listened(offer);
-                b.app.borrow_mut().on_bind_outcome(outcome)
-            }
-            LinkStep::RunOpenLrsTx(_) | LinkStep::BindOpenLrsTx { .. } => None,
-        };
-        carry_out(shared, action);
+        let random = rng.next_u64() as u32;
+        run_link_step(&ports, radio, &mut clock, random).await;
     }
 }
 
-/// The firmware's `carry_out`: a save goes to the module's settings flash (kept by the
-/// world across resets); the LED is not modelled.
+/// Puts the driver back in the board's slot when the boot's link task ends.
+struct GiveBack<'a, C: Clock>(
+    Option<DualRadio<SimSpi, SimIrq, SimSdn, SimDelay, C>>,
+    &'a RefCell<ModuleChip>,
+);
+
+impl<C: Clock> Drop for GiveBack<'_, C> {
+    fn drop(&mut self) {
+        if let Some((driver, _)) = self.0.take().and_then(|radio| radio.release()) {
+            self.1.borrow_mut().radio = Some(driver);
+        }
+    }
+}
+
+/// The firmware's `carry_out`: a save goes to the settings task (the firmware's `SAVE`
+/// signal: the newest wins); the LED is not modelled.
 fn carry_out(shared: &Shared, action: Option<Action>) {
     if let Some(Action::Save(settings)) = action {
-        shared.borrow_mut().module_flash = settings;
+        shared.borrow_mut().module_save = Some(settings);
+    }
+}
+
+/// The settings task (the firmware's `settings_task`): every 50 ms, a pending save goes
+/// through module-core's `SettingsStore` to the module's flash, halting the board for the
+/// NVMC's time (`module_flash::nrf52840_us`: pages erased, words written).
+async fn settings_task(b: &Board, shared: &Shared) {
+    loop {
+        sleep_ms(b.delay(), 50).await;
+        let pending = shared.borrow_mut().module_save.take();
+        let Some(settings) = pending else {
+            continue;
+        };
+        let (_saved, us) = shared.borrow_mut().module_flash.save(&settings);
+        {
+            let mut s = shared.borrow_mut();
+            s.module_busy_until_ns = s.now_ns() + us * 1000;
+        }
+        b.delay().sleep_ns(us * 1000).await;
+    }
+}
+
+/// Waits while the module's CPU is halted by its NVMC.
+async fn wait_while_halted(shared: &Shared, delay: &SimDelay) {
+    loop {
+        let left = {
+            let s = shared.borrow();
+            s.module_busy_until_ns.saturating_sub(s.now_ns())
+        };
+        if left == 0 {
+            return;
+        }
+        delay.sleep_ns(left).await;
     }
 }
 
@@ -538,10 +452,12 @@ async fn hm10_task(b: &Board, shared: &Shared) {
     }
 }
 
-/// The supervisor: every 100 ms, fed if every expected task checked in.
-async fn supervisor_task(b: &Board) {
+/// The supervisor: every 100 ms, fed if every expected task checked in (not while the
+/// NVMC halts the CPU).
+async fn supervisor_task(b: &Board, shared: &Shared) {
     loop {
         sleep_ms(b.delay(), 100).await;
+        wait_while_halted(shared, b.delay()).await;
         if b.checked_in.get() & EXPECTED == EXPECTED {
             b.checked_in.set(0);
             b.last_feed_ms.set(b.now_ms());
@@ -564,13 +480,14 @@ pub(crate) async fn module_board(
     shared: Shared,
     medium: Medium,
     delay: SimDelay,
-    mut chip: ModuleChip,
+    chip: ModuleChip,
     seed: u64,
 ) {
+    let chip = RefCell::new(chip);
     let mut cause = BootCause::PowerOn;
     loop {
         sleep_ms(&delay, MODULE_BOOT_MS).await;
-        let settings: ModuleSettings = shared.borrow().module_flash;
+        let settings: ModuleSettings = shared.borrow_mut().module_flash.load();
         let Ok(mut app) = App::new(settings, AirLink::new(), Handset::new(&settings), true) else {
             return;
         };
@@ -586,13 +503,16 @@ pub(crate) async fn module_board(
         };
         let tasks = join(
             join5(
-                link_task(&board, &mut chip, &shared, seed),
+                link_task(&board, &chip, &shared, seed),
                 ppm_in_task(&board, &shared),
                 app_task(&board, &shared),
                 hm10_task(&board, &shared),
-                supervisor_task(&board),
+                supervisor_task(&board, &shared),
             ),
-            jr_line_task(&board, &shared),
+            join(
+                jr_line_task(&board, &shared),
+                settings_task(&board, &shared),
+            ),
         );
         let _ = select(tasks, watchdog(&board)).await;
         shared.borrow_mut().watchdog_resets.module += 1;

@@ -69,6 +69,10 @@ pub enum FlashInjection {
     Corrupted(u64),
     /// Erased (a new board).
     Erased,
+    /// The scenario's settings stored, then the map filled with earlier saves until the next
+    /// save of a changed parameter must erase a sector (sequential-storage erases when it
+    /// runs out of room): that save stalls the F405 for a sector erase.
+    NearlyFull,
 }
 
 /// The end of the link a figure belongs to.

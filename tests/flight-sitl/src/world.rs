@@ -160,8 +160,12 @@ pub(crate) struct WorldState {
     pub(crate) flight: Option<(Rc<RefCell<FlightApp>>, SimClock)>,
     /// The flight settings when the flight board last stopped.
     pub(crate) flight_settings: Settings,
-    /// What the module's settings flash holds.
-    pub(crate) module_flash: module_core::settings::Settings,
+    /// The module's settings flash (kept across its resets).
+    pub(crate) module_flash: crate::module_flash::ModuleFlash,
+    /// A save the module core asked for, waiting for the module's settings task.
+    pub(crate) module_save: Option<module_core::settings::Settings>,
+    /// Until when (virtual ns) the module's CPU is halted by its NVMC (a settings save).
+    pub(crate) module_busy_until_ns: u64,
     /// Messages the module relayed to the phone, with the scenario time (s).
     pub(crate) module_rx: Vec<(f64, Message)>,
     /// What the module sent on the JR line, with the scenario time (s).
@@ -177,6 +181,9 @@ pub(crate) struct WorldState {
     /// Until when (virtual ns) the flight board's one thread-mode executor is held by a
     /// blocking job (a flash operation, a gain design).
     pub(crate) flight_busy_until_ns: u64,
+    /// The flight storage adapter stretches the watchdog around a save as the app's job
+    /// asks (`false`: [`World::without_save_watchdog_stretch`]).
+    pub(crate) save_stretch: bool,
     medium: si4432_sim::Medium,
 }
 
@@ -369,7 +376,9 @@ impl World {
             input: PilotInput::default(),
             flight: None,
             flight_settings: settings.clone(),
-            module_flash: module,
+            module_flash: crate::module_flash::ModuleFlash::new(&module),
+            module_save: None,
+            module_busy_until_ns: 0,
             module_rx: Vec::new(),
             handset_tx: Vec::new(),
             uplink: setting_changes,
@@ -377,6 +386,7 @@ impl World {
             phone_key: settings.link_key(),
             watchdog_resets: WatchdogResets::default(),
             flight_busy_until_ns: 0,
+            save_stretch: true,
             boots: Vec::new(),
             medium: medium.clone(),
         }));
@@ -590,6 +600,25 @@ impl World {
             ts_s,
             end,
         }
+    }
+
+    /// Types `bytes` at the running flight controller's USB console (`console`); one reply
+    /// per finished line, none while the board is down.
+    pub fn type_at_flight_console(&mut self, bytes: &[u8]) -> Vec<String> {
+        let app = self
+            .shared
+            .borrow()
+            .flight
+            .as_ref()
+            .map(|(app, _)| app.clone());
+        app.map(|app| crate::console::type_into_console(&mut app.borrow_mut(), bytes))
+            .unwrap_or_default()
+    }
+
+    /// The flight storage adapter no longer stretches the watchdog around a save (the app's
+    /// `SaveJob::watchdog_ms` ignored): what the stretch is for, shown.
+    pub fn without_save_watchdog_stretch(&mut self) {
+        self.shared.borrow_mut().save_stretch = false;
     }
 
     /// Runs `d` more of virtual time.

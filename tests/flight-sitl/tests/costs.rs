@@ -15,7 +15,7 @@ use flight_core::settings::PARAMS;
 use flight_sitl::scenario::default_airframe;
 use std::time::Duration;
 
-use flight_sitl::{PilotInput, Sample, Scenario, WARMUP_S, World};
+use flight_sitl::{FlashInjection, PilotInput, Sample, Scenario, WARMUP_S, World};
 use telemetry::link::LinkKey;
 use telemetry::messages::SettingChange;
 
@@ -44,6 +44,19 @@ fn held(samples: &[Sample], ts_s: f64) -> Vec<(f64, f64)> {
 /// On the ground, disarmed: the phone sends `changes` one by one from 1 s (one per
 /// 20 ms), the world runs `seconds`.
 fn on_the_ground(changes: &[SettingChange], seconds: f64) -> flight_sitl::Sitl {
+    on_the_ground_with(changes, seconds, FlashInjection::Stored, true, false)
+}
+
+/// [`on_the_ground`] with the flash as `flash` holds it, the storage adapter stretching the
+/// watchdog around saves or (`stretch` false) not, and the pilot typing `save` at the
+/// console after the changes (`save`).
+fn on_the_ground_with(
+    changes: &[SettingChange],
+    seconds: f64,
+    flash: FlashInjection,
+    stretch: bool,
+    save: bool,
+) -> flight_sitl::Sitl {
     let (quad, mut settings) = default_airframe();
     // Changes from the phone are signed with the binding phrase both ends carry (spec §12.5).
     let key = LinkKey::from_phrase("costs of blocking jobs");
@@ -58,11 +71,21 @@ fn on_the_ground(changes: &[SettingChange], seconds: f64) -> flight_sitl::Sitl {
         link_key: Some(key),
         ..Default::default()
     });
+    s.flight_flash = flash;
     let mut world = World::new(s);
+    if !stretch {
+        world.without_save_watchdog_stretch();
+    }
     world.run_for(Duration::from_secs_f64(WARMUP_S + 1.0));
     for c in changes {
         world.phone_change(*c);
         world.run_for(Duration::from_millis(20));
+    }
+    if save {
+        // The pilot keeps the changes: a save, on the ground.
+        world.run_for(Duration::from_millis(200));
+        let replies = world.type_at_flight_console(b"save\r\n");
+        assert_eq!(replies, ["saving\r\n"]);
     }
     world.run_to_end();
     world.finish()
@@ -81,4 +104,28 @@ fn a_gain_design_holds_the_board_for_42_ms() {
         .copied();
     assert!(design.is_some(), "no 42 ms design stretch in {stretches:?}");
     assert_eq!(sitl.watchdog_resets.flight, 0);
+}
+
+/// A save that needs a sector erase (the map ran out of room) holds the F405 for the erase
+/// (250 ms, DS8626) — as long as the 250 ms watchdog timeout. The storage adapter stretches
+/// the watchdog to the app's `SaveJob::watchdog_ms` for it: no reset. Without the stretch
+/// the watchdog model sees the stall and resets the flight controller.
+#[test]
+fn a_save_with_a_sector_erase_resets_nothing_because_the_watchdog_is_stretched() {
+    let changes = [change("pid.roll.kp", 0.0042)];
+    let sitl = on_the_ground_with(&changes, 2.0, FlashInjection::NearlyFull, true, true);
+    let stretches = held(&sitl.samples, sitl.ts_s);
+    println!("held: {stretches:?}");
+    assert!(
+        stretches.iter().any(|(_, len)| *len >= 0.25),
+        "no sector-erase stretch in {stretches:?}"
+    );
+    assert_eq!(sitl.watchdog_resets.flight, 0);
+    assert_eq!(sitl.settings.f32("pid.roll.kp"), 0.0042);
+
+    let unstretched = on_the_ground_with(&changes, 2.0, FlashInjection::NearlyFull, false, true);
+    assert!(
+        unstretched.watchdog_resets.flight >= 1,
+        "a 250 ms stall under a 250 ms watchdog must reset the flight controller"
+    );
 }

@@ -8,8 +8,10 @@
 //! Owned here: the live and stored settings and the setup derived from them; the flight
 //! loop and its controllers; the IMU fault policy (`imu`); the baro climb rate; the
 //! battery monitor and the tone player; the link follower's hooks, bind handling and
-//! telemetry (`link`), the same over OpenLRSng (`openlrs`); the console's command language
-//! (`console`); the watchdog check-in policy (`watchdog`); the GPS port (`gps`: UBX bytes in,
+//! telemetry (`link`), the same over OpenLRSng (`openlrs`), and the link task's body the
+//! firmware and the simulator share (`link_task`); the console's command language
+//! (`console`); the watchdog check-in policy (`watchdog`) and the stretch around settings
+//! saves (`save`); the GPS port (`gps`: UBX bytes in,
 //! boot configuration out); the magnetometer calibration (`magcal`: collected from the
 //! console, applied to every reading).
 
@@ -17,8 +19,10 @@ mod console;
 mod gps;
 mod imu;
 mod link;
+pub mod link_task;
 mod magcal;
 mod openlrs;
+mod save;
 mod watchdog;
 
 #[cfg(test)]
@@ -40,6 +44,7 @@ pub use magcal::{MagcalSession, calibration as mag_calibration};
 pub use openlrs::{
     OPENLRS_FAILSAFE_DELAY, OPENLRS_RATE_CODE_BASE, openlrs_bind_window, run_openlrs_receiver,
 };
+pub use save::{SAVE_WATCHDOG_MS, SaveJob};
 pub use watchdog::{FEED_PERIOD_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog};
 
 use crate::alerts::{Alert, TonePlayer};

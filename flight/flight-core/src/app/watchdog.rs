@@ -56,6 +56,8 @@ pub struct Watchdog {
     required: u16,
     checked_in: u16,
     last_feed_ms: u32,
+    /// The period in force: [`WATCHDOG_TIMEOUT_MS`], or a stretch around a flash write.
+    timeout_ms: u32,
 }
 
 impl Watchdog {
@@ -66,7 +68,25 @@ impl Watchdog {
             required,
             checked_in: 0,
             last_feed_ms: now_ms,
+            timeout_ms: WATCHDOG_TIMEOUT_MS,
         }
+    }
+
+    /// The hardware watchdog was reprogrammed to `timeout_ms` at `now_ms` (which feeds it):
+    /// a blocking job such as a sector erase may run that long.
+    pub fn stretch(&mut self, now_ms: u32, timeout_ms: u32) {
+        self.last_feed_ms = now_ms;
+        self.timeout_ms = timeout_ms;
+    }
+
+    /// Back to [`WATCHDOG_TIMEOUT_MS`] at `now_ms`, with the feed reprogramming gives.
+    pub fn restore(&mut self, now_ms: u32) {
+        self.stretch(now_ms, WATCHDOG_TIMEOUT_MS);
+    }
+
+    /// The period in force, ms.
+    pub fn timeout_ms(&self) -> u32 {
+        self.timeout_ms
     }
 
     /// `task` is alive.
@@ -92,8 +112,8 @@ impl Watchdog {
             .filter(|t| self.required & t.bit() != 0 && self.checked_in & t.bit() == 0)
     }
 
-    /// The hardware model: no feed for the IWDG timeout means the chip has reset.
+    /// The hardware model: no feed for the timeout in force means the chip has reset.
     pub fn expired(&self, now_ms: u32) -> bool {
-        now_ms.wrapping_sub(self.last_feed_ms) >= WATCHDOG_TIMEOUT_MS
+        now_ms.wrapping_sub(self.last_feed_ms) >= self.timeout_ms
     }
 }

@@ -15,6 +15,7 @@ use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 use embassy_time::Instant;
+use flight_core::app::link_task::AppAccess;
 use flight_core::app::{FlightApp, Task};
 use flight_core::outputs::Command;
 use static_cell::StaticCell;
@@ -43,6 +44,16 @@ pub fn install(app: FlightApp) {
 /// Runs `f` on the application; `None` before it is installed.
 pub fn with_app<R>(f: impl FnOnce(&mut FlightApp) -> R) -> Option<R> {
     APP.lock(|cell| cell.try_borrow_mut().ok()?.as_deref_mut().map(f))
+}
+
+/// The installed application, as the shared task bodies (`flight_core::app::link_task`)
+/// reach it.
+pub struct SharedApp;
+
+impl AppAccess for SharedApp {
+    fn with_app<R>(&self, f: impl FnOnce(&mut FlightApp) -> R) -> Option<R> {
+        with_app(f)
+    }
 }
 
 /// A task that hands the application nothing else checks in with the watchdog policy.

@@ -1,22 +1,21 @@
-//! The link loop's embassy plumbing for the link task: embassy-time as the link's
-//! `LinkClock`, the loops' hook into the module core, and the wrappers that keep the task
-//! checked in while a link step runs (the driver adapter is `radio_rfm22b::link::LinkRadio`).
+//! The link task's embassy plumbing: embassy-time as the link's `LinkClock`, and the board
+//! as `module_core::link_task::LinkPorts` (the core behind its lock, the radio task's
+//! check-in, the action signals). The driver adapters are radio-rfm22b's `LinkRadio` and
+//! `DualRadio`; the task body is `module_core::link_task::run_link_step`.
 
-use core::convert::Infallible;
-
-use embassy_futures::select::{Either, select};
 use embassy_time::{Instant, Timer};
-use module_core::session::{POLL_MS, SessionEnd};
+use module_core::air::AirLink;
+use module_core::app::{Action, App};
+use module_core::handset::Handset;
+use module_core::link_task::LinkPorts;
 use telemetry::link::LinkClock;
-use telemetry::link::core::{Follower, Master};
-use telemetry::link::follower::FollowerHooks;
-use telemetry::link::master::MasterHooks;
 
-use crate::firmware::shared::{now_ms, with_app};
+use crate::firmware::shared::{carry_out, now_ms, with_app};
 use crate::firmware::tasks::supervisor::{Watched, check_in};
 
 /// embassy-time in µs: the same clock the JR-line task stamps CRSF frames with, so the
 /// link's slot times are directly the CRSF timing frame's phase.
+#[derive(Clone, Copy)]
 pub struct EmbassyClock;
 
 impl LinkClock for EmbassyClock {
@@ -29,61 +28,25 @@ impl LinkClock for EmbassyClock {
     }
 }
 
-/// The loops' hook: the module core exchanges channels, records and statistics.
-pub struct Hooks;
+/// The board as the link task's body sees it.
+pub struct Ports;
 
-impl MasterHooks for Hooks {
-    fn on_slot(&mut self, now_us: u64, master: &mut Master) {
-        with_app(|app| app.on_master_slot(now_us, now_ms(), master));
+impl LinkPorts for Ports {
+    type Handset = Handset;
+
+    fn with_app<R>(&self, f: impl FnOnce(&mut App<AirLink, Handset>) -> R) -> Option<R> {
+        with_app(f)
     }
-}
 
-impl FollowerHooks for Hooks {
-    fn on_step(&mut self, now_us: u64, follower: &mut Follower) {
-        with_app(|app| app.on_follower_step(now_us, now_ms(), follower));
-    }
-}
-
-/// Checks in every `POLL_MS` until the core ends the running step.
-pub async fn poll_session() -> SessionEnd {
-    loop {
+    fn check_in(&self) {
         check_in(Watched::Radio);
-        if let Some(end) = with_app(|app| app.poll_session(now_ms())).flatten() {
-            return end;
-        }
-        Timer::after_millis(POLL_MS.into()).await;
     }
-}
 
-/// `step` to its end, checking in meanwhile.
-pub async fn keep_alive<T>(step: impl Future<Output = T>) -> T {
-    let ticking = async {
-        loop {
-            check_in(Watched::Radio);
-            Timer::after_millis(POLL_MS.into()).await;
-        }
-    };
-    match select(step, ticking).await {
-        Either::First(value) => value,
-        Either::Second(never) => never,
+    fn now_ms(&self) -> u32 {
+        now_ms()
     }
-}
 
-/// A link loop until its radio fails or the core ends the step.
-pub async fn run<E: defmt::Format>(
-    link: impl Future<Output = Result<Infallible, E>>,
-) -> SessionEnd {
-    match select(link, poll_session()).await {
-        Either::First(Err(e)) => {
-            log(&e);
-            SessionEnd::RadioFailed
-        }
-        Either::First(Ok(never)) => match never {},
-        Either::Second(end) => end,
+    fn carry_out(&self, action: Action) {
+        carry_out(Some(action));
     }
-}
-
-/// A radio error, logged.
-pub fn log<E: defmt::Format>(error: &E) {
-    defmt::warn!("link radio: {}", error);
 }

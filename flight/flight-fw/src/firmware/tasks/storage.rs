@@ -1,18 +1,18 @@
 //! Settings in flash sectors 2–3 (0x0800_8000–0x0800_FFFF, hardware/brushedsparky): loaded
 //! at boot before the watchdog starts (a load problem goes to the app, which refuses to arm
-//! until a save), saved when the app asks (`FlightApp::take_save`, disarmed only) with the
-//! watchdog stretched over the possible sector erase.
+//! until a save), saved when the app hands out a job (`FlightApp::take_save_job`, disarmed
+//! only) with the watchdog stretched to the job's period over the possible sector erase.
 
 use defmt::{info, warn};
 use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_stm32::flash::{Bank1Region1, Blocking};
 use embassy_time::{Duration, Timer};
-use flight_core::settings::{LoadProblem, Settings, load, save, save_whole};
+use flight_core::settings::{LoadProblem, Settings, load};
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
 
 use super::supervisor::with_long_timeout;
-use crate::firmware::shared::with_app;
+use crate::firmware::shared::{now_ms, with_app};
 
 /// The flash under the map.
 pub type SettingsFlash = BlockingAsync<Bank1Region1<'static, Blocking>>;
@@ -57,25 +57,15 @@ pub async fn open(
 pub async fn storage_task(mut map: SettingsMap) {
     loop {
         Timer::after(Duration::from_millis(100)).await;
-        // The app hands out a save only while disarmed.
-        let Some(Some((live, stored, whole))) =
-            with_app(|a| a.take_save().map(|(l, s)| (l, s, a.save_whole())))
-        else {
+        // The app hands out a save only while disarmed, with the watchdog period it needs.
+        let Some(job) = with_app(|a| a.take_save_job()).flatten() else {
             continue;
         };
-        let written = async {
-            if whole {
-                // After a load problem flash is not what `stored` says: write it all.
-                save_whole(&mut map, &live).await.map(|()| 1)
-            } else {
-                save(&mut map, &live, &stored).await
-            }
-        };
-        match with_long_timeout(written).await {
-            Ok(n) => {
-                info!("settings saved ({} changed)", n);
-                with_app(|a| a.on_saved(live));
-            }
+        let written = with_long_timeout(job.watchdog_ms, job.write(&mut map)).await;
+        let saved = written.as_ref().ok().map(|_| job.live.clone());
+        with_app(|a| a.on_save_done(now_ms(), saved));
+        match written {
+            Ok(n) => info!("settings saved ({} written)", n),
             Err(e) => warn!("settings save failed: {}", e),
         }
     }

@@ -2,10 +2,11 @@
 //! policy (`flight_core::app::Watchdog`) says every supervised task checked in, so a stuck
 //! task is a reset, not a runaway motor.
 //!
-//! A flash sector erase stalls the CPU for up to 0.8 s (16 KiB sector, RM0090 / datasheet
-//! "sector erase time"), longer than the 250 ms timeout. Settings are only written while
-//! disarmed, inside [`with_long_timeout`], which stretches the watchdog to 4 s for the write
-//! and restores it afterwards.
+//! A flash sector erase stalls the CPU for up to 0.5 s (16 KiB sector at ×32, DS8626
+//! "Flash memory programming"), longer than the 250 ms timeout. Settings are only written
+//! while disarmed, inside [`with_long_timeout`], which stretches the watchdog to the period
+//! the app's save job asks for (`flight_core::app::SAVE_WATCHDOG_MS`) and restores it
+//! afterwards, telling the app's watchdog model both times.
 
 use embassy_stm32::pac;
 use embassy_stm32::pac::iwdg::vals::{Key, Pr};
@@ -26,10 +27,13 @@ fn set_timeout(prescaler: Pr, reload: u16) {
     iwdg.kr().write(|w| w.set_key(Key::RESET));
 }
 
-/// Runs `f` (a flash write) with a 4 s watchdog, then restores 250 ms.
-pub async fn with_long_timeout<R>(f: impl core::future::Future<Output = R>) -> R {
-    // 32 kHz / 64 = 500 Hz, 2000 ticks = 4 s.
-    set_timeout(Pr::DIVIDE_BY64, 2000);
+/// Runs `f` (a flash write) with a watchdog of `timeout_ms` (at most 8 s: 32 kHz / 64,
+/// 12-bit reload), then restores 250 ms (the app's model restores with `on_save_done`).
+pub async fn with_long_timeout<R>(timeout_ms: u32, f: impl core::future::Future<Output = R>) -> R {
+    // 32 kHz / 64 = 500 Hz: one tick per 2 ms (4 s = 2000 ticks).
+    let reload = u16::try_from((timeout_ms / 2).min(0xFFF)).unwrap_or(0xFFF);
+    set_timeout(Pr::DIVIDE_BY64, reload);
+    with_app(|a| a.on_watchdog_stretched(now_ms(), u32::from(reload) * 2));
     let result = f.await;
     // 32 kHz / 32 = 1 kHz, 250 ticks = 250 ms (what IndependentWatchdog::new chose).
     set_timeout(Pr::DIVIDE_BY32, 249);
