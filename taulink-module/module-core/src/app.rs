@@ -287,8 +287,12 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         }
     }
 
-    /// A telemetry record received over the link: to the handset and the phone.
+    /// A telemetry record received over the link: to the handset and the phone. The flight
+    /// side's arm state is kept: no phrase change while it says armed (`crate::phrase`).
     pub fn on_link_record(&mut self, record: &[u8]) {
+        if let Ok(telemetry::messages::Message::ArmState(state)) = crate::records::decode(record) {
+            self.commands.flight_armed = state.armed;
+        }
         if self.settings.role == Role::Transmitter {
             self.handset.on_telemetry(record);
         }
@@ -495,6 +499,10 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
                 }
             }
             Effect::Save => {
+                let _ = self.actions.push_back(Action::Save(self.settings));
+            }
+            Effect::NewPhrase => {
+                self.restart_request = true;
                 let _ = self.actions.push_back(Action::Save(self.settings));
             }
             Effect::None | Effect::CommandStatus => {}

@@ -43,6 +43,8 @@ struct FakeHandset {
     stats: Vec<LinkStats>,
     /// The radio's selected model.
     model: Option<u8>,
+    /// Requests the radio made, oldest first.
+    requests: std::collections::VecDeque<HandsetRequest>,
 }
 
 impl HandsetOutput for FakeHandset {
@@ -54,6 +56,9 @@ impl HandsetOutput for FakeHandset {
     }
     fn model_id(&self) -> Option<u8> {
         self.model
+    }
+    fn take_request(&mut self) -> Option<HandsetRequest> {
+        self.requests.pop_front()
     }
 }
 
@@ -538,4 +543,87 @@ fn the_hm10_always_gets_a_pin_the_factory_one_from_the_chip_id() {
     app.set_setting_text("ble_pin", "271828").unwrap();
     assert_eq!(app.parameter_commands().ble_pin, Pin::new(271_828));
     assert_eq!(app.hm10_script(0, 1).pin(), Pin::new(271_828));
+}
+
+/// The radio writes `value` to parameter `number` (as the Lua tool's PARAMETER_WRITE).
+fn radio_writes(app: &mut App<FakeLink, FakeHandset>, number: u8, value: &[u8]) {
+    app.handset_mut().requests.push_back(HandsetRequest::Write {
+        origin: address::RADIO,
+        number,
+        value: heapless::Vec::from_slice(value).unwrap(),
+    });
+    app.on_handset_idle(0);
+}
+
+fn info_row(app: &App<FakeLink, FakeHandset>, number: u8) -> String {
+    let entry = params::entry(number, app.settings(), app.parameter_commands()).unwrap();
+    let name_end = entry[2..].iter().position(|b| *b == 0).unwrap() + 2;
+    String::from_utf8(entry[name_end + 1..entry.len() - 1].to_vec()).unwrap()
+}
+
+fn arm_record(armed: bool) -> Vec<u8> {
+    let message = telemetry::messages::Message::ArmState(telemetry::messages::ArmState {
+        armed,
+        failsafe: false,
+        arming_blockers: 0,
+    });
+    let mut out = [0u8; MAX_RECORD_LEN];
+    let n = crate::records::encode(&message, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+#[test]
+fn a_phrase_typed_on_the_radio_keys_the_link_but_never_while_the_quad_is_armed() {
+    use crate::session::{LinkStep, SessionEnd};
+    use telemetry::link::LinkKey;
+    let mut app = app(Settings {
+        bind_id: 0x0101_0101,
+        ..Settings::default()
+    });
+    app.on_radio_present(true);
+    let LinkStep::RunMaster(_) = app.next_link_step(0, 7) else {
+        panic!("bound: the master runs");
+    };
+    assert_eq!(info_row(&app, params::PHRASE_KEY), params::NO_PHRASE);
+
+    // The flight side reports armed: the phrase is refused, nothing restarts or is saved.
+    app.on_link_record(&arm_record(true));
+    radio_writes(
+        &mut app,
+        params::BIND_PHRASE,
+        b"correct horse battery staple\0",
+    );
+    assert_eq!(app.settings().link_key, None);
+    assert_eq!(app.take_action(), None);
+    assert_eq!(app.poll_session(50), None);
+    assert_eq!(info_row(&app, params::PHRASE_KEY), "refused: quad armed");
+
+    // Disarmed: the same write keys the link, is saved at once and restarts the link.
+    app.on_link_record(&arm_record(false));
+    radio_writes(
+        &mut app,
+        params::BIND_PHRASE,
+        b"  correct horse battery staple\0",
+    );
+    let key = LinkKey::from_phrase("correct horse battery staple");
+    assert_eq!(
+        app.settings().link_key,
+        Some(key),
+        "trimmed like every path"
+    );
+    let Some(Action::Save(saved)) = app.take_action() else {
+        panic!("the new key is saved at once");
+    };
+    assert_eq!(saved.link_key, Some(key));
+    assert_eq!(app.poll_session(100), Some(SessionEnd::SettingsChanged));
+    assert_eq!(
+        info_row(&app, params::PHRASE_KEY),
+        key.fingerprint().to_string()
+    );
+
+    // An empty commit (the pilot backed out of the editor) keeps the phrase.
+    radio_writes(&mut app, params::BIND_PHRASE, b"\0");
+    assert_eq!(app.settings().link_key, Some(key));
+    assert_eq!(app.take_action(), None);
+    assert_eq!(info_row(&app, params::PHRASE_KEY), "empty: phrase kept");
 }

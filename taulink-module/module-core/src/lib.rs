@@ -13,6 +13,7 @@ pub mod channels;
 pub mod handset;
 pub mod hm10;
 pub mod params;
+pub mod phrase;
 pub mod ports;
 pub mod ppm;
 pub mod records;
