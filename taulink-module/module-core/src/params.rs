@@ -42,6 +42,7 @@ use crate::settings::{
     Band, DEFAULT_INPUT_TIMEOUT_MS, DEFAULT_TELEMETRY_RATIO, INPUT_TIMEOUT_MS, InputProtocol,
     LinkProtocol, OutputProtocol, RateMode, Settings, TELEMETRY_RATIOS,
 };
+use telemetry::module_record::{KeyOutcome, KeyRefusal};
 
 /// Packet rate (the link's rate modes).
 pub const PACKET_RATE: u8 = 1;
@@ -87,8 +88,10 @@ pub const BIND_PHRASE: u8 = 20;
 pub const BLE_PIN: u8 = 21;
 /// Info: the binding phrase's fingerprint, or why the last phrase was refused.
 pub const PHRASE_KEY: u8 = 22;
+/// Command: apply the key the phone proposed, after the pilot's confirmation.
+pub const PHONE_PHRASE: u8 = 23;
 /// Parameters the module offers (DEVICE_INFO's count).
-pub const PARAMETER_COUNT: u8 = 22;
+pub const PARAMETER_COUNT: u8 = 23;
 
 /// The phrase row without a phrase.
 pub const NO_PHRASE: &str = "none - UNAUTHENTICATED";
@@ -122,6 +125,12 @@ pub struct Commands {
     pub flight_armed: bool,
     /// What the last phrase write did, for the "Phrase Key" row.
     pub phrase_note: Option<PhraseNote>,
+    /// A key the phone proposed, waiting for the pilot ("Phone Phrase").
+    pub phone_key: Option<telemetry::link::LinkKey>,
+    /// The "Phone Phrase" command asks the pilot to confirm `phone_key`.
+    pub phone_confirming: bool,
+    /// How the last "Phone Phrase" confirmation ended.
+    pub phone_result: Option<KeyOutcome>,
 }
 
 /// What a write asks of the core beyond the settings change.
@@ -144,6 +153,15 @@ pub enum Effect {
     CommandStatus,
     /// A new binding phrase's key is in force: restart the link and save at once.
     NewPhrase,
+    /// The phone's proposal was decided on the radio: tell the phone (and, when it was
+    /// applied and changed the key, restart the link and save at once). Answer with the
+    /// command's entry.
+    PhoneKey {
+        /// Applied or refused (declined, armed).
+        outcome: KeyOutcome,
+        /// The key in force changed.
+        changed: bool,
+    },
 }
 
 /// The name the radio shows for a rate mode, with its packet rate.
@@ -389,6 +407,35 @@ pub fn entry(
             }
             Entry::info(0, "Phrase Key", &text)
         }
+        PHONE_PHRASE => {
+            let mut text: String<24> = String::new();
+            let status = match (commands.phone_key, commands.phone_confirming) {
+                (Some(key), true) => {
+                    write!(text, "Use key {}?", key.fingerprint()).ok()?;
+                    CommandStatus::ConfirmationNeeded
+                }
+                (Some(key), false) => {
+                    write!(text, "{} from phone", key.fingerprint()).ok()?;
+                    CommandStatus::Ready
+                }
+                (None, _) => {
+                    match (commands.phone_result, settings.link_key) {
+                        (Some(KeyOutcome::Applied), Some(key)) => {
+                            write!(text, "Key {} set", key.fingerprint()).ok()?
+                        }
+                        (Some(KeyOutcome::Refused(KeyRefusal::Armed)), _) => {
+                            text.push_str("refused: quad armed").ok()?
+                        }
+                        (Some(KeyOutcome::Refused(KeyRefusal::Declined)), _) => {
+                            text.push_str("Cancelled").ok()?
+                        }
+                        _ => text.push_str("none from phone").ok()?,
+                    }
+                    CommandStatus::Ready
+                }
+            };
+            Entry::command(0, "Phone Phrase", status, POLL_10MS, &text)
+        }
         BLE_PIN => {
             let mut text: String<8> = String::new();
             match commands.ble_pin {
@@ -525,6 +572,7 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
                 Effect::None
             }
         }
+        (PHONE_PHRASE, Some(step)) => phone_phrase(step, settings, commands),
         (SAVE, Some(step)) => match CommandStatus::from_byte(step) {
             Some(CommandStatus::Start) => {
                 commands.save_confirming = true;
@@ -562,6 +610,44 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
         commands.restarted_by = None;
     }
     effect
+}
+
+/// A step of the "Phone Phrase" command: start shows the proposal's fingerprint and asks
+/// for a confirmation; confirm applies it (never while armed); cancel declines it.
+fn phone_phrase(step: u8, settings: &mut Settings, commands: &mut Commands) -> Effect {
+    match CommandStatus::from_byte(step) {
+        Some(CommandStatus::Start) => {
+            commands.phone_confirming = commands.phone_key.is_some();
+            Effect::CommandStatus
+        }
+        Some(CommandStatus::Confirm) if commands.phone_confirming => {
+            commands.phone_confirming = false;
+            let Some(key) = commands.phone_key.take() else {
+                return Effect::CommandStatus;
+            };
+            let (note, changed) = phrase::adopt(key, commands.flight_armed, &mut settings.link_key);
+            commands.phrase_note = Some(note);
+            let outcome = if note == PhraseNote::Armed {
+                KeyOutcome::Refused(KeyRefusal::Armed)
+            } else {
+                KeyOutcome::Applied
+            };
+            commands.phone_result = Some(outcome);
+            Effect::PhoneKey { outcome, changed }
+        }
+        Some(CommandStatus::Cancel) if commands.phone_confirming => {
+            commands.phone_confirming = false;
+            commands.phone_key = None;
+            let outcome = KeyOutcome::Refused(KeyRefusal::Declined);
+            commands.phone_result = Some(outcome);
+            Effect::PhoneKey {
+                outcome,
+                changed: false,
+            }
+        }
+        Some(_) => Effect::CommandStatus,
+        None => Effect::None,
+    }
 }
 
 /// An OpenLRSng parameter changed: the running link restarts only if it is OpenLRSng.

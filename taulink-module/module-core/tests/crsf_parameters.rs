@@ -366,7 +366,7 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             let name_end = info[2..].iter().position(|&b| b == 0).unwrap() + 2;
             assert_eq!(&info[2..name_end], b"TauLink");
             let count = info[name_end + 13];
-            assert_eq!(count, 22, "DEVICE_INFO's parameter count");
+            assert_eq!(count, 23, "DEVICE_INFO's parameter count");
 
             // Read every parameter.
             let mut fields = Vec::new();
@@ -402,7 +402,8 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                     "OLRS Telem",
                     "Bind Phrase",
                     "BLE PIN",
-                    "Phrase Key"
+                    "Phrase Key",
+                    "Phone Phrase"
                 ]
             );
             assert_eq!(fields[12].options, ["Off", "On"]);
@@ -424,6 +425,10 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             assert_eq!(
                 fields[21].info, "none - UNAUTHENTICATED",
                 "no phrase: the menu says so"
+            );
+            assert_eq!(
+                (fields[22].kind, fields[22].status, fields[22].info.as_str()),
+                (13, 0, "none from phone")
             );
             let rate = &fields[0];
             assert_eq!(
