@@ -165,7 +165,7 @@ function renderSettingValues(): void {
   set("settings-status", r ? `${name} ${REFUSALS[r.reason]}` : "", r ? "bad" : "");
   // The flight side refuses changes while armed; the page does not offer them then.
   const armed = state.arm?.armed === true;
-  for (const b of document.querySelectorAll<HTMLButtonElement>("button[data-set]")) {
+  for (const b of document.querySelectorAll<HTMLButtonElement>("button[data-set], #module-phrase-send")) {
     if (b.disabled !== armed) {
       b.disabled = armed;
       b.title = armed ? "refused while armed" : "";
