@@ -13,9 +13,9 @@
 
 use libfuzzer_sys::fuzz_target;
 use module_core::hm10::relay::{MAX_FRAME_LEN, MAX_RECORD_LEN, PhoneEvent, PhoneReader, Relay};
-use taulink_fuzz::Input;
 use module_core::params::Commands;
 use module_core::phrase::PhoneKeys;
+use taulink_fuzz::Input;
 use telemetry::cobs;
 use telemetry::link::LinkKey;
 use telemetry::module_record::{self, KeyOutcome};
@@ -57,7 +57,9 @@ fuzz_target!(|data: &[u8]| {
                         assert_eq!(module_record::decode(&again[..k]), Ok(decoded));
                         commands.flight_armed = input.bool();
                         let before = link_key;
-                        if let Some(outcome) = keys.on_record(&decoded, &mut link_key, &mut commands) {
+                        if let Some(outcome) =
+                            keys.on_record(&decoded, &mut link_key, &mut commands)
+                        {
                             assert_eq!(outcome.changed, before != link_key);
                             if outcome.changed {
                                 assert!(!commands.flight_armed, "a key changed while armed");
