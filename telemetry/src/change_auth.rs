@@ -44,6 +44,11 @@ impl ChangeKey {
         Self(bytes)
     }
 
+    /// The key's bytes, for the other MACs under it (`crate::module_record`).
+    pub(crate) fn as_bytes(&self) -> &[u8; KEY_BYTES] {
+        &self.0
+    }
+
     /// The tag of `change` signed with `counter` in the flight side's `session`.
     pub fn tag(&self, session: u32, counter: u32, change: &SettingChange) -> [u8; 8] {
         let mut h = SipHasher24::new(&self.0);

@@ -17,3 +17,4 @@ pub mod link;
 pub mod messages;
 #[cfg(feature = "std")]
 pub mod mock;
+pub mod module_record;

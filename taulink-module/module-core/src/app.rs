@@ -13,6 +13,7 @@ use crate::button::ButtonEvent;
 use crate::channels::ChannelFrame;
 use crate::hm10::relay::{MAX_RECORD_LEN, Relay, RelayStats};
 use crate::params::{self, Commands, Effect};
+use crate::phrase::PhoneKeys;
 use crate::ports::{HandsetOutput, HandsetRequest, LinkPort, LinkStats};
 use crate::ppm::{self, Decoded, Decoder, DecoderConfig, Encoder, EncoderConfig};
 use crate::session::{BindOutcome, LinkStep, Session, SessionEnd};
@@ -89,6 +90,8 @@ pub struct App<L: LinkPort, H: HandsetOutput> {
     unique_id: Option<u64>,
     /// Seeds a receiver-role follower's epoch nonces (spec §12.2), from the RNG at boot.
     nonce_seed: u64,
+    /// Key changes from the phone: session, counter, proposal timeout.
+    phone_keys: PhoneKeys,
 }
 
 impl<L: LinkPort, H: HandsetOutput> App<L, H> {
@@ -126,6 +129,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             link_model: None,
             unique_id: None,
             nonce_seed: 0,
+            phone_keys: PhoneKeys::new(0),
         })
     }
 
@@ -142,9 +146,12 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
 
     /// The seed of the link's epoch nonces (spec §12.2) — the master's own nonce, or a
     /// receiver-role follower's — from the nRF52840's RNG at boot: a keyed end's nonce must
-    /// never repeat, across reboots too.
+    /// never repeat, across reboots too. It also draws the session of key changes from the
+    /// phone (`phrase::PhoneKeys`), so a signed key record recorded before a reboot fails
+    /// after it.
     pub fn seed_link_nonces(&mut self, random: u64) {
         self.nonce_seed = random;
+        self.phone_keys = PhoneKeys::new(random);
     }
 
     /// The follower for `LinkStep::RunFollower`'s fields, keyed as [`App::master`].
@@ -288,8 +295,12 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         }
     }
 
-    /// A telemetry record received over the link: to the handset and the phone.
+    /// A telemetry record received over the link: to the handset and the phone. The flight
+    /// side's arm state is kept: no phrase change while it says armed (`crate::phrase`).
     pub fn on_link_record(&mut self, record: &[u8]) {
+        if let Ok(telemetry::messages::Message::ArmState(state)) = crate::records::decode(record) {
+            self.commands.flight_armed = state.armed;
+        }
         if self.settings.role == Role::Transmitter {
             self.handset.on_telemetry(record);
         }
@@ -300,7 +311,53 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// (the rest waits in the bounded relay queue).
     pub fn on_phone_bytes(&mut self, bytes: &[u8]) {
         self.relay.on_phone_bytes(bytes);
+        self.serve_module_records();
         self.flush_uplink();
+    }
+
+    /// Module-addressed records from the phone (`telemetry::module_record`): a key proposed
+    /// (waits for the pilot's confirmation on the radio) or signed under the current key
+    /// (applied at once); every one is answered. Records that fail their CRC or decode are
+    /// dropped unanswered, as on the link.
+    fn serve_module_records(&mut self) {
+        let mut record = [0u8; MAX_RECORD_LEN];
+        while let Some(length) = self.relay.next_record_to_module(&mut record) {
+            let Some(Ok(payload)) = record.get(..length).map(crate::records::payload) else {
+                continue;
+            };
+            let Ok(module_record) = telemetry::module_record::decode(payload) else {
+                continue;
+            };
+            let Some(outcome) = self.phone_keys.on_record(
+                &module_record,
+                &mut self.settings.link_key,
+                &mut self.commands,
+            ) else {
+                continue;
+            };
+            if outcome.changed {
+                self.apply(Effect::NewPhrase);
+            }
+            self.answer_phone(outcome.answer);
+        }
+    }
+
+    /// Queues `answer` for the phone (dropped without a phone, like telemetry).
+    fn answer_phone(&mut self, answer: telemetry::module_record::KeyAnswer) {
+        use telemetry::module_record::{self, ModuleRecord};
+        let mut payload = [0u8; module_record::MAX_PAYLOAD_BYTES];
+        let Some(length) = module_record::encode(&ModuleRecord::KeyAnswer(answer), &mut payload)
+        else {
+            return;
+        };
+        let mut record = [0u8; MAX_RECORD_LEN];
+        if let Some(Ok(length)) = payload
+            .get(..length)
+            .map(|p| crate::records::with_crc(p, &mut record))
+            && let Some(bytes) = record.get(..length)
+        {
+            self.relay.on_link_record(bytes);
+        }
     }
 
     /// The HM-10 configuration found a phone already connected.
@@ -441,7 +498,13 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
                     let effect =
                         params::write(number, &value, &mut self.settings, &mut self.commands);
                     self.apply(effect);
-                    if matches!(effect, Effect::Bind | Effect::Save | Effect::CommandStatus) {
+                    if matches!(
+                        effect,
+                        Effect::Bind
+                            | Effect::Save
+                            | Effect::CommandStatus
+                            | Effect::PhoneKey { .. }
+                    ) {
                         // The radio's popup waits for the command's new status.
                         self.send_parameter(origin, number, 0);
                     }
@@ -497,6 +560,17 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             }
             Effect::Save => {
                 let _ = self.actions.push_back(Action::Save(self.settings));
+            }
+            Effect::NewPhrase => {
+                self.restart_request = true;
+                let _ = self.actions.push_back(Action::Save(self.settings));
+            }
+            Effect::PhoneKey { outcome, changed } => {
+                if changed {
+                    self.apply(Effect::NewPhrase);
+                }
+                let answer = self.phone_keys.answer(outcome, self.settings.link_key);
+                self.answer_phone(answer);
             }
             Effect::None | Effect::CommandStatus => {}
         }
@@ -623,6 +697,12 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             self.binding = false;
         }
         self.encoder.set_failsafe(!stats.connected);
+        if let Some(answer) = self
+            .phone_keys
+            .on_tick(self.settings.link_key, &mut self.commands)
+        {
+            self.answer_phone(answer);
+        }
         self.flush_uplink();
         self.update_led()
     }

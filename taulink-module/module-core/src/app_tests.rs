@@ -43,6 +43,8 @@ struct FakeHandset {
     stats: Vec<LinkStats>,
     /// The radio's selected model.
     model: Option<u8>,
+    /// Requests the radio made, oldest first.
+    requests: std::collections::VecDeque<HandsetRequest>,
 }
 
 impl HandsetOutput for FakeHandset {
@@ -54,6 +56,9 @@ impl HandsetOutput for FakeHandset {
     }
     fn model_id(&self) -> Option<u8> {
         self.model
+    }
+    fn take_request(&mut self) -> Option<HandsetRequest> {
+        self.requests.pop_front()
     }
 }
 
@@ -538,4 +543,309 @@ fn the_hm10_always_gets_a_pin_the_factory_one_from_the_chip_id() {
     app.set_setting_text("ble_pin", "271828").unwrap();
     assert_eq!(app.parameter_commands().ble_pin, Pin::new(271_828));
     assert_eq!(app.hm10_script(0, 1).pin(), Pin::new(271_828));
+}
+
+/// The radio writes `value` to parameter `number` (as the Lua tool's PARAMETER_WRITE).
+fn radio_writes(app: &mut App<FakeLink, FakeHandset>, number: u8, value: &[u8]) {
+    app.handset_mut().requests.push_back(HandsetRequest::Write {
+        origin: address::RADIO,
+        number,
+        value: heapless::Vec::from_slice(value).unwrap(),
+    });
+    app.on_handset_idle(0);
+}
+
+fn info_row(app: &App<FakeLink, FakeHandset>, number: u8) -> String {
+    let entry = params::entry(number, app.settings(), app.parameter_commands()).unwrap();
+    let name_end = entry[2..].iter().position(|b| *b == 0).unwrap() + 2;
+    String::from_utf8(entry[name_end + 1..entry.len() - 1].to_vec()).unwrap()
+}
+
+fn arm_record(armed: bool) -> Vec<u8> {
+    let message = telemetry::messages::Message::ArmState(telemetry::messages::ArmState {
+        armed,
+        failsafe: false,
+        arming_blockers: 0,
+    });
+    let mut out = [0u8; MAX_RECORD_LEN];
+    let n = crate::records::encode(&message, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+#[test]
+fn a_phrase_typed_on_the_radio_keys_the_link_but_never_while_the_quad_is_armed() {
+    use crate::session::{LinkStep, SessionEnd};
+    use telemetry::link::LinkKey;
+    let mut app = app(Settings {
+        bind_id: 0x0101_0101,
+        ..Settings::default()
+    });
+    app.on_radio_present(true);
+    let LinkStep::RunMaster(_) = app.next_link_step(0, 7) else {
+        panic!("bound: the master runs");
+    };
+    assert_eq!(info_row(&app, params::PHRASE_KEY), params::NO_PHRASE);
+
+    // The flight side reports armed: the phrase is refused, nothing restarts or is saved.
+    app.on_link_record(&arm_record(true));
+    radio_writes(
+        &mut app,
+        params::BIND_PHRASE,
+        b"correct horse battery staple\0",
+    );
+    assert_eq!(app.settings().link_key, None);
+    assert_eq!(app.take_action(), None);
+    assert_eq!(app.poll_session(50), None);
+    assert_eq!(info_row(&app, params::PHRASE_KEY), "refused: quad armed");
+
+    // Disarmed: the same write keys the link, is saved at once and restarts the link.
+    app.on_link_record(&arm_record(false));
+    radio_writes(
+        &mut app,
+        params::BIND_PHRASE,
+        b"  correct horse battery staple\0",
+    );
+    let key = LinkKey::from_phrase("correct horse battery staple");
+    assert_eq!(
+        app.settings().link_key,
+        Some(key),
+        "trimmed like every path"
+    );
+    let Some(Action::Save(saved)) = app.take_action() else {
+        panic!("the new key is saved at once");
+    };
+    assert_eq!(saved.link_key, Some(key));
+    assert_eq!(app.poll_session(100), Some(SessionEnd::SettingsChanged));
+    assert_eq!(
+        info_row(&app, params::PHRASE_KEY),
+        key.fingerprint().to_string()
+    );
+
+    // An empty commit (the pilot backed out of the editor) keeps the phrase.
+    radio_writes(&mut app, params::BIND_PHRASE, b"\0");
+    assert_eq!(app.settings().link_key, Some(key));
+    assert_eq!(app.take_action(), None);
+    assert_eq!(info_row(&app, params::PHRASE_KEY), "empty: phrase kept");
+}
+
+// ---- Key changes from the phone (telemetry::module_record) ----
+
+use telemetry::link::LinkKey;
+use telemetry::module_record::{self, KeyAnswer, KeyOutcome, KeyRefusal, KeySigner, ModuleRecord};
+
+/// The phone sends `record` over the HM-10.
+fn phone_sends(app: &mut App<FakeLink, FakeHandset>, record: &ModuleRecord) {
+    let mut payload = [0u8; module_record::MAX_PAYLOAD_BYTES];
+    let n = module_record::encode(record, &mut payload).unwrap();
+    let mut framed = [0u8; MAX_RECORD_LEN];
+    let m = crate::records::with_crc(&payload[..n], &mut framed).unwrap();
+    app.on_phone_bytes(&cobs_frame(&framed[..m]));
+}
+
+/// The module's answers waiting for the phone.
+fn phone_answers(app: &mut App<FakeLink, FakeHandset>) -> Vec<KeyAnswer> {
+    let mut answers = Vec::new();
+    let mut frame = [0u8; MAX_FRAME_LEN];
+    while let Some(n) = app.next_phone_frame(&mut frame) {
+        let len = cobs::decode_in_place(&mut frame[..n - 1]).unwrap();
+        let payload = crate::records::payload(&frame[..len]).unwrap();
+        if let Ok(ModuleRecord::KeyAnswer(answer)) = module_record::decode(payload) {
+            answers.push(answer);
+        }
+    }
+    answers
+}
+
+/// Status and info of the "Phone Phrase" command row.
+fn phone_row(app: &App<FakeLink, FakeHandset>) -> (u8, String) {
+    let entry = params::entry(
+        params::PHONE_PHRASE,
+        app.settings(),
+        app.parameter_commands(),
+    )
+    .unwrap();
+    let at = 2 + "Phone Phrase".len() + 1;
+    (
+        entry[at],
+        String::from_utf8(entry[at + 2..entry.len() - 1].to_vec()).unwrap(),
+    )
+}
+
+fn old_key() -> LinkKey {
+    LinkKey::from_phrase("correct horse battery staple")
+}
+
+fn new_key() -> LinkKey {
+    LinkKey::from_phrase("tr0ub4dor and 3")
+}
+
+#[test]
+fn a_phone_proposal_waits_for_the_pilots_confirmation_on_the_radio() {
+    let mut app = app(Settings {
+        bind_id: 0x0101_0101,
+        ..Settings::default()
+    });
+    app.seed_link_nonces(42);
+    app.on_radio_present(true);
+    let crate::session::LinkStep::RunMaster(_) = app.next_link_step(0, 7) else {
+        panic!("bound: the master runs");
+    };
+    phone_sends(&mut app, &ModuleRecord::ProposeKey(new_key().to_bytes()));
+    let [waiting] = phone_answers(&mut app)[..] else {
+        panic!("one answer");
+    };
+    assert_eq!(waiting.outcome, KeyOutcome::AwaitingConfirmation);
+    assert_eq!(waiting.fingerprint, Some(new_key().fingerprint().0));
+    assert_eq!(app.settings().link_key, None, "nothing changes by itself");
+    assert!(
+        app.link().records.is_empty(),
+        "a module record never goes to the flight side"
+    );
+    let fingerprint = new_key().fingerprint().to_string();
+    assert_eq!(phone_row(&app), (0, format!("{fingerprint} from phone")));
+
+    // The pilot starts the command: the radio asks to confirm, showing the fingerprint.
+    radio_writes(&mut app, params::PHONE_PHRASE, &[1]);
+    assert_eq!(phone_row(&app), (3, format!("Use key {fingerprint}?")));
+    radio_writes(&mut app, params::PHONE_PHRASE, &[4]);
+    assert_eq!(app.settings().link_key, Some(new_key()));
+    assert!(matches!(app.take_action(), Some(Action::Save(s)) if s.link_key == Some(new_key())));
+    assert_eq!(
+        app.poll_session(50),
+        Some(crate::session::SessionEnd::SettingsChanged)
+    );
+    assert_eq!(phone_row(&app), (0, format!("Key {fingerprint} set")));
+    let [applied] = phone_answers(&mut app)[..] else {
+        panic!("one answer");
+    };
+    assert_eq!(applied.outcome, KeyOutcome::Applied);
+    assert_eq!(applied.fingerprint, Some(new_key().fingerprint().0));
+}
+
+#[test]
+fn a_proposal_is_declined_by_cancel_expires_unseen_and_is_never_taken_armed() {
+    let mut app = app(Settings {
+        link_key: Some(old_key()),
+        ..Settings::default()
+    });
+    phone_sends(&mut app, &ModuleRecord::ProposeKey(new_key().to_bytes()));
+    radio_writes(&mut app, params::PHONE_PHRASE, &[1]);
+    radio_writes(&mut app, params::PHONE_PHRASE, &[5]);
+    assert_eq!(app.settings().link_key, Some(old_key()));
+    let answers = phone_answers(&mut app);
+    assert_eq!(
+        answers.last().unwrap().outcome,
+        KeyOutcome::Refused(KeyRefusal::Declined)
+    );
+    assert_eq!(
+        answers.last().unwrap().fingerprint,
+        Some(old_key().fingerprint().0)
+    );
+    assert_eq!(phone_row(&app), (0, "Cancelled".into()));
+
+    // Nobody confirms: the proposal expires and the phone is told.
+    phone_sends(&mut app, &ModuleRecord::ProposeKey(new_key().to_bytes()));
+    phone_answers(&mut app);
+    for _ in 0..crate::phrase::PROPOSAL_TICKS {
+        app.on_tick();
+    }
+    assert_eq!(
+        phone_answers(&mut app).last().map(|a| a.outcome),
+        Some(KeyOutcome::Refused(KeyRefusal::Expired))
+    );
+    radio_writes(&mut app, params::PHONE_PHRASE, &[1]);
+    assert_eq!(phone_row(&app).0, 0, "nothing left to confirm");
+
+    // Armed: a proposal is refused at once; one that arrived disarmed is refused at the
+    // confirmation if the quad armed meanwhile.
+    app.on_link_record(&arm_record(true));
+    phone_sends(&mut app, &ModuleRecord::ProposeKey(new_key().to_bytes()));
+    assert_eq!(
+        phone_answers(&mut app).last().map(|a| a.outcome),
+        Some(KeyOutcome::Refused(KeyRefusal::Armed))
+    );
+    app.on_link_record(&arm_record(false));
+    phone_sends(&mut app, &ModuleRecord::ProposeKey(new_key().to_bytes()));
+    radio_writes(&mut app, params::PHONE_PHRASE, &[1]);
+    app.on_link_record(&arm_record(true));
+    radio_writes(&mut app, params::PHONE_PHRASE, &[4]);
+    assert_eq!(app.settings().link_key, Some(old_key()));
+    assert_eq!(
+        phone_answers(&mut app).last().map(|a| a.outcome),
+        Some(KeyOutcome::Refused(KeyRefusal::Armed))
+    );
+    assert_eq!(phone_row(&app), (0, "refused: quad armed".into()));
+}
+
+#[test]
+fn a_key_signed_under_the_current_phrase_is_applied_at_once_and_only_once() {
+    let mut app = app(Settings {
+        link_key: Some(old_key()),
+        ..Settings::default()
+    });
+    app.seed_link_nonces(0xDEAD_BEEF);
+    let mut phone = KeySigner::new(&old_key());
+    // The phone does not know the session yet: refused once, with the session.
+    phone_sends(&mut app, &ModuleRecord::SignedKey(phone.seal(&new_key())));
+    let [first] = phone_answers(&mut app)[..] else {
+        panic!("one answer");
+    };
+    assert_eq!(
+        first.outcome,
+        KeyOutcome::Refused(KeyRefusal::NotAuthenticated)
+    );
+    assert_eq!(app.settings().link_key, Some(old_key()));
+    assert!(phone.on_answer(&first), "the phone signs again");
+    let signed = phone.seal(&new_key());
+    phone_sends(&mut app, &ModuleRecord::SignedKey(signed));
+    let [applied] = phone_answers(&mut app)[..] else {
+        panic!("one answer");
+    };
+    assert_eq!(applied.outcome, KeyOutcome::Applied);
+    assert_eq!(
+        app.settings().link_key,
+        Some(new_key()),
+        "no confirmation needed"
+    );
+    assert!(matches!(app.take_action(), Some(Action::Save(s)) if s.link_key == Some(new_key())));
+    assert!(app.link().records.is_empty());
+
+    // The recorded record replayed: its counter is used up (and the key it carries is only
+    // valid under the old phrase anyway).
+    app.set_setting_text("phrase", "correct horse battery staple")
+        .unwrap();
+    phone_sends(&mut app, &ModuleRecord::SignedKey(signed));
+    assert_eq!(
+        phone_answers(&mut app).last().map(|a| a.outcome),
+        Some(KeyOutcome::Refused(KeyRefusal::Replayed))
+    );
+    assert_eq!(app.settings().link_key, Some(old_key()));
+    // Another boot, another session: the recording fails there too.
+    app.seed_link_nonces(1);
+    phone_sends(&mut app, &ModuleRecord::SignedKey(signed));
+    assert_eq!(
+        phone_answers(&mut app).last().map(|a| a.outcome),
+        Some(KeyOutcome::Refused(KeyRefusal::NotAuthenticated))
+    );
+    // A phone with another phrase, and a module without one.
+    let mut stranger = KeySigner::new(&LinkKey::from_phrase("guess"));
+    let answer = KeyAnswer {
+        outcome: KeyOutcome::Refused(KeyRefusal::NotAuthenticated),
+        fingerprint: None,
+        session: applied.session,
+        counter: 0,
+    };
+    stranger.on_answer(&answer);
+    phone_sends(
+        &mut app,
+        &ModuleRecord::SignedKey(stranger.seal(&new_key())),
+    );
+    assert_eq!(app.settings().link_key, Some(old_key()));
+    let mut plain = self::app(Settings::default());
+    phone_sends(&mut plain, &ModuleRecord::SignedKey(phone.seal(&new_key())));
+    assert_eq!(
+        phone_answers(&mut plain).last().map(|a| a.outcome),
+        Some(KeyOutcome::Refused(KeyRefusal::NoPhrase))
+    );
+    assert_eq!(plain.settings().link_key, None);
 }

@@ -14,6 +14,7 @@ pub mod handset;
 pub mod hm10;
 pub mod link_task;
 pub mod params;
+pub mod phrase;
 pub mod ports;
 pub mod ppm;
 pub mod records;

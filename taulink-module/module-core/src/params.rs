@@ -22,23 +22,27 @@
 //! which the set would not run (`Settings::validate`: an OpenLRSng link outside the band
 //! plan, OpenLRSng in the receiver role) is refused and changes nothing.
 //!
-//! The binding phrase and the
-//! HM-10 PIN are read-only INFO rows at the end (20, 21): the phrase shows as its key's
-//! fingerprint, to compare with the flight console's, or "none - UNAUTHENTICATED" (ASCII:
-//! EdgeTX's fonts lack the dash); it is typed elsewhere (the module's text settings), since a
-//! handset's scroll wheel is no way to enter a 64-byte secret.
+//! **Bind Phrase** (20) is a STRING row the pilot types the binding phrase into (the
+//! ExpressLRS Lua tool edits STRING parameters with the radio's name editor); the text is
+//! never stored or shown, only its key, whose fingerprint the **Phrase Key** row (22) shows
+//! afterwards — to compare with the flight console's — or "none - UNAUTHENTICATED" (ASCII:
+//! EdgeTX's fonts lack the dash), or why the last phrase was refused (armed quad, empty
+//! text: `crate::phrase`). A new phrase restarts the link and is saved at once, as on the
+//! flight console. The HM-10 PIN in force is the read-only **BLE PIN** row (21).
 
 use core::fmt::Write;
 
 use heapless::{String, Vec};
 use telemetry::handset::crsf::params::{CommandStatus, Entry, MAX_ENTRY_LEN};
 
+use crate::phrase::{self, HANDSET_PHRASE_MAX, PhraseNote};
 use crate::ppm::FailsafeOutput;
 use crate::settings::openlrs::{CHANNEL_MODES, DEFAULT_CHANNEL_MODE, DEFAULT_PROFILE};
 use crate::settings::{
     Band, DEFAULT_INPUT_TIMEOUT_MS, DEFAULT_TELEMETRY_RATIO, INPUT_TIMEOUT_MS, InputProtocol,
     LinkProtocol, OutputProtocol, RateMode, Settings, TELEMETRY_RATIOS,
 };
+use telemetry::module_record::{KeyOutcome, KeyRefusal};
 
 /// Packet rate (the link's rate modes).
 pub const PACKET_RATE: u8 = 1;
@@ -78,12 +82,16 @@ pub const OPENLRS_RATE: u8 = 17;
 pub const OPENLRS_CHANNELS: u8 = 18;
 /// OpenLRSng telemetry on/off.
 pub const OPENLRS_TELEMETRY: u8 = 19;
-/// Info: the binding phrase's fingerprint.
+/// The binding phrase (STRING: typed on the radio, never shown).
 pub const BIND_PHRASE: u8 = 20;
 /// Info: the HM-10 pairing PIN in force.
 pub const BLE_PIN: u8 = 21;
+/// Info: the binding phrase's fingerprint, or why the last phrase was refused.
+pub const PHRASE_KEY: u8 = 22;
+/// Command: apply the key the phone proposed, after the pilot's confirmation.
+pub const PHONE_PHRASE: u8 = 23;
 /// Parameters the module offers (DEVICE_INFO's count).
-pub const PARAMETER_COUNT: u8 = 21;
+pub const PARAMETER_COUNT: u8 = 23;
 
 /// The phrase row without a phrase.
 pub const NO_PHRASE: &str = "none - UNAUTHENTICATED";
@@ -112,6 +120,17 @@ pub struct Commands {
     /// The HM-10 PIN in force (the set one, or the factory one of this chip), for its row;
     /// the core fills it in (`App::set_unique_id`). `None`: not known yet.
     pub ble_pin: Option<crate::hm10::at::Pin>,
+    /// The flight side reported its motors armed (its last `ArmState`); the core fills it
+    /// in from telemetry. A phrase change is refused while set.
+    pub flight_armed: bool,
+    /// What the last phrase write did, for the "Phrase Key" row.
+    pub phrase_note: Option<PhraseNote>,
+    /// A key the phone proposed, waiting for the pilot ("Phone Phrase").
+    pub phone_key: Option<telemetry::link::LinkKey>,
+    /// The "Phone Phrase" command asks the pilot to confirm `phone_key`.
+    pub phone_confirming: bool,
+    /// How the last "Phone Phrase" confirmation ended.
+    pub phone_result: Option<KeyOutcome>,
 }
 
 /// What a write asks of the core beyond the settings change.
@@ -132,6 +151,17 @@ pub enum Effect {
     Save,
     /// Answer with the command's entry (its new status).
     CommandStatus,
+    /// A new binding phrase's key is in force: restart the link and save at once.
+    NewPhrase,
+    /// The phone's proposal was decided on the radio: tell the phone (and, when it was
+    /// applied and changed the key, restart the link and save at once). Answer with the
+    /// command's entry.
+    PhoneKey {
+        /// Applied or refused (declined, armed).
+        outcome: KeyOutcome,
+        /// The key in force changed.
+        changed: bool,
+    },
 }
 
 /// The name the radio shows for a rate mode, with its packet rate.
@@ -353,13 +383,49 @@ pub fn entry(
             1,
             unit(commands, number, ""),
         ),
-        BIND_PHRASE => {
+        // The value is always empty: the phrase is not kept, and the radio's editor starts
+        // from the value, so anything shown would have to be overwritten.
+        BIND_PHRASE => Entry::string(0, "Bind Phrase", "", HANDSET_PHRASE_MAX),
+        PHRASE_KEY => {
             let mut text: String<24> = String::new();
-            match settings.link_key {
-                Some(key) => write!(text, "{}", key.fingerprint()).ok()?,
-                None => text.push_str(NO_PHRASE).ok()?,
+            match (
+                commands.phrase_note.and_then(PhraseNote::refusal),
+                settings.link_key,
+            ) {
+                (Some(refusal), _) => text.push_str(refusal).ok()?,
+                (None, Some(key)) => write!(text, "{}", key.fingerprint()).ok()?,
+                (None, None) => text.push_str(NO_PHRASE).ok()?,
             }
-            Entry::info(0, "Bind Phrase", &text)
+            Entry::info(0, "Phrase Key", &text)
+        }
+        PHONE_PHRASE => {
+            let mut text: String<24> = String::new();
+            let status = match (commands.phone_key, commands.phone_confirming) {
+                (Some(key), true) => {
+                    write!(text, "Use key {}?", key.fingerprint()).ok()?;
+                    CommandStatus::ConfirmationNeeded
+                }
+                (Some(key), false) => {
+                    write!(text, "{} from phone", key.fingerprint()).ok()?;
+                    CommandStatus::Ready
+                }
+                (None, _) => {
+                    match (commands.phone_result, settings.link_key) {
+                        (Some(KeyOutcome::Applied), Some(key)) => {
+                            write!(text, "Key {} set", key.fingerprint()).ok()?
+                        }
+                        (Some(KeyOutcome::Refused(KeyRefusal::Armed)), _) => {
+                            text.push_str("refused: quad armed").ok()?
+                        }
+                        (Some(KeyOutcome::Refused(KeyRefusal::Declined)), _) => {
+                            text.push_str("Cancelled").ok()?
+                        }
+                        _ => text.push_str("none from phone").ok()?,
+                    }
+                    CommandStatus::Ready
+                }
+            };
+            Entry::command(0, "Phone Phrase", status, POLL_10MS, &text)
         }
         BLE_PIN => {
             let mut text: String<8> = String::new();
@@ -478,6 +544,19 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
             settings.openlrs.telemetry = on == 1;
             openlrs_change(settings)
         }
+        (BIND_PHRASE, Some(_)) => {
+            let (note, changed) = match phrase::key_from_write(value) {
+                Ok(key) => phrase::adopt(key, commands.flight_armed, &mut settings.link_key),
+                Err(note) => (note, false),
+            };
+            commands.phrase_note = Some(note);
+            if changed {
+                Effect::NewPhrase
+            } else {
+                Effect::None
+            }
+        }
+        (PHONE_PHRASE, Some(step)) => phone_phrase(step, settings, commands),
         (SAVE, Some(step)) => match CommandStatus::from_byte(step) {
             Some(CommandStatus::Start) => {
                 commands.save_confirming = true;
@@ -515,6 +594,44 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
         commands.restarted_by = None;
     }
     effect
+}
+
+/// A step of the "Phone Phrase" command: start shows the proposal's fingerprint and asks
+/// for a confirmation; confirm applies it (never while armed); cancel declines it.
+fn phone_phrase(step: u8, settings: &mut Settings, commands: &mut Commands) -> Effect {
+    match CommandStatus::from_byte(step) {
+        Some(CommandStatus::Start) => {
+            commands.phone_confirming = commands.phone_key.is_some();
+            Effect::CommandStatus
+        }
+        Some(CommandStatus::Confirm) if commands.phone_confirming => {
+            commands.phone_confirming = false;
+            let Some(key) = commands.phone_key.take() else {
+                return Effect::CommandStatus;
+            };
+            let (note, changed) = phrase::adopt(key, commands.flight_armed, &mut settings.link_key);
+            commands.phrase_note = Some(note);
+            let outcome = if note == PhraseNote::Armed {
+                KeyOutcome::Refused(KeyRefusal::Armed)
+            } else {
+                KeyOutcome::Applied
+            };
+            commands.phone_result = Some(outcome);
+            Effect::PhoneKey { outcome, changed }
+        }
+        Some(CommandStatus::Cancel) if commands.phone_confirming => {
+            commands.phone_confirming = false;
+            commands.phone_key = None;
+            let outcome = KeyOutcome::Refused(KeyRefusal::Declined);
+            commands.phone_result = Some(outcome);
+            Effect::PhoneKey {
+                outcome,
+                changed: false,
+            }
+        }
+        Some(_) => Effect::CommandStatus,
+        None => Effect::None,
+    }
 }
 
 /// An OpenLRSng parameter changed: the running link restarts only if it is OpenLRSng.
@@ -679,30 +796,61 @@ mod tests {
     }
 
     #[test]
-    fn the_phrase_row_shows_the_fingerprint_or_says_unauthenticated() {
+    fn the_phrase_is_a_string_row_and_its_key_row_shows_the_fingerprint_or_why() {
         let commands = Commands::default();
-        let plain = entry(BIND_PHRASE, &Settings::default(), &commands).unwrap();
+        // STRING: parent, type 0x0A, name NUL, the (always empty) value NUL, max length.
+        let row = entry(BIND_PHRASE, &Settings::default(), &commands).unwrap();
+        assert_eq!(row.as_slice(), b"\x00\x0ABind Phrase\x00\x00\x38");
+        let plain = entry(PHRASE_KEY, &Settings::default(), &commands).unwrap();
         assert_eq!(info_text(&plain), NO_PHRASE);
-        let key = telemetry::link::LinkKey::from_phrase("correct horse battery staple");
-        let keyed = Settings {
-            link_key: Some(key),
-            ..Settings::default()
-        };
-        let row = entry(BIND_PHRASE, &keyed, &commands).unwrap();
-        assert_eq!(info_text(&row), key.fingerprint().to_string());
-        // Read-only: a write changes nothing.
-        let mut settings = keyed;
+
+        let mut settings = Settings::default();
         let mut commands = Commands::default();
+        let phrase = b"correct horse battery staple\0";
         assert_eq!(
-            write(BIND_PHRASE, &[0], &mut settings, &mut commands),
+            write(BIND_PHRASE, phrase, &mut settings, &mut commands),
+            Effect::NewPhrase
+        );
+        let key = telemetry::link::LinkKey::from_phrase("correct horse battery staple");
+        assert_eq!(settings.link_key, Some(key));
+        let row = entry(PHRASE_KEY, &settings, &commands).unwrap();
+        assert_eq!(info_text(&row), key.fingerprint().to_string());
+        // The row never shows the phrase.
+        let row = entry(BIND_PHRASE, &settings, &commands).unwrap();
+        assert!(!row.windows(7).any(|w| w == b"correct"));
+        // The same phrase again restarts nothing.
+        assert_eq!(
+            write(BIND_PHRASE, phrase, &mut settings, &mut commands),
             Effect::None
         );
-        assert_eq!(settings, keyed);
+        assert_eq!(commands.phrase_note, Some(PhraseNote::Unchanged));
+
+        // Refusals keep the key and say why.
+        for (value, armed, why) in [
+            (&b"another phrase\0"[..], true, "refused: quad armed"),
+            (b"   \0", false, "empty: phrase kept"),
+            (b"bell\x07ring\0", false, "refused: bad character"),
+            (b"\xFF\xFE\0", false, "refused: bad character"),
+        ] {
+            commands.flight_armed = armed;
+            assert_eq!(
+                write(BIND_PHRASE, value, &mut settings, &mut commands),
+                Effect::None
+            );
+            assert_eq!(settings.link_key, Some(key));
+            assert_eq!(
+                info_text(&entry(PHRASE_KEY, &settings, &commands).unwrap()),
+                why
+            );
+        }
         let pin = Commands {
             ble_pin: crate::hm10::at::Pin::new(4_217),
             ..Commands::default()
         };
-        assert_eq!(info_text(&entry(BLE_PIN, &keyed, &pin).unwrap()), "004217");
+        assert_eq!(
+            info_text(&entry(BLE_PIN, &settings, &pin).unwrap()),
+            "004217"
+        );
     }
 
     #[test]

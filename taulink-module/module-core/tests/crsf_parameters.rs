@@ -142,6 +142,12 @@ fn parse_field(data: &[u8]) -> Field {
             at += 2;
             field.info = cstr(data, &mut at);
         }
+        // STRING: the text, then its max length (kept in `value`).
+        10 => {
+            field.info = cstr(data, &mut at);
+            field.value = data[at].into();
+            at += 1;
+        }
         11 => {}
         // INFO: the text after the name.
         12 => field.info = cstr(data, &mut at),
@@ -360,7 +366,7 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             let name_end = info[2..].iter().position(|&b| b == 0).unwrap() + 2;
             assert_eq!(&info[2..name_end], b"TauLink");
             let count = info[name_end + 13];
-            assert_eq!(count, 21, "DEVICE_INFO's parameter count");
+            assert_eq!(count, 23, "DEVICE_INFO's parameter count");
 
             // Read every parameter.
             let mut fields = Vec::new();
@@ -395,7 +401,9 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                     "OLRS Channels",
                     "OLRS Telem",
                     "Bind Phrase",
-                    "BLE PIN"
+                    "BLE PIN",
+                    "Phrase Key",
+                    "Phone Phrase"
                 ]
             );
             assert_eq!(fields[12].options, ["Off", "On"]);
@@ -410,8 +418,17 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             assert_eq!(fields[16].options[fields[16].value as usize], "19k2bps");
             assert_eq!(fields[17].options[fields[17].value as usize], "8");
             assert_eq!(
-                fields[19].info, "none - UNAUTHENTICATED",
+                (fields[19].kind, fields[19].info.as_str(), fields[19].value),
+                (10, "", 56),
+                "the phrase is an empty STRING of at most 56 bytes"
+            );
+            assert_eq!(
+                fields[21].info, "none - UNAUTHENTICATED",
                 "no phrase: the menu says so"
+            );
+            assert_eq!(
+                (fields[22].kind, fields[22].status, fields[22].info.as_str()),
+                (13, 0, "none from phone")
             );
             let rate = &fields[0];
             assert_eq!(
@@ -499,6 +516,25 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             for _ in 0..500 {
                 script.tick(None).await;
             }
+            // The module sees the link up at F500 too (the rate code it reports to the handset).
+            let stats = module_core::ports::LinkPort::stats(app.borrow().link());
+            assert!(stats.connected);
+            assert_eq!(stats.rate_code, telemetry::link::RateMode::F500.code());
+            // The pilot types a phrase in the STRING row: the radio writes it NUL-terminated;
+            // the key row then shows its fingerprint, and the new key is saved at once.
+            let mut typed = vec![0xEE, 0xEA, 20];
+            typed.extend_from_slice(b"correct horse battery staple\0");
+            script.tick(Some(frame(0x2D, &typed))).await;
+            let (key_row, _) = script.read(22).await;
+            let key = telemetry::link::LinkKey::from_phrase("correct horse battery staple");
+            assert_eq!(key_row.info, key.fingerprint().to_string());
+            let mut phrase_saved = None;
+            while let Some(action) = app.borrow_mut().take_action() {
+                if let Action::Save(s) = action {
+                    phrase_saved = Some(s.link_key);
+                }
+            }
+            assert_eq!(phrase_saved, Some(Some(key)));
             report
                 .borrow_mut()
                 .push(format!("reply frames by type: {:?}", script.seen));
@@ -524,10 +560,10 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
     eprintln!("flight side: {in_last_second} channel updates in the last second");
     assert!(in_last_second > 300, "{in_last_second} updates/s");
 
-    // The module sees the link up at F500 too (the rate code it reports to the handset).
+    // Keyed by the typed phrase, the module's link restarted under the key's identity: the
+    // unkeyed flight side no longer answers it.
     let stats = module_core::ports::LinkPort::stats(app.borrow().link());
-    assert!(stats.connected);
-    assert_eq!(stats.rate_code, telemetry::link::RateMode::F500.code());
+    assert!(!stats.connected, "the link runs keyed now");
 
     // Save persisted across a power cycle: mock flash, a new core from the store.
     let to_save = saved.borrow().expect("Save asked the firmware to persist");

@@ -7,7 +7,7 @@
 import { readFileSync } from "node:fs";
 import { fileURLToPath } from "node:url";
 import { expect, test, type Page } from "@playwright/test";
-import { Decoder, loadWasm } from "../src/decoder";
+import { Decoder, loadWasm, phraseFingerprint } from "../src/decoder";
 import * as fmt from "../src/format";
 import { parseLog } from "../src/log";
 import { MODE_NAMES, type Event, type FlightMode } from "../src/messages";
@@ -124,6 +124,37 @@ test("a setting change signed with a wrong phrase is refused and shown as refuse
   expect(log.applied).toHaveLength(0);
   expect(log.refused.length).toBeGreaterThan(0);
   expect(log.refused.every((r) => r.reason === "NotAuthenticated")).toBe(true);
+});
+
+/** The fingerprint the module must show for `phrase`, from the same WebAssembly build in Node. */
+async function fingerprintOf(phrase: string): Promise<string> {
+  await loadWasm(readFileSync(fileURLToPath(new URL("../src/wasm/telemetry_wasm_bg.wasm", import.meta.url))));
+  return phraseFingerprint(phrase);
+}
+
+test("the module's phrase set from the page: signed with its phrase it is taken at once", async ({ page }) => {
+  await page.goto("/?sim");
+  await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
+  await page.getByLabel("Binding phrase").fill(SERVE_PHRASE);
+  await page.getByRole("button", { name: "Use phrase" }).click();
+  await page.getByLabel("New module phrase").fill("tr0ub4dor and 3");
+  await page.getByRole("button", { name: "Set module phrase" }).click();
+  // The simulated module's App answered (after teaching the page its session once).
+  await expect(page.getByLabel("Module phrase status")).toHaveText(
+    `module phrase set: key ${await fingerprintOf("tr0ub4dor and 3")}`,
+    { timeout: 10_000 },
+  );
+});
+
+test("the module's phrase proposed without its phrase waits for the radio", async ({ page }) => {
+  await page.goto("/?sim");
+  await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
+  await page.getByLabel("New module phrase").fill("tr0ub4dor and 3");
+  await page.getByRole("button", { name: "Set module phrase" }).click();
+  await expect(page.getByLabel("Module phrase status")).toHaveText(
+    `confirm on the radio: Phone Phrase, key ${await fingerprintOf("tr0ub4dor and 3")}`,
+    { timeout: 10_000 },
+  );
 });
 
 test("a recorded log replays", async ({ page, context }) => {

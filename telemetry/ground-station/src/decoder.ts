@@ -6,11 +6,13 @@ import init, {
   Decoder as WasmDecoder,
   Phone as WasmPhone,
   encode_setting_change,
+  phrase_fingerprint,
+  propose_module_phrase,
   setting_from_wire,
   setting_to_wire,
   settings_table,
 } from "./wasm/telemetry_wasm.js";
-import type { Event } from "./messages";
+import type { Event, KeyAnswer } from "./messages";
 
 export interface SettingRow {
   id: number;
@@ -80,9 +82,42 @@ export class Phone {
     return wire === undefined ? undefined : this.inner.sign_change(id, wire);
   }
 
+  /**
+   * The record setting the module's phrase to `newPhrase`, signed with this phrase (which must
+   * be the module's current one): the module takes it at once. Throws for an unusable phrase.
+   */
+  signModulePhrase(newPhrase: string): Uint8Array {
+    return this.inner.sign_module_phrase(newPhrase);
+  }
+
+  /** The module's answer: the record to send again, or undefined (the answer stands). */
+  onModuleAnswer(answer: KeyAnswer): Uint8Array | undefined {
+    const frame = this.inner.on_module_answer(JSON.stringify(answer));
+    return frame.length ? frame : undefined;
+  }
+
   /** A refusal from the flight side: the frame to send again, or undefined (the refusal stands). */
   onRefused(refused: unknown): Uint8Array | undefined {
     const frame = this.inner.on_refused(JSON.stringify(refused));
     return frame.length ? frame : undefined;
   }
+}
+
+/**
+ * The record proposing `phrase` as the module's phrase: the module takes it only once the
+ * pilot confirms on the radio (Phone Phrase). Throws for an empty or unusable phrase.
+ */
+export function moduleProposalFrame(phrase: string): Uint8Array {
+  return propose_module_phrase(phrase);
+}
+
+/** The fingerprint (`1a2b-3c4d`) of `phrase`'s key. Throws for an empty or unusable phrase. */
+export function phraseFingerprint(phrase: string): string {
+  return phrase_fingerprint(phrase);
+}
+
+/** A 32-bit key fingerprint as the radio and the consoles show it. */
+export function fingerprintText(f: number): string {
+  const hex = (n: number) => n.toString(16).padStart(4, "0");
+  return `${hex(f >>> 16)}-${hex(f & 0xffff)}`;
 }

@@ -8,7 +8,7 @@
  * Also the CSV export: the log decoded again, one table per message type, a row per
  * message with its receive time.
  */
-import type { Event, Message } from "./messages";
+import type { Event } from "./messages";
 import { kindOf } from "./messages";
 
 export const LOG_HEADER = "# taulink-gcs log 1";
@@ -74,7 +74,7 @@ export function parseLog(text: string): Chunk[] {
 }
 
 /** Flattens a message's fields: `{Battery:{voltage_mv:1}}` → `[["voltage_mv", 1]]`. */
-function fields(m: Message): [string, string][] {
+function fields(m: Exclude<Event, "Dropped">): [string, string][] {
   const body = (m as Record<string, unknown>)[kindOf(m)];
   if (typeof body !== "object" || body === null) return [["value", String(body)]];
   return Object.entries(body as Record<string, unknown>).map(([k, v]) => [k, String(v)]);

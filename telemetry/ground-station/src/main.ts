@@ -5,7 +5,18 @@
  */
 import "./style.css";
 import { Alerts, Speaker, armText } from "./alerts";
-import { Decoder, Phone, loadWasm, settingValue, settingsTable, type SettingRow } from "./decoder";
+import {
+  Decoder,
+  Phone,
+  fingerprintText,
+  loadWasm,
+  moduleProposalFrame,
+  phraseFingerprint,
+  settingValue,
+  settingsTable,
+  type SettingRow,
+} from "./decoder";
+import type { KeyAnswer, KeyRefusal } from "./messages";
 import * as fmt from "./format";
 import { type Chunk, Recorder, csvByType, parseLog } from "./log";
 import { MODE_NAMES, RATE_MODES, type Event, type RefuseReason } from "./messages";
@@ -49,6 +60,10 @@ function onBytes(bytes: Uint8Array): void {
   recorder?.add(performance.now(), bytes);
   const now = performance.now();
   for (const e of decoder.push(bytes)) {
+    if (typeof e === "object" && "KeyAnswer" in e) {
+      void onModuleAnswer(e.KeyAnswer);
+      continue;
+    }
     // A refusal that only taught the phone the flight side's session: signed again, once.
     if (typeof e === "object" && "ChangeRefused" in e) {
       const again = phone?.onRefused(e.ChangeRefused);
@@ -150,7 +165,7 @@ function renderSettingValues(): void {
   set("settings-status", r ? `${name} ${REFUSALS[r.reason]}` : "", r ? "bad" : "");
   // The flight side refuses changes while armed; the page does not offer them then.
   const armed = state.arm?.armed === true;
-  for (const b of document.querySelectorAll<HTMLButtonElement>("button[data-set]")) {
+  for (const b of document.querySelectorAll<HTMLButtonElement>("button[data-set], #module-phrase-send")) {
     if (b.disabled !== armed) {
       b.disabled = armed;
       b.title = armed ? "refused while armed" : "";
@@ -202,6 +217,64 @@ async function sendSetting(row: SettingRow, text: string): Promise<void> {
   }
   await transport.send(frame);
   status(`${row.name} → ${text} sent; waiting for the flight side's report`);
+}
+
+/** The new module phrase sent, until the module answers (memory only). */
+let modulePhrase: string | undefined;
+
+const KEY_REFUSALS: Record<KeyRefusal, string> = {
+  Armed: "refused: armed",
+  NotAuthenticated: "refused: the phrase above is not the module's",
+  Replayed: "refused: replayed",
+  NoPhrase: "the module has no phrase to check with",
+  Declined: "declined on the radio",
+  Expired: "not confirmed on the radio in time",
+};
+
+async function onModuleAnswer(answer: KeyAnswer): Promise<void> {
+  // Signed for a session this page did not know yet: signed again, once.
+  const again = phone?.onModuleAnswer(answer);
+  if (again && transport) {
+    await transport.send(again);
+    return;
+  }
+  const key = answer.fingerprint === null ? "none" : fingerprintText(answer.fingerprint);
+  const o = answer.outcome;
+  if (o === "Applied") {
+    modulePhrase = undefined;
+    set("module-phrase-status", `module phrase set: key ${key}`, "good");
+  } else if (o === "AwaitingConfirmation") {
+    set("module-phrase-status", `confirm on the radio: Phone Phrase, key ${key}`);
+  } else if (o.Refused === "NoPhrase" && modulePhrase !== undefined && transport) {
+    // Nothing to sign under: propose instead, for the pilot to confirm.
+    const phrase = modulePhrase;
+    modulePhrase = undefined;
+    await transport.send(moduleProposalFrame(phrase));
+  } else {
+    modulePhrase = undefined;
+    set("module-phrase-status", `module phrase ${KEY_REFUSALS[o.Refused]}`, "bad");
+  }
+}
+
+async function sendModulePhrase(text: string): Promise<void> {
+  if (state.arm?.armed === true) {
+    set("module-phrase-status", "module phrase refused: armed", "bad");
+    return;
+  }
+  if (!transport) {
+    status("connect first to set the module's phrase");
+    return;
+  }
+  try {
+    const fingerprint = phraseFingerprint(text);
+    // Knowing the module's phrase (entered above), sign; else propose for the radio.
+    const frame = phone ? phone.signModulePhrase(text) : moduleProposalFrame(text);
+    modulePhrase = text;
+    await transport.send(frame);
+    set("module-phrase-status", `sent (key ${fingerprint}); waiting for the module`);
+  } catch (e) {
+    set("module-phrase-status", e instanceof Error ? e.message : String(e), "bad");
+  }
 }
 
 function reset(): void {
@@ -303,6 +376,12 @@ async function main(): Promise<void> {
       status(e instanceof Error ? e.message : String(e));
     }
     input.value = "";
+  };
+  $("module-phrase-send").onclick = () => {
+    const input = $<HTMLInputElement>("module-phrase");
+    const text = input.value;
+    input.value = "";
+    void sendModulePhrase(text);
   };
   $("settings-read").onclick = () => void usb?.command("list");
   $("settings-save").onclick = () => void usb?.command("save");

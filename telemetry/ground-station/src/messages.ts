@@ -39,10 +39,16 @@ export type Message =
   | { ChangeRefused: ChangeRefused }
   | { Home: Home };
 
-export type Event = Message | "Dropped";
+/** Why the module did not take a key from the phone (`telemetry::module_record::KeyRefusal`). */
+export type KeyRefusal = "Armed" | "NotAuthenticated" | "Replayed" | "NoPhrase" | "Declined" | "Expired";
+export type KeyOutcome = "Applied" | "AwaitingConfirmation" | { Refused: KeyRefusal };
+/** The module's answer to a key from the phone (a module record, not a flight message). */
+export interface KeyAnswer { outcome: KeyOutcome; fingerprint: number | null; session: number; counter: number }
+
+export type Event = Message | { KeyAnswer: KeyAnswer } | "Dropped";
 
 /** The variant name of a message ("Attitude", "Battery", ...). */
-export function kindOf(m: Message): string {
+export function kindOf(m: Exclude<Event, "Dropped">): string {
   return Object.keys(m)[0] ?? "";
 }
 

@@ -1,5 +1,5 @@
 //! The ground station's Rust half: the telemetry stream reader (`telemetry::messages`) and
-//! the encoders for what the phone sends (setting changes), exported to JavaScript with
+//! the encoders for what the phone sends (setting changes, the module's phrase), exported to JavaScript with
 //! wasm-bindgen so the web app decodes with exactly the code the module and the flight side
 //! run. Everything crosses the boundary as bytes or JSON text; the logic lives in
 //! [`stream`] and [`settings`], which build and test on the host too.
@@ -95,4 +95,34 @@ impl Phone {
     pub fn on_refused(&mut self, refused_json: &str) -> Vec<u8> {
         self.inner.on_refused(refused_json)
     }
+
+    /// The framed record setting the module's phrase to `new_phrase`, signed under this
+    /// phone's phrase (the module's current one): applied at once. Throws for an empty or
+    /// unusable phrase.
+    pub fn sign_module_phrase(
+        &mut self,
+        new_phrase: &str,
+    ) -> Result<Vec<u8>, wasm_bindgen::JsError> {
+        self.inner
+            .sign_module_phrase(new_phrase)
+            .map_err(|e| wasm_bindgen::JsError::new(&e))
+    }
+
+    /// A `KeyAnswer` event's body as JSON: the frame to send again, or empty.
+    pub fn on_module_answer(&mut self, answer_json: &str) -> Vec<u8> {
+        self.inner.on_module_answer(answer_json)
+    }
+}
+
+/// The framed record proposing `phrase` as the module's phrase (the pilot confirms on the
+/// radio). Throws for an empty or unusable phrase.
+#[wasm_bindgen]
+pub fn propose_module_phrase(phrase: &str) -> Result<Vec<u8>, wasm_bindgen::JsError> {
+    settings::propose_module_phrase(phrase).map_err(|e| wasm_bindgen::JsError::new(&e))
+}
+
+/// The fingerprint (`1a2b-3c4d`) of `phrase`'s key. Throws for an empty or unusable phrase.
+#[wasm_bindgen]
+pub fn phrase_fingerprint(phrase: &str) -> Result<String, wasm_bindgen::JsError> {
+    settings::phrase_fingerprint(phrase).map_err(|e| wasm_bindgen::JsError::new(&e))
 }

@@ -11,10 +11,12 @@
 use flight_core::settings::{Kind, PARAMS, Param, Value};
 use serde_json::json;
 use telemetry::change_auth::Signer;
-use telemetry::link::key_for_phrase;
+use telemetry::framing::{frame, framed_len};
+use telemetry::link::{LinkKey, key_for_phrase};
 use telemetry::messages::{
     ChangeRefused, EncodeError, FRAMED_MAX_BYTES, Message, SettingChange, encode_message,
 };
+use telemetry::module_record::{self, KeyAnswer, KeySigner, ModuleRecord};
 
 /// The phone's signing state for one binding phrase.
 #[derive(Debug, Clone)]
@@ -22,6 +24,10 @@ pub struct Phone {
     signer: Signer,
     fingerprint: String,
     pending: Option<SettingChange>,
+    /// Seals new module keys under this phrase's key (the module's current one).
+    key_signer: KeySigner,
+    /// The module key last sent signed, to send again after a stale-session answer.
+    pending_module: Option<LinkKey>,
 }
 
 impl Phone {
@@ -35,7 +41,36 @@ impl Phone {
             signer: Signer::new(&key),
             fingerprint: key.fingerprint().to_string(),
             pending: None,
+            key_signer: KeySigner::new(&key),
+            pending_module: None,
         })
+    }
+
+    /// The framed record that sets the module's phrase to `new_phrase`, sealed and signed
+    /// under this phone's phrase, which must be the module's current one (spec §12.5): the
+    /// module applies it at once. An error text for an empty or unusable phrase.
+    pub fn sign_module_phrase(&mut self, new_phrase: &str) -> Result<Vec<u8>, String> {
+        let key = phrase_key(new_phrase)?;
+        self.pending_module = Some(key);
+        frame_module(&ModuleRecord::SignedKey(self.key_signer.seal(&key)))
+    }
+
+    /// The module answered (the `KeyAnswer` event's JSON body): the frame to send again if
+    /// the refusal was only for a session or counter this phone did not know (empty: none —
+    /// the answer stands and the app shows it).
+    pub fn on_module_answer(&mut self, answer_json: &str) -> Vec<u8> {
+        let Ok(answer) = serde_json::from_str::<KeyAnswer>(answer_json) else {
+            return Vec::new();
+        };
+        let retry = self.key_signer.on_answer(&answer);
+        match self.pending_module.take() {
+            Some(key) if retry => {
+                self.pending_module = Some(key);
+                frame_module(&ModuleRecord::SignedKey(self.key_signer.seal(&key)))
+                    .unwrap_or_default()
+            }
+            _ => Vec::new(),
+        }
     }
 
     /// The key's fingerprint, as the flight console and the module show it.
@@ -65,6 +100,33 @@ impl Phone {
             _ => Vec::new(),
         }
     }
+}
+
+fn phrase_key(phrase: &str) -> Result<LinkKey, String> {
+    key_for_phrase(phrase)
+        .map_err(|e| e.to_string())?
+        .ok_or_else(|| "an empty phrase: the module keeps its phrase".to_owned())
+}
+
+fn frame_module(record: &ModuleRecord) -> Result<Vec<u8>, String> {
+    let mut payload = [0u8; module_record::MAX_PAYLOAD_BYTES];
+    let n = module_record::encode(record, &mut payload).ok_or("module record too long")?;
+    let mut out = [0u8; framed_len(module_record::MAX_PAYLOAD_BYTES)];
+    let m = frame(payload.get(..n).unwrap_or_default(), &mut out).map_err(|e| e.to_string())?;
+    Ok(out.get(..m).unwrap_or_default().to_vec())
+}
+
+/// The framed record that proposes `phrase` as the module's phrase, for a phone that does
+/// not know the module's current one: the module applies it only after the pilot confirms
+/// on the radio ("Phone Phrase", showing the fingerprint). An error text for an empty or
+/// unusable phrase.
+pub fn propose_module_phrase(phrase: &str) -> Result<Vec<u8>, String> {
+    frame_module(&ModuleRecord::ProposeKey(phrase_key(phrase)?.to_bytes()))
+}
+
+/// The fingerprint of `phrase`'s key, to compare with the radio's confirmation.
+pub fn phrase_fingerprint(phrase: &str) -> Result<String, String> {
+    Ok(phrase_key(phrase)?.fingerprint().to_string())
 }
 
 fn encode(message: &Message) -> Result<Vec<u8>, EncodeError> {

@@ -3,14 +3,28 @@
 //! it (`{"Battery":{"voltage_mv":11870,...}}`, `{"FlightMode":"AltitudeHold"}`), each
 //! dropped frame as the string `"Dropped"`. The HM-10 relay's frames are the link frames
 //! byte for byte (module-core `records`), so the same reader serves the phone, the flight
-//! USB console and the simulator.
+//! USB console and the simulator. Records the module itself sends the phone
+//! (`telemetry::module_record`, e.g. its answer to a proposed key) become their own event,
+//! `{"KeyAnswer":{"outcome":"AwaitingConfirmation","fingerprint":…,"session":…,"counter":…}}`.
 
-use telemetry::messages::{Decoded, MessageReader};
+use telemetry::framing::{Deframed, Deframer, framed_len};
+use telemetry::messages::{FRAMED_MAX_BYTES, Message};
+use telemetry::module_record;
+
+/// The longest frame: a message's or a module record's.
+const MAX_FRAME: usize = {
+    let module = framed_len(module_record::MAX_PAYLOAD_BYTES);
+    if module > FRAMED_MAX_BYTES {
+        module
+    } else {
+        FRAMED_MAX_BYTES
+    }
+};
 
 /// Decodes a byte stream into JSON events; bounded by the reader (one frame).
 #[derive(Debug, Default)]
 pub struct StreamDecoder {
-    reader: MessageReader,
+    reader: Deframer<MAX_FRAME>,
     dropped: u32,
 }
 
@@ -26,15 +40,25 @@ impl StreamDecoder {
         for &byte in bytes {
             match self.reader.push(byte) {
                 None => {}
-                Some(Decoded::Message(message)) => {
+                Some(Deframed::Frame { .. }) => {
+                    let payload = self.reader.payload();
                     // Serialising these plain structs cannot fail; a failure would still
                     // only cost this one event.
-                    match serde_json::to_value(message) {
-                        Ok(value) => events.push(value),
-                        Err(_) => self.drop_one(&mut events),
+                    let value = if module_record::is_module_payload(payload) {
+                        module_record::decode(payload)
+                            .ok()
+                            .and_then(|r| serde_json::to_value(r).ok())
+                    } else {
+                        postcard::from_bytes::<Message>(payload)
+                            .ok()
+                            .and_then(|m| serde_json::to_value(m).ok())
+                    };
+                    match value {
+                        Some(value) => events.push(value),
+                        None => self.drop_one(&mut events),
                     }
                 }
-                Some(Decoded::Dropped) => self.drop_one(&mut events),
+                Some(Deframed::Overflow | Deframed::Corrupt) => self.drop_one(&mut events),
             }
         }
         serde_json::Value::Array(events).to_string()

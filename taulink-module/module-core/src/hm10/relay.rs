@@ -5,6 +5,10 @@
 //! While no phone is connected the HM-10 parses its UART input as AT commands (§5), so
 //! records for the phone are only sent while connected; a disconnect clears what waits for
 //! the phone (stale telemetry is worthless and counted as dropped).
+//!
+//! Records from the phone go on to the flight side unread, except module-addressed ones
+//! (`telemetry::module_record`: their first byte is the module marker), which wait for the
+//! module core ([`Relay::next_record_to_module`]).
 
 use super::queue::{DropStats, RecordQueue};
 use telemetry::cobs;
@@ -19,6 +23,9 @@ const TO_PHONE_RECORDS: usize = 48;
 /// Bytes buffered from the phone towards the flight side.
 const TO_FLIGHT_BYTES: usize = 256;
 const TO_FLIGHT_RECORDS: usize = 8;
+/// Bytes buffered from the phone for the module itself (a key record is ≈ 35 bytes).
+const TO_MODULE_BYTES: usize = 128;
+const TO_MODULE_RECORDS: usize = 2;
 
 /// The HM-10's connection notifications (`AT+NOTI1`), sent without CR/LF.
 const CONNECTED: &[u8; 7] = b"OK+CONN";
@@ -118,6 +125,8 @@ pub struct RelayStats {
     pub to_phone: DropStats,
     /// Dropped on the way to the flight side.
     pub to_flight: DropStats,
+    /// Module-addressed records dropped (the core did not take them in time).
+    pub to_module: DropStats,
     /// Frames from the phone that were malformed or overlong.
     pub bad_frames_from_phone: u32,
 }
@@ -127,6 +136,7 @@ pub struct RelayStats {
 pub struct Relay {
     to_phone: RecordQueue<TO_PHONE_BYTES, TO_PHONE_RECORDS>,
     to_flight: RecordQueue<TO_FLIGHT_BYTES, TO_FLIGHT_RECORDS>,
+    to_module: RecordQueue<TO_MODULE_BYTES, TO_MODULE_RECORDS>,
     reader: PhoneReader,
     connected: bool,
     bad_frames_from_phone: u32,
@@ -139,6 +149,7 @@ impl Relay {
         Self {
             to_phone: RecordQueue::new(MAX_RECORD_LEN),
             to_flight: RecordQueue::new(MAX_RECORD_LEN),
+            to_module: RecordQueue::new(MAX_RECORD_LEN),
             reader: PhoneReader::new(),
             connected,
             bad_frames_from_phone: 0,
@@ -161,6 +172,7 @@ impl Relay {
         RelayStats {
             to_phone: self.to_phone.dropped(),
             to_flight: self.to_flight.dropped(),
+            to_module: self.to_module.dropped(),
             bad_frames_from_phone: self.bad_frames_from_phone,
         }
     }
@@ -195,7 +207,11 @@ impl Relay {
                 Some(PhoneEvent::Record(record)) => {
                     // Only a connected phone's data reaches the UART.
                     self.connected = true;
-                    self.to_flight.push(record);
+                    if telemetry::module_record::is_module_payload(record) {
+                        self.to_module.push(record);
+                    } else {
+                        self.to_flight.push(record);
+                    }
                 }
                 Some(PhoneEvent::Connected) => self.connected = true,
                 Some(PhoneEvent::Disconnected) => {
@@ -212,6 +228,11 @@ impl Relay {
     /// The next record from the phone for the flight side into `out` (≥ [`MAX_RECORD_LEN`]).
     pub fn next_record_to_flight(&mut self, out: &mut [u8]) -> Option<usize> {
         self.to_flight.pop_into(out).ok().flatten()
+    }
+
+    /// The next module-addressed record from the phone into `out` (≥ [`MAX_RECORD_LEN`]).
+    pub fn next_record_to_module(&mut self, out: &mut [u8]) -> Option<usize> {
+        self.to_module.pop_into(out).ok().flatten()
     }
 }
 

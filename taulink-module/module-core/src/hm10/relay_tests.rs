@@ -134,6 +134,19 @@ fn bad_phone_frames_are_counted_and_resynchronised() {
     assert_eq!(drain_to_flight(&mut relay), vec![vec![9, 8, 7]]);
 }
 
+#[test]
+fn module_records_stop_at_the_module_and_the_rest_goes_on() {
+    use telemetry::module_record::MARKER;
+    let mut relay = Relay::new(true);
+    let records = vec![vec![0x01, 0x02, 0x03], vec![MARKER, 1, 0, 7], vec![0x04]];
+    relay.on_phone_bytes(&phone_encode(&records));
+    assert_eq!(drain_to_flight(&mut relay), vec![vec![1, 2, 3], vec![4]]);
+    let mut out = [0u8; MAX_RECORD_LEN];
+    let n = relay.next_record_to_module(&mut out).unwrap();
+    assert_eq!(&out[..n], &[MARKER, 1, 0, 7]);
+    assert_eq!(relay.next_record_to_module(&mut out), None);
+}
+
 proptest! {
     #[test]
     fn random_phone_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..2000)) {
@@ -164,8 +177,14 @@ proptest! {
             relay.on_phone_bytes(piece);
             received.extend(drain_to_flight(&mut relay));
         }
-        let tail = received.len().saturating_sub(records.len());
-        prop_assert_eq!(&received[tail..], &records[..]);
+        // Module-addressed records (the marker first) stop at the module.
+        let for_flight: Vec<Vec<u8>> = records
+            .iter()
+            .filter(|r| !telemetry::module_record::is_module_payload(r))
+            .cloned()
+            .collect();
+        let tail = received.len().saturating_sub(for_flight.len());
+        prop_assert_eq!(&received[tail..], &for_flight[..]);
     }
 
     /// Every link record is either delivered to the phone, in order, or counted as dropped.

@@ -12,6 +12,7 @@
 //!
 //! * text selection (9): `options separated by ';' NUL, value, min, max, default, unit NUL`
 //! * unsigned 16 (2): `value, min, max, default (u16 each), unit NUL`
+//! * string (10): `text NUL, max length (u8)`; the radio's write carries the text NUL-terminated
 //! * folder (11): nothing after the name (the children name their parent)
 //! * info (12): `text NUL`
 //! * command (13): `status, timeout (10 ms units: how often the radio polls), info NUL`
@@ -318,6 +319,15 @@ impl Entry {
         entry
     }
 
+    /// Editable text `value` of at most `max_len` bytes (the radio's editor stops there and
+    /// its write carries the text NUL-terminated).
+    pub fn string(parent: u8, name: &str, value: &str, max_len: u8) -> Self {
+        let mut entry = Self::start(parent, ParameterType::String, name);
+        entry.text(value);
+        entry.push(&[max_len]);
+        entry
+    }
+
     /// A folder.
     pub fn folder(parent: u8, name: &str) -> Self {
         Self::start(parent, ParameterType::Folder, name)
@@ -376,6 +386,8 @@ mod tests {
             number.as_slice(),
             b"\x03\x02T\x00\x01\xF4\x00\x64\x07\xD0\x01\xF4ms\x00"
         );
+        let string = Entry::string(0, "Phrase", "", 56).finish().unwrap();
+        assert_eq!(string.as_slice(), b"\x00\x0APhrase\x00\x00\x38");
         let command = Entry::command(0, "Bind", CommandStatus::Progress, 50, "Binding")
             .finish()
             .unwrap();
