@@ -189,7 +189,10 @@ mod tests {
                 "{typed}: {answers:?}"
             );
             assert_eq!(answers.len(), 2, "one refusal, one more try: {answers:?}");
-            assert_eq!(flight.f32("pid.roll.kp") == 0.004, applied);
+            assert_eq!(
+                flight.get(flight_core::settings::handles::PID_ROLL_KP) == 0.004,
+                applied
+            );
         }
         assert!(Phone::new("").is_err());
         assert_eq!(

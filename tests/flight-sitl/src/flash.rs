@@ -149,11 +149,11 @@ fn corrupt(flash: &mut Flash, seed: u64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flight_core::settings::Value;
+    use flight_core::settings::handles;
 
     fn tuned() -> Settings {
         let mut s = Settings::default();
-        let _ = s.set("pid.roll.kp", Value::F32(0.0042));
+        s.put(handles::PID_ROLL_KP, 0.0042).unwrap();
         s
     }
 

@@ -11,7 +11,7 @@
 )]
 
 use flight_core::report::f32_value;
-use flight_core::settings::PARAMS;
+use flight_core::settings::{PARAMS, handles};
 use flight_sitl::scenario::default_airframe;
 use std::time::Duration;
 
@@ -72,7 +72,7 @@ fn on_the_ground(changes: &[SettingChange], seconds: f64) -> flight_sitl::Sitl {
 fn a_gain_design_holds_the_board_for_42_ms() {
     // An LQG cost from the phone, on the ground: applied, the gains re-designed, saved.
     let sitl = on_the_ground(&[change("lqg.q_rate", 900.0)], 2.0);
-    assert_eq!(sitl.settings.f32("lqg.q_rate"), 900.0);
+    assert_eq!(sitl.settings.get(handles::LQG_Q_RATE), 900.0);
     let stretches = held(&sitl.samples, sitl.ts_s);
     println!("held: {stretches:?}");
     let design = stretches
