@@ -147,11 +147,9 @@ impl LqgAxis {
         // shrinks by the rotation they will still cause.
         let mut x = now;
         let mut angle_ahead = 0.0;
-        let pending = self
-            .outputs
-            .get(..self.output_delay_samples)
-            .unwrap_or_default();
-        for u in pending.iter().rev() {
+        // The delay is at most 3 of the 4 outputs kept; `take` needs no fallback.
+        let pending = self.outputs.iter().take(self.output_delay_samples);
+        for u in pending.rev() {
             angle_ahead += self.ts_s * x.rate_dps;
             x = self.kf.predict_ahead(x, *u);
         }
