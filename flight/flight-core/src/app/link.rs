@@ -268,10 +268,11 @@ impl FlightApp {
         let mut buf = [0u8; 32];
         loop {
             let n = follower.uplink_stream.read(&mut buf);
-            if n == 0 {
+            // `read` fills at most `buf`, so the range always exists; none read ends it.
+            let Some(bytes) = buf.get(..n).filter(|b| !b.is_empty()) else {
                 break;
-            }
-            self.on_uplink_bytes(buf.get(..n).unwrap_or_default());
+            };
+            self.on_uplink_bytes(bytes);
         }
         if self.report_due(now_us) {
             self.report(follower);
