@@ -142,7 +142,7 @@ proptest! {
             app.on_handset_bytes(now_us, burst);
             app.on_handset_idle(now_us + 20);
             let mut out = [0u8; MAX_LINE_BURST];
-            let len = app.next_handset_bytes(now_us + 50, &mut out);
+            let len = app.next_handset_bytes(now_us + 50, &mut out).len();
             prop_assert!(len <= MAX_LINE_BURST);
             let mut decoder = crsf::Decoder::new();
             let mut frames = 0;
@@ -170,7 +170,8 @@ proptest! {
         let mut frame = [0u8; 64];
         let n = crsf::Message::RcChannels(channels)
             .encode(address::TX_MODULE, &mut frame)
-            .unwrap();
+            .unwrap()
+            .len();
         let (a, b) = frame[..n].split_at(cut.min(n));
         app.on_handset_bytes(5_000, a);
         app.on_handset_bytes(5_050, b);

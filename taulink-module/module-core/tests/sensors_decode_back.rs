@@ -88,7 +88,7 @@ fn crsf_values(altitude_cm: i32) -> (Vec<i32>, Vec<i32>) {
     for k in 0..500u64 {
         let now = 10_000 + k * 4_000;
         handset.on_line_bytes(now, &rc_frame());
-        let n = handset.next_line_bytes(now + 20, &mut out);
+        let n = handset.next_line_bytes(now + 20, &mut out).len();
         let mut bytes = &out[..n];
         while bytes.len() >= 4 {
             let len = bytes[1] as usize;
@@ -176,7 +176,7 @@ fn sport_altitude_vario_cells_and_module_battery_decode_back() {
     let mut out = [0u8; MAX_LINE_BURST];
     let mut frames = Vec::new();
     for k in 0..500u64 {
-        let n = handset.next_line_bytes(k * 12_000, &mut out);
+        let n = handset.next_line_bytes(k * 12_000, &mut out).len();
         frames.extend(sport_frames(&out[..n]));
     }
     let values = |id: u16| -> Vec<u32> {
@@ -271,7 +271,7 @@ fn hub_altitudes(altitude_cm: i32) -> (Vec<i32>, Vec<i32>) {
     let mut out = [0u8; MAX_LINE_BURST];
     let mut stream = Vec::new();
     for k in 0..200u64 {
-        let n = handset.next_line_bytes(k * 30_000, &mut out);
+        let n = handset.next_line_bytes(k * 30_000, &mut out).len();
         hub_stream(&out[..n], &mut stream);
     }
     let (mut alt, mut vspd, mut bp) = (Vec::new(), Vec::new(), None);

@@ -101,19 +101,19 @@ impl Frame {
     }
 
     /// Writes `7E`, the stuffed frame and `7E`; returns the bytes written (11…19).
-    pub fn encode(&self, out: &mut [u8]) -> Result<usize, Error> {
+    pub fn encode<'o>(&self, out: &'o mut [u8]) -> Result<&'o [u8], Error> {
         let bytes = self.bytes();
         let needed = 2 + stuffed_len(bytes);
         let Some(out) = out.get_mut(..needed) else {
             return Err(Error::BufferTooSmall { needed });
         };
-        let mut w = Writer::new(out);
+        let mut w = Writer::new(&mut *out);
         w.raw(DELIMITER);
         for byte in bytes {
             w.stuffed(byte);
         }
         w.raw(DELIMITER);
-        Ok(needed)
+        Ok(out)
     }
 }
 
