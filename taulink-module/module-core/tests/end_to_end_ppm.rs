@@ -91,7 +91,7 @@ fn spawn_phone(world: &mut World<'_>) -> common::Shared<Vec<u8>> {
                     id: 7,
                     value: -1234,
                 });
-                let n = encode_message(&change, &mut frame).unwrap();
+                let n = encode_message(&change, &mut frame).unwrap().len();
                 // The HM-10 hands BLE writes over in 20-byte pieces at most.
                 for chunk in frame[..n].chunks(5) {
                     app.on_phone_bytes(chunk);

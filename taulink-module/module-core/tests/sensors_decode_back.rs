@@ -41,7 +41,7 @@ fn handset(input: InputProtocol, output: OutputProtocol, altitude_cm: i32) -> Ha
         Message::Cells(Cells { count: CELLS }),
     ] {
         let mut record = [0u8; 64];
-        let n = records::encode(&message, &mut record).unwrap();
+        let n = records::encode(&message, &mut record).unwrap().len();
         handset.on_telemetry(&record[..n]);
     }
     handset.on_link_stats(&LinkStats {

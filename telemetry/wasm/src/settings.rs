@@ -69,18 +69,17 @@ impl Phone {
 
 fn encode(message: &Message) -> Result<Vec<u8>, EncodeError> {
     let mut out = [0u8; FRAMED_MAX_BYTES];
-    let n = encode_message(message, &mut out)?;
-    Ok(out.get(..n).unwrap_or_default().to_vec())
+    Ok(encode_message(message, &mut out)?.to_vec())
 }
 
 /// The framed stream bytes of `SettingChange { id, value: wire }`.
 pub fn encode_change(id: u16, wire: i32) -> Result<Vec<u8>, EncodeError> {
     let mut out = [0u8; FRAMED_MAX_BYTES];
-    let n = encode_message(
+    Ok(encode_message(
         &Message::SettingChange(SettingChange { id, value: wire }),
         &mut out,
-    )?;
-    Ok(out.get(..n).unwrap_or_default().to_vec())
+    )?
+    .to_vec())
 }
 
 fn number(value: Value) -> f64 {

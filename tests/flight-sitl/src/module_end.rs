@@ -460,10 +460,8 @@ async fn app_task(b: &Board, shared: &Shared) {
 /// A message from the phone, as the HM-10 hands its bytes to the module.
 fn send_to_flight(b: &Board, message: &Message) {
     let mut buf = [0u8; FRAMED_MAX_BYTES];
-    if let Ok(n) = encode_message(message, &mut buf) {
-        b.app
-            .borrow_mut()
-            .on_phone_bytes(buf.get(..n).unwrap_or(&[]));
+    if let Ok(bytes) = encode_message(message, &mut buf) {
+        b.app.borrow_mut().on_phone_bytes(bytes);
     }
 }
 

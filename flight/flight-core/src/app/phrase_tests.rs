@@ -107,7 +107,9 @@ fn uplink(app: &mut FlightApp, message: &telemetry::messages::Message, at_us: u6
     use telemetry::channels::FailsafeValues;
     use telemetry::link::core::Follower;
     let mut bytes = [0u8; 64];
-    let n = telemetry::messages::encode_message(message, &mut bytes).unwrap();
+    let n = telemetry::messages::encode_message(message, &mut bytes)
+        .unwrap()
+        .len();
     let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
     follower.uplink_stream.on_data(0, &bytes[..n]);
     app.on_link_step(at_us, &mut follower);

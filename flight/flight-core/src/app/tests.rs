@@ -361,7 +361,9 @@ fn a_setting_change_over_the_link_is_refused_while_armed() {
         value: f32_value(before + 0.5),
     };
     let mut bytes = [0u8; 64];
-    let n = encode_message(&Message::SettingChange(change), &mut bytes).unwrap();
+    let n = encode_message(&Message::SettingChange(change), &mut bytes)
+        .unwrap()
+        .len();
     let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
     armed_in_the_air(&mut app);
     follower.uplink_stream.on_data(0, &bytes[..n]);
@@ -535,7 +537,8 @@ mod gps {
             let mut buf = [0u8; telemetry::messages::FRAMED_MAX_BYTES];
             let n = a
                 .next_report(crate::report::LinkSeen::default(), &mut buf)
-                .unwrap();
+                .unwrap()
+                .len();
             sent.extend(buf[..n].iter().filter_map(|&b| reader.push(b)));
         }
         let Some(telemetry::messages::Decoded::Message(telemetry::messages::Message::Home(h))) =

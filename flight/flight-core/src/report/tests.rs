@@ -87,7 +87,7 @@ fn rotation_carries_every_kind_and_attitude_half_the_time() {
     assert!(matches!(r.next(&snap), Message::SysIdResult(_)));
     // The messages survive the stream encoding.
     let mut buf = [0u8; 64];
-    let n = encode_message(&attitude, &mut buf).unwrap();
+    let n = encode_message(&attitude, &mut buf).unwrap().len();
     let mut reader = MessageReader::new();
     let got: Vec<Decoded> = buf[..n].iter().filter_map(|b| reader.push(*b)).collect();
     assert_eq!(got, vec![Decoded::Message(attitude)]);

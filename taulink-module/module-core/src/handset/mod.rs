@@ -285,6 +285,7 @@ impl HandsetOutput for Handset {
                 .and_then(|frame| frame.encode(out).ok()),
             Protocol::Off => None,
         };
+        // Kept (the decision above): nothing is sent.
         sent.unwrap_or(&[])
     }
 

@@ -26,6 +26,7 @@ pub fn taulink_device_info(major: u8, minor: u8, patch: u8) -> DeviceInfo {
     DeviceInfo {
         destination: address::RADIO,
         origin: address::TX_MODULE,
+        // Kept default: a 7-byte constant in the name's 32-byte string cannot fail.
         name: String::try_from(TAULINK_NAME).unwrap_or_default(),
         serial: TAULINK_SERIAL,
         hardware_id: TAULINK_HARDWARE_ID,
@@ -300,7 +301,8 @@ impl Responder {
             now_us,
             self.config.link_statistics_interval_us,
         ) {
-            // No link: LQ 0 tells EdgeTX "telemetry lost" at once instead of after 1 s.
+            // No link: LQ 0 tells EdgeTX "telemetry lost" at once instead of after 1 s (the
+            // all-zero default is the report, deliberately).
             let stats = telemetry
                 .link
                 .as_ref()

@@ -215,11 +215,14 @@ fn parse(bytes: &[u8; FRAME_LEN]) -> Event {
         })),
         USER_FRAME => {
             let length = b1;
-            match bytes.get(3..3 + usize::from(length)) {
-                Some(data) if usize::from(length) <= USER_DATA_MAX => {
-                    Event::Frame(Frame::User(Vec::from_slice(data).unwrap_or_default()))
-                }
-                _ => Event::Rejected(Rejection::BadUserLength { length }),
+            // The user data's Vec holds at most USER_DATA_MAX: a longer claim is refused by
+            // the type, never cut to an empty frame.
+            match bytes
+                .get(3..3 + usize::from(length))
+                .and_then(|data| Vec::from_slice(data).ok())
+            {
+                Some(data) => Event::Frame(Frame::User(data)),
+                None => Event::Rejected(Rejection::BadUserLength { length }),
             }
         }
         frame_type => Event::Rejected(Rejection::UnknownType { frame_type }),

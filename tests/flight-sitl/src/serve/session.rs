@@ -232,7 +232,7 @@ mod tests {
 
     fn send(session: &mut Session, message: Message) {
         let mut frame = [0u8; 48];
-        let n = encode_message(&message, &mut frame).unwrap();
+        let n = encode_message(&message, &mut frame).unwrap().len();
         session.from_page(&frame[..n]);
     }
 
