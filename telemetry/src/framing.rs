@@ -36,15 +36,18 @@ pub const fn framed_len(payload_len: usize) -> usize {
     cobs::max_encoded_len(payload_len + 2) + 1
 }
 
-/// Frames `payload` into `out`; returns the framed length (delimiter included).
-pub fn frame(payload: &[u8], out: &mut [u8]) -> Result<usize, FramingError> {
+/// Frames `payload` into `out`; returns the framed bytes (delimiter included), postcard's
+/// `to_slice` style.
+pub fn frame<'o>(payload: &[u8], out: &'o mut [u8]) -> Result<&'o [u8], FramingError> {
     let crc = crc16(payload).to_be_bytes();
     let needed = framed_len(payload.len());
     let too_small = FramingError::BufferTooSmall { needed };
     let body = out.get_mut(..needed - 1).ok_or(too_small)?;
     let encoded = cobs::encode_parts(&[payload, &crc], body).map_err(|_| too_small)?;
-    *out.get_mut(encoded).ok_or(too_small)? = 0;
-    Ok(encoded + 1)
+    let (framed, _) = out.split_at_mut_checked(encoded + 1).ok_or(too_small)?;
+    let (_, delimiter) = framed.split_at_mut(encoded);
+    delimiter.fill(0);
+    Ok(framed)
 }
 
 /// What the deframer made of one delimited frame.
@@ -131,6 +134,7 @@ impl<const N: usize> Deframer<N> {
 
     /// The payload of the last good frame.
     pub fn payload(&self) -> &[u8] {
+        // Kept: `decoded_len` is only set from a successful `get(..write)` of this buffer.
         self.buf.get(..self.decoded_len).unwrap_or(&[])
     }
 }
@@ -141,7 +145,7 @@ mod tests {
 
     fn round_trip(payload: &[u8]) {
         let mut out = vec![0u8; framed_len(payload.len())];
-        let n = frame(payload, &mut out).unwrap();
+        let n = frame(payload, &mut out).unwrap().len();
         assert_eq!(out[n - 1], 0);
         assert!(!out[..n - 1].contains(&0), "no zero inside a frame");
         let mut d = Deframer::<600>::new();
@@ -176,7 +180,7 @@ mod tests {
         // Payload 11 00 22, CRC-16/CCITT-FALSE of it appended, then COBS.
         let crc = crc16(&[0x11, 0x00, 0x22]).to_be_bytes();
         let mut out = [0u8; 16];
-        let n = frame(&[0x11, 0x00, 0x22], &mut out).unwrap();
+        let n = frame(&[0x11, 0x00, 0x22], &mut out).unwrap().len();
         assert_eq!(&out[..3], &[0x02, 0x11, 0x04]);
         assert_eq!(&out[3..6], &[0x22, crc[0], crc[1]]);
         assert_eq!((n, out[6]), (7, 0));
@@ -192,7 +196,7 @@ mod tests {
             .find(|(_, crc)| !crc.contains(&0))
             .unwrap();
         let mut out = [0u8; 300];
-        let n = frame(&payload, &mut out).unwrap();
+        let n = frame(&payload, &mut out).unwrap().len();
         assert_eq!(n, 256);
         assert_eq!(out[0], 0xFF);
         assert_eq!(&out[1..253], &payload);
@@ -202,7 +206,7 @@ mod tests {
     #[test]
     fn resynchronises_after_garbage_and_drops_corruption() {
         let mut a = [0u8; 16];
-        let n = frame(b"abc", &mut a).unwrap();
+        let n = frame(b"abc", &mut a).unwrap().len();
         let mut d = Deframer::<32>::new();
         let mut outcomes = Vec::new();
         let mut bad = a;

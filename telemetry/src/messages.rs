@@ -294,7 +294,7 @@ impl core::fmt::Display for EncodeError {
 impl core::error::Error for EncodeError {}
 
 /// Encodes and frames `message` into `out`; returns the bytes to put in the stream.
-pub fn encode_message(message: &Message, out: &mut [u8]) -> Result<usize, EncodeError> {
+pub fn encode_message<'o>(message: &Message, out: &'o mut [u8]) -> Result<&'o [u8], EncodeError> {
     let mut scratch = [0u8; MESSAGE_MAX_BYTES];
     let payload = postcard::to_slice(message, &mut scratch).map_err(|_| EncodeError::Serialize)?;
     frame(payload, out).map_err(EncodeError::Framing)
@@ -402,7 +402,7 @@ mod tests {
         let mut stream = Vec::new();
         for m in samples() {
             let mut buf = [0u8; FRAMED_MAX_BYTES];
-            let n = encode_message(&m, &mut buf).unwrap();
+            let n = encode_message(&m, &mut buf).unwrap().len();
             assert!(n <= FRAMED_MAX_BYTES);
             stream.extend_from_slice(&buf[..n]);
         }
@@ -416,7 +416,7 @@ mod tests {
     fn sizes_are_compact() {
         let mut buf = [0u8; FRAMED_MAX_BYTES];
         // Tag 0, three zig-zag varints of 2–3 bytes, CRC 2, COBS 1, delimiter 1.
-        let n = encode_message(&samples()[0], &mut buf).unwrap();
+        let n = encode_message(&samples()[0], &mut buf).unwrap().len();
         assert_eq!(n, 1 + 2 + 2 + 3 + 2 + 1 + 1);
         // Largest: GPS, tag + 3 × i32 varint (5) + 2 × u16 (3) + u8 + fix tag.
         assert_eq!(MESSAGE_MAX_BYTES, 24);
@@ -439,7 +439,7 @@ mod tests {
     #[test]
     fn a_damaged_frame_is_dropped_and_the_next_one_read() {
         let mut a = [0u8; FRAMED_MAX_BYTES];
-        let n = encode_message(&samples()[1], &mut a).unwrap();
+        let n = encode_message(&samples()[1], &mut a).unwrap().len();
         let mut reader = MessageReader::new();
         let mut out = Vec::new();
         for (i, &b) in a[..n].iter().chain(&a[..n]).enumerate() {

@@ -24,7 +24,7 @@ fn frames(decoded: &[Decoded]) -> Vec<Frame> {
 
 fn encode(frame: &Frame) -> Vec<u8> {
     let mut out = [0u8; 64];
-    let n = frame.encode(&mut out).unwrap();
+    let n = frame.encode(&mut out).unwrap().len();
     out[..n].to_vec()
 }
 

@@ -32,7 +32,7 @@ fn one_frame(bytes: &[u8]) -> Frame {
         panic!("{decoded:?}")
     };
     let mut out = [0u8; 64];
-    let written = frame.encode(&mut out).unwrap();
+    let written = frame.encode(&mut out).unwrap().len();
     assert_eq!(&out[..written], bytes);
     frame
 }
@@ -43,7 +43,7 @@ fn one_message(bytes: &[u8]) -> Message {
     let message = Message::from_frame(&frame).unwrap();
     let mut out = [0u8; 64];
     let written = message.encode(frame.address, &mut out).unwrap();
-    assert_eq!(&out[..written], bytes);
+    assert_eq!(written, bytes);
     message
 }
 
@@ -130,7 +130,7 @@ fn hand_computed_rc_from_microseconds() {
     let bytes =
         hex("EE 18 16 BF 00 1F C0 59 31 F1 27 C1 15 7C E0 03 1F F8 C0 07 3E F0 81 0F 7C 8D");
     let mut out = [0u8; 64];
-    let written = rc.to_frame().encode(&mut out).unwrap();
+    let written = rc.to_frame().encode(&mut out).unwrap().len();
     assert_eq!(&out[..written], &bytes[..]);
     assert_eq!(rc.to_us(), us);
 }
@@ -480,10 +480,10 @@ fn worked_k_parameter_write_decodes() {
     assert_eq!(write.value.as_slice(), &[0x01]);
     // Re-encoded, the same bytes.
     let mut out = [0u8; 16];
-    let n = Message::ParameterWrite(write)
+    let written = Message::ParameterWrite(write)
         .encode(0xC8, &mut out)
         .unwrap();
-    assert_eq!(&out[..n], &hex("C8 06 2D EE EF 11 01 A5")[..]);
+    assert_eq!(written, &hex("C8 06 2D EE EF 11 01 A5")[..]);
 }
 
 #[test]

@@ -105,7 +105,10 @@ fn run(
     while now < seconds * 1_000_000 {
         responder.on_frame(now, &rc_frame());
         let mut out = [0u8; 256];
-        let n = responder.reply(now + 50, telemetry, &mut out);
+        let n = responder
+            .reply(now + 50, telemetry, &mut out)
+            .unwrap()
+            .len();
         assert!(n <= 128);
         replies.push((now, decode_all(&out[..n])));
         now += period_us;
@@ -125,17 +128,42 @@ fn count(replies: &[(u64, Vec<Message>)], pick: impl Fn(&Message) -> bool) -> us
 fn silent_without_a_radio_frame() {
     let mut responder = responder(400_000);
     let mut out = [0u8; 128];
-    assert_eq!(responder.reply(0, &full_telemetry(), &mut out), 0);
+    assert!(
+        responder
+            .reply(0, &full_telemetry(), &mut out)
+            .unwrap()
+            .is_empty()
+    );
     responder.on_frame(0, &rc_frame());
-    assert!(responder.reply(10, &full_telemetry(), &mut out) > 0);
+    assert!(
+        !responder
+            .reply(10, &full_telemetry(), &mut out)
+            .unwrap()
+            .is_empty()
+    );
     // One window per radio frame.
-    assert_eq!(responder.reply(20, &full_telemetry(), &mut out), 0);
+    assert!(
+        responder
+            .reply(20, &full_telemetry(), &mut out)
+            .unwrap()
+            .is_empty()
+    );
     // A window not used within half the radio period (4 ms default at 400 kBd) is missed.
     responder.on_frame(4_000, &rc_frame());
-    assert_eq!(responder.reply(6_001, &full_telemetry(), &mut out), 0);
+    assert!(
+        responder
+            .reply(6_001, &full_telemetry(), &mut out)
+            .unwrap()
+            .is_empty()
+    );
     // 2 ms late is still inside; link statistics are due again 100 ms after the first ones.
     responder.on_frame(100_000, &rc_frame());
-    assert!(responder.reply(102_000, &full_telemetry(), &mut out) > 0);
+    assert!(
+        !responder
+            .reply(102_000, &full_telemetry(), &mut out)
+            .unwrap()
+            .is_empty()
+    );
 }
 
 #[test]
@@ -147,7 +175,7 @@ fn ping_is_answered_with_taulink_device_info_once() {
         Some(Message::DevicePing(_))
     ));
     let mut out = [0u8; 128];
-    let n = responder.reply(10, &telemetry, &mut out);
+    let n = responder.reply(10, &telemetry, &mut out).unwrap().len();
     let messages = decode_all(&out[..n]);
     let Message::DeviceInfo(info) = &messages[0] else {
         panic!("{messages:?}")
@@ -156,7 +184,7 @@ fn ping_is_answered_with_taulink_device_info_once() {
     assert_eq!((info.destination, info.origin), (0xEA, 0xEE));
     assert_ne!(&info.serial, b"ELRS");
     responder.on_frame(4_000, &rc_frame());
-    let n = responder.reply(4_010, &telemetry, &mut out);
+    let n = responder.reply(4_010, &telemetry, &mut out).unwrap().len();
     assert!(
         !decode_all(&out[..n])
             .iter()
@@ -174,14 +202,20 @@ fn ping_is_answered_even_in_a_short_window() {
     assert_eq!(responder.reply_budget(6), 44);
     assert_eq!(responder.reply_budget(26), 24);
     let mut out = [0u8; 128];
-    let n = responder.reply(5_010, &HandsetTelemetry::default(), &mut out);
+    let n = responder
+        .reply(5_010, &HandsetTelemetry::default(), &mut out)
+        .unwrap()
+        .len();
     assert!(matches!(
         decode_all(&out[..n])[..],
         [Message::DeviceInfo(_), ..]
     ));
     // Ping again, answered in a window shortened by a (hypothetical) 26-byte radio frame.
     let mut responder = responder_at_5ms_with_ping_after_channels();
-    let n = responder.reply(10_010, &full_telemetry(), &mut out);
+    let n = responder
+        .reply(10_010, &full_telemetry(), &mut out)
+        .unwrap()
+        .len();
     assert_eq!(n, 28);
     assert!(matches!(
         decode_all(&out[..n])[..],
@@ -204,7 +238,10 @@ fn ping_for_someone_else_is_ignored() {
     let mut responder = responder(400_000);
     responder.on_frame(0, &Frame::new(0xC8, 0x28, &[0xEC, 0xEA]).unwrap());
     let mut out = [0u8; 128];
-    let n = responder.reply(10, &HandsetTelemetry::default(), &mut out);
+    let n = responder
+        .reply(10, &HandsetTelemetry::default(), &mut out)
+        .unwrap()
+        .len();
     assert!(
         !decode_all(&out[..n])
             .iter()
@@ -343,7 +380,10 @@ fn radio_locks_onto_the_air_schedule() {
         let arrival = next_send as u64 + 650; // 26 bytes at 400 kBd
         responder.on_frame(arrival, &rc_frame());
         let mut out = [0u8; 128];
-        let n = responder.reply(arrival + 20, &telemetry, &mut out);
+        let n = responder
+            .reply(arrival + 20, &telemetry, &mut out)
+            .unwrap()
+            .len();
         next_send += radio_period_us;
         for message in decode_all(&out[..n]) {
             if let Message::TimingCorrection(t) = message {
@@ -388,7 +428,7 @@ proptest! {
             responder.on_frame(now, &frame);
             let budget_after = responder.reply_budget(frame.wire_len());
             let mut out = vec![0u8; out_len];
-            let n = responder.reply(now + delay_us, &telemetry, &mut out);
+            let n = responder.reply(now + delay_us, &telemetry, &mut out).unwrap().len();
             prop_assert!(n <= out_len && n <= 128);
             let messages = decode_all(&out[..n]);
             if n > budget_after {

@@ -51,7 +51,7 @@ fn via_crsf(t: &HandsetTelemetry) -> Seen {
         let now = k * 4_000;
         responder.on_frame(now, &RcChannels::CENTRED.to_frame());
         let mut out = [0u8; 128];
-        let n = responder.reply(now + 30, t, &mut out);
+        let n = responder.reply(now + 30, t, &mut out).unwrap().len();
         line.extend_from_slice(&out[..n]);
     }
     let mut seen: Seen = (None, None, None, None);
@@ -82,7 +82,7 @@ fn via_sport(t: &HandsetTelemetry) -> Seen {
     for now in (0..1_000_000u64).step_by(1_000) {
         if let Some(frame) = scheduler.next_frame(now, t) {
             let mut out = [0u8; sport::MAX_WIRE_LEN];
-            let n = frame.encode(&mut out).unwrap();
+            let n = frame.encode(&mut out).unwrap().len();
             line.extend_from_slice(&out[..n]);
         }
     }
@@ -109,7 +109,7 @@ fn via_frsky_d(t: &HandsetTelemetry) -> Seen {
     for now in (0..2_000_000u64).step_by(1_000) {
         if let Some(frame) = sender.next_frame(now, t) {
             let mut out = [0u8; frsky_d::MAX_WIRE_LEN];
-            let n = frame.encode(&mut out).unwrap();
+            let n = frame.encode(&mut out).unwrap().len();
             line.extend_from_slice(&out[..n]);
         }
     }

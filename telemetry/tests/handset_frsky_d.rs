@@ -22,7 +22,7 @@ fn hex(text: &str) -> Vec<u8> {
 
 fn encode(frame: &Frame) -> Vec<u8> {
     let mut out = [0u8; frsky_d::MAX_WIRE_LEN];
-    let n = frame.encode(&mut out).unwrap();
+    let n = frame.encode(&mut out).unwrap().len();
     out[..n].to_vec()
 }
 

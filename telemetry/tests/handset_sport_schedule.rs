@@ -146,7 +146,7 @@ fn bytes_decode_back_to_the_telemetry() {
     let mut line = Vec::new();
     for (_, frame) in run(&mut scheduler, 1_000_000, &telemetry()) {
         let mut out = [0u8; sport::MAX_WIRE_LEN];
-        let n = frame.encode(&mut out).unwrap();
+        let n = frame.encode(&mut out).unwrap().len();
         line.extend_from_slice(&out[..n]);
         line.push(sport::START); // openLRSng-style idle byte between frames
     }

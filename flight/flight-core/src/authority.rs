@@ -113,7 +113,7 @@ impl ChangeGate {
 mod tests {
     use super::*;
     use crate::report::f32_value;
-    use crate::settings::PARAMS;
+    use crate::settings::{PARAMS, handles};
     use telemetry::change_auth::Signer;
 
     const SESSION: u32 = 0x5E55_1017;
@@ -175,7 +175,7 @@ mod tests {
             gate.on_message(&good, &mut settings, Some(key()), false),
             Some(Reply::Applied(descent()))
         );
-        assert_eq!(settings.f32("failsafe.descent_mps"), 0.9);
+        assert_eq!(settings.get(handles::FAILSAFE_DESCENT_MPS), 0.9);
         // The same frame again: a replay.
         let mut again = settings.clone();
         assert_eq!(

@@ -283,7 +283,7 @@ pub fn apply_setting(
         return (Err(ParamError::Unknown), None);
     };
     let result = from_wire(param, change.value).and_then(|v| settings.set(param.name, v));
-    let echo = settings.get(param.name).map(|v| SettingChange {
+    let echo = settings.by_name(param.name).map(|v| SettingChange {
         id: change.id,
         value: to_wire(v),
     });
@@ -293,7 +293,7 @@ pub fn apply_setting(
 /// The report of setting `id`'s current value.
 pub fn setting_report(settings: &Settings, id: u16) -> Option<SettingChange> {
     let param = PARAMS.get(usize::from(id))?;
-    let value = settings.get(param.name)?;
+    let value = settings.by_name(param.name)?;
     Some(SettingChange {
         id,
         value: to_wire(value),

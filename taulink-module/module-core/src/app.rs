@@ -351,10 +351,9 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             return;
         };
         let mut record = [0u8; MAX_RECORD_LEN];
-        if let Some(Ok(length)) = payload
+        if let Some(Ok(bytes)) = payload
             .get(..length)
             .map(|p| crate::records::with_crc(p, &mut record))
-            && let Some(bytes) = record.get(..length)
         {
             self.relay.on_link_record(bytes);
         }
@@ -576,11 +575,11 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         }
     }
 
-    /// What to send on the JR line at `now_us` (`out` ≥ `handset::MAX_LINE_BURST`); 0 =
-    /// nothing now.
-    pub fn next_handset_bytes(&mut self, now_us: u64, out: &mut [u8]) -> usize {
+    /// What to send on the JR line at `now_us` (`out` ≥ `handset::MAX_LINE_BURST`), written
+    /// into `out`; empty = nothing now.
+    pub fn next_handset_bytes<'o>(&mut self, now_us: u64, out: &'o mut [u8]) -> &'o [u8] {
         if self.settings.role != Role::Transmitter {
-            return 0;
+            return &[];
         }
         self.handset.next_line_bytes(now_us, out)
     }

@@ -568,8 +568,7 @@ fn arm_record(armed: bool) -> Vec<u8> {
         arming_blockers: 0,
     });
     let mut out = [0u8; MAX_RECORD_LEN];
-    let n = crate::records::encode(&message, &mut out).unwrap();
-    out[..n].to_vec()
+    crate::records::encode(&message, &mut out).unwrap().to_vec()
 }
 
 #[test]
@@ -638,8 +637,8 @@ fn phone_sends(app: &mut App<FakeLink, FakeHandset>, record: &ModuleRecord) {
     let mut payload = [0u8; module_record::MAX_PAYLOAD_BYTES];
     let n = module_record::encode(record, &mut payload).unwrap();
     let mut framed = [0u8; MAX_RECORD_LEN];
-    let m = crate::records::with_crc(&payload[..n], &mut framed).unwrap();
-    app.on_phone_bytes(&cobs_frame(&framed[..m]));
+    let record = crate::records::with_crc(&payload[..n], &mut framed).unwrap();
+    app.on_phone_bytes(&cobs_frame(record));
 }
 
 /// The module's answers waiting for the phone.

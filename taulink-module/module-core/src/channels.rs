@@ -50,6 +50,8 @@ impl ChannelFrame {
 
     /// The ticks, one per channel.
     pub fn as_slice(&self) -> &[u16] {
+        // Kept: `count` never exceeds the array (every constructor bounds it); the type stays
+        // `Copy`, which a heapless::Vec would not be.
         self.ticks.get(..self.count()).unwrap_or(&[])
     }
 

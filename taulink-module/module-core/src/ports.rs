@@ -109,10 +109,10 @@ pub trait HandsetOutput {
     fn on_line_idle(&mut self, _now_us: u64) -> Option<ChannelFrame> {
         None
     }
-    /// What to send on the JR line at `now_us` into `out` (≥ 128 bytes); 0 = nothing. The
-    /// encoder paces itself (S.Port slots, CRSF reply windows).
-    fn next_line_bytes(&mut self, _now_us: u64, _out: &mut [u8]) -> usize {
-        0
+    /// What to send on the JR line at `now_us`, written into `out` (≥ 128 bytes); empty =
+    /// nothing. The encoder paces itself (S.Port slots, CRSF reply windows).
+    fn next_line_bytes<'o>(&mut self, _now_us: u64, _out: &'o mut [u8]) -> &'o [u8] {
+        &[]
     }
     /// The oldest request from the radio not yet taken.
     fn take_request(&mut self) -> Option<HandsetRequest> {

@@ -71,15 +71,15 @@ pub fn decode(record: &[u8]) -> Result<Message, RecordError> {
     postcard::from_bytes::<Message>(payload(record)?).map_err(|_| RecordError::UnknownMessage)
 }
 
-/// The record of `message` into `out`; returns its length.
-pub fn encode(message: &Message, out: &mut [u8]) -> Result<usize, RecordError> {
+/// The record of `message` into `out`; returns it.
+pub fn encode<'o>(message: &Message, out: &'o mut [u8]) -> Result<&'o [u8], RecordError> {
     let mut scratch = [0u8; MESSAGE_MAX_BYTES];
     let body = postcard::to_slice(message, &mut scratch).map_err(|_| RecordError::TooLong)?;
     with_crc(body, out)
 }
 
 /// `payload ‖ crc16_be(payload)` into `out`.
-pub fn with_crc(payload: &[u8], out: &mut [u8]) -> Result<usize, RecordError> {
+pub fn with_crc<'o>(payload: &[u8], out: &'o mut [u8]) -> Result<&'o [u8], RecordError> {
     let len = payload.len() + CRC_BYTES;
     if len > MAX_RECORD_LEN {
         return Err(RecordError::TooLong);
@@ -90,11 +90,11 @@ pub fn with_crc(payload: &[u8], out: &mut [u8]) -> Result<usize, RecordError> {
         .ok_or(RecordError::TooLong)?;
     body.copy_from_slice(payload);
     crc.copy_from_slice(&crc16(payload).to_be_bytes());
-    Ok(len)
+    Ok(slot)
 }
 
-/// The stream frame of `record` (checked) into `out`; returns its length.
-pub fn to_stream(record: &[u8], out: &mut [u8]) -> Result<usize, RecordError> {
+/// The stream frame of `record` (checked) into `out`; returns it.
+pub fn to_stream<'o>(record: &[u8], out: &'o mut [u8]) -> Result<&'o [u8], RecordError> {
     frame(payload(record)?, out).map_err(|_| RecordError::TooLong)
 }
 
@@ -123,10 +123,10 @@ impl Splitter {
 
     /// One stream byte; at the end of a good frame the record goes into `out` (≥
     /// [`MAX_RECORD_LEN`]) and its length is returned.
-    pub fn push(&mut self, byte: u8, out: &mut [u8]) -> Option<usize> {
+    pub fn push<'o>(&mut self, byte: u8, out: &'o mut [u8]) -> Option<&'o [u8]> {
         match self.deframer.push(byte)? {
             Deframed::Frame { .. } => match with_crc(self.deframer.payload(), out) {
-                Ok(len) => Some(len),
+                Ok(record) => Some(record),
                 Err(_) => {
                     self.dropped = self.dropped.saturating_add(1);
                     None
@@ -158,16 +158,16 @@ mod tests {
     #[test]
     fn record_framed_by_the_relay_is_the_link_frame() {
         let mut record = [0u8; MAX_RECORD_LEN];
-        let len = encode(&battery(), &mut record).unwrap();
+        let len = encode(&battery(), &mut record).unwrap().len();
         let mut relay_frame = [0u8; 80];
         let n = cobs::encode(&record[..len], &mut relay_frame).unwrap();
         relay_frame[n] = 0;
         let mut link_frame = [0u8; 80];
-        let m = encode_message(&battery(), &mut link_frame).unwrap();
+        let m = encode_message(&battery(), &mut link_frame).unwrap().len();
         assert_eq!(&relay_frame[..=n], &link_frame[..m]);
         let mut stream = [0u8; 80];
-        let k = to_stream(&record[..len], &mut stream).unwrap();
-        assert_eq!(&stream[..k], &link_frame[..m]);
+        let streamed = to_stream(&record[..len], &mut stream).unwrap();
+        assert_eq!(streamed, &link_frame[..m]);
     }
 
     #[test]
@@ -175,7 +175,7 @@ mod tests {
         let mut stream = Vec::new();
         let mut buf = [0u8; 80];
         for message in [battery(), Message::FlightMode(FlightMode::AltitudeHold)] {
-            let n = encode_message(&message, &mut buf).unwrap();
+            let n = encode_message(&message, &mut buf).unwrap().len();
             stream.extend_from_slice(&buf[..n]);
         }
         // Damage the first frame: its CRC fails, the second still arrives.
@@ -184,7 +184,7 @@ mod tests {
         let mut got = Vec::new();
         let mut record = [0u8; MAX_RECORD_LEN];
         for &b in &stream {
-            if let Some(len) = splitter.push(b, &mut record) {
+            if let Some(len) = splitter.push(b, &mut record).map(<[u8]>::len) {
                 got.push(decode(&record[..len]).unwrap());
             }
         }
@@ -197,8 +197,8 @@ mod tests {
         assert_eq!(payload(&[1]), Err(RecordError::TooShort));
         assert_eq!(payload(&[1, 2, 3]), Err(RecordError::Crc));
         let mut out = [0u8; 8];
-        let len = with_crc(&[0xFF, 0xFF], &mut out).unwrap();
-        assert_eq!(decode(&out[..len]), Err(RecordError::UnknownMessage));
+        let record = with_crc(&[0xFF, 0xFF], &mut out).unwrap();
+        assert_eq!(decode(record), Err(RecordError::UnknownMessage));
         assert_eq!(
             with_crc(&[0; 63], &mut [0u8; 80]),
             Err(RecordError::TooLong)

@@ -184,7 +184,7 @@ impl Script {
             let mut app = self.app.borrow_mut();
             app.on_handset_bytes(now, &bytes);
             app.on_handset_idle(now);
-            app.next_handset_bytes(now + 20, &mut reply)
+            app.next_handset_bytes(now + 20, &mut reply).len()
         };
         let frames = parse(&reply[..len]);
         for (kind, _) in &frames {

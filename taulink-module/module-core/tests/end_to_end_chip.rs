@@ -138,7 +138,7 @@ fn ppm_over_the_driver_on_virtual_si4432s() {
             let now = io_medium.now().as_micros() as u64 + MODULE_EPOCH_US;
             let mut app = io_app.borrow_mut();
             let mut out = [0u8; 128];
-            let n = app.next_handset_bytes(now, &mut out);
+            let n = app.next_handset_bytes(now, &mut out).len();
             sport_log.borrow_mut().extend_from_slice(&out[..n]);
             if k.is_multiple_of(5) {
                 let mut frame = [0u8; MAX_FRAME_LEN];

@@ -51,13 +51,18 @@ fn spawn_radio(world: &mut World<'_>) -> common::Shared<Vec<(u64, Vec<u8>)>> {
             };
             first = false;
             let mut frame = [0u8; 64];
-            let n = message.encode(address::TX_MODULE, &mut frame).unwrap();
+            let n = message
+                .encode(address::TX_MODULE, &mut frame)
+                .unwrap()
+                .len();
             {
                 let mut app = app.borrow_mut();
                 app.on_handset_bytes(module_now(t), &frame[..n]);
                 app.on_handset_idle(module_now(t + 25));
                 let mut reply = [0u8; 128];
-                let len = app.next_handset_bytes(module_now(t + 100), &mut reply);
+                let len = app
+                    .next_handset_bytes(module_now(t + 100), &mut reply)
+                    .len();
                 if len > 0 {
                     replies.borrow_mut().push((t, reply[..len].to_vec()));
                 }
@@ -243,13 +248,15 @@ fn spawn_obedient_radio(world: &mut World<'_>) -> common::Shared<Vec<u64>> {
             let mut frame = [0u8; 64];
             let n = Message::RcChannels(channels)
                 .encode(address::TX_MODULE, &mut frame)
-                .unwrap();
+                .unwrap()
+                .len();
             let mut reply = [0u8; 128];
             let len = {
                 let mut app = app.borrow_mut();
                 app.on_handset_bytes(module_now(t), &frame[..n]);
                 app.on_handset_idle(module_now(t));
                 app.next_handset_bytes(module_now(t + 100), &mut reply)
+                    .len()
             };
             ends.borrow_mut().push(module_now(t));
             let mut next_ns = t_ns + period_ns;

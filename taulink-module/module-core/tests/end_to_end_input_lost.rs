@@ -66,7 +66,8 @@ fn spawn_crsf_radio(world: &mut World<'_>) {
     let mut frame = [0u8; 64];
     let len = Message::RcChannels(RcChannels::from_us(&widths))
         .encode(address::TX_MODULE, &mut frame)
-        .unwrap();
+        .unwrap()
+        .len();
     world.executor.spawn(async move {
         let mut t = 50_000u64;
         loop {

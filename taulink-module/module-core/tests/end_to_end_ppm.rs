@@ -62,7 +62,10 @@ fn spawn_jr_line(world: &mut World<'_>) -> common::Shared<Vec<(u64, Vec<u8>)>> {
             t += 2_000;
             time.sleep_until(t).await;
             let mut out = [0u8; 128];
-            let n = app.borrow_mut().next_handset_bytes(module_now(t), &mut out);
+            let n = app
+                .borrow_mut()
+                .next_handset_bytes(module_now(t), &mut out)
+                .len();
             if n > 0 {
                 log.borrow_mut().push((t, out[..n].to_vec()));
             }
@@ -88,7 +91,7 @@ fn spawn_phone(world: &mut World<'_>) -> common::Shared<Vec<u8>> {
                     id: 7,
                     value: -1234,
                 });
-                let n = encode_message(&change, &mut frame).unwrap();
+                let n = encode_message(&change, &mut frame).unwrap().len();
                 // The HM-10 hands BLE writes over in 20-byte pieces at most.
                 for chunk in frame[..n].chunks(5) {
                     app.on_phone_bytes(chunk);

@@ -51,14 +51,16 @@ fn record() -> Vec<u8> {
         remaining_percent: 71,
     });
     let mut out = [0u8; 64];
-    let n = module_core::records::encode(&message, &mut out).unwrap();
-    out[..n].to_vec()
+    module_core::records::encode(&message, &mut out)
+        .unwrap()
+        .to_vec()
 }
 
 fn stream_frame(record: &[u8]) -> Vec<u8> {
     let mut out = [0u8; 80];
-    let n = module_core::records::to_stream(record, &mut out).unwrap();
-    out[..n].to_vec()
+    module_core::records::to_stream(record, &mut out)
+        .unwrap()
+        .to_vec()
 }
 
 /// Binds the module (long press) with a receiver that has no bind data; returns the link

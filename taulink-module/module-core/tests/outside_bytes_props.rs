@@ -89,11 +89,11 @@ proptest! {
         // A sender that joins a stream always starts with a delimiter.
         stream.push(0);
         let mut frame = [0u8; 64];
-        let n = encode_message(&first, &mut frame).unwrap();
+        let n = encode_message(&first, &mut frame).unwrap().len();
         stream.extend_from_slice(&frame[..n]);
         stream.extend_from_slice(&garbage_b);
         stream.push(0);
-        let n = encode_message(&second, &mut frame).unwrap();
+        let n = encode_message(&second, &mut frame).unwrap().len();
         stream.extend_from_slice(&frame[..n]);
 
         let mut splitter = Splitter::new();
@@ -101,7 +101,7 @@ proptest! {
         let mut record = [0u8; MAX_RECORD_LEN];
         for chunk in chunks(&stream, &cuts) {
             for &b in chunk {
-                if let Some(len) = splitter.push(b, &mut record) {
+                if let Some(len) = splitter.push(b, &mut record).map(<[u8]>::len) {
                     // Every record the splitter hands out carries a valid CRC.
                     prop_assert!(records::payload(&record[..len]).is_ok());
                     if let Ok(m) = records::decode(&record[..len]) {
@@ -142,7 +142,7 @@ proptest! {
             app.on_handset_bytes(now_us, burst);
             app.on_handset_idle(now_us + 20);
             let mut out = [0u8; MAX_LINE_BURST];
-            let len = app.next_handset_bytes(now_us + 50, &mut out);
+            let len = app.next_handset_bytes(now_us + 50, &mut out).len();
             prop_assert!(len <= MAX_LINE_BURST);
             let mut decoder = crsf::Decoder::new();
             let mut frames = 0;
@@ -170,7 +170,8 @@ proptest! {
         let mut frame = [0u8; 64];
         let n = crsf::Message::RcChannels(channels)
             .encode(address::TX_MODULE, &mut frame)
-            .unwrap();
+            .unwrap()
+            .len();
         let (a, b) = frame[..n].split_at(cut.min(n));
         app.on_handset_bytes(5_000, a);
         app.on_handset_bytes(5_050, b);

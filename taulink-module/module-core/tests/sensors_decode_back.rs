@@ -45,7 +45,7 @@ fn handset(input: InputProtocol, output: OutputProtocol, altitude_cm: i32) -> Ha
         Message::Cells(Cells { count: CELLS }),
     ] {
         let mut record = [0u8; 64];
-        let n = records::encode(&message, &mut record).unwrap();
+        let n = records::encode(&message, &mut record).unwrap().len();
         handset.on_telemetry(&record[..n]);
     }
     handset.on_link_stats(&LinkStats {
@@ -77,7 +77,7 @@ fn crsf_values(altitude_cm: i32) -> (Vec<i32>, Vec<i32>) {
     for k in 0..500u64 {
         let now = 10_000 + k * 4_000;
         handset.on_line_bytes(now, &rc_frame());
-        let n = handset.next_line_bytes(now + 20, &mut out);
+        let n = handset.next_line_bytes(now + 20, &mut out).len();
         for (kind, payload) in crsf_frames(&out[..n]) {
             match kind {
                 0x07 => vspd.push(crsf_vario_cm_s(&payload)),
@@ -111,7 +111,7 @@ fn sport_altitude_vario_cells_and_module_battery_decode_back() {
     let mut out = [0u8; MAX_LINE_BURST];
     let mut frames = Vec::new();
     for k in 0..500u64 {
-        let n = handset.next_line_bytes(k * 12_000, &mut out);
+        let n = handset.next_line_bytes(k * 12_000, &mut out).len();
         frames.extend(sport_frames(&out[..n]));
     }
     let values = |id: u16| -> Vec<u32> {
@@ -157,7 +157,7 @@ fn hub_altitudes(altitude_cm: i32) -> (Vec<i32>, Vec<i32>) {
     let mut out = [0u8; MAX_LINE_BURST];
     let mut stream = Vec::new();
     for k in 0..200u64 {
-        let n = handset.next_line_bytes(k * 30_000, &mut out);
+        let n = handset.next_line_bytes(k * 30_000, &mut out).len();
         hub_stream(&out[..n], &mut stream);
     }
     let (mut alt, mut vspd, mut bp) = (Vec::new(), Vec::new(), None);

@@ -32,7 +32,7 @@ pub async fn bind_follower<R: PacketRadio, C: LinkClock>(
         let RxOutcome::Packet { len, .. } = radio.receive(&mut buf, timeout).await? else {
             continue;
         };
-        let Some(params) = offered_params(buf.get(..len).unwrap_or(&[])) else {
+        let Some(params) = buf.get(..len).and_then(offered_params) else {
             continue;
         };
         let mut accept = [0u8; 16];
@@ -45,9 +45,13 @@ pub async fn bind_follower<R: PacketRadio, C: LinkClock>(
         ) else {
             continue;
         };
+        // An accept that cannot be built is no bind (never an empty frame on the air).
+        let Some(accept) = accept.get(..n) else {
+            continue;
+        };
         for _ in 0..ACCEPT_REPEATS {
             clock.sleep_until_us(clock.now_us() + ACCEPT_GAP_US).await;
-            radio.transmit(accept.get(..n).unwrap_or(&[])).await?;
+            radio.transmit(accept).await?;
         }
         return Ok(Some(params));
     }

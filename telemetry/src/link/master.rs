@@ -26,16 +26,20 @@ pub async fn bind_master<R: PacketRadio, C: LinkClock>(
     let Ok(offer_len) = encode(&Frame::BindOffer(params.offer()), BIND_KEY, &mut offer) else {
         return Ok(false);
     };
+    // An offer that cannot be built is no bind (never an empty frame on the air).
+    let Some(offer) = offer.get(..offer_len) else {
+        return Ok(false);
+    };
     let mut buf = [0u8; FIFO_BYTES];
     while clock.now_us() < give_up {
         let period_end = clock.now_us() + u64::from(OFFER_PERIOD_US);
-        radio
-            .transmit(offer.get(..offer_len).unwrap_or(&[]))
-            .await?;
+        radio.transmit(offer).await?;
         while clock.now_us() < period_end {
             let timeout = u32::try_from(period_end - clock.now_us()).unwrap_or(u32::MAX);
             if let RxOutcome::Packet { len, .. } = radio.receive(&mut buf, timeout).await?
-                && is_accept_of(buf.get(..len).unwrap_or(&[]), params)
+                && buf
+                    .get(..len)
+                    .is_some_and(|packet| is_accept_of(packet, params))
             {
                 return Ok(true);
             }

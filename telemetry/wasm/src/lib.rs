@@ -41,6 +41,7 @@ impl Decoder {
 /// WebSocket or the serial port. Empty if it cannot be encoded.
 #[wasm_bindgen]
 pub fn encode_setting_change(id: u16, wire: i32) -> Vec<u8> {
+    // Kept default: the JavaScript API's "cannot encode" is an empty array (documented).
     settings::encode_change(id, wire).unwrap_or_default()
 }
 
@@ -86,8 +87,10 @@ impl Phone {
         self.inner.fingerprint().to_owned()
     }
 
-    /// The framed, signed change of setting `id` to `wire` ([`setting_to_wire`]).
+    /// The framed, signed change of setting `id` to `wire` ([`setting_to_wire`]); empty if
+    /// it cannot be encoded.
     pub fn sign_change(&mut self, id: u16, wire: i32) -> Vec<u8> {
+        // Kept default: the JavaScript API's "cannot encode" is an empty array.
         self.inner.sign_change(id, wire).unwrap_or_default()
     }
 

@@ -112,8 +112,9 @@ fn frame_module(record: &ModuleRecord) -> Result<Vec<u8>, String> {
     let mut payload = [0u8; module_record::MAX_PAYLOAD_BYTES];
     let n = module_record::encode(record, &mut payload).ok_or("module record too long")?;
     let mut out = [0u8; framed_len(module_record::MAX_PAYLOAD_BYTES)];
-    let m = frame(payload.get(..n).unwrap_or_default(), &mut out).map_err(|e| e.to_string())?;
-    Ok(out.get(..m).unwrap_or_default().to_vec())
+    let framed =
+        frame(payload.get(..n).unwrap_or_default(), &mut out).map_err(|e| e.to_string())?;
+    Ok(framed.to_vec())
 }
 
 /// The framed record that proposes `phrase` as the module's phrase, for a phone that does
@@ -131,18 +132,17 @@ pub fn phrase_fingerprint(phrase: &str) -> Result<String, String> {
 
 fn encode(message: &Message) -> Result<Vec<u8>, EncodeError> {
     let mut out = [0u8; FRAMED_MAX_BYTES];
-    let n = encode_message(message, &mut out)?;
-    Ok(out.get(..n).unwrap_or_default().to_vec())
+    Ok(encode_message(message, &mut out)?.to_vec())
 }
 
 /// The framed stream bytes of `SettingChange { id, value: wire }`.
 pub fn encode_change(id: u16, wire: i32) -> Result<Vec<u8>, EncodeError> {
     let mut out = [0u8; FRAMED_MAX_BYTES];
-    let n = encode_message(
+    Ok(encode_message(
         &Message::SettingChange(SettingChange { id, value: wire }),
         &mut out,
-    )?;
-    Ok(out.get(..n).unwrap_or_default().to_vec())
+    )?
+    .to_vec())
 }
 
 fn number(value: Value) -> f64 {
@@ -251,7 +251,10 @@ mod tests {
                 "{typed}: {answers:?}"
             );
             assert_eq!(answers.len(), 2, "one refusal, one more try: {answers:?}");
-            assert_eq!(flight.f32("pid.roll.kp") == 0.004, applied);
+            assert_eq!(
+                flight.get(flight_core::settings::handles::PID_ROLL_KP) == 0.004,
+                applied
+            );
         }
         assert!(Phone::new("").is_err());
         assert_eq!(

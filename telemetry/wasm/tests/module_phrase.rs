@@ -33,9 +33,9 @@ fn decoded(answer: KeyAnswer) -> String {
     let mut payload = [0u8; module_record::MAX_PAYLOAD_BYTES];
     let n = module_record::encode(&ModuleRecord::KeyAnswer(answer), &mut payload).unwrap();
     let mut framed = [0u8; 64];
-    let m = frame(&payload[..n], &mut framed).unwrap();
+    let bytes = frame(&payload[..n], &mut framed).unwrap();
     let events: serde_json::Value =
-        serde_json::from_str(&StreamDecoder::new().push(&framed[..m])).unwrap();
+        serde_json::from_str(&StreamDecoder::new().push(bytes)).unwrap();
     events[0]["KeyAnswer"].to_string()
 }
 

@@ -96,7 +96,7 @@ fn random_message(rng: &mut Rng) -> Message {
 
 fn framed(m: &Message) -> Vec<u8> {
     let mut buf = [0u8; FRAMED_MAX_BYTES];
-    let n = encode_message(m, &mut buf).unwrap();
+    let n = encode_message(m, &mut buf).unwrap().len();
     buf[..n].to_vec()
 }
 
@@ -119,7 +119,7 @@ fn through_relay(messages: &[Message], rng: &mut Rng) -> Vec<Vec<u8>> {
     let mut phone = Vec::new();
     for m in messages {
         let mut record = [0u8; 64];
-        let len = records::encode(m, &mut record).unwrap();
+        let len = records::encode(m, &mut record).unwrap().len();
         relay.on_link_record(&record[..len]);
         let mut frame = [0u8; MAX_FRAME_LEN];
         while let Some(n) = relay.next_frame_to_phone(&mut frame) {

@@ -6,7 +6,7 @@
 
 use embassy_futures::block_on;
 use flight_core::app::SaveJob;
-use flight_core::settings::{LoadProblem, Settings, Value, load, save, save_whole};
+use flight_core::settings::{Handle, LoadProblem, Settings, handles, load, save, save_whole};
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
 use sequential_storage::mock_flash::{MockFlashBase, WriteCountCheck};
@@ -117,13 +117,13 @@ impl FlashWork {
 }
 
 /// The parameter the fill toggles (any one-parameter change makes a record of one size).
-const FILLER: &str = "lqg.q_torque";
+const FILLER: Handle<f32> = handles::LQG_Q_TORQUE;
 
 /// `settings` with [`FILLER`] changed.
 fn with_filler_changed(settings: &Settings) -> Settings {
     let mut changed = settings.clone();
-    let v = settings.f32(FILLER);
-    let _ = changed.set(FILLER, Value::F32(if v > 1.0 { v * 0.5 } else { v + 1.0 }));
+    let v = settings.get(FILLER);
+    let _ = changed.put(FILLER, if v > 1.0 { v * 0.5 } else { v + 1.0 });
     changed
 }
 
@@ -188,11 +188,11 @@ fn corrupt(flash: &mut Flash, seed: u64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flight_core::settings::Value;
+    use flight_core::settings::handles;
 
     fn tuned() -> Settings {
         let mut s = Settings::default();
-        let _ = s.set("pid.roll.kp", Value::F32(0.0042));
+        s.put(handles::PID_ROLL_KP, 0.0042).unwrap();
         s
     }
 
@@ -209,7 +209,7 @@ mod tests {
         let mut f = SettingsFlash::new(&tuned(), FlashInjection::NearlyFull);
         assert_eq!(f.load(), (tuned(), None));
         let mut live = tuned();
-        let _ = live.set("pid.roll.kp", Value::F32(0.005));
+        let _ = live.put(handles::PID_ROLL_KP, 0.005);
         let job = SaveJob {
             live,
             stored: tuned(),

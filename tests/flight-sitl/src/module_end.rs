@@ -330,7 +330,7 @@ async fn jr_line_task(b: &Board, shared: &Shared) {
                         ),
                     };
                     let n = radio_frame
-                        .and_then(|f| f.encode(&mut frame).ok())
+                        .and_then(|f| f.encode(&mut frame).ok().map(<[u8]>::len))
                         .unwrap_or(0);
                     // 10 bits per byte on the line.
                     let line_us = (n as u64 * 10 * 1_000_000).div_ceil(u64::from(baud));
@@ -339,7 +339,7 @@ async fn jr_line_task(b: &Board, shared: &Shared) {
                     let mut app = b.app.borrow_mut();
                     app.on_handset_bytes(now, frame.get(..n).unwrap_or(&[]));
                     app.on_handset_idle(now);
-                    sent = app.next_handset_bytes(now, &mut reply);
+                    sent = app.next_handset_bytes(now, &mut reply).len();
                     while let Some(action) = app.take_action() {
                         carry_out(shared, Some(action));
                     }
@@ -350,7 +350,7 @@ async fn jr_line_task(b: &Board, shared: &Shared) {
             }
             LineMode::Push { .. } => {
                 let now = clock.now_us();
-                let sent = b.app.borrow_mut().next_handset_bytes(now, &mut reply);
+                let sent = b.app.borrow_mut().next_handset_bytes(now, &mut reply).len();
                 sleep_ms(b.delay(), PUSH_POLL_MS).await;
                 sent
             }
@@ -380,10 +380,8 @@ async fn app_task(b: &Board, shared: &Shared) {
 /// A message from the phone, as the HM-10 hands its bytes to the module.
 fn send_to_flight(b: &Board, message: &Message) {
     let mut buf = [0u8; FRAMED_MAX_BYTES];
-    if let Ok(n) = encode_message(message, &mut buf) {
-        b.app
-            .borrow_mut()
-            .on_phone_bytes(buf.get(..n).unwrap_or(&[]));
+    if let Ok(bytes) = encode_message(message, &mut buf) {
+        b.app.borrow_mut().on_phone_bytes(bytes);
     }
 }
 

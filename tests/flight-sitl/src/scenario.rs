@@ -225,33 +225,33 @@ impl Scenario {
 /// frame-invariant LQG costs.
 ///
 /// # Panics
-/// If the autotune refuses the model (it does not for these numbers).
+/// If the autotune refuses the model, or the table a value (neither happens for these
+/// numbers).
 #[allow(clippy::expect_used)]
 pub fn default_airframe() -> (QuadParams, Settings) {
     use flight_core::control::mixer::QUAD_X;
-    use flight_core::settings::Value;
+    use flight_core::settings::handles::*;
     use flight_core::sysid::autotune::{AutotuneSettings, analytic_pid, lqg_costs};
     let quad = QuadParams::quad_x(10.0, 6.5, 0.03, &QUAD_X);
     let mut s = Settings::default();
-    let set = |s: &mut Settings, name: &str, v: f32| {
-        // Names and ranges are fixed here; a failure is a test bug and shows as a bad flight.
-        let _ = s.set(name, Value::F32(v));
-    };
-    set(&mut s, "lqg.ln_beta1.roll", 10.0);
-    set(&mut s, "lqg.ln_beta1.pitch", 10.0);
-    set(&mut s, "lqg.ln_beta1.yaw", 6.5);
-    set(&mut s, "lqg.tau_s", 0.03);
     let tune = analytic_pid([10.0, 10.0, 6.5], 0.03, &AutotuneSettings::default())
         .expect("the autotune accepts the frame");
-    for (axis, g) in ["roll", "pitch", "yaw"].iter().zip(tune.rate) {
-        set(&mut s, &format!("pid.{axis}.kp"), g.kp);
-        set(&mut s, &format!("pid.{axis}.ki"), g.ki);
-        set(&mut s, &format!("pid.{axis}.kd"), g.kd);
-    }
-    set(&mut s, "pid.attitude.kp", tune.outer_kp);
     let costs = lqg_costs(&tune);
-    set(&mut s, "lqg.q_attitude", costs.q1_angle as f32);
-    set(&mut s, "lqg.q_rate", costs.q2_rate as f32);
-    set(&mut s, "lqg.q_torque", costs.q4_torque as f32);
+    let [roll, pitch, yaw] = LQG_LN_BETA1;
+    let mut changes = vec![
+        roll.to(10.0),
+        pitch.to(10.0),
+        yaw.to(6.5),
+        LQG_TAU_S.to(0.03),
+        PID_ATTITUDE_KP.to(tune.outer_kp),
+        LQG_Q_ATTITUDE.to(costs.q1_angle as f32),
+        LQG_Q_RATE.to(costs.q2_rate as f32),
+        LQG_Q_TORQUE.to(costs.q4_torque as f32),
+    ];
+    for ([kp, ki, kd], g) in PID_GAINS.into_iter().zip(tune.rate) {
+        changes.extend([kp.to(g.kp), ki.to(g.ki), kd.to(g.kd)]);
+    }
+    s.apply(&changes)
+        .expect("the autotuned airframe is within the table's ranges");
     (quad, s)
 }

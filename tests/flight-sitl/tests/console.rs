@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
 
 use flight_core::app::FlightApp;
-use flight_core::settings::Settings;
+use flight_core::settings::{Settings, handles};
 use flight_sitl::console::{LINE_BUFFER, type_into_console};
 
 #[test]
@@ -48,7 +48,7 @@ fn settings_that_cannot_run_are_refused_with_the_reason() {
     println!("{replies:?}");
     assert_eq!(replies[0], "ok\r\n");
     assert!(replies[1].contains("pulse limits"), "{}", replies[1]);
-    assert_eq!(app.settings().u32("output.protocol"), 1);
-    assert_eq!(app.settings().u32("output.rate_hz"), 400);
-    assert_eq!(app.settings().u32("output.min_us"), 1_000);
+    assert_eq!(app.settings().get(handles::OUTPUT_PROTOCOL), 1);
+    assert_eq!(app.settings().get(handles::OUTPUT_RATE_HZ), 400);
+    assert_eq!(app.settings().get(handles::OUTPUT_MIN_US), 1_000);
 }

@@ -11,7 +11,7 @@
 )]
 
 use flight_core::report::f32_value;
-use flight_core::settings::PARAMS;
+use flight_core::settings::{PARAMS, handles};
 use flight_sitl::scenario::default_airframe;
 use std::time::Duration;
 
@@ -95,7 +95,7 @@ fn on_the_ground_with(
 fn a_gain_design_holds_the_board_for_42_ms() {
     // An LQG cost from the phone, on the ground: applied, the gains re-designed, saved.
     let sitl = on_the_ground(&[change("lqg.q_rate", 900.0)], 2.0);
-    assert_eq!(sitl.settings.f32("lqg.q_rate"), 900.0);
+    assert_eq!(sitl.settings.get(handles::LQG_Q_RATE), 900.0);
     let stretches = held(&sitl.samples, sitl.ts_s);
     println!("held: {stretches:?}");
     let design = stretches
@@ -121,7 +121,11 @@ fn a_save_with_a_sector_erase_resets_nothing_because_the_watchdog_is_stretched()
         "no sector-erase stretch in {stretches:?}"
     );
     assert_eq!(sitl.watchdog_resets.flight, 0);
-    assert_eq!(sitl.settings.f32("pid.roll.kp"), 0.0042);
+    assert_eq!(
+        sitl.settings
+            .get(flight_core::settings::handles::PID_ROLL_KP),
+        0.0042
+    );
 
     let unstretched = on_the_ground_with(&changes, 2.0, FlashInjection::NearlyFull, false, true);
     assert!(

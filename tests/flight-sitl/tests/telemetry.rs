@@ -18,7 +18,7 @@ use flight_sitl::{PilotInput, Scenario, run};
 #[test]
 fn telemetry_reaches_the_module_and_settings_come_back() {
     use flight_core::report::f32_value;
-    use flight_core::settings::PARAMS;
+    use flight_core::settings::{PARAMS, handles};
     use telemetry::messages::{FlightMode as WireMode, Message, SettingChange};
     let (quad, settings) = default_airframe();
     let id = PARAMS
@@ -55,7 +55,7 @@ fn telemetry_reaches_the_module_and_settings_come_back() {
     println!("module received {} messages ({per_s:.0}/s)", rx.len());
     assert!(per_s > 30.0, "{per_s}");
     // The change was applied on the flight side and echoed.
-    assert_eq!(sitl.settings.f32("failsafe.descent_mps"), 0.9);
+    assert_eq!(sitl.settings.get(handles::FAILSAFE_DESCENT_MPS), 0.9);
     assert!(rx.iter().any(|(_, m)| *m == Message::SettingChange(change)));
     // Armed state after the gesture (armed at 1.507 s; allow the downlink's latency).
     let armed_at = rx

@@ -156,7 +156,11 @@ fn a_power_cycle_boots_again_from_the_stored_settings() {
     );
     assert_eq!(sitl.watchdog_resets, WatchdogResets::default());
     // The change reached the app before the cut (live only), the reboot loaded the stored 0.7.
-    assert_eq!(sitl.settings.f32("failsafe.descent_mps"), 0.7);
+    assert_eq!(
+        sitl.settings
+            .get(flight_core::settings::handles::FAILSAFE_DESCENT_MPS),
+        0.7
+    );
 }
 
 /// Corrupted settings flash at the first boot: the flight controller boots on the factory
@@ -255,7 +259,7 @@ fn factory_module_settings_are_bound_at_the_scenario_rate() {
     });
     assert!(sitl.samples.iter().all(|x| x.link_up));
     assert_eq!(
-        sitl.settings.u32("link.rate"),
+        sitl.settings.get(flight_core::settings::handles::LINK_RATE),
         1,
         "M100 stored on the flight side"
     );

@@ -31,7 +31,8 @@ fuzz_target!(|data: &[u8]| {
         let mut out = [0u8; 64];
         let written = frame
             .encode(&mut out)
-            .expect("a decoded frame fits 64 bytes");
+            .expect("a decoded frame fits 64 bytes")
+            .len();
         let again: Vec<Decoded> = Decoder::new().feed(&out[..written]).collect();
         assert_eq!(again, vec![Decoded::Frame(frame.clone())]);
         if let Ok(message) = Message::from_frame(&frame) {

@@ -81,6 +81,6 @@ fn round_trip(settings: &Settings, name: &str) {
     again
         .set_text(name, value_text)
         .unwrap_or_else(|e| panic!("`set {name} {value_text}` refused: {e:?}"));
-    let bits = |s: &Settings| s.get(name).map(|v| v.to_bits());
+    let bits = |s: &Settings| s.by_name(name).map(|v| v.to_bits());
     assert_eq!(bits(&again), bits(settings), "{shown}");
 }

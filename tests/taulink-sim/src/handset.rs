@@ -211,11 +211,13 @@ impl Handset {
         }
         let _ = self.responder.on_frame(frame.arrived_us, &self.rc_frame);
         let mut out = [0u8; 128];
-        let n = self
+        // The simulated radio hears nothing if the responder fails (it never has).
+        let reply = self
             .responder
-            .reply(frame.arrived_us + 20, &self.telemetry, &mut out);
+            .reply(frame.arrived_us + 20, &self.telemetry, &mut out)
+            .unwrap_or(&[]);
         let mut corrections = Vec::new();
-        for decoded in self.decoder.feed(out.get(..n).unwrap_or(&[])) {
+        for decoded in self.decoder.feed(reply) {
             if let Decoded::Frame(f) = decoded
                 && let Ok(Message::TimingCorrection(t)) = Message::from_frame(&f)
             {

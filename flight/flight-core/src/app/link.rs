@@ -268,10 +268,11 @@ impl FlightApp {
         let mut buf = [0u8; 32];
         loop {
             let n = follower.uplink_stream.read(&mut buf);
-            if n == 0 {
+            // `read` fills at most `buf`, so the range always exists; none read ends it.
+            let Some(bytes) = buf.get(..n).filter(|b| !b.is_empty()) else {
                 break;
-            }
-            self.on_uplink_bytes(buf.get(..n).unwrap_or_default());
+            };
+            self.on_uplink_bytes(bytes);
         }
         if self.report_due(now_us) {
             self.report(follower);
@@ -363,21 +364,19 @@ impl FlightApp {
             failsafes: self.link.failsafes,
         };
         let mut buf = [0u8; FRAMED_MAX_BYTES];
-        if let Some(n) = self.next_report(seen, &mut buf) {
-            follower
-                .downlink_stream
-                .write(buf.get(..n).unwrap_or_default());
+        if let Some(framed) = self.next_report(seen, &mut buf) {
+            follower.downlink_stream.write(framed);
         }
     }
 
     /// The next telemetry message, framed into `buf`, with `seen` as the link's figures:
     /// a setting echo, then an identification result, then a state change out of turn, then
     /// the home and the GPS fix when due, else the rotation. `None` before the loop has run.
-    pub(super) fn next_report(
+    pub(super) fn next_report<'o>(
         &mut self,
         seen: LinkSeen,
-        buf: &mut [u8; FRAMED_MAX_BYTES],
-    ) -> Option<usize> {
+        buf: &'o mut [u8; FRAMED_MAX_BYTES],
+    ) -> Option<&'o [u8]> {
         let out = self.last_out?;
         let snap = Snapshot {
             out,

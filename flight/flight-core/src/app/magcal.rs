@@ -10,7 +10,7 @@
 use heapless::Vec;
 
 use crate::estimation::magcal::{MagCalConfig, MagCalError, MagCalibration, fit};
-use crate::settings::{ParamError, Settings, Value};
+use crate::settings::{ParamError, Settings, handles};
 
 /// Readings kept at most (≈ 30 s of turning; 12 bytes each).
 pub const CAPACITY: usize = 300;
@@ -99,21 +99,9 @@ impl MagcalSession {
     }
 }
 
-const NAMES: [&str; 9] = [
-    "mag.offset_x",
-    "mag.offset_y",
-    "mag.offset_z",
-    "mag.xx",
-    "mag.yy",
-    "mag.zz",
-    "mag.xy",
-    "mag.xz",
-    "mag.yz",
-];
-
 /// The calibration the settings hold (factory: zero offset, identity — readings unchanged).
 pub fn calibration(settings: &Settings) -> MagCalibration {
-    let [ox, oy, oz, xx, yy, zz, xy, xz, yz] = NAMES.map(|n| settings.f32(n));
+    let [ox, oy, oz, xx, yy, zz, xy, xz, yz] = handles::MAG_CALIBRATION.map(|h| settings.get(h));
     MagCalibration {
         offset: [ox, oy, oz],
         matrix: [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]],
@@ -130,10 +118,16 @@ pub fn calibration(settings: &Settings) -> MagCalibration {
 pub fn store(settings: &mut Settings, cal: &MagCalibration) -> Result<(), ParamError> {
     let [ox, oy, oz] = cal.offset;
     let [[xx, xy, xz], [_, yy, yz], [_, _, zz]] = cal.matrix;
-    let values = [ox, oy, oz, xx, yy, zz, xy, xz, yz];
-    let mut changes = [("", Value::F32(0.0)); 9];
-    for (c, (n, v)) in changes.iter_mut().zip(NAMES.iter().zip(values)) {
-        *c = (n, Value::F32(v));
-    }
-    settings.set_many(&changes)
+    use handles::*;
+    settings.apply(&[
+        MAG_OFFSET_X.to(ox),
+        MAG_OFFSET_Y.to(oy),
+        MAG_OFFSET_Z.to(oz),
+        MAG_XX.to(xx),
+        MAG_YY.to(yy),
+        MAG_ZZ.to(zz),
+        MAG_XY.to(xy),
+        MAG_XZ.to(xz),
+        MAG_YZ.to(yz),
+    ])
 }

@@ -3,6 +3,7 @@
 //! refused and nothing is stored; nothing runs while armed.
 
 use super::*;
+use crate::settings::handles;
 use crate::supervisor::Sticks;
 
 /// Hard iron (raw units, µT-like) and symmetric soft iron: raw = SOFT · field + OFFSET.
@@ -82,11 +83,9 @@ fn a_turn_through_every_orientation_is_checked_stored_and_applied() {
     // THEN the checks pass, the offset and shape are stored and a save is requested
     assert!(saved.contains("stored"), "{saved}");
     let s = app.settings();
-    for (name, want) in ["mag.offset_x", "mag.offset_y", "mag.offset_z"]
-        .iter()
-        .zip(OFFSET)
-    {
-        assert!((s.f32(name) - want).abs() < 0.2, "{name} {}", s.f32(name));
+    for (handle, want) in handles::MAG_CALIBRATION.iter().zip(OFFSET) {
+        let got = s.get(*handle);
+        assert!((got - want).abs() < 0.2, "{handle:?} {got}");
     }
     assert!(app.take_save().is_some());
     assert!(!app.magcal().collecting());

@@ -186,8 +186,8 @@ impl FlightApp {
             failsafes: self.link_failsafes(),
         };
         let mut buf = [0u8; FRAMED_MAX_BYTES];
-        if let Some(n) = self.next_report(seen, &mut buf) {
-            for byte in buf.iter().take(n) {
+        if let Some(framed) = self.next_report(seen, &mut buf) {
+            for byte in framed {
                 let _ = self.link.openlrs.pending.push_back(*byte);
             }
             self.link.openlrs.idle_replies = 0;

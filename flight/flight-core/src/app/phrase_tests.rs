@@ -107,7 +107,9 @@ fn uplink(app: &mut FlightApp, message: &telemetry::messages::Message, at_us: u6
     use telemetry::channels::FailsafeValues;
     use telemetry::link::core::Follower;
     let mut bytes = [0u8; 64];
-    let n = telemetry::messages::encode_message(message, &mut bytes).unwrap();
+    let n = telemetry::messages::encode_message(message, &mut bytes)
+        .unwrap()
+        .len();
     let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
     follower.uplink_stream.on_data(0, &bytes[..n]);
     app.on_link_step(at_us, &mut follower);
@@ -119,7 +121,7 @@ fn uplink(app: &mut FlightApp, message: &telemetry::messages::Message, at_us: u6
 #[test]
 fn an_unsigned_change_is_refused_and_a_signed_one_applied() {
     use crate::report::f32_value;
-    use crate::settings::PARAMS;
+    use crate::settings::{PARAMS, handles};
     use telemetry::change_auth::ChangeKey;
     use telemetry::messages::{Message, SettingChange};
     let mut app = bound_app();
@@ -134,14 +136,14 @@ fn an_unsigned_change_is_refused_and_a_signed_one_applied() {
         id,
         value: f32_value(0.9),
     };
-    let before = app.settings().f32("failsafe.descent_mps");
+    let before = app.settings().get(handles::FAILSAFE_DESCENT_MPS);
     uplink(&mut app, &Message::SettingChange(change), 100_000);
-    assert_eq!(app.settings().f32("failsafe.descent_mps"), before);
+    assert_eq!(app.settings().get(handles::FAILSAFE_DESCENT_MPS), before);
     assert_eq!(app.take_design_request(), None);
 
     let key = ChangeKey::from_link_key(&LinkKey::from_phrase(PHRASE));
     let signed = key.sign(0xABCD_0001, 1, change);
     uplink(&mut app, &Message::SignedChange(signed), 200_000);
-    assert_eq!(app.settings().f32("failsafe.descent_mps"), 0.9);
+    assert_eq!(app.settings().get(handles::FAILSAFE_DESCENT_MPS), 0.9);
     assert!(app.take_design_request().is_some());
 }

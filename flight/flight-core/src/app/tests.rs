@@ -349,25 +349,27 @@ fn bind_is_refused_while_armed() {
 #[test]
 fn a_setting_change_over_the_link_is_refused_while_armed() {
     use crate::report::f32_value;
-    use crate::settings::PARAMS;
+    use crate::settings::{PARAMS, handles};
     use telemetry::messages::{Message, SettingChange, encode_message};
     let mut app = app();
     let Some(id) = PARAMS.iter().position(|p| p.name == "failsafe.descent_mps") else {
         panic!("parameter exists");
     };
-    let before = app.settings().f32("failsafe.descent_mps");
+    let before = app.settings().get(handles::FAILSAFE_DESCENT_MPS);
     let change = SettingChange {
         id: id as u16,
         value: f32_value(before + 0.5),
     };
     let mut bytes = [0u8; 64];
-    let n = encode_message(&Message::SettingChange(change), &mut bytes).unwrap();
+    let n = encode_message(&Message::SettingChange(change), &mut bytes)
+        .unwrap()
+        .len();
     let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
     armed_in_the_air(&mut app);
     follower.uplink_stream.on_data(0, &bytes[..n]);
     app.on_link_step(100_000, &mut follower);
     assert!(app.armed());
-    assert_eq!(app.settings().f32("failsafe.descent_mps"), before);
+    assert_eq!(app.settings().get(handles::FAILSAFE_DESCENT_MPS), before);
     assert_eq!(app.take_design_request(), None);
 }
 
@@ -535,7 +537,8 @@ mod gps {
             let mut buf = [0u8; telemetry::messages::FRAMED_MAX_BYTES];
             let n = a
                 .next_report(crate::report::LinkSeen::default(), &mut buf)
-                .unwrap();
+                .unwrap()
+                .len();
             sent.extend(buf[..n].iter().filter_map(|&b| reader.push(b)));
         }
         let Some(telemetry::messages::Decoded::Message(telemetry::messages::Message::Home(h))) =

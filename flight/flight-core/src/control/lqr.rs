@@ -153,11 +153,8 @@ impl LqgAxis {
             angle_ahead += self.ts_s * x.rate_dps;
             x = self.kf.predict_ahead(x, pending);
         } else {
-            let pending = self
-                .outputs
-                .get(..self.output_delay_samples)
-                .unwrap_or_default();
-            for u in pending.iter().rev() {
+            // The delay is at most 3 of the 4 outputs kept; `take` needs no fallback.
+            for u in self.outputs.iter().take(self.output_delay_samples).rev() {
                 angle_ahead += self.ts_s * x.rate_dps;
                 x = self.kf.predict_ahead(x, *u);
             }

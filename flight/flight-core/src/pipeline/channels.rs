@@ -4,7 +4,7 @@
 
 use super::flight_loop::LinkInput;
 use super::setup::SetupError;
-use crate::settings::Settings;
+use crate::settings::{Settings, handles};
 use crate::supervisor::Sticks;
 
 /// Channel value at −100 % (CRSF).
@@ -78,7 +78,7 @@ impl ChannelMap {
     /// is also a stick or the mode switch.
     pub fn from_settings(s: &Settings) -> Result<Self, SetupError> {
         let map = Self::default();
-        let channel = s.u32("arm.channel");
+        let channel = s.get(handles::ARM_CHANNEL);
         if channel == 0 {
             return Ok(map);
         }
@@ -86,8 +86,10 @@ impl ChannelMap {
         if [map.roll, map.pitch, map.throttle, map.yaw, map.mode].contains(&index) {
             return Err(SetupError::ArmChannelInUse);
         }
-        let min_us = u16::try_from(s.u32("arm.min_us")).map_err(|_| SetupError::ArmWindow)?;
-        let max_us = u16::try_from(s.u32("arm.max_us")).map_err(|_| SetupError::ArmWindow)?;
+        let min_us =
+            u16::try_from(s.get(handles::ARM_MIN_US)).map_err(|_| SetupError::ArmWindow)?;
+        let max_us =
+            u16::try_from(s.get(handles::ARM_MAX_US)).map_err(|_| SetupError::ArmWindow)?;
         if min_us >= max_us {
             return Err(SetupError::ArmWindow);
         }

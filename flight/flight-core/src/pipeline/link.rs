@@ -9,7 +9,7 @@ use openlrs::bind::{BindData, MAX_HOPS};
 use telemetry::channels::ChannelFormat;
 use telemetry::link::{Band, LinkParams, RateMode};
 
-use crate::settings::{ParamError, Settings, Value};
+use crate::settings::{Change, Handle, ParamError, Settings, handles};
 
 const BANDS: [Band; 3] = [Band::Mhz433, Band::Mhz868, Band::Mhz915];
 const RATES: [RateMode; 5] = [
@@ -28,53 +28,37 @@ const FORMATS: [ChannelFormat; 3] = [
 /// The band to listen for a bind offer on: the stored `link.band` (433 MHz if out of range).
 pub fn bind_band(s: &Settings) -> Band {
     BANDS
-        .get(s.u32("link.band") as usize)
+        .get(s.get(handles::LINK_BAND) as usize)
         .copied()
         .unwrap_or(Band::Mhz433)
 }
 
 /// The stored link, or `None` if this flight controller was never bound.
 pub fn stored_link(s: &Settings) -> Option<LinkParams> {
-    let bind_id = s.u32("link.bind_id");
+    let bind_id = s.get(handles::LINK_BIND_ID);
     if bind_id == 0 {
         return None;
     }
-    let pick = |name: &str| s.u32(name) as usize;
+    let pick = |handle: Handle<u32>| s.get(handle) as usize;
     Some(LinkParams {
         bind_id,
-        band: BANDS.get(pick("link.band")).copied()?,
-        rate: RATES.get(pick("link.rate")).copied()?,
-        format: FORMATS.get(pick("link.channels")).copied()?,
-        telemetry_ratio: u8::try_from(s.u32("link.telemetry_ratio")).ok()?,
+        band: BANDS.get(pick(handles::LINK_BAND)).copied()?,
+        rate: RATES.get(pick(handles::LINK_RATE)).copied()?,
+        format: FORMATS.get(pick(handles::LINK_CHANNELS)).copied()?,
+        telemetry_ratio: u8::try_from(s.get(handles::LINK_TELEMETRY_RATIO)).ok()?,
     })
 }
 
 /// Writes a freshly bound link into `s` (in RAM; the storage task persists it): all five
-/// values or none (see [`Settings::set_many`]).
+/// values or none (see [`Settings::apply`]).
 pub fn store_link(s: &mut Settings, link: &LinkParams) -> Result<(), ParamError> {
-    let index = |found: Option<usize>| {
-        found
-            .map(|i| Value::U32(i as u32))
-            .ok_or(ParamError::OutOfRange)
-    };
-    s.set_many(&[
-        ("link.bind_id", Value::U32(link.bind_id)),
-        (
-            "link.band",
-            index(BANDS.iter().position(|b| *b == link.band))?,
-        ),
-        (
-            "link.rate",
-            index(RATES.iter().position(|r| *r == link.rate))?,
-        ),
-        (
-            "link.channels",
-            index(FORMATS.iter().position(|f| *f == link.format))?,
-        ),
-        (
-            "link.telemetry_ratio",
-            Value::U32(u32::from(link.telemetry_ratio)),
-        ),
+    let index = |found: Option<usize>| found.map(|i| i as u32).ok_or(ParamError::OutOfRange);
+    s.apply(&[
+        handles::LINK_BIND_ID.to(link.bind_id),
+        handles::LINK_BAND.to(index(BANDS.iter().position(|b| *b == link.band))?),
+        handles::LINK_RATE.to(index(RATES.iter().position(|r| *r == link.rate))?),
+        handles::LINK_CHANNELS.to(index(FORMATS.iter().position(|f| *f == link.format))?),
+        handles::LINK_TELEMETRY_RATIO.to(u32::from(link.telemetry_ratio)),
     ])
 }
 
@@ -90,7 +74,7 @@ pub enum Protocol {
 
 /// The stored `link.protocol` (TauLink if out of range).
 pub fn protocol(s: &Settings) -> Protocol {
-    match s.u32("link.protocol") {
+    match s.get(handles::LINK_PROTOCOL) {
         1 => Protocol::OpenLrs(BindingVersion::V38),
         2 => Protocol::OpenLrs(BindingVersion::V39),
         _ => Protocol::TauLink,
@@ -102,33 +86,27 @@ pub fn openlrs_band(s: &Settings) -> RfmType {
     RfmType::for_band(bind_band(s))
 }
 
-const HOP_WORDS: [&str; MAX_HOPS / 4] = [
-    "link.olrs_hops_0",
-    "link.olrs_hops_1",
-    "link.olrs_hops_2",
-    "link.olrs_hops_3",
-    "link.olrs_hops_4",
-    "link.olrs_hops_5",
-];
+/// The hop-channel words: four channels each, so exactly enough for `MAX_HOPS`.
+const HOP_WORDS: [Handle<u32>; MAX_HOPS / 4] = handles::LINK_OLRS_HOPS;
 
 /// The stored OpenLRSng bind data, whether or not `link.protocol` selects it; `None` when
 /// never bound over OpenLRSng (magic 0) or when it would not run on this module's band
 /// (`BindData::validate_for`: profile, power, hops and carrier inside the band's range).
 pub fn stored_openlrs(s: &Settings, version: BindingVersion) -> Option<BindData> {
-    let magic = s.u32("link.olrs_magic");
+    let magic = s.get(handles::LINK_OLRS_MAGIC);
     if magic == 0 {
         return None;
     }
     let mut data = BindData::defaults(version, openlrs_band(s));
     data.rf_magic = magic;
-    data.rf_frequency_hz = s.u32("link.olrs_frequency_hz");
-    let [spacing, profile, flags, power] = s.u32("link.olrs_modem").to_le_bytes();
+    data.rf_frequency_hz = s.get(handles::LINK_OLRS_FREQUENCY_HZ);
+    let [spacing, profile, flags, power] = s.get(handles::LINK_OLRS_MODEM).to_le_bytes();
     data.rf_channel_spacing = spacing;
     data.modem_profile = profile;
     data.flags = flags;
     data.rf_power = power;
-    for (chunk, name) in data.hop_channels.chunks_mut(4).zip(HOP_WORDS) {
-        for (slot, byte) in chunk.iter_mut().zip(s.u32(name).to_le_bytes()) {
+    for (chunk, word) in data.hop_channels.chunks_mut(4).zip(HOP_WORDS) {
+        for (slot, byte) in chunk.iter_mut().zip(s.get(word).to_le_bytes()) {
             *slot = byte;
         }
     }
@@ -140,16 +118,16 @@ pub fn stored_openlrs(s: &Settings, version: BindingVersion) -> Option<BindData>
 /// The bytes OpenLRSng keeps for the RX's UART rate are not stored (the link never uses
 /// them); `data.to_bytes()` of the stored link therefore differs there only.
 pub fn store_openlrs(s: &mut Settings, data: &BindData) -> Result<(), ParamError> {
-    let mut changes: heapless::Vec<(&str, Value), 16> = heapless::Vec::new();
-    let mut push = |name: &'static str, v: u32| {
+    let mut changes: heapless::Vec<Change, 16> = heapless::Vec::new();
+    let mut push = |handle: Handle<u32>, v: u32| {
         changes
-            .push((name, Value::U32(v)))
+            .push(handle.to(v))
             .map_err(|_| ParamError::OutOfRange)
     };
-    push("link.olrs_magic", data.rf_magic)?;
-    push("link.olrs_frequency_hz", data.rf_frequency_hz)?;
+    push(handles::LINK_OLRS_MAGIC, data.rf_magic)?;
+    push(handles::LINK_OLRS_FREQUENCY_HZ, data.rf_frequency_hz)?;
     push(
-        "link.olrs_modem",
+        handles::LINK_OLRS_MODEM,
         u32::from_le_bytes([
             data.rf_channel_spacing,
             data.modem_profile,
@@ -157,14 +135,14 @@ pub fn store_openlrs(s: &mut Settings, data: &BindData) -> Result<(), ParamError
             data.rf_power,
         ]),
     )?;
-    for (chunk, name) in data.hop_channels.chunks(4).zip(HOP_WORDS) {
-        let mut word = [0u8; 4];
-        for (slot, byte) in word.iter_mut().zip(chunk) {
+    for (chunk, word) in data.hop_channels.chunks(4).zip(HOP_WORDS) {
+        let mut bytes = [0u8; 4];
+        for (slot, byte) in bytes.iter_mut().zip(chunk) {
             *slot = *byte;
         }
-        push(name, u32::from_le_bytes(word))?;
+        push(word, u32::from_le_bytes(bytes))?;
     }
-    s.set_many(&changes)
+    s.apply(&changes)
 }
 
 /// The whole-set check of the OpenLRSng link: once bound over OpenLRSng and selected, the
@@ -173,7 +151,7 @@ pub fn openlrs_valid(s: &Settings) -> bool {
     match protocol(s) {
         Protocol::TauLink => true,
         Protocol::OpenLrs(version) => {
-            s.u32("link.olrs_magic") == 0 || stored_openlrs(s, version).is_some()
+            s.get(handles::LINK_OLRS_MAGIC) == 0 || stored_openlrs(s, version).is_some()
         }
     }
 }
@@ -181,6 +159,7 @@ pub fn openlrs_valid(s: &Settings) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::settings::Value;
 
     #[test]
     fn a_bound_link_round_trips_through_the_settings() {
@@ -194,7 +173,7 @@ mod tests {
             8,
         );
         store_link(&mut s, &link).unwrap();
-        assert_eq!(s.u32("link.rate"), 3);
+        assert_eq!(s.get(handles::LINK_RATE), 3);
         assert_eq!(stored_link(&s), Some(link));
         // A ratio outside the table's 2–128 is refused, not stored.
         let odd = LinkParams {

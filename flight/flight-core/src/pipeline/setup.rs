@@ -16,7 +16,7 @@ use crate::control::pid::PidGains;
 use crate::estimation::complementary;
 use crate::model::{AxisModel, ModelError};
 use crate::outputs::Protocol;
-use crate::settings::Settings;
+use crate::settings::{Handle, Settings, handles};
 use crate::supervisor::{FlightMode, Settings as SupervisorSettings};
 
 /// Everything derived from the settings.
@@ -92,79 +92,71 @@ fn mode(index: u32) -> Result<FlightMode, SetupError> {
     })
 }
 
-fn pid(s: &Settings, axis: &str) -> PidGains {
-    let mut name: heapless::String<24> = heapless::String::new();
-    let mut gain = |g: &str| {
-        name.clear();
-        // "pid.<axis>.<g>" is at most 17 bytes; a failed push leaves a wrong name → 0.
-        let _ = name.push_str("pid.");
-        let _ = name.push_str(axis);
-        let _ = name.push('.');
-        let _ = name.push_str(g);
-        s.f32(&name)
-    };
-    let (kp, ki, kd) = (gain("kp"), gain("ki"), gain("kd"));
+/// One axis's rate PID gains (`handles::PID_GAINS` row: kp, ki, kd).
+fn pid(s: &Settings, gains: [Handle<f32>; 3]) -> PidGains {
+    let [kp, ki, kd] = gains.map(|g| s.get(g));
     // The derivative filter: a 2 ms time constant (≈ 80 Hz), as the flight-core defaults.
     PidGains::new(kp, ki, kd, 0.002)
 }
 
 /// Builds the whole configuration from `s`.
 pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
-    let loop_rate_hz = match s.u32("loop.rate_hz") {
+    let loop_rate_hz = match s.get(handles::LOOP_RATE_HZ) {
         0 => 500,
         1 => 1000,
         _ => return Err(SetupError::BadChoice),
     };
     let ts_s = 1.0 / loop_rate_hz as f32;
     let shaping = StickShaping {
-        max_rate_dps: s.f32("rate.max_dps"),
-        max_angle_deg: s.f32("attitude.max_deg"),
+        max_rate_dps: s.get(handles::RATE_MAX_DPS),
+        max_angle_deg: s.get(handles::ATTITUDE_MAX_DEG),
         ..StickShaping::default()
     };
     let supervisor = SupervisorSettings {
-        idle_disarm_ms: s.u32("arm.idle_disarm_ms"),
-        arm_on_critical_battery: s.u32("arm.critical_battery") == 1,
-        failsafe_descent_mps: s.f32("failsafe.descent_mps"),
+        idle_disarm_ms: s.get(handles::ARM_IDLE_DISARM_MS),
+        arm_on_critical_battery: s.get(handles::ARM_CRITICAL_BATTERY) == 1,
+        failsafe_descent_mps: s.get(handles::FAILSAFE_DESCENT_MPS),
         ..SupervisorSettings::default()
     };
     let modes = [
-        mode(s.u32("mode.switch_low"))?,
-        mode(s.u32("mode.switch_mid"))?,
-        mode(s.u32("mode.switch_high"))?,
+        mode(s.get(handles::MODE_SWITCH_LOW))?,
+        mode(s.get(handles::MODE_SWITCH_MID))?,
+        mode(s.get(handles::MODE_SWITCH_HIGH))?,
     ];
     let loop_config = LoopConfig {
         ts_s,
         shaping,
-        idle: s.f32("output.idle"),
+        idle: s.get(handles::OUTPUT_IDLE),
         supervisor,
         modes,
         attitude_uses_lqg: true,
         attitude_filter: complementary::Config::default(),
         // Ground kp 1 rad/s per rad → 0.05 in flight (a 20 s time constant).
         armed_accel_divider: 20,
-        estimator: match s.u32("ins.mode") {
+        estimator: match s.get(handles::INS_MODE) {
             0 => EstimatorMode::Complementary,
             1 => EstimatorMode::Ins,
             2 => EstimatorMode::InsIndoor,
             _ => return Err(SetupError::BadChoice),
         },
     };
-    let tau_s = s.f32("lqg.tau_s");
+    let tau_s = s.get(handles::LQG_TAU_S);
     // The yaw entry is the yaw axis' authority (β of the drag torque, lqg.md §1); the
     // lag-free β2 term is left to identification.
+    let [roll, pitch, yaw] = handles::LQG_LN_BETA1;
     let models = [
-        AxisModel::new(s.f32("lqg.ln_beta1.roll"), tau_s)?,
-        AxisModel::new(s.f32("lqg.ln_beta1.pitch"), tau_s)?,
-        AxisModel::new(s.f32("lqg.ln_beta1.yaw"), tau_s)?,
+        AxisModel::new(s.get(roll), tau_s)?,
+        AxisModel::new(s.get(pitch), tau_s)?,
+        AxisModel::new(s.get(yaw), tau_s)?,
     ];
     // The stored costs are frame-invariant (q1 angle, q2 rate, q4 torque; design.rs
     // `FrameInvariantCosts`): what autotune's `lqg_costs` produces, and they stay right when
     // identification changes β. Each axis gets them scaled by its own β1. One set serves
     // both solves; the rate solve ignores the angle cost (lqg.md §3).
     let invariant = FrameInvariantCosts {
-        q1_angle: f64::from(s.f32("lqg.q_attitude")),
-        q2_rate: f64::from(s.f32("lqg.q_rate")),
-        q4_torque: f64::from(s.f32("lqg.q_torque")),
+        q1_angle: f64::from(s.get(handles::LQG_Q_ATTITUDE)),
+        q2_rate: f64::from(s.get(handles::LQG_Q_RATE)),
+        q4_torque: f64::from(s.get(handles::LQG_Q_TORQUE)),
     };
     let costs = models.map(|m| invariant.for_beta(m.beta1()));
     let control = ControlParams {
@@ -173,45 +165,47 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
         rate_costs: costs,
         attitude_costs: costs,
         noise: KfNoise::default(),
-        pid_rate: [pid(s, "roll"), pid(s, "pitch"), pid(s, "yaw")],
-        attitude_kp: s.f32("pid.attitude.kp"),
+        pid_rate: handles::PID_GAINS.map(|axis| pid(s, axis)),
+        attitude_kp: s.get(handles::PID_ATTITUDE_KP),
         attitude_max_rate_dps: shaping.max_rate_dps,
         // Synchronous outputs: the command reaches the motors one sample after the gyro read.
         output_delay_samples: 1,
     };
-    let protocol = match s.u32("output.protocol") {
+    let protocol = match s.get(handles::OUTPUT_PROTOCOL) {
         0 => Protocol::Brushed {
-            frequency_hz: s.u32("output.rate_hz"),
+            frequency_hz: s.get(handles::OUTPUT_RATE_HZ),
         },
         1 => Protocol::Pwm {
-            rate_hz: s.u32("output.rate_hz"),
-            min_us: u16::try_from(s.u32("output.min_us")).map_err(|_| SetupError::BadChoice)?,
-            max_us: u16::try_from(s.u32("output.max_us")).map_err(|_| SetupError::BadChoice)?,
+            rate_hz: s.get(handles::OUTPUT_RATE_HZ),
+            min_us: u16::try_from(s.get(handles::OUTPUT_MIN_US))
+                .map_err(|_| SetupError::BadChoice)?,
+            max_us: u16::try_from(s.get(handles::OUTPUT_MAX_US))
+                .map_err(|_| SetupError::BadChoice)?,
         },
         2 => Protocol::OneShot125,
         _ => return Err(SetupError::BadChoice),
     };
-    let expo = s.f32("mixer.thrust_expo");
+    let expo = s.get(handles::MIXER_THRUST_EXPO);
     let curve = if expo > 0.0 {
         ThrustCurve::Quadratic { k: expo }
     } else {
         ThrustCurve::Linear
     };
-    let mixer = match s.u32("mixer.frame") {
+    let mixer = match s.get(handles::MIXER_FRAME) {
         0 => Mixer::new(QUAD_X, curve),
         1 => Mixer::new(QUAD_PLUS, curve),
         2 => return Err(SetupError::FrameNotSupported),
         _ => return Err(SetupError::BadChoice),
     };
-    let warning = u16::try_from(s.u32("battery.cell_warning_mv")).unwrap_or(u16::MAX);
-    let critical = u16::try_from(s.u32("battery.cell_critical_mv")).unwrap_or(u16::MAX);
+    let warning = u16::try_from(s.get(handles::BATTERY_CELL_WARNING_MV)).unwrap_or(u16::MAX);
+    let critical = u16::try_from(s.get(handles::BATTERY_CELL_CRITICAL_MV)).unwrap_or(u16::MAX);
     if warning < critical {
         return Err(SetupError::BatteryThresholds);
     }
-    let cells = u8::try_from(s.u32("battery.cells")).unwrap_or(0);
-    let sense = s.f32("battery.current_mv_per_a");
+    let cells = u8::try_from(s.get(handles::BATTERY_CELLS)).unwrap_or(0);
+    let sense = s.get(handles::BATTERY_CURRENT_MV_PER_A);
     let battery = BatteryConfig {
-        voltage_divider: s.f32("battery.divider"),
+        voltage_divider: s.get(handles::BATTERY_DIVIDER),
         current_mv_per_amp: (sense > 0.0).then_some(sense),
         cells: (cells > 0).then_some(cells),
         cell_warning_mv: warning,

@@ -11,7 +11,7 @@ use super::link::{openlrs_valid, stored_link};
 use super::setup::{FlightSetup, SetupError, from_settings};
 use crate::board::MOTOR_TIMER_CLOCKS;
 use crate::outputs::OutputError;
-use crate::settings::Settings;
+use crate::settings::{Settings, handles};
 
 /// Why a settings set cannot run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -51,11 +51,11 @@ pub fn validate(s: &Settings) -> Result<FlightSetup, InvalidSettings> {
             .map_err(InvalidSettings::Output)?;
     }
     // The ratio is checked even before a bind: the module side would refuse it on the air.
-    let ratio = u8::try_from(s.u32("link.telemetry_ratio")).unwrap_or(0);
+    let ratio = u8::try_from(s.get(handles::LINK_TELEMETRY_RATIO)).unwrap_or(0);
     if !valid_telemetry_ratio(ratio) {
         return Err(InvalidSettings::Link);
     }
-    if s.u32("link.bind_id") != 0 && stored_link(s).is_none() {
+    if s.get(handles::LINK_BIND_ID) != 0 && stored_link(s).is_none() {
         return Err(InvalidSettings::Link);
     }
     if !openlrs_valid(s) {
@@ -130,8 +130,8 @@ mod tests {
         assert!(s.set_text("output.rate_hz", "400").is_err());
         s.set_text_pairs("output.protocol pwm output.rate_hz 400")
             .unwrap();
-        assert_eq!(s.u32("output.protocol"), 1);
-        assert_eq!(s.u32("output.rate_hz"), 400);
+        assert_eq!(s.get(handles::OUTPUT_PROTOCOL), 1);
+        assert_eq!(s.get(handles::OUTPUT_RATE_HZ), 400);
         // A bad pair anywhere refuses the whole line.
         let before = s.clone();
         assert_eq!(

@@ -1,6 +1,7 @@
 use super::*;
 use crate::battery::BatteryLevel;
 use crate::outputs::Command;
+use crate::settings::handles;
 use crate::supervisor::Decision;
 use telemetry::messages::{Decoded, MessageReader, encode_message};
 
@@ -86,7 +87,7 @@ fn rotation_carries_every_kind_and_attitude_half_the_time() {
     assert!(matches!(r.next(&snap), Message::SysIdResult(_)));
     // The messages survive the stream encoding.
     let mut buf = [0u8; 64];
-    let n = encode_message(&attitude, &mut buf).unwrap();
+    let n = encode_message(&attitude, &mut buf).unwrap().len();
     let mut reader = MessageReader::new();
     let got: Vec<Decoded> = buf[..n].iter().filter_map(|b| reader.push(*b)).collect();
     assert_eq!(got, vec![Decoded::Message(attitude)]);
@@ -106,7 +107,7 @@ fn setting_changes_are_checked_and_echoed() {
         },
     );
     assert_eq!(r, Ok(()));
-    assert_eq!(s.f32("pid.roll.kp"), 0.004);
+    assert_eq!(s.get(handles::PID_ROLL_KP), 0.004);
     assert_eq!(echo.unwrap().value, f32_value(0.004));
     // Out of range: refused, the echo carries the unchanged value.
     let (r, echo) = apply_setting(
@@ -127,7 +128,7 @@ fn setting_changes_are_checked_and_echoed() {
         },
     );
     assert_eq!(r, Ok(()));
-    assert_eq!(s.u32("output.protocol"), 2);
+    assert_eq!(s.get(handles::OUTPUT_PROTOCOL), 2);
     assert_eq!(
         setting_report(&s, proto as u16),
         Some(SettingChange {

@@ -155,7 +155,7 @@ pub fn write_setting<W: Write>(out: &mut W, settings: &Settings, name: &str) -> 
     let Some((_, param)) = find(name) else {
         return writeln!(out, "{name}: no such setting");
     };
-    match (param.kind, settings.get(name)) {
+    match (param.kind, settings.by_name(name)) {
         (Kind::Choice(names), Some(Value::U32(i))) => {
             writeln!(
                 out,
@@ -180,6 +180,7 @@ pub fn write_list<W: Write>(out: &mut W, settings: &Settings, prefix: &str) -> c
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::settings::handles;
 
     #[test]
     fn parses_commands_and_refuses_garbage() {
@@ -230,6 +231,9 @@ mod tests {
             let (name, value) = line.split_once(" = ").unwrap();
             again.set_text(name, value).unwrap();
         }
-        assert_eq!(again.get("output.protocol"), s.get("output.protocol"));
+        assert_eq!(
+            again.get(handles::OUTPUT_PROTOCOL),
+            s.get(handles::OUTPUT_PROTOCOL)
+        );
     }
 }

@@ -3,11 +3,13 @@
 //! and the text console that reads and changes them over USB.
 
 mod console;
+mod handle;
 mod line;
 mod params;
 mod store;
 
 pub use console::{Command, ConsoleError, MagcalAction, parse_line, write_list, write_setting};
+pub use handle::{Change, Handle, ParamType};
 pub use line::{LineAssembler, LineError};
-pub use params::{Choice, Kind, MAX_PAIRS, PARAMS, Param, ParamError, Settings, Value};
+pub use params::{Choice, Kind, MAX_PAIRS, PARAMS, Param, ParamError, Settings, Value, handles};
 pub use store::{FLASH_BUFFER, LoadProblem, LoadReport, StoreError, load, save, save_whole};

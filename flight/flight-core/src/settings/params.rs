@@ -4,8 +4,11 @@
 //! so is any change after which the whole set would not run
 //! ([`crate::pipeline::validate`]): a change leaves the set valid or untouched.
 
+use core::marker::PhantomData;
+
 use telemetry::link::LinkKey;
 
+use super::handle::{Bits, Change, Handle, ParamType, Row, table};
 use crate::pipeline::{InvalidSettings, validate};
 
 /// A parameter's value.
@@ -95,30 +98,39 @@ pub const MAX_PAIRS: usize = 8;
 
 impl core::error::Error for ParamError {}
 
-const fn f(key: u16, name: &'static str, min: f32, max: f32, default: f32) -> Param {
-    Param {
-        key,
-        name,
-        kind: Kind::F32 { min, max },
-        default: Value::F32(default),
+const fn f(key: u16, name: &'static str, min: f32, max: f32, default: f32) -> Row<f32> {
+    Row {
+        param: Param {
+            key,
+            name,
+            kind: Kind::F32 { min, max },
+            default: Value::F32(default),
+        },
+        _type: PhantomData,
     }
 }
 
-const fn u(key: u16, name: &'static str, min: u32, max: u32, default: u32) -> Param {
-    Param {
-        key,
-        name,
-        kind: Kind::U32 { min, max },
-        default: Value::U32(default),
+const fn u(key: u16, name: &'static str, min: u32, max: u32, default: u32) -> Row<u32> {
+    Row {
+        param: Param {
+            key,
+            name,
+            kind: Kind::U32 { min, max },
+            default: Value::U32(default),
+        },
+        _type: PhantomData,
     }
 }
 
-const fn c(key: u16, name: &'static str, choice: Choice, default: u32) -> Param {
-    Param {
-        key,
-        name,
-        kind: Kind::Choice(choice),
-        default: Value::U32(default),
+const fn c(key: u16, name: &'static str, choice: Choice, default: u32) -> Row<u32> {
+    Row {
+        param: Param {
+            key,
+            name,
+            kind: Kind::Choice(choice),
+            default: Value::U32(default),
+        },
+        _type: PhantomData,
     }
 }
 
@@ -154,109 +166,151 @@ pub const LOOP_RATES: Choice = &["500", "1000"];
 /// GPS, the INS without GPS (horizontal velocity held by a pseudo-measurement).
 pub const INS_MODES: Choice = &["complementary", "ins", "ins_indoor"];
 
-/// Every parameter. Keys are grouped by hundreds per subsystem.
-pub const PARAMS: &[Param] = &[
+table! {
     // outputs (1xx)
-    c(100, "output.protocol", OUTPUT_PROTOCOLS, 0),
-    u(101, "output.rate_hz", 50, 64_000, 32_000),
-    u(102, "output.min_us", 500, 2_500, 1_000),
-    u(103, "output.max_us", 500, 2_500, 2_000),
-    f(104, "output.idle", 0.0, 0.3, 0.05),
-    c(105, "mixer.frame", FRAMES, 0),
-    f(106, "mixer.thrust_expo", 0.0, 1.0, 0.0),
+    OUTPUT_PROTOCOL: u32 = c(100, "output.protocol", OUTPUT_PROTOCOLS, 0),
+    OUTPUT_RATE_HZ: u32 = u(101, "output.rate_hz", 50, 64_000, 32_000),
+    OUTPUT_MIN_US: u32 = u(102, "output.min_us", 500, 2_500, 1_000),
+    OUTPUT_MAX_US: u32 = u(103, "output.max_us", 500, 2_500, 2_000),
+    OUTPUT_IDLE: f32 = f(104, "output.idle", 0.0, 0.3, 0.05),
+    MIXER_FRAME: u32 = c(105, "mixer.frame", FRAMES, 0),
+    MIXER_THRUST_EXPO: f32 = f(106, "mixer.thrust_expo", 0.0, 1.0, 0.0),
     // loop (2xx)
-    c(200, "loop.rate_hz", LOOP_RATES, 1),
+    LOOP_RATE_HZ: u32 = c(200, "loop.rate_hz", LOOP_RATES, 1),
     // PID rate gains (3xx): roll, pitch, yaw × kp, ki, kd
-    f(300, "pid.roll.kp", 0.0, 1.0, 0.0030),
-    f(301, "pid.roll.ki", 0.0, 1.0, 0.0050),
-    f(302, "pid.roll.kd", 0.0, 0.1, 0.00004),
-    f(303, "pid.pitch.kp", 0.0, 1.0, 0.0030),
-    f(304, "pid.pitch.ki", 0.0, 1.0, 0.0050),
-    f(305, "pid.pitch.kd", 0.0, 0.1, 0.00004),
-    f(306, "pid.yaw.kp", 0.0, 1.0, 0.0060),
-    f(307, "pid.yaw.ki", 0.0, 1.0, 0.0100),
-    f(308, "pid.yaw.kd", 0.0, 0.1, 0.0),
-    f(309, "pid.attitude.kp", 0.0, 20.0, 2.5),
-    f(310, "rate.max_dps", 30.0, 2_000.0, 720.0),
-    f(311, "attitude.max_deg", 5.0, 80.0, 45.0),
+    PID_ROLL_KP: f32 = f(300, "pid.roll.kp", 0.0, 1.0, 0.0030),
+    PID_ROLL_KI: f32 = f(301, "pid.roll.ki", 0.0, 1.0, 0.0050),
+    PID_ROLL_KD: f32 = f(302, "pid.roll.kd", 0.0, 0.1, 0.00004),
+    PID_PITCH_KP: f32 = f(303, "pid.pitch.kp", 0.0, 1.0, 0.0030),
+    PID_PITCH_KI: f32 = f(304, "pid.pitch.ki", 0.0, 1.0, 0.0050),
+    PID_PITCH_KD: f32 = f(305, "pid.pitch.kd", 0.0, 0.1, 0.00004),
+    PID_YAW_KP: f32 = f(306, "pid.yaw.kp", 0.0, 1.0, 0.0060),
+    PID_YAW_KI: f32 = f(307, "pid.yaw.ki", 0.0, 1.0, 0.0100),
+    PID_YAW_KD: f32 = f(308, "pid.yaw.kd", 0.0, 0.1, 0.0),
+    PID_ATTITUDE_KP: f32 = f(309, "pid.attitude.kp", 0.0, 20.0, 2.5),
+    RATE_MAX_DPS: f32 = f(310, "rate.max_dps", 30.0, 2_000.0, 720.0),
+    ATTITUDE_MAX_DEG: f32 = f(311, "attitude.max_deg", 5.0, 80.0, 45.0),
     // LQG model and costs (4xx)
-    f(400, "lqg.ln_beta1.roll", 5.0, 14.0, 10.0),
-    f(401, "lqg.ln_beta1.pitch", 5.0, 14.0, 10.0),
-    f(402, "lqg.ln_beta1.yaw", 3.0, 12.0, 7.0),
-    f(403, "lqg.tau_s", 0.005, 0.2, 0.03),
+    LQG_LN_BETA1_ROLL: f32 = f(400, "lqg.ln_beta1.roll", 5.0, 14.0, 10.0),
+    LQG_LN_BETA1_PITCH: f32 = f(401, "lqg.ln_beta1.pitch", 5.0, 14.0, 10.0),
+    LQG_LN_BETA1_YAW: f32 = f(402, "lqg.ln_beta1.yaw", 3.0, 12.0, 7.0),
+    LQG_TAU_S: f32 = f(403, "lqg.tau_s", 0.005, 0.2, 0.03),
     // Frame-invariant LQR costs (control::design::FrameInvariantCosts: q1 angle, q2 rate,
     // q4 torque; each axis scales them by its own β1). Defaults: what autotune's
     // `lqg_costs` gives for τ = 30 ms (any β): 38 ms rate rise in the SITL, where Tau Labs'
     // absolute (10⁴, 4, 0.04) read as invariant gave a sluggish 216 ms. Key 407 (an unused
     // integral cost) is retired and must not be reused.
-    f(404, "lqg.q_rate", 1e-6, 1e6, 1_000.0),
-    f(405, "lqg.q_torque", 1e-9, 1e3, 0.1),
-    f(406, "lqg.q_attitude", 1e-3, 1e9, 480_000.0),
+    LQG_Q_RATE: f32 = f(404, "lqg.q_rate", 1e-6, 1e6, 1_000.0),
+    LQG_Q_TORQUE: f32 = f(405, "lqg.q_torque", 1e-9, 1e3, 0.1),
+    LQG_Q_ATTITUDE: f32 = f(406, "lqg.q_attitude", 1e-3, 1e9, 480_000.0),
     // battery (5xx)
-    u(500, "battery.cells", 0, 6, 0),
-    u(501, "battery.cell_warning_mv", 2_800, 4_200, 3_500),
-    u(502, "battery.cell_critical_mv", 2_800, 4_200, 3_300),
-    f(503, "battery.divider", 1.0, 30.0, 2.0),
-    f(504, "battery.current_mv_per_a", 0.0, 1_000.0, 50.0),
+    BATTERY_CELLS: u32 = u(500, "battery.cells", 0, 6, 0),
+    BATTERY_CELL_WARNING_MV: u32 = u(501, "battery.cell_warning_mv", 2_800, 4_200, 3_500),
+    BATTERY_CELL_CRITICAL_MV: u32 = u(502, "battery.cell_critical_mv", 2_800, 4_200, 3_300),
+    BATTERY_DIVIDER: f32 = f(503, "battery.divider", 1.0, 30.0, 2.0),
+    BATTERY_CURRENT_MV_PER_A: f32 = f(504, "battery.current_mv_per_a", 0.0, 1_000.0, 50.0),
     // safety (6xx)
     // Key 600 (`failsafe.disarm_ms`, a fixed disarm time that could stop the motors in the
     // air) is retired and must not be reused: a failsafe now ends on detected touchdown.
-    f(601, "failsafe.descent_mps", 0.2, 3.0, 0.7),
-    u(602, "arm.idle_disarm_ms", 2_000, 120_000, 10_000),
-    c(603, "mode.switch_low", MODES, 2),
-    c(604, "mode.switch_mid", MODES, 0),
-    c(605, "mode.switch_high", MODES, 1),
+    FAILSAFE_DESCENT_MPS: f32 = f(601, "failsafe.descent_mps", 0.2, 3.0, 0.7),
+    ARM_IDLE_DISARM_MS: u32 = u(602, "arm.idle_disarm_ms", 2_000, 120_000, 10_000),
+    MODE_SWITCH_LOW: u32 = c(603, "mode.switch_low", MODES, 2),
+    MODE_SWITCH_MID: u32 = c(604, "mode.switch_mid", MODES, 0),
+    MODE_SWITCH_HIGH: u32 = c(605, "mode.switch_high", MODES, 1),
     // the bound link (7xx), written after an over-the-air bind; bind ID 0 = never bound
-    u(700, "link.bind_id", 0, u32::MAX, 0),
-    c(701, "link.band", BANDS, 0),
-    c(702, "link.rate", RATES, 2),
-    c(703, "link.channels", CHANNEL_FORMATS, 0),
-    u(704, "link.telemetry_ratio", 2, 128, 4),
+    LINK_BIND_ID: u32 = u(700, "link.bind_id", 0, u32::MAX, 0),
+    LINK_BAND: u32 = c(701, "link.band", BANDS, 0),
+    LINK_RATE: u32 = c(702, "link.rate", RATES, 2),
+    LINK_CHANNELS: u32 = c(703, "link.channels", CHANNEL_FORMATS, 0),
+    LINK_TELEMETRY_RATIO: u32 = u(704, "link.telemetry_ratio", 2, 128, 4),
     // Later safety settings, appended so the table index (the telemetry `SettingChange` id)
     // of every older row stays put.
-    c(606, "arm.critical_battery", ARM_ON_CRITICAL, 0),
+    ARM_CRITICAL_BATTERY: u32 = c(606, "arm.critical_battery", ARM_ON_CRITICAL, 0),
     // The arm switch: 0 = stick gesture only; 1–16 = the channel number (5 = AUX1), "on"
     // while its pulse lies in arm.min_us…arm.max_us (CRSF: 988…2012 µs for −100…+100 %).
-    u(607, "arm.channel", 0, 16, 0),
-    u(608, "arm.min_us", 800, 2_200, 1_750),
-    u(609, "arm.max_us", 800, 2_200, 2_100),
+    ARM_CHANNEL: u32 = u(607, "arm.channel", 0, 16, 0),
+    ARM_MIN_US: u32 = u(608, "arm.min_us", 800, 2_200, 1_750),
+    ARM_MAX_US: u32 = u(609, "arm.max_us", 800, 2_200, 2_100),
     // estimation (8xx). Factory: the complementary filter, as flown before the INS did.
-    c(800, "ins.mode", INS_MODES, 0),
+    INS_MODE: u32 = c(800, "ins.mode", INS_MODES, 0),
     // The air protocol and the OpenLRSng bind data (7xx, appended): `link.olrs_*` are what
     // an OpenLRSng transmitter sent in its bind packet, with OpenLRSng's factory values
     // (`bindInitDefaults()`) as defaults; magic 0 = never bound over OpenLRSng. Packed so
     // the flash record grows little: `olrs_modem` is channel spacing (10 kHz units), modem
     // profile, flags and power code, one byte each from the low end; hop channels travel
     // four to a word, first in the low byte (`pipeline::stored_openlrs` checks them all).
-    c(705, "link.protocol", PROTOCOLS, 0),
-    u(706, "link.olrs_magic", 0, u32::MAX, 0),
-    u(
+    LINK_PROTOCOL: u32 = c(705, "link.protocol", PROTOCOLS, 0),
+    LINK_OLRS_MAGIC: u32 = u(706, "link.olrs_magic", 0, u32::MAX, 0),
+    LINK_OLRS_FREQUENCY_HZ: u32 = u(
         707,
         "link.olrs_frequency_hz",
         413_000_000,
         935_000_000,
         435_000_000,
     ),
-    u(708, "link.olrs_modem", 0, u32::MAX, 0x070A_0205),
-    u(709, "link.olrs_hops_0", 0, u32::MAX, 0x2213_0A16),
-    u(710, "link.olrs_hops_1", 0, u32::MAX, 0x0000_2931),
-    u(711, "link.olrs_hops_2", 0, u32::MAX, 0),
-    u(712, "link.olrs_hops_3", 0, u32::MAX, 0),
-    u(713, "link.olrs_hops_4", 0, u32::MAX, 0),
-    u(714, "link.olrs_hops_5", 0, u32::MAX, 0),
+    LINK_OLRS_MODEM: u32 = u(708, "link.olrs_modem", 0, u32::MAX, 0x070A_0205),
+    LINK_OLRS_HOPS_0: u32 = u(709, "link.olrs_hops_0", 0, u32::MAX, 0x2213_0A16),
+    LINK_OLRS_HOPS_1: u32 = u(710, "link.olrs_hops_1", 0, u32::MAX, 0x0000_2931),
+    LINK_OLRS_HOPS_2: u32 = u(711, "link.olrs_hops_2", 0, u32::MAX, 0),
+    LINK_OLRS_HOPS_3: u32 = u(712, "link.olrs_hops_3", 0, u32::MAX, 0),
+    LINK_OLRS_HOPS_4: u32 = u(713, "link.olrs_hops_4", 0, u32::MAX, 0),
+    LINK_OLRS_HOPS_5: u32 = u(714, "link.olrs_hops_5", 0, u32::MAX, 0),
     // Magnetometer calibration (`magcal save`; `estimation::magcal`): calibrated =
     // matrix · (raw − offset), raw in the sensor's unit; the matrix symmetric. Factory: none
     // (zero offset, identity).
-    f(801, "mag.offset_x", -10_000.0, 10_000.0, 0.0),
-    f(802, "mag.offset_y", -10_000.0, 10_000.0, 0.0),
-    f(803, "mag.offset_z", -10_000.0, 10_000.0, 0.0),
-    f(804, "mag.xx", -10.0, 10.0, 1.0),
-    f(805, "mag.yy", -10.0, 10.0, 1.0),
-    f(806, "mag.zz", -10.0, 10.0, 1.0),
-    f(807, "mag.xy", -10.0, 10.0, 0.0),
-    f(808, "mag.xz", -10.0, 10.0, 0.0),
-    f(809, "mag.yz", -10.0, 10.0, 0.0),
-];
+    MAG_OFFSET_X: f32 = f(801, "mag.offset_x", -10_000.0, 10_000.0, 0.0),
+    MAG_OFFSET_Y: f32 = f(802, "mag.offset_y", -10_000.0, 10_000.0, 0.0),
+    MAG_OFFSET_Z: f32 = f(803, "mag.offset_z", -10_000.0, 10_000.0, 0.0),
+    MAG_XX: f32 = f(804, "mag.xx", -10.0, 10.0, 1.0),
+    MAG_YY: f32 = f(805, "mag.yy", -10.0, 10.0, 1.0),
+    MAG_ZZ: f32 = f(806, "mag.zz", -10.0, 10.0, 1.0),
+    MAG_XY: f32 = f(807, "mag.xy", -10.0, 10.0, 0.0),
+    MAG_XZ: f32 = f(808, "mag.xz", -10.0, 10.0, 0.0),
+    MAG_YZ: f32 = f(809, "mag.yz", -10.0, 10.0, 0.0),
+    ;
+    // Handle arrays for the composite names, in the handles module.
+    /// The rate PID gains, `[roll, pitch, yaw][kp, ki, kd]` (`pid.<axis>.<gain>`).
+    pub const PID_GAINS: [[Handle<f32>; 3]; 3] = {
+        [
+            [PID_ROLL_KP, PID_ROLL_KI, PID_ROLL_KD],
+            [PID_PITCH_KP, PID_PITCH_KI, PID_PITCH_KD],
+            [PID_YAW_KP, PID_YAW_KI, PID_YAW_KD],
+        ]
+    };
+
+    /// The LQG model's ln β₁, `[roll, pitch, yaw]` (`lqg.ln_beta1.<axis>`).
+    pub const LQG_LN_BETA1: [Handle<f32>; 3] = {
+        [LQG_LN_BETA1_ROLL, LQG_LN_BETA1_PITCH, LQG_LN_BETA1_YAW]
+    };
+
+    /// The OpenLRSng hop-channel words, four channels each (`link.olrs_hops_<n>`).
+    pub const LINK_OLRS_HOPS: [Handle<u32>; 6] = {
+        [
+            LINK_OLRS_HOPS_0,
+            LINK_OLRS_HOPS_1,
+            LINK_OLRS_HOPS_2,
+            LINK_OLRS_HOPS_3,
+            LINK_OLRS_HOPS_4,
+            LINK_OLRS_HOPS_5,
+        ]
+    };
+
+    /// The magnetometer calibration: offset x, y, z, then the symmetric matrix's xx, yy, zz,
+    /// xy, xz, yz (`mag.*`).
+    pub const MAG_CALIBRATION: [Handle<f32>; 9] = {
+        [
+            MAG_OFFSET_X,
+            MAG_OFFSET_Y,
+            MAG_OFFSET_Z,
+            MAG_XX,
+            MAG_YY,
+            MAG_ZZ,
+            MAG_XY,
+            MAG_XZ,
+            MAG_YZ,
+        ]
+    };
+}
 
 /// Number of parameters.
 pub const COUNT: usize = PARAMS.len();
@@ -310,7 +364,9 @@ impl Param {
 /// The current value of every parameter, and the link key.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Settings {
-    values: [Value; COUNT],
+    /// Each parameter's stored bits in table order; its row's kind says how to read them
+    /// (a [`Handle`] reads them as its type).
+    values: Bits,
     /// The link key derived from the binding phrase (spec §12), outside the table: it is
     /// no parameter a `list`, `get` or `SettingChange` can read, only the console's `phrase`
     /// sets it. `None`: no phrase, the link runs unauthenticated.
@@ -319,14 +375,22 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        let mut values = [Value::U32(0); COUNT];
+        let mut values = [0; COUNT];
         for (v, p) in values.iter_mut().zip(PARAMS) {
-            *v = p.default;
+            *v = p.default.to_bits();
         }
         Self {
             values,
             link_key: None,
         }
+    }
+}
+
+/// A row's value from its stored bits (the kind decides which type they are).
+fn value_of(param: &Param, bits: u32) -> Value {
+    match param.kind {
+        Kind::F32 { .. } => Value::F32(f32::from_bits(bits)),
+        Kind::U32 { .. } | Kind::Choice(_) => Value::U32(bits),
     }
 }
 
@@ -342,43 +406,53 @@ impl Settings {
         self.link_key = key;
     }
 
-    /// Value by name.
-    pub fn get(&self, name: &str) -> Option<Value> {
-        let (i, _) = find(name)?;
-        self.values.get(i).copied()
+    /// A parameter's value, typed by its handle (`settings.get(handles::RATE_MAX_DPS)`).
+    pub fn get<T: ParamType>(&self, handle: Handle<T>) -> T {
+        T::from_bits((handle.read)(&self.values))
     }
 
-    /// A real-number parameter (its default if the name is wrong, which a test catches).
-    pub fn f32(&self, name: &str) -> f32 {
-        match self.get(name) {
-            Some(Value::F32(v)) => v,
-            _ => 0.0,
-        }
+    /// Value by console name (the console, telemetry and the phone; code uses [`Self::get`]).
+    pub fn by_name(&self, name: &str) -> Option<Value> {
+        let (i, p) = find(name)?;
+        self.values.get(i).map(|&bits| value_of(p, bits))
     }
 
-    /// A whole-number or choice parameter.
-    pub fn u32(&self, name: &str) -> u32 {
-        match self.get(name) {
-            Some(Value::U32(v)) => v,
-            _ => 0,
-        }
-    }
-
-    /// Changes a value after checking it and the whole set it makes.
+    /// Changes a value, given by console name, after checking it and the whole set it makes.
     pub fn set(&mut self, name: &str, value: Value) -> Result<(), ParamError> {
         self.set_many(&[(name, value)])
     }
 
-    /// Changes several values at once: each is range-checked, then the whole resulting set
-    /// is validated; on any error nothing changes. Use it for changes that are only valid
-    /// together (PWM and its rate, a bind's five `link.*` values).
+    /// Changes one value, named by its handle (see [`Self::apply`]).
+    pub fn put<T: ParamType>(&mut self, handle: Handle<T>, value: T) -> Result<(), ParamError> {
+        self.apply(&[handle.to(value)])
+    }
+
+    /// Changes several values given by console name at once (see [`Self::apply`]; code
+    /// names them by handle and calls `apply`).
     pub fn set_many(&mut self, changes: &[(&str, Value)]) -> Result<(), ParamError> {
-        let mut candidate = self.clone();
+        let mut typed: heapless::Vec<Change, COUNT> = heapless::Vec::new();
         for &(name, value) in changes {
-            let (i, p) = find(name).ok_or(ParamError::Unknown)?;
-            let checked = p.check(value)?;
-            let slot = candidate.values.get_mut(i).ok_or(ParamError::Unknown)?;
-            *slot = checked;
+            let (index, _) = find(name).ok_or(ParamError::Unknown)?;
+            typed
+                .push(Change { index, value })
+                .map_err(|_| ParamError::Unparsable)?;
+        }
+        self.apply(&typed)
+    }
+
+    /// Changes several values at once (`handle.to(value)` each): each is range-checked, then
+    /// the whole resulting set is validated; on any error nothing changes. Use it for
+    /// changes that are only valid together (PWM and its rate, a bind's five `link.*` values).
+    pub fn apply(&mut self, changes: &[Change]) -> Result<(), ParamError> {
+        let mut candidate = self.clone();
+        for change in changes {
+            let p = PARAMS.get(change.index).ok_or(ParamError::Unknown)?;
+            let checked = p.check(change.value)?;
+            let slot = candidate
+                .values
+                .get_mut(change.index)
+                .ok_or(ParamError::Unknown)?;
+            *slot = checked.to_bits();
         }
         candidate.check().map_err(ParamError::Invalid)?;
         *self = candidate;
@@ -393,19 +467,19 @@ impl Settings {
     }
 
     /// Changes up to [`MAX_PAIRS`] values given as console text, `NAME VALUE NAME VALUE …`,
-    /// together (see [`Settings::set_many`]).
+    /// together (see [`Settings::apply`]).
     pub fn set_text_pairs(&mut self, text: &str) -> Result<(), ParamError> {
-        let mut changes: heapless::Vec<(&str, Value), MAX_PAIRS> = heapless::Vec::new();
+        let mut changes: heapless::Vec<Change, MAX_PAIRS> = heapless::Vec::new();
         let mut words = text.split_ascii_whitespace();
         while let Some(name) = words.next() {
             let value_text = words.next().ok_or(ParamError::Unparsable)?;
-            let (_, p) = find(name).ok_or(ParamError::Unknown)?;
+            let (index, p) = find(name).ok_or(ParamError::Unknown)?;
             let value = p.parse(value_text)?;
             changes
-                .push((p.name, value))
+                .push(Change { index, value })
                 .map_err(|_| ParamError::Unparsable)?;
         }
-        self.set_many(&changes)
+        self.apply(&changes)
     }
 
     /// Whether the whole set can run (every cross-setting rule).
@@ -424,7 +498,10 @@ impl Settings {
 
     /// (parameter, value) pairs in table order.
     pub fn iter(&self) -> impl Iterator<Item = (&'static Param, Value)> + '_ {
-        PARAMS.iter().zip(self.values.iter().copied())
+        PARAMS
+            .iter()
+            .zip(self.values.iter())
+            .map(|(p, &bits)| (p, value_of(p, bits)))
     }
 
     pub(crate) fn set_by_key(&mut self, key: u16, bits: u32) -> Result<(), ParamError> {
@@ -435,7 +512,7 @@ impl Settings {
         let p = PARAMS.get(i).ok_or(ParamError::Unknown)?;
         let value = p.from_bits(bits)?;
         let slot = self.values.get_mut(i).ok_or(ParamError::Unknown)?;
-        *slot = value;
+        *slot = value.to_bits();
         Ok(())
     }
 }
@@ -461,11 +538,46 @@ mod tests {
     }
 
     #[test]
+    fn every_handle_names_a_row_of_its_type() {
+        let rows = handle_rows();
+        assert_eq!(rows.len(), COUNT, "one handle per row");
+        for (i, (ident, index, fits)) in rows.into_iter().enumerate() {
+            assert_eq!(index, i, "{ident} is not in table order");
+            let p = &PARAMS[index];
+            assert_eq!(
+                ident,
+                p.name.to_uppercase().replace('.', "_"),
+                "{ident} names another row"
+            );
+            assert!(fits, "{ident}'s type does not match {}'s kind", p.name);
+        }
+        let s = Settings::default();
+        assert_eq!(s.get(handles::OUTPUT_RATE_HZ), 32_000);
+        assert_eq!(s.get(handles::RATE_MAX_DPS), 720.0);
+        assert_eq!(
+            handles::PID_GAINS[2][0].param().map(|p| p.name),
+            Some("pid.yaw.kp")
+        );
+        assert_eq!(
+            handles::LQG_LN_BETA1[1].param().map(|p| p.name),
+            Some("lqg.ln_beta1.pitch")
+        );
+        assert_eq!(
+            handles::LINK_OLRS_HOPS[5].param().map(|p| p.name),
+            Some("link.olrs_hops_5")
+        );
+        assert_eq!(
+            handles::MAG_CALIBRATION[6].param().map(|p| p.name),
+            Some("mag.xy")
+        );
+    }
+
+    #[test]
     fn set_checks_ranges_and_choices() {
         let mut s = Settings::default();
-        assert_eq!(s.u32("output.rate_hz"), 32_000);
+        assert_eq!(s.get(handles::OUTPUT_RATE_HZ), 32_000);
         s.set_text("output.protocol", "oneshot125").unwrap();
-        assert_eq!(s.u32("output.protocol"), 2);
+        assert_eq!(s.get(handles::OUTPUT_PROTOCOL), 2);
         assert_eq!(
             s.set_text("output.protocol", "dshot"),
             Err(ParamError::Unparsable)
@@ -479,7 +591,7 @@ mod tests {
             Err(ParamError::OutOfRange)
         );
         s.set_text("pid.roll.kp", "0.004").unwrap();
-        assert_eq!(s.f32("pid.roll.kp"), 0.004);
+        assert_eq!(s.get(handles::PID_ROLL_KP), 0.004);
         assert_eq!(s.set_text("no.such", "1"), Err(ParamError::Unknown));
         assert_eq!(
             s.set("battery.cells", Value::F32(1.0)),

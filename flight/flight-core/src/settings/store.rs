@@ -63,6 +63,8 @@ const RECORD_MAX: usize = 1 + 4 + 2 + 6 * super::params::COUNT + 1 + KEY_BYTES +
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum StoreError {
     /// The flash driver failed, the area is full or corrupt; the settings in RAM are intact.
+    /// (Also a record that did not fit `RECORD_MAX`, which the bound's formula rules out:
+    /// nothing is written rather than a record cut short.)
     Flash,
 }
 
@@ -140,41 +142,44 @@ fn crc32(bytes: &[u8]) -> u32 {
     !crc
 }
 
-/// Serialises `settings` as generation `generation`; returns the record length.
-fn encode(settings: &Settings, generation: u32, out: &mut [u8; RECORD_MAX]) -> usize {
-    let mut at = 0;
-    let mut put = |bytes: &[u8]| {
-        for &b in bytes {
-            if let Some(slot) = out.get_mut(at) {
-                *slot = b;
-            }
-            at += 1;
-        }
-    };
-    put(&[VERSION]);
-    put(&generation.to_le_bytes());
-    put(&(PARAMS.len() as u16).to_le_bytes());
+/// Serialises `settings` as generation `generation`; returns the record.
+/// (The record tests read it through `encode`, copied into a whole buffer.)
+///
+/// # Errors
+/// [`StoreError::Flash`] if the record outgrew [`RECORD_MAX`] (ruled out by the bound's
+/// formula): refused rather than stored cut short.
+fn record(
+    settings: &Settings,
+    generation: u32,
+) -> Result<heapless::Vec<u8, RECORD_MAX>, StoreError> {
+    let mut out: heapless::Vec<u8, RECORD_MAX> = heapless::Vec::new();
+    let mut put = |bytes: &[u8]| out.extend_from_slice(bytes).map_err(|_| StoreError::Flash);
+    put(&[VERSION])?;
+    put(&generation.to_le_bytes())?;
+    put(&(PARAMS.len() as u16).to_le_bytes())?;
     for (p, v) in settings.iter() {
-        put(&p.key.to_le_bytes());
-        put(&v.to_bits().to_le_bytes());
+        put(&p.key.to_le_bytes())?;
+        put(&v.to_bits().to_le_bytes())?;
     }
     match settings.link_key() {
         Some(key) => {
-            put(&[1]);
-            put(&key.to_bytes());
+            put(&[1])?;
+            put(&key.to_bytes())?;
         }
-        None => put(&[0]),
+        None => put(&[0])?,
     }
-    let body = at;
-    let crc = crc32(out.get(..body).unwrap_or(&[]));
-    let mut at2 = body;
-    for b in crc.to_le_bytes() {
-        if let Some(slot) = out.get_mut(at2) {
-            *slot = b;
-        }
-        at2 += 1;
-    }
-    at2
+    let crc = crc32(&out);
+    out.extend_from_slice(&crc.to_le_bytes())
+        .map_err(|_| StoreError::Flash)?;
+    Ok(out)
+}
+
+/// The record tests' view of [`record`]: copied into `out`, its length returned.
+#[cfg(test)]
+fn encode(settings: &Settings, generation: u32, out: &mut [u8; RECORD_MAX]) -> usize {
+    let bytes = record(settings, generation).unwrap();
+    out[..bytes.len()].copy_from_slice(&bytes);
+    bytes.len()
 }
 
 /// A decoded record.
@@ -383,9 +388,8 @@ pub async fn save_whole<S: NorFlash, C: CacheImpl<u16>>(
         (_, Some(y)) => (a, y),
         (None, None) => (a, 0),
     };
-    let mut record = [0u8; RECORD_MAX];
-    let len = encode(settings, newest.wrapping_add(1), &mut record);
-    let record = record.get(..len).unwrap_or(&[]);
+    let record = record(settings, newest.wrapping_add(1))?;
+    let record: &[u8] = &record;
     // First the slot without the newest record: once it is whole, the new set is committed.
     // Then the same record into the other slot, so a damaged copy later still leaves the
     // newest set readable instead of bringing back the previous one.

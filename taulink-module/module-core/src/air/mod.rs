@@ -26,7 +26,7 @@ use crate::channels::ChannelFrame;
 use crate::hm10::RecordQueue;
 use crate::hm10::relay::MAX_RECORD_LEN;
 use crate::ports::{AirSchedule, LinkPort, LinkStats};
-use crate::records::{MAX_STREAM_FRAME_LEN, Splitter, to_stream};
+use crate::records::{self, MAX_STREAM_FRAME_LEN, Splitter, to_stream};
 use crate::settings::Settings;
 
 /// The master counts the link as up while a downlink arrived within this time.
@@ -174,10 +174,10 @@ impl AirLink {
         }
         while master.uplink_stream.free() >= MAX_STREAM_FRAME_LEN {
             let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
-            let Some(len) = self.pop_uplink_frame(&mut frame) else {
+            let Some(stream) = self.pop_uplink_frame(&mut frame) else {
                 break;
             };
-            master.uplink_stream.write(frame.get(..len).unwrap_or(&[]));
+            master.uplink_stream.write(stream);
         }
         self.read_stream(|buf| master.downlink_stream.read(buf));
         let remote = master.remote_report();
@@ -220,12 +220,10 @@ impl AirLink {
         }
         while follower.downlink_stream.free() >= MAX_STREAM_FRAME_LEN {
             let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
-            let Some(len) = self.pop_uplink_frame(&mut frame) else {
+            let Some(stream) = self.pop_uplink_frame(&mut frame) else {
                 break;
             };
-            follower
-                .downlink_stream
-                .write(frame.get(..len).unwrap_or(&[]));
+            follower.downlink_stream.write(stream);
         }
         self.read_stream(|buf| follower.uplink_stream.read(buf));
         let remote = follower.remote_report();
@@ -255,14 +253,25 @@ impl AirLink {
     }
 
     /// The next queued record as a stream frame; a record that fails its check is dropped.
-    fn pop_uplink_frame(&mut self, frame: &mut [u8]) -> Option<usize> {
+    fn pop_uplink_frame<'o>(&mut self, frame: &'o mut [u8]) -> Option<&'o [u8]> {
         let mut record = [0u8; MAX_RECORD_LEN];
         loop {
             let len = self.uplink.pop_into(&mut record).ok()??;
-            match to_stream(record.get(..len)?, frame) {
-                Ok(n) => return Some(n),
-                Err(_) => self.rejected_records = self.rejected_records.saturating_add(1),
+            let record = record.get(..len)?;
+            // A damaged record is counted and the next one tried; checked before `frame` is
+            // lent out, so only the record that is sent borrows it.
+            if records::payload(record).is_err() {
+                self.rejected_records = self.rejected_records.saturating_add(1);
+                continue;
             }
+            return match to_stream(record, frame) {
+                Ok(stream) => Some(stream),
+                // Only a frame buffer shorter than MAX_STREAM_FRAME_LEN gets here.
+                Err(_) => {
+                    self.rejected_records = self.rejected_records.saturating_add(1);
+                    None
+                }
+            };
         }
     }
 
@@ -271,12 +280,13 @@ impl AirLink {
         let mut record = [0u8; MAX_RECORD_LEN];
         loop {
             let n = read(&mut buf);
-            if n == 0 {
+            // `read` fills at most `buf`, so the range exists; none read ends the loop.
+            let Some(bytes) = buf.get(..n).filter(|b| !b.is_empty()) else {
                 break;
-            }
-            for &byte in buf.get(..n).unwrap_or(&[]) {
-                if let Some(len) = self.splitter.push(byte, &mut record) {
-                    self.received.push(record.get(..len).unwrap_or(&[]));
+            };
+            for &byte in bytes {
+                if let Some(whole) = self.splitter.push(byte, &mut record) {
+                    self.received.push(whole);
                 }
             }
         }
@@ -406,7 +416,9 @@ mod tests {
         assert_eq!(master.uplink_stream.pending(), 0);
         assert!(link.can_send_record());
         let mut record = [0u8; MAX_RECORD_LEN];
-        let len = crate::records::with_crc(&[7, 7, 7], &mut record).unwrap();
+        let len = crate::records::with_crc(&[7, 7, 7], &mut record)
+            .unwrap()
+            .len();
         link.send_record(&record[..len]);
         link.on_master_slot(4_000, &mut master);
         // COBS(7 7 7 crc crc) + 0x00.

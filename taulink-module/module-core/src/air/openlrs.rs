@@ -46,10 +46,10 @@ impl AirLink {
         }
         while tx.serial_free() >= MAX_STREAM_FRAME_LEN {
             let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
-            let Some(len) = self.pop_uplink_frame(&mut frame) else {
+            let Some(stream) = self.pop_uplink_frame(&mut frame) else {
                 break;
             };
-            tx.queue_serial(frame.get(..len).unwrap_or(&[]));
+            tx.queue_serial(stream);
         }
     }
 

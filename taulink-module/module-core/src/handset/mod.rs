@@ -270,20 +270,23 @@ impl HandsetOutput for Handset {
         }
     }
 
-    fn next_line_bytes(&mut self, now_us: u64, out: &mut [u8]) -> usize {
+    fn next_line_bytes<'o>(&mut self, now_us: u64, out: &'o mut [u8]) -> &'o [u8] {
         let report = self.state.report();
-        match &mut self.protocol {
-            Protocol::Crsf { responder, .. } => responder.reply(now_us, &report, out),
+        // An encode error (a frame longer than `out`, which callers size for the largest
+        // reply) sends nothing this window: the line stays silent rather than carrying a
+        // cut frame, and the next window tries again.
+        let sent = match &mut self.protocol {
+            Protocol::Crsf { responder, .. } => responder.reply(now_us, &report, out).ok(),
             Protocol::SPort(scheduler) => scheduler
                 .next_frame(now_us, &report)
-                .and_then(|frame| frame.encode(out).ok())
-                .unwrap_or(0),
+                .and_then(|frame| frame.encode(out).ok()),
             Protocol::FrskyD(sender) => sender
                 .next_frame(now_us, &report)
-                .and_then(|frame| frame.encode(out).ok())
-                .unwrap_or(0),
-            Protocol::Off => 0,
-        }
+                .and_then(|frame| frame.encode(out).ok()),
+            Protocol::Off => None,
+        };
+        // Kept (the decision above): nothing is sent.
+        sent.unwrap_or(&[])
     }
 
     fn take_request(&mut self) -> Option<HandsetRequest> {
@@ -374,11 +377,14 @@ mod tests {
     fn sport_goes_quiet_between_slots_and_sends_rssi_zero_without_link() {
         let mut handset = Handset::new(&Settings::default());
         let mut out = [0u8; MAX_LINE_BURST];
-        let len = handset.next_line_bytes(0, &mut out);
+        let sent = handset.next_line_bytes(0, &mut out);
         // 7E 98 10 01 F1 00 00 00 00 crc: RSSI 0 (no link), nothing stuffed.
-        assert_eq!(len, 10);
-        assert_eq!(&out[..6], &[0x7E, 0x98, 0x10, 0x01, 0xF1, 0x00]);
-        assert_eq!(handset.next_line_bytes(11_999, &mut out), 0, "12 ms slot");
-        assert!(handset.next_line_bytes(100_000, &mut out) > 0);
+        assert_eq!(sent.len(), 10);
+        assert_eq!(&sent[..6], &[0x7E, 0x98, 0x10, 0x01, 0xF1, 0x00]);
+        assert!(
+            handset.next_line_bytes(11_999, &mut out).is_empty(),
+            "12 ms slot"
+        );
+        assert!(!handset.next_line_bytes(100_000, &mut out).is_empty());
     }
 }

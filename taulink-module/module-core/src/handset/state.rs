@@ -30,6 +30,7 @@ pub fn flight_mode_report(mode: messages::FlightMode) -> FlightModeReport {
         messages::FlightMode::SystemId => ("SYSID", 5),
     };
     FlightModeReport {
+        // Kept default: every name above is a constant shorter than the string's capacity.
         name: String::try_from(name).unwrap_or_default(),
         number,
     }

@@ -111,7 +111,11 @@ impl PhoneReader {
         }
         self.handed_out = true;
         match cobs::decode_in_place(&mut self.frame) {
-            Ok(length) => Some(PhoneEvent::Record(self.frame.get(..length).unwrap_or(&[]))),
+            Ok(length) => {
+                // The decoded record is the front of the frame (cleared on the next byte).
+                self.frame.truncate(length);
+                Some(PhoneEvent::Record(&self.frame))
+            }
             Err(error) => Some(PhoneEvent::Malformed(error)),
         }
     }

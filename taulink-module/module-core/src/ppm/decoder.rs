@@ -221,6 +221,7 @@ impl Decoder {
     /// Channel periods of the last frame handed out, µs (valid after a `Decoded::Frame`).
     pub fn last_periods_us(&self) -> &[u16] {
         match self.state {
+            // Kept: `count` is only set from periods pushed into this array (≤ its length).
             State::Locked { count } => self.periods_us.get(..count).unwrap_or(&[]),
             _ => &[],
         }

@@ -111,6 +111,9 @@ pub struct Frame {
 impl Frame {
     /// The slots in output order.
     pub fn slots(&self) -> &[Slot] {
+        // Kept: `len` is only set by `build`, to channels + 2 with channels ≤ MAX_CHANNELS
+        // checked when the encoder is made (the frame stays `Copy`, which a heapless::Vec
+        // would not be).
         self.slots.get(..self.len).unwrap_or(&[])
     }
 

@@ -157,7 +157,7 @@ impl FollowerHooks for FlightHooks {
         ];
         for message in messages {
             let mut frame = [0u8; 64];
-            let n = encode_message(&message, &mut frame).unwrap();
+            let n = encode_message(&message, &mut frame).unwrap().len();
             if follower.downlink_stream.free() >= n {
                 follower.downlink_stream.write(&frame[..n]);
                 side.sent.push(message);

@@ -182,13 +182,14 @@ impl Frame {
         }
     }
 
-    /// Writes the frame into `out` and returns the number of bytes written.
-    pub fn encode(&self, out: &mut [u8]) -> Result<usize, Error> {
+    /// Writes the frame into `out` and returns the bytes written (postcard's `to_slice`
+    /// style: the caller never slices `out` by a count).
+    pub fn encode<'o>(&self, out: &'o mut [u8]) -> Result<&'o [u8], Error> {
         let needed = self.wire_len();
         let Some(out) = out.get_mut(..needed) else {
             return Err(Error::BufferTooSmall { needed });
         };
-        let Some((head, rest)) = out.split_first_chunk_mut::<3>() else {
+        let Some((head, rest)) = (*out).split_first_chunk_mut::<3>() else {
             return Err(Error::BufferTooSmall { needed });
         };
         *head = [self.address, self.length_byte(), self.frame_type];
@@ -197,7 +198,7 @@ impl Frame {
         };
         payload.copy_from_slice(&self.payload);
         *crc = self.crc();
-        Ok(needed)
+        Ok(out)
     }
 }
 

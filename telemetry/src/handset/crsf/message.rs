@@ -140,7 +140,7 @@ impl Message {
     }
 
     /// Encodes the whole frame into `out`; returns the bytes written.
-    pub fn encode(&self, address: u8, out: &mut [u8]) -> Result<usize, Error> {
+    pub fn encode<'o>(&self, address: u8, out: &'o mut [u8]) -> Result<&'o [u8], Error> {
         self.to_frame(address)?.encode(out)
     }
 }

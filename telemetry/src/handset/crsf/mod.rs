@@ -25,7 +25,7 @@
 //! }
 //! // Line idle after the radio's frame: our turn to talk.
 //! let mut reply = [0u8; 128];
-//! let len = responder.reply(now_us + 20, &telemetry, &mut reply);
+//! let len = responder.reply(now_us + 20, &telemetry, &mut reply).unwrap().len();
 //! assert_eq!(&reply[..3], &[0xC8, 0x1A, 0x29]); // DEVICE_INFO first
 //! assert!(len > 28); // then LINK_STATISTICS (LQ 0: no link yet)
 //! ```

@@ -5,7 +5,7 @@
 use heapless::String;
 
 use super::device::{DeviceInfo, TimingCorrection};
-use super::frame::{Frame, address, frame_type};
+use super::frame::{Error, Frame, address, frame_type};
 use super::message::Message;
 use super::params::{CHUNK_HEADER_LEN, MAX_CHUNK_DATA, ParameterChunk};
 use super::sensors::{
@@ -28,6 +28,7 @@ pub fn taulink_device_info(major: u8, minor: u8, patch: u8) -> DeviceInfo {
     DeviceInfo {
         destination: address::RADIO,
         origin: address::TX_MODULE,
+        // Kept default: a 7-byte constant in the name's 32-byte string cannot fail.
         name: String::try_from(TAULINK_NAME).unwrap_or_default(),
         serial: TAULINK_SERIAL,
         hardware_id: TAULINK_HARDWARE_ID,
@@ -233,16 +234,25 @@ impl Responder {
     }
 
     /// Fills `out` with whole frames for the reply window opened by the last radio frame and
-    /// returns the byte count (0: stay silent — no window, window missed, or nothing due). Send
-    /// it as one burst right away; EdgeTX reads a burst on its UART idle interrupt.
-    pub fn reply(&mut self, now_us: u64, telemetry: &HandsetTelemetry, out: &mut [u8]) -> usize {
+    /// returns them (empty: stay silent — no window, window missed, or nothing due). Send
+    /// them as one burst right away; EdgeTX reads a burst on its UART idle interrupt.
+    ///
+    /// # Errors
+    /// [`Error::BufferTooSmall`] if the frames written overran `out` (ruled out by the
+    /// writer; the caller sends nothing rather than a cut frame).
+    pub fn reply<'o>(
+        &mut self,
+        now_us: u64,
+        telemetry: &HandsetTelemetry,
+        out: &'o mut [u8],
+    ) -> Result<&'o [u8], Error> {
         let Some((frame_end_us, radio_frame_len)) = self.window.take() else {
-            return 0;
+            return Ok(&[]);
         };
         // Starting later than half a period risks colliding with the radio's next frame on
         // the shared wire (the budget assumes we start right after its frame).
         if now_us.saturating_sub(frame_end_us) > u64::from(self.radio_period_us / 2) {
-            return 0;
+            return Ok(&[]);
         }
         let budget = self.reply_budget(radio_frame_len).min(out.len());
         if self.ping_pending {
@@ -257,28 +267,26 @@ impl Responder {
             } else {
                 out.len().min(MAX_REPLY_BYTES)
             };
-            let mut writer = Writer {
-                out: out.get_mut(..limit).unwrap_or_default(),
-                used: 0,
-            };
+            let mut writer = Writer::new(out, limit);
             if writer.put(&info) {
                 self.ping_pending = false;
             }
             if !fits {
-                return writer.used;
+                return writer.into_written();
             }
             return self.fill(now_us, telemetry, writer);
         }
-        let writer = Writer {
-            out: out.get_mut(..budget).unwrap_or_default(),
-            used: 0,
-        };
-        self.fill(now_us, telemetry, writer)
+        self.fill(now_us, telemetry, Writer::new(out, budget))
     }
 
     /// Adds what is due after a possible DEVICE_INFO: a parameter chunk, timing, link
     /// statistics, sensors.
-    fn fill(&mut self, now_us: u64, telemetry: &HandsetTelemetry, mut writer: Writer) -> usize {
+    fn fill<'o>(
+        &mut self,
+        now_us: u64,
+        telemetry: &HandsetTelemetry,
+        mut writer: Writer<'o>,
+    ) -> Result<&'o [u8], Error> {
         if let Some(chunk) = self.parameter_chunk.take()
             && !writer.put(&Message::ParameterChunk(chunk.clone()))
         {
@@ -295,7 +303,8 @@ impl Responder {
             now_us,
             self.config.link_statistics_interval_us,
         ) {
-            // No link: LQ 0 tells EdgeTX "telemetry lost" at once instead of after 1 s.
+            // No link: LQ 0 tells EdgeTX "telemetry lost" at once instead of after 1 s (the
+            // all-zero default is the report, deliberately).
             let stats = telemetry
                 .link
                 .as_ref()
@@ -308,7 +317,7 @@ impl Responder {
         if telemetry.link_streaming() {
             self.rotate_sensors(now_us, telemetry, &mut writer);
         }
-        writer.used
+        writer.into_written()
     }
 
     /// One pass over the sensors from where the last window stopped; sends every due one that
@@ -402,21 +411,40 @@ fn due(last_us: Option<u64>, now_us: u64, interval_us: u32) -> bool {
 struct Writer<'a> {
     out: &'a mut [u8],
     used: usize,
+    /// Bytes the window allows (at most `out.len()`).
+    limit: usize,
 }
 
-impl Writer<'_> {
+impl<'a> Writer<'a> {
+    fn new(out: &'a mut [u8], limit: usize) -> Self {
+        let limit = limit.min(out.len());
+        Self {
+            out,
+            used: 0,
+            limit,
+        }
+    }
+
     /// True if `message` was written. Module → radio frames start with 0xC8 (as ExpressLRS
     /// sends them; EdgeTX accepts 0xC8 and 0xEA).
     fn put(&mut self, message: &Message) -> bool {
-        let Some(free) = self.out.get_mut(self.used..) else {
+        let Some(free) = self.out.get_mut(self.used..self.limit) else {
             return false;
         };
         match message.encode(address::FLIGHT_CONTROLLER, free) {
             Ok(written) => {
-                self.used += written;
+                self.used += written.len();
                 true
             }
             Err(_) => false,
         }
+    }
+
+    /// The whole frames written, in order.
+    fn into_written(self) -> Result<&'a [u8], Error> {
+        let used = self.used;
+        let out: &'a [u8] = self.out;
+        out.get(..used)
+            .ok_or(Error::BufferTooSmall { needed: used })
     }
 }

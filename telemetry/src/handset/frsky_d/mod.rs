@@ -101,19 +101,19 @@ impl Frame {
     }
 
     /// Writes `7E`, the stuffed frame and `7E`; returns the bytes written (11…19).
-    pub fn encode(&self, out: &mut [u8]) -> Result<usize, Error> {
+    pub fn encode<'o>(&self, out: &'o mut [u8]) -> Result<&'o [u8], Error> {
         let bytes = self.bytes();
         let needed = 2 + stuffed_len(bytes);
         let Some(out) = out.get_mut(..needed) else {
             return Err(Error::BufferTooSmall { needed });
         };
-        let mut w = Writer::new(out);
+        let mut w = Writer::new(&mut *out);
         w.raw(DELIMITER);
         for byte in bytes {
             w.stuffed(byte);
         }
         w.raw(DELIMITER);
-        Ok(needed)
+        Ok(out)
     }
 }
 
@@ -215,11 +215,14 @@ fn parse(bytes: &[u8; FRAME_LEN]) -> Event {
         })),
         USER_FRAME => {
             let length = b1;
-            match bytes.get(3..3 + usize::from(length)) {
-                Some(data) if usize::from(length) <= USER_DATA_MAX => {
-                    Event::Frame(Frame::User(Vec::from_slice(data).unwrap_or_default()))
-                }
-                _ => Event::Rejected(Rejection::BadUserLength { length }),
+            // The user data's Vec holds at most USER_DATA_MAX: a longer claim is refused by
+            // the type, never cut to an empty frame.
+            match bytes
+                .get(3..3 + usize::from(length))
+                .and_then(|data| Vec::from_slice(data).ok())
+            {
+                Some(data) => Event::Frame(Frame::User(data)),
+                None => Event::Rejected(Rejection::BadUserLength { length }),
             }
         }
         frame_type => Event::Rejected(Rejection::UnknownType { frame_type }),

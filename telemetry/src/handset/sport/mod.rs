@@ -155,7 +155,7 @@ impl Frame {
     }
 
     /// Writes `7E physId` and the stuffed body + CRC; returns the bytes written (10…18).
-    pub fn encode(&self, out: &mut [u8]) -> Result<usize, Error> {
+    pub fn encode<'o>(&self, out: &'o mut [u8]) -> Result<&'o [u8], Error> {
         if matches!(self.physical_id, START | STUFF) {
             return Err(Error::ReservedPhysicalId);
         }
@@ -165,13 +165,13 @@ impl Frame {
         let Some(out) = out.get_mut(..needed) else {
             return Err(Error::BufferTooSmall { needed });
         };
-        let mut w = Writer::new(out);
+        let mut w = Writer::new(&mut *out);
         w.raw(START);
         w.raw(self.physical_id);
         for byte in body.into_iter().chain([crc]) {
             w.stuffed(byte);
         }
-        Ok(needed)
+        Ok(out)
     }
 }
 

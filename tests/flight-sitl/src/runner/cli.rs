@@ -239,6 +239,7 @@ impl Cli {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flight_core::settings::handles;
 
     fn parse(s: &str) -> Result<Cli, clap::Error> {
         Cli::try_parse_from(std::iter::once("flight-sitl").chain(s.split_whitespace()))
@@ -257,7 +258,7 @@ mod tests {
         assert_eq!(o.seed, 3);
         assert_eq!(o.altitude_m, Some(60.0));
         assert_eq!(o.duration_s, Some(90.0));
-        assert_eq!(o.settings.f32("failsafe.descent_mps"), 1.5);
+        assert_eq!(o.settings.get(handles::FAILSAFE_DESCENT_MPS), 1.5);
         let m = o.module_settings.unwrap();
         assert_eq!(m.input_timeout_ms, 750);
         assert_eq!(m.rate, RateMode::L50);
@@ -274,7 +275,10 @@ mod tests {
     fn choice(name: &str, text: &str) -> u32 {
         let mut s = flight_core::settings::Settings::default();
         s.set_text(name, text).unwrap();
-        s.u32(name)
+        match s.by_name(name) {
+            Some(flight_core::settings::Value::U32(i)) => i,
+            other => panic!("{name} is no choice: {other:?}"),
+        }
     }
 
     #[test]
@@ -282,17 +286,20 @@ mod tests {
         let o = parse("position-hold --wind 3").unwrap().options().unwrap();
         assert!(o.gps);
         assert_eq!(o.wind_mps, 3.0);
-        assert_eq!(o.settings.u32("ins.mode"), choice("ins.mode", "ins"));
+        assert_eq!(o.settings.get(handles::INS_MODE), choice("ins.mode", "ins"));
         assert_eq!(
-            o.settings.u32("mode.switch_high"),
+            o.settings.get(handles::MODE_SWITCH_HIGH),
             choice("mode.switch_high", "position-hold")
         );
         let a = parse("altitude-hold").unwrap().options().unwrap();
         assert!(!a.gps);
-        assert_eq!(a.settings.u32("ins.mode"), choice("ins.mode", "ins_indoor"));
+        assert_eq!(
+            a.settings.get(handles::INS_MODE),
+            choice("ins.mode", "ins_indoor")
+        );
         let c = parse("link-cut --gps").unwrap().options().unwrap();
         assert!(c.gps);
-        assert_eq!(c.settings.u32("ins.mode"), choice("ins.mode", "ins"));
+        assert_eq!(c.settings.get(handles::INS_MODE), choice("ins.mode", "ins"));
         // Plain link-cut: factory settings, no receiver.
         let plain = parse("link-cut").unwrap().options().unwrap();
         assert!(!plain.gps);
@@ -302,7 +309,10 @@ mod tests {
             .unwrap()
             .options()
             .unwrap();
-        assert_eq!(l.settings.u32("ins.mode"), choice("ins.mode", "ins_indoor"));
+        assert_eq!(
+            l.settings.get(handles::INS_MODE),
+            choice("ins.mode", "ins_indoor")
+        );
     }
 
     #[test]

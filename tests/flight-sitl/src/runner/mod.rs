@@ -12,7 +12,7 @@ pub mod pilot;
 pub mod plot;
 pub mod report;
 
-use flight_core::settings::Settings;
+use flight_core::settings::{Settings, handles};
 use quad_sim::quad::QuadParams;
 use telemetry::link::RateMode;
 
@@ -334,7 +334,7 @@ const DRAIN_FROM_MV: f32 = 4_000.0;
 const DRAIN_MV_PER_S: f32 = 50.0;
 
 fn idle(settings: &Settings) -> f32 {
-    settings.f32("output.idle")
+    settings.get(handles::OUTPUT_IDLE)
 }
 
 /// The runner's pilot flying a [`Plan`], with the plan's fault scripted alongside: while
@@ -361,7 +361,7 @@ impl PlanPilot {
         Self {
             plan,
             glance_until_s,
-            critical_mv: opts.settings.u32("battery.cell_critical_mv") as f32,
+            critical_mv: opts.settings.get(handles::BATTERY_CELL_CRITICAL_MV) as f32,
         }
     }
 }
@@ -449,7 +449,7 @@ pub fn reach_times(opts: &Options, altitudes_m: &[f64]) -> Result<Vec<(f64, f64)
     // probe allows half that.
     let duration_s = pilot::BOOST_END_S + 5.0 + top;
     let mut plan = PilotPlan::climb(&opts.quad, idle(&opts.settings));
-    plan.arm_switch = opts.settings.u32("arm.channel") != 0;
+    plan.arm_switch = opts.settings.get(handles::ARM_CHANNEL) != 0;
     let probe = Plan {
         kind: Kind::Hover,
         rate: opts.rate,
@@ -487,9 +487,9 @@ pub fn reach_times(opts: &Options, altitudes_m: &[f64]) -> Result<Vec<(f64, f64)
 /// (`reach`: time, climb rate; from [`reach_times`]).
 pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunError> {
     let mut pilot = PilotPlan::climb(&opts.quad, idle(&opts.settings));
-    pilot.arm_switch = opts.settings.u32("arm.channel") != 0;
+    pilot.arm_switch = opts.settings.get(handles::ARM_CHANNEL) != 0;
     let (t_reach, _) = reach;
-    let descent = f64::from(opts.settings.f32("failsafe.descent_mps")).max(0.1);
+    let descent = f64::from(opts.settings.get(handles::FAILSAFE_DESCENT_MPS)).max(0.1);
     let altitude = opts.altitude_m.unwrap_or(kind.default_altitude_m());
     let (fault_at_s, hold_from_s, duration_s) = match kind {
         Kind::LinkCut => {
@@ -522,7 +522,7 @@ pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunEr
         Kind::Hover => (None, Some(t_reach), t_reach + 10.0),
         Kind::LowBattery => {
             let at = opts.at_s.unwrap_or(t_reach + SETTLE_S);
-            let critical = opts.settings.u32("battery.cell_critical_mv") as f64;
+            let critical = opts.settings.get(handles::BATTERY_CELL_CRITICAL_MV) as f64;
             let drain = (f64::from(DRAIN_FROM_MV) - critical) / f64::from(DRAIN_MV_PER_S);
             (Some(at), Some(t_reach), at + drain + 3.0)
         }

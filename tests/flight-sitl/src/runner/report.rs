@@ -238,7 +238,10 @@ pub fn extract(sitl: &Sitl, plan: &Plan) -> Report {
     };
     let step = match (plan.kind, plan.fault_at_s, plan.fault_end_s) {
         (Kind::AttitudeStep, Some(at), Some(end)) => {
-            let max_deg = f64::from(sitl.settings.f32("attitude.max_deg"));
+            let max_deg = f64::from(
+                sitl.settings
+                    .get(flight_core::settings::handles::ATTITUDE_MAX_DEG),
+            );
             let target = f64::from(super::STEP_ROLL_STICK) * max_deg;
             Some(step_figures(s, at, end, target))
         }

@@ -89,6 +89,8 @@ impl ServeCli {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flight_core::settings::handles;
+    use telemetry::link::RateMode;
 
     fn parse(s: &str) -> Result<ServeCli, clap::Error> {
         ServeCli::try_parse_from(std::iter::once("serve").chain(s.split_whitespace()))
@@ -110,7 +112,7 @@ mod tests {
             (2.0, RateMode::L50, 3)
         );
         assert_eq!(o.world.packet_loss, 0.1);
-        assert_eq!(o.world.settings.f32("pid.roll.kp"), 0.004);
+        assert_eq!(o.world.settings.get(handles::PID_ROLL_KP), 0.004);
         for bad in [
             "nowhere",
             "--speed 0",

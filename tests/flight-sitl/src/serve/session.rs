@@ -10,7 +10,7 @@ use std::time::Duration;
 use telemetry::link::LinkKey;
 
 use flight_core::report::setting_report;
-use flight_core::settings::{PARAMS, Settings};
+use flight_core::settings::{PARAMS, Settings, handles};
 use quad_sim::quad::QuadParams;
 use telemetry::link::RateMode;
 use telemetry::messages::{Decoded, Message, MessageReader, SettingChange};
@@ -58,7 +58,7 @@ impl Default for WorldOptions {
 /// the airframe, the pilot): endless, flown by [`ServedPilot`], the module bound to the
 /// flight side at the rate as the runner pairs them.
 pub fn scenario(o: &WorldOptions) -> Scenario {
-    let trim = PilotPlan::climb(&o.quad, o.settings.f32("output.idle")).trim;
+    let trim = PilotPlan::climb(&o.quad, o.settings.get(handles::OUTPUT_IDLE)).trim;
     let mut s = Scenario::flown_by(
         o.settings.clone(),
         o.quad.clone(),
@@ -232,7 +232,7 @@ mod tests {
 
     fn send(session: &mut Session, message: Message) {
         let mut frame = [0u8; 48];
-        let n = encode_message(&message, &mut frame).unwrap();
+        let n = encode_message(&message, &mut frame).unwrap().len();
         session.from_page(&frame[..n]);
     }
 
@@ -286,7 +286,7 @@ mod tests {
         send(&mut session, Message::SignedChange(phone.sign(change)));
         session.run_until(s(4.5));
         assert_eq!(session.sent.applied, vec![change]);
-        assert!((session.world.flight_settings().f32("pid.roll.kp") - 0.004).abs() < 1e-7);
+        assert!((session.world.flight_settings().get(handles::PID_ROLL_KP) - 0.004).abs() < 1e-7);
         let echoed = page_messages(&mut session, &mut reader);
         assert!(echoed.contains(&Message::SettingChange(change)), "no echo");
     }

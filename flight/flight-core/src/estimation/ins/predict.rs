@@ -144,36 +144,30 @@ impl Filter {
         // P' = W·Φᵀ: P'[r][c] = Σₘ W[r][m]·Φ[c][m], only for r ≤ c, each value stored to both
         // triangles; Φ row c's coefficients stay in registers across the r loop.
         let p = &mut self.p;
-        for c in 0..STATES {
-            let rows = w.iter().enumerate().take(c + 1);
-            match c {
-                0..3 => {
-                    for (r, wr) in rows {
-                        let v = get_row(wr, c) + dt * get_row(wr, c + 3);
-                        covariance::set_symmetric(p, r, c, v);
-                    }
-                }
-                3..6 => {
-                    let a = phi.dv_dq.get(c - 3).copied().unwrap_or_default();
-                    let ab = phi.dv_dab.get(c - 3).copied().unwrap_or_default();
-                    for (r, wr) in rows {
-                        let v = get_row(wr, c) + dot(wr, 6, &a) + ab * get_row(wr, 13);
-                        covariance::set_symmetric(p, r, c, v);
-                    }
-                }
-                6..10 => {
-                    let q = phi.qq.get(c - 6).copied().unwrap_or_default();
-                    let b = phi.qb.get(c - 6).copied().unwrap_or_default();
-                    for (r, wr) in rows {
-                        let v = dot(wr, 6, &q) + dot(wr, 10, &b);
-                        covariance::set_symmetric(p, r, c, v);
-                    }
-                }
-                _ => {
-                    for (r, wr) in rows {
-                        covariance::set_symmetric(p, r, c, get_row(wr, c));
-                    }
-                }
+        // Φ's row blocks by column range; the velocity and quaternion blocks are zipped with
+        // their columns, so a Jacobian row can never be missing (it was a zero fallback).
+        let rows = |c: usize| w.iter().enumerate().take(c + 1);
+        for c in 0..3 {
+            for (r, wr) in rows(c) {
+                let v = get_row(wr, c) + dt * get_row(wr, c + 3);
+                covariance::set_symmetric(p, r, c, v);
+            }
+        }
+        for (c, (a, &ab)) in (3..6).zip(phi.dv_dq.iter().zip(&phi.dv_dab)) {
+            for (r, wr) in rows(c) {
+                let v = get_row(wr, c) + dot(wr, 6, a) + ab * get_row(wr, 13);
+                covariance::set_symmetric(p, r, c, v);
+            }
+        }
+        for (c, (q, b)) in (6..10).zip(phi.qq.iter().zip(&phi.qb)) {
+            for (r, wr) in rows(c) {
+                let v = dot(wr, 6, q) + dot(wr, 10, b);
+                covariance::set_symmetric(p, r, c, v);
+            }
+        }
+        for c in 10..STATES {
+            for (r, wr) in rows(c) {
+                covariance::set_symmetric(p, r, c, get_row(wr, c));
             }
         }
         self.add_process_noise(dt);

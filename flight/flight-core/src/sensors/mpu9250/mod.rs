@@ -175,8 +175,12 @@ impl<SPI: SpiDevice> Mpu9250<SPI> {
     /// [`Error::Bus`].
     pub async fn read(&mut self) -> Result<Sample, Error<SPI::Error>> {
         let mut buf = [0u8; 22];
-        let len = if self.config.magnetometer { 22 } else { 14 };
-        let bytes = buf.get_mut(..len).unwrap_or_default();
+        // Constant ranges of a fixed-size array: checked when compiling.
+        let bytes = if self.config.magnetometer {
+            &mut buf[..]
+        } else {
+            &mut buf[..14]
+        };
         self.read_registers(reg::ACCEL_XOUT_H, bytes).await?;
         Ok(self.decode(&buf))
     }

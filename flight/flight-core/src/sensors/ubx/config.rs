@@ -87,9 +87,10 @@ impl Default for Settings {
 /// One encoded frame.
 pub type Bytes = Vec<u8, MAX_FRAME>;
 
-fn frame_or_empty(class: u8, id: u8, payload: &[u8]) -> Bytes {
-    // Every payload here is a few dozen bytes, far below MAX_PAYLOAD.
-    frame::encode(class, id, payload).unwrap_or_default()
+/// Every payload here has a fixed-size type far below `MAX_PAYLOAD` (checked when
+/// compiling), so no message can come out empty.
+fn frame<P: frame::BoundedPayload>(class: u8, id: u8, payload: &P) -> Bytes {
+    frame::encode_bounded(class, id, payload)
 }
 
 /// The baud-rate message, to be sent at the receiver's current baud (M8 default 9600,
@@ -103,7 +104,7 @@ pub fn baud_message(generation: Generation, settings: &Settings) -> Bytes {
             let _ = p.extend_from_slice(&VALSET_HEADER);
             let _ = p.extend_from_slice(&KEY_UART1_BAUDRATE.to_le_bytes());
             let _ = p.extend_from_slice(&settings.baud.to_le_bytes());
-            frame_or_empty(CLASS_CFG, ID_VALSET, &p)
+            frame(CLASS_CFG, ID_VALSET, &p)
         }
     }
 }
@@ -127,7 +128,7 @@ fn m8_prt(baud: u32) -> Bytes {
             *dst = src;
         }
     }
-    frame_or_empty(CLASS_CFG, ID_PRT, &p)
+    frame(CLASS_CFG, ID_PRT, &p)
 }
 
 /// The acknowledged messages, in order, sent at the new baud.
@@ -141,17 +142,13 @@ pub fn acked_messages(generation: Generation, settings: &Settings) -> Vec<Bytes,
             let mut rate = [0u8; 6];
             let [m0, m1] = settings.meas_period_ms.to_le_bytes();
             rate.copy_from_slice(&[m0, m1, 1, 0, 1, 0]); // navRate 1, timeRef GPS
-            let _ = out.push(frame_or_empty(CLASS_CFG, ID_RATE, &rate));
-            let _ = out.push(frame_or_empty(
-                CLASS_CFG,
-                ID_MSG,
-                &[nav_pvt::CLASS, nav_pvt::ID, 1],
-            ));
+            let _ = out.push(frame(CLASS_CFG, ID_RATE, &rate));
+            let _ = out.push(frame(CLASS_CFG, ID_MSG, &[nav_pvt::CLASS, nav_pvt::ID, 1]));
             let mut nav5 = [0u8; 36];
             nav5.iter_mut()
                 .zip([0x01, 0x00, settings.dyn_model]) // mask: dyn only; dynModel
                 .for_each(|(d, s)| *d = s);
-            let _ = out.push(frame_or_empty(CLASS_CFG, ID_NAV5, &nav5));
+            let _ = out.push(frame(CLASS_CFG, ID_NAV5, &nav5));
         }
         Generation::M9M10 => {
             let mut p: Vec<u8, 64> = Vec::new();
@@ -171,7 +168,7 @@ pub fn acked_messages(generation: Generation, settings: &Settings) -> Vec<Bytes,
                 let _ = p.extend_from_slice(&key.to_le_bytes());
                 let _ = p.extend_from_slice(&value.to_le_bytes());
             }
-            let _ = out.push(frame_or_empty(CLASS_CFG, ID_VALSET, &p));
+            let _ = out.push(frame(CLASS_CFG, ID_VALSET, &p));
         }
     }
     out

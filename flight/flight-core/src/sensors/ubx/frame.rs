@@ -21,7 +21,7 @@ pub const MAX_FRAME: usize = MAX_PAYLOAD + OVERHEAD;
 
 /// The 8-bit Fletcher checksum (CK_A, CK_B) of `bytes`.
 #[must_use]
-pub fn checksum(bytes: &[u8]) -> [u8; 2] {
+pub fn checksum<'a>(bytes: impl IntoIterator<Item = &'a u8>) -> [u8; 2] {
     let (mut a, mut b) = (0u8, 0u8);
     for &x in bytes {
         a = a.wrapping_add(x);
@@ -54,18 +54,61 @@ pub enum EncodeError {
 /// # Errors
 /// [`EncodeError::TooLong`] when the payload exceeds [`MAX_PAYLOAD`].
 pub fn encode(class: u8, id: u8, payload: &[u8]) -> Result<Vec<u8, MAX_FRAME>, EncodeError> {
-    let len = u16::try_from(payload.len()).map_err(|_| EncodeError::TooLong)?;
     if payload.len() > MAX_PAYLOAD {
         return Err(EncodeError::TooLong);
     }
+    Ok(frame_checked_payload(class, id, payload))
+}
+
+/// A payload whose largest size is part of its type.
+pub trait BoundedPayload {
+    /// Most bytes a value of this type holds.
+    const MAX: usize;
+    /// The payload bytes.
+    fn bytes(&self) -> &[u8];
+}
+
+impl<const N: usize> BoundedPayload for [u8; N] {
+    const MAX: usize = N;
+    fn bytes(&self) -> &[u8] {
+        self
+    }
+}
+
+impl<const N: usize> BoundedPayload for Vec<u8, N> {
+    const MAX: usize = N;
+    fn bytes(&self) -> &[u8] {
+        self
+    }
+}
+
+/// [`encode`] for a payload type that always fits: its bound is checked against
+/// [`MAX_PAYLOAD`] when compiling, so there is no failure left to handle (the receiver
+/// configuration's fixed messages).
+#[must_use]
+pub fn encode_bounded<P: BoundedPayload>(class: u8, id: u8, payload: &P) -> Vec<u8, MAX_FRAME> {
+    const {
+        assert!(
+            P::MAX <= MAX_PAYLOAD,
+            "payload type larger than a UBX frame holds"
+        )
+    };
+    frame_checked_payload(class, id, payload.bytes())
+}
+
+/// The frame around `payload`, whose length the caller checked against [`MAX_PAYLOAD`].
+fn frame_checked_payload(class: u8, id: u8, payload: &[u8]) -> Vec<u8, MAX_FRAME> {
     let mut out: Vec<u8, MAX_FRAME> = Vec::new();
-    let [l0, l1] = len.to_le_bytes();
+    // MAX_PAYLOAD (128) fits in the u16 length field.
+    let [l0, l1] = (payload.len() as u16).to_le_bytes();
+    let header = [class, id, l0, l1];
+    let ck = checksum(header.iter().chain(payload));
     // Capacity is MAX_FRAME and the payload was checked, so these cannot fail.
-    let _ = out.extend_from_slice(&[SYNC_1, SYNC_2, class, id, l0, l1]);
+    let _ = out.extend_from_slice(&[SYNC_1, SYNC_2]);
+    let _ = out.extend_from_slice(&header);
     let _ = out.extend_from_slice(payload);
-    let ck = checksum(out.get(2..).unwrap_or(&[]));
     let _ = out.extend_from_slice(&ck);
-    Ok(out)
+    out
 }
 
 /// Where the parser is inside a frame.

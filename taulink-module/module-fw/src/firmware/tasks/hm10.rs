@@ -25,7 +25,9 @@ pub async fn hm10_task(mut hm10: Hm10) {
         let (mut received, mut count) = ([0u8; 32], 0);
         loop {
             check_in(Watched::Hm10);
-            match script.poll(now_ms(), received.get(..count).unwrap_or(&[])) {
+            // The driver reads at most `received.len()`; a count past it reads as nothing.
+            let reply = received.get(..count).unwrap_or(&[]);
+            match script.poll(now_ms(), reply) {
                 Action::SetBaud(next) if next != baud => break,
                 Action::SetBaud(_) => count = 0,
                 Action::Send(command) => {
@@ -59,7 +61,10 @@ pub async fn hm10_task(mut hm10: Hm10) {
                 Timer::after_millis(1).await;
                 continue;
             };
-            with_app(|app| app.on_phone_bytes(buffer.get(..count).unwrap_or(&[])));
+            // The driver reads at most `buffer.len()`, so the range always exists.
+            if let Some(bytes) = buffer.get(..count) {
+                with_app(|app| app.on_phone_bytes(bytes));
+            }
         }
     };
     let send = async {
@@ -67,7 +72,11 @@ pub async fn hm10_task(mut hm10: Hm10) {
         loop {
             check_in(Watched::Hm10);
             while let Some(count) = with_app(|app| app.next_phone_frame(&mut frame)).flatten() {
-                write(&mut tx, frame.get(..count).unwrap_or(&[])).await;
+                // The relay writes at most `frame.len()`; a count past it sends nothing.
+                let Some(bytes) = frame.get(..count) else {
+                    break;
+                };
+                write(&mut tx, bytes).await;
             }
             Timer::after_millis(20).await;
         }

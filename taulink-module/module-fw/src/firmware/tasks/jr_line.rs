@@ -39,14 +39,20 @@ pub async fn jr_line_task(mut line: JrLine) {
                 let Ok(Ok(count)) = received else {
                     continue;
                 };
+                // The driver reads at most `frame.len()` bytes, so the range always exists.
+                let Some(received) = frame.get(..count) else {
+                    continue;
+                };
                 let idle_us = now_us();
-                let length = with_app(|app| {
-                    app.on_handset_bytes(idle_us, frame.get(..count).unwrap_or(&[]));
+                let burst = with_app(|app| {
+                    app.on_handset_bytes(idle_us, received);
                     app.on_handset_idle(idle_us);
                     app.next_handset_bytes(now_us(), &mut reply)
                 });
-                line.send(baud, reply.get(..length.unwrap_or(0)).unwrap_or(&[]))
-                    .await;
+                // No app (it is being replaced): nothing to send this window.
+                if let Some(burst) = burst {
+                    line.send(baud, burst).await;
+                }
                 // A save or bind asked for from the radio's device tool.
                 while let Some(action) = with_app(|app| app.take_action()).flatten() {
                     carry_out(Some(action));
@@ -54,9 +60,9 @@ pub async fn jr_line_task(mut line: JrLine) {
             }
             LineMode::Push { baud } => {
                 line.invert.set_high();
-                let length = with_app(|app| app.next_handset_bytes(now_us(), &mut reply));
-                line.send(baud, reply.get(..length.unwrap_or(0)).unwrap_or(&[]))
-                    .await;
+                if let Some(burst) = with_app(|app| app.next_handset_bytes(now_us(), &mut reply)) {
+                    line.send(baud, burst).await;
+                }
                 Timer::after(PUSH_POLL).await;
             }
             LineMode::Off => idle(Watched::JrLine).await,
