@@ -150,7 +150,7 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
         },
     };
     let tau_s = s.f32("lqg.tau_s");
-    // The yaw entry is the yaw axis' authority (β of the drag torque, lqg.md §1); the
+    // The yaw entry is the yaw axis' authority (β of the drag torque, `control/LQG.md` §1); the
     // lag-free β2 term is left to identification.
     let models = [
         AxisModel::new(s.f32("lqg.ln_beta1.roll"), tau_s)?,
@@ -160,7 +160,7 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
     // The stored costs are frame-invariant (q1 angle, q2 rate, q4 torque; design.rs
     // `FrameInvariantCosts`): what autotune's `lqg_costs` produces, and they stay right when
     // identification changes β. Each axis gets them scaled by its own β1. One set serves
-    // both solves; the rate solve ignores the angle cost (lqg.md §3).
+    // both solves; the rate solve ignores the angle cost (`control/LQG.md` §3).
     let invariant = FrameInvariantCosts {
         q1_angle: f64::from(s.f32("lqg.q_attitude")),
         q2_rate: f64::from(s.f32("lqg.q_rate")),
