@@ -141,7 +141,7 @@ pub fn report(name: &str, r: &Run) {
     );
 }
 
-/// The static "assertState" of the reference (ekf.md §7), used with tighter numbers: pos and
+/// The static "assertState" of the reference (flight-core's `DERIVATION.md` §7), used with tighter numbers: pos and
 /// vel < `pos_vel`, roll/pitch < `tilt_deg`, wrap-safe yaw < `yaw_deg`, gyro bias within
 /// `bias` of the truth and z accel bias within `bias` of the truth.
 pub fn assert_state(
