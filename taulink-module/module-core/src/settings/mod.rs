@@ -152,7 +152,8 @@ pub struct Settings {
     pub output: OutputProtocol,
     /// RF band.
     pub band: Band,
-    /// RFM22B power step 0…7 (register 0x6D bits 2..0, radio.md).
+    /// RFM22B power step 0…7 (register 0x6D bits 2..0: +1, +2, +5, +8, +11, +14, +17, +20 dBm,
+    /// Si4432 datasheet, register 6Dh).
     pub tx_power: u8,
     /// Failsafe behaviour of the PPM output (receiver role).
     pub failsafe: FailsafeOutput,
