@@ -118,7 +118,8 @@ pub enum OutputProtocol {
     Off,
     /// CRSF telemetry frames (with CRSF input).
     Crsf,
-    /// FrSky S.Port frames pushed unpolled at 57 600 Bd (protocols.md §1.3).
+    /// FrSky S.Port frames pushed unpolled at 57 600 Bd (how a PPM module's telemetry reaches
+    /// EdgeTX ≥ 2.11 and OpenTX 2.2/2.3; see `handset`).
     SPort,
     /// FrSky D hub frames at 9600 Bd (older radios).
     FrskyHub,
