@@ -1,6 +1,7 @@
 //! modem.rs and carrier.rs against every captured register table: the Tau Labs data-rate
-//! table (`flight/PiOS/Common/pios_rfm22b.c`, transcribed here, it has no JSON), OpenLRSng's five modem profiles and
-//! bind profile (`modem_registers.json`) and `rfmSetCarrierFrequency` (`carrier_frequency.json`).
+//! table (`flight/PiOS/Common/pios_rfm22b.c`, transcribed here, it has no JSON), OpenLRSng's five
+//! modem profiles and bind profile (`modem_registers.json`) and `rfmSetCarrierFrequency`
+//! (`carrier_frequency.json`).
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)] // test code
 
 mod common;

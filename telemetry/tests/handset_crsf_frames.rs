@@ -1,7 +1,7 @@
 //! CRSF frames byte-exact against worked frames and against frames computed by hand here.
 //!
-//! The worked frames (tests `worked_*`, lettered A–K): the unprimed A–J were composed field by field from
-//! the CRSF spec (github.com/tbs-fpv/tbs-crsf-spec, `crsf.md`) and EdgeTX
+//! The worked frames (tests `worked_*`, lettered A–K): the unprimed A–J were composed field by
+//! field from the CRSF spec (github.com/tbs-fpv/tbs-crsf-spec, `crsf.md`) and EdgeTX
 //! `radio/src/telemetry/crossfire.cpp` / `crossfire.h` (address bytes, 0xEE-led RC frames,
 //! the 0xBA inner CRC of command frames), their CRCs recomputed independently; A′ (all centre),
 //! A″ (all 172), B′ (link statistics captured from a real link) and K (a parameter write) are

@@ -136,8 +136,9 @@ pub fn reset_transcript() -> Vec<T> {
 }
 
 /// Every register of `tau_config`, in the driver's order. The values are Tau Labs'
-/// `rfm22_init` sequence and its 57.6 kbps data-rate table column (`flight/PiOS/Common/pios_rfm22b.c`), so this also checks
-/// that the driver can program a Tau Labs-identical chip.
+/// `rfm22_init` sequence and its 57.6 kbps data-rate table column
+/// (`flight/PiOS/Common/pios_rfm22b.c`), so this also checks that the driver can program a Tau
+/// Labs-identical chip.
 pub fn configure_transcript() -> Vec<T> {
     [
         w(0x07, &[0x01]),

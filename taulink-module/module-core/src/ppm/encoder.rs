@@ -6,8 +6,9 @@
 //! tail slot with no pulse. The tail is what makes frame joins glitch-free: if the next
 //! frame starts late, the PWM repeats the last slot, and a slot without a pulse only
 //! stretches the sync gap (we keep ≥ 4.5 ms of it: decoders look for "longer than 2.5–4 ms" —
-//! openLRSng 2.5 ms, Betaflight 2.7 ms, dRonin 3 ms, ExpressLRS' PPM input 4 ms of idle line). New channel values are latched only when the firmware asks for
-//! the next frame, so a frame is never a mix of old and new values.
+//! openLRSng 2.5 ms, Betaflight 2.7 ms, dRonin 3 ms, ExpressLRS' PPM input 4 ms of idle line). New
+//! channel values are latched only when the firmware asks for the next frame, so a frame is never a
+//! mix of old and new values.
 
 use crate::channels::{Channels, MAX_CHANNELS, ticks_to_us};
 

@@ -211,7 +211,8 @@ impl Filter {
         [q0, q1, q2, q3]
     }
 
-    /// Clamps the biases to the configured limits (the C reference's `INSLimitBias`, DERIVATION.md §6–7, with wider limits).
+    /// Clamps the biases to the configured limits (the C reference's `INSLimitBias`, DERIVATION.md
+    /// §6–7, with wider limits).
     fn limit_biases(&mut self) {
         let g = self.config.gyro_bias_limit_radps;
         let a = self.config.accel_bias_limit_mps2;

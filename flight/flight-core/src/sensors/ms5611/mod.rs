@@ -1,6 +1,7 @@
 //! MS5611 barometer over I²C (address 0x77 with CSB low, MS5611-01BA03 datasheet;
-//! the Sparky2 ties CSB to GND and PS to VDD, Tau Labs `flight/targets/sparky2/` schematic): reset, PROM read
-//! with CRC-4 check, D1/D2 conversions at a chosen oversampling, compensation and altitude.
+//! the Sparky2 ties CSB to GND and PS to VDD, Tau Labs `flight/targets/sparky2/` schematic): reset,
+//! PROM read with CRC-4 check, D1/D2 conversions at a chosen oversampling, compensation and
+//! altitude.
 
 pub mod compensation;
 #[cfg(test)]

@@ -3,7 +3,8 @@
 //!
 //! * CRSF (EdgeTX): 400 kBd, not inverted, half duplex. The UARTE cannot share one wire, so
 //!   the driver is re-created per direction (the UARTE has no
-//!   half-duplex or inversion setting, and its pins can only change while it is disabled): the radio's frame is received
+//!   half-duplex or inversion setting, and its pins can only change while it is disabled): the
+//! radio's frame is received
 //!   with idle-line detection and goes to the CRSF decoder stamped with the idle time; then
 //!   the responder's reply (DEVICE_INFO, timing, LINK_STATISTICS, sensors) is sent in the
 //!   slot after the radio's frame (`JrLine::send` enables the buffer only for it).
