@@ -304,8 +304,8 @@ mod tests {
                 }
             }
         }
-        // `control/LQG.md`: the φ-form stays within 4.2e-7 in f32 (plus the f32 rounding of exp(ln
-        // β)).
+        // `control/LQG.md` §1: the φ-form stays within 4.2e-7 in f32 (plus the f32 rounding of
+        // exp(ln β)).
         assert!(worst32 < 2e-6, "worst f32 relative error {worst32}");
     }
 
