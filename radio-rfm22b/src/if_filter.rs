@@ -151,7 +151,9 @@ mod tests {
 
     #[test]
     fn picks_the_narrowest_filter_that_fits() {
-        // Carson bandwidths of the Tau Labs rates (radio.md decoded table).
+        // Carson bandwidths (bit rate + 2 × deviation) of the rates in the data-rate table of
+        // Tau Labs `flight/PiOS/Common/pios_rfm22b.c`; 75.2 kHz is the widest the 0x01 setting
+        // of the Si4432 datasheet's IF-filter table (register 1Ch) passes.
         assert_eq!(IfFilter::for_bandwidth_hz(69_600).unwrap().register(), 0x01);
         assert_eq!(IfFilter::for_bandwidth_hz(75_200).unwrap().register(), 0x01);
         assert_eq!(IfFilter::for_bandwidth_hz(75_201).unwrap().register(), 0x02);

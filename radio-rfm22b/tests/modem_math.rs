@@ -1,6 +1,7 @@
 //! modem.rs and carrier.rs against every captured register table: the Tau Labs data-rate
-//! table (radio.md §1a, transcribed here, it has no JSON), OpenLRSng's five modem profiles and
-//! bind profile (`modem_registers.json`) and `rfmSetCarrierFrequency` (`carrier_frequency.json`).
+//! table (`flight/PiOS/Common/pios_rfm22b.c`, transcribed here, it has no JSON), OpenLRSng's five
+//! modem profiles and bind profile (`modem_registers.json`) and `rfmSetCarrierFrequency`
+//! (`carrier_frequency.json`).
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)] // test code
 
 mod common;
@@ -8,7 +9,8 @@ mod common;
 use radio_rfm22b::{Carrier, IfFilter, ModemConfig, ModemSettings};
 
 /// Tau Labs `pios_rfm22b.c` rows: bit rate, deviation asked of the calculator, then 0x1C,
-/// 0x1D, 0x1E, 0x1F, 0x20–0x25, 0x2A, 0x58, 0x69, 0x6E–0x72 (radio.md §1a table).
+/// 0x1D, 0x1E, 0x1F, 0x20–0x25, 0x2A, 0x58, 0x69, 0x6E–0x72 (its data-rate table, one
+/// column per rate; registers as in the Si4432 datasheet / AN440).
 const TAU_LABS: [(u32, u32, [u8; 18]); 9] = [
     (
         9_600,
@@ -75,7 +77,8 @@ const TAU_LABS: [(u32, u32, [u8; 18]); 9] = [
         ],
     ),
     // 0x72: the table has 0x0F (9.4 kHz), a typo for the 150 kHz its comment states
-    // (radio.md "quirks" 2). We compute 150 kHz → 0xF0 and do not copy the typo.
+    // (0x72 counts 625 Hz steps: 0x0F = 9.4 kHz, 0xF0 = 150 kHz). We compute 150 kHz → 0xF0
+    // and do not copy the typo.
     (
         256_000,
         150_000,

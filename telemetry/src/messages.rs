@@ -129,8 +129,8 @@ pub enum Axis {
     Yaw,
 }
 
-/// Result of a system-identification run on one axis (lqg.md §1: ω' = β1·ν + β2·(u − ν),
-/// ν' = (u − ν)/τ, with ν the lagged actuator).
+/// Result of a system-identification run on one axis (`flight/flight-core/src/control/LQG.md`
+/// §1: ω' = β1·ν + β2·(u − ν), ν' = (u − ν)/τ, with ν the lagged actuator).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SysIdResult {

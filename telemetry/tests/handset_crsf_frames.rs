@@ -1,10 +1,18 @@
-//! CRSF frames byte-exact against the worked frames of protocols.md §4.5 and against frames
-//! computed by hand here (the field arithmetic is written next to each; CRCs were checked with
-//! an independent bitwise CRC-8/0xD5, which `bitwise_crc_matches_the_table` re-runs).
+//! CRSF frames byte-exact against worked frames and against frames computed by hand here.
+//!
+//! The worked frames (tests `worked_*`, lettered A–K): the unprimed A–J were composed field by
+//! field from the CRSF spec (github.com/tbs-fpv/tbs-crsf-spec, `crsf.md`) and EdgeTX
+//! `radio/src/telemetry/crossfire.cpp` / `crossfire.h` (address bytes, 0xEE-led RC frames,
+//! the 0xBA inner CRC of command frames), their CRCs recomputed independently; A′ (all centre),
+//! A″ (all 172), B′ (link statistics captured from a real link) and K (a parameter write) are
+//! frames published in other projects' tests, e.g. the CRSF parser tests of A. Morale's
+//! `elrs_joy` (A′, K). Hand-computed frames have their field arithmetic written next to them;
+//! CRCs were checked with an independent bitwise CRC-8/0xD5, which
+//! `bitwise_crc_matches_the_table` re-runs.
 
 // Test helpers outside #[test] fns are not covered by clippy.toml's test allowances.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
-// 1.5708 rad is the worked frame's value (protocols.md §4.5 E), not a stand-in for π/2.
+// 1.5708 rad is the worked frame's value (frame E), not a stand-in for π/2.
 #![allow(clippy::approx_constant)]
 
 use telemetry::handset::crsf::channels::{self, RcChannels};

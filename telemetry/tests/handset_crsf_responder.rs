@@ -2,7 +2,8 @@
 
 // Test helpers outside #[test] fns are not covered by clippy.toml's test allowances.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
-// 1.5708 rad is the worked frame's value (protocols.md §4.5 E), not a stand-in for π/2.
+// 1.5708 rad is the worked ATTITUDE frame's value (`handset_crsf_frames.rs`, frame E), not a
+// stand-in for π/2.
 #![allow(clippy::approx_constant)]
 
 use proptest::prelude::*;
@@ -361,7 +362,8 @@ fn timing_offset_by_hand() {
     );
 }
 
-/// EdgeTX as protocols.md §4.2 describes it: runs its mixer at the interval it is told and
+/// EdgeTX as `radio/src/telemetry/crossfire.cpp` handles the 0x3A/0x10 timing frame (the
+/// "OpenTX sync" sub-type of the CRSF spec): runs its mixer at the interval it is told and
 /// shifts its next frame by the offset (positive = it was early, so it waits longer).
 #[test]
 fn radio_locks_onto_the_air_schedule() {

@@ -1,5 +1,8 @@
 //! FrSky D hub frames byte-exact against openLRSng's `frskytx.h` output (frsky.json,
-//! transcribed below) and protocols.md §3.4 / worked frames; decoders and property tests.
+//! transcribed below) and worked frames composed from openLRSng `frskytx.h` and EdgeTX
+//! `radio/src/telemetry/frsky_d.cpp` (link frame `7E FE A1 A2 RSSI TXRSSI 00 00 00 00 7E`,
+//! user frame `7E FD n 00 b0…b5 7E`, hub records `5E id lo hi` with 0x5D escapes XOR 0x60,
+//! as EdgeTX `parseTelemHubByte` undoes them); decoders and property tests.
 
 // Test helpers outside #[test] fns are not covered by clippy.toml's test allowances.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
@@ -81,7 +84,7 @@ fn openlrsng_user_frames() {
 }
 
 #[test]
-fn worked_frames_from_protocols_md() {
+fn worked_frames() {
     check(
         Frame::Link(LinkFrame {
             a1: 0x8C,

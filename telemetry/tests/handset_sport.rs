@@ -1,5 +1,11 @@
-//! S.Port frames byte-exact against protocols.md's worked frames and openLRSng's output
+//! S.Port frames byte-exact against worked frames and openLRSng's output
 //! (`shared/vectors/openlrs/frsky.json`, transcribed below), the decoder, and property tests.
+//!
+//! The worked frames were composed from the frame layout and value IDs as EdgeTX parses them
+//! (`radio/src/telemetry/frsky_sport.cpp`, `frsky_defs.h`: `7E physId 10 idLo idHi v0..v3
+//! crc`, 0x7D/0x20 stuffing, the CRC an end-around-carry byte sum subtracted from 0xFF over the
+//! unstuffed body), with the checksums recomputed by hand; the capture line is a public
+//! Taranis S.Port log line.
 
 // Test helpers outside #[test] fns are not covered by clippy.toml's test allowances.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
@@ -46,7 +52,7 @@ fn check(frame: Frame, wire: &str) {
 }
 
 #[test]
-fn worked_frames_from_protocols_md() {
+fn worked_frames() {
     check(
         Frame::data(0x98, value_id::RSSI, 80),
         "7E 98 10 01 F1 50 00 00 00 AC",
@@ -84,7 +90,7 @@ fn worked_frames_from_protocols_md() {
         Frame::data(0x1B, value_id::VFAS, 0x7E),
         "7E 1B 10 10 02 7D 5E 00 00 00 5F",
     );
-    // The public Taranis capture line of protocols.md §6.
+    // A public Taranis S.Port capture line (its CRC checks with EdgeTX's algorithm).
     assert_eq!(
         frames(&decode(&hex("7E 83 10 20 07 EA 00 00 00 DD"))).len(),
         1

@@ -1,7 +1,8 @@
 //! The SPI-transcript toolkit shared by the transcript tests: register read/write
 //! transactions for embedded-hal-mock, nIRQ and delay doubles, and the init transcript of a
-//! Tau Labs-style configuration. Expected bytes are written out from the datasheet and
-//! radio.md, not computed with the driver's own functions.
+//! Tau Labs-style configuration. Expected bytes are written out from the Si4432 datasheet
+//! (and AN440, its register descriptions) and from Tau Labs' `pios_rfm22b.c`, not computed
+//! with the driver's own functions.
 #![allow(
     dead_code,
     clippy::unwrap_used,
@@ -135,8 +136,9 @@ pub fn reset_transcript() -> Vec<T> {
 }
 
 /// Every register of `tau_config`, in the driver's order. The values are Tau Labs'
-/// `rfm22_init` sequence and its 57.6 kbps table column (radio.md §1a), so this also checks
-/// that the driver can program a Tau Labs-identical chip.
+/// `rfm22_init` sequence and its 57.6 kbps data-rate table column
+/// (`flight/PiOS/Common/pios_rfm22b.c`), so this also checks that the driver can program a Tau
+/// Labs-identical chip.
 pub fn configure_transcript() -> Vec<T> {
     [
         w(0x07, &[0x01]),

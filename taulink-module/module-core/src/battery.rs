@@ -1,5 +1,5 @@
 //! The radio battery on JR pin 3, as the SAADC sees it through the 100 k / 22 k divider
-//! (hardware.md §5).
+//! (`hardware/taulink-module/README.md`).
 //!
 //! SAADC single-ended, internal 0.6 V reference, gain 1/6: full scale 3.6 V over 12 bits
 //! (nRF52840 PS §6.23.2, RESULT = V · GAIN/REFERENCE · 2^RESOLUTION). The divider scales by

@@ -3,7 +3,7 @@
 //!
 //! The µs ↔ ticks mapping is telemetry's ([`telemetry::handset::crsf::channels`], re-exported
 //! here): the one CRSF transmitters use (ExpressLRS `fmap(us, 988, 2012, 172, 1811)`,
-//! protocols.md §2.2), 988 µs ↔ 172 (−100 %), 1500 µs ↔ 992 (centre), 2012 µs ↔ 1811
+//! `src/lib/Handset/PPMHandset.cpp`), 988 µs ↔ 172 (−100 %), 1500 µs ↔ 992 (centre), 2012 µs ↔ 1811
 //! (+100 %). Beyond ±100 % it extrapolates linearly and clips to the 11-bit range 0…2047
 //! (≈ 881…2159 µs), so EdgeTX's extended limits (732…2268 µs) saturate instead of wrapping.
 

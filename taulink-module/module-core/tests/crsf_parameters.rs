@@ -32,7 +32,7 @@ use telemetry::link::master::{bind_master, run_master};
 use telemetry::link::{Band, LinkParams};
 use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
 
-// ---- The client's own CRSF codec (protocols.md §4.1) ----
+// ---- The client's own CRSF codec (CRSF spec, github.com/tbs-fpv/tbs-crsf-spec) ----
 
 fn crc8(poly: u8, bytes: &[u8]) -> u8 {
     let mut crc = 0u8;

@@ -41,7 +41,8 @@ fn spawn_taranis(world: &mut World<'_>) {
         let mut frame_start = 50_000u64;
         loop {
             let mut t = frame_start;
-            // A pulse starts every channel period and the rest period (protocols.md §2.1).
+            // A pulse starts every channel period and the rest period (EdgeTX
+            // `radio/src/pulses/ppm.cpp`).
             for width in WIDTHS_US.iter().map(|w| u64::from(*w)).chain([0]) {
                 time.sleep_until(t).await;
                 app.borrow_mut().on_ppm_edge(module_now(t) as u32);

@@ -34,9 +34,9 @@ pub struct Scenario {
 }
 
 impl Scenario {
-    /// The Tau Labs test set-up (ekf.md §7) at realistic rates: IMU 500 Hz, mag and baro
-    /// 50 Hz, GPS 10 Hz; noise 1e-3 on gyro, accel, GPS and baro, 10 on the magnetometer
-    /// (Be = [400, 0, 1600]); static, level, at the origin, facing north.
+    /// The Tau Labs test set-up (flight-core's `DERIVATION.md` §7) at realistic rates: IMU 500 Hz,
+    /// mag and baro 50 Hz, GPS 10 Hz; noise 1e-3 on gyro, accel, GPS and baro, 10 on the
+    /// magnetometer (Be = [400, 0, 1600]); static, level, at the origin, facing north.
     #[must_use]
     pub fn reference(noise: bool) -> Self {
         let n = if noise { 1e-3 } else { 0.0 };

@@ -26,11 +26,11 @@ pub struct Truth {
 pub enum Motion {
     /// Still, at the initial pose.
     Static,
-    /// ekf.md §7 `fly_circle`: 5 s straight and climbing-down, then a level 18 s circle of
+    /// `fly_circle` (DERIVATION.md §7): 5 s straight and climbing-down, then a level 18 s circle of
     /// ≈ 8.2 m radius, with a vertical stop between 20 and 25 s.
     Circle,
-    /// ekf.md §7 `rock_and_turn`: 5 °/s yaw, vertical pulses, then a pitch rocking at 0.1 Hz
-    /// from 30 s; the specific force stays body-fixed so the craft drifts away.
+    /// `rock_and_turn` (DERIVATION.md §7): 5 °/s yaw, vertical pulses, then a pitch rocking at 0.1
+    /// Hz from 30 s; the specific force stays body-fixed so the craft drifts away.
     RockAndTurn,
     /// Hovering in place while rotating about all three axes (rates up to ~30 °/s): the
     /// specific force is gravity only, so an accelerometer sees true "down" at all times.

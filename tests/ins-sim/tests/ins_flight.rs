@@ -1,5 +1,5 @@
-//! The reference's simulated flights (ekf.md §7 "Simulated flights"), noise on, seed 1:
-//! a climbing-down start then level circles, and rock-and-turn (never run by the
+//! The reference's simulated flights (flight-core's `DERIVATION.md` §7, simulated flights), noise
+//! on, seed 1: a climbing-down start then level circles, and rock-and-turn (never run by the
 //! reference because its name lacked `test_`).
 
 #![allow(

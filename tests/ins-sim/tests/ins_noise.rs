@@ -1,7 +1,7 @@
 //! The estimator told the sensors' true noise figures (`Config::with_sensor_noise` and
 //! `AidingConfig::for_known_noise`, what `replay --noise/--tuning` does) against the Tau
-//! Labs C INS on the same scenarios (ekf.md §9 final errors), and its convergence from a
-//! bad initial attitude kept. Prints the README table rows (`--nocapture`).
+//! Labs C INS on the same scenarios (flight-core's `DERIVATION.md` §8 final errors), and its
+//! convergence from a bad initial attitude kept. Prints the README table rows (`--nocapture`).
 
 #![allow(
     clippy::unwrap_used,
@@ -85,8 +85,8 @@ fn fly(mut ins: Ins, s: Scenario, seconds: f64) -> Outcome {
     }
 }
 
-/// ekf.md §9 final errors of the C INS: attitude (°), heading (°), position (m),
-/// velocity (m/s).
+/// flight-core's `DERIVATION.md` §8: final errors of the C INS: attitude (°), heading (°), position
+/// (m), velocity (m/s).
 struct CRef {
     att: f64,
     heading: f64,
@@ -184,8 +184,8 @@ fn rock_and_turn_no_worse_than_c() {
 
 #[test]
 fn bad_initial_attitude_still_converges_fast() {
-    // GIVEN the circle started with a 90° roll error (ekf.md: the C INS needs 48.6 s to get
-    // below 1°; the default tuning 3.3 s)
+    // GIVEN the circle started with a 90° roll error (DERIVATION.md §8: the C INS needs 48.6 s to
+    // get below 1°; the default tuning 3.3 s)
     let s = scenario(Motion::Circle);
     let bad = |mut ins: Ins| {
         let q = std::f32::consts::FRAC_1_SQRT_2;

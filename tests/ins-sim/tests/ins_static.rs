@@ -1,6 +1,6 @@
-//! The reference's static scenarios (ekf.md §7 "Static"), re-run on our sensor simulator
-//! at IMU 500 Hz / mag, baro 50 Hz / GPS 10 Hz. Thresholds are the reference's assertState
-//! (pos/vel < 0.05, roll/pitch < 0.5°, yaw < 1°, biases < 0.005) or tighter.
+//! The reference's static scenarios (flight-core's `DERIVATION.md` §7, static), re-run on our
+//! sensor simulator at IMU 500 Hz / mag, baro 50 Hz / GPS 10 Hz. Thresholds are the reference's
+//! assertState (pos/vel < 0.05, roll/pitch < 0.5°, yaw < 1°, biases < 0.005) or tighter.
 
 #![allow(
     clippy::unwrap_used,

@@ -1,5 +1,5 @@
-//! The reference's step scenarios (ekf.md §7 "Step"): a bias appears after 30 s of a
-//! converged static run; 90 s in total. Convergence targets: gyro bias within 10 % of a
+//! The reference's step scenarios (flight-core's `DERIVATION.md` §7, step): a bias appears after 30
+//! s of a converged static run; 90 s in total. Convergence targets: gyro bias within 10 % of a
 //! 10 °/s offset and z accel bias within 10 % of 1 m/s², each in ≤ 30 s after the step.
 
 #![allow(

@@ -62,9 +62,11 @@ pub struct RadioConfig {
     pub irq_latency_ns: u64,
 }
 
-/// The flight board's RFM22B bus: SPI3 at APB1 42 MHz ÷ 8 (hardware.md, flight-fw board.rs).
+/// The flight board's RFM22B bus: SPI3 at APB1 42 MHz ÷ 8 (`hardware/brushedsparky/README.md`,
+/// flight-fw board.rs).
 pub const SPI_CLOCK_F405_HZ: u32 = 5_250_000;
-/// The module's RFM22B bus: nRF52840 SPIM at 8 MHz (hardware.md, module-fw board.rs).
+/// The module's RFM22B bus: nRF52840 SPIM at 8 MHz (`hardware/taulink-module/README.md`, module-fw
+/// board.rs).
 pub const SPI_CLOCK_NRF52840_HZ: u32 = 8_000_000;
 /// Default per-transaction SPI overhead: nSEL set-up/hold, DMA start and the async
 /// driver's completion wake-up, a few µs on a Cortex-M4 at 168 MHz or an nRF52840.

@@ -1,5 +1,6 @@
 //! LQG gain design for one axis, in f64 before take-off: the steady-state Kalman gain of the
-//! rate/torque/bias estimator (RTKF) and the LQR gains for rate and attitude (lqg.md §2–3).
+//! rate/torque/bias estimator (RTKF) and the LQR gains for rate and attitude (`control/LQG.md`
+//! §2–3).
 //!
 //! Costs are per sample with r = 1. The torque cost can be given frame-invariantly as
 //! q3 = β1·q4 (the blog's "frame invariant" costs): a frame with twice the authority needs
@@ -111,7 +112,8 @@ pub struct KfNoise {
 }
 
 impl Default for KfNoise {
-    /// Tau Labs' LQRSettings (lqg.md §2 table): Q = (1, 1e-5, 1e-7), R = 1000 for raw gyro.
+    /// Tau Labs' LQRSettings (`control/LQG.md` §2 table): Q = (1, 1e-5, 1e-7), R = 1000 for raw
+    /// gyro.
     fn default() -> Self {
         Self {
             q_rate: 1.0,

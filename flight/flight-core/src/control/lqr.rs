@@ -1,5 +1,5 @@
 //! The LQG controller of one axis: RTKF estimate + LQR feedback with setpoint offsets
-//! (lqg.md §3, the blog's "Setpoints" section).
+//! (`control/LQG.md` §3, the blog's "Setpoints" section).
 //!
 //! Rate mode: u = k_ω·(ω_sp − ω̂) − k_ν·ν̂ + b̂. Attitude mode: u = k_θ·θ_err − k_ω·ω̂ − k_ν·ν̂ + b̂
 //! (θ_err = θ_sp − θ from the attitude estimator, yaw already wrapped to ±180°). The ν

@@ -1,8 +1,8 @@
 //! PID rate and attitude controllers: the default controller and the LQG's baseline.
 //!
 //! Parallel form C = kp + ki/s + kd·s/(τ_d·s + 1) (the form the analytic autotune of
-//! lqg.md §6 designs for), discretised with backward Euler so the derivative filter is stable
-//! for any τ_d. Setpoint weighting: P acts on b·sp − y and D on c·sp − y (c = 0 avoids the
+//! `control/LQG.md` §6 designs for), discretised with backward Euler so the derivative filter is
+//! stable for any τ_d. Setpoint weighting: P acts on b·sp − y and D on c·sp − y (c = 0 avoids the
 //! derivative kick on stick steps). Anti-windup: the integrator freezes while the output is
 //! saturated in the direction the error would push it, and is clamped.
 

@@ -1,4 +1,4 @@
-//! The rate/torque/bias Kalman filter ("RTKF", lqg.md §2), steady-state gain, f32.
+//! The rate/torque/bias Kalman filter ("RTKF", `control/LQG.md` §2), steady-state gain, f32.
 //!
 //! Per loop: predict with the output applied during the last period, x⁻ = A·x̂ + B·u_{k−1},
 //! then correct with the new gyro sample, x̂ = x⁻ + L·(y_k − ω⁻) (the "current estimator",

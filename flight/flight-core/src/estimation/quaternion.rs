@@ -9,7 +9,8 @@ pub type Quaternion = [f32; 4];
 /// The identity attitude (level, facing north).
 pub const IDENTITY: Quaternion = [1.0, 0.0, 0.0, 0.0];
 
-/// R_be(q): rows are the NED axes expressed in body coordinates (ekf.md §1).
+/// R_be(q): rows are the NED axes expressed in body coordinates (`estimation/ins/DERIVATION.md`
+/// §0).
 #[must_use]
 pub fn ned_to_body(q: Quaternion) -> [[f32; 3]; 3] {
     let [q0, q1, q2, q3] = q;

@@ -1,4 +1,4 @@
-//! The system-identification flight mode: the shake (lqg.md §5) on top of self-levelling
+//! The system-identification flight mode: the shake (`control/LQG.md` §5) on top of self-levelling
 //! attitude control, and the 13-state EKF that identifies β and τ from the gyro and the
 //! output actually sent. The loop starts it on entering the mode in the air and keeps the
 //! result when the mode is left (`FlightLoop::take_identification`).

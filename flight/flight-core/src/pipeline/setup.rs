@@ -141,7 +141,7 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
         },
     };
     let tau_s = s.get(handles::LQG_TAU_S);
-    // The yaw entry is the yaw axis' authority (β of the drag torque, lqg.md §1); the
+    // The yaw entry is the yaw axis' authority (β of the drag torque, `control/LQG.md` §1); the
     // lag-free β2 term is left to identification.
     let [roll, pitch, yaw] = handles::LQG_LN_BETA1;
     let models = [
@@ -152,7 +152,7 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
     // The stored costs are frame-invariant (q1 angle, q2 rate, q4 torque; design.rs
     // `FrameInvariantCosts`): what autotune's `lqg_costs` produces, and they stay right when
     // identification changes β. Each axis gets them scaled by its own β1. One set serves
-    // both solves; the rate solve ignores the angle cost (lqg.md §3).
+    // both solves; the rate solve ignores the angle cost (`control/LQG.md` §3).
     let invariant = FrameInvariantCosts {
         q1_angle: f64::from(s.get(handles::LQG_Q_ATTITUDE)),
         q2_rate: f64::from(s.get(handles::LQG_Q_RATE)),

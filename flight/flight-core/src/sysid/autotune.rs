@@ -1,4 +1,4 @@
-//! Autotune: analytic PID gains from the identified (β, τ) (lqg.md §6, the Tau Labs GCS
+//! Autotune: analytic PID gains from the identified (β, τ) (`control/LQG.md` §6, the Tau Labs GCS
 //! derivation) and the LQG models for the identified frame.
 //!
 //! The loop β/(s(τs + 1)) with C = kp + ki/s + kd·s/(τ_d·s + 1) has a 4th-order
@@ -161,7 +161,7 @@ mod tests {
 
     #[test]
     fn matches_reference_example() {
-        // lqg.md §6: ln β 10, τ 30 ms → ωn 49.3, τ_d 5.75 ms, kp 2.22e-3, ki 8.81e-3,
+        // `control/LQG.md` §6: ln β 10, τ 30 ms → ωn 49.3, τ_d 5.75 ms, kp 2.22e-3, ki 8.81e-3,
         // kd 4.84e-5, outer kp 7.30.
         let t = analytic_pid([10.0, 10.0, 10.0], 0.03, &AutotuneSettings::default()).unwrap();
         assert!((t.natural_frequency_rad_s - 49.3).abs() < 0.05, "{t:?}");

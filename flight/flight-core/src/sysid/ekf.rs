@@ -1,5 +1,5 @@
-//! The identification EKF (Korken's / Tau Labs' autotune filter, lqg.md §5), with the exact
-//! ZOH model of the LQG branch and causal pairing.
+//! The identification EKF (Korken's / Tau Labs' autotune filter, `control/LQG.md` §5), with the
+//! exact ZOH model of the LQG branch and causal pairing.
 //!
 //! State (13): per axis roll, pitch, yaw: ω (deg/s), ν, input bias b, ln β; then one ln τ
 //! shared by all axes. Prediction uses the cancellation-free ZOH of `model::discrete`:

@@ -1,4 +1,4 @@
-//! The identification excitation ("shake", lqg.md §5): square offsets added to the
+//! The identification excitation ("shake", `control/LQG.md` §5): square offsets added to the
 //! stabilising controller's output in an 8-phase cycle yaw+, roll+, yaw−, roll−, yaw+,
 //! pitch+, yaw−, pitch−. Roll and pitch each get one + and one − pulse per cycle and yaw four
 //! alternating ones, so every axis has zero mean excitation.

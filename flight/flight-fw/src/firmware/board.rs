@@ -88,9 +88,10 @@ pub const IMU_SPI_FAST_HZ: u32 = 10_500_000;
 pub const BARO_ADDRESS: u8 = 0x77;
 
 /// MPU9250 axes → body FRD. The chip's z points up out of the board (it reads +1 g lying
-/// flat) and the board mounts it "top, 180°" (hardware.md): chip x points aft, chip y to the
-/// right, so body = (−x, y, −z). A proper rotation: accelerometer, gyro and magnetometer
-/// vectors all map the same way.
+/// flat) and the board mounts it "top, 180°" (Tau Labs
+/// `flight/targets/sparky2/fw/pios_board.c`, `hardware/brushedsparky/README.md`): chip x points
+/// aft, chip y to the right, so body = (−x, y, −z). A proper rotation: accelerometer, gyro and
+/// magnetometer vectors all map the same way.
 pub fn imu_to_body(v: [f32; 3]) -> [f32; 3] {
     let [x, y, z] = v;
     [-x, y, -z]
@@ -212,9 +213,9 @@ pub struct Board {
     pub rng: Rng<'static, peripherals::RNG>,
 }
 
-/// The u-blox receiver on the Sparky2's Main port: USART1, TX PA9, RX PA10 (hardware.md
-/// §1), interrupt-driven with a 256-byte receive buffer (2.5 NAV-PVTs; the task drains it
-/// every few ms) and 64 bytes for the configuration frames.
+/// The u-blox receiver on the Sparky2's Main port: USART1, TX PA9, RX PA10
+/// (`hardware/brushedsparky/README.md`), interrupt-driven with a 256-byte receive buffer (2.5
+/// NAV-PVTs; the task drains it every few ms) and 64 bytes for the configuration frames.
 #[cfg(feature = "sparky2")]
 pub struct Gps {
     /// USART1, 8N1, at the first of `GPS_BOOT_BAUDS` until the task reconfigures it.

@@ -2,7 +2,9 @@
 //! reply responder (CRSF input), the S.Port push scheduler and the FrSky D hub sender (PPM
 //! input), chosen from the settings. Implements [`HandsetOutput`] for the module core.
 //!
-//! Line settings the firmware applies (protocols.md §1.3, §4): CRSF 400 kBd, not inverted,
+//! Line settings the firmware applies (CRSF spec and EdgeTX `radio/src/telemetry/crossfire.h`
+//! for CRSF; EdgeTX `radio/src/pulses/ppm.cpp` and `telemetry/telemetry.cpp` for S.Port and
+//! FrSky D): CRSF 400 kBd, not inverted,
 //! half duplex; S.Port 57 600 Bd inverted, push only; FrSky D 9600 Bd inverted, push only.
 
 pub mod state;

@@ -1,4 +1,5 @@
-//! Boot-time configuration of the HM-10 over its UART (protocols.md §5), sans-IO.
+//! Boot-time configuration of the HM-10 over its UART (JNHuaMao HM-10 datasheet, HMSoft
+//! firmware AT command set), sans-IO.
 //!
 //! HMSoft takes AT commands without CR/LF and answers `OK`, `OK+Set:x`; it ships at 9600 Bd
 //! and keeps `AT+BAUD4` (115 200 Bd) across power cycles. So the script first listens at

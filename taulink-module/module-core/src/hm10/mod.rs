@@ -1,4 +1,5 @@
-//! The HM-10 BLE bridge to a phone ground station (protocols.md §5): boot-time AT
+//! The HM-10 BLE bridge to a phone ground station (JNHuaMao HM-10, HMSoft firmware;
+//! GATT service 0xFFE0, characteristic 0xFFE1, 20-byte notifications): boot-time AT
 //! configuration, and the relay of telemetry records both ways over its transparent UART.
 //!
 //! ## Framing on the phone side

@@ -1,8 +1,9 @@
 //! PPM input decoder fed with hardware edge timestamps (µs, free-running wrapping u32).
 //!
-//! The firmware captures one edge polarity only (TIMER1 CAPTURE through PPI, toolchain.md §2),
+//! The firmware captures one edge polarity only (TIMER1 CAPTURE through PPI),
 //! so each interval between edges is one channel *period* as EdgeTX makes it (pulse plus
-//! gap, protocols.md §2.1); the polarity of the line does not matter. An interval longer
+//! gap: EdgeTX `radio/src/pulses/ppm.cpp` sets each period to the channel value and pulses
+//! for its first 300 µs); the polarity of the line does not matter. An interval longer
 //! than `sync_min_us` ends a frame. Every period from `glitch_below_us` up to the sync gap is a
 //! channel: one outside `channel_min_us..=channel_max_us` (700…2300 µs, wider than EdgeTX's
 //! ±150 % extended limits, 732…2268 µs) is clamped to that range and counted, never dropped, so
@@ -50,7 +51,8 @@ impl Default for DecoderConfig {
         Self {
             sync_min_us: 2500,
             glitch_below_us: 500,
-            // protocols.md §2.2: 700…2300 µs covers EdgeTX's extended limits (732…2268 µs).
+            // 700…2300 µs covers EdgeTX's extended limits (±150 %: 732…2268 µs); sync above
+            // 2.5 ms as openLRSng's TX (`TX.h`), where Betaflight waits for 2.7 ms, dRonin 3 ms.
             channel_min_us: 700,
             channel_max_us: 2300,
             min_channels: 4,

@@ -5,9 +5,10 @@
 //! channel period is over), one sync slot (its pulse ends the last channel) and an idle
 //! tail slot with no pulse. The tail is what makes frame joins glitch-free: if the next
 //! frame starts late, the PWM repeats the last slot, and a slot without a pulse only
-//! stretches the sync gap (protocols.md §2.3 wants ≥ 4.5 ms of it; decoders only look for
-//! "longer than 2.5–4 ms"). New channel values are latched only when the firmware asks for
-//! the next frame, so a frame is never a mix of old and new values.
+//! stretches the sync gap (we keep ≥ 4.5 ms of it: decoders look for "longer than 2.5–4 ms" —
+//! openLRSng 2.5 ms, Betaflight 2.7 ms, dRonin 3 ms, ExpressLRS' PPM input 4 ms of idle line). New
+//! channel values are latched only when the firmware asks for the next frame, so a frame is never a
+//! mix of old and new values.
 
 use crate::channels::{ChannelFrame, MAX_CHANNELS, ticks_to_us};
 
@@ -21,7 +22,8 @@ pub enum FailsafeOutput {
     StopPulses,
 }
 
-/// Output timing. The defaults are protocols.md §2.3: 8 channels, 22.5 ms, 300 µs pulses.
+/// Output timing. The defaults are EdgeTX's PPM defaults (`radio/src/pulses/ppm.cpp`): 8
+/// channels, 22.5 ms, 300 µs pulses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct EncoderConfig {

@@ -1,4 +1,5 @@
-//! Test waveforms: PPM edge timestamps as EdgeTX produces them (protocols.md §2.1). Each
+//! Test waveforms: PPM edge timestamps as EdgeTX produces them (`radio/src/pulses/ppm.cpp`:
+//! every channel period starts with a pulse, and a 3 ms rest period follows the last). Each
 //! frame is N + 1 pulses — one starting each channel period and one starting the rest
 //! period — and frames start every `frame_us`.
 

@@ -118,7 +118,8 @@ pub enum OutputProtocol {
     Off,
     /// CRSF telemetry frames (with CRSF input).
     Crsf,
-    /// FrSky S.Port frames pushed unpolled at 57 600 Bd (protocols.md §1.3).
+    /// FrSky S.Port frames pushed unpolled at 57 600 Bd (how a PPM module's telemetry reaches
+    /// EdgeTX ≥ 2.11 and OpenTX 2.2/2.3; see `handset`).
     SPort,
     /// FrSky D hub frames at 9600 Bd (older radios).
     FrskyHub,
@@ -142,7 +143,8 @@ pub struct Settings {
     pub output: OutputProtocol,
     /// RF band.
     pub band: Band,
-    /// RFM22B power step 0…7 (register 0x6D bits 2..0, radio.md).
+    /// RFM22B power step 0…7 (register 0x6D bits 2..0: +1, +2, +5, +8, +11, +14, +17, +20 dBm,
+    /// Si4432 datasheet, register 6Dh).
     pub tx_power: u8,
     /// Failsafe behaviour of the PPM output (receiver role).
     pub failsafe: FailsafeOutput,

@@ -1,5 +1,5 @@
 //! The only file that names pins and interrupts. Mirrors `hardware/taulink-module/README.md`
-//! (the nice!nano-class pin map proposed in hardware.md §5); change both together.
+//! (the nice!nano-class pin map it describes); change both together.
 
 use embassy_nrf::gpio::{Input, Level, Output, OutputDrive, Pull};
 use embassy_nrf::peripherals::{

@@ -141,8 +141,9 @@ pub fn report(name: &str, r: &Run) {
     );
 }
 
-/// The static "assertState" of the reference (ekf.md §7), used with tighter numbers: pos and
-/// vel < `pos_vel`, roll/pitch < `tilt_deg`, wrap-safe yaw < `yaw_deg`, gyro bias within
+/// The static "assertState" of the reference (flight-core's `DERIVATION.md` §7), used with tighter
+/// numbers: pos and vel < `pos_vel`, roll/pitch < `tilt_deg`, wrap-safe yaw < `yaw_deg`, gyro bias
+/// within
 /// `bias` of the truth and z accel bias within `bias` of the truth.
 pub fn assert_state(
     r: &Run,

@@ -39,8 +39,9 @@ pub fn status(spi: &mut impl SpiDevice) -> (u8, u8) {
     (s[0], s[1])
 }
 
-/// Tau Labs 57 600 bit/s profile (radio.md §1a table), 430 MHz, GFSK from the FIFO,
-/// 6-byte preamble, sync 2D D4 4B 59, 4-byte header, variable length, whitening.
+/// Tau Labs 57 600 bit/s profile (the data-rate table of `flight/PiOS/Common/pios_rfm22b.c`), 430
+/// MHz, GFSK from the FIFO, 6-byte preamble, sync 2D D4 4B 59, 4-byte header, variable length,
+/// whitening.
 pub fn configure_57600(spi: &mut impl SpiDevice, crc: bool) {
     status(spi);
     write(spi, 0x05, &[0x00, 0x00]);

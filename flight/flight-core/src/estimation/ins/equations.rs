@@ -96,7 +96,7 @@ pub fn process_jacobian(
 }
 
 /// The magnetometer reading rotated into the level heading frame with the filter's own roll
-/// and pitch (R_aᵀ·m, ekf.md §3). Its horizontal part depends on yaw alone.
+/// and pitch (R_aᵀ·m, DERIVATION.md §4). Its horizontal part depends on yaw alone.
 #[must_use]
 pub fn level_frame_field(q: Quaternion, mag_body: [f32; 3]) -> [f32; 3] {
     let [[_, _, r13], [_, _, r23], [_, _, r33]] = ned_to_body(q);

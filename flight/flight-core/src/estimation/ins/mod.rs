@@ -42,7 +42,7 @@ pub mod index {
 }
 
 /// Tuning of the filter. Process noises are power spectral densities, so the tuning does not
-/// depend on the predict rate (the C reference scaled its Q by dT², ekf.md §2).
+/// depend on the predict rate (the C reference scaled its Q by dT², DERIVATION.md §7).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config {
@@ -211,7 +211,8 @@ impl Filter {
         [q0, q1, q2, q3]
     }
 
-    /// Clamps the biases to the configured limits (ekf.md §3 `INSLimitBias`, wider limits).
+    /// Clamps the biases to the configured limits (the C reference's `INSLimitBias`, DERIVATION.md
+    /// §6–7, with wider limits).
     fn limit_biases(&mut self) {
         let g = self.config.gyro_bias_limit_radps;
         let a = self.config.accel_bias_limit_mps2;

@@ -89,7 +89,7 @@ impl Filter {
         if !(dt_s > 0.0 && dt_s <= MAX_DT_S) {
             return Err(Error::InvalidTimeStep);
         }
-        // F is linearised at the pre-step state, as in the C reference (ekf.md §2).
+        // F is linearised at the pre-step state, as in the C reference (DERIVATION.md §2, §7).
         let jacobian = process_jacobian(&self.x, gyro_radps, accel_mps2);
         self.predict_state(gyro_radps, accel_mps2, dt_s);
         self.predict_covariance(&jacobian, dt_s);

@@ -127,7 +127,9 @@ pub struct Config {
 }
 
 impl Default for Config {
-    /// The flight default (hardware.md): 500 Hz, 184 Hz DLPF, ±2000 °/s, ±8 g, magnetometer on.
+    /// The flight default (Tau Labs' Sparky2 defaults, `flight/targets/sparky2/` and
+    /// `shared/uavobjectdefinition/hwsparky2.xml`): 500 Hz, 184 Hz DLPF, ±2000 °/s, ±8 g,
+    /// magnetometer on.
     fn default() -> Self {
         Self {
             gyro_range: GyroRange::Dps2000,

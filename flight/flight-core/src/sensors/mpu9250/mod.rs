@@ -1,5 +1,6 @@
 //! MPU-9250 gyro/accelerometer over SPI (mode 3), with the AK8963 magnetometer read through
-//! the MPU's own I²C master (its AUX pins are not wired on the Sparky2, hardware.md). One
+//! the MPU's own I²C master (its AUX pins are not wired on the Sparky2:
+//! Sparky 2.0 schematic, Tau Labs `flight/targets/sparky2/hw/`). One
 //! 22-byte burst read returns accel, temperature, gyro and the magnetometer bytes.
 
 mod ak8963;

@@ -1,5 +1,7 @@
-//! MS5611 barometer over I²C (address 0x77 with CSB low, hardware.md): reset, PROM read
-//! with CRC-4 check, D1/D2 conversions at a chosen oversampling, compensation and altitude.
+//! MS5611 barometer over I²C (address 0x77 with CSB low, MS5611-01BA03 datasheet;
+//! the Sparky2 ties CSB to GND and PS to VDD, Tau Labs `flight/targets/sparky2/` schematic): reset,
+//! PROM read with CRC-4 check, D1/D2 conversions at a chosen oversampling, compensation and
+//! altitude.
 
 pub mod compensation;
 #[cfg(test)]
@@ -29,7 +31,8 @@ pub enum Oversampling {
     Osr256 = 0,
     /// OSR 512.
     Osr512 = 1,
-    /// OSR 1024 (the flight default, hardware.md).
+    /// OSR 1024 (the flight default, as in Tau Labs' Sparky2 board files,
+    /// `flight/targets/sparky2/`).
     Osr1024 = 2,
     /// OSR 2048.
     Osr2048 = 3,

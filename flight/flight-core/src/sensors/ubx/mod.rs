@@ -4,7 +4,8 @@
 //! follow-up). Sans-IO: the firmware moves UART bytes in and out; the estimator side of a
 //! fix is [`crate::estimation::ins::aiding::gps::GpsAiding`]. On the Sparky2 the receiver
 //! plugs into the Main port (USART1, PA9 TX / PA10 RX) or the Flexi port (USART3, PB10 /
-//! PB11), hardware.md §1; "UART1" in [`config`] is the *receiver's* port.
+//! PB11), as `hardware/brushedsparky/README.md` lists; "UART1" in [`config`] is the *receiver's*
+//! port.
 //!
 //! Cost (m4count, `tests/m4-bench` `gps`): one 100-byte NAV-PVT through [`Parser`] and
 //! [`Message::from_frame`] is 4,241 Cortex-M4 instructions (~42 per byte); at 10 Hz that is

@@ -2,12 +2,15 @@
 //! driven as the module core's handset codec asks (`module_core::handset::LineMode`):
 //!
 //! * CRSF (EdgeTX): 400 kBd, not inverted, half duplex. The UARTE cannot share one wire, so
-//!   the driver is re-created per direction (toolchain.md §2): the radio's frame is received
-//!   with idle-line detection and goes to the CRSF decoder stamped with the idle time; then
-//!   the responder's reply (DEVICE_INFO, timing, LINK_STATISTICS, sensors) is sent in the
-//!   slot after the radio's frame (`JrLine::send` enables the buffer only for it).
+//!   the driver is re-created per direction (the UARTE has no half-duplex or inversion
+//!   setting, and its pins can only change while it is disabled): the radio's frame is
+//!   received with idle-line detection and goes to the CRSF decoder stamped with the idle
+//!   time; then the responder's reply (DEVICE_INFO, timing, LINK_STATISTICS, sensors) is
+//!   sent in the slot after the radio's frame (`JrLine::send` enables the buffer only for it).
 //! * S.Port (57 600 Bd) / FrSky D (9600 Bd): inverted through the polarity pin, transmit
-//!   only, frames pushed unpolled (protocols.md §1.3); the scheduler in the core paces them
+//!   only, frames pushed unpolled (a PPM module's telemetry: EdgeTX ≥ 2.11
+//!   `radio/src/pulses/ppm.cpp` opens the S.Port pin receive-only; OpenTX 2.2/2.3 and
+//!   EdgeTX ≤ 2.8 through the model's telemetry type); the scheduler in the core paces them
 //!   (12 ms / 30 ms slots), this task asks every 2 ms.
 
 use embassy_time::{Duration, Timer, with_timeout};

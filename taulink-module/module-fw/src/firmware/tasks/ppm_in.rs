@@ -1,4 +1,5 @@
-//! PPM capture from the handset (toolchain.md §2): each falling edge on P1.04 triggers,
+//! PPM capture from the handset (nRF52840 Product Specification: GPIOTE, PPI, TIMER): each
+//! falling edge on P1.04 triggers,
 //! through GPIOTE and PPI, TIMER1's CAPTURE[0] in hardware, so the timestamp is exact to
 //! 1 µs whatever the interrupt latency; the task only reads CC[0] after the edge and hands
 //! it to the decoder in the module core. Edges come at least every 2.25 ms inside a frame,

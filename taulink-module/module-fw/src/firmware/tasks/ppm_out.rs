@@ -19,7 +19,8 @@ use crate::firmware::shared::with_app;
 
 /// Four words per slot, up to 16 channels plus sync and tail.
 const WAVEFORM_WORDS: usize = 4 * (16 + 2);
-/// Negative-going pulses (idle high), the common convention (protocols.md §2.1).
+/// Negative-going pulses (idle high), the common convention: EdgeTX's default polarity "−"
+/// (`radio/src/pulses/ppm.cpp`).
 const PULSE_HIGH: bool = false;
 /// Idle re-check period while there is nothing to send.
 const IDLE: Duration = Duration::from_micros(22_500);

@@ -1,4 +1,4 @@
-//! Barometric altitude: h = −pD (ekf.md §3 row 9), fused as a direct observation of pD
+//! Barometric altitude: h = −pD (DERIVATION.md §4), fused as a direct observation of pD
 //! with the measurement negated.
 
 use super::Fusion;

@@ -1,5 +1,5 @@
 //! GPS position and velocity: direct observations of the NED position and velocity states
-//! (H rows are unit vectors, ekf.md §3 rows 0–5).
+//! (H rows are unit vectors, DERIVATION.md §4).
 
 use super::Fusion;
 use crate::estimation::ins::{Filter, index};

@@ -1,4 +1,4 @@
-//! Heading-only magnetometer fusion (ekf.md §3 rows 6–7). The reading is rotated into the
+//! Heading-only magnetometer fusion (DERIVATION.md §4). The reading is rotated into the
 //! level heading frame with the filter's roll and pitch, its horizontal part is scaled to
 //! the earth field's horizontal magnitude (only its direction carries heading), and it is
 //! compared with the earth field rotated by yaw. The H rows therefore only touch the yaw
