@@ -103,14 +103,9 @@ impl MasterHooks for ModuleHooks {
 /// Both ends at `rate`; at 2 s the follower's radio fails `follower_fails` calls in a row, at
 /// 4 s the master's `master_fails`; runs to 6 s.
 fn run(rate: RateMode, follower_fails: u32, master_fails: u32) -> Log {
-    let common::Pair {
-        time,
-        medium,
-        module_node,
-        flight_node,
-        params,
-        mut executor,
-    } = common::pair(rate, 5);
+    let mut world = common::pair(rate, 5);
+    let (time, medium, params) = (world.time.clone(), world.medium.clone(), world.params);
+    let (module_node, flight_node) = (world.module_node, world.flight_node);
     let log = Rc::new(RefCell::new(Log::default()));
     let (master_fail, follower_fail) = (Rc::new(Cell::new(0)), Rc::new(Cell::new(0)));
     let mut radio = Flaky {
@@ -119,7 +114,7 @@ fn run(rate: RateMode, follower_fails: u32, master_fails: u32) -> Log {
     };
     let mut clock = MockClock::new(time.clone(), 0);
     let (module_log, mut hooks) = (log.clone(), ModuleHooks(log.clone()));
-    executor.spawn(async move {
+    world.executor.spawn(async move {
         let mut master = Master::new(params);
         let _ = run_master(&mut radio, &mut clock, &mut master, &mut hooks).await;
         module_log.borrow_mut().master_ended = true;
@@ -130,17 +125,17 @@ fn run(rate: RateMode, follower_fails: u32, master_fails: u32) -> Log {
     };
     let mut clock = MockClock::new(time.clone(), 0);
     let (flight_log, mut hooks) = (log.clone(), FlightHooks(log.clone(), true));
-    executor.spawn(async move {
+    world.executor.spawn(async move {
         let mut follower = Follower::new(params, FailsafeValues::default(), 250_000);
         let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut hooks).await;
         flight_log.borrow_mut().follower_ended = true;
     });
-    executor.run_until(2_000_000);
+    world.executor.run_until(2_000_000);
     follower_fail.set(follower_fails);
-    executor.run_until(4_000_000);
+    world.executor.run_until(4_000_000);
     master_fail.set(master_fails);
-    executor.run_until(6_000_000);
-    drop(executor);
+    world.executor.run_until(6_000_000);
+    drop(world);
     Rc::try_unwrap(log).ok().unwrap().into_inner()
 }
 

@@ -60,19 +60,14 @@ const RESTORE_US: u64 = 4_000_000;
 const END_US: u64 = 7_000_000;
 
 fn run(rate: RateMode) -> Log {
-    let common::Pair {
-        time,
-        medium,
-        module_node,
-        flight_node,
-        params,
-        mut executor,
-    } = common::pair(rate, 11);
+    let mut world = common::pair(rate, 11);
+    let (time, medium, params) = (world.time.clone(), world.medium.clone(), world.params);
+    let (module_node, flight_node) = (world.module_node, world.flight_node);
     let log = Rc::new(RefCell::new(Log::default()));
     let mut hooks = ModuleHooks(log.clone());
     let mut radio = MockRadio::new(medium.clone(), module_node);
     let mut clock = MockClock::new(time.clone(), 0);
-    executor.spawn(async move {
+    world.executor.spawn(async move {
         let mut master = Master::new(params);
         let _ = run_master(&mut radio, &mut clock, &mut master, &mut hooks).await;
     });
@@ -80,17 +75,17 @@ fn run(rate: RateMode) -> Log {
     let mut radio = MockRadio::new(medium.clone(), flight_node);
     let mut clock = MockClock::new(time.clone(), 0);
     let boot = time.clone();
-    executor.spawn(async move {
+    world.executor.spawn(async move {
         boot.sleep_until(FOLLOWER_BOOT_US).await;
         let mut follower = Follower::new(params, FailsafeValues::default(), 250_000);
         let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut hooks).await;
     });
-    executor.run_until(CUT_US);
+    world.executor.run_until(CUT_US);
     medium.set_cut(module_node, flight_node, true);
-    executor.run_until(RESTORE_US);
+    world.executor.run_until(RESTORE_US);
     medium.set_cut(module_node, flight_node, false);
-    executor.run_until(END_US);
-    drop(executor);
+    world.executor.run_until(END_US);
+    drop(world);
     Rc::try_unwrap(log).ok().unwrap().into_inner()
 }
 
