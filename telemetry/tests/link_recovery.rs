@@ -3,16 +3,18 @@
 //! silence as always, and only `MAX_CONSECUTIVE_RADIO_ERRORS` errors in a row give up.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 
+mod common;
+
 use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 
-use telemetry::channels::{ChannelFormat, FailsafeValues};
+use telemetry::channels::FailsafeValues;
 use telemetry::link::core::follower::SyncState;
 use telemetry::link::core::{Follower, MAX_CONSECUTIVE_RADIO_ERRORS, Master};
 use telemetry::link::follower::{FollowerHooks, run_follower};
 use telemetry::link::master::{MasterHooks, run_master};
-use telemetry::link::{Band, LinkParams, PacketRadio, RadioConfig, RateMode, RxOutcome};
-use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
+use telemetry::link::{PacketRadio, RadioConfig, RateMode, RxOutcome};
+use telemetry::mock::{MockClock, MockRadio};
 
 /// The error of [`Flaky`].
 #[derive(Debug)]
@@ -101,29 +103,18 @@ impl MasterHooks for ModuleHooks {
 /// Both ends at `rate`; at 2 s the follower's radio fails `follower_fails` calls in a row, at
 /// 4 s the master's `master_fails`; runs to 6 s.
 fn run(rate: RateMode, follower_fails: u32, master_fails: u32) -> Log {
-    let format = if rate == RateMode::L50 {
-        ChannelFormat::Compact8
-    } else {
-        ChannelFormat::Full16
-    };
-    let params = LinkParams::new(0x5EED_1234, Band::Mhz433, rate, format, 4);
+    let mut world = common::pair(rate, 5);
+    let (time, medium, params) = (world.time.clone(), world.medium.clone(), world.params);
+    let (module_node, flight_node) = (world.module_node, world.flight_node);
     let log = Rc::new(RefCell::new(Log::default()));
-    let time = VirtualTime::new();
-    let medium = Medium::new(time.clone(), ChannelModel::default(), 5);
-    let module_node = medium.add_node(Node::default());
-    let flight_node = medium.add_node(Node {
-        position_m: 100.0,
-        ..Node::default()
-    });
     let (master_fail, follower_fail) = (Rc::new(Cell::new(0)), Rc::new(Cell::new(0)));
-    let mut executor = Executor::new(time.clone());
     let mut radio = Flaky {
         inner: MockRadio::new(medium.clone(), module_node),
         fail: master_fail.clone(),
     };
     let mut clock = MockClock::new(time.clone(), 0);
     let (module_log, mut hooks) = (log.clone(), ModuleHooks(log.clone()));
-    executor.spawn(async move {
+    world.executor.spawn(async move {
         let mut master = Master::new(params);
         let _ = run_master(&mut radio, &mut clock, &mut master, &mut hooks).await;
         module_log.borrow_mut().master_ended = true;
@@ -134,17 +125,17 @@ fn run(rate: RateMode, follower_fails: u32, master_fails: u32) -> Log {
     };
     let mut clock = MockClock::new(time.clone(), 0);
     let (flight_log, mut hooks) = (log.clone(), FlightHooks(log.clone(), true));
-    executor.spawn(async move {
+    world.executor.spawn(async move {
         let mut follower = Follower::new(params, FailsafeValues::default(), 250_000);
         let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut hooks).await;
         flight_log.borrow_mut().follower_ended = true;
     });
-    executor.run_until(2_000_000);
+    world.executor.run_until(2_000_000);
     follower_fail.set(follower_fails);
-    executor.run_until(4_000_000);
+    world.executor.run_until(4_000_000);
     master_fail.set(master_fails);
-    executor.run_until(6_000_000);
-    drop(executor);
+    world.executor.run_until(6_000_000);
+    drop(world);
     Rc::try_unwrap(log).ok().unwrap().into_inner()
 }
 

@@ -4,16 +4,18 @@
 //! window ([`MAX_LISTEN_US`]) without a hook call, at any rate mode.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 
+mod common;
+
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use telemetry::channels::{ChannelFormat, FailsafeValues};
+use telemetry::channels::FailsafeValues;
+use telemetry::link::RateMode;
 use telemetry::link::core::follower::SyncState;
 use telemetry::link::core::{Follower, MAX_LISTEN_US, Master};
 use telemetry::link::follower::{FollowerHooks, run_follower};
 use telemetry::link::master::{MasterHooks, run_master};
-use telemetry::link::{Band, LinkParams, RateMode};
-use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
+use telemetry::mock::{MockClock, MockRadio};
 
 /// Largest gap allowed between two hook calls: one listen window plus slack for the radio's
 /// turnaround and a packet completed past the window's end.
@@ -58,25 +60,14 @@ const RESTORE_US: u64 = 4_000_000;
 const END_US: u64 = 7_000_000;
 
 fn run(rate: RateMode) -> Log {
-    let format = if rate == RateMode::L50 {
-        ChannelFormat::Compact8
-    } else {
-        ChannelFormat::Full16
-    };
-    let params = LinkParams::new(0x5EED_1234, Band::Mhz433, rate, format, 4);
+    let mut world = common::pair(rate, 11);
+    let (time, medium, params) = (world.time.clone(), world.medium.clone(), world.params);
+    let (module_node, flight_node) = (world.module_node, world.flight_node);
     let log = Rc::new(RefCell::new(Log::default()));
-    let time = VirtualTime::new();
-    let medium = Medium::new(time.clone(), ChannelModel::default(), 11);
-    let module_node = medium.add_node(Node::default());
-    let flight_node = medium.add_node(Node {
-        position_m: 100.0,
-        ..Node::default()
-    });
-    let mut executor = Executor::new(time.clone());
     let mut hooks = ModuleHooks(log.clone());
     let mut radio = MockRadio::new(medium.clone(), module_node);
     let mut clock = MockClock::new(time.clone(), 0);
-    executor.spawn(async move {
+    world.executor.spawn(async move {
         let mut master = Master::new(params);
         let _ = run_master(&mut radio, &mut clock, &mut master, &mut hooks).await;
     });
@@ -84,17 +75,17 @@ fn run(rate: RateMode) -> Log {
     let mut radio = MockRadio::new(medium.clone(), flight_node);
     let mut clock = MockClock::new(time.clone(), 0);
     let boot = time.clone();
-    executor.spawn(async move {
+    world.executor.spawn(async move {
         boot.sleep_until(FOLLOWER_BOOT_US).await;
         let mut follower = Follower::new(params, FailsafeValues::default(), 250_000);
         let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut hooks).await;
     });
-    executor.run_until(CUT_US);
+    world.executor.run_until(CUT_US);
     medium.set_cut(module_node, flight_node, true);
-    executor.run_until(RESTORE_US);
+    world.executor.run_until(RESTORE_US);
     medium.set_cut(module_node, flight_node, false);
-    executor.run_until(END_US);
-    drop(executor);
+    world.executor.run_until(END_US);
+    drop(world);
     Rc::try_unwrap(log).ok().unwrap().into_inner()
 }
 

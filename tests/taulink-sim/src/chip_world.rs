@@ -15,8 +15,8 @@ use telemetry::mock::{MediumStats, SplitMix64};
 
 use crate::attack::{Powered, Witnessed, attacker, flight_end_powered, power_plan, victim_of};
 use crate::driver::{LinkRadio, SimClock};
-use crate::ends::{FlightStart, flight_end, module_end};
-use crate::probe::{FlightApp, ModuleApp, Now, Record, Shared, Witness};
+use crate::ends::{FlightStart, apps, flight_end, module_end};
+use crate::probe::{Now, Record, Shared, Witness};
 use crate::scenario::Scenario;
 use crate::world::{
     FLIGHT_EPOCH_US, MODULE_EPOCH_US, Outcome, STATUS_PERIOD_US, Status, StatusTracker, params_for,
@@ -78,14 +78,7 @@ fn spawn_pair(
     );
     let m = medium.clone();
     let now: Now = Rc::new(move || m.now().as_micros() as u64);
-    let mut module_app = ModuleApp::new(
-        now.clone(),
-        record.clone(),
-        salt,
-        s.telemetry_load,
-        s.handset,
-    );
-    let mut flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
+    let (mut module_app, mut flight_app) = apps(s, now, &record, salt);
     if let Some(attacker) = attacker {
         module_app.witness = Some(Witness::new(module_radio.last_sender(), attacker));
         flight_app.witness = Some(Witness::new(flight_radio.last_sender(), attacker));
@@ -98,13 +91,7 @@ fn spawn_pair(
         s.key,
         module_app,
     ));
-    let start = FlightStart {
-        bind,
-        params,
-        band: s.band,
-        failsafe_us: s.failsafe_ms * 1000,
-        key: s.key.map(|k| (k, s.seed ^ salt)),
-    };
+    let start = FlightStart::of(s, bind, params, salt);
     let plan = s
         .attack
         .map(|a| power_plan(a, s.duration_s))

@@ -7,8 +7,22 @@ use telemetry::link::follower::{bind_follower, run_follower};
 use telemetry::link::master::{bind_master, run_master};
 use telemetry::link::{Band, LinkClock, LinkKey, LinkParams, PacketRadio};
 
-use crate::probe::{FlightApp, ModuleApp, Shared};
+use crate::probe::{FlightApp, ModuleApp, Now, Shared};
+use crate::scenario::Scenario;
 use crate::world::BIND_TIMEOUT_US;
+
+/// The two ends' applications for scenario `s`, both recording into `record`.
+pub(crate) fn apps(s: &Scenario, now: Now, record: &Shared, salt: u64) -> (ModuleApp, FlightApp) {
+    let module = ModuleApp::new(
+        now.clone(),
+        record.clone(),
+        salt,
+        s.telemetry_load,
+        s.handset,
+    );
+    let flight = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
+    (module, flight)
+}
 
 /// The module (master) end: with `bind`, it offers the bind 0.3 s after boot first; then it
 /// runs the master loop until the simulation ends.
@@ -47,6 +61,19 @@ pub(crate) struct FlightStart {
     /// Link key (keyed link), and the seed of the follower's epoch nonces (a hardware RNG
     /// on the real controller).
     pub key: Option<(LinkKey, u64)>,
+}
+
+impl FlightStart {
+    /// How scenario `s` starts the flight end: bound with `params`, or listening for a bind.
+    pub(crate) fn of(s: &Scenario, bind: bool, params: LinkParams, salt: u64) -> Self {
+        Self {
+            bind,
+            params,
+            band: s.band,
+            failsafe_us: s.failsafe_ms * 1000,
+            key: s.key.map(|k| (k, s.seed ^ salt)),
+        }
+    }
 }
 
 /// The follower of `params`, keyed if `key` is given.

@@ -12,6 +12,7 @@ pub mod cli;
 pub mod driver;
 mod ends;
 pub mod handset;
+mod json;
 pub mod openlrs;
 pub mod plot;
 pub mod probe;

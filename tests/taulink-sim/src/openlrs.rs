@@ -15,7 +15,10 @@ use openlrs::rx::{Config, Receiver};
 use openlrs::tx::Transmitter;
 use openlrs::{BindData, BindingVersion, timing};
 use radio_rfm22b::RfmType;
+use serde::Serialize;
 use si4432_sim::{Medium, Outcome, RadioConfig, RadioHandle, RadioId, Simulation};
+
+use crate::json::{decimals, decimals_or_null};
 
 /// The virtual chips' power-on reset time, waited before the first register access.
 const POWER_UP_US: u32 = 30_000;
@@ -63,8 +66,8 @@ impl Default for OpenLrsScenario {
     }
 }
 
-/// The figures of one OpenLRSng run.
-#[derive(Clone, Debug, PartialEq)]
+/// The figures of one OpenLRSng run; serialized in field order (the README's JSON keys).
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct OpenLrsReport {
     /// "openlrs38" or "openlrs39".
     pub protocol: &'static str,
@@ -77,18 +80,25 @@ pub struct OpenLrsReport {
     /// Whether the bind succeeded.
     pub bound: bool,
     /// Channel updates delivered per second of link time (after the first, outside the cut).
+    #[serde(serialize_with = "decimals::<3, _>")]
     pub update_rate_hz: f64,
     /// Mean latency from the handset's value change to the receiver's output, ms.
+    #[serde(serialize_with = "decimals::<3, _>")]
     pub latency_mean_ms: f64,
     /// 99th percentile of that latency, ms.
+    #[serde(serialize_with = "decimals::<3, _>")]
     pub latency_p99_ms: f64,
     /// Uplink packets received intact, percent of those sent (link time outside the cut).
+    #[serde(rename = "uplink_lq_mean", serialize_with = "decimals::<2, _>")]
     pub uplink_lq_pct: f64,
     /// Telemetry replies received intact by the TX, percent of those sent.
+    #[serde(rename = "downlink_lq_mean", serialize_with = "decimals::<2, _>")]
     pub downlink_lq_pct: f64,
     /// From the cut's start to the receiver's failsafe, ms.
+    #[serde(serialize_with = "decimals_or_null::<3, _>")]
     pub failsafe_ms: Option<f64>,
     /// From the cut's end to the next channel update, ms.
+    #[serde(serialize_with = "decimals_or_null::<3, _>")]
     pub recovery_ms: Option<f64>,
     /// Channel outputs that were not a value the handset set (must be 0).
     pub errors: u64,
@@ -104,23 +114,7 @@ impl OpenLrsReport {
     /// The report as one JSON object.
     #[must_use]
     pub fn to_json(&self) -> String {
-        let opt = |v: Option<f64>| v.map_or("null".into(), |v| format!("{v:.3}"));
-        format!(
-            "{{\"protocol\": \"{}\", \"bit_rate_bps\": {}, \"interval_us\": {}, \"channels\": {}, \"bound\": {}, \"update_rate_hz\": {:.3}, \"latency_mean_ms\": {:.3}, \"latency_p99_ms\": {:.3}, \"uplink_lq_mean\": {:.2}, \"downlink_lq_mean\": {:.2}, \"failsafe_ms\": {}, \"recovery_ms\": {}, \"errors\": {}}}",
-            self.protocol,
-            self.bit_rate_bps,
-            self.interval_us,
-            self.channels,
-            self.bound,
-            self.update_rate_hz,
-            self.latency_mean_ms,
-            self.latency_p99_ms,
-            self.uplink_lq_pct,
-            self.downlink_lq_pct,
-            opt(self.failsafe_ms),
-            opt(self.recovery_ms),
-            self.errors
-        )
+        crate::json::to_string(self)
     }
 
     /// The report as a human-readable table.

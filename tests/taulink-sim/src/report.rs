@@ -1,13 +1,18 @@
 //! The end-of-run summary: figures computed from the records, printed as a table or JSON
-//! (hand-written JSON: flat numbers only, no dependency needed).
+//! (the JSON derived from the struct: its fields, in their order, are the README's keys).
 
 use std::fmt::Write;
+
+use serde::Serialize;
+
+use crate::json::decimals;
 
 use crate::scenario::Scenario;
 use crate::world::Outcome;
 
-/// Figures of one run.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// Figures of one run. Serialized in field order; the attack figures (the last five) only
+/// with `--attack` (see [`Report::to_json`]).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Report {
     /// Rate mode name.
     pub rate: String,
@@ -24,46 +29,60 @@ pub struct Report {
     /// Airtime of a full uplink frame, µs.
     pub uplink_airtime_us: u32,
     /// Virtual seconds simulated.
+    #[serde(serialize_with = "decimals::<3, _>")]
     pub duration_s: f64,
     /// Injected loss.
+    #[serde(serialize_with = "decimals::<3, _>")]
     pub loss: f64,
     /// Seconds from start until the follower was bound (bind mode) or started.
+    #[serde(serialize_with = "decimals::<3, _>")]
     pub bound_s: f64,
     /// Channel updates delivered per second (after the first one).
+    #[serde(serialize_with = "decimals::<1, _>")]
     pub update_rate_hz: f64,
     /// Mean uplink latency input → output, ms.
+    #[serde(serialize_with = "decimals::<3, _>")]
     pub latency_mean_ms: f64,
     /// 99th percentile uplink latency, ms.
+    #[serde(serialize_with = "decimals::<3, _>")]
     pub latency_p99_ms: f64,
     /// Updates per second of the least updated stick (channels 1–4) at the flight side.
+    #[serde(serialize_with = "decimals::<1, _>")]
     pub stick_updates_per_s: f64,
     /// Updates per second of the least updated of all channels the link carries.
+    #[serde(serialize_with = "decimals::<1, _>")]
     pub all_channel_updates_per_s: f64,
     /// Timing frames the handset followed (crsf-synced).
     pub handset_corrections: u32,
     /// Uplink LQ at the end (follower).
     pub uplink_lq: u8,
-    /// Mean uplink LQ over the run.
-    pub uplink_lq_mean: f64,
-    /// Mean downlink LQ over the run.
-    pub downlink_lq_mean: f64,
     /// Downlink LQ at the end (master).
     pub downlink_lq: u8,
+    /// Mean uplink LQ over the run.
+    #[serde(serialize_with = "decimals::<1, _>")]
+    pub uplink_lq_mean: f64,
+    /// Mean downlink LQ over the run.
+    #[serde(serialize_with = "decimals::<1, _>")]
+    pub downlink_lq_mean: f64,
     /// RSSI at the follower, dBm.
     pub follower_rssi_dbm: i16,
     /// RSSI at the master, dBm.
     pub master_rssi_dbm: i16,
     /// Uplink stream goodput, B/s.
+    #[serde(serialize_with = "decimals::<1, _>")]
     pub uplink_goodput_bps: f64,
     /// Downlink stream goodput, B/s.
+    #[serde(serialize_with = "decimals::<1, _>")]
     pub downlink_goodput_bps: f64,
     /// Outputs / stream bytes that were wrong (must be 0).
     pub errors: u64,
     /// Failsafe entries.
     pub failsafes: usize,
     /// Time of the first failsafe entry after the link came up, s (0 if none).
+    #[serde(serialize_with = "decimals::<4, _>")]
     pub failsafe_at_s: f64,
     /// Time the link left that failsafe, s (0 if it did not).
+    #[serde(serialize_with = "decimals::<4, _>")]
     pub recovered_at_s: f64,
     /// Resyncs.
     pub resyncs: u32,
@@ -78,14 +97,19 @@ pub struct Report {
     /// Wrong outputs or bytes on the foreign link (must be 0).
     pub foreign_errors: u64,
     /// The attack run (`--attack`), if any.
+    #[serde(skip)]
     pub attack: Option<String>,
     /// Frames the attacking radio sent.
+    #[serde(skip)]
     pub attacker_frames_sent: u64,
     /// Attacker frames a victim's link core accepted (must be 0).
+    #[serde(skip)]
     pub attacker_frames_accepted: u64,
     /// Times the flight side was power-cycled.
+    #[serde(skip)]
     pub power_cycles: u32,
     /// Boots after which the flight side ran a link other than the module's (must be 0).
+    #[serde(skip)]
     pub rebinds: u32,
 }
 
@@ -188,76 +212,18 @@ impl Report {
             || self.rebinds > 0
     }
 
-    /// One JSON object.
+    /// One JSON object: every field, the attack figures only if there was an attack.
     pub fn to_json(&self) -> String {
-        let mut j = String::from("{");
-        let mut field = |k: &str, v: String| {
-            if j.len() > 1 {
-                j.push_str(", ");
-            }
-            let _ = write!(j, "\"{k}\": {v}");
-        };
-        field("rate", format!("\"{}\"", self.rate));
-        field("telemetry_ratio", self.telemetry_ratio.to_string());
-        field("channels", self.channels.to_string());
-        field("handset", format!("\"{}\"", self.handset));
-        field("bit_rate_bps", self.bit_rate_bps.to_string());
-        field("slot_rate_hz", self.slot_rate_hz.to_string());
-        field("uplink_airtime_us", self.uplink_airtime_us.to_string());
-        field("duration_s", format!("{:.3}", self.duration_s));
-        field("loss", format!("{:.3}", self.loss));
-        field("bound_s", format!("{:.3}", self.bound_s));
-        field("update_rate_hz", format!("{:.1}", self.update_rate_hz));
-        field("latency_mean_ms", format!("{:.3}", self.latency_mean_ms));
-        field("latency_p99_ms", format!("{:.3}", self.latency_p99_ms));
-        field(
-            "stick_updates_per_s",
-            format!("{:.1}", self.stick_updates_per_s),
-        );
-        field(
-            "all_channel_updates_per_s",
-            format!("{:.1}", self.all_channel_updates_per_s),
-        );
-        field("handset_corrections", self.handset_corrections.to_string());
-        field("uplink_lq", self.uplink_lq.to_string());
-        field("downlink_lq", self.downlink_lq.to_string());
-        field("uplink_lq_mean", format!("{:.1}", self.uplink_lq_mean));
-        field("downlink_lq_mean", format!("{:.1}", self.downlink_lq_mean));
-        field("follower_rssi_dbm", self.follower_rssi_dbm.to_string());
-        field("master_rssi_dbm", self.master_rssi_dbm.to_string());
-        field(
-            "uplink_goodput_bps",
-            format!("{:.1}", self.uplink_goodput_bps),
-        );
-        field(
-            "downlink_goodput_bps",
-            format!("{:.1}", self.downlink_goodput_bps),
-        );
-        field("errors", self.errors.to_string());
-        field("failsafes", self.failsafes.to_string());
-        field("failsafe_at_s", format!("{:.4}", self.failsafe_at_s));
-        field("recovered_at_s", format!("{:.4}", self.recovered_at_s));
-        field("resyncs", self.resyncs.to_string());
-        field("transmitted", self.transmitted.to_string());
-        field("header_rejected", self.header_rejected.to_string());
-        field("chip_crc_rejected", self.chip_crc_rejected.to_string());
-        field("link_rejected", self.link_rejected.to_string());
-        field("foreign_errors", self.foreign_errors.to_string());
-        if let Some(attack) = &self.attack {
-            field("attack", format!("\"{attack}\""));
-            field(
-                "attacker_frames_sent",
-                self.attacker_frames_sent.to_string(),
-            );
-            field(
-                "attacker_frames_accepted",
-                self.attacker_frames_accepted.to_string(),
-            );
-            field("power_cycles", self.power_cycles.to_string());
-            field("rebinds", self.rebinds.to_string());
-        }
-        j.push('}');
-        j
+        crate::json::to_string(&Json {
+            report: self,
+            attack: self.attack.as_deref().map(|attack| AttackJson {
+                attack,
+                attacker_frames_sent: self.attacker_frames_sent,
+                attacker_frames_accepted: self.attacker_frames_accepted,
+                power_cycles: self.power_cycles,
+                rebinds: self.rebinds,
+            }),
+        })
     }
 
     /// The human-readable summary.
@@ -340,4 +306,23 @@ impl Report {
         }
         t
     }
+}
+
+/// The JSON of a report: its fields, then the attack's (present only with `--attack`).
+#[derive(Serialize)]
+struct Json<'a> {
+    #[serde(flatten)]
+    report: &'a Report,
+    #[serde(flatten)]
+    attack: Option<AttackJson<'a>>,
+}
+
+/// The attack figures of [`Report`], in their JSON order.
+#[derive(Serialize)]
+struct AttackJson<'a> {
+    attack: &'a str,
+    attacker_frames_sent: u64,
+    attacker_frames_accepted: u64,
+    power_cycles: u32,
+    rebinds: u32,
 }

@@ -11,8 +11,8 @@ use telemetry::mock::{
     VirtualTime,
 };
 
-use crate::ends::{FlightStart, flight_end, module_end};
-use crate::probe::{FlightApp, ModuleApp, Now, Record, Shared, Snapshot};
+use crate::ends::{FlightStart, apps, flight_end, module_end};
+use crate::probe::{Now, Record, Shared, Snapshot};
 use crate::report::{Report, summarise};
 use crate::scenario::Scenario;
 
@@ -83,14 +83,7 @@ fn spawn_pair<'a>(
     let flight_clock = MockClock::new(time.clone(), FLIGHT_EPOCH_US);
     let t = time.clone();
     let now: Now = Rc::new(move || t.now_us());
-    let module_app = ModuleApp::new(
-        now.clone(),
-        record.clone(),
-        salt,
-        s.telemetry_load,
-        s.handset,
-    );
-    let flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
+    let (module_app, flight_app) = apps(s, now, &record, salt);
     ex.spawn(module_end(
         module_radio,
         module_clock,
@@ -99,13 +92,7 @@ fn spawn_pair<'a>(
         s.key,
         module_app,
     ));
-    let start = FlightStart {
-        bind,
-        params,
-        band: s.band,
-        failsafe_us: s.failsafe_ms * 1000,
-        key: s.key.map(|k| (k, s.seed ^ salt)),
-    };
+    let start = FlightStart::of(s, bind, params, salt);
     // Both mock clocks count the shared virtual time from their own epoch.
     ex.spawn(flight_end(
         flight_radio,

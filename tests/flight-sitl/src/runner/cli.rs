@@ -4,6 +4,9 @@
 //! `module_core::settings::Settings::set_text`, so nonsense is refused with a clear message
 //! and a non-zero exit before anything flies. [`Cli::options`] turns it into [`Options`].
 
+use std::sync::LazyLock;
+
+use clap::builder::PossibleValue;
 use clap::{Parser, ValueEnum};
 use telemetry::link::RateMode;
 
@@ -100,47 +103,44 @@ pub struct Cli {
     pub quiet: bool,
 }
 
-/// Scenario names on the command line.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-#[allow(missing_docs)] // the names are the documentation (the list in --help)
+/// A scenario name on the command line: a [`Kind`] by its [`Kind::name`], or `table`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ScenarioArg {
-    Hover,
-    LinkCut,
-    PowerCycle,
-    HandsetUnplugged,
-    ImuStall,
-    ImuFrozen,
-    RadioStuckIrq,
-    RadioBrownout,
-    SettingsCorrupt,
-    LowBattery,
-    AltitudeHold,
-    PositionHold,
-    Loiter,
-    AttitudeStep,
+    /// Fly one scenario.
+    Run(Kind),
+    /// The acceptance table.
     Table,
+}
+
+/// Every scenario name in `--help` order: the README's, then `table`.
+static SCENARIO_ARGS: LazyLock<Vec<ScenarioArg>> = LazyLock::new(|| {
+    Kind::ALL
+        .into_iter()
+        .map(ScenarioArg::Run)
+        .chain([ScenarioArg::Table])
+        .collect()
+});
+
+impl ValueEnum for ScenarioArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        &SCENARIO_ARGS
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(match self {
+            Self::Run(kind) => kind.name(),
+            Self::Table => "table",
+        }))
+    }
 }
 
 impl ScenarioArg {
     /// The scenario (None for `table`).
     pub fn kind(self) -> Option<Kind> {
-        Some(match self {
-            Self::Hover => Kind::Hover,
-            Self::LinkCut => Kind::LinkCut,
-            Self::PowerCycle => Kind::PowerCycle,
-            Self::HandsetUnplugged => Kind::HandsetUnplugged,
-            Self::ImuStall => Kind::ImuStall,
-            Self::ImuFrozen => Kind::ImuFrozen,
-            Self::RadioStuckIrq => Kind::RadioStuckIrq,
-            Self::RadioBrownout => Kind::RadioBrownout,
-            Self::SettingsCorrupt => Kind::SettingsCorrupt,
-            Self::LowBattery => Kind::LowBattery,
-            Self::AltitudeHold => Kind::AltitudeHold,
-            Self::PositionHold => Kind::PositionHold,
-            Self::Loiter => Kind::Loiter,
-            Self::AttitudeStep => Kind::AttitudeStep,
-            Self::Table => return None,
-        })
+        match self {
+            Self::Run(kind) => Some(kind),
+            Self::Table => None,
+        }
     }
 }
 
@@ -246,13 +246,21 @@ mod tests {
     }
 
     #[test]
+    fn every_scenario_is_named_by_its_kind_and_table_by_table() {
+        for kind in Kind::ALL {
+            assert_eq!(parse(kind.name()).unwrap().scenario.kind(), Some(kind));
+        }
+        assert_eq!(parse("table").unwrap().scenario, ScenarioArg::Table);
+    }
+
+    #[test]
     fn parses_a_full_command_line() {
         let cli = parse(
             "link-cut --rate l50 --seed 3 --altitude 60 --set failsafe.descent_mps=1.5 \
              --module-set input_timeout_ms=750 --json --duration 90",
         )
         .unwrap();
-        assert_eq!(cli.scenario, ScenarioArg::LinkCut);
+        assert_eq!(cli.scenario, ScenarioArg::Run(Kind::LinkCut));
         let o = cli.options().unwrap();
         assert_eq!(o.rate, RateMode::L50);
         assert_eq!(o.seed, 3);
