@@ -3,7 +3,7 @@
 //! rewrites ([`Mode::Write`]) or checks ([`Mode::Check`]) what is between them, so a
 //! simulator figure the docs quote as current can never go stale unnoticed (issue 19; the
 //! model is `cargo xtask figures` for instruction counts). Text outside the markers is
-//! prose, and a figure there is history ("measured at <commit>").
+//! prose, and a figure there is history ("measured at COMMIT").
 
 use std::fs;
 use std::path::Path;
