@@ -1,6 +1,7 @@
 //! `cargo run --release -p flight-sitl -- SCENARIO [options]`: flies a named scenario
 //! through the firmware-in-the-loop world and prints its figures, as text or one JSON
-//! object, optionally drawn; `table` runs the acceptance set and prints it as Markdown;
+//! object, optionally drawn; `table` runs the acceptance set and prints it as Markdown
+//! (`--check` / `--write`: against the README's `runner-table` block);
 //! `serve [ADDR]` serves the web ground station against the world (`serve/cli.rs`).
 //! `--help` lists the options (`runner/cli.rs`).
 
@@ -10,6 +11,7 @@ use clap::Parser;
 use flight_sitl::runner::{self, cli::Cli};
 use flight_sitl::serve::cli::ServeCli;
 use quad_sim::experiments::oneshot::{OneShotArgs, run_cli};
+use sim_plot::docblock;
 
 /// `flight-sitl oneshot-experiment`: the Tau Labs seed's OneShot125 experiment — the ESC
 /// time constant identified with conventional 400 Hz PWM (asynchronous to a 500 Hz loop) and
@@ -59,11 +61,28 @@ fn main() -> ExitCode {
             bar.inc(1);
         });
         bar.finish_and_clear();
-        return match rows {
-            Ok(rows) => {
-                print!("{}", runner::acceptance::markdown(&rows));
-                ExitCode::SUCCESS
-            }
+        let mode = if cli.check {
+            docblock::Mode::Check
+        } else if cli.write {
+            docblock::Mode::Write
+        } else {
+            docblock::Mode::Print
+        };
+        let readme = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md");
+        return match rows.map(|rows| runner::acceptance::markdown(&rows)) {
+            Ok(table) => match docblock::apply(&readme, "runner-table", &table, mode) {
+                Ok(current) if current || mode == docblock::Mode::Write => ExitCode::SUCCESS,
+                Ok(_) => {
+                    eprintln!(
+                        "flight-sitl: the README's runner table is stale: run `cargo run --release -p flight-sitl -- table --write`"
+                    );
+                    ExitCode::FAILURE
+                }
+                Err(e) => {
+                    eprintln!("flight-sitl: {e}");
+                    ExitCode::FAILURE
+                }
+            },
             Err(e) => {
                 eprintln!("flight-sitl: {e}");
                 ExitCode::FAILURE

@@ -2,9 +2,10 @@
 //! flight-sitl scenario runner): figures made of stacked time-series panels ([`figure`]),
 //! drawn with an embedded font so no system fonts are needed ([`font`]), the `--plot DIR` /
 //! `--plot-format` flags every plotting tool shares ([`PlotArgs`]), and the progress bar of
-//! long runs ([`progress`]).
+//! long runs ([`progress`]), and the generated tables in the docs ([`docblock`]).
 #![warn(missing_docs)]
 
+pub mod docblock;
 pub mod figure;
 pub mod font;
 pub mod progress;

@@ -32,6 +32,8 @@ pub const ATTACK_PHRASE: &str = "taulink-sim attack";
                                                    drawn to out/link.png
   taulink-sim --sweep                              every rate mode, clean and at 10 % loss
   taulink-sim --rate F700 --ratio 8 --handset ppm  the stick mode fed by free-running PPM
+  taulink-sim --docs check                         the docs' link figures against a fresh
+                                                   run (--docs write rewrites them)
   taulink-sim --serve                              the web ground station against the
                                                    firmware-in-the-loop world (flight-sitl
                                                    serve): open the printed URL
@@ -122,6 +124,12 @@ pub struct Cli {
     /// progress bar on a terminal).
     #[arg(long, conflicts_with = "plot")]
     pub sweep: bool,
+    /// The link figures the docs quote (README "Link figures", spec §10), from every rate
+    /// mode at the default conditions (other options are ignored): print them, check the
+    /// docs' `link-figures` blocks against them (exit 1 when stale), or write them.
+    #[arg(long, value_enum, value_name = "MODE",
+          conflicts_with_all = ["sweep", "serve", "json", "plot", "attack", "protocol"])]
+    pub docs: Option<DocsArg>,
     /// `--plot DIR`: draw `link.png` (LQ, RSSI, updates/s, latency over time, cut and
     /// failsafe marked) into DIR.
     #[command(flatten)]
@@ -168,6 +176,27 @@ pub enum ProtocolArg {
     Openlrs38,
     #[value(name = "openlrs39")]
     Openlrs39,
+}
+
+/// `--docs`: what to do with the docs' generated link figures.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DocsArg {
+    /// Print both tables.
+    Print,
+    /// Fail (exit 1) when a document's table differs from the fresh run.
+    Check,
+    /// Rewrite the tables in the documents.
+    Write,
+}
+
+impl From<DocsArg> for sim_plot::docblock::Mode {
+    fn from(d: DocsArg) -> Self {
+        match d {
+            DocsArg::Print => Self::Print,
+            DocsArg::Check => Self::Check,
+            DocsArg::Write => Self::Write,
+        }
+    }
 }
 
 /// Handsets as command-line words.
@@ -464,6 +493,9 @@ mod tests {
             "--bogus",
             "--attack jam",
             "--attack forge --sweep",
+            "--docs check --sweep",
+            "--docs check --json",
+            "--docs stale",
             "--attack replay --packet-level",
         ] {
             assert!(parse(bad).is_err(), "{bad} accepted");

@@ -9,6 +9,7 @@
 pub mod attack;
 pub mod chip_world;
 pub mod cli;
+pub mod docs;
 pub mod driver;
 mod ends;
 pub mod handset;
@@ -19,6 +20,7 @@ pub mod probe;
 pub mod report;
 pub mod scenario;
 pub mod serve;
+pub mod sweep;
 pub mod world;
 
 pub use cli::Cli;

@@ -6,6 +6,7 @@ use std::io::Write;
 use std::process::ExitCode;
 
 use clap::Parser;
+use sim_plot::docblock;
 use taulink_sim::{Cli, Report, Scenario, Status, run};
 
 fn status_line(st: &Status) {
@@ -48,19 +49,7 @@ fn sweep(base: &Scenario, progress: bool) -> Vec<(Report, Report)> {
     let mut reports: Vec<(Report, Report)> = Vec::new();
     let mut done = 0;
     for mode in modes {
-        let mut s = base.clone();
-        s.rate = mode;
-        // The long-range mode carries 8 channels (as OpenLRSng does at that rate) to leave
-        // room for uplink telemetry; the others carry 16.
-        if s.rate == telemetry::link::RateMode::L50 {
-            s.format = telemetry::channels::ChannelFormat::Compact8;
-        }
-        // F700 is the stick mode: its 16 channels travel in the stick format, at the 1:8
-        // telemetry ratio it is laid out for (spec §4.1), whatever --ratio says.
-        if s.rate == telemetry::link::RateMode::F700 {
-            s.format = telemetry::channels::ChannelFormat::Sticks16;
-            s.telemetry_ratio = 8;
-        }
+        let s = taulink_sim::sweep::scenario(base, mode);
         let mut one = |loss: f64| {
             bar.set_message(format!("{mode:?} loss {:.0} %", loss * 100.0));
             #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
@@ -127,6 +116,38 @@ fn print_sweep(reports: &[(Report, Report)], json: bool) {
     );
 }
 
+/// `--docs MODE`: the docs' link figures from a fresh set of runs.
+fn docs(mode: docblock::Mode, progress: bool) -> ExitCode {
+    let modes = telemetry::link::RateMode::ALL.len() as u64;
+    let bar = sim_plot::progress::bar(3 * modes, "runs", progress);
+    let runs = taulink_sim::docs::run(|name| {
+        bar.set_message(name.to_owned());
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+    if taulink_sim::docs::failed(&runs) {
+        eprintln!("taulink-sim: a run delivered a wrong output or stream byte");
+        return ExitCode::FAILURE;
+    }
+    let mut stale = false;
+    for (doc, name, table) in taulink_sim::docs::blocks(&runs) {
+        match docblock::apply(&doc, name, &table, mode) {
+            Ok(current) => stale |= !current,
+            Err(e) => {
+                eprintln!("taulink-sim: {e}");
+                return ExitCode::FAILURE;
+            }
+        }
+    }
+    if stale && mode == docblock::Mode::Check {
+        eprintln!(
+            "taulink-sim: the docs' link figures are stale: run `cargo run --release -p taulink-sim -- --docs write`"
+        );
+        return ExitCode::FAILURE;
+    }
+    ExitCode::SUCCESS
+}
+
 fn main() -> ExitCode {
     // clap prints --help/--version (exit 0) and usage errors with a suggestion (exit 2).
     let cli = Cli::parse();
@@ -159,6 +180,9 @@ fn main() -> ExitCode {
     }
     let scenario = cli.scenario();
     let live = sim_plot::progress::wanted(cli.quiet, cli.json);
+    if let Some(mode) = cli.docs {
+        return docs(mode.into(), live);
+    }
     if cli.sweep {
         let reports = sweep(&scenario, live);
         print_sweep(&reports, cli.json);

@@ -37,6 +37,7 @@ use super::{Kind, Options};
   loiter              position hold in loiter; the pilot pushes pitch forward (half stick)
                       for 3 s and releases: how far it moved, how well the new spot is held
   table               the acceptance runs of issues 12/13/16, as a Markdown table
+                      (--check: fail if the README's table differs; --write: rewrite it)
 
   oneshot-experiment  the seed's OneShot125 experiment (its own options: --runs N, --json,
                       --plot DIR; see `flight-sitl oneshot-experiment --help`)
@@ -52,6 +53,7 @@ Examples:
   flight-sitl position-hold --wind 3 --json
   flight-sitl handset-unplugged --module-set input_timeout_ms=1000
   flight-sitl table > acceptance.md
+  flight-sitl table --check               (CI: the README's runner table is current)
 
 Exit status: 0 when the run was made, 2 for a command-line error (a misspelt flag, a value
 out of range, a setting refused), 1 if the scenario could not be flown as asked."
@@ -101,6 +103,12 @@ pub struct Cli {
     /// No progress bar (the `table` mode).
     #[arg(long, short)]
     pub quiet: bool,
+    /// With `table`: fail (exit 1) when the README's runner table differs from this run.
+    #[arg(long, conflicts_with = "write")]
+    pub check: bool,
+    /// With `table`: rewrite the README's runner table with this run.
+    #[arg(long)]
+    pub write: bool,
 }
 
 /// A scenario name on the command line: a [`Kind`] by its [`Kind::name`], or `table`.
@@ -226,6 +234,9 @@ impl Cli {
             }
             o.module_settings = Some(m);
         }
+        if (self.check || self.write) && self.scenario != ScenarioArg::Table {
+            return Err("--check and --write are for `table` (the README's runner table)".into());
+        }
         if let Some(kind) = self.scenario.kind()
             && self.at.is_some()
             && !kind.has_fault_time()
@@ -251,6 +262,14 @@ mod tests {
             assert_eq!(parse(kind.name()).unwrap().scenario.kind(), Some(kind));
         }
         assert_eq!(parse("table").unwrap().scenario, ScenarioArg::Table);
+    }
+
+    #[test]
+    fn check_and_write_are_for_the_table_only() {
+        assert!(parse("table --check").unwrap().options().is_ok());
+        assert!(parse("table --write").unwrap().options().is_ok());
+        assert!(parse("table --check --write").is_err());
+        assert!(parse("hover --check").unwrap().options().is_err());
     }
 
     #[test]
