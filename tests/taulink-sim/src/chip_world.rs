@@ -85,7 +85,14 @@ fn spawn_pair(
         s.telemetry_load,
         s.handset,
     );
-    let mut flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
+    let mut flight_app = FlightApp::new(
+        now,
+        record.clone(),
+        salt,
+        s.telemetry_load,
+        s.format,
+        s.handset,
+    );
     if let Some(attacker) = attacker {
         module_app.witness = Some(Witness::new(module_radio.last_sender(), attacker));
         flight_app.witness = Some(Witness::new(flight_radio.last_sender(), attacker));

@@ -14,6 +14,7 @@ mod ends;
 pub mod handset;
 pub mod openlrs;
 pub mod plot;
+pub mod ppm_input;
 pub mod probe;
 pub mod report;
 pub mod scenario;

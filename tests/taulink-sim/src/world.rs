@@ -90,7 +90,14 @@ fn spawn_pair<'a>(
         s.telemetry_load,
         s.handset,
     );
-    let flight_app = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
+    let flight_app = FlightApp::new(
+        now,
+        record.clone(),
+        salt,
+        s.telemetry_load,
+        s.format,
+        s.handset,
+    );
     ex.spawn(module_end(
         module_radio,
         module_clock,
