@@ -68,8 +68,8 @@ pub fn stamp(channels: &Channels) -> u64 {
         .sum()
 }
 
-/// One captured edge: the capture timer's reading, the virtual instant, and the frame whose
-/// last channel it closes (with that instant: the latency's start).
+/// One edge on the line: when (virtual µs), and the frame whose last channel period it
+/// closes, if it does (its capture is the latency's start).
 #[derive(Clone, Copy, Debug)]
 struct Edge {
     at_us: f64,
@@ -90,7 +90,7 @@ pub struct PpmInput {
     last_capture: Option<(u32, u64)>,
     released: Option<HandsetFrame>,
     rejected: u32,
-    /// The release deadline the task last woke for.
+    /// The release deadline the task last woke for (since the last edge).
     woken_for: Option<u32>,
 }
 
@@ -181,7 +181,8 @@ impl PpmInput {
     }
 
     /// When the capture task releases the frame in progress, virtual µs: the first RTC tick
-    /// at or after the decoder's deadline.
+    /// at or after the decoder's deadline (the few µs from the RTC interrupt to the task
+    /// running are left out).
     fn release_at_us(&self) -> Option<f64> {
         // The decoder releases at its own deadline; were it not to, the task would not spin
         // on that deadline here (the next edge ends the frame).
@@ -199,6 +200,7 @@ impl PpmInput {
         let capture = self.capture(e.at_us);
         let at_us = e.at_us.floor() as u64;
         self.last_capture = Some((capture, at_us));
+        self.woken_for = None;
         if let Some(k) = e.closes {
             self.closed = Some((k, at_us));
             closed(HandsetFrame {
