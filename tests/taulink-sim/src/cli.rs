@@ -70,9 +70,10 @@ pub struct Cli {
     pub compact8: bool,
     /// What feeds the module: crsf-synced (EdgeTX on CRSF at 400 kBd following the module's
     /// timing frames), crsf (EdgeTX ignoring them: every 4 ms of its own crystal), ppm
-    /// (free-running 22.5 ms frames), free-1k (a 1 kHz sample stream, the figures measured
-    /// before handsets were modelled). Latency is from the handset's frame generation to the
-    /// flight side's output (ppm: from the end of the frame).
+    /// (free-running 22.5 ms frames through the module's own PPM decoder), free-1k (a 1 kHz
+    /// sample stream, the figures measured before handsets were modelled). Latency is from
+    /// the handset's frame generation to the flight side's output (ppm: from the edge closing
+    /// the frame's last channel, the decoder's 2.5 ms hold included).
     #[arg(long, value_enum, default_value_t = HandsetArg::CrsfSynced)]
     pub handset: HandsetArg,
     /// Frequency band in MHz.

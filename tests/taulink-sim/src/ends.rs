@@ -20,7 +20,14 @@ pub(crate) fn apps(s: &Scenario, now: Now, record: &Shared, salt: u64) -> (Modul
         s.telemetry_load,
         s.handset,
     );
-    let flight = FlightApp::new(now, record.clone(), salt, s.telemetry_load, s.format);
+    let flight = FlightApp::new(
+        now,
+        record.clone(),
+        salt,
+        s.telemetry_load,
+        s.format,
+        s.handset,
+    );
     (module, flight)
 }
 

@@ -3,7 +3,8 @@
 //! CRSF handset that follows the module — how it re-times itself on the module's 0x3A timing
 //! frames as EdgeTX does. The module's side of that exchange is the real
 //! `telemetry::handset::crsf::Responder` (what `module-core` runs); only the radio is
-//! modelled here.
+//! modelled here. A PPM handset is an edge train into the module's own PPM decoder
+//! (`ppm_input.rs`).
 //!
 //! EdgeTX's mixer scheduler (`ModuleSyncStatus` in `telemetry.cpp`): a timing frame sets
 //! `refreshRate` to its interval (clamped to 850 … 50 000 µs) and `currentLag` to its offset;
@@ -13,10 +14,14 @@
 
 use std::collections::VecDeque;
 
+use telemetry::channels::Channels;
 use telemetry::handset::HandsetTelemetry;
 use telemetry::handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
 use telemetry::handset::crsf::{Decoded, Decoder, Frame, Message, frame_type};
 use telemetry::mock::SplitMix64;
+
+use crate::ppm_input::PpmInput;
+use crate::probe::sample_channels;
 
 /// What feeds the module.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -25,7 +30,8 @@ pub enum HandsetKind {
     CrsfSynced,
     /// EdgeTX on CRSF ignoring them: frames every 4 ms of its own crystal.
     Crsf,
-    /// Free-running PPM: an 8-channel frame every 22.5 ms of the handset's crystal.
+    /// Free-running PPM: an 8-channel frame every 22.5 ms of the handset's crystal, decoded
+    /// and released by the module's `ppm::Decoder` as its firmware does.
     Ppm,
     /// The 1 kHz sample stream the simulator measured with before (not synchronised to
     /// anything, no line time): comparable with earlier figures.
@@ -55,8 +61,6 @@ const EDGETX_MIN_PERIOD_US: i64 = 850;
 const EDGETX_MAX_PERIOD_US: i64 = 50_000;
 /// EdgeTX drops the sync 2 s after the last timing frame.
 const SYNC_VALID_US: u64 = 2_000_000;
-/// PPM frame period (8 channels, EdgeTX's default 22.5 ms).
-const PPM_PERIOD_US: f64 = 22_500.0;
 /// The legacy sampler's period.
 const FREE_PERIOD_US: f64 = 1_001.0;
 /// The handset's crystal error: +50 ppm (a handset crystal's tolerance; the module's MCU
@@ -66,21 +70,27 @@ pub const HANDSET_PPM: f64 = 50.0;
 /// mixer task takes a few hundred µs on a Taranis-class MCU; modelled as 100 µs ± 50 µs.
 const MIXER_RUN_US: (f64, f64) = (50.0, 150.0);
 
-/// One channel frame: its sample index, when it was generated and when it was complete at
-/// the module's input (virtual µs).
+/// One channel frame: its sample index, when it was generated and when the module's input
+/// had it for the link (virtual µs), and the channels it handed over.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HandsetFrame {
     /// Sample index (stamped into the channels).
     pub k: u64,
-    /// When the mixer sampled the sticks.
+    /// When the mixer sampled the sticks (PPM: when the frame's last channel period closed
+    /// at the module's input).
     pub generated_us: u64,
-    /// When the frame had fully arrived at the module.
+    /// When the module's input handed the frame to the link (CRSF: fully arrived; PPM:
+    /// released by the module's decoder).
     pub arrived_us: u64,
+    /// The 16 channel values the link gets.
+    pub channels: Channels,
 }
 
 /// A handset and the module's CRSF responder.
 pub struct Handset {
     kind: HandsetKind,
+    salt: u64,
+    ppm: Option<PpmInput>,
     rng: SplitMix64,
     next_tick_us: f64,
     next_k: u64,
@@ -97,13 +107,16 @@ pub struct Handset {
 }
 
 impl Handset {
-    /// A handset of `kind` that boots at a phase drawn from `seed`.
-    pub fn new(kind: HandsetKind, seed: u64) -> Self {
-        let mut rng = SplitMix64::new(seed ^ 0x04A2_D5E7);
+    /// A handset of `kind` on link `salt` (its channel values), booting at a phase drawn
+    /// from it.
+    pub fn new(kind: HandsetKind, salt: u64) -> Self {
+        let mut rng = SplitMix64::new(salt ^ 0x04A2_D5E7);
         let first = 1_000.0 + rng.unit() * 5_000.0;
         let rc = [0u8; 22];
         Self {
             kind,
+            salt,
+            ppm: (kind == HandsetKind::Ppm).then(|| PpmInput::new(salt, first, HANDSET_PPM)),
             rng,
             next_tick_us: first,
             next_k: 0,
@@ -130,18 +143,32 @@ impl Handset {
         }));
     }
 
+    /// What the handset is.
+    pub fn kind(&self) -> HandsetKind {
+        self.kind
+    }
+
     /// Timing frames the handset has followed.
     pub fn corrections(&self) -> u32 {
         self.corrections
     }
 
-    /// Runs the handset and the module's responder up to `now_us`; the newest frame that has
-    /// fully arrived by then, if any, and every frame generated so far through `generated`.
+    /// PPM frames the module's decoder dropped (0 for the other kinds).
+    pub fn rejected(&self) -> u32 {
+        self.ppm.as_ref().map_or(0, PpmInput::rejected)
+    }
+
+    /// Runs the handset and the module's input (CRSF responder or PPM decoder) up to
+    /// `now_us`; the newest frame the input has handed over by then, if any, and every frame
+    /// generated so far through `generated`.
     pub fn advance(
         &mut self,
         now_us: u64,
         mut generated: impl FnMut(HandsetFrame),
     ) -> Option<HandsetFrame> {
+        if let Some(ppm) = &mut self.ppm {
+            return ppm.advance(now_us, generated);
+        }
         loop {
             let arrival = self.in_flight.front().map(|f| f.arrived_us);
             let tick = self.next_tick_us;
@@ -167,12 +194,8 @@ impl Handset {
         let k = self.next_k;
         self.next_k += 1;
         let (arrived, period_local) = match self.kind {
-            HandsetKind::Free1k => (tick, FREE_PERIOD_US),
-            // Handed to the link code at the frame's last channel edge: that is "generation"
-            // for PPM (what comes before is the handset's own business, and ≥ a frame long).
-            // The module's decoder releases a locked frame only a sync gap (2 501 µs) after
-            // that edge; that proof is not modelled here (spec §10 gives the figure with it).
-            HandsetKind::Ppm => (tick, PPM_PERIOD_US),
+            // (PPM frames come from `PpmInput`, never from here.)
+            HandsetKind::Free1k | HandsetKind::Ppm => (tick, FREE_PERIOD_US),
             HandsetKind::Crsf | HandsetKind::CrsfSynced => {
                 let (lo, hi) = MIXER_RUN_US;
                 let mixer = lo + (hi - lo) * self.rng.unit();
@@ -186,6 +209,7 @@ impl Handset {
             k,
             generated_us: tick as u64,
             arrived_us: arrived as u64,
+            channels: sample_channels(self.salt, k),
         }
     }
 

@@ -16,6 +16,7 @@ pub mod handset;
 mod json;
 pub mod openlrs;
 pub mod plot;
+pub mod ppm_input;
 pub mod probe;
 pub mod report;
 pub mod scenario;

@@ -4,6 +4,7 @@
 //! the shared record both ends write into.
 
 use std::cell::{Cell, RefCell};
+use std::collections::VecDeque;
 use std::rc::Rc;
 
 use si4432_sim::RadioId;
@@ -16,6 +17,7 @@ use telemetry::link::master::MasterHooks;
 use telemetry::link::schedule::SlotKind;
 
 use crate::handset::{Handset, HandsetKind};
+use crate::ppm_input;
 
 /// Samples older than this at their output are not counted as latency (the link was down:
 /// that time shows up as failsafe, not as latency).
@@ -26,6 +28,9 @@ const STAMP_LOW: usize = 0;
 const STAMP_HIGH: usize = 1;
 /// Hop records kept for the hop-sequence check.
 const HOP_RECORDS: usize = 20_000;
+/// PPM frames the module handed the link that an output may still name (256 × 22.5 ms =
+/// 5.8 s, far beyond `MAX_BACKLOG_US`).
+const INPUT_FRAMES: usize = 256;
 
 fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -53,8 +58,11 @@ pub fn sample_channels(salt: u64, k: u64) -> Channels {
     ch
 }
 
-/// The handset sample index stamped into `channels`.
-fn stamp(channels: &Channels) -> u64 {
+/// The handset sample index stamped into `channels` by a handset of `kind`.
+fn stamp(channels: &Channels, kind: HandsetKind) -> u64 {
+    if kind == HandsetKind::Ppm {
+        return ppm_input::stamp(channels);
+    }
     let get = |i: usize| u64::from(channels.get(i).copied().unwrap_or(0));
     get(STAMP_LOW) | (get(STAMP_HIGH) << 11)
 }
@@ -103,6 +111,12 @@ pub struct Record {
     pub latencies_us: Vec<u32>,
     /// Generation time (virtual µs) of each handset frame, by sample index.
     pub generated_us: Vec<u64>,
+    /// PPM: the newest frames the module's decoder handed the link (sample index,
+    /// channels), what the flight side's outputs must match (the values come out of the
+    /// module's capture, not from a table).
+    pub input_frames: VecDeque<(u64, Channels)>,
+    /// PPM frames the module's decoder dropped (must stay 0: the line is clean).
+    pub input_rejected: u32,
     /// Per channel: outputs that refreshed it with its right value.
     pub channel_updates: [u64; MAX_CHANNELS],
     /// Timing frames the handset followed.
@@ -281,12 +295,22 @@ impl MasterHooks for ModuleApp {
                 .handset
                 .advance(now, |f| rec.generated_us.push(f.generated_us));
             rec.handset_corrections = self.handset.corrections();
+            rec.input_rejected = self.handset.rejected();
+            if let Some(f) = frame
+                && self.handset.kind() == HandsetKind::Ppm
+                && rec.input_frames.back().is_none_or(|(k, _)| *k != f.k)
+            {
+                if rec.input_frames.len() == INPUT_FRAMES {
+                    rec.input_frames.pop_front();
+                }
+                rec.input_frames.push_back((f.k, f.channels));
+            }
             frame
         };
         match latest {
             Some(frame) => {
                 master.set_input_lost(false);
-                master.set_channels(&sample_channels(self.salt, frame.k));
+                master.set_channels(&frame.channels);
             }
             // Nothing from the handset yet: the module says so (the follower flies failsafe).
             None => master.set_input_lost(true),
@@ -342,6 +366,7 @@ pub struct FlightApp {
     /// Under attack: attributes accepted uplinks.
     pub witness: Option<Witness>,
     format: ChannelFormat,
+    handset: HandsetKind,
     last_updates: u32,
     last_sample: Option<u64>,
     last_failsafe: bool,
@@ -350,13 +375,14 @@ pub struct FlightApp {
 }
 
 impl FlightApp {
-    /// A flight application for a link with `format`.
+    /// A flight application for a link with `format`, fed by a handset of `handset` kind.
     pub fn new(
         now: Now,
         record: Shared,
         salt: u64,
         telemetry_load: bool,
         format: ChannelFormat,
+        handset: HandsetKind,
     ) -> Self {
         Self {
             now,
@@ -365,6 +391,7 @@ impl FlightApp {
             telemetry_load,
             witness: None,
             format,
+            handset,
             last_updates: 0,
             last_sample: None,
             last_failsafe: true,
@@ -387,15 +414,22 @@ impl FollowerHooks for FlightApp {
         if follower.updates() != self.last_updates && !follower.in_failsafe() {
             self.last_updates = follower.updates();
             let out = follower.output();
-            let k = stamp(out);
-            let expected = sample_channels(self.salt, k);
+            let k = stamp(out, self.handset);
+            let expected = if self.handset == HandsetKind::Ppm {
+                rec.input_frames
+                    .iter()
+                    .find(|(sample, _)| *sample == k)
+                    .map(|(_, channels)| *channels)
+            } else {
+                Some(sample_channels(self.salt, k))
+            };
             // The channels this update refreshed (all the format carries, or the sticks and
             // one aux group) must be sample k's.
             let carried = (1u32 << self.format.count()) - 1;
             let mask = u32::from(follower.updated_channels()) & carried;
             let right = (0..MAX_CHANNELS)
                 .filter(|i| mask & (1 << i) != 0)
-                .all(|i| out.get(i) == expected.get(i));
+                .all(|i| expected.is_some_and(|e| out.get(i) == e.get(i)));
             if right && mask != 0 {
                 rec.outputs_ok += 1;
                 rec.last_output_us = now;

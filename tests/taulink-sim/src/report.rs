@@ -74,7 +74,7 @@ pub struct Report {
     /// Downlink stream goodput, B/s.
     #[serde(serialize_with = "decimals::<1, _>")]
     pub downlink_goodput_bps: f64,
-    /// Outputs / stream bytes that were wrong (must be 0).
+    /// Outputs / stream bytes that were wrong, PPM frames the module dropped (must be 0).
     pub errors: u64,
     /// Failsafe entries.
     pub failsafes: usize,
@@ -161,7 +161,7 @@ pub fn summarise(s: &Scenario, o: &Outcome) -> Report {
         master_rssi_dbm: m.now.master_rssi_dbm.unwrap_or(0),
         uplink_goodput_bps: m.up_bytes_ok as f64 / active_s,
         downlink_goodput_bps: m.down_bytes_ok as f64 / active_s,
-        errors: m.outputs_bad + m.up_bytes_bad + m.down_bytes_bad,
+        errors: m.outputs_bad + m.up_bytes_bad + m.down_bytes_bad + u64::from(m.input_rejected),
         failsafes: m
             .failsafe_changes
             .iter()

@@ -1,7 +1,8 @@
 //! The latency goals of issue 17 as measured figures (chip level, SPI time and nIRQ latency
 //! on, 30 s, seed 1): the stick mode F700 at 1:8 telemetry with an EdgeTX handset that
-//! follows the module's timing frames and with free-running PPM, and every older mode
-//! keeping the figures it had before channels were latched at transmission (spec §10).
+//! follows the module's timing frames and with free-running PPM (through the module's own
+//! decoder), and every older mode keeping the figures it had before channels were latched
+//! at transmission (spec §10).
 
 use taulink_sim::handset::HandsetKind;
 use taulink_sim::{Report, Scenario, run};
@@ -53,14 +54,26 @@ fn f700_with_a_synced_crsf_handset_has_a_p99_latency_under_2_5_ms() {
 }
 
 #[test]
-fn f700_with_free_running_ppm_has_a_p99_latency_near_4_ms() {
-    // The goal was ≤ 4 ms; measured 4.09 ms: a frame that just missed the uplink before a
-    // downlink slot waits two slots (spec §10 says what 4 ms would take). Measured: the
-    // sticks (the stamp rides in channels 1–2), from the frame's last channel edge at the
-    // module (the decoder's 2.5 ms sync-gap proof not included) to the follower's output.
+fn f700_with_free_running_ppm_has_a_p99_latency_of_6_6_ms() {
+    // Measured 4.78 / 6.58 ms (mean / p99): the sticks (the stamp rides in channels 1–3), from
+    // the frame's last channel edge at the module's input to the follower's output. That
+    // includes the module decoder's hold, as its firmware runs it: a locked frame goes to the
+    // link a sync gap (2 501 µs, on the task's next 32 768 Hz timer tick) after that edge,
+    // the proof that no split pulse or extra channel follows; then the wait for the next
+    // latch (up to two slots across the downlink slot) and the 1.35 ms path. The issue's goal
+    // of ≤ 4 ms is not met: spec §10 says what it would take and why frame integrity was
+    // chosen. The lower bounds keep the hold in the figure.
     let r = f700(HandsetKind::Ppm);
-    assert!(r.latency_p99_ms <= 4.1, "{}", r.latency_p99_ms);
-    assert!(r.latency_mean_ms <= 2.5, "{}", r.latency_mean_ms);
+    assert!(
+        (6.4..=6.7).contains(&r.latency_p99_ms),
+        "{}",
+        r.latency_p99_ms
+    );
+    assert!(
+        (4.6..=4.9).contains(&r.latency_mean_ms),
+        "{}",
+        r.latency_mean_ms
+    );
 }
 
 #[test]
