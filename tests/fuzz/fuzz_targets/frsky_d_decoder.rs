@@ -11,7 +11,10 @@ fuzz_target!(|data: &[u8]| {
     decoder.push_all(data, |event| {
         if let Event::Frame(frame) = event {
             let mut out = [0u8; frsky_d::MAX_WIRE_LEN];
-            let written = frame.encode(&mut out).expect("decoded frame re-encodes").len();
+            let written = frame
+                .encode(&mut out)
+                .expect("decoded frame re-encodes")
+                .len();
             let mut again = Vec::new();
             Decoder::new().push_all(&out[..written], |e| again.push(e));
             assert_eq!(again, vec![Event::Frame(frame.clone())]);

@@ -8,9 +8,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use openlrs::bind::{
-    BIND_DATA_LEN, BIND_PACKET_LEN, BindData, BindReception, receive_bind_packet,
-};
+use openlrs::bind::{BIND_DATA_LEN, BIND_PACKET_LEN, BindData, BindReception, receive_bind_packet};
 use openlrs::modem::{self, Purpose};
 use openlrs::{BindingVersion, hopping, timing, tx::Transmitter};
 use radio_rfm22b::RfmType;

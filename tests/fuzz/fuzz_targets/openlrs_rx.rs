@@ -9,10 +9,10 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use openlrs::BindingVersion;
 use openlrs::bind::{BIND_ACK, BIND_DATA_LEN, BindData};
 use openlrs::rx::{Command, Config, Output, Receiver};
 use openlrs::telemetry::{self, DOWNLINK_FRAME_LEN, Downlink};
-use openlrs::BindingVersion;
 use radio_rfm22b::RfmType;
 use taulink_fuzz::Input;
 

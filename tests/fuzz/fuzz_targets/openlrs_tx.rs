@@ -10,12 +10,12 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use openlrs::BindingVersion;
 use openlrs::bind::{BIND_ACK, BindData};
 use openlrs::channels::MAX_CHANNELS;
 use openlrs::frsky::HandsetTelemetry;
 use openlrs::tx::{BindBeacon, Received, Transmitter};
 use openlrs::uplink::{self, Uplink};
-use openlrs::BindingVersion;
 use radio_rfm22b::RfmType;
 use taulink_fuzz::Input;
 use telemetry::handset::{frsky_d, sport};

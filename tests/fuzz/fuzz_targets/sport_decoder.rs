@@ -10,7 +10,10 @@ fuzz_target!(|data: &[u8]| {
         if let Event::Frame(frame) = event {
             let mut out = [0u8; sport::MAX_WIRE_LEN];
             // Physical IDs 0x7D/0x7E cannot be produced by the decoder's framing.
-            let written = frame.encode(&mut out).expect("decoded frame re-encodes").len();
+            let written = frame
+                .encode(&mut out)
+                .expect("decoded frame re-encodes")
+                .len();
             let mut again = Vec::new();
             Decoder::new().push_all(&out[..written], |e| again.push(e));
             assert_eq!(again, vec![Event::Frame(frame)]);

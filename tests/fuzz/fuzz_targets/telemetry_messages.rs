@@ -18,14 +18,18 @@ fuzz_target!(|data: &[u8]| {
     for &byte in data {
         if let Some(Decoded::Message(message)) = reader.push(byte) {
             let mut encoded = [0u8; FRAMED_MAX_BYTES];
-            let n = encode_message(&message, &mut encoded).expect("a decoded message encodes").len();
+            let n = encode_message(&message, &mut encoded)
+                .expect("a decoded message encodes")
+                .len();
             let mut again = MessageReader::new();
             let back: Vec<_> = encoded[..n].iter().filter_map(|&b| again.push(b)).collect();
             let [Decoded::Message(copy)] = back[..] else {
                 panic!("re-encoded message did not decode: {back:?}");
             };
             let mut encoded_again = [0u8; FRAMED_MAX_BYTES];
-            let m = encode_message(&copy, &mut encoded_again).expect("encodes").len();
+            let m = encode_message(&copy, &mut encoded_again)
+                .expect("encodes")
+                .len();
             assert_eq!(encoded[..n], encoded_again[..m]);
         }
     }
@@ -34,7 +38,9 @@ fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
     let payload = input.chunk(MESSAGE_MAX_BYTES * 2);
     let mut out = vec![0u8; framed_len(payload.len())];
-    let n = frame(payload, &mut out).expect("framed_len is enough").len();
+    let n = frame(payload, &mut out)
+        .expect("framed_len is enough")
+        .len();
     assert_eq!(out[n - 1], 0);
     assert!(!out[..n - 1].contains(&0));
     let mut deframer = Deframer::<{ MESSAGE_MAX_BYTES * 2 + 8 }>::new();
