@@ -2,7 +2,7 @@
 """Reference LQG gains for tests/quad-sim/tests/control_reference_dare.rs.
 
 Independent of the Rust code: the ZOH matrices come from scipy.linalg.expm of the augmented
-continuous model (lqg.md section 1), the gains from scipy.linalg.solve_discrete_are, each
+continuous model (flight/flight-core/src/control/LQG.md §1), the gains from scipy.linalg.solve_discrete_are, each
 refined by Newton-free fixed-point polishing and checked by its Riccati residual.
 Run:  python3 dare_reference.py > dare_reference.json   (numpy + scipy)
 """
