@@ -8,10 +8,10 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use openlrs::RfmType;
 use openlrs::bind::{BIND_DATA_LEN, BIND_PACKET_LEN, BindData, BindReception, receive_bind_packet};
 use openlrs::modem::{self, Purpose};
 use openlrs::{BindingVersion, hopping, timing, tx::Transmitter};
-use radio_rfm22b::RfmType;
 
 fuzz_target!(|packet: &[u8]| {
     if let Some(bytes) = packet.first_chunk::<BIND_DATA_LEN>() {

@@ -10,10 +10,10 @@
 
 use libfuzzer_sys::fuzz_target;
 use openlrs::BindingVersion;
+use openlrs::RfmType;
 use openlrs::bind::{BIND_ACK, BIND_DATA_LEN, BindData};
 use openlrs::rx::{Command, Config, Output, Receiver};
 use openlrs::telemetry::{self, DOWNLINK_FRAME_LEN, Downlink};
-use radio_rfm22b::RfmType;
 use taulink_fuzz::Input;
 
 fuzz_target!(|data: &[u8]| {

@@ -11,12 +11,12 @@
 
 use libfuzzer_sys::fuzz_target;
 use openlrs::BindingVersion;
+use openlrs::RfmType;
 use openlrs::bind::{BIND_ACK, BindData};
 use openlrs::channels::MAX_CHANNELS;
 use openlrs::frsky::HandsetTelemetry;
 use openlrs::tx::{BindBeacon, Received, Transmitter};
 use openlrs::uplink::{self, Uplink};
-use radio_rfm22b::RfmType;
 use taulink_fuzz::Input;
 use telemetry::handset::{frsky_d, sport};
 
