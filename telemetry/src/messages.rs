@@ -55,22 +55,86 @@ pub struct LinkStats {
     pub failsafes: u16,
 }
 
-/// Flight mode.
+/// The flight mode: what the controller flies and what the link reports — one type for both
+/// ends, so the mode the quad flies is the mode the handset and the phone show.
+///
+/// **The variant order is the wire and the settings.** postcard encodes the variant index,
+/// and that index is [`FlightMode::id`], the number the flight side's settings store for the
+/// mode-switch positions (`mode.switch_low/mid/high`, `flight_core::settings::params::MODES`
+/// in the same order). So stored switch choices keep their meaning and the wire byte is the
+/// stable id: new modes are appended, never inserted, reordered or removed (a retired mode
+/// keeps its variant). The flight-only policy of each mode (which loops run) lives in
+/// `flight_core`, not here.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
 pub enum FlightMode {
-    /// Direct rate (acro).
-    Rate,
-    /// Self-levelling.
-    Attitude,
-    /// Attitude with altitude hold.
-    AltitudeHold,
-    /// Position hold.
-    PositionHold,
-    /// Return to home.
-    ReturnToHome,
-    /// System-identification excitation running.
-    SystemId,
+    /// Sticks command body rates, PID controller (acro).
+    RatePid = 0,
+    /// Sticks command body rates, LQG controller.
+    RateLqg = 1,
+    /// Sticks command roll/pitch angles (self-levelling).
+    Attitude = 2,
+    /// Attitude near centre, rate at full deflection.
+    Horizon = 3,
+    /// System identification: the shake excitation on top of rate control.
+    SystemId = 4,
+    /// Attitude with the altitude held (throttle centred) or climbing at a rate (deflected).
+    AltitudeHold = 5,
+    /// Altitude hold, and the position held while the roll/pitch sticks are centred (GPS).
+    PositionHold = 6,
+    /// Altitude hold, and the sticks move the held position at a bounded speed (GPS).
+    Loiter = 7,
+}
+
+impl FlightMode {
+    /// Every mode, in id order.
+    pub const ALL: [FlightMode; 8] = [
+        FlightMode::RatePid,
+        FlightMode::RateLqg,
+        FlightMode::Attitude,
+        FlightMode::Horizon,
+        FlightMode::SystemId,
+        FlightMode::AltitudeHold,
+        FlightMode::PositionHold,
+        FlightMode::Loiter,
+    ];
+
+    /// The stable number: the wire's variant index, the stored mode-switch choice, and the
+    /// number the handset's numeric sensors show (S.Port DIY 0x5101, FrSky hub Temp1).
+    pub const fn id(self) -> u8 {
+        self as u8
+    }
+
+    /// The mode with stable number `id`, if there is one.
+    pub const fn from_id(id: u8) -> Option<FlightMode> {
+        Some(match id {
+            0 => FlightMode::RatePid,
+            1 => FlightMode::RateLqg,
+            2 => FlightMode::Attitude,
+            3 => FlightMode::Horizon,
+            4 => FlightMode::SystemId,
+            5 => FlightMode::AltitudeHold,
+            6 => FlightMode::PositionHold,
+            7 => FlightMode::Loiter,
+            _ => return None,
+        })
+    }
+
+    /// Short name, at most 5 characters in Betaflight/INAV's style (CRSF FLIGHT_MODE as
+    /// EdgeTX shows it, the flight console, logs).
+    pub const fn name(self) -> &'static str {
+        match self {
+            FlightMode::RatePid => "RATE",
+            FlightMode::RateLqg => "LQG",
+            FlightMode::Attitude => "ANGL",
+            FlightMode::Horizon => "HOR",
+            FlightMode::SystemId => "SYSID",
+            FlightMode::AltitudeHold => "ALTH",
+            FlightMode::PositionHold => "POSH",
+            FlightMode::Loiter => "LOIT",
+        }
+    }
 }
 
 /// Arming and failsafe state.
@@ -220,7 +284,7 @@ pub struct ChangeRefused {
 }
 
 /// The home: where the flight side's GNSS position is measured from (its first usable fix,
-/// or one set explicitly), and where a return-to-home flies to.
+/// or one set explicitly); where a return-to-home would fly to (no mode flies one yet).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Home {
@@ -244,8 +308,11 @@ pub enum Message {
     Battery(Battery),
     /// Link statistics.
     LinkStats(LinkStats),
-    /// Flight mode.
-    FlightMode(FlightMode),
+    /// Retired (wire number 3): the six-mode flight mode of the first message set (Rate,
+    /// Attitude, AltitudeHold, PositionHold, ReturnToHome, SystemId by index), kept so the
+    /// variants after it keep their numbers. Nothing sends it; a reader ignores it (an older
+    /// flight side's mode cannot be mapped to [`FlightMode`] without guessing).
+    RetiredFlightMode(u8),
     /// Arming / failsafe.
     ArmState(ArmState),
     /// GNSS.
@@ -265,6 +332,9 @@ pub enum Message {
     ChangeRefused(ChangeRefused),
     /// The home position (flight → ground; appended: earlier variants keep their numbers).
     Home(Home),
+    /// The flight mode (flight → ground; wire number 13, replacing the retired number 3: an
+    /// older reader drops it as unknown instead of misreading the eight modes).
+    FlightMode(FlightMode),
 }
 
 /// Largest postcard encoding of a [`Message`].
@@ -434,6 +504,30 @@ mod tests {
         let bytes = postcard::to_slice(&m, &mut buf).unwrap();
         // Tag 12 (after ChangeRefused = 11), zig-zag 1, -1, 2, then true.
         assert_eq!(bytes, &[12, 2, 1, 4, 1]);
+    }
+
+    #[test]
+    fn a_flight_mode_is_its_stable_id_on_the_wire() {
+        for (id, mode) in (0u8..).zip(FlightMode::ALL) {
+            assert_eq!(mode.id(), id);
+            assert_eq!(FlightMode::from_id(id), Some(mode));
+            let mut buf = [0u8; MESSAGE_MAX_BYTES];
+            assert_eq!(postcard::to_slice(&mode, &mut buf).unwrap(), &[id]);
+            // Message number 13 (after Home = 12), then the mode's id.
+            let bytes = postcard::to_slice(&Message::FlightMode(mode), &mut buf).unwrap();
+            assert_eq!(bytes, &[13, id]);
+        }
+        assert_eq!(FlightMode::from_id(8), None);
+        assert!(postcard::from_bytes::<FlightMode>(&[8]).is_err());
+    }
+
+    #[test]
+    fn an_older_flight_sides_mode_is_read_as_retired_not_as_a_mode() {
+        // The first message set sent Attitude as [3, 1]; today 1 would be RateLqg.
+        assert_eq!(
+            postcard::from_bytes::<Message>(&[3, 1]).unwrap(),
+            Message::RetiredFlightMode(1)
+        );
     }
 
     #[test]

@@ -10,14 +10,14 @@
 //! every range in the table (1e-9 … 1e9 do not fit one decimal fixed point).
 
 use telemetry::messages::{
-    ArmState, Attitude, Axis, Battery, Cells, FlightMode as WireMode, LinkStats, Message,
-    SettingChange, SysIdResult, Vertical,
+    ArmState, Attitude, Axis, Battery, Cells, LinkStats, Message, SettingChange, SysIdResult,
+    Vertical,
 };
 
 use crate::battery::BatteryStatus;
 use crate::pipeline::LoopOutput;
 use crate::settings::{PARAMS, Param, ParamError, Settings, Value};
-use crate::supervisor::{ArmBlocker, FlightMode};
+use crate::supervisor::ArmBlocker;
 use crate::sysid::ekf::Identification;
 
 /// What the flight side's link end sees.
@@ -68,18 +68,6 @@ pub const fn blocker_bit(b: ArmBlocker) -> u16 {
         ArmBlocker::GainsNotReady => 8,
         ArmBlocker::BatteryCritical => 16,
         ArmBlocker::SettingsProblem => 32,
-    }
-}
-
-/// The wire's flight mode for ours: the LQG and PID rate modes are both "rate", horizon
-/// is reported as attitude (the closest wire value).
-pub const fn wire_mode(m: FlightMode) -> WireMode {
-    match m {
-        FlightMode::RatePid | FlightMode::RateLqg => WireMode::Rate,
-        FlightMode::Attitude | FlightMode::Horizon => WireMode::Attitude,
-        FlightMode::SystemId => WireMode::SystemId,
-        FlightMode::AltitudeHold => WireMode::AltitudeHold,
-        FlightMode::PositionHold | FlightMode::Loiter => WireMode::PositionHold,
     }
 }
 
@@ -205,7 +193,8 @@ impl Reporter {
                     failsafes: l.failsafes,
                 })
             }
-            Kind::FlightMode => Message::FlightMode(wire_mode(snap.out.mode)),
+            // The mode flown is the mode reported: one type, no mapping.
+            Kind::FlightMode => Message::FlightMode(snap.out.mode),
             Kind::Vertical => vertical_message(snap.altitude_m?, snap.climb_mps?),
             Kind::Cells => return cells_message(&snap.battery?),
         })

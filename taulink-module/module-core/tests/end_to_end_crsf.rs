@@ -205,7 +205,7 @@ fn crsf_channels_to_flight_and_telemetry_back_as_crsf() {
             _ => None,
         })
         .unwrap();
-    assert_eq!(mode.name.as_str(), "ALT HOLD");
+    assert_eq!(mode.name.as_str(), "ALTH");
     let gps = messages
         .iter()
         .rev()

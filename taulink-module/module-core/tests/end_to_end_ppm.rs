@@ -169,9 +169,9 @@ fn ppm_to_flight_and_telemetry_back_as_sport_and_hm10() {
     let vfas = values(value_id::VFAS);
     assert!(!vfas.is_empty());
     assert!(vfas.iter().all(|&(_, v)| v == 1187));
-    // Flight mode number: AltitudeHold = 2 under DIY ID 0x5101.
+    // Flight mode number: AltitudeHold's stable id 5 under DIY ID 0x5101.
     let modes = values(value_id::TAULINK_FLIGHT_MODE);
-    assert!(!modes.is_empty() && modes.iter().all(|&(_, v)| v == 2));
+    assert!(!modes.is_empty() && modes.iter().all(|&(_, v)| v == 5));
     // LQ under DIY ID 0x5100: the follower's uplink LQ; on this clean link 100 %.
     let lq = values(value_id::TAULINK_LQ);
     assert!(!lq.is_empty());
@@ -294,7 +294,11 @@ fn ppm_mode_fallback_frsky_d_hub_decodes_to_the_flight_values() {
     assert_eq!(value(hub::id::VFAS), Some(3187));
     assert_eq!(value(hub::id::CURRENT), Some(125));
     assert_eq!(value(hub::id::FUEL), Some(64));
-    assert_eq!(value(hub::id::TEMP1), Some(2), "flight mode number");
+    assert_eq!(
+        value(hub::id::TEMP1),
+        Some(5),
+        "flight mode number (AltitudeHold's id)"
+    );
     // Channels arrive on this path too.
     let flight = world.flight.borrow();
     assert_eq!(last_output(&flight)[0], us_to_ticks(WIDTHS_US[0]));

@@ -73,9 +73,9 @@ test("arming and a flight-mode change are spoken; mute silences the next change"
   // PID) at 20 s.
   await expect
     .poll(async () => page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.join(";")), { timeout: 30_000 })
-    .toContain("Flight mode Rate");
+    .toContain("Flight mode Rate PID");
   expect(await page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.join(";"))).toContain("Armed");
-  await expect(page.getByLabel("Flight mode", { exact: true })).toHaveText("Rate");
+  await expect(page.getByLabel("Flight mode", { exact: true })).toHaveText("Rate PID");
   // Armed and flying: settings are no longer offered.
   await expect(page.getByLabel("Armed", { exact: true })).toHaveText("Yes");
   await expect(page.getByRole("button", { name: "Set" }).first()).toBeDisabled();

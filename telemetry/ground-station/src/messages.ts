@@ -10,7 +10,9 @@ export interface LinkStats {
   uplink_rssi_dbm: number; uplink_lq: number; downlink_rssi_dbm: number; downlink_lq: number;
   rate_mode: number; received: number; missed: number; failsafes: number;
 }
-export type FlightMode = "Rate" | "Attitude" | "AltitudeHold" | "PositionHold" | "ReturnToHome" | "SystemId";
+/** `telemetry::messages::FlightMode`: what the controller flies, as the flight side reports it. */
+export type FlightMode =
+  | "RatePid" | "RateLqg" | "Attitude" | "Horizon" | "SystemId" | "AltitudeHold" | "PositionHold" | "Loiter";
 export interface ArmState { armed: boolean; failsafe: boolean; arming_blockers: number }
 export type GpsFix = "None" | "Fix2d" | "Fix3d";
 export interface Gps {
@@ -30,14 +32,16 @@ export type Message =
   | { Attitude: Attitude }
   | { Battery: Battery }
   | { LinkStats: LinkStats }
-  | { FlightMode: FlightMode }
+  /** An older flight side's mode (retired wire number): its numbers meant other modes; ignored. */
+  | { RetiredFlightMode: number }
   | { ArmState: ArmState }
   | { Gps: Gps }
   | { SysIdResult: SysIdResult }
   | { SettingChange: SettingChange }
   | { SignedChange: SignedChange }
   | { ChangeRefused: ChangeRefused }
-  | { Home: Home };
+  | { Home: Home }
+  | { FlightMode: FlightMode };
 
 /** Why the module did not take a key from the phone (`telemetry::module_record::KeyRefusal`). */
 export type KeyRefusal = "Armed" | "NotAuthenticated" | "Replayed" | "NoPhrase" | "Declined" | "Expired";
@@ -54,12 +58,14 @@ export function kindOf(m: Exclude<Event, "Dropped">): string {
 
 /** Flight mode names as a pilot says them. */
 export const MODE_NAMES: Record<FlightMode, string> = {
-  Rate: "Rate",
+  RatePid: "Rate PID",
+  RateLqg: "Rate LQG",
   Attitude: "Attitude",
+  Horizon: "Horizon",
+  SystemId: "System identification",
   AltitudeHold: "Altitude hold",
   PositionHold: "Position hold",
-  ReturnToHome: "Return to home",
-  SystemId: "System identification",
+  Loiter: "Loiter",
 };
 
 /** `ArmState.arming_blockers` bits (flight_core::report::blocker_bit). */

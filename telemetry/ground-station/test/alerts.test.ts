@@ -25,11 +25,11 @@ describe("voice alerts", () => {
   it("telemetry lost after LINK_LOST_MS of silence, regained on the next message", () => {
     const a = new Alerts();
     const s = initialState();
-    apply(s, { FlightMode: "Rate" }, 0);
+    apply(s, { FlightMode: "RatePid" }, 0);
     expect(a.update(s, 0)).toEqual([]);
     expect(a.update(s, LINK_LOST_MS + 1)).toEqual(["Telemetry lost"]);
     expect(a.update(s, LINK_LOST_MS + 500)).toEqual([]);
-    apply(s, { FlightMode: "Rate" }, 5000);
+    apply(s, { FlightMode: "RatePid" }, 5000);
     expect(a.update(s, 5000)).toEqual(["Telemetry regained"]);
   });
 

@@ -25,7 +25,7 @@ describe("logs", () => {
   it("exports one CSV per message type", () => {
     const events: Record<string, Event[]> = {
       a: [{ Battery: { voltage_mv: 16000, current_ca: 5, used_mah: 1, remaining_percent: 0 } }, "Dropped"],
-      b: [{ FlightMode: "Rate" }, { Battery: { voltage_mv: 15990, current_ca: 6, used_mah: 2, remaining_percent: 0 } }],
+      b: [{ FlightMode: "RatePid" }, { Battery: { voltage_mv: 15990, current_ca: 6, used_mah: 2, remaining_percent: 0 } }],
     };
     const csv = csvByType(
       [{ t: 0, bytes: new Uint8Array([0xa]) }, { t: 20, bytes: new Uint8Array([0xb]) }],
@@ -33,6 +33,6 @@ describe("logs", () => {
     );
     expect([...csv.keys()]).toEqual(["Battery", "FlightMode"]);
     expect(csv.get("Battery")).toBe("t_ms,voltage_mv,current_ca,used_mah,remaining_percent\n0,16000,5,1,0\n20,15990,6,2,0\n");
-    expect(csv.get("FlightMode")).toBe("t_ms,value\n20,Rate\n");
+    expect(csv.get("FlightMode")).toBe("t_ms,value\n20,RatePid\n");
   });
 });

@@ -13,9 +13,9 @@ describe("model", () => {
     const s = initialState();
     apply(s, { FlightMode: "Attitude" }, 1);
     apply(s, "Dropped", 2);
-    apply(s, { FlightMode: "Rate" }, 3);
+    apply(s, { FlightMode: "RatePid" }, 3);
     apply(s, { SettingChange: { id: 4, value: 9 } }, 4);
-    expect(s.mode).toBe("Rate");
+    expect(s.mode).toBe("RatePid");
     expect(s.settings.get(4)).toBe(9);
     expect([s.messages, s.dropped, s.lastMessageMs]).toEqual([3, 1, 4]);
   });

@@ -58,7 +58,7 @@ pub struct AttitudeReport {
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FlightModeReport {
-    /// Short name, e.g. "ANGLE" (CRSF shows 13 characters).
+    /// Short name, e.g. "ANGL" (CRSF shows 13 characters).
     pub name: String<FLIGHT_MODE_NAME_MAX_LEN>,
     /// Mode number for numeric sensors.
     pub number: u8,

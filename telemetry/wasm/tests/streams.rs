@@ -56,16 +56,7 @@ fn random_message(rng: &mut Rng) -> Message {
             missed: rng.next() as u32 >> (r % 32),
             failsafes: (r >> 40) as u16,
         }),
-        3 => Message::FlightMode(
-            [
-                FlightMode::Rate,
-                FlightMode::Attitude,
-                FlightMode::AltitudeHold,
-                FlightMode::PositionHold,
-                FlightMode::ReturnToHome,
-                FlightMode::SystemId,
-            ][(r % 6) as usize],
-        ),
+        3 => Message::FlightMode(FlightMode::ALL[(r % 8) as usize]),
         4 => Message::ArmState(ArmState {
             armed: r & 1 == 1,
             failsafe: r & 2 == 2,
@@ -169,6 +160,11 @@ fn streams() -> Vec<(&'static str, Vec<Vec<u8>>)> {
                 set: true,
             }))],
         ),
+        // An older flight side's six-mode flight mode (retired message 3): the page ignores it.
+        (
+            "retired flight mode",
+            vec![framed(&Message::RetiredFlightMode(1))],
+        ),
     ]
 }
 
@@ -243,6 +239,10 @@ fn the_streams_exercise_messages_and_drops() {
                 all,
                 "[{\"Home\":{\"altitude_cm\":50000,\"latitude_e7\":470654321,\"longitude_e7\":-80123456,\"set\":true}}]",
                 "{name}: the JSON the ground station's `Home` type describes"
+            ),
+            "retired flight mode" => assert_eq!(
+                all, "[{\"RetiredFlightMode\":1}]",
+                "{name}: the JSON the ground station's model ignores"
             ),
             "damaged, joined mid-frame" => {
                 assert!(kind("Dropped") >= 20 && kind("{\"") >= 180, "{name}")

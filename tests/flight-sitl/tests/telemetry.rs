@@ -19,7 +19,7 @@ use flight_sitl::{PilotInput, Scenario, run};
 fn telemetry_reaches_the_module_and_settings_come_back() {
     use flight_core::report::f32_value;
     use flight_core::settings::{PARAMS, handles};
-    use telemetry::messages::{FlightMode as WireMode, Message, SettingChange};
+    use telemetry::messages::{FlightMode, Message, SettingChange};
     let (quad, settings) = default_airframe();
     let id = PARAMS
         .iter()
@@ -73,7 +73,7 @@ fn telemetry_reaches_the_module_and_settings_come_back() {
     assert!(armed_at > armed && armed_at - armed < 0.05, "{armed_at}");
     assert!(
         rx.iter()
-            .any(|(_, m)| *m == Message::FlightMode(WireMode::Attitude))
+            .any(|(_, m)| *m == Message::FlightMode(FlightMode::Attitude))
     );
     // Attitude in hover (truth within 0.35°, estimate within 0.3° of it): within 1°.
     let hover: Vec<_> = rx

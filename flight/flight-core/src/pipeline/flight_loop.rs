@@ -16,7 +16,7 @@ use crate::estimation::quaternion::{Quaternion, ned_to_body};
 use crate::estimation::{GRAVITY_MPS2, all_finite};
 use crate::outputs::Command;
 use crate::supervisor::{
-    Decision, FlightMode, Inputs, LandingDetector, LandingInputs, ModeSwitch,
+    Decision, FlightMode, Inputs, LandingDetector, LandingInputs, ModePolicy, ModeSwitch,
     Settings as SupervisorSettings, Sticks, Supervisor,
 };
 use crate::sysid::ekf::Identification;

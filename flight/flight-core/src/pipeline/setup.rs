@@ -77,19 +77,12 @@ impl From<ModelError> for SetupError {
     }
 }
 
-/// The `settings::MODES` choice index as a flight mode (same order).
+/// The `settings::MODES` choice index as a flight mode: the index is the mode's stable id.
 fn mode(index: u32) -> Result<FlightMode, SetupError> {
-    Ok(match index {
-        0 => FlightMode::RatePid,
-        1 => FlightMode::RateLqg,
-        2 => FlightMode::Attitude,
-        3 => FlightMode::Horizon,
-        4 => FlightMode::SystemId,
-        5 => FlightMode::AltitudeHold,
-        6 => FlightMode::PositionHold,
-        7 => FlightMode::Loiter,
-        _ => return Err(SetupError::BadChoice),
-    })
+    u8::try_from(index)
+        .ok()
+        .and_then(FlightMode::from_id)
+        .ok_or(SetupError::BadChoice)
 }
 
 /// One axis's rate PID gains (`handles::PID_GAINS` row: kp, ki, kd).

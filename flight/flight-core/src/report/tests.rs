@@ -2,7 +2,7 @@ use super::*;
 use crate::battery::BatteryLevel;
 use crate::outputs::Command;
 use crate::settings::handles;
-use crate::supervisor::Decision;
+use crate::supervisor::{Decision, FlightMode};
 use telemetry::messages::{Decoded, MessageReader, encode_message};
 
 fn snapshot() -> Snapshot {
@@ -63,7 +63,8 @@ fn rotation_carries_every_kind_and_attitude_half_the_time() {
         used_mah: 120,
         remaining_percent: 0
     })));
-    assert!(msgs.contains(&Message::FlightMode(WireMode::Rate)));
+    // The LQG rate mode is reported as itself (once both rate modes were "Rate").
+    assert!(msgs.contains(&Message::FlightMode(FlightMode::RateLqg)));
     assert!(msgs.iter().any(|m| matches!(
         m,
         Message::LinkStats(LinkStats {

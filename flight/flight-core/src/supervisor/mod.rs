@@ -16,7 +16,7 @@ pub use machine::{
     ArmBlocker, Decision, Inputs, LAST_RESORT_ALTITUDE_M, Settings, State, Supervisor,
     last_resort_ms,
 };
-pub use modes::{FlightMode, ModeSwitch};
+pub use modes::{FlightMode, ModePolicy, ModeSwitch};
 
 /// Stick positions as the link delivers them: throttle 0…1, the others −1…1 (centre 0).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -1,59 +1,18 @@
-//! Flight modes and the switch channel that selects them.
+//! Flight modes (the type is the wire's, `telemetry::messages::FlightMode`), their flight-only
+//! policy, and the switch channel that selects them.
 
-/// What the controller does with the sticks.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum FlightMode {
-    /// Sticks command body rates, PID controller.
-    RatePid,
-    /// Sticks command body rates, LQG controller.
-    RateLqg,
-    /// Sticks command roll/pitch angles (self-levelling).
-    Attitude,
-    /// Attitude near centre, rate at full deflection.
-    Horizon,
-    /// System identification: the shake excitation on top of rate control.
-    SystemId,
-    /// Attitude mode with the altitude held (throttle stick centred) or climbing at a rate
-    /// (deflected) on the INS vertical (`pipeline::hold`).
-    AltitudeHold,
-    /// Altitude hold, and the position held while the roll/pitch sticks are centred (GPS).
-    PositionHold,
-    /// Altitude hold, and the sticks move the held position at a bounded speed (GPS).
-    Loiter,
+/// What the controller does with the sticks: one type with the link's, defined by the wire
+/// crate (its variant index is the stable id the settings store; see its doc).
+pub use telemetry::messages::FlightMode;
+
+/// The flight-only policy of a [`FlightMode`] (the wire crate stays free of it).
+pub trait ModePolicy {
+    /// The throttle holds the altitude and the attitude comes from the hold loops.
+    fn holds(self) -> bool;
 }
 
-impl FlightMode {
-    /// Stable number for telemetry.
-    pub const fn id(self) -> u8 {
-        match self {
-            FlightMode::RatePid => 0,
-            FlightMode::RateLqg => 1,
-            FlightMode::Attitude => 2,
-            FlightMode::Horizon => 3,
-            FlightMode::SystemId => 4,
-            FlightMode::AltitudeHold => 5,
-            FlightMode::PositionHold => 6,
-            FlightMode::Loiter => 7,
-        }
-    }
-
-    /// Short name (CRSF FLIGHT_MODE, S.Port, logs).
-    pub const fn name(self) -> &'static str {
-        match self {
-            FlightMode::RatePid => "RATE",
-            FlightMode::RateLqg => "LQG",
-            FlightMode::Attitude => "ANGL",
-            FlightMode::Horizon => "HOR",
-            FlightMode::SystemId => "SYSID",
-            FlightMode::AltitudeHold => "ALTH",
-            FlightMode::PositionHold => "POSH",
-            FlightMode::Loiter => "LOIT",
-        }
-    }
-
-    /// The throttle holds the altitude and the attitude comes from the hold loops.
-    pub const fn holds(self) -> bool {
+impl ModePolicy for FlightMode {
+    fn holds(self) -> bool {
         matches!(
             self,
             FlightMode::AltitudeHold | FlightMode::PositionHold | FlightMode::Loiter

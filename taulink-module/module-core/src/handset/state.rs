@@ -18,21 +18,15 @@ const TX_POWER_MW: [u16; 8] = [1, 2, 3, 6, 13, 25, 50, 100];
 /// Radians per centidegree (π / 18 000).
 const RAD_PER_CDEG: f32 = core::f32::consts::PI / 18_000.0;
 
-/// The flight-mode name and number the handset shows for `mode`. The number is what S.Port
-/// (DIY ID 0x5101) and the FrSky hub (Temp1) carry, which have no text.
+/// The flight-mode name and number the handset shows for `mode`: the mode's own short name
+/// (`FlightMode::name`, what CRSF FLIGHT_MODE shows in EdgeTX) and stable id
+/// (`FlightMode::id`, what S.Port DIY ID 0x5101 and the FrSky hub's Temp1 carry, having no
+/// text).
 pub fn flight_mode_report(mode: messages::FlightMode) -> FlightModeReport {
-    let (name, number) = match mode {
-        messages::FlightMode::Rate => ("RATE", 0),
-        messages::FlightMode::Attitude => ("ANGLE", 1),
-        messages::FlightMode::AltitudeHold => ("ALT HOLD", 2),
-        messages::FlightMode::PositionHold => ("POS HOLD", 3),
-        messages::FlightMode::ReturnToHome => ("RTH", 4),
-        messages::FlightMode::SystemId => ("SYSID", 5),
-    };
     FlightModeReport {
-        // Kept default: every name above is a constant shorter than the string's capacity.
-        name: String::try_from(name).unwrap_or_default(),
-        number,
+        // Kept default: every name is a constant of at most 5 characters, below the capacity.
+        name: String::try_from(mode.name()).unwrap_or_default(),
+        number: mode.id(),
     }
 }
 
@@ -90,7 +84,9 @@ impl FlightState {
             | Message::SignedChange(_)
             | Message::ChangeRefused(_)
             // No handset protocol here carries a home (CRSF, S.Port, FrSky D); the phone does.
-            | Message::Home(_) => {}
+            | Message::Home(_)
+            // An older flight side's mode: its numbers meant other modes, so none is shown.
+            | Message::RetiredFlightMode(_) => {}
         }
     }
 
@@ -255,9 +251,12 @@ mod tests {
 
     #[test]
     fn flight_modes_have_names_and_numbers() {
-        let report = flight_mode_report(messages::FlightMode::ReturnToHome);
-        assert_eq!((report.name.as_str(), report.number), ("RTH", 4));
+        let report = flight_mode_report(messages::FlightMode::Loiter);
+        assert_eq!((report.name.as_str(), report.number), ("LOIT", 7));
         let report = flight_mode_report(messages::FlightMode::Attitude);
-        assert_eq!((report.name.as_str(), report.number), ("ANGLE", 1));
+        assert_eq!((report.name.as_str(), report.number), ("ANGL", 2));
+        for mode in messages::FlightMode::ALL {
+            assert_eq!(flight_mode_report(mode).name.as_str(), mode.name());
+        }
     }
 }

@@ -341,7 +341,7 @@ mod tests {
         let warmup = crate::WARMUP_S;
         let mut session = Session::new(&WorldOptions::default());
         let mut reader = MessageReader::new();
-        // Armed and hovering, in rate mode (the mode switch), reported by FlightApp.
+        // Armed and hovering, in rate mode (the mode switch mid: rate PID), reported by FlightApp.
         session.run_until(s(warmup + RATE_FROM_S + 2.0));
         let got = page_messages(&mut session, &mut reader);
         let armed_seen = got
@@ -357,7 +357,7 @@ mod tests {
             .collect();
         assert_eq!(
             modes.last(),
-            Some(&telemetry::messages::FlightMode::Rate),
+            Some(&telemetry::messages::FlightMode::RatePid),
             "{modes:?}"
         );
         // Up in the air, from the flight side's attitude reports too.

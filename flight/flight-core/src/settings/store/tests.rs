@@ -369,3 +369,40 @@ fn a_version_2_record_loads_whole_with_no_key() {
     record[len - 4..len].copy_from_slice(&crc.to_le_bytes());
     assert!(decode(&record[..len]).is_none());
 }
+
+/// The mode-switch choices a controller stored before the flight mode became the wire's
+/// type (ids 0…7 in `params::MODES` order) select the same modes after it: the stored number
+/// is `FlightMode::id`, the wire's variant index.
+#[test]
+fn an_old_records_mode_switch_choices_select_the_same_modes() {
+    use crate::pipeline::from_settings;
+    use crate::supervisor::FlightMode;
+    // The choice names and modes as the settings table and the setup mapped them then.
+    let before = [
+        ("rate-pid", FlightMode::RatePid),
+        ("rate-lqg", FlightMode::RateLqg),
+        ("attitude", FlightMode::Attitude),
+        ("horizon", FlightMode::Horizon),
+        ("sysid", FlightMode::SystemId),
+        ("altitude-hold", FlightMode::AltitudeHold),
+        ("position-hold", FlightMode::PositionHold),
+        ("loiter", FlightMode::Loiter),
+    ];
+    assert_eq!(super::super::params::MODES.len(), before.len());
+    for (id, (name, mode)) in (0u32..).zip(before) {
+        assert_eq!(super::super::params::MODES[id as usize], name);
+        let mut old = generation_set(1);
+        // Any one of three positions: the others keep their (valid) values.
+        let position = ["mode.switch_low", "mode.switch_mid", "mode.switch_high"][id as usize % 3];
+        old.set_many(&[(position, Value::U32(id))]).unwrap();
+        let mut m = map(Flash::default());
+        let mut buf = Buffer::new();
+        let record = version_2_record(&old, 5);
+        block_on(m.store_item(&mut buf.0, &SLOTS[0], &&record[..])).unwrap();
+        let (loaded, report) = boot(m.destroy().0);
+        assert_eq!(report.problem, None);
+        let modes = from_settings(&loaded).unwrap().loop_config.modes;
+        assert_eq!(modes[id as usize % 3], mode, "stored choice {id} ({name})");
+        assert_eq!(mode.id() as u32, id);
+    }
+}
