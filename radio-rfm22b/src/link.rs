@@ -12,7 +12,7 @@ use embedded_hal_async::delay::DelayNs;
 use embedded_hal_async::digital::Wait;
 use embedded_hal_async::spi::SpiDevice;
 use telemetry::link::rate::PREAMBLE_BYTES;
-use telemetry::link::{PacketRadio, RadioConfig, RateMode, RxOutcome};
+use telemetry::link::{LinkRx, PacketRadio, RadioConfig, RateMode};
 
 use crate::{
     Carrier, ChannelSpacing, Config, ConfigError, Crc, Error, ModemConfig, PacketConfig, Rfm22b,
@@ -163,21 +163,19 @@ where
             .map_err(LinkRadioError::Radio)
     }
 
-    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<RxOutcome, Self::Error> {
+    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<LinkRx, Self::Error> {
         let outcome = self
             .radio
             .receive(buf, timeout_us)
             .await
             .map_err(LinkRadioError::Radio)?;
         Ok(match outcome {
-            crate::RxOutcome::Packet(packet) => RxOutcome::Packet {
+            crate::RxOutcome::Packet(packet) => LinkRx::Packet {
                 len: packet.len,
                 rssi_dbm: packet.signal.rssi_dbm,
             },
-            crate::RxOutcome::CrcError(_) | crate::RxOutcome::TooLong { .. } => {
-                RxOutcome::Corrupted
-            }
-            crate::RxOutcome::Timeout => RxOutcome::Timeout,
+            crate::RxOutcome::CrcError(_) | crate::RxOutcome::TooLong { .. } => LinkRx::Corrupted,
+            crate::RxOutcome::Timeout => LinkRx::Timeout,
         })
     }
 

@@ -41,6 +41,11 @@ pub struct RxPacket {
 }
 
 /// What a [`Rfm22b::receive`] ended with. Rejected packets are outcomes, not errors.
+///
+/// The chip's view of a reception; the TauLink link sees a narrower one
+/// (`telemetry::link::LinkRx`, mapped in the `telemetry` feature's adapter): two layers,
+/// so the driver needs no protocol crate and the link no particular chip (README, "Two
+/// layers").
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum RxOutcome {

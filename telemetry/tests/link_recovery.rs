@@ -13,7 +13,7 @@ use telemetry::link::core::follower::SyncState;
 use telemetry::link::core::{Follower, MAX_CONSECUTIVE_RADIO_ERRORS, Master};
 use telemetry::link::follower::{FollowerHooks, run_follower};
 use telemetry::link::master::{MasterHooks, run_master};
-use telemetry::link::{PacketRadio, RadioConfig, RateMode, RxOutcome};
+use telemetry::link::{LinkRx, PacketRadio, RadioConfig, RateMode};
 use telemetry::mock::{MockClock, MockRadio};
 
 /// The error of [`Flaky`].
@@ -59,7 +59,7 @@ impl PacketRadio for Flaky {
         self.inner.transmit(frame).await.map_err(|e| match e {})
     }
 
-    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<RxOutcome, BusError> {
+    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<LinkRx, BusError> {
         self.check()?;
         self.inner
             .receive(buf, timeout_us)

@@ -5,7 +5,7 @@
 use super::bind::{ACCEPT_REPEATS, BIND_KEY, LinkParams, bind_radio_config, offered_params};
 use super::core::{Follower, Step};
 use super::hopping::Band;
-use super::radio::{LinkClock, PacketRadio, RxOutcome};
+use super::radio::{LinkClock, LinkRx, PacketRadio};
 use super::rate::FIFO_BYTES;
 use super::recovery::Recovery;
 use crate::frame::{Frame, encode};
@@ -29,7 +29,7 @@ pub async fn bind_follower<R: PacketRadio, C: LinkClock>(
     let mut buf = [0u8; FIFO_BYTES];
     while clock.now_us() < give_up {
         let timeout = u32::try_from(give_up - clock.now_us()).unwrap_or(u32::MAX);
-        let RxOutcome::Packet { len, .. } = radio.receive(&mut buf, timeout).await? else {
+        let LinkRx::Packet { len, .. } = radio.receive(&mut buf, timeout).await? else {
             continue;
         };
         let Some(params) = buf.get(..len).and_then(offered_params) else {

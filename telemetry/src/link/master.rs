@@ -4,7 +4,7 @@
 
 use super::bind::{BIND_KEY, LinkParams, OFFER_PERIOD_US, bind_radio_config, is_accept_of};
 use super::core::{Master, Step};
-use super::radio::{LinkClock, PacketRadio, RxOutcome};
+use super::radio::{LinkClock, LinkRx, PacketRadio};
 use super::rate::FIFO_BYTES;
 use super::recovery::Recovery;
 use super::schedule::SlotKind;
@@ -36,7 +36,7 @@ pub async fn bind_master<R: PacketRadio, C: LinkClock>(
         radio.transmit(offer).await?;
         while clock.now_us() < period_end {
             let timeout = u32::try_from(period_end - clock.now_us()).unwrap_or(u32::MAX);
-            if let RxOutcome::Packet { len, .. } = radio.receive(&mut buf, timeout).await?
+            if let LinkRx::Packet { len, .. } = radio.receive(&mut buf, timeout).await?
                 && buf
                     .get(..len)
                     .is_some_and(|packet| is_accept_of(packet, params))

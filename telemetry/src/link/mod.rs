@@ -19,6 +19,6 @@ pub mod stream;
 pub use auth::{Fingerprint, LinkKey, PhraseError, key_for_phrase};
 pub use bind::{BIND_HEADER, BIND_KEY, LinkParams};
 pub use hopping::{Band, HOP_CHANNELS, HopSequence};
-pub use radio::{LinkClock, PacketRadio, RadioConfig, RxOutcome};
+pub use radio::{LinkClock, LinkRx, PacketRadio, RadioConfig};
 pub use rate::{RateMode, UnknownRateMode};
 pub use schedule::{Schedule, SlotKind};

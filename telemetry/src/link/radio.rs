@@ -30,10 +30,17 @@ impl RadioConfig {
     }
 }
 
-/// Result of one receive.
+/// What one listen window gave the link ([`PacketRadio::receive`]).
+///
+/// Two layers, two types: a chip driver has its own, richer result (radio-rfm22b's
+/// `RxOutcome`: the received header, raw RSSI and AFC offset, a CRC error told from an
+/// over-long packet), and its `telemetry` adapter maps that to this one. They stay two because
+/// the driver is used without this crate (OpenLRSng, other protocols) and the link must not
+/// depend on one chip: the link needs only the length, the RSSI, and whether something
+/// corrupt arrived (to count it and listen on).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum RxOutcome {
+pub enum LinkRx {
     /// A packet passed the chip's checks; `len` bytes are in the buffer.
     Packet {
         /// Packet length.
@@ -65,7 +72,7 @@ pub trait PacketRadio {
 
     /// Listens for one packet for up to `timeout_us`; returns as soon as one has fully
     /// arrived (the caller timestamps it with its clock).
-    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<RxOutcome, Self::Error>;
+    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<LinkRx, Self::Error>;
 
     /// Checks that the chip still holds its setup (the link loops call it every
     /// `HEALTH_CHECK_PERIOD_US`); an error (e.g. the chip had reset) makes the loop

@@ -8,7 +8,7 @@ use std::task::Poll;
 use super::executor::VirtualTime;
 use super::medium::Medium;
 use crate::link::rate::PLL_SETTLE_US;
-use crate::link::{PacketRadio, RadioConfig, RateMode, RxOutcome};
+use crate::link::{LinkRx, PacketRadio, RadioConfig, RateMode};
 
 /// One mock radio (node) on a medium.
 pub struct MockRadio {
@@ -81,7 +81,7 @@ impl PacketRadio for MockRadio {
         Ok(())
     }
 
-    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<RxOutcome, Infallible> {
+    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<LinkRx, Infallible> {
         let now = self.time.now_us();
         let ready = now + u64::from(PLL_SETTLE_US);
         let mut deadline = now + u64::from(timeout_us);
@@ -95,7 +95,7 @@ impl PacketRadio for MockRadio {
                 if let (Some(dst), Some(src)) = (buf.get_mut(..len), d.bytes.get(..len)) {
                     dst.copy_from_slice(src);
                 }
-                return Poll::Ready(RxOutcome::Packet {
+                return Poll::Ready(LinkRx::Packet {
                     len,
                     rssi_dbm: d.rssi_dbm,
                 });
@@ -109,7 +109,7 @@ impl PacketRadio for MockRadio {
                         time.wake_at(end);
                         return Poll::Pending;
                     }
-                    _ => return Poll::Ready(RxOutcome::Timeout),
+                    _ => return Poll::Ready(LinkRx::Timeout),
                 }
             }
             if !registered {

@@ -15,7 +15,7 @@ use telemetry::frame::{
     CRC_BYTES, Frame, LinkReport, Received, StreamHeader, Uplink, decode, encode,
 };
 use telemetry::link::core::{Follower, STREAM_RX_BYTES, Step};
-use telemetry::link::{Band, HOP_CHANNELS, LinkParams, RateMode, RxOutcome};
+use telemetry::link::{Band, HOP_CHANNELS, LinkParams, LinkRx, RateMode};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
@@ -36,7 +36,7 @@ fuzz_target!(|data: &[u8]| {
                 let rssi_dbm = i16::from(input.u8() as i8);
                 let before = *follower.output();
                 let updates = follower.updates();
-                let outcome = RxOutcome::Packet {
+                let outcome = LinkRx::Packet {
                     len: frame.len(),
                     rssi_dbm,
                 };
@@ -60,9 +60,9 @@ fuzz_target!(|data: &[u8]| {
             }
             2 => {
                 let outcome = if input.bool() {
-                    RxOutcome::Corrupted
+                    LinkRx::Corrupted
                 } else {
-                    RxOutcome::Timeout
+                    LinkRx::Timeout
                 };
                 follower.on_received(outcome, &[], now);
             }

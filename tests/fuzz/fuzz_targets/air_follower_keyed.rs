@@ -36,7 +36,7 @@ use telemetry::link::auth::TAG_BYTES;
 use telemetry::link::core::follower::SyncState;
 use telemetry::link::core::{Follower, STREAM_RX_BYTES, Step, frame_counter};
 use telemetry::link::{
-    Band, HOP_CHANNELS, LinkKey, LinkParams, RateMode, RxOutcome, Schedule, SlotKind,
+    Band, HOP_CHANNELS, LinkKey, LinkParams, LinkRx, RateMode, Schedule, SlotKind,
 };
 
 /// Frames kept for replays.
@@ -87,9 +87,9 @@ fuzz_target!(|data: &[u8]| {
             }
             3 => {
                 let outcome = if input.bool() {
-                    RxOutcome::Corrupted
+                    LinkRx::Corrupted
                 } else {
-                    RxOutcome::Timeout
+                    LinkRx::Timeout
                 };
                 let (updates, slot) = (follower.updates(), follower.tracked_slot());
                 let state = follower.sync_state();
@@ -213,7 +213,7 @@ fn receive(
     let failsafe = *follower.failsafe_values();
     let available = follower.uplink_stream.available();
     let remote = follower.remote_report();
-    let outcome = RxOutcome::Packet {
+    let outcome = LinkRx::Packet {
         len: frame.len(),
         rssi_dbm: i16::from(input.u8() as i8),
     };
@@ -346,7 +346,7 @@ fn clean_run(
             let mut buf = [0u8; 64];
             let n =
                 seal(&Frame::MasterNonce { slot, nonce }, key, counter, &mut buf).expect("fits");
-            let outcome = RxOutcome::Packet {
+            let outcome = LinkRx::Packet {
                 len: n,
                 rssi_dbm: -60,
             };
@@ -379,7 +379,7 @@ fn clean_run(
         let mut buf = [0u8; 64];
         let n = seal(&Frame::Uplink(up), &tag_key, counter, &mut buf).expect("fits 64 bytes");
         let updates = follower.updates();
-        let outcome = RxOutcome::Packet {
+        let outcome = LinkRx::Packet {
             len: n,
             rssi_dbm: -60,
         };

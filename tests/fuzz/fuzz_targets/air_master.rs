@@ -15,7 +15,7 @@ use telemetry::frame::{
     CRC_BYTES, Downlink, Frame, LinkReport, Received, StreamHeader, decode, encode,
 };
 use telemetry::link::core::{Master, STREAM_RX_BYTES, Step};
-use telemetry::link::{Band, HOP_CHANNELS, LinkParams, RateMode, RxOutcome};
+use telemetry::link::{Band, HOP_CHANNELS, LinkParams, LinkRx, RateMode};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
@@ -47,7 +47,7 @@ fuzz_target!(|data: &[u8]| {
                 };
                 let received = master.counters().received;
                 let slot = master.slot();
-                let outcome = RxOutcome::Packet {
+                let outcome = LinkRx::Packet {
                     len: frame.len(),
                     rssi_dbm: i16::from(input.u8() as i8),
                 };
@@ -63,9 +63,9 @@ fuzz_target!(|data: &[u8]| {
             }
             2 => {
                 let outcome = if input.bool() {
-                    RxOutcome::Corrupted
+                    LinkRx::Corrupted
                 } else {
-                    RxOutcome::Timeout
+                    LinkRx::Timeout
                 };
                 master.on_received(outcome, &[], now);
             }

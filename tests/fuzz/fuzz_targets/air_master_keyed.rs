@@ -33,7 +33,7 @@ use telemetry::frame::{
     seal,
 };
 use telemetry::link::core::{Master, STREAM_RX_BYTES, Step, frame_counter};
-use telemetry::link::{Band, HOP_CHANNELS, LinkKey, LinkParams, RateMode, RxOutcome};
+use telemetry::link::{Band, HOP_CHANNELS, LinkKey, LinkParams, LinkRx, RateMode};
 
 /// Nonces a master remembers having used (spec §12.2: "the last 8 are kept").
 const RECENT_NONCES: usize = 8;
@@ -141,9 +141,9 @@ fuzz_target!(|data: &[u8]| {
             }
             3 => {
                 let outcome = if input.bool() {
-                    RxOutcome::Corrupted
+                    LinkRx::Corrupted
                 } else {
-                    RxOutcome::Timeout
+                    LinkRx::Timeout
                 };
                 let received = master.counters().received;
                 master.on_received(outcome, &[], now);
@@ -268,7 +268,7 @@ fn receive(
     let available = master.downlink_stream.available();
     let remote = master.remote_report();
     let ratio = master.params().telemetry_ratio;
-    let outcome = RxOutcome::Packet {
+    let outcome = LinkRx::Packet {
         len: frame.len(),
         rssi_dbm: i16::from(input.u8() as i8),
     };

@@ -19,8 +19,8 @@ use telemetry::frame::{BindOffer, Downlink, Frame, StreamHeader, Uplink, encode,
 use telemetry::link::bind::bind_radio_config;
 use telemetry::link::follower::{bind_follower, run_follower};
 use telemetry::link::{
-    BIND_KEY, HOP_CHANNELS, HopSequence, LinkKey, LinkParams, PacketRadio, RadioConfig, RateMode,
-    RxOutcome, Schedule,
+    BIND_KEY, HOP_CHANNELS, HopSequence, LinkKey, LinkParams, LinkRx, PacketRadio, RadioConfig,
+    RateMode, Schedule,
 };
 use telemetry::mock::SplitMix64;
 
@@ -82,9 +82,9 @@ impl<R: PacketRadio> PacketRadio for Witnessed<R> {
         self.inner.transmit(frame).await
     }
 
-    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<RxOutcome, Self::Error> {
+    async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<LinkRx, Self::Error> {
         let outcome = self.inner.receive(buf, timeout_us).await?;
-        if self.enabled && matches!(outcome, RxOutcome::Packet { .. }) {
+        if self.enabled && matches!(outcome, LinkRx::Packet { .. }) {
             let me = self.me;
             let sender = self.medium.with_trace(|frames| {
                 frames
@@ -388,7 +388,7 @@ async fn replay<R: PacketRadio>(
         // Acquire: dwell on one channel until an uplink names its slot.
         radio.set_channel(victim.hops.channel(0)).await?;
         let timeout = u32::try_from(2 * (HOP_CHANNELS as u64 + 1) * slot_us).unwrap_or(u32::MAX);
-        let RxOutcome::Packet { len, .. } = radio.receive(&mut buf, timeout).await? else {
+        let LinkRx::Packet { len, .. } = radio.receive(&mut buf, timeout).await? else {
             continue;
         };
         if !is_uplink(buf.get(..len).unwrap_or(&[])) {
@@ -422,7 +422,7 @@ async fn replay<R: PacketRadio>(
                 clock.sleep_until_us(start.saturating_sub(100)).await;
                 let until = start + u64::from(schedule.listen_end_offset_us());
                 let timeout = u32::try_from(until.saturating_sub(clock.now_us())).unwrap_or(0);
-                if let RxOutcome::Packet { len, .. } = radio.receive(&mut buf, timeout).await?
+                if let LinkRx::Packet { len, .. } = radio.receive(&mut buf, timeout).await?
                     && buf.get(2) == Some(&(on_air as u8))
                 {
                     heard_this_wrap = true;

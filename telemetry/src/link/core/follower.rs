@@ -12,7 +12,7 @@ use crate::link::auth::LinkKey;
 use crate::link::bind::LinkParams;
 use crate::link::hopping::{HOP_CHANNELS, HopSequence};
 use crate::link::quality::{Counters, LqWindow, RssiFilter};
-use crate::link::radio::{RadioConfig, RxOutcome};
+use crate::link::radio::{LinkRx, RadioConfig};
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
@@ -419,9 +419,9 @@ impl Follower {
     }
 
     /// The outcome of a listen, at `now_us` (for a packet: when it had fully arrived).
-    pub fn on_received(&mut self, outcome: RxOutcome, packet: &[u8], now_us: u64) {
+    pub fn on_received(&mut self, outcome: LinkRx, packet: &[u8], now_us: u64) {
         self.now_us = now_us;
-        if let RxOutcome::Packet { len, rssi_dbm } = outcome {
+        if let LinkRx::Packet { len, rssi_dbm } = outcome {
             let bytes = packet.get(..len).unwrap_or(&[]);
             // Re-time the grid: the master started this slot `packet_end_offset` ago.
             let slot_start_us =
@@ -467,7 +467,7 @@ impl Follower {
                 return;
             }
             self.counters.rejected += 1;
-        } else if outcome == RxOutcome::Corrupted {
+        } else if outcome == LinkRx::Corrupted {
             self.counters.rejected += 1;
         }
         self.check_failsafe(now_us);

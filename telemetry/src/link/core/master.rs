@@ -11,7 +11,7 @@ use crate::link::auth::LinkKey;
 use crate::link::bind::LinkParams;
 use crate::link::hopping::HopSequence;
 use crate::link::quality::{Counters, LqWindow, RssiFilter};
-use crate::link::radio::{RadioConfig, RxOutcome};
+use crate::link::radio::{LinkRx, RadioConfig};
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
@@ -264,9 +264,9 @@ impl Master {
     /// One receive outcome in the current (downlink) slot, at `now_us`. Returns true once
     /// the follower's downlink has been heard (the slot is done); otherwise the loop listens
     /// on for the rest of the window. Then call [`Master::finish_listen`].
-    pub fn on_received(&mut self, outcome: RxOutcome, packet: &[u8], now_us: u64) -> bool {
+    pub fn on_received(&mut self, outcome: LinkRx, packet: &[u8], now_us: u64) -> bool {
         match outcome {
-            RxOutcome::Packet { len, rssi_dbm } => {
+            LinkRx::Packet { len, rssi_dbm } => {
                 let bytes = packet.get(..len).unwrap_or(&[]);
                 let received = match &self.key {
                     Some(key) => self.open_downlink(key, bytes),
@@ -301,8 +301,8 @@ impl Master {
                     _ => self.counters.rejected += 1,
                 }
             }
-            RxOutcome::Corrupted => self.counters.rejected += 1,
-            RxOutcome::Timeout => {}
+            LinkRx::Corrupted => self.counters.rejected += 1,
+            LinkRx::Timeout => {}
         }
         self.heard
     }

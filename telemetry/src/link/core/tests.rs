@@ -5,7 +5,7 @@ use super::follower::{DEFAULT_FAILSAFE_US, RESYNC_MISSES, SyncState};
 use super::*;
 use crate::channels::{ChannelFormat, FailsafeValues};
 use crate::link::hopping::HOP_CHANNELS;
-use crate::link::radio::RxOutcome;
+use crate::link::radio::LinkRx;
 use crate::link::{Band, LinkParams, RateMode};
 
 pub(super) const SLOT_US: u64 = 4_000;
@@ -83,7 +83,7 @@ fn follower_acquires_then_tracks_the_master() {
     let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
     assert!(end < dwell_end);
     follower.on_received(
-        RxOutcome::Packet {
+        LinkRx::Packet {
             len: frame.len(),
             rssi_dbm: -70,
         },
@@ -126,7 +126,7 @@ fn downlink_reaches_the_master_with_report_and_ack() {
     let mut t = 0;
     let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
     follower.on_received(
-        RxOutcome::Packet {
+        LinkRx::Packet {
             len: frame.len(),
             rssi_dbm: -70,
         },
@@ -144,7 +144,7 @@ fn downlink_reaches_the_master_with_report_and_ack() {
             (Step::Transmit { len, .. }, Step::Listen { .. }) => {
                 master.on_sent();
                 let end = t + u64::from(master.schedule().packet_end_offset_us(len));
-                follower.on_received(RxOutcome::Packet { len, rssi_dbm: -71 }, &mbuf, end);
+                follower.on_received(LinkRx::Packet { len, rssi_dbm: -71 }, &mbuf, end);
             }
             (
                 Step::Listen { channel: mc, .. },
@@ -155,7 +155,7 @@ fn downlink_reaches_the_master_with_report_and_ack() {
                 assert_eq!(mc, fc);
                 follower.on_sent();
                 let end = t + u64::from(master.schedule().packet_end_offset_us(len));
-                assert!(master.on_received(RxOutcome::Packet { len, rssi_dbm: -75 }, &fbuf, end));
+                assert!(master.on_received(LinkRx::Packet { len, rssi_dbm: -75 }, &fbuf, end));
                 master.finish_listen();
                 let mut got = [0u8; 16];
                 let n = master.downlink_stream.read(&mut got);
@@ -184,7 +184,7 @@ fn failsafe_exactly_after_the_configured_silence_then_resync() {
     let mut t = 0;
     let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
     follower.on_received(
-        RxOutcome::Packet {
+        LinkRx::Packet {
             len: frame.len(),
             rssi_dbm: -70,
         },
@@ -247,7 +247,7 @@ fn save_failsafe_command_stores_the_channels_on_the_follower() {
     }
     assert_eq!(flagged, super::master::SAVE_FAILSAFE_REPEATS);
     follower.on_received(
-        RxOutcome::Packet {
+        LinkRx::Packet {
             len: frame.len(),
             rssi_dbm: -70,
         },
@@ -274,7 +274,7 @@ fn input_lost_uplinks_put_the_follower_in_failsafe_at_once_and_keep_it_tracking(
     };
     let mut t = 0;
     let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
-    let packet = |frame: &[u8]| RxOutcome::Packet {
+    let packet = |frame: &[u8]| LinkRx::Packet {
         len: frame.len(),
         rssi_dbm: -70,
     };
@@ -334,7 +334,7 @@ fn tracking_follower_rejects_a_replayed_uplink_of_another_slot() {
     };
     let mut t = 0;
     let (first, end) = next_uplink_on(&mut master, &mut t, channel);
-    let packet = |frame: &[u8]| RxOutcome::Packet {
+    let packet = |frame: &[u8]| LinkRx::Packet {
         len: frame.len(),
         rssi_dbm: -70,
     };
@@ -411,7 +411,7 @@ fn a_forged_uplink_moves_nothing_on_an_acquiring_follower() {
     for (i, f) in forged.iter().enumerate() {
         let t = 1_000 * (i as u64 + 1);
         follower.on_received(
-            RxOutcome::Packet {
+            LinkRx::Packet {
                 len: f.len(),
                 rssi_dbm: -40,
             },
@@ -500,7 +500,7 @@ fn the_link_returns_within_one_dwell_of_the_path_whatever_the_phase() {
                         Some(Step::Listen { channel: c, .. }),
                     ) if c == channel && n >= start + cut => {
                         let end = t + u64::from(master.schedule().packet_end_offset_us(len));
-                        let packet = RxOutcome::Packet { len, rssi_dbm: -70 };
+                        let packet = LinkRx::Packet { len, rssi_dbm: -70 };
                         follower.on_received(packet, &mb[..len], end);
                     }
                     (_, Some(Step::Transmit { .. })) => follower.on_sent(),

@@ -7,7 +7,7 @@ use super::tests::{SLOT_US, pair, test_key};
 use super::*;
 use crate::channels::Channels;
 use crate::frame::{Frame, SEALED_VERSION, peek_sealed};
-use crate::link::radio::RxOutcome;
+use crate::link::radio::LinkRx;
 use crate::link::schedule::SlotKind;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -79,7 +79,7 @@ impl Link {
         let slot = self.master.slot();
         let t = self.t;
         let schedule = *self.master.schedule();
-        let packet = |b: &Vec<u8>| RxOutcome::Packet {
+        let packet = |b: &Vec<u8>| LinkRx::Packet {
             len: b.len(),
             rssi_dbm: -70,
         };
@@ -532,7 +532,7 @@ fn both_ends_report_the_counter_they_tag_and_check_under() {
             crate::frame::seal(&Frame::Uplink(up), &epoch_key, counter, &mut buf).expect("fits");
         let before = link.follower.updates();
         link.follower.on_received(
-            RxOutcome::Packet { len, rssi_dbm: -70 },
+            LinkRx::Packet { len, rssi_dbm: -70 },
             &buf[..len],
             link.t + 1_000,
         );
@@ -799,7 +799,7 @@ fn in_the_handshake_only_the_master_nonce_is_taken_under_the_handshake_counter()
     let len = crate::frame::seal(&Frame::Uplink(up), &test_key(1), counter, &mut buf).unwrap();
     let failsafe = *link.follower.failsafe_values();
     link.follower.on_received(
-        RxOutcome::Packet { len, rssi_dbm: -70 },
+        LinkRx::Packet { len, rssi_dbm: -70 },
         &buf[..len],
         link.t + 1_000,
     );

@@ -26,7 +26,7 @@ fn main() -> ! {
     use m4_bench::{exit, m4count_marker};
     use telemetry::channels::{ChannelFormat, Channels, FailsafeValues};
     use telemetry::link::core::{Follower, Master, Step};
-    use telemetry::link::{Band, LinkParams, RateMode, RxOutcome};
+    use telemetry::link::{Band, LinkParams, LinkRx, RateMode};
 
     /// Slots measured: two hop cycles and a bit, so every slot kind and channel appears.
     const SLOTS: u32 = 80;
@@ -70,7 +70,7 @@ fn main() -> ! {
                 if c == channel {
                     let end = start + u64::from(master.schedule().packet_end_offset_us(len));
                     let frame = mbuf.get(..len).unwrap_or(&[]);
-                    follower.on_received(RxOutcome::Packet { len, rssi_dbm: -70 }, frame, end);
+                    follower.on_received(LinkRx::Packet { len, rssi_dbm: -70 }, frame, end);
                     acquired = true;
                     break;
                 }
@@ -98,15 +98,14 @@ fn main() -> ! {
                 master.on_sent();
                 m4count_marker();
                 let frame = mbuf.get(..len).unwrap_or(&[]);
-                follower.on_received(RxOutcome::Packet { len, rssi_dbm: -70 }, frame, end);
+                follower.on_received(LinkRx::Packet { len, rssi_dbm: -70 }, frame, end);
                 sent = sticks;
                 uplinks += 1;
             }
             (Step::Listen { .. }, Step::Transmit { len, .. }) => {
                 let end = now + u64::from(master.schedule().packet_end_offset_us(len));
                 let frame = fbuf.get(..len).unwrap_or(&[]);
-                let taken =
-                    master.on_received(RxOutcome::Packet { len, rssi_dbm: -75 }, frame, end);
+                let taken = master.on_received(LinkRx::Packet { len, rssi_dbm: -75 }, frame, end);
                 master.finish_listen();
                 m4count_marker();
                 follower.on_sent();
