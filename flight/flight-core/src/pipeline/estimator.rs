@@ -255,8 +255,9 @@ impl Estimator {
         }
     }
 
-    /// One sample: `cf_accel` is what the complementary filter may use (the loop skips the
-    /// accelerometer on most samples while armed), the INS takes the raw specific force.
+    /// One sample: the complementary filter corrects with the accelerometer only when
+    /// `cf_accel_corrects` (the loop skips it on most samples while armed), the INS takes the
+    /// raw specific force.
     ///
     /// # Errors
     /// [`Error::NonFinite`] or [`Error::InvalidTimeStep`] for an unusable sample (the
@@ -265,13 +266,19 @@ impl Estimator {
     pub fn update(
         &mut self,
         imu: &ImuSample,
-        cf_accel: [f32; 3],
+        cf_accel_corrects: bool,
         armed: bool,
         dt_s: f32,
     ) -> Result<(), Error> {
         match self.source {
             Source::Complementary => {
-                self.cf.update(imu.gyro_radps, cf_accel, imu.mag, dt_s)?;
+                self.cf.update_with(
+                    imu.gyro_radps,
+                    imu.accel_mps2,
+                    cf_accel_corrects,
+                    imu.mag,
+                    dt_s,
+                )?;
                 // The factory mode stops here: nothing else to keep.
                 if self.mode != EstimatorMode::Complementary {
                     self.await_ins(dt_s);
