@@ -213,9 +213,12 @@ impl LqgAxis {
     /// over-predicts the response: on the 6-DoF quad at 3 deg/s noise that cost 0.3–0.5 %
     /// attitude overshoot and a 35 ms instead of 24 ms rate rise.
     pub fn set_realised_output(&mut self, realised: f32) {
-        // `realised.clamp(-1.0, 1.0)` unless NaN (ignored), in two compares.
-        let clamped = if realised >= -1.0 {
-            if realised > 1.0 { 1.0 } else { realised }
+        // `realised.clamp(-1.0, 1.0)` unless NaN (ignored); within ±1 (always, unless the
+        // caller passes something else than the mixer's result) in one compare.
+        let clamped = if realised.abs() <= 1.0 {
+            realised
+        } else if realised > 1.0 {
+            1.0
         } else if realised < -1.0 {
             -1.0
         } else {
@@ -264,12 +267,15 @@ impl LqgAxis {
             }
         };
         // NaN (never expected) clamps to NaN: fall back to 0 so the motors stay defined.
-        let out = if u >= -1.0 {
-            if u > 1.0 { 1.0 } else { u }
+        // Unsaturated (the usual case) in one compare.
+        let out = if u.abs() <= 1.0 {
+            u
+        } else if u > 1.0 {
+            1.0
         } else if u < -1.0 {
             -1.0
         } else {
-            0.0 // NaN fails both compares
+            0.0 // NaN fails every compare
         };
         // Shifted by hand: `rotate_right` is a `memmove` call for four floats.
         let [o0, o1, o2, _] = self.outputs;

@@ -160,7 +160,15 @@ impl<const N: usize> Mixer<N> {
         // min/max, not clamp: after scaling −lo and 1 − hi can cross by one ulp, and clamp
         // panics on crossed bounds.
         let t = max(min(throttle.clamp(0.0, 1.0), 1.0 - hi), -lo);
-        let thrust = parts.map(|p| (t + p * scale).clamp(0.0, 1.0));
+        let thrust = parts.map(|p| t + p * scale);
+        // Rounding is monotonic, so the lowest and highest motors are exactly t + lo and
+        // t + hi (or within them): when those fit, as they do unless rounding pushed one
+        // past an end, every motor does and the per-motor clamp is skipped.
+        let thrust = if t + lo >= 0.0 && t + hi <= 1.0 {
+            thrust
+        } else {
+            thrust.map(|x| x.clamp(0.0, 1.0))
+        };
         // The curve is fixed per mixer: decided once, not per motor.
         let motors = match self.curve {
             ThrustCurve::Linear => thrust,

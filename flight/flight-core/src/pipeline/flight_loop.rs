@@ -106,18 +106,23 @@ pub struct LoopOutput {
     pub estimator: Source,
 }
 
-/// The loop's low-pass gains, worked out once from the loop period (a division each).
+/// What the loop works out once from its configuration rather than every step: the
+/// low-pass gains (a division each) and the limited idle command.
 #[derive(Debug, Clone, Copy)]
 struct Gains {
     /// Ts / (CLIMB_BLEND_S + Ts).
     climb_blend: f32,
     /// Ts / (HOVER_LEARN_S + Ts).
     hover: f32,
+    /// The idle command, limited ([`stages::idle`]).
+    idle: f32,
 }
 
 impl Gains {
-    fn new(ts_s: f32) -> Self {
+    fn new(config: &LoopConfig) -> Self {
+        let ts_s = config.ts_s;
         Self {
+            idle: stages::idle(config.idle),
             climb_blend: ts_s / (CLIMB_BLEND_S + ts_s),
             hover: ts_s / (HOVER_LEARN_S + ts_s),
         }
@@ -177,7 +182,7 @@ impl FlightLoop {
         let modes = ModeSwitch::new(config.modes);
         Self {
             config,
-            gains: Gains::new(config.ts_s),
+            gains: Gains::new(&config),
             estimator: Estimator::new(config.estimator, config.attitude_filter),
             supervisor: Supervisor::new(config.supervisor),
             mode: modes.mode(),
@@ -657,7 +662,7 @@ impl FlightLoop {
             stages::Demand {
                 throttle,
                 attitude: attitude_out,
-                idle: self.config.idle,
+                idle: self.gains.idle,
                 uses_lqg,
             },
         );
