@@ -538,7 +538,11 @@ mod tests {
             let above = over_budget(|n| Ok(if n == name { limit + 1 } else { 0 })).unwrap();
             assert_eq!(above, vec![(name, limit + 1, limit)]);
         }
-        assert!(BUDGETS.iter().any(|&(n, l)| n == "loop.attitude" && l == 1_200));
+        assert!(
+            BUDGETS
+                .iter()
+                .any(|&(n, l)| n == "loop.attitude" && l == 1_200)
+        );
     }
 
     #[test]

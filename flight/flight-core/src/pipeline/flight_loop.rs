@@ -346,7 +346,7 @@ impl FlightLoop {
         let previous_mode = self.mode;
         let decision = self.supervise(now_ms, link, &estimate);
         // The INS's vertical velocity when it flies on the baro; else the loop's own blend.
-        // The rotation matrix once per step: the climb blend, the Euler angles and the
+        // The rotation matrix once per step: the climb blend, roll and pitch and the
         // hold loops' heading all read it.
         let r = ned_to_body(self.estimator.attitude());
         let climb_rate_mps = match self.estimator.vertical() {
