@@ -189,8 +189,8 @@ impl Complementary {
 /// `quaternion::normalized` for a quaternion one filter step away from unit length:
 /// |q|² = 1 + ε with |ε| ≈ 1e-7 (rounding, the rotation series' error), and
 /// 1/√(1 + ε) = 1 − ε/2 + 3ε²/8 − …, so s = (3 − |q|²)/2 is exact to f32 rounding while
-/// |ε| < 2⁻¹² (the neglected 3ε²/8 < 2⁻²⁵·ε … below half an ulp) — no inverse square root.
-/// Anything further off (NaN included) takes the full normalisation.
+/// |ε| < 2⁻¹² (the neglected 3ε²/8 < 3·2⁻²⁷, below half an ulp of 1) — no inverse square
+/// root. Anything further off (a reset, NaN) takes the full normalisation.
 fn renormalized(q: Quaternion) -> Quaternion {
     let [q0, q1, q2, q3] = q;
     let n2 = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3;
