@@ -161,7 +161,7 @@ impl Reporter {
     fn message(kind: Kind, snap: &Snapshot) -> Option<Message> {
         Some(match kind {
             Kind::Attitude => {
-                let [r, p, y] = snap.out.attitude_deg;
+                let [r, p, y] = snap.out.attitude.deg();
                 Message::Attitude(Attitude {
                     roll_cdeg: centidegrees(r),
                     pitch_cdeg: centidegrees(p),

@@ -4,6 +4,10 @@
 //! follows a `<!-- m4:NAME -->` marker in the project's Markdown files. A doc figure without a
 //! marker is a historical one ("before", "was"); a current one always has its marker, so no
 //! hand-copied count can go stale unnoticed.
+//!
+//! Some figures are budgets as well ([`BUDGETS`]): `--check` also fails when one of them is
+//! over its limit, so a change that makes the flight loop too slow fails CI rather than
+//! just updating the docs.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -95,6 +99,25 @@ const FIGURES: &[(&str, &str, Select)] = &[
     link("link.down.master", false, &[0, 2]),
     link("link.down.follower", false, &[1, 3]),
 ];
+
+/// Upper limits on figures (name, the most instructions allowed), checked by `--check`.
+/// - `loop.attitude` ≤ 1 200: issue 17's goal for one full flight-loop step in attitude
+///   mode (≈ 9 µs at CPI 1.3 on the 168 MHz F405, ≈ 7 % of the CPU at 8 kHz).
+pub const BUDGETS: &[(&str, u64)] = &[("loop.attitude", 1_200)];
+
+/// The budgets a set of figure values breaks: (name, value, limit).
+fn over_budget(
+    value: impl Fn(&str) -> Result<u64, String>,
+) -> Result<Vec<(&'static str, u64, u64)>, String> {
+    let mut over = Vec::new();
+    for &(name, limit) in BUDGETS {
+        let v = value(name)?;
+        if v > limit {
+            over.push((name, v, limit));
+        }
+    }
+    Ok(over)
+}
 
 /// A `link` figure; the statistic is chosen by the suffix the doc's marker adds
 /// (`.min`, `.mean`, `.max`), so one table row names its three numbers.
@@ -328,6 +351,14 @@ pub fn run(root: &Path, elf_dir: &Path, mode: Mode) -> Result<(), String> {
         select(regions, s)
             .ok_or_else(|| format!("figure `{name}`: bench `{bench}` has too few regions"))
     };
+    let over = over_budget(value)?;
+    for (name, v, limit) in &over {
+        println!(
+            "OVER BUDGET {name}: {} instructions, the limit is {}",
+            format(*v),
+            format(*limit)
+        );
+    }
     if mode == Mode::Print {
         for (name, _, s) in FIGURES {
             match s {
@@ -395,6 +426,12 @@ pub fn run(root: &Path, elf_dir: &Path, mode: Mode) -> Result<(), String> {
     if mode == Mode::Check && stale > 0 {
         return Err(format!(
             "{stale} figure(s) in the docs are stale: run `cargo xtask figures --write`"
+        ));
+    }
+    if mode == Mode::Check && !over.is_empty() {
+        return Err(format!(
+            "{} figure(s) over their budget (`figures::BUDGETS`)",
+            over.len()
         ));
     }
     Ok(())
@@ -490,6 +527,22 @@ mod tests {
             },
         );
         assert_eq!(down, Some(1275));
+    }
+
+    #[test]
+    fn a_figure_over_its_budget_is_reported_and_one_within_is_not() {
+        for &(name, limit) in BUDGETS {
+            assert!(lookup(name).is_some(), "budget for unknown figure {name}");
+            let at = over_budget(|n| Ok(if n == name { limit } else { 0 })).unwrap();
+            assert!(at.is_empty(), "{name} at its limit is within budget");
+            let above = over_budget(|n| Ok(if n == name { limit + 1 } else { 0 })).unwrap();
+            assert_eq!(above, vec![(name, limit + 1, limit)]);
+        }
+        assert!(
+            BUDGETS
+                .iter()
+                .any(|&(n, l)| n == "loop.attitude" && l == 1_200)
+        );
     }
 
     #[test]

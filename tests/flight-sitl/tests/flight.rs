@@ -35,7 +35,7 @@ fn takes_off_and_holds_attitude() {
     let roll = worst(&flight, |x| x.truth.euler_deg[0]);
     let pitch = worst(&flight, |x| x.truth.euler_deg[1]);
     let est = worst(&flight, |x| {
-        f64::from(x.out.attitude_deg[0]) - x.truth.euler_deg[0]
+        f64::from(x.out.attitude.roll_deg) - x.truth.euler_deg[0]
     });
     let alt = s.last().unwrap().altitude_m;
     println!(

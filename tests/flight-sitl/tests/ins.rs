@@ -37,10 +37,10 @@ fn banking(settings: flight_core::settings::Settings) -> flight_sitl::Sitl {
 fn estimate_error(s: &flight_sitl::Sitl, from: f64, to: f64) -> f64 {
     let w = window(&s.samples, from, to);
     let roll = worst(&w, |x| {
-        f64::from(x.out.attitude_deg[0]) - x.truth.euler_deg[0]
+        f64::from(x.out.attitude.roll_deg) - x.truth.euler_deg[0]
     });
     let pitch = worst(&w, |x| {
-        f64::from(x.out.attitude_deg[1]) - x.truth.euler_deg[1]
+        f64::from(x.out.attitude.pitch_deg) - x.truth.euler_deg[1]
     });
     roll.max(pitch)
 }

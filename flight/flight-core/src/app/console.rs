@@ -176,7 +176,7 @@ impl FlightApp {
                 state.failsafe,
                 link,
                 self.arming_blockers(),
-                state.attitude_deg
+                state.attitude.deg()
             )?,
             None => out.write_str("flight loop not running (IMU?)\r\n")?,
         }

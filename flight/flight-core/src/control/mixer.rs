@@ -58,6 +58,8 @@ impl ThrustCurve {
 pub struct Mixer<const N: usize> {
     factors: [MotorFactors; N],
     curve: ThrustCurve,
+    /// The factors are [`QUAD_X`] (the factory frame): mixed in straight-line code.
+    quad_x: bool,
 }
 
 /// Quad X, motors 1–4: front-right (CCW), rear-right (CW), rear-left (CCW), front-left (CW).
@@ -84,10 +86,59 @@ pub const HEX_X: [MotorFactors; 6] = [
     m(0.5, 0.866, -0.5),
 ];
 
+/// The factors are exactly [`QUAD_X`]'s (const: decided when the mixer is built).
+const fn is_quad_x(factors: &[MotorFactors]) -> bool {
+    let (mut f, mut q): (&[MotorFactors], &[MotorFactors]) = (factors, &QUAD_X);
+    if f.len() != q.len() {
+        return false;
+    }
+    while let ([a, f_rest @ ..], [b, q_rest @ ..]) = (f, q) {
+        if a.roll != b.roll || a.pitch != b.pitch || a.yaw != b.yaw {
+            return false;
+        }
+        (f, q) = (f_rest, q_rest);
+    }
+    true
+}
+
 impl<const N: usize> Mixer<N> {
     /// A mixer with the given geometry and thrust curve.
     pub const fn new(factors: [MotorFactors; N], curve: ThrustCurve) -> Self {
-        Self { factors, curve }
+        Self {
+            factors,
+            curve,
+            quad_x: is_quad_x(&factors),
+        }
+    }
+
+    /// Each motor's attitude part and the parts' lowest and highest value (≤ 0 ≤).
+    #[inline(always)]
+    fn parts(&self, [roll, pitch, yaw]: [f32; 3]) -> ([f32; N], f32, f32) {
+        if self.quad_x {
+            // QUAD_X's ±0.5 factors, the same roundings as the general sums (halving is
+            // exact): motors −a+b−c, −a−b+c, a−b−c, a+b+c. The extremes pair up as −c ± |b−a|
+            // and c ± |a+b|; the parts sum to 0, so lo ≤ 0 ≤ hi as in the general fold.
+            let (a, b, c) = (0.5 * roll, 0.5 * pitch, 0.5 * yaw);
+            let (u, v) = (b - a, a + b);
+            let q = [u - c, c - v, -(u + c), v + c];
+            // Plain compares: a NaN demand makes both NaN, which the desaturation below
+            // ignores exactly as the general fold's NaN parts.
+            let (au, av) = (u.abs(), v.abs());
+            let (lo1, lo2, hi1, hi2) = (-c - au, c - av, au - c, c + av);
+            let lo = if lo2 < lo1 { lo2 } else { lo1 };
+            let hi = if hi2 > hi1 { hi2 } else { hi1 };
+            let parts = core::array::from_fn(|i| q.get(i).copied().unwrap_or(0.0));
+            return (parts, lo, hi);
+        }
+        let parts = self
+            .factors
+            .map(|f| f.roll * roll + f.pitch * pitch + f.yaw * yaw);
+        let (lo, hi) = parts.iter().fold((0.0f32, 0.0f32), |(lo, hi), &p| {
+            // The accumulators start at 0 and never take a NaN (a NaN part fails both
+            // compares), so plain compares give exactly `lo.min(p)` and `hi.max(p)`.
+            (if p < lo { p } else { lo }, if p > hi { p } else { hi })
+        });
+        (parts, lo, hi)
     }
 
     /// Mixes throttle in [0, 1] and (roll, pitch, yaw) in ±1 into motor commands in [0, 1].
@@ -100,15 +151,7 @@ impl<const N: usize> Mixer<N> {
     /// predict with their own output must be told this, not the request (see
     /// `sysid::ekf::SystemIdentifier::record_output`).
     pub fn mix_with_applied(&self, throttle: f32, attitude: [f32; 3]) -> ([f32; N], [f32; 3]) {
-        let [roll, pitch, yaw] = attitude;
-        let parts = self
-            .factors
-            .map(|f| f.roll * roll + f.pitch * pitch + f.yaw * yaw);
-        let (lo, hi) = parts.iter().fold((0.0f32, 0.0f32), |(lo, hi), &p| {
-            // The accumulators start at 0 and never take a NaN (a NaN part fails both
-            // compares), so plain compares give exactly `lo.min(p)` and `hi.max(p)`.
-            (if p < lo { p } else { lo }, if p > hi { p } else { hi })
-        });
+        let (parts, lo, hi) = self.parts(attitude);
         let span = hi - lo;
         // Scale the attitude part only when it alone cannot fit into [0, 1].
         let scale = if span > 1.0 { 1.0 / span } else { 1.0 };
@@ -117,7 +160,15 @@ impl<const N: usize> Mixer<N> {
         // min/max, not clamp: after scaling −lo and 1 − hi can cross by one ulp, and clamp
         // panics on crossed bounds.
         let t = max(min(throttle.clamp(0.0, 1.0), 1.0 - hi), -lo);
-        let thrust = parts.map(|p| (t + p * scale).clamp(0.0, 1.0));
+        let thrust = parts.map(|p| t + p * scale);
+        // Rounding is monotonic, so the lowest and highest motors are exactly t + lo and
+        // t + hi (or within them): when those fit, as they do unless rounding pushed one
+        // past an end, every motor does and the per-motor clamp is skipped.
+        let thrust = if t + lo >= 0.0 && t + hi <= 1.0 {
+            thrust
+        } else {
+            thrust.map(|x| x.clamp(0.0, 1.0))
+        };
         // The curve is fixed per mixer: decided once, not per motor.
         let motors = match self.curve {
             ThrustCurve::Linear => thrust,
@@ -163,6 +214,50 @@ mod tests {
         let (motors, applied) = mx.mix_with_applied(0.5, [1.0, 1.0, 0.0]);
         assert_eq!(motors, sat);
         assert_eq!(applied, [0.5, 0.5, 0.0]);
+    }
+
+    #[test]
+    fn the_straight_line_quad_x_mix_is_the_general_one_bit_for_bit() {
+        let fast = Mixer::new(QUAD_X, ThrustCurve::Linear);
+        assert!(fast.quad_x && !Mixer::new(QUAD_PLUS, ThrustCurve::Linear).quad_x);
+        let general = Mixer {
+            quad_x: false,
+            ..fast
+        };
+        let values = [
+            f32::NAN,
+            -1.7,
+            -1.0,
+            -0.5037707,
+            -0.3,
+            -1e-7,
+            -0.0,
+            0.0,
+            0.013,
+            0.2,
+            0.5037707,
+            0.77,
+            1.0,
+        ];
+        let same = |a: &[f32], b: &[f32]| {
+            a.iter()
+                .zip(b)
+                .all(|(x, y)| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()))
+        };
+        for throttle in [0.0, 0.05, 0.5, 0.93, 1.0] {
+            for r in values {
+                for p in values {
+                    for y in values {
+                        let (m1, a1) = fast.mix_with_applied(throttle, [r, p, y]);
+                        let (m2, a2) = general.mix_with_applied(throttle, [r, p, y]);
+                        assert!(
+                            same(&m1, &m2) && same(&a1, &a2),
+                            "{throttle} {r} {p} {y}: {m1:?} {a1:?} vs {m2:?} {a2:?}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]

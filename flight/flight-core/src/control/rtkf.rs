@@ -54,6 +54,11 @@ impl Rtkf {
         self.x
     }
 
+    /// The discretised model the filter predicts with.
+    pub fn model(&self) -> &EstimatorMatrices<f32> {
+        &self.model
+    }
+
     /// `x` propagated one period ahead under output `u` (no measurement): used to look past
     /// outputs that are computed but not yet acting.
     pub fn predict_ahead(&self, x: RateTorqueEstimate, u: f32) -> RateTorqueEstimate {
@@ -68,6 +73,7 @@ impl Rtkf {
 
     /// One loop: predict with `previous_output` (clamped, as actually applied), correct with
     /// `gyro_dps`.
+    #[inline]
     pub fn update(&mut self, previous_output: f32, gyro_dps: f32) -> RateTorqueEstimate {
         let m = &self.model;
         let RateTorqueEstimate {

@@ -93,6 +93,23 @@ impl Complementary {
         mag: Option<[f32; 3]>,
         dt_s: f32,
     ) -> Result<(), Error> {
+        self.update_with(gyro_radps, accel_mps2, true, mag, dt_s)
+    }
+
+    /// [`Self::update`] where the accelerometer corrects only if `accel_corrects` (armed,
+    /// one sample in `armed_accel_divider`); it is checked for finiteness either way, so a
+    /// broken accelerometer is refused on every sample.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] or [`Error::InvalidTimeStep`]; the estimate is unchanged then.
+    pub fn update_with(
+        &mut self,
+        gyro_radps: [f32; 3],
+        accel_mps2: [f32; 3],
+        accel_corrects: bool,
+        mag: Option<[f32; 3]>,
+        dt_s: f32,
+    ) -> Result<(), Error> {
         check_finite(&gyro_radps)?;
         check_finite(&accel_mps2)?;
         if let Some(m) = mag {
@@ -113,7 +130,7 @@ impl Complementary {
         let [ax, ay, az] = accel_mps2;
         let f2 = ax * ax + ay * ay + az * az;
         let g = crate::estimation::GRAVITY_MPS2;
-        if f2 > 1e-6 {
+        if accel_corrects && f2 > 1e-6 {
             let inv = inv_sqrt(f2);
             let norm = f2 * inv;
             if (norm - g).abs() < cfg.accel_trust_band * g {
@@ -161,11 +178,29 @@ impl Complementary {
                 - self.gyro_bias_radps.get(k).copied().unwrap_or(0.0)
                 + correction.get(k).copied().unwrap_or(0.0)
         });
-        self.attitude = quaternion::normalized(quaternion::rotate_by_body_vector(
+        self.attitude = renormalized(quaternion::rotate_by_body_vector(
             self.attitude,
             omega.map(|w| w * dt_s),
         ));
         Ok(())
+    }
+}
+
+/// `quaternion::normalized` for a quaternion one filter step away from unit length:
+/// |q|² = 1 + ε with |ε| ≈ 1e-7 (rounding, the rotation series' error), and
+/// 1/√(1 + ε) = 1 − ε/2 + 3ε²/8 − …, so s = (3 − |q|²)/2 is exact to f32 rounding while
+/// |ε| < 2⁻¹² (the neglected 3ε²/8 < 3·2⁻²⁷, below half an ulp of 1) — no inverse square
+/// root. Anything further off (a reset, NaN) takes the full normalisation.
+fn renormalized(q: Quaternion) -> Quaternion {
+    let [q0, q1, q2, q3] = q;
+    let n2 = q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3;
+    if (n2 - 1.0).abs() < 1.0 / 4096.0 {
+        let s = 1.5 - 0.5 * n2;
+        // The scalar part is kept non-negative, as `normalized` does.
+        let s = if q0 < 0.0 { -s } else { s };
+        q.map(|c| c * s)
+    } else {
+        quaternion::normalized(q)
     }
 }
 
@@ -229,6 +264,41 @@ mod tests {
                 && (b[2] - 0.01).abs() < 0.001,
             "{b:?}"
         );
+    }
+
+    #[test]
+    fn renormalising_near_unit_length_matches_the_full_normalisation() {
+        // One step's worth of error either way, and a quaternion far off (full path).
+        for (k, scale) in [1.0_f32, 1.0 + 1e-7, 1.0 - 2e-7, 1.0 + 1e-4, 1.0 - 1e-4, 3.0]
+            .into_iter()
+            .enumerate()
+        {
+            let q = quaternion::from_euler(0.3 * k as f32, -0.2, 2.0 - k as f32).map(|c| c * scale);
+            let (fast, full) = (renormalized(q), quaternion::normalized(q));
+            for (a, b) in fast.iter().zip(full) {
+                assert!((a - b).abs() < 2.5e-7, "{scale}: {fast:?} vs {full:?}");
+            }
+        }
+        // Negative scalar part flipped, NaN to the identity, as the full one does.
+        assert!(renormalized([-1.0, 0.0, 0.0, 0.0])[0] > 0.0);
+        assert_eq!(renormalized([f32::NAN; 4]), quaternion::IDENTITY);
+    }
+
+    #[test]
+    fn a_skipped_accelerometer_is_still_checked_but_does_not_correct() {
+        let mut cf = Complementary::new(Config::default());
+        let tilted = [0.0, -3.0, -9.3];
+        for _ in 0..100 {
+            cf.update_with([0.0; 3], tilted, false, None, 0.002)
+                .unwrap();
+        }
+        assert_eq!(cf.attitude(), quaternion::IDENTITY);
+        assert_eq!(
+            cf.update_with([0.0; 3], [f32::NAN, 0.0, -9.8], false, None, 0.002),
+            Err(Error::NonFinite)
+        );
+        cf.update_with([0.0; 3], tilted, true, None, 0.002).unwrap();
+        assert_ne!(cf.attitude(), quaternion::IDENTITY);
     }
 
     #[test]

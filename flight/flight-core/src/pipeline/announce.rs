@@ -62,7 +62,7 @@ mod tests {
             mode_changed,
             armed: false,
             failsafe: false,
-            attitude_deg: [0.0; 3],
+            attitude: crate::pipeline::Attitude::LEVEL,
             estimator: crate::pipeline::Source::Complementary,
         }
     }

@@ -21,10 +21,11 @@
 //! fallbacks.
 //!
 //! Cost (m4count, `tests/m4-bench` `flight_loop` regions 34–38, one whole attitude-mode
-//! `FlightLoop::step` at 1 kHz): 5 237 instructions with the INS predicting (1 329 with the
-//! complementary filter, region 3), 6 360 on a step that also fuses a baro reading, 5 336 on
+//! `FlightLoop::step` at 1 kHz; measured at issue 17's third loop pass, current figures in
+//! `tests/flight-sitl/README.md`): 4 374 instructions with the INS predicting (1 167 with the
+//! complementary filter, region 3), 5 451 on a step that also fuses a baro reading, 4 411 on
 //! average over 100 steps with the baro at 50 Hz and one pseudo-measurement. At 1.3 cycles per
-//! instruction on the 168 MHz F405 that is 40 µs, **4.0 % of the CPU at 1 kHz**, so the INS
+//! instruction on the 168 MHz F405 that is 34 µs, **3.4 % of the CPU at 1 kHz**, so the INS
 //! predicts on every sample; a step that also fuses a magnetometer reading (≈ 3 500) and a
 //! GPS fix (≈ 8 100, `gps` bench) stays under 18 000 (≈ 140 µs).
 //!
@@ -255,8 +256,9 @@ impl Estimator {
         }
     }
 
-    /// One sample: `cf_accel` is what the complementary filter may use (the loop skips the
-    /// accelerometer on most samples while armed), the INS takes the raw specific force.
+    /// One sample: the complementary filter corrects with the accelerometer only when
+    /// `cf_accel_corrects` (the loop skips it on most samples while armed), the INS takes the
+    /// raw specific force.
     ///
     /// # Errors
     /// [`Error::NonFinite`] or [`Error::InvalidTimeStep`] for an unusable sample (the
@@ -265,13 +267,19 @@ impl Estimator {
     pub fn update(
         &mut self,
         imu: &ImuSample,
-        cf_accel: [f32; 3],
+        cf_accel_corrects: bool,
         armed: bool,
         dt_s: f32,
     ) -> Result<(), Error> {
         match self.source {
             Source::Complementary => {
-                self.cf.update(imu.gyro_radps, cf_accel, imu.mag, dt_s)?;
+                self.cf.update_with(
+                    imu.gyro_radps,
+                    imu.accel_mps2,
+                    cf_accel_corrects,
+                    imu.mag,
+                    dt_s,
+                )?;
                 // The factory mode stops here: nothing else to keep.
                 if self.mode != EstimatorMode::Complementary {
                     self.await_ins(dt_s);

@@ -2,6 +2,7 @@
 //! estimate → supervise → failsafe descent or setpoint → mix → output commands. The
 //! stateless parts of the setpoint and mix stages live in `stages`.
 
+use super::attitude::Attitude;
 use super::controllers::Controllers;
 use super::estimator::{Estimator, EstimatorMode, Source};
 use super::hold::{DescentHold, Hold, Horizontal, Nav};
@@ -9,11 +10,11 @@ use super::identify::Sysid;
 use super::stages;
 use super::sticks::StickShaping;
 use crate::control::mixer::Mixer;
+use crate::estimation::GRAVITY_MPS2;
 use crate::estimation::complementary;
 use crate::estimation::ins::aiding::gps::GpsUpdate;
-use crate::estimation::math::{inv_sqrt, wrap_pi};
+use crate::estimation::math::inv_sqrt;
 use crate::estimation::quaternion::{Quaternion, ned_to_body};
-use crate::estimation::{GRAVITY_MPS2, all_finite};
 use crate::outputs::Command;
 use crate::supervisor::{
     Decision, FlightMode, Inputs, LandingDetector, LandingInputs, ModePolicy, ModeSwitch,
@@ -26,6 +27,8 @@ const DEG_PER_RAD: f32 = 180.0 / core::f32::consts::PI;
 const GYRO_LIMIT_DPS: f32 = 2200.0;
 /// Time constant pulling the accelerometer-integrated climb rate towards the measured one, s.
 const CLIMB_BLEND_S: f32 = 1.0;
+/// Time constant of the hover-throttle estimate (a low-pass of the flying throttle), s.
+const HOVER_LEARN_S: f32 = 2.0;
 /// On a link failsafe with a good GPS fix the frame holds its position and altitude this
 /// long (the pilot may walk back into range, the link may return), then descends in place
 /// at the failsafe rate, still holding the position. Without a fix: the descent at once.
@@ -97,16 +100,40 @@ pub struct LoopOutput {
     pub armed: bool,
     /// Link failsafe descent active (or its position hold, see [`FAILSAFE_HOLD_MS`]).
     pub failsafe: bool,
-    /// Estimated attitude (roll, pitch, yaw), deg.
-    pub attitude_deg: [f32; 3],
+    /// Estimated attitude: roll and pitch, deg; the yaw on demand ([`Attitude::yaw_deg`]).
+    pub attitude: Attitude,
     /// The estimator that flew this loop.
     pub estimator: Source,
+}
+
+/// What the loop works out once from its configuration rather than every step: the
+/// low-pass gains (a division each) and the limited idle command.
+#[derive(Debug, Clone, Copy)]
+struct Gains {
+    /// Ts / (CLIMB_BLEND_S + Ts).
+    climb_blend: f32,
+    /// Ts / (HOVER_LEARN_S + Ts).
+    hover: f32,
+    /// The idle command, limited ([`stages::idle`]).
+    idle: f32,
+}
+
+impl Gains {
+    fn new(config: &LoopConfig) -> Self {
+        let ts_s = config.ts_s;
+        Self {
+            idle: stages::idle(config.idle),
+            climb_blend: ts_s / (CLIMB_BLEND_S + ts_s),
+            hover: ts_s / (HOVER_LEARN_S + ts_s),
+        }
+    }
 }
 
 /// The loop's state.
 #[derive(Debug, Clone)]
 pub struct FlightLoop {
     config: LoopConfig,
+    gains: Gains,
     estimator: Estimator,
     supervisor: Supervisor,
     modes: ModeSwitch,
@@ -155,6 +182,7 @@ impl FlightLoop {
         let modes = ModeSwitch::new(config.modes);
         Self {
             config,
+            gains: Gains::new(&config),
             estimator: Estimator::new(config.estimator, config.attitude_filter),
             supervisor: Supervisor::new(config.supervisor),
             mode: modes.mode(),
@@ -246,7 +274,7 @@ impl FlightLoop {
         let f_down = r13 * x + r23 * y + r33 * z;
         let up_accel = -(f_down + GRAVITY_MPS2);
         let ts = self.config.ts_s;
-        let k = ts / (CLIMB_BLEND_S + ts);
+        let k = self.gains.climb_blend;
         let v = self.climb_mps.unwrap_or(measured);
         let v = if up_accel.is_finite() {
             v + up_accel * ts
@@ -318,7 +346,7 @@ impl FlightLoop {
         let previous_mode = self.mode;
         let decision = self.supervise(now_ms, link, &estimate);
         // The INS's vertical velocity when it flies on the baro; else the loop's own blend.
-        // The rotation matrix once per step: the climb blend, the Euler angles and the
+        // The rotation matrix once per step: the climb blend, roll and pitch and the
         // hold loops' heading all read it.
         let r = ned_to_body(self.estimator.attitude());
         let climb_rate_mps = match self.estimator.vertical() {
@@ -328,7 +356,7 @@ impl FlightLoop {
             }
             None => self.fuse_climb(climb_rate_mps, imu.accel_mps2, &r),
         };
-        let [roll, pitch, yaw] = euler_deg(&r);
+        let attitude = Attitude::from_rotation(&r);
         let failsafe = self.supervisor.failsafe_descent_mps();
         // Nothing below changes the supervisor's state: read it once.
         let armed = self.supervisor.motors_enabled();
@@ -359,7 +387,7 @@ impl FlightLoop {
                 decision,
                 mode_changed: self.mode != previous_mode,
                 gyro_dps: estimate.gyro_dps,
-                attitude_deg: [roll, pitch],
+                attitude_deg: [attitude.roll_deg, attitude.pitch_deg],
                 failsafe_descent_mps: failsafe,
                 climb_rate_mps,
                 nav,
@@ -394,7 +422,7 @@ impl FlightLoop {
             mode_changed: self.mode != previous_mode,
             armed,
             failsafe: failsafe.is_some(),
-            attitude_deg: [roll, pitch, yaw],
+            attitude,
             estimator: self.estimator.source(),
         }
     }
@@ -404,24 +432,22 @@ impl FlightLoop {
         let gyro_dps = imu.gyro_radps.map(|g| g * DEG_PER_RAD);
         // `abs() < limit` is false for NaN and ±∞: no separate finiteness test.
         let gyro_ok = gyro_dps.iter().all(|g| g.abs() < GYRO_LIMIT_DPS);
-        // A zero vector is below the filter's accelerometer threshold: gyro (and mag) only.
+        // Armed, the accelerometer corrects on one sample in `armed_accel_divider` (it is
+        // checked on every one).
         let armed = self.supervisor.motors_enabled();
-        let accel = if armed {
+        let accel_corrects = if armed {
             self.accel_phase = self.accel_phase.wrapping_add(1);
-            if self.accel_phase >= self.config.armed_accel_divider.max(1) {
+            let due = self.accel_phase >= self.config.armed_accel_divider.max(1);
+            if due {
                 self.accel_phase = 0;
-                imu.accel_mps2
-            } else if all_finite(&imu.accel_mps2) {
-                [0.0; 3]
-            } else {
-                imu.accel_mps2
             }
+            due
         } else {
-            imu.accel_mps2
+            true
         };
         let filter_ok = self
             .estimator
-            .update(imu, accel, armed, self.config.ts_s)
+            .update(imu, accel_corrects, armed, self.config.ts_s)
             .is_ok();
         Estimate {
             gyro_dps,
@@ -607,11 +633,11 @@ impl FlightLoop {
                 } else {
                     out
                 };
-                // 2 s low-pass of the flying throttle: what hovering takes (learnt from the
+                // 2 s low-pass (`HOVER_LEARN_S`) of the flying throttle: what hovering takes (learnt from the
                 // pilot's throttle only: the hold loops fly around it).
                 if hold_out.is_none() && throttle > 0.1 {
                     self.airborne = true;
-                    let k = self.config.ts_s / (2.0 + self.config.ts_s);
+                    let k = self.gains.hover;
                     self.hover_throttle += k * (throttle - self.hover_throttle);
                 }
                 (throttle, out, shaking)
@@ -636,7 +662,7 @@ impl FlightLoop {
             stages::Demand {
                 throttle,
                 attitude: attitude_out,
-                idle: self.config.idle,
+                idle: self.gains.idle,
                 uses_lqg,
             },
         );
@@ -671,45 +697,6 @@ struct Fly {
     failsafe_for_ms: Option<u32>,
     /// The frame was in the air when the failsafe began.
     failsafe_airborne: bool,
-}
-
-/// (roll, pitch, yaw) in degrees without libm: a polynomial atan2 (error < 0.01°) on the
-/// rotation matrix (`ned_to_body`), so the loop never calls soft-double trigonometry on the M4F.
-fn euler_deg(r: &[[f32; 3]; 3]) -> [f32; 3] {
-    let [[r11, r12, r13], [_, _, r23], [_, _, r33]] = *r;
-    let horizontal = r23 * r23 + r33 * r33;
-    let cos_pitch = if horizontal > 0.0 {
-        horizontal * inv_sqrt(horizontal)
-    } else {
-        0.0
-    };
-    [
-        atan2(r23, r33) * DEG_PER_RAD,
-        atan2(-r13, cos_pitch) * DEG_PER_RAD,
-        wrap_pi(atan2(r12, r11)) * DEG_PER_RAD,
-    ]
-}
-
-/// atan2 by octant reduction and a degree-9 odd minimax polynomial on [−1, 1].
-fn atan2(y: f32, x: f32) -> f32 {
-    use core::f32::consts::{FRAC_PI_2, PI};
-    let (ax, ay) = (x.abs(), y.abs());
-    if ax == 0.0 && ay == 0.0 {
-        return 0.0;
-    }
-    let swap = ay > ax;
-    let z = if swap { ax / ay } else { ay / ax };
-    let z2 = z * z;
-    let mut a = z
-        * (0.999_866
-            + z2 * (-0.330_299_5 + z2 * (0.180_141 + z2 * (-0.085_133 + z2 * 0.020_835_1))));
-    if swap {
-        a = FRAC_PI_2 - a;
-    }
-    if x < 0.0 {
-        a = PI - a;
-    }
-    if y < 0.0 { -a } else { a }
 }
 
 #[cfg(test)]

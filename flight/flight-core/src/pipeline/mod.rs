@@ -6,6 +6,7 @@
 //! `announce` picks the alerts to sound; `link` keeps the bound link in the settings.
 
 mod announce;
+mod attitude;
 mod channels;
 mod climb;
 mod controllers;
@@ -20,6 +21,7 @@ mod sticks;
 mod validate;
 
 pub use announce::{BATTERY_REPEAT_MS, announce, announce_battery, battery_alert, loop_alerts};
+pub use attitude::Attitude;
 pub use channels::{
     ArmChannel, CHANNEL_HIGH, CHANNEL_LOW, CHANNEL_MID, ChannelMap, channel_for, channel_us,
     throttle_channel,

@@ -120,13 +120,18 @@ pub(super) fn setpoint(
     (out, false)
 }
 
+/// The configured idle command limited to 0…0.3 (worked out once, not per loop).
+pub(super) fn idle(configured: f32) -> f32 {
+    configured.clamp(0.0, 0.3)
+}
+
 /// What the flying stages hand to the mix.
 pub(super) struct Demand {
     /// Collective throttle, 0…1.
     pub throttle: f32,
     /// Roll, pitch, yaw demand, −1…1.
     pub attitude: [f32; 3],
-    /// Motor command at zero throttle.
+    /// Motor command at zero throttle, already limited to 0…0.3 ([`idle`]).
     pub idle: f32,
     /// The active controller predicts with its own output (told what was realised).
     pub uses_lqg: bool,
@@ -141,9 +146,10 @@ pub(super) fn mix(
     sysid: Option<&mut Sysid>,
     demand: Demand,
 ) -> [Command; 4] {
-    let idle = demand.idle.clamp(0.0, 0.3);
+    let idle = demand.idle;
     let (mixed, applied) = mixer.mix_with_applied(demand.throttle, demand.attitude);
-    if demand.uses_lqg {
+    // Undesaturated (the usual case) the LQG's own outputs were realised: nothing to tell.
+    if demand.uses_lqg && applied != demand.attitude {
         c.lqg_realised(applied);
     }
     if let Some(s) = sysid {

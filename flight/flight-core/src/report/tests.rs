@@ -14,7 +14,7 @@ fn snapshot() -> Snapshot {
             mode_changed: false,
             armed: true,
             failsafe: false,
-            attitude_deg: [12.345, -200.0, 179.99],
+            attitude: crate::pipeline::Attitude::from_deg([12.345, -200.0, 123.455]),
             estimator: crate::pipeline::Source::Complementary,
         },
         battery: Some(BatteryStatus {
@@ -49,7 +49,7 @@ fn rotation_carries_every_kind_and_attitude_half_the_time() {
     let attitude = Message::Attitude(Attitude {
         roll_cdeg: 1234,
         pitch_cdeg: -18_000,
-        yaw_cdeg: 17_999,
+        yaw_cdeg: 12_345,
     });
     assert_eq!(msgs.iter().filter(|m| **m == attitude).count(), 7);
     assert!(msgs.contains(&Message::ArmState(ArmState {

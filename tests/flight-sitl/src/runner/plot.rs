@@ -62,8 +62,8 @@ pub fn figure(o: &Outcome) -> Figure {
         Panel::new("Attitude", "deg")
             .series(series(s, "roll", |x| x.truth.euler_deg[0]))
             .series(series(s, "pitch", |x| x.truth.euler_deg[1]))
-            .series(series(s, "roll est.", |x| f64::from(x.out.attitude_deg[0])).dashed())
-            .series(series(s, "pitch est.", |x| f64::from(x.out.attitude_deg[1])).dashed()),
+            .series(series(s, "roll est.", |x| f64::from(x.out.attitude.roll_deg)).dashed())
+            .series(series(s, "pitch est.", |x| f64::from(x.out.attitude.pitch_deg)).dashed()),
     ))
     .panel(with_events(
         Panel::new("Motor commands (stopped = 0)", "throttle")

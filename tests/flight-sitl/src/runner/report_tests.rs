@@ -22,7 +22,7 @@ fn sample(t_s: f64, altitude_m: f64, climb_mps: f64, armed: bool, failsafe: bool
             mode_changed: false,
             armed,
             failsafe,
-            attitude_deg: [0.0; 3],
+            attitude: flight_core::pipeline::Attitude::LEVEL,
             estimator: flight_core::pipeline::Source::Complementary,
         },
         link_up: !failsafe,

@@ -1,6 +1,6 @@
 //! Instructions for one full flight-loop iteration, `FlightLoop::step`, exactly as the firmware
 //! runs it after each gyro sample: complementary-filter attitude update (accelerometer
-//! correction), the arming/failsafe supervisor, the mode switch, Euler angles, the controller
+//! correction), the arming/failsafe supervisor, the mode switch, roll and pitch, the controller
 //! of the active mode and the quad-X mixer. Configuration from the factory settings
 //! (`pipeline::from_settings`, 1 kHz), gains designed before the first measured step, the loop
 //! armed by the stick gesture (1.2 s of steps, not measured).

@@ -24,7 +24,7 @@ fn run(e: &mut Estimator, imu: &ImuSample, seconds: f32, altitude_m: f32) {
         if k % 20 == 0 {
             e.baro(altitude_m);
         }
-        e.update(imu, imu.accel_mps2, false, DT).unwrap();
+        e.update(imu, true, false, DT).unwrap();
     }
 }
 
@@ -52,7 +52,7 @@ fn the_ins_takes_over_and_hands_back_without_an_attitude_jump() {
     let mut switched_at = None;
     let mut previous = before;
     for k in 0..20 {
-        e.update(&imu, imu.accel_mps2, false, DT).unwrap();
+        e.update(&imu, true, false, DT).unwrap();
         let jump = angle_between(previous, e.attitude()).to_degrees();
         assert!(jump < 0.01, "step {k}: {jump}° at the hand-over");
         previous = e.attitude();
@@ -82,7 +82,7 @@ fn the_ins_takes_over_and_hands_back_without_an_attitude_jump() {
     assert_eq!(e.fallbacks(), 1);
     let jump = angle_between(before, e.attitude()).to_degrees();
     assert!(jump < 0.01, "{jump}° at the fallback");
-    e.update(&imu, imu.accel_mps2, false, DT).unwrap();
+    e.update(&imu, true, false, DT).unwrap();
     let jump = angle_between(before, e.attitude()).to_degrees();
     assert!(jump < 0.01, "{jump}° one step after the fallback");
     // AND the INS restarts from it later
@@ -109,7 +109,7 @@ fn the_indoor_ins_follows_the_baro_and_reports_the_climb() {
             accel_mps2: [0.0, 0.0, -(GRAVITY_MPS2 + up_accel)],
             ..imu
         };
-        e.update(&climbing, climbing.accel_mps2, false, DT).unwrap();
+        e.update(&climbing, true, false, DT).unwrap();
         speed += up_accel * DT;
         altitude += speed * DT;
     }
@@ -118,7 +118,7 @@ fn the_indoor_ins_follows_the_baro_and_reports_the_climb() {
     assert!((climb - 1.0).abs() < 0.1, "climb {climb}");
     // Without baro readings the vertical is not offered.
     for _ in 0..1000 {
-        e.update(&imu, imu.accel_mps2, false, DT).unwrap();
+        e.update(&imu, true, false, DT).unwrap();
     }
     assert_eq!(e.vertical(), None);
 }
@@ -158,7 +158,7 @@ fn the_full_ins_takes_the_gps_position() {
         if k % 20 == 0 {
             e.baro(0.0);
         }
-        e.update(&imu, imu.accel_mps2, false, DT).unwrap();
+        e.update(&imu, true, false, DT).unwrap();
     }
     let ([n, east], [vn, ve]) = e.horizontal().expect("position on a good fix");
     assert!((n - 3.0).abs() < 0.3 && east.abs() < 0.3, "{n} {east}");
@@ -166,7 +166,7 @@ fn the_full_ins_takes_the_gps_position() {
     assert!(e.home().is_some());
     // The fix lost: no horizontal position after the timeout.
     for _ in 0..1500 {
-        e.update(&imu, imu.accel_mps2, false, DT).unwrap();
+        e.update(&imu, true, false, DT).unwrap();
     }
     assert_eq!(e.horizontal(), None);
     assert_eq!(
