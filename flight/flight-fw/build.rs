@@ -1,9 +1,6 @@
-//! Link setup for the STM32F405 image. Host builds (the stub `main`) get nothing.
-//!
-//! The memory layout is chosen by feature and written to OUT_DIR, because the linker runs
-//! in the workspace root and would not find a memory.x next to this file.
-
-use std::{env, fs, path::PathBuf};
+//! The STM32F405 image's memory layouts, one chosen by feature; writing it to OUT_DIR and
+//! the link arguments are `fw-link`'s (hardware/fw-link, shared with module-fw). Host builds
+//! (the stub `main`) get nothing.
 
 /// Sectors 0–3 are 16 KiB each; sectors 2–3 (0x0800_8000–0x0800_FFFF) hold the settings,
 /// where Tau Labs kept them on boards without external flash (hardware/brushedsparky).
@@ -34,20 +31,9 @@ _stack_start = ORIGIN(RAM) + LENGTH(RAM) - 16;
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
-    if env::var("CARGO_CFG_TARGET_OS").as_deref() != Ok("none") {
-        return;
-    }
-    let layout = if env::var_os("CARGO_FEATURE_TAULABS_BOOTLOADER").is_some() {
+    fw_link::link_image(if fw_link::feature("taulabs-bootloader") {
         BOOTLOADER
     } else {
         DIRECT
-    };
-    let out = PathBuf::from(env::var_os("OUT_DIR").unwrap_or_default());
-    if let Err(e) = fs::write(out.join("memory.x"), layout) {
-        println!("cargo:warning=cannot write memory.x: {e}");
-    }
-    println!("cargo:rustc-link-search={}", out.display());
-    println!("cargo:rustc-link-arg-bins=--nmagic");
-    println!("cargo:rustc-link-arg-bins=-Tlink.x");
-    println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    });
 }

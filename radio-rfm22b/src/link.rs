@@ -19,6 +19,26 @@ use crate::{
     TxPower,
 };
 
+/// The link's clock on embassy-time (feature `embassy-time`): its ticks in µs as the time,
+/// `Timer::at` as the sleep — the one both TauLink firmwares run their link loops on (and
+/// the module's JR-line task stamps its CRSF frames with, so slot times are directly the
+/// CRSF timing frame's phase).
+#[cfg(feature = "embassy-time")]
+#[cfg_attr(docsrs, doc(cfg(feature = "embassy-time")))]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EmbassyClock;
+
+#[cfg(feature = "embassy-time")]
+impl telemetry::link::LinkClock for EmbassyClock {
+    fn now_us(&self) -> u64 {
+        embassy_time::Instant::now().as_micros()
+    }
+
+    async fn sleep_until_us(&mut self, deadline_us: u64) {
+        embassy_time::Timer::at(embassy_time::Instant::from_micros(deadline_us)).await;
+    }
+}
+
 /// The modem of each rate mode: deviation for a modulation index 2Δf/R of 1.2…3.1 (Tau
 /// Labs' and OpenLRSng's profiles span 1.1–4.7); 256 kbps uses the 150 kHz Tau Labs
 /// intended, not its table's 9.4 kHz typo.

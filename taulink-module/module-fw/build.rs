@@ -1,9 +1,6 @@
-//! Link setup for the nRF52840 image. Host builds (the stub `main`) get nothing.
-//!
-//! memory.x is chosen by feature and written to OUT_DIR, because the linker runs in the
-//! workspace root and would not find one next to this file.
-
-use std::{env, fs, path::PathBuf};
+//! The nRF52840 image's memory layouts, one chosen by feature; writing it to OUT_DIR and the
+//! link arguments are `fw-link`'s (hardware/fw-link, shared with flight-fw). Host builds (the
+//! stub `main`) get nothing.
 
 /// Flash 0x0–0xE9FFF for code, 0xEC000–0xF3FFF (8 pages of 4 KiB) for settings, and the top
 /// 48 KiB left to a UF2 bootloader, so both layouts keep settings in the same place. The
@@ -33,20 +30,5 @@ MEMORY
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
-    if env::var("CARGO_CFG_TARGET_OS").as_deref() != Ok("none") {
-        return;
-    }
-    let layout = if env::var_os("CARGO_FEATURE_UF2").is_some() {
-        UF2
-    } else {
-        PROBE
-    };
-    let out = PathBuf::from(env::var_os("OUT_DIR").unwrap_or_default());
-    if let Err(e) = fs::write(out.join("memory.x"), layout) {
-        println!("cargo:warning=cannot write memory.x: {e}");
-    }
-    println!("cargo:rustc-link-search={}", out.display());
-    println!("cargo:rustc-link-arg-bins=--nmagic");
-    println!("cargo:rustc-link-arg-bins=-Tlink.x");
-    println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    fw_link::link_image(if fw_link::feature("uf2") { UF2 } else { PROBE });
 }

@@ -1,6 +1,7 @@
 //! The role loops: the RX and TX state machines ([`rx`](super::rx), [`tx`](super::tx))
 //! driven over a [`Radio`]. Each `*_step` does one wait-and-react cycle, so a test harness
-//! or a firmware task can run them; `run_*` loop forever.
+//! or a firmware task can run them; `run_*` loop forever (`run_*_steps` handing the
+//! application each step's events at once).
 //!
 //! Cancel-safety: a step dropped at an `.await` leaves the chip wherever it was (listening,
 //! sending, half-programmed) and the state machine consistent; call `rx_start` / `tx_start`
@@ -181,6 +182,42 @@ where
     }
 }
 
+/// Events one [`rx_step`] can report (a packet's output, then failsafe).
+pub const RX_STEP_EVENTS: usize = 4;
+
+/// Runs the receiver forever like [`run_receiver`], but hands each step's events to
+/// `on_step(now_us, rx, events)` together, once per step, with the receiver to read — for an
+/// application that takes them under a lock (TauLink's flight firmware and simulator). A
+/// step waits at most one hop cycle. Returns only on a radio error (the events of the step
+/// that failed are not delivered).
+pub async fn run_receiver_steps<SPI, IRQ, D, C>(
+    radio: &mut Radio<SPI, IRQ, D, C>,
+    rx: &mut Receiver,
+    mut on_step: impl FnMut(u64, &mut Receiver, &[RxEvent]),
+) -> Error<SPI::Error, IRQ::Error>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    D: DelayNs,
+    C: Clock,
+{
+    if let Err(e) = rx_start(radio, rx).await {
+        return e;
+    }
+    loop {
+        let mut events: heapless::Vec<RxEvent, RX_STEP_EVENTS> = heapless::Vec::new();
+        let step = rx_step(radio, rx, &mut |event| {
+            let _ = events.push(event);
+        })
+        .await;
+        if let Err(e) = step {
+            return e;
+        }
+        let now = radio.now_us();
+        on_step(now, rx, &events);
+    }
+}
+
 /// Bind mode of the TX: sends the bind packet every 200 ms and listens 50 ms after each,
 /// until an RX answers `'B'` (`true`) or `until_us` passes (`false`).
 pub async fn tx_bind<SPI, IRQ, D, C>(
@@ -285,6 +322,42 @@ where
         }
     }
     Ok(())
+}
+
+/// Events one [`tx_step`] can report.
+pub const TX_STEP_EVENTS: usize = 2;
+
+/// Runs the transmitter forever: [`tx_start`], then [`tx_step`] with `before_send` right
+/// before each packet and `on_step(now_us, tx, events)` after each step with that step's
+/// events — the transmitter's counterpart of [`run_receiver_steps`] (TauLink's module
+/// firmware and simulator). Returns only on a radio error.
+pub async fn run_transmitter_steps<SPI, IRQ, D, C>(
+    radio: &mut Radio<SPI, IRQ, D, C>,
+    tx: &mut Transmitter,
+    mut before_send: impl FnMut(&mut Transmitter),
+    mut on_step: impl FnMut(u64, &Transmitter, &[TxEvent]),
+) -> Error<SPI::Error, IRQ::Error>
+where
+    SPI: SpiDevice,
+    IRQ: Wait,
+    D: DelayNs,
+    C: Clock,
+{
+    if let Err(e) = tx_start(radio, tx).await {
+        return e;
+    }
+    loop {
+        let mut events: heapless::Vec<TxEvent, TX_STEP_EVENTS> = heapless::Vec::new();
+        let step = tx_step(radio, tx, &mut before_send, &mut |event| {
+            let _ = events.push(event);
+        })
+        .await;
+        if let Err(e) = step {
+            return e;
+        }
+        let now = radio.now_us();
+        on_step(now, tx, &events);
+    }
 }
 
 /// RSSI samples are taken this often while dwelling on a channel during a scan.

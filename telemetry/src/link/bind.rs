@@ -4,6 +4,7 @@
 use super::hopping::{Band, mix32};
 use super::radio::RadioConfig;
 use super::rate::{BIND_RATE, RateMode};
+use super::schedule::Schedule;
 use crate::channels::ChannelFormat;
 use crate::frame::{BindOffer, Frame, Received, decode};
 
@@ -62,6 +63,14 @@ impl LinkParams {
             [h[0] ^ 0xFF, h[1], h[2], h[3]]
         } else {
             h
+        }
+    }
+
+    /// The slot schedule of the bound link: its rate's slots, its telemetry ratio.
+    pub fn schedule(&self) -> Schedule {
+        Schedule {
+            rate: self.rate,
+            telemetry_ratio: self.telemetry_ratio,
         }
     }
 

@@ -5,9 +5,10 @@
 use super::bind::{ACCEPT_REPEATS, BIND_KEY, LinkParams, bind_radio_config, offered_params};
 use super::core::{Follower, Step};
 use super::hopping::Band;
-use super::radio::{LinkClock, LinkRx, PacketRadio};
+use super::radio::{LinkClock, PacketRadio, LinkRx};
 use super::rate::FIFO_BYTES;
 use super::recovery::Recovery;
+use super::step_io::{receive_until, transmit_at, tune_until};
 use crate::frame::{Frame, encode};
 
 /// Gap between receiving an offer and answering, and between repeated accepts: the master
@@ -28,8 +29,8 @@ pub async fn bind_follower<R: PacketRadio, C: LinkClock>(
     let give_up = clock.now_us() + timeout_us;
     let mut buf = [0u8; FIFO_BYTES];
     while clock.now_us() < give_up {
-        let timeout = u32::try_from(give_up - clock.now_us()).unwrap_or(u32::MAX);
-        let LinkRx::Packet { len, .. } = radio.receive(&mut buf, timeout).await? else {
+        let LinkRx::Packet { len, .. } = receive_until(radio, clock, &mut buf, give_up).await?
+        else {
             continue;
         };
         let Some(params) = buf.get(..len).and_then(offered_params) else {
@@ -105,19 +106,8 @@ async fn run_step<R: PacketRadio, C: LinkClock>(
             at_us,
             len,
         } => {
-            let sent = async {
-                radio.set_channel(channel).await?;
-                clock.sleep_until_us(at_us).await;
-                radio.transmit(buf.get(..len).unwrap_or(&[])).await
-            }
-            .await;
-            match sent {
-                Ok(()) => follower.on_sent(),
-                Err(e) => {
-                    follower.on_skipped();
-                    return Err(e);
-                }
-            }
+            let frame = buf.get(..len).unwrap_or(&[]);
+            transmit_at(radio, clock, follower, (channel, at_us, frame), false).await?;
         }
         Step::Listen {
             channel,
@@ -125,12 +115,8 @@ async fn run_step<R: PacketRadio, C: LinkClock>(
             until_us,
         } => {
             // A failed listen needs no bookkeeping: the next plan counts its slot as missed.
-            radio.set_channel(channel).await?;
-            clock.sleep_until_us(from_us).await;
-            let timeout = until_us.saturating_sub(clock.now_us());
-            let outcome = radio
-                .receive(buf, u32::try_from(timeout).unwrap_or(u32::MAX))
-                .await?;
+            tune_until(radio, clock, channel, from_us).await?;
+            let outcome = receive_until(radio, clock, buf, until_us).await?;
             follower.on_received(outcome, buf, clock.now_us());
         }
         Step::Idle => follower.on_skipped(),

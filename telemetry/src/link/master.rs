@@ -4,10 +4,11 @@
 
 use super::bind::{BIND_KEY, LinkParams, OFFER_PERIOD_US, bind_radio_config, is_accept_of};
 use super::core::{Master, Step};
-use super::radio::{LinkClock, LinkRx, PacketRadio};
+use super::radio::{LinkClock, PacketRadio, LinkRx};
 use super::rate::FIFO_BYTES;
 use super::recovery::Recovery;
 use super::schedule::SlotKind;
+use super::step_io::{receive_until, transmit_at, tune_until};
 use crate::frame::{Frame, encode};
 
 /// Bind mode on the master (started by the bind button/command): offers `params` on the
@@ -35,8 +36,8 @@ pub async fn bind_master<R: PacketRadio, C: LinkClock>(
         let period_end = clock.now_us() + u64::from(OFFER_PERIOD_US);
         radio.transmit(offer).await?;
         while clock.now_us() < period_end {
-            let timeout = u32::try_from(period_end - clock.now_us()).unwrap_or(u32::MAX);
-            if let LinkRx::Packet { len, .. } = radio.receive(&mut buf, timeout).await?
+            if let LinkRx::Packet { len, .. } =
+                receive_until(radio, clock, &mut buf, period_end).await?
                 && buf
                     .get(..len)
                     .is_some_and(|packet| is_accept_of(packet, params))
@@ -116,26 +117,10 @@ async fn run_slot<R: PacketRadio, C: LinkClock>(
             at_us,
             len,
         } => {
-            let sent = async {
-                radio.set_channel(channel).await?;
-                // Too late for this slot (e.g. right after a radio recovery): an uplink off
-                // the grid would drag the follower's grid with it, so the slot is skipped.
-                if clock.now_us() > at_us {
-                    return Ok(false);
-                }
-                clock.sleep_until_us(at_us).await;
-                radio.transmit(buf.get(..len).unwrap_or(&[])).await?;
-                Ok(true)
-            }
-            .await;
-            match sent {
-                Ok(true) => master.on_sent(),
-                Ok(false) => master.on_skipped(),
-                Err(e) => {
-                    master.on_skipped();
-                    return Err(e);
-                }
-            }
+            // Too late for this slot once tuned (e.g. right after a radio recovery): an uplink
+            // off the grid would drag the follower's grid with it, so the slot is skipped.
+            let frame = buf.get(..len).unwrap_or(&[]);
+            transmit_at(radio, clock, master, (channel, at_us, frame), true).await?;
         }
         Step::Listen {
             channel,
@@ -143,14 +128,10 @@ async fn run_slot<R: PacketRadio, C: LinkClock>(
             until_us,
         } => {
             let heard = async {
-                radio.set_channel(channel).await?;
-                clock.sleep_until_us(from_us).await;
+                tune_until(radio, clock, channel, from_us).await?;
                 // Listen on after a foreign or corrupted packet: ours may still come.
                 while clock.now_us() < until_us {
-                    let timeout = until_us - clock.now_us();
-                    let outcome = radio
-                        .receive(buf, u32::try_from(timeout).unwrap_or(u32::MAX))
-                        .await?;
+                    let outcome = receive_until(radio, clock, buf, until_us).await?;
                     if master.on_received(outcome, buf, clock.now_us()) {
                         break;
                     }

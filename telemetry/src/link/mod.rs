@@ -14,6 +14,7 @@ pub mod radio;
 pub mod rate;
 mod recovery;
 pub mod schedule;
+mod step_io;
 pub mod stream;
 
 pub use auth::{Fingerprint, LinkKey, PhraseError, key_for_phrase};

@@ -6,7 +6,9 @@
 
 use embassy_futures::block_on;
 use flight_core::app::SaveJob;
-use flight_core::settings::{Handle, LoadProblem, Settings, handles, load, save, save_whole};
+use flight_core::settings::{
+    Handle, LoadProblem, Settings, handles, load_at_boot, save, save_whole,
+};
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
 use sequential_storage::mock_flash::{MockFlashBase, WriteCountCheck};
@@ -53,17 +55,15 @@ impl SettingsFlash {
         Self { map }
     }
 
-    /// The storage task's boot-time load: the settings and the load's problem (an
-    /// unreadable store is `Corrupt`, as the firmware treats it).
+    /// The storage task's boot-time load (`load_at_boot`, as the firmware's): the settings
+    /// and the load's problem.
     pub(crate) fn load(&mut self) -> (Settings, Option<LoadProblem>) {
         let mut settings = Settings::default();
         let Some(map) = self.map.as_mut() else {
             return (settings, None);
         };
-        match block_on(load(map, &mut settings)) {
-            Ok(report) => (settings, report.problem),
-            Err(_) => (Settings::default(), Some(LoadProblem::Corrupt)),
-        }
+        let (report, _) = block_on(load_at_boot(map, &mut settings));
+        (settings, report.problem)
     }
 
     /// The storage task's save of the app's job (`SaveJob::write`, as the firmware's):

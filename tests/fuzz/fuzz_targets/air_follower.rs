@@ -9,17 +9,16 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use taulink_fuzz::{Input, seal};
-use telemetry::channels::{CHANNEL_MAX, ChannelFormat, FailsafeValues};
-use telemetry::frame::{
-    CRC_BYTES, Frame, LinkReport, Received, StreamHeader, Uplink, decode, encode,
-};
-use telemetry::link::core::{Follower, STREAM_RX_BYTES, Step};
-use telemetry::link::{Band, HOP_CHANNELS, LinkParams, LinkRx, RateMode};
+use taulink_fuzz::Input;
+use taulink_fuzz::air::{self, Sealing};
+use telemetry::channels::FailsafeValues;
+use telemetry::frame::{Frame, Received, decode};
+use telemetry::link::HOP_CHANNELS;
+use telemetry::link::core::{Follower, Step};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
-    let params = params(&mut input);
+    let params = air::params(&mut input, false);
     let failsafe_us = u64::from(input.u16()) * 16;
     let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
     let mut now = 0u64;
@@ -29,17 +28,21 @@ fuzz_target!(|data: &[u8]| {
         match input.u8() % 6 {
             0 | 1 => {
                 let frame = if input.bool() {
-                    seal(input.chunk(64), params.bind_id)
+                    taulink_fuzz::seal(input.chunk(64), params.bind_id)
                 } else {
-                    uplink(&mut input, &params, &follower)
+                    // A well-formed uplink, slot mostly the one the follower expects: the
+                    // way deep into tracking, failsafe values and the stream.
+                    let slot = air::uplink_slot(&mut input, follower.tracked_slot());
+                    let mut packed = [0u8; 22];
+                    let up = air::uplink(&mut input, params.format, slot, &mut packed);
+                    let sealing = Sealing::Crc {
+                        bind_id: params.bind_id,
+                    };
+                    air::sealed(&mut input, &Frame::Uplink(up), sealing)
                 };
-                let rssi_dbm = i16::from(input.u8() as i8);
+                let outcome = air::packet(&mut input, &frame);
                 let before = *follower.output();
                 let updates = follower.updates();
-                let outcome = LinkRx::Packet {
-                    len: frame.len(),
-                    rssi_dbm,
-                };
                 follower.on_received(outcome, &frame, now);
                 if follower.updates() != updates {
                     let Received::Accepted(Frame::Uplink(up)) = decode(&frame, params.bind_id)
@@ -58,104 +61,31 @@ fuzz_target!(|data: &[u8]| {
                     );
                 }
             }
-            2 => {
-                let outcome = if input.bool() {
-                    LinkRx::Corrupted
-                } else {
-                    LinkRx::Timeout
-                };
-                follower.on_received(outcome, &[], now);
-            }
-            3 | 4 => match follower.plan(now, &mut buf) {
-                Step::Transmit { channel, len, .. } => {
-                    assert!(usize::from(channel) < HOP_CHANNELS);
-                    assert!(len <= params.rate.max_frame_bytes());
-                    assert!(matches!(
-                        decode(&buf[..len], params.bind_id),
-                        Received::Accepted(Frame::Downlink(_))
-                    ));
-                    if input.bool() {
-                        follower.on_sent();
-                    } else {
-                        follower.on_skipped();
+            2 => follower.on_received(air::nothing(&mut input), &[], now),
+            3 | 4 => {
+                let step = follower.plan(now, &mut buf);
+                air::assert_grid(&step);
+                match step {
+                    Step::Transmit { len, .. } => {
+                        assert!(len <= params.rate.max_frame_bytes());
+                        assert!(matches!(
+                            decode(&buf[..len], params.bind_id),
+                            Received::Accepted(Frame::Downlink(_))
+                        ));
+                        if input.bool() {
+                            follower.on_sent();
+                        } else {
+                            follower.on_skipped();
+                        }
                     }
+                    step => air::follower_listen_or_idle(&mut follower, step, now),
                 }
-                Step::Listen {
-                    channel,
-                    from_us,
-                    until_us,
-                } => {
-                    assert!(usize::from(channel) < HOP_CHANNELS);
-                    assert!(until_us >= from_us || until_us >= now);
-                }
-                Step::Idle => follower.on_skipped(),
-            },
-            _ => {
-                follower.downlink_stream.write(input.chunk(64));
-                let mut out = [0u8; 64];
-                follower.uplink_stream.read(&mut out);
             }
+            _ => air::use_follower_streams(&mut input, &mut follower),
         }
-        assert!(follower.output().iter().all(|&v| v <= CHANNEL_MAX));
-        assert!(follower.uplink_lq() <= 100);
-        assert!(follower.uplink_stream.available() <= STREAM_RX_BYTES);
+        air::assert_follower(&follower);
         if let Some((_, channel)) = follower.tracked_slot() {
             assert!(usize::from(channel) < HOP_CHANNELS);
         }
-        if let Some(report) = follower.remote_report() {
-            assert!(report.lq_percent <= 100);
-        }
     }
 });
-
-/// A well-formed uplink (slot mostly the one the follower expects, fuzzed fields, stream data)
-/// with up to two fuzzed byte flips, sealed: the way deep into tracking, failsafe values and
-/// the stream.
-fn uplink(input: &mut Input, params: &LinkParams, follower: &Follower) -> Vec<u8> {
-    let slot = match (input.u8(), follower.tracked_slot()) {
-        (0..=191, Some((slot, _))) => slot,
-        (0..=127, None) => 0,
-        (_, _) => input.u8(),
-    };
-    let mut packed = [0u8; 22];
-    let packed = &mut packed[..params.format.packed_bytes()];
-    for byte in packed.iter_mut() {
-        *byte = input.u8();
-    }
-    let report = input.bool().then(|| LinkReport {
-        rssi_dbm: input.u8() as i8,
-        lq_percent: input.u8() % 101,
-    });
-    let up = Uplink {
-        slot,
-        stream: StreamHeader {
-            seq: input.u8(),
-            ack: input.u8(),
-        },
-        report,
-        save_failsafe: input.u8() < 32,
-        input_lost: input.u8() < 16,
-        format: params.format,
-        packed_channels: packed,
-        data: input.chunk(40),
-    };
-    let mut buf = [0u8; 128];
-    let n = encode(&Frame::Uplink(up), params.bind_id, &mut buf).expect("fits 128 bytes");
-    let body = &mut buf[..n - CRC_BYTES];
-    for _ in 0..input.u8() % 3 {
-        let at = usize::from(input.u8()) % body.len();
-        body[at] ^= input.u8();
-    }
-    seal(body, params.bind_id)
-}
-
-/// Link parameters from the input: any bind ID, every band, rate, format and ratio.
-pub fn params(input: &mut Input) -> LinkParams {
-    LinkParams {
-        bind_id: input.u32(),
-        band: Band::from_code(input.u8() % 3).unwrap_or(Band::Mhz433),
-        rate: RateMode::from_code(input.u8() % 5).unwrap_or(RateMode::F500),
-        format: ChannelFormat::from_code(input.u8() % 3).unwrap_or(ChannelFormat::Full16),
-        telemetry_ratio: 2 << (input.u8() % 7),
-    }
-}

@@ -27,32 +27,26 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use taulink_fuzz::air::{self, Replays, Sealing, epoch_or_any_counter as any_counter};
 use taulink_fuzz::{Input, link_key, seal_tagged};
-use telemetry::channels::{CHANNEL_MAX, ChannelFormat, FailsafeValues};
-use telemetry::frame::{
-    Frame, LinkReport, Received, SEALED_VERSION, StreamHeader, Uplink, open, seal,
-};
+use telemetry::channels::FailsafeValues;
+use telemetry::frame::{Frame, Received, SEALED_VERSION, StreamHeader, Uplink, open, seal};
 use telemetry::link::auth::TAG_BYTES;
 use telemetry::link::core::follower::SyncState;
-use telemetry::link::core::{Follower, STREAM_RX_BYTES, Step, frame_counter};
-use telemetry::link::{
-    Band, HOP_CHANNELS, LinkKey, LinkParams, LinkRx, RateMode, Schedule, SlotKind,
-};
-
-/// Frames kept for replays.
-const REPLAYS: usize = 16;
+use telemetry::link::core::{Follower, Step, frame_counter};
+use telemetry::link::{HOP_CHANNELS, LinkKey, LinkParams, LinkRx, Schedule, SlotKind};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
     let key = link_key(&mut input);
-    let params = params(&mut input);
+    let params = air::params(&mut input, true);
     let failsafe_us = u64::from(input.u16()) * 16;
     let mut follower = Follower::new(params, FailsafeValues::default(), failsafe_us)
         .with_key(key)
         .with_nonce_seed(u64::from(input.u32()));
     let mut now = 0u64;
     let mut buf = [0u8; 64];
-    let mut heard: Vec<Vec<u8>> = Vec::new();
+    let mut heard = Replays::default();
     let mut taken: Vec<(Option<(u32, u32)>, u64)> = Vec::new();
     let mut last_sent: Option<(Option<(u32, u32)>, u64)> = None;
     while !input.is_empty() {
@@ -69,28 +63,18 @@ fuzz_target!(|data: &[u8]| {
                         let counter = expected.unwrap_or_else(|| any_counter(&mut input));
                         seal_tagged(input.chunk(40), &key, counter)
                     }
-                    5 if !heard.is_empty() => {
-                        let at = usize::from(input.u8()) % heard.len();
-                        heard.get(at).cloned().unwrap_or_default()
-                    }
+                    5 if !heard.is_empty() => heard.pick(&mut input),
                     6 => {
                         let counter = any_counter(&mut input);
                         seal_tagged(input.chunk(40), &key, counter)
                     }
                     _ => input.chunk(40).to_vec(),
                 };
-                if heard.len() == REPLAYS {
-                    heard.remove(0);
-                }
-                heard.push(frame.clone());
+                heard.keep(&frame);
                 receive(&mut follower, &key, &frame, &mut input, now, &mut taken);
             }
             3 => {
-                let outcome = if input.bool() {
-                    LinkRx::Corrupted
-                } else {
-                    LinkRx::Timeout
-                };
+                let outcome = air::nothing(&mut input);
                 let (updates, slot) = (follower.updates(), follower.tracked_slot());
                 let state = follower.sync_state();
                 follower.on_received(outcome, &[], now);
@@ -99,53 +83,48 @@ fuzz_target!(|data: &[u8]| {
                     assert_eq!(follower.tracked_slot(), slot);
                 }
             }
-            4 | 5 => match follower.plan(now, &mut buf) {
-                Step::Transmit { channel, len, .. } => {
-                    assert!(usize::from(channel) < HOP_CHANNELS);
-                    assert!(len <= params.rate.max_frame_bytes());
-                    let frame = &buf[..len];
-                    assert_eq!(frame.first(), Some(&SEALED_VERSION));
-                    let counter = follower.frame_counter().expect("sends only with an epoch");
-                    let (slot, _) = follower.tracked_slot().expect("sends only when tracking");
-                    let epoch = follower.epoch_nonces();
-                    let tag_key = epoch_key(&key, &follower);
-                    match (open(frame, &tag_key, counter), follower.sync_state()) {
-                        (
-                            Received::Accepted(Frame::Nonce { slot: s, nonce }),
-                            SyncState::Handshake,
-                        ) => {
-                            assert_eq!(s, slot);
-                            assert_eq!(counter, frame_counter(nonce, 0, slot));
+            4 | 5 => {
+                let step = follower.plan(now, &mut buf);
+                air::assert_grid(&step);
+                match step {
+                    Step::Transmit { len, .. } => {
+                        assert!(len <= params.rate.max_frame_bytes());
+                        let frame = &buf[..len];
+                        assert_eq!(frame.first(), Some(&SEALED_VERSION));
+                        let counter = follower.frame_counter().expect("sends only with an epoch");
+                        let (slot, _) = follower.tracked_slot().expect("sends only when tracking");
+                        let epoch = follower.epoch_nonces();
+                        let tag_key = epoch_key(&key, &follower);
+                        match (open(frame, &tag_key, counter), follower.sync_state()) {
+                            (
+                                Received::Accepted(Frame::Nonce { slot: s, nonce }),
+                                SyncState::Handshake,
+                            ) => {
+                                assert_eq!(s, slot);
+                                assert_eq!(counter, frame_counter(nonce, 0, slot));
+                            }
+                            (Received::Accepted(Frame::Downlink(down)), SyncState::Tracking) => {
+                                assert_eq!(down.slot, slot);
+                                assert!(down.report.is_some_and(|r| r.lq_percent <= 100));
+                            }
+                            (other, state) => panic!("planned {other:?} in {state:?}"),
                         }
-                        (Received::Accepted(Frame::Downlink(down)), SyncState::Tracking) => {
-                            assert_eq!(down.slot, slot);
-                            assert!(down.report.is_some_and(|r| r.lq_percent <= 100));
+                        if input.bool() {
+                            if let Some((last_epoch, last)) = last_sent
+                                && last_epoch == epoch
+                                && last >> 32 == counter >> 32
+                            {
+                                assert!(counter > last, "two downlinks under counter {counter:#x}");
+                            }
+                            last_sent = Some((epoch, counter));
+                            follower.on_sent();
+                        } else {
+                            follower.on_skipped();
                         }
-                        (other, state) => panic!("planned {other:?} in {state:?}"),
                     }
-                    if input.bool() {
-                        if let Some((last_epoch, last)) = last_sent
-                            && last_epoch == epoch
-                            && last >> 32 == counter >> 32
-                        {
-                            assert!(counter > last, "two downlinks under counter {counter:#x}");
-                        }
-                        last_sent = Some((epoch, counter));
-                        follower.on_sent();
-                    } else {
-                        follower.on_skipped();
-                    }
+                    step => air::follower_listen_or_idle(&mut follower, step, now),
                 }
-                Step::Listen {
-                    channel,
-                    from_us,
-                    until_us,
-                } => {
-                    assert!(usize::from(channel) < HOP_CHANNELS);
-                    assert!(until_us >= from_us || until_us >= now);
-                }
-                Step::Idle => follower.on_skipped(),
-            },
+            }
             6 => {
                 // The loop fell behind: a run of skipped slots (past a wrap, or into resync).
                 let updates = follower.updates();
@@ -163,15 +142,9 @@ fuzz_target!(|data: &[u8]| {
                 assert_eq!(follower.updates(), updates);
             }
             7 => clean_run(&mut follower, &key, &params, &mut input, now),
-            _ => {
-                follower.downlink_stream.write(input.chunk(64));
-                let mut out = [0u8; 64];
-                follower.uplink_stream.read(&mut out);
-            }
+            _ => air::use_follower_streams(&mut input, &mut follower),
         }
-        assert!(follower.output().iter().all(|&v| v <= CHANNEL_MAX));
-        assert!(follower.uplink_lq() <= 100);
-        assert!(follower.uplink_stream.available() <= STREAM_RX_BYTES);
+        air::assert_follower(&follower);
         if follower.updates() == 0 {
             assert!(
                 follower.in_failsafe(),
@@ -187,9 +160,6 @@ fuzz_target!(|data: &[u8]| {
                 assert_ne!(counter >> 32, 0, "nonces are never 0");
                 assert!(usize::from(channel) < HOP_CHANNELS);
             }
-        }
-        if let Some(report) = follower.remote_report() {
-            assert!(report.lq_percent <= 100);
         }
     }
 });
@@ -213,11 +183,7 @@ fn receive(
     let failsafe = *follower.failsafe_values();
     let available = follower.uplink_stream.available();
     let remote = follower.remote_report();
-    let outcome = LinkRx::Packet {
-        len: frame.len(),
-        rssi_dbm: i16::from(input.u8() as i8),
-    };
-    follower.on_received(outcome, frame, now);
+    follower.on_received(air::packet(input, frame), frame, now);
 
     if follower.counters().received == received {
         assert_eq!(follower.updates(), updates, "channels from a refused frame");
@@ -417,79 +383,28 @@ fn master_nonce(input: &mut Input, follower: &Follower, key: &LinkKey) -> Vec<u8
     let mut buf = [0u8; 64];
     let n = seal(&Frame::MasterNonce { slot, nonce }, key, counter, &mut buf).expect("fits");
     let frame = &mut buf[..n];
-    if input.u8() < 16 {
-        let at = usize::from(input.u8()) % frame.len();
-        frame[at] ^= input.u8();
-    }
+    air::rare_flip(input, frame);
     frame.to_vec()
-}
-
-/// Any counter: one of an arbitrary epoch's, or 64 fuzzed bits.
-fn any_counter(input: &mut Input) -> u64 {
-    if input.bool() {
-        frame_counter(input.u32(), u32::from(input.u8()), input.u8())
-    } else {
-        u64::from(input.u32()) << 32 | u64::from(input.u32())
-    }
 }
 
 /// A well-formed sealed uplink: slot mostly the tracked one (while acquiring: 0 or fuzzed, so
 /// the dwell channel's slot is found), tagged mostly under the follower's counter, fuzzed
 /// fields and stream data, then up to two fuzzed byte flips.
 fn uplink(input: &mut Input, params: &LinkParams, follower: &Follower, key: &LinkKey) -> Vec<u8> {
-    let slot = match (input.u8(), follower.tracked_slot()) {
-        (0..=191, Some((slot, _))) => slot,
-        (0..=127, None) => 0,
-        (_, _) => input.u8(),
-    };
+    let slot = air::uplink_slot(input, follower.tracked_slot());
     let counter = match (input.u8(), follower.frame_counter()) {
         (0..=223, Some(counter)) => counter,
         _ => any_counter(input),
     };
     let mut packed = [0u8; 22];
-    let packed = &mut packed[..params.format.packed_bytes()];
-    for byte in packed.iter_mut() {
-        *byte = input.u8();
-    }
-    let report = input.bool().then(|| LinkReport {
-        rssi_dbm: input.u8() as i8,
-        lq_percent: input.u8() % 101,
-    });
-    let up = Uplink {
-        slot,
-        stream: StreamHeader {
-            seq: input.u8(),
-            ack: input.u8(),
-        },
-        report,
-        save_failsafe: input.u8() < 32,
-        input_lost: input.u8() < 16,
-        format: params.format,
-        packed_channels: packed,
-        data: input.chunk(40),
-    };
+    let up = air::uplink(input, params.format, slot, &mut packed);
     let tag_key = match input.u8() {
         0..=239 => epoch_key(key, follower),
         _ => *key,
     };
-    let mut buf = [0u8; 128];
-    let n = seal(&Frame::Uplink(up), &tag_key, counter, &mut buf).expect("fits 128 bytes");
-    let frame = &mut buf[..n];
-    for _ in 0..input.u8() % 3 {
-        let at = usize::from(input.u8()) % frame.len();
-        frame[at] ^= input.u8();
-    }
-    frame.to_vec()
-}
-
-/// Link parameters from the input: every band, rate, format and ratio (the bind ID is
-/// replaced by the key's).
-fn params(input: &mut Input) -> LinkParams {
-    LinkParams {
-        bind_id: input.u32(),
-        band: Band::from_code(input.u8() % 3).unwrap_or(Band::Mhz433),
-        rate: RateMode::from_code(input.u8() % 4).unwrap_or(RateMode::F500),
-        format: ChannelFormat::from_code(input.u8() % 2).unwrap_or(ChannelFormat::Full16),
-        telemetry_ratio: 2 << (input.u8() % 7),
-    }
+    let sealing = Sealing::Tag {
+        key: &tag_key,
+        counter,
+    };
+    air::sealed(input, &Frame::Uplink(up), sealing)
 }

@@ -9,23 +9,16 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use taulink_fuzz::{Input, seal};
-use telemetry::channels::{ChannelFormat, Channels};
-use telemetry::frame::{
-    CRC_BYTES, Downlink, Frame, LinkReport, Received, StreamHeader, decode, encode,
-};
-use telemetry::link::core::{Master, STREAM_RX_BYTES, Step};
-use telemetry::link::{Band, HOP_CHANNELS, LinkParams, LinkRx, RateMode};
+use taulink_fuzz::Input;
+use taulink_fuzz::air::{self, Sealing};
+use telemetry::channels::Channels;
+use telemetry::frame::{Frame, Received, decode};
+use telemetry::link::LinkParams;
+use telemetry::link::core::{Master, Step};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
-    let params = LinkParams {
-        bind_id: input.u32(),
-        band: Band::from_code(input.u8() % 3).unwrap_or(Band::Mhz433),
-        rate: RateMode::from_code(input.u8() % 5).unwrap_or(RateMode::F500),
-        format: ChannelFormat::from_code(input.u8() % 3).unwrap_or(ChannelFormat::Full16),
-        telemetry_ratio: 2 << (input.u8() % 7),
-    };
+    let params = air::params(&mut input, false);
     // As every real link is built (`LinkParams::new`, module-core's `link_params`): the
     // format the rate carries (F700 flies `Sticks16`; the others never do).
     let params = LinkParams {
@@ -41,17 +34,18 @@ fuzz_target!(|data: &[u8]| {
         match input.u8() % 7 {
             0 | 1 => {
                 let frame = if input.bool() {
-                    seal(input.chunk(64), params.bind_id)
+                    taulink_fuzz::seal(input.chunk(64), params.bind_id)
                 } else {
-                    downlink(&mut input, &params, &master)
+                    let slot = air::mostly(&mut input, master.slot() as u8);
+                    let down = air::downlink(&mut input, slot, 50);
+                    let sealing = Sealing::Crc {
+                        bind_id: params.bind_id,
+                    };
+                    air::sealed(&mut input, &Frame::Downlink(down), sealing)
                 };
                 let received = master.counters().received;
                 let slot = master.slot();
-                let outcome = LinkRx::Packet {
-                    len: frame.len(),
-                    rssi_dbm: i16::from(input.u8() as i8),
-                };
-                master.on_received(outcome, &frame, now);
+                master.on_received(air::packet(&mut input, &frame), &frame, now);
                 if master.counters().received != received {
                     let Received::Accepted(Frame::Downlink(down)) = decode(&frame, params.bind_id)
                     else {
@@ -62,18 +56,14 @@ fuzz_target!(|data: &[u8]| {
                 }
             }
             2 => {
-                let outcome = if input.bool() {
-                    LinkRx::Corrupted
-                } else {
-                    LinkRx::Timeout
-                };
-                master.on_received(outcome, &[], now);
+                master.on_received(air::nothing(&mut input), &[], now);
             }
             3 | 4 => {
                 let slot = master.slot();
-                match master.plan(now, &mut buf) {
-                    Step::Transmit { channel, len, .. } => {
-                        assert!(usize::from(channel) < HOP_CHANNELS);
+                let step = master.plan(now, &mut buf);
+                air::assert_grid(&step);
+                match step {
+                    Step::Transmit { len, .. } => {
                         assert!(len <= params.rate.max_frame_bytes());
                         let Received::Accepted(Frame::Uplink(up)) =
                             decode(&buf[..len], params.bind_id)
@@ -89,72 +79,12 @@ fuzz_target!(|data: &[u8]| {
                             master.on_skipped();
                         }
                     }
-                    Step::Listen {
-                        channel,
-                        from_us,
-                        until_us,
-                    } => {
-                        assert!(usize::from(channel) < HOP_CHANNELS);
-                        assert!(from_us <= until_us);
-                        if input.bool() {
-                            master.finish_listen();
-                        } else {
-                            master.on_skipped();
-                        }
-                    }
-                    Step::Idle => master.on_skipped(),
+                    step => air::listen_or_idle(&mut input, &mut master, step),
                 }
             }
-            5 => {
-                for value in channels.iter_mut() {
-                    *value = input.u16();
-                }
-                master.set_channels(&channels);
-                if input.bool() {
-                    master.request_save_failsafe();
-                }
-            }
-            _ => {
-                master.uplink_stream.write(input.chunk(64));
-                let mut out = [0u8; 64];
-                master.downlink_stream.read(&mut out);
-            }
+            5 => air::new_channels(&mut input, &mut master, &mut channels),
+            _ => air::use_master_streams(&mut input, &mut master),
         }
-        assert!(master.downlink_lq() <= 100);
-        assert!(master.downlink_stream.available() <= STREAM_RX_BYTES);
-        if let Some(report) = master.remote_report() {
-            assert!(report.lq_percent <= 100);
-        }
+        air::assert_master(&master);
     }
 });
-
-/// A well-formed downlink (slot mostly the master's current one, fuzzed report and stream)
-/// with up to two fuzzed byte flips, sealed.
-fn downlink(input: &mut Input, params: &LinkParams, master: &Master) -> Vec<u8> {
-    let slot = if input.u8() < 192 {
-        master.slot() as u8
-    } else {
-        input.u8()
-    };
-    let report = input.bool().then(|| LinkReport {
-        rssi_dbm: input.u8() as i8,
-        lq_percent: input.u8() % 101,
-    });
-    let down = Downlink {
-        slot,
-        stream: StreamHeader {
-            seq: input.u8(),
-            ack: input.u8(),
-        },
-        report,
-        data: input.chunk(50),
-    };
-    let mut buf = [0u8; 128];
-    let n = encode(&Frame::Downlink(down), params.bind_id, &mut buf).expect("fits 128 bytes");
-    let body = &mut buf[..n - CRC_BYTES];
-    for _ in 0..input.u8() % 3 {
-        let at = usize::from(input.u8()) % body.len();
-        body[at] ^= input.u8();
-    }
-    seal(body, params.bind_id)
-}

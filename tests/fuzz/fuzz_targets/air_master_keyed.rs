@@ -26,19 +26,15 @@
 use std::collections::HashSet;
 
 use libfuzzer_sys::fuzz_target;
+use taulink_fuzz::air::{self, Replays, Sealing};
 use taulink_fuzz::{Input, link_key, seal_tagged};
-use telemetry::channels::{ChannelFormat, Channels};
-use telemetry::frame::{
-    Downlink, Frame, LinkReport, NONCE_FRAME_BYTES, Received, SEALED_VERSION, StreamHeader, open,
-    seal,
-};
-use telemetry::link::core::{Master, STREAM_RX_BYTES, Step, frame_counter};
-use telemetry::link::{Band, HOP_CHANNELS, LinkKey, LinkParams, LinkRx, RateMode};
+use telemetry::channels::Channels;
+use telemetry::frame::{Frame, NONCE_FRAME_BYTES, Received, SEALED_VERSION, open, seal};
+use telemetry::link::core::{Master, Step, frame_counter};
+use telemetry::link::{LinkKey, LinkParams};
 
 /// Nonces a master remembers having used (spec §12.2: "the last 8 are kept").
 const RECENT_NONCES: usize = 8;
-/// Frames kept for replays.
-const REPLAYS: usize = 16;
 
 /// The spec's epoch rules for the master (§12.2), the oracle the master is held to.
 #[derive(Default)]
@@ -101,13 +97,7 @@ impl Model {
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
     let key = link_key(&mut input);
-    let params = LinkParams {
-        bind_id: input.u32(),
-        band: Band::from_code(input.u8() % 3).unwrap_or(Band::Mhz433),
-        rate: RateMode::from_code(input.u8() % 4).unwrap_or(RateMode::F500),
-        format: ChannelFormat::from_code(input.u8() % 2).unwrap_or(ChannelFormat::Full16),
-        telemetry_ratio: 2 << (input.u8() % 7),
-    };
+    let params = air::params(&mut input, true);
     let pool: [u32; 4] = core::array::from_fn(|i| input.u32().max(i as u32 + 1));
     let mut master = Master::new(params)
         .with_key(key)
@@ -116,7 +106,7 @@ fuzz_target!(|data: &[u8]| {
     let mut channels: Channels = [992; 16];
     let mut now = 0u64;
     let mut buf = [0u8; 64];
-    let mut heard: Vec<Vec<u8>> = Vec::new();
+    let mut heard = Replays::default();
     // (follower nonce, master nonce, counter) of every uplink sent under an epoch key.
     let mut sent: HashSet<(u32, u32, u64)> = HashSet::new();
     while !input.is_empty() {
@@ -127,33 +117,23 @@ fuzz_target!(|data: &[u8]| {
                     0..=2 => nonce_frame(&mut input, &master, &key, &pool),
                     3 | 4 => downlink(&mut input, &params, &master, &key),
                     5 => seal_tagged(input.chunk(40), &key, master.frame_counter()),
-                    6 if !heard.is_empty() => {
-                        let at = usize::from(input.u8()) % heard.len();
-                        heard.get(at).cloned().unwrap_or_default()
-                    }
+                    6 if !heard.is_empty() => heard.pick(&mut input),
                     _ => input.chunk(40).to_vec(),
                 };
-                if heard.len() == REPLAYS {
-                    heard.remove(0);
-                }
-                heard.push(frame.clone());
+                heard.keep(&frame);
                 receive(&mut master, &mut model, &key, &frame, &mut input, now);
             }
             3 => {
-                let outcome = if input.bool() {
-                    LinkRx::Corrupted
-                } else {
-                    LinkRx::Timeout
-                };
                 let received = master.counters().received;
-                master.on_received(outcome, &[], now);
+                master.on_received(air::nothing(&mut input), &[], now);
                 assert_eq!(master.counters().received, received);
             }
             4 | 5 => {
                 let slot = master.slot();
-                match master.plan(now, &mut buf) {
-                    Step::Transmit { channel, len, .. } => {
-                        assert!(usize::from(channel) < HOP_CHANNELS);
+                let step = master.plan(now, &mut buf);
+                air::assert_grid(&step);
+                match step {
+                    Step::Transmit { len, .. } => {
                         let frame = &buf[..len];
                         assert_eq!(frame.first(), Some(&SEALED_VERSION));
                         assert!(
@@ -202,20 +182,7 @@ fuzz_target!(|data: &[u8]| {
                             master.on_skipped();
                         }
                     }
-                    Step::Listen {
-                        channel,
-                        from_us,
-                        until_us,
-                    } => {
-                        assert!(usize::from(channel) < HOP_CHANNELS);
-                        assert!(from_us <= until_us);
-                        if input.bool() {
-                            master.finish_listen();
-                        } else {
-                            master.on_skipped();
-                        }
-                    }
-                    Step::Idle => master.on_skipped(),
+                    step => air::listen_or_idle(&mut input, &mut master, step),
                 }
             }
             6 => {
@@ -224,20 +191,8 @@ fuzz_target!(|data: &[u8]| {
                     master.on_skipped();
                 }
             }
-            7 => {
-                for value in channels.iter_mut() {
-                    *value = input.u16();
-                }
-                master.set_channels(&channels);
-                if input.bool() {
-                    master.request_save_failsafe();
-                }
-            }
-            _ => {
-                master.uplink_stream.write(input.chunk(64));
-                let mut out = [0u8; 64];
-                master.downlink_stream.read(&mut out);
-            }
+            7 => air::new_channels(&mut input, &mut master, &mut channels),
+            _ => air::use_master_streams(&mut input, &mut master),
         }
         assert_eq!(master.has_epoch(), model.current.is_some());
         assert_eq!(
@@ -245,11 +200,7 @@ fuzz_target!(|data: &[u8]| {
             model.current.map(|(n, _)| (n, model.master_nonce))
         );
         assert_eq!(master.frame_counter(), model.counter(master.slot()));
-        assert!(master.downlink_lq() <= 100);
-        assert!(master.downlink_stream.available() <= STREAM_RX_BYTES);
-        if let Some(report) = master.remote_report() {
-            assert!(report.lq_percent <= 100);
-        }
+        air::assert_master(&master);
     }
 });
 
@@ -268,11 +219,7 @@ fn receive(
     let available = master.downlink_stream.available();
     let remote = master.remote_report();
     let ratio = master.params().telemetry_ratio;
-    let outcome = LinkRx::Packet {
-        len: frame.len(),
-        rssi_dbm: i16::from(input.u8() as i8),
-    };
-    master.on_received(outcome, frame, now);
+    master.on_received(air::packet(input, frame), frame, now);
     let counted = master.counters().received != received;
 
     // What the frame is, by the harness' own reading of the spec.
@@ -355,15 +302,12 @@ fn nonce_frame(input: &mut Input, master: &Master, key: &LinkKey, pool: &[u32; 4
     let counter = if input.u8() < 224 {
         frame_counter(nonce, 0, slot)
     } else {
-        u64::from(input.u32()) << 32 | u64::from(input.u32())
+        air::any_counter(input)
     };
     let mut buf = [0u8; NONCE_FRAME_BYTES];
     let n = seal(&Frame::Nonce { slot, nonce }, key, counter, &mut buf).expect("fits");
     let frame = &mut buf[..n];
-    if input.u8() < 16 {
-        let at = usize::from(input.u8()) % frame.len();
-        frame[at] ^= input.u8();
-    }
+    air::rare_flip(input, frame);
     frame.to_vec()
 }
 
@@ -371,39 +315,17 @@ fn nonce_frame(input: &mut Input, master: &Master, key: &LinkKey, pool: &[u32; 4
 /// the epoch key under the master's counter, fuzzed report and stream, then up to two fuzzed
 /// byte flips.
 fn downlink(input: &mut Input, params: &LinkParams, master: &Master, key: &LinkKey) -> Vec<u8> {
-    let slot = if input.u8() < 192 {
-        master.slot() as u8
-    } else {
-        input.u8()
-    };
+    let slot = air::mostly(input, master.slot() as u8);
     let counter = if input.u8() < 224 {
         master.frame_counter()
     } else {
-        u64::from(input.u32()) << 32 | u64::from(input.u32())
+        air::any_counter(input)
     };
     let key = match (master.epoch_nonces(), input.u8()) {
         (Some((n, m)), 0..=239) => key.epoch_key(n, m),
         _ => *key,
     };
-    let report = input.bool().then(|| LinkReport {
-        rssi_dbm: input.u8() as i8,
-        lq_percent: input.u8() % 101,
-    });
-    let down = Downlink {
-        slot,
-        stream: StreamHeader {
-            seq: input.u8(),
-            ack: input.u8(),
-        },
-        report,
-        data: input.chunk(params.rate.max_frame_bytes()),
-    };
-    let mut buf = [0u8; 128];
-    let n = seal(&Frame::Downlink(down), &key, counter, &mut buf).expect("fits 128 bytes");
-    let frame = &mut buf[..n];
-    for _ in 0..input.u8() % 3 {
-        let at = usize::from(input.u8()) % frame.len();
-        frame[at] ^= input.u8();
-    }
-    frame.to_vec()
+    let down = air::downlink(input, slot, params.rate.max_frame_bytes());
+    let sealing = Sealing::Tag { key: &key, counter };
+    air::sealed(input, &Frame::Downlink(down), sealing)
 }

@@ -15,9 +15,11 @@ fuzz_target!(|data: &[u8]| {
                 .encode(&mut out)
                 .expect("decoded frame re-encodes")
                 .len();
-            let mut again = Vec::new();
-            Decoder::new().push_all(&out[..written], |e| again.push(e));
-            assert_eq!(again, vec![Event::Frame(frame.clone())]);
+            taulink_fuzz::assert_decodes_to(
+                &out[..written],
+                Event::Frame(frame.clone()),
+                |wire, sink| Decoder::new().push_all(wire, sink),
+            );
             if let Frame::User(bytes) = frame {
                 for byte in bytes {
                     if let Some(record) = hub.push(byte) {

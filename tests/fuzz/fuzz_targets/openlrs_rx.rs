@@ -9,7 +9,6 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use openlrs::BindingVersion;
 use openlrs::RfmType;
 use openlrs::bind::{BIND_ACK, BIND_DATA_LEN, BindData};
 use openlrs::rx::{Command, Config, Output, Receiver};
@@ -18,12 +17,7 @@ use taulink_fuzz::Input;
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
-    let version = if input.bool() {
-        BindingVersion::V38
-    } else {
-        BindingVersion::V39
-    };
-    let band = [RfmType::Mhz433, RfmType::Mhz868, RfmType::Mhz915][usize::from(input.u8() % 3)];
+    let (version, band) = taulink_fuzz::openlrs_link(&mut input);
     let config = Config {
         version,
         band,
@@ -37,10 +31,7 @@ fuzz_target!(|data: &[u8]| {
         }
         Some(BindData::from_bytes(&bytes))
     } else {
-        let mut d = BindData::defaults(version, band);
-        d.flags = input.u8();
-        d.modem_profile = input.u8() % 5;
-        Some(d)
+        Some(taulink_fuzz::openlrs_bind(&mut input, version, band))
     };
     let mut rx = Receiver::new(config, stored);
     let mut now = u64::from(input.u16());

@@ -10,9 +10,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use openlrs::BindingVersion;
-use openlrs::RfmType;
-use openlrs::bind::{BIND_ACK, BindData};
+use openlrs::bind::BIND_ACK;
 use openlrs::channels::MAX_CHANNELS;
 use openlrs::frsky::HandsetTelemetry;
 use openlrs::tx::{BindBeacon, Received, Transmitter};
@@ -22,15 +20,8 @@ use telemetry::handset::{frsky_d, sport};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
-    let version = if input.bool() {
-        BindingVersion::V38
-    } else {
-        BindingVersion::V39
-    };
-    let band = [RfmType::Mhz433, RfmType::Mhz868, RfmType::Mhz915][usize::from(input.u8() % 3)];
-    let mut bind = BindData::defaults(version, band);
-    bind.flags = input.u8();
-    bind.modem_profile = input.u8() % 5;
+    let (version, band) = taulink_fuzz::openlrs_link(&mut input);
+    let mut bind = taulink_fuzz::openlrs_bind(&mut input, version, band);
     let hops = usize::from(input.u8() % 25);
     for (slot, &ch) in bind.hop_channels.iter_mut().zip(input.bytes(hops)) {
         *slot = ch % 50;

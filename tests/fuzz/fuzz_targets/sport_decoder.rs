@@ -14,9 +14,9 @@ fuzz_target!(|data: &[u8]| {
                 .encode(&mut out)
                 .expect("decoded frame re-encodes")
                 .len();
-            let mut again = Vec::new();
-            Decoder::new().push_all(&out[..written], |e| again.push(e));
-            assert_eq!(again, vec![Event::Frame(frame)]);
+            taulink_fuzz::assert_decodes_to(&out[..written], Event::Frame(frame), |wire, sink| {
+                Decoder::new().push_all(wire, sink)
+            });
         }
     });
 });

@@ -1,10 +1,16 @@
 //! What the fuzz targets share: a cursor that turns the fuzzer's bytes into typed choices,
 //! the two functions that make a fuzzed air frame pass the link's integrity check (the keyed
-//! CRC of unkeyed ends, the tag of keyed ones), and a `block_on` for the async flash stores.
+//! CRC of unkeyed ends, the tag of keyed ones), a `block_on` for the async flash stores, the
+//! handset decoders' round-trip check and the OpenLRSng roles' set-up; the air-link
+//! harnesses' frames, steps and invariants are in [`air`].
 //!
 //! Every target lives in `fuzz_targets/` and is built by `cargo fuzz build -s none` from this
 //! directory (see README.md).
 
+pub mod air;
+
+use openlrs::bind::BindData;
+use openlrs::{BindingVersion, RfmType};
 use telemetry::checksum::keyed_crc16;
 use telemetry::frame::CRC_BYTES;
 use telemetry::link::LinkKey;
@@ -131,4 +137,37 @@ pub fn assert_uplink_channels(up: &telemetry::frame::Uplink<'_>, channels: &[u16
             assert_eq!(got, expected, "channel {i}");
         }
     }
+}
+
+/// Checks a handset decoder's round trip: `wire`, a frame the decoder delivered and
+/// re-encoded, decodes with a fresh decoder (`decode_all`: the decoder's `push_all`) to
+/// exactly `expected`.
+pub fn assert_decodes_to<E: PartialEq + core::fmt::Debug>(
+    wire: &[u8],
+    expected: E,
+    decode_all: impl FnOnce(&[u8], &mut dyn FnMut(E)),
+) {
+    let mut again = Vec::new();
+    decode_all(wire, &mut |e| again.push(e));
+    assert_eq!(again, vec![expected]);
+}
+
+/// An OpenLRSng link's binding version and band from the input (both versions, every band).
+pub fn openlrs_link(input: &mut Input) -> (BindingVersion, RfmType) {
+    let version = if input.bool() {
+        BindingVersion::V38
+    } else {
+        BindingVersion::V39
+    };
+    let band = [RfmType::Mhz433, RfmType::Mhz868, RfmType::Mhz915][usize::from(input.u8() % 3)];
+    (version, band)
+}
+
+/// OpenLRSng's default bind data for `version` and `band` with fuzzed flags and modem
+/// profile (any of the five).
+pub fn openlrs_bind(input: &mut Input, version: BindingVersion, band: RfmType) -> BindData {
+    let mut data = BindData::defaults(version, band);
+    data.flags = input.u8();
+    data.modem_profile = input.u8() % 5;
+    data
 }

@@ -195,42 +195,13 @@ impl FlightApp {
     }
 }
 
-/// Events one `rx_step` can report (a packet's output, then failsafe).
-const STEP_EVENTS: usize = 4;
-
 /// The link task's OpenLRSng receiver, shared by the firmware and the simulator so neither
-/// re-implements it: the crate's role loop (`rx_start`, then `rx_step` forever), with
-/// `on_step(now_us, rx, events)` after every step — the firmware passes
+/// re-implements it: the crate's step-wise role loop (`rx_start`, then `rx_step` forever),
+/// with `on_step(now_us, rx, events)` after every step — the firmware passes
 /// [`FlightApp::on_openlrs_step`] through its app lock. Returns only on a radio error.
 /// A step waits at most one hop cycle (longer than the watchdog period at the slow
 /// profiles), so the caller races this against its 50 ms check-in, as for TauLink.
-pub async fn run_openlrs_receiver<SPI, IRQ, D, C>(
-    radio: &mut Radio<SPI, IRQ, D, C>,
-    rx: &mut Receiver,
-    mut on_step: impl FnMut(u64, &mut Receiver, &[RxEvent]),
-) -> RadioError<SPI::Error, IRQ::Error>
-where
-    SPI: SpiDevice,
-    IRQ: Wait,
-    D: DelayNs,
-    C: Clock,
-{
-    if let Err(e) = rx_start(radio, rx).await {
-        return e;
-    }
-    loop {
-        let mut events: heapless::Vec<RxEvent, STEP_EVENTS> = heapless::Vec::new();
-        let step = rx_step(radio, rx, &mut |event| {
-            let _ = events.push(event);
-        })
-        .await;
-        if let Err(e) = step {
-            return e;
-        }
-        let now = radio.now_us();
-        on_step(now, rx, &events);
-    }
-}
+pub use openlrs::roles::run_receiver_steps as run_openlrs_receiver;
 
 /// The OpenLRSng bind window ([`LinkStep::BindOpenLrs`]): a receiver without bind data
 /// listens on OpenLRSng's bind frequency until a transmitter's bind packet is accepted

@@ -343,6 +343,28 @@ pub async fn load<S: NorFlash, C: CacheImpl<u16>>(
     Ok(report)
 }
 
+/// The boot-time load, as the firmware's storage task and the simulators do it: [`load`],
+/// where a store that cannot be read at all (the map itself fails) counts as
+/// [`LoadProblem::Corrupt`] with the factory set — the flight controller boots on defaults
+/// and refuses to arm until a save; it never stops. The flash error, if any, comes back
+/// beside the report for the log.
+pub async fn load_at_boot<S: NorFlash, C: CacheImpl<u16>>(
+    map: &mut MapStorage<u16, S, C>,
+    settings: &mut Settings,
+) -> (LoadReport, Option<StoreError>) {
+    match load(map, settings).await {
+        Ok(report) => (report, None),
+        Err(e) => {
+            *settings = Settings::default();
+            let report = LoadReport {
+                problem: Some(LoadProblem::Corrupt),
+                ..LoadReport::default()
+            };
+            (report, Some(e))
+        }
+    }
+}
+
 /// Writes `settings` as a new generation when it differs from `stored` (what flash holds
 /// now), into the slot not holding the newest record; returns how many parameters changed
 /// (the link key counts as one; 0 = nothing written). Call only while disarmed: on the F405 a sector erase stalls

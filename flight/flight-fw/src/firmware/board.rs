@@ -46,24 +46,10 @@ pub const WATCHDOG_TIMEOUT_US: u32 = 250_000;
 // both; S0 is left to I2C1); I2C1 (baro) TX S6, RX S0 (channel 1); SPI1 (IMU) TX DMA2 S3,
 // RX DMA2 S0 (channel 3). EXTI9_5 serves the IMU's data-ready (EXTI5) and, on the
 // BrushedSparky, the radio's nIRQ (EXTI7).
-#[cfg(not(feature = "sparky2"))]
 bind_interrupts!(pub struct Irqs {
-    EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
-    DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
-    OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
-    RNG => rng::InterruptHandler<peripherals::RNG>;
-    DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
-    DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
-    DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
-    DMA1_STREAM0 => dma::InterruptHandler<peripherals::DMA1_CH0>;
-    DMA2_STREAM3 => dma::InterruptHandler<peripherals::DMA2_CH3>;
-    DMA2_STREAM0 => dma::InterruptHandler<peripherals::DMA2_CH0>;
-    I2C1_EV => i2c::EventInterruptHandler<peripherals::I2C1>;
-    I2C1_ER => i2c::ErrorInterruptHandler<peripherals::I2C1>;
-});
-#[cfg(feature = "sparky2")]
-bind_interrupts!(pub struct Irqs {
+    #[cfg(feature = "sparky2")]
     USART1 => usart::BufferedInterruptHandler<peripherals::USART1>;
+    #[cfg(feature = "sparky2")]
     EXTI2 => exti::InterruptHandler<interrupt::typelevel::EXTI2>;
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;

@@ -21,6 +21,7 @@ use telemetry::link::core::{Follower, Master};
 use telemetry::link::master::LATCH_BEFORE_TX_US;
 #[cfg(test)]
 use telemetry::link::rate::TX_LEAD_US;
+use telemetry::link::stream::{StreamReceiver, StreamSender};
 
 use crate::channels::ChannelFrame;
 use crate::hm10::RecordQueue;
@@ -172,14 +173,7 @@ impl AirLink {
             }
             master.set_channels(&values);
         }
-        while master.uplink_stream.free() >= MAX_STREAM_FRAME_LEN {
-            let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
-            let Some(stream) = self.pop_uplink_frame(&mut frame) else {
-                break;
-            };
-            master.uplink_stream.write(stream);
-        }
-        self.read_stream(|buf| master.downlink_stream.read(buf));
+        self.exchange_records(&mut master.uplink_stream, &mut master.downlink_stream);
         let remote = master.remote_report();
         let rate = master.params().rate;
         self.stats = LinkStats {
@@ -218,14 +212,7 @@ impl AirLink {
                 output.get(..count).unwrap_or(output),
             ));
         }
-        while follower.downlink_stream.free() >= MAX_STREAM_FRAME_LEN {
-            let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
-            let Some(stream) = self.pop_uplink_frame(&mut frame) else {
-                break;
-            };
-            follower.downlink_stream.write(stream);
-        }
-        self.read_stream(|buf| follower.uplink_stream.read(buf));
+        self.exchange_records(&mut follower.downlink_stream, &mut follower.uplink_stream);
         let remote = follower.remote_report();
         self.stats = LinkStats {
             connected: !follower.in_failsafe(),
@@ -250,6 +237,23 @@ impl AirLink {
             self.input_losses = self.input_losses.saturating_add(1);
         }
         self.input_lost = lost;
+    }
+
+    /// Either role's stream exchange: queued records into the link's stream while a whole
+    /// frame fits, then everything received split into records.
+    fn exchange_records<const T: usize, const R: usize>(
+        &mut self,
+        send: &mut StreamSender<T>,
+        receive: &mut StreamReceiver<R>,
+    ) {
+        while send.free() >= MAX_STREAM_FRAME_LEN {
+            let mut frame = [0u8; MAX_STREAM_FRAME_LEN];
+            let Some(stream) = self.pop_uplink_frame(&mut frame) else {
+                break;
+            };
+            send.write(stream);
+        }
+        self.read_stream(|buf| receive.read(buf));
     }
 
     /// The next queued record as a stream frame; a record that fails its check is dropped.

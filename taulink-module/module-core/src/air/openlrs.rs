@@ -13,13 +13,9 @@
 //!
 //! [`run_openlrs_transmitter`] is the role loop the firmware and the simulator share.
 
-use embedded_hal_async::delay::DelayNs;
-use embedded_hal_async::digital::Wait;
-use embedded_hal_async::spi::SpiDevice;
 use openlrs::channels::ticks_to_bits;
 use openlrs::quality::{quality_percent, rssi_dbm};
-use openlrs::radio::{Clock, Error as RadioError, Radio};
-use openlrs::roles::{TxEvent, tx_start, tx_step};
+use openlrs::roles::TxEvent;
 use openlrs::tx::{Received, Transmitter};
 
 use super::{AirLink, CONNECTED_TIMEOUT_US};
@@ -30,8 +26,6 @@ use crate::records::MAX_STREAM_FRAME_LEN;
 /// `LinkStats::rate_code` of an OpenLRSng link: this plus the modem profile (0..4), clear of
 /// TauLink's rate codes (the flight side's `OPENLRS_RATE_CODE_BASE`).
 pub const OPENLRS_RATE_CODE_BASE: u8 = 0x10;
-/// Events one `tx_step` can report.
-const STEP_EVENTS: usize = 2;
 
 impl AirLink {
     /// Right before an OpenLRSng packet is built: fresh handset channels (none once the
@@ -106,31 +100,4 @@ impl AirLink {
 /// crate's `tx_start`, then `tx_step` forever, `before_send` right before each packet
 /// ([`AirLink::on_openlrs_send`] through the app) and `on_step(now_us, tx, events)` after
 /// each step ([`crate::app::App::on_openlrs_step`]). Returns only on a radio error.
-pub async fn run_openlrs_transmitter<SPI, IRQ, D, C>(
-    radio: &mut Radio<SPI, IRQ, D, C>,
-    tx: &mut Transmitter,
-    mut before_send: impl FnMut(&mut Transmitter),
-    mut on_step: impl FnMut(u64, &Transmitter, &[TxEvent]),
-) -> RadioError<SPI::Error, IRQ::Error>
-where
-    SPI: SpiDevice,
-    IRQ: Wait,
-    D: DelayNs,
-    C: Clock,
-{
-    if let Err(e) = tx_start(radio, tx).await {
-        return e;
-    }
-    loop {
-        let mut events: heapless::Vec<TxEvent, STEP_EVENTS> = heapless::Vec::new();
-        let step = tx_step(radio, tx, &mut before_send, &mut |event| {
-            let _ = events.push(event);
-        })
-        .await;
-        if let Err(e) = step {
-            return e;
-        }
-        let now = radio.now_us();
-        on_step(now, tx, &events);
-    }
-}
+pub use openlrs::roles::run_transmitter_steps as run_openlrs_transmitter;

@@ -41,6 +41,47 @@ fn split_addresses(frame_type: u8, payload: &[u8]) -> Result<(u8, u8, &[u8]), Er
     }
 }
 
+/// The inner CRC of a CRSF command (poly 0xBA over the frame type, the addresses, the
+/// command set, the sub-command `sub` and its `body`).
+fn command_crc(destination: u8, origin: u8, sub: u8, body: &[u8]) -> u8 {
+    let mut digest = COMMAND_CRC.digest();
+    digest.update(&[frame_type::COMMAND, destination, origin, COMMAND_CRSF, sub]);
+    digest.update(body);
+    digest.finalize()
+}
+
+/// Reads a CRSF command payload (frame type 0x32, command set 0x10) of sub-command `sub`
+/// with an `N`-byte body: the addresses and the body, once the inner CRC checks. Another
+/// command, or this one with another length, is `Unsupported`.
+fn command_from_payload<const N: usize>(
+    payload: &[u8],
+    sub: u8,
+) -> Result<(u8, u8, [u8; N]), Error> {
+    let (destination, origin, rest) = split_addresses(frame_type::COMMAND, payload)?;
+    match rest {
+        [COMMAND_CRSF, s, tail @ ..] if *s == sub => {
+            let Some((inner_crc, body)) = tail.split_last() else {
+                return Err(Error::Unsupported { sub_type: sub });
+            };
+            let Ok(body) = <[u8; N]>::try_from(body) else {
+                return Err(Error::Unsupported { sub_type: sub });
+            };
+            if command_crc(destination, origin, sub, &body) == *inner_crc {
+                Ok((destination, origin, body))
+            } else {
+                Err(Error::InnerCrc)
+            }
+        }
+        [COMMAND_CRSF, sub_type, ..] | [sub_type, ..] => Err(Error::Unsupported {
+            sub_type: *sub_type,
+        }),
+        [] => Err(Error::PayloadLength {
+            frame_type: frame_type::COMMAND,
+            length: payload.len(),
+        }),
+    }
+}
+
 /// DEVICE_PING (0x28): "who is there". EdgeTX ≥ 2.11 sends `C8 04 28 00 EA 54`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -241,14 +282,12 @@ pub struct ModelSelect {
 
 impl ModelSelect {
     fn inner_crc(&self) -> u8 {
-        COMMAND_CRC.checksum(&[
-            frame_type::COMMAND,
+        command_crc(
             self.destination,
             self.origin,
-            COMMAND_CRSF,
             COMMAND_MODEL_SELECT,
-            self.model_id,
-        ])
+            &[self.model_id],
+        )
     }
 
     /// The 6-byte payload, inner CRC last.
@@ -265,28 +304,13 @@ impl ModelSelect {
 
     /// Reads the payload; other commands are `Unsupported`.
     pub fn from_payload(payload: &[u8]) -> Result<Self, Error> {
-        let (destination, origin, rest) = split_addresses(frame_type::COMMAND, payload)?;
-        match rest {
-            [COMMAND_CRSF, COMMAND_MODEL_SELECT, model_id, inner_crc] => {
-                let command = Self {
-                    destination,
-                    origin,
-                    model_id: *model_id,
-                };
-                if command.inner_crc() == *inner_crc {
-                    Ok(command)
-                } else {
-                    Err(Error::InnerCrc)
-                }
-            }
-            [COMMAND_CRSF, sub_type, ..] | [sub_type, ..] => Err(Error::Unsupported {
-                sub_type: *sub_type,
-            }),
-            [] => Err(Error::PayloadLength {
-                frame_type: frame_type::COMMAND,
-                length: payload.len(),
-            }),
-        }
+        let (destination, origin, [model_id]) =
+            command_from_payload(payload, COMMAND_MODEL_SELECT)?;
+        Ok(Self {
+            destination,
+            origin,
+            model_id,
+        })
     }
 }
 
@@ -303,13 +327,7 @@ pub struct BindCommand {
 
 impl BindCommand {
     fn inner_crc(&self) -> u8 {
-        COMMAND_CRC.checksum(&[
-            frame_type::COMMAND,
-            self.destination,
-            self.origin,
-            COMMAND_CRSF,
-            COMMAND_BIND,
-        ])
+        command_crc(self.destination, self.origin, COMMAND_BIND, &[])
     }
 
     /// The 5-byte payload, inner CRC last.
@@ -325,26 +343,10 @@ impl BindCommand {
 
     /// Reads the payload.
     pub fn from_payload(payload: &[u8]) -> Result<Self, Error> {
-        let (destination, origin, rest) = split_addresses(frame_type::COMMAND, payload)?;
-        match rest {
-            [COMMAND_CRSF, COMMAND_BIND, inner_crc] => {
-                let command = Self {
-                    destination,
-                    origin,
-                };
-                if command.inner_crc() == *inner_crc {
-                    Ok(command)
-                } else {
-                    Err(Error::InnerCrc)
-                }
-            }
-            [COMMAND_CRSF, sub_type, ..] | [sub_type, ..] => Err(Error::Unsupported {
-                sub_type: *sub_type,
-            }),
-            [] => Err(Error::PayloadLength {
-                frame_type: frame_type::COMMAND,
-                length: payload.len(),
-            }),
-        }
+        let (destination, origin, []) = command_from_payload(payload, COMMAND_BIND)?;
+        Ok(Self {
+            destination,
+            origin,
+        })
     }
 }

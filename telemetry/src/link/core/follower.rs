@@ -5,8 +5,8 @@
 
 use crate::channels::{CHANNEL_CENTER, Channels, FailsafeValues};
 use crate::frame::{
-    Downlink, Frame, LinkReport, Received, Rejection, StreamHeader, decode, downlink_overhead,
-    encode, open, peek_sealed, seal,
+    Downlink, Frame, LinkReport, Received, Rejection, decode, downlink_overhead, encode, open,
+    peek_sealed, seal,
 };
 use crate::link::auth::LinkKey;
 use crate::link::bind::LinkParams;
@@ -16,8 +16,9 @@ use crate::link::radio::{LinkRx, RadioConfig};
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
+use super::end::{keyed_hops, report, stream_in, stream_out, stream_room};
 use super::epoch::{FollowerEpoch, NonceSource, counter};
-use super::{MAX_LISTEN_US, STREAM_RX_BYTES, STREAM_TX_BYTES, Step, tag_extra};
+use super::{MAX_LISTEN_US, STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
 
 /// Default failsafe delay.
 pub const DEFAULT_FAILSAFE_US: u64 = 250_000;
@@ -109,10 +110,7 @@ impl Follower {
         failsafe_values.apply(&mut output);
         Self {
             params,
-            schedule: Schedule {
-                rate: params.rate,
-                telemetry_ratio: params.telemetry_ratio,
-            },
+            schedule: params.schedule(),
             hops: HopSequence::new(params.bind_id),
             sync: Sync::Acquiring {
                 index: 0,
@@ -151,8 +149,7 @@ impl Follower {
     /// tagged with the epoch key ([`LinkKey::epoch_key`]). Seed the nonces with
     /// [`Follower::with_nonce_seed`].
     pub fn with_key(mut self, key: LinkKey) -> Self {
-        self.params.bind_id = key.bind_id();
-        self.hops = HopSequence::new(key.hop_seed());
+        self.hops = keyed_hops(&mut self.params, &key);
         self.key = Some(key);
         self
     }
@@ -373,27 +370,19 @@ impl Follower {
             let frame = Frame::Nonce { slot, nonce };
             return seal(&frame, key, counter(nonce, 0, slot), buf).ok();
         }
-        let report = LinkReport {
-            rssi_dbm: self.rssi.report_dbm(),
-            lq_percent: self.lq.percent(),
-        };
-        let room = self
-            .params
-            .rate
-            .max_frame_bytes()
-            .saturating_sub(downlink_overhead(true))
-            .saturating_sub(tag_extra(self.key.is_some()));
+        let room = stream_room(&self.params, downlink_overhead(true), self.key.is_some());
         let mut data = [0u8; 64];
-        let data = data.get_mut(..room)?;
-        let (seq, n) = self.downlink_stream.fill(data);
+        let (stream, data) = stream_out(
+            &mut self.downlink_stream,
+            &self.uplink_stream,
+            room,
+            &mut data,
+        )?;
         let down = Downlink {
             slot,
-            stream: StreamHeader {
-                seq,
-                ack: self.uplink_stream.ack(),
-            },
-            report: Some(report),
-            data: data.get(..n)?,
+            stream,
+            report: Some(report(&self.rssi, &self.lq)),
+            data,
         };
         match &self.key {
             Some(link) => {
@@ -574,8 +563,8 @@ impl Follower {
             self.updates = self.updates.wrapping_add(1);
         }
         self.remote = up.report.or(self.remote);
-        self.downlink_stream.on_ack(up.stream.ack);
-        self.uplink_stream.on_data(up.stream.seq, up.data);
+        let (send, receive) = (&mut self.downlink_stream, &mut self.uplink_stream);
+        stream_in(send, receive, up.stream, up.data);
     }
 
     /// Channel outputs (failsafe values while in failsafe).

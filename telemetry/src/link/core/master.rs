@@ -4,8 +4,7 @@
 
 use crate::channels::{CHANNEL_CENTER, Channels, pack_group};
 use crate::frame::{
-    Frame, LinkReport, Received, StreamHeader, Uplink, decode, encode, open, peek_sealed, seal,
-    uplink_overhead,
+    Frame, LinkReport, Received, Uplink, decode, encode, open, peek_sealed, seal, uplink_overhead,
 };
 use crate::link::auth::LinkKey;
 use crate::link::bind::LinkParams;
@@ -15,8 +14,9 @@ use crate::link::radio::{LinkRx, RadioConfig};
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
+use super::end::{keyed_hops, report, stream_in, stream_out, stream_room};
 use super::epoch::{MasterEpoch, NonceVerdict, counter};
-use super::{STREAM_RX_BYTES, STREAM_TX_BYTES, Step, tag_extra};
+use super::{STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
 
 /// Uplinks that carry a save-failsafe request, so one lost packet does not lose it (storing
 /// twice is harmless: the follower keeps the channels of the last flagged packet).
@@ -65,10 +65,7 @@ impl Master {
     pub fn new(params: LinkParams) -> Self {
         Self {
             params,
-            schedule: Schedule {
-                rate: params.rate,
-                telemetry_ratio: params.telemetry_ratio,
-            },
+            schedule: params.schedule(),
             hops: HopSequence::new(params.bind_id),
             slot: 0,
             channels: [CHANNEL_CENTER; 16],
@@ -99,8 +96,7 @@ impl Master {
     /// [`Frame::MasterNonce`] uplink, and from then tags and accepts frames only with the
     /// epoch's key. Seed its nonces with [`Master::with_nonce_seed`].
     pub fn with_key(mut self, key: LinkKey) -> Self {
-        self.params.bind_id = key.bind_id();
-        self.hops = HopSequence::new(key.hop_seed());
+        self.hops = keyed_hops(&mut self.params, &key);
         self.key = Some(key);
         self
     }
@@ -195,38 +191,28 @@ impl Master {
             return seal(&frame, key, counter, buf).ok();
         }
         let format = self.params.format;
-        let report = if self.report_due {
-            Some(LinkReport {
-                rssi_dbm: self.rssi.report_dbm(),
-                lq_percent: self.lq.percent(),
-            })
-        } else {
-            None
-        };
+        let report = self.report_due.then(|| report(&self.rssi, &self.lq));
         let mut packed = [0u8; 22];
         let packed = packed.get_mut(..format.packed_bytes())?;
         pack_group(&self.channels, format, self.aux_group, packed);
-        let room = self
-            .params
-            .rate
-            .max_frame_bytes()
-            .saturating_sub(uplink_overhead(format, report.is_some()))
-            .saturating_sub(tag_extra(self.key.is_some()));
+        let overhead = uplink_overhead(format, report.is_some());
+        let room = stream_room(&self.params, overhead, self.key.is_some());
         let mut data = [0u8; 64];
-        let data = data.get_mut(..room)?;
-        let (seq, n) = self.uplink_stream.fill(data);
+        let (stream, data) = stream_out(
+            &mut self.uplink_stream,
+            &self.downlink_stream,
+            room,
+            &mut data,
+        )?;
         let up = Uplink {
             slot: self.slot as u8,
-            stream: StreamHeader {
-                seq,
-                ack: self.downlink_stream.ack(),
-            },
+            stream,
             report,
             save_failsafe: self.save_failsafe > 0 && !self.input_lost,
             input_lost: self.input_lost,
             format,
             packed_channels: packed,
-            data: data.get(..n)?,
+            data,
         };
         let len = match (&self.key, self.epoch.key()) {
             (Some(_), Some(epoch_key)) => {
@@ -277,8 +263,8 @@ impl Master {
                         self.epoch.heard(self.slot);
                         self.heard(rssi_dbm, now_us);
                         self.remote = down.report.or(self.remote);
-                        self.uplink_stream.on_ack(down.stream.ack);
-                        self.downlink_stream.on_data(down.stream.seq, down.data);
+                        let (send, receive) = (&mut self.uplink_stream, &mut self.downlink_stream);
+                        stream_in(send, receive, down.stream, down.data);
                     }
                     // A verified nonce of this slot: only the epoch moves (its frame carries
                     // nothing else, so a refused replay changes nothing).

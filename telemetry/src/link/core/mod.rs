@@ -2,6 +2,7 @@
 //! radio did, and answer with the next [`Step`]; the async loops in `link::master` and
 //! `link::follower` only carry these steps out.
 
+mod end;
 mod epoch;
 pub mod follower;
 pub mod master;

@@ -295,6 +295,42 @@ fn two_damaged_copies_are_reported_not_taken_for_a_new_board() {
     assert_eq!(report.problem, Some(LoadProblem::Corrupt), "{report:?}");
 }
 
+/// A store the flash driver cannot read at all (here: a map configured past the end of the
+/// mock flash, so every read fails) is no error the boot has to handle: `load_at_boot` gives
+/// the factory set, whatever was in RAM, reported `Corrupt` (the app then refuses to arm
+/// until a save), and the flash error for the log.
+#[test]
+fn an_unreadable_store_boots_the_factory_set_reported_corrupt() {
+    let end = Flash::FULL_FLASH_RANGE.end;
+    let config = MapConfig::try_new(end..end + Flash::FULL_FLASH_RANGE.len() as u32).unwrap();
+    let flash = Flash::new(WriteCountCheck::OnceOnly, None, true);
+    let mut m = MapStorage::new(flash, config, Cache::new_uncached());
+    let mut s = generation_set(7);
+    assert_eq!(
+        block_on(load(&mut m, &mut s.clone())),
+        Err(StoreError::Flash),
+        "the store must be unreadable for this test"
+    );
+    let (report, error) = block_on(load_at_boot(&mut m, &mut s));
+    assert_eq!(s, Settings::default());
+    assert_eq!(report.problem, Some(LoadProblem::Corrupt));
+    assert_eq!((report.loaded, report.generation), (0, 0));
+    assert_eq!(error, Some(StoreError::Flash));
+}
+
+/// A readable store: `load_at_boot` is `load`, with no error beside the report.
+#[test]
+fn a_readable_store_boots_as_load_reads_it() {
+    let mut m = map(Flash::new(WriteCountCheck::OnceOnly, None, true));
+    block_on(save(&mut m, &generation_set(3), &Settings::default())).unwrap();
+    let mut s = Settings::default();
+    let (report, error) = block_on(load_at_boot(&mut m, &mut s));
+    assert_eq!(error, None);
+    assert_eq!(s, generation_set(3));
+    assert_eq!(report.problem, None);
+    assert_eq!(report.generation, 1);
+}
+
 #[test]
 fn the_link_key_is_saved_and_loaded_and_a_key_change_alone_is_a_change() {
     let mut m = map(Flash::new(WriteCountCheck::OnceOnly, None, true));

@@ -7,7 +7,7 @@ use defmt::{info, warn};
 use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_stm32::flash::{Bank1Region1, Blocking};
 use embassy_time::{Duration, Timer};
-use flight_core::settings::{LoadProblem, Settings, load};
+use flight_core::settings::{LoadProblem, Settings, load_at_boot};
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
 
@@ -23,7 +23,7 @@ pub type SettingsMap = MapStorage<u16, SettingsFlash, Cache<Uncached, Uncached, 
 const SETTINGS_RANGE: core::ops::Range<u32> = 0x8000..0x1_0000;
 
 /// Opens the map and loads the settings (defaults for anything missing or refused), with
-/// the load's problem if any (an unreadable store is `Corrupt`). No map means the area is
+/// the load's problem if any (`load_at_boot`: an unreadable store is `Corrupt`). No map means the area is
 /// unusable: fly on defaults, never stop the flight controller.
 pub async fn open(
     flash: Bank1Region1<'static, Blocking>,
@@ -34,8 +34,10 @@ pub async fn open(
         return (None, settings, None);
     };
     let mut map = MapStorage::new(BlockingAsync::new(flash), config, Cache::new_uncached());
-    let problem = match load(&mut map, &mut settings).await {
-        Ok(report) => {
+    let (report, unreadable) = load_at_boot(&mut map, &mut settings).await;
+    match unreadable {
+        Some(e) => warn!("settings unreadable ({}), using defaults", e),
+        None => {
             info!(
                 "settings: {} loaded, {} refused, generation {}",
                 report.loaded, report.refused, report.generation
@@ -43,13 +45,9 @@ pub async fn open(
             if let Some(problem) = report.problem {
                 warn!("settings: {}", problem);
             }
-            report.problem
         }
-        Err(e) => {
-            warn!("settings unreadable ({}), using defaults", e);
-            Some(LoadProblem::Corrupt)
-        }
-    };
+    }
+    let problem = report.problem;
     (Some(map), settings, problem)
 }
 
