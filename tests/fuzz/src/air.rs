@@ -11,7 +11,7 @@ use telemetry::channels::{CHANNEL_MAX, ChannelFormat, Channels};
 use telemetry::frame::{CRC_BYTES, Downlink, Frame, LinkReport, StreamHeader, Uplink};
 use telemetry::link::core::{Follower, Master, STREAM_RX_BYTES, Step, frame_counter};
 use telemetry::link::stream::{StreamReceiver, StreamSender};
-use telemetry::link::{Band, HOP_CHANNELS, LinkKey, LinkParams, RateMode, LinkRx};
+use telemetry::link::{Band, HOP_CHANNELS, LinkKey, LinkParams, LinkRx, RateMode};
 
 use crate::Input;
 
