@@ -1,11 +1,12 @@
 //! The shared simulation state behind every handle: chips, air, and the virtual time
 //! (`sim_exec::VirtualTime`) they and the tasks share.
 //!
-//! Time only moves forward through `advance_one`/`advance_to` (the executor's, or a
-//! busy-wait's), which process every chip event up to the new time in time order (ties in
-//! radio order) before the wake-ups of that instant fire, so when an SPI access or a task
-//! runs, every chip is exactly at `now`. An SPI transaction costs its bus time first
-//! (`spi_cost_ns`, spent by the caller in `pins`), then acts on the chip at once.
+//! Time only moves forward through `VirtualTime::advance_one`/`advance_to` (the executor's
+//! steps, or a busy-wait's `World::advance_to`), which process every chip event up to the
+//! new time in time order (ties in radio order) before the wake-ups of that instant fire, so
+//! when an SPI access or a task runs, every chip is exactly at `now`. An SPI transaction
+//! costs its bus time first (`spi_cost_ns`, spent by the caller in `pins`), then acts on the
+//! chip at once.
 
 use core::task::Waker;
 use std::collections::HashMap;

@@ -235,10 +235,7 @@ impl<'a> Executor<'a> {
 
     /// Runs until virtual time reads `end_us`, or earlier once every task has finished.
     pub fn run_until_us(&self, end_us: u64) {
-        let tasks = self.tasks.clone();
-        self.drive(end_us.saturating_mul(1_000), move || {
-            tasks.borrow().iter().all(|slot| slot.finished)
-        });
+        self.drive(end_us.saturating_mul(1_000), || self.all_finished());
     }
 
     /// Runs until `condition` holds (checked whenever every task is idle) or nothing is left
