@@ -30,7 +30,7 @@ fn calls(rate: RateMode) -> Vec<(u64, u64, SlotKind)> {
     let time = VirtualTime::new();
     let medium = Medium::new(time.clone(), ChannelModel::default(), 3);
     let node = medium.add_node(Node::default());
-    let executor = Executor::polling_all(time.clone());
+    let executor = Executor::new(time.clone());
     let log: Calls = Rc::default();
     let mut hooks = Hooks(log.clone(), time.clone());
     let mut radio = MockRadio::new(medium, node);

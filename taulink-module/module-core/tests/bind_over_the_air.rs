@@ -60,7 +60,7 @@ fn both_ends_store_the_same_link() {
         position_m: 5.0,
         ..Node::default()
     });
-    let executor = Executor::polling_all(time.clone());
+    let executor = Executor::new(time.clone());
     let saved = Rc::new(RefCell::new(Vec::new()));
     let (tx_app, tx_saved) = (tx.clone(), saved.clone());
     let mut radio = MockRadio::new(medium.clone(), tx_node);

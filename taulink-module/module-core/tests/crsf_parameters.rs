@@ -262,7 +262,7 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
     let app = Rc::new(RefCell::new(
         App::new(settings, AirLink::new(), Handset::new(&settings), false).unwrap(),
     ));
-    let executor = Executor::polling_all(time.clone());
+    let executor = Executor::new(time.clone());
     let steps: Steps = Rc::default();
 
     // The link task, as module-fw's: ask, run until the core says stop, report back.

@@ -92,7 +92,7 @@ fn run(failsafe: FailsafeOutput) -> Vec<(u64, Option<Vec<u16>>)> {
     // The module holds every channel; its PPM output applies its own failsafe setting.
     assert_eq!(failsafe, FailsafeValues([Failsafe::Hold; MAX_CHANNELS]));
     assert_eq!(failsafe_us, DEFAULT_FAILSAFE_US);
-    let executor = Executor::polling_all(time.clone());
+    let executor = Executor::new(time.clone());
     let mut radio = MockRadio::new(medium.clone(), tx_node);
     let mut clock = SimClock::new(time.clone(), 55_555, 0.0);
     executor.spawn(async move {

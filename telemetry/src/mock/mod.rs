@@ -5,8 +5,9 @@
 //! than real time; the chip-level simulator (`tests/si4432-sim`) is the other, slower rung,
 //! on the same executor and clock.
 //!
-//! The mock radio's futures check the medium when polled rather than registering wakers, so
-//! run them on [`Executor::polling_all`].
+//! The mock radio's futures check the medium when polled rather than registering wakers: the
+//! medium and the radio ask for a wake-up of every task ([`VirtualTime::wake_all_at`]) at each
+//! packet end and receive deadline.
 
 mod clock;
 pub mod medium;

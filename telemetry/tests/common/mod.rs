@@ -37,7 +37,7 @@ pub fn pair(rate: RateMode, seed: u64) -> Pair {
         ..Node::default()
     });
     Pair {
-        executor: Executor::polling_all(time.clone()),
+        executor: Executor::new(time.clone()),
         time,
         medium,
         module_node,

@@ -33,7 +33,7 @@ fn longest_unfed_ms(rate: RateMode) -> u64 {
         FlightApp::new(Settings::default(), 0).expect("factory setup"),
     ));
     let longest = Rc::new(RefCell::new(0u64));
-    let ex = Executor::polling_all(time.clone());
+    let ex = Executor::new(time.clone());
     {
         let mut radio = MockRadio::new(medium.clone(), node);
         let mut clock = SimClock::new(time.clone(), 0, 0.0);

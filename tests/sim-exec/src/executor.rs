@@ -1,11 +1,10 @@
 //! The deterministic single-threaded executor: polls woken tasks in the order they were woken
 //! until none is, then moves virtual time to the next wake-up or world event and repeats.
 //!
-//! Two polling policies, one machine: [`Executor::new`] polls only woken tasks (real wakers:
-//! the chip-level world, whose pins and timers wake exactly the task that waits);
-//! [`Executor::polling_all`] also polls every task, in spawn order, at every instant time
-//! stops at and at the start of every run — the packet-level mock, whose radio futures check
-//! the medium when polled instead of registering wakers.
+//! Tasks are woken by real wakers (a sleep, a chip's nIRQ, another task finishing) or, for
+//! futures that check shared state when polled instead of registering a waker (the
+//! packet-level mock's radio), by a wake-up for everyone ([`VirtualTime::wake_all_at`]),
+//! which polls every unfinished task in spawn order.
 
 use core::future::Future;
 use core::pin::Pin;
@@ -159,7 +158,6 @@ pub struct Executor<'a> {
     events: Rc<RefCell<dyn Events + 'a>>,
     tasks: Rc<RefCell<Vec<Slot<'a>>>>,
     ready: Arc<ReadyQueue>,
-    poll_all: bool,
 }
 
 impl core::fmt::Debug for Executor<'_> {
@@ -167,13 +165,12 @@ impl core::fmt::Debug for Executor<'_> {
         f.debug_struct("Executor")
             .field("now_ns", &self.time.now_ns())
             .field("tasks", &self.tasks.borrow().len())
-            .field("poll_all", &self.poll_all)
             .finish()
     }
 }
 
 impl<'a> Executor<'a> {
-    /// An executor on `time` that polls woken tasks only.
+    /// An executor on `time`.
     pub fn new(time: VirtualTime) -> Self {
         Self::with_events(time, Rc::new(RefCell::new(NoEvents)))
     }
@@ -186,17 +183,6 @@ impl<'a> Executor<'a> {
             events,
             tasks: Rc::new(RefCell::new(Vec::new())),
             ready: Arc::new(ReadyQueue::default()),
-            poll_all: false,
-        }
-    }
-
-    /// An executor on `time` that polls every task, in spawn order, at the start of every
-    /// run and at every instant time stops at (futures may check state instead of
-    /// registering wakers; they must still register the time they wait for).
-    pub fn polling_all(time: VirtualTime) -> Self {
-        Self {
-            poll_all: true,
-            ..Self::new(time)
         }
     }
 
@@ -252,9 +238,6 @@ impl<'a> Executor<'a> {
     }
 
     fn drive(&self, deadline_ns: u64, mut stop: impl FnMut() -> bool) -> bool {
-        if self.poll_all {
-            self.schedule_all();
-        }
         loop {
             self.poll_ready();
             if stop() {
@@ -264,9 +247,6 @@ impl<'a> Executor<'a> {
             match next {
                 Some(t) if t <= deadline_ns => {
                     self.time.advance_one(t, &mut *self.events.borrow_mut());
-                    if self.poll_all {
-                        self.schedule_all();
-                    }
                 }
                 _ => {
                     if deadline_ns != u64::MAX {
@@ -280,7 +260,8 @@ impl<'a> Executor<'a> {
         }
     }
 
-    /// Replaces the ready queue by every unfinished task in spawn order.
+    /// Replaces the ready queue by every unfinished task in spawn order (a wake-up for
+    /// everyone: the order does not depend on who was woken first).
     fn schedule_all(&self) {
         let tasks = self.tasks.borrow();
         if let Ok(mut queue) = self.ready.queue.lock() {
@@ -405,7 +386,7 @@ mod tests {
     #[test]
     fn run_until_us_stops_at_the_end_or_when_every_task_is_done() {
         let time = VirtualTime::new();
-        let ex = Executor::polling_all(time.clone());
+        let ex = Executor::new(time.clone());
         let t = time.clone();
         ex.spawn(async move {
             let mut k = 0;
@@ -417,41 +398,39 @@ mod tests {
         ex.run_until_us(55);
         assert_eq!(time.now_us(), 55);
         let t = time.clone();
-        let ex = Executor::polling_all(time.clone());
+        let ex = Executor::new(time.clone());
         ex.spawn(async move { t.sleep_until(70).await });
         ex.run_until_us(1_000);
         assert_eq!(time.now_us(), 70, "stops when its only task is done");
     }
 
     #[test]
-    fn polling_all_polls_every_task_in_spawn_order_at_each_instant() {
-        // A future that only checks a flag (no waker) sees it at the next instant any task
-        // stops at, and the tasks run in spawn order there.
+    fn a_wake_up_for_everyone_polls_every_task_in_spawn_order() {
+        // Three futures that only check the time when polled (no waker): the second one is
+        // also woken by its own sleep first, yet at 40 they still run in spawn order.
         let time = VirtualTime::new();
-        let ex = Executor::polling_all(time.clone());
-        let flag = Rc::new(Cell::new(false));
+        let ex = Executor::new(time.clone());
         let log = Rc::new(RefCell::new(Vec::new()));
-        let (f, l, t) = (flag.clone(), log.clone(), time.clone());
-        ex.spawn(async move {
-            core::future::poll_fn(|_| {
-                if f.get() {
-                    Poll::Ready(())
-                } else {
-                    Poll::Pending
+        for name in ["a", "b", "c"] {
+            let (t, l) = (time.clone(), log.clone());
+            ex.spawn(async move {
+                if name == "b" {
+                    t.sleep_until(40).await;
                 }
-            })
-            .await;
-            l.borrow_mut().push(("checker", t.now_us()));
-        });
-        let (f, l, t) = (flag.clone(), log.clone(), time.clone());
-        ex.spawn(async move {
-            t.sleep_until(5).await;
-            f.set(true);
-            l.borrow_mut().push(("setter", t.now_us()));
-            t.sleep_until(8).await;
-        });
-        ex.run_until_us(100);
-        assert_eq!(*log.borrow(), vec![("setter", 5), ("checker", 8)]);
+                core::future::poll_fn(|_| {
+                    if t.now_us() >= 40 {
+                        Poll::Ready(())
+                    } else {
+                        Poll::Pending
+                    }
+                })
+                .await;
+                l.borrow_mut().push(name);
+            });
+        }
+        time.wake_all_at(40);
+        ex.run_until_us(1_000);
+        assert_eq!(*log.borrow(), vec!["a", "b", "c"]);
     }
 
     #[test]

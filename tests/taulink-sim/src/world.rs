@@ -206,7 +206,7 @@ pub fn simulate_packet(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome
     let medium = Medium::new(time.clone(), model, s.seed);
     let mut rng = SplitMix64::new(s.seed);
     let params = params_for(s, rng.next_u64() as u32);
-    let ex = Executor::polling_all(time.clone());
+    let ex = Executor::new(time.clone());
     let (main, module_node, flight_node) = spawn_pair(
         &ex,
         &time,

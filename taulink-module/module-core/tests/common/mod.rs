@@ -221,7 +221,7 @@ impl World<'_> {
             LinkStep::RunMaster(params)
         );
         let flight = Rc::new(RefCell::new(FlightSide::default()));
-        let executor = Executor::polling_all(time.clone());
+        let executor = Executor::new(time.clone());
         let mut hooks = ModuleHooks { app: app.clone() };
         let mut radio = MockRadio::new(medium.clone(), module_node);
         let mut clock = SimClock::new(time.clone(), MODULE_EPOCH_US, 0.0);
