@@ -11,7 +11,7 @@ use telemetry::channels::ChannelFormat;
 use telemetry::link::core::Master;
 use telemetry::link::master::{LATCH_BEFORE_TX_US, MasterHooks, run_master};
 use telemetry::link::{Band, LinkParams, RateMode, SlotKind};
-use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
+use telemetry::mock::{ChannelModel, Executor, Medium, MockRadio, Node, SimClock, VirtualTime};
 
 /// (slot start, time of the call, kind of the slot) of every hook call.
 type Calls = Rc<RefCell<Vec<(u64, u64, SlotKind)>>>;
@@ -30,16 +30,16 @@ fn calls(rate: RateMode) -> Vec<(u64, u64, SlotKind)> {
     let time = VirtualTime::new();
     let medium = Medium::new(time.clone(), ChannelModel::default(), 3);
     let node = medium.add_node(Node::default());
-    let mut executor = Executor::new(time.clone());
+    let executor = Executor::new(time.clone());
     let log: Calls = Rc::default();
     let mut hooks = Hooks(log.clone(), time.clone());
     let mut radio = MockRadio::new(medium, node);
-    let mut clock = MockClock::new(time, 0);
+    let mut clock = SimClock::new(time, 0, 0.0);
     executor.spawn(async move {
         let mut master = Master::new(params);
         let _ = run_master(&mut radio, &mut clock, &mut master, &mut hooks).await;
     });
-    executor.run_until(200_000);
+    executor.run_until_us(200_000);
     drop(executor);
     Rc::try_unwrap(log).ok().unwrap().into_inner()
 }

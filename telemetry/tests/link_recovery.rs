@@ -14,7 +14,7 @@ use telemetry::link::core::{Follower, MAX_CONSECUTIVE_RADIO_ERRORS, Master};
 use telemetry::link::follower::{FollowerHooks, run_follower};
 use telemetry::link::master::{MasterHooks, run_master};
 use telemetry::link::{LinkRx, PacketRadio, RadioConfig, RateMode};
-use telemetry::mock::{MockClock, MockRadio};
+use telemetry::mock::{MockRadio, SimClock};
 
 /// The error of [`Flaky`].
 #[derive(Debug)]
@@ -103,7 +103,7 @@ impl MasterHooks for ModuleHooks {
 /// Both ends at `rate`; at 2 s the follower's radio fails `follower_fails` calls in a row, at
 /// 4 s the master's `master_fails`; runs to 6 s.
 fn run(rate: RateMode, follower_fails: u32, master_fails: u32) -> Log {
-    let mut world = common::pair(rate, 5);
+    let world = common::pair(rate, 5);
     let (time, medium, params) = (world.time.clone(), world.medium.clone(), world.params);
     let (module_node, flight_node) = (world.module_node, world.flight_node);
     let log = Rc::new(RefCell::new(Log::default()));
@@ -112,7 +112,7 @@ fn run(rate: RateMode, follower_fails: u32, master_fails: u32) -> Log {
         inner: MockRadio::new(medium.clone(), module_node),
         fail: master_fail.clone(),
     };
-    let mut clock = MockClock::new(time.clone(), 0);
+    let mut clock = SimClock::new(time.clone(), 0, 0.0);
     let (module_log, mut hooks) = (log.clone(), ModuleHooks(log.clone()));
     world.executor.spawn(async move {
         let mut master = Master::new(params);
@@ -123,18 +123,18 @@ fn run(rate: RateMode, follower_fails: u32, master_fails: u32) -> Log {
         inner: MockRadio::new(medium.clone(), flight_node),
         fail: follower_fail.clone(),
     };
-    let mut clock = MockClock::new(time.clone(), 0);
+    let mut clock = SimClock::new(time.clone(), 0, 0.0);
     let (flight_log, mut hooks) = (log.clone(), FlightHooks(log.clone(), true));
     world.executor.spawn(async move {
         let mut follower = Follower::new(params, FailsafeValues::default(), 250_000);
         let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut hooks).await;
         flight_log.borrow_mut().follower_ended = true;
     });
-    world.executor.run_until(2_000_000);
+    world.executor.run_until_us(2_000_000);
     follower_fail.set(follower_fails);
-    world.executor.run_until(4_000_000);
+    world.executor.run_until_us(4_000_000);
     master_fail.set(master_fails);
-    world.executor.run_until(6_000_000);
+    world.executor.run_until_us(6_000_000);
     drop(world);
     Rc::try_unwrap(log).ok().unwrap().into_inner()
 }

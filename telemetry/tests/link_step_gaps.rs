@@ -15,7 +15,7 @@ use telemetry::link::core::follower::SyncState;
 use telemetry::link::core::{Follower, MAX_LISTEN_US, Master};
 use telemetry::link::follower::{FollowerHooks, run_follower};
 use telemetry::link::master::{MasterHooks, run_master};
-use telemetry::mock::{MockClock, MockRadio};
+use telemetry::mock::{MockRadio, SimClock};
 
 /// Largest gap allowed between two hook calls: one listen window plus slack for the radio's
 /// turnaround and a packet completed past the window's end.
@@ -60,31 +60,31 @@ const RESTORE_US: u64 = 4_000_000;
 const END_US: u64 = 7_000_000;
 
 fn run(rate: RateMode) -> Log {
-    let mut world = common::pair(rate, 11);
+    let world = common::pair(rate, 11);
     let (time, medium, params) = (world.time.clone(), world.medium.clone(), world.params);
     let (module_node, flight_node) = (world.module_node, world.flight_node);
     let log = Rc::new(RefCell::new(Log::default()));
     let mut hooks = ModuleHooks(log.clone());
     let mut radio = MockRadio::new(medium.clone(), module_node);
-    let mut clock = MockClock::new(time.clone(), 0);
+    let mut clock = SimClock::new(time.clone(), 0, 0.0);
     world.executor.spawn(async move {
         let mut master = Master::new(params);
         let _ = run_master(&mut radio, &mut clock, &mut master, &mut hooks).await;
     });
     let mut hooks = FlightHooks(log.clone());
     let mut radio = MockRadio::new(medium.clone(), flight_node);
-    let mut clock = MockClock::new(time.clone(), 0);
+    let mut clock = SimClock::new(time.clone(), 0, 0.0);
     let boot = time.clone();
     world.executor.spawn(async move {
         boot.sleep_until(FOLLOWER_BOOT_US).await;
         let mut follower = Follower::new(params, FailsafeValues::default(), 250_000);
         let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut hooks).await;
     });
-    world.executor.run_until(CUT_US);
+    world.executor.run_until_us(CUT_US);
     medium.set_cut(module_node, flight_node, true);
-    world.executor.run_until(RESTORE_US);
+    world.executor.run_until_us(RESTORE_US);
     medium.set_cut(module_node, flight_node, false);
-    world.executor.run_until(END_US);
+    world.executor.run_until_us(END_US);
     drop(world);
     Rc::try_unwrap(log).ok().unwrap().into_inner()
 }

@@ -18,7 +18,7 @@ use module_core::session::{BindOutcome, LinkStep, SessionEnd};
 use module_core::settings::{Band, RateMode, Role, Settings};
 use telemetry::link::follower::bind_follower;
 use telemetry::link::master::bind_master;
-use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
+use telemetry::mock::{ChannelModel, Executor, Medium, MockRadio, Node, SimClock, VirtualTime};
 
 fn core(settings: Settings) -> App<AirLink, Handset> {
     App::new(settings, AirLink::new(), Handset::new(&settings), false).unwrap()
@@ -60,11 +60,11 @@ fn both_ends_store_the_same_link() {
         position_m: 5.0,
         ..Node::default()
     });
-    let mut executor = Executor::new(time.clone());
+    let executor = Executor::new(time.clone());
     let saved = Rc::new(RefCell::new(Vec::new()));
     let (tx_app, tx_saved) = (tx.clone(), saved.clone());
     let mut radio = MockRadio::new(medium.clone(), tx_node);
-    let mut clock = MockClock::new(time.clone(), 1_000);
+    let mut clock = SimClock::new(time.clone(), 1_000, 0.0);
     let LinkStep::BindMaster { params, timeout_us } = press_bind(&mut tx.borrow_mut(), 0x7777_1234)
     else {
         panic!("a transmitter binds as master");
@@ -79,7 +79,7 @@ fn both_ends_store_the_same_link() {
     });
     let (rx_app, rx_saved) = (rx.clone(), saved.clone());
     let mut radio = MockRadio::new(medium, rx_node);
-    let mut clock = MockClock::new(time.clone(), 2_000_000);
+    let mut clock = SimClock::new(time.clone(), 2_000_000, 0.0);
     let LinkStep::BindFollower { band, timeout_us } = press_bind(&mut rx.borrow_mut(), 1) else {
         panic!("a receiver binds as follower");
     };
@@ -90,7 +90,7 @@ fn both_ends_store_the_same_link() {
             .on_bind_outcome(BindOutcome::listened(result));
         rx_saved.borrow_mut().push(("rx", action));
     });
-    executor.run_until(12_000_000);
+    executor.run_until_us(12_000_000);
 
     let saved = saved.borrow();
     assert_eq!(saved.len(), 2, "both ends bound: {saved:?}");

@@ -30,7 +30,7 @@ use telemetry::link::core::Follower;
 use telemetry::link::follower::{bind_follower, run_follower};
 use telemetry::link::master::{bind_master, run_master};
 use telemetry::link::{Band, LinkParams};
-use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
+use telemetry::mock::{ChannelModel, Executor, Medium, MockRadio, Node, SimClock, VirtualTime};
 
 // ---- The client's own CRSF codec (CRSF spec, github.com/tbs-fpv/tbs-crsf-spec) ----
 
@@ -262,14 +262,14 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
     let app = Rc::new(RefCell::new(
         App::new(settings, AirLink::new(), Handset::new(&settings), false).unwrap(),
     ));
-    let mut executor = Executor::new(time.clone());
+    let executor = Executor::new(time.clone());
     let steps: Steps = Rc::default();
 
     // The link task, as module-fw's: ask, run until the core says stop, report back.
     {
         let (app, steps, time) = (app.clone(), steps.clone(), time.clone());
         let mut radio = MockRadio::new(medium.clone(), module_node);
-        let mut clock = MockClock::new(time.clone(), common::MODULE_EPOCH_US);
+        let mut clock = SimClock::new(time.clone(), common::MODULE_EPOCH_US, 0.0);
         executor.spawn(async move {
             let mut random = 0x4242_0000u32;
             loop {
@@ -329,7 +329,7 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
     {
         let (flight, offered, time) = (flight.clone(), offered.clone(), time.clone());
         let mut radio = MockRadio::new(medium, flight_node);
-        let mut clock = MockClock::new(time.clone(), common::FLIGHT_EPOCH_US);
+        let mut clock = SimClock::new(time.clone(), common::FLIGHT_EPOCH_US, 0.0);
         executor.spawn(async move {
             time.sleep_until(3_000_000).await;
             let params = bind_follower(&mut radio, &mut clock, Band::Mhz433, 10_000_000)
@@ -540,7 +540,7 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                 .push(format!("reply frames by type: {:?}", script.seen));
         });
     }
-    executor.run_until(9_000_000);
+    executor.run_until_us(9_000_000);
 
     for line in report.borrow().iter() {
         eprintln!("{line}");

@@ -51,12 +51,7 @@ fn ppm_over_the_driver_on_virtual_si4432s() {
     let app = Rc::new(RefCell::new(
         App::new(settings, AirLink::new(), Handset::new(&settings), true).unwrap(),
     ));
-    let mut module_clock = SimClock::new(
-        medium.clone(),
-        module_chip.delay.clone(),
-        MODULE_EPOCH_US,
-        0.0,
-    );
+    let mut module_clock = SimClock::new(medium.time(), MODULE_EPOCH_US, 0.0);
     let mut module_radio = LinkRadio::new(
         Rfm22b::new(
             module_chip.spi,
@@ -80,12 +75,7 @@ fn ppm_over_the_driver_on_virtual_si4432s() {
     });
 
     let flight = Rc::new(RefCell::new(FlightSide::default()));
-    let mut flight_clock = SimClock::new(
-        medium.clone(),
-        flight_chip.delay.clone(),
-        FLIGHT_EPOCH_US,
-        0.0,
-    );
+    let mut flight_clock = SimClock::new(medium.time(), FLIGHT_EPOCH_US, 0.0);
     let mut flight_radio = LinkRadio::new(
         Rfm22b::new(
             flight_chip.spi,

@@ -20,7 +20,7 @@ use telemetry::link::core::follower::DEFAULT_FAILSAFE_US;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{FollowerHooks, run_follower};
 use telemetry::link::master::{MasterHooks, run_master};
-use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
+use telemetry::mock::{ChannelModel, Executor, Medium, MockRadio, Node, SimClock, VirtualTime};
 
 /// What the transmitter sends on channels 1…8, µs.
 const WIDTHS_US: [u16; 8] = [1000, 1500, 2000, 1234, 1777, 1100, 1900, 1450];
@@ -92,15 +92,15 @@ fn run(failsafe: FailsafeOutput) -> Vec<(u64, Option<Vec<u16>>)> {
     // The module holds every channel; its PPM output applies its own failsafe setting.
     assert_eq!(failsafe, FailsafeValues([Failsafe::Hold; MAX_CHANNELS]));
     assert_eq!(failsafe_us, DEFAULT_FAILSAFE_US);
-    let mut executor = Executor::new(time.clone());
+    let executor = Executor::new(time.clone());
     let mut radio = MockRadio::new(medium.clone(), tx_node);
-    let mut clock = MockClock::new(time.clone(), 55_555);
+    let mut clock = SimClock::new(time.clone(), 55_555, 0.0);
     executor.spawn(async move {
         let mut master = Master::new(params);
         let _ = run_master(&mut radio, &mut clock, &mut master, &mut Transmitter).await;
     });
     let mut radio = MockRadio::new(medium.clone(), rx_node);
-    let mut clock = MockClock::new(time.clone(), 7_777_777);
+    let mut clock = SimClock::new(time.clone(), 7_777_777, 0.0);
     let mut hooks = Receiver { app: app.clone() };
     executor.spawn(async move {
         let mut follower = Follower::new(params, failsafe, failsafe_us);
@@ -133,7 +133,7 @@ fn run(failsafe: FailsafeOutput) -> Vec<(u64, Option<Vec<u16>>)> {
         cut_time.sleep_until(CUT_US).await;
         medium.set_cut(tx_node, rx_node, true);
     });
-    executor.run_until(RUN_US);
+    executor.run_until_us(RUN_US);
     frames.take()
 }
 

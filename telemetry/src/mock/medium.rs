@@ -7,10 +7,10 @@ use std::cell::RefCell;
 use std::collections::{HashSet, VecDeque};
 use std::rc::Rc;
 
-use super::executor::VirtualTime;
 use crate::checksum::crc16;
 use crate::link::RateMode;
 use crate::link::rate::{PREAMBLE_BYTES, SYNC_BYTES};
+use sim_exec::VirtualTime;
 use sim_rng::SplitMix64;
 
 /// Propagation and impairment settings (shared by all nodes).
@@ -246,7 +246,7 @@ impl Medium {
         while s.air.front().is_some_and(|t| t.end_us < horizon) {
             s.air.pop_front();
         }
-        s.time.wake_at(end_us);
+        s.time.wake_all_at(end_us);
     }
 
     /// `node` starts a new listen: nothing is evaluated yet (packets that started before

@@ -5,10 +5,10 @@ use std::convert::Infallible;
 use std::future::poll_fn;
 use std::task::Poll;
 
-use super::executor::VirtualTime;
 use super::medium::Medium;
 use crate::link::rate::PLL_SETTLE_US;
 use crate::link::{LinkRx, PacketRadio, RadioConfig, RateMode};
+use sim_exec::VirtualTime;
 
 /// One mock radio (node) on a medium.
 pub struct MockRadio {
@@ -106,14 +106,14 @@ impl PacketRadio for MockRadio {
                     Some(end) if !extended => {
                         extended = true;
                         deadline = end;
-                        time.wake_at(end);
+                        time.wake_all_at(end);
                         return Poll::Pending;
                     }
                     _ => return Poll::Ready(LinkRx::Timeout),
                 }
             }
             if !registered {
-                time.wake_at(deadline);
+                time.wake_all_at(deadline);
                 registered = true;
             }
             Poll::Pending

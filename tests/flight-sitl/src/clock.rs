@@ -1,8 +1,8 @@
-//! Time on the chip simulator's virtual clock: each board's clock (si4432-sim's `SimClock`,
+//! Time on the simulators' one virtual time: each board's clock (`SimClock`, from sim-exec,
 //! booted with its board and a crystal a few ppm off) and the sleeps the simulated tasks wait
 //! with.
 
-use si4432_sim::{Medium, SimDelay};
+use si4432_sim::{Medium, VirtualTime};
 
 /// Virtual time now, µs.
 pub(crate) fn virtual_us(medium: &Medium) -> u64 {
@@ -10,6 +10,6 @@ pub(crate) fn virtual_us(medium: &Medium) -> u64 {
 }
 
 /// Sleeps `ms` of virtual time.
-pub(crate) async fn sleep_ms(delay: &SimDelay, ms: u64) {
-    delay.sleep_ns(ms * 1_000_000).await;
+pub(crate) async fn sleep_ms(time: &VirtualTime, ms: u64) {
+    time.sleep_ns(ms * 1_000_000).await;
 }

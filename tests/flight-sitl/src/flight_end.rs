@@ -25,7 +25,7 @@ use crate::clock::sleep_ms;
 use crate::flash::SettingsFlash;
 use crate::scenario::{End, RadioInjection};
 use crate::world::{BootCause, Shared};
-use si4432_sim::SimClock;
+use si4432_sim::{SimClock, VirtualTime};
 
 /// Power-on to the first loop, ms, modelled as the firmware's boot at 168 MHz: clocks and
 /// PLL lock ≈ 2 ms, settings load ≈ 3 ms (two records read and CRC-checked), MPU-9250
@@ -113,16 +113,16 @@ pub const DESIGN_US: u64 = 42_700;
 /// a blocking job (a gain design; a flash operation, which on the single-bank F405 also
 /// stalls code fetch) keeps the others — the IMU adapter, the supervisor — from running.
 /// The radio link's timing is not held (a simplification: its slots run on).
-async fn occupy(shared: &Shared, delay: &SimDelay, us: u64) {
+async fn occupy(shared: &Shared, time: &VirtualTime, us: u64) {
     {
         let mut s = shared.borrow_mut();
         s.flight_busy_until_ns = s.now_ns() + us * 1000;
     }
-    delay.sleep_ns(us * 1000).await;
+    time.sleep_ns(us * 1000).await;
 }
 
 /// Waits while the board is held by a blocking job.
-async fn wait_while_busy(shared: &Shared, delay: &SimDelay) {
+async fn wait_while_busy(shared: &Shared, time: &VirtualTime) {
     loop {
         let left = {
             let s = shared.borrow();
@@ -131,7 +131,7 @@ async fn wait_while_busy(shared: &Shared, delay: &SimDelay) {
         if left == 0 {
             return;
         }
-        delay.sleep_ns(left).await;
+        time.sleep_ns(left).await;
     }
 }
 
@@ -139,18 +139,22 @@ async fn wait_while_busy(shared: &Shared, delay: &SimDelay) {
 /// inside the app's model (`Watchdog::poll`), which the stop watcher reads.
 async fn supervisor_task(app: Rc<RefCell<FlightApp>>, clock: SimClock, shared: &Shared) {
     loop {
-        sleep_ms(clock.delay(), u64::from(FEED_PERIOD_MS)).await;
-        wait_while_busy(shared, clock.delay()).await;
+        sleep_ms(clock.time(), u64::from(FEED_PERIOD_MS)).await;
+        wait_while_busy(shared, clock.time()).await;
         let _fed = app.borrow_mut().on_watchdog_poll(clock.now_ms());
     }
 }
 
 /// The heartbeat LED task (50 ms ticker) and the motor task's check-in (it wakes at least
 /// every 100 ms; the commands themselves go to the quad in the physics task).
-async fn heartbeat_and_motors_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay, shared: &Shared) {
+async fn heartbeat_and_motors_task(
+    app: Rc<RefCell<FlightApp>>,
+    time: VirtualTime,
+    shared: &Shared,
+) {
     loop {
-        sleep_ms(&delay, 50).await;
-        wait_while_busy(shared, &delay).await;
+        sleep_ms(&time, 50).await;
+        wait_while_busy(shared, &time).await;
         let mut a = app.borrow_mut();
         a.check_in(Task::Heartbeat);
         a.check_in(Task::Motors);
@@ -166,9 +170,9 @@ async fn storage_task(
     clock: SimClock,
     shared: &Shared,
 ) {
-    let delay = clock.delay().clone();
+    let time = clock.time().clone();
     loop {
-        sleep_ms(&delay, 100).await;
+        sleep_ms(&time, 100).await;
         let Some(job) = app.borrow_mut().take_save_job() else {
             continue;
         };
@@ -177,7 +181,7 @@ async fn storage_task(
                 .on_watchdog_stretched(clock.now_ms(), job.watchdog_ms);
         }
         let (saved, work) = flash.borrow_mut().save(&job);
-        occupy(shared, &delay, work.f405_us()).await;
+        occupy(shared, &time, work.f405_us()).await;
         let saved = saved.then(|| job.live.clone());
         app.borrow_mut().on_save_done(clock.now_ms(), saved);
     }
@@ -185,9 +189,9 @@ async fn storage_task(
 
 /// The gains task: every 100 ms, a design request is solved (holding the board for
 /// [`DESIGN_US`]) and handed back.
-async fn gains_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay, shared: &Shared) {
+async fn gains_task(app: Rc<RefCell<FlightApp>>, time: VirtualTime, shared: &Shared) {
     loop {
-        sleep_ms(&delay, 100).await;
+        sleep_ms(&time, 100).await;
         let Some(settings) = app.borrow_mut().take_design_request() else {
             continue;
         };
@@ -195,7 +199,7 @@ async fn gains_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay, shared: &Share
             continue;
         };
         let designed = Controllers::design(&setup.control);
-        occupy(shared, &delay, DESIGN_US).await;
+        occupy(shared, &time, DESIGN_US).await;
         if let Ok(c) = designed {
             app.borrow_mut().on_designed(setup, c);
         }
@@ -205,7 +209,7 @@ async fn gains_task(app: Rc<RefCell<FlightApp>>, delay: SimDelay, shared: &Share
 /// Ends a boot: the IWDG expired (no feed for `WATCHDOG_TIMEOUT_MS`) or the power went.
 async fn stop_watcher(app: &Rc<RefCell<FlightApp>>, shared: &Shared, clock: &SimClock) -> Stop {
     loop {
-        sleep_ms(clock.delay(), WATCH_MS).await;
+        sleep_ms(clock.time(), WATCH_MS).await;
         if !shared.borrow().input.flight_powered {
             return Stop::PowerOff;
         }
@@ -219,7 +223,7 @@ async fn stop_watcher(app: &Rc<RefCell<FlightApp>>, shared: &Shared, clock: &Sim
 pub(crate) async fn flight_board(
     shared: Shared,
     medium: Medium,
-    delay: SimDelay,
+    time: VirtualTime,
     chip: FlightChip,
     flash: SettingsFlash,
     failsafe_us: u64,
@@ -230,17 +234,17 @@ pub(crate) async fn flight_board(
     let mut cause = BootCause::PowerOn;
     loop {
         while !shared.borrow().input.flight_powered {
-            sleep_ms(&delay, WATCH_MS).await;
+            sleep_ms(&time, WATCH_MS).await;
         }
         if cause == BootCause::PowerOn {
             // The RFM22B is powered with the board.
             chip.power_on_reset();
         }
-        sleep_ms(&delay, FLIGHT_BOOT_MS).await;
+        sleep_ms(&time, FLIGHT_BOOT_MS).await;
         if !shared.borrow().input.flight_powered {
             continue;
         }
-        let clock = SimClock::booting_now(medium.clone(), delay.clone(), FLIGHT_DRIFT_PPM);
+        let clock = SimClock::booting_now(medium.time(), FLIGHT_DRIFT_PPM);
         let (settings, problem) = flash.borrow_mut().load();
         let Some(mut app) = FlightApp::new(settings, clock.now_ms()) else {
             return;
@@ -262,9 +266,9 @@ pub(crate) async fn flight_board(
         let tasks = join5(
             link_task(app.clone(), &radio, clock.clone(), failsafe_us),
             supervisor_task(app.clone(), clock.clone(), &shared),
-            heartbeat_and_motors_task(app.clone(), delay.clone(), &shared),
+            heartbeat_and_motors_task(app.clone(), time.clone(), &shared),
             storage_task(app.clone(), &flash, clock.clone(), &shared),
-            gains_task(app.clone(), delay.clone(), &shared),
+            gains_task(app.clone(), time.clone(), &shared),
         );
         let stop = match select(tasks, stop_watcher(&app, &shared, &clock)).await {
             Either::First(_) => Stop::PowerOff,

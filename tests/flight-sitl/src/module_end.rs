@@ -38,7 +38,7 @@ use telemetry::mock::SplitMix64;
 use crate::clock::sleep_ms;
 use crate::scenario::End;
 use crate::world::{BootCause, Shared, TO_PHONE_MAX, transmitter};
-use si4432_sim::SimClock;
+use si4432_sim::{SimClock, VirtualTime};
 
 /// Power-on to the first task, ms: nRF52840 start-up and HFXO ≈ 1 ms, settings load from
 /// the NVMC ≈ 1 ms, the RFM22B probe is the link task's first step (its own POR time is
@@ -123,8 +123,8 @@ impl Board {
         self.clock.now_ms()
     }
 
-    fn delay(&self) -> &SimDelay {
-        self.clock.delay()
+    fn time(&self) -> &VirtualTime {
+        self.clock.time()
     }
 }
 
@@ -206,7 +206,7 @@ fn carry_out(shared: &Shared, action: Option<Action>) {
 /// NVMC's time (`module_flash::nrf52840_us`: pages erased, words written).
 async fn settings_task(b: &Board, shared: &Shared) {
     loop {
-        sleep_ms(b.delay(), 50).await;
+        sleep_ms(b.time(), 50).await;
         let pending = shared.borrow_mut().module_save.take();
         let Some(settings) = pending else {
             continue;
@@ -216,12 +216,12 @@ async fn settings_task(b: &Board, shared: &Shared) {
             let mut s = shared.borrow_mut();
             s.module_busy_until_ns = s.now_ns() + us * 1000;
         }
-        b.delay().sleep_ns(us * 1000).await;
+        b.time().sleep_ns(us * 1000).await;
     }
 }
 
 /// Waits while the module's CPU is halted by its NVMC.
-async fn wait_while_halted(shared: &Shared, delay: &SimDelay) {
+async fn wait_while_halted(shared: &Shared, time: &VirtualTime) {
     loop {
         let left = {
             let s = shared.borrow();
@@ -230,7 +230,7 @@ async fn wait_while_halted(shared: &Shared, delay: &SimDelay) {
         if left == 0 {
             return;
         }
-        delay.sleep_ns(left).await;
+        time.sleep_ns(left).await;
     }
 }
 
@@ -249,7 +249,7 @@ async fn ppm_in_task(b: &Board, shared: &Shared) {
         clock.sleep_until_us(frame_start).await;
         let input = shared.borrow().input;
         if !input.handset_connected {
-            sleep_ms(b.delay(), PPM_IDLE_MS).await;
+            sleep_ms(b.time(), PPM_IDLE_MS).await;
             let now = clock.now_us() as u32;
             b.app.borrow_mut().on_ppm_tick(now);
             frame_start = clock.now_us();
@@ -351,11 +351,11 @@ async fn jr_line_task(b: &Board, shared: &Shared) {
             LineMode::Push { .. } => {
                 let now = clock.now_us();
                 let sent = b.app.borrow_mut().next_handset_bytes(now, &mut reply).len();
-                sleep_ms(b.delay(), PUSH_POLL_MS).await;
+                sleep_ms(b.time(), PUSH_POLL_MS).await;
                 sent
             }
             LineMode::Off => {
-                sleep_ms(b.delay(), 100).await;
+                sleep_ms(b.time(), 100).await;
                 0
             }
         };
@@ -373,7 +373,7 @@ async fn app_task(b: &Board, shared: &Shared) {
         b.check_in(Watched::App);
         let action = b.app.borrow_mut().on_tick();
         carry_out(shared, action);
-        sleep_ms(b.delay(), 100).await;
+        sleep_ms(b.time(), 100).await;
     }
 }
 
@@ -446,7 +446,7 @@ async fn hm10_task(b: &Board, shared: &Shared) {
                 }
             }
         }
-        sleep_ms(b.delay(), HM10_POLL_MS).await;
+        sleep_ms(b.time(), HM10_POLL_MS).await;
     }
 }
 
@@ -454,8 +454,8 @@ async fn hm10_task(b: &Board, shared: &Shared) {
 /// NVMC halts the CPU).
 async fn supervisor_task(b: &Board, shared: &Shared) {
     loop {
-        sleep_ms(b.delay(), 100).await;
-        wait_while_halted(shared, b.delay()).await;
+        sleep_ms(b.time(), 100).await;
+        wait_while_halted(shared, b.time()).await;
         if b.checked_in.get() & EXPECTED == EXPECTED {
             b.checked_in.set(0);
             b.last_feed_ms.set(b.now_ms());
@@ -466,7 +466,7 @@ async fn supervisor_task(b: &Board, shared: &Shared) {
 /// The WDT: returns when it expires.
 async fn watchdog(b: &Board) {
     loop {
-        sleep_ms(b.delay(), 5).await;
+        sleep_ms(b.time(), 5).await;
         if u64::from(b.now_ms().wrapping_sub(b.last_feed_ms.get())) >= MODULE_WATCHDOG_MS {
             return;
         }
@@ -477,14 +477,14 @@ async fn watchdog(b: &Board) {
 pub(crate) async fn module_board(
     shared: Shared,
     medium: Medium,
-    delay: SimDelay,
+    time: VirtualTime,
     chip: ModuleChip,
     seed: u64,
 ) {
     let chip = RefCell::new(chip);
     let mut cause = BootCause::PowerOn;
     loop {
-        sleep_ms(&delay, MODULE_BOOT_MS).await;
+        sleep_ms(&time, MODULE_BOOT_MS).await;
         let settings: ModuleSettings = shared.borrow_mut().module_flash.load();
         let Ok(mut app) = App::new(settings, AirLink::new(), Handset::new(&settings), true) else {
             return;
@@ -492,7 +492,7 @@ pub(crate) async fn module_board(
         // The firmware's RNG at boot seeds a receiver-role follower's epoch nonces.
         app.seed_link_nonces(SplitMix64::new(seed ^ crate::clock::virtual_us(&medium)).next_u64());
         shared.borrow_mut().record_boot(End::Module, cause, false);
-        let clock = SimClock::booting_now(medium.clone(), delay.clone(), MODULE_DRIFT_PPM);
+        let clock = SimClock::booting_now(medium.time(), MODULE_DRIFT_PPM);
         let board = Board {
             app: RefCell::new(app),
             last_feed_ms: Cell::new(clock.now_ms()),

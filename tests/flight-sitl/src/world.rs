@@ -394,14 +394,14 @@ impl World {
         sim.spawn(module_board(
             shared.clone(),
             medium.clone(),
-            sim.delay(),
+            sim.time(),
             ModuleChip::new(module_radio, module.tx_power),
             seed,
         ));
         sim.spawn(flight_board(
             shared.clone(),
             medium.clone(),
-            sim.delay(),
+            sim.time(),
             FlightChip::new(flight_radio),
             flash,
             link_failsafe_ms * 1000,

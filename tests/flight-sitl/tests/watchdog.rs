@@ -14,7 +14,7 @@ use telemetry::channels::{ChannelFormat, FailsafeValues};
 use telemetry::link::core::Follower;
 use telemetry::link::follower::{FollowerHooks, run_follower};
 use telemetry::link::{Band, LinkParams, RateMode};
-use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
+use telemetry::mock::{ChannelModel, Executor, Medium, MockRadio, Node, SimClock, VirtualTime};
 
 struct AppHooks(Rc<RefCell<FlightApp>>);
 
@@ -33,10 +33,10 @@ fn longest_unfed_ms(rate: RateMode) -> u64 {
         FlightApp::new(Settings::default(), 0).expect("factory setup"),
     ));
     let longest = Rc::new(RefCell::new(0u64));
-    let mut ex = Executor::new(time.clone());
+    let ex = Executor::new(time.clone());
     {
         let mut radio = MockRadio::new(medium.clone(), node);
-        let mut clock = MockClock::new(time.clone(), 0);
+        let mut clock = SimClock::new(time.clone(), 0, 0.0);
         let mut hooks = AppHooks(app.clone());
         let params = LinkParams::new(0x7A11_0001, Band::Mhz433, rate, ChannelFormat::Full16, 4);
         ex.spawn(async move {
@@ -69,7 +69,7 @@ fn longest_unfed_ms(rate: RateMode) -> u64 {
             }
         });
     }
-    ex.run_until(5_000_000);
+    ex.run_until_us(5_000_000);
     *longest.borrow()
 }
 

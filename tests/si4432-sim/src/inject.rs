@@ -63,7 +63,7 @@ impl World {
 
         let chips_per_bit = if modem.manchester { 2.0 } else { 1.0 };
         let clock = BitClock {
-            start_ns: self.now_ns,
+            start_ns: self.now_ns(),
             preamble_bits: u32::from(format.preamble_nibbles) * 4,
             ns_per_bit: chips_per_bit * 1e9 / modem.tx_bit_rate_bps.max(1.0),
         };
@@ -81,7 +81,7 @@ impl World {
             decodable: true,
             rx_power_dbm: Vec::new(),
         };
-        self.air.prune(self.now_ns);
+        self.air.prune(self.now_ns());
         let count = self.radios.len();
         let id = self.air.start(transmission, logical, count);
         self.air.set_powers(id, vec![power_dbm; count]);

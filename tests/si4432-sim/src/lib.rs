@@ -42,8 +42,11 @@
 //!   random loss, interference bursts, collisions (optional capture), and a trace of every
 //!   frame with every receiver's outcome ([`TraceFrame`]). [`Medium::inject_packet`] plays
 //!   a frame from an ideal transmitter in the receiver's own format (lora-rs' `inject_rx`).
-//! - **Execution** ([`Simulation`]): a deterministic single-threaded executor in virtual
-//!   time; all randomness from one seed ([`sim_rng::SplitMix64`]).
+//! - **Execution** ([`Simulation`]): the simulators' one deterministic single-threaded
+//!   executor and virtual time (`sim-exec`), with the chips' events as stops of that time;
+//!   all randomness from one seed ([`sim_rng::SplitMix64`]). A board's clock ([`SimClock`]:
+//!   its epoch and crystal drift, from [`Simulation::time`]) is the same one the
+//!   packet-level mock uses (with `telemetry`'s `std` feature it is the link's `LinkClock`).
 //! - **The MCU's bus** (per radio, [`RadioConfig`]): every SPI transaction takes
 //!   `spi_overhead_ns` + bytes × 8 / `spi_clock_hz` of virtual time before it acts on the
 //!   chip (async: the task sleeps and others run, as with DMA; blocking: the whole world
@@ -117,7 +120,6 @@ mod access;
 mod acquire;
 mod air;
 mod chip;
-mod clock;
 mod executor;
 pub mod fifo;
 mod inject;
@@ -133,12 +135,12 @@ mod tx;
 mod world;
 
 pub use chip::{ChipState, Fault, PLL_SETTLE_NS, POWER_ON_RESET_NS, XTAL_START_NS};
-pub use clock::SimClock;
-pub use executor::{Simulation, Spawner, Task};
+pub use executor::{Simulation, Spawner};
 pub use medium::{
     ChipHandle, IRQ_LATENCY_NS, Interference, Medium, MediumConfig, RadioConfig, RadioHandle,
     SPI_CLOCK_F405_HZ, SPI_CLOCK_NRF52840_HZ, SPI_OVERHEAD_NS,
 };
-pub use pins::{SimDelay, SimIrq, SimSdn, SimSpi, Sleep, SpiError};
+pub use pins::{SimDelay, SimIrq, SimSdn, SimSpi, SpiError};
+pub use sim_exec::{SimClock, Sleep, Task, VirtualTime};
 pub use trace::{Outcome, RadioId, Reception, TraceFrame};
 pub use world::SpiStats;

@@ -12,6 +12,7 @@ use crate::pins::{SimDelay, SimIrq, SimSdn, SimSpi};
 use crate::trace::{RadioId, TraceFrame};
 use crate::world::SpiStats;
 use crate::world::World;
+use sim_exec::VirtualTime;
 
 /// Medium-wide settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -249,7 +250,12 @@ impl Medium {
 
     /// Current virtual time.
     pub fn now(&self) -> Duration {
-        Duration::from_nanos(self.world.borrow().now_ns)
+        Duration::from_nanos(self.world.borrow().now_ns())
+    }
+
+    /// The virtual time the chips and tasks share (for a board's [`crate::SimClock`]).
+    pub fn time(&self) -> VirtualTime {
+        self.world.borrow().time.clone()
     }
 }
 
@@ -394,7 +400,7 @@ impl core::fmt::Debug for Medium {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         let world = self.world.borrow();
         f.debug_struct("Medium")
-            .field("now_ns", &world.now_ns)
+            .field("now_ns", &world.now_ns())
             .field("radios", &world.radios.len())
             .field("frames", &world.air.trace.len())
             .finish()

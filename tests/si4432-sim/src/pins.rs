@@ -19,6 +19,7 @@ use embedded_hal::spi::Operation;
 
 use crate::chip::Power;
 use crate::world::World;
+use sim_exec::Sleep;
 
 /// SPI bus to one chip: blocking `embedded_hal::spi::SpiDevice` and async
 /// `embedded_hal_async::spi::SpiDevice`. The first byte of a transaction is the address
@@ -55,7 +56,7 @@ impl embedded_hal::spi::SpiDevice for SimSpi {
     fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), SpiError> {
         let mut world = self.world.borrow_mut();
         let cost = world.spi_cost_ns(self.index, operations);
-        let until = world.now_ns.saturating_add(cost);
+        let until = world.now_ns().saturating_add(cost);
         world.advance_to(until);
         world.spi_transaction(self.index, operations, cost)
     }
@@ -67,15 +68,11 @@ impl embedded_hal_async::spi::SpiDevice for SimSpi {
         let (cost, deadline_ns) = {
             let world = self.world.borrow();
             let cost = world.spi_cost_ns(self.index, operations);
-            (cost, world.now_ns.saturating_add(cost))
+            (cost, world.now_ns().saturating_add(cost))
         };
         if cost > 0 {
-            Sleep {
-                world: self.world.clone(),
-                deadline_ns,
-                registered: None,
-            }
-            .await;
+            let sleep = self.world.borrow().time.sleep_until_ns(deadline_ns);
+            sleep.await;
         }
         self.world
             .borrow_mut()
@@ -190,7 +187,7 @@ impl Future for IrqWait {
 
     fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<()> {
         let mut world = self.world.borrow_mut();
-        let now = world.now_ns;
+        let now = world.now_ns();
         let Some(radio) = world.radios.get_mut(self.index) else {
             return Poll::Ready(());
         };
@@ -284,18 +281,13 @@ impl SimDelay {
 
     fn block_for_ns(&mut self, ns: u64) {
         let mut world = self.world.borrow_mut();
-        let until = world.now_ns.saturating_add(ns);
+        let until = world.now_ns().saturating_add(ns);
         world.advance_to(until);
     }
 
     /// Sleep for `ns` nanoseconds of virtual time (async).
     pub fn sleep_ns(&self, ns: u64) -> Sleep {
-        let deadline_ns = self.world.borrow().now_ns.saturating_add(ns);
-        Sleep {
-            world: self.world.clone(),
-            deadline_ns,
-            registered: None,
-        }
+        self.world.borrow().time.sleep_ns(ns)
     }
 }
 
@@ -327,35 +319,6 @@ impl embedded_hal_async::delay::DelayNs for SimDelay {
     }
 }
 
-/// Future that completes when virtual time reaches its deadline.
-pub struct Sleep {
-    world: Rc<RefCell<World>>,
-    deadline_ns: u64,
-    /// The waker already queued as a timer (re-polls with the same waker add nothing).
-    registered: Option<core::task::Waker>,
-}
-
-impl Future for Sleep {
-    type Output = ();
-
-    fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<()> {
-        let this = self.get_mut();
-        let mut world = this.world.borrow_mut();
-        if world.now_ns >= this.deadline_ns {
-            return Poll::Ready(());
-        }
-        if !this
-            .registered
-            .as_ref()
-            .is_some_and(|w| w.will_wake(cx.waker()))
-        {
-            world.add_timer(this.deadline_ns, cx.waker().clone());
-            this.registered = Some(cx.waker().clone());
-        }
-        Poll::Pending
-    }
-}
-
 impl core::fmt::Debug for SimSpi {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("SimSpi")
@@ -383,13 +346,5 @@ impl core::fmt::Debug for SimSdn {
 impl core::fmt::Debug for SimDelay {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("SimDelay").finish_non_exhaustive()
-    }
-}
-
-impl core::fmt::Debug for Sleep {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.debug_struct("Sleep")
-            .field("deadline_ns", &self.deadline_ns)
-            .finish_non_exhaustive()
     }
 }

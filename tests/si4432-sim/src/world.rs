@@ -1,13 +1,15 @@
-//! The shared simulation state behind every handle: virtual clock, chips, air, timers.
+//! The shared simulation state behind every handle: chips, air, and the virtual time
+//! (`sim_exec::VirtualTime`) they and the tasks share.
 //!
-//! Time only moves forward through `advance_one`/`advance_to`, which process every chip
-//! event up to the new time in time order (ties in radio order), so when an SPI access or a
-//! task runs, every chip is exactly at `now`. An SPI transaction costs its bus time first
-//! (`spi_cost_ns`, spent by the caller in `pins`), then acts on the chip at once.
+//! Time only moves forward through `VirtualTime::advance_one`/`advance_to` (the executor's
+//! steps, or a busy-wait's `World::advance_to`), which process every chip event up to the
+//! new time in time order (ties in radio order) before the wake-ups of that instant fire, so
+//! when an SPI access or a task runs, every chip is exactly at `now`. An SPI transaction
+//! costs its bus time first (`spi_cost_ns`, spent by the caller in `pins`), then acts on the
+//! chip at once.
 
-use core::cmp::Ordering;
 use core::task::Waker;
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::HashMap;
 
 use embedded_hal::spi::Operation;
 
@@ -15,6 +17,7 @@ use crate::air::Air;
 use crate::chip::{Chip, Ctx, Fault};
 use crate::medium::{MediumConfig, RadioConfig};
 use crate::propagation::path_loss_db;
+use sim_exec::{Events, VirtualTime};
 use sim_rng::SplitMix64;
 
 /// Safety net: more chip steps than this at one instant means a model bug; stop, don't hang.
@@ -59,39 +62,23 @@ pub(crate) struct Radio {
 }
 
 #[derive(Debug)]
-struct Timer {
-    deadline_ns: u64,
-    seq: u64,
-    waker: Waker,
-}
-
-impl PartialEq for Timer {
-    fn eq(&self, other: &Self) -> bool {
-        (self.deadline_ns, self.seq) == (other.deadline_ns, other.seq)
-    }
-}
-impl Eq for Timer {}
-impl PartialOrd for Timer {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Timer {
-    // Reversed, so the max-heap pops the earliest deadline first.
-    fn cmp(&self, other: &Self) -> Ordering {
-        (other.deadline_ns, other.seq).cmp(&(self.deadline_ns, self.seq))
-    }
-}
-
-#[derive(Debug)]
 pub(crate) struct World {
-    pub now_ns: u64,
+    pub time: VirtualTime,
     pub rng: SplitMix64,
     pub radios: Vec<Radio>,
     pub air: Air,
     pub attenuation_db: HashMap<(usize, usize), f64>,
-    timers: BinaryHeap<Timer>,
-    timer_seq: u64,
+}
+
+/// The chips' events move the executor's time like its wake-ups do.
+impl Events for World {
+    fn next_due_ns(&self) -> Option<u64> {
+        self.next_chip_event_ns()
+    }
+
+    fn process_due(&mut self) {
+        World::process_due(self);
+    }
 }
 
 /// Decoder state of one SPI transaction (nSEL low): the first byte is the address.
@@ -102,15 +89,13 @@ struct Session {
 }
 
 impl World {
-    pub fn new(seed: u64, config: MediumConfig) -> Self {
+    pub fn new(seed: u64, config: MediumConfig, time: VirtualTime) -> Self {
         Self {
-            now_ns: 0,
+            time,
             rng: SplitMix64::new(seed),
             radios: Vec::new(),
             air: Air::new(config),
             attenuation_db: HashMap::new(),
-            timers: BinaryHeap::new(),
-            timer_seq: 0,
         }
     }
 
@@ -130,56 +115,34 @@ impl World {
         me
     }
 
-    /// Earliest pending chip event or timer.
-    pub fn next_event_ns(&self) -> Option<u64> {
-        let chips = self
-            .radios
+    /// Current virtual time, ns.
+    pub fn now_ns(&self) -> u64 {
+        self.time.now_ns()
+    }
+
+    /// Earliest pending chip event.
+    fn next_chip_event_ns(&self) -> Option<u64> {
+        self.radios
             .iter()
             .filter_map(|r| r.chip.next_event_ns())
-            .min();
-        let timer = self.timers.peek().map(|t| t.deadline_ns);
-        match (chips, timer) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+            .min()
     }
 
-    /// Move to `t` (never backwards), process everything due, fire expired timers.
-    pub fn advance_one(&mut self, t: u64) {
-        self.now_ns = self.now_ns.max(t);
-        self.process_due();
-        while self
-            .timers
-            .peek()
-            .is_some_and(|timer| timer.deadline_ns <= self.now_ns)
-        {
-            if let Some(timer) = self.timers.pop() {
-                timer.waker.wake();
-            }
-        }
-    }
-
-    /// Process every event up to `t`, then stand at `t`.
+    /// Process every chip event and wake-up up to `t` in time order (a busy-wait: no task
+    /// runs), then stand at `t`.
     pub fn advance_to(&mut self, t: u64) {
-        while let Some(next) = self.next_event_ns().filter(|&next| next <= t) {
-            self.advance_one(next);
-        }
-        self.now_ns = self.now_ns.max(t);
+        let time = self.time.clone();
+        time.advance_to(t, self);
     }
 
     /// Wake `waker` when virtual time reaches `deadline_ns`.
     pub fn add_timer(&mut self, deadline_ns: u64, waker: Waker) {
-        self.timer_seq += 1;
-        self.timers.push(Timer {
-            deadline_ns,
-            seq: self.timer_seq,
-            waker,
-        });
+        self.time.wake_at_ns(deadline_ns, waker);
     }
 
     /// Run every chip step due at `now`, in radio order, until none is left.
     pub fn process_due(&mut self) {
-        let now = self.now_ns;
+        let now = self.now_ns();
         let mut steps = 0;
         loop {
             let mut progressed = false;
@@ -215,7 +178,7 @@ impl World {
         f: impl FnOnce(&mut Chip, u64, &mut Ctx<'_>) -> R,
     ) -> Option<R> {
         let radio_count = self.radios.len();
-        let now = self.now_ns;
+        let now = self.now_ns();
         let Self {
             radios, air, rng, ..
         } = self;
@@ -274,6 +237,7 @@ impl World {
 
     /// Re-evaluate nIRQ of radio `i`; wake its waiters on any change.
     pub fn update_irq(&mut self, i: usize) {
+        let now = self.now_ns();
         let Some(radio) = self.radios.get_mut(i) else {
             return;
         };
@@ -282,7 +246,7 @@ impl World {
             radio.irq.low = low;
             if low {
                 radio.irq.falling_edges += 1;
-                radio.irq.fell_at_ns = self.now_ns;
+                radio.irq.fell_at_ns = now;
             } else {
                 radio.irq.rising_edges += 1;
             }
@@ -296,7 +260,7 @@ impl World {
     fn live_rssi(&self, i: usize) -> u8 {
         self.radios
             .get(i)
-            .map_or(0, |r| r.chip.live_rssi(&self.air, self.now_ns))
+            .map_or(0, |r| r.chip.live_rssi(&self.air, self.now_ns()))
     }
 
     /// Bus time of `operations` on radio `i`: bytes × 8 at its SPI clock plus the
@@ -384,7 +348,7 @@ impl World {
                     }
                 }
                 Operation::DelayNs(ns) => {
-                    let until = self.now_ns.saturating_add(u64::from(*ns));
+                    let until = self.now_ns().saturating_add(u64::from(*ns));
                     self.advance_to(until);
                 }
             }

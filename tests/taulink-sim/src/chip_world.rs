@@ -45,8 +45,8 @@ fn spawn_pair(
     let ids = (module.id, flight.id);
     let flight_chip = flight.chip.clone();
     // The MCU clocks drift too, 40 ppm apart: the follower must keep re-timing its grid.
-    let module_clock = SimClock::new(medium.clone(), module.delay.clone(), MODULE_EPOCH_US, 20.0);
-    let flight_clock = SimClock::new(medium.clone(), flight.delay.clone(), FLIGHT_EPOCH_US, -20.0);
+    let module_clock = SimClock::new(medium.time(), MODULE_EPOCH_US, 20.0);
+    let flight_clock = SimClock::new(medium.time(), FLIGHT_EPOCH_US, -20.0);
     let link_radio = |radio| {
         let r = LinkRadio::new(radio, TxPower::MAX);
         if s.header_check {
@@ -203,7 +203,7 @@ pub fn simulate_chip(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome {
     );
     if let (Some(attack), Some(r)) = (s.attack, attacker_radio) {
         let victim = victim_of(s, &params, s.key);
-        let clock = SimClock::new(medium.clone(), r.delay.clone(), 0, 0.0);
+        let clock = SimClock::new(medium.time(), 0, 0.0);
         let radio = LinkRadio::new(Rfm22b::new(r.spi, r.nirq, r.sdn, r.delay), TxPower::MAX);
         sim.spawn(attacker(attack, radio, clock, victim, main.clone(), s.seed));
     }

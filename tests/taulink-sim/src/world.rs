@@ -5,10 +5,9 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use telemetry::link::rate::airtime_us;
-use telemetry::link::{HOP_CHANNELS, LinkClock, LinkParams, PacketRadio, RadioConfig};
+use telemetry::link::{HOP_CHANNELS, LinkParams, PacketRadio, RadioConfig};
 use telemetry::mock::{
-    ChannelModel, Executor, Medium, MediumStats, MockClock, MockRadio, Node, SplitMix64,
-    VirtualTime,
+    ChannelModel, Executor, Medium, MediumStats, MockRadio, Node, SimClock, SplitMix64, VirtualTime,
 };
 
 use crate::ends::{FlightStart, apps, flight_end, module_end};
@@ -58,7 +57,7 @@ pub(crate) fn params_for(s: &Scenario, random: u32) -> LinkParams {
 /// Spawns a master and follower pair. With `bind`, both start in bind mode.
 #[allow(clippy::too_many_arguments)]
 fn spawn_pair<'a>(
-    ex: &mut Executor<'a>,
+    ex: &Executor<'a>,
     time: &VirtualTime,
     medium: &Medium,
     s: &Scenario,
@@ -79,8 +78,8 @@ fn spawn_pair<'a>(
     let module_radio = MockRadio::new(medium.clone(), module_node);
     let flight_radio = MockRadio::new(medium.clone(), flight_node);
     // The ends boot at different times and count from different epochs.
-    let module_clock = MockClock::new(time.clone(), MODULE_EPOCH_US);
-    let flight_clock = MockClock::new(time.clone(), FLIGHT_EPOCH_US);
+    let module_clock = SimClock::new(time.clone(), MODULE_EPOCH_US, 0.0);
+    let flight_clock = SimClock::new(time.clone(), FLIGHT_EPOCH_US, 0.0);
     let t = time.clone();
     let now: Now = Rc::new(move || t.now_us());
     let (module_app, flight_app) = apps(s, now, &record, salt);
@@ -100,14 +99,14 @@ fn spawn_pair<'a>(
         start,
         flight_app,
         record.clone(),
-        |c: &MockClock| c.now_us() - FLIGHT_EPOCH_US,
+        |c: &SimClock| c.now_us() - FLIGHT_EPOCH_US,
     ));
     (record, module_node, flight_node)
 }
 
 /// A jammer: random bursts on random grid channels at `duty` of the time.
 fn spawn_jammer(
-    ex: &mut Executor<'_>,
+    ex: &Executor<'_>,
     time: &VirtualTime,
     medium: &Medium,
     s: &Scenario,
@@ -120,7 +119,7 @@ fn spawn_jammer(
     let mut radio = MockRadio::new(medium.clone(), node);
     let mut rng = SplitMix64::new(s.seed ^ 0x1A33_E500);
     let (rate, band, duty) = (s.rate, s.band, s.interference.clamp(0.001, 0.95));
-    let mut clock = MockClock::new(time.clone(), 0);
+    let mut clock = SimClock::new(time.clone(), 0, 0.0);
     ex.spawn(async move {
         let _ = radio
             .configure(&RadioConfig {
@@ -207,9 +206,9 @@ pub fn simulate_packet(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome
     let medium = Medium::new(time.clone(), model, s.seed);
     let mut rng = SplitMix64::new(s.seed);
     let params = params_for(s, rng.next_u64() as u32);
-    let mut ex = Executor::new(time.clone());
+    let ex = Executor::new(time.clone());
     let (main, module_node, flight_node) = spawn_pair(
-        &mut ex,
+        &ex,
         &time,
         &medium,
         s,
@@ -222,7 +221,7 @@ pub fn simulate_packet(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome
         let foreign_params = params_for(s, rng.next_u64() as u32);
         let mid = s.distance_m / 2.0;
         spawn_pair(
-            &mut ex,
+            &ex,
             &time,
             &medium,
             s,
@@ -234,7 +233,7 @@ pub fn simulate_packet(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome
         .0
     });
     if s.interference > 0.0 {
-        spawn_jammer(&mut ex, &time, &medium, s, s.distance_m / 2.0);
+        spawn_jammer(&ex, &time, &medium, s, s.distance_m / 2.0);
     }
     if let Some((from_s, to_s)) = s.cut_s {
         let (t, m) = (time.clone(), medium.clone());
@@ -251,7 +250,7 @@ pub fn simulate_packet(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome
     while t_us < end_us {
         let step = STATUS_PERIOD_US.min(end_us - t_us);
         t_us += step;
-        ex.run_until(t_us);
+        ex.run_until_us(t_us);
         status(&tracker.sample(t_us, &main.borrow(), step));
     }
     drop(ex);

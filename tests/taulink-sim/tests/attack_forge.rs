@@ -73,7 +73,7 @@ fn forged_uplinks_from_a_third_radio_are_never_accepted() {
     let key = LinkKey::from_bytes(*b"sixteen byte key");
     let log = Rc::new(RefCell::new(Log::default()));
 
-    let mut clock = SimClock::new(medium.clone(), module.delay.clone(), 0, 0.0);
+    let mut clock = SimClock::new(medium.time(), 0, 0.0);
     let mut radio = LinkRadio::new(
         Rfm22b::new(module.spi, module.nirq, module.sdn, module.delay),
         TxPower::MAX,
@@ -82,7 +82,7 @@ fn forged_uplinks_from_a_third_radio_are_never_accepted() {
         let mut master = Master::new(params).with_key(key);
         let _ = run_master(&mut radio, &mut clock, &mut master, &mut Module).await;
     });
-    let mut clock = SimClock::new(medium.clone(), flight.delay.clone(), 0, 0.0);
+    let mut clock = SimClock::new(medium.time(), 0, 0.0);
     let mut radio = LinkRadio::new(
         Rfm22b::new(flight.spi, flight.nirq, flight.sdn, flight.delay),
         TxPower::MAX,
@@ -99,7 +99,7 @@ fn forged_uplinks_from_a_third_radio_are_never_accepted() {
     let config = victim.radio_config();
     let bind_id = victim.params().bind_id;
     let hops = HopSequence::new(key.hop_seed());
-    let mut clock = SimClock::new(medium.clone(), attacker.delay.clone(), 0, 0.0);
+    let mut clock = SimClock::new(medium.time(), 0, 0.0);
     let mut radio = LinkRadio::new(
         Rfm22b::new(attacker.spi, attacker.nirq, attacker.sdn, attacker.delay),
         TxPower::MAX,

@@ -35,7 +35,7 @@ fn both_ends_bind_at_the_lowest_power_step_and_link_at_their_own() {
     // Power step seen on each chip while it transmitted bind frames, and after binding.
     let seen = Rc::new(RefCell::new((None, None, None, None)));
 
-    let mut clock = SimClock::new(medium.clone(), module.delay.clone(), 0, 0.0);
+    let mut clock = SimClock::new(medium.time(), 0, 0.0);
     let mut radio = LinkRadio::new(
         Rfm22b::new(module.spi, module.nirq, module.sdn, module.delay),
         TxPower::MAX,
@@ -47,7 +47,7 @@ fn both_ends_bind_at_the_lowest_power_step_and_link_at_their_own() {
         radio.configure(&params.radio_config()).await.unwrap();
         s.borrow_mut().1 = Some(chip.peek(TX_POWER_REG) & 0x07);
     });
-    let mut clock = SimClock::new(medium.clone(), flight.delay.clone(), 0, 0.0);
+    let mut clock = SimClock::new(medium.time(), 0, 0.0);
     let mut radio = LinkRadio::new(
         Rfm22b::new(flight.spi, flight.nirq, flight.sdn, flight.delay),
         TxPower::MAX,

@@ -69,7 +69,7 @@ fn spi_errors_and_a_brown_out_are_ridden_through_without_ending_the_session() {
         4,
     );
     let log = Rc::new(RefCell::new(Log::default()));
-    let mut clock = SimClock::new(medium.clone(), module.delay.clone(), 0, 0.0);
+    let mut clock = SimClock::new(medium.time(), 0, 0.0);
     let mut radio = LinkRadio::new(
         Rfm22b::new(module.spi, module.nirq, module.sdn, module.delay),
         TxPower::MAX,
@@ -80,7 +80,7 @@ fn spi_errors_and_a_brown_out_are_ridden_through_without_ending_the_session() {
         let _ = run_master(&mut radio, &mut clock, &mut master, &mut hooks).await;
         l.borrow_mut().master_ended = true;
     });
-    let mut clock = SimClock::new(medium.clone(), flight.delay.clone(), 0, 0.0);
+    let mut clock = SimClock::new(medium.time(), 0, 0.0);
     let mut radio = LinkRadio::new(
         Rfm22b::new(flight.spi, flight.nirq, flight.sdn, flight.delay),
         TxPower::MAX,

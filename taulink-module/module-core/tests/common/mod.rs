@@ -20,7 +20,7 @@ use telemetry::link::master::{MasterHooks, run_master};
 use telemetry::messages::{
     Attitude, Battery, FlightMode, Gps, GpsFix, LinkStats, Message, MessageReader, encode_message,
 };
-use telemetry::mock::{ChannelModel, Executor, Medium, MockClock, MockRadio, Node, VirtualTime};
+use telemetry::mock::{ChannelModel, Executor, Medium, MockRadio, Node, SimClock, VirtualTime};
 
 /// Offset of the module's clock from virtual time (it booted earlier).
 pub const MODULE_EPOCH_US: u64 = 1_234_567;
@@ -221,10 +221,10 @@ impl World<'_> {
             LinkStep::RunMaster(params)
         );
         let flight = Rc::new(RefCell::new(FlightSide::default()));
-        let mut executor = Executor::new(time.clone());
+        let executor = Executor::new(time.clone());
         let mut hooks = ModuleHooks { app: app.clone() };
         let mut radio = MockRadio::new(medium.clone(), module_node);
-        let mut clock = MockClock::new(time.clone(), MODULE_EPOCH_US);
+        let mut clock = SimClock::new(time.clone(), MODULE_EPOCH_US, 0.0);
         let mut master = app.borrow().master(params);
         executor.spawn(async move {
             let _ = run_master(&mut radio, &mut clock, &mut master, &mut hooks).await;
@@ -233,7 +233,7 @@ impl World<'_> {
             side: flight.clone(),
         };
         let mut radio = MockRadio::new(medium, flight_node);
-        let mut clock = MockClock::new(time.clone(), FLIGHT_EPOCH_US);
+        let mut clock = SimClock::new(time.clone(), FLIGHT_EPOCH_US, 0.0);
         let flight_time = time.clone();
         executor.spawn(async move {
             flight_time.sleep_until(123_457).await;
@@ -262,7 +262,7 @@ impl World<'_> {
 
     /// Runs until virtual `end_us`.
     pub fn run_until(&mut self, end_us: u64) {
-        self.executor.run_until(end_us);
+        self.executor.run_until_us(end_us);
     }
 }
 
