@@ -57,13 +57,15 @@ fn f700_with_a_synced_crsf_handset_has_a_p99_latency_under_2_5_ms() {
 }
 
 #[test]
-fn f700_with_free_running_ppm_releases_nearly_every_frame_at_its_last_edge() {
+fn f700_with_free_running_ppm_has_a_p99_latency_under_4_ms() {
     // The sticks (the stamp rides in channels 1–3), from the frame's last channel edge at
     // the module's input to the follower's output, every frame counted. A pilot's frame
     // agrees with the one before (within 200 µs on every channel) and the module's decoder
-    // releases it at that edge; a switch flip waits for its sync gap (2.5 ms). Measured
-    // 2.25 / 4.13 ms (mean / p99), 99.6 % released early; it was 4.78 / 6.58 ms when every
-    // frame waited for its sync gap.
+    // releases it at that edge; a switch flip waits for its sync gap (2.5 ms; held frames
+    // are in the figure). Then the wait for the next latch (up to two slots across the
+    // downlink slot) and the path from the latch, which comes once the transmitter is on.
+    // Measured 1.91 / 3.77 ms (mean / p99), 99.6 % released early; 4.78 / 6.58 ms when every
+    // frame waited for its sync gap, 2.25 / 4.13 ms with the latch before the SPI set-up.
     let r = f700(HandsetKind::Ppm);
     assert!(
         r.ppm_early_release_pct >= 99.0,
@@ -71,8 +73,8 @@ fn f700_with_free_running_ppm_releases_nearly_every_frame_at_its_last_edge() {
         r.ppm_early_release_pct
     );
     assert!(r.ppm_early_release_pct < 100.0, "switch flips are held");
-    assert!(r.latency_p99_ms <= 4.2, "{}", r.latency_p99_ms);
-    assert!(r.latency_mean_ms <= 2.4, "{}", r.latency_mean_ms);
+    assert!(r.latency_p99_ms <= 3.9, "{}", r.latency_p99_ms);
+    assert!(r.latency_mean_ms <= 2.0, "{}", r.latency_mean_ms);
 }
 
 #[test]
