@@ -48,11 +48,6 @@ pub async fn bind_master<R: PacketRadio, C: LinkClock>(
     Ok(false)
 }
 
-/// How long before an uplink's transmission the application was asked for its channels
-/// before they were latched after the transmitter came on ([`uplink_latch_offset_us`]);
-/// kept for the record of the history figures (spec §10).
-pub const LATCH_BEFORE_TX_US: u32 = 30;
-
 /// When, after its slot start, an uplink's channels are latched: once the transmitter is on
 /// and its PLL has settled (TX lead + SPI set-up + PLL settle, the packet's start in the slot
 /// budget). The radio was started with the frame's length ([`Master::uplink_len`],
