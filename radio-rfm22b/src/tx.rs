@@ -39,6 +39,8 @@ where
         self.check_length(len)?;
         self.begun = None;
         self.abort_if_busy().await?;
+        // The SPI order of Tau Labs' `PIOS_RFM22B_TransmitPacket`: FIFO clear, length, FIFO,
+        // interrupts, status clear, TX on.
         self.clear_and_set_length(len).await?;
         let (first, rest) = data.split_at(len.min(FIFO_LEN));
         self.bus.write_burst(FIFO, first).await?;
