@@ -183,6 +183,22 @@ where
             .map_err(LinkRadioError::Radio)
     }
 
+    async fn begin_transmit(&mut self, len: usize) -> Result<(), Self::Error> {
+        self.radio
+            .begin_transmit(len)
+            .await
+            .map_err(LinkRadioError::Radio)
+    }
+
+    async fn finish_transmit(&mut self, frame: &[u8]) -> Result<(), Self::Error> {
+        // As `transmit`: twice the airtime plus the PLL settle.
+        let timeout_us = 2 * self.rate.airtime_us(frame.len()) + 1_000;
+        self.radio
+            .finish_transmit(frame, timeout_us)
+            .await
+            .map_err(LinkRadioError::Radio)
+    }
+
     async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<LinkRx, Self::Error> {
         let outcome = self
             .radio

@@ -55,6 +55,9 @@ pub struct Rfm22b<SPI, IRQ, SDN, D> {
     pub(crate) busy: bool,
     /// The chip is in standby: the next TX/RX will see a (legitimate) chip-ready flag.
     pub(crate) standby: bool,
+    /// A packet begun with [`Rfm22b::begin_transmit`]: its length, and whether the chip
+    /// came out of standby for it.
+    pub(crate) begun: Option<(usize, bool)>,
 }
 
 // Constructors first (rustdoc lists methods in this order); they need no trait bounds.
@@ -78,6 +81,7 @@ impl<SPI, IRQ, SDN, D> Rfm22b<SPI, IRQ, SDN, D> {
             channel: 0,
             busy: false,
             standby: false,
+            begun: None,
         }
     }
 }

@@ -35,27 +35,96 @@ where
         data: &[u8],
         timeout_us: u32,
     ) -> Result<(), Error<SPI::Error>> {
-        let config = self.config.ok_or(Error::NotInitialised)?;
         let len = data.len();
+        self.check_length(len)?;
+        self.begun = None;
+        self.abort_if_busy().await?;
+        // The SPI order of Tau Labs' `PIOS_RFM22B_TransmitPacket`: FIFO clear, length, FIFO,
+        // interrupts, status clear, TX on.
+        self.clear_and_set_length(len).await?;
+        let (first, rest) = data.split_at(len.min(FIFO_LEN));
+        self.bus.write_burst(FIFO, first).await?;
+        self.enable_tx_interrupts(len).await?;
+        self.tx_on().await?;
+        let waking = core::mem::take(&mut self.standby);
+        self.await_sent(rest, waking, timeout_us).await
+    }
+
+    /// Starts a packet of `len` bytes before its bytes are known (same lengths as
+    /// [`Rfm22b::transmit`]): the FIFO is cleared, the length and interrupts set and the
+    /// transmitter comes on, so the PLL settles and preamble and sync go out while the
+    /// caller builds the bytes; [`Rfm22b::finish_transmit`] loads them. The chip takes each
+    /// payload byte from the FIFO when it is due (datasheet §6.1, the TX FIFO streams during
+    /// transmission, as the almost-empty refill of long packets relies on), so the first
+    /// must be in by the end of the sync word, header and length: at 256 kbps with a 5-byte
+    /// preamble and no header, 200 µs of PLL settle + 250 µs. A late byte underflows the
+    /// FIFO: [`Error::FifoError`] and a frame that fails the receiver's CRC.
+    ///
+    /// The frame-independent SPI work happens here, before the caller latches its input;
+    /// only the FIFO load follows it.
+    pub async fn begin_transmit(&mut self, len: usize) -> Result<(), Error<SPI::Error>> {
+        self.check_length(len)?;
+        self.begun = None;
+        self.abort_if_busy().await?;
+        self.clear_and_set_length(len).await?;
+        self.enable_tx_interrupts(len).await?;
+        self.tx_on().await?;
+        self.begun = Some((len, core::mem::take(&mut self.standby)));
+        Ok(())
+    }
+
+    /// Loads the bytes of the packet [`Rfm22b::begin_transmit`] started (exactly its `len`)
+    /// and waits up to `timeout_us` for it to leave, as [`Rfm22b::transmit`].
+    ///
+    /// Errors: [`Error::InvalidLength`] if nothing was begun or `data` is not its length
+    /// (the chip is stopped), and those of [`Rfm22b::transmit`].
+    pub async fn finish_transmit(
+        &mut self,
+        data: &[u8],
+        timeout_us: u32,
+    ) -> Result<(), Error<SPI::Error>> {
+        let Some((len, waking)) = self.begun.take() else {
+            return Err(Error::InvalidLength { len: data.len() });
+        };
+        if data.len() != len {
+            self.abort_if_busy().await?;
+            return Err(Error::InvalidLength { len: data.len() });
+        }
+        let (first, rest) = data.split_at(len.min(FIFO_LEN));
+        self.bus.write_burst(FIFO, first).await?;
+        self.await_sent(rest, waking, timeout_us).await
+    }
+
+    fn check_length(&self, len: usize) -> Result<(), Error<SPI::Error>> {
+        let config = self.config.ok_or(Error::NotInitialised)?;
         let length_ok = match config.packet.length() {
             PacketLength::Variable => (1..=255).contains(&len),
             PacketLength::Fixed(n) => len == usize::from(n),
         };
-        if !length_ok {
-            return Err(Error::InvalidLength { len });
+        if length_ok {
+            Ok(())
+        } else {
+            Err(Error::InvalidLength { len })
         }
-        self.abort_if_busy().await?;
+    }
+
+    /// TX FIFO clear and packet length.
+    async fn clear_and_set_length(&mut self, len: usize) -> Result<(), Error<SPI::Error>> {
+        let config = self.config.ok_or(Error::NotInitialised)?;
         self.clear_fifos(FFCLR_TX).await?;
         if let PacketLength::Variable = config.packet.length() {
-            // `len` ≤ 255 was checked above.
+            // `len` ≤ 255 was checked (`check_length`).
             self.bus.write(TRANSMIT_PACKET_LENGTH, len as u8).await?;
         }
-        let (first, mut rest) = data.split_at(len.min(FIFO_LEN));
-        self.bus.write_burst(FIFO, first).await?;
-        let refill = if rest.is_empty() {
-            0
-        } else {
+        Ok(())
+    }
+
+    /// Interrupts (a refill for packets over the FIFO) and a status clear.
+    async fn enable_tx_interrupts(&mut self, len: usize) -> Result<(), Error<SPI::Error>> {
+        let refill = if len > FIFO_LEN {
             IRQ1_TX_ALMOST_EMPTY
+        } else {
+            0
         };
         self.bus
             .write_burst(
@@ -64,13 +133,27 @@ where
             )
             .await?;
         self.clear_status().await?;
+        Ok(())
+    }
+
+    async fn tx_on(&mut self) -> Result<(), Error<SPI::Error>> {
         self.busy = true;
         self.bus
             .write(OPERATING_MODE_1, MODE_TXON | MODE_XTON)
             .await?;
+        Ok(())
+    }
 
+    /// Refills from `rest` on almost-empty until packet-sent, an error or `timeout_us`; the
+    /// chip returns to READY.
+    async fn await_sent(
+        &mut self,
+        mut rest: &[u8],
+        waking: bool,
+        timeout_us: u32,
+    ) -> Result<(), Error<SPI::Error>> {
+        let config = self.config.ok_or(Error::NotInitialised)?;
         let refill_len = config.fifo.tx_refill_len();
-        let waking = core::mem::take(&mut self.standby);
         let outcome = {
             let Self {
                 irq, delay, bus, ..

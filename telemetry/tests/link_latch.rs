@@ -1,5 +1,5 @@
-//! The master asks its application for channels right before each uplink is built and sent
-//! (`LATCH_BEFORE_TX_US` before the transmission), not at the slot start: every uplink
+//! The master asks its application for channels once each uplink's transmitter is on and its
+//! PLL settled (`uplink_latch_offset_us` into the slot), not at the slot start: every uplink
 //! carries the freshest handset input the slot allows (issue 17). Downlink slots are still
 //! announced at their start.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
@@ -9,7 +9,7 @@ use std::rc::Rc;
 
 use telemetry::channels::ChannelFormat;
 use telemetry::link::core::Master;
-use telemetry::link::master::{LATCH_BEFORE_TX_US, MasterHooks, run_master};
+use telemetry::link::master::{MasterHooks, run_master, uplink_latch_offset_us};
 use telemetry::link::{Band, LinkParams, RateMode, SlotKind};
 use telemetry::mock::{ChannelModel, Executor, Medium, MockRadio, Node, SimClock, VirtualTime};
 
@@ -49,7 +49,7 @@ fn channels_are_latched_right_before_each_uplink() {
     for rate in RateMode::ALL {
         let calls = calls(rate);
         assert!(calls.len() > 8, "{rate:?}");
-        let latch = u64::from(rate.tx_lead_us().saturating_sub(LATCH_BEFORE_TX_US));
+        let latch = u64::from(uplink_latch_offset_us(rate));
         for &(slot_start, at, kind) in &calls {
             let expected = match kind {
                 SlotKind::Uplink => slot_start + latch,
@@ -58,8 +58,12 @@ fn channels_are_latched_right_before_each_uplink() {
             assert_eq!(at, expected, "{rate:?} {kind:?}");
         }
     }
-    // F500: 70 µs later than the slot start, 30 µs before its transmission.
+    // F500: 400 µs after the slot start (100 lead, 100 SPI set-up, 200 PLL) where it was
+    // 70 µs, before the set-up; F700 310 µs where it was at the slot start.
     let f500 = calls(RateMode::F500);
     let (start, at, _) = f500[0];
-    assert_eq!(at - start, 70);
+    assert_eq!(at - start, 400);
+    let f700 = calls(RateMode::F700);
+    let (start, at, _) = f700[0];
+    assert_eq!(at - start, 310);
 }

@@ -59,6 +59,19 @@ impl PacketRadio for Flaky {
         self.inner.transmit(frame).await.map_err(|e| match e {})
     }
 
+    async fn begin_transmit(&mut self, len: usize) -> Result<(), BusError> {
+        self.check()?;
+        self.inner.begin_transmit(len).await.map_err(|e| match e {})
+    }
+
+    async fn finish_transmit(&mut self, frame: &[u8]) -> Result<(), BusError> {
+        self.check()?;
+        self.inner
+            .finish_transmit(frame)
+            .await
+            .map_err(|e| match e {})
+    }
+
     async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<LinkRx, BusError> {
         self.check()?;
         self.inner

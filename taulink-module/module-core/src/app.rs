@@ -263,9 +263,10 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         }
     }
 
-    /// PPM frame release and loss detection, on the TIMER1 clock: a locked frame goes out
-    /// once the line has been quiet for a sync gap after its last channel
-    /// ([`App::ppm_deadline_us`]), not at the next frame's first edge.
+    /// PPM frame release and loss detection, on the TIMER1 clock: a locked frame that did
+    /// not agree with the last one (so did not go at its last edge, in
+    /// [`App::on_ppm_edge`]) goes out once the line has been quiet for a sync gap after its
+    /// last channel ([`App::ppm_deadline_us`]), not at the next frame's first edge.
     pub fn on_ppm_tick(&mut self, now_us: u32) {
         if let Some(Decoded::Frame(channels)) = self.decoder.release_due(now_us) {
             self.forward(&channels);

@@ -12,8 +12,9 @@ use crate::channels::ChannelFrame;
 pub struct AirSchedule {
     /// Slot length (one packet per slot).
     pub period_us: u32,
-    /// When one uplink's channels are latched (`telemetry::link::master::LATCH_BEFORE_TX_US`
-    /// before its transmission): the instant the handset's channel frame must be in by.
+    /// When one uplink's channels are latched (`telemetry::link::master::uplink_latch_offset_us`
+    /// into its slot, the transmitter on): the instant the handset's channel frame must be in
+    /// by.
     pub phase_us: u64,
 }
 

@@ -5,7 +5,7 @@
 use super::bind::{ACCEPT_REPEATS, BIND_KEY, LinkParams, bind_radio_config, offered_params};
 use super::core::{Follower, Step};
 use super::hopping::Band;
-use super::radio::{LinkClock, PacketRadio, LinkRx};
+use super::radio::{LinkClock, LinkRx, PacketRadio};
 use super::rate::FIFO_BYTES;
 use super::recovery::Recovery;
 use super::step_io::{receive_until, transmit_at, tune_until};

@@ -4,8 +4,8 @@
 
 use super::bind::{BIND_KEY, LinkParams, OFFER_PERIOD_US, bind_radio_config, is_accept_of};
 use super::core::{Master, Step};
-use super::radio::{LinkClock, PacketRadio, LinkRx};
-use super::rate::FIFO_BYTES;
+use super::radio::{LinkClock, LinkRx, PacketRadio};
+use super::rate::{FIFO_BYTES, PLL_SETTLE_US, RateMode};
 use super::recovery::Recovery;
 use super::schedule::SlotKind;
 use super::step_io::{receive_until, transmit_at, tune_until};
@@ -49,14 +49,20 @@ pub async fn bind_master<R: PacketRadio, C: LinkClock>(
     Ok(false)
 }
 
-/// How long before an uplink's transmission the application is asked for its channels and
-/// the frame is built: room for building it (pack, CRC: tens of µs on the nRF52840) and the
-/// hop-register write before the transmission starts.
-pub const LATCH_BEFORE_TX_US: u32 = 30;
+/// When, after its slot start, an uplink's channels are latched: once the transmitter is on
+/// and its PLL has settled (TX lead + SPI set-up + PLL settle, the packet's start in the slot
+/// budget). The radio was started with the frame's length ([`Master::uplink_len`],
+/// [`PacketRadio::begin_transmit`]); while the chip sends preamble and sync (≥ 250 µs at
+/// 256 kbps, more at the slower rates) the master builds the frame and loads the FIFO
+/// ([`PacketRadio::finish_transmit`]). Latched here, the channels reach the air 306 µs (F700)
+/// later than when they were latched before the SPI set-up and the PLL settle.
+pub fn uplink_latch_offset_us(rate: RateMode) -> u32 {
+    rate.tx_lead_us() + rate.tx_setup_us() + PLL_SETTLE_US
+}
 
 /// The application side of a master: called once per slot — at the start of a downlink slot,
-/// and [`LATCH_BEFORE_TX_US`] before the transmission of an uplink, so the channels it sets
-/// are as fresh as the slot allows.
+/// and at [`uplink_latch_offset_us`] into an uplink slot (the transmitter on, preamble on
+/// the air), so the channels it sets are as fresh as the slot allows.
 pub trait MasterHooks {
     /// Feed channels and telemetry into `master`, read telemetry and stats out.
     fn on_slot(&mut self, now_us: u64, master: &mut Master);
@@ -85,21 +91,87 @@ pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
             master.on_skipped();
             slot_start_us += slot_us;
         }
-        // Channels are latched right before the uplink is built and sent, not at the slot
-        // start: every uplink then carries the freshest handset input the slot allows.
-        if master.schedule().kind(master.slot()) == SlotKind::Uplink {
-            let tx_lead = master.schedule().rate.tx_lead_us();
-            let latch = slot_start_us + u64::from(tx_lead.saturating_sub(LATCH_BEFORE_TX_US));
-            clock.sleep_until_us(latch).await;
-        }
-        hooks.on_slot(slot_start_us, master);
-        let step = master.plan(slot_start_us, &mut buf);
-        let result = run_slot(radio, clock, master, step, &mut buf).await;
+        // Channels are latched once the uplink's transmitter is on, not at the slot start:
+        // every uplink then carries the freshest handset input the slot allows.
+        let result = if master.schedule().kind(master.slot()) == SlotKind::Uplink {
+            run_uplink(radio, clock, master, hooks, slot_start_us, &mut buf).await
+        } else {
+            hooks.on_slot(slot_start_us, master);
+            let step = master.plan(slot_start_us, &mut buf);
+            run_slot(radio, clock, master, step, &mut buf).await
+        };
         recovery
             .after_step(radio, clock, &config, result, || master.on_radio_error())
             .await?;
         slot_start_us += slot_us;
         clock.sleep_until_us(slot_start_us).await;
+    }
+}
+
+/// An uplink slot: the radio is started with the frame's length at the TX lead, the
+/// channels are latched and the frame built once its PLL has settled
+/// ([`uplink_latch_offset_us`]), and the bytes follow into the FIFO while preamble and sync
+/// are on the air. On an error the master has been moved past the slot.
+async fn run_uplink<R: PacketRadio, C: LinkClock, H: MasterHooks>(
+    radio: &mut R,
+    clock: &mut C,
+    master: &mut Master,
+    hooks: &mut H,
+    slot_start_us: u64,
+    buf: &mut [u8; FIFO_BYTES],
+) -> Result<(), R::Error> {
+    let rate = master.schedule().rate;
+    let at_us = slot_start_us + u64::from(rate.tx_lead_us());
+    // The frame as it stands (the last slot's channels): its length, and a fallback.
+    let (Some(len), channel) = (master.uplink_len(buf), master.channel()) else {
+        hooks.on_slot(slot_start_us, master);
+        master.on_skipped();
+        return Ok(());
+    };
+    let fallback = *buf;
+    let started = async {
+        radio.set_channel(channel).await?;
+        // Too late for this slot (e.g. right after a radio recovery): an uplink off the
+        // grid would drag the follower's grid with it, so the slot is skipped.
+        if clock.now_us() > at_us {
+            return Ok(false);
+        }
+        clock.sleep_until_us(at_us).await;
+        radio.begin_transmit(len).await?;
+        Ok(true)
+    }
+    .await;
+    match started {
+        Ok(true) => {}
+        Ok(false) => {
+            hooks.on_slot(slot_start_us, master);
+            master.on_skipped();
+            return Ok(());
+        }
+        Err(e) => {
+            master.on_skipped();
+            return Err(e);
+        }
+    }
+    clock
+        .sleep_until_us(slot_start_us + u64::from(uplink_latch_offset_us(rate)))
+        .await;
+    hooks.on_slot(slot_start_us, master);
+    // Built again with the fresh channels; the same length (stream data capped), else the
+    // frame built before goes out — the radio is already sending a frame of `len`.
+    let frame = match master.plan(slot_start_us, buf) {
+        Step::Transmit { len: built, .. } if built == len => buf.get(..len),
+        _ => fallback.get(..len),
+    };
+    match radio.finish_transmit(frame.unwrap_or(&[])).await {
+        Ok(()) => {
+            master.on_sent();
+            Ok(())
+        }
+        Err(e) => {
+            master.on_skipped();
+            Err(e)
+        }
     }
 }
 

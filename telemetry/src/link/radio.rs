@@ -70,6 +70,19 @@ pub trait PacketRadio {
     /// Sends one packet; returns when it has left the antenna.
     async fn transmit(&mut self, frame: &[u8]) -> Result<(), Self::Error>;
 
+    /// Starts a packet of `len` bytes whose bytes are not known yet: the transmitter comes
+    /// on now, the PLL settles and preamble and sync go on the air while the caller latches
+    /// its input, builds the frame and hands it to [`PacketRadio::finish_transmit`] — at
+    /// the latest by the end of the sync word (+ header and length; 250 µs at 256 kbps),
+    /// when the chip needs the first byte (the Si4432 takes each payload byte from its FIFO
+    /// when it is due; one loaded too late goes out wrong and fails the CRC, never a wrong
+    /// frame).
+    async fn begin_transmit(&mut self, len: usize) -> Result<(), Self::Error>;
+
+    /// The bytes of the packet [`PacketRadio::begin_transmit`] started (exactly `len` of
+    /// them); returns when it has left the antenna.
+    async fn finish_transmit(&mut self, frame: &[u8]) -> Result<(), Self::Error>;
+
     /// Listens for one packet for up to `timeout_us`; returns as soon as one has fully
     /// arrived (the caller timestamps it with its clock).
     async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<LinkRx, Self::Error>;

@@ -64,7 +64,7 @@ const fn on_air_us(bytes: usize, bit_rate_bps: u32) -> u32 {
 const F700_SLOT_US: u32 = 1_428;
 /// F700's TX lead. The follower opens its window [`RX_EARLY_US`] before the slot anyway, so
 /// the lead only has to cover building the frame and the hop-register write (channels are
-/// latched right before transmission, `link::master::LATCH_BEFORE_TX_US`).
+/// latched once the transmitter is on, `link::master::uplink_latch_offset_us`).
 ///
 /// [`RX_EARLY_US`]: crate::link::core::follower::RX_EARLY_US
 const F700_TX_LEAD_US: u32 = 30;

@@ -5,7 +5,7 @@
 //! foreign packet — and what they do with a received packet.
 
 use super::core::{Follower, Master};
-use super::radio::{LinkClock, PacketRadio, LinkRx};
+use super::radio::{LinkClock, LinkRx, PacketRadio};
 
 /// What both state machines are told after a planned transmission.
 pub(super) trait Sender {

@@ -95,6 +95,13 @@ impl<const N: usize> StreamSender<N> {
         (seq, count)
     }
 
+    /// Takes back the last [`StreamSender::fill`] (its offset and count, right after it):
+    /// those bytes are sent again by the next fill.
+    pub fn unfill(&mut self, seq: u8, count: usize) {
+        self.next = seq;
+        self.sent_total = self.sent_total.saturating_sub(count as u64);
+    }
+
     /// Processes the peer's cumulative ack. An ack outside `base..=next` is stale and
     /// ignored — unless [`STALE_ACKS_TO_RESYNC`] come in a row: then the peer's counter is
     /// adopted and the unacknowledged bytes are sent again from it (the peer restarted, and

@@ -18,6 +18,8 @@ pub struct MockRadio {
     config: RadioConfig,
     frequency_hz: u32,
     transmitted: u64,
+    /// A packet begun ([`PacketRadio::begin_transmit`]): when its first bit goes out.
+    begun_start_us: Option<u64>,
 }
 
 impl MockRadio {
@@ -37,6 +39,7 @@ impl MockRadio {
             },
             frequency_hz: 0,
             transmitted: 0,
+            begun_start_us: None,
         }
     }
 
@@ -71,8 +74,24 @@ impl PacketRadio for MockRadio {
     }
 
     async fn transmit(&mut self, frame: &[u8]) -> Result<(), Infallible> {
+        self.begin_transmit(frame.len()).await?;
+        self.finish_transmit(frame).await
+    }
+
+    async fn begin_transmit(&mut self, _len: usize) -> Result<(), Infallible> {
         let rate = self.config.rate;
-        let start = self.time.now_us() + u64::from(rate.tx_setup_us() + PLL_SETTLE_US);
+        self.begun_start_us =
+            Some(self.time.now_us() + u64::from(rate.tx_setup_us() + PLL_SETTLE_US));
+        Ok(())
+    }
+
+    async fn finish_transmit(&mut self, frame: &[u8]) -> Result<(), Infallible> {
+        let rate = self.config.rate;
+        // The packet went on the air when begun (its bytes are in the FIFO in time).
+        let start = self
+            .begun_start_us
+            .take()
+            .unwrap_or_else(|| self.time.now_us());
         let end = start + u64::from(rate.airtime_us(frame.len()));
         self.medium
             .transmit(self.node, start, end, self.frequency_hz, frame);

@@ -25,6 +25,7 @@ fuzz_target!(|data: &[u8]| {
             min_channels: usize::from(input.u8() % 20),
             lock_frames: input.u8() % 8,
             loss_timeout_us: input.u32(),
+            early_release_within_us: input.bool().then(|| u32::from(input.u16())),
         }
     };
     let mut decoder = Decoder::new(config);

@@ -82,6 +82,14 @@ impl<R: PacketRadio> PacketRadio for Witnessed<R> {
         self.inner.transmit(frame).await
     }
 
+    async fn begin_transmit(&mut self, len: usize) -> Result<(), Self::Error> {
+        self.inner.begin_transmit(len).await
+    }
+
+    async fn finish_transmit(&mut self, frame: &[u8]) -> Result<(), Self::Error> {
+        self.inner.finish_transmit(frame).await
+    }
+
     async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<LinkRx, Self::Error> {
         let outcome = self.inner.receive(buf, timeout_us).await?;
         if self.enabled && matches!(outcome, LinkRx::Packet { .. }) {

@@ -153,6 +153,12 @@ impl Handset {
         self.corrections
     }
 
+    /// PPM frames the module's decoder handed the link, and how many of them at their last
+    /// channel's closing edge ((0, 0) for the other kinds).
+    pub fn ppm_released(&self) -> (u32, u32) {
+        self.ppm.as_ref().map_or((0, 0), PpmInput::released)
+    }
+
     /// PPM frames the module's decoder dropped (0 for the other kinds).
     pub fn rejected(&self) -> u32 {
         self.ppm.as_ref().map_or(0, PpmInput::rejected)

@@ -2,14 +2,21 @@
 //! (8 channels every 22.5 ms of the handset's crystal, its defaults and the module's, which
 //! `module_core::ppm::Decoder` locks to) captured at 1 µs and decoded by the module's own
 //! decoder with its factory `DecoderConfig`. A frame goes to the link when the firmware's
-//! `ppm_in` task releases it: at an edge that ends it, or — once locked, the usual case — at
-//! the decoder's `release_deadline_us`, a sync gap (2 501 µs) after its last channel closed,
-//! the proof that no split pulse or extra channel follows. Only the radio is modelled here;
-//! the decision is the module's code.
+//! `ppm_in` task releases it: once locked, at the edge closing its last channel when every
+//! channel agrees with the frame released before (the usual case), else at the decoder's
+//! `release_deadline_us`, a sync gap (2 501 µs) after that edge, the proof that no split
+//! pulse or extra channel follows (or at the sync edge while acquiring). Only the radio is
+//! modelled here; the decision is the module's code.
 //!
-//! The handset stamps each frame's index `k` into channels 1–3 at 4 µs steps (8 bits each),
-//! so a period captured 1 µs off still names its frame; the other channels carry
-//! pseudo-random values in EdgeTX's ±100 % range (988…2012 µs).
+//! The channels are what a pilot makes, since the decoder's early release depends on it
+//! (a frame that agrees with the last one goes at its last channel's edge, one that jumped
+//! waits for its sync gap): channels 1–3 carry the frame's index `k` at 4 µs steps (8 bits
+//! each, so a period captured 1 µs off still names its frame) in reflected order — each digit
+//! runs up and then back down, a Gray code in base 256 — so they move like slowly driven
+//! sticks, never more than 4 µs a frame; channel 4 is a stick moved smoothly (two seeded
+//! sines, ≤ 41 µs a frame); channels 5–8 are switches (988 / 1 500 / 2 012 µs), one of them
+//! flipped every 4.05 s window at a seeded frame (≈ 0.5 % of frames jump, each held for its
+//! sync gap).
 
 use std::collections::VecDeque;
 
@@ -40,32 +47,93 @@ fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// Channel periods of frame `k` on link `salt`, µs (handset µs): the stamp, then
-/// pseudo-random values.
+/// Switch positions: EdgeTX's −100 %, centre, +100 %.
+const SWITCH_US: [u16; 3] = [WIDTH_MIN_US, 1_500, WIDTH_MIN_US + WIDTH_SPAN_US as u16];
+/// Frames per switch window (4.05 s): one aux switch flips in each, at a seeded frame.
+const SWITCH_WINDOW: u64 = 180;
+/// The aux channels (5–8).
+const AUX: std::ops::Range<usize> = 4..PPM_CHANNELS;
+
+/// Digit `i` of the stamp of frame `k`: its byte, reflected when the index above it is odd.
+fn stamp_digit(k: u64, i: usize) -> u16 {
+    let digit = (k >> (8 * i)) & 0xFF;
+    let above = k >> (8 * (i + 1));
+    (if above % 2 == 1 { 0xFF - digit } else { digit }) as u16
+}
+
+/// The smooth stick (channel 4) at frame `k`: 1 500 µs ± 400 (2.9 s period) ± 100 (0.7 s),
+/// phases seeded by `salt`; at most 2π·(400/2.9 + 100/0.7)·22.5 ms ≈ 40 µs a frame.
+fn stick_us(salt: u64, k: u64) -> u16 {
+    let t = k as f64 * PPM_FRAME_US * 1e-6;
+    let phase = |n: u64| (mix64(salt ^ n) % 6_283) as f64 * 1e-3;
+    let tau = std::f64::consts::TAU;
+    let us = 1_500.0
+        + 400.0 * (tau * t / 2.9 + phase(0x5717)).sin()
+        + 100.0 * (tau * t / 0.7 + phase(0x5718)).sin();
+    us.round() as u16
+}
+
+/// Switch position `n` (any `n`, taken modulo the three).
+fn switch_position(n: u64) -> u16 {
+    match n % 3 {
+        0 => SWITCH_US[0],
+        1 => SWITCH_US[1],
+        _ => SWITCH_US[2],
+    }
+}
+
+/// The flip of switch window `w`: (frame, aux channel, new position).
+fn flip(salt: u64, w: u64) -> (u64, usize, u16) {
+    let h = mix64(salt ^ 0xF11F ^ (w << 8));
+    let at = w * SWITCH_WINDOW + h % SWITCH_WINDOW;
+    let channel = AUX.start + ((h >> 16) % AUX.len() as u64) as usize;
+    let position = switch_position(h >> 24);
+    (at, channel, position)
+}
+
+/// Switch `channel` at frame `k`: the position of its last flip at or before `k`, else its
+/// seeded start position.
+fn switch_us(salt: u64, k: u64, channel: usize) -> u16 {
+    (0..=k / SWITCH_WINDOW)
+        .rev()
+        .map(|w| flip(salt, w))
+        .find(|(at, c, _)| *c == channel && *at <= k)
+        .map_or_else(
+            || switch_position(mix64(salt ^ channel as u64)),
+            |(_, _, position)| position,
+        )
+}
+
+/// Channel periods of frame `k` on link `salt`, µs (handset µs): the stamp, the smooth
+/// stick, the switches.
 pub fn widths_us(salt: u64, k: u64) -> [u16; PPM_CHANNELS] {
     let mut widths = [0u16; PPM_CHANNELS];
     for (i, w) in widths.iter_mut().enumerate() {
-        let offset = if i < STAMP_CHANNELS {
-            ((k >> (8 * i)) & 0xFF) as u16 * STAMP_STEP_US
-        } else {
-            (mix64(salt ^ (k << 5) ^ i as u64) % (WIDTH_SPAN_US + 1)) as u16
+        *w = match i {
+            _ if i < STAMP_CHANNELS => WIDTH_MIN_US + stamp_digit(k, i) * STAMP_STEP_US,
+            _ if AUX.contains(&i) => switch_us(salt, k, i),
+            _ => stick_us(salt, k),
         };
-        *w = WIDTH_MIN_US + offset;
     }
     widths
 }
 
 /// The frame index stamped into channels decoded from a PPM frame.
 pub fn stamp(channels: &Channels) -> u64 {
-    channels
-        .iter()
-        .take(STAMP_CHANNELS)
-        .enumerate()
-        .map(|(i, ticks)| {
-            let us = ticks_to_us(*ticks).saturating_sub(WIDTH_MIN_US - STAMP_STEP_US / 2);
-            u64::from(us / STAMP_STEP_US) << (8 * i)
-        })
-        .sum()
+    let digit = |i: usize| {
+        let ticks = channels.get(i).copied().unwrap_or(0);
+        let us = ticks_to_us(ticks).saturating_sub(WIDTH_MIN_US - STAMP_STEP_US / 2);
+        u64::from(us / STAMP_STEP_US).min(0xFF)
+    };
+    // From the top digit down: each one is reflected when the index above it is odd.
+    (0..STAMP_CHANNELS).rev().fold(0, |above, i| {
+        let d = if above % 2 == 1 {
+            0xFF - digit(i)
+        } else {
+            digit(i)
+        };
+        (above << 8) | d
+    })
 }
 
 /// One edge on the line: when (virtual µs), and the frame whose last channel period it
@@ -90,6 +158,9 @@ pub struct PpmInput {
     last_capture: Option<(u32, u64)>,
     released: Option<HandsetFrame>,
     rejected: u32,
+    /// Frames released / released at their last channel's edge (the agreement rule).
+    released_frames: u32,
+    early_frames: u32,
     /// The release deadline the task last woke for (since the last edge).
     woken_for: Option<u32>,
 }
@@ -110,6 +181,8 @@ impl PpmInput {
             last_capture: None,
             released: None,
             rejected: 0,
+            released_frames: 0,
+            early_frames: 0,
             woken_for: None,
         }
     }
@@ -117,6 +190,12 @@ impl PpmInput {
     /// Frames the decoder dropped (none on a clean line).
     pub fn rejected(&self) -> u32 {
         self.rejected
+    }
+
+    /// Frames handed to the link, and how many of them at their last channel's closing
+    /// edge (they agreed with the frame before).
+    pub fn released(&self) -> (u32, u32) {
+        (self.released_frames, self.early_frames)
     }
 
     /// Runs the line and the module's capture task up to `now_us`: the newest frame the
@@ -240,6 +319,8 @@ impl PpmInput {
                     arrived_us: at_us,
                     channels,
                 });
+                self.released_frames += 1;
+                self.early_frames += u32::from(at_us == closed_us);
             }
             Some(Decoded::Rejected(_)) => self.rejected += 1,
             Some(Decoded::Acquiring { .. }) | None => {}

@@ -117,6 +117,9 @@ pub struct Record {
     pub input_frames: VecDeque<(u64, Channels)>,
     /// PPM frames the module's decoder dropped (must stay 0: the line is clean).
     pub input_rejected: u32,
+    /// PPM frames the module's decoder handed the link, and of them at their last channel's
+    /// closing edge (early release).
+    pub input_released: (u32, u32),
     /// Per channel: outputs that refreshed it with its right value.
     pub channel_updates: [u64; MAX_CHANNELS],
     /// Timing frames the handset followed.
@@ -296,6 +299,7 @@ impl MasterHooks for ModuleApp {
                 .advance(now, |f| rec.generated_us.push(f.generated_us));
             rec.handset_corrections = self.handset.corrections();
             rec.input_rejected = self.handset.rejected();
+            rec.input_released = self.handset.ppm_released();
             if let Some(f) = frame
                 && self.handset.kind() == HandsetKind::Ppm
                 && rec.input_frames.back().is_none_or(|(k, _)| *k != f.k)

@@ -54,6 +54,11 @@ pub struct Report {
     pub all_channel_updates_per_s: f64,
     /// Timing frames the handset followed (crsf-synced).
     pub handset_corrections: u32,
+    /// PPM: the share of frames the module's decoder released at their last channel's
+    /// closing edge (they agreed with the frame before), %; the others waited for their sync
+    /// gap. 0 for the other handsets.
+    #[serde(serialize_with = "decimals::<1, _>")]
+    pub ppm_early_release_pct: f64,
     /// Uplink LQ at the end (follower).
     pub uplink_lq: u8,
     /// Downlink LQ at the end (master).
@@ -153,6 +158,10 @@ pub fn summarise(s: &Scenario, o: &Outcome) -> Report {
         stick_updates_per_s: per_s(m.channel_updates.iter().take(4).copied().min().unwrap_or(0)),
         all_channel_updates_per_s: per_s(carried.copied().min().unwrap_or(0)),
         handset_corrections: m.handset_corrections,
+        ppm_early_release_pct: match m.input_released {
+            (0, _) => 0.0,
+            (all, early) => 100.0 * f64::from(early) / f64::from(all),
+        },
         uplink_lq: m.now.uplink_lq,
         uplink_lq_mean: m.uplink_lq_mean(),
         downlink_lq_mean: m.downlink_lq_mean(),
@@ -260,6 +269,12 @@ impl Report {
                 self.latency_mean_ms, self.latency_p99_ms
             ),
         );
+        if self.handset == "ppm" {
+            row(
+                "PPM released early",
+                format!("{:.1} % of frames", self.ppm_early_release_pct),
+            );
+        }
         row(
             "LQ up / down",
             format!("{} % / {} %", self.uplink_lq, self.downlink_lq),

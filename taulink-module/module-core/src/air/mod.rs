@@ -18,9 +18,11 @@ pub mod openlrs;
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat};
 use telemetry::link::LinkParams;
 use telemetry::link::core::{Follower, Master};
-use telemetry::link::master::LATCH_BEFORE_TX_US;
+use telemetry::link::master::uplink_latch_offset_us;
 #[cfg(test)]
 use telemetry::link::rate::TX_LEAD_US;
+#[cfg(test)]
+use telemetry::link::rate::{PLL_SETTLE_US, TX_SETUP_US};
 use telemetry::link::stream::{StreamReceiver, StreamSender};
 
 use crate::channels::ChannelFrame;
@@ -191,9 +193,7 @@ impl AirLink {
                 // the instant the handset's frame must have arrived by. The cycle's first
                 // slot is always an uplink, so a radio asked for every other slot (the CRSF
                 // line's minimum period) lands on uplinks only, never on the downlink hole.
-                phase_us: (now_us
-                    + u64::from(rate.tx_lead_us().saturating_sub(LATCH_BEFORE_TX_US)))
-                .saturating_sub(
+                phase_us: (now_us + u64::from(uplink_latch_offset_us(rate))).saturating_sub(
                     u64::from(master.slot() % u32::from(master.params().telemetry_ratio.max(1)))
                         * u64::from(rate.slot_us()),
                 ),
@@ -368,8 +368,9 @@ mod tests {
         link.on_master_slot(100_000, &mut master);
         let schedule = link.stats().schedule.unwrap();
         assert_eq!(schedule.period_us, 1_428);
-        // F700 latches at its slot start (30 µs lead, 30 µs latch): three slots back.
-        assert_eq!(schedule.phase_us, 100_000 - 3 * 1_428);
+        // F700 latches 310 µs into its slot (30 µs lead, 80 µs set-up, 200 µs PLL, the
+        // transmitter on): three slots back.
+        assert_eq!(schedule.phase_us, 100_000 + 310 - 3 * 1_428);
     }
 
     #[test]
@@ -432,7 +433,7 @@ mod tests {
         assert_eq!(stats.schedule.unwrap().period_us, 20_000);
         assert_eq!(
             stats.schedule.unwrap().phase_us,
-            4_000 + u64::from(TX_LEAD_US - LATCH_BEFORE_TX_US)
+            4_000 + u64::from(TX_LEAD_US + TX_SETUP_US + PLL_SETTLE_US)
         );
         link.start_bind();
         assert!(link.take_bind_request());

@@ -15,13 +15,32 @@
 //! different count must itself repeat `lock_frames` times before it replaces the old one, so
 //! one glitch never changes the channel layout.
 //!
-//! A locked frame is handed out as soon as it is proven complete, not at the next edge: once
-//! its last channel period has closed and no edge followed for longer than `sync_min_us`,
-//! the line is in the sync gap, so the frame had exactly the locked count and no split pulse
-//! ([`Decoder::release_due`], called by the capture task at [`Decoder::release_deadline_us`]).
-//! That saves the rest of the sync gap (≈ 8 ms of a 22.5 ms frame at centred sticks) and
-//! keeps every check of the sync-edge release: an extra period (a split pulse, a longer
-//! frame) arrives within the gap's first 2.5 ms and holds the frame for the usual end.
+//! A locked frame is handed out as soon as it is known to be right, by one of two proofs:
+//!
+//! * **Agreement (early release).** At the edge that closes the locked count's last channel,
+//!   a frame whose every channel is within `early_release_within_us` (factory 200 µs) of the
+//!   last frame handed out goes at once: that edge is the end of the frame's channels, unless
+//!   a split pulse (one extra edge, §10 of the spec) made it the end of the one before, and a
+//!   split cannot hide there unless the frame moved far: to pass, a split of channel k < N
+//!   into `a + b` needs `a` within T of the last value of k, `b` within T of the last value of
+//!   k + 1 and every later channel within T of its neighbour's last value, so channel k itself
+//!   must have jumped by at least `max(b, 500) − T ≥ (last k+1) − 2T` (≥ 588 µs for channels
+//!   in EdgeTX's ±100 %) in that very frame; a split of the last channel releases its first
+//!   part, within T of its last value. Whatever the split, every channel handed out early is
+//!   within T of the last frame handed out — that is the rule itself — so the worst an
+//!   undetected split does is one frame (22.5 ms) up to T off on some channels. The line is
+//!   still watched until the sync gap: an extra period or a glitch after an early release is
+//!   counted ([`Reject::GapNotClean`]) and the next frame must prove its sync gap again.
+//! * **Sync gap (held).** Otherwise — a switch flip, a stick snap, the first frame after
+//!   lock, after a loss or after a gap that was not clean — once its last channel period has
+//!   closed and no edge followed for longer than `sync_min_us`, the line is in the sync gap,
+//!   so the frame had exactly the locked count and no split pulse ([`Decoder::release_due`],
+//!   called by the capture task at [`Decoder::release_deadline_us`]): 2.5 ms later, never
+//!   dropped. An extra period (a split pulse, a longer frame) arrives within the gap's first
+//!   2.5 ms and holds the frame for the checks at its sync edge, which drop it.
+//!
+//! Both save the rest of the sync gap (≈ 8 ms of a 22.5 ms frame at centred sticks) over
+//! waiting for the next frame's first edge.
 
 use crate::channels::{ChannelFrame, MAX_CHANNELS, us_to_ticks};
 
@@ -44,6 +63,10 @@ pub struct DecoderConfig {
     pub lock_frames: u8,
     /// Without an accepted frame for this long the lock is lost.
     pub loss_timeout_us: u32,
+    /// A locked frame goes out at its last channel's closing edge when every channel is
+    /// within this of the last frame handed out (the agreement rule, module doc); `None`:
+    /// every locked frame waits for its sync gap.
+    pub early_release_within_us: Option<u32>,
 }
 
 impl Default for DecoderConfig {
@@ -59,6 +82,11 @@ impl Default for DecoderConfig {
             lock_frames: 5,
             // Between ELRS' 1 s and the 100 ms an FC allows before its own failsafe (§2.2).
             loss_timeout_us: 250_000,
+            // What a stick moves in one 22.5 ms frame at the fastest: a full-travel flick
+            // (1 024 µs) takes ≈ 0.1 s, 230 µs a frame. Flying moves far less, so nearly
+            // every frame goes early; and a frame wrongly released (an undetected split
+            // pulse) is off by at most this, 20 % of the travel, for one frame.
+            early_release_within_us: Some(200),
         }
     }
 }
@@ -84,6 +112,13 @@ pub enum Reject {
         /// The locked count.
         locked: usize,
         /// The count of this frame.
+        count: usize,
+    },
+    /// A frame already released early (it agreed with the last one) was followed by another
+    /// period or a glitch before its sync gap: it may have been a split pulse. It is out;
+    /// this counts it, and the next frame is held for its sync gap.
+    GapNotClean {
+        /// Periods seen before the sync gap (the locked count + 1 for a split pulse).
         count: usize,
     },
 }
@@ -156,8 +191,15 @@ pub struct Decoder {
     /// The locked count's last channel period closed at this edge (no glitch so far): the
     /// frame is released once the line stays quiet for a sync gap.
     complete_at_us: Option<u32>,
-    /// The current frame was released early; its sync edge hands out nothing more.
+    /// The current frame was released (early or at its deadline); its sync edge hands out
+    /// nothing more, only checks that the gap was clean.
     released: bool,
+    /// The last frame handed out (its count and periods), what an early release must agree
+    /// with; `None` after a lock loss or a gap that was not clean, so the next frame proves
+    /// its sync gap.
+    last_released: Option<(usize, [u16; MAX_CHANNELS])>,
+    /// Frames released at their last channel's closing edge.
+    early_releases: u32,
 }
 
 impl Decoder {
@@ -176,6 +218,8 @@ impl Decoder {
             clamped: 0,
             complete_at_us: None,
             released: false,
+            last_released: None,
+            early_releases: 0,
         }
     }
 
@@ -220,6 +264,11 @@ impl Decoder {
         self.clamped
     }
 
+    /// Frames handed out at their last channel's closing edge (the agreement rule) so far.
+    pub fn early_releases(&self) -> u32 {
+        self.early_releases
+    }
+
     /// Channel periods of the last frame handed out, µs (valid after a `Decoded::Frame`).
     pub fn last_periods_us(&self) -> &[u16] {
         match self.state {
@@ -230,16 +279,20 @@ impl Decoder {
     }
 
     /// One captured edge at `timestamp_us`. Returns what the frame gave when this edge ends
-    /// one, `None` inside a frame.
+    /// one (or closes the last channel of a locked frame that agrees with the last one,
+    /// which goes out at once), `None` inside a frame.
     pub fn on_edge(&mut self, timestamp_us: u32) -> Option<Decoded> {
         let previous = self.previous_edge_us.replace(timestamp_us)?;
         // Wrapping difference: correct across the 2^32 µs (71.6 min) timer wrap.
         let period_us = timestamp_us.wrapping_sub(previous);
         self.complete_at_us = None;
         if period_us > self.config.sync_min_us {
-            // Released early: this is the sync gap proven then; the frame is out already.
             let released = core::mem::take(&mut self.released);
-            let outcome = (self.synced && !released).then(|| self.end_frame(timestamp_us));
+            let outcome = match (self.synced, released) {
+                (false, _) => None,
+                (true, false) => Some(self.end_frame(timestamp_us)),
+                (true, true) => self.end_released_frame(timestamp_us),
+            };
             self.synced = true;
             self.collected = 0;
             self.glitch = None;
@@ -267,6 +320,11 @@ impl Decoder {
                     })
                     && !self.released
                 {
+                    if self.agrees_with_last_released(self.collected) {
+                        self.released = true;
+                        self.early_releases = self.early_releases.saturating_add(1);
+                        return Some(self.accept(timestamp_us, self.collected));
+                    }
                     self.complete_at_us = Some(timestamp_us);
                 }
             }
@@ -290,7 +348,44 @@ impl Decoder {
         self.state = State::Searching;
         self.pending = None;
         self.complete_at_us = None;
+        self.last_released = None;
         was_locked.then_some(Lost { silent_us })
+    }
+
+    /// Every one of the first `count` periods within `early_release_within_us` of the last
+    /// frame handed out, which had `count` channels too.
+    fn agrees_with_last_released(&self, count: usize) -> bool {
+        let (Some(within_us), Some((last_count, last))) =
+            (self.config.early_release_within_us, &self.last_released)
+        else {
+            return false;
+        };
+        *last_count == count
+            && self
+                .periods_us
+                .iter()
+                .zip(last)
+                .take(count)
+                .all(|(now, then)| u32::from(now.abs_diff(*then)) <= within_us)
+    }
+
+    /// The sync edge of a frame already handed out. Released at its deadline, the gap was
+    /// proven quiet; released early, the gap is checked now: another period or a glitch
+    /// after the release is counted, and the next frame must prove its own sync gap. The
+    /// frame still counts towards a change of the channel count (a handset that went from
+    /// 8 to 9 channels agrees on its first 8 every frame).
+    fn end_released_frame(&mut self, timestamp_us: u32) -> Option<Decoded> {
+        let clean = self.glitch.is_none() && self.locked_count() == Some(self.collected);
+        if clean {
+            self.pending = None;
+            return None;
+        }
+        self.last_released = None;
+        let count = self.collected;
+        match self.end_frame(timestamp_us) {
+            frame @ Decoded::Frame(_) => Some(frame),
+            _ => Some(Decoded::Rejected(Reject::GapNotClean { count })),
+        }
     }
 
     fn end_frame(&mut self, timestamp_us: u32) -> Decoded {
@@ -349,6 +444,7 @@ impl Decoder {
 
     fn accept(&mut self, timestamp_us: u32, count: usize) -> Decoded {
         self.last_good_us = timestamp_us;
+        self.last_released = Some((count, self.periods_us));
         let mut channels = ChannelFrame::centered(count);
         for (index, period_us) in self.periods_us.iter().take(count).enumerate() {
             channels.set(index, us_to_ticks(*period_us));

@@ -19,11 +19,21 @@ fn frames_of(outcomes: &[Decoded]) -> Vec<ChannelFrame> {
         .collect()
 }
 
+/// Today's checks of the sync-edge and sync-gap releases: early release off, so every
+/// locked frame waits for its sync gap (the factory configuration's early release has its
+/// own tests, `decoder_early_tests.rs`).
+fn sync_only() -> DecoderConfig {
+    DecoderConfig {
+        early_release_within_us: None,
+        ..DecoderConfig::default()
+    }
+}
+
 const EIGHT: [u16; 8] = [988, 1500, 2012, 1200, 1800, 1000, 2000, 1500];
 
 #[test]
 fn locks_on_fifth_clean_frame_and_decodes_values() {
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let outcomes = feed(&mut decoder, &edges(&EIGHT, 22_500, 10, 1_000));
     // The first sync is only seen at frame 2's start and frame 10 has no sync after it, so
     // 8 frame ends: 4 acquiring, then 4 handed out.
@@ -56,7 +66,7 @@ fn locks_on_fifth_clean_frame_and_decodes_values() {
 fn every_channel_count_from_4_to_16_locks() {
     for count in 4..=16usize {
         let widths: Vec<u16> = (0..count).map(|i| 1000 + 60 * i as u16).collect();
-        let mut decoder = Decoder::new(DecoderConfig::default());
+        let mut decoder = Decoder::new(sync_only());
         let outcomes = feed(&mut decoder, &edges(&widths, edgetx_frame_us(count), 8, 0));
         let frames = frames_of(&outcomes);
         assert_eq!(frames.len(), 2, "{count} channels");
@@ -75,7 +85,7 @@ fn edgetx_extended_limits_on_one_channel_keep_every_channel() {
     // channel range's ends (0 and 2047), the others exact.
     for extreme in [732u16, 2268] {
         let widths = [1500u16, extreme, 1200, 1800, 1000, 2000, 988, 2012];
-        let mut decoder = Decoder::new(DecoderConfig::default());
+        let mut decoder = Decoder::new(sync_only());
         let frames = frames_of(&feed(&mut decoder, &edges(&widths, 22_500, 10, 0)));
         assert_eq!(frames.len(), 4, "{extreme} µs");
         let expected_extreme = if extreme < 1500 { 0 } else { 2047 };
@@ -96,19 +106,19 @@ fn edgetx_extended_limits_on_one_channel_keep_every_channel() {
 fn periods_outside_700_to_2300_are_clamped_not_dropped() {
     // 600 µs and 2400 µs (still under the 2.5 ms sync) clamp to 700 / 2300 µs.
     let widths = [600u16, 1500, 2400, 1500];
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let frames = frames_of(&feed(&mut decoder, &edges(&widths, 20_000, 7, 0)));
     assert_eq!(frames.len(), 1);
     assert_eq!(decoder.last_periods_us(), &[700, 1500, 2300, 1500]);
     assert_eq!(frames[0].as_slice(), &[0, 992, 2047, 992]);
     assert!(decoder.clamped() >= 2 * 6, "two per frame end seen");
     // The clamp bounds themselves pass unchanged.
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     feed(&mut decoder, &edges(&[700, 2300, 700, 2300], 20_000, 7, 0));
     assert_eq!(decoder.last_periods_us(), &[700, 2300, 700, 2300]);
     assert_eq!(decoder.clamped(), 0);
     // Below the glitch threshold a period is not a channel: that frame is dropped.
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let outcomes = feed(&mut decoder, &edges(&[499, 1500, 1500, 1500], 20_000, 3, 0));
     assert_eq!(
         outcomes[0],
@@ -121,10 +131,10 @@ fn sync_threshold_is_strictly_above_2500_us() {
     // 16 channels of 2012 µs need 32.2 ms; a 34.7 ms frame leaves a 2.5 ms gap: not a sync,
     // so it reads as a 17th (clamped) channel and those frames are too long.
     let widths = [2012u16; 16];
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let short_rest = 16 * 2012 + 2500;
     assert!(frames_of(&feed(&mut decoder, &edges(&widths, short_rest, 10, 0))).is_empty());
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let frames = frames_of(&feed(&mut decoder, &edges(&widths, short_rest + 1, 10, 0)));
     assert_eq!(frames.len(), 4);
 }
@@ -136,7 +146,7 @@ fn jitter_of_two_microseconds_keeps_lock_and_values() {
     for (i, t) in timestamps.iter_mut().enumerate() {
         *t = t.wrapping_add([0u32, 2, 1, 0, 2][i % 5]).wrapping_sub(1);
     }
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let outcomes = feed(&mut decoder, &timestamps);
     let frames = frames_of(&outcomes);
     assert_eq!(frames.len(), 34);
@@ -151,7 +161,7 @@ fn jitter_of_two_microseconds_keeps_lock_and_values() {
 #[test]
 fn timer_wrap_inside_a_frame_is_seamless() {
     let start = u32::MAX - 30_000;
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let frames = frames_of(&feed(&mut decoder, &edges(&EIGHT, 22_500, 10, start)));
     assert_eq!(frames.len(), 4);
     assert!(frames.iter().all(|f| f.as_slice()[2] == 1811));
@@ -163,7 +173,7 @@ fn a_glitch_drops_one_frame_and_keeps_the_lock() {
     // A spike 100 µs after a pulse in frame 8 (9 edges per frame).
     let spike = timestamps[8 * 9 + 3] + 100;
     timestamps.insert(8 * 9 + 4, spike);
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let outcomes = feed(&mut decoder, &timestamps);
     assert_eq!(
         outcomes[7],
@@ -180,7 +190,7 @@ fn count_change_needs_confirmation() {
     let start = timestamps.last().unwrap() + 10_500;
     let six = [1100u16; 6];
     timestamps.extend(edges(&six, 22_500, 8, start));
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let outcomes = feed(&mut decoder, &timestamps);
     let mismatches = outcomes
         .iter()
@@ -207,7 +217,7 @@ fn one_stray_frame_of_another_count_does_not_switch() {
     timestamps.extend(edges(&[1500u16; 5], 22_500, 1, t + 9_000));
     let t = *timestamps.last().unwrap();
     timestamps.extend(edges(&EIGHT, 22_500, 3, t + 9_000));
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let outcomes = feed(&mut decoder, &timestamps);
     assert!(outcomes.contains(&Decoded::Rejected(Reject::CountMismatch {
         locked: 8,
@@ -220,7 +230,7 @@ fn one_stray_frame_of_another_count_does_not_switch() {
 #[test]
 fn loss_after_timeout_reported_once_then_relock() {
     let timestamps = edges(&EIGHT, 22_500, 8, 0);
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     feed(&mut decoder, &timestamps);
     // The last frame end seen is the sync edge at the start of frame 8 (7 · 22.5 ms).
     let last_sync = 7 * 22_500;
@@ -265,7 +275,7 @@ fn feed_timed(decoder: &mut Decoder, timestamps: &[u32]) -> Vec<(u32, Decoded)> 
 #[test]
 fn a_locked_frame_goes_out_a_sync_gap_after_its_last_channel_once() {
     let stream = edges(&EIGHT, 22_500, 10, 1_000);
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let outcomes = feed_timed(&mut decoder, &stream);
     let frames: Vec<(u32, ChannelFrame)> = outcomes
         .iter()
@@ -277,7 +287,7 @@ fn a_locked_frame_goes_out_a_sync_gap_after_its_last_channel_once() {
     // Locked at the 5th frame end (its sync edge, as before); frames 6–10 then each go out
     // early, once: five frames, the last one (no sync edge after it) included.
     assert_eq!(frames.len(), 5, "{outcomes:?}");
-    let sync_ended = feed(&mut Decoder::new(DecoderConfig::default()), &stream);
+    let sync_ended = feed(&mut Decoder::new(sync_only()), &stream);
     assert_eq!(frames_of(&sync_ended).len(), 4);
     for (k, (t, ch)) in frames.iter().enumerate().skip(1) {
         // Frame f starts at 1 000 + 22 500·f; its last channel closes after the 8 widths.
@@ -299,7 +309,7 @@ fn a_split_pulse_in_the_last_channel_is_never_released_early() {
     let pos = stream.iter().position(|t| *t == eighth).unwrap();
     stream.insert(pos + 1, eighth + 800);
     stream.push(22_500 * 7);
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let outcomes = feed_timed(&mut decoder, &stream);
     let late: Vec<_> = outcomes.iter().filter(|(t, _)| *t > eighth).collect();
     assert_eq!(
@@ -316,13 +326,13 @@ fn a_split_pulse_in_the_last_channel_is_never_released_early() {
 
 #[test]
 fn too_few_and_too_many_channels_are_rejected() {
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let outcomes = feed(&mut decoder, &edges(&[1500u16; 3], 20_000, 3, 0));
     assert_eq!(
         outcomes[0],
         Decoded::Rejected(Reject::TooFewChannels { count: 3 })
     );
-    let mut decoder = Decoder::new(DecoderConfig::default());
+    let mut decoder = Decoder::new(sync_only());
     let outcomes = feed(&mut decoder, &edges(&[1000u16; 17], 40_000, 3, 0));
     assert_eq!(outcomes[0], Decoded::Rejected(Reject::TooManyChannels));
 }
@@ -368,7 +378,7 @@ mod properties {
             for (t, j) in timestamps.iter_mut().zip(jitter.iter().cycle()) {
                 *t = t.wrapping_add_signed(i32::from(*j));
             }
-            let mut decoder = Decoder::new(DecoderConfig::default());
+            let mut decoder = Decoder::new(sync_only());
             let decoded = frames_of(&feed(&mut decoder, &timestamps));
             // 20 frames: 18 frame ends, 4 of them to acquire.
             prop_assert_eq!(decoded.len(), frames - 6);
@@ -406,3 +416,6 @@ mod properties {
         }
     }
 }
+
+#[path = "decoder_early_tests.rs"]
+mod early;

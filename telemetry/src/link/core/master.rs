@@ -58,6 +58,9 @@ pub struct Master {
     master_nonce_due: bool,
     /// The uplink planned in this slot is the master's nonce.
     planned_nonce: bool,
+    /// Stream bytes [`Master::uplink_len`] put in this slot's uplink: [`Master::plan`]
+    /// takes no more, so the frame keeps the length the radio was started with.
+    stream_cap: Option<usize>,
 }
 
 impl Master {
@@ -85,6 +88,7 @@ impl Master {
             epoch: MasterEpoch::new(0),
             master_nonce_due: false,
             planned_nonce: false,
+            stream_cap: None,
         }
     }
 
@@ -164,7 +168,7 @@ impl Master {
                 from_us: slot_start_us,
                 until_us: slot_start_us + u64::from(self.schedule.listen_end_offset_us()),
             },
-            SlotKind::Uplink => match self.build_uplink(buf) {
+            SlotKind::Uplink => match self.build_uplink(buf).map(|(len, _)| len) {
                 Some(len) => Step::Transmit {
                     channel,
                     at_us: slot_start_us + u64::from(self.schedule.rate.tx_lead_us()),
@@ -176,7 +180,32 @@ impl Master {
         }
     }
 
-    fn build_uplink(&mut self, buf: &mut [u8]) -> Option<usize> {
+    /// The hop channel of the current slot.
+    pub fn channel(&self) -> u8 {
+        self.hops.channel_for_slot(self.slot)
+    }
+
+    /// The length of this slot's uplink, built into `buf` and taken back: the radio can be
+    /// started with it (preamble and sync on the air) before the channels are latched and
+    /// [`Master::plan`] builds the frame for good, with the same length — its stream data
+    /// is capped to what this one took (the application may queue more meanwhile; acks,
+    /// which could shorten it, only come with a downlink). `None` in a downlink slot.
+    pub fn uplink_len(&mut self, buf: &mut [u8]) -> Option<usize> {
+        if self.schedule.kind(self.slot) != SlotKind::Uplink {
+            return None;
+        }
+        self.stream_cap = None;
+        let (len, filled) = self.build_uplink(buf)?;
+        if let Some((seq, count)) = filled {
+            self.uplink_stream.unfill(seq, count);
+            self.stream_cap = Some(count);
+        }
+        Some(len)
+    }
+
+    /// Builds the uplink into `buf`: its length, and the stream bytes it took (offset,
+    /// count; `None` for the master's nonce).
+    fn build_uplink(&mut self, buf: &mut [u8]) -> Option<(usize, Option<(u8, usize)>)> {
         self.planned_nonce = false;
         if let (Some(key), true) = (&self.key, self.master_nonce_due)
             && let Some((nonce, counter)) = self.epoch.master_nonce_for(self.slot)
@@ -188,7 +217,7 @@ impl Master {
                 nonce,
             };
             self.planned_nonce = true;
-            return seal(&frame, key, counter, buf).ok();
+            return seal(&frame, key, counter, buf).ok().map(|len| (len, None));
         }
         let format = self.params.format;
         let report = self.report_due.then(|| report(&self.rssi, &self.lq));
@@ -197,6 +226,7 @@ impl Master {
         pack_group(&self.channels, format, self.aux_group, packed);
         let overhead = uplink_overhead(format, report.is_some());
         let room = stream_room(&self.params, overhead, self.key.is_some());
+        let room = room.min(self.stream_cap.take().unwrap_or(usize::MAX));
         let mut data = [0u8; 64];
         let (stream, data) = stream_out(
             &mut self.uplink_stream,
@@ -204,6 +234,7 @@ impl Master {
             room,
             &mut data,
         )?;
+        let (seq, n) = (stream.seq, data.len());
         let up = Uplink {
             slot: self.slot as u8,
             stream,
@@ -223,7 +254,7 @@ impl Master {
             (Some(key), None) => seal(&Frame::Uplink(up), key, self.frame_counter(), buf),
             (None, _) => encode(&Frame::Uplink(up), self.params.bind_id, buf),
         };
-        len.ok()
+        len.ok().map(|len| (len, Some((seq, n))))
     }
 
     /// The uplink of the current slot has been sent.
@@ -243,6 +274,7 @@ impl Master {
     }
 
     fn next_slot(&mut self) {
+        self.stream_cap = None;
         self.slot = self.slot.wrapping_add(1);
         self.epoch.on_slot(self.slot);
     }

@@ -523,3 +523,48 @@ fn the_link_returns_within_one_dwell_of_the_path_whatever_the_phase() {
     // The scan does reach its worst case of one dwell.
     assert!(worst > 24, "{worst}");
 }
+
+#[test]
+fn the_uplink_length_is_known_before_its_channels_are_latched() {
+    // `uplink_len` starts the radio's packet; the channels are latched and `plan` builds the
+    // frame afterwards: the same length although the application queued more telemetry
+    // meanwhile, the new channels, and the stream bytes `uplink_len` saw (not skipped).
+    let (mut master, _) = pair();
+    master.uplink_stream.write(&[1, 2, 3]);
+    let mut buf = [0u8; 64];
+    let len = master.uplink_len(&mut buf).unwrap();
+    master.uplink_stream.write(&[4; 40]);
+    master.set_channels(&[1_800; 16]);
+    let Step::Transmit { len: built, .. } = master.plan(0, &mut buf) else {
+        panic!("an uplink slot");
+    };
+    assert_eq!(built, len);
+    let crate::frame::Received::Accepted(crate::frame::Frame::Uplink(up)) =
+        crate::frame::decode(&buf[..len], master.params().bind_id)
+    else {
+        panic!("a valid uplink");
+    };
+    assert_eq!(up.stream.seq, 0);
+    assert_eq!(up.data, &[1, 2, 3]);
+    let mut channels = [0u16; 16];
+    assert!(crate::channels::unpack(
+        up.packed_channels,
+        ChannelFormat::Full16,
+        &mut channels
+    ));
+    assert_eq!(channels, [1_800; 16]);
+    // The next slot's uplink goes on with the queued bytes.
+    master.on_sent();
+    let len = master.uplink_len(&mut buf).unwrap();
+    let Step::Transmit { len: next, .. } = master.plan(SLOT_US, &mut buf) else {
+        panic!("an uplink slot");
+    };
+    assert_eq!(next, len);
+    let crate::frame::Received::Accepted(crate::frame::Frame::Uplink(up)) =
+        crate::frame::decode(&buf[..len], master.params().bind_id)
+    else {
+        panic!("a valid uplink");
+    };
+    assert_eq!(up.stream.seq, 3);
+    assert!(up.data.iter().all(|b| *b == 4) && !up.data.is_empty());
+}

@@ -7,7 +7,9 @@
 //!
 //! The follower first acquires the master (not measured), then the pair runs `SLOTS` slots.
 //! Each slot is five m4count regions, in this order:
-//! 1. master `plan` (hop, schedule, frame build: channels, stream chunk, CRC);
+//! 1. master `uplink_len` and `plan` (hop, schedule, frame build: channels, stream chunk,
+//!    CRC — an uplink is built twice: once for its length before the radio is started, once
+//!    with the channels latched, as `link::master::run_master` does);
 //! 2. follower `plan` (hop, schedule; on a downlink slot its frame build);
 //! 3. master completion: `on_sent`, or `on_received` of the downlink (frame parse, CRC,
 //!    stream ack/reassembly, link quality) and `finish_listen`;
@@ -88,6 +90,7 @@ fn main() -> ! {
     for _ in 0..SLOTS {
         let now = black_box(t);
         m4count_marker();
+        let _ = master.uplink_len(&mut mbuf);
         let m = master.plan(now, &mut mbuf);
         m4count_marker();
         let f = follower.plan(now, &mut fbuf);

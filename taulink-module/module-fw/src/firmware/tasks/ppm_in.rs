@@ -4,9 +4,10 @@
 //! 1 µs whatever the interrupt latency; the task only reads CC[0] after the edge and hands
 //! it to the decoder in the module core. Edges come at least every 2.25 ms inside a frame,
 //! far slower than the wake-up, so CC[0] is read before the next capture overwrites it.
-//! When the core has a frame waiting for its sync gap to be proven (`App::ppm_deadline_us`)
-//! the task also wakes at that deadline, so the frame goes out ≈ 8 ms before the next
-//! frame's first edge would have released it.
+//! A frame that agrees with the last one goes out at the edge closing its last channel
+//! (`App::on_ppm_edge`). When the core has one waiting for its sync gap to be proven instead
+//! (`App::ppm_deadline_us`) the task also wakes at that deadline, so the frame goes out
+//! ≈ 8 ms before the next frame's first edge would have released it.
 
 use embassy_nrf::gpio::Pull;
 use embassy_nrf::gpiote::{InputChannel, InputChannelPolarity};
