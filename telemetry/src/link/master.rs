@@ -163,6 +163,9 @@ async fn run_uplink<R: PacketRadio, C: LinkClock, H: MasterHooks>(
         Step::Transmit { len: built, .. } if built == len => buf.get(..len),
         _ => fallback.get(..len),
     };
+    // `len` is the length of a frame encoded into a FIFO-sized buffer, so both slices exist;
+    // were one ever missing, the empty load would make the chip send a packet that fails its
+    // CRC (a FIFO underflow) — a lost uplink, never a wrong one.
     match radio.finish_transmit(frame.unwrap_or(&[])).await {
         Ok(()) => {
             master.on_sent();

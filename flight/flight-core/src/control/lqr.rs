@@ -240,7 +240,7 @@ impl LqgAxis {
     }
 
     /// One control loop: update the RTKF with the previous output and this gyro sample, then
-    /// the LQR law (the look-ahead past pending outputs folded in, [`FoldedLaw`]); returns
+    /// the LQR law (the look-ahead past pending outputs folded in, `FoldedLaw`); returns
     /// the output clamped to ±1.
     pub fn update(&mut self, gyro_dps: f32, setpoint: AxisSetpoint) -> f32 {
         let applied = self
