@@ -15,7 +15,7 @@ use telemetry::mock::{MediumStats, SplitMix64};
 
 use crate::attack::{Powered, Witnessed, attacker, flight_end_powered, power_plan, victim_of};
 use crate::driver::{LinkRadio, SimClock};
-use crate::ends::{FlightStart, apps, flight_end, module_end};
+use crate::ends::{FlightStart, apps, flight_end, master_nonce_seed, module_end};
 use crate::probe::{Now, Record, Shared, Witness};
 use crate::scenario::Scenario;
 use crate::world::{
@@ -88,7 +88,7 @@ fn spawn_pair(
         module_clock,
         params,
         bind,
-        s.key,
+        s.key.map(|k| (k, master_nonce_seed(s.seed, salt))),
         module_app,
     ));
     let start = FlightStart::of(s, bind, params, salt);

@@ -38,7 +38,7 @@ pub(crate) async fn module_end<R: PacketRadio, C: LinkClock>(
     mut clock: C,
     params: LinkParams,
     bind: bool,
-    key: Option<LinkKey>,
+    key: Option<(LinkKey, u64)>,
     mut app: ModuleApp,
 ) {
     if bind {
@@ -49,10 +49,16 @@ pub(crate) async fn module_end<R: PacketRadio, C: LinkClock>(
         };
     }
     let mut master = match key {
-        Some(key) => Master::new(params).with_key(key),
+        Some((key, seed)) => Master::new(params).with_key(key).with_nonce_seed(seed),
         None => Master::new(params),
     };
     let _ = run_master(&mut radio, &mut clock, &mut master, &mut app).await;
+}
+
+/// The seed of the module's epoch nonces in a run of scenario `seed` (the module app seeds
+/// them from its boot RNG; here from the scenario, unlike the follower's `seed ^ salt`).
+pub(crate) fn master_nonce_seed(seed: u64, salt: u64) -> u64 {
+    (seed ^ salt).rotate_left(32) ^ 0x6d61_7374_6572
 }
 
 /// How the flight end is started.
