@@ -1,6 +1,8 @@
-//! The flight controller's behaviour, free of any HAL: sensor drivers over embedded-hal,
-//! estimation, control and the arming/failsafe supervisor. The firmware crate only wires
-//! peripherals to what lives here, so everything here runs in host tests.
+//! The flight controller's behaviour, free of any HAL: estimation, control, the
+//! arming/failsafe supervisor and the application the firmware's tasks call into. The
+//! firmware crate only wires peripherals to what lives here, so everything here runs in host
+//! tests. The sensor drivers are crates of their own under `flight/` (`mpu9250`, `ms5611`,
+//! `ubx`); the UBX protocol, which the GPS port here drives, is re-exported as [`sensors::ubx`].
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]

@@ -16,11 +16,11 @@
 
 use heapless::Vec;
 use telemetry::messages::{Gps, GpsFix, Home as WireHome, Message as WireMessage};
+use ubx::config::{self, Bytes};
+use ubx::{Configurator, FixType, Generation, Message, NavPvt, Parser, Status};
 
 use super::FlightApp;
 use crate::estimation::ins::aiding::gps::{GpsUpdate, Home};
-use crate::sensors::ubx::config::{self, Bytes};
-use crate::sensors::ubx::{Configurator, FixType, Generation, Message, NavPvt, Parser, Status};
 
 /// The receiver's baud after configuration.
 pub const GPS_BAUD: u32 = 115_200;

@@ -464,9 +464,10 @@ fn telemetry_carries_altitude_from_the_power_up_point_vario_and_cells() {
 }
 
 mod gps {
-    use super::*;
-    use crate::sensors::ubx::{FixType, Generation, NavPvt, Status, frame};
     use telemetry::messages::GpsFix;
+    use ubx::{FixType, Generation, NavPvt, Status, frame};
+
+    use super::*;
 
     fn pvt(itow_ms: u32) -> NavPvt {
         NavPvt {

@@ -31,6 +31,8 @@
 //!
 //! [`Filter::fuse_zero_horizontal_velocity`]: crate::estimation::ins::Filter::fuse_zero_horizontal_velocity
 
+use ubx::NavPvt;
+
 use super::flight_loop::ImuSample;
 use crate::estimation::complementary::{self, Complementary};
 use crate::estimation::ins::aiding::AidingConfig;
@@ -38,7 +40,6 @@ use crate::estimation::ins::aiding::gps::{GpsAiding, GpsAidingConfig, GpsUpdate,
 use crate::estimation::ins::{Config, Ins, State};
 use crate::estimation::quaternion::Quaternion;
 use crate::estimation::{Error, all_finite};
-use crate::sensors::ubx::NavPvt;
 
 /// Seconds the complementary filter runs (at boot, after a fallback) before the INS
 /// starts from it: long enough for the complementary filter to have levelled from its

@@ -326,7 +326,7 @@ impl FlightLoop {
     }
 
     /// A NAV-PVT from the GPS, just arrived (fused while the full INS flies).
-    pub fn on_gps(&mut self, pvt: &crate::sensors::ubx::NavPvt) -> Option<GpsUpdate> {
+    pub fn on_gps(&mut self, pvt: &ubx::NavPvt) -> Option<GpsUpdate> {
         self.estimator.gps(pvt)
     }
 

@@ -16,7 +16,7 @@ mod usb_cdc;
 use defmt::{error, info};
 use embassy_executor::{SpawnError, SpawnToken, Spawner};
 use flight_core::app::FlightApp;
-use flight_core::sensors::mpu9250::SampleRate;
+use mpu9250::SampleRate;
 use {defmt_rtt as _, panic_probe as _};
 
 #[embassy_executor::main]

@@ -1,7 +1,7 @@
 //! Instruction counts of the GPS path: the UBX parser over one 100-byte NAV-PVT frame and
 //! its decoding (region 1), and `GpsAiding::fuse` — quality checks, NED from home, latency
 //! compensation and the position and velocity updates (region 2). The frame is the
-//! ubxlib capture used in flight-core's transcript tests.
+//! ubxlib capture used in the `ubx` crate's transcript tests.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]

@@ -2,10 +2,11 @@
 //! takes over and hands back without an attitude jump, the indoor mode holds the vertical
 //! on the baro, and the full INS follows GPS.
 
+use ubx::{FixType, NavPvt};
+
 use super::*;
 use crate::estimation::GRAVITY_MPS2;
 use crate::estimation::quaternion::{self, angle_between};
-use crate::sensors::ubx::{FixType, NavPvt};
 
 const DT: f32 = 0.001;
 

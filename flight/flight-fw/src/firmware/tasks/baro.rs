@@ -4,7 +4,7 @@
 
 use defmt::{info, warn};
 use embassy_time::{Delay, Duration, Ticker, Timer};
-use flight_core::sensors::ms5611::{Ms5611, Oversampling};
+use ms5611::{Ms5611, Oversampling};
 
 use crate::firmware::board::{BARO_ADDRESS, Baro};
 use crate::firmware::shared::{now_ms, with_app};

@@ -12,7 +12,7 @@ use embassy_time::{Duration, Timer};
 use embedded_hal_bus::spi::ExclusiveDevice;
 use flight_core::app::ImuFault;
 use flight_core::pipeline::ImuSample;
-use flight_core::sensors::mpu9250::{Config, Mpu9250, SampleRate};
+use mpu9250::{Config, Mpu9250, SampleRate};
 
 use crate::firmware::board::{Imu, imu_to_body};
 use crate::firmware::imu_bus::{AliveDelay, IMU_SPI_FAST, ImuBus};

@@ -16,11 +16,11 @@
 //! Cortex-M4 instructions.
 
 use heapless::Deque;
+use ubx::NavPvt;
 
 use super::{Aided, Ins};
 use crate::estimation::Error;
 use crate::estimation::ins::State;
-use crate::sensors::ubx::NavPvt;
 
 /// Spacing of the estimate history (µs).
 pub const HISTORY_STEP_US: u64 = 10_000;

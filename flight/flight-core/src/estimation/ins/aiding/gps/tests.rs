@@ -1,10 +1,11 @@
 //! GPS aiding: units and frame of the measurement, fix loss and regain, and latency
 //! compensation measured against an uncompensated run.
 
+use ubx::{FixType, NavPvt};
+
 use super::*;
 use crate::estimation::ins::aiding::AidingConfig;
 use crate::estimation::ins::{Config, Ins};
-use crate::sensors::ubx::{FixType, NavPvt};
 
 const HOME: Home = Home {
     lat_e7: 522_227_387,

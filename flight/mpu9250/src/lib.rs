@@ -1,7 +1,33 @@
-//! MPU-9250 gyro/accelerometer over SPI (mode 3), with the AK8963 magnetometer read through
-//! the MPU's own I²C master (its AUX pins are not wired on the Sparky2:
-//! Sparky 2.0 schematic, Tau Labs `flight/targets/sparky2/hw/`). One
-//! 22-byte burst read returns accel, temperature, gyro and the magnetometer bytes.
+//! InvenSense MPU-9250 gyro/accelerometer over SPI (mode 3, embedded-hal-async 1.0), with
+//! the AK8963 magnetometer read through the MPU's own I²C master, so one 22-byte burst read
+//! returns accel, temperature, gyro and the magnetometer bytes (boards such as the Sparky2
+//! leave the AUX pins unwired: Sparky 2.0 schematic, Tau Labs `flight/targets/sparky2/hw/`).
+//!
+//! [`Mpu9250::new`] resets, probes and configures the chip (and the AK8963 if
+//! [`Config::magnetometer`]), checking a register read-back; [`Mpu9250::read`] is one burst,
+//! scaled to SI units in the MPU's own axes ([`Sample`]). Delays are injected
+//! ([`DelayNs`]): every wait is bounded, an absent chip is an error, never a hang, and the
+//! driver runs in host tests against `embedded-hal-mock` SPI transcripts. Register map:
+//! [`registers`] (RM-MPU-9250A-00 rev 1.6); ranges, filter and rate: [`config`].
+//!
+//! ```no_run
+//! # async fn demo<S: embedded_hal_async::spi::SpiDevice>(
+//! #     spi: S,
+//! #     delay: &mut impl embedded_hal_async::delay::DelayNs,
+//! # ) -> Result<(), mpu9250::Error<S::Error>> {
+//! use mpu9250::{Config, Mpu9250};
+//!
+//! let mut imu = Mpu9250::new(spi, Config::default(), delay).await?;
+//! // On each data-ready edge (INT is latched until any register read):
+//! let sample = imu.read().await?;
+//! let [gx, gy, gz] = sample.gyro_radps;
+//! # let _ = (gx, gy, gz);
+//! # Ok(())
+//! # }
+//! ```
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
 
 mod ak8963;
 pub mod config;

@@ -1,7 +1,30 @@
-//! MS5611 barometer over I²C (address 0x77 with CSB low, MS5611-01BA03 datasheet;
-//! the Sparky2 ties CSB to GND and PS to VDD, Tau Labs `flight/targets/sparky2/` schematic): reset,
-//! PROM read with CRC-4 check, D1/D2 conversions at a chosen oversampling, compensation and
-//! altitude.
+//! TE MS5611-01BA03 barometer over I²C (embedded-hal-async 1.0): reset, PROM read with the
+//! AN520 CRC-4 check, D1/D2 conversions at a chosen [`Oversampling`], first- and
+//! second-order compensation and the ISA altitude ([`compensation`], pure functions).
+//! The address is 0x77 with CSB low ([`ADDRESS`]; the Sparky2 ties CSB to GND and PS to VDD,
+//! Tau Labs `flight/targets/sparky2/` schematic), 0x76 with CSB high.
+//!
+//! Delays are injected ([`DelayNs`]): the conversion waits are the datasheet's maximum
+//! times, nothing polls, and the driver runs in host tests against `embedded-hal-mock` I²C
+//! transcripts.
+//!
+//! ```no_run
+//! # async fn demo<I: embedded_hal_async::i2c::I2c>(
+//! #     i2c: I,
+//! #     delay: &mut impl embedded_hal_async::delay::DelayNs,
+//! # ) -> Result<(), ms5611::Error<I::Error>> {
+//! use ms5611::{ADDRESS, Ms5611, Oversampling};
+//!
+//! let mut baro = Ms5611::new(i2c, ADDRESS, Oversampling::Osr1024, delay).await?;
+//! let m = baro.measure(delay).await?; // 2 × 2.28 ms of conversions at OSR 1024
+//! let (pa, metres) = (m.reading.pressure_pa, m.altitude_m);
+//! # let _ = (pa, metres);
+//! # Ok(())
+//! # }
+//! ```
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
 
 pub mod compensation;
 #[cfg(test)]
