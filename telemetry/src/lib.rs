@@ -1,7 +1,8 @@
 //! TauLink's messages and wire formats: what travels over the air between the module and
-//! the flight controller, and what the module speaks to the handset. Pure `no_std` code,
-//! no radio and no async runtime: the radio driver and the firmware crates plug into it
-//! through [`link::PacketRadio`] and [`link::LinkClock`].
+//! the flight controller. Pure `no_std` code, no radio and no async runtime: the radio
+//! driver and the firmware crates plug into it through [`link::PacketRadio`] and
+//! [`link::LinkClock`]. What the module speaks to the handset (CRSF, S.Port, FrSky D) is its
+//! own crate, `taulink-handset`, re-exported here as [`handset`].
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -12,7 +13,9 @@ pub mod checksum;
 pub mod cobs;
 pub mod frame;
 pub mod framing;
-pub mod handset;
+/// The handset protocols (CRSF, FrSky S.Port, FrSky D), the `taulink-handset` crate. New
+/// code depends on that crate directly; this path stays so existing callers keep building.
+pub use taulink_handset as handset;
 pub mod link;
 pub mod messages;
 #[cfg(feature = "std")]

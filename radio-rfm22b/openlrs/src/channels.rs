@@ -3,7 +3,7 @@
 //! between OpenLRSng's values and TauLink's channels (CRSF ticks, `telemetry::channels`),
 //! which both TauLink ends use when they speak OpenLRSng.
 
-use telemetry::handset::crsf::channels::{ticks_to_us, us_to_ticks};
+use taulink_handset::crsf::channels::{ticks_to_us, us_to_ticks};
 
 /// Most channels any mode carries (dRonin's mode 7, 16 + 4).
 pub const MAX_CHANNELS: usize = 20;
@@ -220,9 +220,7 @@ mod tests {
 
     #[test]
     fn taulink_channels_map_through_microseconds() {
-        use telemetry::handset::crsf::channels::{
-            TICKS_CENTRE, TICKS_MAX_NOMINAL, TICKS_MIN_NOMINAL,
-        };
+        use taulink_handset::crsf::channels::{TICKS_CENTRE, TICKS_MAX_NOMINAL, TICKS_MIN_NOMINAL};
         assert_eq!(bits_to_ticks(CENTER_BITS), TICKS_CENTRE);
         assert_eq!(ticks_to_bits(TICKS_CENTRE), CENTER_BITS);
         // ±100 % (988 / 2012 µs) fall in OpenLRSng's 16 µs steps outside 1000..1999 µs:

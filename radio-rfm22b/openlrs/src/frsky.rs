@@ -5,8 +5,8 @@
 //! of a hub user frame (`7E FD n 00 d0..d5 7E` when n < 6) and S.Port value bytes v1..v3.
 //! We send 0x00 in those places, as the vectors (built with zeroed locals) do.
 
-use ::telemetry::handset::stuffing;
 use heapless::{Deque, Vec};
+use taulink_handset::stuffing;
 
 use super::telemetry;
 

@@ -20,9 +20,9 @@ use crate::session::{BindOutcome, LinkStep, Session, SessionEnd};
 use crate::settings::{InputProtocol, Role, Settings};
 use crate::status::LinkState;
 use heapless::Deque;
+use taulink_handset::crsf::address;
+use taulink_handset::crsf::params::ParameterChunk;
 use telemetry::channels::FailsafeValues;
-use telemetry::handset::crsf::address;
-use telemetry::handset::crsf::params::ParameterChunk;
 use telemetry::link::LinkParams;
 use telemetry::link::core::{Follower, Master};
 

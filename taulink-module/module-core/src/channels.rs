@@ -1,13 +1,13 @@
 //! Link channels: up to 16 stick/switch values at CRSF resolution, 11 bit, in CRSF ticks
 //! like everywhere else in the workspace.
 //!
-//! The µs ↔ ticks mapping is telemetry's ([`telemetry::handset::crsf::channels`], re-exported
+//! The µs ↔ ticks mapping is CRSF's ([`taulink_handset::crsf::channels`], re-exported
 //! here): the one CRSF transmitters use (ExpressLRS `fmap(us, 988, 2012, 172, 1811)`,
 //! `src/lib/Handset/PPMHandset.cpp`), 988 µs ↔ 172 (−100 %), 1500 µs ↔ 992 (centre), 2012 µs ↔ 1811
 //! (+100 %). Beyond ±100 % it extrapolates linearly and clips to the 11-bit range 0…2047
 //! (≈ 881…2159 µs), so EdgeTX's extended limits (732…2268 µs) saturate instead of wrapping.
 
-pub use telemetry::handset::crsf::channels::{
+pub use taulink_handset::crsf::channels::{
     TICKS_CENTRE, TICKS_MAX, TICKS_MAX_NOMINAL, TICKS_MIN_NOMINAL, ticks_to_us, us_to_ticks,
 };
 

@@ -1,6 +1,6 @@
 //! The module's settings as CRSF parameters, as the radio's device tool (the ExpressLRS Lua
 //! script EdgeTX users run for any CRSF module) lists and changes them; the wire format is
-//! `telemetry::handset::crsf::params`. This module owns the table: numbers, names, options,
+//! `taulink_handset::crsf::params`. This module owns the table: numbers, names, options,
 //! what a write changes and which changes restart the link.
 //!
 //! Changes apply at once to the settings in RAM; the **Save** command persists them (after a
@@ -33,7 +33,7 @@
 use core::fmt::Write;
 
 use heapless::{String, Vec};
-use telemetry::handset::crsf::params::{CommandStatus, Entry, MAX_ENTRY_LEN};
+use taulink_handset::crsf::params::{CommandStatus, Entry, MAX_ENTRY_LEN};
 
 use crate::phrase::{self, HANDSET_PHRASE_MAX, PhraseNote};
 use crate::ppm::FailsafeOutput;

@@ -18,7 +18,7 @@
 //!   so an empty write is far more likely a slip than a wish to fly unauthenticated (the
 //!   phrase is cleared through the text settings, `phrase=`).
 
-use telemetry::handset::crsf::params::MAX_WRITE_LEN;
+use taulink_handset::crsf::params::MAX_WRITE_LEN;
 use telemetry::link::LinkKey;
 use telemetry::link::auth::{PHRASE_MAX_BYTES, PhraseError, key_for_phrase};
 use telemetry::module_record::{self, KeyAnswer, KeyOutcome, KeyRefusal, ModuleRecord};

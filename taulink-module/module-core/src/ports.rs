@@ -1,6 +1,6 @@
 //! The seams where other crates plug into the module core: the air link (telemetry crate's
 //! `link`, driven by the radio driver; [`crate::air::AirLink`]) and the handset telemetry
-//! encoders (telemetry crate's `handset`: CRSF, S.Port, FrSky D; [`crate::handset::Handset`]).
+//! encoders (the `taulink-handset` crate: CRSF, S.Port, FrSky D; [`crate::handset::Handset`]).
 //! The core only ever talks to these traits.
 
 use crate::channels::ChannelFrame;
@@ -86,7 +86,7 @@ pub enum HandsetRequest {
         /// Parameter number.
         number: u8,
         /// Value bytes.
-        value: heapless::Vec<u8, { telemetry::handset::crsf::params::MAX_WRITE_LEN }>,
+        value: heapless::Vec<u8, { taulink_handset::crsf::params::MAX_WRITE_LEN }>,
     },
     /// The radio's Bind button (CRSF command 0x32 / 0x10 / 0x01).
     Bind,
@@ -121,10 +121,10 @@ pub trait HandsetOutput {
     }
     /// Data bytes per parameter chunk the line carries in one reply window.
     fn parameter_chunk_len(&self) -> usize {
-        telemetry::handset::crsf::params::MAX_CHUNK_DATA
+        taulink_handset::crsf::params::MAX_CHUNK_DATA
     }
     /// A parameter chunk to send in the next reply window.
-    fn send_parameter_chunk(&mut self, _chunk: telemetry::handset::crsf::params::ParameterChunk) {}
+    fn send_parameter_chunk(&mut self, _chunk: taulink_handset::crsf::params::ParameterChunk) {}
     /// The model ID the radio selected (CRSF model select, 0x32 / 0x10 / 0x05), `None` before
     /// one arrived or on a line that carries none (PPM).
     fn model_id(&self) -> Option<u8> {

@@ -1,7 +1,7 @@
 //! Issue 6 acceptance, CRSF mode: a simulated EdgeTX radio on the half-duplex JR line pings,
 //! then sends RC channel frames every 4 ms; the module answers in each reply window. The
 //! channels reach the flight side unchanged over the real link; the module's replies decode
-//! (with the `telemetry::handset` CRSF decoder) to DEVICE_INFO, the timing frame on the link's
+//! (with the `taulink_handset` CRSF decoder) to DEVICE_INFO, the timing frame on the link's
 //! packet period, LINK_STATISTICS with the flight side's uplink LQ, and BATTERY, ATTITUDE,
 //! FLIGHT_MODE and GPS carrying the flight side's values.
 
@@ -17,7 +17,7 @@ mod common;
 
 use common::{World, flight_battery, module_now, module_settings};
 use module_core::settings::{InputProtocol, OutputProtocol};
-use telemetry::handset::crsf::{
+use taulink_handset::crsf::{
     Decoded, Decoder, DevicePing, Message, RcChannels, address, channels::us_to_ticks,
 };
 
@@ -287,7 +287,7 @@ fn the_timing_frame_pulls_the_radio_onto_the_air_packets() {
     // latched", wrapped to ±P/2.
     let period = i64::from(schedule.period_us);
     let error = |end_us: u64| {
-        let lead = telemetry::handset::crsf::responder::DEFAULT_TIMING_LEAD_US;
+        let lead = taulink_handset::crsf::responder::DEFAULT_TIMING_LEAD_US;
         let target = schedule.phase_us as i64 - i64::from(lead);
         let e = (end_us as i64 - target).rem_euclid(period);
         if e >= period / 2 { e - period } else { e }

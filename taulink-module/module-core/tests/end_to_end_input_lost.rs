@@ -18,7 +18,7 @@ use common::{World, module_now, module_settings};
 use module_core::channels::us_to_ticks;
 use module_core::ports::LinkPort;
 use module_core::settings::{InputProtocol, OutputProtocol, RateMode};
-use telemetry::handset::crsf::{Message, RcChannels, address};
+use taulink_handset::crsf::{Message, RcChannels, address};
 
 /// The Taranis' 8 channel periods, µs; throttle (channel 3) high, as in a climb.
 const WIDTHS_US: [u16; 8] = [1400, 1550, 1800, 1450, 1000, 2000, 1200, 1700];

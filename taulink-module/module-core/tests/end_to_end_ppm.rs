@@ -1,7 +1,7 @@
 //! Issue 6 acceptance, PPM mode: a simulated Taranis PPM waveform → the module core's PPM
 //! decoder → the real link master over the mock radio → the real follower on the flight side,
 //! which must output the same channels; flight telemetry → link → module → S.Port bytes that
-//! the `telemetry::handset` S.Port decoder turns back into the same voltage, RSSI, LQ and
+//! the `taulink_handset` S.Port decoder turns back into the same voltage, RSSI, LQ and
 //! flight mode; and the HM-10 stream, which decodes to the same telemetry messages. A phone
 //! record travels the other way to the flight side.
 
@@ -22,7 +22,7 @@ use module_core::channels::{ticks_to_us, us_to_ticks};
 use module_core::hm10::relay::MAX_FRAME_LEN;
 use module_core::ports::LinkPort;
 use module_core::settings::{InputProtocol, OutputProtocol};
-use telemetry::handset::sport::{self, value_id};
+use taulink_handset::sport::{self, value_id};
 use telemetry::messages::{
     Decoded, FlightMode, Message, MessageReader, SettingChange, encode_message,
 };
@@ -252,7 +252,7 @@ fn ppm_to_flight_and_telemetry_back_as_sport_and_hm10() {
 
 #[test]
 fn ppm_mode_fallback_frsky_d_hub_decodes_to_the_flight_values() {
-    use telemetry::handset::frsky_d::{self, HubDecoder, hub};
+    use taulink_handset::frsky_d::{self, HubDecoder, hub};
 
     let mut world = World::new(module_settings(
         InputProtocol::Ppm,

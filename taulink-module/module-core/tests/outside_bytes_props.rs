@@ -16,7 +16,7 @@ use module_core::ports::{LinkPort, LinkStats};
 use module_core::records::{self, Splitter};
 use module_core::settings::{InputProtocol, OutputProtocol, Settings};
 use proptest::prelude::*;
-use telemetry::handset::crsf::{self, Decoded, RcChannels, address};
+use taulink_handset::crsf::{self, Decoded, RcChannels, address};
 use telemetry::messages::{Attitude, Battery, Message, encode_message};
 
 fn battery(voltage_mv: u16, current_ca: i16) -> Message {

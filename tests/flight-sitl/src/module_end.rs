@@ -26,10 +26,10 @@ use openlrs::dual::DualRadio;
 use openlrs::radio::Clock;
 use radio_rfm22b::{Rfm22b, TxPower};
 use si4432_sim::{Medium, SimDelay, SimIrq, SimSdn, SimSpi};
+use taulink_handset::crsf::channels::RcChannels;
+use taulink_handset::crsf::frame::{Frame, frame_type};
+use taulink_handset::crsf::{ModelSelect, address};
 use telemetry::change_auth::Signer;
-use telemetry::handset::crsf::channels::RcChannels;
-use telemetry::handset::crsf::frame::{Frame, frame_type};
-use telemetry::handset::crsf::{ModelSelect, address};
 use telemetry::messages::{
     Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SettingChange, encode_message,
 };

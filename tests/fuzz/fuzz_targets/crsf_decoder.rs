@@ -5,7 +5,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use telemetry::handset::crsf::{Decoded, Decoder, Message};
+use taulink_handset::crsf::{Decoded, Decoder, Message};
 
 fuzz_target!(|data: &[u8]| {
     let Some((&chunk, line)) = data.split_first() else {

@@ -1,4 +1,4 @@
-//! The module's CRSF responder (`telemetry::handset::crsf::responder`) behind the decoder:
+//! The module's CRSF responder (`taulink_handset::crsf::responder`) behind the decoder:
 //! radio frames from the fuzz bytes (RC channels, pings, model select, anything) at fuzzed
 //! times, with a fuzzed link schedule and handset telemetry, and a reply window after each.
 //!
@@ -9,11 +9,11 @@
 
 use libfuzzer_sys::fuzz_target;
 use taulink_fuzz::Input;
-use telemetry::handset::crsf::responder::{
+use taulink_handset::crsf::responder::{
     Config, LinkSchedule, MAX_REPLY_BYTES, Responder, taulink_device_info,
 };
-use telemetry::handset::crsf::{Decoded, Decoder, Message};
-use telemetry::handset::report::{
+use taulink_handset::crsf::{Decoded, Decoder, Message};
+use taulink_handset::report::{
     AttitudeReport, BatteryReport, FlightModeReport, GpsReport, HandsetTelemetry, LinkReport,
     VerticalReport,
 };

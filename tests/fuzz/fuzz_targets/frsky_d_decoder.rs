@@ -3,7 +3,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use telemetry::handset::frsky_d::{self, Decoder, Event, Frame, HubDecoder};
+use taulink_handset::frsky_d::{self, Decoder, Event, Frame, HubDecoder};
 
 fuzz_target!(|data: &[u8]| {
     let mut decoder = Decoder::new();

@@ -16,7 +16,7 @@ use openlrs::frsky::HandsetTelemetry;
 use openlrs::tx::{BindBeacon, Received, Transmitter};
 use openlrs::uplink::{self, Uplink};
 use taulink_fuzz::Input;
-use telemetry::handset::{frsky_d, sport};
+use taulink_handset::{frsky_d, sport};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);

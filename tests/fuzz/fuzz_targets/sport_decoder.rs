@@ -2,7 +2,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use telemetry::handset::sport::{self, Decoder, Event};
+use taulink_handset::sport::{self, Decoder, Event};
 
 fuzz_target!(|data: &[u8]| {
     let mut decoder = Decoder::new();

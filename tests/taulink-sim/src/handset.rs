@@ -2,7 +2,7 @@
 //! (the mixer run that samples the sticks), when it has arrived at the module, and — for a
 //! CRSF handset that follows the module — how it re-times itself on the module's 0x3A timing
 //! frames as EdgeTX does. The module's side of that exchange is the real
-//! `telemetry::handset::crsf::Responder` (what `module-core` runs); only the radio is
+//! `taulink_handset::crsf::Responder` (what `module-core` runs); only the radio is
 //! modelled here. A PPM handset is an edge train into the module's own PPM decoder
 //! (`ppm_input.rs`).
 //!
@@ -14,10 +14,10 @@
 
 use std::collections::VecDeque;
 
+use taulink_handset::HandsetTelemetry;
+use taulink_handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
+use taulink_handset::crsf::{Decoded, Decoder, Frame, Message, frame_type};
 use telemetry::channels::Channels;
-use telemetry::handset::HandsetTelemetry;
-use telemetry::handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
-use telemetry::handset::crsf::{Decoded, Decoder, Frame, Message, frame_type};
 use telemetry::mock::SplitMix64;
 
 use crate::ppm_input::PpmInput;

@@ -21,8 +21,8 @@
 use std::collections::VecDeque;
 
 use module_core::ppm::{Decoded, Decoder, DecoderConfig};
+use taulink_handset::crsf::channels::ticks_to_us;
 use telemetry::channels::{CHANNEL_CENTER, Channels};
-use telemetry::handset::crsf::channels::ticks_to_us;
 
 use crate::handset::HandsetFrame;
 

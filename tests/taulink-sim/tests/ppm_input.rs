@@ -1,10 +1,10 @@
 //! The PPM handset as the module firmware takes it: an edge train through the module's own
 //! decoder, each frame handed to the link when the firmware's capture task releases it.
 
+use taulink_handset::crsf::channels::us_to_ticks;
 use taulink_sim::handset::{Handset, HandsetFrame, HandsetKind};
 use taulink_sim::ppm_input::{PPM_CHANNELS, stamp, widths_us};
 use telemetry::channels::CHANNEL_CENTER;
-use telemetry::handset::crsf::channels::us_to_ticks;
 
 const SALT: u64 = 7;
 

@@ -1,4 +1,4 @@
-//! The handset side of the JR line, built on `telemetry::handset`: the CRSF decoder and
+//! The handset side of the JR line, built on `taulink_handset`: the CRSF decoder and
 //! reply responder (CRSF input), the S.Port push scheduler and the FrSky D hub sender (PPM
 //! input), chosen from the settings. Implements [`HandsetOutput`] for the module core.
 //!
@@ -9,16 +9,16 @@
 
 pub mod state;
 
-use telemetry::handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
-use telemetry::handset::crsf::{Decoded, Decoder, Message};
-use telemetry::handset::frsky_d::Sender;
-use telemetry::handset::frsky_d::hub::SenderConfig;
-use telemetry::handset::sport::Scheduler;
-use telemetry::handset::sport::schedule::Config as SportConfig;
+use taulink_handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
+use taulink_handset::crsf::{Decoded, Decoder, Message};
+use taulink_handset::frsky_d::Sender;
+use taulink_handset::frsky_d::hub::SenderConfig;
+use taulink_handset::sport::Scheduler;
+use taulink_handset::sport::schedule::Config as SportConfig;
 
 use heapless::Deque;
-use telemetry::handset::crsf::address;
-use telemetry::handset::crsf::params::ParameterChunk;
+use taulink_handset::crsf::address;
+use taulink_handset::crsf::params::ParameterChunk;
 
 use crate::channels::ChannelFrame;
 use crate::ports::{HandsetOutput, HandsetRequest, LinkStats};
@@ -64,7 +64,7 @@ pub const SPORT_BAUD: u32 = 57_600;
 /// FrSky D rate.
 pub const FRSKY_D_BAUD: u32 = 9_600;
 /// Largest burst [`HandsetOutput::next_line_bytes`] writes (EdgeTX's CRSF receive buffer).
-pub const MAX_LINE_BURST: usize = telemetry::handset::crsf::responder::MAX_REPLY_BYTES;
+pub const MAX_LINE_BURST: usize = taulink_handset::crsf::responder::MAX_REPLY_BYTES;
 
 /// How the JR line is driven.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -298,7 +298,7 @@ impl HandsetOutput for Handset {
     fn parameter_chunk_len(&self) -> usize {
         match &self.protocol {
             Protocol::Crsf { responder, .. } => responder.parameter_chunk_len(),
-            _ => telemetry::handset::crsf::params::MAX_CHUNK_DATA,
+            _ => taulink_handset::crsf::params::MAX_CHUNK_DATA,
         }
     }
 

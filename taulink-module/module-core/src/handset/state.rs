@@ -1,10 +1,10 @@
 //! What the handset is told: the flight side's latest telemetry messages and the link's own
-//! statistics, turned into `telemetry::handset::HandsetTelemetry` (plain units) for the CRSF
+//! statistics, turned into `taulink_handset::HandsetTelemetry` (plain units) for the CRSF
 //! responder and the S.Port / FrSky D schedulers.
 
 use heapless::String;
-use telemetry::handset::HandsetTelemetry;
-use telemetry::handset::report::{
+use taulink_handset::HandsetTelemetry;
+use taulink_handset::report::{
     AttitudeReport, BatteryReport, FlightModeReport, GpsReport, LinkReport, VerticalReport,
 };
 use telemetry::messages::{self, GpsFix, Message};

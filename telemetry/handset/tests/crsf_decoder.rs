@@ -5,7 +5,7 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 use proptest::prelude::*;
-use telemetry::handset::crsf::{Decoded, Decoder, Frame, Rejection};
+use taulink_handset::crsf::{Decoded, Decoder, Frame, Rejection};
 
 const BATTERY: [u8; 12] = [
     0xC8, 0x0A, 0x08, 0x00, 0x6F, 0x00, 0x35, 0x00, 0x04, 0xD2, 0x50, 0xB8,

@@ -6,7 +6,7 @@
 //! raw over 13.2 V) at 1 Hz.
 
 use super::{Frame, physical_id, value_id};
-use crate::handset::report::{HandsetTelemetry, scaled_u16};
+use crate::report::{HandsetTelemetry, scaled_u16};
 
 /// How link quality reaches the radio.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

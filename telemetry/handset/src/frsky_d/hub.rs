@@ -5,7 +5,7 @@
 use heapless::{Deque, Vec};
 
 use super::{Frame, LinkFrame, USER_DATA_MAX};
-use crate::handset::report::{HandsetTelemetry, scaled_u16};
+use crate::report::{HandsetTelemetry, scaled_u16};
 
 /// Record start.
 pub const HUB_START: u8 = 0x5E;

@@ -8,12 +8,12 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 use proptest::prelude::*;
-use telemetry::handset::HandsetTelemetry;
-use telemetry::handset::frsky_d::hub::{SenderConfig, id};
-use telemetry::handset::frsky_d::{
+use taulink_handset::HandsetTelemetry;
+use taulink_handset::frsky_d::hub::{SenderConfig, id};
+use taulink_handset::frsky_d::{
     self, Decoder, Event, Frame, HubDecoder, HubRecord, LinkFrame, Rejection, Sender,
 };
-use telemetry::handset::report::{BatteryReport, FlightModeReport, LinkReport, VerticalReport};
+use taulink_handset::report::{BatteryReport, FlightModeReport, LinkReport, VerticalReport};
 
 fn hex(text: &str) -> Vec<u8> {
     let text: String = text.split_whitespace().collect();

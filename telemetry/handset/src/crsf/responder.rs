@@ -11,7 +11,7 @@ use super::params::{CHUNK_HEADER_LEN, MAX_CHUNK_DATA, ParameterChunk};
 use super::sensors::{
     Attitude, BaroAltitude, Battery, FlightModeFrame, Gps, LinkStatistics, Vario,
 };
-use crate::handset::report::HandsetTelemetry;
+use crate::report::HandsetTelemetry;
 
 /// EdgeTX's receive buffer for one burst (`TELEMETRY_RX_PACKET_SIZE`).
 pub const MAX_REPLY_BYTES: usize = 128;

@@ -6,12 +6,12 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 use proptest::prelude::*;
-use telemetry::handset::HandsetTelemetry;
-use telemetry::handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
-use telemetry::handset::crsf::{self, Decoded, Message, RcChannels};
-use telemetry::handset::frsky_d::{self, HubDecoder, Sender, hub};
-use telemetry::handset::report::{BatteryReport, FlightModeReport, LinkReport};
-use telemetry::handset::sport::{self, Scheduler, schedule, value_id};
+use taulink_handset::HandsetTelemetry;
+use taulink_handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
+use taulink_handset::crsf::{self, Decoded, Message, RcChannels};
+use taulink_handset::frsky_d::{self, HubDecoder, Sender, hub};
+use taulink_handset::report::{BatteryReport, FlightModeReport, LinkReport};
+use taulink_handset::sport::{self, Scheduler, schedule, value_id};
 
 fn telemetry(voltage_mv: u32, current_ma: u32, lq: u8, mode: u8) -> HandsetTelemetry {
     HandsetTelemetry {

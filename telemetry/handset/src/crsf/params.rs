@@ -429,7 +429,7 @@ mod tests {
             })
         );
         assert!(ParameterRead::from_payload(&[0xEE, 0xEA, 3]).is_err());
-        // Worked frame K (`tests/handset_crsf_frames.rs`): `C8 06 2D EE EF 11 01 A5`, a parameter
+        // Worked frame K (`tests/crsf_frames.rs`): `C8 06 2D EE EF 11 01 A5`, a parameter
         // write published in other CRSF parsers' tests.
         let write = ParameterWrite::from_payload(&[0xEE, 0xEF, 0x11, 0x01]).unwrap();
         assert_eq!((write.number, write.value.as_slice()), (0x11, &[1u8][..]));

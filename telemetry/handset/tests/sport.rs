@@ -11,7 +11,7 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 use proptest::prelude::*;
-use telemetry::handset::sport::{self, Decoder, Event, Frame, Rejection, physical_id, value_id};
+use taulink_handset::sport::{self, Decoder, Event, Frame, Rejection, physical_id, value_id};
 
 fn hex(text: &str) -> Vec<u8> {
     let text: String = text.split_whitespace().collect();

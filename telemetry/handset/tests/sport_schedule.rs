@@ -4,10 +4,10 @@
 // Test helpers outside #[test] fns are not covered by clippy.toml's test allowances.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
-use telemetry::handset::HandsetTelemetry;
-use telemetry::handset::report::{BatteryReport, FlightModeReport, LinkReport};
-use telemetry::handset::sport::schedule::{Config, LqEncoding, RssiSource};
-use telemetry::handset::sport::{self, Decoder, Event, Frame, Scheduler, value_id};
+use taulink_handset::HandsetTelemetry;
+use taulink_handset::report::{BatteryReport, FlightModeReport, LinkReport};
+use taulink_handset::sport::schedule::{Config, LqEncoding, RssiSource};
+use taulink_handset::sport::{self, Decoder, Event, Frame, Scheduler, value_id};
 
 fn telemetry() -> HandsetTelemetry {
     HandsetTelemetry {

@@ -15,11 +15,11 @@
 // 1.5708 rad is the worked frame's value (frame E), not a stand-in for π/2.
 #![allow(clippy::approx_constant)]
 
-use telemetry::handset::crsf::channels::{self, RcChannels};
-use telemetry::handset::crsf::device::COMMAND_CRC;
-use telemetry::handset::crsf::frame::FRAME_CRC;
-use telemetry::handset::crsf::responder::taulink_device_info;
-use telemetry::handset::crsf::{
+use taulink_handset::crsf::channels::{self, RcChannels};
+use taulink_handset::crsf::device::COMMAND_CRC;
+use taulink_handset::crsf::frame::FRAME_CRC;
+use taulink_handset::crsf::responder::taulink_device_info;
+use taulink_handset::crsf::{
     Attitude, Battery, Decoded, Decoder, DeviceInfo, DevicePing, Error, FlightModeFrame, Frame,
     Gps, LinkStatistics, Message, ModelSelect, TimingCorrection,
 };
@@ -498,7 +498,7 @@ fn worked_k_parameter_write_decodes() {
 fn bind_command_needs_its_inner_crc() {
     // EdgeTX's Bind button: 0x32 / 0x10 / 0x01 with the poly-0xBA inner CRC.
     let inner =
-        telemetry::handset::crsf::device::COMMAND_CRC.checksum(&[0x32, 0xEE, 0xEA, 0x10, 0x01]);
+        taulink_handset::crsf::device::COMMAND_CRC.checksum(&[0x32, 0xEE, 0xEA, 0x10, 0x01]);
     let frame = Frame::new(0xC8, 0x32, &[0xEE, 0xEA, 0x10, 0x01, inner]).unwrap();
     assert!(matches!(
         Message::from_frame(&frame),
@@ -545,7 +545,7 @@ fn microseconds_survive_the_tick_round_trip() {
 
 #[test]
 fn power_table_and_angle_saturation() {
-    use telemetry::handset::crsf::sensors::{radians_to_100urad, tx_power_index};
+    use taulink_handset::crsf::sensors::{radians_to_100urad, tx_power_index};
     // Table 0, 10, 25, 100, 500, 1000, 2000, 250, 50 mW: largest entry not above the power,
     // never "0 mW" for a transmitter.
     for (mw, index) in [

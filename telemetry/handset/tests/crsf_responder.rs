@@ -2,15 +2,15 @@
 
 // Test helpers outside #[test] fns are not covered by clippy.toml's test allowances.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
-// 1.5708 rad is the worked ATTITUDE frame's value (`handset_crsf_frames.rs`, frame E), not a
+// 1.5708 rad is the worked ATTITUDE frame's value (`crsf_frames.rs`, frame E), not a
 // stand-in for π/2.
 #![allow(clippy::approx_constant)]
 
 use proptest::prelude::*;
-use telemetry::handset::HandsetTelemetry;
-use telemetry::handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
-use telemetry::handset::crsf::{Decoded, Decoder, Frame, Message, RcChannels};
-use telemetry::handset::report::{
+use taulink_handset::HandsetTelemetry;
+use taulink_handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
+use taulink_handset::crsf::{Decoded, Decoder, Frame, Message, RcChannels};
+use taulink_handset::report::{
     AttitudeReport, BatteryReport, FlightModeReport, GpsReport, LinkReport,
 };
 

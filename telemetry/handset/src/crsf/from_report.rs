@@ -5,7 +5,7 @@ use super::sensors::{
     Attitude, Battery, FLIGHT_MODE_VISIBLE_LEN, FlightModeFrame, Gps, LinkStatistics,
 };
 use super::sensors::{radians_to_100urad, tx_power_index};
-use crate::handset::report::{
+use crate::report::{
     AttitudeReport, BatteryReport, FlightModeReport, GpsReport, LinkReport, scaled_u16,
 };
 
