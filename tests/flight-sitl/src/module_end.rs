@@ -22,6 +22,7 @@ use module_core::channels::ticks_to_us;
 use module_core::handset::{Handset, LineMode, MAX_LINE_BURST};
 use module_core::link_task::{LinkPorts, run_link_step};
 use module_core::settings::Settings as ModuleSettings;
+use module_core::watchdog::{CheckIns, FEED_PERIOD_MS, WATCHDOG_TIMEOUT_MS, Watched};
 use openlrs::dual::DualRadio;
 use openlrs::radio::Clock;
 use radio_rfm22b::{Rfm22b, TxPower};
@@ -44,8 +45,8 @@ use si4432_sim::{SimClock, VirtualTime};
 /// the NVMC ≈ 1 ms, the RFM22B probe is the link task's first step (its own POR time is
 /// in the chip model).
 pub const MODULE_BOOT_MS: u64 = 5;
-/// The nRF52840 WDT timeout the firmware programs (32 768 / 4 ticks), ms.
-pub const MODULE_WATCHDOG_MS: u64 = 250;
+/// The nRF52840 WDT timeout the firmware programs (module-core's `WATCHDOG_TIMEOUT_MS`), ms.
+pub const MODULE_WATCHDOG_MS: u64 = WATCHDOG_TIMEOUT_MS as u64;
 /// The module's crystal error, ppm.
 const MODULE_DRIFT_PPM: f64 = 20.0;
 /// PPM frame period of the handset, µs (8 channels, the usual 22.5 ms).
@@ -92,31 +93,22 @@ impl ModuleChip {
 
 type ModuleApp = App<AirLink, Handset>;
 
-/// The tasks the module's supervisor expects (the firmware's `Watched` bits of the tasks
-/// modelled here; the LED, button, battery, settings and JR-line tasks only idle and
-/// check in, so they are left out).
-#[derive(Clone, Copy)]
-enum Watched {
-    Radio = 1 << 1,
-    PpmIn = 1 << 2,
-    Hm10 = 1 << 5,
-    App = 1 << 9,
-}
-
-const EXPECTED: u32 =
-    Watched::Radio as u32 | Watched::PpmIn as u32 | Watched::Hm10 as u32 | Watched::App as u32;
+/// The tasks the module's supervisor expects here (the firmware registers these; the LED,
+/// button, battery, settings and JR-line tasks only idle and check in, so they are left out).
+const EXPECTED: [Watched; 4] = [Watched::Radio, Watched::PpmIn, Watched::Hm10, Watched::App];
 
 /// One boot's context.
 struct Board {
     app: RefCell<ModuleApp>,
     clock: SimClock,
-    checked_in: Cell<u32>,
+    /// module-core's check-in policy, as the firmware's supervisor runs it.
+    check_ins: CheckIns,
     last_feed_ms: Cell<u32>,
 }
 
 impl Board {
     fn check_in(&self, t: Watched) {
-        self.checked_in.set(self.checked_in.get() | t as u32);
+        self.check_ins.check_in(t);
     }
 
     fn now_ms(&self) -> u32 {
@@ -454,10 +446,9 @@ async fn hm10_task(b: &Board, shared: &Shared) {
 /// NVMC halts the CPU).
 async fn supervisor_task(b: &Board, shared: &Shared) {
     loop {
-        sleep_ms(b.time(), 100).await;
+        sleep_ms(b.time(), u64::from(FEED_PERIOD_MS)).await;
         wait_while_halted(shared, b.time()).await;
-        if b.checked_in.get() & EXPECTED == EXPECTED {
-            b.checked_in.set(0);
+        if b.check_ins.poll() {
             b.last_feed_ms.set(b.now_ms());
         }
     }
@@ -497,8 +488,11 @@ pub(crate) async fn module_board(
             app: RefCell::new(app),
             last_feed_ms: Cell::new(clock.now_ms()),
             clock,
-            checked_in: Cell::new(0),
+            check_ins: CheckIns::new(),
         };
+        for task in EXPECTED {
+            board.check_ins.expect(task);
+        }
         let tasks = join(
             join5(
                 link_task(&board, &chip, &shared, seed),
