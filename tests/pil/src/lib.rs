@@ -1,0 +1,8 @@
+//! Processor in the loop: the images a pilot flashes, run on emulated microcontrollers
+//! (`m4-sim`'s Cortex-M4F core with this crate's register-level STM32F405 and nRF52840
+//! peripheral models) against the project's simulated chips, handset and quadrotor.
+//!
+//! - [`wire`]: what a microcontroller model sees of its board — pins, SPI, I²C, UART and
+//!   analog inputs — the one boundary between the SoC models and the world.
+
+pub mod wire;
