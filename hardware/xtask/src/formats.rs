@@ -1,7 +1,7 @@
 //! Flashable file formats from load segments: raw binary (USB DFU), Intel HEX (probe-rs,
 //! nRF tools) and UF2 (drag-and-drop bootloaders such as the nice!nano's).
 
-use crate::elf::Segment;
+use fw_elf::Segment;
 
 /// Flat image from the lowest to the highest loaded address, gaps filled with 0xFF (the
 /// erased state of flash). Returns the start address and the bytes.

@@ -11,7 +11,7 @@
 //! cargo xtask figures [--check | --write]                # the docs' M4 instruction figures
 //! ```
 
-mod elf;
+use fw_elf as elf;
 mod figures;
 mod formats;
 mod layout;

@@ -3,10 +3,10 @@
 //! never reaches a pilot. Every check reads the files `dist` wrote; nothing is trusted from
 //! the linker scripts.
 
-use crate::elf::{self, Segment};
 use crate::formats;
 use crate::layout::Layout;
 use crate::tlfw;
+use fw_elf::{self as elf, Segment};
 
 /// VTOR, the Vector Table Offset Register (Armv7-M SCB).
 pub const VTOR: u32 = 0xE000_ED08;

@@ -1,5 +1,6 @@
-//! Just enough ELF32 (little-endian, ARM) reading to get the loadable image and the
-//! text/data/bss sizes out of a firmware ELF, so no binutils are needed.
+//! Just enough ELF32 (little-endian, ARM) reading to get the loadable image, the
+//! text/data/bss sizes and the symbol table out of a firmware ELF, so no binutils are needed
+//! (xtask's flashable files and checks, the processor-in-the-loop runner's loader).
 
 use std::fmt;
 
@@ -172,6 +173,59 @@ pub fn sizes(elf: &[u8]) -> Result<Sizes, ElfError> {
     Ok(sizes)
 }
 
+/// One symbol of the symbol table with an address (functions, objects).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Symbol {
+    /// The (mangled) name.
+    pub name: String,
+    /// Its value: the address (Thumb functions have bit 0 set, as the table stores them).
+    pub address: u32,
+    /// Its size in bytes (0 when the table does not say).
+    pub size: u32,
+}
+
+const SHT_SYMTAB: u32 = 2;
+const SYM_SIZE: usize = 16;
+
+/// Every named symbol of the `.symtab` sections, in table order.
+pub fn symbols(elf: &[u8]) -> Result<Vec<Symbol>, ElfError> {
+    check_header(elf)?;
+    let shoff = u32_at(elf, 0x20)? as usize;
+    let shentsize = u16_at(elf, 0x2E)? as usize;
+    let shnum = u16_at(elf, 0x30)? as usize;
+    let section = |i: usize| shoff + i * shentsize;
+    let mut out = Vec::new();
+    for i in 0..shnum {
+        let sh = section(i);
+        if u32_at(elf, sh + 4)? != SHT_SYMTAB {
+            continue;
+        }
+        let (offset, size, link) = (
+            u32_at(elf, sh + 16)? as usize,
+            u32_at(elf, sh + 20)? as usize,
+            u32_at(elf, sh + 24)? as usize,
+        );
+        let strings = u32_at(elf, section(link) + 16)? as usize;
+        for entry in (offset..offset + size).step_by(SYM_SIZE) {
+            let name = u32_at(elf, entry)? as usize;
+            if name == 0 {
+                continue;
+            }
+            let tail = elf.get(strings + name..).ok_or(ElfError::Truncated)?;
+            let end = tail
+                .iter()
+                .position(|&b| b == 0)
+                .ok_or(ElfError::Truncated)?;
+            out.push(Symbol {
+                name: String::from_utf8_lossy(tail.get(..end).unwrap_or_default()).into_owned(),
+                address: u32_at(elf, entry + 4)?,
+                size: u32_at(elf, entry + 8)?,
+            });
+        }
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -233,6 +287,11 @@ pub(crate) mod tests {
                 bss: 50
             }
         );
+    }
+
+    #[test]
+    fn an_elf_without_a_symbol_table_has_no_symbols() {
+        assert_eq!(symbols(&tiny_elf()).unwrap(), vec![]);
     }
 
     #[test]
