@@ -267,6 +267,9 @@ table! {
     MAG_XY: f32 = f(807, "mag.xy", -10.0, 10.0, 0.0),
     MAG_XZ: f32 = f(808, "mag.xz", -10.0, 10.0, 0.0),
     MAG_YZ: f32 = f(809, "mag.yz", -10.0, 10.0, 0.0),
+    // 1 lets a bind without a key agreement through and the link it stores run
+    // unauthenticated (spec §12.1: only by this explicit setting; the module needs its own).
+    LINK_UNAUTHENTICATED: u32 = u(715, "link.unauthenticated", 0, 1, 0),
     ;
     // Handle arrays for the composite names, in the handles module.
     /// The rate PID gains, `[roll, pitch, yaw][kp, ki, kd]` (`pid.<axis>.<gain>`).
