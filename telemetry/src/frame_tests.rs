@@ -317,7 +317,10 @@ fn sealed_frames_fail_under_another_counter_key_or_any_flipped_bit() {
         "a replay under a later counter"
     );
     let other = LinkKey::from_bytes([0x40; 16]);
-    assert_eq!(open(sealed, &other, &TagContext::Counter(5)), Received::Rejected(Rejection::Tag));
+    assert_eq!(
+        open(sealed, &other, &TagContext::Counter(5)),
+        Received::Rejected(Rejection::Tag)
+    );
     for bit in 8..m * 8 {
         let mut f = sealed.to_vec();
         f[bit / 8] ^= 1 << (bit % 8);
@@ -362,7 +365,10 @@ fn the_epoch_nonce_travels_only_in_sealed_downlinks_with_64_bits_and_an_optional
         out[..11],
         [SEALED_VERSION, 0x44, 7, 0xEF, 0xBE, 0xAD, 0xDE, 4, 3, 2, 1]
     );
-    assert_eq!(open(&out[..n], &sealed_key(), &ctx), Received::Accepted(nonce));
+    assert_eq!(
+        open(&out[..n], &sealed_key(), &ctx),
+        Received::Accepted(nonce)
+    );
     assert_eq!(peek_sealed(&out[..n]), Some(nonce));
     assert_eq!(
         open(&out[..n], &sealed_key(), &TagContext::Counter(9)),
@@ -378,7 +384,10 @@ fn the_epoch_nonce_travels_only_in_sealed_downlinks_with_64_bits_and_an_optional
     assert_eq!(p, PROVEN_NONCE_FRAME_BYTES);
     assert_eq!(out[1], 0x4C);
     assert_eq!(out[11..15], [0xD4, 0xC3, 0xB2, 0xA1]);
-    assert_eq!(open(&out[..p], &sealed_key(), &ctx), Received::Accepted(proven));
+    assert_eq!(
+        open(&out[..p], &sealed_key(), &ctx),
+        Received::Accepted(proven)
+    );
     // The proof bit on a nonce frame without a proof, or the proof without the bit:
     // malformed.
     for (kind, len) in [(0x4C, 11), (0x44, 15), (0x4E, 11)] {
@@ -490,7 +499,13 @@ fn sealed_frames_without_stream_data_drop_the_seq_byte() {
         panic!()
     };
     let mut out = [0u8; 64];
-    let m = seal(&Frame::Uplink(up), &sealed_key(), &TagContext::Counter(5), &mut out).unwrap();
+    let m = seal(
+        &Frame::Uplink(up),
+        &sealed_key(),
+        &TagContext::Counter(5),
+        &mut out,
+    )
+    .unwrap();
     assert_eq!(m, 32);
     assert_eq!(m, sealed_uplink_bytes(ChannelFormat::Full16, true, 0));
     assert_eq!(out[1] & 0x80, 0x80);
@@ -505,7 +520,13 @@ fn sealed_frames_without_stream_data_drop_the_seq_byte() {
     );
     // With stream data the seq byte is there and the flag is not.
     let data = Uplink { data: b"xy", ..up };
-    let k = seal(&Frame::Uplink(data), &sealed_key(), &TagContext::Counter(5), &mut out).unwrap();
+    let k = seal(
+        &Frame::Uplink(data),
+        &sealed_key(),
+        &TagContext::Counter(5),
+        &mut out,
+    )
+    .unwrap();
     assert_eq!(k, 35);
     assert_eq!(out[1] & 0x80, 0);
     assert_eq!(
@@ -534,8 +555,14 @@ fn the_master_nonce_travels_only_in_sealed_frames_as_kind_0x46_bound_to_both_non
     let mut out = [0u8; 64];
     let n = seal(&nonce, &sealed_key(), &ctx, &mut out).unwrap();
     assert_eq!(n, NONCE_FRAME_BYTES);
-    assert_eq!(out[..11], [SEALED_VERSION, 0x46, 8, 4, 3, 2, 1, 0x0D, 0x0C, 0x0B, 0x0A]);
-    assert_eq!(open(&out[..n], &sealed_key(), &ctx), Received::Accepted(nonce));
+    assert_eq!(
+        out[..11],
+        [SEALED_VERSION, 0x46, 8, 4, 3, 2, 1, 0x0D, 0x0C, 0x0B, 0x0A]
+    );
+    assert_eq!(
+        open(&out[..n], &sealed_key(), &ctx),
+        Received::Accepted(nonce)
+    );
     assert_eq!(peek_sealed(&out[..n]), Some(nonce));
     // Under another follower nonce it fails: only the follower it answers takes it.
     assert_eq!(

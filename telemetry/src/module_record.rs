@@ -419,7 +419,11 @@ mod tests {
         let (_, granted) = module
             .respond(&response, Some(&change_key()))
             .expect("confirmed");
-        assert_ne!(granted.change_key.as_ref(), Some(change_key().as_bytes()), "never in clear");
+        assert_ne!(
+            granted.change_key.as_ref(),
+            Some(change_key().as_bytes()),
+            "never in clear"
+        );
         assert_eq!(phone.on_granted(&granted), Ok(Some(change_key())));
         // Another phrase: the module refuses; a module that does not know the phrase is
         // not believed by the phone either.
@@ -447,7 +451,10 @@ mod tests {
             .unwrap();
             let (mut session, _) = module.respond(&response, None).unwrap();
             let record = phone.set_phrase("brass lantern at the weir").unwrap();
-            assert_eq!(record.counter, 1, "a fresh phone signs counter 1 every time");
+            assert_eq!(
+                record.counter, 1,
+                "a fresh phone signs counter 1 every time"
+            );
             assert_eq!(
                 session.open(&record),
                 Ok(secret("brass lantern at the weir").prs)
@@ -457,7 +464,10 @@ mod tests {
             forged.sealed[0] ^= 1;
             assert_eq!(session.open(&forged), Err(Refusal::NotAuthenticated));
             // The pad is the sealed bytes XOR the derivation.
-            pads.push(xor(&record.sealed, &secret("brass lantern at the weir").prs));
+            pads.push(xor(
+                &record.sealed,
+                &secret("brass lantern at the weir").prs,
+            ));
         }
         assert_ne!(pads[0], pads[1], "two sessions never share a pad");
     }

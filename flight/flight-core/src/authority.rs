@@ -258,7 +258,12 @@ mod tests {
         let mut forged = phone.sign(descent());
         forged.tag[0] ^= 1;
         assert_eq!(
-            refused(gate.on_message(&Message::SignedChange(forged), &mut settings, Some(key()), true)),
+            refused(gate.on_message(
+                &Message::SignedChange(forged),
+                &mut settings,
+                Some(key()),
+                true
+            )),
             RefuseReason::NotAuthenticated
         );
         let next = Message::SignedChange(phone.sign(descent()));

@@ -36,6 +36,21 @@ pub struct LinkStats {
     pub rate_code: u8,
     /// The uplink schedule (transmitter role, once the link runs).
     pub schedule: Option<AirSchedule>,
+    /// Frames whose authentication tag failed at this end since the link session started
+    /// (spec §12.2).
+    pub tag_failures: u32,
+}
+
+/// The link's authentication failures (spec §12.2) as the handset and the phone show them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TagFailures {
+    /// Frames whose tag failed at this module since it started.
+    pub down: u32,
+    /// Frames whose tag failed at the other end (its last report).
+    pub up: u32,
+    /// Either runs above what noise explains.
+    pub alert: bool,
 }
 
 /// The air link as the module core sees it.

@@ -341,7 +341,8 @@ impl Offering {
         if bind_id != self.offer.bind_id {
             return None;
         }
-        let (Some(own), Some(theirs), Some(offered)) = (&self.exchange, exchange, self.offer.exchange)
+        let (Some(own), Some(theirs), Some(offered)) =
+            (&self.exchange, exchange, self.offer.exchange)
         else {
             return (self.exchange.is_none() && exchange.is_none()).then_some(Accepted::Bound {
                 key: None,
@@ -439,13 +440,7 @@ impl Answering {
         let offered = offer.exchange?;
         let sid = bind_sid(offer.bind_id, &offered.session);
         let exchange = Exchange::start(prs, BIND_CI, &sid, random);
-        let isk = exchange.finish(
-            Role::Responder,
-            &offered.share,
-            &[],
-            &offer_ad(offer),
-            &sid,
-        )?;
+        let isk = exchange.finish(Role::Responder, &offered.share, &[], &offer_ad(offer), &sid)?;
         Some(Self {
             offer: *offer,
             share: exchange.share(),
@@ -473,8 +468,11 @@ impl Answering {
     /// right one (the link's key, unsealed), `Some(None)` for a wrong one (the bind ends:
     /// one guess), `None` for anything else.
     pub fn on_confirm(&self, packet: &[u8]) -> Option<Option<LinkKey>> {
-        let Received::Accepted(Frame::BindConfirm { bind_id, tag, sealed }) =
-            decode(packet, BIND_KEY)
+        let Received::Accepted(Frame::BindConfirm {
+            bind_id,
+            tag,
+            sealed,
+        }) = decode(packet, BIND_KEY)
         else {
             return None;
         };
@@ -482,9 +480,8 @@ impl Answering {
             return None;
         }
         Some(
-            tags_equal(&confirm_tag(&self.isk, &sealed), &tag).then(|| {
-                LinkKey::from_bytes(xor16(&sealed, &self.isk.derive16(LABEL_WRAP)))
-            }),
+            tags_equal(&confirm_tag(&self.isk, &sealed), &tag)
+                .then(|| LinkKey::from_bytes(xor16(&sealed, &self.isk.derive16(LABEL_WRAP)))),
         )
     }
 
@@ -547,7 +544,10 @@ mod tests {
         let offering = Offering::new(&p, &BindAuth::Plain, &[0; 32]);
         let mut buf = [0u8; 64];
         let n = encode(&Frame::BindOffer(offering.offer()), BIND_KEY, &mut buf).unwrap();
-        assert_eq!(n, 13, "a plain offer: version, kind, ID, 4 codes, auth, CRC");
+        assert_eq!(
+            n, 13,
+            "a plain offer: version, kind, ID, 4 codes, auth, CRC"
+        );
         assert_eq!(buf[0], crate::frame::BIND_VERSION);
         let offer = offered(&buf[..n]).unwrap();
         assert_eq!(LinkParams::from_offer(&offer), p);
@@ -635,7 +635,10 @@ mod tests {
         // Without a phrase: anyone in the window agrees, and still nobody who only listens.
         let (accepted, confirmed, offer_len) = bind(&BindAuth::Anonymous, &[], 2);
         assert_eq!(offer_len, 53);
-        assert!(matches!(accepted, Some(Accepted::Bound { key: Some(_), .. })));
+        assert!(matches!(
+            accepted,
+            Some(Accepted::Bound { key: Some(_), .. })
+        ));
         assert_eq!(confirmed, Some(Some(key(0x5A))));
     }
 
@@ -685,7 +688,10 @@ mod tests {
         changed.rate = RateMode::L50;
         let other = Answering::new(&changed, &[], &[8; 32]).unwrap();
         let n = encode(&other.accept(), BIND_KEY, &mut buf).unwrap();
-        assert_eq!(offering.on_accept(&buf[..n], &key(1)), Some(Accepted::Mismatch));
+        assert_eq!(
+            offering.on_accept(&buf[..n], &key(1)),
+            Some(Accepted::Mismatch)
+        );
     }
 
     #[test]

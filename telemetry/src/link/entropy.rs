@@ -56,8 +56,16 @@ mod tests {
         let first = a.draw(b"nonces");
         assert_eq!(b.draw(b"nonces"), first, "deterministic");
         assert_ne!(a.draw(b"nonces"), first, "the next draw");
-        assert_ne!(Entropy::new([1; 32]).draw(b"session"), first, "another label");
+        assert_ne!(
+            Entropy::new([1; 32]).draw(b"session"),
+            first,
+            "another label"
+        );
         assert_ne!(Entropy::new([2; 32]).draw(b"nonces"), first, "another seed");
-        assert_eq!(format!("{a:?}"), "Entropy(2 draws)", "the seed is never printed");
+        assert_eq!(
+            format!("{a:?}"),
+            "Entropy(2 draws)",
+            "the seed is never printed"
+        );
     }
 }

@@ -4,8 +4,8 @@
 
 use super::auth::LinkKey;
 use super::bind::{
-    ACCEPT_REPEATS, Answering, BIND_KEY, BindRefusal, CONFIRM_WAIT_US, FollowerAuth,
-    LinkParams, OfferNeeds, bind_radio_config, offer_needs, offered,
+    ACCEPT_REPEATS, Answering, BIND_KEY, BindRefusal, CONFIRM_WAIT_US, FollowerAuth, LinkParams,
+    OfferNeeds, bind_radio_config, offer_needs, offered,
 };
 use super::core::{Follower, Step};
 use super::hopping::Band;
@@ -83,7 +83,9 @@ pub async fn bind_follower<R: PacketRadio, C: LinkClock>(
                 });
             }
             OfferNeeds::Anonymous => None,
-            OfferNeeds::Phrase { stored: Some(s), .. } => Some(s),
+            OfferNeeds::Phrase {
+                stored: Some(s), ..
+            } => Some(s),
             OfferNeeds::Phrase { salt, stored: None } => {
                 let Some(phrase) = auth.phrase else {
                     continue;

@@ -286,7 +286,10 @@ mod tests {
         // The identity and a non-canonical encoding are refused.
         assert_eq!(a.finish(Role::Initiator, &[0; 32], b"", b"", &sid), None);
         assert_eq!(a.finish(Role::Initiator, &[0xFF; 32], b"", b"", &sid), None);
-        assert_eq!(format!("{a:?} {:?}", agreed.unwrap()), "Exchange(..) SessionKey(..)");
+        assert_eq!(
+            format!("{a:?} {:?}", agreed.unwrap()),
+            "Exchange(..) SessionKey(..)"
+        );
         let key = agreed.unwrap();
         assert_ne!(key.derive16(b"one"), key.derive16(b"two"));
         assert!(tags_equal(&key.derive16(b"one"), &key.derive16(b"one")));

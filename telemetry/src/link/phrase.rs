@@ -299,11 +299,21 @@ mod tests {
             Ok(Some("amber kettle under the oak"))
         );
         assert_eq!(check_phrase("short one"), Err(PhraseError::TooShort));
-        assert_eq!(check_phrase("ääääbbbbcccc").map(|p| p.is_some()), Err(PhraseError::TooSimple));
-        assert_eq!(check_phrase("abababababababab"), Err(PhraseError::TooSimple));
+        assert_eq!(
+            check_phrase("ääääbbbbcccc").map(|p| p.is_some()),
+            Err(PhraseError::TooSimple)
+        );
+        assert_eq!(
+            check_phrase("abababababababab"),
+            Err(PhraseError::TooSimple)
+        );
         assert!(check_phrase("Grüezi Säntis 2026").unwrap().is_some());
         let longest = "abcdefghij".repeat(6) + "abcd";
-        assert_eq!(check_phrase(&longest), Ok(Some(longest.as_str())), "64 bytes");
+        assert_eq!(
+            check_phrase(&longest),
+            Ok(Some(longest.as_str())),
+            "64 bytes"
+        );
         assert_eq!(check_phrase(&(longest + "e")), Err(PhraseError::TooLong));
         assert_eq!(
             check_phrase("bell\u{7}ringing loud"),
@@ -316,6 +326,10 @@ mod tests {
         ] {
             assert_eq!(check_phrase(famous), Err(PhraseError::Famous), "{famous}");
         }
-        assert!(check_phrase("correct horse battery stapler").unwrap().is_some());
+        assert!(
+            check_phrase("correct horse battery stapler")
+                .unwrap()
+                .is_some()
+        );
     }
 }

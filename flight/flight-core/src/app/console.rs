@@ -218,7 +218,6 @@ impl FlightApp {
     }
 }
 
-
 impl FlightApp {
     /// The link's key as the console shows it (its fingerprint, never the key) and how the
     /// last bind window ended.

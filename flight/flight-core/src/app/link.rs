@@ -24,19 +24,20 @@
 use openlrs::BindData;
 use openlrs::rx::Config as OpenLrsConfig;
 use telemetry::channels::FailsafeValues;
+use telemetry::link::alarm::TagAlarm;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::{FollowerBind, FollowerHooks};
 use telemetry::link::phrase::PHRASE_MAX_BYTES;
 use telemetry::link::{Band, BindRefusal, Entropy, LinkParams, PhraseError, check_phrase};
 use telemetry::messages::{
-    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SysIdResult, encode_message,
+    Decoded, FRAMED_MAX_BYTES, LinkSecurity, Message, MessageReader, SysIdResult, encode_message,
 };
 
 use super::{FlightApp, Task};
 use crate::authority::{ChangeGate, Reply};
 use crate::pipeline::{ChannelMap, Protocol, bind_band, protocol, store_link, stored_link};
-use crate::settings::handles;
 use crate::report::{LinkSeen, Reporter, Snapshot, sysid_messages};
+use crate::settings::handles;
 use crate::supervisor::FlightMode;
 use crate::sysid::ekf::Identification;
 
@@ -77,6 +78,13 @@ pub(super) struct LinkSide {
     pub(super) openlrs: super::openlrs::OpenLrsSide,
     /// The link key changed since the running follower was built: restart it.
     key_changed: bool,
+    /// Tag failures over the last seconds (spec §12.2).
+    alarm: TagAlarm,
+    /// The tag failures and alert last sent, and when (a `LinkSecurity` message goes out when
+    /// they change, at most once a second).
+    security_sent: (u32, bool, Option<u64>),
+    /// A `LinkSecurity` message is due.
+    security_due: Option<LinkSecurity>,
 }
 
 /// Where the explicit bind stands.
@@ -113,6 +121,9 @@ impl LinkSide {
             bind: BindState::Closed,
             openlrs: super::openlrs::OpenLrsSide::new(),
             key_changed: false,
+            alarm: TagAlarm::default(),
+            security_sent: (0, false, None),
+            security_due: None,
         }
     }
 
@@ -363,9 +374,31 @@ impl FlightApp {
             };
             self.on_uplink_bytes(bytes);
         }
+        self.watch_tags(now_us, follower.counters().tag_failures);
         if self.report_due(now_us) {
             self.report(follower);
         }
+    }
+
+    /// The follower's tag failures at `now_us`: the alarm follows them, and a change is
+    /// reported (at most once a second).
+    fn watch_tags(&mut self, now_us: u64, tag_failures: u32) {
+        let alert = self.link.alarm.update(now_us, tag_failures);
+        let (sent, sent_alert, at) = self.link.security_sent;
+        let changed = (tag_failures, alert) != (sent, sent_alert);
+        let quiet = at.is_none_or(|t| now_us.saturating_sub(t) >= 1_000_000);
+        if changed && quiet {
+            self.link.security_sent = (tag_failures, alert, Some(now_us));
+            self.link.security_due = Some(LinkSecurity {
+                tag_failures,
+                alert,
+            });
+        }
+    }
+
+    /// Whether the link's tag failures run above what noise explains.
+    pub fn tag_alert(&self) -> bool {
+        self.link.alarm.alert()
     }
 
     /// What every link protocol hands the loop after each step, the one interface the
@@ -489,6 +522,8 @@ impl FlightApp {
         } else if self.link.last_state != Some(state) {
             self.link.last_state = Some(state);
             Reporter::state(&snap)
+        } else if let Some(security) = self.link.security_due.take() {
+            Message::LinkSecurity(security)
         } else if let Some(home) = self.take_home_report() {
             home
         } else if let Some(gps) = self.take_gps_report() {

@@ -150,7 +150,11 @@ where
                     request.window_us,
                 );
                 let Either::First(result) = select(bind, keep_alive(app, ticker)).await;
-                let outcome = result.as_ref().ok().copied().unwrap_or(FollowerBind::NoOffer);
+                let outcome = result
+                    .as_ref()
+                    .ok()
+                    .copied()
+                    .unwrap_or(FollowerBind::NoOffer);
                 let stored = app.with_app(|a| a.on_bind_result(&outcome));
                 let event = match outcome {
                     FollowerBind::Bound { params, key } if stored == Some(true) => {

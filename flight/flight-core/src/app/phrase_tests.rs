@@ -37,7 +37,10 @@ fn bind_with_a_phrase_holds_it_for_the_window_only_and_stores_the_agreed_key() {
     app.seed_random(&[1; 32]);
     let out = console(&mut app, &format!("bind {PHRASE}"));
     assert!(out.contains("with the phrase"), "{out}");
-    assert!(!out.contains("kettle"), "the phrase is never printed: {out}");
+    assert!(
+        !out.contains("kettle"),
+        "the phrase is never printed: {out}"
+    );
     let request = app.take_bind_request().expect("a window");
     assert_eq!(request.phrase.as_deref(), Some(PHRASE));
     assert_eq!(request.auth().phrase, Some(PHRASE));
@@ -70,7 +73,11 @@ fn bind_is_refused_in_flight_and_for_weak_or_famous_phrases() {
     assert!(console(&mut app, &format!("bind {PHRASE}")).contains("refused"));
     assert!(!app.bind_requested());
     let mut app = bound_app();
-    for weak in ["short one", "correct horse battery staple", "aaaaaaaaaaaaaaaa"] {
+    for weak in [
+        "short one",
+        "correct horse battery staple",
+        "aaaaaaaaaaaaaaaa",
+    ] {
         let out = console(&mut app, &format!("bind {weak}"));
         assert!(out.contains("refused"), "{weak}: {out}");
         assert!(!app.bind_requested());

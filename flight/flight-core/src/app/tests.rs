@@ -317,7 +317,12 @@ fn the_bind_command_opens_one_window_and_only_its_bind_is_stored() {
     assert!(app.bind_requested());
     let request = app.take_bind_request().expect("a window");
     assert_eq!(
-        (request.band, request.window_us, request.phrase, request.allow_plain),
+        (
+            request.band,
+            request.window_us,
+            request.phrase,
+            request.allow_plain
+        ),
         (Band::Mhz433, BIND_WINDOW_US, None, false)
     );
     assert!(!app.bind_requested());
@@ -394,7 +399,10 @@ fn the_link_task_is_told_what_to_do_next() {
     let LinkStep::Bind(request) = app.next_link_step() else {
         panic!("a bind window");
     };
-    assert_eq!((request.band, request.window_us), (Band::Mhz433, BIND_WINDOW_US));
+    assert_eq!(
+        (request.band, request.window_us),
+        (Band::Mhz433, BIND_WINDOW_US)
+    );
     assert!(app.on_bind_result(&bound(some_link())));
     assert_eq!(app.next_link_step(), LinkStep::Follow(some_link()));
 }

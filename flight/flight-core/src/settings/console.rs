@@ -108,7 +108,9 @@ pub fn parse_line(line: &str) -> Result<Command<'_>, ConsoleError> {
     }
     if word == "bind" {
         // The phrase is the rest of the line, spaces inside included.
-        return Ok(Command::Bind(line.trim_start().get(4..).unwrap_or("").trim()));
+        return Ok(Command::Bind(
+            line.trim_start().get(4..).unwrap_or("").trim(),
+        ));
     }
     let a = words.next();
     let b = words.next();

@@ -83,6 +83,8 @@ impl FlightState {
             | Message::SettingChange(_)
             | Message::SignedChange(_)
             | Message::ChangeRefused(_)
+            // The tag failures reach the handset through the core's device-tool row.
+            | Message::LinkSecurity(_)
             // No handset protocol here carries a home (CRSF, S.Port, FrSky D); the phone does.
             | Message::Home(_)
             // An older flight side's mode: its numbers meant other modes, so none is shown.

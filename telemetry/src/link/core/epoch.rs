@@ -154,7 +154,10 @@ struct Adopted {
 
 impl Adopted {
     fn counter(&self, slot: u32) -> u64 {
-        counter(u64::from(slot.wrapping_sub(self.base) / WRAP_SLOTS), slot as u8)
+        counter(
+            u64::from(slot.wrapping_sub(self.base) / WRAP_SLOTS),
+            slot as u8,
+        )
     }
 
     fn in_wrap_zero(&self, slot: u32) -> bool {
@@ -479,7 +482,10 @@ mod tests {
         assert_eq!(m.master_nonce_for(260), Some((master_nonce, 5)));
         assert_eq!(m.master_nonce_for(512), None, "only in the nonce's wrap");
         assert_eq!(m.offer(5, None, 263, &link(), 0), NonceVerdict::Repeated);
-        assert_eq!(m.offer(5, None, 259 + 256, &link(), 0), NonceVerdict::Refused);
+        assert_eq!(
+            m.offer(5, None, 259 + 256, &link(), 0),
+            NonceVerdict::Refused
+        );
         assert_eq!(m.counter(260), Some(counter(0, 4)));
         assert_eq!(m.counter(512), Some(counter(1, 0)));
         assert_eq!(m.handshake_counts(), (1, 1));
@@ -490,20 +496,29 @@ mod tests {
         let mut m = flying();
         let in_force = m.nonces();
         let current = m.current.expect("in force");
-        assert_eq!(m.current_check(267), Some((current.key, current.counter(267))));
+        assert_eq!(
+            m.current_check(267),
+            Some((current.key, current.counter(267)))
+        );
         m.heard(267);
         // A replayed nonce frame (no proof, or a proof of another epoch) is refused for the
         // failsafe period, and nothing changes.
         for slot in [271, 300, 267 + 62] {
             assert_eq!(m.offer(6, None, slot, &link(), 0), NonceVerdict::Refused);
-            assert_eq!(m.offer(6, Some(1234), slot, &link(), 0), NonceVerdict::Refused);
+            assert_eq!(
+                m.offer(6, Some(1234), slot, &link(), 0),
+                NonceVerdict::Refused
+            );
         }
         assert_eq!(m.nonces(), in_force);
         assert_eq!(m.pending_nonces(), None);
         // The follower of the epoch in force resynced: its proof takes its new nonce at once,
         // pending until that follower is heard under it.
         let proof = current.key.rekey_proof(7, 275u32 as u8);
-        assert_eq!(m.offer(7, Some(proof), 275, &link(), 0), NonceVerdict::Adopted);
+        assert_eq!(
+            m.offer(7, Some(proof), 275, &link(), 0),
+            NonceVerdict::Adopted
+        );
         assert_eq!(m.nonces(), in_force, "still in force until confirmed");
         assert_eq!(m.pending_nonces().map(|n| n.0), Some(7));
         assert_eq!(m.master_nonce_for(276).map(|n| n.1), Some(7));
@@ -550,7 +565,11 @@ mod tests {
         assert_eq!(m.master_nonce_for(8).map(|n| n.1), Some(6));
         m.confirm(11);
         assert_eq!(m.nonces().map(|n| n.0), Some(6));
-        assert_eq!(m.offer(5, None, 15, &link(), 0), NonceVerdict::Refused, "used");
+        assert_eq!(
+            m.offer(5, None, 15, &link(), 0),
+            NonceVerdict::Refused,
+            "used"
+        );
         // Nothing is taken in the last slot of a wrap: no uplink is left to answer in.
         assert_eq!(m.offer(9, None, 511, &link(), 0), NonceVerdict::Refused);
     }
@@ -566,7 +585,10 @@ mod tests {
             // A hardware random seed per boot, the lock times of 131 handshakes.
             let mut source = NonceSource::new(boot.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0xB007);
             for draw in 0..131u64 {
-                assert!(seen.insert(source.draw(1_000_000 + draw * 4_000)), "boot {boot}");
+                assert!(
+                    seen.insert(source.draw(1_000_000 + draw * 4_000)),
+                    "boot {boot}"
+                );
             }
         }
         assert_eq!(seen.len(), 262_000);

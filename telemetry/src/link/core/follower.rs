@@ -424,7 +424,13 @@ impl Follower {
             Some(_) => {
                 let key = self.epoch.key()?;
                 let counter = self.epoch.counter(slot)?;
-                seal(&Frame::Downlink(down), key, &TagContext::Counter(counter), buf).ok()
+                seal(
+                    &Frame::Downlink(down),
+                    key,
+                    &TagContext::Counter(counter),
+                    buf,
+                )
+                .ok()
             }
             None => encode(&Frame::Downlink(down), self.params.bind_id, buf).ok(),
         }
@@ -554,9 +560,11 @@ impl Follower {
             return Received::Rejected(Rejection::Tag);
         };
         match self.epoch {
-            FollowerEpoch::InForce { key, wraps, .. } => {
-                open(bytes, &key, &TagContext::Counter(super::epoch::counter(wraps, slot)))
-            }
+            FollowerEpoch::InForce { key, wraps, .. } => open(
+                bytes,
+                &key,
+                &TagContext::Counter(super::epoch::counter(wraps, slot)),
+            ),
             // The handshake's context is the master's nonce's alone: nothing else is taken
             // under it (the master sends channels only under an epoch key), so no frame
             // can give channels before the epoch is in force.

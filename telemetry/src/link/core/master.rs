@@ -361,21 +361,22 @@ impl Master {
             return received;
         }
         let slot = self.slot;
-        let check = |(epoch_key, counter): (LinkKey, u64)| {
-            match open(bytes, &epoch_key, &TagContext::Counter(counter)) {
-                Received::Accepted(Frame::Downlink(down)) if down.slot != slot as u8 => {
-                    Received::Rejected(Rejection::Malformed)
-                }
-                received => received,
+        let check = |(epoch_key, counter): (LinkKey, u64)| match open(
+            bytes,
+            &epoch_key,
+            &TagContext::Counter(counter),
+        ) {
+            Received::Accepted(Frame::Downlink(down)) if down.slot != slot as u8 => {
+                Received::Rejected(Rejection::Malformed)
             }
+            received => received,
         };
         let current = self.epoch.current_check(slot).map(check);
         if let Some(received @ Received::Accepted(_)) = current {
             self.epoch.heard(slot);
             return received;
         }
-        if let Some(received @ Received::Accepted(_)) = self.epoch.pending_check(slot).map(check)
-        {
+        if let Some(received @ Received::Accepted(_)) = self.epoch.pending_check(slot).map(check) {
             self.epoch.confirm(slot);
             return received;
         }
@@ -389,7 +390,9 @@ impl Master {
     /// Counts a tag failure of a frame naming the current slot (a neighbouring link's
     /// frames, which F700 lets through without a chip header, name any slot).
     fn count_tag_failure(&mut self, received: Received<'_>, bytes: &[u8]) {
-        if received == Received::Rejected(Rejection::Tag) && bytes.get(2) == Some(&(self.slot as u8)) {
+        if received == Received::Rejected(Rejection::Tag)
+            && bytes.get(2) == Some(&(self.slot as u8))
+        {
             self.counters.tag_failures = self.counters.tag_failures.saturating_add(1);
         }
     }

@@ -631,10 +631,13 @@ fn replay_old_epoch(link: &mut Link, rec: &Recording) -> (bool, usize) {
         Dir::Down => Some(rec.nonce.bytes.clone()),
         Dir::Up => Some(f.bytes.clone()),
     });
-    let adopted = [link.master.epoch_nonces(), link.master.pending_epoch_nonces()]
-        .iter()
-        .flatten()
-        .any(|(n, _)| *n == old);
+    let adopted = [
+        link.master.epoch_nonces(),
+        link.master.pending_epoch_nonces(),
+    ]
+    .iter()
+    .flatten()
+    .any(|(n, _)| *n == old);
     let base = target & !0xFF;
     let mut taken = 0;
     for _ in 0..700 {
@@ -832,7 +835,6 @@ fn in_the_handshake_only_the_master_nonce_is_taken_under_the_handshake_counter()
     assert_ne!(link.follower.sync_state(), SyncState::Tracking);
 }
 
-
 /// Issue 30, finding 3: a nonce frame recorded in an earlier power cycle of the flight side,
 /// replayed in the downlink slot after one the attacker jammed at the module, was adopted
 /// (the epoch was "live" only if heard in the previous downlink slot): every uplink then
@@ -890,9 +892,16 @@ fn a_replayed_nonce_frame_never_tears_down_a_live_link() {
         }
     }
     assert!(attacks >= 4, "{attacks}");
-    assert_eq!(link.master.epoch_nonces(), epoch, "the epoch in force stays");
+    assert_eq!(
+        link.master.epoch_nonces(),
+        epoch,
+        "the epoch in force stays"
+    );
     assert_eq!(link.follower.resyncs(), resyncs, "the link never dropped");
-    assert!(link.master.handshakes().1 >= attacks, "every replay refused and counted");
+    assert!(
+        link.master.handshakes().1 >= attacks,
+        "every replay refused and counted"
+    );
 }
 
 /// A follower that lost the master long enough to re-acquire (32 uplinks jammed at the
@@ -953,8 +962,13 @@ fn tag_failures_are_counted_and_one_frame_cannot_rewrite_the_failsafe_values() {
     };
     let mut forged = [0u8; 64];
     let wrong = test_key(9);
-    let n = crate::frame::seal(&Frame::Uplink(up), &wrong, &TagContext::Counter(0), &mut forged)
-        .unwrap();
+    let n = crate::frame::seal(
+        &Frame::Uplink(up),
+        &wrong,
+        &TagContext::Counter(0),
+        &mut forged,
+    )
+    .unwrap();
     let before = link.follower.counters();
     for k in 0..100_000u64 {
         link.follower.on_received(

@@ -401,7 +401,11 @@ fn old_records_load_their_pairs_but_no_link_and_no_key() {
         assert_eq!(report.problem, None);
         assert_eq!(report.generation, 9);
         assert_eq!(loaded.link_key(), None);
-        assert_eq!(loaded.get(super::super::handles::LINK_BIND_ID), 0, "unbound");
+        assert_eq!(
+            loaded.get(super::super::handles::LINK_BIND_ID),
+            0,
+            "unbound"
+        );
         assert_eq!(
             loaded.get(super::super::handles::PID_GAINS[0][0]),
             old.get(super::super::handles::PID_GAINS[0][0]),
