@@ -806,6 +806,9 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             alert: alert || self.flight_security.alert,
         };
         self.commands.tag_failures = now;
+        if self.settings.role == Role::Transmitter && self.settings.link_key.is_some() {
+            self.handset.on_tag_failures(now);
+        }
         let (sent, at) = self.security_sent;
         if now != sent && self.ticks.saturating_sub(at) >= 10 {
             self.security_sent = (now, self.ticks);

@@ -45,6 +45,8 @@ struct FakeHandset {
     model: Option<u8>,
     /// Requests the radio made, oldest first.
     requests: std::collections::VecDeque<HandsetRequest>,
+    /// The last tag failures the radio was told.
+    tag_failures: Option<crate::ports::TagFailures>,
 }
 
 impl HandsetOutput for FakeHandset {
@@ -53,6 +55,9 @@ impl HandsetOutput for FakeHandset {
     }
     fn on_link_stats(&mut self, stats: &LinkStats) {
         self.stats.push(*stats);
+    }
+    fn on_tag_failures(&mut self, failures: crate::ports::TagFailures) {
+        self.tag_failures = Some(failures);
     }
     fn model_id(&self) -> Option<u8> {
         self.model
@@ -900,6 +905,15 @@ fn tag_failures_show_on_the_radio_and_reach_the_phone_with_the_alert() {
     app.link_mut().stats.tag_failures = 25;
     app.on_tick();
     assert_eq!(info_row(&app, params::TAG_FAILS), "25 / 3 ALERT");
+    // The radio's sensors (S.Port TAG / TALR, CRSF's FM "TAG ALERT") are fed the same.
+    assert_eq!(
+        app.handset().tag_failures,
+        Some(crate::ports::TagFailures {
+            down: 25,
+            up: 3,
+            alert: true
+        })
+    );
     // The phone is told at most once a second.
     for _ in 0..10 {
         app.on_tick();

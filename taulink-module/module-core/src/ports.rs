@@ -116,6 +116,8 @@ pub trait HandsetOutput {
     fn on_link_stats(&mut self, stats: &LinkStats);
     /// The module's own supply voltage (the radio battery on JR pin 3), mV.
     fn on_module_battery(&mut self, _millivolts: u16) {}
+    /// A keyed link's tag failures at both ends and the alert, as often as they change.
+    fn on_tag_failures(&mut self, _failures: TagFailures) {}
     /// Bytes the radio sent on the JR line, the last one received at `now_us`; returns the
     /// newest RC channels they completed.
     fn on_line_bytes(&mut self, _now_us: u64, _bytes: &[u8]) -> Option<ChannelFrame> {
