@@ -379,8 +379,15 @@ impl PhoneSession {
 
     /// A new phrase (already checked) for the module, sealed with the next counter.
     pub fn set_phrase(&mut self, phrase: &str) -> Option<SetPhrase> {
-        let (challenge, isk) = self.phrase_salted.as_ref()?;
+        let (challenge, _) = self.phrase_salted.as_ref()?;
         let secret = PhraseSecret::derive(phrase, challenge.salt);
+        self.set_phrase_with(&secret)
+    }
+
+    /// [`PhoneSession::set_phrase`] with the new phrase's derivation already made (under
+    /// the module's salt: the challenge's).
+    pub fn set_phrase_with(&mut self, secret: &PhraseSecret) -> Option<SetPhrase> {
+        let (_, isk) = self.phrase_salted.as_ref()?;
         self.counter = self.counter.wrapping_add(1);
         let sealed = xor(&secret.prs, &phrase_pad(isk, self.counter));
         Some(SetPhrase {

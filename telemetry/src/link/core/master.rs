@@ -361,14 +361,17 @@ impl Master {
             return received;
         }
         let slot = self.slot;
+        // Only the follower's downlink of this slot is taken under an epoch: whatever else
+        // verifies (a frame the follower never sends) neither counts nor makes it live.
         let check = |(epoch_key, counter): (LinkKey, u64)| match open(
             bytes,
             &epoch_key,
             &TagContext::Counter(counter),
         ) {
-            Received::Accepted(Frame::Downlink(down)) if down.slot != slot as u8 => {
-                Received::Rejected(Rejection::Malformed)
+            received @ Received::Accepted(Frame::Downlink(down)) if down.slot == slot as u8 => {
+                received
             }
+            Received::Accepted(_) => Received::Rejected(Rejection::Malformed),
             received => received,
         };
         let current = self.epoch.current_check(slot).map(check);
