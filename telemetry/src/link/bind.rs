@@ -107,8 +107,8 @@ impl LinkParams {
     /// format and ratio under an identity mixed from the bind ID and the model ID, so a
     /// receiver bound under one model never hears (the chip's header check drops its
     /// frames) nor is heard by the module flying another. The mix is keyed like
-    /// [`LinkParams::header`], never 0 or the bind key; keyed links derive their model key
-    /// with `LinkKey::for_model` instead, which the bind ID then follows.
+    /// [`LinkParams::header`], never 0 or the bind key; a keyed link's key follows the
+    /// mixed bind ID (`LinkKey::for_link` of the module key).
     pub fn for_model(&self, model_id: u8) -> Self {
         let mixed = mix32(self.bind_id ^ mix32(0x6D0D_E100 ^ u32::from(model_id)));
         Self {

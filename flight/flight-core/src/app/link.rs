@@ -106,7 +106,7 @@ impl LinkSide {
             reporter: Reporter::new(),
             reader: MessageReader::new(),
             reply: None,
-            // Seeded by the firmware's RNG (`FlightApp::seed_change_session`).
+            // Seeded by the firmware's RNG (`FlightApp::seed_random`).
             gate: ChangeGate::new(0),
             entropy: Entropy::new([0; 32]),
             nonce_seed: 0,

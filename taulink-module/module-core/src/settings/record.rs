@@ -236,7 +236,11 @@ impl Settings {
             [flag, tail @ ..] => decode_security(*flag, tail)?,
             [] => (None, None),
         };
-        let (phrase_salt, phrase_prs, plain) = decode_phrase(phrase)?;
+        let PhraseTail {
+            salt: phrase_salt,
+            prs: phrase_prs,
+            plain,
+        } = decode_phrase(phrase)?;
         // Bound before the key agreement: no link (module doc).
         let bound = version == RECORD_VERSION;
         let telemetry_ratio = match rest {
@@ -410,12 +414,23 @@ fn decode_security(flag: u8, tail: &[u8]) -> Result<(Option<LinkKey>, Option<Pin
     Ok((link_key, ble_pin))
 }
 
+/// What version 7's tail holds.
+struct PhraseTail {
+    salt: [u8; 8],
+    prs: Option<[u8; 32]>,
+    plain: bool,
+}
+
 /// Version 7's tail (empty for older records: no phrase, no salt, authenticated): the phrase
 /// flag, the salt, the derivation (all 0 without a phrase) and the unauthenticated setting.
-fn decode_phrase(tail: &[u8]) -> Result<([u8; 8], Option<[u8; 32]>, bool), DecodeError> {
+fn decode_phrase(tail: &[u8]) -> Result<PhraseTail, DecodeError> {
     let field = |offset: usize| DecodeError::Field { offset };
     let Some((flag, rest)) = tail.split_first() else {
-        return Ok(([0; 8], None, false));
+        return Ok(PhraseTail {
+            salt: [0; 8],
+            prs: None,
+            plain: false,
+        });
     };
     let (salt, rest) = rest
         .split_first_chunk::<8>()
@@ -434,7 +449,11 @@ fn decode_phrase(tail: &[u8]) -> Result<([u8; 8], Option<[u8; 32]>, bool), Decod
         [1] => true,
         _ => return Err(field(RECORD_V6_LEN + 41)),
     };
-    Ok((*salt, prs, plain))
+    Ok(PhraseTail {
+        salt: *salt,
+        prs,
+        plain,
+    })
 }
 
 #[cfg(test)]
