@@ -5,4 +5,5 @@
 //! - [`wire`]: what a microcontroller model sees of its board — pins, SPI, I²C, UART and
 //!   analog inputs — the one boundary between the SoC models and the world.
 
+pub mod stm32f405;
 pub mod wire;
