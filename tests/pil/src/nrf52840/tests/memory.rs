@@ -111,3 +111,17 @@ fn icache_hits_cost_nothing_misses_the_wait_state() {
     assert_eq!(r(&mut c, 0x4001_E548, 0), 1, "IHIT");
     assert_eq!(r(&mut c, 0x4001_E54C, 0), 2, "IMISS");
 }
+
+#[test]
+fn a_store_into_ram_code_changes_the_code_generation() {
+    use m4_sim::Width;
+    let mut c = chip();
+    assert!(c.fetch(0x2000_1000).is_some());
+    let g = c.code_generation();
+    c.write(0x2000_2000, Width::Word, 1, 0).unwrap();
+    assert_eq!(c.code_generation(), g, "data page");
+    c.write(0x2000_1004, Width::Word, 1, 0).unwrap();
+    assert_eq!(c.code_generation(), g + 1, "a page code ran from");
+    // The code-bus alias of RAM fetches the same bytes.
+    assert_eq!(c.fetch(0x0080_1004), Some(1));
+}

@@ -89,3 +89,30 @@ fn trigovrflw_sets_the_counter_near_the_wrap() {
     run_to(&mut c, wrap);
     assert_eq!(r(&mut c, RTC1 + 0x104, wrap), 1);
 }
+
+#[test]
+fn evten_decides_whether_an_rtc_event_reaches_the_ppi() {
+    let mut c = chip();
+    let t0 = start_lfxo(&mut c, 0);
+    const RTC0: u32 = 0x4000_B000;
+    const TIMER0: u32 = 0x4000_8000;
+    const PPI: u32 = 0x4001_F000;
+    // TIMER0 at 1 MHz; PPI CH5: RTC0 COMPARE[0] → TIMER0 CAPTURE[2].
+    w(&mut c, TIMER0 + 0x508, 3, t0);
+    w(&mut c, TIMER0 + 0x000, 1, t0);
+    w(&mut c, PPI + 0x510 + 8 * 5, RTC0 + 0x140, t0);
+    w(&mut c, PPI + 0x514 + 8 * 5, TIMER0 + 0x048, t0);
+    w(&mut c, PPI + 0x504, 1 << 5, t0);
+    w(&mut c, RTC0 + 0x540, 10, t0);
+    w(&mut c, RTC0 + 0x000, 1, t0);
+    let first = t0 + (10 * 30_517_578_125u128).div_ceil(1_000_000) as u64;
+    run_to(&mut c, first);
+    assert_eq!(r(&mut c, RTC0 + 0x140, first), 1, "the event register is set");
+    assert_eq!(r(&mut c, TIMER0 + 0x548, first), 0, "EVTEN clear: no PPI event");
+    // EVTENSET COMPARE0, next match 20 ticks on.
+    w(&mut c, RTC0 + 0x344, 1 << 16, first);
+    w(&mut c, RTC0 + 0x540, 30, first);
+    let second = t0 + (30 * 30_517_578_125u128).div_ceil(1_000_000) as u64;
+    run_to(&mut c, second);
+    assert_eq!(r(&mut c, TIMER0 + 0x548, second), ((second - t0) / 1000) as u32);
+}
