@@ -107,12 +107,23 @@ fn evten_decides_whether_an_rtc_event_reaches_the_ppi() {
     w(&mut c, RTC0 + 0x000, 1, t0);
     let first = t0 + (10 * 30_517_578_125u128).div_ceil(1_000_000) as u64;
     run_to(&mut c, first);
-    assert_eq!(r(&mut c, RTC0 + 0x140, first), 1, "the event register is set");
-    assert_eq!(r(&mut c, TIMER0 + 0x548, first), 0, "EVTEN clear: no PPI event");
+    assert_eq!(
+        r(&mut c, RTC0 + 0x140, first),
+        1,
+        "the event register is set"
+    );
+    assert_eq!(
+        r(&mut c, TIMER0 + 0x548, first),
+        0,
+        "EVTEN clear: no PPI event"
+    );
     // EVTENSET COMPARE0, next match 20 ticks on.
     w(&mut c, RTC0 + 0x344, 1 << 16, first);
     w(&mut c, RTC0 + 0x540, 30, first);
     let second = t0 + (30 * 30_517_578_125u128).div_ceil(1_000_000) as u64;
     run_to(&mut c, second);
-    assert_eq!(r(&mut c, TIMER0 + 0x548, second), ((second - t0) / 1000) as u32);
+    assert_eq!(
+        r(&mut c, TIMER0 + 0x548, second),
+        ((second - t0) / 1000) as u32
+    );
 }

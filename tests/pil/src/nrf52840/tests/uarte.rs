@@ -150,3 +150,47 @@ fn stoprx_ends_the_buffer_then_times_out() {
         "a stopped receiver drops bytes"
     );
 }
+
+#[test]
+fn the_jr_line_turns_round_receive_then_send_then_receive() {
+    let mut c = chip();
+    // UarteRx on P0.08 (CRSF, 400 kBd), a frame in, then dropped: ENABLE 0, PSEL back.
+    w(&mut c, UARTE0 + 0x524, 0x0666_6000, 0);
+    w(&mut c, UARTE0 + 0x514, 8, 0);
+    w(&mut c, UARTE0 + 0x500, 8, 0);
+    w(&mut c, UARTE0 + 0x534, BUF, 0);
+    w(&mut c, UARTE0 + 0x538, 64, 0);
+    w(&mut c, UARTE0 + 0x000, 1, 0);
+    c.uart_receive(1, 0xC8, 25_000);
+    run_to(&mut c, 30_000);
+    w(&mut c, UARTE0 + 0x004, 1, 30_000);
+    w(&mut c, UARTE0 + 0x500, 0, 30_000);
+    // The radio's own transmission is not read back: the receiver is gone.
+    c.uart_receive(1, 0xEE, 90_000);
+    // UarteTx on P0.06 for the reply, then dropped.
+    send(&mut c, &[0xEA], 40_000);
+    run_to(&mut c, 100_000);
+    w(&mut c, UARTE0 + 0x500, 0, 100_000);
+    assert_eq!(c.outside().uart, vec![(1, 0xEA, 65_000)]);
+    assert_eq!(c.ram()[0x400], 0xEA, "the TX buffer");
+    assert_eq!(
+        r(&mut c, UARTE0 + 0x53C, 100_000),
+        1,
+        "only the radio's byte was received"
+    );
+}
+
+#[test]
+fn the_hm10_rate_9600_takes_1_04_ms_a_byte() {
+    let mut c = chip();
+    w(&mut c, 0x4002_8524, 0x0027_5000, 0);
+    w(&mut c, 0x4002_850C, 32 + 11, 0);
+    w(&mut c, 0x4002_8500, 8, 0);
+    c.write(BUF, Width::Byte, u32::from(b'A'), 0).unwrap();
+    w(&mut c, 0x4002_8544, BUF, 0);
+    w(&mut c, 0x4002_8548, 1, 0);
+    w(&mut c, 0x4002_8008, 1, 0);
+    run_to(&mut c, 2_000_000);
+    // 10 bits of 1667 cycles at 16 MHz.
+    assert_eq!(c.outside().uart, vec![(2, b'A', 1_041_875)]);
+}
