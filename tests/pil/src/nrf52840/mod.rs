@@ -35,7 +35,7 @@ pub use memory::{Anomaly198, Anomaly198Hit, Anomaly198Mode, Master, regout0_volt
 pub use nvmc::FlashTiming;
 pub use records::{DmaFault, Note, Records, Unmodelled};
 pub use soc::{Config, LoadError, Nrf52840, ResetRecord};
-pub use uarte::bit_ps as uarte_bit_ps;
+pub use uarte::{bit_ps as uarte_bit_ps, resample as uarte_resample};
 pub use wdt::RELOAD as WDT_RELOAD;
 
 #[cfg(test)]

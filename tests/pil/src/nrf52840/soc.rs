@@ -254,11 +254,21 @@ impl<O: Outside> Nrf52840<O> {
     /// The board queues a byte on UARTE `uart` (1 = UARTE0, 2 = UARTE1, as in
     /// `Outside::uart_sent`) whose stop bit ends at `at_ns`.
     pub fn uart_receive(&mut self, uart: u8, byte: u8, at_ns: u64) {
+        self.queue_uart(uart, byte, None, at_ns);
+    }
+
+    /// As [`Self::uart_receive`], for a byte sent at `baud`: the receiver samples it at its
+    /// own rate, so a rate far enough off changes it or makes a framing error.
+    pub fn uart_receive_at_baud(&mut self, uart: u8, byte: u8, baud: f64, at_ns: u64) {
+        self.queue_uart(uart, byte, Some(baud), at_ns);
+    }
+
+    fn queue_uart(&mut self, uart: u8, byte: u8, baud: Option<f64>, at_ns: u64) {
         if let Some(u) = usize::from(uart)
             .checked_sub(1)
             .and_then(|n| self.parts.uarte.get_mut(n))
         {
-            u.receive(byte, at_ns);
+            u.receive(byte, baud, at_ns);
         }
     }
 

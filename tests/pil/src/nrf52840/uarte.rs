@@ -16,6 +16,10 @@
 //! STOPRX ends the buffer (ENDRX with AMOUNT so far) and raises RXTO at once (the silicon's
 //! receiver time-out is not modelled). FLUSHRX moves the FIFO into the buffer (ENDRX).
 //!
+//! A byte the board queues with its own baud rate is sampled against the receiver's bit
+//! times ([`resample`]): a few percent apart it arrives intact, further apart it arrives
+//! changed and, when the stop bit is sampled low, with a framing error (ERRORSRC.FRAMING).
+//!
 //! Baud rate: the UARTE times a bit as a whole number of 16 MHz cycles,
 //! floor(2^32 / BAUDRATE): that reproduces every "actual rate" in the PS's UARTE BAUDRATE
 //! table (115 200 → 115 108 Bd = 16 MHz / 139, 921 600 → 941 176 Bd = 16 MHz / 17, 9600 →
@@ -49,6 +53,8 @@ const ENABLE_UARTE: u32 = 8;
 const FIFO: usize = 4;
 /// ERRORSRC.OVERRUN.
 const OVERRUN: u32 = 1;
+/// ERRORSRC.FRAMING.
+const FRAMING: u32 = 1 << 2;
 
 /// PSEL slots (RTS, TXD, CTS, RXD).
 const TXD: usize = 1;
@@ -99,7 +105,22 @@ pub struct Uarte {
     rx_buf: Option<Dma>,
     fifo: VecDeque<u8>,
     tx: Option<Tx>,
-    queue: VecDeque<(u64, u8)>,
+    queue: VecDeque<(u64, u8, Option<f64>)>,
+}
+
+/// What a receiver with bits of `rx_ps` makes of `byte` sent 8N1 at `tx_baud`: it samples
+/// each bit in the middle of its own bit time against the sender's waveform (idle after
+/// the stop bit); the stop bit sampled low is a framing error.
+pub fn resample(byte: u8, tx_baud: f64, rx_ps: u64) -> (u8, bool) {
+    let tx_ps = 1e12 / tx_baud;
+    let level = |t_ps: f64| match (t_ps / tx_ps).floor() as i64 {
+        0 => false,
+        k @ 1..=8 => byte & (1 << (k - 1)) != 0,
+        _ => true,
+    };
+    let at = |bit: u32| level((f64::from(bit) + 0.5) * rx_ps as f64);
+    let value = (1..=8).fold(0u8, |v, k| v | (u8::from(at(k)) << (k - 1)));
+    (value, at(9))
 }
 
 impl Uarte {
@@ -161,10 +182,11 @@ impl Uarte {
         1 + 8 + parity + stop
     }
 
-    /// The board queues a byte whose stop bit ends at `at_ns`.
-    pub fn receive(&mut self, byte: u8, at_ns: u64) {
-        let at = self.queue.partition_point(|&(t, _)| t <= at_ns);
-        self.queue.insert(at, (at_ns, byte));
+    /// The board queues a byte whose stop bit ends at `at_ns`, sent at `baud` (`None`:
+    /// at the receiver's own rate).
+    pub fn receive(&mut self, byte: u8, baud: Option<f64>, at_ns: u64) {
+        let at = self.queue.partition_point(|&(t, ..)| t <= at_ns);
+        self.queue.insert(at, (at_ns, byte, baud));
     }
 
     fn tx_next_ns(&self) -> u64 {
@@ -175,7 +197,7 @@ impl Uarte {
 
     /// The next byte boundary (sent or received).
     pub fn next_event_ns(&self) -> u64 {
-        let rx = self.queue.front().map_or(u64::MAX, |&(t, _)| t);
+        let rx = self.queue.front().map_or(u64::MAX, |&(t, ..)| t);
         rx.min(self.tx_next_ns())
     }
 
@@ -326,15 +348,24 @@ impl Uarte {
     /// Sends and receives the bytes due at `ctx.now`.
     pub fn step(&mut self, ctx: &mut Ctx<'_>) {
         self.tx_step(ctx);
-        while let Some(&(t, byte)) = self.queue.front() {
+        while let Some(&(t, byte, baud)) = self.queue.front() {
             if t > ctx.now {
                 break;
             }
             self.queue.pop_front();
-            if self.enabled() && self.rx_running {
-                self.ev.raise(ev::RXDRDY, ctx.fired);
-                self.store(byte, ctx);
+            if !self.enabled() || !self.rx_running {
+                continue;
             }
+            let (byte, framed) = match (baud, bit_ps(self.baudrate)) {
+                (Some(baud), Some(rx_ps)) => resample(byte, baud, rx_ps),
+                _ => (byte, true),
+            };
+            self.ev.raise(ev::RXDRDY, ctx.fired);
+            if !framed {
+                self.errorsrc |= FRAMING;
+                self.ev.raise(ev::ERROR, ctx.fired);
+            }
+            self.store(byte, ctx);
         }
     }
 

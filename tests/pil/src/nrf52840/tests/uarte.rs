@@ -194,3 +194,23 @@ fn the_hm10_rate_9600_takes_1_04_ms_a_byte() {
     // 10 bits of 1667 cycles at 16 MHz.
     assert_eq!(c.outside().uart, vec![(2, b'A', 1_041_875)]);
 }
+
+#[test]
+fn a_sender_a_few_percent_off_is_read_right_far_off_it_is_a_framing_error() {
+    use crate::nrf52840::uarte_resample as resample;
+    let rx = uarte_bit_ps(0x0EBE_D000).unwrap(); // 941 176 Bd
+    // EdgeTX at 921 600 Bd into the module's "921 600" setting: 2.1 % apart, intact.
+    for byte in [0x00, 0x55, 0xC8, 0xFF] {
+        assert_eq!(resample(byte, 921_600.0, rx), (byte, true));
+    }
+    // A 400 kBd CRSF byte into a 115 200 Bd receiver: garbage.
+    let (value, framed) = resample(0xC8, 400_000.0, uarte_bit_ps(0x01D6_0000).unwrap());
+    assert!(value != 0xC8 || !framed);
+    // Through the chip: the ERROR event and ERRORSRC.FRAMING.
+    let mut c = chip();
+    receiver(&mut c, 4, 0);
+    c.uart_receive_at_baud(1, 0x00, 57_600.0, 100_000);
+    run_to(&mut c, 100_000);
+    assert_eq!(r(&mut c, UARTE0 + 0x480, 100_000), 1 << 2);
+    assert_eq!(r(&mut c, UARTE0 + 0x124, 100_000), 1);
+}
