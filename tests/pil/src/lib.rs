@@ -4,6 +4,9 @@
 //!
 //! - [`wire`]: what a microcontroller model sees of its board — pins, SPI, I²C, UART and
 //!   analog inputs — the one boundary between the SoC models and the world.
+//! - [`nrf52840`]: the module's nRF52840, register by register.
+//! - [`stm32f405`]: the flight controller's STM32F405, register by register.
 
+pub mod nrf52840;
 pub mod stm32f405;
 pub mod wire;
