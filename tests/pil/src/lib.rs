@@ -4,5 +4,7 @@
 //!
 //! - [`wire`]: what a microcontroller model sees of its board — pins, SPI, I²C, UART and
 //!   analog inputs — the one boundary between the SoC models and the world.
+//! - [`chips`]: the chips on the boards, register by register from their datasheets.
 
+pub mod chips;
 pub mod wire;
