@@ -232,8 +232,8 @@ pub(crate) struct PhonePipes {
 /// The transmitter's arm switch: channel 5 (AUX1), index 4 (`arm.channel 5` listens to it).
 const ARM_SWITCH_CHANNEL: usize = 4;
 
-/// The handset's channels for the pilot's sticks and switches.
-pub(crate) fn transmitter(p: &PilotInput) -> Channels {
+/// The handset's channels for the pilot's sticks and switches (the PIL's handset plays the same).
+pub fn transmitter(p: &PilotInput) -> Channels {
     let mut ch = [CHANNEL_CENTER; MAX_CHANNELS];
     let map = ChannelMap::default();
     let mut set = |i: usize, v: u16| {

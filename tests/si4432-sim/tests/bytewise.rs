@@ -66,7 +66,10 @@ fn reading_the_status_releases_nirq_and_the_edges_carry_their_times() {
     assert_eq!(edges.len(), 1, "{edges:?}");
     let (t, low) = edges[0];
     assert!(low);
-    assert_eq!(t, due, "the edge is stamped when the chip raised the interrupt");
+    assert_eq!(
+        t, due,
+        "the edge is stamped when the chip raised the interrupt"
+    );
     assert_eq!(medium.now().as_nanos(), 10_000_000);
     // Time never runs back.
     medium.advance_to_ns(5);

@@ -151,10 +151,9 @@ impl Ak8963 {
             }
             CNTL1 => self.cntl1,
             CNTL2 => 0,
-            ASAX..=0x12 if self.mode() == Mode::FuseRom => ASA
-                .get(usize::from(register - ASAX))
-                .copied()
-                .unwrap_or(0),
+            ASAX..=0x12 if self.mode() == Mode::FuseRom => {
+                ASA.get(usize::from(register - ASAX)).copied().unwrap_or(0)
+            }
             _ => 0,
         }
     }
@@ -185,7 +184,11 @@ impl Ak8963 {
         } else {
             UT_PER_LSB_14
         };
-        let limit = if self.sixteen_bit() { 32_760.0 } else { 8_190.0 };
+        let limit = if self.sixteen_bit() {
+            32_760.0
+        } else {
+            8_190.0
+        };
         let hofl = field_ut.iter().map(|v| v.abs()).sum::<f64>() > OVERFLOW_UT;
         let mut data = [0u8; 6];
         for ((pair, h), asa) in data.chunks_exact_mut(2).zip(field_ut).zip(ASA) {

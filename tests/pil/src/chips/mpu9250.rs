@@ -63,7 +63,10 @@ const WHO_AM_I: u8 = 0x75;
 
 /// Registers the MCU cannot write (RM: R only).
 fn read_only(register: u8) -> bool {
-    matches!(register, I2C_MST_STATUS | INT_STATUS..=0x60 | FIFO_COUNTH | 0x73 | WHO_AM_I)
+    matches!(
+        register,
+        I2C_MST_STATUS | INT_STATUS..=0x60 | FIFO_COUNTH | 0x73 | WHO_AM_I
+    )
 }
 
 /// One sample of the truth at the chip, in the accelerometer/gyro axes of the package
@@ -255,7 +258,11 @@ impl Mpu9250 {
     /// order.
     fn catch_up(&mut self, now_ns: u64) {
         loop {
-            let sample = self.pending.first().map(|(t, _)| *t).filter(|t| *t <= now_ns);
+            let sample = self
+                .pending
+                .first()
+                .map(|(t, _)| *t)
+                .filter(|t| *t <= now_ns);
             let mag = self.ak.next_measurement_ns().filter(|t| *t <= now_ns);
             match (sample, mag) {
                 (Some(s), m) if m.is_none_or(|m| s <= m) => {
@@ -289,7 +296,11 @@ impl Mpu9250 {
         for (i, a) in m.accel_mps2.iter().enumerate() {
             // DISABLE_XA..ZA: bits 5..3.
             let off = disabled & (0x20 >> i) != 0;
-            let c = if off { 0 } else { counts(a / G_MPS2, accel_lsb) };
+            let c = if off {
+                0
+            } else {
+                counts(a / G_MPS2, accel_lsb)
+            };
             self.set_word(ACCEL_XOUT_H + 2 * i as u8, c);
         }
         let temp = counts(m.temp_c - TEMP_ZERO_C, TEMP_LSB_PER_C);
@@ -484,7 +495,11 @@ mod tests {
         write(&mut chip, t, SMPLRT_DIV, 1);
         assert_eq!(chip.sample_period_ns(), 2_000_000, "1 kHz / 2");
         write(&mut chip, t, GYRO_CONFIG, 0x01);
-        assert_eq!(chip.internal_rate_hz(), 32_000, "FCHOICE_B bypasses the DLPF");
+        assert_eq!(
+            chip.internal_rate_hz(),
+            32_000,
+            "FCHOICE_B bypasses the DLPF"
+        );
         let fast = Mpu9250::new(0, 500.0, 0.0);
         let mut fast = fast;
         write(&mut fast, t, CONFIG, 0x01);
@@ -621,10 +636,16 @@ mod tests {
         // The AK8963's X is the package's Y.
         let hx = i16::from_le_bytes([ext[1], ext[2]]);
         let adjust = (f64::from(ak8963::ASA[0]) - 128.0) / 256.0 + 1.0;
-        assert!((f64::from(hx) * adjust * 0.15 - field[1]).abs() < 0.2, "{hx}");
+        assert!(
+            (f64::from(hx) * adjust * 0.15 - field[1]).abs() < 0.2,
+            "{hx}"
+        );
         let hz = i16::from_le_bytes([ext[5], ext[6]]);
         let adjust_z = (f64::from(ak8963::ASA[2]) - 128.0) / 256.0 + 1.0;
-        assert!((f64::from(hz) * adjust_z * 0.15 + field[2]).abs() < 0.2, "{hz}");
+        assert!(
+            (f64::from(hz) * adjust_z * 0.15 + field[2]).abs() < 0.2,
+            "{hz}"
+        );
         assert_eq!(ext[7], 0x10, "ST2: BITM 16-bit");
         // A slave address nobody answers: NACK in I2C_MST_STATUS.
         write(&mut chip, t, I2C_SLV0_ADDR, 0x80 | 0x0D);

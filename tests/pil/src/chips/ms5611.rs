@@ -187,14 +187,15 @@ impl Ms5611 {
     /// SCL as the bus carries it (high = released by everyone). A rising edge while the
     /// chip holds SDA clocks one bit out.
     pub fn scl(&mut self, high: bool) {
-        if high && !self.scl_high {
-            if let Bus::Holding { pulses } = self.bus {
-                self.bus = if pulses <= 1 {
-                    Bus::AwaitingStop
-                } else {
-                    Bus::Holding { pulses: pulses - 1 }
-                };
-            }
+        if high
+            && !self.scl_high
+            && let Bus::Holding { pulses } = self.bus
+        {
+            self.bus = if pulses <= 1 {
+                Bus::AwaitingStop
+            } else {
+                Bus::Holding { pulses: pulses - 1 }
+            };
         }
         self.scl_high = high;
     }
@@ -305,7 +306,9 @@ impl Ms5611 {
                 });
             }
             0x00 => self.pending_read = PendingRead::Adc,
-            0xA0..=0xAE if byte & 1 == 0 => self.pending_read = PendingRead::Prom((byte - 0xA0) / 2),
+            0xA0..=0xAE if byte & 1 == 0 => {
+                self.pending_read = PendingRead::Prom((byte - 0xA0) / 2)
+            }
             _ => {}
         }
     }
