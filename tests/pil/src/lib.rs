@@ -5,6 +5,8 @@
 //! - [`wire`]: what a microcontroller model sees of its board — pins, SPI, I²C, UART and
 //!   analog inputs — the one boundary between the SoC models and the world.
 //! - [`chips`]: the chips on the boards, register by register from their datasheets.
+//! - [`board`]: the boards (which chip is on which pin), each an `Outside`.
 
+pub mod board;
 pub mod chips;
 pub mod wire;
