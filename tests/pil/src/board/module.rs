@@ -148,12 +148,12 @@ impl ModuleBoard {
         let mut t = start_ns;
         for &b in frame {
             let got = self.jr.from_handset(b, t);
-            self.to_mcu(PINS.jr_uart, got);
+            self.queue_rx(PINS.jr_uart, got);
             t += frame_ns(CRSF_BAUD);
         }
     }
 
-    fn to_mcu(&mut self, uart: u8, got: Vec<Received>) {
+    fn queue_rx(&mut self, uart: u8, got: Vec<Received>) {
         for r in got {
             self.outbox.uart(uart, r.byte, r.at_ns);
         }
@@ -166,12 +166,12 @@ impl ModuleBoard {
         self.hm10_link.set_rx_baud(mcu);
         for (start, byte, baud) in self.hm10.take_output() {
             let got = self.hm10_link.send(byte, start, baud, false);
-            self.to_mcu(PINS.hm10_uart, got);
+            self.queue_rx(PINS.hm10_uart, got);
         }
         let tail = self.hm10_link.flush(now_ns);
-        self.to_mcu(PINS.hm10_uart, tail);
+        self.queue_rx(PINS.hm10_uart, tail);
         let (module, handset) = self.jr.flush(now_ns);
-        self.to_mcu(PINS.jr_uart, module);
+        self.queue_rx(PINS.jr_uart, module);
         self.handset_rx
             .extend(handset.into_iter().map(|r| (r.at_ns, r.byte)));
     }
@@ -231,7 +231,7 @@ impl Outside for ModuleBoard {
             let (handset, echo) = self.jr.from_module(byte, start, baud);
             self.handset_rx
                 .extend(handset.into_iter().map(|r| (r.at_ns, r.byte)));
-            self.to_mcu(PINS.jr_uart, echo);
+            self.queue_rx(PINS.jr_uart, echo);
         }
     }
 
