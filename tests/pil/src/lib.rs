@@ -6,7 +6,9 @@
 //!   analog inputs — the one boundary between the SoC models and the world.
 //! - [`chips`]: the chips on the boards, register by register from their datasheets.
 //! - [`board`]: the boards (which chip is on which pin), each an `Outside`.
+//! - [`world`]: the co-simulation of both MCUs with the radios, physics, handset and pilot.
 
 pub mod board;
 pub mod chips;
 pub mod wire;
+pub mod world;

@@ -211,6 +211,18 @@ impl FlightBoard {
         }
     }
 
+    /// The board's supply comes up at `now_ns` (a power cycle): the chips start over (the
+    /// MPU-9250's start-up, the baro's and flash's power-on state, the radio's POR); the
+    /// GPS receiver keeps its configuration only in its battery-backed RAM, which this
+    /// model does not have.
+    pub fn power_on(&mut self, now_ns: u64, imu_ppm: (f64, f64)) {
+        self.mpu = Mpu9250::new(now_ns, imu_ppm.0, imu_ppm.1);
+        self.baro = Ms5611::new();
+        self.flash = self.pins.flash_cs.map(|_| M25p16::new());
+        self.radio.power_on();
+        self.int_high = false;
+    }
+
     /// The inputs waiting for the MCU.
     pub fn outbox(&mut self) -> &mut Outbox {
         &mut self.outbox

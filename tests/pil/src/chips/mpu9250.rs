@@ -120,6 +120,12 @@ pub struct Mpu9250 {
     /// The chip's oscillator runs this much fast, ppm.
     drift_ppm: f64,
     samples: u64,
+    /// The latest sample's data was read (a sensor register read since it landed).
+    read_since_sample: bool,
+    /// Samples that landed with the previous one never read.
+    missed: u64,
+    /// The previous sample raised data-ready (only those can be missed).
+    signalled: bool,
 }
 
 impl Mpu9250 {
@@ -138,6 +144,9 @@ impl Mpu9250 {
             int_edges: Vec::new(),
             drift_ppm,
             samples: 0,
+            read_since_sample: true,
+            missed: 0,
+            signalled: false,
         };
         chip.reset_registers();
         chip
@@ -163,6 +172,19 @@ impl Mpu9250 {
     /// Samples the chip has taken so far.
     pub fn samples(&self) -> u64 {
         self.samples
+    }
+
+    /// Samples whose data no one read before the next one replaced it (the MCU missed
+    /// them).
+    pub fn samples_missed(&self) -> u64 {
+        self.missed
+    }
+
+    /// The sample clock ticks with no sample (a stalled sensor: no data, no data-ready).
+    pub fn skip_sample(&mut self) {
+        if let Some(t) = self.next_sample_ns() {
+            self.last_sample_ns = t;
+        }
     }
 
     fn sleeping(&self) -> bool {
@@ -277,6 +299,11 @@ impl Mpu9250 {
 
     fn apply_sample(&mut self, t: u64, m: Measurement) {
         self.samples += 1;
+        if self.signalled && !self.read_since_sample {
+            self.missed += 1;
+        }
+        self.read_since_sample = false;
+        self.signalled = self.reg(INT_ENABLE) & 0x01 != 0;
         self.field_ut = m.mag_ut;
         // Measurements the AK8963 finished before this sample see the previous field.
         while let Some(mt) = self.ak.next_measurement_ns().filter(|mt| *mt <= t) {
@@ -380,6 +407,9 @@ impl Mpu9250 {
         }
         let miso = if tx.read {
             let value = self.reg(address);
+            if (ACCEL_XOUT_H..EXT_SENS_DATA_00 + 24).contains(&address) {
+                self.read_since_sample = true;
+            }
             let any_read_clears = self.cfg() & 0x10 != 0;
             if (any_read_clears && !tx.cleared) || address == INT_STATUS {
                 tx.cleared = true;

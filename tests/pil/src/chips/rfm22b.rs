@@ -79,6 +79,14 @@ impl Rfm22b {
         };
     }
 
+    /// The board's supply comes up: a power-on reset of the chip (registers lost, `ipor`
+    /// after the POR time).
+    pub fn power_on(&mut self) {
+        self.selected = false;
+        self.radio.chip.deselect();
+        self.radio.chip.power_on_reset();
+    }
+
     /// nIRQ's level now (true = high, released).
     pub fn nirq_high(&self) -> bool {
         !self.radio.chip.nirq_is_low()
