@@ -351,8 +351,13 @@ impl Cpu {
         std::mem::take(&mut self.semihost_out)
     }
 
-    /// Runs until virtual time reaches `deadline_ns` or something stops the core first.
+    /// Runs until virtual time reaches `deadline_ns` (the first instruction boundary at or
+    /// after it) or something stops the core first. The bus's interrupt lines, next event,
+    /// clock and code generation are read afresh on entry: whatever drove the bus between
+    /// two calls is seen.
     pub fn run_until<B: Bus>(&mut self, bus: &mut B, deadline_ns: u64) -> Stop {
+        // The world may have changed the bus since the last run: pick that up.
+        self.after_advance(bus);
         self.deadline = self.clock.cycle_at(deadline_ns);
         self.stop_at = 0;
         loop {
