@@ -19,6 +19,9 @@ use crate::nvic::Nvic;
 use crate::scs::{Debug, Mpu, Scb};
 use crate::systick::SysTick;
 
+/// SCR.SEVONPEND.
+const SEVONPEND: u32 = 1 << 4;
+
 /// Why [`Cpu::run_until`] returned.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stop {
@@ -250,13 +253,22 @@ impl Cpu {
     /// main stack pointer and the reset vector from the vector table at address 0. The
     /// bus is not reset; virtual time and statistics carry on.
     pub fn reset<B: Bus>(&mut self, bus: &mut B) {
+        self.boot(bus, 0);
+    }
+
+    /// Resets the core like [`Cpu::reset`] but starts from the vector table at
+    /// `vector_table` (VTOR set to it), as a bootloader that jumps to an application
+    /// leaves the core: the application's initial SP and reset vector.
+    pub fn boot<B: Bus>(&mut self, bus: &mut B, vector_table: u32) {
         self.reset_core_state();
+        self.scb.vtor = vector_table & 0xFFFF_FF80;
         self.clock.set_hz(bus.core_hz());
         self.code_generation = bus.code_generation();
         self.cache.clear();
         let now = self.clock.now_ns();
-        let sp = bus.read(0, crate::Width::Word, now);
-        let pc = bus.read(4, crate::Width::Word, now);
+        let table = self.scb.vtor;
+        let sp = bus.read(table, crate::Width::Word, now);
+        let pc = bus.read(table.wrapping_add(4), crate::Width::Word, now);
         match (sp, pc) {
             (Ok(sp), Ok(pc)) => {
                 self.r[13] = sp & !3;
@@ -269,7 +281,7 @@ impl Cpu {
                 self.state = RunState::LockedUp;
             }
         }
-        self.nvic.sample(bus.irq_lines(), &mut self.event);
+        self.nvic.sample(bus.irq_lines());
         self.stop_at = 0;
     }
 
@@ -549,8 +561,8 @@ impl Cpu {
             }
             self.check_code_generation(bus);
         }
-        if self.nvic.sample(bus.irq_lines(), &mut self.event) {
-            self.stop_at = 0;
+        if self.nvic.sample(bus.irq_lines()) {
+            self.new_pending();
         }
         let event = self.clock.cycle_at(bus.next_event_ns());
         if event != self.bus_event {
@@ -570,6 +582,15 @@ impl Cpu {
         }
         self.reset(bus);
         self.bus_event = self.clock.cycle_at(bus.next_event_ns());
+    }
+
+    /// An interrupt became pending: with SCR.SEVONPEND that is a WFE wake-up event; in any
+    /// case the run loop re-evaluates exceptions.
+    pub(crate) fn new_pending(&mut self) {
+        if self.scb.scr & SEVONPEND != 0 {
+            self.event = true;
+        }
+        self.stop_at = 0;
     }
 
     /// Records an SP value for the lowest-SP statistic.

@@ -253,7 +253,9 @@ impl Cpu {
         if returning != exc::NMI {
             self.faultmask = false;
         }
-        self.nvic.relatch();
+        if self.nvic.relatch() {
+            self.new_pending();
+        }
         self.exclusive = false;
         self.event = true;
         self.stop_at = 0;

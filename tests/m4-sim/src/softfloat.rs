@@ -715,10 +715,22 @@ pub(crate) fn to_fixed(
     }
 }
 
-/// `FixedToFP`: a `size`-bit integer with `frac` fraction bits to single precision, in
-/// FPSCR's rounding mode.
-pub(crate) fn from_fixed(v: u32, frac: u32, unsigned: bool, size: u32, fpscr: &mut u32) -> u32 {
-    let mode = Rounding::of(*fpscr);
+/// `FixedToFP`: a `size`-bit integer with `frac` fraction bits to single precision,
+/// rounding to nearest (`nearest`, the fixed-point VCVT) or in FPSCR's mode (the integer
+/// VCVT).
+pub(crate) fn from_fixed(
+    v: u32,
+    frac: u32,
+    unsigned: bool,
+    size: u32,
+    nearest: bool,
+    fpscr: &mut u32,
+) -> u32 {
+    let mode = if nearest {
+        Rounding::Nearest
+    } else {
+        Rounding::of(*fpscr)
+    };
     let value: i64 = match (size, unsigned) {
         (16, true) => i64::from(v as u16),
         (16, false) => i64::from(v as u16 as i16),
@@ -749,7 +761,8 @@ pub(crate) fn single_to_half(a: u32, fpscr: &mut u32) -> u32 {
     match x.kind {
         Kind::QNaN | Kind::SNaN => {
             let r = if ahp {
-                0
+                // No NaN in the alternative format: a zero of the NaN's sign.
+                sign
             } else if *fpscr & fpscr::DN != 0 {
                 DEFAULT_NAN_HALF
             } else {

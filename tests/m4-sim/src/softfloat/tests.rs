@@ -163,11 +163,16 @@ fn fixed_point_conversions() {
         (85, fpscr::IXC)
     );
     assert_eq!(
-        with(0, |m| from_fixed(0xFFFF, 16, false, 16, m)).0,
+        with(0, |m| from_fixed(0xFFFF, 16, false, 16, true, m)).0,
         f(-1.0 / 65536.0)
     );
+    // Fixed point converts to nearest even under another FPSCR mode; integers do not.
+    let fixed = with(RZ, |m| from_fixed(0x0100_0003, 1, false, 32, true, m));
+    assert_eq!(fixed.0, 0x4B00_0002);
+    let integer = with(RZ, |m| from_fixed(0x0100_0003, 0, false, 32, false, m));
+    assert_eq!(integer.0, 0x4B80_0001);
     assert_eq!(
-        with(0, |m| from_fixed(0x8000_0000, 31, true, 32, m)).0,
+        with(0, |m| from_fixed(0x8000_0000, 31, true, 32, true, m)).0,
         f(1.0)
     );
 }
@@ -192,8 +197,8 @@ fn half_precision() {
         (0x7E00, fpscr::IOC)
     );
     assert_eq!(
-        with(fpscr::AHP, |m| single_to_half(0x7FC0_0000, m)),
-        (0, fpscr::IOC)
+        with(fpscr::AHP, |m| single_to_half(0xFFC0_0000, m)),
+        (0x8000, fpscr::IOC)
     );
     assert_eq!(
         with(0, |m| half_to_single(0x0001, m)),
