@@ -55,7 +55,7 @@ pub enum Stop {
     },
 }
 
-/// A register for [`Cpu::reg`] and [`Cpu::set_reg`].
+/// A register for [`Cpu::read_reg`] and [`Cpu::write_reg`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reg {
     /// R0–R15 (13 = the current SP, 14 = LR, 15 = the PC of the next instruction).
@@ -94,6 +94,19 @@ pub struct Stats {
     pub lowest_sp: u32,
     /// Exceptions taken, by exception number (16 + n for IRQ n).
     pub exceptions: Vec<u64>,
+}
+
+/// The fault status registers (SCB CFSR, HFSR, MMFAR, BFAR), for reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FaultStatus {
+    /// Configurable fault status (MMFSR, BFSR, UFSR).
+    pub cfsr: u32,
+    /// HardFault status.
+    pub hfsr: u32,
+    /// MemManage fault address.
+    pub mmfar: u32,
+    /// BusFault address.
+    pub bfar: u32,
 }
 
 /// What the core is doing between instructions.
@@ -170,10 +183,14 @@ pub struct Cpu {
     pub(crate) clock: Clock,
     /// The cycle count at which `service` must run.
     pub(crate) stop_at: u64,
-    /// `run_until`'s deadline in cycles.
+    /// `run_until`'s deadline in cycles, and in nanoseconds (to recompute the cycles when
+    /// the clock changes).
     pub(crate) deadline: u64,
-    /// The bus's next event in cycles (`u64::MAX`: none).
+    pub(crate) deadline_ns: u64,
+    /// The bus's next event in cycles (`u64::MAX`: none), and in nanoseconds as the bus
+    /// said it.
     pub(crate) bus_event: u64,
+    pub(crate) bus_event_ns: u64,
     /// A stop decided inside an instruction (semihosting exit, breakpoint, lockup).
     pub(crate) pending_stop: Option<Stop>,
     pub(crate) reset_request: Option<ResetKind>,
@@ -224,7 +241,9 @@ impl Cpu {
             clock: Clock::new(cfg.initial_hz),
             stop_at: 0,
             deadline: 0,
+            deadline_ns: 0,
             bus_event: u64::MAX,
+            bus_event_ns: u64::MAX,
             pending_stop: None,
             reset_request: None,
             code_generation: 0,
@@ -262,7 +281,10 @@ impl Cpu {
     pub fn boot<B: Bus>(&mut self, bus: &mut B, vector_table: u32) {
         self.reset_core_state();
         self.scb.vtor = vector_table & 0xFFFF_FF80;
-        self.clock.set_hz(bus.core_hz());
+        let hz = bus.core_hz();
+        if u64::from(hz) != self.clock.hz() {
+            self.set_clock(hz);
+        }
         self.code_generation = bus.code_generation();
         self.cache.clear();
         let now = self.clock.now_ns();
@@ -333,6 +355,16 @@ impl Cpu {
         s
     }
 
+    /// The fault status registers as the program would read them.
+    pub fn fault_status(&self) -> FaultStatus {
+        FaultStatus {
+            cfsr: self.scb.cfsr,
+            hfsr: self.scb.hfsr,
+            mmfar: self.scb.mmfar,
+            bfar: self.scb.bfar,
+        }
+    }
+
     /// Whether the core sleeps (WFI, WFE, sleep-on-exit).
     pub fn is_sleeping(&self) -> bool {
         matches!(self.state, RunState::SleepWfi | RunState::SleepWfe)
@@ -369,8 +401,9 @@ impl Cpu {
     /// two calls is seen.
     pub fn run_until<B: Bus>(&mut self, bus: &mut B, deadline_ns: u64) -> Stop {
         // The world may have changed the bus since the last run: pick that up.
-        self.after_advance(bus);
+        self.deadline_ns = deadline_ns;
         self.deadline = self.clock.cycle_at(deadline_ns);
+        self.after_advance(bus);
         self.stop_at = 0;
         loop {
             if self.clock.cycles >= self.stop_at {
@@ -555,20 +588,29 @@ impl Cpu {
         if write {
             let hz = bus.core_hz();
             if u64::from(hz) != self.clock.hz() {
-                self.clock.set_hz(hz);
-                self.systick.clock_changed();
-                self.stop_at = 0;
+                self.set_clock(hz);
             }
             self.check_code_generation(bus);
         }
         if self.nvic.sample(bus.irq_lines()) {
             self.new_pending();
         }
-        let event = self.clock.cycle_at(bus.next_event_ns());
-        if event != self.bus_event {
-            self.bus_event = event;
-            self.stop_at = self.stop_at.min(event);
+        let event_ns = bus.next_event_ns();
+        if event_ns != self.bus_event_ns {
+            self.bus_event_ns = event_ns;
+            self.bus_event = self.clock.cycle_at(event_ns);
+            self.stop_at = self.stop_at.min(self.bus_event);
         }
+    }
+
+    /// Counts at a new core clock from now: the deadline and the bus's next event move to
+    /// the cycles that are now their times.
+    pub(crate) fn set_clock(&mut self, hz: u32) {
+        self.clock.set_hz(hz);
+        self.systick.clock_changed();
+        self.deadline = self.clock.cycle_at(self.deadline_ns);
+        self.bus_event = self.clock.cycle_at(self.bus_event_ns);
+        self.stop_at = 0;
     }
 
     /// AIRCR.SYSRESETREQ or a reset the bus asked for: the bus and the core reset.
@@ -581,7 +623,8 @@ impl Cpu {
             bus.sleeping(false, self.clock.now_ns());
         }
         self.reset(bus);
-        self.bus_event = self.clock.cycle_at(bus.next_event_ns());
+        self.bus_event_ns = bus.next_event_ns();
+        self.bus_event = self.clock.cycle_at(self.bus_event_ns);
     }
 
     /// An interrupt became pending: with SCR.SEVONPEND that is a WFE wake-up event; in any

@@ -217,3 +217,98 @@ fn the_bus_is_advanced_to_each_event_and_to_the_deadline() {
     );
     assert!(advanced.last().is_some_and(|&t| t >= 1_000_000));
 }
+
+/// A flat bus with a clock register at 0x4000_0000: writing it sets the core clock.
+struct ClockBus(m4_sim::FlatBus);
+
+impl m4_sim::Bus for ClockBus {
+    fn fetch(&mut self, addr: u32) -> Option<u16> {
+        self.0.fetch(addr)
+    }
+    fn read(&mut self, addr: u32, w: m4_sim::Width, now: u64) -> Result<u32, m4_sim::BusFault> {
+        self.0.read(addr, w, now)
+    }
+    fn write(
+        &mut self,
+        addr: u32,
+        w: m4_sim::Width,
+        v: u32,
+        now: u64,
+    ) -> Result<(), m4_sim::BusFault> {
+        if addr == 0x4000_0000 {
+            self.0.set_hz(v);
+            return Ok(());
+        }
+        self.0.write(addr, w, v, now)
+    }
+    fn code_generation(&self) -> u64 {
+        self.0.code_generation()
+    }
+    fn irq_lines(&self) -> [u32; 8] {
+        self.0.irq
+    }
+    fn next_event_ns(&self) -> u64 {
+        self.0.next_event
+    }
+    fn advance(&mut self, now: u64) {
+        self.0.advance(now);
+    }
+    fn core_hz(&self) -> u32 {
+        self.0.core_hz()
+    }
+}
+
+#[test]
+fn a_clock_change_inside_a_run_moves_the_deadline_in_cycles() {
+    // str r1, [r0] (the clock register); b .
+    let rig = Rig::new(&[0x6001, 0xE7FE]);
+    let mut cpu = rig.cpu;
+    let mut bus = ClockBus(rig.bus);
+    cpu.write_reg(Reg::R(0), 0x4000_0000);
+    cpu.write_reg(Reg::R(1), 100_000_000);
+    assert_eq!(cpu.run_until(&mut bus, 1_000_000), Stop::Deadline);
+    // A few cycles at 25 MHz, the rest of the millisecond at 100 MHz.
+    assert!(
+        (1_000_000..1_000_030).contains(&cpu.now_ns()),
+        "{}",
+        cpu.now_ns()
+    );
+    assert!(
+        (99_800..100_010).contains(&cpu.cycles()),
+        "{}",
+        cpu.cycles()
+    );
+}
+
+#[test]
+fn basepri_max_only_raises_the_priority() {
+    // msr basepri_max, r0/r1/r2; mrs r3, basepri
+    let code = [
+        0xF380, 0x8812, 0xF381, 0x8812, 0xF382, 0x8812, 0xF3EF, 0x8311,
+    ];
+    let mut rig = Rig::new(&code);
+    rig.set(0, 0x80);
+    rig.set(1, 0xC0); // lower priority than 0x80: ignored
+    rig.set(2, 0x40);
+    rig.run_to_end(code.len());
+    assert_eq!(rig.r(3), 0x40);
+}
+
+#[test]
+fn sleep_on_exit_returns_to_sleep_after_the_handler() {
+    // wfi; movs r7, #7 — with SLEEPONEXIT the thread does not get past the WFI: the
+    // handler (which disables its interrupt) returns into sleep.
+    let mut rig = Rig::new(&[0xBF30, 0x2707]);
+    let m = mov32(0, 0xE000_E180); // ICER0
+    rig.place(0x400, &[m[0], m[1], m[2], m[3], 0x2101, 0x6001, 0x4770]);
+    rig.vector(16, 0x400);
+    rig.scs_write(0xE000_ED10, 1 << 1);
+    rig.scs_write(0xE000_E100, 1);
+    assert_eq!(rig.cpu.run_until(&mut rig.bus, 1_000_000), Stop::Deadline);
+    assert!(rig.cpu.is_sleeping());
+    rig.bus.irq[0] = 1;
+    assert_eq!(rig.cpu.run_until(&mut rig.bus, 2_000_000), Stop::Deadline);
+    assert_eq!(rig.cpu.stats().exceptions[16], 1);
+    assert!(rig.cpu.is_sleeping());
+    assert_eq!(rig.r(7), 0);
+}
