@@ -80,8 +80,9 @@ pub enum Reg {
     Fpscr,
 }
 
-/// Counters over the life of a [`Cpu`] (they survive resets).
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// Counters over the life of a [`Cpu`] (they survive resets). Exceptions taken per
+/// exception number are [`Cpu::exceptions_taken`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Stats {
     /// Instructions executed (a condition-failed instruction in an IT block counts, as in
     /// QEMU's count).
@@ -90,10 +91,8 @@ pub struct Stats {
     pub cycles_active: u64,
     /// Cycles spent asleep (WFI, WFE, sleep-on-exit, lockup).
     pub cycles_asleep: u64,
-    /// The lowest value either stack pointer held.
+    /// The lowest value either stack pointer held (`u32::MAX` before any).
     pub lowest_sp: u32,
-    /// Exceptions taken, by exception number (16 + n for IRQ n).
-    pub exceptions: Vec<u64>,
 }
 
 /// The fault status registers (SCB CFSR, HFSR, MMFAR, BFAR), for reports.
@@ -201,6 +200,8 @@ pub struct Cpu {
     /// Instruction count and Rt of the last single load (for load pipelining).
     pub(crate) last_load: (u64, u8),
     pub(crate) stats: Stats,
+    /// Exceptions taken, by exception number.
+    pub(crate) exceptions: [u64; 256],
     pub(crate) semihost_out: Vec<u8>,
 }
 
@@ -255,8 +256,8 @@ impl Cpu {
                 cycles_active: 0,
                 cycles_asleep: 0,
                 lowest_sp: u32::MAX,
-                exceptions: vec![0; 256],
             },
+            exceptions: [0; 256],
             semihost_out: Vec::new(),
         };
         cpu.reset_core_state();
@@ -350,9 +351,14 @@ impl Cpu {
 
     /// The statistics so far.
     pub fn stats(&self) -> Stats {
-        let mut s = self.stats.clone();
+        let mut s = self.stats;
         s.cycles_active = self.clock.cycles - s.cycles_asleep;
         s
+    }
+
+    /// Exceptions taken so far, by exception number (16 + n for IRQ n).
+    pub fn exceptions_taken(&self) -> &[u64; 256] {
+        &self.exceptions
     }
 
     /// The fault status registers as the program would read them.

@@ -194,7 +194,7 @@ impl Cpu {
         self.exclusive = false;
         self.event = true;
         self.refill = true;
-        if let Some(count) = self.stats.exceptions.get_mut(usize::from(n)) {
+        if let Some(count) = self.exceptions.get_mut(usize::from(n)) {
             *count += 1;
         }
         let vector_addr = self.scb.vtor.wrapping_add(4 * u32::from(n));

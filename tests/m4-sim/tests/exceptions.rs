@@ -55,7 +55,7 @@ fn svc_stacks_a_frame_and_returns_past_the_svc() {
     assert_eq!(words[7] & (1 << 24), 1 << 24, "stacked T bit");
     assert_eq!(rig.r(0), 11, "execution resumed after the SVC");
     assert_eq!(rig.r(13), STACK);
-    assert_eq!(rig.cpu.stats().exceptions[SVCALL as usize], 1);
+    assert_eq!(rig.cpu.exceptions_taken()[SVCALL as usize], 1);
 }
 
 const CODE_AT: u32 = CODE;
@@ -271,8 +271,8 @@ fn an_equal_priority_interrupt_tail_chains() {
         "B ran on A's frame: no unstacking in between"
     );
     assert_eq!(rig.r(6), 0xFFFF_FFF9, "B returns straight to thread mode");
-    assert_eq!(rig.cpu.stats().exceptions[16], 1);
-    assert_eq!(rig.cpu.stats().exceptions[17], 1);
+    assert_eq!(rig.cpu.exceptions_taken()[16], 1);
+    assert_eq!(rig.cpu.exceptions_taken()[17], 1);
     // Entry 12 + A (4) + tail-chain 6 + B (4) + return 10 + the rest: far below two full
     // entries and returns.
     assert!(
@@ -398,7 +398,7 @@ fn wfi_sleeps_until_the_next_event_in_one_jump() {
     assert!(cpu.stats().cycles_asleep >= 74_990);
     assert!(cpu.stats().instructions < 30);
     assert_eq!(
-        cpu.stats().exceptions[16],
+        cpu.exceptions_taken()[16],
         0,
         "PRIMASK held the interrupt back"
     );

@@ -164,7 +164,7 @@ fn without_a_debugger_bkpt_is_a_hard_fault() {
             pc: default_handler(3)
         }
     );
-    assert_eq!(rig.cpu.stats().exceptions[3], 1);
+    assert_eq!(rig.cpu.exceptions_taken()[3], 1);
 }
 
 #[test]
@@ -308,7 +308,7 @@ fn sleep_on_exit_returns_to_sleep_after_the_handler() {
     assert!(rig.cpu.is_sleeping());
     rig.bus.irq[0] = 1;
     assert_eq!(rig.cpu.run_until(&mut rig.bus, 2_000_000), Stop::Deadline);
-    assert_eq!(rig.cpu.stats().exceptions[16], 1);
+    assert_eq!(rig.cpu.exceptions_taken()[16], 1);
     assert!(rig.cpu.is_sleeping());
     assert_eq!(rig.r(7), 0);
 }
