@@ -3,6 +3,8 @@
 //! (`ins.mode`) and it is healthy, from the complementary filter otherwise.
 //!
 //! - `complementary` (factory): the complementary filter alone, as before the INS flew.
+//!   A receiver's fixes are not fused, but the first usable one is still the home (the
+//!   `Home` message, the ground station's marker), in every mode.
 //! - `ins`: the full filter — gyro and accelerometer predict at the sensor rate, baro, mag
 //!   and GPS ([`GpsAiding`], latency compensated) correct. While there is no usable fix the
 //!   indoor pseudo-measurement stands in for GPS velocity.
@@ -235,16 +237,14 @@ impl Estimator {
         }
     }
 
-    /// A NAV-PVT that arrived now; fused while the full INS flies (`None`: not offered).
+    /// A NAV-PVT that arrived now; fused while the full INS flies. Otherwise (any other
+    /// mode, or before the INS starts) it still sets the fix state and, from the first
+    /// usable fix, the home — telemetry's `Home` and the ground station's marker do not need
+    /// the INS. `None`: not fused and usable.
     pub fn gps(&mut self, pvt: &NavPvt) -> Option<GpsUpdate> {
-        if self.mode != EstimatorMode::Ins {
-            return None;
-        }
         self.last_gps_us = Some(self.time_us);
-        if self.source != Source::Ins {
-            // Quality only (home, fix state): the INS is not running.
-            let usable = self.gps.usable(pvt);
-            return usable.err().map(GpsUpdate::Unusable);
+        if self.mode != EstimatorMode::Ins || self.source != Source::Ins {
+            return self.gps.observe(pvt).err().map(GpsUpdate::Unusable);
         }
         match self.gps.fuse(&mut self.ins, pvt, self.time_us) {
             Ok(update) => Some(update),
