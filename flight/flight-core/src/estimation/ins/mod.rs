@@ -13,10 +13,10 @@ mod noise;
 mod predict;
 mod reset;
 
+pub use crate::estimation::align::tilt_from_accel;
 pub use aiding::{Aided, Ins};
 pub use fusion::Fusion;
 pub use noise::SensorNoise;
-pub use reset::tilt_from_accel;
 
 use crate::estimation::quaternion::{self, Quaternion};
 use crate::estimation::{Error, GRAVITY_MPS2, check_finite};
