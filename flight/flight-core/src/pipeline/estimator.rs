@@ -318,8 +318,8 @@ impl Estimator {
         let [ax, ay, az] = imu.accel_mps2;
         let g = crate::estimation::GRAVITY_MPS2;
         let f2 = ax * ax + ay * ay + az * az;
-        let band = (g * (1.0 - ALIGN_ACCEL_BAND))..(g * (1.0 + ALIGN_ACCEL_BAND));
-        let still = band.contains(&crate::estimation::math::sqrt(f2));
+        let (low, high) = (g * (1.0 - ALIGN_ACCEL_BAND), g * (1.0 + ALIGN_ACCEL_BAND));
+        let still = (low * low..high * high).contains(&f2);
         if still
             && (imu.mag.is_some() || *waited >= ALIGN_WAIT_S)
             && self.cf.align(imu.accel_mps2, imu.mag).is_ok()
