@@ -133,25 +133,16 @@ impl FlightApp {
                     Err(e) => write!(out, "not yet: {e}\r\n"),
                 }
             }
-            MagcalAction::Save => {
-                if !self.magcal.collecting() {
-                    return out.write_str("refused: magcal start first\r\n");
+            MagcalAction::Save => match self.store_magcal() {
+                Ok(cal) => {
+                    write_calibration(out, &cal)?;
+                    out.write_str("stored, saving\r\n")
                 }
-                let cal = match self.magcal.fit() {
-                    Ok(cal) => cal,
-                    Err(e) => return write!(out, "refused: {e}; nothing stored\r\n"),
-                };
-                let mut changed = self.live.clone();
-                if let Err(e) = super::magcal::store(&mut changed, &cal) {
-                    return write!(out, "refused: {e}; nothing stored\r\n");
+                Err(super::magcal::StoreRefused::NotStarted) => {
+                    out.write_str("refused: magcal start first\r\n")
                 }
-                self.live = changed;
-                self.magcal.cancel();
-                self.settings_changed();
-                self.request_save();
-                write_calibration(out, &cal)?;
-                out.write_str("stored, saving\r\n")
-            }
+                Err(e) => write!(out, "refused: {e}; nothing stored\r\n"),
+            },
         }
     }
 

@@ -267,6 +267,9 @@ table! {
     MAG_XY: f32 = f(807, "mag.xy", -10.0, 10.0, 0.0),
     MAG_XZ: f32 = f(808, "mag.xz", -10.0, 10.0, 0.0),
     MAG_YZ: f32 = f(809, "mag.yz", -10.0, 10.0, 0.0),
+    // Magnetic declination at the flying field, degrees east of true north: the heading the
+    // estimators take from the magnetometer is turned by it (`estimation::align`).
+    MAG_DECLINATION_DEG: f32 = f(810, "mag.declination_deg", -180.0, 180.0, 0.0),
     ;
     // Handle arrays for the composite names, in the handles module.
     /// The rate PID gains, `[roll, pitch, yaw][kp, ki, kd]` (`pid.<axis>.<gain>`).
