@@ -10,5 +10,6 @@
 
 pub mod board;
 pub mod chips;
+pub mod runner;
 pub mod wire;
 pub mod world;

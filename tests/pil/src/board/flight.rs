@@ -325,15 +325,24 @@ impl FlightBoard {
         })
     }
 
-    /// Pulse starts of the motors since the last call (for the loop's timing).
-    pub fn take_motor_starts(&mut self) -> Vec<u64> {
-        let mut v: Vec<u64> = self
+    /// Complete pulses of the motors since the last call: (start ns, width ns, motor).
+    pub fn take_motor_pulses(&mut self) -> Vec<(u64, u64, usize)> {
+        let mut v: Vec<(u64, u64, usize)> = self
             .motors
             .iter_mut()
-            .flat_map(PulseMeter::take_starts)
+            .enumerate()
+            .flat_map(|(i, m)| {
+                m.take_starts();
+                m.take_pulses().into_iter().map(move |(s, w)| (s, w, i))
+            })
             .collect();
         v.sort_unstable();
         v
+    }
+
+    /// Data-ready rises since the last call.
+    pub fn take_int_rises(&mut self) -> Vec<u64> {
+        std::mem::take(&mut self.int_rises)
     }
 
     /// The last complete pulse width of each motor, ns (None: none yet).

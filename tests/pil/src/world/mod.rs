@@ -22,6 +22,7 @@
 
 pub mod machine;
 pub mod observe;
+pub mod timing;
 
 use flight_core::outputs::{Command, Protocol};
 use flight_core::pipeline::{Attitude, LoopOutput, Source};
@@ -178,6 +179,8 @@ pub struct World<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard
     halts: Vec<(End, u64, Halt)>,
     stats_at_power_off: MachineStats,
     pilot_pin: Option<u32>,
+    /// Data-ready to motor pulse.
+    pub loop_timing: timing::LoopTiming,
 }
 
 /// The flight board for a scenario (radio from `radios`).
@@ -272,6 +275,7 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
             halts: Vec::new(),
             stats_at_power_off: MachineStats::default(),
             pilot_pin: config.phone_pin,
+            loop_timing: timing::LoopTiming::default(),
             config,
             now_ns: 0,
         }
@@ -321,6 +325,10 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
         if let Err(h) = self.module.run_until(t1) {
             self.halts.push((End::Module, t1, h));
         }
+        let board = self.flight.board();
+        let rises = board.take_int_rises();
+        let pulses = board.take_motor_pulses();
+        self.loop_timing.feed(&rises, &pulses);
         self.now_ns = t1;
     }
 

@@ -1,0 +1,3 @@
+//! The runner (in progress).
+pub mod binding;
+pub mod image;
