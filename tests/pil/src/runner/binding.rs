@@ -102,7 +102,7 @@ impl<const W: usize, const E: usize> NorFlash for FlashWindow<W, E> {
     const ERASE_SIZE: usize = E;
 
     async fn erase(&mut self, from: u32, to: u32) -> Result<(), FlashError> {
-        if from as usize % E != 0 || to as usize % E != 0 {
+        if !(from as usize).is_multiple_of(E) || !(to as usize).is_multiple_of(E) {
             return Err(FlashError(NorFlashErrorKind::NotAligned));
         }
         let span = self.span(from, to.saturating_sub(from) as usize)?;
@@ -114,7 +114,7 @@ impl<const W: usize, const E: usize> NorFlash for FlashWindow<W, E> {
     }
 
     async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), FlashError> {
-        if offset as usize % W != 0 || bytes.len() % W != 0 {
+        if !(offset as usize).is_multiple_of(W) || !bytes.len().is_multiple_of(W) {
             return Err(FlashError(NorFlashErrorKind::NotAligned));
         }
         let span = self.span(offset, bytes.len())?;
