@@ -64,6 +64,18 @@ impl<const W: usize, const E: usize> FlashWindow<W, E> {
         &self.bytes
     }
 
+    /// Fills the window with `bytes` (a read-back of the real flash).
+    ///
+    /// # Errors
+    /// When the length differs from the window's.
+    pub fn load(&mut self, bytes: &[u8]) -> Result<(), FlashError> {
+        if bytes.len() != self.bytes.len() {
+            return Err(FlashError(NorFlashErrorKind::OutOfBounds));
+        }
+        self.bytes.copy_from_slice(bytes);
+        Ok(())
+    }
+
     fn span(&self, offset: u32, len: usize) -> Result<Range<usize>, FlashError> {
         let start = offset
             .checked_sub(self.range.start)

@@ -14,6 +14,20 @@ pub enum Halt {
     Error(String),
 }
 
+/// A hardware fault the SoC model injects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Injection {
+    /// A bus error during a DMA transfer on `controller`'s `stream` (DMA1 = 1, DMA2 = 2):
+    /// the stream's transfer-error flag (RM0090 §10.3.15, TEIFx) — embassy-stm32's DMA
+    /// interrupt handler panics on it.
+    DmaTransferError {
+        /// DMA controller.
+        controller: u8,
+        /// Stream.
+        stream: u8,
+    },
+}
+
 /// The figures of one emulated MCU since power-on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct MachineStats {
@@ -83,6 +97,19 @@ pub trait Machine {
 
     /// Its figures so far.
     fn stats(&self) -> MachineStats;
+
+    /// Injects a hardware fault now; false when the model cannot.
+    fn inject(&mut self, injection: Injection) -> bool {
+        let _ = injection;
+        false
+    }
+
+    /// `len` bytes of its memory at `addr` as a debug probe reads them (flash, RAM); None
+    /// when unmapped or not supported.
+    fn read_memory(&self, addr: u32, len: usize) -> Option<Vec<u8>> {
+        let _ = (addr, len);
+        None
+    }
 }
 
 /// Hands `inputs` to `machine`'s queues.
