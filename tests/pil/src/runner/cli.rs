@@ -56,7 +56,7 @@ pub struct Cli {
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
-    /// The flight image (default: dist/flight-<board>.elf).
+    /// The flight image (default: `dist/flight-BOARD.elf`).
     #[arg(long, value_name = "PATH")]
     pub flight_image: Option<PathBuf>,
     /// The module image (default: dist/module-nrf52840.elf).
