@@ -35,6 +35,11 @@ pub use report::Outcome;
 /// The binding phrase both ends carry unless told otherwise.
 pub const DEFAULT_PHRASE: &str = "correct horse battery staple";
 
+/// The module's nRF52840 FICR DEVICEID, which a [`Platform`] programs into the model: the
+/// module derives its HM-10 pairing PIN from it (`module_core::hm10::at::Pin::factory`), and
+/// the pilot's phone knows that PIN, as printed on the module's label.
+pub const MODULE_DEVICE_ID: u64 = 0x5A17_0002_8840_0001;
+
 /// A named PIL scenario.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
@@ -154,7 +159,8 @@ pub trait Platform {
         seed: u64,
     ) -> Result<Self::Flight, String>;
 
-    /// The nRF52840 on `board` running `image`, its settings pages holding `settings`.
+    /// The nRF52840 on `board` running `image`, its settings pages holding `settings`, its
+    /// FICR DEVICEID [`MODULE_DEVICE_ID`].
     ///
     /// # Errors
     /// As [`Platform::flight`].
@@ -298,6 +304,7 @@ pub fn run<P: Platform>(platform: &P, opts: &Options) -> Result<Outcome, PilErro
         quantum_ns: opts.quantum_ns,
         i2c_stuck: (opts.kind == Kind::I2cStuck).then_some((0, 9)),
         phone_key: key,
+        phone_pin: Some(module_core::hm10::at::Pin::factory(MODULE_DEVICE_ID).value()),
         ..WorldConfig::default()
     };
     let mut radios = Radios::new(scenario.seed, scenario.packet_loss);
