@@ -266,12 +266,15 @@ impl Cpu {
         if let Some((n, _)) = chain {
             self.clock.cycles += crate::cycles::TAIL_CHAIN;
             self.activate(bus, n, exc_return);
-            return Ok(());
+        } else {
+            self.pop_frame(bus, use_psp, fp_frame, to_thread);
+            if to_thread && self.scb.scr & 2 != 0 {
+                self.sleep(bus, RunState::SleepWfi);
+            }
         }
-        self.pop_frame(bus, use_psp, fp_frame, to_thread);
-        if to_thread && self.scb.scr & 2 != 0 {
-            self.sleep(bus, RunState::SleepWfi);
-        }
+        // The returning instruction (a POP, LDM, LDR or BX) completes by moving to the PC
+        // the return chose, not to its own successor.
+        self.next_pc = self.pc;
         Ok(())
     }
 

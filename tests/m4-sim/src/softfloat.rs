@@ -666,4 +666,3 @@ pub(crate) fn half_to_single(h: u32, fpscr: &mut u32) -> u32 {
         fpscr,
     )
 }
-

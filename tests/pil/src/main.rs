@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use pil::runner::cli::Cli;
-use pil::runner::emulated::Emulated;
+use pil::runner::emulated::EmulatedBoards;
 use pil::runner::image::Image;
 
 fn main() -> ExitCode {
@@ -22,7 +22,7 @@ fn main() -> ExitCode {
             }
         }
     }
-    let outcome = match pil::runner::run(&Emulated, &opts) {
+    let outcome = match pil::runner::run(&EmulatedBoards, &opts) {
         Ok(o) => o,
         Err(e) => {
             eprintln!("pil: {e}");

@@ -56,9 +56,12 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
         .collect()
 }
 
-/// The mangled name's part every task poll's symbol carries (`embassy_executor::raw::
-/// TaskStorage<F>::poll`).
-const TASK_POLL: &str = "TaskStorage$LT$F$GT$4poll";
+/// What every task poll's symbol carries (`embassy_executor::raw::TaskStorage<F>::poll`),
+/// in both manglings: legacy `…TaskStorage$LT$F$GT$4poll17h…E` and v0
+/// `…11TaskStorage…E4poll…`.
+fn is_task_poll(name: &str) -> bool {
+    name.contains("TaskStorage") && name.contains("4poll")
+}
 
 impl Image {
     /// The image in `bytes` (read from `path`).
@@ -80,7 +83,7 @@ impl Image {
         let mut task_polls: Vec<u32> = fw_elf::symbols(&bytes)
             .map_err(|e| ImageError::Elf(e.to_string()))?
             .into_iter()
-            .filter(|s| s.name.contains(TASK_POLL))
+            .filter(|s| is_task_poll(&s.name))
             .map(|s| s.address & !1)
             .collect();
         task_polls.sort_unstable();
@@ -122,6 +125,17 @@ mod tests {
             sha256_hex(b"abc"),
             "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
         );
+    }
+
+    #[test]
+    fn task_polls_in_both_manglings() {
+        assert!(is_task_poll(
+            "_ZN16embassy_executor3raw20TaskStorage$LT$F$GT$4poll17h119b6b6c1c125153E"
+        ));
+        assert!(is_task_poll(
+            "_RNvMs1_NtCs5APViPlMGpI_16embassy_executor3rawINtB5_11TaskStorageNCNvNvNtCsve3zSKosp0_9flight_fw8firmware21_____embassy_main_task36_____embassy_main_task_inner_function0E4pollB18_"
+        ));
+        assert!(!is_task_poll("_ZN4core6future4poll17h0E"));
     }
 
     #[test]

@@ -86,7 +86,7 @@ pub trait Machine {
     fn uart_receive(&mut self, uart: u8, byte: u8, at_ns: u64);
 
     /// The rate UART `uart` is set to now (None: not configured).
-    fn uart_baud(&self, uart: u8) -> Option<u32>;
+    fn uart_baud(&mut self, uart: u8) -> Option<u32>;
 
     /// Power off (`false`: everything stops, RAM is lost) or on (a power-on reset) at
     /// `now_ns`.
@@ -216,7 +216,7 @@ impl<B: Outside> Machine for FakeMachine<B> {
             .push(crate::board::Input::Uart { uart, byte, at_ns });
     }
 
-    fn uart_baud(&self, uart: u8) -> Option<u32> {
+    fn uart_baud(&mut self, uart: u8) -> Option<u32> {
         self.bauds.iter().find(|(u, _)| *u == uart).map(|(_, b)| *b)
     }
 
