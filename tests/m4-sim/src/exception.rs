@@ -266,15 +266,12 @@ impl Cpu {
         if let Some((n, _)) = chain {
             self.clock.cycles += crate::cycles::TAIL_CHAIN;
             self.activate(bus, n, exc_return);
-        } else {
-            self.pop_frame(bus, use_psp, fp_frame, to_thread);
-            if to_thread && self.scb.scr & 2 != 0 {
-                self.sleep(bus, RunState::SleepWfi);
-            }
+            return Ok(());
         }
-        // The returning instruction (a POP, LDM, LDR or BX) completes by moving to the PC
-        // the return chose, not to its own successor.
-        self.next_pc = self.pc;
+        self.pop_frame(bus, use_psp, fp_frame, to_thread);
+        if to_thread && self.scb.scr & 2 != 0 {
+            self.sleep(bus, RunState::SleepWfi);
+        }
         Ok(())
     }
 
