@@ -666,3 +666,4 @@ pub(crate) fn half_to_single(h: u32, fpscr: &mut u32) -> u32 {
         fpscr,
     )
 }
+

@@ -98,3 +98,4 @@ pub(crate) fn decode_imm_shift(ty: u32, imm5: u32) -> (crate::insn::Shift, u8) {
 pub(crate) const fn pc_aligned(addr: u32) -> u32 {
     addr.wrapping_add(4) & !3
 }
+
