@@ -58,9 +58,10 @@ fn main() {
         let msp = m.cpu().read_reg(m4_sim::Reg::Msp);
         let ram = m.soc().sram_contents();
         let word = |a: u32| {
-            let o = (a - 0x2000_0000) as usize;
+            let o = a.wrapping_sub(0x2000_0000) as usize;
             ram.get(o..o + 4)
-                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .and_then(|b| b.try_into().ok())
+                .map(u32::from_le_bytes)
         };
         println!(
             "msp 0x{msp:08x}: {:x?}",

@@ -106,7 +106,7 @@ pub struct Emulated<B: Bus> {
     polls: Vec<u32>,
     polled: BTreeSet<u32>,
     boot_from_ns: u64,
-    boot_ns: Option<u64>,
+    last_first_poll_ns: Option<u64>,
     stack_top: u32,
     locked: bool,
     lockups: u32,
@@ -132,7 +132,7 @@ impl<B: Bus> Emulated<B> {
             polls: image.task_polls.clone(),
             polled: BTreeSet::new(),
             boot_from_ns: 0,
-            boot_ns: None,
+            last_first_poll_ns: None,
             stack_top: image.stack_top,
             locked: false,
             lockups: 0,
@@ -160,9 +160,8 @@ impl<B: Bus> Emulated<B> {
                 Stop::Deadline => return Ok(()),
                 Stop::Hook { pc } => {
                     self.cpu.remove_pc_hook(pc);
-                    self.polled.insert(pc);
-                    if self.boot_ns.is_none() && self.polled.len() == self.polls.len() {
-                        self.boot_ns = Some(self.cpu.now_ns().saturating_sub(self.boot_from_ns));
+                    if self.polled.insert(pc) {
+                        self.last_first_poll_ns = Some(self.cpu.now_ns());
                     }
                 }
                 Stop::Lockup { .. } => {
@@ -210,7 +209,12 @@ impl<B: Bus> Emulated<B> {
             lowest_sp: (s.lowest_sp != u32::MAX).then_some(s.lowest_sp),
             watchdog_resets: self.log.watchdog,
             resets: self.log.resets,
-            boot_ns: self.boot_ns,
+            boot_ns: self
+                .last_first_poll_ns
+                .map(|t| t.saturating_sub(self.boot_from_ns)),
+            tasks_polled: u32::try_from(self.polled.len()).unwrap_or(u32::MAX),
+            tasks_total: u32::try_from(self.polls.len()).unwrap_or(u32::MAX),
+            last_first_poll_ns: self.last_first_poll_ns,
             lockups: self.lockups,
         }
     }

@@ -28,6 +28,9 @@ use crate::world::machine::{Machine, MachineStats};
 /// The panic scenario: the motors must be off this soon after the fault, ms (issue 29: a
 /// handler that drives every motor pin off at once).
 pub const MAX_MOTORS_OFF_MS: f64 = 1.0;
+/// `boot`: the image's polled tasks are the spawned ones once no task was first polled for
+/// this long, ns.
+pub const SETTLED_NS: u64 = 1_000_000_000;
 /// The setting the `settings-save` phone changes, and to what.
 pub const SAVED_SETTING: (&str, f32) = ("failsafe.descent_mps", 0.9);
 
@@ -116,6 +119,8 @@ pub struct Outcome {
     pub pil: PilFigures,
     /// Criteria not met, in words.
     pub failed: Vec<String>,
+    /// The run's end, virtual ns.
+    pub end_ns: u64,
     /// Wall-clock time of the run, s.
     pub wall_s: f64,
     /// CPU time of the run, s.
@@ -201,6 +206,7 @@ impl Outcome {
             images: [flight, module],
             pil,
             failed: Vec::new(),
+            end_ns: world.now_ns(),
             wall_s,
             cpu_s,
         };
@@ -233,12 +239,22 @@ impl Outcome {
         let [flight, module] = &self.images;
         match self.kind {
             Kind::Boot => {
-                need(flight.stats.boot_ns.is_some(), "every flight task polled");
-                need(module.stats.boot_ns.is_some(), "every module task polled");
-                need(
-                    flight.stats.resets == 0 && module.stats.resets == 0,
-                    "no reset",
-                );
+                for (f, end) in [(flight, "flight"), (module, "module")] {
+                    let settled = f
+                        .stats
+                        .last_first_poll_ns
+                        .is_some_and(|t| t + SETTLED_NS <= self.end_ns);
+                    need(
+                        f.stats.tasks_polled > 0 && settled,
+                        &format!(
+                            "every {end} task spawned and polled (none first polled in the last second)"
+                        ),
+                    );
+                    need(
+                        f.stats.watchdog_resets == 0 && f.stats.lockups == 0,
+                        &format!("no {end} watchdog reset or lockup"),
+                    );
+                }
                 need(
                     self.pil.first_telemetry_s.is_some(),
                     "telemetry reaches the phone (link up)",
@@ -288,11 +304,13 @@ impl Outcome {
                 .map_or("null".into(), |x| fixed(x, d))
         };
         let mut o = format!(
-            "{{\"path\":\"{}\",\"image_sha256\":\"{}\",\"instructions\":{},\"boot_ms\":{},\"max_stack_bytes\":{},\"cpu_load_pct\":{},\"watchdog_resets\":{},\"resets\":{},\"lockups\":{}",
+            "{{\"path\":\"{}\",\"image_sha256\":\"{}\",\"instructions\":{},\"boot_ms\":{},\"tasks_polled\":{},\"tasks_in_image\":{},\"max_stack_bytes\":{},\"cpu_load_pct\":{},\"watchdog_resets\":{},\"resets\":{},\"lockups\":{}",
             f.path.replace('\\', "/").replace('"', "'"),
             f.sha256,
             f.stats.instructions,
             num(f.stats.boot_ns.map(|n| n as f64 / 1e6), 3),
+            f.stats.tasks_polled,
+            f.stats.tasks_total,
             f.stats
                 .max_stack_bytes()
                 .map_or("null".into(), |b| b.to_string()),

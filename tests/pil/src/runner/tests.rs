@@ -117,7 +117,10 @@ fn boot_with_silent_mcus_fails_its_criteria_and_names_them() {
     );
     assert_eq!(out.plan.duration_s, BOOT_S);
     assert!(
-        out.failed.contains(&"every flight task polled".to_owned()),
+        out.failed.contains(
+            &"every flight task spawned and polled (none first polled in the last second)"
+                .to_owned()
+        ),
         "{:?}",
         out.failed
     );
@@ -136,6 +139,7 @@ fn boot_with_silent_mcus_fails_its_criteria_and_names_them() {
         "\"watchdog_resets\":{\"flight\":0,\"module\":0}",
         "\"instructions\":",
         "\"boot_ms\":null",
+        "\"tasks_polled\":0,\"tasks_in_image\":0,",
         "\"max_stack_bytes\":",
         "\"cpu_load_pct\":",
         "\"loop_jitter_p99_us\":",

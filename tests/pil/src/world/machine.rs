@@ -45,9 +45,17 @@ pub struct MachineStats {
     pub watchdog_resets: u32,
     /// Every reset after the first power-on (watchdog, software, lockup recovery, power).
     pub resets: u32,
-    /// From the last reset until every task of the image had been polled, ns (None: not
-    /// all yet).
+    /// From power-on until the last of the image's tasks was first polled, ns (None: none
+    /// yet).
     pub boot_ns: Option<u64>,
+    /// The image's tasks polled at least once, of how many it holds (a task the image's
+    /// configuration does not spawn is never polled: the module's receiver-only PPM output
+    /// in the transmitter role).
+    pub tasks_polled: u32,
+    /// …
+    pub tasks_total: u32,
+    /// When the last task was first polled, ns since power-on.
+    pub last_first_poll_ns: Option<u64>,
     /// Times the core locked up.
     pub lockups: u32,
 }
