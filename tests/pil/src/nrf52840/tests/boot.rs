@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use m4_sim::bus::ResetCause;
 use m4_sim::{Config as CpuConfig, Cpu, Reg, Stop};
 
-use crate::nrf52840::{Config, Nrf52840, resetreas, uicr};
+use crate::nrf52840::{ClockFaults, Config, Nrf52840, resetreas, uicr};
 use crate::wire::{Drive, I2cReply, I2cStep, Outside, Pin};
 
 /// A quiet board: the radio answers 0x00 to everything, nIRQ and the bind button idle high,
@@ -104,7 +104,11 @@ fn is_task_poll(symbol: &str) -> bool {
 }
 
 fn boot(elf: &[u8], uf2: bool, expected: &[&str]) -> Boot {
-    let mut chip = Nrf52840::new(Quiet::default(), Config::default());
+    boot_with(elf, uf2, expected, Config::default())
+}
+
+fn boot_with(elf: &[u8], uf2: bool, expected: &[&str], config: Config) -> Boot {
+    let mut chip = Nrf52840::new(Quiet::default(), config);
     chip.load_elf(elf).unwrap();
     if uf2 {
         chip.install_uf2_boot_chain(0x26000);
@@ -190,9 +194,12 @@ const TASKS: [&str; 11] = [
 ];
 
 fn report(name: &str, b: &Boot) {
+    let at = b.all_polled_ns.map_or_else(
+        || "never".to_owned(),
+        |t| format!("at {:.3} ms", t as f64 / 1e6),
+    );
     println!(
-        "{name}: every task polled at {:.3} ms, {} instructions, lowest SP 0x{:08X}, resets {:?}",
-        b.all_polled_ns.unwrap_or(0) as f64 / 1e6,
+        "{name}: every task polled {at}, {} instructions, lowest SP 0x{:08X}, resets {:?}",
         b.instructions,
         b.lowest_sp,
         b.chip.resets()
@@ -243,6 +250,31 @@ fn the_uf2_image_boots_behind_the_mbr_and_bootloader() {
     assert_eq!(b.chip.gpio_supply_volts(), 3.3);
     // Interrupts arrive through the image's own table (VTOR) although the MBR forwards too.
     assert!(b.polled.contains_key("link_task"));
+}
+
+#[test]
+#[ignore = "needs the images of cargo xtask dist"]
+fn a_dead_32khz_crystal_hangs_the_boot_before_the_watchdog_exists() {
+    // Issue 29, "boot hangs on missing clocks": embassy_nrf::init waits for LFCLKSTARTED
+    // with no time-out and no watchdog running yet.
+    let config = Config {
+        clock_faults: ClockFaults {
+            hfxo_dead: false,
+            lfxo_dead: true,
+        },
+        ..Config::default()
+    };
+    let b = boot_with(&dist("module-nrf52840.elf"), false, &TASKS, config);
+    report("module-nrf52840.elf, LFXO dead", &b);
+    assert_eq!(b.all_polled_ns, None);
+    assert_eq!(b.polled.keys().collect::<Vec<_>>(), ["__embassy_main"]);
+    assert_eq!(
+        b.chip.watchdog_timeouts(),
+        0,
+        "no watchdog to get out of it"
+    );
+    assert_eq!(b.chip.resets().len(), 1, "only init's UICR reset");
+    assert_eq!(b.chip.sleep_ns(), 0, "spinning, not sleeping");
 }
 
 #[test]
