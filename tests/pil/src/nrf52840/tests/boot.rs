@@ -278,6 +278,38 @@ fn a_dead_32khz_crystal_hangs_the_boot_before_the_watchdog_exists() {
 }
 
 #[test]
+#[ignore = "needs the images of cargo xtask dist"]
+fn three_seconds_on_a_silent_board() {
+    let mut chip = Nrf52840::new(Quiet::default(), Config::default());
+    chip.load_elf(&dist("module-nrf52840.elf")).unwrap();
+    let mut cpu = core();
+    cpu.reset(&mut chip);
+    let stop = cpu.run_until(&mut chip, 3_000_000_000);
+    assert_eq!(stop, Stop::Deadline);
+    let s = cpu.stats();
+    let a = chip.anomaly_198();
+    println!(
+        "3 s: {} instructions, {} cycles active, {} asleep; watchdog expiries {}; anomaly 198: \
+         {} conditions in {} SPIM3 transfers, first {:?}",
+        s.instructions,
+        s.cycles_active,
+        s.cycles_asleep,
+        chip.watchdog_timeouts(),
+        a.count,
+        a.transfers,
+        a.hits.first()
+    );
+    assert!(chip.unmodelled().is_empty(), "{:#?}", chip.unmodelled());
+    assert!(
+        chip.records().notes().is_empty(),
+        "{:#?}",
+        chip.records().notes()
+    );
+    assert_eq!(chip.watchdog_timeouts(), 0);
+    assert!(s.cycles_asleep > s.cycles_active);
+}
+
+#[test]
 fn task_names_come_out_of_both_manglings() {
     assert_eq!(
         task_name("_ZN9module_fw8firmware5tasks6button11button_task4POOL17hd17b4ca2ea4460c2E"),
