@@ -12,6 +12,7 @@ use core::fmt::Write;
 use super::FlightApp;
 use telemetry::link::{LinkKey, key_for_phrase};
 
+use crate::settings::decimal::{Fixed, Shortest};
 use crate::settings::{
     Command, LineError, MagcalAction, Settings, parse_line, write_list, write_setting,
 };
@@ -169,15 +170,18 @@ impl FlightApp {
     fn write_status<W: Write>(&self, out: &mut W) -> core::fmt::Result {
         let link = if self.link_input.up { "up" } else { "down" };
         match &self.last_out {
-            Some(state) => write!(
-                out,
-                "mode {}, failsafe {}, link {}, arm blockers {:#x}, attitude {:?} deg\r\n",
-                state.mode.name(),
-                state.failsafe,
-                link,
-                self.arming_blockers(),
-                state.attitude.deg()
-            )?,
+            Some(state) => {
+                write!(
+                    out,
+                    "mode {}, failsafe {}, link {}, arm blockers {:#x}, attitude ",
+                    state.mode.name(),
+                    state.failsafe,
+                    link,
+                    self.arming_blockers(),
+                )?;
+                write_vector(out, state.attitude.deg(), |v| Fixed(v, 1))?;
+                out.write_str(" deg\r\n")?
+            }
             None => out.write_str("flight loop not running (IMU?)\r\n")?,
         }
         let estimator = self.flight.estimator();
@@ -250,10 +254,24 @@ fn write_calibration<W: Write>(
     out: &mut W,
     cal: &crate::estimation::magcal::MagCalibration,
 ) -> core::fmt::Result {
-    let [[xx, xy, xz], [_, yy, yz], [_, _, zz]] = cal.matrix;
+    let [[xx, xy, xz], [_, yy, yz], [_, _, zz]] = cal.matrix.map(|row| row.map(Shortest));
+    out.write_str("offset ")?;
+    write_vector(out, cal.offset, Shortest)?;
     write!(
         out,
-        "offset {:?}\r\nmatrix xx {xx} yy {yy} zz {zz} xy {xy} xz {xz} yz {yz}\r\nfield {}, residual {:.2} % (round: < 3 %), coverage {:.2} (≥ 0.3)\r\n",
-        cal.offset, cal.field, cal.residual_pct, cal.coverage
+        "\r\nmatrix xx {xx} yy {yy} zz {zz} xy {xy} xz {xz} yz {yz}\r\nfield {}, residual {} % (round: < 3 %), coverage {} (≥ 0.3)\r\n",
+        Shortest(cal.field),
+        Fixed(cal.residual_pct, 2),
+        Fixed(cal.coverage, 2)
     )
+}
+
+/// `[x, y, z]`, each value written as `text` makes it.
+fn write_vector<W: Write, T: core::fmt::Display>(
+    out: &mut W,
+    v: [f32; 3],
+    text: impl Fn(f32) -> T,
+) -> core::fmt::Result {
+    let [x, y, z] = v.map(text);
+    write!(out, "[{x}, {y}, {z}]")
 }

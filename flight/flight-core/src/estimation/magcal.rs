@@ -15,6 +15,8 @@
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
+use crate::settings::decimal::Fixed;
+
 /// Limits a calibration must meet.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -120,7 +122,8 @@ impl core::fmt::Display for MagCalError {
             }
             Self::HighResidual { residual_pct } => write!(
                 f,
-                "calibrated magnitudes disagree by {residual_pct:.2} % RMS (too noisy, or iron moved)"
+                "calibrated magnitudes disagree by {} % RMS (too noisy, or iron moved)",
+                Fixed(*residual_pct, 2)
             ),
         }
     }

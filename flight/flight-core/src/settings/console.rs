@@ -21,6 +21,7 @@
 
 use core::fmt::Write;
 
+use super::decimal::Shortest;
 use super::params::{Kind, Settings, Value, find};
 
 /// A parsed line.
@@ -163,7 +164,7 @@ pub fn write_setting<W: Write>(out: &mut W, settings: &Settings, name: &str) -> 
                 names.get(i as usize).copied().unwrap_or("?")
             )
         }
-        (_, Some(Value::F32(v))) => writeln!(out, "{name} = {v}"),
+        (_, Some(Value::F32(v))) => writeln!(out, "{name} = {}", Shortest(v)),
         (_, Some(Value::U32(v))) => writeln!(out, "{name} = {v}"),
         (_, None) => writeln!(out, "{name}: no such setting"),
     }
