@@ -6,9 +6,15 @@
 //! SDA: A₀ = A, G₀ = B r⁻¹ Bᵀ, H₀ = Q, W = I + G H,
 //! A' = A W⁻¹ A, G' = G + A W⁻¹ G Aᵀ, H' = H + Aᵀ H W⁻¹ A; H → X quadratically.
 //! It runs once before take-off, so it may be slow; it must never hand back NaN gains.
+//!
+//! The matrices are [`Square`]s whose size is a runtime value: one loop serves the 2- and
+//! 3-state problems, where fixed-size matrices made the optimiser write out every product
+//! of every size in soft-float calls (12.5 KB of flash for this file; issue 33).
 
 use core::fmt;
-use nalgebra::{SMatrix, SVector};
+
+/// Largest state dimension solved for (the 3-state Kalman and attitude models).
+pub const MAX_STATES: usize = 3;
 
 /// Upper bound on doubling steps: each doubles the horizon, 64 steps cover 2⁶⁴ samples.
 pub const MAX_ITERATIONS: u32 = 64;
@@ -22,7 +28,8 @@ const RESIDUAL_TOLERANCE: f64 = 1e-8;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum DareError {
-    /// An input matrix or cost contains NaN/∞, or r ≤ 0, or Q is not ⪰ 0 on its diagonal.
+    /// An input matrix or cost contains NaN/∞, or r ≤ 0, or Q is not ⪰ 0 on its diagonal
+    /// (or the sizes disagree).
     BadInput,
     /// I + G·H became singular: the problem is not stabilisable/detectable.
     Singular,
@@ -45,50 +52,257 @@ impl fmt::Display for DareError {
 
 impl core::error::Error for DareError {}
 
+/// A column vector of a [`Square`]'s size (entries past it are 0).
+pub type Vector = [f64; MAX_STATES];
+
+/// An n×n matrix, n ≤ [`MAX_STATES`], row-major; entries outside n×n are 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Square {
+    n: usize,
+    m: [[f64; MAX_STATES]; MAX_STATES],
+}
+
+impl Square {
+    /// The n×n zero matrix (n clamped to [`MAX_STATES`]).
+    pub fn zeros(n: usize) -> Self {
+        Self {
+            n: n.min(MAX_STATES),
+            m: [[0.0; MAX_STATES]; MAX_STATES],
+        }
+    }
+
+    /// The n×n identity.
+    pub fn identity(n: usize) -> Self {
+        let mut s = Self::zeros(n);
+        for i in 0..s.n {
+            s.set(i, i, 1.0);
+        }
+        s
+    }
+
+    /// The leading n×n block of `rows`.
+    pub fn from_rows<const C: usize>(n: usize, rows: &[[f64; C]]) -> Self {
+        let mut s = Self::zeros(n);
+        for (i, row) in rows.iter().enumerate().take(s.n) {
+            for (j, &v) in row.iter().enumerate().take(s.n) {
+                s.set(i, j, v);
+            }
+        }
+        s
+    }
+
+    /// The diagonal matrix of the first n entries of `d`.
+    pub fn diagonal(n: usize, d: &[f64]) -> Self {
+        let mut s = Self::zeros(n);
+        for (i, &v) in d.iter().enumerate().take(s.n) {
+            s.set(i, i, v);
+        }
+        s
+    }
+
+    /// Rows (and columns).
+    pub fn size(&self) -> usize {
+        self.n
+    }
+
+    /// Entry (i, j); 0 outside the matrix.
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        self.m.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0)
+    }
+
+    fn set(&mut self, i: usize, j: usize, v: f64) {
+        if let Some(e) = self.m.get_mut(i).and_then(|r| r.get_mut(j)) {
+            *e = v;
+        }
+    }
+
+    /// Column j.
+    pub fn column(&self, j: usize) -> Vector {
+        let mut c = [0.0; MAX_STATES];
+        for (i, e) in c.iter_mut().enumerate().take(self.n) {
+            *e = self.get(i, j);
+        }
+        c
+    }
+
+    /// `self · rhs` (rhs of the same size).
+    #[inline(never)]
+    pub fn mul(&self, rhs: &Square) -> Square {
+        let mut out = Square::zeros(self.n);
+        for i in 0..self.n {
+            for j in 0..self.n {
+                let mut acc = 0.0;
+                for k in 0..self.n {
+                    acc += self.get(i, k) * rhs.get(k, j);
+                }
+                out.set(i, j, acc);
+            }
+        }
+        out
+    }
+
+    /// `self · v`.
+    #[inline(never)]
+    pub fn mul_vec(&self, v: &Vector) -> Vector {
+        let mut out = [0.0; MAX_STATES];
+        for (i, o) in out.iter_mut().enumerate().take(self.n) {
+            for (k, x) in v.iter().enumerate().take(self.n) {
+                *o += self.get(i, k) * x;
+            }
+        }
+        out
+    }
+
+    /// `a·self + b·rhs`, entry by entry.
+    #[inline(never)]
+    fn combine(&self, a: f64, rhs: &Square, b: f64) -> Square {
+        let mut out = Square::zeros(self.n);
+        for i in 0..self.n {
+            for j in 0..self.n {
+                out.set(i, j, a * self.get(i, j) + b * rhs.get(i, j));
+            }
+        }
+        out
+    }
+
+    /// `self + rhs`.
+    pub fn add(&self, rhs: &Square) -> Square {
+        self.combine(1.0, rhs, 1.0)
+    }
+
+    /// `self − rhs`.
+    pub fn sub(&self, rhs: &Square) -> Square {
+        self.combine(1.0, rhs, -1.0)
+    }
+
+    /// The transpose.
+    #[inline(never)]
+    pub fn transpose(&self) -> Square {
+        let mut out = Square::zeros(self.n);
+        for i in 0..self.n {
+            for j in 0..self.n {
+                out.set(i, j, self.get(j, i));
+            }
+        }
+        out
+    }
+
+    /// (self + selfᵀ)/2: round-off makes the doubling's G and H drift from symmetric.
+    pub fn symmetrised(&self) -> Square {
+        self.combine(0.5, &self.transpose(), 0.5)
+    }
+
+    /// `u · vᵀ · scale` (n×n).
+    #[inline(never)]
+    pub fn outer(n: usize, u: &Vector, v: &Vector, scale: f64) -> Square {
+        let mut out = Square::zeros(n);
+        for (i, ui) in u.iter().enumerate().take(out.n) {
+            for (j, vj) in v.iter().enumerate().take(out.n) {
+                out.set(i, j, ui * vj * scale);
+            }
+        }
+        out
+    }
+
+    /// The inverse by Gauss-Jordan elimination with partial pivoting; `None` when a pivot
+    /// vanishes (singular) or the result is not finite.
+    #[inline(never)]
+    pub fn inverse(&self) -> Option<Square> {
+        let n = self.n;
+        let mut a = *self;
+        let mut inv = Square::identity(n);
+        for col in 0..n {
+            let pivot =
+                (col..n).max_by(|&x, &y| a.get(x, col).abs().total_cmp(&a.get(y, col).abs()))?;
+            a.m.swap(col, pivot);
+            inv.m.swap(col, pivot);
+            let p = a.get(col, col);
+            if p == 0.0 || !p.is_finite() {
+                return None;
+            }
+            for j in 0..n {
+                a.set(col, j, a.get(col, j) / p);
+                inv.set(col, j, inv.get(col, j) / p);
+            }
+            for i in (0..n).filter(|&i| i != col) {
+                let f = a.get(i, col);
+                for j in 0..n {
+                    a.set(i, j, a.get(i, j) - f * a.get(col, j));
+                    inv.set(i, j, inv.get(i, j) - f * inv.get(col, j));
+                }
+            }
+        }
+        inv.all_finite().then_some(inv)
+    }
+
+    fn entries(&self) -> impl Iterator<Item = f64> + '_ {
+        self.m
+            .iter()
+            .take(self.n)
+            .flat_map(move |r| r.iter().take(self.n).copied())
+    }
+
+    /// Every entry finite.
+    pub fn all_finite(&self) -> bool {
+        self.entries().all(f64::is_finite)
+    }
+
+    /// The largest |entry|.
+    pub fn amax(&self) -> f64 {
+        self.entries().fold(0.0, |m, v| m.max(v.abs()))
+    }
+
+    /// The Frobenius norm.
+    pub fn norm(&self) -> f64 {
+        libm::sqrt(self.entries().map(|v| v * v).sum())
+    }
+}
+
+/// `u · v` over the first n entries.
+pub fn dot(n: usize, u: &Vector, v: &Vector) -> f64 {
+    u.iter().zip(v).take(n).map(|(a, b)| a * b).sum()
+}
+
 /// The solution and how it was reached.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DareSolution<const N: usize> {
+pub struct DareSolution {
     /// The stabilising solution X.
-    pub x: SMatrix<f64, N, N>,
+    pub x: Square,
     /// Doubling steps used.
     pub iterations: u32,
 }
 
-fn all_finite<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> bool {
-    m.iter().all(|v| v.is_finite())
-}
-
-/// Solves the DARE for (A, b, Q, r); see the module doc.
-pub fn solve<const N: usize>(
-    a: &SMatrix<f64, N, N>,
-    b: &SVector<f64, N>,
-    q: &SMatrix<f64, N, N>,
-    r: f64,
-) -> Result<DareSolution<N>, DareError> {
-    let diag_ok = q.diagonal().iter().all(|v| *v >= 0.0);
-    if !(all_finite(a) && all_finite(b) && all_finite(q) && r.is_finite() && r > 0.0 && diag_ok) {
+/// Solves the DARE for (A, b, Q, r) of A's size; see the module doc.
+#[inline(never)]
+pub fn solve(a: &Square, b: &Vector, q: &Square, r: f64) -> Result<DareSolution, DareError> {
+    let n = a.size();
+    let diag_ok = (0..n).all(|i| q.get(i, i) >= 0.0);
+    let b_finite = b.iter().all(|v| v.is_finite());
+    if !(q.size() == n && a.all_finite() && b_finite && q.all_finite() && r.is_finite())
+        || !(r > 0.0 && diag_ok)
+    {
         return Err(DareError::BadInput);
     }
-    let identity = SMatrix::<f64, N, N>::identity();
+    let identity = Square::identity(n);
     let mut ak = *a;
-    let mut gk = b * b.transpose() / r;
-    let mut hk = (q + q.transpose()) * 0.5;
+    let mut gk = Square::outer(n, b, b, 1.0 / r);
+    let mut hk = q.symmetrised();
     for iteration in 1..=MAX_ITERATIONS {
-        let w_inv = (identity + gk * hk)
-            .try_inverse()
+        let w_inv = identity
+            .add(&gk.mul(&hk))
+            .inverse()
             .ok_or(DareError::Singular)?;
-        let aw = ak * w_inv;
-        let a_next = aw * ak;
-        let g_next = gk + aw * gk * ak.transpose();
-        let h_next = hk + ak.transpose() * hk * w_inv * ak;
-        // Round-off makes G and H drift from symmetric; symmetrise every step.
-        let g_next = (g_next + g_next.transpose()) * 0.5;
-        let h_next = (h_next + h_next.transpose()) * 0.5;
-        if !(all_finite(&a_next) && all_finite(&g_next) && all_finite(&h_next)) {
+        let aw = ak.mul(&w_inv);
+        let a_next = aw.mul(&ak);
+        let g_next = gk.add(&aw.mul(&gk).mul(&ak.transpose())).symmetrised();
+        let h_next = hk
+            .add(&ak.transpose().mul(&hk).mul(&w_inv).mul(&ak))
+            .symmetrised();
+        if !(a_next.all_finite() && g_next.all_finite() && h_next.all_finite()) {
             return Err(DareError::Diverged);
         }
         // Max-abs norms: the Frobenius norm of a diverging H overflows before H does.
-        let change = (h_next - hk).amax();
+        let change = h_next.sub(&hk).amax();
         let scale = h_next.amax();
         ak = a_next;
         gk = g_next;
@@ -97,7 +311,7 @@ pub fn solve<const N: usize>(
             let res = residual(a, b, q, r, &hk);
             // The result must solve the equation and be the *stabilising* solution.
             let k = lqr_gain(a, b, r, &hk);
-            let closed = a - b * k.transpose();
+            let closed = a.sub(&Square::outer(n, b, &k, 1.0));
             if !(res.is_finite() && res <= RESIDUAL_TOLERANCE * hk.norm() && is_stable(&closed)) {
                 return Err(DareError::Diverged);
             }
@@ -112,11 +326,11 @@ pub fn solve<const N: usize>(
 
 /// Spectral radius < 1, tested without an eigen-solver: M^(2^48) must have decayed (an
 /// eigenvalue 1 − 1e-9 decays to e^-2.8e5 there, one ≥ 1 does not).
-pub fn is_stable<const N: usize>(m: &SMatrix<f64, N, N>) -> bool {
+pub fn is_stable(m: &Square) -> bool {
     let mut p = *m;
     for _ in 0..48 {
-        p = p * p;
-        if !all_finite(&p) {
+        p = p.mul(&p);
+        if !p.all_finite() {
             return false;
         }
     }
@@ -124,35 +338,28 @@ pub fn is_stable<const N: usize>(m: &SMatrix<f64, N, N>) -> bool {
 }
 
 /// ‖Aᵀ X A − Aᵀ X b (r + bᵀ X b)⁻¹ bᵀ X A + Q − X‖_F.
-pub fn residual<const N: usize>(
-    a: &SMatrix<f64, N, N>,
-    b: &SVector<f64, N>,
-    q: &SMatrix<f64, N, N>,
-    r: f64,
-    x: &SMatrix<f64, N, N>,
-) -> f64 {
-    let xb = x * b;
-    let s = r + b.dot(&xb);
-    let atxb = a.transpose() * xb;
-    let rhs = a.transpose() * x * a - atxb * atxb.transpose() / s + q;
-    (rhs - x).norm()
+pub fn residual(a: &Square, b: &Vector, q: &Square, r: f64, x: &Square) -> f64 {
+    let n = a.size();
+    let xb = x.mul_vec(b);
+    let s = r + dot(n, b, &xb);
+    let atxb = a.transpose().mul_vec(&xb);
+    let atxa = a.transpose().mul(x).mul(a);
+    let rhs = atxa.sub(&Square::outer(n, &atxb, &atxb, 1.0 / s)).add(q);
+    rhs.sub(x).norm()
 }
 
 /// LQR gain k = (r + bᵀ X b)⁻¹ bᵀ X A for u = −k·x.
-pub fn lqr_gain<const N: usize>(
-    a: &SMatrix<f64, N, N>,
-    b: &SVector<f64, N>,
-    r: f64,
-    x: &SMatrix<f64, N, N>,
-) -> SVector<f64, N> {
-    let xb = x * b;
-    (a.transpose() * xb) / (r + b.dot(&xb))
+pub fn lqr_gain(a: &Square, b: &Vector, r: f64, x: &Square) -> Vector {
+    let n = a.size();
+    let xb = x.mul_vec(b);
+    let s = r + dot(n, b, &xb);
+    a.transpose().mul_vec(&xb).map(|v| v / s)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::{Matrix2, Vector2};
+    use nalgebra::Matrix2;
 
     #[test]
     fn scalar_case_matches_closed_form() {
@@ -162,40 +369,61 @@ mod tests {
         let s = q + a * a * r - r;
         let expect = (s + (s * s + 4.0 * q * r).sqrt()) / 2.0;
         let sol = solve(
-            &SMatrix::<f64, 1, 1>::new(a),
-            &SVector::<f64, 1>::new(1.0),
-            &SMatrix::<f64, 1, 1>::new(q),
+            &Square::from_rows(1, &[[a]]),
+            &[1.0, 0.0, 0.0],
+            &Square::from_rows(1, &[[q]]),
             r,
         )
         .unwrap();
-        assert!((sol.x[(0, 0)] - expect).abs() < 1e-12 * expect);
+        assert!((sol.x.get(0, 0) - expect).abs() < 1e-12 * expect);
     }
 
     #[test]
     fn double_integrator_converges_and_rejects_garbage() {
-        let a = Matrix2::new(1.0, 0.01, 0.0, 1.0);
-        let b = Vector2::new(5e-5, 0.01);
-        let q = Matrix2::new(1.0, 0.0, 0.0, 0.1);
+        let a = Square::from_rows(2, &[[1.0, 0.01], [0.0, 1.0]]);
+        let b = [5e-5, 0.01, 0.0];
+        let q = Square::diagonal(2, &[1.0, 0.1]);
         let sol = solve(&a, &b, &q, 1.0).unwrap();
         assert!(sol.iterations < 30);
         assert!(residual(&a, &b, &q, 1.0, &sol.x) < 1e-9 * sol.x.norm());
         let k = lqr_gain(&a, &b, 1.0, &sol.x);
-        // Closed loop A − b kᵀ must be stable.
-        let cl = a - b * k.transpose();
-        let eig = cl.complex_eigenvalues();
+        // Closed loop A − b kᵀ must be stable (eigenvalues from an independent solver).
+        let cl = a.sub(&Square::outer(2, &b, &k, 1.0));
+        let eig = Matrix2::new(cl.get(0, 0), cl.get(0, 1), cl.get(1, 0), cl.get(1, 1))
+            .complex_eigenvalues();
         assert!(eig.iter().all(|l| l.re.hypot(l.im) < 1.0));
+        assert!(is_stable(&cl));
         assert_eq!(solve(&a, &b, &q, 0.0).unwrap_err(), DareError::BadInput);
+        let nan_q = Square::diagonal(2, &[f64::NAN, 0.1]);
+        assert_eq!(solve(&a, &b, &nan_q, 1.0).unwrap_err(), DareError::BadInput);
         assert_eq!(
-            solve(&a, &b, &(q * f64::NAN), 1.0).unwrap_err(),
-            DareError::BadInput
+            solve(&a, &b, &Square::identity(3), 1.0).unwrap_err(),
+            DareError::BadInput,
+            "sizes disagree"
         );
         // Uncontrollable unstable mode: no stabilising solution.
         let bad = solve(
-            &Matrix2::new(1.2, 0.0, 0.0, 0.5),
-            &Vector2::new(0.0, 1.0),
+            &Square::from_rows(2, &[[1.2, 0.0], [0.0, 0.5]]),
+            &[0.0, 1.0, 0.0],
             &q,
             1.0,
         );
         assert!(bad.is_err(), "{bad:?}");
+    }
+
+    #[test]
+    fn inverse_pivots_and_refuses_singular() {
+        // A zero leading entry needs the row swap.
+        let m = Square::from_rows(3, &[[0.0, 2.0, 1.0], [1.0, 1.0, 0.0], [3.0, 0.0, 1.0]]);
+        let inv = m.inverse().unwrap();
+        let id = m.mul(&inv);
+        for i in 0..3 {
+            for j in 0..3 {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((id.get(i, j) - want).abs() < 1e-15, "{id:?}");
+            }
+        }
+        let singular = Square::from_rows(2, &[[1.0, 2.0], [2.0, 4.0]]);
+        assert_eq!(singular.inverse(), None);
     }
 }
