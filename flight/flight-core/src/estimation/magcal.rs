@@ -13,8 +13,6 @@
 //! and calibrated magnitudes that agree (the residual). Pure, no heap: the caller owns the
 //! samples (the firmware keeps a bounded buffer while the owner turns the frame).
 
-use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
-
 use crate::settings::decimal::Fixed;
 
 /// Limits a calibration must meet.
@@ -131,10 +129,47 @@ impl core::fmt::Display for MagCalError {
 
 impl core::error::Error for MagCalError {}
 
-fn vec3(s: &[f32; 3]) -> Vector3<f64> {
-    let [x, y, z] = *s;
-    Vector3::new(f64::from(x), f64::from(y), f64::from(z))
+type Vec3 = [f64; 3];
+type Mat3 = [[f64; 3]; 3];
+
+fn vec3(s: &[f32; 3]) -> Vec3 {
+    s.map(f64::from)
 }
+
+fn add(a: Vec3, b: Vec3) -> Vec3 {
+    let ([x, y, z], [p, q, r]) = (a, b);
+    [x + p, y + q, z + r]
+}
+
+fn sub(a: Vec3, b: Vec3) -> Vec3 {
+    let ([x, y, z], [p, q, r]) = (a, b);
+    [x - p, y - q, z - r]
+}
+
+fn dot(a: Vec3, b: Vec3) -> f64 {
+    let ([x, y, z], [p, q, r]) = (a, b);
+    x * p + y * q + z * r
+}
+
+fn norm(a: Vec3) -> f64 {
+    libm::sqrt(dot(a, a))
+}
+
+fn mat_vec(m: &Mat3, v: Vec3) -> Vec3 {
+    m.map(|row| dot(row, v))
+}
+
+/// `m += w · a·aᵀ`.
+fn add_outer(m: &mut Mat3, a: Vec3, w: f64) {
+    for (row, ai) in m.iter_mut().zip(a) {
+        for (e, aj) in row.iter_mut().zip(a) {
+            *e += w * ai * aj;
+        }
+    }
+}
+
+/// Unknowns of the quadric fit.
+const QUADRIC: usize = 9;
 
 /// Fits a calibration to `samples` and checks it against `config`.
 ///
@@ -152,25 +187,22 @@ pub fn fit(samples: &[[f32; 3]], config: &MagCalConfig) -> Result<MagCalibration
         return Err(MagCalError::NonFinite);
     }
     let nf = n as f64;
-    let mean = samples.iter().map(vec3).sum::<Vector3<f64>>() / nf;
-    let cov = samples
-        .iter()
-        .map(|s| {
-            let d = vec3(s) - mean;
-            d * d.transpose()
-        })
-        .sum::<Matrix3<f64>>()
-        / nf;
-    check_spread(samples, &mean, &cov, config)?;
+    let sum = samples.iter().fold([0.0; 3], |acc, s| add(acc, vec3(s)));
+    let mean = sum.map(|v| v / nf);
+    let mut cov = [[0.0; 3]; 3];
+    for s in samples {
+        add_outer(&mut cov, sub(vec3(s), mean), 1.0 / nf);
+    }
+    check_spread(samples, mean, &cov, config)?;
 
     // Fit in centred, scaled coordinates so the normal equations are well conditioned.
-    let scale = libm::sqrt(cov.trace());
-    let mut ata = SMatrix::<f64, 9, 9>::zeros();
-    let mut atb = SVector::<f64, 9>::zeros();
+    let [[c0, ..], [_, c1, _], [.., c2]] = cov;
+    let scale = libm::sqrt(c0 + c1 + c2);
+    let mut ata = [[0.0; QUADRIC]; QUADRIC];
+    let mut atb = [0.0; QUADRIC];
     for s in samples {
-        let p = (vec3(s) - mean) / scale;
-        let (x, y, z) = (p.x, p.y, p.z);
-        let phi = SVector::<f64, 9>::from([
+        let [x, y, z] = sub(vec3(s), mean).map(|v| v / scale);
+        let phi = [
             x * x,
             y * y,
             z * z,
@@ -180,47 +212,54 @@ pub fn fit(samples: &[[f32; 3]], config: &MagCalConfig) -> Result<MagCalibration
             2.0 * x,
             2.0 * y,
             2.0 * z,
-        ]);
-        ata += phi * phi.transpose();
-        atb += phi;
+        ];
+        for ((row, b), pi) in ata.iter_mut().zip(atb.iter_mut()).zip(phi) {
+            for (e, pj) in row.iter_mut().zip(phi) {
+                *e += pi * pj;
+            }
+            *b += pi;
+        }
     }
-    let q = ata.lu().solve(&atb).ok_or(MagCalError::NotAnEllipsoid)?;
-    let get = |i: usize| q.get(i).copied().unwrap_or(0.0);
-    let m = Matrix3::new(
-        get(0),
-        get(3),
-        get(4),
-        get(3),
-        get(1),
-        get(5),
-        get(4),
-        get(5),
-        get(2),
-    );
-    let v = Vector3::new(get(6), get(7), get(8));
-    let centre = -(m.try_inverse().ok_or(MagCalError::NotAnEllipsoid)? * v);
-    let k = 1.0 + (centre.transpose() * m * centre).x;
+    let [a, b, c, d, e, f, g, h, i] =
+        solve_linear(ata, atb, QUADRIC).ok_or(MagCalError::NotAnEllipsoid)?;
+    let m = [[a, d, e], [d, b, f], [e, f, c]];
+    // The centre solves M·c = −v.
+    let mut m9 = [[0.0; QUADRIC]; QUADRIC];
+    for (row9, row) in m9.iter_mut().zip(m) {
+        for (e9, e) in row9.iter_mut().zip(row) {
+            *e9 = e;
+        }
+    }
+    let [x, y, z, ..] = solve_linear(m9, [-g, -h, -i, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 3)
+        .ok_or(MagCalError::NotAnEllipsoid)?;
+    let centre = [x, y, z];
+    let k = 1.0 + dot(centre, mat_vec(&m, centre));
     if k.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
         return Err(MagCalError::NotAnEllipsoid);
     }
-    let eig = (m / k).symmetric_eigen();
-    if eig
-        .eigenvalues
+    let (lambda, v) = symmetric_eigen(m.map(|row| row.map(|e| e / k)));
+    if lambda
         .iter()
         .any(|&l| l.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater))
     {
         return Err(MagCalError::NotAnEllipsoid);
     }
-    let sqrt_l = Matrix3::from_diagonal(&eig.eigenvalues.map(libm::sqrt));
-    let w = eig.eigenvectors * sqrt_l * eig.eigenvectors.transpose();
-    // Determinant 1: the shape is corrected, the size of the field kept.
-    let matrix = w / libm::cbrt(w.determinant());
-    let offset = mean + centre * scale;
+    // W = Σ √λₖ·vₖ·vₖᵀ maps the ellipsoid onto a sphere; det W = √(λ₀λ₁λ₂), so W scaled
+    // to determinant 1 (the shape corrected, the size of the field kept) takes √(λₖ/γ),
+    // γ the geometric mean of the λ.
+    let [l0, l1, l2] = lambda;
+    let gamma = cube_root(l0 * l1 * l2);
+    let root = lambda.map(|l| libm::sqrt(l / gamma));
+    let mut w = [[0.0; 3]; 3];
+    for (vector, r) in v.iter().zip(root) {
+        add_outer(&mut w, *vector, r);
+    }
+    let matrix = w.map(|row| row.map(|e| e as f32));
+    let offset = add(mean, centre.map(|c| c * scale));
 
     let cal = MagCalibration {
-        offset: [offset.x as f32, offset.y as f32, offset.z as f32],
-        matrix: [0, 1, 2]
-            .map(|r| [0, 1, 2].map(|c| matrix.get((r, c)).copied().unwrap_or(0.0) as f32)),
+        offset: offset.map(|o| o as f32),
+        matrix,
         field: 0.0,
         residual_pct: 0.0,
         coverage: 0.0,
@@ -248,22 +287,23 @@ pub fn fit(samples: &[[f32; 3]], config: &MagCalConfig) -> Result<MagCalibration
 /// every reading about equally far from its mean; a small patch or arc does not.
 fn check_spread(
     samples: &[[f32; 3]],
-    mean: &Vector3<f64>,
-    cov: &Matrix3<f64>,
+    mean: Vec3,
+    cov: &Mat3,
     config: &MagCalConfig,
 ) -> Result<(), MagCalError> {
-    let eig = cov.symmetric_eigen().eigenvalues;
-    let max = eig.max();
-    let min = eig.min();
+    let (eig, _) = symmetric_eigen(*cov);
+    let max = eig.iter().copied().fold(f64::MIN, f64::max);
+    let min = eig.iter().copied().fold(f64::MAX, f64::min);
     if max > 0.0 && min / max >= config.min_spread_ratio {
         return Ok(());
     }
     let nf = samples.len() as f64;
-    let d: f64 = samples.iter().map(|s| (vec3(s) - mean).norm()).sum::<f64>() / nf;
+    let distance = |s: &[f32; 3]| norm(sub(vec3(s), mean));
+    let d: f64 = samples.iter().map(distance).sum::<f64>() / nf;
     let var: f64 = samples
         .iter()
         .map(|s| {
-            let e = (vec3(s) - mean).norm() - d;
+            let e = distance(s) - d;
             e * e
         })
         .sum::<f64>()
@@ -281,10 +321,10 @@ fn check_spread(
 fn quality(samples: &[[f32; 3]], cal: &MagCalibration) -> (f64, f64, f64) {
     let nf = samples.len() as f64;
     let cals = || samples.iter().map(|s| vec3(&cal.apply(*s)));
-    let field = cals().map(|c| c.norm()).sum::<f64>() / nf;
+    let field = cals().map(norm).sum::<f64>() / nf;
     let var = cals()
         .map(|c| {
-            let e = c.norm() - field;
+            let e = norm(c) - field;
             e * e
         })
         .sum::<f64>()
@@ -294,13 +334,136 @@ fn quality(samples: &[[f32; 3]], cal: &MagCalibration) -> (f64, f64, f64) {
     } else {
         f64::INFINITY
     };
-    let spread = cals()
-        .filter_map(|c| c.try_normalize(1e-12))
-        .map(|u| u * u.transpose())
-        .sum::<Matrix3<f64>>()
-        / nf;
-    let coverage = 3.0 * spread.symmetric_eigen().eigenvalues.min();
+    let mut spread = [[0.0; 3]; 3];
+    for c in cals() {
+        let length = norm(c);
+        if length > 1e-12 {
+            add_outer(&mut spread, c.map(|v| v / length), 1.0 / nf);
+        }
+    }
+    let (eig, _) = symmetric_eigen(spread);
+    let coverage = 3.0 * eig.iter().copied().fold(f64::MAX, f64::min);
     (field, residual_pct, coverage)
+}
+
+/// Solves the leading `n`×`n` block of `a·x = b` (n ≤ 9) by Gaussian elimination with
+/// partial pivoting; `None` when a pivot vanishes. One routine for the 9-unknown quadric
+/// and the 3×3 centre: the size is a runtime value, so it is not written out per size.
+#[inline(never)]
+fn solve_linear(
+    mut a: [[f64; QUADRIC]; QUADRIC],
+    mut b: [f64; QUADRIC],
+    n: usize,
+) -> Option<[f64; QUADRIC]> {
+    let n = n.min(QUADRIC);
+    for k in 0..n {
+        let magnitude = |i: &usize| a.get(*i).and_then(|r| r.get(k)).map_or(0.0, |v| v.abs());
+        let pivot = (k..n).max_by(|i, j| magnitude(i).total_cmp(&magnitude(j)))?;
+        a.swap(k, pivot);
+        b.swap(k, pivot);
+        let (upper, lower) = a.split_at_mut(k + 1);
+        let (b_upper, b_lower) = b.split_at_mut(k + 1);
+        let (row_k, &b_k) = (upper.last()?, b_upper.last()?);
+        let p = *row_k.get(k)?;
+        if p == 0.0 || !p.is_finite() {
+            return None;
+        }
+        for (row, bi) in lower.iter_mut().zip(b_lower.iter_mut()).take(n - k - 1) {
+            let factor = row.get(k)? / p;
+            for (x, y) in row.iter_mut().zip(row_k).take(n).skip(k) {
+                *x -= factor * y;
+            }
+            *bi -= factor * b_k;
+        }
+    }
+    let mut x = [0.0; QUADRIC];
+    for k in (0..n).rev() {
+        let row = a.get(k)?;
+        let known: f64 = row
+            .iter()
+            .zip(&x)
+            .take(n)
+            .skip(k + 1)
+            .map(|(r, x)| r * x)
+            .sum();
+        let value = (b.get(k)? - known) / row.get(k)?;
+        *x.get_mut(k)? = value;
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// Eigenvalues of a symmetric 3×3 matrix and its orthonormal eigenvectors (the rows of
+/// the second, in the same order), by cyclic Jacobi rotations — each zeroes one
+/// off-diagonal entry; a few sweeps reach round-off.
+fn symmetric_eigen(m: Mat3) -> (Vec3, Mat3) {
+    let [[a00, a01, a02], [_, a11, a12], [.., a22]] = m;
+    let mut diagonal = [a00, a11, a22];
+    // off[r] = a[p][q] for {p, q, r} = {0, 1, 2}.
+    let mut off = [a12, a02, a01];
+    let mut vectors = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _ in 0..32 {
+        let size = diagonal.iter().map(|v| v * v).sum::<f64>();
+        let rest = off.iter().map(|v| v * v).sum::<f64>();
+        // Also stops on NaN.
+        if rest.partial_cmp(&(1e-32 * size)) != Some(core::cmp::Ordering::Greater) {
+            break;
+        }
+        for (p, q, r) in [(0, 1, 2), (0, 2, 1), (1, 2, 0)] {
+            rotate(&mut diagonal, &mut off, &mut vectors, [p, q, r]);
+        }
+    }
+    (diagonal, vectors)
+}
+
+/// One Jacobi rotation J in the (p, q) plane, r the third axis: `a ← Jᵀ·a·J` with a[p][q]
+/// becoming 0, and the eigenvector rows p and q turned alike.
+#[inline(never)]
+fn rotate(diagonal: &mut Vec3, off: &mut Vec3, vectors: &mut Mat3, [p, q, r]: [usize; 3]) {
+    let (Ok([app, aqq]), Ok([apq, apr, aqr])) = (
+        diagonal.get_disjoint_mut([p, q]),
+        off.get_disjoint_mut([r, q, p]),
+    ) else {
+        return;
+    };
+    if *apq == 0.0 {
+        return;
+    }
+    // t = tan of the rotation angle, the smaller root of t² + 2θt − 1 = 0.
+    let theta = (*aqq - *app) / (2.0 * *apq);
+    let t = if theta.abs() > 1e100 {
+        0.5 / theta
+    } else {
+        let t = 1.0 / (theta.abs() + libm::sqrt(theta * theta + 1.0));
+        if theta < 0.0 { -t } else { t }
+    };
+    let c = 1.0 / libm::sqrt(t * t + 1.0);
+    let s = t * c;
+    let turn = |x: &mut f64, y: &mut f64| {
+        let (a, b) = (*x, *y);
+        *x = c * a - s * b;
+        *y = s * a + c * b;
+    };
+    *app -= t * *apq;
+    *aqq += t * *apq;
+    *apq = 0.0;
+    turn(apr, aqr);
+    if let Ok([vp, vq]) = vectors.get_disjoint_mut([p, q]) {
+        for (x, y) in vp.iter_mut().zip(vq.iter_mut()) {
+            turn(x, y);
+        }
+    }
+}
+
+/// x^(1/3) for a finite x > 0: Newton's iteration y ← (2y + x/y²)/3 from the exponent
+/// divided by three (within ≈ 10 %), six steps to round-off. libm's `cbrt` and the `fma` it
+/// uses were 3 KB of flash for this one call per calibration.
+fn cube_root(x: f64) -> f64 {
+    const ONE_THIRD_BIAS: u64 = (1023 - 1023 / 3) << 52;
+    let mut y = f64::from_bits(x.to_bits() / 3 + ONE_THIRD_BIAS);
+    for _ in 0..6 {
+        y = (2.0 * y + x / (y * y)) / 3.0;
+    }
+    y
 }
 
 #[cfg(test)]
