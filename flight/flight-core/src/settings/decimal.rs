@@ -204,13 +204,15 @@ pub fn parse(text: &str) -> Option<f32> {
 }
 
 fn special(body: &str) -> Option<f32> {
-    if body.eq_ignore_ascii_case("inf") || body.eq_ignore_ascii_case("infinity") {
-        Some(f32::INFINITY)
-    } else if body.eq_ignore_ascii_case("nan") {
-        Some(f32::NAN)
-    } else {
-        None
-    }
+    const WORDS: [(&str, f32); 3] = [
+        ("inf", f32::INFINITY),
+        ("infinity", f32::INFINITY),
+        ("nan", f32::NAN),
+    ];
+    WORDS
+        .iter()
+        .find(|(word, _)| body.eq_ignore_ascii_case(word))
+        .map(|&(_, v)| v)
 }
 
 /// `digits[.digits][(e|E)[+-]digits]` as `(d, e)` for the value d·10^e: `d` holds the
@@ -402,17 +404,27 @@ impl fmt::Display for Shortest {
 
 impl fmt::Display for Fixed {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = self.0;
+        if v.is_nan() || v.abs() >= 1e15 {
+            return Shortest(v).fmt(f);
+        }
+        write_sign(f, v)?;
         let decimals = u32::from(self.1.min(3));
         let scale = 10u64.pow(decimals);
-        // Exact: a 24-bit mantissa times at most 1000 needs 34 of f64's 53 bits.
-        let x = f64::from(self.0.abs()) * scale as f64;
-        if x.is_nan() || x >= 1e18 {
-            return Shortest(self.0).fmt(f);
-        }
-        write_sign(f, self.0)?;
-        let int = x as u64;
-        let rest = x - int as f64;
-        let q = int + u64::from(rest > 0.5 || rest == 0.5 && int % 2 == 1);
+        // |v|·10^decimals = m·10^decimals·2^e exactly (below 2^61 here), rounded half to even.
+        let (m, e) = parts(v);
+        let n = u64::from(m) * scale;
+        let q = match e.unsigned_abs() {
+            shift if e >= 0 => n << shift,
+            // n < 2^34: all of it is below half of 2^shift.
+            shift if shift > 63 => 0,
+            shift => {
+                let q = n >> shift;
+                let rest = n - (q << shift);
+                let half = 1u64 << (shift - 1);
+                q + u64::from(rest > half || rest == half && q % 2 == 1)
+            }
+        };
         write_uint(f, q / scale, 1)?;
         if decimals > 0 {
             f.write_str(".")?;
@@ -471,10 +483,12 @@ fn write_point(f: &mut fmt::Formatter<'_>, d: &Digits) -> fmt::Result {
         write_zeros(f, d.point.unsigned_abs())?;
         f.write_str(digits)
     } else if d.point < len {
-        let (int, frac) = digits.split_at(d.point.unsigned_abs() as usize);
-        f.write_str(int)?;
+        // (`get`, not `split_at`: the digits are ASCII, and `split_at`'s char-boundary
+        // panic would link core's `char` Debug formatting.)
+        let point = d.point.unsigned_abs() as usize;
+        f.write_str(digits.get(..point).unwrap_or(""))?;
         f.write_str(".")?;
-        f.write_str(frac)
+        f.write_str(digits.get(point..).unwrap_or(""))
     } else {
         f.write_str(digits)?;
         write_zeros(f, (d.point - len).unsigned_abs())
@@ -490,16 +504,23 @@ fn reaches(r: &Big, gap: &Big, s: &Big, inclusive: bool) -> bool {
     }
 }
 
-/// The shortest digits of a finite `v > 0` (see the module doc).
-fn shortest_digits(v: f32) -> Option<Digits> {
+/// |v| = m·2^e, m the integer significand (with its leading bit unless subnormal).
+fn parts(v: f32) -> (u32, i32) {
     let bits = v.to_bits();
     let field = (bits >> 23) & 0xFF;
     let frac = bits & 0x7F_FFFF;
-    let (m, e) = if field == 0 {
+    if field == 0 {
         (frac, -149)
     } else {
         (frac | 1 << 23, field as i32 - 150)
-    };
+    }
+}
+
+/// The shortest digits of a finite `v > 0` (see the module doc).
+fn shortest_digits(v: f32) -> Option<Digits> {
+    let (m, e) = parts(v);
+    let frac = m & 0x7F_FFFF;
+    let field = v.to_bits() >> 23 & 0xFF;
     // v = r/s. The reals that read back as v reach half an ulp up (mp/s) and half an ulp
     // down (mm/s), a quarter at a power of two, where the ulp below halves — counted
     // there as core does, from every power of two including the least normal. They include
