@@ -9,7 +9,9 @@
 //!
 //! The matrices are [`Square`]s whose size is a runtime value: one loop serves the 2- and
 //! 3-state problems, where fixed-size matrices made the optimiser write out every product
-//! of every size in soft-float calls (12.5 KB of flash for this file; issue 33).
+//! of every size in soft-float calls (12.5 KB of flash for this file; issue 33). Every
+//! product, sum and inverse is evaluated in the order nalgebra's did before, so the gains
+//! are the same to the last bit.
 
 use core::fmt;
 
@@ -192,47 +194,69 @@ impl Square {
         self.combine(0.5, &self.transpose(), 0.5)
     }
 
-    /// `u · vᵀ · scale` (n×n).
+    /// `u · vᵀ / divisor` (n×n).
     #[inline(never)]
-    pub fn outer(n: usize, u: &Vector, v: &Vector, scale: f64) -> Square {
+    pub fn outer(n: usize, u: &Vector, v: &Vector, divisor: f64) -> Square {
         let mut out = Square::zeros(n);
         for (i, ui) in u.iter().enumerate().take(out.n) {
             for (j, vj) in v.iter().enumerate().take(out.n) {
-                out.set(i, j, ui * vj * scale);
+                out.set(i, j, ui * vj / divisor);
             }
         }
         out
     }
 
-    /// The inverse by Gauss-Jordan elimination with partial pivoting; `None` when a pivot
-    /// vanishes (singular) or the result is not finite.
+    /// The inverse by the adjugate over the determinant (n ≤ 3), written out term by term
+    /// in the order the design has always evaluated it, so the gains keep their last bits;
+    /// `None` when the determinant is 0 (a non-finite result is the caller's to refuse).
     #[inline(never)]
     pub fn inverse(&self) -> Option<Square> {
-        let n = self.n;
-        let mut a = *self;
-        let mut inv = Square::identity(n);
-        for col in 0..n {
-            let pivot =
-                (col..n).max_by(|&x, &y| a.get(x, col).abs().total_cmp(&a.get(y, col).abs()))?;
-            a.m.swap(col, pivot);
-            inv.m.swap(col, pivot);
-            let p = a.get(col, col);
-            if p == 0.0 || !p.is_finite() {
-                return None;
-            }
-            for j in 0..n {
-                a.set(col, j, a.get(col, j) / p);
-                inv.set(col, j, inv.get(col, j) / p);
-            }
-            for i in (0..n).filter(|&i| i != col) {
-                let f = a.get(i, col);
-                for j in 0..n {
-                    a.set(i, j, a.get(i, j) - f * a.get(col, j));
-                    inv.set(i, j, inv.get(i, j) - f * inv.get(col, j));
+        let g = |i, j| self.get(i, j);
+        let (m11, m12, m13) = (g(0, 0), g(0, 1), g(0, 2));
+        let (m21, m22, m23) = (g(1, 0), g(1, 1), g(1, 2));
+        let (m31, m32, m33) = (g(2, 0), g(2, 1), g(2, 2));
+        let rows: [[f64; MAX_STATES]; MAX_STATES] = match self.n {
+            1 if m11 != 0.0 => [[1.0 / m11, 0.0, 0.0], [0.0; 3], [0.0; 3]],
+            2 => {
+                let det = m11 * m22 - m21 * m12;
+                if det == 0.0 {
+                    return None;
                 }
+                [
+                    [m22 / det, -m12 / det, 0.0],
+                    [-m21 / det, m11 / det, 0.0],
+                    [0.0; 3],
+                ]
             }
-        }
-        inv.all_finite().then_some(inv)
+            3 => {
+                let minor_23_23 = m22 * m33 - m32 * m23;
+                let minor_13_23 = m21 * m33 - m31 * m23;
+                let minor_12_23 = m21 * m32 - m31 * m22;
+                let det = m11 * minor_23_23 - m12 * minor_13_23 + m13 * minor_12_23;
+                if det == 0.0 {
+                    return None;
+                }
+                [
+                    [
+                        minor_23_23 / det,
+                        (m13 * m32 - m33 * m12) / det,
+                        (m12 * m23 - m22 * m13) / det,
+                    ],
+                    [
+                        -minor_13_23 / det,
+                        (m11 * m33 - m31 * m13) / det,
+                        (m13 * m21 - m23 * m11) / det,
+                    ],
+                    [
+                        minor_12_23 / det,
+                        (m12 * m31 - m32 * m11) / det,
+                        (m11 * m22 - m21 * m12) / det,
+                    ],
+                ]
+            }
+            _ => return None,
+        };
+        Some(Square { n: self.n, m: rows })
     }
 
     fn entries(&self) -> impl Iterator<Item = f64> + '_ {
@@ -285,7 +309,7 @@ pub fn solve(a: &Square, b: &Vector, q: &Square, r: f64) -> Result<DareSolution,
     }
     let identity = Square::identity(n);
     let mut ak = *a;
-    let mut gk = Square::outer(n, b, b, 1.0 / r);
+    let mut gk = Square::outer(n, b, b, r);
     let mut hk = q.symmetrised();
     for iteration in 1..=MAX_ITERATIONS {
         let w_inv = identity
@@ -344,7 +368,7 @@ pub fn residual(a: &Square, b: &Vector, q: &Square, r: f64, x: &Square) -> f64 {
     let s = r + dot(n, b, &xb);
     let atxb = a.transpose().mul_vec(&xb);
     let atxa = a.transpose().mul(x).mul(a);
-    let rhs = atxa.sub(&Square::outer(n, &atxb, &atxb, 1.0 / s)).add(q);
+    let rhs = atxa.sub(&Square::outer(n, &atxb, &atxb, s)).add(q);
     rhs.sub(x).norm()
 }
 
@@ -412,8 +436,7 @@ mod tests {
     }
 
     #[test]
-    fn inverse_pivots_and_refuses_singular() {
-        // A zero leading entry needs the row swap.
+    fn inverse_is_exact_and_refuses_singular() {
         let m = Square::from_rows(3, &[[0.0, 2.0, 1.0], [1.0, 1.0, 0.0], [3.0, 0.0, 1.0]]);
         let inv = m.inverse().unwrap();
         let id = m.mul(&inv);
@@ -425,5 +448,60 @@ mod tests {
         }
         let singular = Square::from_rows(2, &[[1.0, 2.0], [2.0, 4.0]]);
         assert_eq!(singular.inverse(), None);
+    }
+
+    #[test]
+    fn operations_give_nalgebras_bits() {
+        // The design's earlier nalgebra code, operation by operation: the same bits, so the
+        // gains (and every simulation flown on them) are unchanged.
+        use nalgebra::{Matrix3, Vector3};
+        let mut state = 0x1234_5678_9ABC_DEF0_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0
+        };
+        for _ in 0..1000 {
+            let rows = [
+                [next(), next(), next()],
+                [next(), next(), next()],
+                [next(), next(), next()],
+            ];
+            let other = [
+                [next(), next(), next()],
+                [next(), next(), next()],
+                [next(), next(), next()],
+            ];
+            let (a, b) = (Square::from_rows(3, &rows), Square::from_rows(3, &other));
+            let (na, nb) = (
+                Matrix3::from(rows).transpose(),
+                Matrix3::from(other).transpose(),
+            );
+            let same = |s: &Square, m: &Matrix3<f64>| {
+                (0..3).all(|i| (0..3).all(|j| s.get(i, j).to_bits() == m[(i, j)].to_bits()))
+            };
+            assert!(same(&a.mul(&b), &(na * nb)));
+            assert!(same(&a.inverse().unwrap(), &na.try_inverse().unwrap()));
+            assert!(same(&a.symmetrised(), &((na + na.transpose()) * 0.5)));
+            let v = [next(), next(), next()];
+            let nv = Vector3::from(v);
+            let r = next().abs() + 0.5;
+            assert!(same(
+                &Square::outer(3, &v, &v, r),
+                &(nv * nv.transpose() / r)
+            ));
+            let mv = a.mul_vec(&v);
+            let nmv = na * nv;
+            assert!((0..3).all(|i| mv[i].to_bits() == nmv[i].to_bits()));
+            assert_eq!(dot(3, &v, &mv).to_bits(), nv.dot(&nmv).to_bits());
+            let two = Square::from_rows(2, &rows);
+            let n2 = nalgebra::Matrix2::new(rows[0][0], rows[0][1], rows[1][0], rows[1][1]);
+            let inv2 = two.inverse().unwrap();
+            let ninv2 = n2.try_inverse().unwrap();
+            assert!(
+                (0..2).all(|i| (0..2).all(|j| inv2.get(i, j).to_bits() == ninv2[(i, j)].to_bits()))
+            );
+        }
     }
 }
