@@ -5,7 +5,7 @@
 
 pub mod complementary;
 pub mod ins;
-pub mod magcal;
+pub use magcal;
 pub mod math;
 pub mod quaternion;
 

@@ -1,5 +1,5 @@
 //! Discrete algebraic Riccati equation, single input, in f64, by the structure-preserving
-//! doubling algorithm (SDA; `control/LQG.md` §7: ≤ 24 iterations, ≤ 3.5e-9 relative error over the
+//! doubling algorithm (SDA; `LQG.md` §7: ≤ 24 iterations, ≤ 3.5e-9 relative error over the
 //! whole parameter grid, where f32 or absolute-tolerance iteration fail).
 //!
 //! Solves X = Aᵀ X A − Aᵀ X B (r + Bᵀ X B)⁻¹ Bᵀ X A + Q for the stabilising X ⪰ 0.

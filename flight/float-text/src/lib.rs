@@ -1,8 +1,20 @@
-//! Decimal text of `f32` values for the console: the shortest text that reads back as the
-//! same value (what `{}` prints), a fixed number of decimals for status lines, and the
-//! reading of typed numbers — each exact, with a few hundred bytes of integer arithmetic
-//! instead of core's float formatting and parsing (Grisu/Dragon and the Eisel-Lemire tables,
-//! ≈ 25 KB of flash; issue 33).
+//! Decimal text of `f32` values for a microcontroller's console: the shortest text that reads
+//! back as the same value ([`Shortest`], what `{}` prints), a fixed number of decimals for
+//! status lines ([`Fixed`]), and the reading of typed numbers ([`parse`]) — each exact, in
+//! ≈ 3 KB of integer arithmetic instead of core's float formatting and parsing
+//! (Grisu/Dragon and the Eisel-Lemire tables, ≈ 25 KB of flash on a Cortex-M4; TauLink
+//! issue 33). `no_std`, no heap, no tables.
+//!
+//! ```
+//! use float_text::{Fixed, Shortest, parse};
+//!
+//! assert_eq!(format!("{}", Shortest(0.004)), "0.004");
+//! assert_eq!(format!("{}", Shortest(1e-7)), format!("{}", 1e-7f32)); // "0.0000001"
+//! assert_eq!(format!("{}", Fixed(2.345, 2)), "2.35"); // 2.345f32 is 2.34500003…
+//! assert_eq!(parse("0.004"), Some(0.004));
+//! assert_eq!(parse("1e-3"), Some(0.001));
+//! assert_eq!(parse("0x10"), None);
+//! ```
 //!
 //! Exactness rests on one small unsigned big integer (`Big`): reading computes the 25
 //! leading bits of the typed decimal's exact quotient and rounds half to even, as IEEE 754
@@ -10,11 +22,14 @@
 //! (Burger & Dybvig's formulation) over the exact interval of reals that read back as the
 //! value, which picks, among the shortest such texts, the one closest to the value — the
 //! same digits `core` prints. Both are tested against `core` on the host over the whole
-//! `f32` range (`decimal_tests.rs`).
+//! `f32` range (`src/tests.rs`).
 //!
 //! Reading accepts what `str::parse::<f32>` accepts (`[+-]`, digits with an optional point,
 //! an optional exponent, `inf`, `infinity`, `nan` in any case) with at most
 //! [`MAX_DIGITS`] significant digits; longer numbers are refused rather than rounded twice.
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
 
 use core::cmp::Ordering;
 use core::fmt;
@@ -592,5 +607,4 @@ fn shortest_digits(v: f32) -> Option<Digits> {
 }
 
 #[cfg(test)]
-#[path = "decimal_tests.rs"]
 mod tests;

@@ -12,8 +12,16 @@
 //! confined to one plane or a small patch, calibrated directions that cover the sphere,
 //! and calibrated magnitudes that agree (the residual). Pure, no heap: the caller owns the
 //! samples (the firmware keeps a bounded buffer while the owner turns the frame).
+//!
+//! The arithmetic is f64 (soft-float on a Cortex-M4F): the fit runs once per calibration,
+//! so the crate is built for size in TauLink's workspace. The 9-unknown least squares is
+//! one Gaussian elimination with partial pivoting, the symmetric 3×3 eigenproblems cyclic
+//! Jacobi rotations — no linear-algebra crate, no libm beyond `sqrt`.
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
 
-use crate::settings::decimal::Fixed;
+use float_text::Fixed;
 
 /// Limits a calibration must meet.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,5 +1,5 @@
 //! LQG gain design for one axis, in f64 before take-off: the steady-state Kalman gain of the
-//! rate/torque/bias estimator (RTKF) and the LQR gains for rate and attitude (`control/LQG.md`
+//! rate/torque/bias estimator (RTKF) and the LQR gains for rate and attitude (`LQG.md`
 //! §2–3).
 //!
 //! Costs are per sample with r = 1. The torque cost can be given frame-invariantly as
@@ -111,7 +111,7 @@ pub struct KfNoise {
 }
 
 impl Default for KfNoise {
-    /// Tau Labs' LQRSettings (`control/LQG.md` §2 table): Q = (1, 1e-5, 1e-7), R = 1000 for raw
+    /// Tau Labs' LQRSettings (`LQG.md` §2 table): Q = (1, 1e-5, 1e-7), R = 1000 for raw
     /// gyro.
     fn default() -> Self {
         Self {
