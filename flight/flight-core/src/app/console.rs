@@ -12,6 +12,9 @@ use core::fmt::Write;
 use super::FlightApp;
 use telemetry::link::{LinkKey, key_for_phrase};
 
+use crate::battery::BatteryLevel;
+use crate::sensors::ubx::config::Status;
+use crate::sensors::ubx::{FixType, Generation};
 use crate::settings::decimal::{Fixed, Shortest};
 use crate::settings::{
     Command, LineError, MagcalAction, Settings, parse_line, write_list, write_setting,
@@ -197,9 +200,22 @@ impl FlightApp {
             let (generation, config) = self.gps_config_status();
             write!(
                 out,
-                "gps {:?} sats {} hacc {} mm, receiver {:?} config {:?}\r\n",
-                pvt.fix_type, pvt.num_sv, pvt.h_acc_mm, generation, config
+                "gps {} sats {} hacc {} mm, receiver {}, config ",
+                fix_name(pvt.fix_type),
+                pvt.num_sv,
+                pvt.h_acc_mm,
+                match generation {
+                    Generation::M8 => "M8",
+                    Generation::M9M10 => "M9/M10",
+                },
             )?;
+            match config {
+                Status::Pending { step } => write!(out, "waiting for ACK {step}")?,
+                Status::Done => out.write_str("done")?,
+                Status::Refused { id } => write!(out, "refused CFG {id:#04x}")?,
+                Status::NoAnswer { id } => write!(out, "no answer to CFG {id:#04x}")?,
+            }
+            out.write_str("\r\n")?;
         }
         if let Some(home) = estimator.home() {
             write!(
@@ -229,11 +245,30 @@ impl FlightApp {
         match self.battery {
             Some(b) => write!(
                 out,
-                "armed {armed}, battery {} mV {} mA {:?}\r\n",
-                b.voltage_mv, b.current_ma, b.level
+                "armed {armed}, battery {} mV {} mA {}\r\n",
+                b.voltage_mv,
+                b.current_ma,
+                match b.level {
+                    BatteryLevel::Ok => "ok",
+                    BatteryLevel::Warning => "warning",
+                    BatteryLevel::Critical => "critical",
+                }
             ),
             None => write!(out, "armed {armed}, battery unknown\r\n"),
         }
+    }
+}
+
+/// A NAV-PVT fix type in words (`Debug` text would link core's struct formatting).
+fn fix_name(fix: FixType) -> &'static str {
+    match fix {
+        FixType::NoFix => "none",
+        FixType::DeadReckoning => "dead-reckoning",
+        FixType::Fix2D => "2D",
+        FixType::Fix3D => "3D",
+        FixType::GnssDeadReckoning => "3D+dead-reckoning",
+        FixType::TimeOnly => "time-only",
+        FixType::Unknown(_) => "unknown",
     }
 }
 
