@@ -50,7 +50,7 @@ impl ModuleBind {
             (_, None) => BindAuth::Plain,
             (None, Some(_)) => BindAuth::Anonymous,
             (Some(p), Some(_)) => {
-                BindAuth::Phrase(PhraseSecret::derive(p, core::array::from_fn(|i| salt8[i])))
+                BindAuth::Phrase(PhraseSecret::derive(p, crate::scenario::head(&salt8)))
             }
         };
         Self {

@@ -140,9 +140,14 @@ impl Default for Scenario {
 /// The link key the module of scenario seed `seed` draws (and hands over at bind): random
 /// as the firmware's, from the seed so runs repeat.
 pub fn link_key_of(seed: u64) -> LinkKey {
-    let mut entropy = telemetry::link::Entropy::new(seed_bytes(seed, 0x6b65_79));
+    let mut entropy = telemetry::link::Entropy::new(seed_bytes(seed, 0x006b_6579));
     let key = entropy.draw(b"module key");
-    LinkKey::from_bytes(core::array::from_fn(|i| key[i]))
+    LinkKey::from_bytes(head(&key))
+}
+
+/// The first `N` bytes of a 32-byte value (a key or salt cut from a hash or a draw).
+pub(crate) fn head<const N: usize>(bytes: &[u8; 32]) -> [u8; N] {
+    bytes.first_chunk::<N>().copied().unwrap_or([0; N])
 }
 
 /// 32 bytes of the scenario's randomness for `what`.

@@ -86,14 +86,14 @@ fn candidate_keys(word: &str, salt: Option<[u8; 8]>, bind_id: u32) -> Vec<LinkKe
     let mut raw: Vec<[u8; 16]> = Vec::new();
     if let Some(salt) = salt {
         let prs = PhraseSecret::derive(word, salt).prs;
-        raw.push(core::array::from_fn(|i| prs[i]));
+        raw.push(crate::scenario::head(&prs));
     }
     let old: [u8; 32] = sha2::Sha256::new()
         .chain_update(b"TauLink/1 binding phrase\0")
         .chain_update(word.as_bytes())
         .finalize()
         .into();
-    raw.push(core::array::from_fn(|i| old[i]));
+    raw.push(crate::scenario::head(&old));
     raw.into_iter()
         .map(LinkKey::from_bytes)
         .flat_map(|k| [k, k.for_link(bind_id)])

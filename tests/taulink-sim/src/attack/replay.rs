@@ -19,7 +19,7 @@ struct Replayer {
 
 impl SlotAttacker for Replayer {
     fn plan(&mut self, k: u64, _kind: SlotKind) -> Action {
-        if (k / 256) % 2 == 0 {
+        if (k / 256).is_multiple_of(2) {
             return Action::Listen;
         }
         let Some(old) = self.recordings.get((k % 256) as usize) else {
@@ -28,7 +28,7 @@ impl SlotAttacker for Replayer {
         let nonce = old.iter().rposition(|f| is_nonce(f));
         let pick = match nonce {
             Some(i) => Some(i),
-            None if k % 5 == 0 && !old.is_empty() => Some((k / 512) as usize % old.len()),
+            None if k.is_multiple_of(5) && !old.is_empty() => Some((k / 512) as usize % old.len()),
             None => None,
         };
         pick.and_then(|i| old.get(i))
