@@ -303,6 +303,10 @@ impl SystemIdentifier {
 
     fn correct(&mut self, axis: usize, gyro_dps: f32) {
         let idx = 4 * axis;
+        // `column` asserts its index: out of range is no measurement (never: axis < 3).
+        if idx >= STATES {
+            return;
+        }
         let innovation = gyro_dps - get(&self.x, idx);
         if let Some(v) = self.noise_var.get_mut(axis) {
             *v = 0.9997 * *v + 0.0003 * innovation * innovation;
