@@ -28,9 +28,7 @@ use embassy_stm32::time::Hertz;
 #[cfg(feature = "sparky2")]
 use embassy_stm32::usart;
 use embassy_stm32::wdg::IndependentWatchdog;
-use embassy_stm32::{
-    Config, Peri, Peripherals, bind_interrupts, dma, exti, interrupt, peripherals,
-};
+use embassy_stm32::{Peri, Peripherals, bind_interrupts, dma, exti, interrupt, peripherals};
 
 /// Board name for the boot log.
 #[cfg(not(feature = "sparky2"))]
@@ -97,35 +95,6 @@ pub struct Imu {
 pub struct Baro {
     /// I2C1 with DMA1 streams 6 (TX) and 0 (RX).
     pub i2c: I2c<'static, Async, i2c::Master>,
-}
-
-/// HSE 8 MHz → PLL (M 8, N 336, P 2, Q 7): SYSCLK 168 MHz, USB 48 MHz; APB1 42 MHz
-/// (timers 84 MHz), APB2 84 MHz (timers 168 MHz). The board has a ceramic resonator, so the
-/// HSE runs as an oscillator, not in bypass.
-pub fn clocks() -> Config {
-    use embassy_stm32::rcc::{
-        AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllMul, PllPDiv, PllPreDiv, PllQDiv,
-        PllSource, Sysclk, mux,
-    };
-    let mut config = Config::default();
-    config.rcc.hse = Some(Hse {
-        freq: Hertz(8_000_000),
-        mode: HseMode::Oscillator,
-    });
-    config.rcc.pll_src = PllSource::HSE;
-    config.rcc.pll = Some(Pll {
-        prediv: PllPreDiv::DIV8,
-        mul: PllMul::MUL336,
-        divp: Some(PllPDiv::DIV2),
-        divq: Some(PllQDiv::DIV7),
-        divr: None,
-    });
-    config.rcc.sys = Sysclk::PLL1_P;
-    config.rcc.ahb_pre = AHBPrescaler::DIV1;
-    config.rcc.apb1_pre = APBPrescaler::DIV4;
-    config.rcc.apb2_pre = APBPrescaler::DIV2;
-    config.rcc.mux.clk48sel = mux::Clk48sel::PLL1_Q;
-    config
 }
 
 /// The RFM22B on SPI3 (SCK PC10, MISO PC11, MOSI PC12), nSEL PA15, nIRQ on EXTI.

@@ -1,4 +1,4 @@
-//! Table of contents: clocks, board, settings → flight setup and solved gains, then one task
+//! Table of contents: clocks (HSE probe, flash accelerator), board, settings → flight setup and solved gains, then one task
 //! per concern: imu (the flight loop, driven by the MPU9250's data-ready), motors, link (the
 //! TauLink follower on the RFM22B), baro, gains (re-solve after setting changes), battery,
 //! alerts, console, storage, heartbeat and the watchdog supervisor. Every decision is in
@@ -6,6 +6,7 @@
 //! their peripheral and the app. See `shared` for the data flow.
 
 mod board;
+mod clocks;
 mod imu_bus;
 mod link_radio;
 mod outputs;
@@ -21,8 +22,16 @@ use {defmt_rtt as _, panic_probe as _};
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
-    let p = embassy_stm32::init(board::clocks());
+    let source = clocks::probe();
+    let p = embassy_stm32::init(clocks::config(source));
+    clocks::accelerate_flash();
     info!("TauLink flight firmware on {}", board::BOARD);
+    if source == clocks::Clocks::HsiFallback {
+        error!(
+            "HSE did not start within {} ms: running from the HSI",
+            clocks::HSE_WAIT_MS
+        );
+    }
     let board = board::Board::new(p);
 
     // Flash work first: a sector erase can stall the CPU longer than the watchdog timeout,
