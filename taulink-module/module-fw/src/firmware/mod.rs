@@ -1,6 +1,7 @@
-//! Table of contents: clocks, board, settings, the module core, then one task per concern.
+//! Table of contents: clocks (bounded crystal start-up, REGOUT0), board, settings, the module core, then one task per concern.
 
 mod board;
+mod clocks;
 mod link_radio;
 mod shared;
 mod tasks;
@@ -17,8 +18,12 @@ use tasks::supervisor::Watched;
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
-    let p = embassy_nrf::init(board::clocks());
+    let (config, clocks) = clocks::probe(board::config());
+    let p = embassy_nrf::init(config);
     info!("TauLink module firmware (nRF52840)");
+    if clocks.high != clocks::HighClock::Crystal || clocks.low != clocks::LowClock::Crystal {
+        error!("crystal did not start: {}", clocks);
+    }
     let board = board::Board::new(p);
     let Some(watchdog) = board.watchdog else {
         // Only possible if a previous image left the WDT running with another config; it
