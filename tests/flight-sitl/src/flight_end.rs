@@ -252,6 +252,7 @@ pub(crate) async fn flight_board(
         if let Some(p) = problem {
             app.on_settings_problem(p);
         }
+        app.model_watchdog_lsi_hz(shared.borrow().flight_lsi_hz);
         // The firmware's RNG at boot: a fresh session nonce for the phone's changes every
         // boot (the virtual time of the boot stands in for the hardware's entropy).
         let boot_us = crate::clock::virtual_us(&medium);

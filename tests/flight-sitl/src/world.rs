@@ -184,6 +184,8 @@ pub(crate) struct WorldState {
     /// The flight storage adapter stretches the watchdog around a save as the app's job
     /// asks (`false`: [`World::without_save_watchdog_stretch`]).
     pub(crate) save_stretch: bool,
+    /// The flight board's LSI, Hz: what its IWDG counts.
+    pub(crate) flight_lsi_hz: u32,
     medium: si4432_sim::Medium,
 }
 
@@ -387,6 +389,7 @@ impl World {
             watchdog_resets: WatchdogResets::default(),
             flight_busy_until_ns: 0,
             save_stretch: true,
+            flight_lsi_hz: flight_core::app::LSI_TYP_HZ,
             boots: Vec::new(),
             medium: medium.clone(),
         }));
@@ -619,6 +622,12 @@ impl World {
     /// `SaveJob::watchdog_ms` ignored): what the stretch is for, shown.
     pub fn without_save_watchdog_stretch(&mut self) {
         self.shared.borrow_mut().save_stretch = false;
+    }
+
+    /// The flight board's LSI runs at `hz` (the datasheet allows 17–47 kHz): its IWDG's
+    /// timeout follows (`flight_core::app::IWDG`), from the next boot on.
+    pub fn with_flight_lsi_hz(&mut self, hz: u32) {
+        self.shared.borrow_mut().flight_lsi_hz = hz;
     }
 
     /// Runs `d` more of virtual time.

@@ -6,7 +6,8 @@
 //! ([`FlightApp::take_design_request`]). No heap, no panics, time injected.
 //!
 //! Owned here: the live and stored settings and the setup derived from them; the flight
-//! loop and its controllers; the IMU fault policy (`imu`); the baro climb rate; the
+//! loop and its controllers; the IMU fault policy (`imu`); the baro climb rate and health
+//! (`baro`: a failing baro declared failed, never a reset); the
 //! battery monitor and the tone player; the link follower's hooks, bind handling and
 //! telemetry (`link`), the same over OpenLRSng (`openlrs`), and the link task's body the
 //! firmware and the simulator share (`link_task`); the console's command language
@@ -15,6 +16,7 @@
 //! boot configuration out); the magnetometer calibration (`magcal`: collected from the
 //! console, applied to every reading).
 
+mod baro;
 mod console;
 mod gps;
 mod imu;
@@ -32,6 +34,7 @@ mod phrase_tests;
 #[cfg(test)]
 mod tests;
 
+pub use baro::{BARO_FAILED_AFTER, BARO_HEALTHY_AFTER, BARO_RETRY_MS, BaroChange, BaroHealth};
 pub use gps::{
     GPS_BAUD, GPS_BOOT_BAUDS, GPS_REPORT_PERIOD_MS, HOME_REPORT_PERIOD_MS, gps_baud_messages,
     gps_message, home_message,
@@ -45,7 +48,10 @@ pub use openlrs::{
     OPENLRS_FAILSAFE_DELAY, OPENLRS_RATE_CODE_BASE, openlrs_bind_window, run_openlrs_receiver,
 };
 pub use save::{SAVE_WATCHDOG_MS, SaveJob};
-pub use watchdog::{FEED_PERIOD_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog};
+pub use watchdog::{
+    CHECK_IN_POLLS, FEED_GAP_MAX_MS, FEED_PERIOD_MS, IWDG, IwdgSetting, LSI_MAX_HZ, LSI_MIN_HZ,
+    LSI_TYP_HZ, MARGIN, POLL_LATENCY_MAX_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog,
+};
 
 use crate::alerts::{Alert, TonePlayer};
 use crate::battery::{BatteryMonitor, BatteryStatus};
@@ -83,6 +89,7 @@ pub struct FlightApp {
     blockers: u16,
     climb: ClimbRate,
     climb_mps: Option<f32>,
+    baro: BaroHealth,
     /// The tracked baro altitude when the tracker first settled: the power-up point the
     /// handset's altitude counts from (the MS5611 reads standard-atmosphere altitude).
     baro_ground_m: Option<f32>,
@@ -134,6 +141,7 @@ impl FlightApp {
             blockers: 0,
             climb: ClimbRate::new(),
             climb_mps: None,
+            baro: BaroHealth::default(),
             baro_ground_m: None,
             battery: None,
             player: TonePlayer::new(),
@@ -246,6 +254,10 @@ impl FlightApp {
         {
             // Same sensor rate only: a rate change needs the chip reconfigured (next boot).
             self.flight = FlightLoop::new(setup.loop_config, setup.mixer, Some(controllers));
+            // What the loop was told about the board carries over to the new one.
+            self.flight.set_vertical_lost(self.baro.failed());
+            self.flight
+                .set_settings_problem(self.settings_problem.is_some());
             self.battery_monitor = BatteryMonitor::new(setup.battery);
             self.link.set_channel_map(setup.channels);
             self.setup = setup;
@@ -329,18 +341,6 @@ impl FlightApp {
 
     // ---- baro, battery, alerts, watchdog --------------------------------------------
 
-    /// A baro altitude (`None`: the reading failed) at `now_ms`.
-    pub fn on_baro(&mut self, now_ms: u32, altitude_m: Option<f32>) {
-        self.watchdog.check_in(Task::Baro);
-        self.climb_mps = altitude_m.and_then(|a| self.climb.update(now_ms, a));
-        if self.climb_mps.is_some() && self.baro_ground_m.is_none() {
-            self.baro_ground_m = self.climb.altitude_m();
-        }
-        if let Some(a) = altitude_m {
-            self.flight.on_baro_altitude(a);
-        }
-    }
-
     /// Barometric altitude above the power-up point, m (the tracked baro altitude less its
     /// value when the tracker first settled); `None` before that or while the baro fails.
     pub fn baro_altitude_m(&self) -> Option<f32> {
@@ -377,6 +377,12 @@ impl FlightApp {
     /// The supervisor's poll at `now_ms`: `true` = feed the hardware watchdog.
     pub fn on_watchdog_poll(&mut self, now_ms: u32) -> bool {
         self.watchdog.poll(now_ms)
+    }
+
+    /// A simulator's chip counts an LSI of `lsi_hz`: the watchdog model's timeout follows
+    /// (the firmware never calls it; its IWDG counts the real LSI).
+    pub fn model_watchdog_lsi_hz(&mut self, lsi_hz: u32) {
+        self.watchdog.set_lsi_hz(lsi_hz);
     }
 
     /// The check-in state (for the simulator's IWDG model and diagnostics).

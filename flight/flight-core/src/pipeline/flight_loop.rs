@@ -174,6 +174,9 @@ pub struct FlightLoop {
     failsafe_holds_altitude: bool,
     /// The boot-time settings load had a problem not yet fixed by a save (arming refused).
     settings_problem: bool,
+    /// The vertical estimate's sensor (the baro) was declared failed: the hold modes fall
+    /// back to attitude mode.
+    vertical_lost: bool,
 }
 
 impl FlightLoop {
@@ -204,6 +207,24 @@ impl FlightLoop {
             failsafe_airborne: false,
             failsafe_holds_altitude: false,
             settings_problem: false,
+            vertical_lost: false,
+        }
+    }
+
+    /// The baro was declared failed (`true`) or is healthy again: while it is failed the hold
+    /// modes cannot engage and an engaged one falls back to attitude mode, the throttle
+    /// back on the stick (their altitude comes from it).
+    pub fn set_vertical_lost(&mut self, lost: bool) {
+        self.vertical_lost = lost;
+    }
+
+    /// The mode the loop flies when the switch selects `selected`: attitude mode instead of
+    /// a hold mode while the vertical estimate is lost.
+    pub fn effective_mode(&self, selected: FlightMode) -> FlightMode {
+        if self.vertical_lost && selected.holds() {
+            FlightMode::Attitude
+        } else {
+            selected
         }
     }
 
@@ -459,9 +480,12 @@ impl FlightLoop {
     /// Supervise stage: the flight-mode switch (while the link is up) and the arming /
     /// failsafe state machine.
     fn supervise(&mut self, now_ms: u32, link: &LinkInput, estimate: &Estimate) -> Decision {
-        if link.up {
-            self.mode = self.modes.update(link.mode_channel);
-        }
+        let selected = if link.up {
+            self.modes.update(link.mode_channel)
+        } else {
+            self.modes.mode()
+        };
+        self.mode = self.effective_mode(selected);
         self.supervisor.update(&Inputs {
             now_ms,
             link_up: link.up,

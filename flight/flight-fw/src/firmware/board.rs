@@ -5,7 +5,7 @@ use embassy_stm32::adc::{Adc, AdcChannel};
 use embassy_stm32::dac::DacChannel;
 use embassy_stm32::exti::ExtiInput;
 use embassy_stm32::flash::{Bank1Region1, Blocking, Flash};
-use embassy_stm32::gpio::{Level, Output, OutputType, Pull, Speed};
+use embassy_stm32::gpio::{Flex, Level, Output, OutputType, Pull, Speed};
 use embassy_stm32::i2c::{self, I2c};
 use embassy_stm32::peripherals::{TIM3, TIM9};
 use embassy_stm32::rng::{self, Rng};
@@ -27,7 +27,6 @@ use embassy_stm32::spi::{self, Spi};
 use embassy_stm32::time::Hertz;
 #[cfg(feature = "sparky2")]
 use embassy_stm32::usart;
-use embassy_stm32::wdg::IndependentWatchdog;
 use embassy_stm32::{Peri, Peripherals, bind_interrupts, dma, exti, interrupt, peripherals};
 
 /// Board name for the boot log.
@@ -36,9 +35,6 @@ pub const BOARD: &str = "BrushedSparky";
 /// Board name for the boot log.
 #[cfg(feature = "sparky2")]
 pub const BOARD: &str = "Sparky2";
-
-/// Independent watchdog timeout (Tau Labs used 250 ms).
-pub const WATCHDOG_TIMEOUT_US: u32 = 250_000;
 
 // DMA streams (RM0090 tables 42/43): DAC1 on DMA1 S5; SPI3 (radio) TX S7, RX S2 (channel 0
 // both; S0 is left to I2C1); I2C1 (baro) TX S6, RX S0 (channel 1); SPI1 (IMU) TX DMA2 S3,
@@ -91,10 +87,39 @@ pub struct Imu {
     pub int: ExtiInput<'static, Async>,
 }
 
-/// The MS5611 on I2C1 (SCL PB8, SDA PB9, 10 k pull-ups on the board), 400 kHz.
+/// The MS5611 on I2C1 (SCL PB8, SDA PB9, 10 k pull-ups on the board), 400 kHz, with DMA1
+/// streams 6 (TX) and 0 (RX). Kept as parts: the bus clear drives the pins as GPIO before
+/// each (re-)initialisation of the driver.
 pub struct Baro {
-    /// I2C1 with DMA1 streams 6 (TX) and 0 (RX).
-    pub i2c: I2c<'static, Async, i2c::Master>,
+    i2c: Peri<'static, peripherals::I2C1>,
+    scl: Peri<'static, peripherals::PB8>,
+    sda: Peri<'static, peripherals::PB9>,
+    tx_dma: Peri<'static, peripherals::DMA1_CH6>,
+    rx_dma: Peri<'static, peripherals::DMA1_CH0>,
+}
+
+impl Baro {
+    /// Clears the bus (`i2c_bus::recover`); whether SDA was released.
+    pub fn recover_bus(&mut self) -> bool {
+        let mut scl = Flex::new(self.scl.reborrow());
+        let mut sda = Flex::new(self.sda.reborrow());
+        super::i2c_bus::recover(&mut scl, &mut sda)
+    }
+
+    /// I2C1 at 400 kHz, initialised afresh (dropping it disables the peripheral).
+    pub fn driver(&mut self) -> I2c<'_, Async, i2c::Master> {
+        let mut config = i2c::Config::default();
+        config.frequency = Hertz(400_000);
+        I2c::new(
+            self.i2c.reborrow(),
+            self.scl.reborrow(),
+            self.sda.reborrow(),
+            self.tx_dma.reborrow(),
+            self.rx_dma.reborrow(),
+            Irqs,
+            config,
+        )
+    }
 }
 
 /// The RFM22B on SPI3 (SCK PC10, MISO PC11, MOSI PC12), nSEL PA15, nIRQ on EXTI.
@@ -142,8 +167,8 @@ impl MotorParts {
 pub struct Board {
     /// Blue STAT/HEARTBEAT LED on PB5, active low.
     pub heartbeat_led: Output<'static>,
-    /// The independent watchdog, not yet started.
-    pub watchdog: IndependentWatchdog<'static, IWDG>,
+    /// The independent watchdog, not yet started (the supervisor task programs it).
+    pub watchdog: Peri<'static, IWDG>,
     /// The radio module.
     pub radio: Radio,
     /// Gyro/accelerometer/magnetometer.
@@ -215,12 +240,12 @@ impl Board {
             cs: Output::new(p.PC4, Level::High, Speed::VeryHigh),
             int: ExtiInput::new(p.PC5, p.EXTI5, Pull::None, Irqs),
         };
-        let mut i2c_config = i2c::Config::default();
-        i2c_config.frequency = Hertz(400_000);
         let baro = Baro {
-            i2c: I2c::new(
-                p.I2C1, p.PB8, p.PB9, p.DMA1_CH6, p.DMA1_CH0, Irqs, i2c_config,
-            ),
+            i2c: p.I2C1,
+            scl: p.PB8,
+            sda: p.PB9,
+            tx_dma: p.DMA1_CH6,
+            rx_dma: p.DMA1_CH0,
         };
         let motors = MotorParts {
             tim3: p.TIM3,
@@ -312,7 +337,7 @@ impl Board {
             settings_flash,
             rng: Rng::new(p.RNG, Irqs),
             heartbeat_led: Output::new(p.PB5, Level::High, Speed::Low),
-            watchdog: IndependentWatchdog::new(p.IWDG, WATCHDOG_TIMEOUT_US),
+            watchdog: p.IWDG,
             radio: Radio {
                 spi,
                 nsel: Output::new(p.PA15, Level::High, Speed::VeryHigh),

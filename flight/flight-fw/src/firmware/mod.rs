@@ -7,6 +7,7 @@
 
 mod board;
 mod clocks;
+mod i2c_bus;
 mod imu_bus;
 mod link_radio;
 mod outputs;

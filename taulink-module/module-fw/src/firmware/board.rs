@@ -17,7 +17,7 @@ bind_interrupts!(pub struct Irqs {
     SAADC => saadc::InterruptHandler;
 });
 
-/// Watchdog period in 32 768 Hz ticks (module-core's `WATCHDOG_TIMEOUT_MS`, 250 ms).
+/// Watchdog period in 32 768 Hz ticks (module-core's `WATCHDOG_TIMEOUT_MS`, 300 ms).
 const WATCHDOG_TICKS: u32 = 32_768 * module_core::watchdog::WATCHDOG_TIMEOUT_MS / 1_000;
 
 /// Settings area in flash: 8 pages of 4 KiB below the UF2 bootloader (build.rs keeps the

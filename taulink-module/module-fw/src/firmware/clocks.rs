@@ -139,8 +139,8 @@ fn lfxo_starts() -> bool {
 
 /// VDDH supplies the chip and UICR.REGOUT0 still holds its erased value.
 fn regout0_erased_on_vddh() -> bool {
-    let high_voltage = pac::POWER.mainregstatus().read().mainregstatus()
-        == pac::power::vals::Mainregstatus::High;
+    let high_voltage =
+        pac::POWER.mainregstatus().read().mainregstatus() == pac::power::vals::Mainregstatus::High;
     // SAFETY: UICR.REGOUT0 is a readable word of the UICR (nRF52840 PS), always mapped.
     let regout0 = unsafe { UICR_REGOUT0.read_volatile() };
     high_voltage && regout0 & VOUT_ERASED == VOUT_ERASED
