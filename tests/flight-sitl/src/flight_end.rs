@@ -14,6 +14,9 @@ use std::rc::Rc;
 use embassy_futures::join::join5;
 use embassy_futures::select::{Either, select};
 use flight_core::app::link_task::run_link_step;
+use flight_core::app::resume::{
+    self, FAULT_WORDS, FEED_WORDS, FaultReason, GAINS_WORDS, Kept, ResetCause, Resume, STATE_WORDS,
+};
 use flight_core::app::{FEED_PERIOD_MS, FlightApp, Task};
 use flight_core::pipeline::{Controllers, from_settings};
 use openlrs::dual::DualRadio;
@@ -32,6 +35,12 @@ use si4432_sim::{SimClock, VirtualTime};
 /// start-up ≈ 100 ms (its datasheet's start-up time after power-on; the driver waits for
 /// it), gain design ≈ 40 ms (≈ 5.5 M instructions of f64 Riccati solves).
 pub const FLIGHT_BOOT_MS: u64 = 145;
+/// Reset to the first loop of a resumed flight, ms, the firmware's resume path at 168 MHz:
+/// clocks ≈ 2 ms, settings load ≈ 3 ms, the record decoded and the controllers rebuilt from
+/// its Riccati solutions (no design) < 1 ms, the MPU-9250's warm start without its 100 ms
+/// reset (`Mpu9250::new_warm`) ≈ 1 ms and the AK8963's set-up (seven 10 ms I²C transfers
+/// through the MPU's master) 70 ms: 76 ms.
+pub const FLIGHT_RESUME_BOOT_MS: u64 = 76;
 /// The flight board's crystal error, ppm (the module's runs 40 ppm apart).
 const FLIGHT_DRIFT_PPM: f64 = -20.0;
 /// How often the stop watcher looks at power and the IWDG, ms.
@@ -65,6 +74,54 @@ impl FlightChip {
 enum Stop {
     Watchdog,
     PowerOff,
+    Panic,
+}
+
+/// The flight board's no-init RAM as the firmware keeps it (`flight-fw` `fault::Record`):
+/// the blocks `flight_core::app::resume` encodes.
+#[derive(Debug, Clone)]
+pub(crate) struct KeptRecord {
+    state: [u32; STATE_WORDS],
+    gains: [u32; GAINS_WORDS],
+    fault: [u32; FAULT_WORDS],
+    feed: [u32; FEED_WORDS],
+}
+
+impl Default for KeptRecord {
+    /// Power-up RAM: nothing any block accepts.
+    fn default() -> Self {
+        Self {
+            state: [0; STATE_WORDS],
+            gains: [0; GAINS_WORDS],
+            fault: [0; FAULT_WORDS],
+            feed: [0; FEED_WORDS],
+        }
+    }
+}
+
+impl KeptRecord {
+    /// The IMU task's part, after each loop (`flight-fw` `imu::keep_for_resume`).
+    pub(crate) fn keep(&mut self, app: &mut FlightApp, now_ms: u32) {
+        if let Some(state) = app.resume_state_due(now_ms) {
+            self.state = state;
+        }
+        app.keep_resume_gains(&mut self.gains);
+    }
+
+    /// Boot: the decision on what the last boot left, and the record invalidated.
+    fn take_plan(&mut self, cause: ResetCause) -> Option<Resume> {
+        let kept = Kept {
+            state: &self.state,
+            gains: &self.gains,
+            fault: &self.fault,
+            feed: &self.feed,
+        };
+        let plan = resume::plan(cause, &kept).ok();
+        self.state = [0; STATE_WORDS];
+        self.fault = [0; FAULT_WORDS];
+        self.feed = [0; FEED_WORDS];
+        plan
+    }
 }
 
 /// The firmware's link task: `flight_core::app::link_task::run_link_step` in a loop, on
@@ -141,7 +198,10 @@ async fn supervisor_task(app: Rc<RefCell<FlightApp>>, clock: SimClock, shared: &
     loop {
         sleep_ms(clock.time(), u64::from(FEED_PERIOD_MS)).await;
         wait_while_busy(shared, clock.time()).await;
-        let _fed = app.borrow_mut().on_watchdog_poll(clock.now_ms());
+        let now = clock.now_ms();
+        if app.borrow_mut().on_watchdog_poll(now) {
+            shared.borrow_mut().flight_record.feed = resume::encode_feed(now);
+        }
     }
 }
 
@@ -206,13 +266,34 @@ async fn gains_task(app: Rc<RefCell<FlightApp>>, time: VirtualTime, shared: &Sha
     }
 }
 
-/// Ends a boot: the IWDG expired (no feed for `WATCHDOG_TIMEOUT_MS`) or the power went.
+/// Ends a boot: the IWDG expired (no feed for its timeout), the power went, or the firmware
+/// panicked (the handler's reset, with the fault recorded). A hang holds the board (no task
+/// runs, no feed) until the IWDG ends it. The injections act on their change to true.
 async fn stop_watcher(app: &Rc<RefCell<FlightApp>>, shared: &Shared, clock: &SimClock) -> Stop {
+    let (mut panicked, mut hung) = {
+        let input = shared.borrow().input;
+        (input.flight_panic, input.flight_hang)
+    };
     loop {
         sleep_ms(clock.time(), WATCH_MS).await;
-        if !shared.borrow().input.flight_powered {
+        let input = shared.borrow().input;
+        if !input.flight_powered {
             return Stop::PowerOff;
         }
+        if input.flight_panic && !panicked {
+            let fault = resume::Fault {
+                reason: FaultReason::Panic,
+                at_ms: clock.now_ms(),
+                address: 0,
+            };
+            shared.borrow_mut().flight_record.fault = fault.encode();
+            return Stop::Panic;
+        }
+        panicked = input.flight_panic;
+        if input.flight_hang && !hung {
+            shared.borrow_mut().flight_busy_until_ns = u64::MAX;
+        }
+        hung = input.flight_hang;
         if app.borrow().watchdog().expired(clock.now_ms()) {
             return Stop::Watchdog;
         }
@@ -237,16 +318,36 @@ pub(crate) async fn flight_board(
             sleep_ms(&time, WATCH_MS).await;
         }
         if cause == BootCause::PowerOn {
-            // The RFM22B is powered with the board.
+            // The RFM22B is powered with the board, the RAM is not kept.
             chip.power_on_reset();
+            shared.borrow_mut().flight_record = KeptRecord::default();
         }
-        sleep_ms(&time, FLIGHT_BOOT_MS).await;
+        // A reset ends whatever held the board.
+        shared.borrow_mut().flight_busy_until_ns = 0;
+        let reset = match cause {
+            BootCause::PowerOn => ResetCause::PowerOn,
+            BootCause::Watchdog => ResetCause::Watchdog,
+            BootCause::Panic | BootCause::Resumed => ResetCause::Software,
+        };
+        let resume = shared.borrow_mut().flight_record.take_plan(reset);
+        let boot_ms = if resume.is_some() {
+            FLIGHT_RESUME_BOOT_MS
+        } else {
+            FLIGHT_BOOT_MS
+        };
+        sleep_ms(&time, boot_ms).await;
         if !shared.borrow().input.flight_powered {
             continue;
         }
         let clock = SimClock::booting_now(medium.time(), FLIGHT_DRIFT_PPM);
         let (settings, problem) = flash.borrow_mut().load();
-        let Some(mut app) = FlightApp::new(settings, clock.now_ms()) else {
+        let resumed = resume
+            .as_ref()
+            .and_then(|r| FlightApp::resume(settings.clone(), r, clock.now_ms()));
+        if resumed.is_some() {
+            cause = BootCause::Resumed;
+        }
+        let Some(mut app) = resumed.or_else(|| FlightApp::new(settings, clock.now_ms())) else {
             return;
         };
         if let Some(p) = problem {
@@ -284,6 +385,7 @@ pub(crate) async fn flight_board(
                 BootCause::Watchdog
             }
             Stop::PowerOff => BootCause::PowerOn,
+            Stop::Panic => BootCause::Panic,
         };
     }
 }

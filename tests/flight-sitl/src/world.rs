@@ -141,6 +141,11 @@ pub enum BootCause {
     PowerOn,
     /// Its independent watchdog expired.
     Watchdog,
+    /// Its panic handler reset it (`PilotInput::flight_panic`).
+    Panic,
+    /// A watchdog or panic reset in the air, from which the flight was resumed
+    /// (`flight_core::app::resume`).
+    Resumed,
 }
 
 /// Virtual time before the scenario starts, s: both boards boot at 0, the flight side takes
@@ -186,6 +191,9 @@ pub(crate) struct WorldState {
     pub(crate) save_stretch: bool,
     /// The flight board's LSI, Hz: what its IWDG counts.
     pub(crate) flight_lsi_hz: u32,
+    /// The flight board's no-init RAM: the record a resume after a reset reads (kept across
+    /// resets, lost with the power).
+    pub(crate) flight_record: crate::flight_end::KeptRecord,
     medium: si4432_sim::Medium,
 }
 
@@ -390,6 +398,7 @@ impl World {
             flight_busy_until_ns: 0,
             save_stretch: true,
             flight_lsi_hz: flight_core::app::LSI_TYP_HZ,
+            flight_record: crate::flight_end::KeptRecord::default(),
             boots: Vec::new(),
             medium: medium.clone(),
         }));
@@ -524,6 +533,8 @@ impl World {
                                 }
                             };
                             motors = step.motors;
+                            // The IMU task keeps the flight state and gains for a resume.
+                            shared.borrow_mut().flight_record.keep(&mut app, now_ms);
                             // The battery task.
                             if loops_since_boot.is_multiple_of(battery_every) {
                                 app.on_battery(

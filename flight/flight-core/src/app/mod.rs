@@ -24,6 +24,7 @@ mod link;
 pub mod link_task;
 mod magcal;
 mod openlrs;
+pub mod resume;
 mod save;
 mod watchdog;
 
@@ -80,8 +81,14 @@ pub struct FlightApp {
     stored: Settings,
     setup: FlightSetup,
     setup_error: Option<SetupError>,
+    /// The settings the setup in force was derived from (what a resume rebuilds it from).
+    flown: Settings,
     flight: FlightLoop,
-    pending_setup: Option<(FlightSetup, Controllers)>,
+    /// A designed setup with its controllers and the settings they came from, installed
+    /// as soon as the motors are stopped.
+    pending_setup: Option<(FlightSetup, Controllers, Settings)>,
+    /// The settings of the design request being solved.
+    design_settings: Option<Settings>,
     design_requested: bool,
     save_requested: bool,
     imu: ImuHealth,
@@ -105,6 +112,12 @@ pub struct FlightApp {
     magcal: MagcalSession,
     /// The magnetometer calibration in force (from the live settings).
     mag_cal: crate::estimation::magcal::MagCalibration,
+    /// This boot resumed a flight (with the fault that reset the board, if recorded).
+    resumed: Option<Option<resume::Fault>>,
+    /// When the flight state was last handed out for the resume record, and what it said.
+    resume_kept: Option<(u32, resume::StateKey)>,
+    /// The gains changed since the resume record last took them.
+    gains_changed: bool,
 }
 
 /// The flight setup for `settings`, or the factory one (and why) if they do not fly.
@@ -124,16 +137,36 @@ impl FlightApp {
         let (setup, setup_error) = setup_for(&stored);
         let setup = setup?;
         let controllers = Controllers::design(&setup.control).ok();
+        let flown = if setup_error.is_some() {
+            Settings::default()
+        } else {
+            stored.clone()
+        };
+        let mut app = Self::with_setup(stored, flown, setup, controllers, now_ms);
+        app.setup_error = setup_error;
+        Some(app)
+    }
+
+    /// The application with a setup and controllers already made from `flown`.
+    fn with_setup(
+        stored: Settings,
+        flown: Settings,
+        setup: FlightSetup,
+        controllers: Option<Controllers>,
+        now_ms: u32,
+    ) -> Self {
         let mag_cal = magcal::calibration(&stored);
-        Some(Self {
+        Self {
             link: link::LinkSide::new(setup.channels),
             live: stored.clone(),
             stored,
+            flown,
             flight: FlightLoop::new(setup.loop_config, setup.mixer, controllers),
             battery_monitor: BatteryMonitor::new(setup.battery),
             setup,
-            setup_error,
+            setup_error: None,
             pending_setup: None,
+            design_settings: None,
             design_requested: false,
             save_requested: false,
             imu: ImuHealth::new(now_ms),
@@ -155,7 +188,10 @@ impl FlightApp {
             gps: gps::GpsPort::new(),
             magcal: MagcalSession::default(),
             mag_cal,
-        })
+            resumed: None,
+            resume_kept: None,
+            gains_changed: true,
+        }
     }
 
     /// The setup in force (motor protocol, loop rate: the firmware starts its peripherals
@@ -250,8 +286,10 @@ impl FlightApp {
     pub fn on_imu_sample(&mut self, now_ms: u32, sample: &ImuSample) -> ImuStep {
         self.watchdog.check_in(Task::Imu);
         if !self.flight.armed()
-            && let Some((setup, controllers)) = self.pending_setup.take()
+            && let Some((setup, controllers, flown)) = self.pending_setup.take()
         {
+            self.flown = flown;
+            self.gains_changed = true;
             // Same sensor rate only: a rate change needs the chip reconfigured (next boot).
             self.flight = FlightLoop::new(setup.loop_config, setup.mixer, Some(controllers));
             // What the loop was told about the board carries over to the new one.
@@ -330,7 +368,7 @@ impl FlightApp {
     fn record(&mut self, out: LoopOutput) {
         if let Decision::ArmRefused(b) = out.decision {
             self.blockers = blocker_bit(b);
-        } else if out.decision == Decision::Armed {
+        } else if matches!(out.decision, Decision::Armed | Decision::Resumed) {
             self.blockers = 0;
         }
         for alert in loop_alerts(&out).into_iter().flatten() {
@@ -439,12 +477,17 @@ impl FlightApp {
         if !core::mem::take(&mut self.design_requested) {
             return None;
         }
+        self.design_settings = Some(self.live.clone());
         Some(self.live.clone())
     }
 
     /// The gains adapter designed `setup` and `controllers`: installed by the IMU path as
     /// soon as the motors are stopped.
     pub fn on_designed(&mut self, setup: FlightSetup, controllers: Controllers) {
-        self.pending_setup = Some((setup, controllers));
+        let flown = self
+            .design_settings
+            .take()
+            .unwrap_or_else(|| self.live.clone());
+        self.pending_setup = Some((setup, controllers, flown));
     }
 }

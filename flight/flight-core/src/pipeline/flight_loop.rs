@@ -9,6 +9,7 @@ use super::hold::{DescentHold, Hold, Horizontal, Nav};
 use super::identify::Sysid;
 use super::stages;
 use super::sticks::StickShaping;
+use crate::app::resume::FlightState;
 use crate::control::mixer::Mixer;
 use crate::estimation::GRAVITY_MPS2;
 use crate::estimation::complementary;
@@ -209,6 +210,42 @@ impl FlightLoop {
             settings_problem: false,
             vertical_lost: false,
         }
+    }
+
+    /// The controllers flying (`None` until the gains are solved).
+    pub fn controllers(&self) -> Option<&Controllers> {
+        self.controllers.as_ref()
+    }
+
+    /// What a resume after a reset needs of the loop at `now_ms` (`app::resume`).
+    pub fn resume_state(&self, now_ms: u32) -> FlightState {
+        FlightState {
+            written_ms: now_ms,
+            armed: self.supervisor.motors_enabled(),
+            in_air: self.airborne && !self.landing.landed(),
+            failsafe: self.supervisor.failsafe_descent_mps().is_some(),
+            mode: self.mode,
+            hover_throttle: self.hover_throttle,
+            attitude: self.estimator.attitude(),
+            gyro_bias_radps: self.estimator.gyro_bias_radps(),
+        }
+    }
+
+    /// Continues a flight after a reset in the air, from `state` (`app::resume`): in the
+    /// air, the attitude and gyro bias, hover throttle and mode restored, in failsafe until
+    /// the link decides (`Supervisor::resume`).
+    pub fn resume(&mut self, now_ms: u32, state: &FlightState) {
+        self.supervisor.resume(now_ms);
+        self.modes.select(state.mode);
+        self.mode = self.effective_mode(state.mode);
+        if state.hover_throttle.is_finite() {
+            self.hover_throttle = state.hover_throttle.clamp(0.05, 0.95);
+        }
+        self.estimator.resume(state.attitude, state.gyro_bias_radps);
+        self.airborne = true;
+        self.landing.airborne();
+        self.failsafe_since_ms = Some(now_ms);
+        self.failsafe_airborne = true;
     }
 
     /// The baro was declared failed (`true`) or is healthy again: while it is failed the hold
@@ -563,7 +600,11 @@ impl FlightLoop {
         if self.controllers.is_none() {
             return ([Command::Stopped; 4], 0.0);
         }
-        if matches!(fly.decision, Decision::Armed | Decision::FailsafeEntered) || fly.mode_changed {
+        if matches!(
+            fly.decision,
+            Decision::Armed | Decision::FailsafeEntered | Decision::Resumed
+        ) || fly.mode_changed
+        {
             self.hold.reset();
         }
         let ts = self.config.ts_s;
@@ -617,7 +658,10 @@ impl FlightLoop {
             return ([Command::Stopped; 4], 0.0);
         };
         let gyro_dps = fly.gyro_dps;
-        if matches!(fly.decision, Decision::Armed | Decision::ControlRecovered) || fly.mode_changed
+        if matches!(
+            fly.decision,
+            Decision::Armed | Decision::ControlRecovered | Decision::Resumed
+        ) || fly.mode_changed
         {
             c.reset(gyro_dps);
         }

@@ -15,3 +15,4 @@ pub use params::{Choice, Kind, MAX_PAIRS, PARAMS, Param, ParamError, Settings, V
 pub use store::{
     FLASH_BUFFER, LoadProblem, LoadReport, StoreError, load, load_at_boot, save, save_whole,
 };
+pub(crate) use store::{RECORD_MAX, crc32, decode as decode_record, record};

@@ -154,6 +154,9 @@ pub enum Decision {
     /// Disarmed because the attitude sensor stopped delivering usable data (the frame can
     /// no longer sense its attitude). Only a fresh arm restarts the motors.
     DisarmedSensorFault,
+    /// Back in the air after a reset: the link shows the arm switch still on (or no arm switch
+    /// is set) — armed in the mode the frame had ([`Supervisor::resume`]).
+    Resumed,
 }
 
 /// The state machine.
@@ -163,6 +166,8 @@ pub struct Supervisor {
     state: State,
     gestures: GestureDetector,
     throttle_low_since: Option<u32>,
+    /// In failsafe since a reset in the air, waiting for the link's word ([`Self::resume`]).
+    resumed: bool,
 }
 
 impl Supervisor {
@@ -173,7 +178,19 @@ impl Supervisor {
             state: State::Disarmed,
             gestures: GestureDetector::new(settings.gesture_hold_ms),
             throttle_low_since: None,
+            resumed: false,
         }
+    }
+
+    /// The board reset in the air while armed (`app::resume`): the motors run again at once,
+    /// in failsafe — levelling, descending or holding as a link loss would — until the link
+    /// delivers: then the arm switch decides, on (or no arm switch set) is
+    /// [`Decision::Resumed`] and armed, off disarms. A link that never comes back is the
+    /// failsafe as usual, landing and disarming on touchdown.
+    pub fn resume(&mut self, now_ms: u32) {
+        self.state = State::Failsafe { since_ms: now_ms };
+        self.throttle_low_since = None;
+        self.resumed = true;
     }
 
     /// Current state.
@@ -217,6 +234,7 @@ impl Supervisor {
         }
         self.state = State::Disarmed;
         self.throttle_low_since = None;
+        self.resumed = false;
         Decision::DisarmedSensorFault
     }
 
@@ -265,6 +283,15 @@ impl Supervisor {
                     self.throttle_low_since = None;
                 }
                 Decision::Steady
+            }
+            State::Failsafe { .. } if self.resumed && link_ok => {
+                self.resumed = false;
+                if inputs.arm_switch == Some(false) {
+                    self.state = State::Disarmed;
+                    return Decision::DisarmedByPilot;
+                }
+                self.state = State::Armed;
+                Decision::Resumed
             }
             State::Failsafe { since_ms } => {
                 if inputs.landed {
@@ -514,6 +541,61 @@ mod tests {
         );
         assert_eq!(sup.state(), State::Armed);
         assert_eq!(sup.failsafe_descent_mps(), None);
+    }
+
+    #[test]
+    fn a_resumed_board_flies_in_failsafe_until_the_link_decides() {
+        let s = Settings::default();
+        let air = |t, up, switch| Inputs {
+            landed: false,
+            arm_switch: switch,
+            ..inputs(t, up, 0.6, 0.3)
+        };
+        // The link back, the arm switch on: armed, the sticks wherever they are.
+        let mut sup = Supervisor::new(s);
+        sup.resume(0);
+        assert!(sup.motors_enabled(), "motors at once, before any link");
+        assert_eq!(sup.failsafe_descent_mps(), Some(0.7));
+        assert_eq!(sup.update(&air(5, false, None)), Decision::Steady);
+        assert_eq!(sup.update(&air(400, true, Some(true))), Decision::Resumed);
+        assert_eq!(sup.state(), State::Armed);
+        // No arm switch set (stick arming): the link alone is the pilot's word.
+        let mut sup = Supervisor::new(s);
+        sup.resume(0);
+        assert_eq!(sup.update(&air(400, true, None)), Decision::Resumed);
+        // The arm switch off: disarmed.
+        let mut sup = Supervisor::new(s);
+        sup.resume(0);
+        assert_eq!(
+            sup.update(&air(400, true, Some(false))),
+            Decision::DisarmedByPilot
+        );
+        assert!(!sup.motors_enabled());
+        // No link: the failsafe as usual, down to the touchdown.
+        let mut sup = Supervisor::new(s);
+        sup.resume(0);
+        for t in (0..60_000).step_by(10) {
+            assert_eq!(sup.update(&air(t, false, Some(true))), Decision::Steady);
+        }
+        assert_eq!(
+            sup.update(&inputs(60_000, false, 0.6, 0.0)),
+            Decision::DisarmedFailsafe
+        );
+        // The resume is spent once decided: a later link loss is a normal failsafe, whose
+        // recovery wants centred sticks.
+        let mut sup = Supervisor::new(s);
+        sup.resume(0);
+        assert_eq!(sup.update(&air(100, true, Some(true))), Decision::Resumed);
+        assert_eq!(
+            sup.update(&air(200, false, Some(true))),
+            Decision::FailsafeEntered
+        );
+        assert_eq!(sup.update(&air(300, true, Some(true))), Decision::Steady);
+        let centred = Inputs {
+            sticks: Sticks::default(),
+            ..air(400, true, Some(true))
+        };
+        assert_eq!(sup.update(&centred), Decision::ControlRecovered);
     }
 
     #[test]

@@ -133,6 +133,29 @@ pub struct Radio {
     pub nirq: ExtiInput<'static, Async>,
 }
 
+/// Drives motor outputs 1–4 low as GPIO, at once, by register: for the fault handlers,
+/// which cannot trust the timers' state or any HAL object. Low is off for every protocol
+/// (no pulse; the brushed FETs off).
+pub fn motors_off() {
+    use embassy_stm32::pac;
+    use embassy_stm32::pac::gpio::vals::Moder;
+    // Output 1 PB0, 2 PB1, 3 PA3, 4 PA2 (`MotorParts::start`).
+    for (port, pins) in [(pac::GPIOB, [0, 1]), (pac::GPIOA, [3, 2])] {
+        // The output level first (no effect while in AF mode), then the mode: the pin goes
+        // low the moment it becomes a GPIO.
+        port.bsrr().write(|w| {
+            for pin in pins {
+                w.set_br(pin, true);
+            }
+        });
+        port.moder().modify(|w| {
+            for pin in pins {
+                w.set_moder(pin, Moder::OUTPUT);
+            }
+        });
+    }
+}
+
 /// Motor outputs 1–4 before the protocol is known: the pins are already in their timer
 /// function and driven low (the FET gates have pull-downs too), so motors are stopped from
 /// power-on.

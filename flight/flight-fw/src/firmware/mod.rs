@@ -7,6 +7,7 @@
 
 mod board;
 mod clocks;
+mod fault;
 mod i2c_bus;
 mod imu_bus;
 mod link_radio;
@@ -15,14 +16,18 @@ mod shared;
 mod tasks;
 mod usb_cdc;
 
-use defmt::{error, info};
+use defmt::{error, info, warn};
+use defmt_rtt as _;
 use embassy_executor::{SpawnError, SpawnToken, Spawner};
 use flight_core::app::FlightApp;
+use flight_core::app::resume::{self, Kept};
 use mpu9250::SampleRate;
-use {defmt_rtt as _, panic_probe as _};
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
+    // Before anything can reset again: why this boot, and what the last one left.
+    let cause = fault::reset_cause();
+    let kept = fault::take();
     let source = clocks::probe();
     let p = embassy_stm32::init(clocks::config(source));
     clocks::accelerate_flash();
@@ -38,12 +43,30 @@ async fn main(spawner: Spawner) {
     // Flash work first: a sector erase can stall the CPU longer than the watchdog timeout,
     // and the watchdog starts with the supervisor below.
     let (map, settings, problem) = tasks::storage::open(board.settings_flash).await;
-    // The application: settings → setup (factory setup if the stored one does not fly) and
-    // the solved gains, before anything can arm.
-    let Some(mut app) = FlightApp::new(settings, shared::now_ms()) else {
+    // A reset in the air with a fresh record resumes the flight with the record's gains;
+    // otherwise the application: settings → setup (factory setup if the stored one does not
+    // fly) and the solved gains, before anything can arm.
+    let kept_blocks = Kept {
+        state: &kept.state,
+        gains: &kept.gains,
+        fault: &kept.fault,
+        feed: &kept.feed,
+    };
+    let resumed = match resume::plan(cause, &kept_blocks) {
+        Ok(r) => FlightApp::resume(settings.clone(), &r, shared::now_ms()),
+        Err(why) => {
+            info!("boot after {}: {}", cause, why);
+            None
+        }
+    };
+    let resuming = resumed.is_some();
+    let Some(mut app) = resumed.or_else(|| FlightApp::new(settings, shared::now_ms())) else {
         error!("no flyable setup, not even the factory one");
         return;
     };
+    if resuming {
+        warn!("reset in the air ({}): flight resumed", cause);
+    }
     if let Some(problem) = problem {
         // Console, telemetry and arming all see it until the pilot saves a set.
         app.on_settings_problem(problem);
@@ -75,7 +98,7 @@ async fn main(spawner: Spawner) {
     spawn(
         &spawner,
         "imu",
-        tasks::imu::imu_task(board.imu, sample_rate(setup.loop_rate_hz)),
+        tasks::imu::imu_task(board.imu, sample_rate(setup.loop_rate_hz), resuming),
     );
     spawn(&spawner, "link", tasks::link::link_task(board.radio));
     spawn(&spawner, "baro", tasks::baro::baro_task(board.baro));

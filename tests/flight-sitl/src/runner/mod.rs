@@ -56,11 +56,14 @@ pub enum Kind {
     /// Hovering in attitude mode, the pilot rolls to 15° (stick 1/3) for 1 s: the stick's way
     /// to the motors and the attitude loop's response.
     AttitudeStep,
+    /// Hovering, the flight firmware panics: the handler stops the motors and resets, the
+    /// flight resumes from the record kept across the reset (`flight_core::app::resume`).
+    Panic,
 }
 
 impl Kind {
     /// Every scenario, in the order of the README.
-    pub const ALL: [Kind; 14] = [
+    pub const ALL: [Kind; 15] = [
         Kind::Hover,
         Kind::LinkCut,
         Kind::PowerCycle,
@@ -75,6 +78,7 @@ impl Kind {
         Kind::PositionHold,
         Kind::Loiter,
         Kind::AttitudeStep,
+        Kind::Panic,
     ];
 
     /// The command-line name.
@@ -94,6 +98,7 @@ impl Kind {
             Kind::PositionHold => "position-hold",
             Kind::Loiter => "loiter",
             Kind::AttitudeStep => "attitude-step",
+            Kind::Panic => "panic",
         }
     }
 
@@ -399,6 +404,7 @@ impl Piloting for PlanPilot {
                 Kind::RadioStuckIrq => input.flight_radio = RadioInjection::IrqStuckLow,
                 Kind::RadioBrownout => input.flight_radio = RadioInjection::BrownOut,
                 Kind::AttitudeStep => input.roll = STEP_ROLL_STICK,
+                Kind::Panic => input.flight_panic = true,
                 Kind::Hover
                 | Kind::SettingsCorrupt
                 | Kind::LowBattery
@@ -530,7 +536,11 @@ pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunEr
             let at = opts.at_s.unwrap_or(t_reach + SETTLE_S);
             (Some(at), Some(t_reach), at + 3.0)
         }
-        Kind::ImuStall | Kind::ImuFrozen | Kind::RadioStuckIrq | Kind::RadioBrownout => {
+        Kind::ImuStall
+        | Kind::ImuFrozen
+        | Kind::RadioStuckIrq
+        | Kind::RadioBrownout
+        | Kind::Panic => {
             let at = opts.at_s.unwrap_or(t_reach + SETTLE_S);
             (Some(at), Some(t_reach), at + 8.0)
         }

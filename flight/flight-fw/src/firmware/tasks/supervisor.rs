@@ -18,6 +18,7 @@ use embassy_stm32::peripherals::IWDG;
 use embassy_time::{Duration, Ticker};
 use flight_core::app::{FEED_PERIOD_MS, IWDG as SETTING, IwdgSetting};
 
+use crate::firmware::fault::keep_feed;
 use crate::firmware::shared::{now_ms, with_app};
 
 /// How long a new prescaler and reload take to reach the LSI domain at most: 5 LSI periods
@@ -67,8 +68,11 @@ pub async fn supervisor_task(_iwdg: Peri<'static, IWDG>) {
     let mut ticker = Ticker::every(Duration::from_millis(u64::from(FEED_PERIOD_MS)));
     loop {
         ticker.next().await;
-        if with_app(|a| a.on_watchdog_poll(now_ms())) == Some(true) {
+        let now = now_ms();
+        if with_app(|a| a.on_watchdog_poll(now)) == Some(true) {
             feed();
+            // A resume after a watchdog reset bounds the reset's time with it.
+            keep_feed(now);
         }
     }
 }
