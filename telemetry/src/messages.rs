@@ -298,6 +298,32 @@ pub struct Home {
     pub set: bool,
 }
 
+/// What the flight controller's firmware has to say about itself (flight → ground; sent
+/// when it changes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Health {
+    /// Flags, the flight code's bit set ([`Health::BARO_FAILED`] …).
+    pub flags: u8,
+    /// IMU samples the flight loop missed since boot (saturating).
+    pub imu_missed: u16,
+    /// Flight-loop steps that ran past the next sample since boot (saturating).
+    pub loop_overruns: u16,
+}
+
+impl Health {
+    /// The barometer is declared failed (the hold modes fall back).
+    pub const BARO_FAILED: u8 = 1;
+    /// The crystal did not start: the clocks run from the internal RC.
+    pub const CLOCK_FALLBACK: u8 = 2;
+    /// This boot resumed a flight after a reset in the air.
+    pub const RESUMED: u8 = 4;
+    /// The hardware random generator failed: seeds from a weaker source.
+    pub const RNG_FALLBACK: u8 = 8;
+    /// A USB host is connected (arming refused).
+    pub const USB_CONNECTED: u8 = 16;
+}
+
 /// Everything the telemetry stream carries.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -335,6 +361,8 @@ pub enum Message {
     /// The flight mode (flight → ground; wire number 13, replacing the retired number 3: an
     /// older reader drops it as unknown instead of misreading the eight modes).
     FlightMode(FlightMode),
+    /// The firmware's health (flight → ground; appended: earlier variants keep their numbers).
+    Health(Health),
 }
 
 /// Largest postcard encoding of a [`Message`].

@@ -17,7 +17,8 @@ use flight_core::app::link_task::run_link_step;
 use flight_core::app::resume::{
     self, FAULT_WORDS, FEED_WORDS, FaultReason, GAINS_WORDS, Kept, ResetCause, Resume, STATE_WORDS,
 };
-use flight_core::app::{FEED_PERIOD_MS, FlightApp, Task};
+use flight_core::app::{FEED_PERIOD_MS, FlightApp, ImuFault, ImuStep, LoopSide, Task};
+use flight_core::pipeline::ImuSample;
 use flight_core::pipeline::{Controllers, from_settings};
 use openlrs::dual::DualRadio;
 use openlrs::radio::Clock;
@@ -101,8 +102,8 @@ impl Default for KeptRecord {
 
 impl KeptRecord {
     /// The IMU task's part, after each loop (`flight-fw` `imu::keep_for_resume`).
-    pub(crate) fn keep(&mut self, app: &mut FlightApp, now_ms: u32) {
-        if let Some(state) = app.resume_state_due(now_ms) {
+    pub(crate) fn keep(&mut self, app: &mut FlightApp, side: &mut LoopSide, now_ms: u32) {
+        if let Some(state) = side.resume_state_due(now_ms) {
             self.state = state;
         }
         app.keep_resume_gains(&mut self.gains);
@@ -166,30 +167,69 @@ impl<C: Clock> Drop for GiveBack<'_, C> {
 /// cycles per instruction and 168 MHz.
 pub const DESIGN_US: u64 = 42_700;
 
-/// Holds the flight board for `us`: every flight task runs on one thread-mode executor, so
-/// a blocking job (a gain design; a flash operation, which on the single-bank F405 also
-/// stalls code fetch) keeps the others — the IMU adapter, the supervisor — from running.
-/// The radio link's timing is not held (a simplification: its slots run on).
-async fn occupy(shared: &Shared, time: &VirtualTime, us: u64) {
+/// What holds the flight board during a blocking job.
+#[derive(Clone, Copy)]
+enum Holds {
+    /// The thread-mode executor (a gain design): the other thread tasks wait — the
+    /// supervisor, storage, gains, heartbeat, baro, battery, alerts and GPS adapters — while
+    /// the flight loop, in its interrupt executor, flies on.
+    Thread,
+    /// The whole CPU (a flash operation: on the single-bank F405 code fetch stalls, the
+    /// loop's interrupt too): no IMU sample either.
+    Cpu,
+}
+
+/// Holds the flight board for `us`. The radio link's timing is not held (a
+/// simplification: its slots run on).
+async fn occupy(shared: &Shared, time: &VirtualTime, us: u64, holds: Holds) {
     {
         let mut s = shared.borrow_mut();
-        s.flight_busy_until_ns = s.now_ns() + us * 1000;
+        let until = s.now_ns() + us * 1000;
+        match holds {
+            Holds::Thread => s.flight_thread_busy_until_ns = until,
+            Holds::Cpu => s.flight_busy_until_ns = until,
+        }
     }
     time.sleep_ns(us * 1000).await;
 }
 
-/// Waits while the board is held by a blocking job.
+/// Waits while the thread-mode executor is held.
 async fn wait_while_busy(shared: &Shared, time: &VirtualTime) {
     loop {
         let left = {
             let s = shared.borrow();
-            s.flight_busy_until_ns.saturating_sub(s.now_ns())
+            let until = s.flight_busy_until_ns.max(s.flight_thread_busy_until_ns);
+            until.saturating_sub(s.now_ns())
         };
         if left == 0 {
             return;
         }
         time.sleep_ns(left).await;
     }
+}
+
+/// The firmware's IMU task for one sample (`flight-fw` `tasks::imu`): the loop's inputs
+/// taken from the app, a designed setup installed while disarmed, the step on the loop's
+/// side, its report handed back.
+pub(crate) fn imu_task_step(
+    app: &mut FlightApp,
+    side: &mut LoopSide,
+    now_ms: u32,
+    reading: Result<ImuSample, ImuFault>,
+) -> ImuStep {
+    let inputs = app.loop_inputs();
+    if inputs.setup_pending
+        && !side.armed()
+        && let Some((setup, controllers)) = app.take_pending_setup()
+    {
+        side.install(&setup, controllers);
+    }
+    let (step, report) = match reading {
+        Ok(sample) => side.step(now_ms, &sample, &inputs),
+        Err(cause) => side.missing(now_ms, cause, &inputs),
+    };
+    app.on_loop_report(now_ms, &report);
+    step
 }
 
 /// The supervisor task: polls the check-in policy every `FEED_PERIOD_MS`; the IWDG is fed
@@ -205,19 +245,14 @@ async fn supervisor_task(app: Rc<RefCell<FlightApp>>, clock: SimClock, shared: &
     }
 }
 
-/// The heartbeat LED task (50 ms ticker) and the motor task's check-in (it wakes at least
-/// every 100 ms; the commands themselves go to the quad in the physics task).
-async fn heartbeat_and_motors_task(
-    app: Rc<RefCell<FlightApp>>,
-    time: VirtualTime,
-    shared: &Shared,
-) {
+/// The heartbeat LED task (50 ms ticker; the motor commands go to the quad from the IMU
+/// adapter in the physics task, as the firmware's loop drives the outputs itself).
+async fn heartbeat_task(app: Rc<RefCell<FlightApp>>, time: VirtualTime, shared: &Shared) {
     loop {
         sleep_ms(&time, 50).await;
         wait_while_busy(shared, &time).await;
         let mut a = app.borrow_mut();
         a.check_in(Task::Heartbeat);
-        a.check_in(Task::Motors);
     }
 }
 
@@ -241,7 +276,7 @@ async fn storage_task(
                 .on_watchdog_stretched(clock.now_ms(), job.watchdog_ms);
         }
         let (saved, work) = flash.borrow_mut().save(&job);
-        occupy(shared, &time, work.f405_us()).await;
+        occupy(shared, &time, work.f405_us(), Holds::Cpu).await;
         let saved = saved.then(|| job.live.clone());
         app.borrow_mut().on_save_done(clock.now_ms(), saved);
     }
@@ -259,7 +294,7 @@ async fn gains_task(app: Rc<RefCell<FlightApp>>, time: VirtualTime, shared: &Sha
             continue;
         };
         let designed = Controllers::design(&setup.control);
-        occupy(shared, &time, DESIGN_US).await;
+        occupy(shared, &time, DESIGN_US, Holds::Thread).await;
         if let Ok(c) = designed {
             app.borrow_mut().on_designed(setup, c);
         }
@@ -291,7 +326,7 @@ async fn stop_watcher(app: &Rc<RefCell<FlightApp>>, shared: &Shared, clock: &Sim
         }
         panicked = input.flight_panic;
         if input.flight_hang && !hung {
-            shared.borrow_mut().flight_busy_until_ns = u64::MAX;
+            shared.borrow_mut().flight_thread_busy_until_ns = u64::MAX;
         }
         hung = input.flight_hang;
         if app.borrow().watchdog().expired(clock.now_ms()) {
@@ -323,7 +358,11 @@ pub(crate) async fn flight_board(
             shared.borrow_mut().flight_record = KeptRecord::default();
         }
         // A reset ends whatever held the board.
-        shared.borrow_mut().flight_busy_until_ns = 0;
+        {
+            let mut s = shared.borrow_mut();
+            s.flight_busy_until_ns = 0;
+            s.flight_thread_busy_until_ns = 0;
+        }
         let reset = match cause {
             BootCause::PowerOn => ResetCause::PowerOn,
             BootCause::Watchdog => ResetCause::Watchdog,
@@ -363,12 +402,18 @@ pub(crate) async fn flight_board(
         shared
             .borrow_mut()
             .record_boot(End::Flight, cause, problem.is_some());
+        // The IMU task owns the loop's side, apart from the app.
+        let side = app.take_loop_side();
         let app = Rc::new(RefCell::new(app));
-        shared.borrow_mut().flight = Some((app.clone(), clock.clone()));
+        {
+            let mut s = shared.borrow_mut();
+            s.flight = Some((app.clone(), clock.clone()));
+            s.flight_loop = side;
+        }
         let tasks = join5(
             link_task(app.clone(), &radio, clock.clone(), failsafe_us),
             supervisor_task(app.clone(), clock.clone(), &shared),
-            heartbeat_and_motors_task(app.clone(), time.clone(), &shared),
+            heartbeat_task(app.clone(), time.clone(), &shared),
             storage_task(app.clone(), &flash, clock.clone(), &shared),
             gains_task(app.clone(), time.clone(), &shared),
         );
@@ -378,6 +423,7 @@ pub(crate) async fn flight_board(
         };
         let mut s = shared.borrow_mut();
         s.flight = None;
+        s.flight_loop = None;
         s.flight_settings = app.borrow().settings().clone();
         cause = match stop {
             Stop::Watchdog => {

@@ -1,7 +1,8 @@
 //! What blocking jobs cost the flight board (issue 12: time that costs): a gain design
-//! (≈ 42 ms on the F405) and the settings flash's writes and sector erases hold its one
-//! thread-mode executor — the loop takes no IMU sample meanwhile, the supervisor does not
-//! feed the IWDG.
+//! (≈ 42 ms on the F405) holds its thread-mode executor — the supervisor does not feed the
+//! IWDG meanwhile, but the flight loop, in its interrupt executor, flies on (issue 29); the
+//! settings flash's writes and sector erases stall the whole CPU (code fetch from the
+//! single-bank flash), the loop too.
 
 #![allow(
     clippy::unwrap_used,
@@ -93,17 +94,19 @@ fn on_the_ground_with(
 }
 
 #[test]
-fn a_gain_design_holds_the_board_for_42_ms() {
+fn a_gain_design_holds_the_thread_tasks_but_not_the_loop() {
     // An LQG cost from the phone, on the ground: applied, the gains re-designed, saved.
     let sitl = on_the_ground(&[change("lqg.q_rate", 900.0)], 2.0);
     assert_eq!(sitl.settings.get(handles::LQG_Q_RATE), 900.0);
     let stretches = held(&sitl.samples, sitl.ts_s);
     println!("held: {stretches:?}");
-    let design = stretches
-        .iter()
-        .find(|(_, len)| (*len - 0.042).abs() < 0.002)
-        .copied();
-    assert!(design.is_some(), "no 42 ms design stretch in {stretches:?}");
+    // The 42 ms design is no stretch of missed loops any more (it was, on one executor).
+    assert!(
+        stretches
+            .iter()
+            .all(|(_, len)| (*len - 0.042).abs() > 0.002),
+        "a design stretch in {stretches:?}"
+    );
     assert_eq!(sitl.watchdog_resets.flight, 0);
 }
 

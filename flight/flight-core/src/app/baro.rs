@@ -5,7 +5,8 @@
 //! hangs; it hands each reading, or `None` for a failed one, to [`FlightApp::on_baro`]. Here:
 //! [`BARO_FAILED_AFTER`] failed readings in a row declare the baro failed. Then the watchdog
 //! no longer requires the baro task (a baro is not worth a reset, in the air least of all),
-//! the hold modes fall back to attitude mode (`FlightLoop::set_vertical_lost`: the switch
+//! the hold modes fall back to attitude mode (the loop's input `vertical_lost`,
+//! `FlightLoop::set_vertical_lost`: the switch
 //! cannot engage them, an engaged one hands the throttle back), the pilot hears the sensor
 //! alert, and `status` and the telemetry's health report say so. [`BARO_HEALTHY_AFTER`] good
 //! readings in a row take it all back.
@@ -89,21 +90,18 @@ impl FlightApp {
         match self.baro.on_reading(altitude_m.is_some()) {
             Some(BaroChange::Failed) => {
                 self.watchdog.excuse(Task::Baro);
-                self.flight.set_vertical_lost(true);
                 self.player.push(Alert::SensorFault);
             }
-            Some(BaroChange::Recovered) => {
-                self.watchdog.require(Task::Baro);
-                self.flight.set_vertical_lost(false);
-            }
+            Some(BaroChange::Recovered) => self.watchdog.require(Task::Baro),
             None => {}
         }
         self.climb_mps = altitude_m.and_then(|a| self.climb.update(now_ms, a));
         if self.climb_mps.is_some() && self.baro_ground_m.is_none() {
             self.baro_ground_m = self.climb.altitude_m();
         }
-        if let Some(a) = altitude_m {
-            self.flight.on_baro_altitude(a);
+        if altitude_m.is_some() {
+            // For the loop's INS, with its next step.
+            self.pending_baro_m = altitude_m;
         }
     }
 
@@ -168,8 +166,11 @@ mod tests {
             }
             assert!(app.on_watchdog_poll(100 + 50 * k), "poll {k}");
         }
+        assert!(app.loop_inputs().vertical_lost);
+        app.on_imu_sample(3_000, &crate::app::tests::resting(0));
+        let flight = app.loop_side().unwrap().flight_loop();
         assert_eq!(
-            app.flight.effective_mode(FlightMode::AltitudeHold),
+            flight.effective_mode(FlightMode::AltitudeHold),
             FlightMode::Attitude
         );
         // Healthy again: required again, and the hold modes engage.
@@ -177,8 +178,10 @@ mod tests {
             app.on_baro(3_000 + 20 * t, Some(100.0));
         }
         assert!(!app.baro_health().failed());
+        app.on_imu_sample(4_000, &crate::app::tests::resting(1));
+        let flight = app.loop_side().unwrap().flight_loop();
         assert_eq!(
-            app.flight.effective_mode(FlightMode::AltitudeHold),
+            flight.effective_mode(FlightMode::AltitudeHold),
             FlightMode::AltitudeHold
         );
         for _ in 0..crate::app::CHECK_IN_POLLS {

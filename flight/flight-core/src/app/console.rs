@@ -34,7 +34,7 @@ impl FlightApp {
 
     /// Answers one console line (without its line ending) into `out`.
     pub fn on_console_line<W: Write>(&mut self, line: &str, out: &mut W) -> core::fmt::Result {
-        let armed = self.flight.armed();
+        let armed = self.armed();
         match parse_line(line) {
             Ok(Command::Nothing) => Ok(()),
             Ok(Command::Help) => out.write_str(HELP),
@@ -168,7 +168,7 @@ impl FlightApp {
 
     fn write_status<W: Write>(&self, out: &mut W) -> core::fmt::Result {
         let link = if self.link_input.up { "up" } else { "down" };
-        match &self.last_out {
+        match self.last_output() {
             Some(state) => write!(
                 out,
                 "mode {}, failsafe {}, link {}, arm blockers {:#x}, attitude {:?} deg\r\n",
@@ -180,15 +180,16 @@ impl FlightApp {
             )?,
             None => out.write_str("flight loop not running (IMU?)\r\n")?,
         }
-        let estimator = self.flight.estimator();
-        write!(
-            out,
-            "estimator {} (ins.mode {}), fallbacks {}, gps fix {}\r\n",
-            estimator.source().name(),
-            estimator.mode().name(),
-            estimator.fallbacks(),
-            estimator.gps_fix()
-        )?;
+        if let Some(estimator) = self.view.as_ref().map(|v| v.estimator) {
+            write!(
+                out,
+                "estimator {} (ins.mode {}), fallbacks {}, gps fix {}\r\n",
+                estimator.source.name(),
+                estimator.mode.name(),
+                estimator.fallbacks,
+                estimator.gps_fix
+            )?;
+        }
         if let Some((pvt, _)) = self.gps_latest() {
             let (generation, config) = self.gps_config_status();
             write!(
@@ -197,14 +198,14 @@ impl FlightApp {
                 pvt.fix_type, pvt.num_sv, pvt.h_acc_mm, generation, config
             )?;
         }
-        if let Some(home) = estimator.home() {
+        if let Some(home) = self.view.as_ref().and_then(|v| v.estimator.home) {
             write!(
                 out,
                 "home lat {} lon {} (1e-7 deg) msl {} mm\r\n",
                 home.lat_e7, home.lon_e7, home.h_msl_mm
             )?;
         }
-        if let Some(fault) = self.imu.fault() {
+        if let Some(fault) = self.imu_fault() {
             write!(
                 out,
                 "IMU fault: {} (motors stopped, re-arm needed)\r\n",
@@ -220,8 +221,9 @@ impl FlightApp {
         if let Some(e) = self.setup_error {
             write!(out, "stored settings not flyable ({e}): factory setup\r\n")?;
         }
+        self.write_health(out)?;
         write_phrase_state(out, self.live.link_key())?;
-        let armed = self.flight.armed();
+        let armed = self.armed();
         match self.battery {
             Some(b) => write!(
                 out,
@@ -230,6 +232,42 @@ impl FlightApp {
             ),
             None => write!(out, "armed {armed}, battery unknown\r\n"),
         }
+    }
+}
+
+impl FlightApp {
+    /// The firmware's standing, a line each: the loop's misses, what the boot found, the
+    /// baro, a resumed flight, the USB host.
+    fn write_health<W: Write>(&self, out: &mut W) -> core::fmt::Result {
+        let h = self.health();
+        write!(
+            out,
+            "loop: {} IMU samples missed, {} overruns\r\n",
+            h.imu_missed, h.loop_overruns
+        )?;
+        if self.board.boot.clock_fallback {
+            out.write_str("HSE crystal did not start: clocks on the HSI (USB unreliable)\r\n")?;
+        }
+        if self.board.boot.rng_fallback {
+            out.write_str("RNG failed at boot: seeds from the unique ID and timing\r\n")?;
+        }
+        if self.baro.failed() {
+            write!(
+                out,
+                "baro failed ({} failed readings): hold modes fall back to attitude\r\n",
+                self.baro.failures()
+            )?;
+        }
+        if let Some(fault) = self.resumed {
+            write!(
+                out,
+                "flight resumed after a reset in the air ({fault:?})\r\n"
+            )?;
+        }
+        if self.board.usb_connected {
+            out.write_str("USB connected: arming refused (unplug to fly)\r\n")?;
+        }
+        Ok(())
     }
 }
 

@@ -204,7 +204,7 @@ impl FlightApp {
     /// The console's `bind`: refused while armed, else the link task is asked to open a
     /// bind window. Returns whether it was accepted.
     pub fn request_bind(&mut self) -> bool {
-        if self.flight.armed() {
+        if self.armed() {
             return false;
         }
         self.link.bind = BindState::Requested;
@@ -224,7 +224,7 @@ impl FlightApp {
         if self.link.bind != BindState::Requested {
             return None;
         }
-        if self.flight.armed() {
+        if self.armed() {
             self.link.bind = BindState::Closed;
             return None;
         }
@@ -241,7 +241,7 @@ impl FlightApp {
         let Some(params) = offered else {
             return false;
         };
-        if !open || self.flight.armed() {
+        if !open || self.armed() {
             return false;
         }
         if store_link(&mut self.live, params).is_ok() {
@@ -316,7 +316,7 @@ impl FlightApp {
     /// gate (signed, fresh, disarmed); the applied value is echoed, a refusal answered with
     /// its reason and the session to sign the next one with.
     fn apply_link_change(&mut self, message: &Message) {
-        let armed = self.flight.armed();
+        let armed = self.armed();
         let key = self.live.link_key();
         let Some(reply) = self
             .link
@@ -371,13 +371,14 @@ impl FlightApp {
 
     /// The next telemetry message, framed into `buf`, with `seen` as the link's figures:
     /// a setting echo, then an identification result, then a state change out of turn, then
-    /// the home and the GPS fix when due, else the rotation. `None` before the loop has run.
+    /// the firmware's health when it changed, the home and the GPS fix when due, else the
+    /// rotation. `None` before the loop has run.
     pub(super) fn next_report<'o>(
         &mut self,
         seen: LinkSeen,
         buf: &'o mut [u8; FRAMED_MAX_BYTES],
     ) -> Option<&'o [u8]> {
-        let out = self.last_out?;
+        let out = *self.last_output()?;
         let snap = Snapshot {
             out,
             battery: self.battery,
@@ -385,7 +386,7 @@ impl FlightApp {
             arming_blockers: self.arming_blockers(),
             sysid: self.link.sysid.front().copied(),
             altitude_m: self.baro_altitude_m(),
-            climb_mps: self.flight.climb_estimate(),
+            climb_mps: self.view.as_ref().and_then(|v| v.climb_mps),
         };
         let state = (out.armed, out.failsafe, out.mode);
         let message = if let Some(reply) = self.link.reply.take() {
@@ -395,6 +396,9 @@ impl FlightApp {
         } else if self.link.last_state != Some(state) {
             self.link.last_state = Some(state);
             Reporter::state(&snap)
+        } else if let Some(health) = self.take_health_report(self.link.last_report_us.unwrap_or(0))
+        {
+            Message::Health(health)
         } else if let Some(home) = self.take_home_report() {
             home
         } else if let Some(gps) = self.take_gps_report() {

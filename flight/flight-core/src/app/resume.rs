@@ -18,7 +18,9 @@
 //! in the air", and only if it is fresh — written at most [`FRESH_MS`] before the reset. The
 //! reset's time is the handler's stamp, or after a watchdog reset the last feed plus the
 //! IWDG's longest timeout (its slowest LSI): a bound, never an underestimate. The firmware
-//! clears the record's magic words at once, so a record resumes one boot at most.
+//! clears the record's magic words at once, so a record resumes one boot at most. The loop's
+//! side hands out the flight state (`LoopSide::resume_state_due`), the app the gains
+//! ([`FlightApp::keep_resume_gains`]).
 //!
 //! The resumed flight ([`FlightApp::resume`]) starts in failsafe with the recorded gains,
 //! mode, hover throttle and attitude: the motors run again as soon as the IMU delivers,
@@ -396,7 +398,9 @@ impl FlightApp {
         );
         app.live = resume.settings.clone();
         app.resumed = Some(resume.fault);
-        app.flight.resume(now_ms, &resume.state);
+        if let Some(side) = app.loop_side.as_mut() {
+            side.resume(now_ms, &resume.state);
+        }
         Some(app)
     }
 
@@ -406,28 +410,13 @@ impl FlightApp {
         self.resumed
     }
 
-    /// The flight state to keep for a resume, when due at `now_ms` (every
-    /// [`STATE_REFRESH_MS`], at once on a change of armed state, failsafe or mode).
-    pub fn resume_state_due(&mut self, now_ms: u32) -> Option<[u32; STATE_WORDS]> {
-        let state = self.flight.resume_state(now_ms);
-        let key: StateKey = (state.armed, state.in_air, state.failsafe, state.mode);
-        let due = self
-            .resume_kept
-            .is_none_or(|(t, k)| k != key || now_ms.wrapping_sub(t) >= STATE_REFRESH_MS);
-        if !due {
-            return None;
-        }
-        self.resume_kept = Some((now_ms, key));
-        Some(state.encode())
-    }
-
     /// Writes the gains block into `out` if the loop's gains changed since it was last
     /// written (at boot, after a new design is installed); whether it did.
     pub fn keep_resume_gains(&mut self, out: &mut [u32; GAINS_WORDS]) -> bool {
         if !self.gains_changed {
             return false;
         }
-        let Some(designs) = self.flight.controllers().map(|c| *c.designs()) else {
+        let Some(designs) = self.designs else {
             return false;
         };
         self.gains_changed = false;

@@ -235,13 +235,13 @@ fn the_app_keeps_its_state_and_gains_for_the_firmware() {
     assert!(!app.keep_resume_gains(&mut gains), "once per change");
     let (settings, _) = decode_gains(&gains).unwrap();
     assert_eq!(settings, Settings::default());
-    app.on_imu_sample(0, &level(0));
-    let words = app.resume_state_due(0).expect("the first state");
+    let mut side = app.take_loop_side().unwrap();
+    let words = side.resume_state_due(0).expect("the first state");
     let state = FlightState::decode(&words).unwrap();
     assert!(!state.armed);
     assert!(
-        app.resume_state_due(5).is_none(),
+        side.resume_state_due(5).is_none(),
         "not before the refresh period"
     );
-    assert!(app.resume_state_due(10).is_some());
+    assert!(side.resume_state_due(10).is_some());
 }

@@ -1,4 +1,5 @@
 use super::*;
+use crate::pipeline::ImuSample;
 use crate::supervisor::Sticks;
 use telemetry::channels::ChannelFormat;
 use telemetry::channels::FailsafeValues;
@@ -556,8 +557,16 @@ mod gps {
         let mut a = FlightApp::new(settings, 0).unwrap();
         fly(&mut a, 0, 3_000, sticks(0.0, 0.0));
         assert_eq!(a.take_home_report(), None, "no fix, no home");
-        a.on_gps_bytes(10, &bytes(&pvt(1_000)));
-        let home = a.flight.estimator().home().expect("the first fix is home");
+        a.on_gps_bytes(3_000, &bytes(&pvt(1_000)));
+        // The loop fuses it with its next step.
+        fly(&mut a, 3_000, 1, sticks(0.0, 0.0));
+        let home = a
+            .view
+            .as_ref()
+            .unwrap()
+            .estimator
+            .home
+            .expect("the first fix is home");
         // The link's report queue sends it (after the state change out of turn).
         let mut reader = telemetry::messages::MessageReader::new();
         let mut sent = Vec::new();
@@ -589,10 +598,14 @@ mod gps {
             }
         );
         assert_eq!((home.lat_e7, home.lon_e7), (h.latitude_e7, h.longitude_e7));
-        // Not repeated before the period; repeated after it.
-        a.on_gps_bytes(1_010, &bytes(&pvt(2_000)));
+        // Not repeated before the period; repeated after it (each fix fused by the loop's
+        // next step).
+        a.on_gps_bytes(4_000, &bytes(&pvt(2_000)));
+        fly(&mut a, 4_000, 1, sticks(0.0, 0.0));
         assert_eq!(a.take_home_report(), None);
-        a.on_gps_bytes(10 + HOME_REPORT_PERIOD_MS, &bytes(&pvt(6_000)));
+        let t = 3_000 + HOME_REPORT_PERIOD_MS;
+        a.on_gps_bytes(t, &bytes(&pvt(6_000)));
+        fly(&mut a, t, 1, sticks(0.0, 0.0));
         assert_eq!(
             a.take_home_report(),
             Some(telemetry::messages::Message::Home(h))
@@ -602,7 +615,7 @@ mod gps {
             lat_e7: home.lat_e7 + 100,
             ..home
         };
-        a.gps.on_home(20 + HOME_REPORT_PERIOD_MS, Some(moved));
+        a.gps.on_home(t + 10, Some(moved));
         let Some(telemetry::messages::Message::Home(m)) = a.take_home_report() else {
             panic!("a moved home is reported at once");
         };

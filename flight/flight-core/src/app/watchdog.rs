@@ -111,13 +111,11 @@ pub enum Task {
     /// The link (radio) task: checks in on every follower hook call and while it waits
     /// (bind window, retry after a radio error).
     Link,
-    /// The motor output task.
-    Motors,
     /// The battery task.
     Battery,
     /// The alert (tone) task.
     Alerts,
-    /// The IMU / flight-loop task.
+    /// The IMU / flight-loop task (it drives the motor outputs too).
     Imu,
     /// The baro task.
     Baro,
@@ -127,10 +125,9 @@ pub enum Task {
 
 impl Task {
     /// Every supervised task.
-    pub const ALL: [Task; 8] = [
+    pub const ALL: [Task; 7] = [
         Task::Heartbeat,
         Task::Link,
-        Task::Motors,
         Task::Battery,
         Task::Alerts,
         Task::Imu,

@@ -54,9 +54,9 @@ struct Cadence {
 }
 
 /// flight-fw's tasks at their slowest: heartbeat and battery 50 ms tickers, alerts 10 ms,
-/// baro 20 ms, the motor task's 100 ms timeout without commands, the IMU's 5 ms poll without
-/// edges, the link's 50 ms idle check-in, the gains task's `Timer::after(100 ms)`.
-const FIRMWARE: [Cadence; 8] = [
+/// baro 20 ms, the IMU's (and motors') 5 ms poll without edges (its report task checks it
+/// in), the link's 50 ms idle check-in, the gains task's `Timer::after(100 ms)`.
+const FIRMWARE: [Cadence; 7] = [
     Cadence {
         task: Task::Heartbeat,
         period_ms: 50,
@@ -65,11 +65,6 @@ const FIRMWARE: [Cadence; 8] = [
     Cadence {
         task: Task::Link,
         period_ms: 50,
-        ticker: false,
-    },
-    Cadence {
-        task: Task::Motors,
-        period_ms: 100,
         ticker: false,
     },
     Cadence {
@@ -159,8 +154,8 @@ fn simulate(
 ) -> Run {
     let mut jitter = Jitter(7);
     // Next due time (the schedule) and next actual run per task; the same for the poll.
-    let mut due: [u32; 8] = [0; 8];
-    let mut runs: [u32; 8] = [0; 8];
+    let mut due: [u32; 7] = [0; 7];
+    let mut runs: [u32; 7] = [0; 7];
     for (i, c) in FIRMWARE.iter().enumerate() {
         due[i] = c.period_ms;
         runs[i] = c.period_ms + jitter.below(latency_ms + 1);

@@ -178,6 +178,8 @@ pub struct FlightLoop {
     /// The vertical estimate's sensor (the baro) was declared failed: the hold modes fall
     /// back to attitude mode.
     vertical_lost: bool,
+    /// A USB host has the console (arming refused).
+    usb_connected: bool,
 }
 
 impl FlightLoop {
@@ -209,7 +211,13 @@ impl FlightLoop {
             failsafe_holds_altitude: false,
             settings_problem: false,
             vertical_lost: false,
+            usb_connected: false,
         }
+    }
+
+    /// Whether a USB host has the console (arming is refused while it does).
+    pub fn set_usb_connected(&mut self, connected: bool) {
+        self.usb_connected = connected;
     }
 
     /// The controllers flying (`None` until the gains are solved).
@@ -534,6 +542,7 @@ impl FlightLoop {
             landing_detectable: self.climb_mps.is_some(),
             battery_critical: self.battery_critical,
             settings_problem: self.settings_problem,
+            usb_connected: self.usb_connected,
         })
     }
 

@@ -94,6 +94,11 @@ pub struct Inputs {
     /// The settings loaded at boot had a problem (corrupt, invalid, refused values): the
     /// frame flies nothing until the pilot saves a set.
     pub settings_problem: bool,
+    /// A USB host has the console (the board enumerated): arming is refused. The frame is on
+    /// the bench, tethered by a cable; settings may change under the pilot's hands; and a
+    /// board powered from the port browns out when motors start. Disconnecting or connecting
+    /// while armed changes nothing (a cable caught in flight must not disarm).
+    pub usb_connected: bool,
 }
 
 /// The supervisor's state.
@@ -127,6 +132,8 @@ pub enum ArmBlocker {
     BatteryCritical,
     /// The stored settings had a problem at boot; fixed by a successful save.
     SettingsProblem,
+    /// A USB host has the console (unplug to fly).
+    UsbConnected,
 }
 
 /// What happened this loop (for alerts and telemetry), besides the state itself.
@@ -221,6 +228,8 @@ impl Supervisor {
             Some(ArmBlocker::BatteryCritical)
         } else if inputs.settings_problem {
             Some(ArmBlocker::SettingsProblem)
+        } else if inputs.usb_connected {
+            Some(ArmBlocker::UsbConnected)
         } else {
             None
         }
@@ -338,6 +347,7 @@ mod tests {
             landing_detectable: true,
             battery_critical: false,
             settings_problem: false,
+            usb_connected: false,
         }
     }
 
@@ -521,6 +531,27 @@ mod tests {
             low.now_ms = s.gesture_hold_ms;
             assert_eq!(sup.update(&low), expected);
         }
+    }
+
+    #[test]
+    fn a_usb_host_refuses_arming_but_never_disarms() {
+        let s = Settings::default();
+        let mut sup = Supervisor::new(s);
+        let mut usb = inputs(0, true, 0.0, 1.0);
+        usb.usb_connected = true;
+        sup.update(&usb);
+        usb.now_ms = s.gesture_hold_ms;
+        assert_eq!(
+            sup.update(&usb),
+            Decision::ArmRefused(ArmBlocker::UsbConnected)
+        );
+        // Unplugged: arms; plugged in while armed (flying): nothing happens.
+        let mut sup = armed(&s);
+        let mut flying = inputs(5_000, true, 0.5, 0.0);
+        flying.landed = false;
+        flying.usb_connected = true;
+        assert_eq!(sup.update(&flying), Decision::Steady);
+        assert!(sup.motors_enabled());
     }
 
     #[test]

@@ -8,7 +8,6 @@ use embassy_stm32::flash::{Bank1Region1, Blocking, Flash};
 use embassy_stm32::gpio::{Flex, Level, Output, OutputType, Pull, Speed};
 use embassy_stm32::i2c::{self, I2c};
 use embassy_stm32::peripherals::{TIM3, TIM9};
-use embassy_stm32::rng::{self, Rng};
 use embassy_stm32::timer::Channel;
 use embassy_stm32::timer::low_level::Timer;
 use embassy_stm32::timer::simple_pwm::PwmPin;
@@ -42,13 +41,16 @@ pub const BOARD: &str = "Sparky2";
 // BrushedSparky, the radio's nIRQ (EXTI7).
 bind_interrupts!(pub struct Irqs {
     #[cfg(feature = "sparky2")]
-    USART1 => usart::BufferedInterruptHandler<peripherals::USART1>;
+    USART1 => usart::InterruptHandler<peripherals::USART1>;
+    #[cfg(feature = "sparky2")]
+    DMA2_STREAM2 => dma::InterruptHandler<peripherals::DMA2_CH2>;
+    #[cfg(feature = "sparky2")]
+    DMA2_STREAM7 => dma::InterruptHandler<peripherals::DMA2_CH7>;
     #[cfg(feature = "sparky2")]
     EXTI2 => exti::InterruptHandler<interrupt::typelevel::EXTI2>;
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
-    RNG => rng::InterruptHandler<peripherals::RNG>;
     DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
     DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
     DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
@@ -211,24 +213,30 @@ pub struct Board {
     /// The GPS receiver (Sparky2 only: the BrushedSparky's PA9/PA10 select the VTX band).
     #[cfg(feature = "sparky2")]
     pub gps: Option<Gps>,
-    /// The true RNG (clocked from the 48 MHz PLL Q the USB uses): seeds the session of the
-    /// phone's authenticated setting changes at boot.
-    pub rng: Rng<'static, peripherals::RNG>,
+    /// The true RNG (clocked from the 48 MHz PLL Q the USB uses): the boot's seeds
+    /// (`seeds`).
+    pub rng: Peri<'static, peripherals::RNG>,
+    /// Orange ALARM/ERR LED on PB4, active low.
+    pub alarm_led: Output<'static>,
+    /// Blue LINK/RF LED on PB6, active low.
+    pub link_led: Output<'static>,
 }
 
 /// The u-blox receiver on the Sparky2's Main port: USART1, TX PA9, RX PA10
-/// (`hardware/brushedsparky/README.md`), interrupt-driven with a 256-byte receive buffer (2.5
-/// NAV-PVTs; the task drains it every few ms) and 64 bytes for the configuration frames.
+/// (`hardware/brushedsparky/README.md`). Receive by DMA into a 512-byte ring (DMA2 stream 2,
+/// channel 4: 5 NAV-PVTs, 44 ms of bytes at 115 200 Bd; no interrupt per byte, so neither the
+/// flight loop's priority nor a busy executor can make it overrun), transmit by DMA (DMA2
+/// stream 7, channel 4).
 #[cfg(feature = "sparky2")]
 pub struct Gps {
-    /// USART1, 8N1, at the first of `GPS_BOOT_BAUDS` until the task reconfigures it.
-    pub uart: usart::BufferedUart<'static>,
+    /// USART1 TX, 8N1, at the first of `GPS_BOOT_BAUDS` until the task reconfigures it.
+    pub tx: usart::UartTx<'static, Async>,
+    /// USART1 RX into the ring (the baud rate is the port's, set through either half).
+    pub rx: usart::RingBufferedUartRx<'static>,
 }
 
 #[cfg(feature = "sparky2")]
-static GPS_RX: StaticCell<[u8; 256]> = StaticCell::new();
-#[cfg(feature = "sparky2")]
-static GPS_TX: StaticCell<[u8; 64]> = StaticCell::new();
+static GPS_RING: StaticCell<[u8; 512]> = StaticCell::new();
 
 /// Keeps the M25P16's chip select driven for the life of the firmware (a dropped `Output`
 /// would float the pin again).
@@ -332,16 +340,16 @@ impl Board {
         let gps = {
             let mut config = usart::Config::default();
             config.baudrate = flight_core::app::GPS_BOOT_BAUDS[0];
-            match usart::BufferedUart::new(
-                p.USART1,
-                p.PA10,
-                p.PA9,
-                GPS_TX.init([0; 64]),
-                GPS_RX.init([0; 256]),
-                Irqs,
-                config,
+            match usart::Uart::new(
+                p.USART1, p.PA10, p.PA9, p.DMA2_CH7, p.DMA2_CH2, Irqs, config,
             ) {
-                Ok(uart) => Some(Gps { uart }),
+                Ok(uart) => {
+                    let (tx, rx) = uart.split();
+                    Some(Gps {
+                        tx,
+                        rx: rx.into_ring_buffered(GPS_RING.init([0; 512])),
+                    })
+                }
                 // 9600 Bd from an 84 MHz APB2 is always reachable; should the driver still
                 // refuse, the board flies without GPS.
                 Err(_) => None,
@@ -358,8 +366,10 @@ impl Board {
             speaker,
             usb,
             settings_flash,
-            rng: Rng::new(p.RNG, Irqs),
+            rng: p.RNG,
             heartbeat_led: Output::new(p.PB5, Level::High, Speed::Low),
+            alarm_led: Output::new(p.PB4, Level::High, Speed::Low),
+            link_led: Output::new(p.PB6, Level::High, Speed::Low),
             watchdog: p.IWDG,
             radio: Radio {
                 spi,

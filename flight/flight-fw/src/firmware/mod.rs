@@ -1,4 +1,5 @@
-//! Table of contents: clocks (HSE probe, flash accelerator), board, settings → flight setup and solved gains, then one task
+//! Table of contents: the reset's cause and record (`fault`), clocks (HSE probe, flash
+//! accelerator), board, settings → flight setup and solved gains, then one task
 //! per concern: imu (the flight loop, driven by the MPU9250's data-ready), motors, link (the
 //! TauLink follower on the RFM22B), baro, gains (re-solve after setting changes), battery,
 //! alerts, console, storage, heartbeat and the watchdog supervisor. Every decision is in
@@ -12,15 +13,18 @@ mod i2c_bus;
 mod imu_bus;
 mod link_radio;
 mod outputs;
+mod seeds;
 mod shared;
 mod tasks;
 mod usb_cdc;
 
 use defmt::{error, info, warn};
 use defmt_rtt as _;
-use embassy_executor::{SpawnError, SpawnToken, Spawner};
-use flight_core::app::FlightApp;
+use embassy_executor::{InterruptExecutor, SendSpawner, SpawnError, SpawnToken, Spawner};
+use embassy_stm32::interrupt;
+use embassy_stm32::interrupt::{InterruptExt, Priority};
 use flight_core::app::resume::{self, Kept};
+use flight_core::app::{BootFacts, FlightApp};
 use mpu9250::SampleRate;
 
 #[embassy_executor::main]
@@ -71,15 +75,24 @@ async fn main(spawner: Spawner) {
         // Console, telemetry and arming all see it until the pilot saves a set.
         app.on_settings_problem(problem);
     }
-    // A fresh session for the phone's signed setting changes every boot (spec §12.5).
-    let mut rng = board.rng;
-    app.seed_change_session(rng.next_u32());
-    // And a fresh seed for the link's epoch nonces (spec §12.2).
-    app.seed_link_nonces(u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32()));
+    // A fresh session for the phone's signed setting changes every boot (spec §12.5), and a
+    // fresh seed for the link's epoch nonces (spec §12.2).
+    let ([session, high, low], rng_fallback) = seeds::seeds::<3>(board.rng);
+    app.seed_change_session(session);
+    app.seed_link_nonces(u64::from(high) << 32 | u64::from(low));
+    if rng_fallback {
+        error!("RNG gave nothing: seeds from the unique ID and timing");
+    }
+    app.on_boot_facts(BootFacts {
+        clock_fallback: source == clocks::Clocks::HsiFallback,
+        rng_fallback,
+    });
     if let Some(e) = app.setup_error() {
         error!("stored settings not flyable ({}): factory setup", e);
     }
     let setup = *app.setup();
+    // The loop's side goes to its own executor; the rest of the app to the tasks.
+    let side = app.take_loop_side();
     shared::install(app);
     if let Some(map) = map {
         spawn(&spawner, "storage", tasks::storage::storage_task(map));
@@ -90,23 +103,42 @@ async fn main(spawner: Spawner) {
         "supervisor",
         tasks::supervisor::supervisor_task(board.watchdog),
     );
-    match board.motors.start(setup.protocol) {
-        Ok(motors) => spawn(&spawner, "motors", tasks::motors::motors_task(motors)),
-        // Without the motor task the watchdog is never fed: reset, and the pins stay low.
-        Err(e) => error!("motor outputs cannot run {}: {}", setup.protocol, e),
-    }
+    let motors = match board.motors.start(setup.protocol) {
+        Ok(motors) => Some(motors),
+        // The pins stay low; the loop flies on without them.
+        Err(e) => {
+            error!("motor outputs cannot run {}: {}", setup.protocol, e);
+            None
+        }
+    };
     spawn(
         &spawner,
-        "imu",
-        tasks::imu::imu_task(board.imu, sample_rate(setup.loop_rate_hz), resuming),
+        "loop report",
+        tasks::loop_report::loop_report_task(),
     );
+    match side {
+        Some(side) => {
+            let token = tasks::imu::imu_task(
+                board.imu,
+                sample_rate(setup.loop_rate_hz),
+                resuming,
+                side,
+                motors,
+            );
+            match token {
+                Ok(token) => loop_executor().spawn(token),
+                Err(e) => error!("cannot start the flight loop: {}", e),
+            }
+        }
+        None => error!("the flight loop's side is gone"),
+    }
     spawn(&spawner, "link", tasks::link::link_task(board.radio));
     spawn(&spawner, "baro", tasks::baro::baro_task(board.baro));
     spawn(&spawner, "gains", tasks::gains::gains_task());
     spawn(
         &spawner,
         "heartbeat",
-        tasks::heartbeat::heartbeat_task(board.heartbeat_led),
+        tasks::heartbeat::heartbeat_task(board.heartbeat_led, board.alarm_led, board.link_led),
     );
     spawn(
         &spawner,
@@ -124,6 +156,23 @@ async fn main(spawner: Spawner) {
         Some(gps) => spawn(&spawner, "gps", tasks::gps::gps_task(gps)),
         None => error!("GPS port unavailable"),
     }
+}
+
+/// The flight loop's executor: UART5's interrupt (unused on both boards), above every
+/// thread-mode task and below the HAL's interrupt handlers (priority 0), which only wake
+/// tasks.
+static LOOP_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+
+#[interrupt]
+unsafe fn UART5() {
+    // SAFETY: the executor's own interrupt, started before it can fire (`loop_executor`).
+    unsafe { LOOP_EXECUTOR.on_interrupt() }
+}
+
+/// Starts the flight loop's executor.
+fn loop_executor() -> SendSpawner {
+    interrupt::UART5.set_priority(Priority::P6);
+    LOOP_EXECUTOR.start(interrupt::UART5)
 }
 
 /// The MPU9250's sample rate for the loop rate.

@@ -59,11 +59,14 @@ pub enum Kind {
     /// Hovering, the flight firmware panics: the handler stops the motors and resets, the
     /// flight resumes from the record kept across the reset (`flight_core::app::resume`).
     Panic,
+    /// Hovering, a thread-mode task hangs (the loop flies on in its interrupt executor):
+    /// the watchdog is no longer fed, the IWDG resets the board, the flight resumes.
+    Hang,
 }
 
 impl Kind {
     /// Every scenario, in the order of the README.
-    pub const ALL: [Kind; 15] = [
+    pub const ALL: [Kind; 16] = [
         Kind::Hover,
         Kind::LinkCut,
         Kind::PowerCycle,
@@ -79,6 +82,7 @@ impl Kind {
         Kind::Loiter,
         Kind::AttitudeStep,
         Kind::Panic,
+        Kind::Hang,
     ];
 
     /// The command-line name.
@@ -99,6 +103,7 @@ impl Kind {
             Kind::Loiter => "loiter",
             Kind::AttitudeStep => "attitude-step",
             Kind::Panic => "panic",
+            Kind::Hang => "hang",
         }
     }
 
@@ -405,6 +410,7 @@ impl Piloting for PlanPilot {
                 Kind::RadioBrownout => input.flight_radio = RadioInjection::BrownOut,
                 Kind::AttitudeStep => input.roll = STEP_ROLL_STICK,
                 Kind::Panic => input.flight_panic = true,
+                Kind::Hang => input.flight_hang = true,
                 Kind::Hover
                 | Kind::SettingsCorrupt
                 | Kind::LowBattery
@@ -540,7 +546,8 @@ pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunEr
         | Kind::ImuFrozen
         | Kind::RadioStuckIrq
         | Kind::RadioBrownout
-        | Kind::Panic => {
+        | Kind::Panic
+        | Kind::Hang => {
             let at = opts.at_s.unwrap_or(t_reach + SETTLE_S);
             (Some(at), Some(t_reach), at + 8.0)
         }

@@ -76,7 +76,7 @@ pub struct Report {
     pub hold: super::hold::Figures,
     /// `attitude-step`: the stick's way and the attitude loop's response.
     pub step: Option<StepFigures>,
-    /// A reset in the air (`panic`): the figures of the resumed flight.
+    /// A reset in the air (`panic`, `hang`): the figures of the resumed flight.
     pub resume: Option<ResumeFigures>,
 }
 
@@ -100,7 +100,7 @@ pub struct StepFigures {
     pub overshoot_pct: Option<f64>,
 }
 
-/// A resumed flight's figures (the `panic` scenario).
+/// A resumed flight's figures (the `panic` and `hang` scenarios).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ResumeFigures {
     /// The flight board came back as a resumed flight (not a cold boot).
@@ -112,7 +112,8 @@ pub struct ResumeFigures {
     pub motors_off_for_s: Option<f64>,
     /// From the motors back to the link's word (armed again in the recorded mode), s.
     pub link_word_after_s: Option<f64>,
-    /// The most the frame sank below its height at the fault within 5 s, m.
+    /// How far the frame sank from its height at the fault until the link's word gave it
+    /// back to the pilot, m (after that the pilot flies it).
     pub drop_m: Option<f64>,
 }
 
@@ -127,11 +128,12 @@ fn resume_figures(sitl: &Sitl, at_s: f64) -> ResumeFigures {
             .find(|x| x.t_s >= b && x.out.decision == Decision::Resumed)
             .map(|x| x.t_s)
     });
-    let lowest = s
-        .iter()
-        .filter(|x| x.t_s < at_s + 5.0)
-        .map(|x| x.altitude_m)
-        .fold(f64::INFINITY, f64::min);
+    let lowest = word.map(|w| {
+        s.iter()
+            .filter(|x| x.t_s <= w)
+            .map(|x| x.altitude_m)
+            .fold(f64::INFINITY, f64::min)
+    });
     ResumeFigures {
         resumed: sitl
             .boots
@@ -140,7 +142,7 @@ fn resume_figures(sitl: &Sitl, at_s: f64) -> ResumeFigures {
         motors_off_after_s: off.map(|o| o - at_s),
         motors_off_for_s: off.zip(back).map(|(o, b)| b - o),
         link_word_after_s: word.zip(back).map(|(w, b)| w - b),
-        drop_m: height.map(|h| (h - lowest).max(0.0)),
+        drop_m: height.zip(lowest).map(|(h, l)| (h - l).max(0.0)),
     }
 }
 
@@ -294,7 +296,7 @@ pub fn extract(sitl: &Sitl, plan: &Plan) -> Report {
         _ => None,
     };
     let resume = match (plan.kind, plan.fault_at_s) {
-        (Kind::Panic, Some(at)) => Some(resume_figures(sitl, at)),
+        (Kind::Panic | Kind::Hang, Some(at)) => Some(resume_figures(sitl, at)),
         _ => None,
     };
     Report {
@@ -383,7 +385,7 @@ impl Report {
                     e.push(("altitude_error_max_m", num(h.altitude_error_max_m, 2)));
                 }
             }
-            Kind::Panic => {
+            Kind::Panic | Kind::Hang => {
                 let r = self.resume.unwrap_or_default();
                 fault(&mut e);
                 e.push(("flight_boots", self.flight_boots.to_string()));

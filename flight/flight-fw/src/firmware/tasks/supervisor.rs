@@ -11,15 +11,17 @@
 //! period the app's save job asks for (`flight_core::app::SAVE_WATCHDOG_MS`) at the fastest
 //! LSI and restores it afterwards, telling the app's watchdog model both times.
 
+use core::sync::atomic::Ordering;
+
 use embassy_stm32::Peri;
 use embassy_stm32::pac;
 use embassy_stm32::pac::iwdg::vals::{Key, Pr};
 use embassy_stm32::peripherals::IWDG;
 use embassy_time::{Duration, Ticker};
-use flight_core::app::{FEED_PERIOD_MS, IWDG as SETTING, IwdgSetting};
+use flight_core::app::{FEED_PERIOD_MS, IWDG as SETTING, IwdgSetting, Task};
 
 use crate::firmware::fault::keep_feed;
-use crate::firmware::shared::{now_ms, with_app};
+use crate::firmware::shared::{LOOP_ALIVE, now_ms, with_app};
 
 /// How long a new prescaler and reload take to reach the LSI domain at most: 5 LSI periods
 /// at 17 kHz (RM0090 IWDG_SR: PVU/RVU stay set while an update is in progress), µs.
@@ -69,7 +71,14 @@ pub async fn supervisor_task(_iwdg: Peri<'static, IWDG>) {
     loop {
         ticker.next().await;
         let now = now_ms();
-        if with_app(|a| a.on_watchdog_poll(now)) == Some(true) {
+        let loop_alive = LOOP_ALIVE.swap(false, Ordering::Relaxed);
+        let fed = with_app(|a| {
+            if loop_alive {
+                a.check_in(Task::Imu);
+            }
+            a.on_watchdog_poll(now)
+        });
+        if fed == Some(true) {
             feed();
             // A resume after a watchdog reset bounds the reset's time with it.
             keep_feed(now);
