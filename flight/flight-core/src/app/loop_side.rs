@@ -31,7 +31,7 @@ use crate::pipeline::{
 };
 use crate::supervisor::Decision;
 use crate::sysid::ekf::Identification;
-use heapless::Vec;
+use heapless::Deque;
 use ubx::NavPvt;
 
 /// What the rest of the app hands the loop for one step (the default: nothing known, the
@@ -90,7 +90,7 @@ pub struct LoopHealth {
 
 /// Outputs whose decision or mode change the app must hear of (alerts, arming refusals),
 /// oldest first: one per step at most, a few while the app's side lags behind.
-pub type LoopNews = Vec<LoopOutput, 4>;
+pub type LoopNews = Deque<LoopOutput, 4>;
 
 /// What the loop hands back after a step.
 #[derive(Debug, Clone, PartialEq)]
@@ -156,13 +156,9 @@ impl LoopReport {
         let mut news = core::mem::take(&mut self.news);
         for out in later.news {
             if news.is_full() {
-                // Keep the order: drop the oldest.
-                news.retain({
-                    let mut first = true;
-                    move |_| !core::mem::take(&mut first)
-                });
+                news.pop_front();
             }
-            let _ = news.push(out);
+            let _ = news.push_back(out);
         }
         let disarmed = self.disarmed_for_sensor;
         let identification = later.identification.or(self.identification);
@@ -341,7 +337,7 @@ impl LoopSide {
             .last_out
             .filter(|o| fresh && (o.decision != Decision::Steady || o.mode_changed))
         {
-            let _ = news.push(out);
+            let _ = news.push_back(out);
         }
         LoopReport {
             out: self.last_out,
@@ -630,7 +626,7 @@ mod tests {
         let mut refused = first;
         refused.decision = Decision::ArmRefused(crate::supervisor::ArmBlocker::LinkDown);
         let mut news = LoopNews::new();
-        news.push(refused).unwrap();
+        news.push_back(refused).unwrap();
         pending.merge(LoopReport {
             news,
             ..pending.clone()

@@ -23,8 +23,9 @@ use defmt_rtt as _;
 use embassy_executor::{InterruptExecutor, SendSpawner, SpawnError, SpawnToken, Spawner};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
-use flight_core::app::resume::{self, Kept};
+use flight_core::app::resume::{self, Kept, ResetCause};
 use flight_core::app::{BootFacts, FlightApp};
+use flight_core::settings::Settings;
 use mpu9250::SampleRate;
 
 #[embassy_executor::main]
@@ -50,24 +51,11 @@ async fn main(spawner: Spawner) {
     // A reset in the air with a fresh record resumes the flight with the record's gains;
     // otherwise the application: settings → setup (factory setup if the stored one does not
     // fly) and the solved gains, before anything can arm.
-    let kept_blocks = Kept {
-        state: &kept.state,
-        gains: &kept.gains,
-        fault: &kept.fault,
-        feed: &kept.feed,
-    };
-    let resumed = match resume::plan(cause, &kept_blocks) {
-        Ok(r) => FlightApp::resume(settings.clone(), &r, shared::now_ms()),
-        Err(why) => {
-            info!("boot after {}: {}", cause, why);
-            None
-        }
-    };
-    let resuming = resumed.is_some();
-    let Some(mut app) = resumed.or_else(|| FlightApp::new(settings, shared::now_ms())) else {
+    let Some(app) = shared::create(|| boot_app(cause, &kept, settings)) else {
         error!("no flyable setup, not even the factory one");
         return;
     };
+    let resuming = app.resumed().is_some();
     if resuming {
         warn!("reset in the air ({}): flight resumed", cause);
     }
@@ -92,7 +80,7 @@ async fn main(spawner: Spawner) {
     }
     let setup = *app.setup();
     // The loop's side goes to its own executor; the rest of the app to the tasks.
-    let side = app.take_loop_side();
+    let side = shared::loop_side(app);
     shared::install(app);
     if let Some(map) = map {
         spawn(&spawner, "storage", tasks::storage::storage_task(map));
@@ -156,6 +144,30 @@ async fn main(spawner: Spawner) {
         Some(gps) => spawn(&spawner, "gps", tasks::gps::gps_task(gps)),
         None => error!("GPS port unavailable"),
     }
+}
+
+/// The application for this boot: the flight the no-init record describes resumed when it
+/// says so (`flight_core::app::resume::plan`), else the stored settings' (the factory's if
+/// they do not fly) with freshly solved gains. Returned, not moved, so its caller can write it
+/// in place.
+#[inline(never)]
+fn boot_app(cause: ResetCause, kept: &fault::Record, settings: Settings) -> Option<FlightApp> {
+    let kept = Kept {
+        state: &kept.state,
+        gains: &kept.gains,
+        fault: &kept.fault,
+        feed: &kept.feed,
+    };
+    match resume::plan(cause, &kept) {
+        Ok(r) => {
+            let resumed = FlightApp::resume(settings.clone(), &r, shared::now_ms());
+            if resumed.is_some() {
+                return resumed;
+            }
+        }
+        Err(why) => info!("boot after {}: {}", cause, why),
+    }
+    FlightApp::new(settings, shared::now_ms())
 }
 
 /// The flight loop's executor: UART5's interrupt (unused on both boards), above every

@@ -23,13 +23,15 @@ use embassy_sync::blocking_mutex::raw::{CriticalSectionRawMutex, ThreadModeRawMu
 use embassy_sync::signal::Signal;
 use embassy_time::Instant;
 use flight_core::app::link_task::AppAccess;
-use flight_core::app::{FlightApp, LoopInputs, LoopReport};
+use flight_core::app::{FlightApp, LoopInputs, LoopReport, LoopSide};
 use flight_core::pipeline::{Controllers, FlightSetup};
 use heapless::Vec;
 use static_cell::StaticCell;
 
 /// The application's storage: uninitialised RAM (.bss), not an initialiser in flash.
-static APP_STORAGE: StaticCell<FlightApp> = StaticCell::new();
+static APP_STORAGE: StaticCell<Option<FlightApp>> = StaticCell::new();
+/// The flight loop's side, once the IMU task's.
+static LOOP_SIDE_STORAGE: StaticCell<Option<LoopSide>> = StaticCell::new();
 static APP: Mutex<ThreadModeRawMutex, RefCell<Option<&'static mut FlightApp>>> =
     Mutex::new(RefCell::new(None));
 
@@ -47,29 +49,45 @@ pub static REPORTED: Signal<CriticalSectionRawMutex, ()> = Signal::new();
 /// A designed setup for the loop to install while disarmed.
 pub static SETUP: Slot<(FlightSetup, Controllers)> = Mutex::new(RefCell::new(Vec::new()));
 
+/// Runs `f` on what `slot` holds (the critical section makes the borrow the only one;
+/// `try_borrow_mut` keeps the impossible double borrow from being a panic path).
+pub fn with_slot<T, R>(slot: &Slot<T>, f: impl FnOnce(&mut Vec<T, 1>) -> R) -> Option<R> {
+    slot.lock(|s| s.try_borrow_mut().ok().map(|mut v| f(&mut v)))
+}
+
 /// Takes the value out of `slot`.
 pub fn take<T>(slot: &Slot<T>) -> Option<T> {
-    slot.lock(|s| s.borrow_mut().pop())
+    with_slot(slot, Vec::pop).flatten()
 }
 
 /// Puts `value` in `slot`, replacing what it held.
 pub fn put<T>(slot: &Slot<T>, value: T) {
-    slot.lock(|s| {
-        let mut s = s.borrow_mut();
-        s.clear();
-        let _ = s.push(value);
+    with_slot(slot, |v| {
+        v.clear();
+        let _ = v.push(value);
     });
 }
 /// The loop is alive while it cannot report (re-probing its sensor); the supervisor checks it
 /// in for it.
 pub static LOOP_ALIVE: AtomicBool = AtomicBool::new(false);
 
+/// Builds the application in its static storage (once): `make` runs with its result
+/// written in place, not moved through the stack (the app is ≈ 16 KiB; the boot's frame held
+/// several copies when it was returned and moved).
+pub fn create(make: impl FnOnce() -> Option<FlightApp>) -> Option<&'static mut FlightApp> {
+    APP_STORAGE.try_init_with(make)?.as_mut()
+}
+
+/// Moves the loop's side to its static storage, for the IMU task.
+pub fn loop_side(app: &mut FlightApp) -> Option<&'static mut LoopSide> {
+    LOOP_SIDE_STORAGE
+        .try_init_with(|| app.take_loop_side())?
+        .as_mut()
+}
+
 /// Installs the application (once, before the tasks start; a second call is refused) and
 /// fills the loop's mailbox from it.
-pub fn install(app: FlightApp) {
-    let Some(app) = APP_STORAGE.try_init(app) else {
-        return;
-    };
+pub fn install(app: &'static mut FlightApp) {
     put(&LOOP_INPUTS, app.loop_inputs());
     APP.lock(|cell| {
         if let Ok(mut slot) = cell.try_borrow_mut() {
@@ -81,23 +99,29 @@ pub fn install(app: FlightApp) {
 /// Runs `f` on the application (thread mode only); `None` before it is installed. The
 /// loop's mailbox follows whatever `f` changed.
 pub fn with_app<R>(f: impl FnOnce(&mut FlightApp) -> R) -> Option<R> {
-    APP.lock(|cell| {
-        let mut slot = cell.try_borrow_mut().ok()?;
-        let app = slot.as_deref_mut()?;
-        let result = f(app);
-        publish(app);
-        Some(result)
-    })
+    let mut f = Some(f);
+    let mut result = None;
+    locked(&mut |app| result = f.take().map(|f| f(app)));
+    result
 }
 
-/// The loop's mailbox brought up to date with `app` (one copy of this code, not one per
-/// `with_app` caller).
+/// The lock, the call and the mailbox update, once in the image rather than once per
+/// `with_app` caller.
 #[inline(never)]
-fn publish(app: &mut FlightApp) {
-    LOOP_INPUTS.lock(|m| {
-        if let Some(mailbox) = m.borrow_mut().first_mut() {
-            app.loop_inputs_into(mailbox);
-        }
+fn locked(f: &mut dyn FnMut(&mut FlightApp)) {
+    APP.lock(|cell| {
+        let Ok(mut slot) = cell.try_borrow_mut() else {
+            return;
+        };
+        let Some(app) = slot.as_deref_mut() else {
+            return;
+        };
+        f(app);
+        with_slot(&LOOP_INPUTS, |m| {
+            if let Some(mailbox) = m.first_mut() {
+                app.loop_inputs_into(mailbox);
+            }
+        });
     });
 }
 

@@ -24,7 +24,7 @@ use super::motors::Motors;
 use crate::firmware::board::{Imu, imu_to_body};
 use crate::firmware::fault::with_record;
 use crate::firmware::imu_bus::{AliveDelay, IMU_SPI_FAST, ImuBus};
-use crate::firmware::shared::{LOOP_INPUTS, LOOP_REPORT, REPORTED, SETUP, now_ms, take};
+use crate::firmware::shared::{LOOP_INPUTS, LOOP_REPORT, REPORTED, SETUP, now_ms, take, with_slot};
 
 /// How long to wait for a data-ready edge before telling the loop it is missing.
 const POLL: Duration = Duration::from_millis(5);
@@ -37,7 +37,7 @@ pub async fn imu_task(
     imu: Imu,
     sample_rate: SampleRate,
     mut warm: bool,
-    mut side: LoopSide,
+    side: &'static mut LoopSide,
     mut motors: Option<Motors>,
 ) {
     let Imu { spi, cs, mut int } = imu;
@@ -78,7 +78,7 @@ pub async fn imu_task(
                 }
             };
             let now = now_ms();
-            let inputs = take_inputs(&mut side);
+            let inputs = take_inputs(side);
             let (step, report) = match reading {
                 Ok(s) => {
                     let sample = ImuSample {
@@ -110,8 +110,8 @@ pub async fn imu_task(
 /// This step's inputs from the mailbox, and a designed setup installed if one waits and the
 /// motors are stopped.
 fn take_inputs(side: &mut LoopSide) -> LoopInputs {
-    let inputs = LOOP_INPUTS.lock(|m| m.borrow_mut().first_mut().map(LoopInputs::take));
-    let inputs = inputs.unwrap_or_default();
+    let inputs = with_slot(&LOOP_INPUTS, |m| m.first_mut().map(LoopInputs::take));
+    let inputs = inputs.flatten().unwrap_or_default();
     if inputs.setup_pending
         && !side.armed()
         && let Some((setup, controllers)) = take(&SETUP)
@@ -123,13 +123,10 @@ fn take_inputs(side: &mut LoopSide) -> LoopInputs {
 
 /// The step's report to the report task (merged into one it has not taken yet).
 fn hand_over(report: LoopReport) {
-    LOOP_REPORT.lock(|r| {
-        let mut slot = r.borrow_mut();
-        match slot.first_mut() {
-            Some(pending) => pending.merge(report),
-            None => {
-                let _ = slot.push(report);
-            }
+    with_slot(&LOOP_REPORT, |slot| match slot.first_mut() {
+        Some(pending) => pending.merge(report),
+        None => {
+            let _ = slot.push(report);
         }
     });
     REPORTED.signal(());

@@ -7,7 +7,9 @@
 use flight_core::app::FlightApp;
 
 use crate::firmware::fault::with_record;
-use crate::firmware::shared::{LOOP_REPORT, REPORTED, SETUP, now_ms, put, take, with_app};
+use crate::firmware::shared::{
+    LOOP_REPORT, REPORTED, SETUP, now_ms, put, take, with_app, with_slot,
+};
 
 #[embassy_executor::task]
 pub async fn loop_report_task() {
@@ -28,7 +30,7 @@ pub async fn loop_report_task() {
 
 /// A designed setup into the loop's mailbox, if one waits and the mailbox is free.
 fn offer_setup(app: &mut FlightApp) {
-    if SETUP.lock(|s| !s.borrow().is_empty()) {
+    if with_slot(&SETUP, |s| !s.is_empty()).unwrap_or(true) {
         return;
     }
     if let Some(setup) = app.take_pending_setup() {
