@@ -482,6 +482,9 @@ impl FlightApp {
         if let Some(raw) = report.mag_raw {
             self.magcal.offer(now_ms, raw);
         }
+        // The calibration's stick gesture (held for seconds: a merged report's coarser
+        // cadence does not matter).
+        self.on_magcal_gesture(now_ms);
         if let Some(update) = report.gps_update {
             self.gps.on_fused(now_ms, update, report.estimator.home);
         }

@@ -131,6 +131,7 @@ pub struct FlightApp {
     gains_changed: bool,
     /// Boot facts, the USB host, the health last reported.
     board: health::BoardState,
+    magcal_gesture: magcal::MagcalGesture,
 }
 
 /// The flight setup for `settings`, or the factory one (and why) if they do not fly.
@@ -210,6 +211,7 @@ impl FlightApp {
             resumed: None,
             gains_changed: true,
             board: health::BoardState::default(),
+            magcal_gesture: magcal::MagcalGesture::default(),
         }
     }
 

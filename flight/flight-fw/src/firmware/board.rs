@@ -373,11 +373,29 @@ impl Board {
             watchdog: p.IWDG,
             radio: Radio {
                 spi,
-                nsel: Output::new(p.PA15, Level::High, Speed::VeryHigh),
+                nsel: Output::new(radio_nsel(p.PA15, p.PC13), Level::High, Speed::VeryHigh),
                 nirq: radio_irq(p.PB7, p.EXTI7, p.PD2, p.EXTI2),
             },
         }
     }
+}
+
+/// nSEL on PA15 (both boards), or PC13 in the PIL's `radio-cs-pc13` test variant
+/// (build.rs): a board wired wrong, which must never link.
+#[cfg(not(pil_radio_cs_pc13))]
+fn radio_nsel(
+    pa15: Peri<'static, peripherals::PA15>,
+    _pc13: Peri<'static, peripherals::PC13>,
+) -> Peri<'static, embassy_stm32::gpio::AnyPin> {
+    pa15.into()
+}
+
+#[cfg(pil_radio_cs_pc13)]
+fn radio_nsel(
+    _pa15: Peri<'static, peripherals::PA15>,
+    pc13: Peri<'static, peripherals::PC13>,
+) -> Peri<'static, embassy_stm32::gpio::AnyPin> {
+    pc13.into()
 }
 
 #[cfg(not(feature = "sparky2"))]

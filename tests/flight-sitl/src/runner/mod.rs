@@ -326,7 +326,7 @@ pub struct Outcome {
 
 /// This thread's CPU time so far, s (`/proc/thread-self/schedstat`, nanoseconds on the CPU;
 /// independent of other load on the machine).
-fn thread_cpu_s() -> Option<f64> {
+pub fn thread_cpu_s() -> Option<f64> {
     let stat = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
     let ns: f64 = stat.split_whitespace().next()?.parse().ok()?;
     Some(ns * 1e-9)
@@ -429,8 +429,9 @@ impl Piloting for PlanPilot {
     }
 }
 
-/// The world's scenario for `opts`, flown by the plan's pilot with the plan's fault.
-fn scenario(opts: &Options, plan: Plan) -> Scenario {
+/// The world's scenario for `opts`, flown by the plan's pilot with the plan's fault (the
+/// processor-in-the-loop runner flies the same).
+pub fn scenario(opts: &Options, plan: Plan) -> Scenario {
     let (kind, duration_s) = (plan.kind, plan.duration_s);
     let mut s = Scenario::flown_by(
         opts.settings.clone(),

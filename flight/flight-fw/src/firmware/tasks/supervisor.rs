@@ -27,6 +27,14 @@ use crate::firmware::shared::{LOOP_ALIVE, now_ms, with_app};
 /// at 17 kHz (RM0090 IWDG_SR: PVU/RVU stay set while an update is in progress), µs.
 const UPDATE_US: u32 = 300;
 
+/// The setting flown: the app's, or — the PIL's `iwdg-half` test variant (build.rs, never
+/// built by dist) — one of half the feed period, which no feeding meets.
+const FLOWN: IwdgSetting = if cfg!(pil_iwdg_half) {
+    IwdgSetting::at_least(FEED_PERIOD_MS / 2)
+} else {
+    SETTING
+};
+
 /// Programs `setting` and reloads the counter with it: feed first (the old period starts
 /// full while the update crosses into the LSI domain), unlock, write, wait for the update
 /// (bounded: a stopped LSI must not hang the board), reload.
@@ -53,12 +61,12 @@ fn feed() {
 }
 
 /// Runs `f` (a flash write) with the watchdog at least `timeout_ms` at the fastest LSI, then
-/// restores [`SETTING`] (the app's model restores with `on_save_done`).
+/// restores [`FLOWN`] (the app's model restores with `on_save_done`).
 pub async fn with_long_timeout<R>(timeout_ms: u32, f: impl core::future::Future<Output = R>) -> R {
     program(IwdgSetting::at_least(timeout_ms));
     with_app(|a| a.on_watchdog_stretched(now_ms(), timeout_ms));
     let result = f.await;
-    program(SETTING);
+    program(FLOWN);
     result
 }
 
@@ -66,7 +74,7 @@ pub async fn with_long_timeout<R>(timeout_ms: u32, f: impl core::future::Future<
 pub async fn supervisor_task(_iwdg: Peri<'static, IWDG>) {
     // Started, it cannot be stopped until the next reset.
     pac::IWDG.kr().write(|w| w.set_key(Key::START));
-    program(SETTING);
+    program(FLOWN);
     let mut ticker = Ticker::every(Duration::from_millis(u64::from(FEED_PERIOD_MS)));
     loop {
         ticker.next().await;
