@@ -33,7 +33,8 @@ _stack_start = ORIGIN(RAM) + LENGTH(RAM) - 16;
 /// source to show it models the hardware, not the app); `cargo xtask dist` never sets
 /// `TAULINK_PIL_VARIANT`, so no flashable image carries one. Comma-separated names:
 /// `radio-cs-pc13` wires the RFM22B's nSEL to PC13 instead of PA15 (a board with the wrong
-/// pin), `iwdg-half` halves the independent watchdog's timeout.
+/// pin), `iwdg-half` sets the independent watchdog's timeout to half the supervisor's feed
+/// period (no feeding meets it).
 const PIL_VARIANTS: [(&str, &str); 2] = [
     ("radio-cs-pc13", "pil_radio_cs_pc13"),
     ("iwdg-half", "pil_iwdg_half"),

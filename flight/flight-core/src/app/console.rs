@@ -9,7 +9,7 @@
 
 use core::fmt::Write;
 
-use super::FlightApp;
+use super::{FlightApp, resume};
 use telemetry::link::{LinkKey, key_for_phrase};
 
 use crate::battery::BatteryLevel;
@@ -276,10 +276,19 @@ impl FlightApp {
             )?;
         }
         if let Some(fault) = self.resumed {
-            write!(
-                out,
-                "flight resumed after a reset in the air ({fault:?})\r\n"
-            )?;
+            // In words and numbers: `Debug` would link core's struct formatting.
+            out.write_str("flight resumed after a reset in the air (")?;
+            match fault {
+                None => out.write_str("watchdog")?,
+                Some(f) => {
+                    let reason = match f.reason {
+                        resume::FaultReason::Panic => "panic",
+                        resume::FaultReason::HardFault => "HardFault",
+                    };
+                    write!(out, "{reason} at {} ms, address {:#x}", f.at_ms, f.address)?;
+                }
+            }
+            out.write_str(")\r\n")?;
         }
         if self.board.usb_connected {
             out.write_str("USB connected: arming refused (unplug to fly)\r\n")?;
