@@ -140,22 +140,34 @@ pub struct Radio {
 /// (no pulse; the brushed FETs off).
 pub fn motors_off() {
     use embassy_stm32::pac;
-    use embassy_stm32::pac::gpio::vals::Moder;
-    // Output 1 PB0, 2 PB1, 3 PA3, 4 PA2 (`MotorParts::start`).
-    for (port, pins) in [(pac::GPIOB, [0, 1]), (pac::GPIOA, [3, 2])] {
+    use embassy_stm32::pac::gpio::regs::Bsrr;
+    // Output 1 PB0, 2 PB1, 3 PA3, 4 PA2 (`MotorParts::start`), as masks: straight-line
+    // register writes (the metapac's per-pin setters assert the pin number, a panic path
+    // inside the panic handler).
+    const ON_B: u32 = (1 << 0) | (1 << 1);
+    const ON_A: u32 = (1 << 3) | (1 << 2);
+    for (port, pins, (mask, output)) in [
+        (pac::GPIOB, ON_B, const { mode_bits(ON_B) }),
+        (pac::GPIOA, ON_A, const { mode_bits(ON_A) }),
+    ] {
         // The output level first (no effect while in AF mode), then the mode: the pin goes
         // low the moment it becomes a GPIO.
-        port.bsrr().write(|w| {
-            for pin in pins {
-                w.set_br(pin, true);
-            }
-        });
-        port.moder().modify(|w| {
-            for pin in pins {
-                w.set_moder(pin, Moder::OUTPUT);
-            }
-        });
+        port.bsrr().write_value(Bsrr(pins << 16));
+        port.moder().modify(|w| w.0 = (w.0 & !mask) | output);
     }
+}
+
+/// MODER's two-bit fields of the pins set in `pins`: their mask, and 0b01 (output) in each.
+const fn mode_bits(pins: u32) -> (u32, u32) {
+    let (mut mask, mut output, mut pin) = (0, 0, 0);
+    while pin < 16 {
+        if pins & (1 << pin) != 0 {
+            mask |= 0b11 << (2 * pin);
+            output |= 0b01 << (2 * pin);
+        }
+        pin += 1;
+    }
+    (mask, output)
 }
 
 /// Motor outputs 1–4 before the protocol is known: the pins are already in their timer
