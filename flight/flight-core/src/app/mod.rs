@@ -147,9 +147,6 @@ impl FlightApp {
     /// that do not make a flyable setup fall back to the factory setup (see
     /// [`FlightApp::setup_error`]); the gains are solved here (≈ 5.5 M instructions), before
     /// anything can arm. `None` only if not even the factory settings make a setup.
-    // Not inlined: the app is ≈ 16 KiB, and a caller that inlines it holds each temporary
-    // in its own frame (the firmware's boot held several).
-    #[inline(never)]
     pub fn new(stored: Settings, now_ms: u32) -> Option<Self> {
         let (setup, setup_error) = setup_for(&stored);
         let setup = setup?;
@@ -165,7 +162,6 @@ impl FlightApp {
     }
 
     /// The application with a setup and controllers already made from `flown`.
-    #[inline(never)]
     fn with_setup(
         stored: Settings,
         flown: Settings,

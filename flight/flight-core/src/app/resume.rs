@@ -386,7 +386,6 @@ impl FlightApp {
     /// ([`plan`]): `stored` is what flash holds, the live settings, gains and loop state are
     /// the record's, and the loop flies in failsafe until the link decides
     /// (`Supervisor::resume`). `None` if the record's settings make no setup.
-    #[inline(never)]
     pub fn resume(stored: Settings, resume: &Resume, now_ms: u32) -> Option<Self> {
         let setup = from_settings(&resume.settings).ok()?;
         let controllers = Controllers::from_designs(&setup.control, resume.designs);

@@ -23,8 +23,9 @@ use defmt_rtt as _;
 use embassy_executor::{InterruptExecutor, SendSpawner, SpawnError, SpawnToken, Spawner};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
-use flight_core::app::resume::{self, Kept, ResetCause};
+use flight_core::app::resume::{self, Kept, ResetCause, Resume};
 use flight_core::app::{BootFacts, FlightApp};
+use flight_core::pipeline::from_settings;
 use flight_core::settings::Settings;
 use mpu9250::SampleRate;
 
@@ -51,7 +52,7 @@ async fn main(spawner: Spawner) {
     // A reset in the air with a fresh record resumes the flight with the record's gains;
     // otherwise the application: settings → setup (factory setup if the stored one does not
     // fly) and the solved gains, before anything can arm.
-    let Some(app) = shared::create(|| boot_app(cause, &kept, settings)) else {
+    let Some(app) = boot_app(cause, &kept, settings) else {
         error!("no flyable setup, not even the factory one");
         return;
     };
@@ -146,12 +147,15 @@ async fn main(spawner: Spawner) {
     }
 }
 
-/// The application for this boot: the flight the no-init record describes resumed when it
-/// says so (`flight_core::app::resume::plan`), else the stored settings' (the factory's if
-/// they do not fly) with freshly solved gains. Returned, not moved, so its caller can write it
-/// in place.
-#[inline(never)]
-fn boot_app(cause: ResetCause, kept: &fault::Record, settings: Settings) -> Option<FlightApp> {
+/// The application for this boot, built in its static storage: the flight the no-init
+/// record describes resumed when it says so (`flight_core::app::resume::plan`) and its
+/// settings make a setup, else the stored settings' (the factory's if they do not fly) with
+/// freshly solved gains.
+fn boot_app(
+    cause: ResetCause,
+    kept: &fault::Record,
+    settings: Settings,
+) -> Option<&'static mut FlightApp> {
     let kept = Kept {
         state: &kept.state,
         gains: &kept.gains,
@@ -159,15 +163,28 @@ fn boot_app(cause: ResetCause, kept: &fault::Record, settings: Settings) -> Opti
         feed: &kept.feed,
     };
     match resume::plan(cause, &kept) {
-        Ok(r) => {
-            let resumed = FlightApp::resume(settings.clone(), &r, shared::now_ms());
-            if resumed.is_some() {
-                return resumed;
-            }
+        Ok(r) if from_settings(&r.settings).is_ok() => resumed_app(settings, &r),
+        Ok(_) => {
+            info!("boot after {}: the record's settings make no setup", cause);
+            new_app(settings)
         }
-        Err(why) => info!("boot after {}: {}", cause, why),
+        Err(why) => {
+            info!("boot after {}: {}", cause, why);
+            new_app(settings)
+        }
     }
-    FlightApp::new(settings, shared::now_ms())
+}
+
+// One builder per frame, neither inlined: the app (≈ 16 KiB) is built in each and written
+// to its storage, so the boot's stack holds one copy, not one per way of making it.
+#[inline(never)]
+fn resumed_app(settings: Settings, r: &Resume) -> Option<&'static mut FlightApp> {
+    shared::create(|| FlightApp::resume(settings, r, shared::now_ms()))
+}
+
+#[inline(never)]
+fn new_app(settings: Settings) -> Option<&'static mut FlightApp> {
+    shared::create(|| FlightApp::new(settings, shared::now_ms()))
 }
 
 /// The flight loop's executor: UART5's interrupt (unused on both boards), above every
