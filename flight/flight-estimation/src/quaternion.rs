@@ -1,7 +1,7 @@
 //! Attitude quaternion helpers. Convention (as the Tau Labs INS): `q = [q0, q1, q2, q3]`,
 //! q0 scalar, rotating body FRD to NED; [`ned_to_body`] is R_be(q), the NED→body DCM.
 
-use crate::estimation::math::inv_sqrt;
+use crate::math::inv_sqrt;
 
 /// Attitude quaternion `[w, x, y, z]`, body FRD → NED.
 pub type Quaternion = [f32; 4];

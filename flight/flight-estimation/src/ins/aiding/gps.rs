@@ -19,8 +19,8 @@ use heapless::Deque;
 use ubx::NavPvt;
 
 use super::{Aided, Ins};
-use crate::estimation::Error;
-use crate::estimation::ins::State;
+use crate::Error;
+use crate::ins::State;
 
 /// Spacing of the estimate history (µs).
 pub const HISTORY_STEP_US: u64 = 10_000;
