@@ -57,11 +57,8 @@ pub fn attitude(
 /// magnetic north turned from true north. Only its direction matters to the heading.
 #[must_use]
 pub fn field_for_declination(declination_rad: f32) -> [f32; 3] {
-    [
-        libm::cosf(declination_rad),
-        libm::sinf(declination_rad),
-        0.0,
-    ]
+    let (sin, cos) = crate::math::sin_cos(declination_rad);
+    [cos, sin, 0.0]
 }
 
 #[cfg(test)]
