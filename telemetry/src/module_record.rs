@@ -35,7 +35,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::change_auth::ChangeKey;
 use crate::link::LinkKey;
-use crate::link::auth::{KEY_BYTES, SipHasher24};
+use crate::link::auth::{KEY_BYTES, sip_cold};
 
 /// First payload byte of every module record (never the first byte of a message).
 pub const MARKER: u8 = 0xA5;
@@ -156,23 +156,16 @@ pub fn encode(record: &ModuleRecord, out: &mut [u8]) -> Option<usize> {
 fn pad(key: &ChangeKey, session: u32, counter: u32) -> [u8; KEY_BYTES] {
     let mut pad = [0u8; KEY_BYTES];
     for (half, index) in pad.chunks_exact_mut(8).zip(0u8..) {
-        let mut h = SipHasher24::new(key.as_bytes());
-        h.write(DOMAIN_WRAP);
-        h.write(&session.to_le_bytes());
-        h.write(&counter.to_le_bytes());
-        h.write(&[index]);
-        half.copy_from_slice(&h.finish().to_le_bytes());
+        let (s, c) = (session.to_le_bytes(), counter.to_le_bytes());
+        let h = sip_cold(key.as_bytes(), &[DOMAIN_WRAP, &s, &c, &[index]]);
+        half.copy_from_slice(&h.to_le_bytes());
     }
     pad
 }
 
 fn tag(key: &ChangeKey, session: u32, counter: u32, sealed: &[u8; KEY_BYTES]) -> [u8; 8] {
-    let mut h = SipHasher24::new(key.as_bytes());
-    h.write(DOMAIN_TAG);
-    h.write(&session.to_le_bytes());
-    h.write(&counter.to_le_bytes());
-    h.write(sealed);
-    h.finish().to_le_bytes()
+    let (s, c) = (session.to_le_bytes(), counter.to_le_bytes());
+    sip_cold(key.as_bytes(), &[DOMAIN_TAG, &s, &c, sealed]).to_le_bytes()
 }
 
 fn xor(a: &[u8; KEY_BYTES], b: &[u8; KEY_BYTES]) -> [u8; KEY_BYTES] {
