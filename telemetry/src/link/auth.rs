@@ -197,7 +197,8 @@ impl LinkKey {
 }
 
 /// SipHash-2-4 of `parts`, in order, under `key`: one out-of-line copy for the derivations
-/// that run once per bind, handshake or settings change (keys, PRFs, the change records).
+/// and MACs that run once per bind, handshake or settings change (keys, PRFs, the phone's
+/// signed changes, the change records).
 /// The hasher is forced inline for the per-frame tag, and each inlined copy is ≈ 1.2 KB of
 /// flash (issue 33).
 #[inline(never)]
