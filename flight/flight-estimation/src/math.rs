@@ -82,6 +82,9 @@ pub fn wrap_pi(angle_rad: f32) -> f32 {
 /// (the result stays in [−1, 1]); NaN and ±∞ give NaN. libm's f32 sine and cosine carry a
 /// reduction for any argument (≈ 4 KB of flash, issue 33) that no angle here needs.
 #[must_use]
+// Out of line: it runs at setup and on a new home, and inlined into `GpsAiding::fuse` it
+// cost that hot path 67 instructions of register pressure.
+#[inline(never)]
 pub fn sin_cos(x: f32) -> (f32, f32) {
     // Quadrant n = round(x·2/π), then r = x − n·π/2 in three parts (Cody–Waite: the first
     // two have few enough bits that n times them is exact for |n| < 2¹³), |r| ≤ π/4.
