@@ -46,7 +46,9 @@ pub use health::{BootFacts, HEALTH_COUNTERS_PERIOD_US, Leds};
 pub use imu::{
     CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
 };
-pub use link::{BIND_WINDOW_US, FAILSAFE_US, LinkStep, REPORT_PERIOD_US};
+pub use link::{
+    BIND_WINDOW_US, BindError, BindReport, BindRequest, FAILSAFE_US, LinkStep, REPORT_PERIOD_US,
+};
 pub use loop_side::{EstimatorStatus, LoopHealth, LoopInputs, LoopReport, LoopSide};
 pub use magcal::{MagcalSession, calibration as mag_calibration};
 pub use openlrs::{

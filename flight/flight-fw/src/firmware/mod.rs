@@ -64,11 +64,15 @@ async fn main(spawner: Spawner) {
         // Console, telemetry and arming all see it until the pilot saves a set.
         app.on_settings_problem(problem);
     }
-    // A fresh session for the phone's signed setting changes every boot (spec §12.5), and a
-    // fresh seed for the link's epoch nonces (spec §12.2).
-    let ([session, high, low], rng_fallback) = seeds::seeds::<3>(board.rng);
-    app.seed_change_session(session);
-    app.seed_link_nonces(u64::from(high) << 32 | u64::from(low));
+    // The link's secrets every boot (spec §12): the phone changes' session, the epoch nonces'
+    // seed and each bind's CPace randomness, from 32 bytes of the hardware RNG (bounded: the
+    // unique ID and cycle counter when it gives nothing).
+    let (words, rng_fallback) = seeds::seeds::<8>(board.rng);
+    let mut random = [0u8; 32];
+    for (bytes, word) in random.chunks_exact_mut(4).zip(words) {
+        bytes.copy_from_slice(&word.to_le_bytes());
+    }
+    app.seed_random(&random);
     if rng_fallback {
         error!("RNG gave nothing: seeds from the unique ID and timing");
     }
