@@ -1,5 +1,5 @@
 /**
- * The WebAssembly half (telemetry-wasm, built by scripts/build-wasm.sh into src/wasm/):
+ * The WebAssembly half (telemetry-wasm, built by `cargo xtask wasm` into src/wasm/):
  * loading it, and typed wrappers over its JSON answers.
  */
 import init, {
@@ -8,6 +8,7 @@ import init, {
   encode_setting_change,
   phrase_fingerprint,
   propose_module_phrase,
+  setting_check,
   setting_from_wire,
   setting_to_wire,
   settings_table,
@@ -17,6 +18,8 @@ import type { Event, KeyAnswer } from "./messages";
 export interface SettingRow {
   id: number;
   name: string;
+  /** The value's unit ("°/s", "µs"), "" for a pure number. */
+  unit: string;
   kind: "real" | "whole" | "choice";
   min?: number;
   max?: number;
@@ -57,6 +60,15 @@ export function settingChangeFrame(id: number, value: number): Uint8Array | unde
   return wire === undefined ? undefined : encode_setting_change(id, wire);
 }
 
+/** The wire value of `value` for setting `id`, or why the flight side would refuse it. */
+export function checkSetting(id: number, value: number): { wire: number } | { refused: string } {
+  try {
+    return { wire: setting_check(id, value) };
+  } catch (e) {
+    return { refused: e instanceof Error ? e.message : String(e) };
+  }
+}
+
 export function settingValue(id: number, wire: number): number | undefined {
   return setting_from_wire(id, wire);
 }
@@ -76,10 +88,9 @@ export class Phone {
     return this.inner.fingerprint();
   }
 
-  /** The signed change frame of `id` to `value`, or undefined if the flight side would refuse the value. */
-  signChange(id: number, value: number): Uint8Array | undefined {
-    const wire = setting_to_wire(id, value);
-    return wire === undefined ? undefined : this.inner.sign_change(id, wire);
+  /** The signed change frame of `id` to the wire value `wire` (from `checkSetting`). */
+  signChange(id: number, wire: number): Uint8Array {
+    return this.inner.sign_change(id, wire);
   }
 
   /**

@@ -4,7 +4,7 @@
 import { readFileSync } from "node:fs";
 import { fileURLToPath } from "node:url";
 import { beforeAll, describe, expect, it } from "vitest";
-import { Decoder, Phone, loadWasm, settingChangeFrame, settingValue, settingsTable } from "../src/decoder";
+import { Decoder, Phone, checkSetting, loadWasm, settingChangeFrame, settingValue, settingsTable } from "../src/decoder";
 import { fromHex } from "../src/log";
 
 const here = (p: string): string => fileURLToPath(new URL(p, import.meta.url));
@@ -42,6 +42,24 @@ describe("settings encoders", () => {
     expect(settingValue(kp!.id, change.value)).toBeCloseTo(0.004, 7);
     expect(settingChangeFrame(kp!.id, 5)).toBeUndefined();
   });
+
+  it("gives each number its unit and range, each choice its names", () => {
+    const table = settingsTable();
+    const rate = table.find((r) => r.name === "rate.max_dps")!;
+    expect([rate.kind, rate.unit, rate.min, rate.max]).toEqual(["real", "°/s", 30, 2000]);
+    const frame = table.find((r) => r.name === "mixer.frame")!;
+    expect([frame.kind, frame.choices]).toEqual(["choice", ["quad-x", "quad-plus", "hex-x"]]);
+  });
+
+  it("says why the flight side would refuse a value", () => {
+    const table = settingsTable();
+    const id = (name: string): number => table.find((r) => r.name === name)!.id;
+    expect(checkSetting(id("pid.roll.kp"), 0.004)).toEqual({ wire: new Int32Array(new Float32Array([0.004]).buffer)[0] });
+    expect(checkSetting(id("pid.roll.kp"), 5)).toEqual({ refused: "5 is above the largest value, 1" });
+    expect(checkSetting(id("rate.max_dps"), 10)).toEqual({ refused: "10 is below the smallest value, 30 °/s" });
+    expect(checkSetting(id("battery.cells"), 2.5)).toEqual({ refused: "2.5 is not a whole number" });
+    expect(checkSetting(id("battery.cells"), NaN)).toEqual({ refused: "not a number" });
+  });
 });
 
 describe("the phone's signer", () => {
@@ -49,12 +67,13 @@ describe("the phone's signer", () => {
     const kp = settingsTable().find((r) => r.name === "pid.roll.kp")!;
     const phone = new Phone("taulink demo");
     expect(phone.fingerprint).toMatch(/^[0-9a-f]{4}-[0-9a-f]{4}$/);
-    const events = new Decoder().push(phone.signChange(kp.id, 0.004)!);
+    const check = checkSetting(kp.id, 0.004);
+    if (!("wire" in check)) throw new Error(check.refused);
+    const events = new Decoder().push(phone.signChange(kp.id, check.wire));
     const signed = (events[0] as { SignedChange: { change: { id: number }; counter: number; tag: number[] } }).SignedChange;
     expect(signed.change.id).toBe(kp.id);
     expect(signed.counter).toBe(1);
     expect(signed.tag).toHaveLength(8);
-    expect(phone.signChange(kp.id, 5)).toBeUndefined();
     // A refusal naming an unknown session: one more signed try.
     const again = phone.onRefused({ id: kp.id, reason: "NotAuthenticated", session: 42, counter: 0 });
     expect(again).toBeDefined();

@@ -152,14 +152,39 @@ fn number(value: Value) -> f64 {
     }
 }
 
-/// `[{"id":0,"name":"output.protocol","kind":"choice","choices":[...],"default":0}, ...]`;
-/// reals and whole numbers carry `"min"` and `"max"`.
+/// The unit a setting's value is in, read from its name: the table names a physical
+/// quantity with its unit last (`rate.max_dps`, `output.min_us`); "" for a pure number.
+pub fn unit(name: &str) -> &'static str {
+    const SUFFIXES: [(&str, &str); 9] = [
+        ("_mv_per_a", "mV/A"),
+        ("_hz", "Hz"),
+        ("_us", "µs"),
+        ("_ms", "ms"),
+        ("_mv", "mV"),
+        ("_dps", "°/s"),
+        ("_deg", "°"),
+        ("_mps", "m/s"),
+        ("_s", "s"),
+    ];
+    SUFFIXES
+        .iter()
+        .find(|(suffix, _)| name.ends_with(suffix))
+        .map_or("", |(_, unit)| unit)
+}
+
+/// `[{"id":0,"name":"output.protocol","unit":"","kind":"choice","choices":[...],"default":0},
+/// ...]`; reals and whole numbers carry `"min"` and `"max"`.
 pub fn table_json() -> String {
     let rows: Vec<serde_json::Value> = PARAMS
         .iter()
         .enumerate()
         .map(|(id, p)| {
-            let mut row = json!({"id": id, "name": p.name, "default": number(p.default)});
+            let mut row = json!({
+                "id": id,
+                "name": p.name,
+                "unit": unit(p.name),
+                "default": number(p.default),
+            });
             let extra = match p.kind {
                 Kind::F32 { min, max } => {
                     json!({"kind": "real", "min": f64::from(min), "max": f64::from(max)})
@@ -183,19 +208,54 @@ fn param(id: u16) -> Option<&'static Param> {
 /// The wire value of `value` for setting `id`; `None` for an unknown setting or a value the
 /// flight side would refuse (outside the range, not a whole number, not a choice).
 pub fn to_wire(id: u16, value: f64) -> Option<i32> {
-    let p = param(id)?;
+    check(id, value).ok()
+}
+
+/// The wire value of `value` for setting `id`, or why the flight side would refuse it, in
+/// words for the pilot ("2 is above the largest value, 1").
+pub fn check(id: u16, value: f64) -> Result<i32, String> {
+    let p = param(id).ok_or("no such setting")?;
+    if !value.is_finite() {
+        return Err("not a number".into());
+    }
+    let unit = match unit(p.name) {
+        "" => String::new(),
+        u => format!(" {u}"),
+    };
     let bits = match p.kind {
-        Kind::F32 { .. } => (value as f32).to_bits(),
-        Kind::U32 { .. } | Kind::Choice(_) => {
-            if value.fract() != 0.0 || !(0.0..=f64::from(u32::MAX)).contains(&value) {
-                return None;
+        Kind::F32 { min, max } => {
+            let v = value as f32;
+            if v < min {
+                return Err(format!("{v} is below the smallest value, {min}{unit}"));
+            }
+            if v > max {
+                return Err(format!("{v} is above the largest value, {max}{unit}"));
+            }
+            v.to_bits()
+        }
+        Kind::U32 { min, max } => {
+            if value.fract() != 0.0 {
+                return Err(format!("{value} is not a whole number"));
+            }
+            if value < f64::from(min) {
+                return Err(format!("{value} is below the smallest value, {min}{unit}"));
+            }
+            if value > f64::from(max) {
+                return Err(format!("{value} is above the largest value, {max}{unit}"));
+            }
+            value as u32
+        }
+        Kind::Choice(names) => {
+            if value.fract() != 0.0 || value < 0.0 || value >= names.len() as f64 {
+                return Err(format!("not one of {}", names.join(", ")));
             }
             value as u32
         }
     };
-    // The flight side's own check decides what is in range.
-    p.from_bits(bits).ok()?;
-    Some(bits as i32)
+    // The flight side's own check has the last word.
+    p.from_bits(bits)
+        .map_err(|e| e.to_string())
+        .map(|_| bits as i32)
 }
 
 /// The number wire value `wire` of setting `id` stands for.
@@ -285,13 +345,33 @@ mod tests {
             from_wire(id, echo.unwrap().value),
             Some(f64::from(0.004f32))
         );
-        // Outside the range: refused here as the flight side would.
+        // Outside the range: refused here as the flight side would, and said why.
         assert_eq!(to_wire(id, 2.0), None);
+        assert_eq!(
+            check(id, 2.0),
+            Err("2 is above the largest value, 1".into())
+        );
+        let (rate, _) = find("rate.max_dps").unwrap();
+        assert_eq!(
+            check(rate as u16, 10.0),
+            Err("10 is below the smallest value, 30 °/s".into())
+        );
+        let (cells, _) = find("battery.cells").unwrap();
+        assert_eq!(
+            check(cells as u16, 2.5),
+            Err("2.5 is not a whole number".into())
+        );
+        assert_eq!(check(cells as u16, f64::NAN), Err("not a number".into()));
         let (choice, _) = find("mixer.frame").unwrap();
         assert_eq!(to_wire(choice as u16, 1.0), Some(1));
         assert_eq!(to_wire(choice as u16, 1.5), None);
         assert_eq!(to_wire(choice as u16, 9.0), None);
+        assert_eq!(
+            check(choice as u16, 9.0),
+            Err("not one of quad-x, quad-plus, hex-x".into())
+        );
         assert_eq!(to_wire(u16::MAX, 1.0), None);
+        assert_eq!(check(u16::MAX, 1.0), Err("no such setting".into()));
     }
 
     #[test]
@@ -303,6 +383,13 @@ mod tests {
             assert_eq!(row["id"], id);
             assert_eq!(row["name"], p.name);
         }
+        let unit_of = |name: &str| rows.iter().find(|r| r["name"] == name).unwrap()["unit"].clone();
+        assert_eq!(unit_of("rate.max_dps"), "°/s");
+        assert_eq!(unit_of("battery.current_mv_per_a"), "mV/A");
+        assert_eq!(unit_of("arm.idle_disarm_ms"), "ms");
+        assert_eq!(unit_of("lqg.tau_s"), "s");
+        assert_eq!(unit_of("failsafe.descent_mps"), "m/s");
+        assert_eq!(unit_of("pid.roll.kp"), "");
     }
 
     #[test]
