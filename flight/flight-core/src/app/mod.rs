@@ -39,7 +39,9 @@ pub use gps::{
 pub use imu::{
     CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
 };
-pub use link::{BIND_WINDOW_US, FAILSAFE_US, LinkStep, REPORT_PERIOD_US};
+pub use link::{
+    BIND_WINDOW_US, BindError, BindReport, BindRequest, FAILSAFE_US, LinkStep, REPORT_PERIOD_US,
+};
 pub use magcal::{MagcalSession, calibration as mag_calibration};
 pub use openlrs::{
     OPENLRS_FAILSAFE_DELAY, OPENLRS_RATE_CODE_BASE, openlrs_bind_window, run_openlrs_receiver,
@@ -96,6 +98,7 @@ pub struct FlightApp {
     settings_problem: Option<LoadProblem>,
     gps: gps::GpsPort,
     magcal: MagcalSession,
+    magcal_gesture: magcal::MagcalGesture,
     /// The magnetometer calibration in force (from the live settings).
     mag_cal: crate::estimation::magcal::MagCalibration,
 }
@@ -146,6 +149,7 @@ impl FlightApp {
             settings_problem: None,
             gps: gps::GpsPort::new(),
             magcal: MagcalSession::default(),
+            magcal_gesture: magcal::MagcalGesture::default(),
             mag_cal,
         })
     }
@@ -273,6 +277,7 @@ impl FlightApp {
             .flight
             .step(now_ms, sample, &self.link_input, self.climb_mps);
         self.record(out);
+        self.on_magcal_gesture(now_ms);
         self.identified = self.flight.take_identification();
         if let Some(id) = &self.identified {
             self.link.queue_identification(id);

@@ -21,6 +21,7 @@
 
 use core::fmt::Write;
 
+use super::decimal::Shortest;
 use super::params::{Kind, Settings, Value, find};
 
 /// A parsed line.
@@ -48,15 +49,10 @@ pub enum Command<'a> {
     Defaults,
     /// Live status.
     Status,
-    /// Open the bind window (the deliberate act that binds this controller to a module).
-    Bind,
-    /// Set the binding phrase: the rest of the line, trimmed (not yet checked: see
-    /// `telemetry::link::key_for_phrase`).
-    Phrase(&'a str),
-    /// Remove the binding phrase.
-    PhraseClear,
-    /// Show the binding phrase's fingerprint.
-    PhraseShow,
+    /// Open the bind window (the deliberate act that binds this controller to a module),
+    /// with the binding phrase for it: the rest of the line, trimmed (not yet checked: see
+    /// `telemetry::link::check_phrase`); empty: bind without a phrase.
+    Bind(&'a str),
     /// Magnetometer calibration.
     Magcal(MagcalAction),
     /// An empty line.
@@ -111,14 +107,11 @@ pub fn parse_line(line: &str) -> Result<Command<'_>, ConsoleError> {
             return Ok(Command::SetAll(pairs));
         }
     }
-    if word == "phrase" {
+    if word == "bind" {
         // The phrase is the rest of the line, spaces inside included.
-        let rest = line.trim_start().get(6..).unwrap_or("").trim();
-        return Ok(match rest {
-            "" => Command::PhraseShow,
-            "clear" => Command::PhraseClear,
-            phrase => Command::Phrase(phrase),
-        });
+        return Ok(Command::Bind(
+            line.trim_start().get(4..).unwrap_or("").trim(),
+        ));
     }
     let a = words.next();
     let b = words.next();
@@ -133,7 +126,6 @@ pub fn parse_line(line: &str) -> Result<Command<'_>, ConsoleError> {
         ("save", None, None) => Ok(Command::Save),
         ("defaults", None, None) => Ok(Command::Defaults),
         ("status", None, None) => Ok(Command::Status),
-        ("bind", None, None) => Ok(Command::Bind),
         ("magcal", Some(action), None) => match action {
             "start" => Ok(Command::Magcal(MagcalAction::Start)),
             "status" => Ok(Command::Magcal(MagcalAction::Status)),
@@ -163,7 +155,7 @@ pub fn write_setting<W: Write>(out: &mut W, settings: &Settings, name: &str) -> 
                 names.get(i as usize).copied().unwrap_or("?")
             )
         }
-        (_, Some(Value::F32(v))) => writeln!(out, "{name} = {v}"),
+        (_, Some(Value::F32(v))) => writeln!(out, "{name} = {}", Shortest(v)),
         (_, Some(Value::U32(v))) => writeln!(out, "{name} = {v}"),
         (_, None) => writeln!(out, "{name}: no such setting"),
     }
@@ -207,12 +199,12 @@ mod tests {
         );
         assert_eq!(parse_line("rm -rf"), Err(ConsoleError::UnknownCommand));
         assert_eq!(
-            parse_line("  phrase  correct horse  battery staple "),
-            Ok(Command::Phrase("correct horse  battery staple"))
+            parse_line("  bind  amber kettle  under the oak "),
+            Ok(Command::Bind("amber kettle  under the oak"))
         );
-        assert_eq!(parse_line("phrase clear"), Ok(Command::PhraseClear));
-        assert_eq!(parse_line("phrase"), Ok(Command::PhraseShow));
-        assert_eq!(parse_line("phrases x"), Err(ConsoleError::UnknownCommand));
+        assert_eq!(parse_line("bind"), Ok(Command::Bind("")));
+        assert_eq!(parse_line("binds x"), Err(ConsoleError::UnknownCommand));
+        assert_eq!(parse_line("phrase x"), Err(ConsoleError::UnknownCommand));
     }
 
     #[test]
@@ -235,5 +227,32 @@ mod tests {
             again.get(handles::OUTPUT_PROTOCOL),
             s.get(handles::OUTPUT_PROTOCOL)
         );
+    }
+
+    #[test]
+    fn every_settable_value_reads_back_from_its_text() {
+        use crate::settings::decimal::Shortest;
+        use crate::settings::{PARAMS, Value};
+        for p in PARAMS {
+            let Kind::F32 { min, max } = p.kind else {
+                continue;
+            };
+            // Both ends, their neighbours, and a sweep of bit patterns in between (positive
+            // and negative halves apart: the bits are ordered by magnitude).
+            let mut values = vec![min, max, min.next_up(), max.next_down()];
+            for (from, to) in [(min.max(0.0), max), (max.min(-0.0), min)] {
+                if from.abs() > to.abs() || from.is_sign_negative() != to.is_sign_negative() {
+                    continue;
+                }
+                let (a, b) = (from.to_bits(), to.to_bits());
+                let step = ((b - a) / 20_000).max(1);
+                values.extend((a..=b).step_by(step as usize).map(f32::from_bits));
+            }
+            for v in values.into_iter().filter(|v| (min..=max).contains(v)) {
+                let text = format!("{}", Shortest(v));
+                assert_eq!(text, format!("{v}"), "{}", p.name);
+                assert_eq!(p.parse(&text), Ok(Value::F32(v)), "{} = {text}", p.name);
+            }
+        }
     }
 }
