@@ -23,3 +23,4 @@ pub mod messages;
 #[cfg(feature = "std")]
 pub mod mock;
 pub mod module_record;
+pub mod settings;

@@ -214,9 +214,10 @@ pub struct SysIdResult {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SettingChange {
-    /// Setting identifier (the flight code's parameter table index).
+    /// Setting identifier: the row's index in the schema, [`crate::settings::PARAMS`].
     pub id: u16,
-    /// New value, in the setting's own fixed-point unit.
+    /// New value: the row's 32 stored bits (a real as IEEE-754, a whole number or a
+    /// choice's index as itself; [`crate::settings::Param::from_bits`] reads it).
     pub value: i32,
 }
 
