@@ -18,6 +18,8 @@ export interface SettingRow {
   name: string;
   /** The value's unit ("°/s", "µs"), "" for a pure number. */
   unit: string;
+  /** What the setting does, in one line (the schema's doc). */
+  doc: string;
   kind: "real" | "whole" | "choice";
   min?: number;
   max?: number;

@@ -217,7 +217,7 @@ function buildSettings(): void {
   $("settings-rows").innerHTML = settings
     .filter((r) => r.name.includes(filter))
     .map((r) =>
-      `<tr><td>${r.name}<br /><small class="range">${rangeText(r)}</small></td>` +
+      `<tr><td title="${r.doc}">${r.name}<br /><small class="range">${rangeText(r)}</small></td>` +
       `<td id="set-${r.id}" aria-label="Setting ${r.name}">—</td>` +
       `<td>${newValueControl(r)}</td>` +
       `<td><button type="button" data-set="${r.id}" aria-label="Set ${r.name}">Set</button></td></tr>`)

@@ -47,6 +47,7 @@ describe("settings encoders", () => {
     const table = settingsTable();
     const rate = table.find((r) => r.name === "rate.max_dps")!;
     expect([rate.kind, rate.unit, rate.min, rate.max]).toEqual(["real", "°/s", 30, 2000]);
+    expect(rate.doc).toBe("Rate modes: the rate full stick commands.");
     const frame = table.find((r) => r.name === "mixer.frame")!;
     expect([frame.kind, frame.choices]).toEqual(["choice", ["quad-x", "quad-plus", "hex-x"]]);
   });
