@@ -2,6 +2,8 @@
 //! a value the page encodes is what the flight side applies and echoes, and a change the
 //! page signs after proving the phrase to the module passes the flight side's gate. Here
 //! because it takes both ends: `telemetry/` depends on nothing under `flight/`.
+// The helpers below are test code outside `#[test]` functions.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 use flight_core::authority::{ChangeGate, Reply};
 use flight_core::report::{apply_setting, f32_value};
