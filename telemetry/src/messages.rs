@@ -60,7 +60,7 @@ pub struct LinkStats {
 ///
 /// **The variant order is the wire and the settings.** postcard encodes the variant index,
 /// and that index is [`FlightMode::id`], the number the flight side's settings store for the
-/// mode-switch positions (`mode.switch_low/mid/high`, `flight_core::settings::params::MODES`
+/// mode-switch positions (`mode.switch_low/mid/high`, [`crate::settings::MODES`]
 /// in the same order). So stored switch choices keep their meaning and the wire byte is the
 /// stable id: new modes are appended, never inserted, reordered or removed (a retired mode
 /// keeps its variant). The flight-only policy of each mode (which loops run) lives in
