@@ -112,8 +112,18 @@ impl LinkKey {
     /// tells nothing of the module's or of another link's. Forging under a link key is as
     /// hard as under this one (2⁻³² per frame).
     pub fn for_link(&self, bind_id: u32) -> Self {
-        let id = bind_id.to_le_bytes();
-        self.key_of(|n| [DOMAIN_LINK_KEY, &id, n])
+        let half = |n: u8| {
+            let mut h = SipHasher24::new(&self.0);
+            h.write(DOMAIN_LINK_KEY);
+            h.write(&bind_id.to_le_bytes());
+            h.write(&[n]);
+            h.finish().to_le_bytes()
+        };
+        let mut bytes = [0u8; KEY_BYTES];
+        let (lo, hi) = bytes.split_at_mut(8);
+        lo.copy_from_slice(&half(0));
+        hi.copy_from_slice(&half(1));
+        Self(bytes)
     }
 
     /// The key of one epoch (spec §12.2): two PRF outputs of this key over the follower's
@@ -123,16 +133,14 @@ impl LinkKey {
     /// recorded under an earlier epoch verifies. Derived once per handshake; the per-frame
     /// tag costs the same.
     pub fn epoch_key(&self, follower_nonce: u64, master_nonce: u64) -> Self {
-        let (f, m) = (follower_nonce.to_le_bytes(), master_nonce.to_le_bytes());
-        self.key_of(|n| [DOMAIN_EPOCH_KEY, &f, &m, n])
-    }
-
-    /// A key of two PRF outputs of this one over `parts(half)`, halves 0 and 1.
-    fn key_of<'p, const N: usize>(&self, parts: impl Fn(&'p [u8]) -> [&'p [u8]; N]) -> Self {
+        let half = |n: u8| {
+            let (f, m) = (follower_nonce.to_le_bytes(), master_nonce.to_le_bytes());
+            sip_cold(&self.0, &[DOMAIN_EPOCH_KEY, &f, &m, &[n]]).to_le_bytes()
+        };
         let mut bytes = [0u8; KEY_BYTES];
         let (lo, hi) = bytes.split_at_mut(8);
-        lo.copy_from_slice(&self.mac(&parts(&[0])).to_le_bytes());
-        hi.copy_from_slice(&self.mac(&parts(&[1])).to_le_bytes());
+        lo.copy_from_slice(&half(0));
+        hi.copy_from_slice(&half(1));
         Self(bytes)
     }
 
@@ -166,24 +174,30 @@ impl LinkKey {
     /// "TauLink/2 rekey" ‖ new nonce ‖ slot). A master takes a new nonce at once from the
     /// follower of its epoch, and only after the epoch went quiet from anyone else.
     pub fn rekey_proof(&self, new_nonce: u64, slot: u8) -> u32 {
-        self.mac(&[DOMAIN_REKEY, &new_nonce.to_le_bytes(), &[slot]]) as u32
+        let mut h = SipHasher24::new(&self.0);
+        h.write(DOMAIN_REKEY);
+        h.write(&new_nonce.to_le_bytes());
+        h.write(&[slot]);
+        h.finish() as u32
     }
 
     pub(crate) fn prf(&self, domain: &[u8]) -> u64 {
-        self.mac(&[domain])
+        sip_cold(&self.0, &[domain])
     }
+}
 
-    /// SipHash-2-4 of the concatenated `parts` under this key: the one out-of-line copy the
-    /// derivations share (each inlined copy of the hash costs ≈ 2.5 KB of flash); only the
-    /// per-frame tag ([`LinkKey::tag_in`]) keeps its own, for speed.
-    #[inline(never)]
-    fn mac(&self, parts: &[&[u8]]) -> u64 {
-        let mut h = SipHasher24::new(&self.0);
-        for part in parts {
-            h.write(part);
-        }
-        h.finish()
+/// SipHash-2-4 of `parts`, in order, under `key`: one out-of-line copy for the derivations
+/// and MACs that run once per bind, handshake or settings change (keys, PRFs, the phone's
+/// signed changes, the change records).
+/// The hasher is forced inline for the per-frame tag, and each inlined copy is ≈ 1.2 KB of
+/// flash (issue 33).
+#[inline(never)]
+pub(crate) fn sip_cold(key: &[u8; KEY_BYTES], parts: &[&[u8]]) -> u64 {
+    let mut h = SipHasher24::new(key);
+    for part in parts {
+        h.write(part);
     }
+    h.finish()
 }
 
 /// SipHash-2-4 with a 64-bit output, fed in pieces.
