@@ -434,9 +434,28 @@ impl<O: Outside> Stm32f405<O> {
         self.resets
     }
 
-    /// The USB host on the OTG FS port (the runner's console).
-    pub fn usb_host(&mut self) -> &mut usb_host::UsbHost {
-        self.otg.host_mut()
+    /// The USB host on the OTG FS port (the runner's console): its state and log.
+    pub fn usb_host(&self) -> &usb_host::UsbHost {
+        self.otg.host()
+    }
+
+    /// Plugs a USB host into the OTG FS port (or pulls it) now.
+    pub fn usb_plug(&mut self, plugged: bool) {
+        let now = self.now;
+        self.otg.plug(plugged, now);
+        self.refresh(now);
+    }
+
+    /// Types `bytes` into the CDC ACM console (sent once the host has enumerated).
+    pub fn usb_send(&mut self, bytes: &[u8]) {
+        let now = self.now;
+        self.otg.send(bytes, now);
+        self.refresh(now);
+    }
+
+    /// What the firmware wrote to the console since the last call.
+    pub fn usb_take_received(&mut self) -> Vec<u8> {
+        self.otg.take_received()
     }
 
     /// Time up to which everything has happened.
