@@ -37,6 +37,8 @@ pub struct Iwdg {
     pub reloads: u64,
     /// Shortest margin left at a reload, ns (how close the image came to a reset).
     pub min_margin_ns: Option<u64>,
+    /// When the counter reaches 0 as things stand (kept current on every change).
+    expires: u64,
 }
 
 impl Iwdg {
@@ -55,6 +57,7 @@ impl Iwdg {
             rvu_until: 0,
             reloads: 0,
             min_margin_ns: None,
+            expires: u64::MAX,
         }
     }
 
@@ -75,6 +78,7 @@ impl Iwdg {
     pub fn set_lsi_hz(&mut self, hz: u32, now: u64) {
         self.rebase(now);
         self.lsi_hz = hz;
+        self.expires = self.compute_expiry();
     }
 
     fn tick_ns(&self) -> u128 {
@@ -93,10 +97,15 @@ impl Iwdg {
     fn rebase(&mut self, now: u64) {
         self.epoch_count = self.count(now);
         self.epoch_ns = now;
+        self.expires = self.compute_expiry();
     }
 
     /// When the counter reaches 0 (u64::MAX when stopped).
     pub fn expiry(&self) -> u64 {
+        self.expires
+    }
+
+    fn compute_expiry(&self) -> u64 {
         if !self.started {
             return u64::MAX;
         }
@@ -125,6 +134,7 @@ impl Iwdg {
             let at = self.pvu_until;
             self.rebase(at);
             self.pr_active = self.pr;
+            self.expires = self.compute_expiry();
         }
         self.started && now >= self.expiry()
     }
@@ -163,6 +173,7 @@ impl Iwdg {
                         self.started = true;
                         self.epoch_ns = now;
                         self.epoch_count = 0xFFF;
+                        self.expires = self.compute_expiry();
                     }
                     self.access = false;
                     return Some(!was);
@@ -175,6 +186,7 @@ impl Iwdg {
                         self.reloads += 1;
                         self.rebase(now);
                         self.epoch_count = u64::from(self.rlr);
+                        self.expires = self.compute_expiry();
                     }
                     self.access = false;
                 }

@@ -470,10 +470,16 @@ impl<O: Outside> m4_sim::Bus for Stm32f405<O> {
     }
 
     fn fetch_stall(&mut self, addr: u32, _sequential: bool) -> u32 {
-        match self.flash_offset(addr) {
-            Some(off) => self.flash.fetch_stall(off, self.now, self.clocks.hclk),
-            None => 0,
-        }
+        // Called for every instruction: the flash test first, without the full decode.
+        let off = addr.wrapping_sub(map::FLASH_BASE);
+        let off = if off < map::FLASH_SIZE {
+            off
+        } else if addr < map::FLASH_SIZE && self.exti.mem_mode() == 0 {
+            addr
+        } else {
+            return 0;
+        };
+        self.flash.fetch_stall(off, self.now, self.clocks.hclk)
     }
 
     fn read(

@@ -705,6 +705,8 @@ pub struct Otg {
     host: UsbHost,
     clock_ok: bool,
     was_connected: bool,
+    /// The core's interrupt line (kept current after every change).
+    line: bool,
     /// Settings written that the model ignores.
     pub unmodelled: Vec<&'static str>,
 }
@@ -721,6 +723,7 @@ impl Otg {
         self.dev = Device::new();
         self.dev.vbus = vbus;
         self.was_connected = false;
+        self.line = false;
         self.host.device_gone();
     }
 
@@ -747,6 +750,7 @@ impl Otg {
                 self.dev.set_idle(Some(now));
             }
         }
+        self.line = self.dev.irq();
     }
 
     /// Queues console input at `now`.
@@ -776,12 +780,13 @@ impl Otg {
             } else {
                 self.host.step(&mut self.dev, t);
             }
+            self.line = self.dev.irq();
         }
     }
 
     /// The OTG_FS interrupt line.
     pub fn irq(&self) -> bool {
-        self.dev.irq()
+        self.line
     }
 
     fn connection_changed(&mut self, now: u64) {
@@ -803,6 +808,7 @@ impl Otg {
     pub fn read(&mut self, offset: u32, now: u64) -> Option<u32> {
         let v = self.dev.read(offset);
         self.connection_changed(now);
+        self.line = self.dev.irq();
         v
     }
 
@@ -812,6 +818,7 @@ impl Otg {
         self.unmodelled.append(&mut self.dev.unmodelled);
         self.connection_changed(now);
         self.host.device_changed(&self.dev, now);
+        self.line = self.dev.irq();
         r
     }
 }

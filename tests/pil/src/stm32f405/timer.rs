@@ -138,6 +138,8 @@ pub struct Timer {
     /// TRGO pulses since last taken (for the DAC trigger), with their times.
     pub trgo: Vec<u64>,
     pulses: [PulseRecord; 4],
+    /// The next event's time, kept current by every change (it is asked for often).
+    next: u64,
     /// Settings written that the model ignores.
     pub unmodelled: Vec<&'static str>,
 }
@@ -169,6 +171,7 @@ impl Timer {
             changes: Vec::new(),
             trgo: Vec::new(),
             pulses: [PulseRecord::default(); 4],
+            next: u64::MAX,
             unmodelled: Vec::new(),
         }
     }
@@ -186,6 +189,7 @@ impl Timer {
                 self.changes.push((i as u8 + 1, SignalDrive::Off, now));
             }
         }
+        self.recompute_next();
     }
 
     /// This timer's identity.
@@ -203,17 +207,24 @@ impl Timer {
 
     /// Ticks of the counter clock in `dt` ns.
     fn ticks_in(&self, dt: u64) -> u64 {
-        let div = u128::from(self.psc_active) + 1;
-        (u128::from(dt) * u128::from(self.clock_hz) / (div * 1_000_000_000)) as u64
+        // ns per tick = (PSC + 1) · 1e9 / f; exact, in u64 while it fits (the usual case).
+        let per = (u64::from(self.psc_active) + 1) * 1_000_000_000;
+        match dt.checked_mul(u64::from(self.clock_hz)) {
+            Some(num) => num / per,
+            None => (u128::from(dt) * u128::from(self.clock_hz) / u128::from(per)) as u64,
+        }
     }
 
     /// The first ns at or after tick `n` from the epoch.
     fn time_of(&self, n: u64) -> u64 {
-        let div = u128::from(self.psc_active) + 1;
-        let num = u128::from(n) * div * 1_000_000_000;
-        let hz = u128::from(self.clock_hz.max(1));
-        self.epoch_ns
-            .saturating_add(u64::try_from(num.div_ceil(hz)).unwrap_or(u64::MAX))
+        let per = (u64::from(self.psc_active) + 1) * 1_000_000_000;
+        let hz = u64::from(self.clock_hz.max(1));
+        let ns = match n.checked_mul(per) {
+            Some(num) => num.div_ceil(hz),
+            None => u64::try_from((u128::from(n) * u128::from(per)).div_ceil(u128::from(hz)))
+                .unwrap_or(u64::MAX),
+        };
+        self.epoch_ns.saturating_add(ns)
     }
 
     /// The counter value at `now` (between events).
@@ -231,6 +242,7 @@ impl Timer {
         }
         self.rebase(now);
         self.clock_hz = hz;
+        self.recompute_next();
     }
 
     fn rebase(&mut self, now: u64) {
@@ -265,7 +277,11 @@ impl Timer {
 
     /// The next time this timer changes by itself.
     pub fn next_event(&self) -> u64 {
-        self.ticks_to_next().map_or(u64::MAX, |n| self.time_of(n))
+        self.next
+    }
+
+    fn recompute_next(&mut self) {
+        self.next = self.ticks_to_next().map_or(u64::MAX, |n| self.time_of(n));
     }
 
     /// Whether its events can raise an interrupt or feed another block (`trgo_used`: the
@@ -297,6 +313,7 @@ impl Timer {
             }
             self.compare(t);
         }
+        self.recompute_next();
     }
 
     /// The counter reached its current value at `t`: matches and PWM levels.
@@ -465,6 +482,12 @@ impl Timer {
 
     /// Register write at `now` (events due before `now` already processed).
     pub fn write(&mut self, offset: u32, value: u32, now: u64) -> Option<()> {
+        let done = self.write_register(offset, value, now);
+        self.recompute_next();
+        done
+    }
+
+    fn write_register(&mut self, offset: u32, value: u32, now: u64) -> Option<()> {
         let ch = usize::from(self.kind.channels);
         let mask = self.count_mask() as u32;
         match offset {
