@@ -2,8 +2,9 @@
 //! [`m4_sim::Bus`] (memories and peripherals around the Cortex-M4F core) that drives its
 //! board through [`crate::wire::Outside`].
 //!
-//! What each block models and what not, the cycle model and the datasheet numbers are in
-//! `README.md` next to this file. The files, one concept each:
+#![doc = include_str!("README.md")]
+//!
+//! The files, one concept each:
 //! - [`map`]: addresses and IRQ numbers; [`memory`]: flash, SRAM, CCM, OTP and ELF loading;
 //! - [`rcc`], [`flash`]: clocks and resets, the flash interface with the ART cycle model;
 //! - [`gpio`], [`exti`], [`timer`], [`dma`], [`spi`], [`i2c`], [`usart`], [`adc`], [`dac`],
