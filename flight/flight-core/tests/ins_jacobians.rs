@@ -67,16 +67,16 @@ fn process_jacobian_matches_finite_differences() {
         for i in 0..3 {
             f[i][3 + i] = 1.0;
             for m in 0..4 {
-                f[3 + i][6 + m] = f64::from(jac.dv_dq[i][m]);
+                f[3 + i][6 + m] = f64::from(jac.dv_dq()[i][m]);
             }
-            f[3 + i][13] = f64::from(jac.dv_dbaz[i]);
+            f[3 + i][13] = f64::from(jac.dv_dbaz()[i]);
         }
         for i in 0..4 {
             for m in 0..4 {
-                f[6 + i][6 + m] = f64::from(jac.dq_dq[i][m]);
+                f[6 + i][6 + m] = f64::from(jac.dq_dq()[i][m]);
             }
             for m in 0..3 {
-                f[6 + i][10 + m] = f64::from(jac.dq_dbg[i][m]);
+                f[6 + i][10 + m] = f64::from(jac.dq_dbg()[i][m]);
             }
         }
         for j in 0..14 {

@@ -100,6 +100,17 @@ pub fn load_segments(elf: &[u8]) -> Result<Vec<Segment>, ElfError> {
     Ok(segments)
 }
 
+/// Which of Berkeley `size`'s three counts an allocated section adds to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Class {
+    /// Read-only with contents: code, rodata, the vector table (in flash).
+    Text,
+    /// Writable with contents: initialised statics (in RAM, copied from flash).
+    Data,
+    /// Without contents: zeroed and uninitialised statics (in RAM).
+    Bss,
+}
+
 /// One allocated section: where it lives at run time and how big it is.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Section {
@@ -109,9 +120,12 @@ pub struct Section {
     pub address: u32,
     /// Size in bytes.
     pub size: u32,
+    /// What it counts as.
+    pub class: Class,
 }
 
-/// The allocated sections (those that take memory at run time), in header order.
+/// The allocated sections (those that take memory at run time), in header order; empty
+/// ones are left out.
 pub fn alloc_sections(elf: &[u8]) -> Result<Vec<Section>, ElfError> {
     check_header(elf)?;
     let shoff = u32_at(elf, 0x20)? as usize;
@@ -122,8 +136,9 @@ pub fn alloc_sections(elf: &[u8]) -> Result<Vec<Section>, ElfError> {
     let mut out = Vec::new();
     for i in 0..shnum {
         let sh = shoff + i * shentsize;
-        let (name, flags, address, size) = (
+        let (name, kind, flags, address, size) = (
             u32_at(elf, sh)? as usize,
+            u32_at(elf, sh + 4)?,
             u32_at(elf, sh + 8)?,
             u32_at(elf, sh + 12)?,
             u32_at(elf, sh + 20)?,
@@ -131,43 +146,41 @@ pub fn alloc_sections(elf: &[u8]) -> Result<Vec<Section>, ElfError> {
         if flags & SHF_ALLOC == 0 || size == 0 {
             continue;
         }
-        let tail = elf.get(names + name..).ok_or(ElfError::Truncated)?;
-        let end = tail
-            .iter()
-            .position(|&b| b == 0)
-            .ok_or(ElfError::Truncated)?;
+        let class = if kind == SHT_NOBITS {
+            Class::Bss
+        } else if flags & SHF_WRITE != 0 {
+            Class::Data
+        } else {
+            Class::Text
+        };
         out.push(Section {
-            name: String::from_utf8_lossy(tail.get(..end).unwrap_or_default()).into_owned(),
+            name: string_at(elf, names + name)?,
             address,
             size,
+            class,
         });
     }
     Ok(out)
 }
 
+/// The NUL-terminated string at `at`.
+fn string_at(elf: &[u8], at: usize) -> Result<String, ElfError> {
+    let tail = elf.get(at..).ok_or(ElfError::Truncated)?;
+    let end = tail
+        .iter()
+        .position(|&b| b == 0)
+        .ok_or(ElfError::Truncated)?;
+    Ok(String::from_utf8_lossy(tail.get(..end).unwrap_or_default()).into_owned())
+}
+
 /// text/data/bss from the section headers.
 pub fn sizes(elf: &[u8]) -> Result<Sizes, ElfError> {
-    check_header(elf)?;
-    let shoff = u32_at(elf, 0x20)? as usize;
-    let shentsize = u16_at(elf, 0x2E)? as usize;
-    let shnum = u16_at(elf, 0x30)? as usize;
     let mut sizes = Sizes::default();
-    for i in 0..shnum {
-        let sh = shoff + i * shentsize;
-        let (kind, flags, size) = (
-            u32_at(elf, sh + 4)?,
-            u32_at(elf, sh + 8)?,
-            u32_at(elf, sh + 20)?,
-        );
-        if flags & SHF_ALLOC == 0 {
-            continue;
-        }
-        if kind == SHT_NOBITS {
-            sizes.bss += size;
-        } else if flags & SHF_WRITE != 0 {
-            sizes.data += size;
-        } else {
-            sizes.text += size;
+    for s in alloc_sections(elf)? {
+        match s.class {
+            Class::Text => sizes.text += s.size,
+            Class::Data => sizes.data += s.size,
+            Class::Bss => sizes.bss += s.size,
         }
     }
     Ok(sizes)
@@ -211,13 +224,8 @@ pub fn symbols(elf: &[u8]) -> Result<Vec<Symbol>, ElfError> {
             if name == 0 {
                 continue;
             }
-            let tail = elf.get(strings + name..).ok_or(ElfError::Truncated)?;
-            let end = tail
-                .iter()
-                .position(|&b| b == 0)
-                .ok_or(ElfError::Truncated)?;
             out.push(Symbol {
-                name: String::from_utf8_lossy(tail.get(..end).unwrap_or_default()).into_owned(),
+                name: string_at(elf, strings + name)?,
                 address: u32_at(elf, entry + 4)?,
                 size: u32_at(elf, entry + 8)?,
             });

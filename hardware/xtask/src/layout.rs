@@ -13,6 +13,9 @@ pub struct Layout {
     pub origin: u32,
     /// Load addresses the bootloader or flash tool accepts.
     pub accepted: Range<u32>,
+    /// Whether `accepted` is a bootloader's application partition, which an image must
+    /// leave room in (`budget::PARTITION_PERCENT`); false where the chip's reset starts it.
+    pub behind_bootloader: bool,
     /// Flash the image must not write: settings sectors, bootloader pages.
     pub reserved_flash: &'static [(Range<u32>, &'static str)],
     /// SRAM the image may use (statics and stack).
@@ -35,6 +38,7 @@ pub const F405_DIRECT: Layout = Layout {
     starter: "reset / ST ROM DFU",
     origin: 0x0800_0000,
     accepted: 0x0800_0000..0x0810_0000,
+    behind_bootloader: false,
     reserved_flash: &[F405_SETTINGS],
     ram: F405_RAM,
     sp_mask: None,
@@ -47,6 +51,7 @@ pub const F405_TAULABS: Layout = Layout {
     starter: "Tau Labs bootloader",
     origin: 0x0802_0000,
     accepted: 0x0802_0000..0x0808_0000 - 100,
+    behind_bootloader: true,
     reserved_flash: &[
         (
             0x0800_0000..0x0800_8000,
@@ -64,6 +69,7 @@ pub const NRF_PROBE: Layout = Layout {
     starter: "reset (debug probe)",
     origin: 0x0,
     accepted: 0x0..0xEA000,
+    behind_bootloader: false,
     reserved_flash: &[NRF_SETTINGS],
     ram: 0x2000_0000..0x2004_0000,
     sp_mask: None,
@@ -77,6 +83,7 @@ pub const NRF_UF2: Layout = Layout {
     starter: "Nordic MBR + Adafruit UF2 bootloader (S140 6.x)",
     origin: 0x26000,
     accepted: 0x26000..0xEA000,
+    behind_bootloader: true,
     reserved_flash: &[
         (0x0..0x26000, "MBR and SoftDevice S140 6.x"),
         NRF_SETTINGS,

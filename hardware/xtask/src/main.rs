@@ -6,15 +6,18 @@
 //! cargo xtask build module [--uf2]
 //! cargo xtask dist                                       # every variant → dist/*.{elf,bin,hex,uf2,tlfw}
 //! cargo xtask size                                       # text/data/bss of what dist/ holds
-//! cargo xtask verify                                     # each file against its boot contract
-//! cargo xtask readme                                     # the README's sizes table from dist/
+//! cargo xtask size-report [--image NAME] [--top N]       # each image's text by crate
+//! cargo xtask verify                                     # boot contracts, flash budgets, README
+//! cargo xtask readme                                     # the README's size tables from dist/
 //! cargo xtask figures [--check | --write]                # the docs' M4 instruction figures
 //! ```
 
 use fw_elf as elf;
+mod budget;
 mod figures;
 mod formats;
 mod layout;
+mod size_report;
 mod tlfw;
 mod verify;
 
@@ -36,7 +39,9 @@ use clap::{Parser, Subcommand};
   cargo xtask build flight --sparky2     the Sparky2 image, prints the ELF's path
   cargo xtask build module --uf2         the nRF52840 image for a UF2 bootloader
   cargo xtask dist                       every variant -> dist/*.{elf,bin,hex,uf2}
-  cargo xtask size                       text/data/bss of what dist/ holds"
+  cargo xtask size                       text/data/bss of what dist/ holds
+  cargo xtask size-report --image flight-sparky2 --top 40
+                                         its text by crate and its 40 largest symbols"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -53,10 +58,24 @@ enum Task {
     Dist,
     /// Print text/data/bss of the ELFs in dist/.
     Size,
-    /// Check every file in dist/ against its bootloader's boot contract, and the README's
-    /// sizes table against dist/ (fails when stale).
+    /// Print each image's text by crate (generic code also by the crate it was instantiated
+    /// for) and its largest symbols, from the ELFs in dist/.
+    SizeReport {
+        /// Only this image (a dist/ name, e.g. flight-sparky2); default: one of each build.
+        #[arg(long, value_parser = image_name)]
+        image: Option<String>,
+        /// How many of the largest symbols to list.
+        #[arg(long, default_value_t = 25)]
+        top: usize,
+        /// Read the ELFs from this folder instead of dist/ (e.g. a copy of another
+        /// branch's dist/, to compare).
+        #[arg(long, value_name = "DIR")]
+        dist: Option<PathBuf>,
+    },
+    /// Check every file in dist/ against its bootloader's boot contract and its flash
+    /// budget, and the README's size tables against dist/ (fails when stale).
     Verify,
-    /// Rewrite the README's sizes table from the ELFs in dist/.
+    /// Rewrite the README's size tables (sizes, text by crate) from the ELFs in dist/.
     Readme,
     /// Build the m4-bench programs, count their instructions under QEMU (m4count) and print
     /// the named figures; with --check fail when a figure marked `<!-- m4:NAME -->` in a
@@ -90,6 +109,17 @@ enum Image {
     },
 }
 
+/// `--image`'s check: the name of a variant.
+fn image_name(name: &str) -> Result<String, String> {
+    match VARIANTS.iter().find(|v| v.name == name) {
+        Some(v) => Ok(v.name.to_string()),
+        None => {
+            let names: Vec<&str> = VARIANTS.iter().map(|v| v.name).collect();
+            Err(format!("the images are {}", names.join(", ")))
+        }
+    }
+}
+
 const TARGET: &str = "thumbv7em-none-eabihf";
 
 /// One firmware variant: which package, which features, what to call the files.
@@ -103,6 +133,9 @@ struct Variant {
     tlfw: Option<(u8, u8)>,
     /// The boot contract the files must keep.
     layout: &'static Layout,
+    /// Shown in the per-crate breakdown: one variant of each build (the others are the
+    /// same code linked for another starter).
+    in_breakdown: bool,
 }
 
 const VARIANTS: &[Variant] = &[
@@ -113,6 +146,7 @@ const VARIANTS: &[Variant] = &[
         uf2: false,
         tlfw: None,
         layout: &layout::F405_DIRECT,
+        in_breakdown: true,
     },
     Variant {
         package: "flight-fw",
@@ -121,6 +155,7 @@ const VARIANTS: &[Variant] = &[
         uf2: false,
         tlfw: None,
         layout: &layout::F405_DIRECT,
+        in_breakdown: true,
     },
     Variant {
         package: "flight-fw",
@@ -129,6 +164,7 @@ const VARIANTS: &[Variant] = &[
         uf2: false,
         tlfw: Some((tlfw::BOARD_TYPE_SPARKY2, tlfw::REVISION_BRUSHEDSPARKY)),
         layout: &layout::F405_TAULABS,
+        in_breakdown: false,
     },
     Variant {
         package: "flight-fw",
@@ -137,6 +173,7 @@ const VARIANTS: &[Variant] = &[
         uf2: false,
         tlfw: Some((tlfw::BOARD_TYPE_SPARKY2, tlfw::REVISION_SPARKY2)),
         layout: &layout::F405_TAULABS,
+        in_breakdown: false,
     },
     Variant {
         package: "module-fw",
@@ -145,6 +182,7 @@ const VARIANTS: &[Variant] = &[
         uf2: false,
         tlfw: None,
         layout: &layout::NRF_PROBE,
+        in_breakdown: true,
     },
     Variant {
         package: "module-fw",
@@ -153,6 +191,7 @@ const VARIANTS: &[Variant] = &[
         uf2: true,
         tlfw: None,
         layout: &layout::NRF_UF2,
+        in_breakdown: false,
     },
 ];
 
@@ -272,55 +311,224 @@ fn size() -> Result<(), String> {
     Ok(())
 }
 
-/// Where the README's generated sizes table starts and ends.
-const SIZES_BEGIN: &str = "<!-- xtask sizes: begin (cargo xtask readme writes this table) -->";
-const SIZES_END: &str = "<!-- xtask sizes: end -->";
+/// A README block `cargo xtask readme` writes and `verify` checks: between two markers.
+struct Block {
+    begin: &'static str,
+    end: &'static str,
+}
+
+/// The sizes table: every variant's flash, text against its budget, and static RAM.
+const SIZES: Block = Block {
+    begin: "<!-- xtask sizes: begin (cargo xtask readme writes this table) -->",
+    end: "<!-- xtask sizes: end -->",
+};
+
+/// The text by crate of one variant of each build (`cargo xtask size-report`).
+const BY_CRATE: Block = Block {
+    begin: "<!-- xtask text-by-crate: begin (cargo xtask readme writes this table) -->",
+    end: "<!-- xtask text-by-crate: end -->",
+};
+
+/// One variant's ELF from dist/.
+fn dist_elf(v: &Variant) -> Result<Vec<u8>, String> {
+    elf_in(&workspace_root().join("dist"), v)
+}
+
+/// One variant's ELF from the folder `dir`.
+fn elf_in(dir: &Path, v: &Variant) -> Result<Vec<u8>, String> {
+    let path = dir.join(format!("{}.elf", v.name));
+    fs::read(&path).map_err(|e| format!("{}: {e} (run `cargo xtask dist`)", path.display()))
+}
+
+/// What the sizes table and the budget checks read from one image.
+struct Usage {
+    sizes: elf::Sizes,
+    /// Bytes loaded into flash (text and the initial values of data).
+    flash: u32,
+}
+
+fn usage(v: &Variant, image: &[u8]) -> Result<Usage, String> {
+    let shown = |e: elf::ElfError| format!("{}.elf: {e}", v.name);
+    let segments = elf::load_segments(image).map_err(shown)?;
+    Ok(Usage {
+        sizes: elf::sizes(image).map_err(shown)?,
+        flash: segments.iter().map(|s| s.data.len() as u32).sum(),
+    })
+}
 
 /// The sizes table for the README, from the ELFs in dist/.
 fn sizes_table() -> Result<String, String> {
-    let dist = workspace_root().join("dist");
     let mut t = String::from(
-        "| image | flash from | flash used | text | data | bss |\n|---|---|---|---|---|---|\n",
+        "| image | flash from | flash used | of the bootloader's partition | text | of the \
+         text budget | data | bss | SRAM left to the stack |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for v in VARIANTS {
-        let path = dist.join(format!("{}.elf", v.name));
-        let elf = fs::read(&path)
-            .map_err(|e| format!("{}: {e} (run `cargo xtask dist`)", path.display()))?;
-        let s = elf::sizes(&elf).map_err(|e| format!("{}: {e}", path.display()))?;
-        let segments = elf::load_segments(&elf).map_err(|e| format!("{}: {e}", path.display()))?;
-        let used: usize = segments.iter().map(|s| s.data.len()).sum();
+        let u = usage(v, &dist_elf(v)?)?;
+        let s = u.sizes;
+        let partition = budget::partition(v.layout).map_or("—".to_string(), |p| {
+            format!("{} of {p} B", budget::percent(u.flash, p))
+        });
+        let text_budget = budget::text_budget(v.package).map_or("—".to_string(), |b| {
+            format!("{} of {b} B", budget::percent(s.text, b))
+        });
+        let ram = v.layout.ram.end - v.layout.ram.start;
+        let left = ram.saturating_sub(s.data + s.bss);
         t.push_str(&format!(
-            "| `{}` | 0x{:08X} | {} B | {} B | {} B | {} B |\n",
-            v.name, v.layout.origin, used, s.text, s.data, s.bss
+            "| `{}` | 0x{:08X} | {} B | {partition} | {} B | {text_budget} | {} B | {} B | {left} B of {ram} B |\n",
+            v.name, v.layout.origin, u.flash, s.text, s.data, s.bss
         ));
     }
     Ok(t)
 }
 
-/// README.md with the sizes table replaced, or an error if the markers are missing.
-fn readme_with_sizes(readme: &str, table: &str) -> Result<String, String> {
+/// Crates under this many bytes in every image are one row of the breakdown.
+const CRATE_ROW_MIN: u32 = 1024;
+/// Generic code instantiated for another crate gets its own row from this many bytes.
+const INSTANCE_ROW_MIN: u32 = 2048;
+
+/// The text-by-crate table for the README: crates by their largest share, generic code
+/// made for another crate below its crate.
+fn crate_table() -> Result<String, String> {
+    let shown: Vec<&Variant> = VARIANTS.iter().filter(|v| v.in_breakdown).collect();
+    let mut reports = Vec::new();
+    for v in &shown {
+        let report =
+            size_report::breakdown(&dist_elf(v)?).map_err(|e| format!("{}.elf: {e}", v.name))?;
+        reports.push(report);
+    }
+    let largest =
+        |get: &dyn Fn(&size_report::Breakdown) -> u32| reports.iter().map(get).max().unwrap_or(0);
+    let mut crates: Vec<&String> = reports.iter().flat_map(|r| r.by_crate.keys()).collect();
+    crates.sort();
+    crates.dedup();
+    crates
+        .sort_by_key(|c| std::cmp::Reverse(largest(&|r| r.by_crate.get(*c).copied().unwrap_or(0))));
+    let mut t = format!(
+        "| crate (generic code: ↳ instantiated for) | {} |\n|---|{}\n",
+        shown
+            .iter()
+            .map(|v| format!("`{}`", v.name))
+            .collect::<Vec<_>>()
+            .join(" | "),
+        "---:|".repeat(shown.len())
+    );
+    let row = |t: &mut String, label: &str, cells: &[u32]| {
+        let cells: Vec<String> = cells.iter().map(u32::to_string).collect();
+        t.push_str(&format!("| {label} | {} |\n", cells.join(" | ")));
+    };
+    let each = |get: &dyn Fn(&size_report::Breakdown) -> u32| -> Vec<u32> {
+        reports.iter().map(get).collect()
+    };
+    let (mut small, mut small_count) = (vec![0u32; reports.len()], 0);
+    for c in crates {
+        let bytes = each(&|r| r.by_crate.get(c).copied().unwrap_or(0));
+        if bytes.iter().all(|&b| b < CRATE_ROW_MIN) {
+            for (sum, b) in small.iter_mut().zip(&bytes) {
+                *sum += b;
+            }
+            small_count += 1;
+            continue;
+        }
+        row(&mut t, c, &bytes);
+        let mut users: Vec<&String> = reports
+            .iter()
+            .flat_map(|r| r.by_instance.keys())
+            .filter(|(k, _)| k == c)
+            .map(|(_, u)| u)
+            .collect();
+        users.sort();
+        users.dedup();
+        for u in users {
+            let key = (c.clone(), u.clone());
+            let bytes = each(&|r| r.by_instance.get(&key).copied().unwrap_or(0));
+            if bytes.iter().any(|&b| b >= INSTANCE_ROW_MIN) {
+                row(&mut t, &format!("↳ {u}"), &bytes);
+            }
+        }
+    }
+    let small_label = format!("{small_count} crates under {CRATE_ROW_MIN} B each");
+    row(&mut t, &small_label, &small);
+    row(
+        &mut t,
+        "no symbol (merged strings, padding)",
+        &each(&|r| r.between_symbols()),
+    );
+    row(&mut t, "**text**", &each(&|r| r.text));
+    Ok(t)
+}
+
+/// `readme` with `block`'s content replaced, or an error if its markers are missing.
+fn readme_with(readme: &str, block: &Block, content: &str) -> Result<String, String> {
     let start = readme
-        .find(SIZES_BEGIN)
-        .ok_or("README.md has no sizes begin marker")?
-        + SIZES_BEGIN.len();
+        .find(block.begin)
+        .ok_or_else(|| format!("README.md has no `{}` marker", block.begin))?
+        + block.begin.len();
     let end = readme
         .get(start..)
-        .and_then(|rest| rest.find(SIZES_END))
-        .ok_or("README.md has no sizes end marker")?
+        .and_then(|rest| rest.find(block.end))
+        .ok_or_else(|| format!("README.md has no `{}` marker", block.end))?
         + start;
     Ok(format!(
-        "{}\n{table}{}",
+        "{}\n{content}{}",
         readme.get(..start).unwrap_or_default(),
         readme.get(end..).unwrap_or_default()
     ))
 }
 
+/// The README with both generated blocks from dist/.
+fn readme_generated(text: &str) -> Result<String, String> {
+    let text = readme_with(text, &SIZES, &sizes_table()?)?;
+    readme_with(&text, &BY_CRATE, &crate_table()?)
+}
+
 fn readme() -> Result<(), String> {
     let path = workspace_root().join("README.md");
     let text = fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let new = readme_with_sizes(&text, &sizes_table()?)?;
-    fs::write(&path, new).map_err(|e| format!("{}: {e}", path.display()))?;
-    println!("sizes table in {} updated", path.display());
+    fs::write(&path, readme_generated(&text)?).map_err(|e| format!("{}: {e}", path.display()))?;
+    println!("size tables in {} updated", path.display());
+    Ok(())
+}
+
+fn size_report(image: Option<&str>, top: usize, dir: &Path) -> Result<(), String> {
+    let chosen: Vec<&Variant> = VARIANTS
+        .iter()
+        .filter(|v| image.map_or(v.in_breakdown, |name| v.name == name))
+        .collect();
+    for v in chosen {
+        let r =
+            size_report::breakdown(&elf_in(dir, v)?).map_err(|e| format!("{}.elf: {e}", v.name))?;
+        println!(
+            "{}: text {} B ({} B under no symbol: merged strings, padding)",
+            v.name,
+            r.text,
+            r.between_symbols()
+        );
+        let mut crates: Vec<(&String, &u32)> = r.by_crate.iter().collect();
+        crates.sort_by_key(|&(c, b)| (std::cmp::Reverse(*b), c.clone()));
+        for (c, b) in crates {
+            println!("  {b:>8} B {:>8}  {c}", budget::percent(*b, r.text));
+            let mut users: Vec<(&String, &u32)> = r
+                .by_instance
+                .iter()
+                .filter(|((k, _), _)| k == c)
+                .map(|((_, u), b)| (u, b))
+                .collect();
+            users.sort_by_key(|&(u, b)| (std::cmp::Reverse(*b), u.clone()));
+            for (u, b) in users {
+                println!("  {b:>8} B {:>8}    ↳ instantiated for {u}", "");
+            }
+        }
+        println!("  largest symbols:");
+        for item in r.items.iter().take(top) {
+            println!(
+                "  {:>8} B  {:<18} {}",
+                item.size,
+                item.owner.krate,
+                size_report::short_name(&item.name, 160)
+            );
+        }
+        println!();
+    }
     Ok(())
 }
 
@@ -349,11 +557,20 @@ fn verify() -> Result<(), String> {
             tlfw: tl.as_deref().zip(v.tlfw).map(|(f, (t, r))| (f, t, r)),
         };
         problems.extend(verify::check(v.layout, &files));
+        match usage(v, &elf) {
+            Ok(u) => problems.extend(budget::problems(v.package, v.layout, u.sizes.text, u.flash)),
+            Err(e) => problems.push(e),
+        }
         println!(
-            "{} {:<34} behind {}",
+            "{} {:<34} behind {}{}",
             if problems.is_empty() { "ok  " } else { "FAIL" },
             v.name,
-            v.layout.starter
+            v.layout.starter,
+            if problems.is_empty() {
+                ", within its flash budget"
+            } else {
+                ""
+            }
         );
         for p in &problems {
             println!("       {p}");
@@ -363,11 +580,11 @@ fn verify() -> Result<(), String> {
     // The README's sizes are generated; a stale table is a failure, not a footnote.
     let path = workspace_root().join("README.md");
     let text = fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    if readme_with_sizes(&text, &sizes_table()?)? != text {
-        println!("FAIL README.md sizes table is stale: run `cargo xtask readme`");
+    if readme_generated(&text)? != text {
+        println!("FAIL README.md size tables are stale: run `cargo xtask readme`");
         failed += 1;
     } else {
-        println!("ok   README.md sizes table matches dist/");
+        println!("ok   README.md size tables match dist/");
     }
     if failed > 0 {
         return Err(format!("{failed} check(s) failed"));
@@ -398,6 +615,12 @@ fn run(task: &Task) -> Result<(), String> {
         }
         Task::Dist => dist(),
         Task::Size => size(),
+        Task::SizeReport { image, top, dist } => {
+            let dir = dist
+                .clone()
+                .unwrap_or_else(|| workspace_root().join("dist"));
+            size_report(image.as_deref(), *top, &dir)
+        }
         Task::Verify => verify(),
         Task::Readme => readme(),
         Task::Figures { check, write } => {
@@ -430,15 +653,39 @@ mod tests {
     use super::*;
 
     #[test]
-    fn readme_sizes_table_is_replaced_between_the_markers() {
-        let text = format!("intro\n{SIZES_BEGIN}\nold table\n{SIZES_END}\noutro\n");
-        let new = readme_with_sizes(&text, "| new |\n").unwrap();
+    fn readme_blocks_are_replaced_between_their_markers() {
+        let text = format!(
+            "intro\n{}\nold table\n{}\nmid\n{}\nold\n{}\noutro\n",
+            SIZES.begin, SIZES.end, BY_CRATE.begin, BY_CRATE.end
+        );
+        let new = readme_with(&text, &SIZES, "| new |\n").unwrap();
         assert_eq!(
             new,
-            format!("intro\n{SIZES_BEGIN}\n| new |\n{SIZES_END}\noutro\n")
+            format!(
+                "intro\n{}\n| new |\n{}\nmid\n{}\nold\n{}\noutro\n",
+                SIZES.begin, SIZES.end, BY_CRATE.begin, BY_CRATE.end
+            )
         );
-        assert_eq!(readme_with_sizes(&new, "| new |\n").unwrap(), new);
-        assert!(readme_with_sizes("no markers", "x").is_err());
+        assert_eq!(readme_with(&new, &SIZES, "| new |\n").unwrap(), new);
+        let both = readme_with(&new, &BY_CRATE, "| c |\n").unwrap();
+        assert!(both.contains(&format!("{}\n| c |\n{}", BY_CRATE.begin, BY_CRATE.end)));
+        assert!(readme_with("no markers", &SIZES, "x").is_err());
+    }
+
+    #[test]
+    fn every_package_has_a_budget_and_one_variant_of_each_build_is_broken_down() {
+        for v in VARIANTS {
+            assert!(budget::text_budget(v.package).is_some(), "{}", v.name);
+        }
+        let shown: Vec<_> = VARIANTS
+            .iter()
+            .filter(|v| v.in_breakdown)
+            .map(|v| v.name)
+            .collect();
+        assert_eq!(
+            shown,
+            ["flight-brushedsparky", "flight-sparky2", "module-nrf52840"]
+        );
     }
 
     #[test]

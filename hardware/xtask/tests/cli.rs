@@ -9,7 +9,8 @@ fn xtask(args: &[&str]) -> Run {
 
 #[test]
 fn help_lists_the_tasks_and_exits_0() {
-    xtask(&["--help"]).assert_lists(&["build", "dist", "size", "Examples:"]);
+    xtask(&["--help"]).assert_lists(&["build", "dist", "size", "size-report", "Examples:"]);
+    xtask(&["size-report", "--help"]).assert_lists(&["--image", "--top", "--dist"]);
     xtask(&["build", "flight", "--help"]).assert_lists(&["--sparky2", "Tau Labs bootloader"]);
 }
 
@@ -19,4 +20,7 @@ fn misspellings_and_wrong_board_flags_are_refused() {
     xtask(&["build", "flight", "--sparky"]).assert_refused("'--sparky2'");
     // --uf2 belongs to the module image.
     xtask(&["build", "flight", "--uf2"]).assert_refused("unexpected argument '--uf2'");
+    xtask(&["size-report", "--image", "flight"])
+        .assert_refused("the images are flight-brushedsparky");
+    xtask(&["size-report", "--top", "many"]).assert_refused("'--top <TOP>'");
 }

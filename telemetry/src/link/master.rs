@@ -122,13 +122,11 @@ async fn run_uplink<R: PacketRadio, C: LinkClock, H: MasterHooks>(
 ) -> Result<(), R::Error> {
     let rate = master.schedule().rate;
     let at_us = slot_start_us + u64::from(rate.tx_lead_us());
-    // The frame as it stands (the last slot's channels): its length, and a fallback.
-    let (Some(len), channel) = (master.uplink_len(buf), master.channel()) else {
+    let (Some(len), channel) = (master.uplink_len(), master.channel()) else {
         hooks.on_slot(slot_start_us, master);
         master.on_skipped();
         return Ok(());
     };
-    let fallback = *buf;
     let started = async {
         radio.set_channel(channel).await?;
         // Too late for this slot (e.g. right after a radio recovery): an uplink off the
@@ -157,15 +155,13 @@ async fn run_uplink<R: PacketRadio, C: LinkClock, H: MasterHooks>(
         .sleep_until_us(slot_start_us + u64::from(uplink_latch_offset_us(rate)))
         .await;
     hooks.on_slot(slot_start_us, master);
-    // Built again with the fresh channels; the same length (stream data capped), else the
-    // frame built before goes out — the radio is already sending a frame of `len`.
+    // Built once, with the fresh channels and the length counted above (stream data
+    // capped). Were it ever another length, nothing is loaded: the chip then sends a packet
+    // that fails its CRC (a FIFO underflow) — a lost uplink, never a wrong one.
     let frame = match master.plan(slot_start_us, buf) {
         Step::Transmit { len: built, .. } if built == len => buf.get(..len),
-        _ => fallback.get(..len),
+        _ => None,
     };
-    // `len` is the length of a frame encoded into a FIFO-sized buffer, so both slices exist;
-    // were one ever missing, the empty load would make the chip send a packet that fails its
-    // CRC (a FIFO underflow) — a lost uplink, never a wrong one.
     match radio.finish_transmit(frame.unwrap_or(&[])).await {
         Ok(()) => {
             master.on_sent();

@@ -77,29 +77,31 @@ impl<const N: usize> StreamSender<N> {
         usize::from(self.next.wrapping_sub(self.base))
     }
 
+    /// How many bytes a [`StreamSender::fill`] of `room` bytes would send now: those queued
+    /// past the ones in flight, within the window and `room`.
+    pub fn ready(&self, room: usize) -> usize {
+        let in_flight = self.in_flight();
+        let unsent = self.buffer.len().saturating_sub(in_flight);
+        MAX_IN_FLIGHT
+            .saturating_sub(in_flight)
+            .min(room)
+            .min(unsent)
+    }
+
     /// Fills `out` with the next bytes to send; returns (offset of the first, count).
     pub fn fill(&mut self, out: &mut [u8]) -> (u8, usize) {
         let in_flight = self.in_flight();
-        let room = MAX_IN_FLIGHT.saturating_sub(in_flight).min(out.len());
-        let mut count = 0;
+        let count = self.ready(out.len());
         for (dst, src) in out
             .iter_mut()
-            .zip(self.buffer.iter().skip(in_flight).take(room))
+            .zip(self.buffer.iter().skip(in_flight).take(count))
         {
             *dst = *src;
-            count += 1;
         }
         let seq = self.next;
         self.next = self.next.wrapping_add(count as u8);
         self.sent_total += count as u64;
         (seq, count)
-    }
-
-    /// Takes back the last [`StreamSender::fill`] (its offset and count, right after it):
-    /// those bytes are sent again by the next fill.
-    pub fn unfill(&mut self, seq: u8, count: usize) {
-        self.next = seq;
-        self.sent_total = self.sent_total.saturating_sub(count as u64);
     }
 
     /// Processes the peer's cumulative ack. An ack outside `base..=next` is stale and
@@ -314,6 +316,22 @@ mod tests {
         }
         // Everything not acknowledged before the reboot arrives, in order.
         assert_eq!(got, b"456789");
+    }
+
+    #[test]
+    fn ready_is_what_the_next_fill_sends() {
+        let mut tx = StreamSender::<1024>::new();
+        assert_eq!(tx.ready(10), 0);
+        tx.write(&[7u8; 300]);
+        let mut buf = [0u8; 50];
+        // Limited by the room, then by the window of MAX_IN_FLIGHT, then by what is queued.
+        for (room, want) in [(50, 50), (50, 50), (50, 27), (50, 0)] {
+            assert_eq!(tx.ready(room), want);
+            assert_eq!(tx.fill(&mut buf[..room]).1, want);
+        }
+        tx.on_ack(127);
+        assert_eq!(tx.ready(200), MAX_IN_FLIGHT);
+        assert_eq!(tx.ready(0), 0);
     }
 
     #[test]

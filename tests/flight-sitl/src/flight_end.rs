@@ -288,7 +288,7 @@ pub(crate) async fn flight_board(
 }
 
 /// Applies a radio injection to a chip (called when it changes).
-pub(crate) fn inject_radio(chip: &ChipHandle, from: RadioInjection, to: RadioInjection) {
+pub fn inject_radio(chip: &ChipHandle, from: RadioInjection, to: RadioInjection) {
     if from == RadioInjection::BrownOut {
         // Power back: a power-on reset, registers lost.
         chip.set_fault(Fault::None);

@@ -148,9 +148,13 @@ pub enum BootCause {
 /// scenario figures stay comparable.
 pub const WARMUP_S: f64 = 4.0;
 /// Distance between the module and the flight controller, m.
-const DISTANCE_M: f64 = 100.0;
+pub const DISTANCE_M: f64 = 100.0;
 /// Attenuation of a cut link, dB.
-const CUT_DB: f64 = 300.0;
+pub const CUT_DB: f64 = 300.0;
+/// The module's RFM22B crystal error, ppm.
+pub const MODULE_CRYSTAL_PPM: f64 = 8.0;
+/// The flight controller's RFM22B crystal error, ppm.
+pub const FLIGHT_CRYSTAL_PPM: f64 = -6.0;
 
 /// What the boards and the physics share.
 pub(crate) struct WorldState {
@@ -232,8 +236,8 @@ pub(crate) struct PhonePipes {
 /// The transmitter's arm switch: channel 5 (AUX1), index 4 (`arm.channel 5` listens to it).
 const ARM_SWITCH_CHANNEL: usize = 4;
 
-/// The handset's channels for the pilot's sticks and switches.
-pub(crate) fn transmitter(p: &PilotInput) -> Channels {
+/// The handset's channels for the pilot's sticks and switches (the PIL's handset plays the same).
+pub fn transmitter(p: &PilotInput) -> Channels {
     let mut ch = [CHANNEL_CENTER; MAX_CHANNELS];
     let map = ChannelMap::default();
     let mut set = |i: usize, v: u16| {
@@ -260,7 +264,7 @@ fn battery_raw(pack_mv: f32, divider: f32) -> u16 {
 /// to the flight side as after a bind — an unbound module gets a bind ID drawn from the
 /// seed, which the flight side then stores too — at the scenario's rate (`Scenario::rate`
 /// decides both ends).
-fn module_settings(s: &Scenario) -> module_core::settings::Settings {
+pub fn module_settings(s: &Scenario) -> module_core::settings::Settings {
     let given = s.module_settings.unwrap_or_default();
     module_core::settings::Settings {
         bind_id: if given.bind_id == 0 {
@@ -280,6 +284,21 @@ fn module_settings(s: &Scenario) -> module_core::settings::Settings {
             ..given.openlrs
         },
         ..given
+    }
+}
+
+/// The flight controller's side of the pairing: `settings` store `module`'s link as after a
+/// bind (under model match the link of the lowest model the module records as bound) and,
+/// with the OpenLRSng protocol, the bind data the module's OpenLRSng bind would send.
+pub fn pair_flight_settings(settings: &mut Settings, module: &module_core::settings::Settings) {
+    let bound_model = (module.model_match && module.bound_models != 0)
+        .then(|| module.bound_models.trailing_zeros() as u8);
+    if let Some(link) = module_core::air::link_params(module) {
+        let link = bound_model.map_or(link, |m| link.for_model(m));
+        let _ = store_link(settings, &link);
+    }
+    if let Ok(data) = module_core::settings::openlrs::bind_data(module) {
+        let _ = store_openlrs(settings, &data);
     }
 }
 
@@ -325,10 +344,11 @@ impl World {
     /// If the settings do not make a flyable configuration — a broken scenario, which the
     /// test should show.
     #[allow(clippy::expect_used, clippy::too_many_lines)]
-    pub fn new(scenario: Scenario) -> Self {
+    pub fn new(mut scenario: Scenario) -> Self {
         let module = module_settings(&scenario);
+        pair_flight_settings(&mut scenario.settings, &module);
         let Scenario {
-            mut settings,
+            settings,
             quad: params,
             seed,
             duration_s,
@@ -341,18 +361,6 @@ impl World {
             flight_flash,
             gps,
         } = scenario;
-        // The flight controller stores the module's link (as after a bind): under model match
-        // the link of the lowest model the module records as bound.
-        let bound_model = (module.model_match && module.bound_models != 0)
-            .then(|| module.bound_models.trailing_zeros() as u8);
-        if let Some(link) = module_core::air::link_params(&module) {
-            let link = bound_model.map_or(link, |m| link.for_model(m));
-            let _ = store_link(&mut settings, &link);
-        }
-        // With the OpenLRSng protocol, the bind data the module's OpenLRSng bind would send.
-        if let Ok(data) = module_core::settings::openlrs::bind_data(&module) {
-            let _ = store_openlrs(&mut settings, &data);
-        }
         let setup = from_settings(&settings).expect("settings make a flyable setup");
         let ts_s = f64::from(setup.loop_config.ts_s);
         let period_us = (ts_s * 1e6).round() as u64;
@@ -368,8 +376,10 @@ impl World {
             p.spi_clock_hz = spi_hz;
             p
         };
-        let module_radio = medium.add_radio(placement(0.0, 8.0, SPI_CLOCK_NRF52840_HZ));
-        let flight_radio = medium.add_radio(placement(DISTANCE_M, -6.0, SPI_CLOCK_F405_HZ));
+        let module_radio =
+            medium.add_radio(placement(0.0, MODULE_CRYSTAL_PPM, SPI_CLOCK_NRF52840_HZ));
+        let flight_radio =
+            medium.add_radio(placement(DISTANCE_M, FLIGHT_CRYSTAL_PPM, SPI_CLOCK_F405_HZ));
         let (module_id, flight_id) = (module_radio.id, flight_radio.id);
         let (module_chip, flight_chip) = (module_radio.chip.clone(), flight_radio.chip.clone());
         let shared: Shared = Rc::new(RefCell::new(WorldState {

@@ -1,7 +1,8 @@
 //! The boundary between the core and the chip around it.
 //!
 //! The core owns the System Control Space (0xE000_E000–0xE000_EFFF: NVIC, SCB, SysTick, MPU,
-//! FPU registers) and the debug blocks below it (DWT, ITM at 0xE000_0000–0xE000_DFFF); every
+//! FPU registers), the debug blocks below it (ITM, DWT, FPB at 0xE000_0000–0xE000_DFFF) and
+//! the TPIU (0xE004_0000–0xE004_0FFF); every
 //! other address — flash, RAM, peripherals — goes to the [`Bus`]. Time is virtual
 //! nanoseconds since power-on, derived by the core from the cycles it has executed at the
 //! clock [`Bus::core_hz`] reports.
@@ -53,10 +54,17 @@ pub enum ResetCause {
 /// Everything outside the core: the memories and peripherals of one chip (a SoC model).
 ///
 /// The core calls `read`/`write` for every data access outside its own SCS, `fetch` for
-/// instructions, and keeps the bus up to date with time: before it lets virtual time pass
-/// [`Bus::next_event_ns`] it calls [`Bus::advance`], and it samples [`Bus::irq_lines`] after
-/// every `write`, `read` and `advance`. Interrupt lines are levels: a line that is high while
-/// its interrupt is not active sets it pending (the NVIC latches it), as on the silicon.
+/// instructions it has not decoded yet (it keeps decoded code until
+/// [`Bus::code_generation`] changes or it stores to that code itself), and keeps the bus up
+/// to date with time: before it lets virtual time pass [`Bus::next_event_ns`] it calls
+/// [`Bus::advance`], and it calls `advance` at the end of every `run_until`. After every
+/// `advance`, and after every `read` or `write` at 0x4000_0000 or above (the peripheral,
+/// device and vendor regions of the ARMv7-M memory map), it samples [`Bus::irq_lines`] and
+/// re-reads [`Bus::next_event_ns`]; after such a write also [`Bus::core_hz`] and
+/// [`Bus::code_generation`]. Accesses below 0x4000_0000 (the Code and SRAM regions) are
+/// memory: nothing is re-read after them. Interrupt lines are levels: a line that is high
+/// while its interrupt is not active sets it pending (the NVIC latches it), as on the
+/// silicon; a rising edge while it is active pends it again.
 pub trait Bus {
     /// The halfword of code at `addr` (2-aligned); `None` is a fetch fault (an instruction
     /// access violation on the core's side).
@@ -99,8 +107,9 @@ pub trait Bus {
     /// Brings the bus to `now_ns` (every event due at or before it has happened).
     fn advance(&mut self, now_ns: u64);
 
-    /// The core clock in Hz; the core re-reads it after every write to the bus (the clock
-    /// tree may have been reprogrammed) and counts time from then on at the new rate.
+    /// The core clock in Hz; the core re-reads it after every write to a peripheral and
+    /// every `advance` (the clock tree may have been reprogrammed) and counts time from then
+    /// on at the new rate.
     fn core_hz(&self) -> u32;
 
     /// A reset the chip requests (watchdog, power): the core resets itself and calls
@@ -113,6 +122,13 @@ pub trait Bus {
     /// peripherals go to their reset state; RAM keeps its contents.
     fn reset(&mut self, cause: ResetCause) {
         let _ = cause;
+    }
+
+    /// The program asked for a system reset (AIRCR.SYSRESETREQ); the core resets itself
+    /// after this returns. Override to record the cause where the chip shows it (RCC_CSR
+    /// SFTRSTF, RESETREAS.SREQ); the default resets the bus with [`ResetCause::Other`].
+    fn sysresetreq(&mut self) {
+        self.reset(ResetCause::Other);
     }
 
     /// The core went to sleep (WFI/WFE with nothing pending) or woke up, at `now_ns`; for the

@@ -6,6 +6,15 @@
 //!   what is modelled, the cycle model and the datasheet figures).
 //! - [`wire`]: what a microcontroller model sees of its board — pins, SPI, I²C, UART and
 //!   analog inputs — the one boundary between the SoC models and the world.
+//! - [`nrf52840`]: the module's nRF52840, register by register.
+//! - [`stm32f405`]: the flight controller's STM32F405, register by register.
+//! - [`chips`]: the chips on the boards, register by register from their datasheets.
+//! - [`board`]: the boards (which chip is on which pin), each an `Outside`.
+//! - [`world`]: the co-simulation of both MCUs with the radios, physics, handset and pilot.
 
+pub mod board;
+pub mod chips;
+pub mod nrf52840;
 pub mod stm32f405;
 pub mod wire;
+pub mod world;

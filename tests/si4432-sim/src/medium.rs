@@ -257,6 +257,22 @@ impl Medium {
     pub fn time(&self) -> VirtualTime {
         self.world.borrow().time.clone()
     }
+
+    /// The earliest instant a chip changes on its own (a byte on air, a PLL settling), ns;
+    /// `None` when every chip is idle. For a co-simulation that steps the medium itself.
+    pub fn next_event_ns(&self) -> Option<u64> {
+        self.world.borrow().next_chip_event_ns()
+    }
+
+    /// Moves the whole medium to `t_ns` (every chip event up to it, in time order; no task
+    /// runs): what a co-simulation that is not an async task calls between its steps.
+    /// Earlier instants are ignored (time only moves forward).
+    pub fn advance_to_ns(&self, t_ns: u64) {
+        let mut world = self.world.borrow_mut();
+        if t_ns > world.now_ns() {
+            world.advance_to(t_ns);
+        }
+    }
 }
 
 /// Test-side access to one chip: look at it and break it.
@@ -387,6 +403,49 @@ impl ChipHandle {
                 );
                 Duration::from_nanos(airtime_ns(bits, modem.tx_bit_rate_bps))
             })
+        })
+    }
+
+    /// nSEL falls: an SPI transaction clocked byte by byte starts ([`ChipHandle::clock_byte`];
+    /// a board whose MCU's SPI controller shifts single bytes, rather than an embedded-hal
+    /// transaction). An injected bus error decides here whether it reaches the chip.
+    pub fn select(&self) {
+        self.with(|w| w.select(self.index));
+    }
+
+    /// One byte clocked while selected: MOSI in, what the chip drives on MISO out; `None`
+    /// when nothing drives MISO (not selected, so SDO is tri-stated, or the transaction was
+    /// failed by an injected bus error). The first byte is the address (bit 7 = write),
+    /// the next ones data, bursts auto-incrementing except at 0x7F, exactly as
+    /// [`crate::SimSpi`]'s transactions; each byte acts on the chip when it is clocked.
+    pub fn clock_byte(&self, mosi: u8) -> Option<u8> {
+        self.with(|w| w.clock_byte(self.index, mosi))
+    }
+
+    /// nSEL rises: the transaction ends.
+    pub fn deselect(&self) {
+        self.with(|w| w.deselect(self.index));
+    }
+
+    /// From now on every change of nIRQ is kept with its time for
+    /// [`ChipHandle::take_nirq_edges`] (a board feeding the line into an MCU model).
+    pub fn record_nirq_edges(&self) {
+        self.with(|w| {
+            if let Some(r) = w.radios.get_mut(self.index) {
+                r.irq.edges.get_or_insert_with(Vec::new);
+            }
+        });
+    }
+
+    /// The changes of nIRQ since the last call, in time order: (time ns, low). Empty unless
+    /// [`ChipHandle::record_nirq_edges`] was called.
+    pub fn take_nirq_edges(&self) -> Vec<(u64, bool)> {
+        self.with(|w| {
+            w.radios
+                .get_mut(self.index)
+                .and_then(|r| r.irq.edges.as_mut())
+                .map(std::mem::take)
+                .unwrap_or_default()
         })
     }
 

@@ -32,6 +32,9 @@ pub(crate) struct IrqLine {
     /// When the line last fell (for the interrupt latency).
     pub fell_at_ns: u64,
     pub waiters: Vec<Waker>,
+    /// Every change (time ns, low) since the board last took them, when a board asked for
+    /// them (`ChipHandle::record_nirq_edges`); `None`: not kept.
+    pub edges: Option<Vec<(u64, bool)>>,
 }
 
 /// SPI bus statistics of one radio.
@@ -59,6 +62,16 @@ pub(crate) struct Radio {
     pub config: RadioConfig,
     pub irq: IrqLine,
     pub spi: SpiBus,
+    /// The byte-wise transaction in progress (nSEL low, `ChipHandle::select`).
+    pub selected: Option<Selected>,
+}
+
+/// A transaction clocked byte by byte by a board's SPI controller.
+#[derive(Debug, Default)]
+pub(crate) struct Selected {
+    session: Session,
+    /// An injected bus error: nothing of it reaches the chip.
+    failed: bool,
 }
 
 #[derive(Debug)]
@@ -82,7 +95,7 @@ impl Events for World {
 }
 
 /// Decoder state of one SPI transaction (nSEL low): the first byte is the address.
-#[derive(Default)]
+#[derive(Debug, Default)]
 struct Session {
     address: Option<u8>,
     write: bool,
@@ -111,6 +124,7 @@ impl World {
                 ..IrqLine::default()
             },
             spi: SpiBus::default(),
+            selected: None,
         });
         me
     }
@@ -121,7 +135,7 @@ impl World {
     }
 
     /// Earliest pending chip event.
-    fn next_chip_event_ns(&self) -> Option<u64> {
+    pub fn next_chip_event_ns(&self) -> Option<u64> {
         self.radios
             .iter()
             .filter_map(|r| r.chip.next_event_ns())
@@ -250,6 +264,9 @@ impl World {
             } else {
                 radio.irq.rising_edges += 1;
             }
+            if let Some(edges) = radio.irq.edges.as_mut() {
+                edges.push((now, low));
+            }
             for waker in radio.irq.waiters.drain(..) {
                 waker.wake();
             }
@@ -284,6 +301,54 @@ impl World {
             .sum();
         let bits = bytes as u64 * 8;
         config.spi_overhead_ns + (bits * 1_000_000_000).div_ceil(u64::from(config.spi_clock_hz))
+    }
+
+    /// nSEL of radio `i` falls: a byte-wise transaction starts (an injected bus error
+    /// decides now whether it reaches the chip). A select while selected starts over.
+    pub fn select(&mut self, i: usize) {
+        self.process_due();
+        let Some(radio) = self.radios.get_mut(i) else {
+            return;
+        };
+        radio.spi.stats.transactions += 1;
+        let bus = &mut radio.spi;
+        let failed = if bus.fail_next > 0 {
+            bus.fail_next -= 1;
+            true
+        } else {
+            bus.error_rate > 0.0 && self.rng.chance(bus.error_rate)
+        };
+        if let Some(r) = self.radios.get_mut(i) {
+            if failed {
+                r.spi.stats.failed += 1;
+            }
+            r.selected = Some(Selected {
+                session: Session::default(),
+                failed,
+            });
+        }
+    }
+
+    /// One byte of the selected transaction of radio `i`: MOSI in, MISO out. `None` when
+    /// nothing drives MISO: nSEL high (the chip's SDO is tri-stated), or a transaction an
+    /// injected bus error kept from the chip.
+    pub fn clock_byte(&mut self, i: usize, mosi: u8) -> Option<u8> {
+        self.process_due();
+        let mut selected = self.radios.get_mut(i).and_then(|r| r.selected.take())?;
+        let miso = (!selected.failed).then(|| self.spi_byte(i, &mut selected.session, mosi));
+        if let Some(r) = self.radios.get_mut(i) {
+            r.selected = Some(selected);
+        }
+        self.process_due();
+        self.update_irq(i);
+        miso
+    }
+
+    /// nSEL of radio `i` rises: the transaction ends.
+    pub fn deselect(&mut self, i: usize) {
+        if let Some(r) = self.radios.get_mut(i) {
+            r.selected = None;
+        }
     }
 
     /// One SPI transaction on radio `i` whose bus time (`cost_ns`) has been spent: fails if

@@ -21,13 +21,12 @@
 //! fallbacks.
 //!
 //! Cost (m4count, `tests/m4-bench` `flight_loop` regions 34–38, one whole attitude-mode
-//! `FlightLoop::step` at 1 kHz; measured at issue 17's third loop pass, current figures in
-//! `tests/flight-sitl/README.md`): 4 374 instructions with the INS predicting (1 167 with the
-//! complementary filter, region 3), 5 451 on a step that also fuses a baro reading, 4 411 on
-//! average over 100 steps with the baro at 50 Hz and one pseudo-measurement. At 1.3 cycles per
-//! instruction on the 168 MHz F405 that is 34 µs, **3.4 % of the CPU at 1 kHz**, so the INS
-//! predicts on every sample; a step that also fuses a magnetometer reading (≈ 3 500) and a
-//! GPS fix (≈ 8 100, `gps` bench) stays under 18 000 (≈ 140 µs).
+//! `FlightLoop::step` at 1 kHz; the current figures are generated into
+//! `tests/flight-sitl/README.md`): a step with the INS predicting is budgeted at 3 500
+//! instructions (`cargo xtask figures --check` fails above it), 27 µs at 1.3 cycles per
+//! instruction on the 168 MHz F405, **under 3 % of the CPU at 1 kHz**, so the INS predicts
+//! on every sample; a full correction (GPS position and velocity, baro, magnetometer) is
+//! budgeted at 8 000.
 //!
 //! [`Filter::fuse_zero_horizontal_velocity`]: crate::estimation::ins::Filter::fuse_zero_horizontal_velocity
 

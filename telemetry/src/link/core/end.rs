@@ -38,6 +38,15 @@ pub(super) fn stream_room(params: &LinkParams, overhead: usize, keyed: bool) -> 
         .saturating_sub(tag_extra(keyed))
 }
 
+/// The most stream bytes one frame carries (a frame is at most one FIFO).
+pub(super) const STREAM_CHUNK_BYTES: usize = 64;
+
+/// How many stream bytes [`stream_out`] would put into a frame with `room` for them now;
+/// None where it would send nothing.
+pub(super) fn stream_ready<const T: usize>(send: &StreamSender<T>, room: usize) -> Option<usize> {
+    (room <= STREAM_CHUNK_BYTES).then(|| send.ready(room))
+}
+
 /// The streams' share of a frame to send: up to `room` bytes from `send` copied into `data`,
 /// with the header carrying their sequence number and the ack of what `receive` has taken.
 /// None if `room` exceeds `data` (the caller then sends nothing rather than a cut frame).
@@ -45,7 +54,7 @@ pub(super) fn stream_out<'d, const T: usize, const R: usize>(
     send: &mut StreamSender<T>,
     receive: &StreamReceiver<R>,
     room: usize,
-    data: &'d mut [u8; 64],
+    data: &'d mut [u8; STREAM_CHUNK_BYTES],
 ) -> Option<(StreamHeader, &'d [u8])> {
     let data = data.get_mut(..room)?;
     let (seq, n) = send.fill(data);

@@ -4,7 +4,8 @@
 
 use crate::channels::{CHANNEL_CENTER, Channels, pack_group};
 use crate::frame::{
-    Frame, LinkReport, Received, Uplink, decode, encode, open, peek_sealed, seal, uplink_overhead,
+    Frame, LinkReport, NONCE_FRAME_BYTES, Received, Uplink, decode, encode, open, peek_sealed,
+    seal, sealed_uplink_bytes, uplink_overhead,
 };
 use crate::link::auth::LinkKey;
 use crate::link::bind::LinkParams;
@@ -14,7 +15,9 @@ use crate::link::radio::{LinkRx, RadioConfig};
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
-use super::end::{keyed_hops, report, stream_in, stream_out, stream_room};
+use super::end::{
+    STREAM_CHUNK_BYTES, keyed_hops, report, stream_in, stream_out, stream_ready, stream_room,
+};
 use super::epoch::{MasterEpoch, NonceVerdict, counter};
 use super::{STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
 
@@ -58,7 +61,7 @@ pub struct Master {
     master_nonce_due: bool,
     /// The uplink planned in this slot is the master's nonce.
     planned_nonce: bool,
-    /// Stream bytes [`Master::uplink_len`] put in this slot's uplink: [`Master::plan`]
+    /// Stream bytes [`Master::uplink_len`] counted for this slot's uplink: [`Master::plan`]
     /// takes no more, so the frame keeps the length the radio was started with.
     stream_cap: Option<usize>,
 }
@@ -168,7 +171,7 @@ impl Master {
                 from_us: slot_start_us,
                 until_us: slot_start_us + u64::from(self.schedule.listen_end_offset_us()),
             },
-            SlotKind::Uplink => match self.build_uplink(buf).map(|(len, _)| len) {
+            SlotKind::Uplink => match self.build_uplink(buf) {
                 Some(len) => Step::Transmit {
                     channel,
                     at_us: slot_start_us + u64::from(self.schedule.rate.tx_lead_us()),
@@ -185,39 +188,51 @@ impl Master {
         self.hops.channel_for_slot(self.slot)
     }
 
-    /// The length of this slot's uplink, built into `buf` and taken back: the radio can be
-    /// started with it (preamble and sync on the air) before the channels are latched and
-    /// [`Master::plan`] builds the frame for good, with the same length — its stream data
-    /// is capped to what this one took (the application may queue more meanwhile; acks,
-    /// which could shorten it, only come with a downlink). `None` in a downlink slot.
-    pub fn uplink_len(&mut self, buf: &mut [u8]) -> Option<usize> {
+    /// The length of this slot's uplink, from what it will carry (nonce or channels, report,
+    /// the stream bytes ready now, CRC or tag) without building it: the radio can be started
+    /// with it (preamble and sync on the air) before the channels are latched and
+    /// [`Master::plan`] builds the frame, with the same length — its stream data is capped
+    /// to what this one counted (the application may queue more meanwhile; acks, which could
+    /// shorten it, only come with a downlink). `None` in a downlink slot.
+    pub fn uplink_len(&mut self) -> Option<usize> {
         if self.schedule.kind(self.slot) != SlotKind::Uplink {
             return None;
         }
         self.stream_cap = None;
-        let (len, filled) = self.build_uplink(buf)?;
-        if let Some((seq, count)) = filled {
-            self.uplink_stream.unfill(seq, count);
-            self.stream_cap = Some(count);
+        if self.master_nonce().is_some() {
+            return Some(NONCE_FRAME_BYTES);
         }
-        Some(len)
+        let (format, with_report) = (self.params.format, self.report_due);
+        let room = stream_room(
+            &self.params,
+            uplink_overhead(format, with_report),
+            self.key.is_some(),
+        );
+        let data = stream_ready(&self.uplink_stream, room)?;
+        self.stream_cap = Some(data);
+        Some(match self.key {
+            Some(_) => sealed_uplink_bytes(format, with_report, data),
+            None => uplink_overhead(format, with_report) + data,
+        })
     }
 
-    /// Builds the uplink into `buf`: its length, and the stream bytes it took (offset,
-    /// count; `None` for the master's nonce).
-    fn build_uplink(&mut self, buf: &mut [u8]) -> Option<(usize, Option<(u8, usize)>)> {
-        self.planned_nonce = false;
-        if let (Some(key), true) = (&self.key, self.master_nonce_due)
-            && let Some((nonce, counter)) = self.epoch.master_nonce_for(self.slot)
-        {
+    /// The master's nonce and its counter, when this slot's uplink is to carry it.
+    fn master_nonce(&self) -> Option<(&LinkKey, (u32, u64))> {
+        let key = self.key.as_ref().filter(|_| self.master_nonce_due)?;
+        Some((key, self.epoch.master_nonce_for(self.slot)?))
+    }
+
+    /// Builds the uplink into `buf`; returns its length.
+    fn build_uplink(&mut self, buf: &mut [u8]) -> Option<usize> {
+        self.planned_nonce = self.master_nonce().is_some();
+        if let Some((key, (nonce, counter))) = self.master_nonce() {
             // The follower is still in its handshake: the master's nonce, alone, under the
             // follower's nonce (the only counter it can check yet); no channels to take.
             let frame = Frame::MasterNonce {
                 slot: self.slot as u8,
                 nonce,
             };
-            self.planned_nonce = true;
-            return seal(&frame, key, counter, buf).ok().map(|len| (len, None));
+            return seal(&frame, key, counter, buf).ok();
         }
         let format = self.params.format;
         let report = self.report_due.then(|| report(&self.rssi, &self.lq));
@@ -227,14 +242,13 @@ impl Master {
         let overhead = uplink_overhead(format, report.is_some());
         let room = stream_room(&self.params, overhead, self.key.is_some());
         let room = room.min(self.stream_cap.take().unwrap_or(usize::MAX));
-        let mut data = [0u8; 64];
+        let mut data = [0u8; STREAM_CHUNK_BYTES];
         let (stream, data) = stream_out(
             &mut self.uplink_stream,
             &self.downlink_stream,
             room,
             &mut data,
         )?;
-        let (seq, n) = (stream.seq, data.len());
         let up = Uplink {
             slot: self.slot as u8,
             stream,
@@ -254,7 +268,7 @@ impl Master {
             (Some(key), None) => seal(&Frame::Uplink(up), key, self.frame_counter(), buf),
             (None, _) => encode(&Frame::Uplink(up), self.params.bind_id, buf),
         };
-        len.ok().map(|len| (len, Some((seq, n))))
+        len.ok()
     }
 
     /// The uplink of the current slot has been sent.

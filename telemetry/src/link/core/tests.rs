@@ -532,7 +532,7 @@ fn the_uplink_length_is_known_before_its_channels_are_latched() {
     let (mut master, _) = pair();
     master.uplink_stream.write(&[1, 2, 3]);
     let mut buf = [0u8; 64];
-    let len = master.uplink_len(&mut buf).unwrap();
+    let len = master.uplink_len().unwrap();
     master.uplink_stream.write(&[4; 40]);
     master.set_channels(&[1_800; 16]);
     let Step::Transmit { len: built, .. } = master.plan(0, &mut buf) else {
@@ -555,7 +555,7 @@ fn the_uplink_length_is_known_before_its_channels_are_latched() {
     assert_eq!(channels, [1_800; 16]);
     // The next slot's uplink goes on with the queued bytes.
     master.on_sent();
-    let len = master.uplink_len(&mut buf).unwrap();
+    let len = master.uplink_len().unwrap();
     let Step::Transmit { len: next, .. } = master.plan(SLOT_US, &mut buf) else {
         panic!("an uplink slot");
     };
@@ -567,4 +567,104 @@ fn the_uplink_length_is_known_before_its_channels_are_latched() {
     };
     assert_eq!(up.stream.seq, 3);
     assert!(up.data.iter().all(|b| *b == 4) && !up.data.is_empty());
+}
+
+#[test]
+fn the_counted_uplink_length_is_the_built_one_in_every_state() {
+    // Both ends in lockstep over every rate mode, keyed (with the epoch handshake's nonce
+    // frames) and not, with reports after downlinks, a lost downlink now and then, and the
+    // uplink stream empty, partly filled and full: the length `uplink_len` counts is the
+    // length `plan` then builds, and the frame goes through.
+    let modes = [
+        (RateMode::L50, ChannelFormat::Compact8),
+        (RateMode::M100, ChannelFormat::Full16),
+        (RateMode::F250, ChannelFormat::Full16),
+        (RateMode::F500, ChannelFormat::Full16),
+        (RateMode::F700, ChannelFormat::Sticks16),
+    ];
+    for (rate, format) in modes {
+        for keyed in [false, true] {
+            let params = LinkParams::new(0xC0FF_EE11, Band::Mhz433, rate, format, 4);
+            let slot_us = u64::from(params.schedule().slot_us());
+            let mut master = Master::new(params);
+            let mut follower = Follower::new(params, FailsafeValues::default(), 1_000_000);
+            if keyed {
+                master = master.with_key(test_key(3)).with_nonce_seed(7);
+                follower = follower.with_key(test_key(3)).with_nonce_seed(9);
+            }
+            let (mut counted, mut nonces, mut empty, mut taken) = (0, 0, 0, 0);
+            for slot in 0..3_000u64 {
+                let t = slot * slot_us;
+                // Telemetry queued in bursts: empty, a few bytes, more than a frame holds.
+                let burst = [0, 0, 3, 0, 90, 0, 0, 1][(slot % 8) as usize];
+                master.uplink_stream.write(&vec![0x5A; burst]);
+                let (mut mb, mut fb) = ([0u8; 64], [0u8; 64]);
+                let len = master.uplink_len();
+                let m = master.plan(t, &mut mb);
+                let f = follower.plan(t, &mut fb);
+                match (m, f) {
+                    (
+                        Step::Transmit {
+                            channel,
+                            len: built,
+                            ..
+                        },
+                        f,
+                    ) => {
+                        assert_eq!(len, Some(built), "{rate:?} keyed {keyed} slot {slot}");
+                        counted += 1;
+                        nonces += usize::from(built == crate::frame::NONCE_FRAME_BYTES);
+                        master.on_sent();
+                        match f {
+                            Step::Listen { channel: c, .. } if c == channel => {
+                                let end =
+                                    t + u64::from(master.schedule().packet_end_offset_us(built));
+                                let rx = LinkRx::Packet {
+                                    len: built,
+                                    rssi_dbm: -70,
+                                };
+                                let before = follower.uplink_stream.available();
+                                follower.on_received(rx, &mb[..built], end);
+                                taken += usize::from(follower.uplink_stream.available() > before);
+                            }
+                            Step::Listen { .. } => {}
+                            Step::Transmit { .. } => follower.on_sent(),
+                            Step::Idle => follower.on_skipped(),
+                        }
+                    }
+                    (m, Step::Transmit { len: sent, .. }) => {
+                        assert_eq!(len, None);
+                        follower.on_sent();
+                        // Every seventh downlink is lost, so reports and acks vary.
+                        if let Step::Listen { .. } = m
+                            && slot % 7 != 3
+                        {
+                            let end = t + u64::from(master.schedule().packet_end_offset_us(sent));
+                            let rx = LinkRx::Packet {
+                                len: sent,
+                                rssi_dbm: -72,
+                            };
+                            master.on_received(rx, &fb[..sent], end);
+                        }
+                        master.finish_listen();
+                    }
+                    (Step::Listen { .. }, _) => {
+                        assert_eq!(len, None);
+                        master.finish_listen();
+                        follower.on_skipped();
+                    }
+                    (Step::Idle, _) => panic!("the master never idles with a FIFO-sized buffer"),
+                }
+                let mut sink = [0u8; 64];
+                empty += usize::from(follower.uplink_stream.read(&mut sink) == 0);
+            }
+            assert!(counted > 1_000, "{rate:?} keyed {keyed}: {counted} uplinks");
+            assert!(
+                taken > 100,
+                "{rate:?} keyed {keyed}: stream taken {taken} times"
+            );
+            assert!(empty > 100, "{rate:?} keyed {keyed}: {empty} empty reads");
+            assert_eq!(nonces > 0, keyed, "{rate:?}: {nonces} master nonce frames");
+        }
+    }
 }

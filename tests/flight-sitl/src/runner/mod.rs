@@ -417,8 +417,9 @@ impl Piloting for PlanPilot {
     }
 }
 
-/// The world's scenario for `opts`, flown by the plan's pilot with the plan's fault.
-fn scenario(opts: &Options, plan: Plan) -> Scenario {
+/// The world's scenario for `opts`, flown by the plan's pilot with the plan's fault (the
+/// processor-in-the-loop runner flies the same).
+pub fn scenario(opts: &Options, plan: Plan) -> Scenario {
     let (kind, duration_s) = (plan.kind, plan.duration_s);
     let mut s = Scenario::flown_by(
         opts.settings.clone(),

@@ -8,8 +8,8 @@
 //! The follower first acquires the master (not measured), then the pair runs `SLOTS` slots.
 //! Each slot is five m4count regions, in this order:
 //! 1. master `uplink_len` and `plan` (hop, schedule, frame build: channels, stream chunk,
-//!    CRC — an uplink is built twice: once for its length before the radio is started, once
-//!    with the channels latched, as `link::master::run_master` does);
+//!    CRC — the length is counted before the radio is started, the frame built once with
+//!    the channels latched, as `link::master::run_master` does);
 //! 2. follower `plan` (hop, schedule; on a downlink slot its frame build);
 //! 3. master completion: `on_sent`, or `on_received` of the downlink (frame parse, CRC,
 //!    stream ack/reassembly, link quality) and `finish_listen`;
@@ -90,7 +90,7 @@ fn main() -> ! {
     for _ in 0..SLOTS {
         let now = black_box(t);
         m4count_marker();
-        let _ = master.uplink_len(&mut mbuf);
+        let _ = master.uplink_len();
         let m = master.plan(now, &mut mbuf);
         m4count_marker();
         let f = follower.plan(now, &mut fbuf);

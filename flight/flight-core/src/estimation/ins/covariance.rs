@@ -8,18 +8,40 @@ pub(super) fn column(p: &Covariance, k: usize) -> [f32; STATES] {
     p.get(k).copied().unwrap_or([0.0; STATES])
 }
 
-/// P ← P − (ph·phᵀ)/s, the scalar Kalman update P − K·H·P with K = ph/s. Written as
-/// P − u·uᵀ with u = ph/√s: every element is one multiply-subtract and, the product being
-/// commutative, P[i][j] and P[j][i] get bit-identical values, so P stays exactly symmetric
-/// without a mirror pass or index arithmetic.
-pub(super) fn subtract_outer(p: &mut Covariance, ph: &[f32; STATES], s: f32) {
-    let scale = crate::estimation::math::inv_sqrt(s);
-    let u = ph.map(|v| v * scale);
-    for (row, &u_i) in p.iter_mut().zip(u.iter()) {
-        for (p_ij, &u_j) in row.iter_mut().zip(u.iter()) {
-            *p_ij -= u_i * u_j;
-        }
+/// How many scalar rows one covariance pass takes at most (a GPS position or velocity).
+pub(super) const ROWS: usize = 3;
+
+/// P ← P − Σₖ uₖ·uₖᵀ: the covariance part of up to [`ROWS`] sequential scalar Kalman
+/// updates, each P − K·H·P = P − u·uᵀ with u = P·hᵀ/√s (P·hᵀ taken after the earlier rows,
+/// see `fusion::Filter::sequential_row`; unused rows are zeros), applied in one pass. Only
+/// the upper triangle is formed and each value is stored to both halves, so P stays exactly
+/// symmetric; one pass for three rows loads and stores P once instead of three times. Each
+/// row is its own instance (`I` constant), so its columns unroll with constant offsets: a
+/// rolled loop spent as many instructions on indices as on the arithmetic.
+pub(super) fn subtract_outers(p: &mut Covariance, u: &[[f32; STATES]; ROWS]) {
+    macro_rules! rows {
+        ($($i:literal)*) => { $( subtract_row::<$i>(p, u); )* };
     }
+    rows!(0 1 2 3 4 5 6 7 8 9 10 11 12 13);
+}
+
+/// Row `I` of [`subtract_outers`], columns I.. .
+#[inline(always)]
+fn subtract_row<const I: usize>(p: &mut Covariance, u: &[[f32; STATES]; ROWS]) {
+    let ui: [f32; ROWS] = core::array::from_fn(|k| cell(u, k, I));
+    for j in I..STATES {
+        let mut v = get(p, I, j);
+        for (k, &uik) in ui.iter().enumerate() {
+            v -= uik * cell(u, k, j);
+        }
+        set_symmetric(p, I, j, v);
+    }
+}
+
+/// `u[k][i]` (0 outside).
+#[inline(always)]
+fn cell(u: &[[f32; STATES]; ROWS], k: usize, i: usize) -> f32 {
+    u.get(k).and_then(|row| row.get(i)).copied().unwrap_or(0.0)
 }
 
 /// P[i][j] (0 outside the matrix, which the callers' index ranges never reach).

@@ -38,17 +38,127 @@ pub fn derivative(
     ]
 }
 
-/// The non-trivial blocks of F = ∂f/∂x (the rest is ∂ṗ/∂v = I and zeros).
+/// The non-trivial blocks of F = ∂f/∂x (the rest is ∂ṗ/∂v = I and zeros), held as the few
+/// distinct values they are made of (DERIVATION.md §2): ∂v̇/∂q is four values with signs,
+/// ∂q̇/∂q three, ∂q̇/∂b_g four. The covariance prediction applies the blocks to vectors with
+/// these values in registers (`*_times_add`); the full matrices are for tests and readers.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ProcessJacobian {
-    /// ∂v̇/∂q (3×4).
-    pub dv_dq: [[f32; 4]; 3],
+    /// d1..d4 of DERIVATION.md §2.
+    d: [f32; 4],
     /// ∂v̇/∂ab_z = −(third column of R_beᵀ).
-    pub dv_dbaz: [f32; 3],
-    /// ∂q̇/∂q = ½Ω(ω − b_g) (4×4).
-    pub dq_dq: [[f32; 4]; 4],
-    /// ∂q̇/∂b_g = −½Ξ(q) (4×3).
-    pub dq_dbg: [[f32; 3]; 4],
+    dv_dbaz: [f32; 3],
+    /// ½(ω − b_g).
+    half_rate: [f32; 3],
+    /// ½q.
+    half_q: Quaternion,
+}
+
+impl ProcessJacobian {
+    /// Every block multiplied by `k` (Φ − I = F·dt is `scaled(dt)`).
+    #[must_use]
+    #[inline(always)]
+    pub fn scaled(&self, k: f32) -> Self {
+        Self {
+            d: self.d.map(|v| v * k),
+            dv_dbaz: self.dv_dbaz.map(|v| v * k),
+            half_rate: self.half_rate.map(|v| v * k),
+            half_q: self.half_q.map(|v| v * k),
+        }
+    }
+
+    /// acc + (∂v̇/∂q)·δq, summed into `acc` term by term (one multiply-accumulate each).
+    #[must_use]
+    #[inline(always)]
+    pub fn dv_dq_times_add(&self, dq: [f32; 4], acc: [f32; 3]) -> [f32; 3] {
+        let [d1, d2, d3, d4] = self.d;
+        let [a, b, c, e] = dq;
+        let [n, east, down] = acc;
+        [
+            n + d1 * a + d2 * b + d3 * c + d4 * e,
+            east - d4 * a - d3 * b + d2 * c + d1 * e,
+            down + d3 * a - d4 * b - d1 * c + d2 * e,
+        ]
+    }
+
+    /// ∂v̇/∂ab_z.
+    #[must_use]
+    #[inline(always)]
+    pub fn dv_dbaz(&self) -> [f32; 3] {
+        self.dv_dbaz
+    }
+
+    /// acc + (∂q̇/∂q)·δq = acc + ½Ω(ω − b_g)·δq.
+    #[must_use]
+    #[inline(always)]
+    pub fn dq_dq_times_add(&self, dq: [f32; 4], acc: [f32; 4]) -> [f32; 4] {
+        let [hx, hy, hz] = self.half_rate;
+        let [a, b, c, e] = dq;
+        let [s0, s1, s2, s3] = acc;
+        [
+            s0 - hx * b - hy * c - hz * e,
+            s1 + hx * a + hz * c - hy * e,
+            s2 + hy * a - hz * b + hx * e,
+            s3 + hz * a + hy * b - hx * c,
+        ]
+    }
+
+    /// acc + (∂q̇/∂b_g)·δb = acc − ½Ξ(q)·δb.
+    #[must_use]
+    #[inline(always)]
+    pub fn dq_dbg_times_add(&self, db: [f32; 3], acc: [f32; 4]) -> [f32; 4] {
+        let [k0, k1, k2, k3] = self.half_q;
+        let [x, y, z] = db;
+        let [s0, s1, s2, s3] = acc;
+        [
+            s0 + k1 * x + k2 * y + k3 * z,
+            s1 - k0 * x + k3 * y - k2 * z,
+            s2 - k3 * x - k0 * y + k1 * z,
+            s3 + k2 * x - k1 * y - k0 * z,
+        ]
+    }
+
+    /// ∂v̇/∂q as a matrix (3×4).
+    #[must_use]
+    pub fn dv_dq(&self) -> [[f32; 4]; 3] {
+        transpose(core::array::from_fn(|m| {
+            self.dv_dq_times_add(unit(m), [0.0; 3])
+        }))
+    }
+
+    /// ∂q̇/∂q as a matrix (4×4).
+    #[must_use]
+    pub fn dq_dq(&self) -> [[f32; 4]; 4] {
+        transpose(core::array::from_fn(|m| {
+            self.dq_dq_times_add(unit(m), [0.0; 4])
+        }))
+    }
+
+    /// ∂q̇/∂b_g as a matrix (4×3).
+    #[must_use]
+    pub fn dq_dbg(&self) -> [[f32; 3]; 4] {
+        transpose(core::array::from_fn(|m| {
+            self.dq_dbg_times_add(unit(m), [0.0; 4])
+        }))
+    }
+}
+
+/// The m-th unit vector.
+fn unit<const N: usize>(m: usize) -> [f32; N] {
+    core::array::from_fn(|i| if i == m { 1.0 } else { 0.0 })
+}
+
+/// Columns → matrix.
+fn transpose<const R: usize, const C: usize>(columns: [[f32; R]; C]) -> [[f32; C]; R] {
+    core::array::from_fn(|r| {
+        core::array::from_fn(|c| {
+            columns
+                .get(c)
+                .and_then(|col| col.get(r))
+                .copied()
+                .unwrap_or(0.0)
+        })
+    })
 }
 
 /// Ξ(q): q ⊗ [0, ω] = Ξ(q)·ω.
@@ -60,6 +170,7 @@ pub fn xi(q: Quaternion) -> [[f32; 3]; 4] {
 
 /// F at state `x` with inputs held constant (DERIVATION.md §2).
 #[must_use]
+#[inline(always)]
 pub fn process_jacobian(
     x: &[f32; STATES],
     gyro_radps: [f32; 3],
@@ -68,30 +179,20 @@ pub fn process_jacobian(
     let [_, _, _, _, _, _, q0, q1, q2, q3, bx, by, bz, ab_z] = *x;
     let [a0, a1, a2] = [accel_mps2[0], accel_mps2[1], accel_mps2[2] - ab_z];
     let [wx, wy, wz] = [gyro_radps[0] - bx, gyro_radps[1] - by, gyro_radps[2] - bz];
-    let d1 = 2.0 * (q0 * a0 - q3 * a1 + q2 * a2);
-    let d2 = 2.0 * (q1 * a0 + q2 * a1 + q3 * a2);
-    let d3 = 2.0 * (-q2 * a0 + q1 * a1 + q0 * a2);
-    let d4 = 2.0 * (-q3 * a0 - q0 * a1 + q1 * a2);
-    // The twelve partials share four distinct expressions (up to sign), DERIVATION.md §2.
-    let dv_dq = [[d1, d2, d3, d4], [-d4, -d3, d2, d1], [d3, -d4, -d1, d2]];
-    let dv_dbaz = [
-        -2.0 * (q1 * q3 + q0 * q2),
-        -2.0 * (q2 * q3 - q0 * q1),
-        -(q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3),
-    ];
-    let (hx, hy, hz) = (0.5 * wx, 0.5 * wy, 0.5 * wz);
-    let dq_dq = [
-        [0.0, -hx, -hy, -hz],
-        [hx, 0.0, hz, -hy],
-        [hy, -hz, 0.0, hx],
-        [hz, hy, -hx, 0.0],
-    ];
-    let dq_dbg = xi([q0, q1, q2, q3]).map(|row| row.map(|c| -0.5 * c));
     ProcessJacobian {
-        dv_dq,
-        dv_dbaz,
-        dq_dq,
-        dq_dbg,
+        d: [
+            2.0 * (q0 * a0 - q3 * a1 + q2 * a2),
+            2.0 * (q1 * a0 + q2 * a1 + q3 * a2),
+            2.0 * (-q2 * a0 + q1 * a1 + q0 * a2),
+            2.0 * (-q3 * a0 - q0 * a1 + q1 * a2),
+        ],
+        dv_dbaz: [
+            -2.0 * (q1 * q3 + q0 * q2),
+            -2.0 * (q2 * q3 - q0 * q1),
+            -(q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3),
+        ],
+        half_rate: [0.5 * wx, 0.5 * wy, 0.5 * wz],
+        half_q: [0.5 * q0, 0.5 * q1, 0.5 * q2, 0.5 * q3],
     }
 }
 

@@ -155,6 +155,12 @@ impl Filter {
         &self.config
     }
 
+    /// Replaces the tuning from the next step on; the state and covariance are kept (a
+    /// host that sets its noise per call, as the C reference's `INSSet*Var` did).
+    pub fn set_config(&mut self, config: Config) {
+        self.config = config;
+    }
+
     /// The current estimate.
     #[must_use]
     pub fn state(&self) -> State {

@@ -1,6 +1,7 @@
 //! Time update: state propagation and P ← Φ·P·Φᵀ + Q_d with Φ = I + F·dt, exploiting the
-//! sparsity of Φ (DERIVATION.md §3). The C reference hand-expanded this into 15 kB of code;
-//! here one sparse "apply Φ" routine is used twice.
+//! structure of Φ (DERIVATION.md §3). The C reference hand-expanded this into 15 kB of code;
+//! here one "apply Φ to a vector" routine is used twice, with Φ's blocks held as the eleven
+//! distinct values they are made of.
 
 use super::equations::{ProcessJacobian, process_jacobian, xi};
 use super::{Covariance, Filter, STATES, covariance};
@@ -10,65 +11,6 @@ use crate::estimation::{Error, check_finite};
 /// Longest accepted time step (s); a longer gap means samples were lost and the caller
 /// should re-initialise rather than extrapolate.
 pub const MAX_DT_S: f32 = 0.1;
-
-/// Φ = I + F·dt in factored form (only the blocks that differ from I).
-struct Transition {
-    dt: f32,
-    /// dt·∂v̇/∂q, rows N, E, D.
-    dv_dq: [[f32; 4]; 3],
-    /// dt·∂v̇/∂abz.
-    dv_dab: [f32; 3],
-    /// I + dt·∂q̇/∂q.
-    qq: [[f32; 4]; 4],
-    /// dt·∂q̇/∂b_g.
-    qb: [[f32; 3]; 4],
-}
-
-impl Transition {
-    fn new(j: &ProcessJacobian, dt: f32) -> Self {
-        let mut qq = j.dq_dq.map(|row| row.map(|c| c * dt));
-        for (i, row) in qq.iter_mut().enumerate() {
-            if let Some(d) = row.get_mut(i) {
-                *d += 1.0;
-            }
-        }
-        Self {
-            dt,
-            dv_dq: j.dv_dq.map(|row| row.map(|c| c * dt)),
-            dv_dab: j.dv_dbaz.map(|c| c * dt),
-            qq,
-            qb: j.dq_dbg.map(|row| row.map(|c| c * dt)),
-        }
-    }
-}
-
-/// out[j] = Σₙ kₙ·rowsₙ[j] for the columns `FIRST..14`; the columns before `FIRST` are
-/// never read by the second pass (it only needs W[r][m] for m in Φ rows c ≥ r) and stay 0.
-/// N and FIRST are constants, so this unrolls with the coefficients held in registers.
-#[inline(always)]
-fn combine<const N: usize, const FIRST: usize>(
-    out: &mut [f32; STATES],
-    rows: [&[f32; STATES]; N],
-    k: [f32; N],
-) {
-    for (j, o) in out.iter_mut().enumerate().skip(FIRST) {
-        let mut acc = 0.0;
-        for (row, kn) in rows.iter().zip(k) {
-            acc += kn * row.get(j).copied().unwrap_or(0.0);
-        }
-        *o = acc;
-    }
-}
-
-/// Σₙ kₙ·v[first + n] for N consecutive entries of one row.
-#[inline(always)]
-fn dot<const N: usize>(v: &[f32; STATES], first: usize, k: &[f32; N]) -> f32 {
-    let mut acc = 0.0;
-    for (x, kn) in v.iter().skip(first).zip(k) {
-        acc += kn * x;
-    }
-    acc
-}
 
 impl Filter {
     /// Propagates the estimate by `dt_s` with one IMU sample (gyro rad/s, specific force
@@ -134,41 +76,40 @@ impl Filter {
         ];
     }
 
+    /// P ← Φ P Φᵀ in two passes over the rows (DERIVATION.md §3). Φ = I + J with
+    /// J = F·dt, whose blocks are few distinct values ([`ProcessJacobian`]), so applying Φ to
+    /// a vector keeps them in registers and reads each element of the vector once.
+    ///
+    /// 1. W = Φ P: column m of W is Φ applied to row m of P (P is symmetric). Only W's
+    ///    velocity rows (columns 3..) and quaternion rows (columns 6..) are kept: its position
+    ///    rows are formed in pass 2 from P's, its bias rows are P's.
+    /// 2. Row r of P' = W Φᵀ is Φ applied to row r of W; only c ≥ r is formed and each
+    ///    value is stored to both triangles, so P stays exactly symmetric. Rows are done in
+    ///    order, and row r reads only columns ≥ r of P's rows r and r + 3, which the earlier
+    ///    rows' mirrored stores (columns < r) have not touched. The bias block of P' is
+    ///    P's (Φ is the identity there): nothing to do.
     fn predict_covariance(&mut self, jacobian: &ProcessJacobian, dt: f32) {
-        let phi = Transition::new(jacobian, dt);
-        let mut w_top = [[0.0; STATES]; 10];
-        phi_times(&phi, &self.p, &mut w_top);
-        let [.., p10, p11, p12, p13] = self.p;
-        let [w0, w1, w2, w3, w4, w5, w6, w7, w8, w9] = w_top;
-        let w = [w0, w1, w2, w3, w4, w5, w6, w7, w8, w9, p10, p11, p12, p13];
-        // P' = W·Φᵀ: P'[r][c] = Σₘ W[r][m]·Φ[c][m], only for r ≤ c, each value stored to both
-        // triangles; Φ row c's coefficients stay in registers across the r loop.
+        let j = jacobian.scaled(dt);
         let p = &mut self.p;
-        // Φ's row blocks by column range; the velocity and quaternion blocks are zipped with
-        // their columns, so a Jacobian row can never be missing (it was a zero fallback).
-        let rows = |c: usize| w.iter().enumerate().take(c + 1);
-        for c in 0..3 {
-            for (r, wr) in rows(c) {
-                let v = get_row(wr, c) + dt * get_row(wr, c + 3);
-                covariance::set_symmetric(p, r, c, v);
-            }
+        // Column m of W's velocity rows is wv[m − 3], of its quaternion rows wq[m − 6].
+        let wv: [[f32; 3]; STATES - 3] =
+            core::array::from_fn(|k| phi_velocity(&j, &covariance::column(p, k + 3)));
+        let wq: [[f32; 4]; STATES - 6] =
+            core::array::from_fn(|k| phi_quaternion(&j, &covariance::column(p, k + 6)));
+        for r in 0..3 {
+            let (pr, pv) = (covariance::column(p, r), covariance::column(p, r + 3));
+            let w: [f32; STATES] = core::array::from_fn(|m| {
+                pr.get(m).copied().unwrap_or(0.0) + dt * pv.get(m).copied().unwrap_or(0.0)
+            });
+            store_phi_row(p, r, &j, dt, &w);
         }
-        for (c, (a, &ab)) in (3..6).zip(phi.dv_dq.iter().zip(&phi.dv_dab)) {
-            for (r, wr) in rows(c) {
-                let v = get_row(wr, c) + dot(wr, 6, a) + ab * get_row(wr, 13);
-                covariance::set_symmetric(p, r, c, v);
-            }
+        for (i, r) in (3..6).enumerate() {
+            let w = core::array::from_fn(|m| cell(&wv, m.wrapping_sub(3), i));
+            store_phi_row(p, r, &j, dt, &w);
         }
-        for (c, (q, b)) in (6..10).zip(phi.qq.iter().zip(&phi.qb)) {
-            for (r, wr) in rows(c) {
-                let v = dot(wr, 6, q) + dot(wr, 10, b);
-                covariance::set_symmetric(p, r, c, v);
-            }
-        }
-        for c in 10..STATES {
-            for (r, wr) in rows(c) {
-                covariance::set_symmetric(p, r, c, get_row(wr, c));
-            }
+        for (i, r) in (6..10).enumerate() {
+            let w = core::array::from_fn(|m| cell(&wq, m.wrapping_sub(6), i));
+            store_phi_row(p, r, &j, dt, &w);
         }
         self.add_process_noise(dt);
     }
@@ -181,14 +122,14 @@ impl Filter {
         let [g0, g1, g2] = cfg.gyro_noise_psd.map(|g| 0.25 * g * dt);
         let bias = cfg.gyro_bias_walk_psd * dt;
         let ab_z = cfg.accel_bias_walk_psd * dt;
-        for (i, row) in self.p.iter_mut().enumerate() {
-            match i {
-                3..6 => add_diag(row, i, accel),
-                10..13 => add_diag(row, i, bias),
-                13 => add_diag(row, i, ab_z),
-                _ => {}
-            }
+        let p = &mut self.p;
+        for i in 3..6 {
+            add_at(p, i, accel);
         }
+        for i in 10..13 {
+            add_at(p, i, bias);
+        }
+        add_at(p, 13, ab_z);
         // Gyro noise on the quaternion block, upper triangle stored to both halves.
         let x = xi(self.attitude());
         for (i, xi_i) in x.iter().enumerate() {
@@ -203,42 +144,65 @@ impl Filter {
     }
 }
 
-/// Rows 0..10 of W = Φ·P into `w` (Φ's bias rows are the identity, so W's bias rows are
-/// P's and are not computed).
-fn phi_times(phi: &Transition, p: &Covariance, w: &mut [[f32; STATES]; 10]) {
-    let [p0, p1, p2, p3, p4, p5, p6, p7, p8, p9, p10, p11, p12, p13] = p;
-    let dt = phi.dt;
-    let [a0, a1, a2] = phi.dv_dq;
-    let [c0, c1, c2] = phi.dv_dab;
-    let [q0, q1, q2, q3] = phi.qq;
-    let [b0, b1, b2, b3] = phi.qb;
-    let [w0, w1, w2, w3, w4, w5, w6, w7, w8, w9] = w;
-    combine::<2, 0>(w0, [p0, p3], [1.0, dt]);
-    combine::<2, 0>(w1, [p1, p4], [1.0, dt]);
-    combine::<2, 0>(w2, [p2, p5], [1.0, dt]);
-    for (wv, pv, a, c) in [(w3, p3, a0, c0), (w4, p4, a1, c1), (w5, p5, a2, c2)] {
-        combine::<6, 3>(
-            wv,
-            [pv, p6, p7, p8, p9, p13],
-            [1.0, a[0], a[1], a[2], a[3], c],
-        );
-    }
-    for (wq, q, b) in [(w6, q0, b0), (w7, q1, b1), (w8, q2, b2), (w9, q3, b3)] {
-        combine::<7, 6>(
-            wq,
-            [p6, p7, p8, p9, p10, p11, p12],
-            [q[0], q[1], q[2], q[3], b[0], b[1], b[2]],
-        );
-    }
-}
-
+/// The velocity rows of Φ applied to `y`: y_v + (∂v̇/∂q)·y_q + (∂v̇/∂ab_z)·y_ab (J = F·dt).
 #[inline(always)]
-fn get_row(row: &[f32; STATES], j: usize) -> f32 {
-    row.get(j).copied().unwrap_or(0.0)
+fn phi_velocity(j: &ProcessJacobian, y: &[f32; STATES]) -> [f32; 3] {
+    let [_, _, _, v0, v1, v2, q0, q1, q2, q3, _, _, _, ab] = *y;
+    let [c0, c1, c2] = j.dv_dbaz();
+    j.dv_dq_times_add([q0, q1, q2, q3], [v0 + c0 * ab, v1 + c1 * ab, v2 + c2 * ab])
 }
 
-fn add_diag(row: &mut [f32; STATES], i: usize, value: f32) {
-    if let Some(d) = row.get_mut(i) {
+/// The quaternion rows of Φ applied to `y`: y_q + (∂q̇/∂q)·y_q + (∂q̇/∂b_g)·y_b.
+#[inline(always)]
+fn phi_quaternion(j: &ProcessJacobian, y: &[f32; STATES]) -> [f32; 4] {
+    let [_, _, _, _, _, _, q0, q1, q2, q3, b0, b1, b2, _] = *y;
+    let q = [q0, q1, q2, q3];
+    j.dq_dbg_times_add([b0, b1, b2], j.dq_dq_times_add(q, q))
+}
+
+/// Row r of P' = W Φᵀ from row r of W (`w`): stores (Φ·w)[c] to P[r][c] and P[c][r] for
+/// every c ≥ r.
+#[inline(always)]
+fn store_phi_row(p: &mut Covariance, r: usize, j: &ProcessJacobian, dt: f32, w: &[f32; STATES]) {
+    let [w0, w1, w2, w3, w4, w5, ..] = *w;
+    for (c, v) in [w0 + dt * w3, w1 + dt * w4, w2 + dt * w5]
+        .into_iter()
+        .enumerate()
+    {
+        if c >= r {
+            covariance::set_symmetric(p, r, c, v);
+        }
+    }
+    if r < 6 {
+        for (c, v) in (3..6).zip(phi_velocity(j, w)) {
+            if c >= r {
+                covariance::set_symmetric(p, r, c, v);
+            }
+        }
+    }
+    for (c, v) in (6..10).zip(phi_quaternion(j, w)) {
+        if c >= r {
+            covariance::set_symmetric(p, r, c, v);
+        }
+    }
+    for (c, &v) in w.iter().enumerate().skip(10) {
+        covariance::set_symmetric(p, r, c, v);
+    }
+}
+
+/// `rows[m][i]` (0 outside, which covers the columns before a buffer's first).
+#[inline(always)]
+fn cell<const N: usize, const M: usize>(rows: &[[f32; N]; M], m: usize, i: usize) -> f32 {
+    rows.get(m)
+        .and_then(|row| row.get(i))
+        .copied()
+        .unwrap_or(0.0)
+}
+
+/// P[i][i] += value.
+#[inline(always)]
+fn add_at(p: &mut Covariance, i: usize, value: f32) {
+    if let Some(d) = p.get_mut(i).and_then(|row| row.get_mut(i)) {
         *d += value;
     }
 }

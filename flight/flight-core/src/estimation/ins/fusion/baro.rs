@@ -17,7 +17,7 @@ impl Filter {
         let r = self.config.baro_var_m2;
         let outcome = Fusion::from_ratio(self.direct_test(k, -altitude_m, r));
         if outcome.is_fused() {
-            self.fuse_direct(k, -altitude_m, r);
+            self.fuse_direct([(k, r)], [-altitude_m]);
             self.finish_update()?;
         }
         Ok(outcome)

@@ -73,7 +73,8 @@ impl Filter {
     }
 
     /// Gates all enabled rows against the prior first; only if every row passes are they
-    /// fused one after the other (PX4 rejects a GPS sample as a whole, too).
+    /// fused one after the other (PX4 rejects a GPS sample as a whole, too). The first two
+    /// rows are always enabled, the third as its flag says (the GPS height).
     fn fuse_direct_rows(
         &mut self,
         rows: &[(usize, f32, bool); 3],
@@ -87,10 +88,12 @@ impl Filter {
             .fold(0.0_f32, |a, b| if b > a || b.is_nan() { b } else { a });
         let outcome = Fusion::from_ratio(worst);
         if outcome.is_fused() {
-            for (&(k, r, used), &z) in rows.iter().zip(measured.iter()) {
-                if used {
-                    self.fuse_direct(k, z, r);
-                }
+            let [(k0, r0, _), (k1, r1, _), (k2, r2, vertical)] = *rows;
+            let [z0, z1, z2] = *measured;
+            if vertical {
+                self.fuse_direct([(k0, r0), (k1, r1), (k2, r2)], [z0, z1, z2]);
+            } else {
+                self.fuse_direct([(k0, r0), (k1, r1)], [z0, z1]);
             }
             self.finish_update()?;
         }

@@ -37,45 +37,30 @@ impl Filter {
             });
         };
         let r = self.config.mag_var;
-        let worst = self.mag_rows(z, r, false);
+        let [b0, b1, _] = self.config.earth_field_ned;
+        let ([y0, y1], [h0, h1]) = heading_field(self.attitude(), [b0, b1]);
+        let [z0, z1] = z;
+        // Both rows gated against the prior.
+        let ph0 = self.p_h(&h0);
+        let ph1 = self.p_h(&h1);
+        let ratio0 = self.test_ratio(z0 - y0, quaternion_dot(&ph0, &h0) + r);
+        let ratio1 = self.test_ratio(z1 - y1, quaternion_dot(&ph1, &h1) + r);
+        let worst = if ratio1 > ratio0 || ratio1.is_nan() {
+            ratio1
+        } else {
+            ratio0
+        };
         let outcome = Fusion::from_ratio(worst);
         if outcome.is_fused() {
-            self.mag_rows(z, r, true);
+            let u0 = self.sequential_row(&[], ph0, |v| quaternion_dot(v, &h0), r, z0 - y0);
+            // The second row re-linearised at the state the first left (cheap, no trig).
+            let ([_, y1], [_, h1]) = heading_field(self.attitude(), [b0, b1]);
+            let ph1 = self.p_h(&h1);
+            let u1 = self.sequential_row(&[u0], ph1, |v| quaternion_dot(v, &h1), r, z1 - y1);
+            self.subtract_outers(&[u0, u1, [0.0; STATES]]);
             self.finish_update()?;
         }
         Ok(outcome)
-    }
-
-    /// Runs both heading rows: returns the larger test ratio, and fuses them when `apply`.
-    /// Y and H are re-linearised before the second row (cheap, no trig).
-    fn mag_rows(&mut self, z: [f32; 2], r: f32, apply: bool) -> f32 {
-        let mut worst = 0.0_f32;
-        for (row, &measured) in z.iter().enumerate() {
-            let [b0, b1, _] = self.config.earth_field_ned;
-            let (y, h) = heading_field(self.attitude(), [b0, b1]);
-            let (Some(&predicted), Some(h_row)) = (y.get(row), h.get(row)) else {
-                continue;
-            };
-            let ph = self.p_h(h_row);
-            let s = ph
-                .iter()
-                .skip(index::QUATERNION)
-                .zip(h_row.iter())
-                .map(|(a, b)| a * b)
-                .sum::<f32>()
-                + r;
-            let innovation = measured - predicted;
-            let ratio = self.test_ratio(innovation, s);
-            worst = if ratio > worst || ratio.is_nan() {
-                ratio
-            } else {
-                worst
-            };
-            if apply {
-                self.apply_update(&ph, s, innovation);
-            }
-        }
-        worst
     }
 
     /// P·hᵀ for an H row that is non-zero only on the quaternion.
@@ -89,4 +74,14 @@ impl Filter {
         }
         ph
     }
+}
+
+/// h·v for an H row that is non-zero only on the quaternion.
+#[inline(always)]
+fn quaternion_dot(v: &[f32; STATES], h: &[f32; 4]) -> f32 {
+    v.iter()
+        .skip(index::QUATERNION)
+        .zip(h.iter())
+        .map(|(a, b)| a * b)
+        .sum()
 }

@@ -67,26 +67,67 @@ impl Filter {
         self.test_ratio(measured - predicted, var)
     }
 
-    /// Scalar update for a direct observation of state `k`; the innovation is recomputed
-    /// from the current state, so earlier rows of the same measurement are accounted for.
-    fn fuse_direct(&mut self, k: usize, measured: f32, r: f32) {
-        let ph = covariance::column(&self.p, k);
-        let predicted = self.x.get(k).copied().unwrap_or(0.0);
-        let s = ph.get(k).copied().unwrap_or(0.0) + r;
-        self.apply_update(&ph, s, measured - predicted);
+    /// One scalar row of a measurement whose rows are fused one after the other:
+    /// `ph_prior` is P·hᵀ of the covariance before the measurement, `earlier` the u vectors
+    /// of the rows already fused, `h_dot` applies h to a vector. P·hᵀ after the earlier rows
+    /// is P_prior·hᵀ − Σ u_l·(h·u_l) (each row subtracted u_l·u_lᵀ from P), so P itself is
+    /// only updated once, for all rows ([`covariance::subtract_outers`]). Applies
+    /// x ← x + P·hᵀ·ν/s now (`innovation` = ν, taken from the state after the earlier rows)
+    /// and returns u = P·hᵀ/√s for the covariance pass (zeros if s is not positive: the
+    /// row is skipped).
+    fn sequential_row(
+        &mut self,
+        earlier: &[[f32; STATES]],
+        ph_prior: [f32; STATES],
+        h_dot: impl Fn(&[f32; STATES]) -> f32,
+        r: f32,
+        innovation: f32,
+    ) -> [f32; STATES] {
+        let mut ph = ph_prior;
+        for u in earlier {
+            let c = h_dot(u);
+            for (a, b) in ph.iter_mut().zip(u.iter()) {
+                *a -= c * b;
+            }
+        }
+        let s = h_dot(&ph) + r;
+        if s.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
+            return [0.0; STATES];
+        }
+        let inv_sqrt_s = crate::estimation::math::inv_sqrt(s);
+        let u = ph.map(|v| v * inv_sqrt_s);
+        let gain = innovation * inv_sqrt_s;
+        for (x, &u_i) in self.x.iter_mut().zip(u.iter()) {
+            *x += u_i * gain;
+        }
+        u
     }
 
-    /// x ← x + ph·ν/s, P ← P − ph·phᵀ/s, for ph = P·hᵀ and s = h·P·hᵀ + r.
-    fn apply_update(&mut self, ph: &[f32; STATES], s: f32, innovation: f32) {
-        if s.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
-            return;
+    /// Direct observations of the states `rows[..].0` with variances `rows[..].1` and
+    /// measured values `measured`, fused one after the other (each innovation from the state
+    /// after the earlier rows), the covariance updated once.
+    fn fuse_direct<const K: usize>(&mut self, rows: [(usize, f32); K], measured: [f32; K]) {
+        let mut u = [[0.0_f32; STATES]; covariance::ROWS];
+        for (n, (&(k, r), &z)) in rows.iter().zip(measured.iter()).enumerate() {
+            let ph = covariance::column(&self.p, k);
+            let predicted = self.x.get(k).copied().unwrap_or(0.0);
+            let (earlier, rest) = u.split_at_mut(n);
+            if let Some(slot) = rest.first_mut() {
+                *slot = self.sequential_row(
+                    earlier,
+                    ph,
+                    |v| v.get(k).copied().unwrap_or(0.0),
+                    r,
+                    z - predicted,
+                );
+            }
         }
-        let inv_s = 1.0 / s;
-        let gain = innovation * inv_s;
-        for (x, &ph_i) in self.x.iter_mut().zip(ph.iter()) {
-            *x += ph_i * gain;
-        }
-        covariance::subtract_outer(&mut self.p, ph, s);
+        self.subtract_outers(&u);
+    }
+
+    /// P ← P − Σ u·uᵀ, then the variance floor.
+    fn subtract_outers(&mut self, u: &[[f32; STATES]; covariance::ROWS]) {
+        covariance::subtract_outers(&mut self.p, u);
         covariance::floor_diagonal(&mut self.p, VARIANCE_FLOOR);
     }
 

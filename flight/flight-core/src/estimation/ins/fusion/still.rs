@@ -25,9 +25,13 @@ impl Filter {
             .iter()
             .map(|&k| self.direct_test(k, 0.0, var_m2ps2))
             .fold(0.0_f32, |a, b| if b > a || b.is_nan() { b } else { a });
-        for k in [index::VELOCITY, index::VELOCITY + 1] {
-            self.fuse_direct(k, 0.0, var_m2ps2);
-        }
+        self.fuse_direct(
+            [
+                (index::VELOCITY, var_m2ps2),
+                (index::VELOCITY + 1, var_m2ps2),
+            ],
+            [0.0; 2],
+        );
         self.finish_update()?;
         Ok(Fusion::Fused { test_ratio: worst })
     }
