@@ -2,8 +2,6 @@
 //! (`m4-sim`'s Cortex-M4F core with this crate's register-level STM32F405 and nRF52840
 //! peripheral models) against the project's simulated chips, handset and quadrotor.
 //!
-//! - [`stm32f405`]: the flight images' STM32F405, register by register (its README says
-//!   what is modelled, the cycle model and the datasheet figures).
 //! - [`wire`]: what a microcontroller model sees of its board — pins, SPI, I²C, UART and
 //!   analog inputs — the one boundary between the SoC models and the world.
 //! - [`nrf52840`]: the module's nRF52840, register by register.

@@ -400,6 +400,12 @@ impl<O: Outside> Stm32f405<O> {
 
     /// Recomputes interrupt lines and next events after anything changed.
     pub(crate) fn refresh(&mut self, now: u64) {
+        if !self.powered {
+            self.irq = [0; 8];
+            self.next_due = u64::MAX;
+            self.next_visible = u64::MAX;
+            return;
+        }
         self.drain_notes(now);
         let mut lines = [0u32; 8];
         let mut set = |n: u32| {
@@ -672,6 +678,9 @@ impl<O: Outside> Stm32f405<O> {
             self.mem.power_on(seed);
         }
         self.resets += 1;
+        if kind == ResetKind::IndependentWatchdog {
+            self.watchdog_resets += 1;
+        }
         self.line_levels = [false; 16];
         self.code_pages = 0;
         self.ram_code_generation += 1;

@@ -519,3 +519,76 @@ fn the_flash_accelerator_changes_what_code_costs() {
     let warm = run(&mut c);
     assert_eq!(warm, 5, "one miss, the rest prefetched or cached");
 }
+
+/// An application linked at 0x0802_0000 whose reset handler stores 0x5A at 0x2000_0100.
+fn app_behind_the_bootloader(c: &mut Stm32f405<Board>) {
+    let app: [u8; 20] = [
+        0x00, 0x00, 0x01, 0x20, // MSP 0x2001_0000
+        0x09, 0x00, 0x02, 0x08, // reset handler 0x0802_0008, Thumb
+        0x5A, 0x20, // movs r0, #0x5A
+        0x01, 0x49, // ldr r1, [pc, #4]
+        0x08, 0x60, // str r0, [r1]
+        0xFE, 0xE7, // b .
+        0x00, 0x01, 0x00, 0x20, // 0x2000_0100
+    ];
+    c.program_flash(0x0802_0000, &app).unwrap();
+    c.install_bootloader_handover(0x0802_0000).unwrap();
+}
+
+#[test]
+fn the_bootloader_stand_in_hands_over_with_the_applications_stack_and_entry() {
+    let mut c = chip();
+    app_behind_the_bootloader(&mut c);
+    assert_eq!(c.boot_entry().map(|e| e.vector_table), Some(0x0800_0000));
+    let mut cpu = m4_sim::Cpu::new(super::mcu::core_config());
+    cpu.reset(&mut c);
+    cpu.run_until(&mut c, 100_000);
+    assert_eq!(c.read(0x2000_0100, Width::Word, 100_000), Ok(0x5A));
+    assert_eq!(cpu.read_reg(m4_sim::Reg::Msp), 0x2001_0000);
+}
+
+#[test]
+fn a_power_cycle_releases_the_pins_loses_ram_and_boots_again() {
+    let mut c = chip();
+    app_behind_the_bootloader(&mut c);
+    let mut cpu = m4_sim::Cpu::new(super::mcu::core_config());
+    cpu.reset(&mut c);
+    cpu.run_until(&mut c, 100_000);
+    w(&mut c, RCC + 0x30, 1, 100_000);
+    w(&mut c, GPIOA, 0xA800_0000 | 1, 100_000);
+    assert_eq!(c.outside().drive(Pin::new(0, 0)), Some(Drive::Low));
+    c.set_powered(false);
+    assert_eq!(
+        c.outside().drive(Pin::new(0, 15)),
+        Some(Drive::Released(Pull::None))
+    );
+    assert_eq!(
+        c.outside().drive(Pin::new(0, 0)),
+        Some(Drive::Released(Pull::None))
+    );
+    assert!(
+        c.read(0x2000_0100, Width::Word, 200_000).is_err(),
+        "nothing answers"
+    );
+    cpu.run_until(&mut c, 10_000_000);
+    assert_eq!(c.resets(), 0);
+    c.set_powered(true);
+    // The core takes the reset at its next look at the bus (at the latest the deadline).
+    cpu.run_until(&mut c, 10_100_000);
+    cpu.run_until(&mut c, 10_200_000);
+    assert_eq!(c.resets(), 1);
+    assert_eq!(
+        c.read(0x2000_0100, Width::Word, 10_200_000),
+        Ok(0x5A),
+        "booted again"
+    );
+    assert_eq!(
+        r(&mut c, RCC + 0x74, 10_200_000) & 1 << 27,
+        1 << 27,
+        "PORRSTF"
+    );
+    assert_eq!(
+        c.outside().drive(Pin::new(0, 15)),
+        Some(Drive::Released(Pull::Up))
+    );
+}
