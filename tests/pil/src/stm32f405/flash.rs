@@ -169,6 +169,8 @@ pub struct FlashIf {
     generation: u64,
     timing: FlashTiming,
     stats: ArtStats,
+    /// The end of the last busy wait charged to the core.
+    waited_until: u64,
 }
 
 /// What a flash-interface access did beyond its registers.
@@ -205,6 +207,7 @@ impl FlashIf {
             generation: 0,
             timing,
             stats: ArtStats::default(),
+            waited_until: 0,
         }
     }
 
@@ -296,10 +299,13 @@ impl FlashIf {
     }
 
     /// Cycles until the busy operation ends.
-    fn busy_stall(&self, now: u64, hclk: u32) -> u32 {
+    fn busy_stall(&mut self, now: u64, hclk: u32) -> u32 {
+        // `now` is the SoC's last known time; a stall already charged moved the core past it.
+        let now = now.max(self.waited_until);
         if self.op.is_none() || now >= self.busy_until {
             return 0;
         }
+        self.waited_until = self.busy_until;
         let ns = self.busy_until - now;
         u32::try_from(u128::from(ns) * u128::from(hclk) / 1_000_000_000).unwrap_or(u32::MAX)
     }
@@ -667,9 +673,11 @@ mod tests {
         assert!(flash[0x8000..0xC000].iter().all(|&b| b == 0xFF));
         assert_eq!(flash[0xC000], 0);
         assert_eq!(f.busy_until(), 1_000 + 400_000_000);
-        // A fetch 100 ms in waits 300 ms at 168 MHz.
+        // A fetch 100 ms in waits 300 ms at 168 MHz; the next line, fetched after that wait
+        // (the SoC's clock has not moved yet), waits no more.
         let stall = f.fetch_stall(0x1_0000, 100_001_000, 168_000_000);
         assert_eq!(stall, 300 * 168_000);
+        assert_eq!(f.fetch_stall(0x1_0010, 100_001_000, 168_000_000), 0);
         f.process(400_001_000);
         assert_eq!(f.read(SR).unwrap() & (BSY | EOP), 0, "EOP only with EOPIE");
         // At ×32 the same sector takes 250 ms.
