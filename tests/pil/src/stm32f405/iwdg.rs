@@ -1,10 +1,16 @@
 //! The independent watchdog (RM0090 §21): KR keys (0xCCCC start, 0xAAAA reload, 0x5555
 //! register access), PR, RLR and SR (PVU, RVU). A 12-bit down-counter at LSI / (4 · 2^PR)
-//! that starts at 0xFFF, reloads RLR on 0xAAAA and resets the chip when it reaches 0; once
-//! started nothing stops it but a reset. PR/RLR writes need 0x5555 first and take five LSI
-//! cycles to reach the LSI domain (PVU/RVU busy meanwhile). The LSI frequency is the
-//! runner's (17–47 kHz, DS8626): the same image times out up to 88 % later (17 kHz) or
-//! 32 % sooner (47 kHz) than at the nominal 32 kHz it was designed for.
+//! that starts at 0xFFF, reloads on 0xAAAA and resets the chip when it reaches 0; once
+//! started nothing stops it but a reset.
+//!
+//! PR and RLR live in the core's domain; the counter in the LSI's. A write (after 0x5555)
+//! takes five LSI cycles to cross (PVU/RVU set meanwhile, and a write while the flag is set
+//! is ignored: RM0090 §21.4.3/§21.4.4); until then the counter runs with the old prescaler
+//! and a reload loads the old reload value — so a firmware that writes RLR and reloads at
+//! once gets its old timeout for that period.
+//!
+//! The LSI frequency is the runner's (17–47 kHz, DS8626): the same image times out up to
+//! 88 % later (17 kHz) or 32 % sooner (47 kHz) than at the nominal 32 kHz.
 
 const KR: u32 = 0x00;
 const PR: u32 = 0x04;
@@ -19,26 +25,35 @@ const RVU: u32 = 1 << 1;
 /// LSI cycles a PR/RLR update takes to reach the watchdog's clock domain.
 const UPDATE_LSI_CYCLES: u64 = 5;
 
+/// A register value on its way to the LSI domain.
+#[derive(Clone, Copy, Debug)]
+struct Crossing {
+    value: u32,
+    lands_at: u64,
+}
+
 /// The watchdog.
 pub struct Iwdg {
+    /// PR and RLR as software wrote them.
     pr: u32,
     rlr: u32,
+    /// The values the counter uses.
+    pr_active: u32,
+    rlr_active: u32,
+    pr_crossing: Option<Crossing>,
+    rlr_crossing: Option<Crossing>,
     access: bool,
     started: bool,
     lsi_hz: u32,
     /// The counter was `epoch_count` at `epoch_ns`.
     epoch_ns: u64,
     epoch_count: u64,
-    /// The prescaler in effect (PR takes effect after its update).
-    pr_active: u32,
-    pvu_until: u64,
-    rvu_until: u64,
+    /// When the counter reaches 0 as things stand (kept current on every change).
+    expires: u64,
     /// Reloads (feeds) seen.
     pub reloads: u64,
     /// Shortest margin left at a reload, ns (how close the image came to a reset).
     pub min_margin_ns: Option<u64>,
-    /// When the counter reaches 0 as things stand (kept current on every change).
-    expires: u64,
 }
 
 impl Iwdg {
@@ -47,17 +62,18 @@ impl Iwdg {
         Self {
             pr: 0,
             rlr: 0xFFF,
+            pr_active: 0,
+            rlr_active: 0xFFF,
+            pr_crossing: None,
+            rlr_crossing: None,
             access: false,
             started: false,
             lsi_hz,
             epoch_ns: 0,
             epoch_count: 0xFFF,
-            pr_active: 0,
-            pvu_until: 0,
-            rvu_until: 0,
+            expires: u64::MAX,
             reloads: 0,
             min_margin_ns: None,
-            expires: u64::MAX,
         }
     }
 
@@ -114,43 +130,46 @@ impl Iwdg {
             .saturating_add(u64::try_from(ns).unwrap_or(u64::MAX))
     }
 
-    /// The next time the watchdog changes by itself: a prescaler update landing, or the
-    /// reset.
+    /// The next time the watchdog changes by itself: a register landing in the LSI
+    /// domain, or the reset.
     pub fn next_event(&self) -> u64 {
-        if self.started && self.pvu_until > self.epoch_ns {
-            self.pvu_until.min(self.expiry())
-        } else {
-            self.expiry()
-        }
+        let lands = |c: Option<Crossing>| c.map_or(u64::MAX, |c| c.lands_at);
+        self.expires
+            .min(lands(self.pr_crossing))
+            .min(lands(self.rlr_crossing))
     }
 
     /// Processes due events; true when the counter reached 0 (reset).
     pub fn process(&mut self, now: u64) -> bool {
-        if self.started
-            && self.pvu_until > self.epoch_ns
-            && now >= self.pvu_until
-            && self.pvu_until < self.expiry()
+        if let Some(c) = self
+            .pr_crossing
+            .filter(|c| c.lands_at <= now && c.lands_at < self.expires)
         {
-            let at = self.pvu_until;
-            self.rebase(at);
-            self.pr_active = self.pr;
+            self.rebase(c.lands_at);
+            self.pr_active = c.value;
+            self.pr_crossing = None;
             self.expires = self.compute_expiry();
         }
-        self.started && now >= self.expiry()
+        if let Some(c) = self.rlr_crossing.filter(|c| c.lands_at <= now) {
+            self.rlr_active = c.value;
+            self.rlr_crossing = None;
+        }
+        self.started && now >= self.expires
     }
 
     /// Register read at `now`.
     pub fn read(&self, offset: u32, now: u64) -> Option<u32> {
+        let busy = |c: Option<Crossing>| c.is_some_and(|c| now < c.lands_at);
         Some(match offset {
             KR => 0,
             PR => self.pr,
             RLR => self.rlr,
             SR => {
                 let mut v = 0;
-                if now < self.pvu_until {
+                if busy(self.pr_crossing) {
                     v |= PVU;
                 }
-                if now < self.rvu_until {
+                if busy(self.rlr_crossing) {
                     v |= RVU;
                 }
                 v
@@ -163,7 +182,8 @@ impl Iwdg {
         UPDATE_LSI_CYCLES * 1_000_000_000 / u64::from(self.lsi_hz.max(1))
     }
 
-    /// Register write at `now`; true when the write started the watchdog.
+    /// Register write at `now` (events due before it already processed); true when the
+    /// write started the watchdog.
     pub fn write(&mut self, offset: u32, value: u32, now: u64) -> Option<bool> {
         match offset {
             KR => match value & 0xFFFF {
@@ -180,12 +200,12 @@ impl Iwdg {
                 }
                 KEY_RELOAD => {
                     if self.started {
-                        let margin = self.expiry().saturating_sub(now);
+                        let margin = self.expires.saturating_sub(now);
                         self.min_margin_ns =
                             Some(self.min_margin_ns.map_or(margin, |m| m.min(margin)));
                         self.reloads += 1;
-                        self.rebase(now);
-                        self.epoch_count = u64::from(self.rlr);
+                        self.epoch_ns = now;
+                        self.epoch_count = u64::from(self.rlr_active);
                         self.expires = self.compute_expiry();
                     }
                     self.access = false;
@@ -193,16 +213,19 @@ impl Iwdg {
                 KEY_ACCESS => self.access = true,
                 _ => self.access = false,
             },
-            PR if self.access => {
+            PR if self.access && self.pr_crossing.is_none() => {
                 self.pr = value & 7;
-                self.pvu_until = now + self.update_ns();
-                if !self.started {
-                    self.pr_active = self.pr;
-                }
+                self.pr_crossing = Some(Crossing {
+                    value: self.pr,
+                    lands_at: now + self.update_ns(),
+                });
             }
-            RLR if self.access => {
+            RLR if self.access && self.rlr_crossing.is_none() => {
                 self.rlr = value & 0xFFF;
-                self.rvu_until = now + self.update_ns();
+                self.rlr_crossing = Some(Crossing {
+                    value: self.rlr,
+                    lands_at: now + self.update_ns(),
+                });
             }
             PR | RLR | SR => {}
             _ => return None,
@@ -215,12 +238,14 @@ impl Iwdg {
 mod tests {
     use super::*;
 
-    /// IndependentWatchdog::new(250 ms): PR = 3 (÷32), RLR = 249 at the HAL's 32 kHz.
+    /// IndependentWatchdog::new(250 ms): PR = 3 (÷32), RLR = 249 at the HAL's 32 kHz, the
+    /// start a while later (the supervisor's unleash).
     fn board_watchdog(lsi: u32) -> Iwdg {
         let mut w = Iwdg::new(lsi);
         w.write(KR, KEY_ACCESS, 0);
         w.write(PR, 3, 0);
         w.write(RLR, 249, 0);
+        w.process(1_000_000);
         w
     }
 
@@ -229,7 +254,7 @@ mod tests {
         let mut w = board_watchdog(32_000);
         assert_eq!(w.next_event(), u64::MAX);
         assert_eq!(w.write(KR, KEY_START, 1_000_000), Some(true));
-        // 4096 ticks at 1 kHz.
+        // 4095 ticks at 1 kHz.
         assert_eq!(w.expiry(), 1_000_000 + 4_095_000_000);
         w.write(KR, KEY_RELOAD, 2_000_000);
         assert_eq!(w.expiry(), 2_000_000 + 249_000_000);
@@ -241,9 +266,9 @@ mod tests {
     fn the_timeout_scales_with_the_lsi_across_its_datasheet_range() {
         for (lsi, ms) in [(17_000u32, 468u64), (32_000, 249), (47_000, 169)] {
             let mut w = board_watchdog(lsi);
-            w.write(KR, KEY_START, 0);
-            w.write(KR, KEY_RELOAD, 0);
-            assert_eq!(w.expiry() / 1_000_000, ms, "LSI {lsi} Hz");
+            w.write(KR, KEY_START, 1_000_000);
+            w.write(KR, KEY_RELOAD, 1_000_000);
+            assert_eq!((w.expiry() - 1_000_000) / 1_000_000, ms, "LSI {lsi} Hz");
         }
     }
 
@@ -255,17 +280,25 @@ mod tests {
         w.write(KR, KEY_ACCESS, 0);
         w.write(RLR, 100, 0);
         assert_eq!(w.read(SR, 1), Some(RVU));
+        w.write(RLR, 7, 10);
+        assert_eq!(
+            w.read(RLR, 10),
+            Some(100),
+            "a write while RVU is set is ignored"
+        );
         assert_eq!(w.read(SR, 156_250), Some(0));
-        w.write(KR, 0x1234, 0);
-        w.write(RLR, 5, 0);
-        assert_eq!(w.read(RLR, 0), Some(100));
+        w.write(KR, 0x1234, 200_000);
+        w.write(RLR, 5, 200_000);
+        assert_eq!(w.read(RLR, 200_000), Some(100));
     }
 
+    /// The supervisor's with_long_timeout: reload, 0x5555, PR ÷64, RLR 2000, reload at once.
+    /// The reload still loads the old 249 (RVU busy) — at the new ÷64 once PR has crossed:
+    /// the "4 s" stretch gives ≈ 0.5 s until the next reload.
     #[test]
-    fn the_supervisors_long_timeout_and_back() {
-        // with_long_timeout: reload, access, PR ÷64, RLR, reload.
+    fn reloading_before_rvu_clears_keeps_the_old_timeout() {
         let mut w = board_watchdog(32_000);
-        w.write(KR, KEY_START, 0);
+        w.write(KR, KEY_START, 1_000_000);
         w.write(KR, KEY_RELOAD, 10_000_000);
         w.write(KR, KEY_ACCESS, 10_000_000);
         w.write(PR, 4, 10_000_000);
@@ -273,8 +306,23 @@ mod tests {
         w.write(KR, KEY_RELOAD, 10_000_000);
         w.process(20_000_000);
         assert_eq!(w.read(SR, 20_000_000), Some(0));
-        // ÷64 at 32 kHz: 2 ms per tick, 2000 ticks ≈ 4 s from the reload.
-        let left = w.expiry() - 20_000_000;
-        assert!((3_980_000_000..=4_000_000_000).contains(&left), "{left}");
+        let left = w.expiry() - 10_000_000;
+        assert!((495_000_000..500_000_000).contains(&left), "{left}");
+        // The next reload takes 2000 at ÷64: the 4 s the firmware asked for.
+        w.write(KR, KEY_RELOAD, 300_000_000);
+        assert_eq!(w.expiry() - 300_000_000, 4_000_000_000);
+    }
+
+    /// The same sequence on a fast-LSI part (47 kHz, DS8626's maximum): 339 ms.
+    #[test]
+    fn a_fast_lsi_shortens_the_stretch_further() {
+        let mut w = board_watchdog(47_000);
+        w.write(KR, KEY_START, 1_000_000);
+        w.write(KR, KEY_ACCESS, 10_000_000);
+        w.write(PR, 4, 10_000_000);
+        w.write(RLR, 2000, 10_000_000);
+        w.write(KR, KEY_RELOAD, 10_000_000);
+        w.process(20_000_000);
+        assert_eq!((w.expiry() - 10_000_000) / 1_000_000, 339);
     }
 }
