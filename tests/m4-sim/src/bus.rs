@@ -57,10 +57,11 @@ pub enum ResetCause {
 /// instructions it has not decoded yet (it keeps decoded code until
 /// [`Bus::code_generation`] changes or it stores to that code itself), and keeps the bus up
 /// to date with time: before it lets virtual time pass [`Bus::next_event_ns`] it calls
-/// [`Bus::advance`], and it calls `advance` at the end of every `run_until`. After every
-/// `advance`, and after every `read` or `write` at 0x4000_0000 or above (the peripheral,
-/// device and vendor regions of the ARMv7-M memory map), it samples [`Bus::irq_lines`] and
-/// re-reads [`Bus::next_event_ns`]; after such a write also [`Bus::core_hz`] and
+/// [`Bus::advance`], and it calls `advance` at the end of every `run_until`. On entry to
+/// `run_until` (the world may have driven the bus in between), after every `advance`, and
+/// after every `read` or `write` at 0x4000_0000 or above (the peripheral, device and vendor
+/// regions of the ARMv7-M memory map), it samples [`Bus::irq_lines`] and re-reads
+/// [`Bus::next_event_ns`]; then and after such a write also [`Bus::core_hz`] and
 /// [`Bus::code_generation`]. Accesses below 0x4000_0000 (the Code and SRAM regions) are
 /// memory: nothing is re-read after them. Interrupt lines are levels: a line that is high
 /// while its interrupt is not active sets it pending (the NVIC latches it), as on the

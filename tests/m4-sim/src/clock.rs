@@ -62,7 +62,13 @@ impl Clock {
         if ns <= self.now_ns() {
             return self.cycles;
         }
-        let d = u128::from(ns - self.base_ns) * u128::from(self.hz.get());
+        let dns = ns - self.base_ns;
+        // The common case in 64 bits (spans of up to a minute or so); else in 128.
+        if let Some(d) = dns.checked_mul(self.hz.get()) {
+            let dc = d.saturating_sub(self.base_rem).div_ceil(NS_PER_S);
+            return self.base_cycles.saturating_add(dc);
+        }
+        let d = u128::from(dns) * u128::from(self.hz.get());
         let need = d.saturating_sub(u128::from(self.base_rem));
         let dc = need.div_ceil(u128::from(NS_PER_S));
         self.base_cycles

@@ -19,6 +19,9 @@ use crate::nvic::Nvic;
 use crate::scs::{Debug, Mpu, Scb};
 use crate::systick::SysTick;
 
+/// SCR.SEVONPEND.
+const SEVONPEND: u32 = 1 << 4;
+
 /// Why [`Cpu::run_until`] returned.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stop {
@@ -52,7 +55,7 @@ pub enum Stop {
     },
 }
 
-/// A register for [`Cpu::reg`] and [`Cpu::set_reg`].
+/// A register for [`Cpu::read_reg`] and [`Cpu::write_reg`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reg {
     /// R0–R15 (13 = the current SP, 14 = LR, 15 = the PC of the next instruction).
@@ -77,8 +80,9 @@ pub enum Reg {
     Fpscr,
 }
 
-/// Counters over the life of a [`Cpu`] (they survive resets).
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// Counters over the life of a [`Cpu`] (they survive resets). Exceptions taken per
+/// exception number are [`Cpu::exceptions_taken`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Stats {
     /// Instructions executed (a condition-failed instruction in an IT block counts, as in
     /// QEMU's count).
@@ -87,10 +91,21 @@ pub struct Stats {
     pub cycles_active: u64,
     /// Cycles spent asleep (WFI, WFE, sleep-on-exit, lockup).
     pub cycles_asleep: u64,
-    /// The lowest value either stack pointer held.
+    /// The lowest value either stack pointer held (`u32::MAX` before any).
     pub lowest_sp: u32,
-    /// Exceptions taken, by exception number (16 + n for IRQ n).
-    pub exceptions: Vec<u64>,
+}
+
+/// The fault status registers (SCB CFSR, HFSR, MMFAR, BFAR), for reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FaultStatus {
+    /// Configurable fault status (MMFSR, BFSR, UFSR).
+    pub cfsr: u32,
+    /// HardFault status.
+    pub hfsr: u32,
+    /// MemManage fault address.
+    pub mmfar: u32,
+    /// BusFault address.
+    pub bfar: u32,
 }
 
 /// What the core is doing between instructions.
@@ -167,10 +182,14 @@ pub struct Cpu {
     pub(crate) clock: Clock,
     /// The cycle count at which `service` must run.
     pub(crate) stop_at: u64,
-    /// `run_until`'s deadline in cycles.
+    /// `run_until`'s deadline in cycles, and in nanoseconds (to recompute the cycles when
+    /// the clock changes).
     pub(crate) deadline: u64,
-    /// The bus's next event in cycles (`u64::MAX`: none).
+    pub(crate) deadline_ns: u64,
+    /// The bus's next event in cycles (`u64::MAX`: none), and in nanoseconds as the bus
+    /// said it.
     pub(crate) bus_event: u64,
+    pub(crate) bus_event_ns: u64,
     /// A stop decided inside an instruction (semihosting exit, breakpoint, lockup).
     pub(crate) pending_stop: Option<Stop>,
     pub(crate) reset_request: Option<ResetKind>,
@@ -181,6 +200,8 @@ pub struct Cpu {
     /// Instruction count and Rt of the last single load (for load pipelining).
     pub(crate) last_load: (u64, u8),
     pub(crate) stats: Stats,
+    /// Exceptions taken, by exception number.
+    pub(crate) exceptions: [u64; 256],
     pub(crate) semihost_out: Vec<u8>,
 }
 
@@ -221,7 +242,9 @@ impl Cpu {
             clock: Clock::new(cfg.initial_hz),
             stop_at: 0,
             deadline: 0,
+            deadline_ns: 0,
             bus_event: u64::MAX,
+            bus_event_ns: u64::MAX,
             pending_stop: None,
             reset_request: None,
             code_generation: 0,
@@ -233,8 +256,8 @@ impl Cpu {
                 cycles_active: 0,
                 cycles_asleep: 0,
                 lowest_sp: u32::MAX,
-                exceptions: vec![0; 256],
             },
+            exceptions: [0; 256],
             semihost_out: Vec::new(),
         };
         cpu.reset_core_state();
@@ -250,13 +273,25 @@ impl Cpu {
     /// main stack pointer and the reset vector from the vector table at address 0. The
     /// bus is not reset; virtual time and statistics carry on.
     pub fn reset<B: Bus>(&mut self, bus: &mut B) {
+        self.boot(bus, 0);
+    }
+
+    /// Resets the core like [`Cpu::reset`] but starts from the vector table at
+    /// `vector_table` (VTOR set to it), as a bootloader that jumps to an application
+    /// leaves the core: the application's initial SP and reset vector.
+    pub fn boot<B: Bus>(&mut self, bus: &mut B, vector_table: u32) {
         self.reset_core_state();
-        self.clock.set_hz(bus.core_hz());
+        self.scb.vtor = vector_table & 0xFFFF_FF80;
+        let hz = bus.core_hz();
+        if u64::from(hz) != self.clock.hz() {
+            self.set_clock(hz);
+        }
         self.code_generation = bus.code_generation();
         self.cache.clear();
         let now = self.clock.now_ns();
-        let sp = bus.read(0, crate::Width::Word, now);
-        let pc = bus.read(4, crate::Width::Word, now);
+        let table = self.scb.vtor;
+        let sp = bus.read(table, crate::Width::Word, now);
+        let pc = bus.read(table.wrapping_add(4), crate::Width::Word, now);
         match (sp, pc) {
             (Ok(sp), Ok(pc)) => {
                 self.r[13] = sp & !3;
@@ -269,7 +304,7 @@ impl Cpu {
                 self.state = RunState::LockedUp;
             }
         }
-        self.nvic.sample(bus.irq_lines(), &mut self.event);
+        self.nvic.sample(bus.irq_lines());
         self.stop_at = 0;
     }
 
@@ -316,9 +351,24 @@ impl Cpu {
 
     /// The statistics so far.
     pub fn stats(&self) -> Stats {
-        let mut s = self.stats.clone();
+        let mut s = self.stats;
         s.cycles_active = self.clock.cycles - s.cycles_asleep;
         s
+    }
+
+    /// Exceptions taken so far, by exception number (16 + n for IRQ n).
+    pub fn exceptions_taken(&self) -> &[u64; 256] {
+        &self.exceptions
+    }
+
+    /// The fault status registers as the program would read them.
+    pub fn fault_status(&self) -> FaultStatus {
+        FaultStatus {
+            cfsr: self.scb.cfsr,
+            hfsr: self.scb.hfsr,
+            mmfar: self.scb.mmfar,
+            bfar: self.scb.bfar,
+        }
     }
 
     /// Whether the core sleeps (WFI, WFE, sleep-on-exit).
@@ -351,9 +401,15 @@ impl Cpu {
         std::mem::take(&mut self.semihost_out)
     }
 
-    /// Runs until virtual time reaches `deadline_ns` or something stops the core first.
+    /// Runs until virtual time reaches `deadline_ns` (the first instruction boundary at or
+    /// after it) or something stops the core first. The bus's interrupt lines, next event,
+    /// clock and code generation are read afresh on entry: whatever drove the bus between
+    /// two calls is seen.
     pub fn run_until<B: Bus>(&mut self, bus: &mut B, deadline_ns: u64) -> Stop {
+        // The world may have changed the bus since the last run: pick that up.
+        self.deadline_ns = deadline_ns;
         self.deadline = self.clock.cycle_at(deadline_ns);
+        self.after_advance(bus);
         self.stop_at = 0;
         loop {
             if self.clock.cycles >= self.stop_at {
@@ -538,20 +594,29 @@ impl Cpu {
         if write {
             let hz = bus.core_hz();
             if u64::from(hz) != self.clock.hz() {
-                self.clock.set_hz(hz);
-                self.systick.clock_changed();
-                self.stop_at = 0;
+                self.set_clock(hz);
             }
             self.check_code_generation(bus);
         }
-        if self.nvic.sample(bus.irq_lines(), &mut self.event) {
-            self.stop_at = 0;
+        if self.nvic.sample(bus.irq_lines()) {
+            self.new_pending();
         }
-        let event = self.clock.cycle_at(bus.next_event_ns());
-        if event != self.bus_event {
-            self.bus_event = event;
-            self.stop_at = self.stop_at.min(event);
+        let event_ns = bus.next_event_ns();
+        if event_ns != self.bus_event_ns {
+            self.bus_event_ns = event_ns;
+            self.bus_event = self.clock.cycle_at(event_ns);
+            self.stop_at = self.stop_at.min(self.bus_event);
         }
+    }
+
+    /// Counts at a new core clock from now: the deadline and the bus's next event move to
+    /// the cycles that are now their times.
+    pub(crate) fn set_clock(&mut self, hz: u32) {
+        self.clock.set_hz(hz);
+        self.systick.clock_changed();
+        self.deadline = self.clock.cycle_at(self.deadline_ns);
+        self.bus_event = self.clock.cycle_at(self.bus_event_ns);
+        self.stop_at = 0;
     }
 
     /// AIRCR.SYSRESETREQ or a reset the bus asked for: the bus and the core reset.
@@ -564,7 +629,17 @@ impl Cpu {
             bus.sleeping(false, self.clock.now_ns());
         }
         self.reset(bus);
-        self.bus_event = self.clock.cycle_at(bus.next_event_ns());
+        self.bus_event_ns = bus.next_event_ns();
+        self.bus_event = self.clock.cycle_at(self.bus_event_ns);
+    }
+
+    /// An interrupt became pending: with SCR.SEVONPEND that is a WFE wake-up event; in any
+    /// case the run loop re-evaluates exceptions.
+    pub(crate) fn new_pending(&mut self) {
+        if self.scb.scr & SEVONPEND != 0 {
+            self.event = true;
+        }
+        self.stop_at = 0;
     }
 
     /// Records an SP value for the lowest-SP statistic.

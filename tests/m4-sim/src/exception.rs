@@ -194,7 +194,7 @@ impl Cpu {
         self.exclusive = false;
         self.event = true;
         self.refill = true;
-        if let Some(count) = self.stats.exceptions.get_mut(usize::from(n)) {
+        if let Some(count) = self.exceptions.get_mut(usize::from(n)) {
             *count += 1;
         }
         let vector_addr = self.scb.vtor.wrapping_add(4 * u32::from(n));
@@ -204,6 +204,9 @@ impl Cpu {
                 self.clock.cycles += u64::from(bus.access_stall(vector_addr, false));
                 self.thumb = vector & 1 != 0;
                 self.pc = vector & !1;
+                // Entered from inside an instruction (a tail-chain), the run loop moves
+                // to `next_pc`.
+                self.next_pc = self.pc;
             }
             Err(_) => {
                 // A vector that cannot be read is a HardFault (VECTTBL), taken from here;
@@ -250,7 +253,9 @@ impl Cpu {
         if returning != exc::NMI {
             self.faultmask = false;
         }
-        self.nvic.relatch();
+        if self.nvic.relatch() {
+            self.new_pending();
+        }
         self.exclusive = false;
         self.event = true;
         self.stop_at = 0;
@@ -314,6 +319,7 @@ impl Cpu {
         self.r[12] = r12;
         self.r[14] = lr;
         self.pc = pc & !1;
+        self.next_pc = self.pc;
         self.refill = true;
         let frame_size = if fp_frame { FRAME_FP } else { FRAME_BASIC };
         let force_align = fp_frame || self.scb.ccr & (1 << 9) != 0;

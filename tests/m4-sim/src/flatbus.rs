@@ -25,6 +25,8 @@ pub struct FlatBus {
     pub advanced: Vec<u64>,
     /// A reset the test wants the core to take.
     pub reset_request: Option<crate::bus::ResetCause>,
+    /// Bumped by every [`FlatBus::load`]: the core re-decodes what it had cached.
+    generation: u64,
 }
 
 /// `mps2-an386`'s flash and RAM.
@@ -48,6 +50,7 @@ impl FlatBus {
             next_event: u64::MAX,
             advanced: Vec::new(),
             reset_request: None,
+            generation: 0,
         }
     }
 
@@ -65,6 +68,7 @@ impl FlatBus {
 
     /// Copies `data` to `addr` (loading an image); false if it does not fit a region.
     pub fn load(&mut self, addr: u32, data: &[u8]) -> bool {
+        self.generation += 1;
         let Some((i, off)) = self.find(addr, data.len() as u32) else {
             return false;
         };
@@ -120,6 +124,10 @@ impl Bus for FlatBus {
             .ok_or(fault)?;
         dst.copy_from_slice(value.to_le_bytes().get(..n as usize).ok_or(fault)?);
         Ok(())
+    }
+
+    fn code_generation(&self) -> u64 {
+        self.generation
     }
 
     fn irq_lines(&self) -> [u32; 8] {

@@ -43,5 +43,5 @@ mod systick;
 
 pub use bus::{Bus, BusFault, ResetCause, Width};
 pub use config::Config;
-pub use cpu::{Cpu, Reg, Stats, Stop};
+pub use cpu::{Cpu, FaultStatus, Reg, Stats, Stop};
 pub use flatbus::FlatBus;

@@ -173,9 +173,8 @@ impl Nvic {
 
     /// Samples the interrupt lines (by IRQ number): a line that is high sets its interrupt
     /// pending unless it is active, and a rising edge sets it pending even when active (a
-    /// new request while the handler runs). Returns whether anything became pending;
-    /// `event` is set for SEVONPEND's benefit when it did.
-    pub fn sample(&mut self, lines: Bits, new_pending: &mut bool) -> bool {
+    /// new request while the handler runs). Returns whether anything became pending.
+    pub fn sample(&mut self, lines: Bits) -> bool {
         let rising = [0, 1, 2, 3, 4, 5, 6, 7]
             .map(|k| lines.get(k).copied().unwrap_or(0) & !self.lines.get(k).copied().unwrap_or(0));
         self.lines = lines;
@@ -191,9 +190,6 @@ impl Nvic {
                 }
                 *p |= add;
             }
-        }
-        if changed {
-            *new_pending = true;
         }
         changed
     }
@@ -252,15 +248,14 @@ mod tests {
     #[test]
     fn lines_latch_as_pending_once_and_again_after_the_handler() {
         let mut nvic = Nvic::new(64, 4);
-        let mut ev = false;
         let mut lines = [0u32; 8];
         lines[1] = 1 << 3; // IRQ 35 = exception 51
-        assert!(nvic.sample(lines, &mut ev));
-        assert!(ev && nvic.is_pending(51));
+        assert!(nvic.sample(lines));
+        assert!(nvic.is_pending(51));
         // Taken: active, not pending; the level stays high but does not re-pend.
         nvic.set_pending(51, false);
         nvic.set_active(51, true);
-        assert!(!nvic.sample(lines, &mut ev));
+        assert!(!nvic.sample(lines));
         assert!(!nvic.is_pending(51));
         // Handler returns with the line still high: pending again.
         nvic.set_active(51, false);
@@ -271,17 +266,15 @@ mod tests {
     #[test]
     fn a_new_edge_while_active_pends() {
         let mut nvic = Nvic::new(32, 3);
-        let mut ev = false;
         nvic.set_active(16, true);
-        assert!(nvic.sample([1, 0, 0, 0, 0, 0, 0, 0], &mut ev));
+        assert!(nvic.sample([1, 0, 0, 0, 0, 0, 0, 0]));
         assert!(nvic.is_pending(16));
     }
 
     #[test]
     fn unimplemented_irqs_never_pend() {
         let mut nvic = Nvic::new(8, 3);
-        let mut ev = false;
-        assert!(!nvic.sample([1 << 9, 0, 0, 0, 0, 0, 0, 0], &mut ev));
+        assert!(!nvic.sample([1 << 9, 0, 0, 0, 0, 0, 0, 0]));
         assert!(!nvic.is_pending(25));
     }
 

@@ -358,11 +358,15 @@ impl Cpu {
             0x180..=0x19F => self.set_irq_bits(irq_reg(0x180), v, |n, e| n.set_enabled(e, false)),
             0x200..=0x21F => {
                 self.set_irq_bits(irq_reg(0x200), v, |n, e| n.set_pending(e, true));
-                self.event |= self.scb.scr & (1 << 4) != 0 && v != 0;
+                if v != 0 {
+                    self.new_pending();
+                }
             }
             0x280..=0x29F => {
                 self.set_irq_bits(irq_reg(0x280), v, |n, e| n.set_pending(e, false));
-                self.nvic.relatch();
+                if self.nvic.relatch() {
+                    self.new_pending();
+                }
             }
             0xD04 => self.icsr_write(v),
             0xD08 => self.scb.vtor = v & 0xFFFF_FF80,
@@ -408,7 +412,7 @@ impl Cpu {
                 let irq = v & 0x1FF;
                 if irq < u32::from(self.nvic.irqs()) {
                     self.nvic.set_pending(exc::IRQ0 + irq as u16, true);
-                    self.event |= self.scb.scr & (1 << 4) != 0;
+                    self.new_pending();
                 }
             }
             0xF34 => {

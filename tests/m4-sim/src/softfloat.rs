@@ -258,7 +258,7 @@ fn normalise(mant: u128, exp: i32) -> (u128, i32) {
 
 /// The exact signed sum of two non-zero finite values (mantissas below 2^60), as a sign,
 /// a magnitude with exponent, and a sticky bit when the smaller one only nudges it.
-fn add_exact(a: (bool, u128, i32), b: (bool, u128, i32)) -> (bool, u128, i32, bool) {
+fn sum_exact(a: (bool, u128, i32), b: (bool, u128, i32)) -> (bool, u128, i32, bool) {
     let (sa, ma, ea) = a;
     let (sb, mb, eb) = b;
     let (ma, ea) = normalise(ma, ea);
@@ -299,7 +299,7 @@ fn round_sum(sum: (bool, u128, i32, bool), mode: Rounding, fpscr: &mut u32) -> u
 }
 
 /// `FPAdd` (and `FPSub` as an add of the negated operand).
-pub(crate) fn add(a: u32, b: u32, fpscr: &mut u32) -> u32 {
+fn add_exact_op(a: u32, b: u32, fpscr: &mut u32) -> u32 {
     let mode = Rounding::of(*fpscr);
     let x = unpack(a, fpscr);
     let y = unpack(b, fpscr);
@@ -315,7 +315,7 @@ pub(crate) fn add(a: u32, b: u32, fpscr: &mut u32) -> u32 {
         (Kind::Zero, _) => round(SINGLE, y.sign, y.mant, y.exp, false, mode, fpscr),
         (_, Kind::Zero) => round(SINGLE, x.sign, x.mant, x.exp, false, mode, fpscr),
         _ => round_sum(
-            add_exact((x.sign, x.mant, x.exp), (y.sign, y.mant, y.exp)),
+            sum_exact((x.sign, x.mant, x.exp), (y.sign, y.mant, y.exp)),
             mode,
             fpscr,
         ),
@@ -324,6 +324,9 @@ pub(crate) fn add(a: u32, b: u32, fpscr: &mut u32) -> u32 {
 
 /// `FPSub`.
 pub(crate) fn sub(a: u32, b: u32, fpscr: &mut u32) -> u32 {
+    if let Some(r) = fast::add(a, b ^ 0x8000_0000, fpscr) {
+        return r;
+    }
     let x = unpack(a, fpscr);
     let y = unpack(b, fpscr);
     // NaN operands keep their own sign: process them before negating.
@@ -334,7 +337,7 @@ pub(crate) fn sub(a: u32, b: u32, fpscr: &mut u32) -> u32 {
 }
 
 /// `FPMul`.
-pub(crate) fn mul(a: u32, b: u32, fpscr: &mut u32) -> u32 {
+fn mul_exact(a: u32, b: u32, fpscr: &mut u32) -> u32 {
     let mode = Rounding::of(*fpscr);
     let x = unpack(a, fpscr);
     let y = unpack(b, fpscr);
@@ -400,11 +403,11 @@ pub(crate) fn mul_add(addend: u32, a: u32, b: u32, fpscr: &mut u32) -> u32 {
     if z.kind == Kind::Zero {
         return round(SINGLE, product.0, product.1, product.2, false, mode, fpscr);
     }
-    round_sum(add_exact((z.sign, z.mant, z.exp), product), mode, fpscr)
+    round_sum(sum_exact((z.sign, z.mant, z.exp), product), mode, fpscr)
 }
 
 /// `FPDiv`.
-pub(crate) fn div(a: u32, b: u32, fpscr: &mut u32) -> u32 {
+fn div_exact(a: u32, b: u32, fpscr: &mut u32) -> u32 {
     let mode = Rounding::of(*fpscr);
     let x = unpack(a, fpscr);
     let y = unpack(b, fpscr);
@@ -430,7 +433,7 @@ pub(crate) fn div(a: u32, b: u32, fpscr: &mut u32) -> u32 {
 }
 
 /// `FPSqrt`.
-pub(crate) fn sqrt(a: u32, fpscr: &mut u32) -> u32 {
+fn sqrt_exact(a: u32, fpscr: &mut u32) -> u32 {
     let mode = Rounding::of(*fpscr);
     let x = unpack(a, fpscr);
     if x.is_nan() {
@@ -465,8 +468,150 @@ fn isqrt(n: u128) -> u128 {
     r
 }
 
+/// `FPAdd`.
+pub(crate) fn add(a: u32, b: u32, fpscr: &mut u32) -> u32 {
+    fast::add(a, b, fpscr).unwrap_or_else(|| add_exact_op(a, b, fpscr))
+}
+
+/// `FPMul`.
+pub(crate) fn mul(a: u32, b: u32, fpscr: &mut u32) -> u32 {
+    fast::mul(a, b, fpscr).unwrap_or_else(|| mul_exact(a, b, fpscr))
+}
+
+/// `FPDiv`.
+pub(crate) fn div(a: u32, b: u32, fpscr: &mut u32) -> u32 {
+    fast::div(a, b, fpscr).unwrap_or_else(|| div_exact(a, b, fpscr))
+}
+
+/// `FPSqrt`.
+pub(crate) fn sqrt(a: u32, fpscr: &mut u32) -> u32 {
+    fast::sqrt(a, fpscr).unwrap_or_else(|| sqrt_exact(a, fpscr))
+}
+
+/// The common case on the host's IEEE arithmetic: round to nearest, operands and result
+/// normal (or zero), where IEEE 754 and the ARM pseudocode give the same bits. The only
+/// flag such an operation can raise is Inexact, found by checking the result exactly.
+/// Everything else (other rounding modes, denormals, infinities, NaNs, overflow, results
+/// near the underflow threshold) returns `None` for the exact path.
+mod fast {
+    use super::fpscr;
+
+    const MIN_NORMAL: f32 = f32::MIN_POSITIVE;
+
+    /// Round to nearest.
+    #[inline(always)]
+    fn nearest(f: u32) -> bool {
+        f >> fpscr::RMODE_SHIFT & 3 == 0
+    }
+
+    /// A normal number or a zero (exponent neither all zeros with a fraction nor all ones).
+    #[inline(always)]
+    fn plain(bits: u32) -> bool {
+        let e = bits >> 23 & 0xFF;
+        e != 0xFF && (e != 0 || bits & 0x7F_FFFF == 0)
+    }
+
+    /// A normal number.
+    #[inline(always)]
+    fn normal(bits: u32) -> bool {
+        let e = bits >> 23 & 0xFF;
+        e != 0xFF && e != 0
+    }
+
+    /// A result that is zero or safely above the underflow threshold and finite.
+    #[inline(always)]
+    fn result_ok(r: f32) -> bool {
+        r == 0.0 || (r.abs() > MIN_NORMAL && r.is_finite())
+    }
+
+    #[inline(always)]
+    fn finish(r: f32, exact: bool, f: &mut u32) -> u32 {
+        if !exact {
+            *f |= fpscr::IXC;
+        }
+        r.to_bits()
+    }
+
+    #[inline(always)]
+    pub fn add(a: u32, b: u32, f: &mut u32) -> Option<u32> {
+        if !(nearest(*f) && plain(a) && plain(b)) {
+            return None;
+        }
+        let (x, y) = (f32::from_bits(a), f32::from_bits(b));
+        let r = x + y;
+        if !result_ok(r) {
+            return None;
+        }
+        // TwoSum in double: s + e is the exact sum of the two singles.
+        let (xd, yd) = (f64::from(x), f64::from(y));
+        let s = xd + yd;
+        let bb = s - xd;
+        let e = (xd - (s - bb)) + (yd - bb);
+        Some(finish(r, e == 0.0 && s == f64::from(r), f))
+    }
+
+    #[inline(always)]
+    pub fn mul(a: u32, b: u32, f: &mut u32) -> Option<u32> {
+        if !(nearest(*f) && plain(a) && plain(b)) {
+            return None;
+        }
+        // The product of two singles is exact in double; rounding it once is IEEE's and
+        // ARM's result. A zero product only comes from a zero operand.
+        let p = f64::from(f32::from_bits(a)) * f64::from(f32::from_bits(b));
+        let r = p as f32;
+        if !result_ok(r) || (r == 0.0) != (p == 0.0) {
+            return None;
+        }
+        Some(finish(r, f64::from(r) == p, f))
+    }
+
+    #[inline(always)]
+    pub fn div(a: u32, b: u32, f: &mut u32) -> Option<u32> {
+        if !(nearest(*f) && plain(a) && normal(b)) {
+            return None;
+        }
+        let (x, y) = (f32::from_bits(a), f32::from_bits(b));
+        let r = x / y;
+        if !result_ok(r) || (r == 0.0 && x != 0.0) {
+            return None;
+        }
+        // Exact when r × y (exact in double) gives x back.
+        Some(finish(r, f64::from(r) * f64::from(y) == f64::from(x), f))
+    }
+
+    #[inline(always)]
+    pub fn sqrt(a: u32, f: &mut u32) -> Option<u32> {
+        if !(nearest(*f) && normal(a) && a >> 31 == 0) {
+            return None;
+        }
+        let x = f32::from_bits(a);
+        let r = x.sqrt();
+        let rd = f64::from(r);
+        Some(finish(r, rd * rd == f64::from(x), f))
+    }
+
+    /// `FPCompare` of two plain operands (no flags possible).
+    #[inline(always)]
+    pub fn compare(a: u32, b: u32) -> Option<u32> {
+        if !(plain(a) && plain(b)) {
+            return None;
+        }
+        let (x, y) = (f32::from_bits(a), f32::from_bits(b));
+        Some(if x == y {
+            0b0110 << 28
+        } else if x < y {
+            0b1000 << 28
+        } else {
+            0b0010 << 28
+        })
+    }
+}
+
 /// `FPCompare`: the NZCV flags (bits 31:28); `signal_qnan` for VCMPE.
 pub(crate) fn compare(a: u32, b: u32, signal_qnan: bool, fpscr: &mut u32) -> u32 {
+    if let Some(r) = fast::compare(a, b) {
+        return r;
+    }
     let x = unpack(a, fpscr);
     let y = unpack(b, fpscr);
     if x.is_nan() || y.is_nan() {
@@ -570,10 +715,22 @@ pub(crate) fn to_fixed(
     }
 }
 
-/// `FixedToFP`: a `size`-bit integer with `frac` fraction bits to single precision, in
-/// FPSCR's rounding mode.
-pub(crate) fn from_fixed(v: u32, frac: u32, unsigned: bool, size: u32, fpscr: &mut u32) -> u32 {
-    let mode = Rounding::of(*fpscr);
+/// `FixedToFP`: a `size`-bit integer with `frac` fraction bits to single precision,
+/// rounding to nearest (`nearest`, the fixed-point VCVT) or in FPSCR's mode (the integer
+/// VCVT).
+pub(crate) fn from_fixed(
+    v: u32,
+    frac: u32,
+    unsigned: bool,
+    size: u32,
+    nearest: bool,
+    fpscr: &mut u32,
+) -> u32 {
+    let mode = if nearest {
+        Rounding::Nearest
+    } else {
+        Rounding::of(*fpscr)
+    };
     let value: i64 = match (size, unsigned) {
         (16, true) => i64::from(v as u16),
         (16, false) => i64::from(v as u16 as i16),
@@ -604,7 +761,8 @@ pub(crate) fn single_to_half(a: u32, fpscr: &mut u32) -> u32 {
     match x.kind {
         Kind::QNaN | Kind::SNaN => {
             let r = if ahp {
-                0
+                // No NaN in the alternative format: a zero of the NaN's sign.
+                sign
             } else if *fpscr & fpscr::DN != 0 {
                 DEFAULT_NAN_HALF
             } else {
@@ -667,3 +825,5 @@ pub(crate) fn half_to_single(h: u32, fpscr: &mut u32) -> u32 {
     )
 }
 
+#[cfg(test)]
+mod tests;

@@ -167,8 +167,8 @@ impl Cpu {
             Insn::VCvt { op, sd, sm } => {
                 let m = self.sreg(sm);
                 let r = match op {
-                    VCvtInt::FromS32 => sf::from_fixed(m, 0, false, 32, &mut f),
-                    VCvtInt::FromU32 => sf::from_fixed(m, 0, true, 32, &mut f),
+                    VCvtInt::FromS32 => sf::from_fixed(m, 0, false, 32, false, &mut f),
+                    VCvtInt::FromU32 => sf::from_fixed(m, 0, true, 32, false, &mut f),
                     VCvtInt::ToS32(rz) => sf::to_fixed(m, 0, false, 32, rz, &mut f),
                     VCvtInt::ToU32(rz) => sf::to_fixed(m, 0, true, 32, rz, &mut f),
                 };
@@ -184,10 +184,12 @@ impl Cpu {
                 let v = self.sreg(sd);
                 let size = if half { 16 } else { 32 };
                 let frac = u32::from(frac);
+                // To fixed point rounds toward zero, from fixed point to nearest, whatever
+                // the FPSCR says.
                 let r = if to_fixed {
                     sf::to_fixed(v, frac, unsigned, size, true, &mut f)
                 } else {
-                    sf::from_fixed(v, frac, unsigned, size, &mut f)
+                    sf::from_fixed(v, frac, unsigned, size, true, &mut f)
                 };
                 self.set_sreg(sd, r);
             }
