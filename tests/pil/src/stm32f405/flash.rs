@@ -171,6 +171,21 @@ pub struct FlashIf {
     stats: ArtStats,
     /// The end of the last busy wait charged to the core.
     waited_until: u64,
+    /// Erases started, oldest first.
+    erases: Vec<Erase>,
+}
+
+/// An erase the firmware started.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Erase {
+    /// First byte erased, as a flash offset (0 = 0x0800_0000).
+    pub offset: u32,
+    /// Bytes erased.
+    pub len: u32,
+    /// When STRT was written, ns.
+    pub started_ns: u64,
+    /// When BSY clears, ns.
+    pub ends_ns: u64,
 }
 
 /// What a flash-interface access did beyond its registers.
@@ -208,6 +223,7 @@ impl FlashIf {
             timing,
             stats: ArtStats::default(),
             waited_until: 0,
+            erases: Vec::new(),
         }
     }
 
@@ -220,9 +236,16 @@ impl FlashIf {
             self.generation += 1;
         }
         let (timing, generation, stats) = (self.timing, self.generation, self.stats);
+        let erases = std::mem::take(&mut self.erases);
         *self = Self::new(timing);
         self.generation = generation;
         self.stats = stats;
+        self.erases = erases;
+    }
+
+    /// The erases started since the model was made, oldest first (kept across resets).
+    pub fn erases(&self) -> &[Erase] {
+        &self.erases
     }
 
     /// Bumped whenever flash content changes.
@@ -492,6 +515,12 @@ impl FlashIf {
         });
         self.busy_until = now + ms * 1_000_000;
         self.generation += 1;
+        self.erases.push(Erase {
+            offset: start as u32,
+            len: len as u32,
+            started_ns: now,
+            ends_ns: self.busy_until,
+        });
     }
 
     fn pick(&self, table: &[[u64; 2]; 4]) -> u64 {

@@ -1,7 +1,8 @@
 //! The independent watchdog (RM0090 §21): KR keys (0xCCCC start, 0xAAAA reload, 0x5555
 //! register access), PR, RLR and SR (PVU, RVU). A 12-bit down-counter at LSI / (4 · 2^PR)
-//! that starts at 0xFFF, reloads on 0xAAAA and resets the chip when it reaches 0; once
-//! started nothing stops it but a reset.
+//! that starts at 0xFFF, reloads on 0xAAAA and resets the chip on the tick after it
+//! reaches 0 — RLR + 1 ticks (DS8626's IWDG timeout table: RL = 0xFFF at ÷4 is 512 ms at
+//! 32 kHz, 4096 ticks); once started nothing stops it but a reset.
 //!
 //! PR and RLR live in the core's domain; the counter in the LSI's. A write (after 0x5555)
 //! takes five LSI cycles to cross (PVU/RVU set meanwhile, and a write while the flag is set
@@ -22,6 +23,8 @@ const KEY_RELOAD: u32 = 0xAAAA;
 const KEY_ACCESS: u32 = 0x5555;
 const PVU: u32 = 1 << 0;
 const RVU: u32 = 1 << 1;
+/// Ticks from the start to the reset: the counter starts at 0xFFF.
+const TICKS_FROM_START: u64 = 0x1000;
 /// LSI cycles a PR/RLR update takes to reach the watchdog's clock domain.
 const UPDATE_LSI_CYCLES: u64 = 5;
 
@@ -45,7 +48,7 @@ pub struct Iwdg {
     access: bool,
     started: bool,
     lsi_hz: u32,
-    /// The counter was `epoch_count` at `epoch_ns`.
+    /// `epoch_count` ticks were left until the reset at `epoch_ns` (the counter + 1).
     epoch_ns: u64,
     epoch_count: u64,
     /// When the counter reaches 0 as things stand (kept current on every change).
@@ -70,7 +73,7 @@ impl Iwdg {
             started: false,
             lsi_hz,
             epoch_ns: 0,
-            epoch_count: 0xFFF,
+            epoch_count: TICKS_FROM_START,
             expires: u64::MAX,
             reloads: 0,
             min_margin_ns: None,
@@ -192,7 +195,7 @@ impl Iwdg {
                     if !was {
                         self.started = true;
                         self.epoch_ns = now;
-                        self.epoch_count = 0xFFF;
+                        self.epoch_count = TICKS_FROM_START;
                         self.expires = self.compute_expiry();
                     }
                     self.access = false;
@@ -205,7 +208,7 @@ impl Iwdg {
                             Some(self.min_margin_ns.map_or(margin, |m| m.min(margin)));
                         self.reloads += 1;
                         self.epoch_ns = now;
-                        self.epoch_count = u64::from(self.rlr_active);
+                        self.epoch_count = u64::from(self.rlr_active) + 1;
                         self.expires = self.compute_expiry();
                     }
                     self.access = false;
@@ -238,37 +241,52 @@ impl Iwdg {
 mod tests {
     use super::*;
 
-    /// IndependentWatchdog::new(250 ms): PR = 3 (÷32), RLR = 249 at the HAL's 32 kHz, the
-    /// start a while later (the supervisor's unleash).
+    /// `IndependentWatchdog::new(250 ms)` as embassy computes it: the smallest prescaler
+    /// whose longest period covers 250 ms — ÷4 — and RLR = 1999 (2000 ticks of 125 µs at
+    /// its nominal 32 kHz).
     fn board_watchdog(lsi: u32) -> Iwdg {
         let mut w = Iwdg::new(lsi);
         w.write(KR, KEY_ACCESS, 0);
-        w.write(PR, 3, 0);
-        w.write(RLR, 249, 0);
+        w.write(PR, 0, 0);
+        w.write(RLR, 1999, 0);
         w.process(1_000_000);
         w
     }
 
+    /// `supervisor::set_timeout`: reload, 0x5555, PR, RLR, reload — at once.
+    fn set_timeout(w: &mut Iwdg, pr: u32, rlr: u32, now: u64) {
+        w.process(now);
+        w.write(KR, KEY_RELOAD, now);
+        w.write(KR, KEY_ACCESS, now);
+        w.write(PR, pr, now);
+        w.write(RLR, rlr, now);
+        w.write(KR, KEY_RELOAD, now);
+    }
+
     #[test]
-    fn the_first_period_counts_from_0xfff_then_reloads_take_rlr() {
+    fn the_first_period_counts_from_0xfff_then_reloads_take_rlr_plus_one() {
         let mut w = board_watchdog(32_000);
         assert_eq!(w.next_event(), u64::MAX);
         assert_eq!(w.write(KR, KEY_START, 1_000_000), Some(true));
-        // 4095 ticks at 1 kHz.
-        assert_eq!(w.expiry(), 1_000_000 + 4_095_000_000);
+        // 4096 ticks of 125 µs: DS8626's 512 ms maximum at ÷4.
+        assert_eq!(w.expiry(), 1_000_000 + 512_000_000);
         w.write(KR, KEY_RELOAD, 2_000_000);
-        assert_eq!(w.expiry(), 2_000_000 + 249_000_000);
-        assert!(!w.process(2_000_000 + 248_999_999));
-        assert!(w.process(2_000_000 + 249_000_000));
+        assert_eq!(w.expiry(), 2_000_000 + 250_000_000);
+        assert!(!w.process(2_000_000 + 249_999_999));
+        assert!(w.process(2_000_000 + 250_000_000));
     }
 
     #[test]
     fn the_timeout_scales_with_the_lsi_across_its_datasheet_range() {
-        for (lsi, ms) in [(17_000u32, 468u64), (32_000, 249), (47_000, 169)] {
+        for (lsi, us) in [
+            (17_000u32, 470_588u64),
+            (32_000, 250_000),
+            (47_000, 170_212),
+        ] {
             let mut w = board_watchdog(lsi);
             w.write(KR, KEY_START, 1_000_000);
             w.write(KR, KEY_RELOAD, 1_000_000);
-            assert_eq!((w.expiry() - 1_000_000) / 1_000_000, ms, "LSI {lsi} Hz");
+            assert_eq!((w.expiry() - 1_000_000) / 1_000, us, "LSI {lsi} Hz");
         }
     }
 
@@ -292,37 +310,54 @@ mod tests {
         assert_eq!(w.read(RLR, 200_000), Some(100));
     }
 
-    /// The supervisor's with_long_timeout: reload, 0x5555, PR ÷64, RLR 2000, reload at once.
-    /// The reload still loads the old 249 (RVU busy) — at the new ÷64 once PR has crossed:
-    /// the "4 s" stretch gives ≈ 0.5 s until the next reload.
+    /// The supervisor's `with_long_timeout` (÷64, RLR 2000: "4 s") and the restore (÷32,
+    /// RLR 249). Each reload comes before RVU clears, so it loads the reload value already
+    /// in the LSI domain, counted at the new prescaler once PR has crossed. The first
+    /// stretch after a boot loads embassy's 1999 + 1 at ÷64: 4 s by luck. The restore loads
+    /// 2000 at ÷32: 2 s until the next feed. Every later stretch loads 249 at ÷64: 500 ms.
     #[test]
-    fn reloading_before_rvu_clears_keeps_the_old_timeout() {
+    fn reloading_before_rvu_clears_keeps_the_old_reload_value() {
         let mut w = board_watchdog(32_000);
         w.write(KR, KEY_START, 1_000_000);
-        w.write(KR, KEY_RELOAD, 10_000_000);
-        w.write(KR, KEY_ACCESS, 10_000_000);
-        w.write(PR, 4, 10_000_000);
-        w.write(RLR, 2000, 10_000_000);
-        w.write(KR, KEY_RELOAD, 10_000_000);
-        w.process(20_000_000);
-        assert_eq!(w.read(SR, 20_000_000), Some(0));
-        let left = w.expiry() - 10_000_000;
-        assert!((495_000_000..500_000_000).contains(&left), "{left}");
-        // The next reload takes 2000 at ÷64: the 4 s the firmware asked for.
+        let left = |w: &mut Iwdg, at: u64| {
+            w.process(at + 1_000_000);
+            assert_eq!(w.read(SR, at + 1_000_000), Some(0));
+            (w.expiry() - at) / 1_000_000
+        };
+        set_timeout(&mut w, 4, 2000, 10_000_000);
+        // 2000 ticks of 125 µs loaded, one gone before PR crosses, 1999 of 2 ms left.
+        assert_eq!(left(&mut w, 10_000_000), 3998, "first stretch");
+        set_timeout(&mut w, 3, 249, 100_000_000);
+        assert_eq!(
+            left(&mut w, 100_000_000),
+            2001,
+            "restore: 2001 ticks of 1 ms"
+        );
+        w.write(KR, KEY_RELOAD, 150_000_000);
+        assert_eq!(left(&mut w, 150_000_000), 250, "the supervisor's next feed");
+        set_timeout(&mut w, 4, 2000, 200_000_000);
+        assert_eq!(
+            left(&mut w, 200_000_000),
+            500,
+            "second stretch: 250 ticks of 2 ms"
+        );
         w.write(KR, KEY_RELOAD, 300_000_000);
-        assert_eq!(w.expiry() - 300_000_000, 4_000_000_000);
+        assert_eq!(
+            left(&mut w, 300_000_000),
+            4002,
+            "only a later reload gets 4 s"
+        );
     }
 
-    /// The same sequence on a fast-LSI part (47 kHz, DS8626's maximum): 339 ms.
+    /// The second stretch on a fast-LSI part (47 kHz, DS8626's maximum): 340 ms.
     #[test]
     fn a_fast_lsi_shortens_the_stretch_further() {
         let mut w = board_watchdog(47_000);
         w.write(KR, KEY_START, 1_000_000);
-        w.write(KR, KEY_ACCESS, 10_000_000);
-        w.write(PR, 4, 10_000_000);
-        w.write(RLR, 2000, 10_000_000);
-        w.write(KR, KEY_RELOAD, 10_000_000);
-        w.process(20_000_000);
-        assert_eq!((w.expiry() - 10_000_000) / 1_000_000, 339);
+        set_timeout(&mut w, 4, 2000, 10_000_000);
+        set_timeout(&mut w, 3, 249, 100_000_000);
+        set_timeout(&mut w, 4, 2000, 200_000_000);
+        w.process(201_000_000);
+        assert_eq!((w.expiry() - 200_000_000) / 1_000_000, 340);
     }
 }

@@ -34,17 +34,75 @@ pub fn core_config() -> m4_sim::Config {
     }
 }
 
-/// The entry points of an image's embassy task polls (Thumb bit cleared).
-pub fn task_polls(elf: &[u8]) -> Result<Vec<u32>, LoadError> {
-    let mut polls: Vec<u32> = fw_elf::symbols(elf)
+/// The task a poll function runs, from its symbol: the v0 mangling names the task's
+/// future (`…15___imu_task_task30___imu_task_task_inner_function…` → `imu_task`); the
+/// legacy mangling does not (`TaskStorage$LT$F$GT$4poll`), so `None`.
+pub fn task_name(symbol: &str) -> Option<String> {
+    const INNER: &str = "_inner_function";
+    let end = symbol.find(INNER)?;
+    // v0 spells the task's future `<n>X<m>X_inner_function` with m = len(X) + 15, X
+    // preceded by a `_` separator when it begins with `_`: find the X that repeats with
+    // the right length in between.
+    let ident = (0..end).rev().find_map(|start| {
+        let x = symbol.get(start..end)?;
+        let before = symbol.get(..start)?;
+        let separator = usize::from(x.starts_with('_'));
+        let m = x.len() - separator + INNER.len();
+        before.ends_with(&format!("{x}{m}")).then_some(x)
+    })?;
+    let ident = ident.trim_start_matches('_');
+    // `#[embassy_executor::task] fn x()` spawns `__x_task`: one `_task` too many.
+    let ident = ident
+        .strip_suffix("_task_task")
+        .map_or(ident.to_string(), |n| format!("{n}_task"));
+    Some(ident).filter(|n| !n.is_empty())
+}
+
+/// An embassy task poll function of an image.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TaskPoll {
+    /// Its entry (Thumb bit cleared).
+    pub entry: u32,
+    /// The task, when the symbol says ([`task_name`]).
+    pub name: Option<String>,
+}
+
+impl fmt::Display for TaskPoll {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.name {
+            Some(n) => f.write_str(n),
+            None => write!(f, "the task polled at 0x{:08x}", self.entry),
+        }
+    }
+}
+
+/// The image's embassy task polls, by entry.
+pub fn task_polls(elf: &[u8]) -> Result<Vec<TaskPoll>, LoadError> {
+    let mut polls: Vec<TaskPoll> = fw_elf::symbols(elf)
         .map_err(|e| LoadError::Elf(e.to_string()))?
         .into_iter()
         .filter(|s| is_task_poll(&s.name))
-        .map(|s| s.address & !1)
+        .map(|s| TaskPoll {
+            entry: s.address & !1,
+            name: task_name(&s.name),
+        })
         .collect();
-    polls.sort_unstable();
-    polls.dedup();
+    polls.sort_unstable_by_key(|p| p.entry);
+    polls.dedup_by_key(|p| p.entry);
     Ok(polls)
+}
+
+/// A watchdog reset and the task the executor was in when it came: the last task
+/// polled, when no other poll began after it (embassy runs one task at a time, so a task
+/// that never returns keeps the executor — and the supervisor — from running).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WatchdogBite {
+    /// When the chip reset, ns.
+    pub at_ns: u64,
+    /// The last task polled before it.
+    pub last_polled: Option<TaskPoll>,
+    /// When that poll began, ns.
+    pub polled_at_ns: u64,
 }
 
 /// Why an image cannot run.
@@ -80,8 +138,12 @@ pub struct Mcu<O: Outside> {
     cpu: Cpu,
     soc: Stm32f405<O>,
     entry: Entry,
-    /// Each task poll's entry and whether it ran since the last reset.
-    polls: Vec<(u32, bool)>,
+    /// Each task poll and whether it ran since the last reset.
+    polls: Vec<(TaskPoll, bool)>,
+    /// The last poll: which, and when.
+    last_poll: Option<(usize, u64)>,
+    bites: Vec<WatchdogBite>,
+    seen_watchdog_resets: u32,
     reset_at: u64,
     boot_ns: Option<u64>,
     seen_resets: u32,
@@ -100,14 +162,17 @@ impl<O: Outside> Mcu<O> {
         let polls = task_polls(elf)?;
         let mut cpu = Cpu::new(core_config());
         cpu.reset(&mut soc);
-        for &p in &polls {
-            cpu.add_pc_hook(p);
+        for p in &polls {
+            cpu.add_pc_hook(p.entry);
         }
         Ok(Self {
             cpu,
             soc,
             entry,
             polls: polls.into_iter().map(|p| (p, false)).collect(),
+            last_poll: None,
+            bites: Vec::new(),
+            seen_watchdog_resets: 0,
             reset_at: 0,
             boot_ns: None,
             seen_resets: 0,
@@ -146,9 +211,22 @@ impl<O: Outside> Mcu<O> {
         self.boot_ns
     }
 
+    /// The image's tasks (their poll functions).
+    pub fn tasks(&self) -> impl Iterator<Item = &TaskPoll> {
+        self.polls.iter().map(|(p, _)| p)
+    }
+
+    /// The watchdog resets so far, each with the task the executor was in.
+    pub fn watchdog_bites(&self) -> &[WatchdogBite] {
+        &self.bites
+    }
+
     fn polled(&mut self, pc: u32) {
-        if let Some(p) = self.polls.iter_mut().find(|(a, _)| *a == pc) {
-            p.1 = true;
+        if let Some(i) = self.polls.iter().position(|(p, _)| p.entry == pc) {
+            if let Some(p) = self.polls.get_mut(i) {
+                p.1 = true;
+            }
+            self.last_poll = Some((i, self.cpu.now_ns()));
         }
         if self.boot_ns.is_none() && !self.polls.is_empty() && self.polls.iter().all(|p| p.1) {
             self.boot_ns = Some(self.cpu.now_ns().saturating_sub(self.reset_at));
@@ -156,8 +234,20 @@ impl<O: Outside> Mcu<O> {
     }
 
     fn note_resets(&mut self) {
+        if self.soc.watchdog_resets() != self.seen_watchdog_resets {
+            self.seen_watchdog_resets = self.soc.watchdog_resets();
+            let last = self.last_poll;
+            self.bites.push(WatchdogBite {
+                at_ns: self.soc.now_ns(),
+                last_polled: last
+                    .and_then(|(i, _)| self.polls.get(i))
+                    .map(|(p, _)| p.clone()),
+                polled_at_ns: last.map_or(0, |(_, t)| t),
+            });
+        }
         if self.soc.resets() != self.seen_resets {
             self.seen_resets = self.soc.resets();
+            self.last_poll = None;
             self.reset_at = self.soc.now_ns();
             self.boot_ns = None;
             for p in &mut self.polls {
@@ -258,5 +348,27 @@ mod tests {
         assert!(!is_task_poll(
             "_ZN16embassy_executor3raw8Executor4poll17h0E"
         ));
+    }
+
+    #[test]
+    fn task_names_come_from_the_v0_mangling() {
+        assert_eq!(
+            task_name(
+                "_RNvMs1_NtCs5APViPlMGpI_16embassy_executor3rawINtB5_11TaskStorageNCNvNvNtNtNtCsve3zSKosp0_9flight_fw8firmware5tasks3imu15___imu_task_task30___imu_task_task_inner_function0E4pollB1c_"
+            )
+            .as_deref(),
+            Some("imu_task")
+        );
+        assert_eq!(
+            task_name(
+                "_RNvMs1_NtCs5APViPlMGpI_16embassy_executor3rawINtB5_11TaskStorageNCNvNvNtCsve3zSKosp0_9flight_fw8firmware21_____embassy_main_task36_____embassy_main_task_inner_function0E4pollB18_"
+            )
+            .as_deref(),
+            Some("embassy_main_task")
+        );
+        assert_eq!(
+            task_name("_ZN16embassy_executor3raw20TaskStorage$LT$F$GT$4poll17hb29a26927235efbdE"),
+            None
+        );
     }
 }

@@ -57,7 +57,7 @@ use dac::{Dac, DacSample};
 use diag::{Diagnostics, Unmodelled, Violation};
 use dma::Dma;
 use exti::Exti;
-use flash::{ArtStats, FlashIf, FlashTiming};
+use flash::{ArtStats, Erase, FlashIf, FlashTiming};
 use gpio::{Gpio, Signal};
 use i2c::I2c;
 use iwdg::Iwdg;
@@ -417,6 +417,11 @@ impl<O: Outside> Stm32f405<O> {
     /// The ART accelerator's counters.
     pub fn art_stats(&self) -> ArtStats {
         self.flash.stats()
+    }
+
+    /// The flash erases the firmware started (sector or mass), oldest first, across resets.
+    pub fn flash_erases(&self) -> &[Erase] {
+        self.flash.erases()
     }
 
     /// The flash wait states configured.

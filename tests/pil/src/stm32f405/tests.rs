@@ -436,24 +436,25 @@ fn a_stuck_i2c_bus_is_freed_by_clocking_it_from_gpio() {
     let _ = I2cReply::Ack;
 }
 
-/// IndependentWatchdog: started and never fed, it resets the chip after 4096 ticks; the
-/// reset releases every pin and RCC_CSR says why.
+/// IndependentWatchdog::new(250 ms) (÷4, RLR 1999), started, fed once at 1 ms and never
+/// again: RLR + 1 ticks later it resets the chip; the reset releases every pin and RCC_CSR
+/// says why.
 #[test]
 fn an_unfed_watchdog_resets_the_chip_and_leaves_its_flag() {
     let mut c = chip();
     w(&mut c, RCC + 0x74, 1 << 24, 0); // RMVF: forget the power-on flags
     w(&mut c, IWDG, 0x5555, 0);
-    w(&mut c, IWDG + 4, 3, 0);
-    w(&mut c, IWDG + 8, 249, 0);
+    w(&mut c, IWDG + 4, 0, 0);
+    w(&mut c, IWDG + 8, 1999, 0);
     w(&mut c, IWDG, 0xCCCC, 0);
     w(&mut c, IWDG, 0xAAAA, 1_000_000);
     w(&mut c, RCC + 0x30, 1, 1_000_000);
     w(&mut c, GPIOA, 0xA800_0000 | 1, 1_000_000);
     assert_eq!(c.outside().drive(Pin::new(0, 0)), Some(Drive::Low));
-    assert_eq!(c.next_event_ns(), 250_000_000);
-    c.advance(249_999_999);
+    assert_eq!(c.next_event_ns(), 251_000_000);
+    c.advance(250_999_999);
     assert_eq!(c.take_reset_request(), None);
-    c.advance(250_000_000);
+    c.advance(251_000_000);
     assert_eq!(c.take_reset_request(), Some(ResetCause::Watchdog));
     c.reset(ResetCause::Watchdog);
     assert_eq!(
@@ -461,7 +462,7 @@ fn an_unfed_watchdog_resets_the_chip_and_leaves_its_flag() {
         Some(Drive::Released(Pull::None))
     );
     assert_eq!(
-        r(&mut c, RCC + 0x74, 250_000_000) & 0xFE00_0000,
+        r(&mut c, RCC + 0x74, 251_000_000) & 0xFE00_0000,
         1 << 29 | 1 << 26
     );
     assert_eq!(c.core_hz(), 16_000_000);
