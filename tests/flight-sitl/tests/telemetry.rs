@@ -168,3 +168,36 @@ fn system_identification_flight_finds_the_airframe() {
     let roll = results[0].1;
     assert!((roll.beta1.ln() - lr).abs() < 1e-3 && roll.tau_s == id.tau_s);
 }
+
+#[test]
+fn the_home_reaches_the_module_with_the_complementary_filter_and_a_fix() {
+    use telemetry::messages::Message;
+    // GIVEN the factory estimator (the complementary filter: no INS) and a receiver
+    let (quad, settings) = default_airframe();
+    assert_eq!(
+        settings.get(flight_core::settings::handles::INS_MODE),
+        0,
+        "factory: complementary"
+    );
+    let sitl = run(Scenario {
+        gps: Some(flight_sitl::gps::GpsConfig::default()),
+        ..Scenario::new(settings, quad, 6.0, Box::new(pilot(-1.0, |_| cruise(-1.0))))
+    });
+    // WHEN it flies for 6 s
+    // THEN the module hears the home (the first usable fix: the simulated field near Zürich),
+    // which is what the ground station's home marker shows
+    let homes: Vec<_> = sitl
+        .module_rx
+        .iter()
+        .filter_map(|(t, m)| match m {
+            Message::Home(h) => Some((*t, *h)),
+            _ => None,
+        })
+        .collect();
+    let (_, home) = *homes.first().expect("a Home message");
+    println!("{home:?}, {} Home messages", homes.len());
+    assert!(home.set);
+    // Within the receiver's 0.5 m of noise of the field's position (1e-7° ≈ 1.1 cm).
+    assert!((home.latitude_e7 - 473_977_420).abs() < 100, "{home:?}");
+    assert!((home.longitude_e7 - 85_455_940).abs() < 150, "{home:?}");
+}

@@ -10,6 +10,7 @@ pub mod plot;
 pub mod replay;
 pub mod scenario;
 pub mod sensors;
+pub mod sweep;
 pub mod trajectory;
 
 /// Element-wise combination of two 3-vectors.

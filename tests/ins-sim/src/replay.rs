@@ -349,6 +349,55 @@ pub fn ned_from_origin(
     ]
 }
 
+/// The records in the order they are fused: each measurement right after the IMU sample
+/// nearest to it in time (the later one on a tie), IMU samples and measurements otherwise
+/// in file order. A measurement stamped with an IMU sample's time but listed before it
+/// would otherwise be fused against the estimate one IMU period old: under a rocking turn
+/// the frame accelerates at up to 5 m/s², so at 500 Hz that alone was ≈ 10 mm/s of GPS
+/// velocity mismatch, and the velocity error settled at 6 mm/s RMS instead of 0.8
+/// (`tests/ins_sweep.rs`).
+#[must_use]
+pub fn schedule(records: &[Record]) -> Vec<Record> {
+    let time = |r: &Record| match *r {
+        Record::Imu { time_us, .. }
+        | Record::Mag { time_us, .. }
+        | Record::Baro { time_us, .. }
+        | Record::Gps { time_us, .. } => time_us,
+    };
+    let imu_times: Vec<u64> = records
+        .iter()
+        .filter(|r| matches!(r, Record::Imu { .. }))
+        .map(time)
+        .collect();
+    // after[k]: the measurements fused after IMU sample k; `before`: those nearest to no
+    // IMU sample before the first one.
+    let mut after: Vec<Vec<Record>> = vec![Vec::new(); imu_times.len()];
+    let mut before = Vec::new();
+    for r in records.iter().filter(|r| !matches!(r, Record::Imu { .. })) {
+        let t = time(r);
+        let next = imu_times.partition_point(|&ti| ti < t);
+        let nearest = match (next.checked_sub(1), imu_times.get(next)) {
+            (Some(prev), Some(&tn)) => {
+                let tp = imu_times.get(prev).copied().unwrap_or(0);
+                if t - tp < tn - t { prev } else { next }
+            }
+            (Some(prev), None) => prev,
+            (None, _) => next,
+        };
+        match after.get_mut(nearest) {
+            Some(slot) => slot.push(*r),
+            None => before.push(*r),
+        }
+    }
+    let mut out = before;
+    let imus = records.iter().filter(|r| matches!(r, Record::Imu { .. }));
+    for (r, slot) in imus.zip(after.iter_mut()) {
+        out.push(*r);
+        out.append(slot);
+    }
+    out
+}
+
 /// Runs the records through a fresh INS. The filter aligns on the first IMU sample once a
 /// magnetometer sample has been seen (roll/pitch from accel, yaw from mag); GPS and baro are
 /// fused once the first fix has set the origin (baro offset = baro − GPS altitude then).
@@ -370,6 +419,7 @@ pub fn run_with_progress(
         .noise
         .map(|n| crate::noise::told(options, &n, records));
     let options = told.as_ref().unwrap_or(options);
+    let records = schedule(records);
     let mut ins = Ins::new(options.config, options.aiding);
     let mut rows = Vec::new();
     let mut last_imu_us: Option<u64> = None;
@@ -473,5 +523,64 @@ fn row(time_us: u64, state: Option<flight_core::estimation::ins::State>) -> Row 
         position_ned_m: s.position_ned_m.map(f64::from),
         gyro_bias_radps: s.gyro_bias_radps.map(f64::from),
         accel_bias_z_mps2: f64::from(s.accel_bias_z_mps2),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn imu(time_us: u64) -> Record {
+        Record::Imu {
+            time_us,
+            accel_mps2: [0.0, 0.0, -9.8],
+            gyro_radps: [0.0; 3],
+        }
+    }
+
+    fn baro(time_us: u64) -> Record {
+        Record::Baro {
+            time_us,
+            altitude_m: 0.0,
+        }
+    }
+
+    #[test]
+    fn each_measurement_follows_the_imu_sample_nearest_in_time() {
+        // GIVEN measurements listed before the IMU sample of their instant, one between two
+        // samples nearer the earlier, one on a tie, one before the first and after the last
+        let file = [
+            baro(0),
+            imu(1000),
+            baro(3000),
+            imu(3000),
+            baro(3900),
+            baro(5000),
+            imu(7000),
+            baro(9000),
+        ];
+        // WHEN scheduled
+        let order: Vec<(bool, u64)> = schedule(&file)
+            .iter()
+            .map(|r| match *r {
+                Record::Imu { time_us, .. } => (true, time_us),
+                Record::Baro { time_us, .. } => (false, time_us),
+                _ => (false, u64::MAX),
+            })
+            .collect();
+        // THEN each comes right after its nearest IMU sample (the later one on a tie)
+        assert_eq!(
+            order,
+            [
+                (true, 1000),
+                (false, 0),
+                (true, 3000),
+                (false, 3000),
+                (false, 3900),
+                (true, 7000),
+                (false, 5000),
+                (false, 9000),
+            ]
+        );
     }
 }

@@ -65,6 +65,11 @@ const ARMED: &[Tone] = &[t(1000, 150), t(2000, 300)];
 const DISARMED: &[Tone] = &[t(2000, 150), t(1000, 300)];
 // A low buzz.
 const ARM_REFUSED: &[Tone] = &[t(300, 600)];
+// The magnetometer calibration: a slow rising triple when collecting starts, a rising
+// run ending high when it is stored, a falling low pair when the readings were refused.
+const MAGCAL_STARTED: &[Tone] = &[t(800, 200), t(0, 80), t(1200, 200), t(0, 80), t(1600, 200)];
+const MAGCAL_STORED: &[Tone] = &[t(1200, 100), t(1600, 100), t(2000, 100), t(2400, 400)];
+const MAGCAL_REFUSED: &[Tone] = &[t(700, 300), t(0, 80), t(400, 600)];
 // Two rising chirps.
 const CONTROL_RECOVERED: &[Tone] = &[t(1500, 100), t(0, 60), t(2500, 200)];
 // Mode beeps: n short beeps at a mid pitch for the n-th mode.
@@ -105,6 +110,12 @@ pub enum Alert {
     ControlRecovered,
     /// Flight mode changed.
     Mode(FlightMode),
+    /// The magnetometer calibration started collecting (stick gesture, disarmed).
+    MagcalStarted,
+    /// The magnetometer calibration was stored (and is being saved).
+    MagcalStored,
+    /// The magnetometer calibration's readings failed its checks; nothing was stored.
+    MagcalRefused,
 }
 
 impl Alert {
@@ -115,7 +126,8 @@ impl Alert {
             Alert::BatteryCritical => 7,
             Alert::Failsafe => 6,
             Alert::BatteryWarning => 5,
-            Alert::ArmRefused => 4,
+            Alert::ArmRefused | Alert::MagcalRefused => 4,
+            Alert::MagcalStarted | Alert::MagcalStored => 3,
             Alert::Armed | Alert::Disarmed => 3,
             Alert::ControlRecovered => 2,
             Alert::Mode(_) => 1,
@@ -133,6 +145,9 @@ impl Alert {
             Alert::Disarmed => DISARMED,
             Alert::ArmRefused => ARM_REFUSED,
             Alert::ControlRecovered => CONTROL_RECOVERED,
+            Alert::MagcalStarted => MAGCAL_STARTED,
+            Alert::MagcalStored => MAGCAL_STORED,
+            Alert::MagcalRefused => MAGCAL_REFUSED,
             Alert::Mode(m) => match m {
                 FlightMode::RatePid => MODE_1,
                 FlightMode::RateLqg => MODE_2,

@@ -155,3 +155,110 @@ fn magcal_is_refused_while_armed_and_arming_ends_a_collection() {
     }
     assert!(!app.magcal().collecting());
 }
+
+/// Holds the calibration's stick gesture for 2.2 s from `t0` (link up, disarmed, 1 kHz);
+/// returns the end time and the tones heard.
+fn hold_gesture(app: &mut FlightApp, t0: u32, up: bool) -> (u32, std::vec::Vec<u16>) {
+    app.link_input = LinkInput {
+        up,
+        sticks: Sticks {
+            throttle: 0.0,
+            roll: -1.0,
+            pitch: -1.0,
+            yaw: 0.0,
+        },
+        arm_switch: None,
+        mode_channel: -1.0,
+    };
+    let mut tones = std::vec::Vec::new();
+    for t in t0..t0 + 3_500 {
+        if t == t0 + 2_200 {
+            // Let the tone finish with the sticks released.
+            app.link_input.sticks = Sticks::default();
+        }
+        let _ = app.on_imu_sample(t, &still(t));
+        tones.push(app.on_alert_tick(t));
+    }
+    (t0 + 3_500, tones)
+}
+
+fn heard(tones: &[u16], pattern: &[crate::alerts::Tone]) -> bool {
+    let pitches: std::vec::Vec<u16> = pattern
+        .iter()
+        .map(|t| t.frequency_hz)
+        .filter(|&f| f > 0)
+        .collect();
+    let mut played: std::vec::Vec<u16> = tones.iter().copied().filter(|&f| f > 0).collect();
+    played.dedup();
+    played
+        .windows(pitches.len())
+        .any(|w| w == pitches.as_slice())
+}
+
+#[test]
+fn the_stick_gesture_starts_and_stores_a_calibration_with_tones() {
+    use crate::alerts::Alert;
+    // GIVEN a disarmed frame with the link up
+    let mut app = app();
+    // WHEN the pilot holds the gesture for 2 s
+    let (t, tones) = hold_gesture(&mut app, 0, true);
+    // THEN collecting starts, confirmed by its tone
+    assert!(app.magcal().collecting());
+    assert!(heard(&tones, Alert::MagcalStarted.tones()), "{tones:?}");
+    // WHEN the frame is turned through every orientation and the gesture held again
+    let t = turn(&mut app, t, 1_500, everywhere);
+    let (_, tones) = hold_gesture(&mut app, t, true);
+    // THEN the calibration is stored, a save requested, and the stored tone plays
+    assert!(heard(&tones, Alert::MagcalStored.tones()), "{tones:?}");
+    let s = app.settings();
+    for (handle, want) in handles::MAG_CALIBRATION.iter().zip(OFFSET) {
+        let got = s.get(*handle);
+        assert!((got - want).abs() < 0.2, "{handle:?} {got}");
+    }
+    assert!(app.take_save().is_some());
+    assert!(!app.magcal().collecting());
+}
+
+#[test]
+fn a_refused_gesture_calibration_stores_nothing_and_says_so() {
+    use crate::alerts::Alert;
+    let mut app = app();
+    let (t, _) = hold_gesture(&mut app, 0, true);
+    let t = turn(&mut app, t, 1_500, yaw_only);
+    let (_, tones) = hold_gesture(&mut app, t, true);
+    assert!(heard(&tones, Alert::MagcalRefused.tones()), "{tones:?}");
+    assert_eq!(app.settings(), &Settings::default());
+    assert!(app.take_save().is_none());
+    assert!(!app.magcal().collecting(), "a refused session is dropped");
+}
+
+#[test]
+fn the_gesture_does_nothing_without_the_link_or_when_not_held_long_enough() {
+    let mut app = app();
+    let (t, tones) = hold_gesture(&mut app, 0, false);
+    assert!(!app.magcal().collecting());
+    assert!(tones.iter().all(|&f| f == 0), "{tones:?}");
+    // Held 1.9 s only.
+    app.link_input.up = true;
+    app.link_input.sticks = Sticks {
+        throttle: 0.0,
+        roll: -1.0,
+        pitch: -1.0,
+        yaw: 0.0,
+    };
+    for t in t..t + 1_900 {
+        let _ = app.on_imu_sample(t, &still(t));
+    }
+    assert!(!app.magcal().collecting());
+}
+
+/// A still frame's sample with the noise a real IMU has (an exactly repeated one is a
+/// frozen sensor to the fault policy).
+fn still(t: u32) -> ImuSample {
+    let wiggle = (t % 13) as f32 * 1e-4;
+    ImuSample {
+        gyro_radps: [wiggle, -wiggle, 0.0],
+        accel_mps2: [0.0, 0.0, -crate::estimation::GRAVITY_MPS2],
+        mag: None,
+    }
+}

@@ -96,6 +96,7 @@ pub struct FlightApp {
     settings_problem: Option<LoadProblem>,
     gps: gps::GpsPort,
     magcal: MagcalSession,
+    magcal_gesture: magcal::MagcalGesture,
     /// The magnetometer calibration in force (from the live settings).
     mag_cal: crate::estimation::magcal::MagCalibration,
 }
@@ -146,6 +147,7 @@ impl FlightApp {
             settings_problem: None,
             gps: gps::GpsPort::new(),
             magcal: MagcalSession::default(),
+            magcal_gesture: magcal::MagcalGesture::default(),
             mag_cal,
         })
     }
@@ -273,6 +275,7 @@ impl FlightApp {
             .flight
             .step(now_ms, sample, &self.link_input, self.climb_mps);
         self.record(out);
+        self.on_magcal_gesture(now_ms);
         self.identified = self.flight.take_identification();
         if let Some(id) = &self.identified {
             self.link.queue_identification(id);

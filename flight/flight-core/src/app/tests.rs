@@ -583,6 +583,47 @@ mod gps {
     }
 
     #[test]
+    fn the_home_goes_to_telemetry_with_the_complementary_filter_too() {
+        // GIVEN the factory estimator (`ins.mode complementary`: no INS at all) and then the
+        // indoor INS, each with a receiver
+        for mode in ["complementary", "ins_indoor"] {
+            let mut settings = Settings::default();
+            settings.set_text("ins.mode", mode).unwrap();
+            let mut a = FlightApp::new(settings, 0).unwrap();
+            fly(&mut a, 0, 3_000, sticks(0.0, 0.0));
+            // WHEN a usable fix arrives
+            a.on_gps_bytes(10, &bytes(&pvt(1_000)));
+            // THEN it is home, and the Home message is due
+            let home = a.flight.estimator().home().expect("the first fix is home");
+            assert_eq!(
+                (home.lat_e7, home.lon_e7),
+                (470_654_321, 80_123_456),
+                "{mode}"
+            );
+            assert_eq!(
+                a.take_home_report(),
+                Some(telemetry::messages::Message::Home(
+                    telemetry::messages::Home {
+                        latitude_e7: 470_654_321,
+                        longitude_e7: 80_123_456,
+                        altitude_cm: 50_000,
+                        set: true,
+                    }
+                )),
+                "{mode}"
+            );
+            assert!(a.flight.estimator().gps_fix(), "{mode}");
+            assert_eq!(a.flight.estimator().source(), {
+                if mode == "complementary" {
+                    crate::pipeline::Source::Complementary
+                } else {
+                    crate::pipeline::Source::Ins
+                }
+            });
+        }
+    }
+
+    #[test]
     fn the_receiver_is_configured_as_m9_and_as_m8_after_a_nak() {
         let mut a = app();
         let first = a.gps_to_send(0).unwrap().to_vec();

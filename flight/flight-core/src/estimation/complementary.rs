@@ -1,10 +1,23 @@
 //! Complementary attitude filter (Mahony style) for flight without GPS: the gyro is
 //! integrated, the accelerometer pulls the estimated "down" towards measured gravity and the
 //! magnetometer pulls the heading only; an integral term learns the gyro bias.
+//!
+//! It starts from the first still sample ([`Complementary::align`], `estimation::align`),
+//! not level and north, and re-aligns its heading from the magnetometer when the two keep
+//! disagreeing by more than 30° ([`REALIGN_COS`]) for [`REALIGN_AFTER_S`] (after a new
+//! magnetometer calibration, or a start facing the heading where the proportional pull
+//! vanishes: sin 180° = 0).
 
+use crate::estimation::align;
 use crate::estimation::math::inv_sqrt;
 use crate::estimation::quaternion::{self, Quaternion, ned_to_body};
 use crate::estimation::{Error, check_finite};
+
+/// The cosine of the heading disagreement (30°) beyond which the filter counts towards a
+/// re-alignment.
+pub const REALIGN_COS: f32 = 0.866_025_4;
+/// How long the disagreement must last (s): longer than a magnetic disturbance passing.
+pub const REALIGN_AFTER_S: f32 = 1.0;
 
 /// Gains of the complementary filter.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -43,6 +56,8 @@ pub struct Complementary {
     config: Config,
     attitude: Quaternion,
     gyro_bias_radps: [f32; 3],
+    /// How long the magnetometer has disagreed by more than 30° (s).
+    heading_off_s: f32,
 }
 
 impl Complementary {
@@ -53,7 +68,23 @@ impl Complementary {
             config,
             attitude: quaternion::IDENTITY,
             gyro_bias_radps: [0.0; 3],
+            heading_off_s: 0.0,
         }
+    }
+
+    /// Starts from a still frame's accelerometer and (if any) magnetometer sample, whatever
+    /// way it points ([`align::attitude`]); the gyro bias is kept.
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`]; the estimate is unchanged then.
+    pub fn align(&mut self, accel_mps2: [f32; 3], mag: Option<[f32; 3]>) -> Result<(), Error> {
+        check_finite(&accel_mps2)?;
+        if let Some(m) = mag {
+            check_finite(&m)?;
+        }
+        self.attitude = align::attitude(accel_mps2, mag, self.config.earth_field_ned);
+        self.heading_off_s = 0.0;
+        Ok(())
     }
 
     /// Body → NED attitude.
@@ -154,6 +185,12 @@ impl Complementary {
                 let s = inv_sqrt(m2) * inv_sqrt(b2);
                 // sin of the angle from measured to reference, about down.
                 let yaw_error = (mn * be - me * bn) * s;
+                // cos of it: far off for long, the heading is re-aligned instead.
+                let cos_error = (mn * bn + me * be) * s;
+                if keeps_disagreeing(&mut self.heading_off_s, cos_error, dt_s) {
+                    self.realign_heading(m);
+                    return Ok(());
+                }
                 let r = r();
                 let down_body = [r[0][2], r[1][2], r[2][2]];
                 corrected = true;
@@ -183,6 +220,28 @@ impl Complementary {
             omega.map(|w| w * dt_s),
         ));
         Ok(())
+    }
+}
+
+/// Counts in `off_s` how long the heading has been off by more than 30° (`cos_error`
+/// below [`REALIGN_COS`]); true once it has been for [`REALIGN_AFTER_S`].
+fn keeps_disagreeing(off_s: &mut f32, cos_error: f32, dt_s: f32) -> bool {
+    if cos_error < REALIGN_COS {
+        *off_s += dt_s;
+    } else {
+        *off_s = 0.0;
+    }
+    *off_s >= REALIGN_AFTER_S
+}
+
+impl Complementary {
+    /// Keeps roll and pitch, sets the heading from the magnetometer (cold path).
+    fn realign_heading(&mut self, mag: [f32; 3]) {
+        let [roll, pitch, _] = quaternion::to_euler(self.attitude);
+        if let Some(yaw) = align::heading_from_mag(roll, pitch, mag, self.config.earth_field_ned) {
+            self.attitude = quaternion::from_euler(roll, pitch, yaw);
+        }
+        self.heading_off_s = 0.0;
     }
 }
 
@@ -299,6 +358,44 @@ mod tests {
         );
         cf.update_with([0.0; 3], tilted, true, None, 0.002).unwrap();
         assert_ne!(cf.attitude(), quaternion::IDENTITY);
+    }
+
+    #[test]
+    fn a_start_facing_away_from_the_field_is_realigned() {
+        // GIVEN a frame facing south and a filter that starts north (not aligned): the
+        // proportional heading pull is sin 180° = 0
+        let field = [0.4, 0.05, 0.9];
+        let truth = quaternion::from_euler(0.0, 0.0, core::f32::consts::PI);
+        let mut cf = Complementary::new(Config {
+            earth_field_ned: field,
+            ..Config::default()
+        });
+        let accel =
+            quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::estimation::GRAVITY_MPS2]);
+        let mag = quaternion::ned_to_body_vector(truth, field);
+        // WHEN it runs 1.2 s with the magnetometer
+        for _ in 0..600 {
+            cf.update([0.0; 3], accel, Some(mag), 0.002).unwrap();
+        }
+        // THEN after the 1 s of disagreement the heading was re-aligned
+        let err = quaternion::angle_between(cf.attitude(), truth).to_degrees();
+        assert!(err < 1.0, "{err}°");
+    }
+
+    #[test]
+    fn align_starts_from_one_sample_whatever_the_heading() {
+        let field = [0.4, 0.05, 0.9];
+        let truth = quaternion::from_euler(0.2, 0.3, -2.5);
+        let mut cf = Complementary::new(Config {
+            earth_field_ned: field,
+            ..Config::default()
+        });
+        let accel =
+            quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::estimation::GRAVITY_MPS2]);
+        cf.align(accel, Some(quaternion::ned_to_body_vector(truth, field)))
+            .unwrap();
+        assert!(quaternion::angle_between(cf.attitude(), truth).to_degrees() < 0.01);
+        assert_eq!(cf.align([f32::NAN; 3], None), Err(Error::NonFinite));
     }
 
     #[test]

@@ -3,9 +3,10 @@
 //! soft-iron calibration they rely on. All sans-IO, no globals: every estimator is a plain
 //! value, so several can run side by side.
 
+pub mod align;
 pub mod complementary;
 pub mod ins;
-pub mod magcal;
+pub use magcal;
 pub mod math;
 pub mod quaternion;
 

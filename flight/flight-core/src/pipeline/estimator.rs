@@ -3,12 +3,20 @@
 //! (`ins.mode`) and it is healthy, from the complementary filter otherwise.
 //!
 //! - `complementary` (factory): the complementary filter alone, as before the INS flew.
+//!   A receiver's fixes are not fused, but the first usable one is still the home (the
+//!   `Home` message, the ground station's marker), in every mode.
 //! - `ins`: the full filter — gyro and accelerometer predict at the sensor rate, baro, mag
 //!   and GPS ([`GpsAiding`], latency compensated) correct. While there is no usable fix the
 //!   indoor pseudo-measurement stands in for GPS velocity.
 //! - `ins_indoor`: no GPS (the BrushedSparky): attitude and vertical from the INS with baro
 //!   and mag, the horizontal velocity held at zero by a pseudo-measurement
 //!   ([`Filter::fuse_zero_horizontal_velocity`], Tau Labs' indoor mode).
+//!
+//! **Any start.** The complementary filter starts from the first still sample with a
+//! magnetometer reading (accelerometer tilt, tilt-compensated heading against the
+//! settings' declination, `estimation::align`), or after [`ALIGN_WAIT_S`] without one from
+//! the tilt alone — not from level and north — so a frame powered up facing south is right
+//! from the first samples, and the INS inherits that.
 //!
 //! **Hand-overs are seamless.** The complementary filter runs first, [`INS_START_S`] after
 //! boot the INS starts *from the complementary filter's attitude and gyro bias* (and the
@@ -44,6 +52,11 @@ use crate::estimation::{Error, all_finite};
 /// starts from it: long enough for the complementary filter to have levelled from its
 /// level-north start (its accelerometer time constant on the ground is 1 s).
 pub const INS_START_S: f32 = 2.0;
+/// How long the start waits for a magnetometer sample before aligning from the tilt alone
+/// (s).
+pub const ALIGN_WAIT_S: f32 = 0.5;
+/// The start aligns only on a still sample: specific force within this fraction of g.
+const ALIGN_ACCEL_BAND: f32 = 0.05;
 /// Period of the indoor pseudo-measurement, s (10 Hz, as the GPS it stands in for).
 pub const PSEUDO_PERIOD_S: f32 = 0.1;
 /// Variance of the indoor pseudo-measurement, (m/s)²: a hovering multirotor's horizontal
@@ -133,6 +146,8 @@ pub struct Estimator {
     /// The INS's latest good attitude and gyro bias: what a fallback continues from.
     last_good: (Quaternion, [f32; 3]),
     fallbacks: u16,
+    /// Time waited for the start's alignment (s); `None` once aligned.
+    unaligned_s: Option<f32>,
 }
 
 impl Estimator {
@@ -160,6 +175,7 @@ impl Estimator {
             last_gps_us: None,
             last_good: (cf.attitude(), cf.gyro_bias_radps()),
             fallbacks: 0,
+            unaligned_s: Some(0.0),
         }
     }
 
@@ -235,16 +251,14 @@ impl Estimator {
         }
     }
 
-    /// A NAV-PVT that arrived now; fused while the full INS flies (`None`: not offered).
+    /// A NAV-PVT that arrived now; fused while the full INS flies. Otherwise (any other
+    /// mode, or before the INS starts) it still sets the fix state and, from the first
+    /// usable fix, the home — telemetry's `Home` and the ground station's marker do not need
+    /// the INS. `None`: not fused and usable.
     pub fn gps(&mut self, pvt: &NavPvt) -> Option<GpsUpdate> {
-        if self.mode != EstimatorMode::Ins {
-            return None;
-        }
         self.last_gps_us = Some(self.time_us);
-        if self.source != Source::Ins {
-            // Quality only (home, fix state): the INS is not running.
-            let usable = self.gps.usable(pvt);
-            return usable.err().map(GpsUpdate::Unusable);
+        if self.mode != EstimatorMode::Ins || self.source != Source::Ins {
+            return self.gps.observe(pvt).err().map(GpsUpdate::Unusable);
         }
         match self.gps.fuse(&mut self.ins, pvt, self.time_us) {
             Ok(update) => Some(update),
@@ -271,6 +285,9 @@ impl Estimator {
         armed: bool,
         dt_s: f32,
     ) -> Result<(), Error> {
+        if self.unaligned_s.is_some() {
+            self.align(imu, dt_s);
+        }
         match self.source {
             Source::Complementary => {
                 self.cf.update_with(
@@ -287,6 +304,27 @@ impl Estimator {
                 Ok(())
             }
             Source::Ins => self.update_ins(imu, armed, dt_s),
+        }
+    }
+
+    /// The start: the complementary filter takes the attitude of the first still sample
+    /// with a magnetometer reading, or of one without after [`ALIGN_WAIT_S`].
+    #[inline(never)]
+    fn align(&mut self, imu: &ImuSample, dt_s: f32) {
+        let Some(waited) = self.unaligned_s.as_mut() else {
+            return;
+        };
+        *waited += dt_s;
+        let [ax, ay, az] = imu.accel_mps2;
+        let g = crate::estimation::GRAVITY_MPS2;
+        let f2 = ax * ax + ay * ay + az * az;
+        let (low, high) = (g * (1.0 - ALIGN_ACCEL_BAND), g * (1.0 + ALIGN_ACCEL_BAND));
+        let still = (low * low..high * high).contains(&f2);
+        if still
+            && (imu.mag.is_some() || *waited >= ALIGN_WAIT_S)
+            && self.cf.align(imu.accel_mps2, imu.mag).is_ok()
+        {
+            self.unaligned_s = None;
         }
     }
 

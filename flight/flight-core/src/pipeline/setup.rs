@@ -123,7 +123,12 @@ pub fn from_settings(s: &Settings) -> Result<FlightSetup, SetupError> {
         supervisor,
         modes,
         attitude_uses_lqg: true,
-        attitude_filter: complementary::Config::default(),
+        attitude_filter: complementary::Config {
+            earth_field_ned: crate::estimation::align::field_for_declination(
+                s.get(handles::MAG_DECLINATION_DEG).to_radians(),
+            ),
+            ..complementary::Config::default()
+        },
         // Ground kp 1 rad/s per rad → 0.05 in flight (a 20 s time constant).
         armed_accel_divider: 20,
         estimator: match s.get(handles::INS_MODE) {

@@ -8,6 +8,7 @@ use core::marker::PhantomData;
 
 use telemetry::link::LinkKey;
 
+use super::decimal;
 use super::handle::{Bits, Change, Handle, ParamType, Row, table};
 use crate::pipeline::{InvalidSettings, validate};
 
@@ -267,6 +268,9 @@ table! {
     MAG_XY: f32 = f(807, "mag.xy", -10.0, 10.0, 0.0),
     MAG_XZ: f32 = f(808, "mag.xz", -10.0, 10.0, 0.0),
     MAG_YZ: f32 = f(809, "mag.yz", -10.0, 10.0, 0.0),
+    // Magnetic declination at the flying field, degrees east of true north: the heading the
+    // estimators take from the magnetometer is turned by it (`estimation::align`).
+    MAG_DECLINATION_DEG: f32 = f(810, "mag.declination_deg", -180.0, 180.0, 0.0),
     ;
     // Handle arrays for the composite names, in the handles module.
     /// The rate PID gains, `[roll, pitch, yaw][kp, ki, kd]` (`pid.<axis>.<gain>`).
@@ -338,7 +342,7 @@ impl Param {
     /// Reads a value from console text: a number, or a choice's name.
     pub fn parse(&self, text: &str) -> Result<Value, ParamError> {
         let value = match self.kind {
-            Kind::F32 { .. } => Value::F32(text.parse().map_err(|_| ParamError::Unparsable)?),
+            Kind::F32 { .. } => Value::F32(decimal::parse(text).ok_or(ParamError::Unparsable)?),
             Kind::U32 { .. } => Value::U32(text.parse().map_err(|_| ParamError::Unparsable)?),
             Kind::Choice(names) => {
                 let i = names

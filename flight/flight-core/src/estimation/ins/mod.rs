@@ -13,10 +13,10 @@ mod noise;
 mod predict;
 mod reset;
 
+pub use crate::estimation::align::tilt_from_accel;
 pub use aiding::{Aided, Ins};
 pub use fusion::Fusion;
 pub use noise::SensorNoise;
-pub use reset::tilt_from_accel;
 
 use crate::estimation::quaternion::{self, Quaternion};
 use crate::estimation::{Error, GRAVITY_MPS2, check_finite};
@@ -229,8 +229,19 @@ impl Filter {
         *ab_z = symmetric_clamp(*ab_z, a);
     }
 
+    /// q/|q|, keeping q's sign. Not `quaternion::normalized`, which makes the scalar part
+    /// non-negative: near a 180° heading (or roll) q0 crosses zero, and flipping q there
+    /// while P keeps the quaternion's cross-covariances (with the biases, the velocity)
+    /// made every correction across the flip pull the wrong way — the heading error that
+    /// stayed after a start facing south.
     fn renormalize(&mut self) {
-        let [q0, q1, q2, q3] = quaternion::normalized(self.attitude());
+        let q = self.attitude();
+        let n2 = q.iter().map(|c| c * c).sum::<f32>();
+        if !(n2 > f32::MIN_POSITIVE && n2.is_finite()) {
+            return;
+        }
+        let s = crate::estimation::math::inv_sqrt(n2);
+        let [q0, q1, q2, q3] = q.map(|c| c * s);
         let [.., a, b, c, d, _, _, _, _] = &mut self.x;
         (*a, *b, *c, *d) = (q0, q1, q2, q3);
     }

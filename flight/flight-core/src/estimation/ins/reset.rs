@@ -2,8 +2,9 @@
 //! fresh, uncorrelated covariance block. Used by the aiding logic after persistent
 //! rejections and for the initial alignment (PX4 EKF2 resets the same way).
 
-use super::equations::{level_frame_field, xi};
+use super::equations::xi;
 use super::{Filter, covariance, index};
+use crate::estimation::align::{self, tilt_from_accel};
 use crate::estimation::quaternion::{self, Quaternion, ned_to_body};
 use crate::estimation::{Error, check_finite};
 
@@ -92,15 +93,11 @@ impl Filter {
     }
 
     /// Yaw (rad) that makes the magnetometer reading agree with the earth field, given the
-    /// current roll and pitch: ψ = atan2(Be_e, Be_n) − atan2(z₁, z₀) (cold path, libm).
+    /// current roll and pitch ([`align::heading_from_mag`]).
     #[must_use]
     pub fn yaw_from_mag(&self, mag_body: [f32; 3]) -> Option<f32> {
-        let [z0, z1, _] = level_frame_field(self.attitude(), mag_body);
-        let [b0, b1, _] = self.config.earth_field_ned;
-        if z0 * z0 + z1 * z1 < 1e-12 || b0 * b0 + b1 * b1 < 1e-12 {
-            return None;
-        }
-        Some(libm::atan2f(b1, b0) - libm::atan2f(z1, z0))
+        let [roll, pitch, _] = quaternion::to_euler(self.attitude());
+        align::heading_from_mag(roll, pitch, mag_body, self.config.earth_field_ned)
     }
 
     /// Keeps roll and pitch, sets yaw from the magnetometer with variance `yaw_var_rad2`.
@@ -153,15 +150,7 @@ impl Filter {
         check_finite(&mag_body)?;
         check_finite(&position_ned_m)?;
         *self = Self::new(self.config);
-        let [roll, pitch] = tilt_from_accel(accel_mps2);
-        let level = quaternion::from_euler(roll, pitch, 0.0);
-        self.reset_attitude(
-            level,
-            tilt_std_rad * tilt_std_rad,
-            yaw_std_rad * yaw_std_rad,
-        );
-        let yaw = self.yaw_from_mag(mag_body).unwrap_or(0.0);
-        let q = quaternion::from_euler(roll, pitch, yaw);
+        let q = align::attitude(accel_mps2, Some(mag_body), self.config.earth_field_ned);
         self.reset_attitude(q, tilt_std_rad * tilt_std_rad, yaw_std_rad * yaw_std_rad);
         let [pos_std, ..] = self.config.initial_std;
         self.reset_position(position_ned_m.map(Some), pos_std * pos_std);
@@ -175,14 +164,4 @@ impl Filter {
             .sum();
         (4.0 / 3.0 * trace).max(1e-8)
     }
-}
-
-/// (roll, pitch) from a specific-force vector that is pure gravity (level reads [0, 0, −g]).
-#[must_use]
-pub fn tilt_from_accel(accel_mps2: [f32; 3]) -> [f32; 2] {
-    let [ax, ay, az] = accel_mps2;
-    [
-        libm::atan2f(-ay, -az),
-        libm::atan2f(ax, libm::sqrtf(ay * ay + az * az)),
-    ]
 }

@@ -176,3 +176,72 @@ fn the_full_ins_takes_the_gps_position() {
         "the indoor pseudo-measurement keeps the INS"
     );
 }
+
+/// A still frame at `yaw_deg`, rolled 20° and pitched −10°, seeing the field of a place with
+/// the given declination (the field's horizontal part points at magnetic north).
+fn facing(yaw_deg: f32, declination_deg: f32, with_mag: bool) -> ImuSample {
+    let q = quaternion::from_euler(0.35, -0.17, yaw_deg.to_radians());
+    let d = declination_deg.to_radians();
+    let field = [0.2 * d.cos(), 0.2 * d.sin(), 0.43];
+    ImuSample {
+        gyro_radps: [0.002, -0.001, 0.0005],
+        accel_mps2: quaternion::ned_to_body_vector(q, [0.0, 0.0, -GRAVITY_MPS2]),
+        mag: with_mag.then(|| quaternion::ned_to_body_vector(q, field)),
+    }
+}
+
+#[test]
+fn a_start_facing_anywhere_is_right_from_the_first_samples_and_the_ins_inherits_it() {
+    for yaw_deg in [0.0_f32, 90.0, 180.0, -135.0] {
+        // GIVEN the indoor INS on a frame powered up facing `yaw_deg`
+        let mut e = Estimator::new(EstimatorMode::InsIndoor, complementary::Config::default());
+        let imu = facing(yaw_deg, 0.0, true);
+        let truth = quaternion::from_euler(0.35, -0.17, yaw_deg.to_radians());
+        // WHEN it runs 10 ms, then past the INS start
+        run(&mut e, &imu, 0.01, 0.0);
+        let early = angle_between(e.attitude(), truth).to_degrees();
+        run(&mut e, &imu, INS_START_S + 1.0, 0.0);
+        // THEN the complementary filter started aligned and the INS took that over
+        let late = angle_between(e.attitude(), truth).to_degrees();
+        assert!(early < 0.5, "{yaw_deg}°: {early}° after 10 ms");
+        assert_eq!(e.source(), Source::Ins);
+        assert!(late < 0.5, "{yaw_deg}°: {late}° on the INS");
+    }
+}
+
+#[test]
+fn without_a_magnetometer_the_start_aligns_the_tilt_after_a_wait() {
+    let mut e = Estimator::new(
+        EstimatorMode::Complementary,
+        complementary::Config::default(),
+    );
+    let imu = facing(0.0, 0.0, false);
+    run(&mut e, &imu, ALIGN_WAIT_S + 0.01, 0.0);
+    let [roll, pitch, _] = quaternion::to_euler(e.attitude());
+    assert!(
+        (roll - 0.35).abs() < 2e-3 && (pitch + 0.17).abs() < 2e-3,
+        "{roll} {pitch}"
+    );
+}
+
+#[test]
+fn the_declination_setting_turns_magnetic_north_into_true_north() {
+    // GIVEN 10° east declination in the settings and a frame facing magnetic north
+    let mut settings = crate::settings::Settings::default();
+    settings.set_text("mag.declination_deg", "10").unwrap();
+    let Ok(setup) = crate::pipeline::from_settings(&settings) else {
+        panic!("the settings make a setup");
+    };
+    let mut e = Estimator::new(
+        EstimatorMode::Complementary,
+        setup.loop_config.attitude_filter,
+    );
+    run(&mut e, &facing(10.0, 10.0, true), 3.0, 0.0);
+    // THEN the heading is 10° (true)
+    let [_, _, yaw] = quaternion::to_euler(e.attitude());
+    assert!(
+        (yaw.to_degrees() - 10.0).abs() < 0.5,
+        "{}",
+        yaw.to_degrees()
+    );
+}

@@ -282,6 +282,28 @@ impl GpsAiding {
             .copied()
     }
 
+    /// Takes one NAV-PVT without fusing it: whether it is a usable fix, and the home from
+    /// the first usable one. What every fix gets, fused or not: without the INS flying the
+    /// home still goes to telemetry and the ground station.
+    ///
+    /// # Errors
+    /// The limit the fix fails ([`GpsAiding::usable`]); it then counts as lost.
+    pub fn observe(&mut self, pvt: &NavPvt) -> Result<(), Unusable> {
+        if let Err(why) = self.usable(pvt) {
+            self.has_fix = false;
+            return Err(why);
+        }
+        self.has_fix = true;
+        if self.home.is_none() {
+            self.set_home(Home {
+                lat_e7: pvt.lat_e7,
+                lon_e7: pvt.lon_e7,
+                h_msl_mm: pvt.h_msl_mm,
+            });
+        }
+        Ok(())
+    }
+
     /// Offers one NAV-PVT that arrived at `arrival_us` to `ins`.
     ///
     /// # Errors
@@ -292,17 +314,8 @@ impl GpsAiding {
         pvt: &NavPvt,
         arrival_us: u64,
     ) -> Result<GpsUpdate, Error> {
-        if let Err(why) = self.usable(pvt) {
-            self.has_fix = false;
+        if let Err(why) = self.observe(pvt) {
             return Ok(GpsUpdate::Unusable(why));
-        }
-        self.has_fix = true;
-        if self.home.is_none() {
-            self.set_home(Home {
-                lat_e7: pvt.lat_e7,
-                lon_e7: pvt.lon_e7,
-                h_msl_mm: pvt.h_msl_mm,
-            });
         }
         let Some(m) = self.measurement(pvt) else {
             return Ok(GpsUpdate::Unusable(Unusable::NoFix));
