@@ -146,6 +146,8 @@ pub struct Mcu<O: Outside> {
     seen_watchdog_resets: u32,
     reset_at: u64,
     boot_ns: Option<u64>,
+    /// When the last task was first polled since the last reset, ns since power-on.
+    last_first_poll_ns: Option<u64>,
     seen_resets: u32,
     lockups: u32,
 }
@@ -175,6 +177,7 @@ impl<O: Outside> Mcu<O> {
             seen_watchdog_resets: 0,
             reset_at: 0,
             boot_ns: None,
+            last_first_poll_ns: None,
             seen_resets: 0,
             lockups: 0,
         })
@@ -223,8 +226,11 @@ impl<O: Outside> Mcu<O> {
 
     fn polled(&mut self, pc: u32) {
         if let Some(i) = self.polls.iter().position(|(p, _)| p.entry == pc) {
-            if let Some(p) = self.polls.get_mut(i) {
+            if let Some(p) = self.polls.get_mut(i)
+                && !p.1
+            {
                 p.1 = true;
+                self.last_first_poll_ns = Some(self.cpu.now_ns());
             }
             self.last_poll = Some((i, self.cpu.now_ns()));
         }
@@ -250,6 +256,7 @@ impl<O: Outside> Mcu<O> {
             self.last_poll = None;
             self.reset_at = self.soc.now_ns();
             self.boot_ns = None;
+            self.last_first_poll_ns = None;
             for p in &mut self.polls {
                 p.1 = false;
             }
@@ -301,7 +308,7 @@ impl<O: Outside> Machine for Mcu<O> {
         self.soc.uart_receive(uart, byte, at_ns);
     }
 
-    fn uart_baud(&self, uart: u8) -> Option<u32> {
+    fn uart_baud(&mut self, uart: u8) -> Option<u32> {
         Some(self.soc.uart_baud(uart)).filter(|&b| b > 0)
     }
 
@@ -325,6 +332,10 @@ impl<O: Outside> Machine for Mcu<O> {
             watchdog_resets: self.soc.watchdog_resets(),
             resets: self.soc.resets(),
             boot_ns: self.boot_ns,
+            tasks_polled: u32::try_from(self.polls.iter().filter(|p| p.1).count())
+                .unwrap_or(u32::MAX),
+            tasks_total: u32::try_from(self.polls.len()).unwrap_or(u32::MAX),
+            last_first_poll_ns: self.last_first_poll_ns,
             lockups: self.lockups,
         }
     }
