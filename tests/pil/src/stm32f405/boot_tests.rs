@@ -245,15 +245,16 @@ fn the_usb_console_answers_a_typed_line() {
     assert!(answer.ends_with("\r\n"));
 }
 
-/// Settings saves over the console, one every 400 ms from a blank settings area, until the
-/// watchdog bites. The save that fills the first 16 KiB page migrates the live items
-/// (sequential-storage, uncached: a bitwise CRC-32 of every item on every fetch, with the
-/// executor blocked) for longer than the watchdog the supervisor stretched — 500 ms, not
-/// 4 s: the reload comes before RVU clears (`iwdg.rs`). The chip resets in the middle of
-/// the save, before any erase; the value being saved is lost and the one before survives.
+/// Settings changes and saves over the console, one every 400 ms from a blank settings
+/// area, 20 of them — past the save that fills the first 16 KiB page and migrates it — never
+/// reset the chip, and the last value reads back. A watchdog reset is reported with the task
+/// the executor was in (task names from the v0 mangling). Fails with main's images of
+/// 5 Dec: the watchdog resets the chip about 155 ms into a poll of `gains_task` after a
+/// `set` (the 15th, at 6.2 s); with the images before h-harden's supervisor, a save outlasted
+/// the 500 ms the unchecked stretch gave. Not in CI until fixed.
 #[test]
-#[ignore = "needs the images: cargo xtask dist"]
-fn the_save_that_fills_a_settings_page_outlasts_the_stretched_watchdog() {
+#[ignore = "a finding of issue 29, fails until fixed; needs the images: cargo xtask dist"]
+fn settings_saves_over_the_console_never_reset_the_chip() {
     let mut mcu = Mcu::new(
         Board::default(),
         Config::default(),
@@ -265,73 +266,31 @@ fn the_save_that_fills_a_settings_page_outlasts_the_stretched_watchdog() {
     let ready =
         |mcu: &Mcu<Board>| mcu.soc().usb_host().state() == &super::usb_host::HostState::Ready;
     let mut t = 200_000_000;
-    let mut saved = Vec::new();
-    while mcu.watchdog_bites().is_empty() && saved.len() < 40 {
+    let mut saved = 0;
+    while saved < 20 {
         t += 100_000_000;
         run(&mut mcu, t);
         if !ready(&mcu) {
             continue;
         }
-        let value = 1700 + saved.len();
         mcu.soc_mut()
-            .usb_send(format!("set arm.min_us {value}\nsave\n").as_bytes());
+            .usb_send(format!("set arm.min_us {}\nsave\n", 1700 + saved).as_bytes());
         t += 300_000_000;
         run(&mut mcu, t);
         let answer = String::from_utf8(mcu.soc_mut().usb_take_received()).unwrap();
-        if answer.ends_with("saving\r\n") {
-            saved.push(value);
-        } else {
-            // Typed while the executor was blocked in the last save: the reset lost it.
-            assert!(!mcu.watchdog_bites().is_empty(), "{answer:?}");
+        if let Some(bite) = mcu.watchdog_bites().first() {
+            panic!(
+                "save {saved}: watchdog reset at {:.1} ms, {:.1} ms into a poll of {} ({answer:?})",
+                bite.at_ns as f64 / 1e6,
+                (bite.at_ns - bite.polled_at_ns) as f64 / 1e6,
+                bite.last_polled
+                    .as_ref()
+                    .map_or("?".into(), ToString::to_string)
+            );
         }
+        assert!(answer.ends_with("saving\r\n"), "{answer:?}");
+        saved += 1;
     }
-    let bite = mcu
-        .watchdog_bites()
-        .first()
-        .cloned()
-        .expect("a watchdog reset");
-    let into_poll = bite.at_ns - bite.polled_at_ns;
-    println!(
-        "save {}: watchdog reset at {:.1} ms, {:.1} ms into a poll of {}",
-        saved.len(),
-        bite.at_ns as f64 / 1e6,
-        into_poll as f64 / 1e6,
-        bite.last_polled
-            .as_ref()
-            .map_or("?".into(), ToString::to_string)
-    );
-    assert_eq!(
-        bite.last_polled.and_then(|p| p.name).as_deref(),
-        Some("storage_task")
-    );
-    assert!(
-        (500_000_000..510_000_000).contains(&into_poll),
-        "the stretch: 250 ticks of 2 ms, {into_poll} ns"
-    );
-    assert!(
-        mcu.soc().flash_erases().is_empty(),
-        "{:?}",
-        mcu.soc().flash_erases()
-    );
-    while !ready(&mcu) {
-        t += 100_000_000;
-        run(&mut mcu, t);
-    }
-    mcu.soc_mut().usb_send(b"get arm.min_us\n");
-    t += 100_000_000;
-    run(&mut mcu, t);
-    let answer = String::from_utf8(mcu.soc_mut().usb_take_received()).unwrap();
-    // The save under way when the watchdog bit is lost; the one before it survives.
-    let survived = saved.len().checked_sub(2).and_then(|i| saved.get(i));
-    println!("after the reset: {answer:?}");
-    assert_eq!(
-        answer.trim_end(),
-        format!("arm.min_us = {}", survived.copied().unwrap_or(0))
-    );
-    // The first save after a boot loads embassy's reload value (1999 + 1 ticks) at ÷64:
-    // 4 s by luck, and it gets through the migration and the erase — a 16 KiB sector at
-    // ×8 (400 ms typical): embassy leaves PSIZE at 0 for erases.
-    mcu.soc_mut().usb_send(b"set arm.min_us 1799\nsave\n");
     t += 3_000_000_000;
     run(&mut mcu, t);
     let _ = mcu.soc_mut().usb_take_received();
@@ -339,15 +298,12 @@ fn the_save_that_fills_a_settings_page_outlasts_the_stretched_watchdog() {
     t += 100_000_000;
     run(&mut mcu, t);
     let answer = String::from_utf8(mcu.soc_mut().usb_take_received()).unwrap();
-    let erases = mcu.soc().flash_erases().to_vec();
-    println!("the next save: {answer:?}, erases {erases:?}");
-    assert_eq!(answer.trim_end(), "arm.min_us = 1799");
-    assert_eq!(mcu.watchdog_bites().len(), 1);
-    let erase = erases.first().expect("the migration's erase");
+    println!("erases {:?}", mcu.soc().flash_erases());
     assert_eq!(
-        (erase.len, erase.ends_ns - erase.started_ns),
-        (0x4000, 400_000_000)
+        answer.trim_end(),
+        format!("arm.min_us = {}", 1700 + saved - 1)
     );
+    assert!(mcu.watchdog_bites().is_empty());
 }
 
 /// Embassy's time on the emulated chip keeps virtual time: the heartbeat LED (PB5, active
