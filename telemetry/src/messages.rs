@@ -60,7 +60,7 @@ pub struct LinkStats {
 ///
 /// **The variant order is the wire and the settings.** postcard encodes the variant index,
 /// and that index is [`FlightMode::id`], the number the flight side's settings store for the
-/// mode-switch positions (`mode.switch_low/mid/high`, `flight_core::settings::params::MODES`
+/// mode-switch positions (`mode.switch_low/mid/high`, [`crate::settings::MODES`]
 /// in the same order). So stored switch choices keep their meaning and the wire byte is the
 /// stable id: new modes are appended, never inserted, reordered or removed (a retired mode
 /// keeps its variant). The flight-only policy of each mode (which loops run) lives in
@@ -214,9 +214,10 @@ pub struct SysIdResult {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SettingChange {
-    /// Setting identifier (the flight code's parameter table index).
+    /// Setting identifier: the row's index in the schema, [`crate::settings::PARAMS`].
     pub id: u16,
-    /// New value, in the setting's own fixed-point unit.
+    /// New value: the row's 32 stored bits (a real as IEEE-754, a whole number or a
+    /// choice's index as itself; [`crate::settings::Param::from_bits`] reads it).
     pub value: i32,
 }
 

@@ -260,7 +260,7 @@ fn to_wire(value: Value) -> i32 {
 }
 
 fn from_wire(param: &Param, value: i32) -> Result<Value, ParamError> {
-    param.from_bits(value as u32)
+    Ok(param.from_bits(value as u32)?)
 }
 
 /// Applies a change from the module (`id` = index in the parameter table). Returns the

@@ -7,8 +7,8 @@
 //! of [`BIND_WINDOW_US`], and only a bind inside that window is stored. Nothing binds at
 //! boot, and no default link ID exists that every unbound controller would share.
 //!
-//! The air protocol is the setting `link.protocol`: `taulink` (factory), or `olrs38` /
-//! `olrs39` to obey an existing OpenLRSng transmitter (`super::openlrs`; OpenLRSng frames
+//! The air protocol is the setting `link.protocol`: `taulink` (factory), or `openlrs38` /
+//! `openlrs39` to obey an existing OpenLRSng transmitter (`super::openlrs`; OpenLRSng frames
 //! cannot be authenticated). The loop sees both the same way (`on_link_channels`).
 //!
 //! The link key (spec §12.1) is what the bind agreed with the module (CPace, on the phrase

@@ -34,8 +34,9 @@ use sequential_storage::map::MapStorage;
 use telemetry::link::LinkKey;
 use telemetry::link::auth::KEY_BYTES;
 
-use super::params::{PARAMS, Settings};
+use super::params::Settings;
 use crate::pipeline::InvalidSettings;
+use telemetry::settings::PARAMS;
 
 /// Scratch buffer size for one map item: the slot key and the record, rounded up to the
 /// flash word (the record is 11 + 6 × parameters bytes).
