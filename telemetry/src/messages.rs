@@ -299,6 +299,32 @@ pub struct Home {
     pub set: bool,
 }
 
+/// What the flight controller's firmware has to say about itself (flight → ground; sent
+/// when it changes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Health {
+    /// Flags, the flight code's bit set ([`Health::BARO_FAILED`] …).
+    pub flags: u8,
+    /// IMU samples the flight loop missed since boot (saturating).
+    pub imu_missed: u16,
+    /// Flight-loop steps that ran past the next sample since boot (saturating).
+    pub loop_overruns: u16,
+}
+
+impl Health {
+    /// The barometer is declared failed (the hold modes fall back).
+    pub const BARO_FAILED: u8 = 1;
+    /// The crystal did not start: the clocks run from the internal RC.
+    pub const CLOCK_FALLBACK: u8 = 2;
+    /// This boot resumed a flight after a reset in the air.
+    pub const RESUMED: u8 = 4;
+    /// The hardware random generator failed: seeds from a weaker source.
+    pub const RNG_FALLBACK: u8 = 8;
+    /// A USB host is connected (arming refused).
+    pub const USB_CONNECTED: u8 = 16;
+}
+
 /// The air link's authentication failures at the flight side (spec §12.2, "Tag failures"):
 /// sent when they change, at most once a second; a clean link never sends it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
@@ -350,6 +376,8 @@ pub enum Message {
     /// The link's authentication failures at the flight side (flight → module and ground;
     /// appended).
     LinkSecurity(LinkSecurity),
+    /// The firmware's health (flight → ground; appended: earlier variants keep their numbers).
+    Health(Health),
 }
 
 /// Largest postcard encoding of a [`Message`].

@@ -68,6 +68,7 @@ pub const fn blocker_bit(b: ArmBlocker) -> u16 {
         ArmBlocker::GainsNotReady => 8,
         ArmBlocker::BatteryCritical => 16,
         ArmBlocker::SettingsProblem => 32,
+        ArmBlocker::UsbConnected => 64,
     }
 }
 

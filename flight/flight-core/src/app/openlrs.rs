@@ -113,7 +113,7 @@ impl FlightApp {
         let Some(data) = bound else {
             return false;
         };
-        if !open || self.flight.armed() {
+        if !open || self.armed() {
             return false;
         }
         if store_openlrs(&mut self.live, data).is_ok() {

@@ -208,6 +208,10 @@ fn every_openlrsng_step_checks_the_link_task_in() {
     let config = bind(&mut app, &tx_data(BindingVersion::V39, 2));
     let mut rx = Receiver::new(config, Some(tx_data(BindingVersion::V39, 2)));
     rx.start(0);
+    // The start-up grace (every task alive for CHECK_IN_POLLS polls) runs out first.
+    for k in 0..crate::app::CHECK_IN_POLLS as u32 {
+        app.on_watchdog_poll(50 * k);
+    }
     for t in Task::ALL {
         if t != Task::Link {
             app.check_in(t);
