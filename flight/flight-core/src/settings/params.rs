@@ -271,6 +271,9 @@ table! {
     // Magnetic declination at the flying field, degrees east of true north: the heading the
     // estimators take from the magnetometer is turned by it (`estimation::align`).
     MAG_DECLINATION_DEG: f32 = f(810, "mag.declination_deg", -180.0, 180.0, 0.0),
+    // 1 lets a bind without a key agreement through and the link it stores run
+    // unauthenticated (spec §12.1: only by this explicit setting; the module needs its own).
+    LINK_UNAUTHENTICATED: u32 = u(715, "link.unauthenticated", 0, 1, 0),
     ;
     // Handle arrays for the composite names, in the handles module.
     /// The rate PID gains, `[roll, pitch, yaw][kp, ki, kd]` (`pid.<axis>.<gain>`).
