@@ -113,11 +113,7 @@ impl LinkKey {
     /// hard as under this one (2⁻³² per frame).
     pub fn for_link(&self, bind_id: u32) -> Self {
         let half = |n: u8| {
-            let mut h = SipHasher24::new(&self.0);
-            h.write(DOMAIN_LINK_KEY);
-            h.write(&bind_id.to_le_bytes());
-            h.write(&[n]);
-            h.finish().to_le_bytes()
+            sip_cold(&self.0, &[DOMAIN_LINK_KEY, &bind_id.to_le_bytes(), &[n]]).to_le_bytes()
         };
         let mut bytes = [0u8; KEY_BYTES];
         let (lo, hi) = bytes.split_at_mut(8);
@@ -174,11 +170,7 @@ impl LinkKey {
     /// "TauLink/2 rekey" ‖ new nonce ‖ slot). A master takes a new nonce at once from the
     /// follower of its epoch, and only after the epoch went quiet from anyone else.
     pub fn rekey_proof(&self, new_nonce: u64, slot: u8) -> u32 {
-        let mut h = SipHasher24::new(&self.0);
-        h.write(DOMAIN_REKEY);
-        h.write(&new_nonce.to_le_bytes());
-        h.write(&[slot]);
-        h.finish() as u32
+        sip_cold(&self.0, &[DOMAIN_REKEY, &new_nonce.to_le_bytes(), &[slot]]) as u32
     }
 
     pub(crate) fn prf(&self, domain: &[u8]) -> u64 {
@@ -187,8 +179,8 @@ impl LinkKey {
 }
 
 /// SipHash-2-4 of `parts`, in order, under `key`: one out-of-line copy for the derivations
-/// and MACs that run once per bind, handshake or settings change (keys, PRFs, the phone's
-/// signed changes, the change records).
+/// and MACs that run once per bind, handshake, rekey or settings change (keys, PRFs, rekey
+/// proofs, the phone's signed changes, the change records).
 /// The hasher is forced inline for the per-frame tag, and each inlined copy is ≈ 1.2 KB of
 /// flash (issue 33).
 #[inline(never)]

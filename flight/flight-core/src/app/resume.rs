@@ -92,7 +92,8 @@ pub struct Fault {
     pub reason: FaultReason,
     /// The board's clock at the fault, ms.
     pub at_ms: u32,
-    /// The faulting instruction's address (HardFault), or 0.
+    /// The faulting instruction's address (HardFault), or the panic handler's return
+    /// address (inside core's panic entry).
     pub address: u32,
 }
 
