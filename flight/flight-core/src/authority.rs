@@ -140,6 +140,18 @@ mod tests {
         }
     }
 
+    /// A phone that has learnt this boot's session from a first refusal, as a real one does.
+    fn phone_in_session() -> Signer {
+        let mut phone = Signer::new(ChangeKey::from_link_key(&key()));
+        phone.on_refused(&ChangeRefused {
+            id: 0,
+            reason: RefuseReason::NotAuthenticated,
+            session: SESSION,
+            counter: 0,
+        });
+        phone
+    }
+
     fn key() -> LinkKey {
         LinkKey::from_bytes([0x6B; 16])
     }
@@ -236,13 +248,7 @@ mod tests {
     fn a_signed_change_refused_while_armed_is_used_up() {
         let mut gate = ChangeGate::new(SESSION);
         let mut settings = Settings::default();
-        let mut phone = Signer::new(ChangeKey::from_link_key(&key()));
-        phone.on_refused(&ChangeRefused {
-            id: 0,
-            reason: RefuseReason::NotAuthenticated,
-            session: SESSION,
-            counter: 0,
-        });
+        let mut phone = phone_in_session();
         let signed = Message::SignedChange(phone.sign(descent()));
         assert_eq!(
             refused(gate.on_message(&signed, &mut settings, Some(key()), true)),
@@ -277,13 +283,7 @@ mod tests {
     fn an_out_of_range_value_is_refused_as_invalid_and_uses_its_counter() {
         let mut gate = ChangeGate::new(SESSION);
         let mut settings = Settings::default();
-        let mut phone = Signer::new(ChangeKey::from_link_key(&key()));
-        phone.on_refused(&ChangeRefused {
-            id: 0,
-            reason: RefuseReason::NotAuthenticated,
-            session: SESSION,
-            counter: 0,
-        });
+        let mut phone = phone_in_session();
         let bad = SettingChange {
             value: f32_value(99.0),
             ..descent()
