@@ -95,6 +95,9 @@ impl FlightApp {
                 ),
                 Err(BindError::Armed) => out.write_str("refused: disarm first\r\n"),
                 Err(BindError::Phrase(e)) => write!(out, "refused: {e}\r\n"),
+                Err(BindError::NoRandomness) => {
+                    out.write_str("refused: the RNG failed at boot; power-cycle and bind again\r\n")
+                }
             },
             Err(e) => write!(out, "{e}\r\n"),
         }

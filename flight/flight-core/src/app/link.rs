@@ -149,6 +149,10 @@ pub enum BindError {
     Armed,
     /// The phrase given does not meet the rules.
     Phrase(PhraseError),
+    /// The hardware RNG failed at boot: the key agreement's secret scalar would come from
+    /// the weak fallback seeds, and a recording of the bind could then test phrase guesses
+    /// offline. A power cycle retries the RNG.
+    NoRandomness,
 }
 
 /// How a bind window ended, for `status` and the log.
@@ -281,6 +285,9 @@ impl FlightApp {
     pub fn request_bind(&mut self, phrase: &str) -> Result<bool, BindError> {
         if self.armed() {
             return Err(BindError::Armed);
+        }
+        if self.board.boot.rng_fallback {
+            return Err(BindError::NoRandomness);
         }
         let phrase = check_phrase(phrase).map_err(BindError::Phrase)?;
         self.link.bind_phrase = phrase.and_then(|p| heapless::String::try_from(p).ok());

@@ -390,6 +390,20 @@ fn bind_is_refused_while_armed() {
 }
 
 #[test]
+fn bind_is_refused_when_the_rng_failed_at_boot() {
+    let mut app = app();
+    app.on_boot_facts(crate::app::BootFacts {
+        rng_fallback: true,
+        ..Default::default()
+    });
+    let mut out = heapless::String::<256>::new();
+    let _ = app.on_console_line("bind amber kettle under the oak", &mut out);
+    assert!(out.contains("refused: the RNG failed"), "{out}");
+    assert!(!app.bind_requested());
+    assert_eq!(app.take_bind_request(), None);
+}
+
+#[test]
 fn a_setting_change_over_the_link_is_refused_while_armed() {
     use crate::report::f32_value;
     use crate::settings::{PARAMS, handles};
