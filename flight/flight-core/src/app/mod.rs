@@ -13,9 +13,12 @@
 //! (`console`); the watchdog check-in policy (`watchdog`) and the stretch around settings
 //! saves (`save`); the GPS port (`gps`: UBX bytes in,
 //! boot configuration out); the magnetometer calibration (`magcal`: collected from the
-//! console, applied to every reading).
+//! console, applied to every reading); the flight controller as the radio's CRSF device
+//! 0xC8 through the link (`device`: the settings table as device-tool rows); the VTX's
+//! select pins (`vtx`: at boot, and after a change while disarmed).
 
 mod console;
+mod device;
 mod gps;
 mod imu;
 mod link;
@@ -23,6 +26,7 @@ pub mod link_task;
 mod magcal;
 mod openlrs;
 mod save;
+mod vtx;
 mod watchdog;
 
 #[cfg(test)]
@@ -32,6 +36,7 @@ mod phrase_tests;
 #[cfg(test)]
 mod tests;
 
+pub use device::{DEVICE_NAME, Note as DeviceNote, tree as device_tree};
 pub use gps::{
     GPS_BAUD, GPS_BOOT_BAUDS, GPS_REPORT_PERIOD_MS, HOME_REPORT_PERIOD_MS, gps_baud_messages,
     gps_message, home_message,
@@ -99,6 +104,10 @@ pub struct FlightApp {
     magcal_gesture: magcal::MagcalGesture,
     /// The magnetometer calibration in force (from the live settings).
     mag_cal: crate::estimation::magcal::MagCalibration,
+    /// The flight controller as the radio's CRSF device 0xC8 (`device`).
+    device: device::DeviceSide,
+    /// The VTX channel the pins were last set to (`vtx`).
+    vtx_applied: Option<crate::vtx::VtxChannel>,
 }
 
 /// The flight setup for `settings`, or the factory one (and why) if they do not fly.
@@ -149,6 +158,8 @@ impl FlightApp {
             magcal: MagcalSession::default(),
             magcal_gesture: magcal::MagcalGesture::default(),
             mag_cal,
+            device: device::DeviceSide::default(),
+            vtx_applied: None,
         })
     }
 

@@ -165,6 +165,14 @@ pub const LOOP_RATES: Choice = &["500", "1000"];
 /// Estimators (`pipeline::EstimatorMode`): the complementary filter alone, the INS with
 /// GPS, the INS without GPS (horizontal velocity held by a pseudo-measurement).
 pub const INS_MODES: Choice = &["complementary", "ins", "ins_indoor"];
+/// VTX bands (`vtx::Band`): the BrushedSparky's VTX module's band-select pins.
+pub const VTX_BANDS: Choice = &["a", "b", "e", "airwave"];
+/// The RFM22B's transmit power steps (`radio_rfm22b::TxPower`), nominal dBm.
+pub const TX_POWERS: Choice = &[
+    "1dbm", "2dbm", "5dbm", "8dbm", "11dbm", "14dbm", "17dbm", "20dbm",
+];
+/// A feature off or on.
+pub const OFF_ON: Choice = &["off", "on"];
 
 table! {
     // outputs (1xx)
@@ -270,6 +278,14 @@ table! {
     // Magnetic declination at the flying field, degrees east of true north: the heading the
     // estimators take from the magnetometer is turned by it (`estimation::align`).
     MAG_DECLINATION_DEG: f32 = f(810, "mag.declination_deg", -180.0, 180.0, 0.0),
+    // The BrushedSparky's VTX (9xx, `vtx`): band and channel 1–8 of its pin-select module,
+    // applied at boot and while disarmed. Stored on the Sparky2 too (one table), unused there.
+    VTX_BAND: u32 = c(900, "vtx.band", VTX_BANDS, 0),
+    VTX_CHANNEL: u32 = u(901, "vtx.channel", 1, 8, 1),
+    // The flight side's transmit power (7xx, appended): the most it sends at, and whether
+    // the link lowers it while the module hears it with margin (`telemetry::link::power`).
+    LINK_TX_POWER: u32 = c(715, "link.tx_power", TX_POWERS, 7),
+    LINK_DYNAMIC_POWER: u32 = c(716, "link.dynamic_power", OFF_ON, 0),
     ;
     // Handle arrays for the composite names, in the handles module.
     /// The rate PID gains, `[roll, pitch, yaw][kp, ki, kd]` (`pid.<axis>.<gain>`).
