@@ -14,7 +14,7 @@ pub mod battery;
 pub mod board;
 pub mod control;
 pub mod estimation;
-pub mod model;
+pub use lqg_design::model;
 pub mod outputs;
 pub mod pipeline;
 pub mod report;
