@@ -13,3 +13,5 @@ pub mod link;
 pub mod motors;
 pub mod storage;
 pub mod supervisor;
+#[cfg(not(feature = "sparky2"))]
+pub mod vtx;
