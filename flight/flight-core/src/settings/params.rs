@@ -168,12 +168,6 @@ pub const LOOP_RATES: Choice = &["500", "1000"];
 pub const INS_MODES: Choice = &["complementary", "ins", "ins_indoor"];
 /// VTX bands (`vtx::Band`): the BrushedSparky's VTX module's band-select pins.
 pub const VTX_BANDS: Choice = &["a", "b", "e", "airwave"];
-/// The RFM22B's transmit power steps (`radio_rfm22b::TxPower`), nominal dBm.
-pub const TX_POWERS: Choice = &[
-    "1dbm", "2dbm", "5dbm", "8dbm", "11dbm", "14dbm", "17dbm", "20dbm",
-];
-/// A feature off or on.
-pub const OFF_ON: Choice = &["off", "on"];
 
 table! {
     // outputs (1xx)
@@ -283,10 +277,6 @@ table! {
     // applied at boot and while disarmed. Stored on the Sparky2 too (one table), unused there.
     VTX_BAND: u32 = c(900, "vtx.band", VTX_BANDS, 0),
     VTX_CHANNEL: u32 = u(901, "vtx.channel", 1, 8, 1),
-    // The flight side's transmit power (7xx, appended): the most it sends at, and whether
-    // the link lowers it while the module hears it with margin (`telemetry::link::power`).
-    LINK_TX_POWER: u32 = c(715, "link.tx_power", TX_POWERS, 7),
-    LINK_DYNAMIC_POWER: u32 = c(716, "link.dynamic_power", OFF_ON, 0),
     ;
     // Handle arrays for the composite names, in the handles module.
     /// The rate PID gains, `[roll, pitch, yaw][kp, ki, kd]` (`pid.<axis>.<gain>`).

@@ -243,7 +243,7 @@ impl FlightApp {
                 self.device.magcal_note.unwrap_or(""),
             ),
             tree::LAST_CHANGE => {
-                let mut text: String<40> = String::new();
+                let mut text = tree::Text::new();
                 if let Some((n, note)) = self.device.last {
                     if let Some((_, param)) = tree::setting(n) {
                         let _ = text.push_str(param.name);

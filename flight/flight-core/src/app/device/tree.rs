@@ -13,12 +13,11 @@
 //! no decimals and a step of a tenth of its default's magnitude; past `i32` it is read-only
 //! text. A real number is a FLOAT: the Lua tool shows at most three decimals, so a number
 //! whose default is below 0.01 (the PID gains) is shown scaled, in thousandths ("3.000e-3")
-//! or millionths ("40.000e-6"), the exponent written as its unit.
+//! or, below 0.001, millionths ("40.000e-6"), the exponent written as its unit.
 //!
 //! **Read-only rows.** The bound link's values (`link.bind_id`, band, rate, channels,
 //! telemetry ratio, protocol and the OpenLRSng bind data) are INFO rows: they are what the
-//! bind agreed with the module, and a change would cut the link the tool talks over. The
-//! flight side's own transmit power (`link.tx_power`, `link.dynamic_power`) is editable.
+//! bind agreed with the module, and a change would cut the link the tool talks over.
 
 use core::fmt::Write;
 
@@ -55,6 +54,9 @@ pub const VTX_FREQUENCY: u8 = SAVE + 4;
 /// Rows the device offers (DEVICE_INFO's count).
 pub const PARAMETER_COUNT: u8 = VTX_FREQUENCY;
 
+/// The rows' texts (one size: one formatting instance in the image).
+pub type Text = String<40>;
+
 /// A whole-number row whose range spans at most this is an unsigned 16 (one step a click);
 /// a wider one a FLOAT with a coarser step.
 pub const UINT16_MAX_SPAN: u32 = 1_000;
@@ -88,7 +90,7 @@ pub fn setting(number: u8) -> Option<(usize, &'static Param)> {
 
 /// Whether a setting is shown read-only (the bound link's values).
 pub fn read_only(param: &Param) -> bool {
-    param.name.starts_with("link.") && !matches!(param.name, "link.tx_power" | "link.dynamic_power")
+    param.name.starts_with("link.")
 }
 
 /// The unit a name's last part implies (`…_hz` → "Hz").
@@ -169,11 +171,13 @@ impl FloatScale {
     }
 
     /// The unit text: the exponent, then the base unit.
-    fn unit(self, base: &str) -> String<16> {
-        let mut text = String::new();
-        if self.exponent != 0 {
-            let _ = write!(text, "e{}", self.exponent);
-        }
+    fn unit(self, base: &str) -> Text {
+        let mut text = Text::new();
+        let _ = text.push_str(match self.exponent {
+            -3 => "e-3",
+            -6 => "e-6",
+            _ => "",
+        });
         let _ = text.push_str(base);
         text
     }
@@ -220,8 +224,8 @@ pub struct View<'a> {
 }
 
 impl View<'_> {
-    fn unit(&self, number: u8, base: &str) -> String<40> {
-        let mut text = String::new();
+    fn unit(&self, number: u8, base: &str) -> Text {
+        let mut text = Text::new();
         let _ = text.push_str(base);
         if let Some((n, note)) = self.note
             && n == number
@@ -326,7 +330,7 @@ fn setting_entry(
 /// "1 5725MHz;2 5745MHz;…" for the settings' band: the channel row shows frequencies.
 fn vtx_channel_entry(parent: u8, value: Value, settings: &Settings, unit: &str) -> Entry {
     let band = VtxChannel::from_settings(settings).band;
-    let mut labels: Vec<String<12>, { vtx::CHANNELS as usize }> = Vec::new();
+    let mut labels: Vec<Text, { vtx::CHANNELS as usize }> = Vec::new();
     for channel in 1..=vtx::CHANNELS {
         let mut label = String::new();
         let _ = write!(
@@ -346,8 +350,8 @@ fn vtx_channel_entry(parent: u8, value: Value, settings: &Settings, unit: &str) 
 }
 
 /// A whole value as text (read-only rows): a choice's name, a number.
-pub fn value_text(param: &Param, value: Value) -> Option<String<24>> {
-    let mut text = String::new();
+pub fn value_text(param: &Param, value: Value) -> Option<Text> {
+    let mut text = Text::new();
     match (param.kind, value) {
         (Kind::Choice(names), Value::U32(v)) => {
             text.push_str(names.get(usize::try_from(v).ok()?)?).ok()?
@@ -395,9 +399,9 @@ pub fn written_value(param: &Param, bytes: &[u8]) -> Option<Value> {
 }
 
 /// The VTX frequency row's text.
-pub fn vtx_frequency_text(settings: &Settings) -> String<24> {
+pub fn vtx_frequency_text(settings: &Settings) -> Text {
     let vtx = VtxChannel::from_settings(settings);
-    let mut text = String::new();
+    let mut text = Text::new();
     let _ = write!(
         text,
         "{} MHz ({} {})",
