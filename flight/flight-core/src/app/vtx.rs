@@ -24,3 +24,41 @@ impl FlightApp {
         self.vtx_applied
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::armed_in_the_air;
+    use super::super::{ImuFault, STALL_RIDE_THROUGH_MS};
+    use super::*;
+    use crate::settings::Settings;
+    use crate::vtx::Band;
+
+    #[test]
+    fn the_pins_follow_the_settings_at_boot_and_disarmed_only() {
+        let mut settings = Settings::default();
+        settings.set_text("vtx.band", "airwave").unwrap();
+        settings.set_text("vtx.channel", "3").unwrap();
+        let mut app = FlightApp::new(settings, 0).unwrap();
+        // Boot: Airwave 3 (5780 MHz) = band code 3, channel code 2.
+        let pins = app.take_vtx_pins().unwrap();
+        assert!(pins.rf_s1 && pins.rf_s2, "band 3: both released");
+        assert!(
+            !pins.rf_ch1 && pins.rf_ch2 && !pins.rf_ch3,
+            "channel code 0b010"
+        );
+        assert_eq!(app.vtx_channel().map(VtxChannel::frequency_mhz), Some(5780));
+        assert_eq!(app.take_vtx_pins(), None, "nothing changed");
+
+        // A change in flight waits: the video must not jump channel.
+        let t = armed_in_the_air(&mut app);
+        app.live.set_text("vtx.band", "b").unwrap();
+        assert_eq!(app.take_vtx_pins(), None);
+        assert_eq!(app.vtx_channel().map(|c| c.band), Some(Band::Airwave));
+        // Disarmed (here by an IMU stall past its ride-through).
+        let _ = app.on_imu_missing(t + STALL_RIDE_THROUGH_MS, ImuFault::Stalled);
+        assert!(!app.armed());
+        let pins = app.take_vtx_pins().unwrap();
+        assert!(pins.rf_s1 && !pins.rf_s2, "band B = code 1");
+        assert_eq!(app.vtx_channel().map(VtxChannel::frequency_mhz), Some(5771));
+    }
+}
