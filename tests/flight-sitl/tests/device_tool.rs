@@ -4,7 +4,7 @@
 //! script sends it: frames `EE len type payload crc8` (EdgeTX's `crossfireTelemetryPush`
 //! to the module), a broadcast ping `00 EA`, reads `dest EF field chunk`, writes
 //! `dest EF field value…`, and the answers taken from the module's JR-line bursts by sync
-//! byte, length and CRC. Both ends share a binding phrase (writes need the keyed link);
+//! byte, length and CRC. Both ends fly a link key (writes need the keyed link);
 //! the quad sits disarmed on the ground.
 #![allow(
     clippy::unwrap_used,
@@ -90,9 +90,10 @@ struct Tool {
 
 impl Tool {
     fn new() -> Self {
-        let (quad, mut settings) = default_airframe();
-        let key = LinkKey::from_phrase("correct horse battery staple");
-        settings.set_link_key(Some(key));
+        // Bound with a key, as after a bind's key agreement (the world hands the flight
+        // side the module's key for the link).
+        let (quad, settings) = default_airframe();
+        let key = LinkKey::from_bytes(*b"the module's key");
         let mut scenario = Scenario::new(
             settings,
             quad,

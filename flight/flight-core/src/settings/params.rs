@@ -273,6 +273,9 @@ table! {
     // Magnetic declination at the flying field, degrees east of true north: the heading the
     // estimators take from the magnetometer is turned by it (`estimation::align`).
     MAG_DECLINATION_DEG: f32 = f(810, "mag.declination_deg", -180.0, 180.0, 0.0),
+    // 1 lets a bind without a key agreement through and the link it stores run
+    // unauthenticated (spec §12.1: only by this explicit setting; the module needs its own).
+    LINK_UNAUTHENTICATED: u32 = u(715, "link.unauthenticated", 0, 1, 0),
     // The BrushedSparky's VTX (9xx, `vtx`): band and channel 1–8 of its pin-select module,
     // applied at boot and while disarmed. Stored on the Sparky2 too (one table), unused there.
     VTX_BAND: u32 = c(900, "vtx.band", VTX_BANDS, 0),

@@ -8,11 +8,13 @@
 //! next chunk when one arrives, so the walk runs at the link's telemetry goodput.
 //!
 //! **Changes** apply to the live settings at once, like the console's `set`, only while
-//! disarmed and only over a keyed link (a binding phrase on both ends: the frames are then
-//! authenticated by the link; without one anyone who knows the bind ID could write). A
+//! disarmed and only over a keyed link (bound with a phrase: the frames are then
+//! authenticated by the link; without a key anyone who knows the bind ID could write). A
 //! refused write changes nothing; its row's unit then says why ("refused: armed") and the
 //! "Last change" row too. **Save** (with a confirmation) writes them to flash; **Bind**
-//! opens the bind window (after its answer is on its way: the link restarts into the bind);
+//! opens the bind window (after its answer is on its way: the link restarts into the bind)
+//! without a phrase, so it binds only what `link.unauthenticated` lets through (a keyed
+//! bind is the console's `bind PHRASE`);
 //! **Magcal** starts a magnetometer calibration (finished from the console or the stick
 //! gesture).
 
@@ -135,10 +137,12 @@ impl FlightApp {
         let reply = self.device.replies.pop_front();
         if reply.is_none() && self.device.bind_after_reply {
             self.device.bind_after_reply = false;
-            self.device.bind_note = Some(if self.request_bind() {
-                "window open 30 s"
-            } else {
-                "refused: armed"
+            // No phrase travels with the command: the window binds only what
+            // `link.unauthenticated` lets through (a keyed bind is the console's
+            // `bind PHRASE`).
+            self.device.bind_note = Some(match self.request_bind("") {
+                Ok(_) => "window open",
+                Err(_) => "refused: armed",
             });
         }
         reply

@@ -21,13 +21,13 @@ fn app() -> FlightApp {
     app
 }
 
-/// An app with a binding phrase (writes need the keyed link).
+/// An app bound with a link key (writes need the keyed link).
 fn keyed_app() -> FlightApp {
-    let mut app = app();
-    let mut out = heapless::String::<512>::new();
-    let _ = app.on_console_line("phrase correct horse battery staple", &mut out);
-    assert!(app.settings().link_key().is_some());
-    let _ = app.take_save();
+    let mut settings = Settings::default();
+    settings.set_link_key(Some(telemetry::link::LinkKey::from_bytes([0x5A; 16])));
+    let Some(app) = FlightApp::new(settings, 0) else {
+        panic!("factory settings make a setup");
+    };
     app
 }
 
