@@ -12,7 +12,7 @@ impl FlightApp {
     pub fn take_vtx_pins(&mut self) -> Option<VtxPins> {
         let wanted = VtxChannel::from_settings(&self.live);
         let boot = self.vtx_applied.is_none();
-        if self.vtx_applied == Some(wanted) || (!boot && self.flight.armed()) {
+        if self.vtx_applied == Some(wanted) || (!boot && self.armed()) {
             return None;
         }
         self.vtx_applied = Some(wanted);

@@ -276,7 +276,7 @@ impl FlightApp {
 
     /// Why a change from the radio may not be made now, if it may not.
     fn write_refusal(&self) -> Option<Note> {
-        if self.flight.armed() {
+        if self.armed() {
             Some(Note::Armed)
         } else if self.live.link_key().is_none() {
             Some(Note::NotAuthenticated)

@@ -24,8 +24,9 @@ use core::fmt::Write;
 use heapless::{String, Vec};
 use telemetry::handset::crsf::params::{Entry, MAX_ENTRY_LEN};
 
-use crate::settings::{COUNT, Kind, PARAMS, Param, Settings, Value};
+use crate::settings::{Kind, PARAMS, Param, Settings, Value};
 use crate::vtx::{self, VtxChannel};
+use telemetry::settings::COUNT;
 
 /// The folders, in number order (folder `n` is number `n + 1`).
 pub const FOLDERS: [&str; 9] = [
