@@ -218,7 +218,7 @@ test("the module's phrase set from the page after proving its phrase", async ({ 
   await page.getByLabel("New module phrase").fill("brass lantern by the weir");
   await page.getByRole("button", { name: "Set module phrase" }).click();
   // The simulated module's App took the sealed derivation.
-  await expect(page.getByLabel("Module phrase status")).toHaveText("module phrase set: bind again with it", {
+  await expect(page.getByLabel("Module phrase change")).toHaveText("module phrase set: bind again with it", {
     timeout: 10_000,
   });
 });
@@ -228,7 +228,7 @@ test("the module's phrase needs its current phrase first", async ({ page }) => {
   await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
   await page.getByLabel("New module phrase").fill("brass lantern by the weir");
   await page.getByRole("button", { name: "Set module phrase" }).click();
-  await expect(page.getByLabel("Module phrase status")).toHaveText("enter the module's current phrase above first");
+  await expect(page.getByLabel("Module phrase change")).toHaveText("enter the module's current phrase above first");
 });
 
 test("a recorded log replays", async ({ page, context }) => {

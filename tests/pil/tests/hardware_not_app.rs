@@ -1,32 +1,39 @@
 //! The PIL models the hardware, not the app: the same flight application built with a
 //! different board glue fails as that hardware would. The flight image is built here from
 //! the firmware source with a test knob `cargo xtask dist` never sets
-//! (`flight/flight-fw/build.rs`, `TAULINK_PIL_VARIANT`), into `target/pil-variants`:
+//! (`flight/flight-fw/build.rs`, `TAULINK_PIL_VARIANT`), kept in `target/pil-variants`:
 //!
 //! - `radio-cs-pc13`: the RFM22B's nSEL on PC13 instead of PA15 — the radio never hears the
 //!   MCU, so `hover` never links (no telemetry, never armed);
 //! - `iwdg-half`: the independent watchdog's timeout half the supervisor's feed period
 //!   (25 ms at the fastest LSI against 50 ms) — `hover` reports watchdog resets.
 //!
-//! Each builds the firmware (minutes) and flies 40 s of emulated time, so they are ignored
+//! Each rebuilds flight-fw (its dependencies are those of `cargo xtask dist`, already built)
+//! and flies 40 s of emulated time, so they are ignored
 //! in a plain `cargo test`; run them with the dist images built (`cargo xtask dist`):
 //! `cargo test --release -p pil --test hardware_not_app -- --ignored`.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use std::path::PathBuf;
 use std::process::Command;
+use std::sync::Mutex;
 
 use pil::runner::emulated::EmulatedBoards;
 use pil::runner::{Kind, Options, image, run};
 
-/// Builds the BrushedSparky flight image with `variant`; returns the ELF's path.
+/// Builds the BrushedSparky flight image with `variant` in the workspace's target folder
+/// (where `cargo xtask dist` built the images: only flight-fw itself recompiles) and keeps
+/// a copy as `target/pil-variants/<variant>.elf`; returns the copy's path. The tests build
+/// into one folder: one build and its copy at a time.
 fn build_variant(variant: &str) -> PathBuf {
+    static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+    let _turn = ONE_AT_A_TIME.lock().unwrap();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let target = root.join("target/pil-variants").join(variant);
+    let target =
+        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
     let status = Command::new(env!("CARGO"))
         .current_dir(&root)
         .env("TAULINK_PIL_VARIANT", variant)
-        .env("CARGO_TARGET_DIR", &target)
         .args([
             "build",
             "--release",
@@ -38,7 +45,11 @@ fn build_variant(variant: &str) -> PathBuf {
         .status()
         .expect("cargo runs");
     assert!(status.success(), "building the {variant} variant");
-    target.join("thumbv7em-none-eabihf/release/flight-fw")
+    let kept = target.join("pil-variants");
+    std::fs::create_dir_all(&kept).unwrap();
+    let elf = kept.join(format!("{variant}.elf"));
+    std::fs::copy(target.join("thumbv7em-none-eabihf/release/flight-fw"), &elf).unwrap();
+    elf
 }
 
 fn hover_with(flight_image: PathBuf) -> pil::runner::Outcome {

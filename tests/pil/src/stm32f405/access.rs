@@ -73,14 +73,6 @@ impl<O: Outside> Stm32f405<O> {
         None
     }
 
-    /// The flash offset of a fetch or read address (main flash or its alias at 0).
-    pub(crate) fn flash_offset(&self, addr: u32) -> Option<u32> {
-        match self.region(addr) {
-            Some(Region::Flash(o)) => Some(o),
-            _ => None,
-        }
-    }
-
     /// An instruction halfword.
     pub(crate) fn fetch_halfword(&mut self, addr: u32) -> Option<u16> {
         let value = match self.region(addr)? {
@@ -259,7 +251,7 @@ impl<O: Outside> Stm32f405<O> {
             self.diag.unmodelled(addr, false, 0, &what, now);
             return Ok(0);
         };
-        self.after_access(now);
+        self.after_access(block, now);
         let shift = 8 * (offset & 3);
         let mask = match width {
             Width::Byte => 0xFF,
@@ -326,7 +318,7 @@ impl<O: Outside> Stm32f405<O> {
         if std::mem::take(&mut self.flash_bus_error) {
             return Err(fault);
         }
-        self.after_access(now);
+        self.after_access(block, now);
         Ok(())
     }
 

@@ -180,6 +180,8 @@ pub struct Dma {
     pub unmodelled: Vec<&'static str>,
     /// Rule breaks to record.
     pub violations: Vec<String>,
+    /// The streams whose interrupt line is up (kept current on every change).
+    lines: u8,
 }
 
 /// How an item ended.
@@ -200,6 +202,7 @@ impl Dma {
             isr: [0; 2],
             unmodelled: Vec::new(),
             violations: Vec::new(),
+            lines: 0,
         }
     }
 
@@ -207,6 +210,7 @@ impl Dma {
     pub fn reset(&mut self) {
         self.streams = [Stream::reset(); 8];
         self.isr = [0; 2];
+        self.lines = 0;
     }
 
     fn flag_pos(stream: usize) -> (usize, u32) {
@@ -230,51 +234,58 @@ impl Dma {
 
     /// The interrupt lines of this controller's streams, as IRQ numbers.
     pub fn irqs(&self) -> impl Iterator<Item = u32> + '_ {
-        (0..8usize).filter_map(move |s| {
-            let cr = self.streams.get(s)?.cr;
-            let f = self.flags(s);
+        (0..8u8)
+            .filter(move |s| self.lines & (1 << s) != 0)
+            .map(move |s| irq::dma_stream(self.index, s))
+    }
+
+    fn update_lines(&mut self) {
+        let mut lines = 0;
+        for (i, st) in self.streams.iter().enumerate() {
+            let f = self.flags(i);
+            let cr = st.cr;
             let on = (f & TCIF != 0 && cr & TCIE != 0)
                 || (f & HTIF != 0 && cr & HTIE != 0)
                 || (f & TEIF != 0 && cr & TEIE != 0)
                 || (f & DMEIF != 0 && cr & DMEIE != 0)
-                || (f & FEIF != 0 && self.streams.get(s)?.fcr & FEIE != 0);
-            on.then(|| irq::dma_stream(self.index, s as u8))
-        })
+                || (f & FEIF != 0 && st.fcr & FEIE != 0);
+            if on {
+                lines |= 1 << i;
+            }
+        }
+        self.lines = lines;
+    }
+
+    /// Whether any stream is enabled (nothing to serve otherwise).
+    pub fn active(&self) -> bool {
+        self.streams.iter().any(Stream::enabled)
     }
 
     /// Enabled streams waiting on a peripheral request, highest priority first (PL, then
     /// the lower stream number: RM0090 §10.3.3).
-    pub fn requesting(&self) -> Vec<(usize, Request)> {
-        let mut v: Vec<(usize, Request, u32)> = self
-            .streams
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| s.enabled() && s.dir() != Some(Direction::MemoryToMemory))
-            .filter_map(|(i, s)| {
-                request_of(self.index, i as u8, s.channel()).map(|r| (i, r, s.priority()))
+    pub fn requesting(&self) -> impl Iterator<Item = (usize, Request)> + '_ {
+        (0..4u32).rev().flat_map(move |pl| {
+            self.streams.iter().enumerate().filter_map(move |(i, s)| {
+                let wanted =
+                    s.enabled() && s.priority() == pl && s.dir() != Some(Direction::MemoryToMemory);
+                if !wanted {
+                    return None;
+                }
+                request_of(self.index, i as u8, s.channel()).map(|r| (i, r))
             })
-            .collect();
-        v.sort_by_key(|&(i, _, pl)| (std::cmp::Reverse(pl), i));
-        v.into_iter().map(|(i, r, _)| (i, r)).collect()
+        })
     }
 
-    /// Enabled memory-to-memory streams (they run without a request).
-    pub fn memory_to_memory(&self) -> Vec<usize> {
-        (0..8)
-            .filter(|&i| {
-                self.streams
-                    .get(i)
-                    .is_some_and(|s| s.enabled() && s.dir() == Some(Direction::MemoryToMemory))
-            })
-            .collect()
+    /// The first enabled memory-to-memory stream (they run without a request).
+    pub fn memory_to_memory(&self) -> Option<usize> {
+        self.streams
+            .iter()
+            .position(|s| s.enabled() && s.dir() == Some(Direction::MemoryToMemory))
     }
 
     /// The stream serving `req`, if one is enabled.
     pub fn stream_for(&self, req: Request) -> Option<usize> {
-        self.requesting()
-            .into_iter()
-            .find(|&(_, r)| r == req)
-            .map(|(i, _)| i)
+        self.requesting().find(|&(_, r)| r == req).map(|(i, _)| i)
     }
 
     /// Remaining items on `stream`.
@@ -314,6 +325,11 @@ impl Dma {
 
     /// Accounts for a moved item (or a bus error) on `stream`.
     pub fn complete(&mut self, stream: usize, outcome: Outcome) {
+        self.complete_item(stream, outcome);
+        self.update_lines();
+    }
+
+    fn complete_item(&mut self, stream: usize, outcome: Outcome) {
         let Some(s) = self.streams.get_mut(stream) else {
             return;
         };
@@ -380,6 +396,12 @@ impl Dma {
 
     /// Register write.
     pub fn write(&mut self, offset: u32, value: u32) -> Option<()> {
+        let done = self.write_register(offset, value);
+        self.update_lines();
+        done
+    }
+
+    fn write_register(&mut self, offset: u32, value: u32) -> Option<()> {
         match offset {
             0x00 | 0x04 => {}
             0x08 | 0x0C => {
@@ -476,7 +498,10 @@ mod tests {
     fn a_peripheral_to_memory_stream_moves_ndtr_items_then_completes() {
         let mut d = Dma::new(1);
         spi1_rx(&mut d);
-        assert_eq!(d.requesting(), vec![(0, Request::Spi1Rx)]);
+        assert_eq!(
+            d.requesting().collect::<Vec<_>>(),
+            vec![(0, Request::Spi1Rx)]
+        );
         for k in 0..4 {
             let item = d.item(0).unwrap();
             assert_eq!(item.dir, Direction::PeripheralToMemory);
@@ -505,7 +530,7 @@ mod tests {
             base,
             7 << 25 | 1 << 13 | 1 << 11 | MINC | CIRC | 1 << 6 | EN,
         );
-        assert_eq!(d.requesting(), vec![(5, Request::Dac1)]);
+        assert_eq!(d.requesting().collect::<Vec<_>>(), vec![(5, Request::Dac1)]);
         let addrs: Vec<u32> = (0..6)
             .map(|_| {
                 let a = d.item(5).unwrap().mem_addr;
@@ -536,7 +561,10 @@ mod tests {
         d.write(base + 0x10, 0x2000_1000);
         d.write(base + 0x04, 2);
         d.write(base, 4 << 25 | MINC | DBM | EN);
-        assert_eq!(d.requesting(), vec![(2, Request::Usart1Rx)]);
+        assert_eq!(
+            d.requesting().collect::<Vec<_>>(),
+            vec![(2, Request::Usart1Rx)]
+        );
         d.complete(2, Outcome::Done);
         d.complete(2, Outcome::Done);
         assert_eq!(d.item(2).unwrap().mem_addr, 0x2000_1000);

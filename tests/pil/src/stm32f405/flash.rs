@@ -169,6 +169,23 @@ pub struct FlashIf {
     generation: u64,
     timing: FlashTiming,
     stats: ArtStats,
+    /// The end of the last busy wait charged to the core.
+    waited_until: u64,
+    /// Erases started, oldest first.
+    erases: Vec<Erase>,
+}
+
+/// An erase the firmware started.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Erase {
+    /// First byte erased, as a flash offset (0 = 0x0800_0000).
+    pub offset: u32,
+    /// Bytes erased.
+    pub len: u32,
+    /// When STRT was written, ns.
+    pub started_ns: u64,
+    /// When BSY clears, ns.
+    pub ends_ns: u64,
 }
 
 /// What a flash-interface access did beyond its registers.
@@ -205,6 +222,8 @@ impl FlashIf {
             generation: 0,
             timing,
             stats: ArtStats::default(),
+            waited_until: 0,
+            erases: Vec::new(),
         }
     }
 
@@ -217,9 +236,16 @@ impl FlashIf {
             self.generation += 1;
         }
         let (timing, generation, stats) = (self.timing, self.generation, self.stats);
+        let erases = std::mem::take(&mut self.erases);
         *self = Self::new(timing);
         self.generation = generation;
         self.stats = stats;
+        self.erases = erases;
+    }
+
+    /// The erases started since the model was made, oldest first (kept across resets).
+    pub fn erases(&self) -> &[Erase] {
+        &self.erases
     }
 
     /// Bumped whenever flash content changes.
@@ -296,10 +322,13 @@ impl FlashIf {
     }
 
     /// Cycles until the busy operation ends.
-    fn busy_stall(&self, now: u64, hclk: u32) -> u32 {
+    fn busy_stall(&mut self, now: u64, hclk: u32) -> u32 {
+        // `now` is the SoC's last known time; a stall already charged moved the core past it.
+        let now = now.max(self.waited_until);
         if self.op.is_none() || now >= self.busy_until {
             return 0;
         }
+        self.waited_until = self.busy_until;
         let ns = self.busy_until - now;
         u32::try_from(u128::from(ns) * u128::from(hclk) / 1_000_000_000).unwrap_or(u32::MAX)
     }
@@ -486,6 +515,12 @@ impl FlashIf {
         });
         self.busy_until = now + ms * 1_000_000;
         self.generation += 1;
+        self.erases.push(Erase {
+            offset: start as u32,
+            len: len as u32,
+            started_ns: now,
+            ends_ns: self.busy_until,
+        });
     }
 
     fn pick(&self, table: &[[u64; 2]; 4]) -> u64 {
@@ -667,9 +702,11 @@ mod tests {
         assert!(flash[0x8000..0xC000].iter().all(|&b| b == 0xFF));
         assert_eq!(flash[0xC000], 0);
         assert_eq!(f.busy_until(), 1_000 + 400_000_000);
-        // A fetch 100 ms in waits 300 ms at 168 MHz.
+        // A fetch 100 ms in waits 300 ms at 168 MHz; the next line, fetched after that wait
+        // (the SoC's clock has not moved yet), waits no more.
         let stall = f.fetch_stall(0x1_0000, 100_001_000, 168_000_000);
         assert_eq!(stall, 300 * 168_000);
+        assert_eq!(f.fetch_stall(0x1_0010, 100_001_000, 168_000_000), 0);
         f.process(400_001_000);
         assert_eq!(f.read(SR).unwrap() & (BSY | EOP), 0, "EOP only with EOPIE");
         // At ×32 the same sector takes 250 ms.

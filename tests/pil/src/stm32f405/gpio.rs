@@ -404,6 +404,19 @@ impl Gpio {
         true
     }
 
+    /// An unpowered chip drives nothing: every pin released, no pulls, told to the board.
+    pub fn release_all<O: Outside>(&mut self, outside: &mut O, now: u64) {
+        for (port, pins) in self.reported.iter_mut().enumerate() {
+            for (n, slot) in pins.iter_mut().enumerate() {
+                let off = Drive::Released(Pull::None);
+                if *slot != Some(off) {
+                    *slot = Some(off);
+                    outside.pin_driven(Pin::new(port as u8, n as u8), off, now);
+                }
+            }
+        }
+    }
+
     /// Reports every pin whose drive changed (after a register write or reset); returns
     /// the pins that changed.
     pub fn refresh<O: Outside>(&mut self, outside: &mut O, now: u64) -> Vec<Pin> {

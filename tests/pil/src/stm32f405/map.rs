@@ -175,10 +175,10 @@ pub fn decode(addr: u32) -> Option<(Block, u32)> {
     if (DBGMCU_BASE..DBGMCU_BASE + 0x10).contains(&addr) {
         return Some((Block::Dbgmcu, addr - DBGMCU_BASE));
     }
-    PERIPHERALS
-        .iter()
-        .find(|(base, size, _)| addr >= *base && addr - *base < *size)
-        .map(|&(base, _, block)| (block, addr - base))
+    // The table is sorted by base address: the candidate is the last base at or below.
+    let i = PERIPHERALS.partition_point(|&(base, _, _)| base <= addr);
+    let &(base, size, block) = PERIPHERALS.get(i.checked_sub(1)?)?;
+    (addr - base < size).then_some((block, addr - base))
 }
 
 /// Interrupt numbers (RM0090 Table 61).
@@ -271,6 +271,14 @@ mod tests {
         assert_eq!(decode(0xE004_2000), Some((Block::Dbgmcu, 0)));
         assert_eq!(decode(0x4000_0800), Some((Block::Unmodelled("TIM4"), 0)));
         assert_eq!(decode(0x4000_2400), None, "a reserved hole in APB1");
+    }
+
+    #[test]
+    fn the_peripheral_table_is_sorted_and_disjoint() {
+        for pair in PERIPHERALS.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            assert!(a.0 + a.1 <= b.0, "{:x} overlaps {:x}", a.0, b.0);
+        }
     }
 
     #[test]

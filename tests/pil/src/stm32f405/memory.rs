@@ -133,20 +133,33 @@ impl Memory {
 /// Little-endian load of `width` bytes (1, 2 or 4) at `offset`.
 pub fn load(bytes: &[u8], offset: u32, width: u32) -> Option<u32> {
     let o = offset as usize;
-    let s = bytes.get(o..o + width as usize)?;
-    Some(s.iter().rev().fold(0, |acc, &b| acc << 8 | u32::from(b)))
+    match width {
+        4 => bytes
+            .get(o..o + 4)
+            .and_then(|s| s.try_into().ok())
+            .map(u32::from_le_bytes),
+        2 => bytes
+            .get(o..o + 2)
+            .and_then(|s| s.try_into().ok())
+            .map(|b| u32::from(u16::from_le_bytes(b))),
+        _ => bytes.get(o).map(|&b| u32::from(b)),
+    }
 }
 
 /// Little-endian store of the low `width` bytes of `value` at `offset`.
 pub fn store(bytes: &mut [u8], offset: u32, width: u32, value: u32) -> bool {
     let o = offset as usize;
-    let Some(s) = bytes.get_mut(o..o + width as usize) else {
-        return false;
-    };
-    for (i, b) in s.iter_mut().enumerate() {
-        *b = (value >> (8 * i)) as u8;
+    let le = value.to_le_bytes();
+    match (
+        bytes.get_mut(o..o + width as usize),
+        le.get(..width as usize),
+    ) {
+        (Some(dest), Some(src)) => {
+            dest.copy_from_slice(src);
+            true
+        }
+        _ => false,
     }
-    true
 }
 
 #[cfg(test)]

@@ -2,9 +2,11 @@
 //! [`m4_sim::Bus`] (memories and peripherals around the Cortex-M4F core) that drives its
 //! board through [`crate::wire::Outside`].
 //!
-//! What each block models and what not, the cycle model and the datasheet numbers are in
-//! `README.md` next to this file. The files, one concept each:
+#![doc = include_str!("README.md")]
+//!
+//! The files, one concept each:
 //! - [`map`]: addresses and IRQ numbers; [`memory`]: flash, SRAM, CCM, OTP and ELF loading;
+//! - [`mcu`]: the chip with its core running an image (the co-simulation's `Machine`);
 //! - [`rcc`], [`flash`]: clocks and resets, the flash interface with the ART cycle model;
 //! - [`gpio`], [`exti`], [`timer`], [`dma`], [`spi`], [`i2c`], [`usart`], [`adc`], [`dac`],
 //!   [`iwdg`], [`rng`], [`otg`] (USB OTG FS device core) and [`usb_host`] (the host on its
@@ -20,6 +22,8 @@
 
 mod access;
 pub mod adc;
+#[cfg(test)]
+mod boot_tests;
 pub mod dac;
 pub mod diag;
 pub mod dma;
@@ -29,6 +33,7 @@ pub mod gpio;
 pub mod i2c;
 pub mod iwdg;
 pub mod map;
+pub mod mcu;
 pub mod memory;
 pub mod otg;
 pub mod rcc;
@@ -52,7 +57,7 @@ use dac::{Dac, DacSample};
 use diag::{Diagnostics, Unmodelled, Violation};
 use dma::Dma;
 use exti::Exti;
-use flash::{ArtStats, FlashIf, FlashTiming};
+use flash::{ArtStats, Erase, FlashIf, FlashTiming};
 use gpio::{Gpio, Signal};
 use i2c::I2c;
 use iwdg::Iwdg;
@@ -163,6 +168,9 @@ pub struct Stm32f405<O: Outside> {
     pub(crate) asleep_since: Option<u64>,
     pub(crate) awake_since: u64,
     pub(crate) resets: u32,
+    pub(crate) watchdog_resets: u32,
+    /// Supply on: unpowered, nothing answers (the core locks up and time passes).
+    pub(crate) powered: bool,
 }
 
 impl<O: Outside> Stm32f405<O> {
@@ -209,6 +217,8 @@ impl<O: Outside> Stm32f405<O> {
             asleep_since: None,
             awake_since: 0,
             resets: 0,
+            watchdog_resets: 0,
+            powered: true,
         };
         soc.gpio.refresh(&mut soc.outside, 0);
         soc.on_clock_change(0);
@@ -409,6 +419,11 @@ impl<O: Outside> Stm32f405<O> {
         self.flash.stats()
     }
 
+    /// The flash erases the firmware started (sector or mass), oldest first, across resets.
+    pub fn flash_erases(&self) -> &[Erase] {
+        self.flash.erases()
+    }
+
     /// The flash wait states configured.
     pub fn flash_latency(&self) -> u32 {
         self.flash.latency()
@@ -434,9 +449,74 @@ impl<O: Outside> Stm32f405<O> {
         self.resets
     }
 
-    /// The USB host on the OTG FS port (the runner's console).
-    pub fn usb_host(&mut self) -> &mut usb_host::UsbHost {
-        self.otg.host_mut()
+    /// Resets by the independent watchdog so far.
+    pub fn watchdog_resets(&self) -> u32 {
+        self.watchdog_resets
+    }
+
+    /// Removes the supply (`false`: every pin let go, memories and registers lost, the core
+    /// finds nothing on its buses) or restores it (a power-on reset the core takes at once).
+    pub fn set_powered(&mut self, on: bool) {
+        if on == self.powered {
+            return;
+        }
+        self.powered = on;
+        if on {
+            self.request_reset(ResetKind::PowerOn);
+        } else {
+            self.irq = [0; 8];
+            self.next_visible = u64::MAX;
+            self.gpio.release_all(&mut self.outside, self.now);
+        }
+    }
+
+    /// Whether the supply is on.
+    pub fn powered(&self) -> bool {
+        self.powered
+    }
+
+    /// Puts a stand-in for the Tau Labs bootloader in flash sector 0: a vector table whose
+    /// reset handler does what that bootloader does when it hands over — load MSP and PC
+    /// from the application's table at `app_table` and jump — so an image linked behind
+    /// it boots, and boots again after every reset.
+    pub fn install_bootloader_handover(&mut self, app_table: u32) -> Result<(), LoadError> {
+        let [a0, a1, a2, a3] = app_table.to_le_bytes();
+        let code: [u8; 28] = [
+            0x00, 0x00, 0x02, 0x20, // initial MSP: top of SRAM
+            0x09, 0x00, 0x00, 0x08, // reset handler at 0x0800_0008, Thumb
+            0x03, 0x48, // ldr r0, [pc, #12]  (the application's table)
+            0x01, 0x68, // ldr r1, [r0]       (its MSP)
+            0x81, 0xF3, 0x08, 0x88, // msr msp, r1
+            0x41, 0x68, // ldr r1, [r0, #4]   (its reset handler)
+            0x08, 0x47, // bx r1
+            0x00, 0x00, 0x00, 0x00, // padding to the literal at 0x18
+            a0, a1, a2, a3,
+        ];
+        self.program_flash(map::FLASH_BASE, &code)
+    }
+
+    /// The USB host on the OTG FS port (the runner's console): its state and log.
+    pub fn usb_host(&self) -> &usb_host::UsbHost {
+        self.otg.host()
+    }
+
+    /// Plugs a USB host into the OTG FS port (or pulls it) now.
+    pub fn usb_plug(&mut self, plugged: bool) {
+        let now = self.now;
+        self.otg.plug(plugged, now);
+        self.refresh(now);
+    }
+
+    /// Types `bytes` into the CDC ACM console (sent once the host has enumerated).
+    pub fn usb_send(&mut self, bytes: &[u8]) {
+        let now = self.now;
+        self.otg.send(bytes, now);
+        self.refresh(now);
+    }
+
+    /// What the firmware wrote to the console since the last call.
+    pub fn usb_take_received(&mut self) -> Vec<u8> {
+        self.otg.take_received()
     }
 
     /// Time up to which everything has happened.
@@ -447,14 +527,23 @@ impl<O: Outside> Stm32f405<O> {
 
 impl<O: Outside> m4_sim::Bus for Stm32f405<O> {
     fn fetch(&mut self, addr: u32) -> Option<u16> {
+        if !self.powered {
+            return None;
+        }
         self.fetch_halfword(addr)
     }
 
     fn fetch_stall(&mut self, addr: u32, _sequential: bool) -> u32 {
-        match self.flash_offset(addr) {
-            Some(off) => self.flash.fetch_stall(off, self.now, self.clocks.hclk),
-            None => 0,
-        }
+        // Called for every instruction: the flash test first, without the full decode.
+        let off = addr.wrapping_sub(map::FLASH_BASE);
+        let off = if off < map::FLASH_SIZE {
+            off
+        } else if addr < map::FLASH_SIZE && self.exti.mem_mode() == 0 {
+            addr
+        } else {
+            return 0;
+        };
+        self.flash.fetch_stall(off, self.now, self.clocks.hclk)
     }
 
     fn read(
@@ -463,6 +552,9 @@ impl<O: Outside> m4_sim::Bus for Stm32f405<O> {
         width: m4_sim::Width,
         now_ns: u64,
     ) -> Result<u32, m4_sim::BusFault> {
+        if !self.powered {
+            return Err(m4_sim::BusFault { addr, write: false });
+        }
         self.bus_read(addr, width, now_ns)
     }
 
@@ -473,6 +565,9 @@ impl<O: Outside> m4_sim::Bus for Stm32f405<O> {
         value: u32,
         now_ns: u64,
     ) -> Result<(), m4_sim::BusFault> {
+        if !self.powered {
+            return Err(m4_sim::BusFault { addr, write: true });
+        }
         self.bus_write(addr, width, value, now_ns)
     }
 
@@ -493,7 +588,11 @@ impl<O: Outside> m4_sim::Bus for Stm32f405<O> {
     }
 
     fn advance(&mut self, now_ns: u64) {
-        self.catch_up(now_ns);
+        if self.powered {
+            self.catch_up(now_ns);
+        } else if now_ns > self.now {
+            self.now = now_ns;
+        }
     }
 
     fn core_hz(&self) -> u32 {
@@ -506,6 +605,11 @@ impl<O: Outside> m4_sim::Bus for Stm32f405<O> {
 
     fn reset(&mut self, cause: ResetCause) {
         self.system_reset(cause);
+    }
+
+    fn sysresetreq(&mut self) {
+        self.pending_kind = Some(ResetKind::Software);
+        self.system_reset(ResetCause::Other);
     }
 
     fn sleeping(&mut self, asleep: bool, now_ns: u64) {

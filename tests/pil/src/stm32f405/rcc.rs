@@ -41,6 +41,8 @@ const BDCR: u32 = 0x70;
 const CSR: u32 = 0x74;
 const SSCGR: u32 = 0x80;
 const PLLI2SCFGR: u32 = 0x84;
+/// PLLSAICFGR and DCKCFGR: STM32F42x/F446 registers, reserved (read 0) on the F405.
+const F42X_ONLY: std::ops::RangeInclusive<u32> = 0x88..=0x8C;
 
 // CR bits.
 const HSION: u32 = 1 << 0;
@@ -469,6 +471,7 @@ impl Rcc {
             }
             SSCGR => self.sscgr,
             PLLI2SCFGR => self.plli2scfgr,
+            o if F42X_ONLY.contains(&o) => 0,
             _ => return None,
         })
     }
@@ -536,6 +539,9 @@ impl Rcc {
                 self.sscgr = value;
             }
             PLLI2SCFGR => self.plli2scfgr = value,
+            o if F42X_ONLY.contains(&o) => fx.violations.push(format!(
+                "RCC +0x{o:02x} written (PLLSAICFGR/DCKCFGR of the F42x/F446): the F405 has no register there, the write does nothing"
+            )),
             _ => return None,
         }
         Some(fx)
@@ -765,6 +771,16 @@ mod tests {
         r.write(APB2ENR, 1 << 12, 0);
         assert!(r.clocked(Block::Spi1));
         assert!(!r.clocked(Block::Tim9));
+    }
+
+    #[test]
+    fn the_f42x_clock_mux_register_is_reserved_on_the_f405() {
+        let mut r = Rcc::new(8_000_000, LSI_TYPICAL_HZ);
+        assert_eq!(r.read(0x8C, 0), Some(0));
+        let fx = r.write(0x8C, 1 << 27, 0).unwrap();
+        assert_eq!(fx.violations.len(), 1);
+        assert_eq!(r.read(0x8C, 0), Some(0));
+        assert_eq!(r.read(0x90, 0), None);
     }
 
     #[test]

@@ -70,6 +70,12 @@ impl<O: Outside> Stm32f405<O> {
         if t > self.now {
             self.now = t;
         }
+        if t < self.next_visible {
+            // Only timers nobody listens to act now (PWM edges): no line, no DMA request
+            // and no other block's event changes.
+            self.process_quiet_timers(t);
+            return;
+        }
         if self.rcc.next_event() <= t && self.rcc.process(t) {
             self.on_clock_change(t);
         }
@@ -111,19 +117,39 @@ impl<O: Outside> Stm32f405<O> {
         self.refresh(t);
     }
 
+    /// The timers' own events at `t`, when nothing else happens then.
+    fn process_quiet_timers(&mut self, t: u64) {
+        let mut due = self.next_visible;
+        for timer in &mut self.timers {
+            if timer.next_event() <= t {
+                timer.process(t);
+            }
+            due = due.min(timer.next_event());
+        }
+        self.forward_timer_outputs();
+        self.next_due = due;
+    }
+
     /// Items left on the DMA stream serving I2C1's receive request.
     fn i2c_dma_rx_left(&self) -> Option<u32> {
         let d = self.dma.first()?;
         d.stream_for(Request::I2c1Rx).map(|s| d.remaining(s))
     }
 
-    /// After a register access: outputs to pins, DMA, lines and the next events.
-    pub(crate) fn after_access(&mut self, now: u64) {
+    /// After an access to `block`: its outputs to the pins, DMA, lines and next events.
+    pub(crate) fn after_access(&mut self, block: Block, now: u64) {
         if self.servicing_dma {
             return;
         }
-        self.forward_timer_outputs();
-        self.sync_signals(now);
+        match block {
+            Block::Tim2 | Block::Tim3 | Block::Tim6 | Block::Tim9 => self.forward_timer_outputs(),
+            Block::Spi1 | Block::Spi3 | Block::Usart1 => self.sync_signals(now),
+            Block::Rcc => {
+                self.forward_timer_outputs();
+                self.sync_signals(now);
+            }
+            _ => {}
+        }
         self.service_dma(now);
         self.refresh(now);
     }
@@ -134,6 +160,9 @@ impl<O: Outside> Stm32f405<O> {
             let Some(timer) = self.timers.get_mut(i) else {
                 continue;
             };
+            if timer.changes.is_empty() && timer.trgo.is_empty() {
+                continue;
+            }
             let number = timer.kind().number;
             let changes = std::mem::take(&mut timer.changes);
             let trgo = std::mem::take(&mut timer.trgo);
@@ -198,15 +227,15 @@ impl<O: Outside> Stm32f405<O> {
     fn dma_step(&mut self, now: u64) -> bool {
         for c in 0..self.dma.len() {
             let Some(dma) = self.dma.get(c) else { continue };
-            let requesting = dma.requesting();
-            let m2m = dma.memory_to_memory();
-            for (stream, req) in requesting {
-                if self.request_active(req) {
-                    self.dma_move(c, stream, now);
-                    return true;
-                }
+            if !dma.active() {
+                continue;
             }
-            if let Some(&stream) = m2m.first() {
+            let served = dma
+                .requesting()
+                .find(|&(_, req)| self.request_active(req))
+                .map(|(stream, _)| stream)
+                .or_else(|| dma.memory_to_memory());
+            if let Some(stream) = served {
                 self.dma_move(c, stream, now);
                 return true;
             }
@@ -371,6 +400,12 @@ impl<O: Outside> Stm32f405<O> {
 
     /// Recomputes interrupt lines and next events after anything changed.
     pub(crate) fn refresh(&mut self, now: u64) {
+        if !self.powered {
+            self.irq = [0; 8];
+            self.next_due = u64::MAX;
+            self.next_visible = u64::MAX;
+            return;
+        }
         self.drain_notes(now);
         let mut lines = [0u32; 8];
         let mut set = |n: u32| {
@@ -457,12 +492,18 @@ impl<O: Outside> Stm32f405<O> {
     /// Moves the blocks' notes into the diagnostics.
     fn drain_notes(&mut self, now: u64) {
         for t in &mut self.timers {
+            if t.unmodelled.is_empty() {
+                continue;
+            }
             let base = map::base_of(timer_block(t.kind().number));
             for u in t.unmodelled.drain(..) {
                 self.diag.unmodelled(base, true, 0, u, now);
             }
         }
         for (c, d) in self.dma.iter_mut().enumerate() {
+            if d.unmodelled.is_empty() && d.violations.is_empty() {
+                continue;
+            }
             let base = map::base_of(Block::Dma(c as u8));
             for u in d.unmodelled.drain(..) {
                 self.diag.unmodelled(base, true, 0, u, now);
@@ -472,6 +513,9 @@ impl<O: Outside> Stm32f405<O> {
             }
         }
         for s in &mut self.spi {
+            if s.unmodelled.is_empty() && s.violations.is_empty() {
+                continue;
+            }
             let base = map::base_of(if s.bus == 1 { Block::Spi1 } else { Block::Spi3 });
             for u in s.unmodelled.drain(..) {
                 self.diag.unmodelled(base, true, 0, u, now);
@@ -480,31 +524,29 @@ impl<O: Outside> Stm32f405<O> {
                 self.diag.violation(v, now);
             }
         }
-        let i2c_base = map::base_of(Block::I2c1);
-        for u in self.i2c.unmodelled.drain(..) {
-            self.diag.unmodelled(i2c_base, true, 0, u, now);
-        }
-        for v in self.i2c.violations.drain(..) {
-            self.diag.violation(&v, now);
-        }
-        for u in self.usart.unmodelled.drain(..) {
-            self.diag
-                .unmodelled(map::base_of(Block::Usart1), true, 0, u, now);
-        }
-        for u in self.adc.unmodelled.drain(..) {
-            self.diag
-                .unmodelled(map::base_of(Block::Adc1), true, 0, u, now);
-        }
-        for v in self.adc.violations.drain(..) {
-            self.diag.violation(v, now);
-        }
-        for u in self.dac.unmodelled.drain(..) {
-            self.diag
-                .unmodelled(map::base_of(Block::Dac), true, 0, u, now);
+        let blocks: [(Block, &mut Vec<&'static str>); 4] = [
+            (Block::I2c1, &mut self.i2c.unmodelled),
+            (Block::Usart1, &mut self.usart.unmodelled),
+            (Block::Adc1, &mut self.adc.unmodelled),
+            (Block::Dac, &mut self.dac.unmodelled),
+        ];
+        for (block, notes) in blocks {
+            if !notes.is_empty() {
+                let base = map::base_of(block);
+                for u in notes.drain(..) {
+                    self.diag.unmodelled(base, true, 0, u, now);
+                }
+            }
         }
         for u in self.otg.unmodelled.drain(..) {
             self.diag
                 .unmodelled(map::base_of(Block::OtgFs), true, 0, u, now);
+        }
+        for v in self.i2c.violations.drain(..) {
+            self.diag.violation(&v, now);
+        }
+        for v in self.adc.violations.drain(..) {
+            self.diag.violation(v, now);
         }
         for (pin, af) in self.gpio.unrouted.drain(..) {
             let base = map::base_of(Block::Gpio(pin.port));
@@ -636,6 +678,9 @@ impl<O: Outside> Stm32f405<O> {
             self.mem.power_on(seed);
         }
         self.resets += 1;
+        if kind == ResetKind::IndependentWatchdog {
+            self.watchdog_resets += 1;
+        }
         self.line_levels = [false; 16];
         self.code_pages = 0;
         self.ram_code_generation += 1;

@@ -436,24 +436,25 @@ fn a_stuck_i2c_bus_is_freed_by_clocking_it_from_gpio() {
     let _ = I2cReply::Ack;
 }
 
-/// IndependentWatchdog: started and never fed, it resets the chip after 4096 ticks; the
-/// reset releases every pin and RCC_CSR says why.
+/// IndependentWatchdog::new(250 ms) (÷4, RLR 1999), started, fed once at 1 ms and never
+/// again: RLR + 1 ticks later it resets the chip; the reset releases every pin and RCC_CSR
+/// says why.
 #[test]
 fn an_unfed_watchdog_resets_the_chip_and_leaves_its_flag() {
     let mut c = chip();
     w(&mut c, RCC + 0x74, 1 << 24, 0); // RMVF: forget the power-on flags
     w(&mut c, IWDG, 0x5555, 0);
-    w(&mut c, IWDG + 4, 3, 0);
-    w(&mut c, IWDG + 8, 249, 0);
+    w(&mut c, IWDG + 4, 0, 0);
+    w(&mut c, IWDG + 8, 1999, 0);
     w(&mut c, IWDG, 0xCCCC, 0);
     w(&mut c, IWDG, 0xAAAA, 1_000_000);
     w(&mut c, RCC + 0x30, 1, 1_000_000);
     w(&mut c, GPIOA, 0xA800_0000 | 1, 1_000_000);
     assert_eq!(c.outside().drive(Pin::new(0, 0)), Some(Drive::Low));
-    assert_eq!(c.next_event_ns(), 250_000_000);
-    c.advance(249_999_999);
+    assert_eq!(c.next_event_ns(), 251_000_000);
+    c.advance(250_999_999);
     assert_eq!(c.take_reset_request(), None);
-    c.advance(250_000_000);
+    c.advance(251_000_000);
     assert_eq!(c.take_reset_request(), Some(ResetCause::Watchdog));
     c.reset(ResetCause::Watchdog);
     assert_eq!(
@@ -461,7 +462,7 @@ fn an_unfed_watchdog_resets_the_chip_and_leaves_its_flag() {
         Some(Drive::Released(Pull::None))
     );
     assert_eq!(
-        r(&mut c, RCC + 0x74, 250_000_000) & 0xFE00_0000,
+        r(&mut c, RCC + 0x74, 251_000_000) & 0xFE00_0000,
         1 << 29 | 1 << 26
     );
     assert_eq!(c.core_hz(), 16_000_000);
@@ -518,4 +519,77 @@ fn the_flash_accelerator_changes_what_code_costs() {
     w(&mut c, FLASH_ACR, 5 | 7 << 8, t0);
     let warm = run(&mut c);
     assert_eq!(warm, 5, "one miss, the rest prefetched or cached");
+}
+
+/// An application linked at 0x0802_0000 whose reset handler stores 0x5A at 0x2000_0100.
+fn app_behind_the_bootloader(c: &mut Stm32f405<Board>) {
+    let app: [u8; 20] = [
+        0x00, 0x00, 0x01, 0x20, // MSP 0x2001_0000
+        0x09, 0x00, 0x02, 0x08, // reset handler 0x0802_0008, Thumb
+        0x5A, 0x20, // movs r0, #0x5A
+        0x01, 0x49, // ldr r1, [pc, #4]
+        0x08, 0x60, // str r0, [r1]
+        0xFE, 0xE7, // b .
+        0x00, 0x01, 0x00, 0x20, // 0x2000_0100
+    ];
+    c.program_flash(0x0802_0000, &app).unwrap();
+    c.install_bootloader_handover(0x0802_0000).unwrap();
+}
+
+#[test]
+fn the_bootloader_stand_in_hands_over_with_the_applications_stack_and_entry() {
+    let mut c = chip();
+    app_behind_the_bootloader(&mut c);
+    assert_eq!(c.boot_entry().map(|e| e.vector_table), Some(0x0800_0000));
+    let mut cpu = m4_sim::Cpu::new(super::mcu::core_config());
+    cpu.reset(&mut c);
+    cpu.run_until(&mut c, 100_000);
+    assert_eq!(c.read(0x2000_0100, Width::Word, 100_000), Ok(0x5A));
+    assert_eq!(cpu.read_reg(m4_sim::Reg::Msp), 0x2001_0000);
+}
+
+#[test]
+fn a_power_cycle_releases_the_pins_loses_ram_and_boots_again() {
+    let mut c = chip();
+    app_behind_the_bootloader(&mut c);
+    let mut cpu = m4_sim::Cpu::new(super::mcu::core_config());
+    cpu.reset(&mut c);
+    cpu.run_until(&mut c, 100_000);
+    w(&mut c, RCC + 0x30, 1, 100_000);
+    w(&mut c, GPIOA, 0xA800_0000 | 1, 100_000);
+    assert_eq!(c.outside().drive(Pin::new(0, 0)), Some(Drive::Low));
+    c.set_powered(false);
+    assert_eq!(
+        c.outside().drive(Pin::new(0, 15)),
+        Some(Drive::Released(Pull::None))
+    );
+    assert_eq!(
+        c.outside().drive(Pin::new(0, 0)),
+        Some(Drive::Released(Pull::None))
+    );
+    assert!(
+        c.read(0x2000_0100, Width::Word, 200_000).is_err(),
+        "nothing answers"
+    );
+    cpu.run_until(&mut c, 10_000_000);
+    assert_eq!(c.resets(), 0);
+    c.set_powered(true);
+    // The core takes the reset at its next look at the bus (at the latest the deadline).
+    cpu.run_until(&mut c, 10_100_000);
+    cpu.run_until(&mut c, 10_200_000);
+    assert_eq!(c.resets(), 1);
+    assert_eq!(
+        c.read(0x2000_0100, Width::Word, 10_200_000),
+        Ok(0x5A),
+        "booted again"
+    );
+    assert_eq!(
+        r(&mut c, RCC + 0x74, 10_200_000) & 1 << 27,
+        1 << 27,
+        "PORRSTF"
+    );
+    assert_eq!(
+        c.outside().drive(Pin::new(0, 15)),
+        Some(Drive::Released(Pull::Up))
+    );
 }

@@ -3,9 +3,11 @@
 //! SR, EGR (UG, CCxG), CCMR output compare modes with preload, CCER (enable, polarity),
 //! CNT, PSC and ARR with their shadow registers, CCR1–4.
 //!
-//! The counter is not ticked: it is computed from the time since the last event at the
-//! timer clock / (PSC + 1), exactly (u128 arithmetic, events at the first nanosecond at or
-//! after the tick). Events are the update (overflow, UG) and compare matches; each
+//! The counter is not ticked: it is computed from the time since the last tick boundary
+//! it was rebased to, at the timer clock / (PSC + 1), exactly — the boundary is kept to a
+//! fraction of a nanosecond, so neither events nor register writes that rebase it lose
+//! time (a time driver's compare writes, hundreds a second, would otherwise slow the count
+//! by up to a tick each). Events happen at the first nanosecond at or after their tick. Events are the update (overflow, UG) and compare matches; each
 //! updates flags, output references and TRGO. Outputs: OCxREF per the OCxM mode, XOR CCxP,
 //! driven when CCxE is set (the pin's drive goes to the board with the edge's time).
 //! Not modelled, and recorded if set: down/centre-aligned counting, slave mode, input
@@ -128,8 +130,10 @@ pub struct Timer {
     ccr_active: [u32; 4],
     /// Timer kernel clock (0: not clocked).
     clock_hz: u32,
-    /// The counter was `epoch_count` at `epoch_ns` (a tick boundary).
+    /// The counter became `epoch_count` at the tick boundary `epoch_ns + epoch_rem / clock_hz`
+    /// ns (`epoch_rem` < `clock_hz`: the boundary's fraction of a nanosecond).
     epoch_ns: u64,
+    epoch_rem: u64,
     epoch_count: u64,
     refs: [bool; 4],
     outputs: [SignalDrive; 4],
@@ -138,6 +142,8 @@ pub struct Timer {
     /// TRGO pulses since last taken (for the DAC trigger), with their times.
     pub trgo: Vec<u64>,
     pulses: [PulseRecord; 4],
+    /// The next event's time, kept current by every change (it is asked for often).
+    next: u64,
     /// Settings written that the model ignores.
     pub unmodelled: Vec<&'static str>,
 }
@@ -163,12 +169,14 @@ impl Timer {
             ccr_active: [0; 4],
             clock_hz: 0,
             epoch_ns: 0,
+            epoch_rem: 0,
             epoch_count: 0,
             refs: [false; 4],
             outputs: [SignalDrive::Off; 4],
             changes: Vec::new(),
             trgo: Vec::new(),
             pulses: [PulseRecord::default(); 4],
+            next: u64::MAX,
             unmodelled: Vec::new(),
         }
     }
@@ -186,6 +194,7 @@ impl Timer {
                 self.changes.push((i as u8 + 1, SignalDrive::Off, now));
             }
         }
+        self.recompute_next();
     }
 
     /// This timer's identity.
@@ -201,27 +210,63 @@ impl Timer {
         if self.kind.wide { 0xFFFF_FFFF } else { 0xFFFF }
     }
 
-    /// Ticks of the counter clock in `dt` ns.
-    fn ticks_in(&self, dt: u64) -> u64 {
-        let div = u128::from(self.psc_active) + 1;
-        (u128::from(dt) * u128::from(self.clock_hz) / (div * 1_000_000_000)) as u64
+    /// A tick in units of 1/clock_hz ns: (PSC + 1) · 1e9.
+    fn tick_units(&self) -> u64 {
+        (u64::from(self.psc_active) + 1) * 1_000_000_000
+    }
+
+    /// Whole ticks from the epoch's boundary to `now` (0 before it).
+    fn ticks_to(&self, now: u64) -> u64 {
+        let dt = now.saturating_sub(self.epoch_ns);
+        let per = self.tick_units();
+        match dt.checked_mul(u64::from(self.clock_hz)) {
+            Some(units) => units.saturating_sub(self.epoch_rem) / per,
+            None => {
+                let units = u128::from(dt) * u128::from(self.clock_hz);
+                u64::try_from(units.saturating_sub(u128::from(self.epoch_rem)) / u128::from(per))
+                    .unwrap_or(u64::MAX)
+            }
+        }
+    }
+
+    /// Tick `n` from the epoch: its boundary as whole ns past `epoch_ns` and the fraction.
+    fn boundary(&self, n: u64) -> (u64, u64) {
+        let hz = u128::from(self.clock_hz.max(1));
+        let units = u128::from(n) * u128::from(self.tick_units()) + u128::from(self.epoch_rem);
+        (
+            u64::try_from(units / hz).unwrap_or(u64::MAX),
+            (units % hz) as u64,
+        )
     }
 
     /// The first ns at or after tick `n` from the epoch.
     fn time_of(&self, n: u64) -> u64 {
-        let div = u128::from(self.psc_active) + 1;
-        let num = u128::from(n) * div * 1_000_000_000;
-        let hz = u128::from(self.clock_hz.max(1));
+        let (ns, rem) = self.boundary(n);
         self.epoch_ns
-            .saturating_add(u64::try_from(num.div_ceil(hz)).unwrap_or(u64::MAX))
+            .saturating_add(ns)
+            .saturating_add(u64::from(rem > 0))
+    }
+
+    /// Moves the epoch `n` ticks on, to that tick's boundary (the count is the caller's).
+    fn advance_epoch(&mut self, n: u64) {
+        let (ns, rem) = self.boundary(n);
+        self.epoch_ns = self.epoch_ns.saturating_add(ns);
+        self.epoch_rem = rem;
+    }
+
+    /// Starts the tick boundaries afresh at `now` (prescaler counter cleared).
+    fn restart_epoch(&mut self, count: u64, now: u64) {
+        self.epoch_count = count;
+        self.epoch_ns = now;
+        self.epoch_rem = 0;
     }
 
     /// The counter value at `now` (between events).
     pub fn count(&self, now: u64) -> u64 {
-        if !self.running() || now <= self.epoch_ns {
+        if !self.running() {
             return self.epoch_count;
         }
-        self.epoch_count + self.ticks_in(now - self.epoch_ns)
+        self.epoch_count + self.ticks_to(now)
     }
 
     /// Changes the kernel clock at `now` (RCC reprogrammed or the enable bit changed).
@@ -230,12 +275,23 @@ impl Timer {
             return;
         }
         self.rebase(now);
+        // The boundary's fraction, in units of the new clock's 1/hz ns.
+        self.epoch_rem =
+            (u128::from(self.epoch_rem) * u128::from(hz) / u128::from(self.clock_hz.max(1))) as u64;
         self.clock_hz = hz;
+        self.recompute_next();
     }
 
+    /// Moves the epoch to the last tick boundary at or before `now` (to `now` when the
+    /// counter is stopped: it starts counting from the moment it is enabled).
     fn rebase(&mut self, now: u64) {
-        self.epoch_count = self.count(now);
-        self.epoch_ns = now;
+        if !self.running() {
+            self.restart_epoch(self.epoch_count, now);
+            return;
+        }
+        let n = self.ticks_to(now);
+        self.epoch_count += n;
+        self.advance_epoch(n);
     }
 
     /// Ticks from the epoch to the next event (update or compare match).
@@ -265,7 +321,11 @@ impl Timer {
 
     /// The next time this timer changes by itself.
     pub fn next_event(&self) -> u64 {
-        self.ticks_to_next().map_or(u64::MAX, |n| self.time_of(n))
+        self.next
+    }
+
+    fn recompute_next(&mut self) {
+        self.next = self.ticks_to_next().map_or(u64::MAX, |n| self.time_of(n));
     }
 
     /// Whether its events can raise an interrupt or feed another block (`trgo_used`: the
@@ -287,16 +347,16 @@ impl Timer {
                 u64::from(self.arr_active)
             };
             let count = self.epoch_count + n;
+            self.advance_epoch(n);
             if count > top {
                 self.epoch_count = 0;
-                self.epoch_ns = t;
                 self.update_event(t, true);
             } else {
                 self.epoch_count = count;
-                self.epoch_ns = t;
             }
             self.compare(t);
         }
+        self.recompute_next();
     }
 
     /// The counter reached its current value at `t`: matches and PWM levels.
@@ -465,6 +525,12 @@ impl Timer {
 
     /// Register write at `now` (events due before `now` already processed).
     pub fn write(&mut self, offset: u32, value: u32, now: u64) -> Option<()> {
+        let done = self.write_register(offset, value, now);
+        self.recompute_next();
+        done
+    }
+
+    fn write_register(&mut self, offset: u32, value: u32, now: u64) -> Option<()> {
         let ch = usize::from(self.kind.channels);
         let mask = self.count_mask() as u32;
         match offset {
@@ -509,8 +575,7 @@ impl Timer {
                 self.levels(now);
             }
             CNT => {
-                self.epoch_count = u64::from(value & mask);
-                self.epoch_ns = now;
+                self.restart_epoch(u64::from(value & mask), now);
                 self.levels(now);
             }
             PSC => self.psc = value & 0xFFFF,
@@ -558,8 +623,7 @@ impl Timer {
     /// CCxG sets the channel flags.
     fn generate(&mut self, value: u32, now: u64) {
         if value & UG != 0 {
-            self.epoch_count = 0;
-            self.epoch_ns = now;
+            self.restart_epoch(0, now);
             if (self.cr2 >> 4) & 7 == 0 {
                 self.trgo.push(now);
             }
@@ -632,6 +696,44 @@ mod tests {
         assert_eq!(t.read(SR, 0).unwrap() & (UIF | 1 << 1), UIF);
         assert_eq!(t.read(CNT, 1_000 + 0x10000 * 1_000 + 999), Some(0));
         assert_eq!(t.read(CNT, 1_000 + 0x10000 * 1_000 + 1_000), Some(1));
+    }
+
+    /// The time driver rewrites the alarm's CCR2 at arbitrary instants, hundreds of times a
+    /// second; none of those writes may move the count: after 10 s of them (and of the
+    /// half-period and overflow events) the counter reads exactly 10 s of ticks.
+    #[test]
+    fn alarm_writes_between_ticks_keep_the_count_exact() {
+        let mut t = time_driver(0);
+        let mut now = 0;
+        let mut seen = 0u64;
+        while now + 1_234_567 < 10_000_000_000 {
+            now += 1_234_567; // never on a tick boundary for long
+            t.process(now);
+            t.write(0x38, (now / 1_000 + 500) as u32 & 0xFFFF, now);
+            t.write(SR, 0, now);
+            seen += 1;
+        }
+        assert!(seen > 8_000);
+        let at = 10_000_000_000 + 999;
+        t.process(at);
+        let periods = 10_000_000 / 0x10000;
+        assert_eq!(t.read(CNT, at), Some(10_000_000 - periods * 0x10000));
+    }
+
+    /// The same on a tick that is no whole number of nanoseconds (84 MHz, PSC 0: 11.9 ns):
+    /// the boundary's fraction is kept across every rebase.
+    #[test]
+    fn rebases_keep_fractional_tick_boundaries() {
+        let mut t = Timer::new(TIM2);
+        t.set_clock(84_000_000, 0);
+        t.write(CR1, CEN, 0);
+        let mut now = 0;
+        while now + 777_777 < 1_000_000_000 {
+            now += 777_777;
+            t.write(0x34, 0, now);
+        }
+        assert_eq!(t.read(CNT, 1_000_000_000), Some(84_000_000));
+        assert_eq!(t.read(CNT, 999_999_999), Some(83_999_999));
     }
 
     #[test]
