@@ -13,6 +13,7 @@ pub mod change_auth;
 pub mod channels;
 pub mod checksum;
 pub mod cobs;
+pub mod crsf_record;
 pub mod frame;
 pub mod framing;
 /// The handset protocols (CRSF, FrSky S.Port, FrSky D), the `taulink-handset` crate. New

@@ -413,6 +413,12 @@ pub fn encode_message<'o>(message: &Message, out: &'o mut [u8]) -> Result<&'o [u
     frame(payload, out).map_err(EncodeError::Framing)
 }
 
+/// The message a deframed payload holds (`None`: not a message this set knows — another
+/// record kind, or a newer protocol's).
+pub fn decode_payload(payload: &[u8]) -> Option<Message> {
+    postcard::from_bytes::<Message>(payload).ok()
+}
+
 /// What one delimiter in the stream produced.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Decoded {

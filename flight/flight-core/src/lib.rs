@@ -22,3 +22,4 @@ pub mod sensors;
 pub mod settings;
 pub mod supervisor;
 pub use flight_control::sysid;
+pub mod vtx;

@@ -377,8 +377,19 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     }
 
     /// A telemetry record received over the link: to the handset and the phone. The flight
-    /// side's arm state is kept: no phrase change while it says armed (`crate::phrase`).
+    /// side's arm state is kept: no phrase change while it says armed (`crate::phrase`). A
+    /// CRSF record (the flight controller's answer to the radio's device tool) goes to the
+    /// radio alone.
     pub fn on_link_record(&mut self, record: &[u8]) {
+        if let Ok(payload) = crate::records::payload(record)
+            && let Ok(frame) = telemetry::crsf_record::decode(payload)
+        {
+            if self.settings.role == Role::Transmitter {
+                self.handset
+                    .send_relayed_frame(frame.frame_type, frame.payload);
+            }
+            return;
+        }
         match crate::records::decode(record) {
             Ok(telemetry::messages::Message::ArmState(state)) => {
                 self.commands.flight_armed = state.armed;
@@ -609,7 +620,36 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
                         self.apply(Effect::Bind);
                     }
                 }
+                HandsetRequest::Relay {
+                    frame_type,
+                    payload,
+                } => self.relay_to_flight(frame_type, &payload),
             }
+        }
+    }
+
+    /// A radio frame for the flight controller into the link's record stream (the
+    /// acknowledged, on a keyed link authenticated, uplink), with the most chunk data the
+    /// radio's line takes in one reply window. No room now: dropped, the radio's tool asks
+    /// again on its timeout.
+    fn relay_to_flight(&mut self, frame_type: u8, payload: &[u8]) {
+        use telemetry::crsf_record::{CrsfRecord, MAX_RECORD_PAYLOAD, MAX_RELAYED_CHUNK_DATA};
+        let chunk_limit = self
+            .handset
+            .parameter_chunk_len()
+            .min(MAX_RELAYED_CHUNK_DATA);
+        let record = CrsfRecord {
+            chunk_limit: u8::try_from(chunk_limit).unwrap_or(0),
+            frame_type,
+            payload,
+        };
+        let mut body = [0u8; MAX_RECORD_PAYLOAD];
+        let mut out = [0u8; MAX_RECORD_LEN];
+        if let Some(body) = record.encode(&mut body)
+            && let Ok(bytes) = crate::records::with_crc(body, &mut out)
+            && self.link.can_send_record()
+        {
+            self.link.send_record(bytes);
         }
     }
 

@@ -105,6 +105,14 @@ pub enum HandsetRequest {
     },
     /// The radio's Bind button (CRSF command 0x32 / 0x10 / 0x01).
     Bind,
+    /// A frame for the flight controller (CRSF device 0xC8: its parameter reads and
+    /// writes, and pings it hears): relayed over the link (`telemetry::crsf_record`).
+    Relay {
+        /// CRSF frame type.
+        frame_type: u8,
+        /// CRSF payload (destination, origin, …).
+        payload: heapless::Vec<u8, { telemetry::crsf_record::MAX_CRSF_PAYLOAD }>,
+    },
 }
 
 /// The handset side of the JR line: telemetry encoders (CRSF, S.Port or FrSky D, chosen by
@@ -142,6 +150,9 @@ pub trait HandsetOutput {
     }
     /// A parameter chunk to send in the next reply window.
     fn send_parameter_chunk(&mut self, _chunk: taulink_handset::crsf::params::ParameterChunk) {}
+    /// A CRSF frame the flight controller sent the radio over the link (its DEVICE_INFO, a
+    /// parameter chunk), for a coming reply window.
+    fn send_relayed_frame(&mut self, _frame_type: u8, _payload: &[u8]) {}
     /// The model ID the radio selected (CRSF model select, 0x32 / 0x10 / 0x05), `None` before
     /// one arrived or on a line that carries none (PPM).
     fn model_id(&self) -> Option<u8> {

@@ -76,6 +76,8 @@ pub const LOOP_RATES: Choice = &["500", "1000"];
 /// Estimators: the complementary filter alone, the INS with GPS, the INS without GPS
 /// (horizontal velocity held by a pseudo-measurement).
 pub const INS_MODES: Choice = &["complementary", "ins", "ins_indoor"];
+/// VTX bands (`flight_core::vtx::Band`): the BrushedSparky's VTX module's band-select pins.
+pub const VTX_BANDS: Choice = &["a", "b", "e", "airwave"];
 
 table! {
     // outputs (1xx)
@@ -249,6 +251,12 @@ table! {
     // Spec §12.1: only by this explicit setting; the module needs its own.
     /// 1 lets a bind without a key agreement through and its link run unauthenticated.
     LINK_UNAUTHENTICATED: u32 = u(715, "link.unauthenticated", 0, 1, 0),
+    // The BrushedSparky's VTX (9xx, `flight_core::vtx`): applied at boot and while disarmed;
+    // stored on the Sparky2 too (one table), unused there.
+    /// VTX band of the pin-select module.
+    VTX_BAND: u32 = c(900, "vtx.band", VTX_BANDS, 0),
+    /// VTX channel 1–8 within the band.
+    VTX_CHANNEL: u32 = u(901, "vtx.channel", 1, 8, 1),
     ;
     // Handle arrays for the composite names, in the handles module.
     /// The rate PID gains, `[roll, pitch, yaw][kp, ki, kd]` (`pid.<axis>.<gain>`).

@@ -281,7 +281,8 @@ async fn ppm_in_task(b: &Board, shared: &Shared) {
 /// The JR-line task (the firmware's `jr_line_task`) with EdgeTX at the other end. CRSF: the
 /// radio sends the pilot's channels every [`CRSF_PERIOD_US`] — in the period after its
 /// model selection (`PilotInput::radio_model`) changes, the model-select command instead,
-/// as EdgeTX does at start and on a model change; once the frame has crossed the
+/// as EdgeTX does at start and on a model change, and a frame a Lua tool pushed
+/// (`World::radio_send`) in place of the next one; once the frame has crossed the
 /// line the module decodes it (`on_handset_bytes`, `on_handset_idle`) and its reply goes
 /// back; a save or bind the radio asked for is carried out. Push modes: the scheduler is
 /// asked every [`PUSH_POLL_MS`]. Every burst the module sends is recorded with the
@@ -298,6 +299,12 @@ async fn jr_line_task(b: &Board, shared: &Shared) {
                 let input = shared.borrow().input;
                 let mut sent = 0;
                 if input.handset_connected {
+                    let select_due = matches!(input.radio_model, Some(m) if model_sent != Some(m));
+                    let pushed = if select_due {
+                        None
+                    } else {
+                        shared.borrow_mut().radio_frames.pop_front()
+                    };
                     let mut frame = [0u8; 64];
                     let radio_frame = match input.radio_model {
                         Some(model_id) if model_sent != Some(model_id) => {
@@ -321,9 +328,15 @@ async fn jr_line_task(b: &Board, shared: &Shared) {
                             .to_frame(),
                         ),
                     };
-                    let n = radio_frame
-                        .and_then(|f| f.encode(&mut frame).ok().map(<[u8]>::len))
-                        .unwrap_or(0);
+                    let n = match pushed {
+                        Some(bytes) => frame.get_mut(..bytes.len()).map_or(0, |slot| {
+                            slot.copy_from_slice(&bytes);
+                            bytes.len()
+                        }),
+                        None => radio_frame
+                            .and_then(|f| f.encode(&mut frame).ok().map(<[u8]>::len))
+                            .unwrap_or(0),
+                    };
                     // 10 bits per byte on the line.
                     let line_us = (n as u64 * 10 * 1_000_000).div_ceil(u64::from(baud));
                     clock.sleep_until_us(frame_start + line_us).await;

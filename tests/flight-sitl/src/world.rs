@@ -181,6 +181,9 @@ pub(crate) struct WorldState {
     pub(crate) module_rx: Vec<(f64, Message)>,
     /// What the module sent on the JR line, with the scenario time (s).
     pub(crate) handset_tx: Vec<(f64, Vec<u8>)>,
+    /// Whole CRSF frames the radio is to send in place of its next channel frames (a Lua
+    /// tool's `crossfireTelemetryPush`), oldest first ([`World::radio_send`]).
+    pub(crate) radio_frames: std::collections::VecDeque<Vec<u8>>,
     /// Setting changes the phone is still to send.
     pub(crate) uplink: Vec<SettingChange>,
     /// The HM-10's phone side as raw bytes, when a page is attached ([`World::attach_phone`]).
@@ -428,6 +431,7 @@ impl World {
             module_busy_until_ns: 0,
             module_rx: Vec::new(),
             handset_tx: Vec::new(),
+            radio_frames: std::collections::VecDeque::new(),
             uplink: setting_changes,
             phone: None,
             phone_key: settings
@@ -776,6 +780,20 @@ impl World {
             .as_mut()
             .map(|p| p.to_phone.drain(..).collect())
             .unwrap_or_default()
+    }
+
+    /// The radio sends `frame` (a whole CRSF frame, address to CRC) in place of its next
+    /// channel frame, as EdgeTX sends what a Lua script pushes (CRSF input only).
+    pub fn radio_send(&mut self, frame: &[u8]) {
+        self.shared
+            .borrow_mut()
+            .radio_frames
+            .push_back(frame.to_vec());
+    }
+
+    /// What the module sent on the JR line since the last call, with the time (s).
+    pub fn take_handset_tx(&mut self) -> Vec<(f64, Vec<u8>)> {
+        std::mem::take(&mut self.shared.borrow_mut().handset_tx)
     }
 
     /// The records (the samples not yet taken).

@@ -24,13 +24,15 @@
 use openlrs::BindData;
 use openlrs::rx::Config as OpenLrsConfig;
 use telemetry::channels::FailsafeValues;
+use telemetry::crsf_record::{self, MAX_RECORD_PAYLOAD};
+use telemetry::framing::{Deframed, Deframer, frame, framed_len};
 use telemetry::link::alarm::TagAlarm;
 use telemetry::link::core::Follower;
 use telemetry::link::follower::{FollowerBind, FollowerHooks};
 use telemetry::link::phrase::PHRASE_MAX_BYTES;
 use telemetry::link::{Band, BindRefusal, Entropy, LinkParams, PhraseError, check_phrase};
 use telemetry::messages::{
-    Decoded, FRAMED_MAX_BYTES, LinkSecurity, Message, MessageReader, SysIdResult, encode_message,
+    FRAMED_MAX_BYTES, LinkSecurity, Message, SysIdResult, decode_payload, encode_message,
 };
 
 use super::{FlightApp, Task};
@@ -54,7 +56,8 @@ pub const REPORT_PERIOD_US: u64 = 20_000;
 pub(super) struct LinkSide {
     map: ChannelMap,
     reporter: Reporter,
-    reader: MessageReader,
+    /// The uplink stream's records: messages from the phone, CRSF records from the radio.
+    deframer: Deframer<{ framed_len(MAX_RECORD_PAYLOAD) }>,
     /// The answer to the last change from the phone, still to send.
     reply: Option<Message>,
     gate: ChangeGate,
@@ -104,7 +107,7 @@ impl LinkSide {
         Self {
             map,
             reporter: Reporter::new(),
-            reader: MessageReader::new(),
+            deframer: Deframer::new(),
             reply: None,
             // Seeded by the firmware's RNG (`FlightApp::seed_random`).
             gate: ChangeGate::new(0),
@@ -420,10 +423,22 @@ impl FlightApp {
         self.link_input = self.link.map.link_input(channels, !failsafe);
     }
 
-    /// Bytes of the module's message stream (the phone's setting changes, signed).
+    /// Bytes of the module's record stream: the phone's setting changes (signed), and the
+    /// radio's device-tool frames for CRSF device 0xC8 (`super::device`).
     pub(super) fn on_uplink_bytes(&mut self, bytes: &[u8]) {
         for b in bytes {
-            if let Some(Decoded::Message(m)) = self.link.reader.push(*b) {
+            let Some(Deframed::Frame { .. }) = self.link.deframer.push(*b) else {
+                continue;
+            };
+            let payload = self.link.deframer.payload();
+            if crsf_record::is_crsf_payload(payload) {
+                let mut record = [0u8; MAX_RECORD_PAYLOAD];
+                let len = payload.len().min(MAX_RECORD_PAYLOAD);
+                if let (Some(slot), Some(body)) = (record.get_mut(..len), payload.get(..len)) {
+                    slot.copy_from_slice(body);
+                    self.on_crsf_record(slot_bytes(&record, len));
+                }
+            } else if let Some(m) = decode_payload(payload) {
                 self.apply_link_change(&m);
             }
         }
@@ -478,12 +493,22 @@ impl FlightApp {
         self.link.entropy = entropy;
     }
 
-    /// One telemetry message when the downlink stream is empty: a setting echo, then an
-    /// identification result, then a state change out of turn, else the rotation.
+    /// One telemetry message when the downlink stream is empty: the device tool's answer
+    /// first (`super::device`), then a setting echo, then an identification result, then a
+    /// state change out of turn, else the rotation.
     fn report(&mut self, follower: &mut Follower) {
         let stream = &follower.downlink_stream;
-        if stream.pending() > 0 || stream.free() < FRAMED_MAX_BYTES {
+        if stream.pending() > 0 || stream.free() < framed_len(MAX_RECORD_PAYLOAD) {
             return; // one message in flight at most: stale telemetry helps nobody
+        }
+        if self.device_reply_pending() {
+            if let Some(reply) = self.take_device_reply() {
+                let mut buf = [0u8; framed_len(MAX_RECORD_PAYLOAD)];
+                if let Ok(framed) = frame(&reply, &mut buf) {
+                    follower.downlink_stream.write(framed);
+                }
+            }
+            return;
         }
         let counters = follower.counters();
         let seen = LinkSeen {
@@ -549,6 +574,11 @@ impl FlightApp {
     pub fn link_failsafes(&self) -> u16 {
         self.link.failsafes
     }
+}
+
+/// The first `len` bytes of `record` (`len` is within it by construction).
+fn slot_bytes(record: &[u8; MAX_RECORD_PAYLOAD], len: usize) -> &[u8] {
+    record.get(..len).unwrap_or(&[])
 }
 
 impl FollowerHooks for FlightApp {

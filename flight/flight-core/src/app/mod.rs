@@ -14,10 +14,13 @@
 //! (`console`); the watchdog check-in policy (`watchdog`) and the stretch around settings
 //! saves (`save`); the GPS port (`gps`: UBX bytes in,
 //! boot configuration out); the magnetometer calibration (`magcal`: collected from the
-//! console, applied to every reading).
+//! console, applied to every reading); the flight controller as the radio's CRSF device
+//! 0xC8 through the link (`device`: the settings table as device-tool rows); the VTX's
+//! select pins (`vtx`: at boot, and after a change while disarmed).
 
 mod baro;
 mod console;
+mod device;
 mod gps;
 mod health;
 mod imu;
@@ -28,6 +31,7 @@ mod magcal;
 mod openlrs;
 pub mod resume;
 mod save;
+mod vtx;
 mod watchdog;
 
 #[cfg(test)]
@@ -38,6 +42,7 @@ mod phrase_tests;
 mod tests;
 
 pub use baro::{BARO_FAILED_AFTER, BARO_HEALTHY_AFTER, BARO_RETRY_MS, BaroChange, BaroHealth};
+pub use device::{DEVICE_NAME, Note as DeviceNote, tree as device_tree};
 pub use gps::{
     GPS_BAUD, GPS_BOOT_BAUDS, GPS_REPORT_PERIOD_MS, HOME_REPORT_PERIOD_MS, gps_baud_messages,
     gps_message, home_message,
@@ -134,6 +139,10 @@ pub struct FlightApp {
     /// Boot facts, the USB host, the health last reported.
     board: health::BoardState,
     magcal_gesture: magcal::MagcalGesture,
+    /// The flight controller as the radio's CRSF device 0xC8 (`device`).
+    device: device::DeviceSide,
+    /// The VTX channel the pins were last set to (`vtx`).
+    vtx_applied: Option<crate::vtx::VtxChannel>,
 }
 
 /// The flight setup for `settings`, or the factory one (and why) if they do not fly.
@@ -210,6 +219,8 @@ impl FlightApp {
             gains_changed: true,
             board: health::BoardState::default(),
             magcal_gesture: magcal::MagcalGesture::default(),
+            device: device::DeviceSide::default(),
+            vtx_applied: None,
         }
     }
 

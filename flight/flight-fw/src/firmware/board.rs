@@ -5,6 +5,8 @@ use embassy_stm32::adc::{Adc, AdcChannel};
 use embassy_stm32::dac::DacChannel;
 use embassy_stm32::exti::ExtiInput;
 use embassy_stm32::flash::{Bank1Region1, Blocking, Flash};
+#[cfg(not(feature = "sparky2"))]
+use embassy_stm32::gpio::OutputOpenDrain;
 use embassy_stm32::gpio::{Flex, Level, Output, OutputType, Pull, Speed};
 use embassy_stm32::i2c::{self, I2c};
 use embassy_stm32::peripherals::{TIM3, TIM9};
@@ -225,6 +227,9 @@ pub struct Board {
     /// The GPS receiver (Sparky2 only: the BrushedSparky's PA9/PA10 select the VTX band).
     #[cfg(feature = "sparky2")]
     pub gps: Option<Gps>,
+    /// The VTX's band and channel select (BrushedSparky only: PA9/PA10 are the Sparky2's GPS).
+    #[cfg(not(feature = "sparky2"))]
+    pub vtx: VtxPins,
     /// The true RNG (clocked from the 48 MHz PLL Q the USB uses): the boot's seeds
     /// (`seeds`).
     pub rng: Peri<'static, peripherals::RNG>,
@@ -245,6 +250,34 @@ pub struct Gps {
     pub tx: usart::UartTx<'static, Async>,
     /// USART1 RX into the ring (the baud rate is the port's, set through either half).
     pub rx: usart::RingBufferedUartRx<'static>,
+}
+
+/// The SM215T VTX's select pins (`../shared/reference/hardware.md`): band RF_S1 PA9 (bit 0),
+/// RF_S2 PA10 (bit 1); channel RF_CH1 PB12 (bit 2), RF_CH2 PB13 (bit 1), RF_CH3 PB14 (bit 0).
+/// Open-drain without a pull: a 1 is released (the module pulls it up), a 0 driven low.
+#[cfg(not(feature = "sparky2"))]
+pub struct VtxPins {
+    rf_s1: OutputOpenDrain<'static>,
+    rf_s2: OutputOpenDrain<'static>,
+    rf_ch1: OutputOpenDrain<'static>,
+    rf_ch2: OutputOpenDrain<'static>,
+    rf_ch3: OutputOpenDrain<'static>,
+}
+
+#[cfg(not(feature = "sparky2"))]
+impl VtxPins {
+    /// Drives the levels `flight_core::vtx` chose (`true` = released).
+    pub fn set(&mut self, levels: flight_core::vtx::VtxPins) {
+        for (pin, released) in [
+            (&mut self.rf_s1, levels.rf_s1),
+            (&mut self.rf_s2, levels.rf_s2),
+            (&mut self.rf_ch1, levels.rf_ch1),
+            (&mut self.rf_ch2, levels.rf_ch2),
+            (&mut self.rf_ch3, levels.rf_ch3),
+        ] {
+            pin.set_level(Level::from(released));
+        }
+    }
 }
 
 #[cfg(feature = "sparky2")]
@@ -368,9 +401,21 @@ impl Board {
             }
         };
 
+        // Released until the app's first levels (the task sets them at once).
+        #[cfg(not(feature = "sparky2"))]
+        let vtx = VtxPins {
+            rf_s1: OutputOpenDrain::new(p.PA9, Level::High, Speed::Low),
+            rf_s2: OutputOpenDrain::new(p.PA10, Level::High, Speed::Low),
+            rf_ch1: OutputOpenDrain::new(p.PB12, Level::High, Speed::Low),
+            rf_ch2: OutputOpenDrain::new(p.PB13, Level::High, Speed::Low),
+            rf_ch3: OutputOpenDrain::new(p.PB14, Level::High, Speed::Low),
+        };
+
         Self {
             #[cfg(feature = "sparky2")]
             gps,
+            #[cfg(not(feature = "sparky2"))]
+            vtx,
             imu,
             baro,
             motors,

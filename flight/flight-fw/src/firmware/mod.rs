@@ -144,6 +144,8 @@ async fn main(spawner: Spawner) {
         tasks::alerts::alerts_task(board.speaker),
     );
     spawn(&spawner, "console", tasks::console::console_task(board.usb));
+    #[cfg(not(feature = "sparky2"))]
+    spawn(&spawner, "vtx", tasks::vtx::vtx_task(board.vtx));
     #[cfg(feature = "sparky2")]
     match board.gps {
         Some(gps) => spawn(&spawner, "gps", tasks::gps::gps_task(gps)),

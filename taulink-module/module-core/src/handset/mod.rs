@@ -10,7 +10,7 @@
 pub mod state;
 
 use taulink_handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
-use taulink_handset::crsf::{Decoded, Decoder, Message};
+use taulink_handset::crsf::{Decoded, Decoder, Frame, Message};
 use taulink_handset::frsky_d::Sender;
 use taulink_handset::frsky_d::hub::SenderConfig;
 use taulink_handset::sport::Scheduler;
@@ -186,7 +186,12 @@ impl Handset {
         for decoded in feed {
             match decoded {
                 Decoded::Frame(frame) => {
-                    let request = match responder.on_frame(now_us, &frame) {
+                    let message = responder.on_frame(now_us, &frame);
+                    if let Some(relay) = relay_request(message.as_ref(), &frame) {
+                        // Full: the radio repeats an unanswered request on its timeout.
+                        let _ = requests.push_back(relay);
+                    }
+                    let request = match message {
                         Some(Message::RcChannels(rc)) => {
                             channels = Some(ChannelFrame::from_ticks(&rc.ticks));
                             None
@@ -312,6 +317,15 @@ impl HandsetOutput for Handset {
         }
     }
 
+    fn send_relayed_frame(&mut self, frame_type: u8, payload: &[u8]) {
+        if let Protocol::Crsf { responder, .. } = &mut self.protocol
+            && let Ok(frame) = Frame::new(address::RADIO, frame_type, payload)
+            && let Ok(message) = Message::from_frame(&frame)
+        {
+            responder.queue_relayed(message);
+        }
+    }
+
     fn model_id(&self) -> Option<u8> {
         match &self.protocol {
             Protocol::Crsf { responder, .. } => responder.model_id(),
@@ -323,6 +337,26 @@ impl HandsetOutput for Handset {
 /// Frames addressed to the module (or to everyone).
 fn for_us(destination: u8) -> bool {
     matches!(destination, address::TX_MODULE | address::BROADCAST)
+}
+
+/// The relay of a radio frame the flight controller must see: a parameter read or write
+/// addressed to it, a ping addressed to it or to everyone (the module answers the latter
+/// for itself too, so the device tool lists both).
+fn relay_request(message: Option<&Message>, frame: &Frame) -> Option<HandsetRequest> {
+    let destination = match message? {
+        Message::ParameterRead(read) => read.destination,
+        Message::ParameterWrite(write) => write.destination,
+        Message::DevicePing(ping) if ping.destination == address::BROADCAST => {
+            address::FLIGHT_CONTROLLER
+        }
+        Message::DevicePing(ping) => ping.destination,
+        _ => return None,
+    };
+    (destination == address::FLIGHT_CONTROLLER).then_some(())?;
+    Some(HandsetRequest::Relay {
+        frame_type: frame.frame_type,
+        payload: heapless::Vec::from_slice(&frame.payload).ok()?,
+    })
 }
 
 #[cfg(test)]

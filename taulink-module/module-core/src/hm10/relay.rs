@@ -213,6 +213,9 @@ impl Relay {
                     self.connected = true;
                     if telemetry::module_record::is_module_payload(record) {
                         self.to_module.push(record);
+                    } else if telemetry::crsf_record::is_crsf_payload(record) {
+                        // Only the radio's line speaks for the device tool.
+                        self.bad_frames_from_phone = self.bad_frames_from_phone.saturating_add(1);
                     } else {
                         self.to_flight.push(record);
                     }

@@ -147,6 +147,16 @@ fn module_records_stop_at_the_module_and_the_rest_goes_on() {
     assert_eq!(relay.next_record_to_module(&mut out), None);
 }
 
+#[test]
+fn a_phone_never_speaks_for_the_radios_device_tool() {
+    // A CRSF record (a PARAMETER_WRITE for the flight controller) from the phone.
+    let write = vec![telemetry::crsf_record::MARKER, 35, 0x2D, 0xC8, 0xEF, 20, 3];
+    let mut relay = Relay::new(true);
+    relay.on_phone_bytes(&phone_encode(&[write, vec![0x04]]));
+    assert_eq!(drain_to_flight(&mut relay), vec![vec![4]]);
+    assert_eq!(relay.stats().bad_frames_from_phone, 1);
+}
+
 proptest! {
     #[test]
     fn random_phone_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..2000)) {
@@ -177,10 +187,12 @@ proptest! {
             relay.on_phone_bytes(piece);
             received.extend(drain_to_flight(&mut relay));
         }
-        // Module-addressed records (the marker first) stop at the module.
+        // Module-addressed records (the marker first) stop at the module; CRSF records
+        // (the radio's device tool speaks on the JR line only) are dropped.
         let for_flight: Vec<Vec<u8>> = records
             .iter()
             .filter(|r| !telemetry::module_record::is_module_payload(r))
+            .filter(|r| !telemetry::crsf_record::is_crsf_payload(r))
             .cloned()
             .collect();
         let tail = received.len().saturating_sub(for_flight.len());

@@ -12,6 +12,9 @@
 //!
 //! * text selection (9): `options separated by ';' NUL, value, min, max, default, unit NUL`
 //! * unsigned 16 (2): `value, min, max, default (u16 each), unit NUL`
+//! * float (8): `value, min, max, default (i32 each, the number × 10^precision), precision
+//!   (u8, decimals shown; the Lua script shows at most 3), step (u32, in the same scaled
+//!   units), unit NUL`
 //! * string (10): `text NUL, max length (u8)`; the radio's write carries the text NUL-terminated
 //! * folder (11): nothing after the name (the children name their parent)
 //! * info (12): `text NUL`
@@ -44,6 +47,8 @@ pub enum ParameterType {
     Uint8 = 0,
     /// Unsigned 16-bit number.
     Uint16 = 2,
+    /// A fixed-point number: an `i32` scaled by 10^precision.
+    Float = 8,
     /// One of a list of texts.
     TextSelection = 9,
     /// Text.
@@ -319,6 +324,37 @@ impl Entry {
         entry
     }
 
+    /// A fixed-point number: every field is the number × 10^`precision` (`value`,
+    /// `min..=max`, `default`); the radio steps it by `step` scaled units.
+    #[allow(clippy::too_many_arguments)] // the wire entry's fields, in its order
+    pub fn float(
+        parent: u8,
+        name: &str,
+        value: i32,
+        range: (i32, i32),
+        default: i32,
+        precision: u8,
+        step: u32,
+        unit: &str,
+    ) -> Self {
+        let mut entry = Self::start(parent, ParameterType::Float, name);
+        for number in [value, range.0, range.1, default] {
+            entry.push(&number.to_be_bytes());
+        }
+        entry.push(&[precision]);
+        entry.push(&step.to_be_bytes());
+        entry.text(unit);
+        entry
+    }
+
+    /// This entry with the hidden flag (bit 7 of the type byte): the radio skips the row.
+    pub fn hidden(mut self) -> Self {
+        if let Some(kind) = self.bytes.get_mut(1) {
+            *kind |= 0x80;
+        }
+        self
+    }
+
     /// Editable text `value` of at most `max_len` bytes (the radio's editor stops there and
     /// its write carries the text NUL-terminated).
     pub fn string(parent: u8, name: &str, value: &str, max_len: u8) -> Self {
@@ -394,6 +430,21 @@ mod tests {
         assert_eq!(command.as_slice(), b"\x00\x0DBind\x00\x02\x32Binding\x00");
         let long = "x".repeat(300);
         assert!(Entry::folder(0, &long).finish().is_err());
+    }
+
+    #[test]
+    fn a_float_entry_is_the_lua_scripts_layout() {
+        // −1.25 in −10.00 … 10.00, default 0, 2 decimals, step 0.05: value, min, max and
+        // default at +0/+4/+8/+12, precision at +16, step at +17, unit at +21 after the name.
+        let float = Entry::float(2, "K", -125, (-1000, 1000), 0, 2, 5, "s")
+            .finish()
+            .unwrap();
+        assert_eq!(
+            float.as_slice(),
+            b"\x02\x08K\x00\xFF\xFF\xFF\x83\xFF\xFF\xFC\x18\x00\x00\x03\xE8\x00\x00\x00\x00\x02\x00\x00\x00\x05s\x00"
+        );
+        let hidden = Entry::folder(0, "VTX").hidden().finish().unwrap();
+        assert_eq!(hidden.as_slice(), b"\x00\x8BVTX\x00");
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! what to send in the reply window — DEVICE_INFO for a ping, the 0x3A timing frame that pulls
 //! the radio onto the link's packet rate, and rotating telemetry (ExpressLRS/EdgeTX).
 
-use heapless::String;
+use heapless::{Deque, String};
 
 use super::device::{DeviceInfo, TimingCorrection};
 use super::frame::{Error, Frame, address, frame_type};
@@ -132,7 +132,14 @@ pub struct Responder {
     model_id: Option<u8>,
     /// A parameter chunk waiting for a reply window.
     parameter_chunk: Option<ParameterChunk>,
+    /// Frames another device (the flight controller behind the link) sent the radio,
+    /// waiting for a reply window.
+    relayed: Deque<Message, RELAYED_FRAMES>,
 }
+
+/// Frames of other devices held for the radio: a DEVICE_INFO and a parameter chunk (the
+/// radio asks one thing at a time; a third waits for the next window).
+const RELAYED_FRAMES: usize = 2;
 
 impl Responder {
     /// A responder that has heard nothing yet.
@@ -152,6 +159,7 @@ impl Responder {
             next_sensor: 0,
             model_id: None,
             parameter_chunk: None,
+            relayed: Deque::new(),
         }
     }
 
@@ -170,6 +178,17 @@ impl Responder {
     /// asks again on its timeout).
     pub fn queue_parameter_chunk(&mut self, chunk: ParameterChunk) {
         self.parameter_chunk = Some(chunk);
+    }
+
+    /// Sends `message`, a frame another device addressed to the radio (relayed over the
+    /// link), in a coming reply window after our own parameter chunk. When the queue is
+    /// full the oldest goes: the radio repeats what it still wants on its timeout.
+    pub fn queue_relayed(&mut self, message: Message) {
+        if self.relayed.is_full() {
+            let _ = self.relayed.pop_front();
+        }
+        // Room was made above.
+        let _ = self.relayed.push_back(message);
     }
 
     /// Whether a parameter chunk still waits for a window.
@@ -291,6 +310,12 @@ impl Responder {
             && !writer.put(&Message::ParameterChunk(chunk.clone()))
         {
             self.parameter_chunk = Some(chunk);
+        }
+        while let Some(message) = self.relayed.front() {
+            if !writer.put(message) {
+                break;
+            }
+            let _ = self.relayed.pop_front();
         }
         if self.timing_due(now_us)
             && let Some(timing) = self.timing_correction()

@@ -14,3 +14,5 @@ pub mod loop_report;
 pub mod motors;
 pub mod storage;
 pub mod supervisor;
+#[cfg(not(feature = "sparky2"))]
+pub mod vtx;
