@@ -14,6 +14,7 @@ pub mod battery;
 pub mod board;
 pub mod control;
 pub mod estimation;
+pub mod logging;
 pub mod model;
 pub mod outputs;
 pub mod pipeline;

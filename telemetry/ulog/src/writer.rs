@@ -239,6 +239,34 @@ impl<'a> Writer<'a> {
         )
     }
 
+    /// A logged string made of `parts` in order (a fixed prefix and a name, without a
+    /// formatting machinery).
+    ///
+    /// # Errors
+    /// [`Error::Full`], [`Error::TooLong`].
+    pub fn logging_parts(
+        &mut self,
+        level: Level,
+        timestamp_us: u64,
+        parts: &[&str],
+    ) -> Result<usize, Error> {
+        let text: usize = parts.iter().map(|p| p.len()).sum();
+        let body = 9 + text;
+        let size = u16::try_from(body).map_err(|_| Error::TooLong)?;
+        if self.remaining() < MESSAGE_HEADER_LEN + body {
+            return Err(Error::Full);
+        }
+        let [lo, hi] = size.to_le_bytes();
+        self.put(&[
+            &[lo, hi, kind::LOGGING, level as u8],
+            &timestamp_us.to_le_bytes(),
+        ])?;
+        for p in parts {
+            self.put(&[p.as_bytes()])?;
+        }
+        Ok(MESSAGE_HEADER_LEN + body)
+    }
+
     /// A synchronisation message (a reader recovers from corruption at the next one).
     ///
     /// # Errors
@@ -288,6 +316,20 @@ mod tests {
         assert_eq!(&b[90..99], b"int32_t a");
         assert_eq!(b[99..103], [0xFF; 4]);
         assert_eq!(b[103..], [2, 0, b'O', 44, 1]);
+    }
+
+    #[test]
+    fn a_string_in_parts_is_one_message() {
+        let mut a = [0u8; 64];
+        let mut b = [0u8; 64];
+        let mut wa = Writer::new(&mut a);
+        let mut wb = Writer::new(&mut b);
+        assert_eq!(wa.logging(Level::Notice, 7, "mode attitude"), Ok(25));
+        assert_eq!(
+            wb.logging_parts(Level::Notice, 7, &["mode ", "attitude"]),
+            Ok(25)
+        );
+        assert_eq!(wa.written(), wb.written());
     }
 
     #[test]

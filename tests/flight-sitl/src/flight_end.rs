@@ -258,9 +258,13 @@ pub(crate) async fn flight_board(
         let mut boot_rng = telemetry::mock::SplitMix64::new(boot_us);
         app.seed_change_session(boot_rng.next_u64() as u32);
         app.seed_link_nonces(boot_rng.next_u64());
-        shared
-            .borrow_mut()
-            .record_boot(End::Flight, cause, problem.is_some());
+        {
+            let mut s = shared.borrow_mut();
+            s.record_boot(End::Flight, cause, problem.is_some());
+            s.flight_logs.push(crate::flight_log::LogFile::new(
+                u64::from(clock.now_ms()) * 1000,
+            ));
+        }
         let app = Rc::new(RefCell::new(app));
         shared.borrow_mut().flight = Some((app.clone(), clock.clone()));
         let tasks = join5(

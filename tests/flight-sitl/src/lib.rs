@@ -9,6 +9,7 @@ mod clock;
 pub mod console;
 mod flash;
 pub mod flight_end;
+pub mod flight_log;
 pub mod gps;
 pub mod metrics;
 pub mod module_end;

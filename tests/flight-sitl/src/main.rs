@@ -115,6 +115,12 @@ fn main() -> ExitCode {
             );
         }
     }
+    if let Some(path) = &cli.log
+        && let Err(e) = runner::write_logs(path, &outcome.sitl.flight_logs)
+    {
+        eprintln!("flight-sitl: --log {}: {e}", path.display());
+        return ExitCode::FAILURE;
+    }
     if let Some(path) = cli.plot.path(kind.name())
         && let Err(e) = runner::plot::figure(&outcome).save_as(&path, cli.plot.plot_format)
     {

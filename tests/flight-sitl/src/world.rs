@@ -110,6 +110,9 @@ pub struct Sitl {
     pub watchdog_resets: WatchdogResets,
     /// Every boot of either end, with the time (s) and why.
     pub boots: Vec<Boot>,
+    /// The flight controller's log of each boot, as ULog files (the `log.profile` setting
+    /// chooses what is in them; `off`: empty).
+    pub flight_logs: Vec<Vec<u8>>,
 }
 
 /// Independent-watchdog resets counted per end.
@@ -188,6 +191,8 @@ pub(crate) struct WorldState {
     /// The flight storage adapter stretches the watchdog around a save as the app's job
     /// asks (`false`: [`World::without_save_watchdog_stretch`]).
     pub(crate) save_stretch: bool,
+    /// The flight log of each boot (the last one growing).
+    pub(crate) flight_logs: Vec<crate::flight_log::LogFile>,
     medium: si4432_sim::Medium,
 }
 
@@ -397,6 +402,7 @@ impl World {
             watchdog_resets: WatchdogResets::default(),
             flight_busy_until_ns: 0,
             save_stretch: true,
+            flight_logs: Vec::new(),
             boots: Vec::new(),
             medium: medium.clone(),
         }));
@@ -542,6 +548,10 @@ impl World {
                             }
                             // The alert task.
                             let tone_hz = app.on_alert_tick(now_ms);
+                            // The logging task: what the app recorded, into this boot's file.
+                            if let Some(log) = shared.borrow_mut().flight_logs.last_mut() {
+                                log.drain(&mut app);
+                            }
                             let identification = app.identification_finished();
                             if let Some(out) = app.last_output().copied() {
                                 last_out = Some(out);
@@ -728,6 +738,10 @@ impl World {
             settings,
             watchdog_resets: s.watchdog_resets,
             boots: std::mem::take(&mut s.boots),
+            flight_logs: std::mem::take(&mut s.flight_logs)
+                .into_iter()
+                .map(crate::flight_log::LogFile::into_bytes)
+                .collect(),
         }
     }
 }

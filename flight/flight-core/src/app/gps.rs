@@ -153,6 +153,7 @@ impl FlightApp {
             }
         });
         for pvt in &pvts {
+            self.log.on_gps(now_ms, pvt);
             self.gps.last_update = self.flight.on_gps(pvt);
             self.gps.last_pvt = Some(*pvt);
             let due = self

@@ -275,7 +275,7 @@ impl FlightApp {
             self.on_uplink_bytes(bytes);
         }
         if self.report_due(now_us) {
-            self.report(follower);
+            self.report(now_us, follower);
         }
     }
 
@@ -346,11 +346,7 @@ impl FlightApp {
 
     /// One telemetry message when the downlink stream is empty: a setting echo, then an
     /// identification result, then a state change out of turn, else the rotation.
-    fn report(&mut self, follower: &mut Follower) {
-        let stream = &follower.downlink_stream;
-        if stream.pending() > 0 || stream.free() < FRAMED_MAX_BYTES {
-            return; // one message in flight at most: stale telemetry helps nobody
-        }
+    fn report(&mut self, now_us: u64, follower: &mut Follower) {
         let counters = follower.counters();
         let seen = LinkSeen {
             rssi_dbm: follower
@@ -363,6 +359,11 @@ impl FlightApp {
             missed: counters.missed,
             failsafes: self.link.failsafes,
         };
+        self.log.on_link(now_us, &seen);
+        let stream = &follower.downlink_stream;
+        if stream.pending() > 0 || stream.free() < FRAMED_MAX_BYTES {
+            return; // one message in flight at most: stale telemetry helps nobody
+        }
         let mut buf = [0u8; FRAMED_MAX_BYTES];
         if let Some(framed) = self.next_report(seen, &mut buf) {
             follower.downlink_stream.write(framed);

@@ -49,6 +49,7 @@ pub use watchdog::{FEED_PERIOD_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog};
 
 use crate::alerts::{Alert, TonePlayer};
 use crate::battery::{BatteryMonitor, BatteryStatus};
+use crate::logging::{Entry, Event, LoopContext, Profile, Recorder};
 use crate::outputs::Command;
 use crate::pipeline::{
     ClimbRate, Controllers, FlightLoop, FlightSetup, ImuSample, LinkInput, LoopOutput, SetupError,
@@ -99,6 +100,8 @@ pub struct FlightApp {
     magcal_gesture: magcal::MagcalGesture,
     /// The magnetometer calibration in force (from the live settings).
     mag_cal: crate::estimation::magcal::MagCalibration,
+    /// The flight log's ring (`logging`), drained by the logging task.
+    log: Recorder,
 }
 
 /// The flight setup for `settings`, or the factory one (and why) if they do not fly.
@@ -119,7 +122,9 @@ impl FlightApp {
         let setup = setup?;
         let controllers = Controllers::design(&setup.control).ok();
         let mag_cal = magcal::calibration(&stored);
+        let log = Recorder::new(log_profile(&stored), setup.loop_rate_hz);
         Some(Self {
+            log,
             link: link::LinkSide::new(setup.channels),
             live: stored.clone(),
             stored,
@@ -199,6 +204,17 @@ impl FlightApp {
         self.battery
     }
 
+    /// The oldest flight-log entry not yet taken (the logging task drains them and encodes
+    /// them with `logging::Encoder`).
+    pub fn take_log_entry(&mut self) -> Option<Entry> {
+        self.log.pop()
+    }
+
+    /// The flight log's recorder (profile, entries waiting, entries dropped).
+    pub fn log_recorder(&self) -> &Recorder {
+        &self.log
+    }
+
     /// The flight loop (read-only: estimates for logs and the simulator).
     pub fn flight_loop(&self) -> &FlightLoop {
         &self.flight
@@ -250,6 +266,9 @@ impl FlightApp {
             self.flight = FlightLoop::new(setup.loop_config, setup.mixer, Some(controllers));
             self.battery_monitor = BatteryMonitor::new(setup.battery);
             self.link.set_channel_map(setup.channels);
+            self.log
+                .reconfigure(log_profile(&self.live), setup.loop_rate_hz);
+            self.log.on_event(now_ms, Event::LoopRestarted);
             self.setup = setup;
         }
         if self.imu.check_sample(now_ms, sample).is_some() {
@@ -271,14 +290,29 @@ impl FlightApp {
             mag: sample.mag.map(|m| self.mag_cal.apply(m)),
             ..*sample
         };
+        let armed_before = self.flight.armed();
         let out = self
             .flight
             .step(now_ms, sample, &self.link_input, self.climb_mps);
         self.record(out);
+        self.log.on_loop(
+            now_ms,
+            &LoopContext {
+                sample,
+                flight: &self.flight,
+                out: &out,
+                link: &self.link_input,
+                armed_before,
+                baro_altitude_m: self.baro_altitude_m(),
+                arming_blockers: self.arming_blockers(),
+                imu_fault: self.imu.fault(),
+            },
+        );
         self.on_magcal_gesture(now_ms);
         self.identified = self.flight.take_identification();
         if let Some(id) = &self.identified {
             self.link.queue_identification(id);
+            self.log.on_identified(now_ms, id);
         }
         ImuStep {
             motors: out.motors,
@@ -298,6 +332,8 @@ impl FlightApp {
     fn ride_through(&mut self, now_ms: u32) -> ImuStep {
         if self.imu.expire(now_ms).is_some() {
             let decision = self.flight.sensor_fault();
+            self.log.on_event(now_ms, Event::ImuFault);
+            self.log.on_event(now_ms, Event::Decision(decision));
             if let Some(out) = self.last_out.as_mut() {
                 out.motors = [Command::Stopped; 4];
                 out.armed = false;
@@ -340,6 +376,7 @@ impl FlightApp {
             self.baro_ground_m = self.climb.altitude_m();
         }
         if let Some(a) = altitude_m {
+            self.log.on_baro(now_ms, a);
             self.flight.on_baro_altitude(a);
         }
     }
@@ -363,6 +400,7 @@ impl FlightApp {
         // Arming is refused on a critical pack (unless `arm.critical_battery allow`).
         self.flight
             .set_battery_critical(status.level == crate::battery::BatteryLevel::Critical);
+        self.log.on_battery(now_ms, &status);
         self.battery = Some(status);
     }
 
@@ -444,4 +482,9 @@ impl FlightApp {
     pub fn on_designed(&mut self, setup: FlightSetup, controllers: Controllers) {
         self.pending_setup = Some((setup, controllers));
     }
+}
+
+/// The log profile the settings choose.
+fn log_profile(settings: &Settings) -> Profile {
+    Profile::from_index(settings.get(crate::settings::handles::LOG_PROFILE))
 }

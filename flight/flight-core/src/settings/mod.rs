@@ -11,7 +11,10 @@ mod store;
 pub use console::{Command, ConsoleError, MagcalAction, parse_line, write_list, write_setting};
 pub use handle::{Change, Handle, ParamType};
 pub use line::{LineAssembler, LineError};
-pub use params::{Choice, Kind, MAX_PAIRS, PARAMS, Param, ParamError, Settings, Value, handles};
+pub use params::{
+    COUNT, Choice, Kind, LOG_PROFILES, MAX_PAIRS, MODES, PARAMS, Param, ParamError, Settings,
+    Value, handles,
+};
 pub use store::{
     FLASH_BUFFER, LoadProblem, LoadReport, StoreError, load, load_at_boot, save, save_whole,
 };

@@ -165,6 +165,9 @@ pub const LOOP_RATES: Choice = &["500", "1000"];
 /// Estimators (`pipeline::EstimatorMode`): the complementary filter alone, the INS with
 /// GPS, the INS without GPS (horizontal velocity held by a pseudo-measurement).
 pub const INS_MODES: Choice = &["complementary", "ins", "ins_indoor"];
+/// Flight-log profiles (`logging::Profile`): off, the telemetry channel's, the Sparky2
+/// flash's, every sample (replay-grade).
+pub const LOG_PROFILES: Choice = &["off", "link", "flight", "full"];
 
 table! {
     // outputs (1xx)
@@ -270,6 +273,9 @@ table! {
     // Magnetic declination at the flying field, degrees east of true north: the heading the
     // estimators take from the magnetometer is turned by it (`estimation::align`).
     MAG_DECLINATION_DEG: f32 = f(810, "mag.declination_deg", -180.0, 180.0, 0.0),
+    // The flight log (9xx): which topics at which rates (`logging::Profile`). Factory:
+    // `flight`, what the Sparky2's flash and the link stream take.
+    LOG_PROFILE: u32 = c(900, "log.profile", LOG_PROFILES, 2),
     ;
     // Handle arrays for the composite names, in the handles module.
     /// The rate PID gains, `[roll, pitch, yaw][kp, ki, kd]` (`pid.<axis>.<gain>`).

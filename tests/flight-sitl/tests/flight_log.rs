@@ -1,0 +1,103 @@
+//! Issue 31's flight log through the firmware-in-the-loop world: what the flight core
+//! records, drained and encoded as the logging task does, read back as ULog; a 60 s hover
+//! logged at the full profile replays through the flight core's estimate stage
+//! (`ins_sim::flight_log::as_flown`, what `replay FILE.ulg` runs) to the estimate flown,
+//! bit for bit; the profiles' contents.
+
+#![allow(clippy::unwrap_used)]
+
+use flight_core::logging::{Profile, TOPICS};
+use flight_core::settings::handles;
+use flight_sitl::runner::{Kind, Options, run_kind};
+use ins_sim::flight_log;
+use taulink_ulog::{Message, Reader};
+
+fn hover_log(profile: Profile, gps: bool, duration_s: f64) -> Vec<u8> {
+    let mut o = Options::for_kind(Kind::Hover, gps).unwrap();
+    o.duration_s = Some(duration_s);
+    o.settings
+        .put(handles::LOG_PROFILE, profile.index())
+        .unwrap();
+    let outcome = run_kind(Kind::Hover, &o).unwrap();
+    assert_eq!(outcome.sitl.flight_logs.len(), 1, "one boot, one log");
+    outcome.sitl.flight_logs.into_iter().next().unwrap()
+}
+
+/// A 60 s hover at the full profile, replayed: every logged estimate equals the replay's.
+fn replays_bit_for_bit(gps: bool) {
+    let bytes = hover_log(Profile::Full, gps, 60.0);
+    let log = flight_log::read(&bytes).unwrap();
+    assert_eq!(log.profile(), Profile::Full);
+    assert!(log.dropouts.is_empty(), "nothing lost: {:?}", log.dropouts);
+    assert!(!log.truncated);
+    let replayed = flight_log::as_flown(&log).unwrap();
+    let logged = flight_log::logged(&log);
+    // 1 kHz for the 60 s and the warm-up before it.
+    assert!(replayed.len() > 60_000, "{} samples", replayed.len());
+    assert_eq!(replayed.len(), logged.len());
+    let check = flight_log::compare(&replayed, &logged);
+    println!("{check:?}");
+    assert_eq!(check.identical, logged.len(), "{check:?}");
+    assert_eq!(check.max_quaternion_diff, 0.0);
+    if gps {
+        let ins_samples = replayed.iter().filter(|r| r.ins.is_some()).count();
+        assert!(ins_samples > 55_000, "the INS flew: {ins_samples}");
+    }
+}
+
+#[test]
+fn a_hover_at_the_full_profile_replays_to_the_flown_estimate_bit_for_bit() {
+    replays_bit_for_bit(false);
+}
+
+#[test]
+fn a_hover_with_gps_and_the_ins_replays_bit_for_bit_too() {
+    replays_bit_for_bit(true);
+}
+
+#[test]
+fn a_log_holds_the_definitions_every_setting_and_its_profile_topics() {
+    let bytes = hover_log(Profile::Flight, false, 5.0);
+    let mut formats = Vec::new();
+    let mut params = 0;
+    let mut per_topic = vec![0usize; TOPICS.len()];
+    let mut armed = false;
+    let mut first_data = None;
+    for m in Reader::new(&bytes).unwrap() {
+        let (offset, m) = m.unwrap();
+        match m {
+            Message::Format(f) => formats.push(f.name),
+            Message::Parameter { .. } => params += 1,
+            Message::Data { msg_id, .. } => {
+                first_data.get_or_insert(offset);
+                per_topic[usize::from(msg_id)] += 1;
+            }
+            Message::Logging { text, .. } => armed |= text == b"armed",
+            _ => {}
+        }
+    }
+    let names: Vec<&str> = TOPICS.iter().map(|t| t.name).collect();
+    assert_eq!(formats, names);
+    assert_eq!(params, flight_core::settings::COUNT);
+    assert!(armed, "the arming is a logged string");
+    let count = |name: &str| per_topic[names.iter().position(|n| *n == name).unwrap()];
+    // The flight profile over ≈ 9 s of boot, warm-up and scenario: IMU at 100 Hz,
+    // estimate at 50 Hz, baro at its 50 Hz.
+    let imu = count("sensor_imu");
+    let estimate = count("estimate");
+    assert!((800..=1000).contains(&imu), "{imu}");
+    assert!((2 * estimate).abs_diff(imu) <= 2, "{estimate} vs {imu}");
+    assert!(count("sensor_baro").abs_diff(estimate) <= 5);
+    assert_eq!(count("sensor_gps"), 0, "no receiver");
+    assert!(count("link_stats") > 10);
+}
+
+#[test]
+fn the_off_profile_logs_only_the_definitions() {
+    let bytes = hover_log(Profile::Off, false, 2.0);
+    let data = Reader::new(&bytes)
+        .unwrap()
+        .filter(|m| matches!(m, Ok((_, Message::Data { .. } | Message::Logging { .. }))))
+        .count();
+    assert_eq!(data, 0);
+}
