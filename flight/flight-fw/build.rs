@@ -29,8 +29,38 @@ MEMORY
 _stack_start = ORIGIN(RAM) + LENGTH(RAM) - 16;
 ";
 
+/// Test variants for the processor-in-the-loop runner (`tests/pil` builds them from this
+/// source to show it models the hardware, not the app); `cargo xtask dist` never sets
+/// `TAULINK_PIL_VARIANT`, so no flashable image carries one. Comma-separated names:
+/// `radio-cs-pc13` wires the RFM22B's nSEL to PC13 instead of PA15 (a board with the wrong
+/// pin), `iwdg-half` halves the independent watchdog's timeout.
+const PIL_VARIANTS: [(&str, &str); 2] = [
+    ("radio-cs-pc13", "pil_radio_cs_pc13"),
+    ("iwdg-half", "pil_iwdg_half"),
+];
+
+fn pil_variants() {
+    println!("cargo:rerun-if-env-changed=TAULINK_PIL_VARIANT");
+    for (_, cfg) in PIL_VARIANTS {
+        println!("cargo::rustc-check-cfg=cfg({cfg})");
+    }
+    let Ok(wanted) = std::env::var("TAULINK_PIL_VARIANT") else {
+        return;
+    };
+    for name in wanted.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+        match PIL_VARIANTS.iter().find(|(n, _)| *n == name) {
+            Some((_, cfg)) => println!("cargo::rustc-cfg={cfg}"),
+            None => {
+                eprintln!("TAULINK_PIL_VARIANT: unknown variant {name:?}");
+                std::process::exit(1);
+            }
+        }
+    }
+}
+
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
+    pil_variants();
     fw_link::link_image(if fw_link::feature("taulabs-bootloader") {
         BOOTLOADER
     } else {

@@ -15,7 +15,7 @@ pub mod board;
 pub mod control;
 pub mod estimation;
 pub mod logging;
-pub mod model;
+pub use lqg_design::model;
 pub mod outputs;
 pub mod pipeline;
 pub mod report;

@@ -13,6 +13,7 @@
 pub mod board;
 pub mod chips;
 pub mod nrf52840;
+pub mod runner;
 pub mod stm32f405;
 pub mod wire;
 pub mod world;

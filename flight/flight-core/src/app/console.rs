@@ -12,6 +12,10 @@ use core::fmt::Write;
 use super::FlightApp;
 use telemetry::link::{LinkKey, key_for_phrase};
 
+use crate::battery::BatteryLevel;
+use crate::sensors::ubx::config::Status;
+use crate::sensors::ubx::{FixType, Generation};
+use crate::settings::decimal::{Fixed, Shortest};
 use crate::settings::{
     Command, LineError, MagcalAction, Settings, parse_line, write_list, write_setting,
 };
@@ -160,15 +164,18 @@ impl FlightApp {
     fn write_status<W: Write>(&self, out: &mut W) -> core::fmt::Result {
         let link = if self.link_input.up { "up" } else { "down" };
         match &self.last_out {
-            Some(state) => write!(
-                out,
-                "mode {}, failsafe {}, link {}, arm blockers {:#x}, attitude {:?} deg\r\n",
-                state.mode.name(),
-                state.failsafe,
-                link,
-                self.arming_blockers(),
-                state.attitude.deg()
-            )?,
+            Some(state) => {
+                write!(
+                    out,
+                    "mode {}, failsafe {}, link {}, arm blockers {:#x}, attitude ",
+                    state.mode.name(),
+                    state.failsafe,
+                    link,
+                    self.arming_blockers(),
+                )?;
+                write_vector(out, state.attitude.deg(), |v| Fixed(v, 1))?;
+                out.write_str(" deg\r\n")?
+            }
             None => out.write_str("flight loop not running (IMU?)\r\n")?,
         }
         let estimator = self.flight.estimator();
@@ -184,9 +191,22 @@ impl FlightApp {
             let (generation, config) = self.gps_config_status();
             write!(
                 out,
-                "gps {:?} sats {} hacc {} mm, receiver {:?} config {:?}\r\n",
-                pvt.fix_type, pvt.num_sv, pvt.h_acc_mm, generation, config
+                "gps {} sats {} hacc {} mm, receiver {}, config ",
+                fix_name(pvt.fix_type),
+                pvt.num_sv,
+                pvt.h_acc_mm,
+                match generation {
+                    Generation::M8 => "M8",
+                    Generation::M9M10 => "M9/M10",
+                },
             )?;
+            match config {
+                Status::Pending { step } => write!(out, "waiting for ACK {step}")?,
+                Status::Done => out.write_str("done")?,
+                Status::Refused { id } => write!(out, "refused CFG {id:#04x}")?,
+                Status::NoAnswer { id } => write!(out, "no answer to CFG {id:#04x}")?,
+            }
+            out.write_str("\r\n")?;
         }
         if let Some(home) = estimator.home() {
             write!(
@@ -216,11 +236,30 @@ impl FlightApp {
         match self.battery {
             Some(b) => write!(
                 out,
-                "armed {armed}, battery {} mV {} mA {:?}\r\n",
-                b.voltage_mv, b.current_ma, b.level
+                "armed {armed}, battery {} mV {} mA {}\r\n",
+                b.voltage_mv,
+                b.current_ma,
+                match b.level {
+                    BatteryLevel::Ok => "ok",
+                    BatteryLevel::Warning => "warning",
+                    BatteryLevel::Critical => "critical",
+                }
             ),
             None => write!(out, "armed {armed}, battery unknown\r\n"),
         }
+    }
+}
+
+/// A NAV-PVT fix type in words (`Debug` text would link core's struct formatting).
+fn fix_name(fix: FixType) -> &'static str {
+    match fix {
+        FixType::NoFix => "none",
+        FixType::DeadReckoning => "dead-reckoning",
+        FixType::Fix2D => "2D",
+        FixType::Fix3D => "3D",
+        FixType::GnssDeadReckoning => "3D+dead-reckoning",
+        FixType::TimeOnly => "time-only",
+        FixType::Unknown(_) => "unknown",
     }
 }
 
@@ -241,10 +280,24 @@ fn write_calibration<W: Write>(
     out: &mut W,
     cal: &crate::estimation::magcal::MagCalibration,
 ) -> core::fmt::Result {
-    let [[xx, xy, xz], [_, yy, yz], [_, _, zz]] = cal.matrix;
+    let [[xx, xy, xz], [_, yy, yz], [_, _, zz]] = cal.matrix.map(|row| row.map(Shortest));
+    out.write_str("offset ")?;
+    write_vector(out, cal.offset, Shortest)?;
     write!(
         out,
-        "offset {:?}\r\nmatrix xx {xx} yy {yy} zz {zz} xy {xy} xz {xz} yz {yz}\r\nfield {}, residual {:.2} % (round: < 3 %), coverage {:.2} (≥ 0.3)\r\n",
-        cal.offset, cal.field, cal.residual_pct, cal.coverage
+        "\r\nmatrix xx {xx} yy {yy} zz {zz} xy {xy} xz {xz} yz {yz}\r\nfield {}, residual {} % (round: < 3 %), coverage {} (≥ 0.3)\r\n",
+        Shortest(cal.field),
+        Fixed(cal.residual_pct, 2),
+        Fixed(cal.coverage, 2)
     )
+}
+
+/// `[x, y, z]`, each value written as `text` makes it.
+fn write_vector<W: Write, T: core::fmt::Display>(
+    out: &mut W,
+    v: [f32; 3],
+    text: impl Fn(f32) -> T,
+) -> core::fmt::Result {
+    let [x, y, z] = v.map(text);
+    write!(out, "[{x}, {y}, {z}]")
 }

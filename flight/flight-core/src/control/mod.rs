@@ -1,8 +1,7 @@
 //! Rate and attitude control: the LQG (RTKF estimator + LQR), its gain design, the PID
 //! default/baseline and the motor mixer.
 
-pub mod dare;
-pub mod design;
+pub use lqg_design::{dare, design};
 pub mod lqr;
 pub mod mixer;
 pub mod pid;

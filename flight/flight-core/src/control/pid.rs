@@ -6,6 +6,8 @@
 //! derivative kick on stick steps). Anti-windup: the integrator freezes while the output is
 //! saturated in the direction the error would push it, and is clamped.
 
+use crate::estimation::math::clamp;
+
 /// Gains and shaping of one PID.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -94,14 +96,17 @@ impl Pid {
         let pushing_further = (unsaturated >= g.output_limit && error > 0.0)
             || (unsaturated <= -g.output_limit && error < 0.0);
         if !pushing_further {
-            self.integral = (self.integral + g.ki * self.ts_s * error)
-                .clamp(-g.integral_limit, g.integral_limit);
+            self.integral = clamp(
+                self.integral + g.ki * self.ts_s * error,
+                -g.integral_limit,
+                g.integral_limit,
+            );
         }
         let out = p + self.integral + self.derivative;
         if out.is_nan() {
             0.0
         } else {
-            out.clamp(-g.output_limit, g.output_limit)
+            clamp(out, -g.output_limit, g.output_limit)
         }
     }
 }
@@ -141,15 +146,21 @@ impl AttitudePid {
 
     /// The rate setpoint the outer loop asks for, deg/s.
     pub fn rate_setpoint(&self, angle_error_deg: f32) -> f32 {
-        (self.outer_kp * angle_error_deg + self.outer_integral)
-            .clamp(-self.max_rate_dps, self.max_rate_dps)
+        clamp(
+            self.outer_kp * angle_error_deg + self.outer_integral,
+            -self.max_rate_dps,
+            self.max_rate_dps,
+        )
     }
 
     /// One step from the angle error (deg) and the gyro (deg/s); returns the output.
     pub fn update(&mut self, angle_error_deg: f32, gyro_dps: f32) -> f32 {
         let limit = 0.25 * self.max_rate_dps;
-        self.outer_integral = (self.outer_integral + self.outer_ki * self.ts_s * angle_error_deg)
-            .clamp(-limit, limit);
+        self.outer_integral = clamp(
+            self.outer_integral + self.outer_ki * self.ts_s * angle_error_deg,
+            -limit,
+            limit,
+        );
         let sp = self.rate_setpoint(angle_error_deg);
         self.rate.update(sp, gyro_dps)
     }

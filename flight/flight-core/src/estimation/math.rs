@@ -43,6 +43,22 @@ pub fn max(a: f32, b: f32) -> f32 {
     if b > a || a.is_nan() { b } else { a }
 }
 
+/// `v.clamp(lo, hi)` without its panic: `f32::clamp` asserts `lo ≤ hi` and, unless the
+/// bounds are constants, formats them with `Debug` for the message — which alone links
+/// core's float formatting into the image (≈ 10 KB of flash, issue 33). A NaN `v` stays
+/// NaN, as with `f32::clamp`; bounds in the wrong order give one of them, not a panic.
+#[must_use]
+#[inline(always)]
+pub fn clamp(v: f32, lo: f32, hi: f32) -> f32 {
+    if v < lo {
+        lo
+    } else if v > hi {
+        hi
+    } else {
+        v
+    }
+}
+
 /// Wraps an angle to (−π, π].
 #[must_use]
 pub fn wrap_pi(angle_rad: f32) -> f32 {

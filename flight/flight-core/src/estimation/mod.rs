@@ -6,7 +6,7 @@
 pub mod align;
 pub mod complementary;
 pub mod ins;
-pub mod magcal;
+pub use magcal;
 pub mod math;
 pub mod quaternion;
 

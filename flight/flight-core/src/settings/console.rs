@@ -21,6 +21,7 @@
 
 use core::fmt::Write;
 
+use super::decimal::Shortest;
 use super::params::{Kind, Settings, Value, find};
 
 /// A parsed line.
@@ -163,7 +164,7 @@ pub fn write_setting<W: Write>(out: &mut W, settings: &Settings, name: &str) -> 
                 names.get(i as usize).copied().unwrap_or("?")
             )
         }
-        (_, Some(Value::F32(v))) => writeln!(out, "{name} = {v}"),
+        (_, Some(Value::F32(v))) => writeln!(out, "{name} = {}", Shortest(v)),
         (_, Some(Value::U32(v))) => writeln!(out, "{name} = {v}"),
         (_, None) => writeln!(out, "{name}: no such setting"),
     }
@@ -235,5 +236,32 @@ mod tests {
             again.get(handles::OUTPUT_PROTOCOL),
             s.get(handles::OUTPUT_PROTOCOL)
         );
+    }
+
+    #[test]
+    fn every_settable_value_reads_back_from_its_text() {
+        use crate::settings::decimal::Shortest;
+        use crate::settings::{PARAMS, Value};
+        for p in PARAMS {
+            let Kind::F32 { min, max } = p.kind else {
+                continue;
+            };
+            // Both ends, their neighbours, and a sweep of bit patterns in between (positive
+            // and negative halves apart: the bits are ordered by magnitude).
+            let mut values = vec![min, max, min.next_up(), max.next_down()];
+            for (from, to) in [(min.max(0.0), max), (max.min(-0.0), min)] {
+                if from.abs() > to.abs() || from.is_sign_negative() != to.is_sign_negative() {
+                    continue;
+                }
+                let (a, b) = (from.to_bits(), to.to_bits());
+                let step = ((b - a) / 20_000).max(1);
+                values.extend((a..=b).step_by(step as usize).map(f32::from_bits));
+            }
+            for v in values.into_iter().filter(|v| (min..=max).contains(v)) {
+                let text = format!("{}", Shortest(v));
+                assert_eq!(text, format!("{v}"), "{}", p.name);
+                assert_eq!(p.parse(&text), Ok(Value::F32(v)), "{} = {text}", p.name);
+            }
+        }
     }
 }

@@ -3,6 +3,7 @@
 //! and the text console that reads and changes them over USB.
 
 mod console;
+pub use float_text as decimal;
 mod handle;
 mod line;
 mod params;

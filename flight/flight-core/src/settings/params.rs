@@ -8,6 +8,7 @@ use core::marker::PhantomData;
 
 use telemetry::link::LinkKey;
 
+use super::decimal;
 use super::handle::{Bits, Change, Handle, ParamType, Row, table};
 use crate::pipeline::{InvalidSettings, validate};
 
@@ -347,7 +348,7 @@ impl Param {
     /// Reads a value from console text: a number, or a choice's name.
     pub fn parse(&self, text: &str) -> Result<Value, ParamError> {
         let value = match self.kind {
-            Kind::F32 { .. } => Value::F32(text.parse().map_err(|_| ParamError::Unparsable)?),
+            Kind::F32 { .. } => Value::F32(decimal::parse(text).ok_or(ParamError::Unparsable)?),
             Kind::U32 { .. } => Value::U32(text.parse().map_err(|_| ParamError::Unparsable)?),
             Kind::Choice(names) => {
                 let i = names

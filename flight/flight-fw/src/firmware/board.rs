@@ -39,8 +39,13 @@ pub const BOARD: &str = "BrushedSparky";
 #[cfg(feature = "sparky2")]
 pub const BOARD: &str = "Sparky2";
 
-/// Independent watchdog timeout (Tau Labs used 250 ms).
-pub const WATCHDOG_TIMEOUT_US: u32 = 250_000;
+/// Independent watchdog timeout (Tau Labs used 250 ms; the PIL's `iwdg-half` test variant,
+/// build.rs, halves it).
+pub const WATCHDOG_TIMEOUT_US: u32 = if cfg!(pil_iwdg_half) {
+    125_000
+} else {
+    250_000
+};
 
 // DMA streams (RM0090 tables 42/43): DAC1 on DMA1 S5; SPI3 (radio) TX S7, RX S2 (channel 0
 // both; S0 is left to I2C1); I2C1 (baro) TX S6, RX S0 (channel 1); SPI1 (IMU) TX DMA2 S3,
@@ -346,11 +351,29 @@ impl Board {
             watchdog: IndependentWatchdog::new(p.IWDG, WATCHDOG_TIMEOUT_US),
             radio: Radio {
                 spi,
-                nsel: Output::new(p.PA15, Level::High, Speed::VeryHigh),
+                nsel: Output::new(radio_nsel(p.PA15, p.PC13), Level::High, Speed::VeryHigh),
                 nirq: radio_irq(p.PB7, p.EXTI7, p.PD2, p.EXTI2),
             },
         }
     }
+}
+
+/// nSEL on PA15 (both boards), or PC13 in the PIL's `radio-cs-pc13` test variant
+/// (build.rs): a board wired wrong, which must never link.
+#[cfg(not(pil_radio_cs_pc13))]
+fn radio_nsel(
+    pa15: Peri<'static, peripherals::PA15>,
+    _pc13: Peri<'static, peripherals::PC13>,
+) -> Peri<'static, embassy_stm32::gpio::AnyPin> {
+    pa15.into()
+}
+
+#[cfg(pil_radio_cs_pc13)]
+fn radio_nsel(
+    _pa15: Peri<'static, peripherals::PA15>,
+    pc13: Peri<'static, peripherals::PC13>,
+) -> Peri<'static, embassy_stm32::gpio::AnyPin> {
+    pc13.into()
 }
 
 #[cfg(not(feature = "sparky2"))]

@@ -316,7 +316,7 @@ pub struct Outcome {
 
 /// This thread's CPU time so far, s (`/proc/thread-self/schedstat`, nanoseconds on the CPU;
 /// independent of other load on the machine).
-fn thread_cpu_s() -> Option<f64> {
+pub fn thread_cpu_s() -> Option<f64> {
     let stat = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
     let ns: f64 = stat.split_whitespace().next()?.parse().ok()?;
     Some(ns * 1e-9)

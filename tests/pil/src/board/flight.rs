@@ -223,6 +223,15 @@ impl FlightBoard {
         self.int_high = false;
     }
 
+    /// The board loses power at `now_ns`: every output falls (the motors' FET gates and
+    /// ESC inputs have pull-downs).
+    pub fn power_off(&mut self, now_ns: u64) {
+        for m in &mut self.motors {
+            m.edge(now_ns, false);
+        }
+        self.buzzer.set(now_ns, false);
+    }
+
     /// The inputs waiting for the MCU.
     pub fn outbox(&mut self) -> &mut Outbox {
         &mut self.outbox
@@ -325,15 +334,24 @@ impl FlightBoard {
         })
     }
 
-    /// Pulse starts of the motors since the last call (for the loop's timing).
-    pub fn take_motor_starts(&mut self) -> Vec<u64> {
-        let mut v: Vec<u64> = self
+    /// Complete pulses of the motors since the last call: (start ns, width ns, motor).
+    pub fn take_motor_pulses(&mut self) -> Vec<(u64, u64, usize)> {
+        let mut v: Vec<(u64, u64, usize)> = self
             .motors
             .iter_mut()
-            .flat_map(PulseMeter::take_starts)
+            .enumerate()
+            .flat_map(|(i, m)| {
+                m.take_starts();
+                m.take_pulses().into_iter().map(move |(s, w)| (s, w, i))
+            })
             .collect();
         v.sort_unstable();
         v
+    }
+
+    /// Data-ready rises since the last call.
+    pub fn take_int_rises(&mut self) -> Vec<u64> {
+        std::mem::take(&mut self.int_rises)
     }
 
     /// The last complete pulse width of each motor, ns (None: none yet).
@@ -388,8 +406,9 @@ impl Outside for FlightBoard {
             let level = self.i2c_line(p.sda);
             self.baro.sda(level);
         } else if let Some(i) = p.motors.iter().position(|m| *m == pin) {
+            // The FET gates and ESC inputs have pull-downs: a released pin is low.
             if let Some(m) = self.motors.get_mut(i) {
-                m.edge(now_ns, Self::level_out(drive));
+                m.edge(now_ns, drive == Drive::High);
             }
         } else if let Some(i) = p.leds.iter().position(|l| *l == pin) {
             if let Some(l) = self.leds.get_mut(i) {

@@ -30,7 +30,7 @@ const CNTL1: u8 = 0x0A;
 const CNTL2: u8 = 0x0B;
 const ASAX: u8 = 0x10;
 
-/// The operating mode (CNTL1 MODE[3:0]).
+/// The operating mode (CNTL1 MODE, bits 3:0).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Mode {
     /// 0000: power-down.

@@ -24,6 +24,8 @@ pub struct PulseMeter {
     starts: Vec<u64>,
     /// From the rise before the last one to the last one, ns.
     pending_period: Option<u64>,
+    /// Every complete pulse (start ns, width ns) since the last [`PulseMeter::take_pulses`].
+    pulses: Vec<(u64, u64)>,
 }
 
 impl PulseMeter {
@@ -44,7 +46,9 @@ impl PulseMeter {
             // The period ending at this rise belongs to the pulse that started it.
             self.pending_period = period;
         } else if let Some(r) = self.rise_ns {
-            self.last = Some((r, t_ns.saturating_sub(r), self.pending_period));
+            let width = t_ns.saturating_sub(r);
+            self.last = Some((r, width, self.pending_period));
+            self.pulses.push((r, width));
         }
         self.level = high;
         self.changed_ns = t_ns;
@@ -58,6 +62,11 @@ impl PulseMeter {
     /// Pulse starts (rising edges) since the last call.
     pub fn take_starts(&mut self) -> Vec<u64> {
         std::mem::take(&mut self.starts)
+    }
+
+    /// Complete pulses (start ns, width ns) since the last call.
+    pub fn take_pulses(&mut self) -> Vec<(u64, u64)> {
+        std::mem::take(&mut self.pulses)
     }
 
     /// The last complete pulse's width and the period before it, ns.

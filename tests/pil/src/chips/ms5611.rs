@@ -126,6 +126,8 @@ pub struct Ms5611 {
     /// SCL and SDA as the bus is (high = released).
     scl_high: bool,
     sda_high: bool,
+    /// Conversions finished so far.
+    conversions: u64,
 }
 
 impl Default for Ms5611 {
@@ -147,7 +149,13 @@ impl Ms5611 {
             temp_c: 25.0,
             scl_high: true,
             sda_high: true,
+            conversions: 0,
         }
+    }
+
+    /// Conversions finished since power-on.
+    pub fn conversions(&self) -> u64 {
+        self.conversions
     }
 
     /// The truth at `now_ns`: pressure (Pa) and die temperature (°C). A conversion that
@@ -163,6 +171,7 @@ impl Ms5611 {
             let (d1, d2) = raw_for(self.pressure_pa, self.temp_c);
             self.adc = Some(if c.d1 { d1 } else { d2 });
             self.conversion = None;
+            self.conversions += 1;
         }
     }
 

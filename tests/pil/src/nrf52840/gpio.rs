@@ -304,10 +304,7 @@ impl Pins {
             0x520 => self.port_bits(port, |p| p.latch),
             0x524 => *self.detectmode.get(port)?,
             0x700..0x780 => {
-                let i = *self
-                    .port_range(port)
-                    .collect::<Vec<_>>()
-                    .get(((reg - 0x700) / 4) as usize)?;
+                let i = self.port_range(port).nth(((reg - 0x700) / 4) as usize)?;
                 self.pins.get(i)?.cnf
             }
             _ => return None,

@@ -176,7 +176,7 @@ impl Nvmc {
         })
     }
 
-    /// A CPU store to flash or UICR (the SoC passes which); `Ok(true)` when programmed.
+    /// A CPU store to flash or UICR: allowed (the word write occupies the NVMC) or why not.
     pub fn program(&mut self, now: u64, word_store: bool) -> Result<(), &'static str> {
         if self.config != WEN {
             return Err("store to flash without CONFIG.WEN = Wen");

@@ -494,6 +494,33 @@ fn cycles(ns: u64) -> u32 {
 }
 
 impl<O: Outside> Nrf52840<O> {
+    /// A CPU lock-up resets the nRF52840 (PS "Reset": RESETREAS.LOCKUP; the watchdog runs
+    /// on). The core reports a lock-up as `Stop::Lockup`; the runner calls this, then
+    /// resets the core.
+    pub fn lockup_reset(&mut self) {
+        self.reset_as(ResetCause::Other, resetreas::LOCKUP);
+    }
+
+    /// A reset for `cause`, recorded in RESETREAS as `reason`.
+    fn reset_as(&mut self, cause: ResetCause, reason: u32) {
+        let now = self.now;
+        let power_on = cause == ResetCause::PowerOn;
+        self.parts.clock.reset(reason, power_on);
+        let watchdog_too = cause != ResetCause::Other;
+        self.with_parts(now, |p, ctx| p.reset(ctx, watchdog_too));
+        self.pins.reset(&mut self.outside, now);
+        self.fired.clear();
+        self.lf_seen = None;
+        if power_on {
+            self.ram = Ram::new();
+        }
+        if let Some(t) = self.asleep_since.take() {
+            self.sleep_ns += now.saturating_sub(t);
+        }
+        self.latch_uicr();
+        self.resets.push(ResetRecord { at_ns: now, cause });
+    }
+
     /// Cycles an access to flash waits while the NVMC writes or erases (the CPU is halted
     /// on flash meanwhile, PS "NVMC"); each wait is reported once.
     fn nvmc_stall(&mut self) -> u32 {
@@ -691,26 +718,12 @@ impl<O: Outside> Bus for Nrf52840<O> {
     }
 
     fn reset(&mut self, cause: ResetCause) {
-        let now = self.now;
-        let (reason, power_on) = match cause {
-            ResetCause::Watchdog => (resetreas::DOG, false),
-            ResetCause::PowerOn => (0, true),
-            ResetCause::Other => (resetreas::SREQ, false),
+        let reason = match cause {
+            ResetCause::Watchdog => resetreas::DOG,
+            ResetCause::PowerOn => 0,
+            ResetCause::Other => resetreas::SREQ,
         };
-        self.parts.clock.reset(reason, power_on);
-        let watchdog_too = cause != ResetCause::Other;
-        self.with_parts(now, |p, ctx| p.reset(ctx, watchdog_too));
-        self.pins.reset(&mut self.outside, now);
-        self.fired.clear();
-        self.lf_seen = None;
-        if power_on {
-            self.ram = Ram::new();
-        }
-        if let Some(t) = self.asleep_since.take() {
-            self.sleep_ns += now.saturating_sub(t);
-        }
-        self.latch_uicr();
-        self.resets.push(ResetRecord { at_ns: now, cause });
+        self.reset_as(cause, reason);
     }
 
     fn sleeping(&mut self, asleep: bool, now_ns: u64) {

@@ -14,6 +14,20 @@ pub enum Halt {
     Error(String),
 }
 
+/// A hardware fault the SoC model injects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Injection {
+    /// A bus error during a DMA transfer on `controller`'s `stream` (DMA1 = 1, DMA2 = 2):
+    /// the stream's transfer-error flag (RM0090 §10.3.15, TEIFx) — embassy-stm32's DMA
+    /// interrupt handler panics on it.
+    DmaTransferError {
+        /// DMA controller.
+        controller: u8,
+        /// Stream.
+        stream: u8,
+    },
+}
+
 /// The figures of one emulated MCU since power-on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct MachineStats {
@@ -31,9 +45,17 @@ pub struct MachineStats {
     pub watchdog_resets: u32,
     /// Every reset after the first power-on (watchdog, software, lockup recovery, power).
     pub resets: u32,
-    /// From the last reset until every task of the image had been polled, ns (None: not
-    /// all yet).
+    /// From power-on until the last of the image's tasks was first polled, ns (None: none
+    /// yet).
     pub boot_ns: Option<u64>,
+    /// The image's tasks polled at least once, of how many it holds (a task the image's
+    /// configuration does not spawn is never polled: the module's receiver-only PPM output
+    /// in the transmitter role).
+    pub tasks_polled: u32,
+    /// …
+    pub tasks_total: u32,
+    /// When the last task was first polled, ns since power-on.
+    pub last_first_poll_ns: Option<u64>,
     /// Times the core locked up.
     pub lockups: u32,
 }
@@ -72,7 +94,7 @@ pub trait Machine {
     fn uart_receive(&mut self, uart: u8, byte: u8, at_ns: u64);
 
     /// The rate UART `uart` is set to now (None: not configured).
-    fn uart_baud(&self, uart: u8) -> Option<u32>;
+    fn uart_baud(&mut self, uart: u8) -> Option<u32>;
 
     /// Power off (`false`: everything stops, RAM is lost) or on (a power-on reset) at
     /// `now_ns`.
@@ -83,6 +105,19 @@ pub trait Machine {
 
     /// Its figures so far.
     fn stats(&self) -> MachineStats;
+
+    /// Injects a hardware fault now; false when the model cannot.
+    fn inject(&mut self, injection: Injection) -> bool {
+        let _ = injection;
+        false
+    }
+
+    /// `len` bytes of its memory at `addr` as a debug probe reads them (flash, RAM); None
+    /// when unmapped or not supported.
+    fn read_memory(&self, addr: u32, len: usize) -> Option<Vec<u8>> {
+        let _ = (addr, len);
+        None
+    }
 }
 
 /// Hands `inputs` to `machine`'s queues.
@@ -189,7 +224,7 @@ impl<B: Outside> Machine for FakeMachine<B> {
             .push(crate::board::Input::Uart { uart, byte, at_ns });
     }
 
-    fn uart_baud(&self, uart: u8) -> Option<u32> {
+    fn uart_baud(&mut self, uart: u8) -> Option<u32> {
         self.bauds.iter().find(|(u, _)| *u == uart).map(|(_, b)| *b)
     }
 

@@ -22,6 +22,7 @@
 
 pub mod machine;
 pub mod observe;
+pub mod timing;
 
 use flight_core::outputs::{Command, Protocol};
 use flight_core::pipeline::{Attitude, LoopOutput, Source};
@@ -76,6 +77,8 @@ pub struct WorldConfig {
     pub gps: Generation,
     /// The baro holds SDA low from this virtual time on (ns), needing this many SCL pulses.
     pub i2c_stuck: Option<(u64, u8)>,
+    /// The binding phrase the pilot typed into the phone (it signs setting changes).
+    pub phone_key: Option<telemetry::link::LinkKey>,
 }
 
 impl Default for WorldConfig {
@@ -87,6 +90,7 @@ impl Default for WorldConfig {
             phone_pin: None,
             gps: Generation::M8,
             i2c_stuck: None,
+            phone_key: None,
         }
     }
 }
@@ -134,6 +138,35 @@ impl Radios {
     }
 }
 
+/// The phone on the HM-10: it sends the scenario's setting changes, signed with the phrase
+/// (re-signed once after the refusal that names the flight side's session), as flight-sitl's
+/// phone does.
+struct Phone {
+    signer: Option<telemetry::change_auth::Signer>,
+    queue: Vec<telemetry::messages::SettingChange>,
+    pending: Option<telemetry::messages::SettingChange>,
+    next_ns: u64,
+}
+
+/// The phone sends one change per this much time, ns, from a second after it connected.
+const PHONE_CHANGE_NS: u64 = 20_000_000;
+
+impl Phone {
+    fn message(&mut self, change: telemetry::messages::SettingChange) -> Message {
+        match self.signer.as_mut() {
+            Some(s) => Message::SignedChange(s.sign(change)),
+            None => Message::SettingChange(change),
+        }
+    }
+}
+
+fn encoded(message: &Message) -> Vec<u8> {
+    let mut buf = [0u8; telemetry::messages::FRAMED_MAX_BYTES];
+    telemetry::messages::encode_message(message, &mut buf)
+        .map(<[u8]>::to_vec)
+        .unwrap_or_default()
+}
+
 /// The physics and the truth at its last step.
 struct Physics {
     quad: Quad,
@@ -178,6 +211,9 @@ pub struct World<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard
     halts: Vec<(End, u64, Halt)>,
     stats_at_power_off: MachineStats,
     pilot_pin: Option<u32>,
+    /// Data-ready to motor pulse.
+    pub loop_timing: timing::LoopTiming,
+    phone: Phone,
 }
 
 /// The flight board for a scenario (radio from `radios`).
@@ -272,6 +308,16 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
             halts: Vec::new(),
             stats_at_power_off: MachineStats::default(),
             pilot_pin: config.phone_pin,
+            loop_timing: timing::LoopTiming::default(),
+            phone: Phone {
+                signer: config
+                    .phone_key
+                    .as_ref()
+                    .map(telemetry::change_auth::Signer::new),
+                queue: scenario.setting_changes,
+                pending: None,
+                next_ns: 0,
+            },
             config,
             now_ns: 0,
         }
@@ -321,6 +367,10 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
         if let Err(h) = self.module.run_until(t1) {
             self.halts.push((End::Module, t1, h));
         }
+        let board = self.flight.board();
+        let rises = board.take_int_rises();
+        let pulses = board.take_motor_pulses();
+        self.loop_timing.feed(&rises, &pulses);
         self.now_ns = t1;
     }
 
@@ -511,14 +561,36 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
             board.hm10.phone_connects((at * 1e9) as u64, self.pilot_pin);
         }
         board.tick(t1);
+        if board.hm10.connected() && !self.phone.queue.is_empty() {
+            if self.phone.next_ns == 0 {
+                self.phone.next_ns = t1 + 1_000_000_000;
+            }
+            if t1 >= self.phone.next_ns {
+                self.phone.next_ns = t1 + PHONE_CHANGE_NS;
+                let change = self.phone.queue.remove(0);
+                self.phone.pending = Some(change);
+                let m = self.phone.message(change);
+                board.hm10.phone_write(&encoded(&m));
+            }
+        }
         let rx = board.hm10.take_phone_rx();
         for (t, chunk) in rx {
             for b in chunk {
                 if let Some(Decoded::Message(m)) = self.reader.push(b) {
-                    self.telemetry.push((t, m));
+                    self.on_telemetry(t, m);
                 }
             }
         }
+    }
+
+    fn on_telemetry(&mut self, t: u64, m: Message) {
+        if let (Message::ChangeRefused(r), Some(change)) = (&m, self.phone.pending)
+            && self.phone.signer.as_mut().is_some_and(|s| s.on_refused(r))
+        {
+            let again = self.phone.message(change);
+            self.module.board().hm10.phone_write(&encoded(&again));
+        }
+        self.telemetry.push((t, m));
     }
 
     /// The flight MCU's figures (accumulated over power cycles).
@@ -628,6 +700,8 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
                 module: self.module.stats().watchdog_resets,
             },
             boots: self.boots.clone(),
+            // The images write no log stream yet (flight-fw has no logging task).
+            flight_logs: Vec::new(),
         }
     }
 }

@@ -33,6 +33,8 @@ pub enum Heard {
     BatteryCritical,
     /// A mode change.
     Mode,
+    /// The magnetometer calibration started, was stored or was refused.
+    Magcal,
 }
 
 /// The first "on" interval and the gap after it, ms, of `alert`'s pattern as a buzzer
@@ -76,10 +78,11 @@ fn heard_of(alert: Alert) -> Heard {
         Alert::BatteryWarning => Heard::BatteryWarning,
         Alert::BatteryCritical => Heard::BatteryCritical,
         Alert::Mode(_) => Heard::Mode,
+        Alert::MagcalStarted | Alert::MagcalStored | Alert::MagcalRefused => Heard::Magcal,
     }
 }
 
-const ALERTS: [Alert; 9] = [
+const ALERTS: [Alert; 12] = [
     Alert::Failsafe,
     Alert::SensorFault,
     Alert::ArmRefused,
@@ -89,6 +92,9 @@ const ALERTS: [Alert; 9] = [
     Alert::BatteryWarning,
     Alert::BatteryCritical,
     Alert::Mode(telemetry::messages::FlightMode::Attitude),
+    Alert::MagcalStarted,
+    Alert::MagcalStored,
+    Alert::MagcalRefused,
 ];
 
 /// The alerts a buzzer trace played: (start ns, what), from its edges (ns, on) in order.

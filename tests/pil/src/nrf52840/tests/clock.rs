@@ -93,3 +93,12 @@ fn mainregstatus_says_high_voltage_mode_and_dcdc_enables_stick() {
     w(&mut c, 0x4000_0578, 1, 0);
     assert_eq!(r(&mut c, 0x4000_0578, 0), 1);
 }
+
+#[test]
+fn a_lockup_resets_with_resetreas_lockup_and_keeps_the_watchdog() {
+    let mut c = chip();
+    w(&mut c, 0x4001_0000, 1, 0); // WDT TASKS_START
+    c.lockup_reset();
+    assert_eq!(c.reset_reason(), resetreas::LOCKUP);
+    assert_eq!(r(&mut c, 0x4001_0400, 0), 1, "WDT RUNSTATUS");
+}

@@ -4,6 +4,7 @@
 // Register addresses read as base + offset, also for offset 0.
 #![allow(clippy::identity_op)]
 
+mod boot;
 mod clock;
 mod decode;
 mod gpio;

@@ -1,7 +1,7 @@
 //! The per-axis airframe model shared by the LQG controller, its gain design and the
-//! identification EKF (`control/LQG.md` §1): θ' = ω, ω' = (β1 − β2)·ν + β2·u, ν' = (u − ν)/τ.
+//! identification EKF (`LQG.md` §1): θ' = ω, ω' = (β1 − β2)·ν + β2·u, ν' = (u − ν)/τ.
 //!
-//! β is stored as ln β everywhere (`control/LQG.md` §4), because identification works on ln β and
+//! β is stored as ln β everywhere (`LQG.md` §4), because identification works on ln β and
 //! real frames span two decades of β; τ is stored in seconds (dRonin's convention).
 
 pub mod discrete;

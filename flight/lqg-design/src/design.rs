@@ -1,15 +1,14 @@
 //! LQG gain design for one axis, in f64 before take-off: the steady-state Kalman gain of the
-//! rate/torque/bias estimator (RTKF) and the LQR gains for rate and attitude (`control/LQG.md`
+//! rate/torque/bias estimator (RTKF) and the LQR gains for rate and attitude (`LQG.md`
 //! §2–3).
 //!
 //! Costs are per sample with r = 1. The torque cost can be given frame-invariantly as
 //! q3 = β1·q4 (the blog's "frame invariant" costs): a frame with twice the authority needs
 //! twice the torque penalty for the same closed-loop shape.
 
-use super::dare::{self, DareError};
+use super::dare::{self, DareError, Square};
 use crate::model::{AxisModel, EstimatorMatrices, LqrMatrices, ModelError, check_sample_period};
 use core::fmt;
-use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 
 /// The torque (ν) cost: absolute, or scaled by β1.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -112,7 +111,7 @@ pub struct KfNoise {
 }
 
 impl Default for KfNoise {
-    /// Tau Labs' LQRSettings (`control/LQG.md` §2 table): Q = (1, 1e-5, 1e-7), R = 1000 for raw
+    /// Tau Labs' LQRSettings (`LQG.md` §2 table): Q = (1, 1e-5, 1e-7), R = 1000 for raw
     /// gyro.
     fn default() -> Self {
         Self {
@@ -191,19 +190,14 @@ pub fn kalman_gain(
         return Err(DesignError::BadCost);
     }
     let m = EstimatorMatrices::<f64>::new(model, ts_s);
-    let a = Matrix3::from(m.a()).transpose(); // from() reads columns; transpose gives rows
-    let q = Matrix3::from_diagonal(&Vector3::new(noise.q_rate, noise.q_torque, noise.q_bias));
+    let a = Square::from_rows(3, &m.a());
+    let q = Square::diagonal(3, &[noise.q_rate, noise.q_torque, noise.q_bias]);
     // Filter DARE = control DARE of the dual system (Aᵀ, cᵀ).
-    let sol = dare::solve(
-        &a.transpose(),
-        &Vector3::new(1.0, 0.0, 0.0),
-        &q,
-        noise.r_gyro,
-    )?;
+    let sol = dare::solve(&a.transpose(), &[1.0, 0.0, 0.0], &q, noise.r_gyro)?;
     // L = P⁻cᵀ/(cP⁻cᵀ + R): the first column of P⁻ over its first entry plus R.
-    let pc: Vector3<f64> = sol.x.column(0).into_owned();
-    let s = pc.x + noise.r_gyro;
-    Ok(([pc.x / s, pc.y / s, pc.z / s], sol.iterations))
+    let pc = sol.x.column(0);
+    let s = pc[0] + noise.r_gyro;
+    Ok((pc.map(|v| v / s), sol.iterations))
 }
 
 /// Rate LQR gain (k_ω, k_ν) on the (ω, ν) sub-model.
@@ -218,13 +212,13 @@ pub fn rate_gain(
         return Err(DesignError::BadCost);
     }
     let m = LqrMatrices::<f64>::new(model, ts_s);
-    let a = Matrix2::new(1.0, m.a_rate_torque, 0.0, m.e);
+    let a = Square::from_rows(2, &[[1.0, m.a_rate_torque], [0.0, m.e]]);
     let [_, b1, b2] = m.b;
-    let b = Vector2::new(b1, b2);
-    let q = Matrix2::new(costs.q_rate, 0.0, 0.0, q3);
+    let b = [b1, b2, 0.0];
+    let q = Square::diagonal(2, &[costs.q_rate, q3]);
     let sol = dare::solve(&a, &b, &q, 1.0)?;
-    let k = dare::lqr_gain(&a, &b, 1.0, &sol.x);
-    Ok(([k.x, k.y], sol.iterations))
+    let [k0, k1, _] = dare::lqr_gain(&a, &b, 1.0, &sol.x);
+    Ok(([k0, k1], sol.iterations))
 }
 
 /// Attitude LQR gain (k_θ, k_ω, k_ν) on the (θ, ω, ν) model.
@@ -239,12 +233,11 @@ pub fn attitude_gain(
         return Err(DesignError::BadCost);
     }
     let m = LqrMatrices::<f64>::new(model, ts_s);
-    let a = Matrix3::from(m.a()).transpose();
-    let b = Vector3::from(m.b);
-    let q = Matrix3::from_diagonal(&Vector3::new(costs.q_angle, costs.q_rate, q3));
-    let sol = dare::solve(&a, &b, &q, 1.0)?;
-    let k = dare::lqr_gain(&a, &b, 1.0, &sol.x);
-    Ok(([k.x, k.y, k.z], sol.iterations))
+    let a = Square::from_rows(3, &m.a());
+    let q = Square::diagonal(3, &[costs.q_angle, costs.q_rate, q3]);
+    let sol = dare::solve(&a, &m.b, &q, 1.0)?;
+    let k = dare::lqr_gain(&a, &m.b, 1.0, &sol.x);
+    Ok((k, sol.iterations))
 }
 
 /// All three solves for one axis.

@@ -1,5 +1,5 @@
 //! Zero-order-hold discretisation of the per-axis model, in a form that stays accurate in f32
-//! (`control/LQG.md` §1 "f32").
+//! (`LQG.md` §1 "f32").
 //!
 //! With x = Ts/τ and e = exp(−x) the exact ZOH matrices need φ1 = 1 − e, φ2 = x − 1 + e and
 //! φ3 = x²/2 − x + 1 − e. Written out directly, φ2 and φ3 are differences of nearly equal
@@ -130,7 +130,7 @@ impl<T: Real> Phi<T> {
     }
 }
 
-/// The RTKF model for x = (ω, ν, b), input u, exact ZOH (`control/LQG.md` §1):
+/// The RTKF model for x = (ω, ν, b), input u, exact ZOH (`LQG.md` §1):
 /// `A = [[1, d·τ·φ1, −B0], [0, e, −φ1], [0, 0, 1]]`, `B = [B0, φ1, 0]`.
 /// Only the entries that are not 0 or 1 are stored; the bias column is −B.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -177,7 +177,7 @@ impl<T: Real> EstimatorMatrices<T> {
     }
 }
 
-/// The LQR model for x = (θ, ω, ν), exact ZOH (`control/LQG.md` §1):
+/// The LQR model for x = (θ, ω, ν), exact ZOH (`LQG.md` §1):
 /// `A = [[1, Ts, d·τ²·φ2], [0, 1, d·τ·φ1], [0, 0, e]]`,
 /// `B = [β2·Ts²/2 + d·τ²·φ3, β2·Ts + d·τ·φ2, φ1]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -304,7 +304,7 @@ mod tests {
                 }
             }
         }
-        // `control/LQG.md` §1: the φ-form stays within 4.2e-7 in f32 (plus the f32 rounding of
+        // `LQG.md` §1: the φ-form stays within 4.2e-7 in f32 (plus the f32 rounding of
         // exp(ln β)).
         assert!(worst32 < 2e-6, "worst f32 relative error {worst32}");
     }
