@@ -5,8 +5,9 @@
 //!
 //! * **Key:** 128 bits derived one-way from the link key, `SipHash-2-4(link key,
 //!   "TauLink/1 phone/0") ‖ SipHash-2-4(link key, "TauLink/1 phone/1")`, so a phone MAC is
-//!   never an air tag or a bind ID, and the link key itself never has to leave the code that
-//!   derived it from the phrase (the ground station derives both in WASM from the phrase).
+//!   never an air tag, and the link key itself never leaves the two ends. The phone gets the
+//!   change key from the module, sealed under the session key of a CPace exchange on the
+//!   binding phrase (`crate::module_record`): nothing on BLE tests a phrase offline.
 //! * **Tag:** the full 64 bits of SipHash-2-4(change key, "TauLink/1 change" ‖ session ‖
 //!   counter ‖ id ‖ value), all little-endian: forgery 2⁻⁶⁴ per try.
 //! * **Replay:** the flight side draws a random 32-bit session at boot and accepts a counter
@@ -44,9 +45,14 @@ impl ChangeKey {
         Self(bytes)
     }
 
-    /// The key's bytes, for the other MACs under it (`crate::module_record`).
+    /// The key's bytes (to seal it for the phone, `crate::module_record`).
     pub(crate) fn as_bytes(&self) -> &[u8; KEY_BYTES] {
         &self.0
+    }
+
+    /// The key from its bytes (unsealed by the phone, `crate::module_record`).
+    pub(crate) const fn from_bytes(bytes: [u8; KEY_BYTES]) -> Self {
+        Self(bytes)
     }
 
     /// The tag of `change` signed with `counter` in the flight side's `session`.
@@ -91,11 +97,12 @@ pub struct Signer {
 }
 
 impl Signer {
-    /// A phone that knows the link key (from the phrase) but no session yet: its first change
-    /// is refused with the session, and [`Signer::on_refused`] says to send it again.
-    pub fn new(key: &LinkKey) -> Self {
+    /// A phone that knows the change key (from the module, `crate::module_record`) but no
+    /// session yet: its first change is refused with the session, and
+    /// [`Signer::on_refused`] says to send it again.
+    pub fn new(key: ChangeKey) -> Self {
         Self {
-            key: ChangeKey::from_link_key(key),
+            key,
             session: 0,
             counter: 0,
         }
@@ -131,7 +138,7 @@ mod tests {
     use super::*;
 
     fn key() -> ChangeKey {
-        ChangeKey::from_link_key(&LinkKey::from_phrase("correct horse battery staple"))
+        ChangeKey::from_link_key(&LinkKey::from_bytes([0x11; 16]))
     }
 
     #[test]
@@ -149,7 +156,7 @@ mod tests {
         other = signed;
         other.change.id = 8;
         assert!(!key().verify(0xC0FFEE, &other), "another setting");
-        let wrong = ChangeKey::from_link_key(&LinkKey::from_phrase("another phrase"));
+        let wrong = ChangeKey::from_link_key(&LinkKey::from_bytes([0x22; 16]));
         assert!(!wrong.verify(0xC0FFEE, &signed), "another phrase");
         for bit in 0..64 {
             let mut forged = signed;
@@ -160,8 +167,8 @@ mod tests {
 
     #[test]
     fn a_signer_learns_the_session_from_one_refusal_and_a_wrong_phrase_stops() {
-        let link = LinkKey::from_phrase("correct horse battery staple");
-        let mut phone = Signer::new(&link);
+        let link = LinkKey::from_bytes([0x11; 16]);
+        let mut phone = Signer::new(ChangeKey::from_link_key(&link));
         let change = SettingChange { id: 1, value: 2 };
         let first = phone.sign(change);
         assert!(!key().verify(77, &first), "no session known yet");
@@ -192,7 +199,7 @@ mod tests {
 
     #[test]
     fn the_change_key_is_neither_the_link_key_nor_printed() {
-        let link = LinkKey::from_phrase("correct horse battery staple");
+        let link = LinkKey::from_bytes([0x11; 16]);
         assert_ne!(key().0, link.to_bytes());
         assert_eq!(format!("{:?}", key()), "ChangeKey(..)");
     }

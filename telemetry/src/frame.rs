@@ -4,18 +4,28 @@
 
 use crate::channels::{ChannelFormat, Channels, unpack, unpack_mask};
 use crate::checksum::keyed_crc16;
-use crate::link::auth::{LinkKey, TAG_BYTES};
+use crate::link::auth::{LinkKey, TAG_BYTES, TagContext};
 use crate::link::{Band, RateMode};
 
 /// Protocol version, the first byte of every frame. Bumped on any incompatible change; a
 /// receiver drops frames of other versions before looking further.
 pub const PROTOCOL_VERSION: u8 = 1;
 /// Version byte of authenticated link frames ([`seal`], [`open`]): the link CRC is replaced
-/// by a 4-byte SipHash-2-4 tag over the frame counter and the frame (spec §12). Version 3:
-/// the epoch has the master's nonce in it ([`Frame::MasterNonce`]) and a frame without
-/// stream data carries no stream-seq byte (spec §5.1, §12.2); version 2 ends (the follower's
-/// nonce alone) are refused at this byte.
-pub const SEALED_VERSION: u8 = 3;
+/// by a 4-byte SipHash-2-4 tag over the frame's [`TagContext`] and the frame (spec §12).
+/// Version 4: 64-bit epoch nonces, the master's nonce tagged under both nonces, a
+/// follower's nonce that may carry the proof of its previous epoch (spec §12.2); ends of
+/// earlier versions are refused at this byte.
+pub const SEALED_VERSION: u8 = 4;
+/// Version byte of bind frames (spec §5.2): version 2 is the key agreement (CPace shares
+/// and confirmation tags); the bind header carries the same number, so ends of version 1
+/// never hear these frames.
+pub const BIND_VERSION: u8 = 2;
+/// Bytes of a key-agreement share in bind frames ([`crate::link::pake::SHARE_BYTES`]).
+pub const SHARE_BYTES: usize = crate::link::pake::SHARE_BYTES;
+/// Bytes of a bind confirmation tag.
+pub const BIND_TAG_BYTES: usize = 16;
+/// Bytes of the bind session nonce in a key-agreement offer.
+pub const SESSION_BYTES: usize = 8;
 /// Bytes of every uplink/downlink frame before the optional parts: version, kind, slot,
 /// stream seq, stream ack.
 pub const LINK_HEADER_BYTES: usize = 5;
@@ -29,7 +39,8 @@ const FLAG_REPORT: u8 = 0x08;
 const FLAG_SAVE_FAILSAFE: u8 = 0x10;
 const FLAG_INPUT_LOST: u8 = 0x20;
 /// Sealed frames only: the frame carries an epoch nonce (spec §12.2), kind byte exactly
-/// `0x44` (the follower's, downlink) or `0x46` (the master's, uplink).
+/// `0x44` (the follower's, downlink), `0x4C` (the follower's with the proof of its previous
+/// epoch: bit 3) or `0x46` (the master's, uplink).
 const FLAG_NONCE: u8 = 0x40;
 /// Sealed frames only: no stream data, and no stream-seq byte (it would name no byte). What
 /// lets a keyed 16-channel uplink with the master's report fit a 32-byte frame (§4.1).
@@ -38,6 +49,12 @@ const RESERVED_MASK: u8 = 0xC0;
 
 const KIND_BIND_OFFER: u8 = 0;
 const KIND_BIND_ACCEPT: u8 = 1;
+/// Bind frames only (version [`BIND_VERSION`]): the master's confirmation.
+const KIND_BIND_CONFIRM: u8 = 7;
+/// How a bind offer agrees the link key (the byte after the telemetry ratio).
+const AUTH_PLAIN: u8 = 0;
+const AUTH_ANONYMOUS: u8 = 1;
+const AUTH_PHRASE: u8 = 2;
 const KIND_RC16: u8 = 2;
 const KIND_RC8: u8 = 3;
 const KIND_DOWNLINK: u8 = 4;
@@ -79,6 +96,32 @@ pub struct BindOffer {
     pub format: ChannelFormat,
     /// One slot in `telemetry_ratio` is a downlink slot (a power of two, 2..=128).
     pub telemetry_ratio: u8,
+    /// The key agreement (spec §12.1); `None`: an unauthenticated link (an explicit setting
+    /// on both ends).
+    pub exchange: Option<OfferExchange>,
+}
+
+/// The master's half of the key agreement in a bind offer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct OfferExchange {
+    /// With a binding phrase: the module's salt of its derivation
+    /// ([`crate::link::phrase::PhraseSecret`]); `None`: no phrase (an anonymous agreement).
+    pub salt: Option<[u8; crate::link::phrase::SALT_BYTES]>,
+    /// Random per bind: with the bind ID, the CPace session.
+    pub session: [u8; SESSION_BYTES],
+    /// The master's CPace share.
+    pub share: [u8; SHARE_BYTES],
+}
+
+/// The follower's half of the key agreement in a bind accept.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AcceptExchange {
+    /// The follower's CPace share.
+    pub share: [u8; SHARE_BYTES],
+    /// Its confirmation: the follower derived the master's key.
+    pub tag: [u8; BIND_TAG_BYTES],
 }
 
 /// A decoded frame.
@@ -86,10 +129,24 @@ pub struct BindOffer {
 pub enum Frame<'a> {
     /// Master → follower on the bind channel.
     BindOffer(BindOffer),
-    /// Follower → master on the bind channel: "stored this bind ID".
+    /// Follower → master on the bind channel: "took this offer" (with its share and
+    /// confirmation tag when the offer agrees a key).
     BindAccept {
         /// The ID being accepted.
         bind_id: u32,
+        /// The follower's half of the key agreement.
+        exchange: Option<AcceptExchange>,
+    },
+    /// Master → follower on the bind channel, after a key agreement: the link's key sealed
+    /// under the agreed session key, and the master's confirmation tag over it; the follower
+    /// stores the link only on it.
+    BindConfirm {
+        /// The ID being confirmed.
+        bind_id: u32,
+        /// The master's confirmation tag.
+        tag: [u8; BIND_TAG_BYTES],
+        /// The link's key, sealed.
+        sealed: [u8; crate::link::auth::KEY_BYTES],
     },
     /// Master → follower: channels, optional report, stream data.
     Uplink(Uplink<'a>),
@@ -97,23 +154,27 @@ pub enum Frame<'a> {
     Downlink(Downlink<'a>),
     /// Follower → master, sealed links only: the epoch nonce the follower drew when it
     /// (re)acquired, sent in its downlink slots until the master uses it (spec §12.2). A
-    /// downlink with kind bit 6 set and nothing but the slot and the nonce.
+    /// downlink with kind bit 6 set and nothing but the slot, the nonce and, from a follower
+    /// that was in force under an epoch before it resynced, that epoch's proof.
     Nonce {
         /// The slot it answers.
         slot: u8,
         /// The follower's epoch nonce (never 0).
-        nonce: u32,
+        nonce: u64,
+        /// [`LinkKey::rekey_proof`] of the follower's previous epoch for this nonce and slot
+        /// (kind bit 3).
+        proof: Option<u32>,
     },
     /// Master → follower, sealed links only: the master's epoch nonce, drawn when it adopted
-    /// the follower's, tagged under the follower's nonce (the one counter the follower can
-    /// check before the epoch is in force) and sent instead of channels in the first uplink
-    /// after each of the follower's nonce frames (spec §12.2). Kind byte `0x46`, then
-    /// nothing but the slot and the nonce.
+    /// the follower's, tagged with the link key under both nonces
+    /// ([`TagContext::MasterNonce`]: only the follower whose nonce it answers can check it)
+    /// and sent instead of channels in the first uplink after each of the follower's nonce
+    /// frames (spec §12.2). Kind byte `0x46`, then nothing but the slot and the nonce.
     MasterNonce {
         /// The master's slot counter (mod 256).
         slot: u8,
         /// The master's epoch nonce (never 0).
-        nonce: u32,
+        nonce: u64,
     },
 }
 
@@ -242,7 +303,12 @@ pub fn encode(frame: &Frame<'_>, key: u32, out: &mut [u8]) -> Result<usize, Enco
         // The epoch nonces exist only on authenticated links.
         return Err(EncodeError::InvalidField);
     }
-    let mut at = encode_body(frame, PROTOCOL_VERSION, out)?;
+    let version = if is_bind(frame) {
+        BIND_VERSION
+    } else {
+        PROTOCOL_VERSION
+    };
+    let mut at = encode_body(frame, version, out)?;
     let body = out
         .get(..at)
         .ok_or(EncodeError::BufferTooSmall { needed: at })?;
@@ -251,25 +317,33 @@ pub fn encode(frame: &Frame<'_>, key: u32, out: &mut [u8]) -> Result<usize, Enco
     Ok(at)
 }
 
-/// Encodes an uplink or downlink authenticated with `key` under frame counter `counter`
-/// (version [`SEALED_VERSION`], tag instead of the link CRC). Bind frames are never sealed
-/// (they precede the key); asking for one is [`EncodeError::InvalidField`].
+/// Encodes a link frame authenticated with `key` in `context` (version [`SEALED_VERSION`],
+/// tag instead of the link CRC). Bind frames are never sealed (they precede the key); asking
+/// for one is [`EncodeError::InvalidField`].
 pub fn seal(
     frame: &Frame<'_>,
     key: &LinkKey,
-    counter: u64,
+    context: &TagContext,
     out: &mut [u8],
 ) -> Result<usize, EncodeError> {
-    if matches!(frame, Frame::BindOffer(_) | Frame::BindAccept { .. }) {
+    if is_bind(frame) {
         return Err(EncodeError::InvalidField);
     }
     let mut at = encode_body(frame, SEALED_VERSION, out)?;
     let body = out
         .get(..at)
         .ok_or(EncodeError::BufferTooSmall { needed: at })?;
-    let tag = key.tag(counter, body);
+    let tag = key.tag_in(context, body);
     put(out, &mut at, &tag.to_le_bytes())?;
     Ok(at)
+}
+
+/// Whether `frame` is a bind frame (version [`BIND_VERSION`], never sealed).
+const fn is_bind(frame: &Frame<'_>) -> bool {
+    matches!(
+        frame,
+        Frame::BindOffer(_) | Frame::BindAccept { .. } | Frame::BindConfirm { .. }
+    )
 }
 
 /// The frame's bytes before its CRC or tag, with `version` in byte 0.
@@ -289,10 +363,38 @@ fn encode_body(frame: &Frame<'_>, version: u8, out: &mut [u8]) -> Result<usize, 
                 offer.telemetry_ratio,
             ];
             put(out, &mut at, &params)?;
+            match &offer.exchange {
+                None => put(out, &mut at, &[AUTH_PLAIN])?,
+                Some(x) => {
+                    match x.salt {
+                        None => put(out, &mut at, &[AUTH_ANONYMOUS])?,
+                        Some(salt) => {
+                            put(out, &mut at, &[AUTH_PHRASE])?;
+                            put(out, &mut at, &salt)?;
+                        }
+                    }
+                    put(out, &mut at, &x.session)?;
+                    put(out, &mut at, &x.share)?;
+                }
+            }
         }
-        Frame::BindAccept { bind_id } => {
+        Frame::BindAccept { bind_id, exchange } => {
             put(out, &mut at, &[version, KIND_BIND_ACCEPT])?;
             put(out, &mut at, &bind_id.to_le_bytes())?;
+            if let Some(x) = exchange {
+                put(out, &mut at, &x.share)?;
+                put(out, &mut at, &x.tag)?;
+            }
+        }
+        Frame::BindConfirm {
+            bind_id,
+            tag,
+            sealed,
+        } => {
+            put(out, &mut at, &[version, KIND_BIND_CONFIRM])?;
+            put(out, &mut at, &bind_id.to_le_bytes())?;
+            put(out, &mut at, tag)?;
+            put(out, &mut at, sealed)?;
         }
         Frame::Uplink(up) => {
             if up.packed_channels.len() != up.format.packed_bytes() {
@@ -328,16 +430,22 @@ fn encode_body(frame: &Frame<'_>, version: u8, out: &mut [u8]) -> Result<usize, 
             )?;
             put(out, &mut at, down.data)?;
         }
-        Frame::Nonce { slot, nonce } | Frame::MasterNonce { slot, nonce } => {
+        Frame::Nonce { slot, nonce, .. } | Frame::MasterNonce { slot, nonce } => {
             if *nonce == 0 {
                 return Err(EncodeError::InvalidField);
             }
-            let kind = match frame {
-                Frame::MasterNonce { .. } => KIND_MASTER_NONCE,
-                _ => KIND_DOWNLINK,
+            let (kind, proof) = match frame {
+                Frame::Nonce {
+                    proof: Some(proof), ..
+                } => (KIND_DOWNLINK | FLAG_REPORT, Some(proof)),
+                Frame::Nonce { .. } => (KIND_DOWNLINK, None),
+                _ => (KIND_MASTER_NONCE, None),
             };
             put(out, &mut at, &[version, kind | FLAG_NONCE, *slot])?;
             put(out, &mut at, &nonce.to_le_bytes())?;
+            if let Some(proof) = proof {
+                put(out, &mut at, &proof.to_le_bytes())?;
+            }
         }
     }
     Ok(at)
@@ -393,7 +501,7 @@ fn decode_inner(packet: &[u8], key: u32) -> Result<Frame<'_>, Rejection> {
     let [version, kind_byte, rest @ ..] = body else {
         return Err(Rejection::TooShort);
     };
-    if *version != PROTOCOL_VERSION {
+    if *version != PROTOCOL_VERSION && *version != BIND_VERSION {
         return Err(Rejection::Version(*version));
     }
     let [c0, c1] = crc else {
@@ -402,20 +510,95 @@ fn decode_inner(packet: &[u8], key: u32) -> Result<Frame<'_>, Rejection> {
     if keyed_crc16(key, body) != u16::from_be_bytes([*c0, *c1]) {
         return Err(Rejection::Crc);
     }
-    parse_body(*kind_byte, rest, false)
+    if *version == BIND_VERSION {
+        parse_bind(*kind_byte, rest)
+    } else {
+        parse_body(*kind_byte, rest, false)
+    }
+}
+
+/// A bind frame's fields after the version byte (version [`BIND_VERSION`] only).
+fn parse_bind(kind_byte: u8, rest: &[u8]) -> Result<Frame<'_>, Rejection> {
+    let (id, rest) = rest.split_first_chunk::<4>().ok_or(Rejection::Malformed)?;
+    let bind_id = u32::from_le_bytes(*id);
+    match kind_byte {
+        KIND_BIND_OFFER => {
+            let ([band, rate, format, ratio, auth], rest) =
+                rest.split_first_chunk::<5>().ok_or(Rejection::Malformed)?;
+            let exchange = match (*auth, rest) {
+                (AUTH_PLAIN, []) => None,
+                (AUTH_ANONYMOUS, rest) => Some(offer_exchange(None, rest)?),
+                (AUTH_PHRASE, rest) => {
+                    let (salt, rest) = rest.split_first_chunk().ok_or(Rejection::Malformed)?;
+                    Some(offer_exchange(Some(*salt), rest)?)
+                }
+                _ => return Err(Rejection::Malformed),
+            };
+            let offer = BindOffer {
+                bind_id,
+                band: Band::from_code(*band).ok_or(Rejection::Malformed)?,
+                rate: RateMode::from_code(*rate).ok_or(Rejection::Malformed)?,
+                format: ChannelFormat::from_code(*format).ok_or(Rejection::Malformed)?,
+                telemetry_ratio: *ratio,
+                exchange,
+            };
+            if !valid_telemetry_ratio(offer.telemetry_ratio) {
+                return Err(Rejection::Malformed);
+            }
+            Ok(Frame::BindOffer(offer))
+        }
+        KIND_BIND_ACCEPT => {
+            let exchange = match rest {
+                [] => None,
+                rest => {
+                    let (share, tag) = rest.split_first_chunk().ok_or(Rejection::Malformed)?;
+                    let tag: [u8; BIND_TAG_BYTES] =
+                        tag.try_into().map_err(|_| Rejection::Malformed)?;
+                    Some(AcceptExchange { share: *share, tag })
+                }
+            };
+            Ok(Frame::BindAccept { bind_id, exchange })
+        }
+        KIND_BIND_CONFIRM => {
+            let (tag, sealed) = rest.split_first_chunk().ok_or(Rejection::Malformed)?;
+            Ok(Frame::BindConfirm {
+                bind_id,
+                tag: *tag,
+                sealed: sealed.try_into().map_err(|_| Rejection::Malformed)?,
+            })
+        }
+        other => Err(Rejection::UnknownKind(other)),
+    }
+}
+
+/// The session and share of a key-agreement offer: exactly what is left.
+fn offer_exchange(
+    salt: Option<[u8; crate::link::phrase::SALT_BYTES]>,
+    rest: &[u8],
+) -> Result<OfferExchange, Rejection> {
+    let (session, share) = rest.split_first_chunk().ok_or(Rejection::Malformed)?;
+    Ok(OfferExchange {
+        salt,
+        session: *session,
+        share: share.try_into().map_err(|_| Rejection::Malformed)?,
+    })
 }
 
 /// Decodes one authenticated packet ([`seal`]): version [`SEALED_VERSION`], the tag checked
-/// with `key` under the counter the receiver expects, before any field is read. Only link
+/// with `key` in the context the receiver expects, before any field is read. Only link
 /// frames are accepted. Never panics.
-pub fn open<'a>(packet: &'a [u8], key: &LinkKey, counter: u64) -> Received<'a> {
-    match open_inner(packet, key, counter) {
+pub fn open<'a>(packet: &'a [u8], key: &LinkKey, context: &TagContext) -> Received<'a> {
+    match open_inner(packet, key, context) {
         Ok(frame) => Received::Accepted(frame),
         Err(why) => Received::Rejected(why),
     }
 }
 
-fn open_inner<'a>(packet: &'a [u8], key: &LinkKey, counter: u64) -> Result<Frame<'a>, Rejection> {
+fn open_inner<'a>(
+    packet: &'a [u8],
+    key: &LinkKey,
+    context: &TagContext,
+) -> Result<Frame<'a>, Rejection> {
     let (body, tag) = packet
         .split_at_checked(packet.len().saturating_sub(TAG_BYTES))
         .ok_or(Rejection::TooShort)?;
@@ -428,15 +611,15 @@ fn open_inner<'a>(packet: &'a [u8], key: &LinkKey, counter: u64) -> Result<Frame
     let [t0, t1, t2, t3] = tag else {
         return Err(Rejection::TooShort);
     };
-    if !key.verify(counter, body, u32::from_le_bytes([*t0, *t1, *t2, *t3])) {
+    if !key.verify_in(context, body, u32::from_le_bytes([*t0, *t1, *t2, *t3])) {
         return Err(Rejection::Tag);
     }
     sealed_link_frame(*kind_byte, rest)
 }
 
-/// The link frame in a sealed packet, tag *not* checked: the receiver's counter for a
-/// [`Frame::Nonce`] depends on the nonce inside, and a follower takes timing (never
-/// content) from uplinks it cannot verify yet (spec §12.2). Crate-private so nothing
+/// The link frame in a sealed packet, tag *not* checked: the receiver's context depends on
+/// the kind of frame, and a follower takes timing (never content) from uplinks it cannot
+/// verify yet (spec §12.2). Crate-private so nothing
 /// outside the link cores can mistake it for an accepted frame.
 pub(crate) fn peek_sealed(packet: &[u8]) -> Option<Frame<'_>> {
     let (body, _tag) = packet.split_at_checked(packet.len().checked_sub(TAG_BYTES)?)?;
@@ -462,21 +645,8 @@ fn sealed_link_frame(kind_byte: u8, rest: &[u8]) -> Result<Frame<'_>, Rejection>
 /// The fields after the version byte, once the CRC or tag has been checked. Kind bit 6
 /// (an epoch nonce) and bit 7 (no stream data) exist only in `sealed` frames.
 fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rejection> {
-    if sealed
-        && (kind_byte == KIND_DOWNLINK | FLAG_NONCE || kind_byte == KIND_MASTER_NONCE | FLAG_NONCE)
-    {
-        let [slot, a, b, c, d] = rest else {
-            return Err(Rejection::Malformed);
-        };
-        let nonce = u32::from_le_bytes([*a, *b, *c, *d]);
-        if nonce == 0 {
-            return Err(Rejection::Malformed);
-        }
-        return Ok(if kind_byte & KIND_MASK == KIND_MASTER_NONCE {
-            Frame::MasterNonce { slot: *slot, nonce }
-        } else {
-            Frame::Nonce { slot: *slot, nonce }
-        });
+    if sealed && kind_byte & FLAG_NONCE != 0 {
+        return parse_nonce(kind_byte, rest);
     }
     let no_stream = sealed && kind_byte & FLAG_NO_STREAM != 0;
     let kind_byte = if sealed {
@@ -492,35 +662,6 @@ fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rej
     let save_failsafe = kind_byte & FLAG_SAVE_FAILSAFE != 0;
     let input_lost = kind_byte & FLAG_INPUT_LOST != 0;
     match kind {
-        KIND_BIND_OFFER | KIND_BIND_ACCEPT
-            if has_report || save_failsafe || input_lost || no_stream =>
-        {
-            Err(Rejection::Malformed)
-        }
-        KIND_BIND_OFFER => {
-            let [a, b, c, d, band, rate, format, ratio] = rest else {
-                return Err(Rejection::Malformed);
-            };
-            let offer = BindOffer {
-                bind_id: u32::from_le_bytes([*a, *b, *c, *d]),
-                band: Band::from_code(*band).ok_or(Rejection::Malformed)?,
-                rate: RateMode::from_code(*rate).ok_or(Rejection::Malformed)?,
-                format: ChannelFormat::from_code(*format).ok_or(Rejection::Malformed)?,
-                telemetry_ratio: *ratio,
-            };
-            if !valid_telemetry_ratio(offer.telemetry_ratio) {
-                return Err(Rejection::Malformed);
-            }
-            Ok(Frame::BindOffer(offer))
-        }
-        KIND_BIND_ACCEPT => {
-            let [a, b, c, d] = rest else {
-                return Err(Rejection::Malformed);
-            };
-            Ok(Frame::BindAccept {
-                bind_id: u32::from_le_bytes([*a, *b, *c, *d]),
-            })
-        }
         KIND_RC16 | KIND_RC8 | KIND_RC_STICKS | KIND_DOWNLINK => {
             // Without stream data (sealed frames, bit 7) there is no seq byte; it reads 0.
             let (slot, stream, rest) = match (no_stream, rest) {
@@ -598,6 +739,32 @@ fn parse_body(kind_byte: u8, rest: &[u8], sealed: bool) -> Result<Frame<'_>, Rej
     }
 }
 
+/// An epoch-nonce frame after its kind byte: the slot, the 64-bit nonce (never 0) and, for
+/// a follower's nonce with kind bit 3, the proof of its previous epoch.
+fn parse_nonce(kind_byte: u8, rest: &[u8]) -> Result<Frame<'_>, Rejection> {
+    let (slot, rest) = rest.split_first().ok_or(Rejection::Malformed)?;
+    let (nonce, rest) = rest.split_first_chunk::<8>().ok_or(Rejection::Malformed)?;
+    let nonce = u64::from_le_bytes(*nonce);
+    if nonce == 0 {
+        return Err(Rejection::Malformed);
+    }
+    let slot = *slot;
+    match (kind_byte, rest) {
+        (k, []) if k == KIND_MASTER_NONCE | FLAG_NONCE => Ok(Frame::MasterNonce { slot, nonce }),
+        (k, []) if k == KIND_DOWNLINK | FLAG_NONCE => Ok(Frame::Nonce {
+            slot,
+            nonce,
+            proof: None,
+        }),
+        (k, [a, b, c, d]) if k == KIND_DOWNLINK | FLAG_NONCE | FLAG_REPORT => Ok(Frame::Nonce {
+            slot,
+            nonce,
+            proof: Some(u32::from_le_bytes([*a, *b, *c, *d])),
+        }),
+        _ => Err(Rejection::Malformed),
+    }
+}
+
 /// Frame bytes an uplink takes before its stream data.
 pub const fn uplink_overhead(format: ChannelFormat, with_report: bool) -> usize {
     LINK_HEADER_BYTES
@@ -613,9 +780,11 @@ pub const fn sealed_uplink_bytes(format: ChannelFormat, with_report: bool, data:
     uplink_overhead(format, with_report) - CRC_BYTES + TAG_BYTES - seq_dropped + data
 }
 
-/// Bytes of a sealed [`Frame::Nonce`] or [`Frame::MasterNonce`]: version, kind, slot, nonce,
-/// tag.
-pub const NONCE_FRAME_BYTES: usize = 3 + 4 + TAG_BYTES;
+/// Bytes of a sealed [`Frame::Nonce`] without proof or a [`Frame::MasterNonce`]: version,
+/// kind, slot, 64-bit nonce, tag.
+pub const NONCE_FRAME_BYTES: usize = 3 + 8 + TAG_BYTES;
+/// Bytes of a sealed [`Frame::Nonce`] with the proof of the previous epoch.
+pub const PROVEN_NONCE_FRAME_BYTES: usize = NONCE_FRAME_BYTES + 4;
 
 /// Frame bytes a downlink takes before its stream data.
 pub const fn downlink_overhead(with_report: bool) -> usize {

@@ -72,25 +72,89 @@ fn downlink_and_bind_round_trip() {
         Received::Accepted(Frame::Downlink(down))
     );
 
-    let offer = BindOffer {
+    let plain = BindOffer {
         bind_id: 0xDEAD_BEEF,
         band: Band::Mhz868,
         rate: RateMode::F250,
         format: ChannelFormat::Compact8,
         telemetry_ratio: 4,
+        exchange: None,
     };
-    let n = encode(&Frame::BindOffer(offer), KEY, &mut out).unwrap();
-    assert_eq!(n, 12);
-    assert_eq!(
-        decode(&out[..n], KEY),
-        Received::Accepted(Frame::BindOffer(offer))
-    );
-    let n = encode(&Frame::BindAccept { bind_id: 5 }, KEY, &mut out).unwrap();
-    assert_eq!(&out[..6], &[PROTOCOL_VERSION, KIND_BIND_ACCEPT, 5, 0, 0, 0]);
-    assert_eq!(
-        decode(&out[..n], KEY),
-        Received::Accepted(Frame::BindAccept { bind_id: 5 })
-    );
+    let exchange = OfferExchange {
+        salt: Some([1; 8]),
+        session: [2; 8],
+        share: [3; 32],
+    };
+    let anonymous = OfferExchange {
+        salt: None,
+        ..exchange
+    };
+    for (offer, len) in [
+        (plain, 13),
+        (
+            BindOffer {
+                exchange: Some(exchange),
+                ..plain
+            },
+            61,
+        ),
+        (
+            BindOffer {
+                exchange: Some(anonymous),
+                ..plain
+            },
+            53,
+        ),
+    ] {
+        let n = encode(&Frame::BindOffer(offer), KEY, &mut out).unwrap();
+        assert_eq!(n, len);
+        assert_eq!(out[0], BIND_VERSION);
+        assert_eq!(
+            decode(&out[..n], KEY),
+            Received::Accepted(Frame::BindOffer(offer))
+        );
+        // One byte less or more: malformed, never a shorter offer.
+        let cut = &mut out[..n - 1].to_vec()[..n - 3];
+        let mut short = cut.to_vec();
+        short.extend(crate::checksum::keyed_crc16(KEY, &short).to_be_bytes());
+        assert_eq!(
+            decode(&short, KEY),
+            Received::Rejected(Rejection::Malformed)
+        );
+    }
+    let accept = Frame::BindAccept {
+        bind_id: 5,
+        exchange: None,
+    };
+    let n = encode(&accept, KEY, &mut out).unwrap();
+    assert_eq!(&out[..6], &[BIND_VERSION, KIND_BIND_ACCEPT, 5, 0, 0, 0]);
+    assert_eq!(decode(&out[..n], KEY), Received::Accepted(accept));
+    let accept = Frame::BindAccept {
+        bind_id: 5,
+        exchange: Some(AcceptExchange {
+            share: [4; 32],
+            tag: [5; 16],
+        }),
+    };
+    let n = encode(&accept, KEY, &mut out).unwrap();
+    assert_eq!(n, 56);
+    assert_eq!(decode(&out[..n], KEY), Received::Accepted(accept));
+    let confirm = Frame::BindConfirm {
+        bind_id: 5,
+        tag: [6; 16],
+        sealed: [7; 16],
+    };
+    let n = encode(&confirm, KEY, &mut out).unwrap();
+    assert_eq!(n, 40);
+    assert_eq!(decode(&out[..n], KEY), Received::Accepted(confirm));
+    // Bind kinds under the link version, link kinds under the bind version: refused.
+    let mut link = out[..n - CRC_BYTES].to_vec();
+    link[0] = PROTOCOL_VERSION;
+    link.extend(crate::checksum::keyed_crc16(KEY, &link).to_be_bytes());
+    assert!(matches!(
+        decode(&link, KEY),
+        Received::Rejected(Rejection::UnknownKind(_))
+    ));
 }
 
 #[test]
@@ -118,10 +182,10 @@ fn every_single_bit_flip_is_rejected() {
 #[test]
 fn other_version_is_rejected_first() {
     let (mut out, n) = uplink_bytes(b"");
-    out[0] = 2;
+    out[0] = 9;
     assert_eq!(
         decode(&out[..n], KEY),
-        Received::Rejected(Rejection::Version(2))
+        Received::Rejected(Rejection::Version(9))
     );
 }
 
@@ -210,6 +274,7 @@ fn encode_reports_needed_size() {
         rate: RateMode::L50,
         format: ChannelFormat::Full16,
         telemetry_ratio: 3,
+        exchange: None,
     };
     assert_eq!(
         encode(&Frame::BindOffer(bad_ratio), KEY, &mut [0; 64]),
@@ -228,11 +293,11 @@ fn sealed_frames_round_trip_and_carry_a_four_byte_tag() {
         panic!()
     };
     let mut out = [0u8; 64];
-    let m = seal(&frame, &sealed_key(), 77, &mut out).unwrap();
+    let m = seal(&frame, &sealed_key(), &TagContext::Counter(77), &mut out).unwrap();
     assert_eq!(m, n + TAG_BYTES - CRC_BYTES);
     assert_eq!(out[0], SEALED_VERSION);
     assert_eq!(
-        open(&out[..m], &sealed_key(), 77),
+        open(&out[..m], &sealed_key(), &TagContext::Counter(77)),
         Received::Accepted(frame)
     );
 }
@@ -244,68 +309,114 @@ fn sealed_frames_fail_under_another_counter_key_or_any_flipped_bit() {
         panic!()
     };
     let mut out = [0u8; 64];
-    let m = seal(&frame, &sealed_key(), 5, &mut out).unwrap();
+    let m = seal(&frame, &sealed_key(), &TagContext::Counter(5), &mut out).unwrap();
     let sealed = &out[..m];
     assert_eq!(
-        open(sealed, &sealed_key(), 5 + 256),
+        open(sealed, &sealed_key(), &TagContext::Counter(5 + 256)),
         Received::Rejected(Rejection::Tag),
         "a replay under a later counter"
     );
     let other = LinkKey::from_bytes([0x40; 16]);
-    assert_eq!(open(sealed, &other, 5), Received::Rejected(Rejection::Tag));
+    assert_eq!(
+        open(sealed, &other, &TagContext::Counter(5)),
+        Received::Rejected(Rejection::Tag)
+    );
     for bit in 8..m * 8 {
         let mut f = sealed.to_vec();
         f[bit / 8] ^= 1 << (bit % 8);
         assert_eq!(
-            open(&f, &sealed_key(), 5),
+            open(&f, &sealed_key(), &TagContext::Counter(5)),
             Received::Rejected(Rejection::Tag),
             "bit {bit}"
         );
     }
     // A version 1 frame (CRC keyed with the public bind ID) is no sealed frame.
     assert_eq!(
-        open(&plain[..n], &sealed_key(), 77),
+        open(&plain[..n], &sealed_key(), &TagContext::Counter(77)),
         Received::Rejected(Rejection::Version(PROTOCOL_VERSION))
     );
 }
 
 #[test]
 fn bind_frames_are_never_sealed() {
-    let offer = Frame::BindAccept { bind_id: 9 };
+    let offer = Frame::BindAccept {
+        bind_id: 9,
+        exchange: None,
+    };
     let mut out = [0u8; 64];
     assert_eq!(
-        seal(&offer, &sealed_key(), 0, &mut out),
+        seal(&offer, &sealed_key(), &TagContext::Counter(0), &mut out),
         Err(EncodeError::InvalidField)
     );
 }
 
 #[test]
-fn the_epoch_nonce_travels_only_in_sealed_downlinks() {
+fn the_epoch_nonce_travels_only_in_sealed_downlinks_with_64_bits_and_an_optional_proof() {
     let nonce = Frame::Nonce {
         slot: 7,
-        nonce: 0xDEAD_BEEF,
+        nonce: 0x0102_0304_DEAD_BEEF,
+        proof: None,
     };
+    let ctx = TagContext::FollowerNonce;
     let mut out = [0u8; 64];
-    let n = seal(&nonce, &sealed_key(), 9, &mut out).unwrap();
+    let n = seal(&nonce, &sealed_key(), &ctx, &mut out).unwrap();
     assert_eq!(n, NONCE_FRAME_BYTES);
-    assert_eq!(out[..7], [SEALED_VERSION, 0x44, 7, 0xEF, 0xBE, 0xAD, 0xDE]);
-    assert_eq!(open(&out[..n], &sealed_key(), 9), Received::Accepted(nonce));
+    assert_eq!(
+        out[..11],
+        [SEALED_VERSION, 0x44, 7, 0xEF, 0xBE, 0xAD, 0xDE, 4, 3, 2, 1]
+    );
+    assert_eq!(
+        open(&out[..n], &sealed_key(), &ctx),
+        Received::Accepted(nonce)
+    );
     assert_eq!(peek_sealed(&out[..n]), Some(nonce));
     assert_eq!(
-        open(&out[..n], &sealed_key(), 10),
+        open(&out[..n], &sealed_key(), &TagContext::Counter(9)),
         Received::Rejected(Rejection::Tag)
     );
-    // Never in a version 1 frame, never 0 (the master's "no epoch").
+    // With the proof of the previous epoch: kind bit 3, four more bytes.
+    let proven = Frame::Nonce {
+        slot: 7,
+        nonce: 5,
+        proof: Some(0xA1B2_C3D4),
+    };
+    let p = seal(&proven, &sealed_key(), &ctx, &mut out).unwrap();
+    assert_eq!(p, PROVEN_NONCE_FRAME_BYTES);
+    assert_eq!(out[1], 0x4C);
+    assert_eq!(out[11..15], [0xD4, 0xC3, 0xB2, 0xA1]);
+    assert_eq!(
+        open(&out[..p], &sealed_key(), &ctx),
+        Received::Accepted(proven)
+    );
+    // The proof bit on a nonce frame without a proof, or the proof without the bit:
+    // malformed.
+    for (kind, len) in [(0x4C, 11), (0x44, 15), (0x4E, 11)] {
+        let mut body = out[..len].to_vec();
+        body[1] = kind;
+        let tag = sealed_key().tag_in(&ctx, &body);
+        body.extend_from_slice(&tag.to_le_bytes());
+        assert_eq!(
+            open(&body, &sealed_key(), &ctx),
+            Received::Rejected(Rejection::Malformed),
+            "{kind:#x} {len}"
+        );
+    }
+    // Never in a version 1 frame, never 0.
     assert_eq!(
         encode(&nonce, KEY, &mut out),
         Err(EncodeError::InvalidField)
     );
-    let zero = Frame::Nonce { slot: 7, nonce: 0 };
+    let zero = Frame::Nonce {
+        slot: 7,
+        nonce: 0,
+        proof: None,
+    };
     assert_eq!(
-        seal(&zero, &sealed_key(), 9, &mut out),
+        seal(&zero, &sealed_key(), &ctx, &mut out),
         Err(EncodeError::InvalidField)
     );
-    // Bit 6 stays reserved in version 1 frames and in sealed uplinks.
+    // Bit 6 stays reserved in version 1 frames; in sealed frames it makes any other kind
+    // byte malformed.
     let (plain, m) = uplink_bytes(b"");
     let mut flagged = plain[..m - CRC_BYTES].to_vec();
     flagged[1] |= 0x40;
@@ -319,10 +430,10 @@ fn the_epoch_nonce_travels_only_in_sealed_downlinks() {
     body[0] = SEALED_VERSION;
     let tag = sealed_key().tag(3, &body);
     body.extend_from_slice(&tag.to_le_bytes());
-    assert!(matches!(
-        open(&body, &sealed_key(), 3),
-        Received::Rejected(Rejection::UnknownKind(_))
-    ));
+    assert_eq!(
+        open(&body, &sealed_key(), &TagContext::Counter(3)),
+        Received::Rejected(Rejection::Malformed)
+    );
 }
 
 #[test]
@@ -388,7 +499,13 @@ fn sealed_frames_without_stream_data_drop_the_seq_byte() {
         panic!()
     };
     let mut out = [0u8; 64];
-    let m = seal(&Frame::Uplink(up), &sealed_key(), 5, &mut out).unwrap();
+    let m = seal(
+        &Frame::Uplink(up),
+        &sealed_key(),
+        &TagContext::Counter(5),
+        &mut out,
+    )
+    .unwrap();
     assert_eq!(m, 32);
     assert_eq!(m, sealed_uplink_bytes(ChannelFormat::Full16, true, 0));
     assert_eq!(out[1] & 0x80, 0x80);
@@ -398,16 +515,22 @@ fn sealed_frames_without_stream_data_drop_the_seq_byte() {
         ..up
     };
     assert_eq!(
-        open(&out[..m], &sealed_key(), 5),
+        open(&out[..m], &sealed_key(), &TagContext::Counter(5)),
         Received::Accepted(Frame::Uplink(expected))
     );
     // With stream data the seq byte is there and the flag is not.
     let data = Uplink { data: b"xy", ..up };
-    let k = seal(&Frame::Uplink(data), &sealed_key(), 5, &mut out).unwrap();
+    let k = seal(
+        &Frame::Uplink(data),
+        &sealed_key(),
+        &TagContext::Counter(5),
+        &mut out,
+    )
+    .unwrap();
     assert_eq!(k, 35);
     assert_eq!(out[1] & 0x80, 0);
     assert_eq!(
-        open(&out[..k], &sealed_key(), 5),
+        open(&out[..k], &sealed_key(), &TagContext::Counter(5)),
         Received::Accepted(Frame::Uplink(data))
     );
     // The flag with stream bytes after the channels: malformed.
@@ -417,30 +540,46 @@ fn sealed_frames_without_stream_data_drop_the_seq_byte() {
     let tag = sealed_key().tag(5, &body);
     body.extend_from_slice(&tag.to_le_bytes());
     assert_eq!(
-        open(&body, &sealed_key(), 5),
+        open(&body, &sealed_key(), &TagContext::Counter(5)),
         Received::Rejected(Rejection::Malformed)
     );
 }
 
 #[test]
-fn the_master_nonce_travels_only_in_sealed_frames_as_kind_0x46() {
+fn the_master_nonce_travels_only_in_sealed_frames_as_kind_0x46_bound_to_both_nonces() {
     let nonce = Frame::MasterNonce {
         slot: 8,
-        nonce: 0x0102_0304,
+        nonce: 0x0A0B_0C0D_0102_0304,
     };
+    let ctx = TagContext::MasterNonce { follower_nonce: 77 };
     let mut out = [0u8; 64];
-    let n = seal(&nonce, &sealed_key(), 9, &mut out).unwrap();
+    let n = seal(&nonce, &sealed_key(), &ctx, &mut out).unwrap();
     assert_eq!(n, NONCE_FRAME_BYTES);
-    assert_eq!(out[..7], [SEALED_VERSION, 0x46, 8, 4, 3, 2, 1]);
-    assert_eq!(open(&out[..n], &sealed_key(), 9), Received::Accepted(nonce));
+    assert_eq!(
+        out[..11],
+        [SEALED_VERSION, 0x46, 8, 4, 3, 2, 1, 0x0D, 0x0C, 0x0B, 0x0A]
+    );
+    assert_eq!(
+        open(&out[..n], &sealed_key(), &ctx),
+        Received::Accepted(nonce)
+    );
     assert_eq!(peek_sealed(&out[..n]), Some(nonce));
+    // Under another follower nonce it fails: only the follower it answers takes it.
+    assert_eq!(
+        open(
+            &out[..n],
+            &sealed_key(),
+            &TagContext::MasterNonce { follower_nonce: 78 }
+        ),
+        Received::Rejected(Rejection::Tag)
+    );
     assert_eq!(
         encode(&nonce, KEY, &mut out),
         Err(EncodeError::InvalidField)
     );
     let zero = Frame::MasterNonce { slot: 8, nonce: 0 };
     assert_eq!(
-        seal(&zero, &sealed_key(), 9, &mut out),
+        seal(&zero, &sealed_key(), &ctx, &mut out),
         Err(EncodeError::InvalidField)
     );
 }

@@ -298,6 +298,17 @@ pub struct Home {
     pub set: bool,
 }
 
+/// The air link's authentication failures at the flight side (spec §12.2, "Tag failures"):
+/// sent when they change, at most once a second; a clean link never sends it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkSecurity {
+    /// Uplinks whose tag failed since the flight side started.
+    pub tag_failures: u32,
+    /// They run above what noise explains (`telemetry::link::alarm`).
+    pub alert: bool,
+}
+
 /// Everything the telemetry stream carries.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -335,6 +346,9 @@ pub enum Message {
     /// The flight mode (flight → ground; wire number 13, replacing the retired number 3: an
     /// older reader drops it as unknown instead of misreading the eight modes).
     FlightMode(FlightMode),
+    /// The link's authentication failures at the flight side (flight → module and ground;
+    /// appended).
+    LinkSecurity(LinkSecurity),
 }
 
 /// Largest postcard encoding of a [`Message`].

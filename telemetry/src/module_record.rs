@@ -1,119 +1,172 @@
-//! Records for the TauLink module itself on the HM-10 relay (spec §12.5): the phone proposes
-//! the module's link key (from a binding phrase typed on the phone), the module answers. Every
-//! other phone record goes on to the flight side unread; these stop at the module.
+//! Records between the phone and the TauLink module itself on the HM-10 relay (spec §12.5):
+//! the phone proves the binding phrase to the module with CPace (no value on BLE lets a
+//! guesser test a phrase offline), and over the session key that gives it receives the
+//! change key of the flight side's settings, sealed, and may set a new phrase. No key ever
+//! crosses BLE in the clear. Every other phone record goes on to the flight side unread;
+//! these stop at the module.
 //!
 //! **Wire format.** Framed like every relay record (`COBS(payload ‖ crc16_be) ‖ 0x00`,
 //! [`crate::framing`]); the payload is [`MARKER`], [`VERSION`], then the postcard encoding of a
 //! [`ModuleRecord`]. A telemetry [`crate::messages::Message`] starts with its postcard variant
 //! number, a one-byte varint below 0x80 for any message set of fewer than 128 variants, so no
-//! message starts with 0xA5: the module tells the two apart by the first byte, and a flight
-//! side that ever saw a module record would drop it as unknown. A record of another version is
-//! refused by [`decode`] (the phone then learns nothing from the module and says so).
+//! message starts with 0xA5: the module tells the two apart by the first byte. A record of
+//! another version is refused by [`decode`]; version 1 (a key proposed in the clear, or
+//! sealed under a pad that could repeat) is no longer read.
 //!
-//! **Two ways to change the key.**
-//! * [`ModuleRecord::ProposeKey`]: the new key in the clear (the BLE link is protected by the
-//!   HM-10's PIN and bonding only). The module applies it only after the pilot confirms on the
-//!   handset — a CRSF command showing the proposed key's fingerprint — so a phone that knows
-//!   nothing can change nothing by itself.
-//! * [`ModuleRecord::SignedKey`]: for a phone that knows the module's current phrase. It
-//!   derives the change key from the current link key exactly as for flight-side setting
-//!   changes ([`crate::change_auth::ChangeKey`]), seals the new key with a one-time pad from it,
-//!   `pad = SipHash-2-4(ck, "TauLink/1 key-wrap" ‖ session ‖ counter ‖ 0) ‖ (… ‖ 1)`, and tags
-//!   the sealed bytes, `tag = SipHash-2-4(ck, "TauLink/1 key-change" ‖ session ‖ counter ‖
-//!   sealed)` (64 bits: forgery 2⁻⁶⁴ per try; the domains differ from every other use of the
-//!   change key, so no flight-side change tag is ever a key-change tag). The module applies it
-//!   at once if the tag verifies under its **session** (random per boot) and the counter is
-//!   above every one it accepted in that session, so a recorded record fails in its own
-//!   session and in every later boot. The new key never crosses BLE in the clear.
-//!
-//! Never while the quad is armed; every outcome is answered with a
-//! [`ModuleRecord::KeyAnswer`] that carries the module's session and highest counter, so a
-//! phone that did not know them signs again once ([`KeySigner::on_answer`]).
+//! **The exchange.** Phone `Hello` → module `Challenge { salt, session, share }` (CPace,
+//! module the initiator, on its stored phrase derivation, [`crate::link::PhraseSecret`]) →
+//! phone `Response { share, tag }` (its share and its confirmation) → module `Granted { tag,
+//! change_key }` (its confirmation and the change key sealed) or an [`Answer`] refusing.
+//! With the session key the phone then sends `SetPhrase { counter, sealed, tag }`: a new
+//! phrase's derivation under the module's salt, sealed with a pad of the session key and
+//! counter (a fresh session key every exchange: no pad repeats) and tagged; the module
+//! takes it once per counter, never while the quad is armed. Every refusal says why; the
+//! module allows [`PHONE_FAILURES`] wrong confirmations per boot, then refuses every
+//! exchange until it restarts (an online guesser gets that many guesses per power cycle).
 
 use postcard::experimental::max_size::MaxSize;
 use serde::{Deserialize, Serialize};
 
 use crate::change_auth::ChangeKey;
-use crate::link::LinkKey;
-use crate::link::auth::{KEY_BYTES, SipHasher24};
+use crate::link::auth::KEY_BYTES;
+use crate::link::pake::{Exchange, Role, SHARE_BYTES, SessionKey, tags_equal};
+use crate::link::phrase::{PRS_BYTES, PhraseSecret, SALT_BYTES};
 
 /// First payload byte of every module record (never the first byte of a message).
 pub const MARKER: u8 = 0xA5;
 /// The record format's version (the second payload byte).
-pub const VERSION: u8 = 1;
+pub const VERSION: u8 = 2;
 /// Largest payload of a module record.
 pub const MAX_PAYLOAD_BYTES: usize = 2 + ModuleRecord::POSTCARD_MAX_SIZE;
+/// Wrong confirmations a module takes from phones per boot before it refuses every
+/// exchange ([`Refusal::Locked`]).
+pub const PHONE_FAILURES: u8 = 5;
+/// Bytes of a confirmation tag.
+pub const TAG_BYTES: usize = 16;
 
-const DOMAIN_WRAP: &[u8] = b"TauLink/1 key-wrap";
-const DOMAIN_TAG: &[u8] = b"TauLink/1 key-change";
+/// The CPace channel identifier of phone exchanges.
+const PHONE_CI: &[u8] = b"TauLink/2 phone";
+const LABEL_PHONE_TAG: &[u8] = b"TauLink/2 phone confirms";
+const LABEL_MODULE_TAG: &[u8] = b"TauLink/2 module confirms";
+const LABEL_CHANGE_KEY: &[u8] = b"TauLink/2 change-key wrap";
+const LABEL_PHRASE_PAD: &[u8] = b"TauLink/2 phrase wrap";
+const LABEL_PHRASE_TAG: &[u8] = b"TauLink/2 phrase tag";
 
-/// A new link key, sealed and signed under the module's current one.
+/// Why the module refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct SignedKey {
-    /// The new key XOR the pad of (session, counter).
-    pub sealed: [u8; KEY_BYTES],
-    /// Above every counter the module accepted in its session.
-    pub counter: u32,
-    /// SipHash-2-4 tag over session, counter and `sealed`.
-    pub tag: [u8; 8],
-}
-
-/// Why the module did not take a key from the phone.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum KeyRefusal {
-    /// The quad is armed (as far as the module heard): no key change in flight.
+pub enum Refusal {
+    /// The quad is armed (as far as the module heard): no phrase change in flight.
     Armed,
-    /// The tag does not verify (another phrase, a forgery).
+    /// The confirmation or tag does not verify (another phrase, a forgery).
     NotAuthenticated,
-    /// The counter is not above the highest accepted (a replay, or a stale session).
+    /// The counter is not above the highest accepted in this session (a replay).
     Replayed,
-    /// A signed key, but the module has no phrase to check it with: propose instead.
+    /// The module has no phrase: set the first one on the radio.
     NoPhrase,
-    /// The pilot cancelled the confirmation on the handset.
-    Declined,
-    /// Nobody confirmed on the handset in time (or a newer proposal replaced this one).
-    Expired,
+    /// No exchange under way (a response or phrase without a session).
+    NoSession,
+    /// Too many wrong confirmations since the module started: restart it.
+    Locked,
+    /// The phrase's derivation would not be a valid one (never sent by the ground station).
+    Invalid,
 }
 
-/// What became of a key from the phone.
+/// What became of a phone's record.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum KeyOutcome {
-    /// The key is in force (the module's link restarted with it, and it is saved).
+pub enum Outcome {
+    /// Taken (the new phrase is in force and saved).
     Applied,
-    /// Waiting for the pilot to confirm on the handset ("Phone Phrase" command).
-    AwaitingConfirmation,
     /// Not taken.
-    Refused(KeyRefusal),
+    Refused(Refusal),
 }
 
-/// The module's answer to a key from the phone.
+/// The module's answer to a record it did not answer with its own kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct KeyAnswer {
+pub struct Answer {
     /// What happened.
-    pub outcome: KeyOutcome,
-    /// The fingerprint ([`LinkKey::fingerprint`]) of the key the answer is about: the one in
-    /// force after `Applied` or a refusal (`None`: no phrase), the proposed one while waiting.
-    pub fingerprint: Option<u32>,
-    /// The module's session nonce for this boot (to sign with).
-    pub session: u32,
+    pub outcome: Outcome,
     /// The highest counter the module accepted in the session (sign with a greater one).
     pub counter: u32,
+}
+
+/// The module's side of the exchange: its salt, session and share.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Challenge {
+    /// The salt of the module's phrase derivation.
+    pub salt: [u8; SALT_BYTES],
+    /// Random per exchange: the CPace session.
+    pub session: [u8; 8],
+    /// The module's CPace share.
+    pub share: [u8; SHARE_BYTES],
+}
+
+/// The phone's share and confirmation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Response {
+    /// The phone's CPace share.
+    pub share: [u8; SHARE_BYTES],
+    /// Its confirmation of the session key.
+    pub tag: [u8; TAG_BYTES],
+}
+
+/// The module's confirmation and the change key, sealed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Granted {
+    /// The module's confirmation of the session key.
+    pub tag: [u8; TAG_BYTES],
+    /// The change key of the flight side's settings ([`ChangeKey`]), sealed; `None` while
+    /// the module has no keyed link (nothing to change on the flight side yet).
+    pub change_key: Option<[u8; KEY_BYTES]>,
+}
+
+/// A new phrase's derivation for the module, sealed and tagged under the session key.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SetPhrase {
+    /// Above every counter the module accepted in the session.
+    pub counter: u32,
+    /// The derivation under the module's salt, sealed with the session's pad of `counter`.
+    pub sealed: [u8; PRS_BYTES],
+    /// Tag over counter and sealed bytes.
+    pub tag: [u8; TAG_BYTES],
 }
 
 /// Everything module-addressed on the relay.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ModuleRecord {
-    /// Phone → module: use this key once the pilot confirms on the handset.
-    ProposeKey([u8; KEY_BYTES]),
-    /// Phone → module: use this key, signed under the current one (applied at once).
-    SignedKey(SignedKey),
-    /// Module → phone: the outcome.
-    KeyAnswer(KeyAnswer),
+    /// Phone → module: start an exchange.
+    Hello,
+    /// Module → phone: the module's half.
+    Challenge(Challenge),
+    /// Phone → module: the phone's half.
+    Response(Response),
+    /// Module → phone: the exchange confirmed, the change key.
+    Granted(Granted),
+    /// Phone → module: a new phrase.
+    SetPhrase(SetPhrase),
+    /// Module → phone: an outcome.
+    Answer(Answer),
+    /// Module → phone: authentication failures of the air link, both ends (spec §12.2).
+    LinkSecurity(LinkSecurity),
+}
+
+/// Tag failures of the air link as the module knows them, for the phone (spec §12.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkSecurity {
+    /// Downlinks whose tag failed at the module since it started.
+    pub tag_failures_down: u32,
+    /// Uplinks whose tag failed at the flight side (its last report).
+    pub tag_failures_up: u32,
+    /// Either end's failures run above what noise explains.
+    pub alert: bool,
 }
 
 /// Why a payload is no module record this firmware reads.
@@ -153,157 +206,305 @@ pub fn encode(record: &ModuleRecord, out: &mut [u8]) -> Option<usize> {
     Some(2 + used)
 }
 
-fn pad(key: &ChangeKey, session: u32, counter: u32) -> [u8; KEY_BYTES] {
-    let mut pad = [0u8; KEY_BYTES];
-    for (half, index) in pad.chunks_exact_mut(8).zip(0u8..) {
-        let mut h = SipHasher24::new(key.as_bytes());
-        h.write(DOMAIN_WRAP);
-        h.write(&session.to_le_bytes());
-        h.write(&counter.to_le_bytes());
-        h.write(&[index]);
-        half.copy_from_slice(&h.finish().to_le_bytes());
+fn xor<const N: usize>(a: &[u8; N], b: &[u8]) -> [u8; N] {
+    core::array::from_fn(|i| a.get(i).copied().unwrap_or(0) ^ b.get(i).copied().unwrap_or(0))
+}
+
+/// The pad and tag key of `counter` in a session: the pad seals the derivation, the tag
+/// covers counter and sealed bytes.
+fn phrase_pad(isk: &SessionKey, counter: u32) -> [u8; 64] {
+    let mut label = [0u8; LABEL_PHRASE_PAD.len() + 4];
+    let (l, c) = label.split_at_mut(LABEL_PHRASE_PAD.len());
+    l.copy_from_slice(LABEL_PHRASE_PAD);
+    c.copy_from_slice(&counter.to_le_bytes());
+    isk.derive(&label)
+}
+
+fn phrase_tag(isk: &SessionKey, counter: u32, sealed: &[u8; PRS_BYTES]) -> [u8; TAG_BYTES] {
+    let mut label = [0u8; LABEL_PHRASE_TAG.len() + 4 + PRS_BYTES];
+    let (l, rest) = label.split_at_mut(LABEL_PHRASE_TAG.len());
+    let (c, s) = rest.split_at_mut(4);
+    l.copy_from_slice(LABEL_PHRASE_TAG);
+    c.copy_from_slice(&counter.to_le_bytes());
+    s.copy_from_slice(sealed);
+    isk.derive16(&label)
+}
+
+/// The module's side of one exchange, between its challenge and the phone's response.
+#[derive(Debug)]
+pub struct ModuleExchange {
+    exchange: Exchange,
+    challenge: Challenge,
+}
+
+/// A confirmed phone session at the module.
+#[derive(Debug, Clone, Copy)]
+pub struct ModuleSession {
+    isk: SessionKey,
+    highest: u32,
+}
+
+impl ModuleExchange {
+    /// A challenge on `secret` (the module's stored phrase derivation), session and scalar
+    /// from `random` (32 bytes of a hardware RNG, fresh per exchange).
+    pub fn new(secret: &PhraseSecret, random: &[u8; 32]) -> Self {
+        let session: [u8; 8] = core::array::from_fn(|i| random.get(i).copied().unwrap_or(0));
+        let exchange = Exchange::start(&secret.prs, PHONE_CI, &session, random);
+        let challenge = Challenge {
+            salt: secret.salt,
+            session,
+            share: exchange.share(),
+        };
+        Self {
+            exchange,
+            challenge,
+        }
     }
-    pad
-}
 
-fn tag(key: &ChangeKey, session: u32, counter: u32, sealed: &[u8; KEY_BYTES]) -> [u8; 8] {
-    let mut h = SipHasher24::new(key.as_bytes());
-    h.write(DOMAIN_TAG);
-    h.write(&session.to_le_bytes());
-    h.write(&counter.to_le_bytes());
-    h.write(sealed);
-    h.finish().to_le_bytes()
-}
-
-fn xor(a: &[u8; KEY_BYTES], b: &[u8; KEY_BYTES]) -> [u8; KEY_BYTES] {
-    let mut out = [0u8; KEY_BYTES];
-    for ((o, x), y) in out.iter_mut().zip(a).zip(b) {
-        *o = x ^ y;
+    /// The challenge to send.
+    pub fn challenge(&self) -> Challenge {
+        self.challenge
     }
-    out
-}
 
-/// `new` sealed and signed under `current` for the module's `session` with `counter`.
-pub fn seal(current: &LinkKey, session: u32, counter: u32, new: &LinkKey) -> SignedKey {
-    let key = ChangeKey::from_link_key(current);
-    let sealed = xor(&new.to_bytes(), &pad(&key, session, counter));
-    SignedKey {
-        sealed,
-        counter,
-        tag: tag(&key, session, counter, &sealed),
+    /// The phone's response: on a right confirmation the session and what to send
+    /// (`Granted`, carrying `change_key` sealed); `None` on a wrong one.
+    pub fn respond(
+        &self,
+        response: &Response,
+        change_key: Option<&ChangeKey>,
+    ) -> Option<(ModuleSession, Granted)> {
+        let isk = self.exchange.finish(
+            Role::Initiator,
+            &response.share,
+            &self.challenge.salt,
+            &[],
+            &self.challenge.session,
+        )?;
+        if !tags_equal(&isk.derive16(LABEL_PHONE_TAG), &response.tag) {
+            return None;
+        }
+        let granted = Granted {
+            tag: isk.derive16(LABEL_MODULE_TAG),
+            change_key: change_key.map(|k| xor(k.as_bytes(), &isk.derive16(LABEL_CHANGE_KEY))),
+        };
+        Some((ModuleSession { isk, highest: 0 }, granted))
     }
 }
 
-/// The new key in `signed` if its tag verifies under `current` and `session` (in time
-/// independent of where a wrong tag differs); the counter's freshness is the caller's check.
-pub fn open(current: &LinkKey, session: u32, signed: &SignedKey) -> Option<LinkKey> {
-    let key = ChangeKey::from_link_key(current);
-    let want = tag(&key, session, signed.counter, &signed.sealed);
-    let diff = want
-        .iter()
-        .zip(signed.tag.iter())
-        .fold(0u8, |acc, (a, b)| acc | (a ^ b));
-    (diff == 0)
-        .then(|| LinkKey::from_bytes(xor(&signed.sealed, &pad(&key, session, signed.counter))))
+impl ModuleSession {
+    /// A new phrase from the phone: its derivation (under the module's salt) if the tag
+    /// verifies and the counter is fresh (then used up); the refusal otherwise.
+    pub fn open(&mut self, record: &SetPhrase) -> Result<[u8; PRS_BYTES], Refusal> {
+        if !tags_equal(
+            &phrase_tag(&self.isk, record.counter, &record.sealed),
+            &record.tag,
+        ) {
+            return Err(Refusal::NotAuthenticated);
+        }
+        if record.counter <= self.highest {
+            return Err(Refusal::Replayed);
+        }
+        self.highest = record.counter;
+        Ok(xor(&record.sealed, &phrase_pad(&self.isk, record.counter)))
+    }
+
+    /// The highest counter taken in this session.
+    pub fn highest(&self) -> u32 {
+        self.highest
+    }
 }
 
-/// The phone's side: seals new keys under the module's current one with a counter that only
-/// grows, and learns the module's session from its answers.
-#[derive(Debug, Clone)]
-pub struct KeySigner {
-    current: LinkKey,
-    session: u32,
+/// The phone's side: derives the phrase under the module's salt, answers the challenge,
+/// learns the change key, and seals new phrases (the ground station runs it in WASM; the
+/// simulators' phones too).
+#[derive(Debug)]
+pub struct PhoneSession {
+    phrase_salted: Option<(Challenge, SessionKey)>,
     counter: u32,
 }
 
-impl KeySigner {
-    /// A phone that knows the module's current key but not its session yet: the first
-    /// record is refused with the session, and [`KeySigner::on_answer`] says to send again.
-    pub fn new(current: &LinkKey) -> Self {
-        Self {
-            current: *current,
-            session: 0,
+impl PhoneSession {
+    /// The phone's response to `challenge` for `phrase` (already checked,
+    /// [`crate::link::check_phrase`]), its scalar from `random`; the session waiting for
+    /// the module's grant. `None` when the module's share is invalid.
+    pub fn respond(
+        phrase: &str,
+        challenge: &Challenge,
+        random: &[u8; 32],
+    ) -> Option<(Self, Response)> {
+        let secret = PhraseSecret::derive(phrase, challenge.salt);
+        Self::respond_with(&secret, challenge, random)
+    }
+
+    /// [`PhoneSession::respond`] with the phrase's derivation already made.
+    pub fn respond_with(
+        secret: &PhraseSecret,
+        challenge: &Challenge,
+        random: &[u8; 32],
+    ) -> Option<(Self, Response)> {
+        let exchange = Exchange::start(&secret.prs, PHONE_CI, &challenge.session, random);
+        let isk = exchange.finish(
+            Role::Responder,
+            &challenge.share,
+            &[],
+            &challenge.salt,
+            &challenge.session,
+        )?;
+        let response = Response {
+            share: exchange.share(),
+            tag: isk.derive16(LABEL_PHONE_TAG),
+        };
+        let session = Self {
+            phrase_salted: Some((*challenge, isk)),
             counter: 0,
-        }
+        };
+        Some((session, response))
     }
 
-    /// `new`, sealed with the next counter.
-    pub fn seal(&mut self, new: &LinkKey) -> SignedKey {
+    /// The module's grant, if its confirmation verifies (the module knows the phrase): the
+    /// change key it carries (`None` while the module has no keyed link). A wrong one is
+    /// [`Refusal::NotAuthenticated`].
+    pub fn on_granted(&self, granted: &Granted) -> Result<Option<ChangeKey>, Refusal> {
+        let (_, isk) = self
+            .phrase_salted
+            .as_ref()
+            .ok_or(Refusal::NotAuthenticated)?;
+        if !tags_equal(&isk.derive16(LABEL_MODULE_TAG), &granted.tag) {
+            return Err(Refusal::NotAuthenticated);
+        }
+        Ok(granted
+            .change_key
+            .map(|k| ChangeKey::from_bytes(xor(&k, &isk.derive16(LABEL_CHANGE_KEY)))))
+    }
+
+    /// A new phrase (already checked) for the module, sealed with the next counter.
+    pub fn set_phrase(&mut self, phrase: &str) -> Option<SetPhrase> {
+        let (challenge, _) = self.phrase_salted.as_ref()?;
+        let secret = PhraseSecret::derive(phrase, challenge.salt);
+        self.set_phrase_with(&secret)
+    }
+
+    /// [`PhoneSession::set_phrase`] with the new phrase's derivation already made (under
+    /// the module's salt: the challenge's).
+    pub fn set_phrase_with(&mut self, secret: &PhraseSecret) -> Option<SetPhrase> {
+        let (_, isk) = self.phrase_salted.as_ref()?;
         self.counter = self.counter.wrapping_add(1);
-        seal(&self.current, self.session, self.counter, new)
+        let sealed = xor(&secret.prs, &phrase_pad(isk, self.counter));
+        Some(SetPhrase {
+            counter: self.counter,
+            sealed,
+            tag: phrase_tag(isk, self.counter, &sealed),
+        })
     }
 
-    /// The module answered: adopt its session and counter. Returns whether sealing the key
-    /// again can succeed (it was refused only for a session or counter this phone did not
-    /// know), so a wrong phrase is not retried forever.
-    pub fn on_answer(&mut self, answer: &KeyAnswer) -> bool {
-        let stale = answer.session != self.session || answer.counter >= self.counter;
-        if answer.session != self.session {
-            self.session = answer.session;
-            self.counter = answer.counter;
-        } else {
-            self.counter = self.counter.max(answer.counter);
-        }
-        stale
-            && matches!(
-                answer.outcome,
-                KeyOutcome::Refused(KeyRefusal::NotAuthenticated | KeyRefusal::Replayed)
-            )
+    /// The module's answer: adopt its counter, so the next record is fresh.
+    pub fn on_answer(&mut self, answer: &Answer) {
+        self.counter = self.counter.max(answer.counter);
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::messages::{Message, SettingChange};
+    use crate::link::LinkKey;
+    use crate::messages::Message;
 
-    fn old() -> LinkKey {
-        LinkKey::from_phrase("correct horse battery staple")
+    fn secret(phrase: &str) -> PhraseSecret {
+        PhraseSecret::derive(phrase, [7; 8])
     }
-    fn new() -> LinkKey {
-        LinkKey::from_phrase("tr0ub4dor and 3")
+
+    fn change_key() -> ChangeKey {
+        ChangeKey::from_link_key(&LinkKey::from_bytes([0x33; 16]))
     }
 
     #[test]
-    fn a_sealed_key_opens_only_under_its_key_session_and_bytes() {
-        let signed = seal(&old(), 77, 5, &new());
-        assert_eq!(open(&old(), 77, &signed), Some(new()));
-        assert_ne!(signed.sealed, new().to_bytes(), "never in the clear");
-        assert_eq!(open(&old(), 78, &signed), None, "another session");
-        assert_eq!(open(&new(), 77, &signed), None, "another phrase");
-        let mut other = signed;
-        other.counter = 6;
-        assert_eq!(open(&old(), 77, &other), None, "another counter");
-        for bit in 0..128 {
-            let mut forged = signed;
-            forged.sealed[bit / 8] ^= 1 << (bit % 8);
-            assert_eq!(open(&old(), 77, &forged), None, "sealed bit {bit}");
-        }
-        for bit in 0..64 {
-            let mut forged = signed;
-            forged.tag[bit / 8] ^= 1 << (bit % 8);
-            assert_eq!(open(&old(), 77, &forged), None, "tag bit {bit}");
-        }
-        // A flight-side change tag of the same key is no key-change tag.
-        let change =
-            ChangeKey::from_link_key(&old()).sign(77, 5, SettingChange { id: 0, value: 0 });
-        let crossed = SignedKey {
-            tag: change.tag,
-            ..signed
+    fn the_phone_with_the_phrase_gets_the_change_key_sealed() {
+        let module = ModuleExchange::new(&secret("amber kettle under the oak"), &[1; 32]);
+        let challenge = module.challenge();
+        let (phone, response) =
+            PhoneSession::respond("amber kettle under the oak", &challenge, &[2; 32]).unwrap();
+        let (_, granted) = module
+            .respond(&response, Some(&change_key()))
+            .expect("confirmed");
+        assert_ne!(
+            granted.change_key.as_ref(),
+            Some(change_key().as_bytes()),
+            "never in clear"
+        );
+        assert_eq!(phone.on_granted(&granted), Ok(Some(change_key())));
+        // Another phrase: the module refuses; a module that does not know the phrase is
+        // not believed by the phone either.
+        let (_, wrong) =
+            PhoneSession::respond("amber kettle under the elm", &challenge, &[2; 32]).unwrap();
+        assert!(module.respond(&wrong, Some(&change_key())).is_none());
+        let forged = Granted {
+            tag: [0x42; 16],
+            ..granted
         };
-        assert_eq!(open(&old(), 77, &crossed), None);
+        assert_eq!(phone.on_granted(&forged), Err(Refusal::NotAuthenticated));
+    }
+
+    #[test]
+    fn a_set_phrase_opens_once_in_its_session_with_a_fresh_pad_each_session() {
+        let stored = secret("amber kettle under the oak");
+        let mut pads = Vec::new();
+        for round in 0..2u8 {
+            let module = ModuleExchange::new(&stored, &[10 + round; 32]);
+            let (mut phone, response) = PhoneSession::respond(
+                "amber kettle under the oak",
+                &module.challenge(),
+                &[20 + round; 32],
+            )
+            .unwrap();
+            let (mut session, _) = module.respond(&response, None).unwrap();
+            let record = phone.set_phrase("brass lantern at the weir").unwrap();
+            assert_eq!(
+                record.counter, 1,
+                "a fresh phone signs counter 1 every time"
+            );
+            assert_eq!(
+                session.open(&record),
+                Ok(secret("brass lantern at the weir").prs)
+            );
+            assert_eq!(session.open(&record), Err(Refusal::Replayed));
+            let mut forged = record;
+            forged.sealed[0] ^= 1;
+            assert_eq!(session.open(&forged), Err(Refusal::NotAuthenticated));
+            // The pad is the sealed bytes XOR the derivation.
+            pads.push(xor(
+                &record.sealed,
+                &secret("brass lantern at the weir").prs,
+            ));
+        }
+        assert_ne!(pads[0], pads[1], "two sessions never share a pad");
     }
 
     #[test]
     fn records_round_trip_and_are_never_messages() {
         let records = [
-            ModuleRecord::ProposeKey(new().to_bytes()),
-            ModuleRecord::SignedKey(seal(&old(), 1, 2, &new())),
-            ModuleRecord::KeyAnswer(KeyAnswer {
-                outcome: KeyOutcome::Refused(KeyRefusal::Expired),
-                fingerprint: Some(u32::MAX),
-                session: u32::MAX,
+            ModuleRecord::Hello,
+            ModuleRecord::Challenge(ModuleExchange::new(&secret("x"), &[3; 32]).challenge()),
+            ModuleRecord::Response(Response {
+                share: [4; 32],
+                tag: [5; 16],
+            }),
+            ModuleRecord::Granted(Granted {
+                tag: [6; 16],
+                change_key: Some([7; 16]),
+            }),
+            ModuleRecord::SetPhrase(SetPhrase {
                 counter: u32::MAX,
+                sealed: [8; 32],
+                tag: [9; 16],
+            }),
+            ModuleRecord::Answer(Answer {
+                outcome: Outcome::Refused(Refusal::Locked),
+                counter: u32::MAX,
+            }),
+            ModuleRecord::LinkSecurity(LinkSecurity {
+                tag_failures_down: u32::MAX,
+                tag_failures_up: 1,
+                alert: true,
             }),
         ];
         for record in records {
@@ -316,35 +517,12 @@ mod tests {
             other[1] = VERSION + 1;
             assert_eq!(decode(&other[..n]), Err(DecodeError::Version(VERSION + 1)));
         }
+        // Version 1 records (a key proposed in the clear among them) are not read.
+        let mut proposal = vec![MARKER, 1, 0];
+        proposal.extend([0x5A; 16]);
+        assert_eq!(decode(&proposal), Err(DecodeError::Version(1)));
         assert_eq!(decode(&[0x00, 1, 2]), Err(DecodeError::NotModule));
         assert_eq!(decode(&[MARKER]), Err(DecodeError::Malformed));
-        assert_eq!(decode(&[MARKER, VERSION, 9]), Err(DecodeError::Malformed));
-    }
-
-    #[test]
-    fn a_signer_learns_the_session_from_one_answer_and_a_wrong_phrase_stops() {
-        let mut phone = KeySigner::new(&old());
-        let first = phone.seal(&new());
-        assert_eq!(open(&old(), 77, &first), None, "no session known yet");
-        let refused = KeyAnswer {
-            outcome: KeyOutcome::Refused(KeyRefusal::NotAuthenticated),
-            fingerprint: None,
-            session: 77,
-            counter: 9,
-        };
-        assert!(phone.on_answer(&refused), "worth one more try");
-        let second = phone.seal(&new());
-        assert_eq!(second.counter, 10);
-        assert_eq!(open(&old(), 77, &second), Some(new()));
-        assert!(
-            !phone.on_answer(&refused),
-            "the same refusal again: another phrase"
-        );
-        let armed = KeyAnswer {
-            outcome: KeyOutcome::Refused(KeyRefusal::Armed),
-            session: 78,
-            ..refused
-        };
-        assert!(!phone.on_answer(&armed), "armed: nothing to retry");
+        assert_eq!(decode(&[MARKER, VERSION, 99]), Err(DecodeError::Malformed));
     }
 }

@@ -44,13 +44,15 @@ proptest! {
         bytes.extend_from_slice(&rest);
         let tag = key.tag(counter, &bytes);
         bytes.extend_from_slice(&tag.to_le_bytes());
-        let opened = telemetry::frame::open(&bytes, &key, counter);
+        let context = telemetry::link::auth::TagContext::Counter(counter);
+        let opened = telemetry::frame::open(&bytes, &key, &context);
         let bind = matches!(
             opened,
             Received::Accepted(Frame::BindOffer(_) | Frame::BindAccept { .. })
         );
         prop_assert!(!bind);
-        let _ = telemetry::frame::open(&bytes, &key, counter.wrapping_add(1));
+        let other = telemetry::link::auth::TagContext::Counter(counter.wrapping_add(1));
+        let _ = telemetry::frame::open(&bytes, &key, &other);
     }
 
     #[test]

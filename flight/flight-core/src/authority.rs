@@ -83,19 +83,30 @@ impl ChangeGate {
         key: Option<LinkKey>,
         armed: bool,
     ) -> Result<SettingChange, RefuseReason> {
-        if armed {
-            return Err(RefuseReason::Armed);
-        }
-        let key = key.ok_or(RefuseReason::NoPhrase)?;
-        let signed = signed.ok_or(RefuseReason::NotAuthenticated)?;
+        let Some(key) = key else {
+            return Err(if armed {
+                RefuseReason::Armed
+            } else {
+                RefuseReason::NoPhrase
+            });
+        };
+        let signed = signed.ok_or(if armed {
+            RefuseReason::Armed
+        } else {
+            RefuseReason::NotAuthenticated
+        })?;
         if !ChangeKey::from_link_key(&key).verify(self.session, signed) {
             return Err(RefuseReason::NotAuthenticated);
         }
         if signed.counter <= self.highest {
             return Err(RefuseReason::Replayed);
         }
-        // Used up whatever the value: a refused value is not sent twice either.
+        // Used up whatever comes of it — a refused value, or a refusal because the quad is
+        // armed: a recorded copy must never apply later in this boot (issue 30, finding 6).
         self.highest = signed.counter;
+        if armed {
+            return Err(RefuseReason::Armed);
+        }
         Ok(signed.change)
     }
 
@@ -114,7 +125,7 @@ mod tests {
     use super::*;
     use crate::report::f32_value;
     use crate::settings::{PARAMS, handles};
-    use telemetry::change_auth::Signer;
+    use telemetry::change_auth::{ChangeKey, Signer};
 
     const SESSION: u32 = 0x5E55_1017;
 
@@ -130,7 +141,7 @@ mod tests {
     }
 
     fn key() -> LinkKey {
-        LinkKey::from_phrase("correct horse battery staple")
+        LinkKey::from_bytes([0x6B; 16])
     }
 
     fn refused(reply: Option<Reply>) -> RefuseReason {
@@ -148,7 +159,7 @@ mod tests {
         let mut gate = ChangeGate::new(SESSION);
         let mut settings = Settings::default();
         let before = settings.clone();
-        let mut phone = Signer::new(&key());
+        let mut phone = Signer::new(ChangeKey::from_link_key(&key()));
         // Unsigned (what every phone sent before): refused, nothing changes.
         let plain = Message::SettingChange(descent());
         let r = refused(gate.on_message(&plain, &mut settings, Some(key()), false));
@@ -171,6 +182,8 @@ mod tests {
             Some(RefuseReason::Armed)
         );
         assert_eq!(settings, before, "never while armed");
+        // That one is used up; the phone signs the next.
+        let good = Message::SignedChange(phone.sign(descent()));
         assert_eq!(
             gate.on_message(&good, &mut settings, Some(key()), false),
             Some(Reply::Applied(descent()))
@@ -183,7 +196,7 @@ mod tests {
             RefuseReason::Replayed
         );
         // Another phrase, or none on the flight side.
-        let mut stranger = Signer::new(&LinkKey::from_phrase("another phrase"));
+        let mut stranger = Signer::new(ChangeKey::from_link_key(&LinkKey::from_bytes([1; 16])));
         stranger.on_refused(&answer);
         let forged = Message::SignedChange(stranger.sign(descent()));
         assert_eq!(
@@ -216,11 +229,55 @@ mod tests {
         );
     }
 
+    /// Issue 30, finding 6: a signed change refused because the quad was armed was not used
+    /// up (the armed check came before the counter was recorded), so its recorded copy
+    /// applied after disarming, in the same boot.
+    #[test]
+    fn a_signed_change_refused_while_armed_is_used_up() {
+        let mut gate = ChangeGate::new(SESSION);
+        let mut settings = Settings::default();
+        let mut phone = Signer::new(ChangeKey::from_link_key(&key()));
+        phone.on_refused(&ChangeRefused {
+            id: 0,
+            reason: RefuseReason::NotAuthenticated,
+            session: SESSION,
+            counter: 0,
+        });
+        let signed = Message::SignedChange(phone.sign(descent()));
+        assert_eq!(
+            refused(gate.on_message(&signed, &mut settings, Some(key()), true)),
+            RefuseReason::Armed
+        );
+        // Disarmed, later in the same boot: the recording is a replay.
+        assert_eq!(
+            refused(gate.on_message(&signed, &mut settings, Some(key()), false)),
+            RefuseReason::Replayed
+        );
+        assert_eq!(settings, Settings::default());
+        // A forgery while armed uses nothing up: the phone's next change still applies.
+        let mut forged = phone.sign(descent());
+        forged.tag[0] ^= 1;
+        assert_eq!(
+            refused(gate.on_message(
+                &Message::SignedChange(forged),
+                &mut settings,
+                Some(key()),
+                true
+            )),
+            RefuseReason::NotAuthenticated
+        );
+        let next = Message::SignedChange(phone.sign(descent()));
+        assert_eq!(
+            gate.on_message(&next, &mut settings, Some(key()), false),
+            Some(Reply::Applied(descent()))
+        );
+    }
+
     #[test]
     fn an_out_of_range_value_is_refused_as_invalid_and_uses_its_counter() {
         let mut gate = ChangeGate::new(SESSION);
         let mut settings = Settings::default();
-        let mut phone = Signer::new(&key());
+        let mut phone = Signer::new(ChangeKey::from_link_key(&key()));
         phone.on_refused(&ChangeRefused {
             id: 0,
             reason: RefuseReason::NotAuthenticated,

@@ -3,18 +3,21 @@
 //! methods from its tasks and carries out what they return.
 //!
 //! Security (spec §12): the link loops are built here ([`App::master`], [`App::follower`]),
-//! keyed with the binding phrase's key when the settings hold one; a phrase set through the
-//! text settings ([`App::set_setting_text`]) restarts the link with it. The HM-10's boot
-//! script ([`App::hm10_script`]) always sets a pairing PIN with bonding: the one set in
-//! `ble_pin`, else this chip's factory PIN.
+//! keyed with the link's key agreed at bind (a link without one runs only by the explicit
+//! `plain` setting); the binds agree it with CPace on the binding phrase's derivation
+//! (`crate::phrase`), and phones prove the phrase the same way before they get the change
+//! key of the flight side's settings. The module's secrets come from one seed of the
+//! hardware RNG ([`App::seed_random`]), each under its own label. The HM-10's boot script
+//! ([`App::hm10_script`]) always sets a pairing PIN with bonding — the one set in `ble_pin`,
+//! else this chip's factory PIN — and the relay opens only once it did.
 
 use crate::air::AirLink;
 use crate::button::ButtonEvent;
 use crate::channels::ChannelFrame;
 use crate::hm10::relay::{MAX_RECORD_LEN, Relay, RelayStats};
 use crate::params::{self, Commands, Effect};
-use crate::phrase::PhoneKeys;
-use crate::ports::{HandsetOutput, HandsetRequest, LinkPort, LinkStats};
+use crate::phrase::{PhoneAccess, PhraseJob, PhraseNote};
+use crate::ports::{HandsetOutput, HandsetRequest, LinkPort, LinkStats, TagFailures};
 use crate::ppm::{self, Decoded, Decoder, DecoderConfig, Encoder, EncoderConfig};
 use crate::session::{BindOutcome, LinkStep, Session, SessionEnd};
 use crate::settings::{InputProtocol, Role, Settings};
@@ -22,9 +25,14 @@ use crate::status::LinkState;
 use heapless::Deque;
 use taulink_handset::crsf::address;
 use taulink_handset::crsf::params::ParameterChunk;
+use telemetry::change_auth::ChangeKey;
 use telemetry::channels::FailsafeValues;
-use telemetry::link::LinkParams;
+use telemetry::link::alarm::TagAlarm;
 use telemetry::link::core::{Follower, Master};
+use telemetry::link::follower::FollowerBind;
+use telemetry::link::master::MasterBind;
+use telemetry::link::{Entropy, LinkKey, LinkParams};
+use telemetry::messages::LinkSecurity;
 
 use crate::hm10::at::{Configurator, Pin};
 use crate::settings::TextError;
@@ -88,10 +96,22 @@ pub struct App<L: LinkPort, H: HandsetOutput> {
     link_model: Option<u8>,
     /// The chip's unique ID (for the factory PIN), once the HM-10 script asked for it.
     unique_id: Option<u64>,
-    /// Seeds a receiver-role follower's epoch nonces (spec §12.2), from the RNG at boot.
+    /// The module's secrets (spec §12), from the RNG at boot.
+    entropy: Entropy,
+    /// Seeds the link's epoch nonces (spec §12.2).
     nonce_seed: u64,
-    /// Key changes from the phone: session, counter, proposal timeout.
-    phone_keys: PhoneKeys,
+    /// The phone's exchanges with the module (CPace on the phrase).
+    phone: PhoneAccess,
+    /// A phrase from the radio being derived ([`App::step_phrase_job`]).
+    phrase_job: Option<PhraseJob>,
+    /// Tag failures at this end over the last seconds (spec §12.2).
+    alarm: TagAlarm,
+    /// The flight side's last `LinkSecurity` report.
+    flight_security: LinkSecurity,
+    /// Core ticks since boot (the alarm's clock: 10 Hz).
+    ticks: u64,
+    /// The tag failures last told the phone, and the tick.
+    security_sent: (TagFailures, u64),
 }
 
 impl<L: LinkPort, H: HandsetOutput> App<L, H> {
@@ -128,30 +148,89 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             actions: Deque::new(),
             link_model: None,
             unique_id: None,
+            entropy: Entropy::new([0; 32]),
             nonce_seed: 0,
-            phone_keys: PhoneKeys::new(0),
+            phone: PhoneAccess::default(),
+            phrase_job: None,
+            alarm: TagAlarm::default(),
+            flight_security: LinkSecurity {
+                tag_failures: 0,
+                alert: false,
+            },
+            ticks: 0,
+            security_sent: (TagFailures::default(), 0),
         })
     }
 
-    /// The master for `params` (from `LinkStep::RunMaster`), keyed with the binding
-    /// phrase's key when one is set (`Master::with_key`: every frame sealed, only verified
-    /// downlinks taken, identity and hop sequence derived from the key), else unkeyed.
+    /// The master for `params` (from `LinkStep::RunMaster`), keyed with that link's key
+    /// ([`App::link_key_for`]: `Master::with_key`, every frame sealed, only verified
+    /// downlinks taken), else unkeyed (the explicit `plain` setting).
     pub fn master(&self, params: LinkParams) -> Master {
         let master = Master::new(params);
-        match self.settings.link_key {
+        match self.link_key_for(&params) {
             Some(key) => master.with_key(key).with_nonce_seed(self.nonce_seed),
             None => master,
         }
     }
 
-    /// The seed of the link's epoch nonces (spec §12.2) — the master's own nonce, or a
-    /// receiver-role follower's — from the nRF52840's RNG at boot: a keyed end's nonce must
-    /// never repeat, across reboots too. It also draws the session of key changes from the
-    /// phone (`phrase::PhoneKeys`), so a signed key record recorded before a reboot fails
-    /// after it.
-    pub fn seed_link_nonces(&mut self, random: u64) {
-        self.nonce_seed = random;
-        self.phone_keys = PhoneKeys::new(random);
+    /// The key of the link `params`: in the transmitter role the module's key for that
+    /// link (each model's link its own, `LinkKey::for_link`), in the receiver role the key
+    /// the master handed over; `None` without one.
+    pub fn link_key_for(&self, params: &LinkParams) -> Option<LinkKey> {
+        let key = self.settings.link_key?;
+        Some(match self.settings.role {
+            Role::Transmitter => key.for_link(params.bind_id),
+            Role::Receiver => key,
+        })
+    }
+
+    /// The module's secrets from 32 bytes of the nRF52840's RNG at every boot (spec §12):
+    /// the seed of the link's epoch nonces (§12.2: a keyed end's nonce must never repeat,
+    /// across reboots too), the CPace randomness of binds and phone exchanges, each new
+    /// module key, and — drawn once and stored — the salt of the phrase's derivation; each
+    /// under its own label, so none tells anything of another.
+    pub fn seed_random(&mut self, random: &[u8; 32]) {
+        let mut entropy = Entropy::new(*random);
+        self.nonce_seed = entropy.draw_u64(b"link nonces");
+        if self.settings.phrase_salt == [0; 8] {
+            let salt = entropy.draw(b"phrase salt");
+            self.settings.phrase_salt = core::array::from_fn(|i| salt.get(i).copied().unwrap_or(0));
+        }
+        self.entropy = entropy;
+    }
+
+    /// The change key of the flight link in force (what a phone that proved the phrase
+    /// gets), if it is keyed.
+    fn change_key(&self) -> Option<ChangeKey> {
+        let params = crate::air::link_params(&self.settings)?;
+        let params = match self.link_model() {
+            Some(m) => params.for_model(m),
+            None => params,
+        };
+        self.link_key_for(&params)
+            .map(|k| ChangeKey::from_link_key(&k))
+    }
+
+    /// Runs up to `iterations` of the phrase's derivation started from the radio; returns
+    /// whether more remain. The firmware calls it an iteration at a time between yields
+    /// (the whole derivation is ≈ 2 s of the nRF52840); when it ends the phrase is in force
+    /// and a save is queued ([`App::take_action`]).
+    pub fn step_phrase_job(&mut self, iterations: u32) -> bool {
+        let Some(job) = self.phrase_job.as_mut() else {
+            return false;
+        };
+        let Some(secret) = job.step(iterations) else {
+            return true;
+        };
+        self.phrase_job = None;
+        if self.commands.flight_armed {
+            self.commands.phrase_note = Some(PhraseNote::Armed);
+            return false;
+        }
+        self.settings.phrase_prs = Some(secret.prs);
+        self.commands.phrase_note = Some(PhraseNote::Set);
+        let _ = self.actions.push_back(Action::Save(self.settings));
+        false
     }
 
     /// The follower for `LinkStep::RunFollower`'s fields, keyed as [`App::master`].
@@ -162,7 +241,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         failsafe_us: u64,
     ) -> Follower {
         let follower = Follower::new(params, failsafe, failsafe_us);
-        match self.settings.link_key {
+        match self.link_key_for(&params) {
             Some(key) => follower.with_key(key).with_nonce_seed(self.nonce_seed),
             None => follower,
         }
@@ -179,6 +258,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         let after = self.settings;
         let link_changed = crate::air::link_params(&before) != crate::air::link_params(&after)
             || before.link_key != after.link_key
+            || before.plain != after.plain
             || before.role != after.role;
         if link_changed {
             self.restart_request = true;
@@ -189,7 +269,8 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         if before.failsafe != after.failsafe {
             self.apply(Effect::PpmFailsafe);
         }
-        if let Some(id) = self.unique_id {
+        if let (Some(id), Some(_)) = (self.unique_id, self.commands.ble_pin) {
+            // The new PIN reaches the HM-10 at the next power-up; the row shows the set one.
             self.commands.ble_pin = Some(self.pin_for(id));
         }
         Ok(Action::Save(self.settings))
@@ -209,7 +290,6 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     pub fn hm10_script(&mut self, now_ms: u32, unique_id: u64) -> Configurator {
         self.unique_id = Some(unique_id);
         let pin = self.pin_for(unique_id);
-        self.commands.ble_pin = Some(pin);
         // "TauLink": the BLE name the phone app filters on.
         Configurator::new("TauLink", now_ms).with_pin(pin)
     }
@@ -299,8 +379,14 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// A telemetry record received over the link: to the handset and the phone. The flight
     /// side's arm state is kept: no phrase change while it says armed (`crate::phrase`).
     pub fn on_link_record(&mut self, record: &[u8]) {
-        if let Ok(telemetry::messages::Message::ArmState(state)) = crate::records::decode(record) {
-            self.commands.flight_armed = state.armed;
+        match crate::records::decode(record) {
+            Ok(telemetry::messages::Message::ArmState(state)) => {
+                self.commands.flight_armed = state.armed;
+            }
+            Ok(telemetry::messages::Message::LinkSecurity(security)) => {
+                self.flight_security = security;
+            }
+            _ => {}
         }
         if self.settings.role == Role::Transmitter {
             self.handset.on_telemetry(record);
@@ -316,10 +402,10 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         self.flush_uplink();
     }
 
-    /// Module-addressed records from the phone (`telemetry::module_record`): a key proposed
-    /// (waits for the pilot's confirmation on the radio) or signed under the current key
-    /// (applied at once); every one is answered. Records that fail their CRC or decode are
-    /// dropped unanswered, as on the link.
+    /// Module-addressed records from the phone (`telemetry::module_record`, spec §12.5): the
+    /// CPace exchange on the phrase, then new phrases in its session; each is answered
+    /// (`crate::phrase::PhoneAccess`). Records that fail their CRC or decode are dropped
+    /// unanswered, as on the link.
     fn serve_module_records(&mut self) {
         let mut record = [0u8; MAX_RECORD_LEN];
         while let Some(length) = self.relay.next_record_to_module(&mut record) {
@@ -329,26 +415,31 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             let Ok(module_record) = telemetry::module_record::decode(payload) else {
                 continue;
             };
-            let Some(outcome) = self.phone_keys.on_record(
+            let change_key = self.change_key();
+            let armed = self.commands.flight_armed;
+            let entropy = &mut self.entropy;
+            let Some(reply) = self.phone.on_record(
                 &module_record,
-                &mut self.settings.link_key,
-                &mut self.commands,
+                &mut self.settings,
+                armed,
+                change_key,
+                || entropy.draw(b"phone"),
             ) else {
                 continue;
             };
-            if outcome.changed {
-                self.apply(Effect::NewPhrase);
+            if reply.changed {
+                self.commands.phrase_note = Some(PhraseNote::Set);
+                self.apply(Effect::Save);
             }
-            self.answer_phone(outcome.answer);
+            self.answer_phone(&reply.reply);
         }
     }
 
-    /// Queues `answer` for the phone (dropped without a phone, like telemetry).
-    fn answer_phone(&mut self, answer: telemetry::module_record::KeyAnswer) {
-        use telemetry::module_record::{self, ModuleRecord};
+    /// Queues `record` for the phone (dropped without a phone, like telemetry).
+    fn answer_phone(&mut self, reply: &telemetry::module_record::ModuleRecord) {
+        use telemetry::module_record;
         let mut payload = [0u8; module_record::MAX_PAYLOAD_BYTES];
-        let Some(length) = module_record::encode(&ModuleRecord::KeyAnswer(answer), &mut payload)
-        else {
+        let Some(length) = module_record::encode(reply, &mut payload) else {
             return;
         };
         let mut record = [0u8; MAX_RECORD_LEN];
@@ -370,12 +461,15 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     pub fn on_hm10_configured(&mut self, outcome: crate::hm10::at::Outcome) -> Option<u32> {
         use crate::hm10::at::Outcome;
         match outcome {
-            Outcome::Configured { baud } => Some(baud),
-            Outcome::PhoneConnected { baud } => {
-                self.on_phone_connected();
+            Outcome::Configured { baud } => {
+                // The PIN is in force only now: the device tool shows it from here on.
+                self.commands.ble_pin = self.unique_id.map(|id| self.pin_for(id));
                 Some(baud)
             }
-            Outcome::NoModule | Outcome::Failed { .. } => None,
+            Outcome::NoModule | Outcome::Failed { .. } => {
+                self.commands.ble_pin = None;
+                None
+            }
         }
     }
 
@@ -497,14 +591,13 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
                 } => {
                     let effect =
                         params::write(number, &value, &mut self.settings, &mut self.commands);
+                    if effect == Effect::DerivePhrase
+                        && let Ok(phrase) = crate::phrase::phrase_from_write(&value)
+                    {
+                        self.phrase_job = Some(PhraseJob::new(phrase, &self.settings));
+                    }
                     self.apply(effect);
-                    if matches!(
-                        effect,
-                        Effect::Bind
-                            | Effect::Save
-                            | Effect::CommandStatus
-                            | Effect::PhoneKey { .. }
-                    ) {
+                    if matches!(effect, Effect::Bind | Effect::Save | Effect::CommandStatus) {
                         // The radio's popup waits for the command's new status.
                         self.send_parameter(origin, number, 0);
                     }
@@ -561,18 +654,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             Effect::Save => {
                 let _ = self.actions.push_back(Action::Save(self.settings));
             }
-            Effect::NewPhrase => {
-                self.restart_request = true;
-                let _ = self.actions.push_back(Action::Save(self.settings));
-            }
-            Effect::PhoneKey { outcome, changed } => {
-                if changed {
-                    self.apply(Effect::NewPhrase);
-                }
-                let answer = self.phone_keys.answer(outcome, self.settings.link_key);
-                self.answer_phone(answer);
-            }
-            Effect::None | Effect::CommandStatus => {}
+            Effect::None | Effect::CommandStatus | Effect::DerivePhrase => {}
         }
     }
 
@@ -620,8 +702,13 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// becomes the bind ID if a master bind is next.
     pub fn next_link_step(&mut self, now_ms: u32, random: u32) -> LinkStep {
         self.link_model = self.link_model();
-        self.session
-            .next(&self.settings, self.link_model, now_ms, random)
+        self.session.next(
+            &self.settings,
+            self.link_model,
+            now_ms,
+            random,
+            &mut self.entropy,
+        )
     }
 
     /// While a link step runs (every `session::POLL_MS`): whether it must stop now (a long
@@ -655,32 +742,36 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         self.update_led()
     }
 
-    /// A bind step ended: a success is remembered (and must be saved), anything else goes
-    /// back to the previous state.
+    /// A bind step ended: a success is remembered with its key (and must be saved), anything
+    /// else goes back to the previous state.
     pub fn on_bind_outcome(&mut self, outcome: BindOutcome) -> Option<Action> {
         let offered = self.session.on_bind_done();
         let seed = self.session.take_offered_seed();
         let accepted = matches!(
             (outcome, offered, seed),
-            (BindOutcome::Offered { accepted: true }, Some(_), _)
-                | (BindOutcome::Offered { accepted: true }, _, Some(_))
-                | (BindOutcome::Listened(Some(_)), _, _)
+            (BindOutcome::Offered(MasterBind::Bound(_)), Some(_), _)
+                | (BindOutcome::OpenLrs { accepted: true }, _, Some(_))
+                | (BindOutcome::Listened(FollowerBind::Bound { .. }), _, _)
         );
         if self.commands.binding {
             self.commands.binding = false;
             self.commands.bind_result = Some(accepted);
         }
-        if let (BindOutcome::Offered { accepted: true }, Some(seed)) = (outcome, seed) {
+        if let (BindOutcome::OpenLrs { accepted: true }, Some(seed)) = (outcome, seed) {
             // An OpenLRSng receiver took the bind data: its seed is the link from now on.
             self.binding = false;
             self.settings.openlrs.hop_seed = seed;
             return Some(Action::Save(self.settings));
         }
         match (outcome, offered) {
-            (BindOutcome::Offered { accepted: true }, Some(offer)) => {
+            (BindOutcome::Offered(MasterBind::Bound(_)), Some(offer)) => {
+                self.settings.link_key = offer.module_key;
                 Some(self.bound(offer.bind_id, offer.model))
             }
-            (BindOutcome::Listened(Some(params)), _) => Some(self.on_bind_offer_accepted(&params)),
+            (BindOutcome::Listened(FollowerBind::Bound { params, key }), _) => {
+                self.settings.link_key = key;
+                Some(self.on_bind_offer_accepted(&params))
+            }
             _ => self.on_bind_failed(),
         }
     }
@@ -697,14 +788,38 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             self.binding = false;
         }
         self.encoder.set_failsafe(!stats.connected);
-        if let Some(answer) = self
-            .phone_keys
-            .on_tick(self.settings.link_key, &mut self.commands)
-        {
-            self.answer_phone(answer);
-        }
+        self.phone.on_tick();
+        self.watch_tags(stats.tag_failures);
         self.flush_uplink();
         self.update_led()
+    }
+
+    /// This end's tag failures (its link session's count) and the flight side's last
+    /// report: the alarm follows them, the device tool's row shows them, and the phone is
+    /// told of a change at most once a second.
+    fn watch_tags(&mut self, down: u32) {
+        self.ticks += 1;
+        let alert = self.alarm.update(self.ticks * 100_000, down);
+        let now = TagFailures {
+            down,
+            up: self.flight_security.tag_failures,
+            alert: alert || self.flight_security.alert,
+        };
+        self.commands.tag_failures = now;
+        if self.settings.role == Role::Transmitter && self.settings.link_key.is_some() {
+            self.handset.on_tag_failures(now);
+        }
+        let (sent, at) = self.security_sent;
+        if now != sent && self.ticks.saturating_sub(at) >= 10 {
+            self.security_sent = (now, self.ticks);
+            self.answer_phone(&telemetry::module_record::ModuleRecord::LinkSecurity(
+                telemetry::module_record::LinkSecurity {
+                    tag_failures_down: now.down,
+                    tag_failures_up: now.up,
+                    alert: now.alert,
+                },
+            ));
+        }
     }
 
     fn forward(&mut self, channels: &ChannelFrame) {

@@ -45,6 +45,8 @@ struct FakeHandset {
     model: Option<u8>,
     /// Requests the radio made, oldest first.
     requests: std::collections::VecDeque<HandsetRequest>,
+    /// The last tag failures the radio was told.
+    tag_failures: Option<crate::ports::TagFailures>,
 }
 
 impl HandsetOutput for FakeHandset {
@@ -53,6 +55,9 @@ impl HandsetOutput for FakeHandset {
     }
     fn on_link_stats(&mut self, stats: &LinkStats) {
         self.stats.push(*stats);
+    }
+    fn on_tag_failures(&mut self, failures: crate::ports::TagFailures) {
+        self.tag_failures = Some(failures);
     }
     fn model_id(&self) -> Option<u8> {
         self.model
@@ -251,6 +256,7 @@ fn led_follows_radio_bind_and_link() {
 fn a_receiver_takes_band_and_rate_from_the_bind_offer() {
     let mut app = app(Settings {
         role: Role::Receiver,
+        plain: true,
         ..Settings::default()
     });
     let offer = telemetry::link::LinkParams::new(
@@ -275,6 +281,7 @@ fn a_receiver_takes_an_f500_offer_and_its_telemetry_ratio() {
     // the saved settings then gave other link parameters than the master's.
     let mut app = app(Settings {
         role: Role::Receiver,
+        plain: true,
         ..Settings::default()
     });
     let offer = telemetry::link::LinkParams::new(
@@ -297,6 +304,7 @@ fn a_long_press_stops_the_link_and_the_bind_outcome_is_saved_or_undone() {
     use crate::session::{BindOutcome, LinkStep, SessionEnd};
     let mut app = app(Settings {
         bind_id: 0x0101_0101,
+        link_key: Some(telemetry::link::LinkKey::from_bytes([0x11; 16])),
         ..Settings::default()
     });
     assert_eq!(app.next_link_step(0, 7), LinkStep::Probe);
@@ -311,11 +319,13 @@ fn a_long_press_stops_the_link_and_the_bind_outcome_is_saved_or_undone() {
         panic!("a transmitter binds as master");
     };
     assert_eq!(params.bind_id, 0xABCD_0123);
-    let Some(Action::Save(saved)) = app.on_bind_outcome(BindOutcome::Offered { accepted: true })
-    else {
+    let key = telemetry::link::LinkKey::from_bytes([1; 16]);
+    let bound = BindOutcome::Offered(telemetry::link::master::MasterBind::Bound(Some(key)));
+    let Some(Action::Save(saved)) = app.on_bind_outcome(bound) else {
         panic!("an accepted offer is saved");
     };
     assert_eq!(saved.bind_id, 0xABCD_0123);
+    assert!(saved.link_key.is_some(), "the module key is stored");
     assert_eq!(app.settings().bind_id, 0xABCD_0123);
     // A bind nobody answers keeps the old ID and ends the Binding LED.
     assert_eq!(app.next_link_step(300, 0), LinkStep::Probe);
@@ -326,7 +336,9 @@ fn a_long_press_stops_the_link_and_the_bind_outcome_is_saved_or_undone() {
     app.on_session_end(SessionEnd::BindRequested);
     app.next_link_step(400, 0x5555_5555);
     assert_eq!(
-        app.on_bind_outcome(BindOutcome::Offered { accepted: false }),
+        app.on_bind_outcome(BindOutcome::Offered(
+            telemetry::link::master::MasterBind::NoAnswer
+        )),
         Some(Action::Led(LinkState::Searching))
     );
     assert_eq!(app.settings().bind_id, 0xABCD_0123);
@@ -349,10 +361,7 @@ fn the_hm10_script_outcome_decides_the_relay() {
     app.on_link_record(&[1, 2, 3]);
     let mut frame = [0u8; MAX_FRAME_LEN];
     assert_eq!(app.next_phone_frame(&mut frame), None);
-    assert_eq!(
-        app.on_hm10_configured(Outcome::PhoneConnected { baud: 9_600 }),
-        Some(9_600)
-    );
+    app.on_phone_connected();
     app.on_link_record(&[4, 5, 6]);
     assert!(app.next_phone_frame(&mut frame).is_some(), "relay open");
 }
@@ -361,6 +370,7 @@ fn the_hm10_script_outcome_decides_the_relay() {
 fn a_low_module_battery_shows_on_the_led_with_hysteresis() {
     let mut app = app(Settings {
         bind_id: 0x0101_0101,
+        link_key: Some(telemetry::link::LinkKey::from_bytes([0x11; 16])),
         ..Settings::default()
     });
     assert_eq!(
@@ -413,6 +423,7 @@ fn model_match_flies_the_selected_models_identity_and_says_mismatch() {
         bind_id: 0x0BAD_F00D,
         model_match: true,
         bound_models: 1 << 3,
+        link_key: Some(telemetry::link::LinkKey::from_bytes([0x22; 16])),
         ..Settings::default()
     };
     let base = crate::air::link_params(&settings).unwrap();
@@ -440,7 +451,11 @@ fn model_match_flies_the_selected_models_identity_and_says_mismatch() {
         panic!("bind next");
     };
     assert_eq!(params, base.for_model(5));
-    let saved = app.on_bind_outcome(BindOutcome::Offered { accepted: true });
+    let saved = app.on_bind_outcome(BindOutcome::Offered(
+        telemetry::link::master::MasterBind::Bound(Some(telemetry::link::LinkKey::from_bytes(
+            [1; 16],
+        ))),
+    ));
     assert!(
         matches!(saved, Some(Action::Save(s)) if s.bind_id == base.bind_id
         && s.bound_models == (1 << 3) | (1 << 5))
@@ -453,6 +468,7 @@ fn model_match_off_flies_one_identity_for_every_model() {
     let settings = Settings {
         input: InputProtocol::Crsf,
         bind_id: 0x0BAD_F00D,
+        link_key: Some(telemetry::link::LinkKey::from_bytes([0x22; 16])),
         ..Settings::default()
     };
     let base = crate::air::link_params(&settings).unwrap();
@@ -485,49 +501,53 @@ fn model_match_off_flies_one_identity_for_every_model() {
 }
 
 #[test]
-fn the_phrase_keys_the_link_ends_and_a_new_phrase_restarts_the_link() {
+fn a_keyed_link_runs_with_its_links_key_and_an_unkeyed_one_only_by_the_plain_setting() {
     use crate::session::{LinkStep, SessionEnd};
     use telemetry::link::LinkKey;
+    let module_key = LinkKey::from_bytes([0x3C; 16]);
     let mut app = app(Settings {
         bind_id: 0x0101_0101,
+        link_key: Some(module_key),
         ..Settings::default()
     });
     app.on_radio_present(true);
     let LinkStep::RunMaster(params) = app.next_link_step(0, 7) else {
-        panic!("bound: the master runs");
+        panic!("bound with a key: the master runs");
     };
-    assert_eq!(app.master(params).params().bind_id, 0x0101_0101, "unkeyed");
-    assert_eq!(app.poll_session(50), None);
-
-    let Ok(Action::Save(saved)) = app.set_setting_text("phrase", "correct horse battery staple")
-    else {
-        panic!("a valid phrase is taken and saved");
-    };
-    let key = LinkKey::from_phrase("correct horse battery staple");
-    assert_eq!(saved.link_key, Some(key));
+    // The link's key is the module key's for this bind ID; identity stays the bind ID's.
     assert_eq!(
-        app.poll_session(100),
-        Some(SessionEnd::SettingsChanged),
-        "the running master stops"
+        app.link_key_for(&params),
+        Some(module_key.for_link(0x0101_0101))
     );
-    app.on_session_end(SessionEnd::SettingsChanged);
-    assert_eq!(app.next_link_step(150, 7), LinkStep::Probe);
-    app.on_radio_present(true);
-    let LinkStep::RunMaster(params) = app.next_link_step(200, 7) else {
-        panic!("the master runs again");
-    };
-    // Keyed: the identity on air is the key's, not the stored bind ID.
-    assert_eq!(app.master(params).params().bind_id, key.bind_id());
-    let follower = app.follower(params, FailsafeValues::default(), 250_000);
-    assert_eq!(follower.params().bind_id, key.bind_id());
-
-    // A bad phrase changes nothing and restarts nothing.
+    assert!(app.master(params).has_key());
+    assert_eq!(app.master(params).params().bind_id, params.bind_id);
     assert_eq!(
-        app.set_setting_text("phrase", &"x".repeat(65)),
-        Err(TextError::BadPhrase)
+        info_row(&app, params::LINK_KEY),
+        format!(
+            "{} no phrase",
+            module_key.for_link(0x0101_0101).fingerprint()
+        )
     );
-    assert_eq!(app.settings().link_key, Some(key));
-    assert_eq!(app.poll_session(250), None);
+    // Bound without a key (an unauthenticated bind): no link unless `plain` is on.
+    let mut plain = crate::app::tests::app(Settings {
+        bind_id: 0x0202_0202,
+        ..Settings::default()
+    });
+    plain.on_radio_present(true);
+    assert_eq!(plain.next_link_step(0, 7), LinkStep::WaitForBind);
+    plain.set_setting_text("plain", "on").unwrap();
+    assert_eq!(plain.poll_session(50), Some(SessionEnd::SettingsChanged));
+    plain.on_session_end(SessionEnd::SettingsChanged);
+    assert_eq!(plain.next_link_step(100, 7), LinkStep::Probe);
+    plain.on_radio_present(true);
+    let LinkStep::RunMaster(params) = plain.next_link_step(150, 7) else {
+        panic!("unauthenticated by the explicit setting");
+    };
+    assert!(!plain.master(params).has_key());
+    assert_eq!(
+        info_row(&plain, params::LINK_KEY),
+        format!("{} no phrase", params::UNAUTHENTICATED)
+    );
 }
 
 #[test]
@@ -538,7 +558,17 @@ fn the_hm10_always_gets_a_pin_the_factory_one_from_the_chip_id() {
     assert_eq!(script.pin(), Some(factory));
     assert!((100_000..=999_999).contains(&factory.value()));
     assert_ne!(factory, Pin::factory(0x1234_5678_9ABC_DEF1), "per chip");
-    assert_eq!(app.parameter_commands().ble_pin, Some(factory), "shown");
+    assert_eq!(
+        app.parameter_commands().ble_pin,
+        None,
+        "not shown before it is set"
+    );
+    app.on_hm10_configured(crate::hm10::at::Outcome::Configured { baud: 115_200 });
+    assert_eq!(
+        app.parameter_commands().ble_pin,
+        Some(factory),
+        "shown once set"
+    );
     // Set by the owner: that one, shown at once, applied at the next boot's script.
     app.set_setting_text("ble_pin", "271828").unwrap();
     assert_eq!(app.parameter_commands().ble_pin, Pin::new(271_828));
@@ -571,280 +601,330 @@ fn arm_record(armed: bool) -> Vec<u8> {
     crate::records::encode(&message, &mut out).unwrap().to_vec()
 }
 
+/// Runs the phrase job the firmware runs in steps; how many steps it took.
+fn derive(app: &mut App<FakeLink, FakeHandset>) -> u32 {
+    let mut steps = 0;
+    while app.step_phrase_job(256) {
+        steps += 1;
+    }
+    steps + 1
+}
+
 #[test]
-fn a_phrase_typed_on_the_radio_keys_the_link_but_never_while_the_quad_is_armed() {
-    use crate::session::{LinkStep, SessionEnd};
-    use telemetry::link::LinkKey;
+fn a_phrase_typed_on_the_radio_is_derived_in_steps_and_never_taken_while_armed() {
+    use telemetry::link::PhraseSecret;
     let mut app = app(Settings {
         bind_id: 0x0101_0101,
+        link_key: Some(telemetry::link::LinkKey::from_bytes([1; 16])),
         ..Settings::default()
     });
+    app.seed_random(&[4; 32]);
+    let salt = app.settings().phrase_salt;
+    assert_ne!(salt, [0; 8], "a salt drawn at boot");
     app.on_radio_present(true);
-    let LinkStep::RunMaster(_) = app.next_link_step(0, 7) else {
-        panic!("bound: the master runs");
-    };
-    assert_eq!(info_row(&app, params::PHRASE_KEY), params::NO_PHRASE);
+    let _ = app.next_link_step(0, 7);
+    assert!(info_row(&app, params::LINK_KEY).ends_with("no phrase"));
 
-    // The flight side reports armed: the phrase is refused, nothing restarts or is saved.
+    // The flight side reports armed: the phrase is refused, nothing is derived or saved.
     app.on_link_record(&arm_record(true));
+    radio_writes(
+        &mut app,
+        params::BIND_PHRASE,
+        b"amber kettle under the oak\0",
+    );
+    assert!(!app.step_phrase_job(1));
+    assert_eq!(app.settings().phrase_prs, None);
+    assert_eq!(app.take_action(), None);
+    assert_eq!(info_row(&app, params::LINK_KEY), "refused: quad armed");
+
+    // Disarmed: the write starts the derivation; when it ends the phrase is in force (for
+    // the next bind) and saved; the running link is not touched.
+    app.on_link_record(&arm_record(false));
+    radio_writes(
+        &mut app,
+        params::BIND_PHRASE,
+        b"  amber kettle under the oak\0",
+    );
+    assert_eq!(info_row(&app, params::LINK_KEY), "deriving phrase...");
+    assert_eq!(derive(&mut app), 4096 / 256, "in steps");
+    let expected = PhraseSecret::derive("amber kettle under the oak", salt);
+    assert_eq!(
+        app.settings().phrase(),
+        Some(expected),
+        "trimmed like every path"
+    );
+    let Some(Action::Save(saved)) = app.take_action() else {
+        panic!("the new phrase is saved");
+    };
+    assert_eq!(saved.phrase_prs, Some(expected.prs));
+    assert_eq!(app.poll_session(100), None, "the link keeps running");
+    assert!(info_row(&app, params::LINK_KEY).ends_with("+phrase"));
+
+    // An empty commit (the pilot backed out of the editor) keeps the phrase; a weak one is
+    // refused with the reason.
+    radio_writes(&mut app, params::BIND_PHRASE, b"\0");
+    assert_eq!(app.settings().phrase(), Some(expected));
+    assert_eq!(info_row(&app, params::LINK_KEY), "empty: phrase kept");
+    radio_writes(&mut app, params::BIND_PHRASE, b"short one\0");
+    assert_eq!(info_row(&app, params::LINK_KEY), "refused: < 12 chars");
     radio_writes(
         &mut app,
         params::BIND_PHRASE,
         b"correct horse battery staple\0",
     );
-    assert_eq!(app.settings().link_key, None);
-    assert_eq!(app.take_action(), None);
-    assert_eq!(app.poll_session(50), None);
-    assert_eq!(info_row(&app, params::PHRASE_KEY), "refused: quad armed");
-
-    // Disarmed: the same write keys the link, is saved at once and restarts the link.
-    app.on_link_record(&arm_record(false));
-    radio_writes(
-        &mut app,
-        params::BIND_PHRASE,
-        b"  correct horse battery staple\0",
-    );
-    let key = LinkKey::from_phrase("correct horse battery staple");
-    assert_eq!(
-        app.settings().link_key,
-        Some(key),
-        "trimmed like every path"
-    );
-    let Some(Action::Save(saved)) = app.take_action() else {
-        panic!("the new key is saved at once");
-    };
-    assert_eq!(saved.link_key, Some(key));
-    assert_eq!(app.poll_session(100), Some(SessionEnd::SettingsChanged));
-    assert_eq!(
-        info_row(&app, params::PHRASE_KEY),
-        key.fingerprint().to_string()
-    );
-
-    // An empty commit (the pilot backed out of the editor) keeps the phrase.
-    radio_writes(&mut app, params::BIND_PHRASE, b"\0");
-    assert_eq!(app.settings().link_key, Some(key));
-    assert_eq!(app.take_action(), None);
-    assert_eq!(info_row(&app, params::PHRASE_KEY), "empty: phrase kept");
+    assert_eq!(info_row(&app, params::LINK_KEY), "refused: famous phrase");
+    assert_eq!(app.settings().phrase(), Some(expected));
 }
 
-// ---- Key changes from the phone (telemetry::module_record) ----
+// ---- The phone (telemetry::module_record) ----
 
-use telemetry::link::LinkKey;
-use telemetry::module_record::{self, KeyAnswer, KeyOutcome, KeyRefusal, KeySigner, ModuleRecord};
+use telemetry::module_record::{self, Answer, ModuleRecord, Outcome, PhoneSession, Refusal};
 
 /// The phone sends `record` over the HM-10.
 fn phone_sends(app: &mut App<FakeLink, FakeHandset>, record: &ModuleRecord) {
     let mut payload = [0u8; module_record::MAX_PAYLOAD_BYTES];
     let n = module_record::encode(record, &mut payload).unwrap();
+    phone_sends_payload(app, &payload[..n]);
+}
+
+fn phone_sends_payload(app: &mut App<FakeLink, FakeHandset>, payload: &[u8]) {
     let mut framed = [0u8; MAX_RECORD_LEN];
-    let record = crate::records::with_crc(&payload[..n], &mut framed).unwrap();
+    let record = crate::records::with_crc(payload, &mut framed).unwrap();
     app.on_phone_bytes(&cobs_frame(record));
 }
 
-/// The module's answers waiting for the phone.
-fn phone_answers(app: &mut App<FakeLink, FakeHandset>) -> Vec<KeyAnswer> {
-    let mut answers = Vec::new();
+/// The module's records waiting for the phone.
+fn phone_hears(app: &mut App<FakeLink, FakeHandset>) -> Vec<ModuleRecord> {
+    let mut records = Vec::new();
     let mut frame = [0u8; MAX_FRAME_LEN];
     while let Some(n) = app.next_phone_frame(&mut frame) {
         let len = cobs::decode_in_place(&mut frame[..n - 1]).unwrap();
         let payload = crate::records::payload(&frame[..len]).unwrap();
-        if let Ok(ModuleRecord::KeyAnswer(answer)) = module_record::decode(payload) {
-            answers.push(answer);
+        if let Ok(record) = module_record::decode(payload) {
+            records.push(record);
         }
     }
-    answers
+    records
 }
 
-/// Status and info of the "Phone Phrase" command row.
-fn phone_row(app: &App<FakeLink, FakeHandset>) -> (u8, String) {
-    let entry = params::entry(
-        params::PHONE_PHRASE,
-        app.settings(),
-        app.parameter_commands(),
-    )
-    .unwrap();
-    let at = 2 + "Phone Phrase".len() + 1;
-    (
-        entry[at],
-        String::from_utf8(entry[at + 2..entry.len() - 1].to_vec()).unwrap(),
-    )
-}
-
-fn old_key() -> LinkKey {
-    LinkKey::from_phrase("correct horse battery staple")
-}
-
-fn new_key() -> LinkKey {
-    LinkKey::from_phrase("tr0ub4dor and 3")
-}
-
-#[test]
-fn a_phone_proposal_waits_for_the_pilots_confirmation_on_the_radio() {
+/// A module with the phrase set, a keyed link and the relay open.
+fn module_with_phrase() -> App<FakeLink, FakeHandset> {
     let mut app = app(Settings {
         bind_id: 0x0101_0101,
+        link_key: Some(telemetry::link::LinkKey::from_bytes([7; 16])),
         ..Settings::default()
     });
-    app.seed_link_nonces(42);
-    app.on_radio_present(true);
-    let crate::session::LinkStep::RunMaster(_) = app.next_link_step(0, 7) else {
-        panic!("bound: the master runs");
-    };
-    phone_sends(&mut app, &ModuleRecord::ProposeKey(new_key().to_bytes()));
-    let [waiting] = phone_answers(&mut app)[..] else {
-        panic!("one answer");
-    };
-    assert_eq!(waiting.outcome, KeyOutcome::AwaitingConfirmation);
-    assert_eq!(waiting.fingerprint, Some(new_key().fingerprint().0));
-    assert_eq!(app.settings().link_key, None, "nothing changes by itself");
-    assert!(
-        app.link().records.is_empty(),
-        "a module record never goes to the flight side"
-    );
-    let fingerprint = new_key().fingerprint().to_string();
-    assert_eq!(phone_row(&app), (0, format!("{fingerprint} from phone")));
-
-    // The pilot starts the command: the radio asks to confirm, showing the fingerprint.
-    radio_writes(&mut app, params::PHONE_PHRASE, &[1]);
-    assert_eq!(phone_row(&app), (3, format!("Use key {fingerprint}?")));
-    radio_writes(&mut app, params::PHONE_PHRASE, &[4]);
-    assert_eq!(app.settings().link_key, Some(new_key()));
-    assert!(matches!(app.take_action(), Some(Action::Save(s)) if s.link_key == Some(new_key())));
-    assert_eq!(
-        app.poll_session(50),
-        Some(crate::session::SessionEnd::SettingsChanged)
-    );
-    assert_eq!(phone_row(&app), (0, format!("Key {fingerprint} set")));
-    let [applied] = phone_answers(&mut app)[..] else {
-        panic!("one answer");
-    };
-    assert_eq!(applied.outcome, KeyOutcome::Applied);
-    assert_eq!(applied.fingerprint, Some(new_key().fingerprint().0));
+    app.seed_random(&[9; 32]);
+    app.set_setting_text("phrase", "amber kettle under the oak")
+        .unwrap();
+    app.on_hm10_configured(crate::hm10::at::Outcome::Configured { baud: 115_200 });
+    app.on_phone_connected();
+    let _ = app.take_action();
+    app
 }
 
-#[test]
-fn a_proposal_is_declined_by_cancel_expires_unseen_and_is_never_taken_armed() {
-    let mut app = app(Settings {
-        link_key: Some(old_key()),
-        ..Settings::default()
-    });
-    phone_sends(&mut app, &ModuleRecord::ProposeKey(new_key().to_bytes()));
-    radio_writes(&mut app, params::PHONE_PHRASE, &[1]);
-    radio_writes(&mut app, params::PHONE_PHRASE, &[5]);
-    assert_eq!(app.settings().link_key, Some(old_key()));
-    let answers = phone_answers(&mut app);
-    assert_eq!(
-        answers.last().unwrap().outcome,
-        KeyOutcome::Refused(KeyRefusal::Declined)
-    );
-    assert_eq!(
-        answers.last().unwrap().fingerprint,
-        Some(old_key().fingerprint().0)
-    );
-    assert_eq!(phone_row(&app), (0, "Cancelled".into()));
-
-    // Nobody confirms: the proposal expires and the phone is told.
-    phone_sends(&mut app, &ModuleRecord::ProposeKey(new_key().to_bytes()));
-    phone_answers(&mut app);
-    for _ in 0..crate::phrase::PROPOSAL_TICKS {
+/// One exchange of the phone with `phrase`: the module's grant or refusal.
+fn exchange(
+    app: &mut App<FakeLink, FakeHandset>,
+    phrase: &str,
+) -> (Option<PhoneSession>, ModuleRecord) {
+    for _ in 0..crate::phrase::HELLO_TICKS {
         app.on_tick();
     }
-    assert_eq!(
-        phone_answers(&mut app).last().map(|a| a.outcome),
-        Some(KeyOutcome::Refused(KeyRefusal::Expired))
-    );
-    radio_writes(&mut app, params::PHONE_PHRASE, &[1]);
-    assert_eq!(phone_row(&app).0, 0, "nothing left to confirm");
+    let _ = phone_hears(app);
+    phone_sends(app, &ModuleRecord::Hello);
+    let heard = phone_hears(app);
+    let Some(ModuleRecord::Challenge(challenge)) = heard.last() else {
+        return (None, *heard.last().expect("an answer"));
+    };
+    let (phone, response) = PhoneSession::respond(phrase, challenge, &[3; 32]).unwrap();
+    phone_sends(app, &ModuleRecord::Response(response));
+    let reply = *phone_hears(app).last().expect("an answer");
+    (Some(phone), reply)
+}
 
-    // Armed: a proposal is refused at once; one that arrived disarmed is refused at the
-    // confirmation if the quad armed meanwhile.
-    app.on_link_record(&arm_record(true));
-    phone_sends(&mut app, &ModuleRecord::ProposeKey(new_key().to_bytes()));
-    assert_eq!(
-        phone_answers(&mut app).last().map(|a| a.outcome),
-        Some(KeyOutcome::Refused(KeyRefusal::Armed))
-    );
-    app.on_link_record(&arm_record(false));
-    phone_sends(&mut app, &ModuleRecord::ProposeKey(new_key().to_bytes()));
-    radio_writes(&mut app, params::PHONE_PHRASE, &[1]);
-    app.on_link_record(&arm_record(true));
-    radio_writes(&mut app, params::PHONE_PHRASE, &[4]);
-    assert_eq!(app.settings().link_key, Some(old_key()));
-    assert_eq!(
-        phone_answers(&mut app).last().map(|a| a.outcome),
-        Some(KeyOutcome::Refused(KeyRefusal::Armed))
-    );
-    assert_eq!(phone_row(&app), (0, "refused: quad armed".into()));
+/// Issue 30, finding 2: `ProposeKey` put the link key itself on BLE and the module kept it
+/// for the pilot to confirm on the radio. Version 1 records are no longer read: the
+/// proposal is dropped unanswered, nothing is pending, nothing changes.
+#[test]
+fn a_key_proposed_in_the_clear_is_never_taken() {
+    let mut app = module_with_phrase();
+    let before = *app.settings();
+    // Version 1's ProposeKey: marker, version 1, variant 0, the key's 16 bytes.
+    let mut proposal = vec![module_record::MARKER, 1, 0];
+    proposal.extend([0x5A; 16]);
+    phone_sends_payload(&mut app, &proposal);
+    assert!(phone_hears(&mut app).is_empty(), "not even answered");
+    assert_eq!(*app.settings(), before);
+    assert_eq!(app.take_action(), None);
+    // No module record carries a key in the clear: the only key-bearing one is sealed.
+    let (_, granted) = exchange(&mut app, "amber kettle under the oak");
+    let ModuleRecord::Granted(granted) = granted else {
+        panic!("granted: {granted:?}");
+    };
+    let link_key = app.link_key_for(&crate::air::link_params(app.settings()).unwrap());
+    let change_key = telemetry::change_auth::ChangeKey::from_link_key(&link_key.unwrap());
+    let mut payload = [0u8; module_record::MAX_PAYLOAD_BYTES];
+    let n = module_record::encode(&ModuleRecord::Granted(granted), &mut payload).unwrap();
+    for secret in [link_key.unwrap().to_bytes(), [7; 16]] {
+        assert!(
+            !payload[..n].windows(16).any(|w| w == secret),
+            "a key in clear"
+        );
+    }
+    let _ = change_key;
 }
 
 #[test]
-fn a_key_signed_under_the_current_phrase_is_applied_at_once_and_only_once() {
-    let mut app = app(Settings {
-        link_key: Some(old_key()),
-        ..Settings::default()
-    });
-    app.seed_link_nonces(0xDEAD_BEEF);
-    let mut phone = KeySigner::new(&old_key());
-    // The phone does not know the session yet: refused once, with the session.
-    phone_sends(&mut app, &ModuleRecord::SignedKey(phone.seal(&new_key())));
-    let [first] = phone_answers(&mut app)[..] else {
-        panic!("one answer");
+fn a_phone_with_the_phrase_gets_the_change_key_and_sets_a_new_phrase() {
+    let mut app = module_with_phrase();
+    let (phone, granted) = exchange(&mut app, "amber kettle under the oak");
+    let ModuleRecord::Granted(granted) = granted else {
+        panic!("granted: {granted:?}");
     };
-    assert_eq!(
-        first.outcome,
-        KeyOutcome::Refused(KeyRefusal::NotAuthenticated)
-    );
-    assert_eq!(app.settings().link_key, Some(old_key()));
-    assert!(phone.on_answer(&first), "the phone signs again");
-    let signed = phone.seal(&new_key());
-    phone_sends(&mut app, &ModuleRecord::SignedKey(signed));
-    let [applied] = phone_answers(&mut app)[..] else {
-        panic!("one answer");
-    };
-    assert_eq!(applied.outcome, KeyOutcome::Applied);
-    assert_eq!(
-        app.settings().link_key,
-        Some(new_key()),
-        "no confirmation needed"
-    );
-    assert!(matches!(app.take_action(), Some(Action::Save(s)) if s.link_key == Some(new_key())));
-    assert!(app.link().records.is_empty());
-
-    // The recorded record replayed: its counter is used up (and the key it carries is only
-    // valid under the old phrase anyway).
-    app.set_setting_text("phrase", "correct horse battery staple")
+    let mut phone = phone.unwrap();
+    let link_key = app
+        .link_key_for(&crate::air::link_params(app.settings()).unwrap())
         .unwrap();
-    phone_sends(&mut app, &ModuleRecord::SignedKey(signed));
     assert_eq!(
-        phone_answers(&mut app).last().map(|a| a.outcome),
-        Some(KeyOutcome::Refused(KeyRefusal::Replayed))
+        phone.on_granted(&granted),
+        Ok(Some(telemetry::change_auth::ChangeKey::from_link_key(
+            &link_key
+        ))),
+        "the flight side's change key, for signed setting changes"
     );
-    assert_eq!(app.settings().link_key, Some(old_key()));
-    // Another boot, another session: the recording fails there too.
-    app.seed_link_nonces(1);
-    phone_sends(&mut app, &ModuleRecord::SignedKey(signed));
+    let set = phone.set_phrase("brass lantern at the weir").unwrap();
+    phone_sends(&mut app, &ModuleRecord::SetPhrase(set));
     assert_eq!(
-        phone_answers(&mut app).last().map(|a| a.outcome),
-        Some(KeyOutcome::Refused(KeyRefusal::NotAuthenticated))
+        phone_hears(&mut app).last(),
+        Some(&ModuleRecord::Answer(Answer {
+            outcome: Outcome::Applied,
+            counter: 1
+        }))
     );
-    // A phone with another phrase, and a module without one.
-    let mut stranger = KeySigner::new(&LinkKey::from_phrase("guess"));
-    let answer = KeyAnswer {
-        outcome: KeyOutcome::Refused(KeyRefusal::NotAuthenticated),
-        fingerprint: None,
-        session: applied.session,
-        counter: 0,
-    };
-    stranger.on_answer(&answer);
-    phone_sends(
-        &mut app,
-        &ModuleRecord::SignedKey(stranger.seal(&new_key())),
-    );
-    assert_eq!(app.settings().link_key, Some(old_key()));
-    let mut plain = self::app(Settings::default());
-    phone_sends(&mut plain, &ModuleRecord::SignedKey(phone.seal(&new_key())));
+    let salt = app.settings().phrase_salt;
     assert_eq!(
-        phone_answers(&mut plain).last().map(|a| a.outcome),
-        Some(KeyOutcome::Refused(KeyRefusal::NoPhrase))
+        app.settings().phrase(),
+        Some(telemetry::link::PhraseSecret::derive(
+            "brass lantern at the weir",
+            salt
+        ))
     );
-    assert_eq!(plain.settings().link_key, None);
+    assert!(matches!(app.take_action(), Some(Action::Save(_))));
+    // The same record again: a replay.
+    phone_sends(&mut app, &ModuleRecord::SetPhrase(set));
+    assert!(matches!(
+        phone_hears(&mut app).last(),
+        Some(ModuleRecord::Answer(Answer {
+            outcome: Outcome::Refused(Refusal::Replayed),
+            ..
+        }))
+    ));
+}
+
+#[test]
+fn wrong_phrases_are_refused_and_lock_the_phone_out_after_five() {
+    let mut app = module_with_phrase();
+    for _ in 0..module_record::PHONE_FAILURES {
+        let (_, reply) = exchange(&mut app, "amber kettle under the elm");
+        assert_eq!(
+            reply,
+            ModuleRecord::Answer(Answer {
+                outcome: Outcome::Refused(Refusal::NotAuthenticated),
+                counter: 0
+            })
+        );
+    }
+    // Even the right phrase is refused now, until the module restarts.
+    let (_, reply) = exchange(&mut app, "amber kettle under the oak");
+    assert!(matches!(
+        reply,
+        ModuleRecord::Answer(Answer {
+            outcome: Outcome::Refused(Refusal::Locked),
+            ..
+        })
+    ));
+    // A module without a phrase has nothing to run the exchange on.
+    let mut bare = crate::app::tests::app(Settings::default());
+    bare.on_hm10_configured(crate::hm10::at::Outcome::Configured { baud: 115_200 });
+    bare.on_phone_connected();
+    let (_, reply) = exchange(&mut bare, "amber kettle under the oak");
+    assert!(matches!(
+        reply,
+        ModuleRecord::Answer(Answer {
+            outcome: Outcome::Refused(Refusal::NoPhrase),
+            ..
+        })
+    ));
+}
+
+/// Like the flight side's signed changes (finding 6): a new phrase refused because the quad
+/// is armed is used up, so its recorded copy never applies after disarming.
+#[test]
+fn a_new_phrase_refused_while_armed_is_used_up() {
+    let mut app = module_with_phrase();
+    let before = app.settings().phrase();
+    let (phone, _) = exchange(&mut app, "amber kettle under the oak");
+    let mut phone = phone.unwrap();
+    let set = phone.set_phrase("brass lantern at the weir").unwrap();
+    app.on_link_record(&arm_record(true));
+    phone_sends(&mut app, &ModuleRecord::SetPhrase(set));
+    assert!(matches!(
+        phone_hears(&mut app).last(),
+        Some(ModuleRecord::Answer(Answer {
+            outcome: Outcome::Refused(Refusal::Armed),
+            ..
+        }))
+    ));
+    app.on_link_record(&arm_record(false));
+    phone_sends(&mut app, &ModuleRecord::SetPhrase(set));
+    assert!(matches!(
+        phone_hears(&mut app).last(),
+        Some(ModuleRecord::Answer(Answer {
+            outcome: Outcome::Refused(Refusal::Replayed),
+            ..
+        }))
+    ));
+    assert_eq!(app.settings().phrase(), before);
+}
+
+#[test]
+fn tag_failures_show_on_the_radio_and_reach_the_phone_with_the_alert() {
+    let mut app = module_with_phrase();
+    assert_eq!(info_row(&app, params::TAG_FAILS), "0 / 0");
+    // The flight side reports 3; this end counts 25 within a second: above noise.
+    let report = telemetry::messages::Message::LinkSecurity(telemetry::messages::LinkSecurity {
+        tag_failures: 3,
+        alert: false,
+    });
+    let mut out = [0u8; MAX_RECORD_LEN];
+    app.on_link_record(crate::records::encode(&report, &mut out).unwrap());
+    for _ in 0..10 {
+        app.on_tick();
+    }
+    app.link_mut().stats.tag_failures = 25;
+    app.on_tick();
+    assert_eq!(info_row(&app, params::TAG_FAILS), "25 / 3 ALERT");
+    // The radio's sensors (S.Port TAG / TALR, CRSF's FM "TAG ALERT") are fed the same.
+    assert_eq!(
+        app.handset().tag_failures,
+        Some(crate::ports::TagFailures {
+            down: 25,
+            up: 3,
+            alert: true
+        })
+    );
+    // The phone is told at most once a second.
+    for _ in 0..10 {
+        app.on_tick();
+    }
+    let told = phone_hears(&mut app);
+    assert!(
+        told.contains(&ModuleRecord::LinkSecurity(module_record::LinkSecurity {
+            tag_failures_down: 25,
+            tag_failures_up: 3,
+            alert: true,
+        })),
+        "{told:?}"
+    );
 }

@@ -23,10 +23,10 @@ use openlrs::dual::DualRadio;
 use openlrs::radio::Clock;
 use openlrs::roles::tx_bind;
 use openlrs::tx::Transmitter;
-use telemetry::link::LinkClock;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
 use telemetry::link::master::{MasterHooks, bind_master, run_master};
+use telemetry::link::{FollowerAuth, LinkClock};
 
 use crate::air::AirLink;
 use crate::air::openlrs::run_openlrs_transmitter;
@@ -197,18 +197,35 @@ where
                     }
                     None => (None, false),
                 },
-                LinkStep::BindMaster { params, timeout_us } => {
-                    let bind = bind_master(radio, clock, &params, timeout_us);
-                    let accepted = keep_alive(ports, ticker, bind).await;
-                    let failed = accepted.is_err();
-                    let outcome = BindOutcome::offered(accepted);
+                LinkStep::BindMaster {
+                    params,
+                    auth,
+                    key,
+                    random,
+                    timeout_us,
+                } => {
+                    let bind = bind_master(radio, clock, &params, &auth, &key, &random, timeout_us);
+                    let result = keep_alive(ports, ticker, bind).await;
+                    let failed = result.is_err();
+                    let outcome = BindOutcome::offered(result);
                     (ports.with_app(|app| app.on_bind_outcome(outcome)), failed)
                 }
-                LinkStep::BindFollower { band, timeout_us } => {
-                    let bind = bind_follower(radio, clock, band, timeout_us);
-                    let offer = keep_alive(ports, ticker, bind).await;
-                    let failed = offer.is_err();
-                    let outcome = BindOutcome::listened(offer);
+                LinkStep::BindFollower {
+                    band,
+                    stored,
+                    allow_plain,
+                    random,
+                    timeout_us,
+                } => {
+                    let auth = FollowerAuth {
+                        phrase: None,
+                        stored,
+                        allow_plain,
+                    };
+                    let bind = bind_follower(radio, clock, band, &auth, &random, timeout_us);
+                    let result = keep_alive(ports, ticker, bind).await;
+                    let failed = result.is_err();
+                    let outcome = BindOutcome::listened(result);
                     (ports.with_app(|app| app.on_bind_outcome(outcome)), failed)
                 }
                 _ => (None, false),
@@ -248,7 +265,7 @@ where
         let until = radio.now_us().saturating_add(timeout_us);
         let accepted = keep_alive(ports, clock.clone(), tx_bind(radio, &data, until)).await;
         let failed = accepted.is_err();
-        let outcome = BindOutcome::offered(accepted);
+        let outcome = BindOutcome::openlrs(accepted);
         return (ports.with_app(|app| app.on_bind_outcome(outcome)), failed);
     }
     let end = match Transmitter::new(data, radio.now_us()) {

@@ -24,11 +24,15 @@
 //!
 //! **Bind Phrase** (20) is a STRING row the pilot types the binding phrase into (the
 //! ExpressLRS Lua tool edits STRING parameters with the radio's name editor); the text is
-//! never stored or shown, only its key, whose fingerprint the **Phrase Key** row (22) shows
-//! afterwards — to compare with the flight console's — or "none - UNAUTHENTICATED" (ASCII:
-//! EdgeTX's fonts lack the dash), or why the last phrase was refused (armed quad, empty
-//! text: `crate::phrase`). A new phrase restarts the link and is saved at once, as on the
-//! flight console. The HM-10 PIN in force is the read-only **BLE PIN** row (21).
+//! never stored or shown, only its slow derivation (`crate::phrase`), which runs for ≈ 2 s
+//! and is then saved; the next bind agrees the link's key with it. The **Link Key** row (22)
+//! shows the fingerprint of the running link's key — to compare with the flight console's
+//! `status` — and whether a phrase is set ("NO AUTH" instead of a fingerprint on an
+//! unauthenticated link), or what the last phrase write did (deriving, refused: armed quad, empty text, too
+//! weak). The HM-10 PIN in force is the read-only **BLE PIN** row (21); the link's
+//! authentication failures (spec §12.2), down at the module and up at the flight side, are
+//! the read-only **Tag Fails** row (23), with "ALERT" when they run above what noise
+//! explains.
 
 use core::fmt::Write;
 
@@ -42,7 +46,6 @@ use crate::settings::{
     Band, DEFAULT_INPUT_TIMEOUT_MS, DEFAULT_TELEMETRY_RATIO, INPUT_TIMEOUT_MS, InputProtocol,
     LinkProtocol, OutputProtocol, RateMode, Settings, TELEMETRY_RATIOS,
 };
-use telemetry::module_record::{KeyOutcome, KeyRefusal};
 
 /// Packet rate (the link's rate modes).
 pub const PACKET_RATE: u8 = 1;
@@ -86,15 +89,15 @@ pub const OPENLRS_TELEMETRY: u8 = 19;
 pub const BIND_PHRASE: u8 = 20;
 /// Info: the HM-10 pairing PIN in force.
 pub const BLE_PIN: u8 = 21;
-/// Info: the binding phrase's fingerprint, or why the last phrase was refused.
-pub const PHRASE_KEY: u8 = 22;
-/// Command: apply the key the phone proposed, after the pilot's confirmation.
-pub const PHONE_PHRASE: u8 = 23;
+/// Info: the link key's fingerprint and the phrase's state, or what the last phrase write did.
+pub const LINK_KEY: u8 = 22;
+/// Info: the link's authentication failures, both ends.
+pub const TAG_FAILS: u8 = 23;
 /// Parameters the module offers (DEVICE_INFO's count).
 pub const PARAMETER_COUNT: u8 = 23;
 
-/// The phrase row without a phrase.
-pub const NO_PHRASE: &str = "none - UNAUTHENTICATED";
+/// The key row of a link without a key (before the phrase's state).
+pub const UNAUTHENTICATED: &str = "NO AUTH";
 
 /// How often the radio polls a running command, 10 ms units.
 const POLL_10MS: u8 = 50;
@@ -123,14 +126,12 @@ pub struct Commands {
     /// The flight side reported its motors armed (its last `ArmState`); the core fills it
     /// in from telemetry. A phrase change is refused while set.
     pub flight_armed: bool,
-    /// What the last phrase write did, for the "Phrase Key" row.
+    /// What the last phrase write did, for the "Link Key" row.
     pub phrase_note: Option<PhraseNote>,
-    /// A key the phone proposed, waiting for the pilot ("Phone Phrase").
-    pub phone_key: Option<telemetry::link::LinkKey>,
-    /// The "Phone Phrase" command asks the pilot to confirm `phone_key`.
-    pub phone_confirming: bool,
-    /// How the last "Phone Phrase" confirmation ended.
-    pub phone_result: Option<KeyOutcome>,
+    /// The link's authentication failures for the "Tag Fails" row: down at the module, up at
+    /// the flight side (its last report), and whether either runs above what noise explains
+    /// (the core fills it in every tick).
+    pub tag_failures: crate::ports::TagFailures,
 }
 
 /// What a write asks of the core beyond the settings change.
@@ -151,17 +152,9 @@ pub enum Effect {
     Save,
     /// Answer with the command's entry (its new status).
     CommandStatus,
-    /// A new binding phrase's key is in force: restart the link and save at once.
-    NewPhrase,
-    /// The phone's proposal was decided on the radio: tell the phone (and, when it was
-    /// applied and changed the key, restart the link and save at once). Answer with the
-    /// command's entry.
-    PhoneKey {
-        /// Applied or refused (declined, armed).
-        outcome: KeyOutcome,
-        /// The key in force changed.
-        changed: bool,
-    },
+    /// A new binding phrase from the radio: start its derivation (the core takes the text
+    /// from the write, `crate::phrase::phrase_from_write`).
+    DerivePhrase,
 }
 
 /// The name the radio shows for a rate mode, with its packet rate.
@@ -386,46 +379,32 @@ pub fn entry(
         // The value is always empty: the phrase is not kept, and the radio's editor starts
         // from the value, so anything shown would have to be overwritten.
         BIND_PHRASE => Entry::string(0, "Bind Phrase", "", HANDSET_PHRASE_MAX),
-        PHRASE_KEY => {
+        LINK_KEY => {
             let mut text: String<24> = String::new();
-            match (
-                commands.phrase_note.and_then(PhraseNote::refusal),
-                settings.link_key,
-            ) {
-                (Some(refusal), _) => text.push_str(refusal).ok()?,
-                (None, Some(key)) => write!(text, "{}", key.fingerprint()).ok()?,
-                (None, None) => text.push_str(NO_PHRASE).ok()?,
-            }
-            Entry::info(0, "Phrase Key", &text)
-        }
-        PHONE_PHRASE => {
-            let mut text: String<24> = String::new();
-            let status = match (commands.phone_key, commands.phone_confirming) {
-                (Some(key), true) => {
-                    write!(text, "Use key {}?", key.fingerprint()).ok()?;
-                    CommandStatus::ConfirmationNeeded
-                }
-                (Some(key), false) => {
-                    write!(text, "{} from phone", key.fingerprint()).ok()?;
-                    CommandStatus::Ready
-                }
-                (None, _) => {
-                    match (commands.phone_result, settings.link_key) {
-                        (Some(KeyOutcome::Applied), Some(key)) => {
-                            write!(text, "Key {} set", key.fingerprint()).ok()?
-                        }
-                        (Some(KeyOutcome::Refused(KeyRefusal::Armed)), _) => {
-                            text.push_str("refused: quad armed").ok()?
-                        }
-                        (Some(KeyOutcome::Refused(KeyRefusal::Declined)), _) => {
-                            text.push_str("Cancelled").ok()?
-                        }
-                        _ => text.push_str("none from phone").ok()?,
-                    }
-                    CommandStatus::Ready
-                }
+            let key = crate::air::link_key(settings, model_of(settings, commands));
+            let phrase = if settings.phrase_prs.is_some() {
+                " +phrase"
+            } else {
+                " no phrase"
             };
-            Entry::command(0, "Phone Phrase", status, POLL_10MS, &text)
+            match (commands.phrase_note.and_then(PhraseNote::text), key) {
+                (Some(note), _) => text.push_str(note).ok()?,
+                (None, Some(key)) => write!(text, "{}{phrase}", key.fingerprint()).ok()?,
+                (None, None) if crate::air::link_params(settings).is_some() => {
+                    write!(text, "{UNAUTHENTICATED}{phrase}").ok()?
+                }
+                (None, None) => write!(text, "not bound{phrase}").ok()?,
+            }
+            Entry::info(0, "Link Key", &text)
+        }
+        TAG_FAILS => {
+            let mut text: String<24> = String::new();
+            let t = commands.tag_failures;
+            write!(text, "{} / {}", t.down, t.up).ok()?;
+            if t.alert {
+                text.push_str(" ALERT").ok()?;
+            }
+            Entry::info(0, "Tag Fails", &text)
         }
         BLE_PIN => {
             let mut text: String<8> = String::new();
@@ -435,7 +414,7 @@ pub fn entry(
                         text.push(char::from(d)).ok()?;
                     }
                 }
-                None => text.push('?').ok()?,
+                None => text.push_str("not set").ok()?,
             }
             Entry::info(0, "BLE PIN", &text)
         }
@@ -544,19 +523,20 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
             settings.openlrs.telemetry = on == 1;
             openlrs_change(settings)
         }
-        (BIND_PHRASE, Some(_)) => {
-            let (note, changed) = match phrase::key_from_write(value) {
-                Ok(key) => phrase::adopt(key, commands.flight_armed, &mut settings.link_key),
-                Err(note) => (note, false),
-            };
-            commands.phrase_note = Some(note);
-            if changed {
-                Effect::NewPhrase
-            } else {
+        (BIND_PHRASE, Some(_)) => match phrase::phrase_from_write(value) {
+            Ok(_) if commands.flight_armed => {
+                commands.phrase_note = Some(PhraseNote::Armed);
                 Effect::None
             }
-        }
-        (PHONE_PHRASE, Some(step)) => phone_phrase(step, settings, commands),
+            Ok(_) => {
+                commands.phrase_note = Some(PhraseNote::Deriving);
+                Effect::DerivePhrase
+            }
+            Err(note) => {
+                commands.phrase_note = Some(note);
+                Effect::None
+            }
+        },
         (SAVE, Some(step)) => match CommandStatus::from_byte(step) {
             Some(CommandStatus::Start) => {
                 commands.save_confirming = true;
@@ -596,42 +576,11 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
     effect
 }
 
-/// A step of the "Phone Phrase" command: start shows the proposal's fingerprint and asks
-/// for a confirmation; confirm applies it (never while armed); cancel declines it.
-fn phone_phrase(step: u8, settings: &mut Settings, commands: &mut Commands) -> Effect {
-    match CommandStatus::from_byte(step) {
-        Some(CommandStatus::Start) => {
-            commands.phone_confirming = commands.phone_key.is_some();
-            Effect::CommandStatus
-        }
-        Some(CommandStatus::Confirm) if commands.phone_confirming => {
-            commands.phone_confirming = false;
-            let Some(key) = commands.phone_key.take() else {
-                return Effect::CommandStatus;
-            };
-            let (note, changed) = phrase::adopt(key, commands.flight_armed, &mut settings.link_key);
-            commands.phrase_note = Some(note);
-            let outcome = if note == PhraseNote::Armed {
-                KeyOutcome::Refused(KeyRefusal::Armed)
-            } else {
-                KeyOutcome::Applied
-            };
-            commands.phone_result = Some(outcome);
-            Effect::PhoneKey { outcome, changed }
-        }
-        Some(CommandStatus::Cancel) if commands.phone_confirming => {
-            commands.phone_confirming = false;
-            commands.phone_key = None;
-            let outcome = KeyOutcome::Refused(KeyRefusal::Declined);
-            commands.phone_result = Some(outcome);
-            Effect::PhoneKey {
-                outcome,
-                changed: false,
-            }
-        }
-        Some(_) => Effect::CommandStatus,
-        None => Effect::None,
-    }
+/// The radio model the module's link is mixed with (model match on, transmitter role).
+fn model_of(settings: &Settings, commands: &Commands) -> Option<u8> {
+    (settings.model_match && settings.role == crate::settings::Role::Transmitter)
+        .then_some(commands.radio_model)
+        .flatten()
 }
 
 /// An OpenLRSng parameter changed: the running link restarts only if it is OpenLRSng.

@@ -151,50 +151,57 @@ fn info_text(entry: &[u8]) -> std::string::String {
 }
 
 #[test]
-fn the_phrase_is_a_string_row_and_its_key_row_shows_the_fingerprint_or_why() {
+fn the_phrase_is_a_string_row_and_the_key_row_shows_the_fingerprint_or_why() {
     let commands = Commands::default();
     // STRING: parent, type 0x0A, name NUL, the (always empty) value NUL, max length.
     let row = entry(BIND_PHRASE, &Settings::default(), &commands).unwrap();
     assert_eq!(row.as_slice(), b"\x00\x0ABind Phrase\x00\x00\x38");
-    let plain = entry(PHRASE_KEY, &Settings::default(), &commands).unwrap();
-    assert_eq!(info_text(&plain), NO_PHRASE);
+    let unbound = entry(LINK_KEY, &Settings::default(), &commands).unwrap();
+    assert_eq!(info_text(&unbound), "not bound no phrase");
 
-    let mut settings = Settings::default();
+    let key = telemetry::link::LinkKey::from_bytes([0x44; 16]);
+    let mut settings = Settings {
+        bind_id: 0x0102_0304,
+        link_key: Some(key),
+        ..Settings::default()
+    };
     let mut commands = Commands::default();
-    let phrase = b"correct horse battery staple\0";
+    let row = entry(LINK_KEY, &settings, &commands).unwrap();
+    assert_eq!(
+        info_text(&row),
+        format!("{} no phrase", key.for_link(0x0102_0304).fingerprint())
+    );
+    let phrase = b"amber kettle under the oak\0";
     assert_eq!(
         write(BIND_PHRASE, phrase, &mut settings, &mut commands),
-        Effect::NewPhrase
+        Effect::DerivePhrase,
+        "the core derives it"
     );
-    let key = telemetry::link::LinkKey::from_phrase("correct horse battery staple");
-    assert_eq!(settings.link_key, Some(key));
-    let row = entry(PHRASE_KEY, &settings, &commands).unwrap();
-    assert_eq!(info_text(&row), key.fingerprint().to_string());
+    assert_eq!(commands.phrase_note, Some(PhraseNote::Deriving));
     // The row never shows the phrase.
     let row = entry(BIND_PHRASE, &settings, &commands).unwrap();
-    assert!(!row.windows(7).any(|w| w == b"correct"));
-    // The same phrase again restarts nothing.
-    assert_eq!(
-        write(BIND_PHRASE, phrase, &mut settings, &mut commands),
-        Effect::None
-    );
-    assert_eq!(commands.phrase_note, Some(PhraseNote::Unchanged));
+    assert!(!row.windows(5).any(|w| w == b"amber"));
 
-    // Refusals keep the key and say why.
+    // Refusals keep the phrase and say why.
     for (value, armed, why) in [
-        (&b"another phrase\0"[..], true, "refused: quad armed"),
+        (
+            &b"amber kettle under the oak\0"[..],
+            true,
+            "refused: quad armed",
+        ),
         (b"   \0", false, "empty: phrase kept"),
-        (b"bell\x07ring\0", false, "refused: bad character"),
+        (b"bell\x07ringing loud\0", false, "refused: bad character"),
         (b"\xFF\xFE\0", false, "refused: bad character"),
+        (b"short one\0", false, "refused: < 12 chars"),
     ] {
         commands.flight_armed = armed;
         assert_eq!(
             write(BIND_PHRASE, value, &mut settings, &mut commands),
             Effect::None
         );
-        assert_eq!(settings.link_key, Some(key));
+        assert_eq!(settings.phrase_prs, None);
         assert_eq!(
-            info_text(&entry(PHRASE_KEY, &settings, &commands).unwrap()),
+            info_text(&entry(LINK_KEY, &settings, &commands).unwrap()),
             why
         );
     }

@@ -1,33 +1,38 @@
-//! The module's binding phrase set from outside its text settings (spec §12.5): typed on the
-//! radio in the device tool's "Bind Phrase" row (a CRSF STRING parameter), which is the
-//! owner's deliberate act — the radio is physically the owner's — or proposed by the phone
-//! over the HM-10 relay (`telemetry::module_record`), where it takes either the pilot's
-//! confirmation on the radio ("Phone Phrase" command, showing the proposed key's
-//! fingerprint) or a record signed under the module's current key. This module owns what
-//! such a change may do and what the rows and the answers to the phone then say.
+//! The module's binding phrase and the phone's access to it (spec §12.1, §12.5).
 //!
-//! Rules, the same as every other path (`telemetry::link::key_for_phrase`): white space at
-//! either end is dropped, at most 64 bytes of printable UTF-8 remain (the radio's write frame
-//! holds 56 of them, [`HANDSET_PHRASE_MAX`]). Only the key is stored, never the text; the
-//! "Phrase Key" row shows its fingerprint afterwards. Refused, and nothing changes:
-//! * while the quad is armed, as far as the module knows from the flight side's `ArmState`
-//!   telemetry — the last state heard counts, also after the link dropped (an armed quad
-//!   out of range may still be flying its failsafe, and a new key would keep it from ever
-//!   hearing this module again);
-//! * an empty text: the radio's editor commits whatever is in it when the pilot backs out,
-//!   so an empty write is far more likely a slip than a wish to fly unauthenticated (the
-//!   phrase is cleared through the text settings, `phrase=`).
+//! **The phrase** is typed on the radio in the device tool's "Bind Phrase" row (a CRSF
+//! STRING parameter; the radio is physically the owner's, so a write is the owner's act), set
+//! through the text settings (`phrase=TEXT`), or set by a phone that proved the current one.
+//! It must meet the rule every end applies (`telemetry::link::check_phrase`); only its slow,
+//! salted derivation is stored (`Settings::phrase_prs`), never the text. The derivation takes
+//! ≈ 2 s of the nRF52840, so a write from the radio starts a [`PhraseJob`] the firmware runs
+//! an iteration at a time; the "Link Key" row says "deriving" meanwhile. A new phrase does
+//! not change the running link (its key was agreed at bind): it is what the next bind and
+//! the next phone exchange run on. Refused, and nothing changes: while the quad is armed
+//! (the flight side's last `ArmState`, kept after a link loss), an empty text (the radio's
+//! editor commits the text when the pilot backs out; clearing is `phrase=`), and a phrase
+//! that breaks the rule.
+//!
+//! **The phone** ([`PhoneAccess`]) runs CPace with the module on the stored derivation
+//! (`telemetry::module_record`): a right confirmation gets it the change key of the flight
+//! link (sealed) and a session to set a new phrase in; every exchange costs the module a
+//! scalar multiplication, so a new one is answered at most every [`HELLO_TICKS`] core ticks,
+//! and after [`PHONE_FAILURES`] wrong confirmations the module refuses every exchange until
+//! it restarts (an online guesser gets that many guesses per power cycle). Nothing is taken
+//! while the quad is armed, and a phrase refused for that is used up.
 
 use taulink_handset::crsf::params::MAX_WRITE_LEN;
-use telemetry::link::LinkKey;
-use telemetry::link::auth::{PHRASE_MAX_BYTES, PhraseError, key_for_phrase};
-use telemetry::module_record::{self, KeyAnswer, KeyOutcome, KeyRefusal, ModuleRecord};
+use telemetry::change_auth::ChangeKey;
+use telemetry::link::phrase::{Derivation, PHRASE_MAX_BYTES};
+use telemetry::link::{PhraseError, PhraseSecret, check_phrase};
+use telemetry::module_record::{
+    self, Answer, ModuleExchange, ModuleRecord, ModuleSession, Outcome, PHONE_FAILURES, Refusal,
+};
 
-use crate::params::Commands;
+use crate::settings::Settings;
 
-/// A proposal from the phone waits this many core ticks (`App::on_tick`, ≈ 10 Hz: about a
-/// minute) for the pilot to start confirming it on the radio, then expires.
-pub const PROPOSAL_TICKS: u16 = 600;
+/// Core ticks (`App::on_tick`, ≈ 10 Hz) between two phone exchanges the module starts.
+pub const HELLO_TICKS: u8 = 5;
 
 // A module record with its CRC fits one relay record.
 const _: () = assert!(
@@ -51,182 +56,181 @@ pub const HANDSET_PHRASE_MAX: u8 = {
     }
 };
 
-/// What the last attempt to set the phrase from outside did (the "Phrase Key" row says it).
+/// What the last attempt to set the phrase from outside did (the "Link Key" row says it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum PhraseNote {
-    /// A new key is in force (the link restarted with it).
+    /// The new phrase is in force (for the next bind and phone exchange).
     Set,
-    /// The phrase gave the key already in force.
-    Unchanged,
+    /// Its derivation is running.
+    Deriving,
     /// Refused: the quad is armed.
     Armed,
     /// Refused: the text was empty (the phrase is kept).
     Empty,
-    /// Refused: longer than 64 bytes.
-    TooLong,
-    /// Refused: a control character or bytes that are no UTF-8.
-    NotPrintable,
+    /// Refused: it breaks the strength rule or is not printable UTF-8.
+    Refused(PhraseError),
 }
 
 impl PhraseNote {
-    /// The row text for a refusal; `None` when the row shows the fingerprint.
-    pub fn refusal(self) -> Option<&'static str> {
+    /// The row text for a note; `None` when the row shows the key.
+    pub fn text(self) -> Option<&'static str> {
         match self {
-            PhraseNote::Set | PhraseNote::Unchanged => None,
+            PhraseNote::Set => None,
+            PhraseNote::Deriving => Some("deriving phrase..."),
             PhraseNote::Armed => Some("refused: quad armed"),
             PhraseNote::Empty => Some("empty: phrase kept"),
-            PhraseNote::TooLong => Some("refused: too long"),
-            PhraseNote::NotPrintable => Some("refused: bad character"),
+            PhraseNote::Refused(PhraseError::TooShort) => Some("refused: < 12 chars"),
+            PhraseNote::Refused(PhraseError::TooSimple) => Some("refused: too simple"),
+            PhraseNote::Refused(PhraseError::Famous) => Some("refused: famous phrase"),
+            PhraseNote::Refused(PhraseError::TooLong) => Some("refused: too long"),
+            PhraseNote::Refused(PhraseError::NotPrintable) => Some("refused: bad character"),
         }
     }
 }
 
-/// The key a STRING write from the radio asks for: its text up to the first NUL (the radio
-/// ends it with one; a write without is taken whole).
-pub fn key_from_write(value: &[u8]) -> Result<LinkKey, PhraseNote> {
+/// The phrase a STRING write from the radio asks for: its text up to the first NUL (the
+/// radio ends it with one; a write without is taken whole), checked.
+pub fn phrase_from_write(value: &[u8]) -> Result<&str, PhraseNote> {
     let text = value.split(|b| *b == 0).next().unwrap_or(&[]);
-    let text = core::str::from_utf8(text).map_err(|_| PhraseNote::NotPrintable)?;
-    match key_for_phrase(text) {
-        Ok(Some(key)) => Ok(key),
+    let text =
+        core::str::from_utf8(text).map_err(|_| PhraseNote::Refused(PhraseError::NotPrintable))?;
+    match check_phrase(text) {
+        Ok(Some(phrase)) => Ok(phrase),
         Ok(None) => Err(PhraseNote::Empty),
-        Err(PhraseError::TooLong) => Err(PhraseNote::TooLong),
-        Err(PhraseError::NotPrintable) => Err(PhraseNote::NotPrintable),
+        Err(e) => Err(PhraseNote::Refused(e)),
     }
 }
 
-/// Puts `key` in force unless the quad is `armed`: the note for the row, and whether the
-/// key changed (the link must restart and the set be saved).
-pub fn adopt(key: LinkKey, armed: bool, link_key: &mut Option<LinkKey>) -> (PhraseNote, bool) {
-    if armed {
-        (PhraseNote::Armed, false)
-    } else if *link_key == Some(key) {
-        (PhraseNote::Unchanged, false)
-    } else {
-        *link_key = Some(key);
-        (PhraseNote::Set, true)
+/// A phrase's derivation the firmware runs in steps, then hands to the settings.
+#[derive(Debug, Clone)]
+pub struct PhraseJob(Derivation);
+
+impl PhraseJob {
+    /// The derivation of `phrase` (checked) under the module's salt.
+    pub fn new(phrase: &str, settings: &Settings) -> Self {
+        Self(Derivation::new(phrase, settings.phrase_salt))
+    }
+
+    /// Runs up to `iterations`; the derivation once done.
+    pub fn step(&mut self, iterations: u32) -> Option<PhraseSecret> {
+        self.0.step(iterations)
     }
 }
 
-/// What a key from the phone did.
+/// What a phone record did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct PhoneOutcome {
-    /// The answer for the phone.
-    pub answer: KeyAnswer,
-    /// The key in force changed: restart the link and save.
+pub struct PhoneReply {
+    /// The record to answer with.
+    pub reply: ModuleRecord,
+    /// The stored phrase changed: save the settings.
     pub changed: bool,
 }
 
-/// The module's side of key changes from the phone: its session (random per boot), the
-/// highest counter accepted in it, and how long a proposal still waits for the pilot. The
-/// proposal itself sits in [`Commands::phone_key`], where the "Phone Phrase" row shows it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct PhoneKeys {
-    session: u32,
-    highest: u32,
-    ticks_left: u16,
+/// The module's side of the phone exchanges.
+#[derive(Debug, Default)]
+pub struct PhoneAccess {
+    /// The exchange waiting for the phone's response.
+    exchange: Option<ModuleExchange>,
+    /// The confirmed session, for new phrases.
+    session: Option<ModuleSession>,
+    /// Wrong confirmations since the module started.
+    failures: u8,
+    /// Ticks until the next exchange may start.
+    cooldown: u8,
 }
 
-impl PhoneKeys {
-    /// A fresh session from a boot-time random number (one-way mixed: the session is public,
-    /// the random number also seeds the link's nonces).
-    pub fn new(random: u64) -> Self {
-        // SplitMix64's finaliser.
-        let mut z = random ^ 0x9E37_79B9_7F4A_7C15;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        Self {
-            session: (z >> 32) as u32,
-            highest: 0,
-            ticks_left: 0,
-        }
+impl PhoneAccess {
+    /// One core tick.
+    pub fn on_tick(&mut self) {
+        self.cooldown = self.cooldown.saturating_sub(1);
     }
 
-    /// The session nonce answers carry.
-    pub fn session(&self) -> u32 {
-        self.session
+    /// Wrong confirmations since the module started.
+    pub fn failures(&self) -> u8 {
+        self.failures
     }
 
-    /// An answer with `outcome` about the key `about`.
-    pub fn answer(&self, outcome: KeyOutcome, about: Option<LinkKey>) -> KeyAnswer {
-        KeyAnswer {
-            outcome,
-            fingerprint: about.map(|k| k.fingerprint().0),
-            session: self.session,
-            counter: self.highest,
-        }
-    }
-
-    /// A module record from the phone; `None` for records a phone does not send.
+    /// A record from the phone, with the settings, whether the quad is `armed`, the change
+    /// key of the flight link (`None` without a keyed link) and `random` (32 bytes for a
+    /// new exchange). `None`: nothing to answer (a record phones do not send, or an
+    /// exchange asked for too soon after the last).
     pub fn on_record(
         &mut self,
         record: &ModuleRecord,
-        link_key: &mut Option<LinkKey>,
-        commands: &mut Commands,
-    ) -> Option<PhoneOutcome> {
-        let refuse = |keys: &Self, why: KeyRefusal, key: &Option<LinkKey>| PhoneOutcome {
-            answer: keys.answer(KeyOutcome::Refused(why), *key),
+        settings: &mut Settings,
+        armed: bool,
+        change_key: Option<ChangeKey>,
+        random: impl FnOnce() -> [u8; 32],
+    ) -> Option<PhoneReply> {
+        let answer = |outcome: Outcome, counter: u32| PhoneReply {
+            reply: ModuleRecord::Answer(Answer { outcome, counter }),
             changed: false,
         };
+        let refuse = |why: Refusal, counter: u32| answer(Outcome::Refused(why), counter);
+        let counter = self.session.map_or(0, |s| s.highest());
         match record {
-            ModuleRecord::KeyAnswer(_) => None,
-            _ if commands.flight_armed => Some(refuse(self, KeyRefusal::Armed, link_key)),
-            ModuleRecord::ProposeKey(bytes) => {
-                let key = LinkKey::from_bytes(*bytes);
-                if *link_key == Some(key) {
-                    return Some(PhoneOutcome {
-                        answer: self.answer(KeyOutcome::Applied, *link_key),
-                        changed: false,
-                    });
+            ModuleRecord::Hello if self.failures >= PHONE_FAILURES => {
+                Some(refuse(Refusal::Locked, counter))
+            }
+            ModuleRecord::Hello => {
+                let Some(secret) = settings.phrase() else {
+                    return Some(refuse(Refusal::NoPhrase, counter));
+                };
+                if self.cooldown > 0 {
+                    return None;
                 }
-                // A newer proposal replaces a waiting one (its phone hears nothing more).
-                commands.phone_key = Some(key);
-                commands.phone_confirming = false;
-                commands.phone_result = None;
-                self.ticks_left = PROPOSAL_TICKS;
-                Some(PhoneOutcome {
-                    answer: self.answer(KeyOutcome::AwaitingConfirmation, Some(key)),
+                self.cooldown = HELLO_TICKS;
+                let exchange = ModuleExchange::new(&secret, &random());
+                let challenge = exchange.challenge();
+                self.exchange = Some(exchange);
+                Some(PhoneReply {
+                    reply: ModuleRecord::Challenge(challenge),
                     changed: false,
                 })
             }
-            ModuleRecord::SignedKey(signed) => {
-                let Some(current) = *link_key else {
-                    return Some(refuse(self, KeyRefusal::NoPhrase, link_key));
+            ModuleRecord::Response(response) => {
+                let Some(exchange) = self.exchange.take() else {
+                    return Some(refuse(Refusal::NoSession, counter));
                 };
-                let Some(key) = module_record::open(&current, self.session, signed) else {
-                    return Some(refuse(self, KeyRefusal::NotAuthenticated, link_key));
-                };
-                if signed.counter <= self.highest {
-                    return Some(refuse(self, KeyRefusal::Replayed, link_key));
+                match exchange.respond(response, change_key.as_ref()) {
+                    Some((session, granted)) => {
+                        self.session = Some(session);
+                        Some(PhoneReply {
+                            reply: ModuleRecord::Granted(granted),
+                            changed: false,
+                        })
+                    }
+                    None => {
+                        self.failures = self.failures.saturating_add(1);
+                        Some(refuse(Refusal::NotAuthenticated, counter))
+                    }
                 }
-                self.highest = signed.counter;
-                let (note, changed) = adopt(key, false, link_key);
-                commands.phrase_note = Some(note);
-                Some(PhoneOutcome {
-                    answer: self.answer(KeyOutcome::Applied, *link_key),
+            }
+            ModuleRecord::SetPhrase(set) => {
+                let Some(session) = self.session.as_mut() else {
+                    return Some(refuse(Refusal::NoSession, counter));
+                };
+                // Verified and used up first: a copy refused while armed never applies later.
+                let prs = match session.open(set) {
+                    Ok(prs) => prs,
+                    Err(why) => return Some(refuse(why, session.highest())),
+                };
+                let counter = session.highest();
+                if armed {
+                    return Some(refuse(Refusal::Armed, counter));
+                }
+                let changed = settings.phrase_prs != Some(prs);
+                settings.phrase_prs = Some(prs);
+                Some(PhoneReply {
                     changed,
+                    ..answer(Outcome::Applied, counter)
                 })
             }
+            ModuleRecord::Challenge(_)
+            | ModuleRecord::Granted(_)
+            | ModuleRecord::Answer(_)
+            | ModuleRecord::LinkSecurity(_) => None,
         }
-    }
-
-    /// One core tick: a proposal nobody started confirming expires (the answer says so).
-    pub fn on_tick(
-        &mut self,
-        link_key: Option<LinkKey>,
-        commands: &mut Commands,
-    ) -> Option<KeyAnswer> {
-        if commands.phone_key.is_none() || commands.phone_confirming {
-            return None;
-        }
-        self.ticks_left = self.ticks_left.saturating_sub(1);
-        if self.ticks_left > 0 {
-            return None;
-        }
-        commands.phone_key = None;
-        Some(self.answer(KeyOutcome::Refused(KeyRefusal::Expired), link_key))
     }
 }

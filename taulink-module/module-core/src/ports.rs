@@ -36,6 +36,21 @@ pub struct LinkStats {
     pub rate_code: u8,
     /// The uplink schedule (transmitter role, once the link runs).
     pub schedule: Option<AirSchedule>,
+    /// Frames whose authentication tag failed at this end since the link session started
+    /// (spec §12.2).
+    pub tag_failures: u32,
+}
+
+/// The link's authentication failures (spec §12.2) as the handset and the phone show them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TagFailures {
+    /// Frames whose tag failed at this module since it started.
+    pub down: u32,
+    /// Frames whose tag failed at the other end (its last report).
+    pub up: u32,
+    /// Either runs above what noise explains.
+    pub alert: bool,
 }
 
 /// The air link as the module core sees it.
@@ -101,6 +116,8 @@ pub trait HandsetOutput {
     fn on_link_stats(&mut self, stats: &LinkStats);
     /// The module's own supply voltage (the radio battery on JR pin 3), mV.
     fn on_module_battery(&mut self, _millivolts: u16) {}
+    /// A keyed link's tag failures at both ends and the alert, as often as they change.
+    fn on_tag_failures(&mut self, _failures: TagFailures) {}
     /// Bytes the radio sent on the JR line, the last one received at `now_us`; returns the
     /// newest RC channels they completed.
     fn on_line_bytes(&mut self, _now_us: u64, _bytes: &[u8]) -> Option<ChannelFrame> {

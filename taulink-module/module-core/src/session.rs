@@ -6,7 +6,9 @@
 
 use telemetry::channels::{Failsafe, FailsafeValues, MAX_CHANNELS};
 use telemetry::link::core::follower::DEFAULT_FAILSAFE_US;
-use telemetry::link::{Band, LinkParams};
+use telemetry::link::follower::FollowerBind;
+use telemetry::link::master::MasterBind;
+use telemetry::link::{Band, BindAuth, Entropy, LinkKey, LinkParams, PhraseSecret};
 
 use ::openlrs::BindData;
 
@@ -48,10 +50,18 @@ pub enum LinkStep {
         /// The follower's silence timeout.
         failsafe_us: u64,
     },
-    /// Offer `params` (a fresh bind ID) until a follower accepts or the timeout passes.
+    /// Offer `params` (a fresh bind ID) until a follower accepts or the timeout passes,
+    /// agreeing a key as `auth` says and handing over `key`, the link's key
+    /// (`telemetry::link::master::bind_master`).
     BindMaster {
         /// What is offered.
         params: LinkParams,
+        /// How the key is agreed.
+        auth: BindAuth,
+        /// The link's key to hand over (the module's key for this link).
+        key: LinkKey,
+        /// The CPace randomness.
+        random: [u8; 32],
         /// How long to offer.
         timeout_us: u64,
     },
@@ -67,10 +77,18 @@ pub enum LinkStep {
         /// How long to offer.
         timeout_us: u64,
     },
-    /// Listen for a master's offer on `band`.
+    /// Listen for a master's offer on `band` (`telemetry::link::follower::bind_follower`),
+    /// with the stored phrase derivation (taken when the master's salt is this module's) and
+    /// the unauthenticated setting.
     BindFollower {
         /// The band's bind channel.
         band: Band,
+        /// The stored phrase derivation.
+        stored: Option<PhraseSecret>,
+        /// Whether an unauthenticated link may be bound.
+        allow_plain: bool,
+        /// The CPace randomness.
+        random: [u8; 32],
         /// How long to listen.
         timeout_us: u64,
     },
@@ -94,26 +112,33 @@ pub enum SessionEnd {
 /// How a bind step ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BindOutcome {
-    /// Master: whether a follower accepted the offer.
-    Offered {
+    /// Master: how the offer ended.
+    Offered(MasterBind),
+    /// Follower: what the window brought.
+    Listened(FollowerBind),
+    /// OpenLRSng: whether a receiver took the bind data.
+    OpenLrs {
         /// Accepted within the timeout.
         accepted: bool,
     },
-    /// Follower: the offer taken, if one came.
-    Listened(Option<LinkParams>),
     /// The radio failed during the bind.
     RadioFailed,
 }
 
 impl BindOutcome {
     /// The master's bind result (`telemetry::link::master::bind_master`).
-    pub fn offered<E>(result: Result<bool, E>) -> Self {
-        result.map_or(Self::RadioFailed, |accepted| Self::Offered { accepted })
+    pub fn offered<E>(result: Result<MasterBind, E>) -> Self {
+        result.map_or(Self::RadioFailed, Self::Offered)
     }
 
     /// The follower's bind result (`telemetry::link::follower::bind_follower`).
-    pub fn listened<E>(result: Result<Option<LinkParams>, E>) -> Self {
+    pub fn listened<E>(result: Result<FollowerBind, E>) -> Self {
         result.map_or(Self::RadioFailed, Self::Listened)
+    }
+
+    /// OpenLRSng's bind result (`openlrs::roles::tx_bind`).
+    pub fn openlrs<E>(result: Result<bool, E>) -> Self {
+        result.map_or(Self::RadioFailed, |accepted| Self::OpenLrs { accepted })
     }
 }
 
@@ -136,8 +161,16 @@ pub struct Offer {
     pub params: LinkParams,
     /// The module's own bind ID to store (before any model mix).
     pub bind_id: u32,
+    /// The module's key to store (each link's key derives from it; `None` for an
+    /// unauthenticated bind).
+    pub module_key: Option<LinkKey>,
     /// The radio model the offer was made under (model match on), to record as bound.
     pub model: Option<u8>,
+}
+
+/// The first 16 of 32 random bytes.
+fn first16(bytes: [u8; 32]) -> [u8; 16] {
+    core::array::from_fn(|i| bytes.get(i).copied().unwrap_or(0))
 }
 
 /// The link of `params` for `model` (model match on and a model selected), else `params`.
@@ -179,7 +212,8 @@ impl Session {
     /// The next step for `settings`, at `now_ms`; `model` is the radio model the link's
     /// identity is mixed with (model match on and a model selected, else `None`); `random`
     /// gives a new bind ID when a master bind is next — except under a model, where a bound
-    /// module keeps its ID so the receivers bound under other models still fly. A step
+    /// module keeps its ID (and its key) so the receivers bound under other models still
+    /// fly; `entropy` the bind's secrets (a new module key, the CPace randomness). A step
     /// still running when this is called is abandoned: probe again.
     pub fn next(
         &mut self,
@@ -187,6 +221,7 @@ impl Session {
         model: Option<u8>,
         now_ms: u32,
         random: u32,
+        entropy: &mut Entropy,
     ) -> LinkStep {
         match self.state {
             State::Absent => {
@@ -254,23 +289,39 @@ impl Session {
                 self.state = State::Binding;
                 match settings.role {
                     Role::Transmitter => {
-                        let base = match (model, link_params(settings)) {
-                            (Some(_), Some(bound)) => bound,
-                            _ => new_bind_params(settings, random),
+                        let (base, module_key) = match (model, link_params(settings)) {
+                            (Some(_), Some(bound)) => (bound, settings.link_key),
+                            _ => (new_bind_params(settings, random), None),
                         };
+                        // A new link gets a new module key; a model's link keeps the key.
+                        let module_key = module_key.unwrap_or_else(|| {
+                            LinkKey::from_bytes(first16(entropy.draw(b"module key")))
+                        });
                         let params = with_model(base, model);
+                        let auth = match (settings.plain, settings.phrase()) {
+                            (true, _) => BindAuth::Plain,
+                            (false, Some(secret)) => BindAuth::Phrase(secret),
+                            (false, None) => BindAuth::Anonymous,
+                        };
                         self.offered = Some(Offer {
                             params,
                             bind_id: base.bind_id,
+                            module_key: (!settings.plain).then_some(module_key),
                             model,
                         });
                         LinkStep::BindMaster {
                             params,
+                            auth,
+                            key: module_key.for_link(params.bind_id),
+                            random: entropy.draw(b"bind"),
                             timeout_us: BIND_TIMEOUT_US,
                         }
                     }
                     Role::Receiver => LinkStep::BindFollower {
                         band: settings.band,
+                        stored: settings.phrase(),
+                        allow_plain: settings.plain,
+                        random: entropy.draw(b"bind"),
                         timeout_us: BIND_TIMEOUT_US,
                     },
                 }

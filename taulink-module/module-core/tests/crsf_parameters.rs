@@ -298,8 +298,17 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                         let Either::Second(end) = select(run, poll).await;
                         app.borrow_mut().on_session_end(end);
                     }
-                    LinkStep::BindMaster { params, timeout_us } => {
-                        let result = bind_master(&mut radio, &mut clock, &params, timeout_us).await;
+                    LinkStep::BindMaster {
+                        params,
+                        auth,
+                        key,
+                        random,
+                        timeout_us,
+                    } => {
+                        let result = bind_master(
+                            &mut radio, &mut clock, &params, &auth, &key, &random, timeout_us,
+                        )
+                        .await;
                         app.borrow_mut()
                             .on_bind_outcome(BindOutcome::offered(result));
                     }
@@ -332,10 +341,25 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
         let mut clock = SimClock::new(time.clone(), common::FLIGHT_EPOCH_US, 0.0);
         executor.spawn(async move {
             time.sleep_until(3_000_000).await;
-            let params = bind_follower(&mut radio, &mut clock, Band::Mhz433, 10_000_000)
-                .await
-                .unwrap()
-                .expect("the module's offer");
+            // The module runs the unauthenticated link (`common::module_settings`): this end
+            // allows it too.
+            let auth = telemetry::link::FollowerAuth {
+                allow_plain: true,
+                ..Default::default()
+            };
+            let bound = bind_follower(
+                &mut radio,
+                &mut clock,
+                Band::Mhz433,
+                &auth,
+                &[1; 32],
+                10_000_000,
+            )
+            .await
+            .unwrap();
+            let telemetry::link::follower::FollowerBind::Bound { params, .. } = bound else {
+                panic!("the module's offer: {bound:?}");
+            };
             *offered.borrow_mut() = Some(params);
             let mut follower = Follower::new(params, FailsafeValues::default(), 500_000);
             let mut hooks = FlightHooks { side: flight };
@@ -402,8 +426,8 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                     "OLRS Telem",
                     "Bind Phrase",
                     "BLE PIN",
-                    "Phrase Key",
-                    "Phone Phrase"
+                    "Link Key",
+                    "Tag Fails"
                 ]
             );
             assert_eq!(fields[12].options, ["Off", "On"]);
@@ -423,12 +447,13 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                 "the phrase is an empty STRING of at most 56 bytes"
             );
             assert_eq!(
-                fields[21].info, "none - UNAUTHENTICATED",
-                "no phrase: the menu says so"
+                fields[21].info, "NO AUTH no phrase",
+                "an unauthenticated link: the menu says so"
             );
             assert_eq!(
-                (fields[22].kind, fields[22].status, fields[22].info.as_str()),
-                (13, 0, "none from phone")
+                (fields[22].kind, fields[22].info.as_str()),
+                (12, "0 / 0"),
+                "the tag failures, both ends"
             );
             let rate = &fields[0];
             assert_eq!(
@@ -521,20 +546,30 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             assert!(stats.connected);
             assert_eq!(stats.rate_code, telemetry::link::RateMode::F500.code());
             // The pilot types a phrase in the STRING row: the radio writes it NUL-terminated;
-            // the key row then shows its fingerprint, and the new key is saved at once.
+            // the key row says it is being derived; once the firmware has run the
+            // derivation, the phrase is saved and the row says a phrase is set.
             let mut typed = vec![0xEE, 0xEA, 20];
-            typed.extend_from_slice(b"correct horse battery staple\0");
+            typed.extend_from_slice(b"amber kettle under the oak\0");
             script.tick(Some(frame(0x2D, &typed))).await;
             let (key_row, _) = script.read(22).await;
-            let key = telemetry::link::LinkKey::from_phrase("correct horse battery staple");
-            assert_eq!(key_row.info, key.fingerprint().to_string());
+            assert_eq!(key_row.info, "deriving phrase...");
+            while app.borrow_mut().step_phrase_job(256) {}
+            let (key_row, _) = script.read(22).await;
+            assert!(key_row.info.ends_with("+phrase"), "{}", key_row.info);
             let mut phrase_saved = None;
             while let Some(action) = app.borrow_mut().take_action() {
                 if let Action::Save(s) = action {
-                    phrase_saved = Some(s.link_key);
+                    phrase_saved = Some(s.phrase());
                 }
             }
-            assert_eq!(phrase_saved, Some(Some(key)));
+            let salt = app.borrow().settings().phrase_salt;
+            assert_eq!(
+                phrase_saved,
+                Some(Some(telemetry::link::PhraseSecret::derive(
+                    "amber kettle under the oak",
+                    salt
+                )))
+            );
             report
                 .borrow_mut()
                 .push(format!("reply frames by type: {:?}", script.seen));
@@ -560,10 +595,9 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
     eprintln!("flight side: {in_last_second} channel updates in the last second");
     assert!(in_last_second > 300, "{in_last_second} updates/s");
 
-    // Keyed by the typed phrase, the module's link restarted under the key's identity: the
-    // unkeyed flight side no longer answers it.
+    // The typed phrase is for the next bind: the running link was not touched.
     let stats = module_core::ports::LinkPort::stats(app.borrow().link());
-    assert!(!stats.connected, "the link runs keyed now");
+    assert!(stats.connected, "the link keeps running");
 
     // Save persisted across a power cycle: mock flash, a new core from the store.
     let to_save = saved.borrow().expect("Save asked the firmware to persist");

@@ -64,6 +64,9 @@ fn run(failsafe: FailsafeOutput) -> Vec<(u64, Option<Vec<u16>>)> {
         rate: RateMode::M100,
         failsafe,
         bind_id: 0x0BAD_CAFE,
+        // The PPM output is what this test is about: the unauthenticated link (the explicit
+        // setting) keeps the master unkeyed.
+        plain: true,
         ..Settings::default()
     };
     let params = link_params(&settings).unwrap();

@@ -91,7 +91,7 @@ fn bind(app: &mut Module, version: BindingVersion) -> openlrs::BindData {
     rx.start(0);
     let reception = rx.on_packet(1_000, &data.bind_packet());
     assert_eq!(reception.output, Output::Bound(data));
-    let Some(Action::Save(saved)) = app.on_bind_outcome(BindOutcome::Offered { accepted: true })
+    let Some(Action::Save(saved)) = app.on_bind_outcome(BindOutcome::OpenLrs { accepted: true })
     else {
         panic!("the bind is saved");
     };

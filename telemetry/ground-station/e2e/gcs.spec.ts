@@ -7,7 +7,7 @@
 import { readFileSync } from "node:fs";
 import { fileURLToPath } from "node:url";
 import { expect, test, type Page } from "@playwright/test";
-import { Decoder, loadWasm, phraseFingerprint } from "../src/decoder";
+import { Decoder, loadWasm } from "../src/decoder";
 import * as fmt from "../src/format";
 import { parseLog } from "../src/log";
 import { MODE_NAMES, type Event, type FlightMode } from "../src/messages";
@@ -87,15 +87,16 @@ test("arming and a flight-mode change are spoken; mute silences the next change"
   expect(await page.evaluate(() => (window as unknown as { spoken: string[] }).spoken.length)).toBe(before);
 });
 
-/** The binding phrase both simulated ends carry (`taulink-sim --serve` prints it). */
-const SERVE_PHRASE = "taulink demo";
+/** The binding phrase the simulated module holds (`taulink-sim --serve` prints it). */
+const SERVE_PHRASE = "taulink served demo";
 
 test("a setting change round-trips to the flight side", async ({ page }) => {
   await page.goto("/?sim");
   await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
   await page.getByLabel("Binding phrase").fill(SERVE_PHRASE);
   await page.getByRole("button", { name: "Use phrase" }).click();
-  await expect(page.getByLabel("Phrase fingerprint")).not.toHaveText("none");
+  // The simulated module's App ran CPace with the page and granted the change key.
+  await expect(page.getByLabel("Phrase status")).toHaveText("phrase confirmed", { timeout: 10_000 });
   await page.getByLabel("Filter settings").fill("pid.roll.kp");
   await page.getByLabel("New value for pid.roll.kp").fill("0.004");
   await page.getByRole("row", { name: /pid\.roll\.kp/ }).getByRole("button", { name: "Set" }).click();
@@ -107,54 +108,53 @@ test("a setting change round-trips to the flight side", async ({ page }) => {
   expect(applied[0]!.value).toBe(bits);
 });
 
-test("a setting change signed with a wrong phrase is refused and shown as refused", async ({ page }) => {
+test("a wrong phrase is refused by the module and nothing can be signed", async ({ page }) => {
   await page.goto("/?sim");
   await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
-  await page.getByLabel("Binding phrase").fill("not the demo phrase");
+  await page.getByLabel("Binding phrase").fill("amber kettle not the demo");
   await page.getByRole("button", { name: "Use phrase" }).click();
+  await expect(page.getByLabel("Phrase status")).toHaveText("refused: the phrase above is not the module's", {
+    timeout: 10_000,
+  });
   await page.getByLabel("Filter settings").fill("pid.roll.kp");
   await page.getByLabel("New value for pid.roll.kp").fill("0.004");
   await page.getByRole("row", { name: /pid\.roll\.kp/ }).getByRole("button", { name: "Set" }).click();
-  await expect(page.getByRole("status", { name: "Settings status" })).toHaveText(
-    "pid.roll.kp refused: wrong binding phrase",
-    { timeout: 10_000 },
+  await expect(page.getByRole("status", { name: "Connection status" })).toHaveText(
+    "enter the binding phrase first: the module must confirm it before changes can be signed",
   );
   await expect(page.getByLabel("Setting pid.roll.kp")).toHaveText("—");
   const log = await sent(page);
   expect(log.applied).toHaveLength(0);
-  expect(log.refused.length).toBeGreaterThan(0);
-  expect(log.refused.every((r) => r.reason === "NotAuthenticated")).toBe(true);
 });
 
-/** The fingerprint the module must show for `phrase`, from the same WebAssembly build in Node. */
-async function fingerprintOf(phrase: string): Promise<string> {
-  await loadWasm(readFileSync(fileURLToPath(new URL("../src/wasm/telemetry_wasm_bg.wasm", import.meta.url))));
-  return phraseFingerprint(phrase);
-}
+test("a phrase under the rule is refused in the page", async ({ page }) => {
+  await page.goto("/?sim");
+  await page.getByLabel("Binding phrase").fill("short");
+  await page.getByRole("button", { name: "Use phrase" }).click();
+  await expect(page.getByRole("status", { name: "Connection status" })).toHaveText(/shorter than 12 characters/);
+  await expect(page.getByLabel("Phrase status")).toHaveText("not asked");
+});
 
-test("the module's phrase set from the page: signed with its phrase it is taken at once", async ({ page }) => {
+test("the module's phrase set from the page after proving its phrase", async ({ page }) => {
   await page.goto("/?sim");
   await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
   await page.getByLabel("Binding phrase").fill(SERVE_PHRASE);
   await page.getByRole("button", { name: "Use phrase" }).click();
-  await page.getByLabel("New module phrase").fill("tr0ub4dor and 3");
+  await expect(page.getByLabel("Phrase status")).toHaveText("phrase confirmed", { timeout: 10_000 });
+  await page.getByLabel("New module phrase").fill("brass lantern by the weir");
   await page.getByRole("button", { name: "Set module phrase" }).click();
-  // The simulated module's App answered (after teaching the page its session once).
-  await expect(page.getByLabel("Module phrase status")).toHaveText(
-    `module phrase set: key ${await fingerprintOf("tr0ub4dor and 3")}`,
-    { timeout: 10_000 },
-  );
+  // The simulated module's App took the sealed derivation.
+  await expect(page.getByLabel("Module phrase status")).toHaveText("module phrase set: bind again with it", {
+    timeout: 10_000,
+  });
 });
 
-test("the module's phrase proposed without its phrase waits for the radio", async ({ page }) => {
+test("the module's phrase needs its current phrase first", async ({ page }) => {
   await page.goto("/?sim");
   await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
-  await page.getByLabel("New module phrase").fill("tr0ub4dor and 3");
+  await page.getByLabel("New module phrase").fill("brass lantern by the weir");
   await page.getByRole("button", { name: "Set module phrase" }).click();
-  await expect(page.getByLabel("Module phrase status")).toHaveText(
-    `confirm on the radio: Phone Phrase, key ${await fingerprintOf("tr0ub4dor and 3")}`,
-    { timeout: 10_000 },
-  );
+  await expect(page.getByLabel("Module phrase status")).toHaveText("enter the module's current phrase above first");
 });
 
 test("a recorded log replays", async ({ page, context }) => {

@@ -6,13 +6,11 @@ import init, {
   Decoder as WasmDecoder,
   Phone as WasmPhone,
   encode_setting_change,
-  phrase_fingerprint,
-  propose_module_phrase,
   setting_from_wire,
   setting_to_wire,
   settings_table,
 } from "./wasm/telemetry_wasm.js";
-import type { Event, KeyAnswer } from "./messages";
+import type { Event, ModuleEvent } from "./messages";
 
 export interface SettingRow {
   id: number;
@@ -62,8 +60,10 @@ export function settingValue(id: number, wire: number): number | undefined {
 }
 
 /**
- * The phone's signing half (Rust, telemetry::change_auth via telemetry-wasm): holds the key
- * derived from the binding phrase in memory only. Throws for an empty or unusable phrase.
+ * The phone's half (Rust, telemetry::module_record and change_auth via telemetry-wasm): the
+ * binding phrase in memory only, proven to the module with CPace (spec §12.5); the module's
+ * grant carries the change key the flight side checks changes with. Throws for a phrase the
+ * phrase rule refuses (12+ characters, 6 different, no famous example).
  */
 export class Phone {
   private readonly inner: WasmPhone;
@@ -72,27 +72,33 @@ export class Phone {
     this.inner = new WasmPhone(phrase);
   }
 
-  get fingerprint(): string {
-    return this.inner.fingerprint();
+  /** The record asking the module for its challenge. */
+  hello(): Uint8Array {
+    return this.inner.hello();
   }
 
-  /** The signed change frame of `id` to `value`, or undefined if the flight side would refuse the value. */
+  /** "unknown", "granted", "granted-no-link" or "refused:REASON". */
+  get standing(): string {
+    return this.inner.standing();
+  }
+
+  /** A record from the module: the record to send next, or undefined. */
+  onModuleRecord(event: ModuleEvent): Uint8Array | undefined {
+    const random = crypto.getRandomValues(new Uint8Array(32));
+    const frame = this.inner.on_module_record(JSON.stringify(event), random);
+    return frame.length ? frame : undefined;
+  }
+
+  /** The record setting the module's phrase (or the Hello that comes first). Throws for a phrase the rule refuses. */
+  setModulePhrase(newPhrase: string): Uint8Array {
+    return this.inner.set_module_phrase(newPhrase);
+  }
+
+  /** The signed change frame of `id` to `value`; undefined if the value would be refused or the module has not granted the change key. */
   signChange(id: number, value: number): Uint8Array | undefined {
     const wire = setting_to_wire(id, value);
-    return wire === undefined ? undefined : this.inner.sign_change(id, wire);
-  }
-
-  /**
-   * The record setting the module's phrase to `newPhrase`, signed with this phrase (which must
-   * be the module's current one): the module takes it at once. Throws for an unusable phrase.
-   */
-  signModulePhrase(newPhrase: string): Uint8Array {
-    return this.inner.sign_module_phrase(newPhrase);
-  }
-
-  /** The module's answer: the record to send again, or undefined (the answer stands). */
-  onModuleAnswer(answer: KeyAnswer): Uint8Array | undefined {
-    const frame = this.inner.on_module_answer(JSON.stringify(answer));
+    if (wire === undefined) return undefined;
+    const frame = this.inner.sign_change(id, wire);
     return frame.length ? frame : undefined;
   }
 
@@ -101,23 +107,4 @@ export class Phone {
     const frame = this.inner.on_refused(JSON.stringify(refused));
     return frame.length ? frame : undefined;
   }
-}
-
-/**
- * The record proposing `phrase` as the module's phrase: the module takes it only once the
- * pilot confirms on the radio (Phone Phrase). Throws for an empty or unusable phrase.
- */
-export function moduleProposalFrame(phrase: string): Uint8Array {
-  return propose_module_phrase(phrase);
-}
-
-/** The fingerprint (`1a2b-3c4d`) of `phrase`'s key. Throws for an empty or unusable phrase. */
-export function phraseFingerprint(phrase: string): string {
-  return phrase_fingerprint(phrase);
-}
-
-/** A 32-bit key fingerprint as the radio and the consoles show it. */
-export function fingerprintText(f: number): string {
-  const hex = (n: number) => n.toString(16).padStart(4, "0");
-  return `${hex(f >>> 16)}-${hex(f & 0xffff)}`;
 }

@@ -8,15 +8,12 @@ import { Alerts, Speaker, armText } from "./alerts";
 import {
   Decoder,
   Phone,
-  fingerprintText,
   loadWasm,
-  moduleProposalFrame,
-  phraseFingerprint,
   settingValue,
   settingsTable,
   type SettingRow,
 } from "./decoder";
-import type { KeyAnswer, KeyRefusal } from "./messages";
+import type { ModuleAnswer, ModuleEvent, ModuleRefusal } from "./messages";
 import * as fmt from "./format";
 import { type Chunk, Recorder, csvByType, parseLog } from "./log";
 import { MODE_NAMES, RATE_MODES, type Event, type RefuseReason } from "./messages";
@@ -41,7 +38,7 @@ let alerts = new Alerts();
 const speaker = new Speaker();
 let horizon: Horizon;
 let settings: SettingRow[] = [];
-/** The binding phrase's signer (in memory only: gone with the page). */
+/** The phone's half with the binding phrase (in memory only: gone with the page). */
 let phone: Phone | undefined;
 /** Console values by setting name (USB), shown when no link echo is there. */
 const consoleValues = new Map<string, string>();
@@ -60,8 +57,9 @@ function onBytes(bytes: Uint8Array): void {
   recorder?.add(performance.now(), bytes);
   const now = performance.now();
   for (const e of decoder.push(bytes)) {
-    if (typeof e === "object" && "KeyAnswer" in e) {
-      void onModuleAnswer(e.KeyAnswer);
+    // The module's exchange with the phone: its phone half reads them.
+    if (typeof e === "object" && ("Challenge" in e || "Granted" in e || "Answer" in e)) {
+      void onModuleRecord(e);
       continue;
     }
     // A refusal that only taught the phone the flight side's session: signed again, once.
@@ -113,6 +111,11 @@ function render(): void {
     set("rate", RATE_MODES[l.rate_mode] ?? `code ${l.rate_mode}`);
     set("failsafes", String(l.failsafes));
   }
+  if (s.tags) {
+    const t = s.tags;
+    const counts = t.down === undefined ? `${t.up} at the quad` : `${t.down} here / ${t.up} at the quad`;
+    set("tag-failures", t.alert ? `${counts} — ALERT: forged or replayed frames` : counts, t.alert ? "bad" : "");
+  }
   const tEnd = s.lastMessageMs ?? now;
   drawStrip($<HTMLCanvasElement>("chart-lq"), s.linkHistory, tEnd, [[(x) => x.upLq, "#66bb6a"], [(x) => x.dnLq, "#4fc3f7"]], [0, 100], "LQ %");
   drawStrip($<HTMLCanvasElement>("chart-rssi"), s.linkHistory, tEnd, [[(x) => x.upRssi, "#66bb6a"], [(x) => x.dnRssi, "#4fc3f7"]], [-120, -20], "RSSI dBm");
@@ -153,9 +156,9 @@ function shownValue(row: SettingRow): string {
 
 const REFUSALS: Record<RefuseReason, string> = {
   Armed: "refused: armed",
-  NotAuthenticated: "refused: wrong binding phrase",
+  NotAuthenticated: "refused: not signed with the link's change key",
   Replayed: "refused: replayed",
-  NoPhrase: "refused: the flight side has no binding phrase",
+  NoPhrase: "refused: the flight side has no keyed link",
   Invalid: "refused: value not accepted",
 };
 
@@ -202,13 +205,15 @@ async function sendSetting(row: SettingRow, text: string): Promise<void> {
     return;
   }
   const value = row.kind === "choice" && row.choices?.includes(text) ? row.choices.indexOf(text) : Number(text);
-  if (!phone) {
-    status("enter the binding phrase first: the flight side only takes signed changes");
+  if (!phone || !phone.standing.startsWith("granted")) {
+    status("enter the binding phrase first: the module must confirm it before changes can be signed");
     return;
   }
   const frame = phone.signChange(row.id, value);
   if (!frame) {
-    status(`${row.name}: ${text} is outside what the flight side accepts`);
+    status(phone.standing === "granted"
+      ? `${row.name}: ${text} is outside what the flight side accepts`
+      : "the module has no keyed flight link yet: bind first");
     return;
   }
   if (!transport) {
@@ -219,40 +224,48 @@ async function sendSetting(row: SettingRow, text: string): Promise<void> {
   status(`${row.name} → ${text} sent; waiting for the flight side's report`);
 }
 
-/** The new module phrase sent, until the module answers (memory only). */
-let modulePhrase: string | undefined;
+/** A new module phrase is on its way (until the module answers). */
+let modulePhraseSent = false;
 
-const KEY_REFUSALS: Record<KeyRefusal, string> = {
+const MODULE_REFUSALS: Record<ModuleRefusal, string> = {
   Armed: "refused: armed",
   NotAuthenticated: "refused: the phrase above is not the module's",
   Replayed: "refused: replayed",
-  NoPhrase: "the module has no phrase to check with",
-  Declined: "declined on the radio",
-  Expired: "not confirmed on the radio in time",
+  NoPhrase: "the module has no phrase: set it on the radio first",
+  NoSession: "no session with the module: enter the phrase again",
+  Locked: "refused: too many wrong phrases, restart the module",
+  Invalid: "refused: not a valid phrase",
 };
 
-async function onModuleAnswer(answer: KeyAnswer): Promise<void> {
-  // Signed for a session this page did not know yet: signed again, once.
-  const again = phone?.onModuleAnswer(answer);
-  if (again && transport) {
-    await transport.send(again);
-    return;
-  }
-  const key = answer.fingerprint === null ? "none" : fingerprintText(answer.fingerprint);
+const STANDING: Record<string, string> = {
+  unknown: "not confirmed yet",
+  granted: "phrase confirmed",
+  "granted-no-link": "phrase confirmed (no keyed flight link yet)",
+};
+
+function showStanding(): void {
+  const st = phone?.standing ?? "unknown";
+  const refused = st.startsWith("refused:") ? (st.slice(8) as ModuleRefusal) : undefined;
+  const text = refused ? MODULE_REFUSALS[refused] : (STANDING[st] ?? st);
+  set("phrase-standing", phone ? text : "not asked", refused ? "bad" : st.startsWith("granted") ? "good" : "");
+}
+
+async function onModuleRecord(record: ModuleEvent): Promise<void> {
+  const next = phone?.onModuleRecord(record);
+  showStanding();
+  if (next && transport) await transport.send(next);
+  if ("Answer" in record && modulePhraseSent) onModuleAnswer(record.Answer);
+}
+
+function onModuleAnswer(answer: ModuleAnswer): void {
   const o = answer.outcome;
   if (o === "Applied") {
-    modulePhrase = undefined;
-    set("module-phrase-status", `module phrase set: key ${key}`, "good");
-  } else if (o === "AwaitingConfirmation") {
-    set("module-phrase-status", `confirm on the radio: Phone Phrase, key ${key}`);
-  } else if (o.Refused === "NoPhrase" && modulePhrase !== undefined && transport) {
-    // Nothing to sign under: propose instead, for the pilot to confirm.
-    const phrase = modulePhrase;
-    modulePhrase = undefined;
-    await transport.send(moduleProposalFrame(phrase));
-  } else {
-    modulePhrase = undefined;
-    set("module-phrase-status", `module phrase ${KEY_REFUSALS[o.Refused]}`, "bad");
+    modulePhraseSent = false;
+    set("module-phrase-status", "module phrase set: bind again with it", "good");
+  } else if (o.Refused !== "Replayed") {
+    // A stale counter is sealed again by the phone half; anything else stands.
+    modulePhraseSent = false;
+    set("module-phrase-status", `module phrase ${MODULE_REFUSALS[o.Refused]}`, "bad");
   }
 }
 
@@ -265,13 +278,15 @@ async function sendModulePhrase(text: string): Promise<void> {
     status("connect first to set the module's phrase");
     return;
   }
+  if (!phone) {
+    set("module-phrase-status", "enter the module's current phrase above first", "bad");
+    return;
+  }
   try {
-    const fingerprint = phraseFingerprint(text);
-    // Knowing the module's phrase (entered above), sign; else propose for the radio.
-    const frame = phone ? phone.signModulePhrase(text) : moduleProposalFrame(text);
-    modulePhrase = text;
+    const frame = phone.setModulePhrase(text);
+    modulePhraseSent = true;
     await transport.send(frame);
-    set("module-phrase-status", `sent (key ${fingerprint}); waiting for the module`);
+    set("module-phrase-status", "sent; waiting for the module");
   } catch (e) {
     set("module-phrase-status", e instanceof Error ? e.message : String(e), "bad");
   }
@@ -301,6 +316,8 @@ async function connect(how: () => Promise<Transport>): Promise<void> {
     status("connecting…");
     transport = await how();
     status(`connected: ${transport.name}`);
+    // A phrase entered before connecting is proven now.
+    if (phone) await transport.send(phone.hello());
   } catch (e) {
     status(e instanceof Error ? e.message : String(e));
   }
@@ -364,15 +381,20 @@ async function main(): Promise<void> {
       status(e instanceof Error ? e.message : String(e));
     }
   };
-  $("phrase-use").onclick = () => {
+  $("phrase-use").onclick = async () => {
     const input = $<HTMLInputElement>("phrase");
     try {
       phone = new Phone(input.value);
-      set("phrase-fingerprint", phone.fingerprint);
-      status("binding phrase set (in memory only); compare the fingerprint with the flight console's");
+      showStanding();
+      if (transport) {
+        await transport.send(phone.hello());
+        status("binding phrase set (in memory only); asking the module to confirm it");
+      } else {
+        status("binding phrase set (in memory only); the module confirms it once connected");
+      }
     } catch (e) {
       phone = undefined;
-      set("phrase-fingerprint", "none");
+      showStanding();
       status(e instanceof Error ? e.message : String(e));
     }
     input.value = "";

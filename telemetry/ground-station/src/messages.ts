@@ -28,6 +28,9 @@ export interface SignedChange { change: SettingChange; counter: number; tag: num
 export type RefuseReason = "Armed" | "NotAuthenticated" | "Replayed" | "NoPhrase" | "Invalid";
 export interface ChangeRefused { id: number; reason: RefuseReason; session: number; counter: number }
 
+/** Tag failures at the flight side (spec §12.2) and whether they run above noise. */
+export interface LinkSecurity { tag_failures: number; alert: boolean }
+
 export type Message =
   | { Attitude: Attitude }
   | { Battery: Battery }
@@ -41,15 +44,24 @@ export type Message =
   | { SignedChange: SignedChange }
   | { ChangeRefused: ChangeRefused }
   | { Home: Home }
-  | { FlightMode: FlightMode };
+  | { FlightMode: FlightMode }
+  | { LinkSecurity: LinkSecurity };
 
-/** Why the module did not take a key from the phone (`telemetry::module_record::KeyRefusal`). */
-export type KeyRefusal = "Armed" | "NotAuthenticated" | "Replayed" | "NoPhrase" | "Declined" | "Expired";
-export type KeyOutcome = "Applied" | "AwaitingConfirmation" | { Refused: KeyRefusal };
-/** The module's answer to a key from the phone (a module record, not a flight message). */
-export interface KeyAnswer { outcome: KeyOutcome; fingerprint: number | null; session: number; counter: number }
+/** Why the module refused a phone's record (`telemetry::module_record::Refusal`). */
+export type ModuleRefusal = "Armed" | "NotAuthenticated" | "Replayed" | "NoPhrase" | "NoSession" | "Locked" | "Invalid";
+export type ModuleOutcome = "Applied" | { Refused: ModuleRefusal };
+/** The module's answer to a phone's record. */
+export interface ModuleAnswer { outcome: ModuleOutcome; counter: number }
+/** Both ends' tag failures as the module reports them to the phone. */
+export interface ModuleLinkSecurity { tag_failures_down: number; tag_failures_up: number; alert: boolean }
+/** Records the module itself sends the phone (`telemetry::module_record::ModuleRecord`); the exchange's own ones are the phone half's to read. */
+export type ModuleEvent =
+  | { Challenge: unknown }
+  | { Granted: unknown }
+  | { Answer: ModuleAnswer }
+  | { LinkSecurity: ModuleLinkSecurity };
 
-export type Event = Message | { KeyAnswer: KeyAnswer } | "Dropped";
+export type Event = Message | ModuleEvent | "Dropped";
 
 /** The variant name of a message ("Attitude", "Battery", ...). */
 export function kindOf(m: Exclude<Event, "Dropped">): string {

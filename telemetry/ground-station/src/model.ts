@@ -5,6 +5,9 @@
  */
 import type { ArmState, Attitude, Axis, Battery, ChangeRefused, Event, FlightMode, Gps, Home, LinkStats, SysIdResult } from "./messages";
 
+/** Tag failures (spec §12.2): the module's count (when it reported), the flight side's, and the alert. */
+export interface TagFailures { down?: number; up: number; alert: boolean }
+
 /** Strip charts show this much history. */
 export const HISTORY_MS = 5 * 60_000;
 /** Track points kept (at GPS rates, hours of flight thinned by distance). */
@@ -24,6 +27,8 @@ export interface State {
   gps?: Gps;
   /** The flight side's home, once it reported one set. */
   home?: Home;
+  /** Tag failures, once either end reported them. */
+  tags?: TagFailures;
   sysid: Partial<Record<Axis, SysIdResult>>;
   /** Setting id → wire value the flight side reported. */
   settings: Map<number, number>;
@@ -75,6 +80,12 @@ export function apply(s: State, event: Event, tMs: number): State {
     let drop = 0;
     while (drop < s.linkHistory.length && (s.linkHistory[drop]?.t ?? tMs) < oldest) drop += 1;
     if (drop > 0) s.linkHistory.splice(0, drop);
+  } else if ("LinkSecurity" in event) {
+    const l = event.LinkSecurity;
+    // The module's record carries both ends' counts; the flight side's message its own.
+    s.tags = "tag_failures_down" in l
+      ? { down: l.tag_failures_down, up: l.tag_failures_up, alert: l.alert }
+      : { down: s.tags?.down, up: l.tag_failures, alert: l.alert };
   } else if ("Home" in event) {
     s.home = event.Home.set ? event.Home : undefined;
   } else if ("Gps" in event) {

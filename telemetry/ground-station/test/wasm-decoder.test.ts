@@ -44,20 +44,20 @@ describe("settings encoders", () => {
   });
 });
 
-describe("the phone's signer", () => {
-  it("signs a change, shows the fingerprint and refuses an empty phrase", () => {
+describe("the phone's half", () => {
+  it("asks the module, signs nothing before its grant, and holds the phrase rule", () => {
     const kp = settingsTable().find((r) => r.name === "pid.roll.kp")!;
-    const phone = new Phone("taulink demo");
-    expect(phone.fingerprint).toMatch(/^[0-9a-f]{4}-[0-9a-f]{4}$/);
-    const events = new Decoder().push(phone.signChange(kp.id, 0.004)!);
-    const signed = (events[0] as { SignedChange: { change: { id: number }; counter: number; tag: number[] } }).SignedChange;
-    expect(signed.change.id).toBe(kp.id);
-    expect(signed.counter).toBe(1);
-    expect(signed.tag).toHaveLength(8);
-    expect(phone.signChange(kp.id, 5)).toBeUndefined();
-    // A refusal naming an unknown session: one more signed try.
-    const again = phone.onRefused({ id: kp.id, reason: "NotAuthenticated", session: 42, counter: 0 });
-    expect(again).toBeDefined();
+    const phone = new Phone("amber kettle under the oak");
+    expect(phone.standing).toBe("unknown");
+    // The Hello is a module record: the page's own decoder reads it back as one.
+    expect(new Decoder().push(phone.hello())).toEqual(["Hello"]);
+    expect(phone.signChange(kp.id, 0.004)).toBeUndefined();
+    expect(phone.onRefused({ id: kp.id, reason: "NotAuthenticated", session: 42, counter: 0 })).toBeUndefined();
+    // A module's refusal is the phone's standing.
+    expect(phone.onModuleRecord({ Answer: { outcome: { Refused: "NoPhrase" }, counter: 0 } })).toBeUndefined();
+    expect(phone.standing).toBe("refused:NoPhrase");
     expect(() => new Phone("  ")).toThrow();
+    expect(() => new Phone("short")).toThrow(/12/);
+    expect(() => new Phone("correct horse battery staple")).toThrow(/famous/);
   });
 });

@@ -92,6 +92,20 @@ pub struct VerticalReport {
     pub vario_cm_s: i16,
 }
 
+/// The keyed link's authentication failures (spec §12.2): frames whose tag failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LinkSecurityReport {
+    /// Tag failures at both ends (the module's count and the flight side's last report).
+    pub tag_failures: u32,
+    /// They run above what noise explains (a forger or replayer on air).
+    pub alert: bool,
+}
+
+/// The flight-mode text shown while [`LinkSecurityReport::alert`] stands (CRSF's FM
+/// sensor; EdgeTX shows 13 characters).
+pub const TAG_ALERT_TEXT: &str = "TAG ALERT";
+
 /// Everything the handset may be told. Absent parts are simply not sent.
 #[derive(Debug, Clone, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -112,6 +126,8 @@ pub struct HandsetTelemetry {
     pub cells: Option<u8>,
     /// The module's own supply, mV.
     pub module_battery_mv: Option<u16>,
+    /// The keyed link's tag failures.
+    pub link_security: Option<LinkSecurityReport>,
 }
 
 impl HandsetTelemetry {
@@ -120,6 +136,18 @@ impl HandsetTelemetry {
         let count = u32::from(self.cells.filter(|c| *c > 0)?);
         let battery = self.battery?;
         u16::try_from(battery.voltage_mv / count).ok()
+    }
+
+    /// The flight mode to show: the tag alert's text over the mode while the alert stands
+    /// (the number stays the mode's, or 0), so the pilot sees it on the FM sensor.
+    pub fn flight_mode_shown(&self) -> Option<FlightModeReport> {
+        if self.link_security.is_some_and(|s| s.alert) {
+            let mut name = String::new();
+            let _ = name.push_str(TAG_ALERT_TEXT);
+            let number = self.flight_mode.as_ref().map_or(0, |m| m.number);
+            return Some(FlightModeReport { name, number });
+        }
+        self.flight_mode.clone()
     }
 
     /// True if the link is up with a non-zero uplink LQ: the radio then accepts sensor values

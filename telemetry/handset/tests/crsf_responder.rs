@@ -11,7 +11,7 @@ use taulink_handset::HandsetTelemetry;
 use taulink_handset::crsf::responder::{Config, LinkSchedule, Responder, taulink_device_info};
 use taulink_handset::crsf::{Decoded, Decoder, Frame, Message, RcChannels};
 use taulink_handset::report::{
-    AttitudeReport, BatteryReport, FlightModeReport, GpsReport, LinkReport,
+    AttitudeReport, BatteryReport, FlightModeReport, GpsReport, LinkReport, LinkSecurityReport,
 };
 
 const PING: [u8; 6] = [0xC8, 0x04, 0x28, 0x00, 0xEA, 0x54];
@@ -286,6 +286,45 @@ fn link_statistics_at_10_hz_and_sensors_at_5_hz() {
             .any(|m| matches!(m, Message::FlightMode(f) if f.name.as_str() == "HORIZON-RESCU"))
     );
     assert!(all.iter().any(|m| matches!(m, Message::LinkStatistics(s) if s.uplink_rssi1_dbm == -67 && s.uplink_tx_power_index == 3)));
+}
+
+/// Issue 30: a tag alert shows on the FM sensor as "TAG ALERT" for as long as it stands
+/// (even with no flight mode known), and the mode comes back after it.
+#[test]
+fn a_tag_alert_is_the_flight_mode_while_it_stands() {
+    let modes = |telemetry: &HandsetTelemetry| -> Vec<String> {
+        let mut responder = responder(400_000);
+        run(&mut responder, 4_000, 1, telemetry)
+            .iter()
+            .flat_map(|(_, m)| m.iter())
+            .filter_map(|m| match m {
+                Message::FlightMode(f) => Some(f.name.as_str().to_owned()),
+                _ => None,
+            })
+            .collect()
+    };
+    let alert = Some(LinkSecurityReport {
+        tag_failures: 412,
+        alert: true,
+    });
+    let alerted = HandsetTelemetry {
+        link_security: alert,
+        ..full_telemetry()
+    };
+    assert_eq!(modes(&alerted), vec!["TAG ALERT"; 5]);
+    let no_mode = HandsetTelemetry {
+        flight_mode: None,
+        ..alerted
+    };
+    assert_eq!(modes(&no_mode), vec!["TAG ALERT"; 5]);
+    let counted_only = HandsetTelemetry {
+        link_security: Some(LinkSecurityReport {
+            tag_failures: 3,
+            alert: false,
+        }),
+        ..full_telemetry()
+    };
+    assert_eq!(modes(&counted_only), vec!["HORIZON-RESCU"; 5]);
 }
 
 #[test]

@@ -5,7 +5,7 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 use taulink_handset::HandsetTelemetry;
-use taulink_handset::report::{BatteryReport, FlightModeReport, LinkReport};
+use taulink_handset::report::{BatteryReport, FlightModeReport, LinkReport, LinkSecurityReport};
 use taulink_handset::sport::schedule::{Config, LqEncoding, RssiSource};
 use taulink_handset::sport::{self, Decoder, Event, Frame, Scheduler, value_id};
 
@@ -100,6 +100,30 @@ fn values_in_sensor_units() {
     assert_eq!(values(&sent, value_id::TAULINK_FLIGHT_MODE)[0], 2);
     assert_eq!(values(&sent, value_id::FUEL)[0], 64);
     assert_eq!(values(&sent, value_id::RSSI)[0], 95);
+}
+
+/// Issue 30: a keyed link's tag failures and alert go out once a second under their DIY IDs;
+/// without a keyed link neither is sent.
+#[test]
+fn tag_failures_and_alert_at_1_hz() {
+    let mut scheduler = Scheduler::new(Config::default());
+    let keyed = HandsetTelemetry {
+        link_security: Some(LinkSecurityReport {
+            tag_failures: 412,
+            alert: true,
+        }),
+        ..telemetry()
+    };
+    let sent = run(&mut scheduler, 2_000_000, &keyed);
+    assert_eq!(values(&sent, value_id::TAULINK_TAG_FAILURES), [412, 412]);
+    assert_eq!(values(&sent, value_id::TAULINK_TAG_ALERT), [1, 1]);
+    let sent = run(
+        &mut Scheduler::new(Config::default()),
+        2_000_000,
+        &telemetry(),
+    );
+    assert!(values(&sent, value_id::TAULINK_TAG_FAILURES).is_empty());
+    assert!(values(&sent, value_id::TAULINK_TAG_ALERT).is_empty());
 }
 
 #[test]

@@ -43,81 +43,54 @@ impl core::fmt::Display for Fingerprint {
     }
 }
 
-/// Longest binding phrase, bytes of UTF-8.
-pub const PHRASE_MAX_BYTES: usize = 64;
+/// Domain separation of the derivations: each use of the key hashes its own prefix, and
+/// every input under one key starts with an 8-byte word no other use starts with — a frame
+/// tag's [`TagContext`] (an epoch counter below 2³², `TLnonceF`, `TLnonceM`, or all ones)
+/// or the ASCII `TauLink/` of a derivation — so no tag coincides with a derived value or
+/// with a tag of another kind.
+const DOMAIN_LINK_KEY: &[u8] = b"TauLink/2 link-key";
+const DOMAIN_EPOCH_KEY: &[u8] = b"TauLink/2 epoch-key";
+const DOMAIN_REKEY: &[u8] = b"TauLink/2 rekey";
+const DOMAIN_FINGERPRINT: &[u8] = b"TauLink/1 fingerprint";
 
-/// Domain prefix of the phrase hash (spec §12); the NUL ends it, so no phrase can extend it.
-const DOMAIN_PHRASE: &[u8] = b"TauLink/1 binding phrase\0";
-
-/// Why a binding phrase was refused.
+/// What a sealed frame's tag covers besides the frame's bytes (spec §12.2): its place in the
+/// link's history, which never travels whole, so a frame recorded anywhere else fails.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum PhraseError {
-    /// Longer than [`PHRASE_MAX_BYTES`] bytes.
-    TooLong,
-    /// Holds a control character (a phrase must be typeable the same on both ends).
-    NotPrintable,
+pub enum TagContext {
+    /// A frame of an epoch, under the epoch's key: `wraps₂₄ ‖ slot₈` (below 2³²).
+    Counter(u64),
+    /// The follower's epoch nonce, under the link key (the frame names nonce and slot).
+    FollowerNonce,
+    /// The master's epoch nonce, under the link key, bound to the follower's nonce it
+    /// answers (which the frame does not carry: only that follower can check it).
+    MasterNonce {
+        /// The follower's nonce.
+        follower_nonce: u64,
+    },
+    /// An uplink before any epoch, under the link key: no follower checks anything under
+    /// it (it gives timing only).
+    BeforeEpoch,
 }
 
-impl core::fmt::Display for PhraseError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(match self {
-            PhraseError::TooLong => "binding phrase longer than 64 bytes",
-            PhraseError::NotPrintable => "binding phrase holds a control character",
-        })
+impl TagContext {
+    fn write(&self, h: &mut SipHasher24) {
+        match self {
+            TagContext::Counter(counter) => h.write(&counter.to_le_bytes()),
+            TagContext::FollowerNonce => h.write(b"TLnonceF"),
+            TagContext::MasterNonce { follower_nonce } => {
+                h.write(b"TLnonceM");
+                h.write(&follower_nonce.to_le_bytes());
+            }
+            TagContext::BeforeEpoch => h.write(&[0xFF; 8]),
+        }
     }
 }
-
-impl core::error::Error for PhraseError {}
-
-/// The key of a binding phrase as a person typed it, the one rule both ends (and the
-/// ground station) apply: leading and trailing white space is dropped; what is left must be
-/// at most [`PHRASE_MAX_BYTES`] bytes of printable UTF-8 (spaces inside are part of it).
-/// `Ok(None)`: no phrase (empty), the link runs unauthenticated.
-pub fn key_for_phrase(text: &str) -> Result<Option<LinkKey>, PhraseError> {
-    let phrase = text.trim();
-    if phrase.is_empty() {
-        return Ok(None);
-    }
-    if phrase.len() > PHRASE_MAX_BYTES {
-        return Err(PhraseError::TooLong);
-    }
-    if phrase.chars().any(char::is_control) {
-        return Err(PhraseError::NotPrintable);
-    }
-    Ok(Some(LinkKey::from_phrase(phrase)))
-}
-
-/// Domain separation of the derivations: each use of the key hashes its own prefix. A frame
-/// tag hashes its 64-bit counter first; "TauLink/" read as a counter is above 2⁶¹, which no
-/// link ever reaches, so no frame tag coincides with a derived value.
-const DOMAIN_BIND_ID: &[u8] = b"TauLink/1 bind-id";
-/// Domain prefix of the binding-phrase hash (spec §12.2).
-const DOMAIN_HOP_SEED: &[u8] = b"TauLink/1 hop-seed";
-const DOMAIN_MODEL_KEY: &[u8] = b"TauLink/1 model-key";
-const DOMAIN_EPOCH_KEY: &[u8] = b"TauLink/1 epoch-key";
-const DOMAIN_FINGERPRINT: &[u8] = b"TauLink/1 fingerprint";
 
 impl LinkKey {
     /// The key from its 16 bytes.
     pub const fn from_bytes(bytes: [u8; KEY_BYTES]) -> Self {
         Self(bytes)
-    }
-
-    /// The key of a binding phrase: `SHA-256("TauLink/1 binding phrase\0" ‖ phrase)`, its
-    /// first 16 bytes (spec §12). The phrase's bytes are hashed as given; people's input goes
-    /// through [`key_for_phrase`], which trims and checks it first.
-    pub fn from_phrase(phrase: &str) -> LinkKey {
-        use sha2::Digest;
-        let mut h = sha2::Sha256::new();
-        h.update(DOMAIN_PHRASE);
-        h.update(phrase.as_bytes());
-        let digest: [u8; 32] = h.finalize().into();
-        let mut key = [0u8; KEY_BYTES];
-        for (k, d) in key.iter_mut().zip(digest) {
-            *k = d;
-        }
-        LinkKey(key)
     }
 
     /// A short public check value of the key, for a person to compare both ends (console,
@@ -132,23 +105,18 @@ impl LinkKey {
         self.0
     }
 
-    /// The link's public 32-bit identity (header bytes, bind frames): a PRF of the key, so
-    /// one heard frame gives no key bits back (the old header was an invertible mix of the
-    /// bind ID). Never 0.
-    pub fn bind_id(&self) -> u32 {
-        let id = self.prf(DOMAIN_BIND_ID) as u32;
-        if id == 0 { 1 } else { id }
-    }
-
-    /// The key of radio model `model_id` (model match, spec §12.6): two PRF outputs of this
-    /// key over the model ID (halves 0 and 1), so each model's link has its own key, bind ID,
-    /// hop seed and tags, and one model's key tells nothing of this key or of another
-    /// model's. Forging under a model key is as hard as under this one (2⁻³² per frame).
-    pub fn for_model(&self, model_id: u8) -> Self {
+    /// The key of the link whose bind ID is `bind_id`, when this is a module's own key
+    /// (spec §12.1, §12.6): two PRF outputs of this key over the bind ID (halves 0 and 1). A
+    /// module hands each receiver its link's key at bind and flies it; each model's link
+    /// (model match mixes the model into the bind ID) so has its own key, and one link's key
+    /// tells nothing of the module's or of another link's. Forging under a link key is as
+    /// hard as under this one (2⁻³² per frame).
+    pub fn for_link(&self, bind_id: u32) -> Self {
         let half = |n: u8| {
             let mut h = SipHasher24::new(&self.0);
-            h.write(DOMAIN_MODEL_KEY);
-            h.write(&[model_id, n]);
+            h.write(DOMAIN_LINK_KEY);
+            h.write(&bind_id.to_le_bytes());
+            h.write(&[n]);
             h.finish().to_le_bytes()
         };
         let mut bytes = [0u8; KEY_BYTES];
@@ -159,11 +127,12 @@ impl LinkKey {
     }
 
     /// The key of one epoch (spec §12.2): two PRF outputs of this key over the follower's
-    /// nonce and the master's (halves 0 and 1). Every frame of the epoch is tagged with it,
-    /// so an epoch's tags repeat only if *both* nonces repeat: a replayed old follower nonce
-    /// meets a fresh master nonce (and the other way round), and nothing recorded under an
-    /// earlier epoch verifies. Derived once per handshake; the per-frame tag costs the same.
-    pub fn epoch_key(&self, follower_nonce: u32, master_nonce: u32) -> Self {
+    /// 64-bit nonce and the master's (halves 0 and 1). Every frame of the epoch is tagged
+    /// with it, so an epoch's tags repeat only if *both* nonces repeat: a replayed old
+    /// follower nonce meets a fresh master nonce (and the other way round), and nothing
+    /// recorded under an earlier epoch verifies. Derived once per handshake; the per-frame
+    /// tag costs the same.
+    pub fn epoch_key(&self, follower_nonce: u64, master_nonce: u64) -> Self {
         let half = |n: u8| {
             let mut h = SipHasher24::new(&self.0);
             h.write(DOMAIN_EPOCH_KEY);
@@ -179,25 +148,41 @@ impl LinkKey {
         Self(bytes)
     }
 
-    /// The seed of the hop sequence: a PRF of the key, independent of [`LinkKey::bind_id`].
-    pub fn hop_seed(&self) -> u32 {
-        self.prf(DOMAIN_HOP_SEED) as u32
-    }
-
-    /// The 32-bit tag of `frame` sent under frame counter `counter` (the on-air 8-bit slot
-    /// extended by the session counter both ends track): the low half of
-    /// SipHash-2-4(key, counter LE ‖ frame). A forger without the key is right with
-    /// probability 2⁻³² per frame.
-    pub fn tag(&self, counter: u64, frame: &[u8]) -> u32 {
+    /// The 32-bit tag of `frame` sent in `context` (for a frame of an epoch, the on-air 8-bit
+    /// slot extended by the wraps both ends count): the low half of SipHash-2-4(key,
+    /// context ‖ frame). A forger without the key is right with probability 2⁻³² per frame.
+    pub fn tag_in(&self, context: &TagContext, frame: &[u8]) -> u32 {
         let mut h = SipHasher24::new(&self.0);
-        h.write(&counter.to_le_bytes());
+        context.write(&mut h);
         h.write(frame);
         h.finish() as u32
     }
 
     /// Checks a received tag, in time independent of where it differs.
+    pub fn verify_in(&self, context: &TagContext, frame: &[u8], tag: u32) -> bool {
+        (self.tag_in(context, frame) ^ tag) == 0
+    }
+
+    /// [`LinkKey::tag_in`] of a frame of an epoch under frame counter `counter`.
+    pub fn tag(&self, counter: u64, frame: &[u8]) -> u32 {
+        self.tag_in(&TagContext::Counter(counter), frame)
+    }
+
+    /// [`LinkKey::verify_in`] of a frame of an epoch under frame counter `counter`.
     pub fn verify(&self, counter: u64, frame: &[u8], tag: u32) -> bool {
-        (self.tag(counter, frame) ^ tag) == 0
+        self.verify_in(&TagContext::Counter(counter), frame, tag)
+    }
+
+    /// An epoch key's proof, in a follower's new nonce frame, that the follower was in force
+    /// under this epoch (spec §12.2): the low 32 bits of SipHash-2-4(epoch key,
+    /// "TauLink/2 rekey" ‖ new nonce ‖ slot). A master takes a new nonce at once from the
+    /// follower of its epoch, and only after the epoch went quiet from anyone else.
+    pub fn rekey_proof(&self, new_nonce: u64, slot: u8) -> u32 {
+        let mut h = SipHasher24::new(&self.0);
+        h.write(DOMAIN_REKEY);
+        h.write(&new_nonce.to_le_bytes());
+        h.write(&[slot]);
+        h.finish() as u32
     }
 
     pub(crate) fn prf(&self, domain: &[u8]) -> u64 {
@@ -320,31 +305,25 @@ mod tests {
     }
 
     #[test]
-    fn model_keys_are_distinct_one_way_derivations() {
+    fn link_keys_are_distinct_one_way_derivations() {
         let key = LinkKey::from_bytes(reference_key());
-        let k3 = key.for_model(3);
-        assert_eq!(k3, key.for_model(3));
+        let k3 = key.for_link(3);
+        assert_eq!(k3, key.for_link(3));
         assert_ne!(k3, key);
-        assert_ne!(k3, key.for_model(4));
-        assert_ne!(
-            k3,
-            LinkKey::from_bytes(reference_key())
-                .for_model(3)
-                .for_model(3)
-        );
-        assert_ne!(k3.bind_id(), key.bind_id());
-        assert_ne!(k3.hop_seed(), key.hop_seed());
-        // Its halves are SipHash(key, domain ‖ model ‖ half).
-        let mut msg = DOMAIN_MODEL_KEY.to_vec();
-        msg.extend([3, 0]);
+        assert_ne!(k3, key.for_link(4));
+        assert_ne!(k3, key.for_link(3).for_link(3));
+        assert_ne!(k3.fingerprint(), key.fingerprint());
+        // Its halves are SipHash(key, domain ‖ bind ID ‖ half).
+        let mut msg = DOMAIN_LINK_KEY.to_vec();
+        msg.extend([3, 0, 0, 0, 0]);
         assert_eq!(
             k3.to_bytes()[..8],
             siphash(&reference_key(), &msg).to_le_bytes()
         );
-        // A tag under one model's key does not verify under another's.
+        // A tag under one link's key does not verify under another's.
         let tag = k3.tag(9, b"frame");
         assert!(k3.verify(9, b"frame", tag));
-        assert!(!key.for_model(4).verify(9, b"frame", tag));
+        assert!(!key.for_link(4).verify(9, b"frame", tag));
     }
 
     #[test]
@@ -387,84 +366,39 @@ mod tests {
         }
     }
 
-    fn bytes(hex: &str) -> [u8; 16] {
-        core::array::from_fn(|i| u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).unwrap())
-    }
-
-    #[test]
-    fn a_phrase_gives_the_key_of_the_spec() {
-        // Expected keys from Python, not from this code:
-        // hashlib.sha256(b"TauLink/1 binding phrase\0" + p).hexdigest()[:32]
-        for (phrase, key) in [
-            (
-                "correct horse battery staple",
-                "6c8c3067ce51b390ad2a8164c0352019",
-            ),
-            ("a", "6882b94b07dd0f2059789153d1c32eb0"),
-            ("Grüezi Säntis 2026", "474c6b9d03a2946f351696fdb431fdef"),
-            (
-                "xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx",
-                "29b16b08d9347165626b1aa44e39481d",
-            ),
-        ] {
-            assert_eq!(
-                LinkKey::from_phrase(phrase).to_bytes(),
-                bytes(key),
-                "{phrase}"
-            );
-            assert_eq!(
-                key_for_phrase(&format!("  {phrase}\t")),
-                Ok(Some(LinkKey::from_bytes(bytes(key)))),
-                "typed with white space around it"
-            );
-        }
-    }
-
-    #[test]
-    fn phrase_rules_one_to_64_printable_bytes_empty_is_none() {
-        assert_eq!(key_for_phrase(""), Ok(None));
-        assert_eq!(key_for_phrase("   "), Ok(None));
-        assert!(
-            key_for_phrase(&"é".repeat(32)).unwrap().is_some(),
-            "64 bytes"
-        );
-        assert_eq!(
-            key_for_phrase(&"é".repeat(32).replace('é', "ée")),
-            Err(PhraseError::TooLong)
-        );
-        assert_eq!(key_for_phrase(&"x".repeat(65)), Err(PhraseError::TooLong));
-        assert_eq!(
-            key_for_phrase("bell\u{7}ring"),
-            Err(PhraseError::NotPrintable)
-        );
-        assert_eq!(key_for_phrase("two\nlines"), Err(PhraseError::NotPrintable));
-        // Inner spaces and case count.
-        assert_ne!(key_for_phrase("a b"), key_for_phrase("ab"));
-        assert_ne!(key_for_phrase("A"), key_for_phrase("a"));
-    }
-
     #[test]
     fn the_fingerprint_is_one_more_separate_value() {
-        let key = LinkKey::from_phrase("correct horse battery staple");
-        assert_ne!(key.fingerprint().0, key.bind_id());
-        assert_ne!(key.fingerprint().0, key.hop_seed());
-        assert_ne!(
-            key.fingerprint(),
-            LinkKey::from_phrase("correct horse battery stapler").fingerprint()
-        );
+        let key = LinkKey::from_bytes(reference_key());
+        let mut other = reference_key();
+        other[15] ^= 1;
+        assert_ne!(key.fingerprint(), LinkKey::from_bytes(other).fingerprint());
         assert_eq!(format!("{}", Fingerprint(0x1a2b_003d)), "1a2b-003d");
     }
 
     #[test]
-    fn identity_and_hop_seed_are_separate_one_way_values_of_the_key() {
+    fn tags_of_other_contexts_and_keys_differ_and_the_key_is_never_printed() {
         let key = LinkKey::from_bytes(reference_key());
-        assert_ne!(key.bind_id(), key.hop_seed());
-        assert_ne!(u64::from(key.bind_id()), key.tag(0, &[]) as u64);
-        let mut other = reference_key();
-        other[0] ^= 0x80;
-        let other = LinkKey::from_bytes(other);
-        assert_ne!(key.bind_id(), other.bind_id());
-        assert_ne!(key.hop_seed(), other.hop_seed());
+        let frame = [0x44u8, 7, 1, 2, 3];
+        let contexts = [
+            TagContext::Counter(0),
+            TagContext::Counter(1 << 8),
+            TagContext::FollowerNonce,
+            TagContext::MasterNonce { follower_nonce: 9 },
+            TagContext::MasterNonce { follower_nonce: 10 },
+            TagContext::BeforeEpoch,
+        ];
+        let tags: Vec<u32> = contexts.iter().map(|c| key.tag_in(c, &frame)).collect();
+        for (i, a) in tags.iter().enumerate() {
+            assert!(key.verify_in(&contexts[i], &frame, *a));
+            for b in &tags[i + 1..] {
+                assert_ne!(a, b, "{:?}", contexts[i]);
+            }
+        }
+        // The proof of an epoch names the new nonce and the slot.
+        let proof = key.rekey_proof(5, 9);
+        assert_ne!(proof, key.rekey_proof(6, 9));
+        assert_ne!(proof, key.rekey_proof(5, 10));
+        assert_ne!(proof, LinkKey::from_bytes([1; 16]).rekey_proof(5, 9));
         assert_eq!(
             format!("{key:?}"),
             "LinkKey(..)",

@@ -2,61 +2,162 @@
 //! clock and lets the application take channel outputs and exchange telemetry at every
 //! step.
 
-use super::bind::{ACCEPT_REPEATS, BIND_KEY, LinkParams, bind_radio_config, offered_params};
+use super::auth::LinkKey;
+use super::bind::{
+    ACCEPT_REPEATS, Answering, BIND_KEY, BindRefusal, CONFIRM_WAIT_US, FollowerAuth, LinkParams,
+    OfferNeeds, bind_radio_config, offer_needs, offered,
+};
 use super::core::{Follower, Step};
 use super::hopping::Band;
+use super::master::{ACCEPT_GAP_US, send_repeated};
+use super::phrase::{Derivation, PhraseSecret};
 use super::radio::{LinkClock, LinkRx, PacketRadio};
 use super::rate::FIFO_BYTES;
 use super::recovery::Recovery;
 use super::step_io::{receive_until, transmit_at, tune_until};
 use crate::frame::{Frame, encode};
 
-/// Gap between receiving an offer and answering, and between repeated accepts: the master
-/// needs to turn around to RX (PLL settle) after its offer.
-const ACCEPT_GAP_US: u64 = 2_000;
+/// Iterations of the phrase's derivation between two yields to the executor (≈ 10 ms of a
+/// 168 MHz Cortex-M4).
+const DERIVATION_STEP: u32 = 64;
 
-/// Bind mode on the follower (started by the bind button/command): listens on `band`'s bind
-/// channel for an offer, answers with accepts and returns the offered parameters for the
-/// caller to store, or `None` after `timeout_us`.
+/// How a follower's bind window ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FollowerBind {
+    /// Bound: the offered link and its key (`None`: an unauthenticated link), to store.
+    Bound {
+        /// The link.
+        params: LinkParams,
+        /// Its key.
+        key: Option<LinkKey>,
+    },
+    /// An offer was heard but not bound, and why (the last such reason).
+    Refused(BindRefusal),
+    /// No offer within the window.
+    NoOffer,
+}
+
+/// Bind mode on the follower (started by the owner's bind command): listens on `band`'s
+/// bind channel, at the lowest power, for an offer it can take with `auth` (spec §12.1).
+/// The first key-agreement offer it can take ends the window, bound or not — one guess per
+/// window: it answers with its CPace share and confirmation (running the phrase's slow
+/// derivation under the offer's salt first, yielding to the executor between steps), and
+/// binds only on the master's confirmation, which carries the link's key. An
+/// unauthenticated offer is taken only when `auth` allows it. `random`: 32 bytes of a
+/// hardware RNG.
 pub async fn bind_follower<R: PacketRadio, C: LinkClock>(
     radio: &mut R,
     clock: &mut C,
     band: Band,
+    auth: &FollowerAuth<'_>,
+    random: &[u8; 32],
     timeout_us: u64,
-) -> Result<Option<LinkParams>, R::Error> {
+) -> Result<FollowerBind, R::Error> {
     radio.configure(&bind_radio_config(band)).await?;
     radio.set_channel(0).await?;
     let give_up = clock.now_us() + timeout_us;
     let mut buf = [0u8; FIFO_BYTES];
+    let mut refused = None;
     while clock.now_us() < give_up {
         let LinkRx::Packet { len, .. } = receive_until(radio, clock, &mut buf, give_up).await?
         else {
             continue;
         };
-        let Some(params) = buf.get(..len).and_then(offered_params) else {
+        let Some(offer) = buf.get(..len).and_then(offered) else {
             continue;
         };
-        let mut accept = [0u8; 16];
-        let Ok(n) = encode(
-            &Frame::BindAccept {
-                bind_id: params.bind_id,
-            },
-            BIND_KEY,
-            &mut accept,
-        ) else {
+        let prs = match offer_needs(&offer, auth) {
+            OfferNeeds::Refused(why) => {
+                refused = Some(why);
+                continue;
+            }
+            OfferNeeds::Plain => {
+                let accept = Frame::BindAccept {
+                    bind_id: offer.bind_id,
+                    exchange: None,
+                };
+                send_repeated(radio, clock, &accept).await?;
+                return Ok(FollowerBind::Bound {
+                    params: LinkParams::from_offer(&offer),
+                    key: None,
+                });
+            }
+            OfferNeeds::Anonymous => None,
+            OfferNeeds::Phrase {
+                stored: Some(s), ..
+            } => Some(s),
+            OfferNeeds::Phrase { salt, stored: None } => {
+                let Some(phrase) = auth.phrase else {
+                    continue;
+                };
+                Some(derive(clock, phrase, salt).await)
+            }
+        };
+        let prs: &[u8] = prs.as_ref().map_or(&[], |s| &s.prs);
+        let Some(answering) = Answering::new(&offer, prs, random) else {
             continue;
         };
-        // An accept that cannot be built is no bind (never an empty frame on the air).
-        let Some(accept) = accept.get(..n) else {
-            continue;
-        };
-        for _ in 0..ACCEPT_REPEATS {
+        return answer(radio, clock, &answering).await;
+    }
+    Ok(refused.map_or(FollowerBind::NoOffer, FollowerBind::Refused))
+}
+
+/// The phrase's derivation under `salt`, yielding to the executor every
+/// [`DERIVATION_STEP`] iterations.
+async fn derive<C: LinkClock>(clock: &mut C, phrase: &str, salt: [u8; 8]) -> PhraseSecret {
+    let mut derivation = Derivation::new(phrase, salt);
+    loop {
+        if let Some(secret) = derivation.step(DERIVATION_STEP) {
+            return secret;
+        }
+        clock.sleep_until_us(clock.now_us() + 1).await;
+    }
+}
+
+/// Sends the accept and waits for the master's confirmation, answering a repeated offer
+/// (its accept was lost) up to [`ACCEPT_REPEATS`] times in all.
+async fn answer<R: PacketRadio, C: LinkClock>(
+    radio: &mut R,
+    clock: &mut C,
+    answering: &Answering,
+) -> Result<FollowerBind, R::Error> {
+    let mut accept = [0u8; FIFO_BYTES];
+    let Ok(n) = encode(&answering.accept(), BIND_KEY, &mut accept) else {
+        return Ok(FollowerBind::Refused(BindRefusal::NotConfirmed));
+    };
+    let Some(accept) = accept.get(..n) else {
+        return Ok(FollowerBind::Refused(BindRefusal::NotConfirmed));
+    };
+    let mut buf = [0u8; FIFO_BYTES];
+    let mut sent = 0;
+    let mut deadline = clock.now_us();
+    loop {
+        if sent < ACCEPT_REPEATS && clock.now_us() >= deadline {
             clock.sleep_until_us(clock.now_us() + ACCEPT_GAP_US).await;
             radio.transmit(accept).await?;
+            sent += 1;
+            deadline = clock.now_us() + CONFIRM_WAIT_US;
         }
-        return Ok(Some(params));
+        if clock.now_us() >= deadline {
+            return Ok(FollowerBind::Refused(BindRefusal::NotConfirmed));
+        }
+        let LinkRx::Packet { len, .. } = receive_until(radio, clock, &mut buf, deadline).await?
+        else {
+            continue;
+        };
+        let packet = buf.get(..len).unwrap_or(&[]);
+        match answering.on_confirm(packet) {
+            Some(Some(key)) => {
+                return Ok(FollowerBind::Bound {
+                    params: answering.params(),
+                    key: Some(key),
+                });
+            }
+            Some(None) => return Ok(FollowerBind::Refused(BindRefusal::NotConfirmed)),
+            None if answering.is_repeat(packet) => deadline = clock.now_us(),
+            None => {}
+        }
     }
-    Ok(None)
 }
 
 /// The application side of a follower: called after every plan, before the step runs.

@@ -2,7 +2,11 @@
 //! one slot after another on its own time base, and lets the application exchange channels
 //! and telemetry with the state machine at every slot boundary.
 
-use super::bind::{BIND_KEY, LinkParams, OFFER_PERIOD_US, bind_radio_config, is_accept_of};
+use super::auth::LinkKey;
+use super::bind::{
+    ACCEPT_REPEATS, Accepted, BIND_KEY, BindAuth, LinkParams, OFFER_PERIOD_US, Offering,
+    bind_radio_config,
+};
 use super::core::{Master, Step};
 use super::radio::{LinkClock, LinkRx, PacketRadio};
 use super::rate::{FIFO_BYTES, PLL_SETTLE_US, RateMode};
@@ -11,42 +15,94 @@ use super::schedule::SlotKind;
 use super::step_io::{receive_until, transmit_at, tune_until};
 use crate::frame::{Frame, encode};
 
+/// Gap before each bind answer or confirmation: the peer needs to turn around to RX (PLL
+/// settle) after its own frame.
+pub(super) const ACCEPT_GAP_US: u64 = 2_000;
+
+/// How a master's bind ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MasterBind {
+    /// A follower took the offer: the link's key it now holds (`None`: unauthenticated).
+    Bound(Option<LinkKey>),
+    /// A follower answered but its key confirmation was wrong: the phrases differ (or
+    /// another radio guessed). The bind ends: one guess per bind.
+    Mismatch,
+    /// Nobody answered before the timeout.
+    NoAnswer,
+}
+
 /// Bind mode on the master (started by the bind button/command): offers `params` on the
-/// band's bind channel every [`OFFER_PERIOD_US`] and listens in between, until a follower
-/// accepts (true) or `timeout_us` passes (false).
+/// band's bind channel, at the lowest power, every [`OFFER_PERIOD_US`] and listens in
+/// between, agreeing a key as `auth` says (spec §12.1: CPace on the phrase's derivation, or
+/// without a phrase, or none), until a follower accepts or `timeout_us` passes. A key
+/// agreement hands over `key` (the link's key the module chose), sealed under the agreed
+/// session key, in the confirmation it then sends [`ACCEPT_REPEATS`] times. `random`: 32
+/// bytes of a hardware RNG (the CPace scalar and session).
 pub async fn bind_master<R: PacketRadio, C: LinkClock>(
     radio: &mut R,
     clock: &mut C,
     params: &LinkParams,
+    auth: &BindAuth,
+    key: &LinkKey,
+    random: &[u8; 32],
     timeout_us: u64,
-) -> Result<bool, R::Error> {
+) -> Result<MasterBind, R::Error> {
     radio.configure(&bind_radio_config(params.band)).await?;
     radio.set_channel(0).await?;
     let give_up = clock.now_us() + timeout_us;
+    let offering = Offering::new(params, auth, random);
     let mut offer = [0u8; FIFO_BYTES];
-    let Ok(offer_len) = encode(&Frame::BindOffer(params.offer()), BIND_KEY, &mut offer) else {
-        return Ok(false);
+    let Ok(offer_len) = encode(&Frame::BindOffer(offering.offer()), BIND_KEY, &mut offer) else {
+        return Ok(MasterBind::NoAnswer);
     };
     // An offer that cannot be built is no bind (never an empty frame on the air).
     let Some(offer) = offer.get(..offer_len) else {
-        return Ok(false);
+        return Ok(MasterBind::NoAnswer);
     };
     let mut buf = [0u8; FIFO_BYTES];
     while clock.now_us() < give_up {
         let period_end = clock.now_us() + u64::from(OFFER_PERIOD_US);
         radio.transmit(offer).await?;
         while clock.now_us() < period_end {
-            if let LinkRx::Packet { len, .. } =
+            let LinkRx::Packet { len, .. } =
                 receive_until(radio, clock, &mut buf, period_end).await?
-                && buf
-                    .get(..len)
-                    .is_some_and(|packet| is_accept_of(packet, params))
-            {
-                return Ok(true);
+            else {
+                continue;
+            };
+            match buf.get(..len).and_then(|p| offering.on_accept(p, key)) {
+                Some(Accepted::Bound { key, confirm }) => {
+                    if let Some(confirm) = confirm {
+                        send_repeated(radio, clock, &confirm).await?;
+                    }
+                    return Ok(MasterBind::Bound(key));
+                }
+                Some(Accepted::Mismatch) => return Ok(MasterBind::Mismatch),
+                None => {}
             }
         }
     }
-    Ok(false)
+    Ok(MasterBind::NoAnswer)
+}
+
+/// Sends `frame` [`ACCEPT_REPEATS`] times, [`ACCEPT_GAP_US`] apart (the peer needs to turn
+/// around to RX after its own frame).
+pub(super) async fn send_repeated<R: PacketRadio, C: LinkClock>(
+    radio: &mut R,
+    clock: &mut C,
+    frame: &Frame<'_>,
+) -> Result<(), R::Error> {
+    let mut bytes = [0u8; FIFO_BYTES];
+    let Ok(n) = encode(frame, BIND_KEY, &mut bytes) else {
+        return Ok(());
+    };
+    let Some(bytes) = bytes.get(..n) else {
+        return Ok(());
+    };
+    for _ in 0..ACCEPT_REPEATS {
+        clock.sleep_until_us(clock.now_us() + ACCEPT_GAP_US).await;
+        radio.transmit(bytes).await?;
+    }
+    Ok(())
 }
 
 /// When, after its slot start, an uplink's channels are latched: once the transmitter is on

@@ -114,6 +114,10 @@ pub struct Counters {
     /// Radio errors (bus, chip reset, FIFO, TX timeout) the link loop met; each was followed
     /// by a re-configure of the radio.
     pub radio_errors: u32,
+    /// Keyed links: frames of this link whose authentication tag failed (also counted in
+    /// `rejected`): forgeries, replays, or — rarely — corruption that passed the chip's
+    /// CRC-16 (spec §12.2, "Tag failures").
+    pub tag_failures: u32,
 }
 
 #[cfg(test)]

@@ -1,5 +1,5 @@
 //! The ground station's Rust half: the telemetry stream reader (`telemetry::messages`) and
-//! the encoders for what the phone sends (setting changes, the module's phrase), exported to JavaScript with
+//! the encoders for what the phone sends (setting changes, the module records), exported to JavaScript with
 //! wasm-bindgen so the web app decodes with exactly the code the module and the flight side
 //! run. Everything crosses the boundary as bytes or JSON text; the logic lives in
 //! [`stream`] and [`settings`], which build and test on the host too.
@@ -64,8 +64,9 @@ pub fn setting_from_wire(id: u16, wire: i32) -> Option<f64> {
     settings::from_wire(id, wire)
 }
 
-/// The phone's signing half for JavaScript (see [`settings::Phone`]): built from the binding
-/// phrase the pilot types into the settings view, held in memory only.
+/// The phone's half for JavaScript (see [`settings::Phone`]): built from the binding phrase
+/// the pilot types into the settings view, held in memory only; proven to the module with
+/// CPace, which grants the change key the flight side checks.
 #[wasm_bindgen]
 #[derive(Debug)]
 pub struct Phone {
@@ -74,7 +75,8 @@ pub struct Phone {
 
 #[wasm_bindgen]
 impl Phone {
-    /// The phone for `phrase`; throws for an empty or unusable phrase, with the reason.
+    /// The phone for `phrase`; throws for an empty phrase or one the phrase rule refuses,
+    /// with the reason.
     #[wasm_bindgen(constructor)]
     pub fn new(phrase: &str) -> Result<Phone, wasm_bindgen::JsError> {
         settings::Phone::new(phrase)
@@ -82,15 +84,44 @@ impl Phone {
             .map_err(|e| wasm_bindgen::JsError::new(&e))
     }
 
-    /// The key's fingerprint (`1a2b-3c4d`), to compare with the flight console's.
-    pub fn fingerprint(&self) -> String {
-        self.inner.fingerprint().to_owned()
+    /// The framed `Hello` that asks the module for its challenge.
+    pub fn hello(&self) -> Result<Vec<u8>, wasm_bindgen::JsError> {
+        self.inner
+            .hello()
+            .map_err(|e| wasm_bindgen::JsError::new(&e))
     }
 
-    /// The framed, signed change of setting `id` to `wire` ([`setting_to_wire`]); empty if
-    /// it cannot be encoded.
+    /// Where the phone stands: "unknown", "granted", "granted-no-link" or "refused:REASON".
+    pub fn standing(&self) -> String {
+        match self.inner.standing() {
+            settings::Standing::Unknown => "unknown".to_owned(),
+            settings::Standing::Granted => "granted".to_owned(),
+            settings::Standing::GrantedWithoutLink => "granted-no-link".to_owned(),
+            settings::Standing::Refused(why) => format!("refused:{why:?}"),
+        }
+    }
+
+    /// A module record's event (its JSON) and 32 random bytes: the frame to send next, or
+    /// empty.
+    pub fn on_module_record(&mut self, record_json: &str, random: &[u8]) -> Vec<u8> {
+        self.inner.on_module_record(record_json, random)
+    }
+
+    /// The framed record setting the module's phrase to `new_phrase` (or the `Hello` that
+    /// comes first); throws for a phrase the rule refuses.
+    pub fn set_module_phrase(
+        &mut self,
+        new_phrase: &str,
+    ) -> Result<Vec<u8>, wasm_bindgen::JsError> {
+        self.inner
+            .set_module_phrase(new_phrase)
+            .map_err(|e| wasm_bindgen::JsError::new(&e))
+    }
+
+    /// The framed, signed change of setting `id` to `wire` ([`setting_to_wire`]); empty
+    /// until the module granted the change key.
     pub fn sign_change(&mut self, id: u16, wire: i32) -> Vec<u8> {
-        // Kept default: the JavaScript API's "cannot encode" is an empty array.
+        // Kept default: the JavaScript API's "cannot sign" is an empty array.
         self.inner.sign_change(id, wire).unwrap_or_default()
     }
 
@@ -98,34 +129,4 @@ impl Phone {
     pub fn on_refused(&mut self, refused_json: &str) -> Vec<u8> {
         self.inner.on_refused(refused_json)
     }
-
-    /// The framed record setting the module's phrase to `new_phrase`, signed under this
-    /// phone's phrase (the module's current one): applied at once. Throws for an empty or
-    /// unusable phrase.
-    pub fn sign_module_phrase(
-        &mut self,
-        new_phrase: &str,
-    ) -> Result<Vec<u8>, wasm_bindgen::JsError> {
-        self.inner
-            .sign_module_phrase(new_phrase)
-            .map_err(|e| wasm_bindgen::JsError::new(&e))
-    }
-
-    /// A `KeyAnswer` event's body as JSON: the frame to send again, or empty.
-    pub fn on_module_answer(&mut self, answer_json: &str) -> Vec<u8> {
-        self.inner.on_module_answer(answer_json)
-    }
-}
-
-/// The framed record proposing `phrase` as the module's phrase (the pilot confirms on the
-/// radio). Throws for an empty or unusable phrase.
-#[wasm_bindgen]
-pub fn propose_module_phrase(phrase: &str) -> Result<Vec<u8>, wasm_bindgen::JsError> {
-    settings::propose_module_phrase(phrase).map_err(|e| wasm_bindgen::JsError::new(&e))
-}
-
-/// The fingerprint (`1a2b-3c4d`) of `phrase`'s key. Throws for an empty or unusable phrase.
-#[wasm_bindgen]
-pub fn phrase_fingerprint(phrase: &str) -> Result<String, wasm_bindgen::JsError> {
-    settings::phrase_fingerprint(phrase).map_err(|e| wasm_bindgen::JsError::new(&e))
 }

@@ -2,87 +2,183 @@
 //! `flight_core::settings` (index = the `SettingChange::id` on the wire), the conversion of a
 //! number to its wire value and back (`flight_core::report`: reals as IEEE-754 bits, whole
 //! numbers and choices as themselves), and the framed `SettingChange` the phone sends.
-//! Authority stays on the flight side: it applies only changes signed with the binding
-//! phrase's key (spec §12.5) and never while armed, and echoes what it holds, so the app
-//! shows a value only once the flight side reported it. [`Phone`] is the signing half: the
-//! key derived from the phrase the pilot typed (kept in this object, in memory only), the
-//! counter, and the session learnt from the flight side's refusals.
+//! Authority stays on the flight side: it applies only changes signed with the link's change
+//! key (spec §12.5) and never while armed, and echoes what it holds, so the app shows a value
+//! only once the flight side reported it. [`Phone`] is the phone's half: the binding phrase
+//! the pilot typed (checked by the phrase rule, kept in this object, in memory only), proven
+//! to the module with CPace (`telemetry::module_record`), which grants the change key; the
+//! signer and its counter; and new module phrases sealed in that session.
 
 use flight_core::settings::{Kind, PARAMS, Param, Value};
 use serde_json::json;
 use telemetry::change_auth::Signer;
 use telemetry::framing::{frame, framed_len};
-use telemetry::link::{LinkKey, key_for_phrase};
+use telemetry::link::check_phrase;
 use telemetry::messages::{
     ChangeRefused, EncodeError, FRAMED_MAX_BYTES, Message, SettingChange, encode_message,
 };
-use telemetry::module_record::{self, KeyAnswer, KeySigner, ModuleRecord};
+use telemetry::module_record::{self, ModuleRecord, Outcome, PhoneSession, Refusal};
 
-/// The phone's signing state for one binding phrase.
-#[derive(Debug, Clone)]
+/// Where the phone stands with the module.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Standing {
+    /// Nothing asked yet, or the module's challenge not answered.
+    Unknown,
+    /// The module confirmed the phrase; it holds a keyed flight link (changes can be signed).
+    Granted,
+    /// The module confirmed the phrase but has no keyed flight link yet.
+    GrantedWithoutLink,
+    /// The module refused (its reason).
+    Refused(Refusal),
+}
+
+/// The phone's state for one binding phrase.
+#[derive(Debug)]
 pub struct Phone {
-    signer: Signer,
-    fingerprint: String,
+    phrase: String,
+    session: Option<PhoneSession>,
+    signer: Option<Signer>,
+    standing: Standing,
     pending: Option<SettingChange>,
-    /// Seals new module keys under this phrase's key (the module's current one).
-    key_signer: KeySigner,
-    /// The module key last sent signed, to send again after a stale-session answer.
-    pending_module: Option<LinkKey>,
+    /// A new module phrase waiting for the session (sent once granted).
+    pending_phrase: Option<String>,
+    /// The last module phrase sent, to seal again after a stale-counter answer.
+    sent_phrase: Option<String>,
 }
 
 impl Phone {
-    /// The phone for `phrase` (the rules of `telemetry::link::key_for_phrase`); an error
+    /// The phone for `phrase` (the phrase rule of `telemetry::link::check_phrase`); an error
     /// text for an empty or unusable phrase.
     pub fn new(phrase: &str) -> Result<Self, String> {
-        let key = key_for_phrase(phrase)
-            .map_err(|e| e.to_string())?
-            .ok_or_else(|| "no binding phrase: the flight side refuses every change".to_owned())?;
+        let phrase = checked(phrase)?;
         Ok(Self {
-            signer: Signer::new(&key),
-            fingerprint: key.fingerprint().to_string(),
+            phrase: phrase.to_owned(),
+            session: None,
+            signer: None,
+            standing: Standing::Unknown,
             pending: None,
-            key_signer: KeySigner::new(&key),
-            pending_module: None,
+            pending_phrase: None,
+            sent_phrase: None,
         })
     }
 
-    /// The framed record that sets the module's phrase to `new_phrase`, sealed and signed
-    /// under this phone's phrase, which must be the module's current one (spec §12.5): the
-    /// module applies it at once. An error text for an empty or unusable phrase.
-    pub fn sign_module_phrase(&mut self, new_phrase: &str) -> Result<Vec<u8>, String> {
-        let key = phrase_key(new_phrase)?;
-        self.pending_module = Some(key);
-        frame_module(&ModuleRecord::SignedKey(self.key_signer.seal(&key)))
+    /// The framed `Hello` that starts an exchange with the module (it answers with its
+    /// challenge, [`Phone::on_module_record`]).
+    pub fn hello(&self) -> Result<Vec<u8>, String> {
+        frame_module(&ModuleRecord::Hello)
     }
 
-    /// The module answered (the `KeyAnswer` event's JSON body): the frame to send again if
-    /// the refusal was only for a session or counter this phone did not know (empty: none —
-    /// the answer stands and the app shows it).
-    pub fn on_module_answer(&mut self, answer_json: &str) -> Vec<u8> {
-        let Ok(answer) = serde_json::from_str::<KeyAnswer>(answer_json) else {
+    /// Where the phone stands with the module.
+    pub fn standing(&self) -> Standing {
+        self.standing
+    }
+
+    /// A record from the module (its event JSON, e.g. `{"Challenge":{…}}`), with 32 random
+    /// bytes for a new exchange (the browser's `crypto.getRandomValues`): the framed record
+    /// to send next (empty: none). A challenge is answered with the phrase's proof; a grant
+    /// verified gives the change key (and sends a waiting module phrase); an answer about a
+    /// module phrase is taken note of (a stale counter seals it again).
+    pub fn on_module_record(&mut self, record_json: &str, random: &[u8]) -> Vec<u8> {
+        let Ok(record) = serde_json::from_str::<ModuleRecord>(record_json) else {
             return Vec::new();
         };
-        let retry = self.key_signer.on_answer(&answer);
-        match self.pending_module.take() {
-            Some(key) if retry => {
-                self.pending_module = Some(key);
-                frame_module(&ModuleRecord::SignedKey(self.key_signer.seal(&key)))
-                    .unwrap_or_default()
+        match record {
+            ModuleRecord::Challenge(challenge) => {
+                let random: [u8; 32] =
+                    core::array::from_fn(|i| random.get(i).copied().unwrap_or(0));
+                let Some((session, response)) =
+                    PhoneSession::respond(&self.phrase, &challenge, &random)
+                else {
+                    return Vec::new();
+                };
+                self.session = Some(session);
+                frame_module(&ModuleRecord::Response(response)).unwrap_or_default()
             }
-            _ => Vec::new(),
+            ModuleRecord::Granted(granted) => {
+                let Some(session) = &self.session else {
+                    return Vec::new();
+                };
+                match session.on_granted(&granted) {
+                    Ok(key) => {
+                        self.standing = match key {
+                            Some(_) => Standing::Granted,
+                            None => Standing::GrantedWithoutLink,
+                        };
+                        self.signer = key.map(Signer::new);
+                        match self.pending_phrase.take() {
+                            Some(phrase) => self.seal_phrase(&phrase).unwrap_or_default(),
+                            None => Vec::new(),
+                        }
+                    }
+                    Err(why) => {
+                        self.standing = Standing::Refused(why);
+                        Vec::new()
+                    }
+                }
+            }
+            ModuleRecord::Answer(answer) => {
+                if let Some(session) = &mut self.session {
+                    session.on_answer(&answer);
+                }
+                match answer.outcome {
+                    Outcome::Refused(Refusal::Replayed) => match self.sent_phrase.take() {
+                        Some(phrase) => self.seal_phrase(&phrase).unwrap_or_default(),
+                        None => Vec::new(),
+                    },
+                    Outcome::Refused(
+                        why @ (Refusal::NotAuthenticated
+                        | Refusal::NoPhrase
+                        | Refusal::NoSession
+                        | Refusal::Locked),
+                    ) => {
+                        self.standing = Standing::Refused(why);
+                        Vec::new()
+                    }
+                    _ => {
+                        self.sent_phrase = None;
+                        Vec::new()
+                    }
+                }
+            }
+            ModuleRecord::Hello
+            | ModuleRecord::Response(_)
+            | ModuleRecord::SetPhrase(_)
+            | ModuleRecord::LinkSecurity(_) => Vec::new(),
         }
     }
 
-    /// The key's fingerprint, as the flight console and the module show it.
-    pub fn fingerprint(&self) -> &str {
-        &self.fingerprint
+    /// The framed record that sets the module's phrase to `new_phrase` (checked by the
+    /// phrase rule): sealed in the session once the module granted this phone's phrase;
+    /// before that a `Hello`, and the phrase goes once the grant comes (spec §12.5). An
+    /// error text for an empty or unusable phrase.
+    pub fn set_module_phrase(&mut self, new_phrase: &str) -> Result<Vec<u8>, String> {
+        let phrase = checked(new_phrase)?.to_owned();
+        if self.session.is_some() && self.standing != Standing::Unknown {
+            return self.seal_phrase(&phrase);
+        }
+        self.pending_phrase = Some(phrase);
+        self.hello()
     }
 
-    /// The framed, signed change of setting `id` to `wire`.
-    pub fn sign_change(&mut self, id: u16, wire: i32) -> Result<Vec<u8>, EncodeError> {
+    fn seal_phrase(&mut self, phrase: &str) -> Result<Vec<u8>, String> {
+        let session = self.session.as_mut().ok_or("no session with the module")?;
+        let record = session
+            .set_phrase(phrase)
+            .ok_or("no session with the module")?;
+        self.sent_phrase = Some(phrase.to_owned());
+        frame_module(&ModuleRecord::SetPhrase(record))
+    }
+
+    /// The framed, signed change of setting `id` to `wire`; an error until the module
+    /// granted the change key.
+    pub fn sign_change(&mut self, id: u16, wire: i32) -> Result<Vec<u8>, String> {
+        let signer = self
+            .signer
+            .as_mut()
+            .ok_or("the module has not confirmed the phrase (or has no keyed link)")?;
         let change = SettingChange { id, value: wire };
         self.pending = Some(change);
-        encode(&Message::SignedChange(self.signer.sign(change)))
+        encode(&Message::SignedChange(signer.sign(change))).map_err(|e| e.to_string())
     }
 
     /// The flight side refused a change (the `ChangeRefused` event's JSON body): the frame
@@ -92,7 +188,10 @@ impl Phone {
         let Ok(refused) = serde_json::from_str::<ChangeRefused>(refused_json) else {
             return Vec::new();
         };
-        let retry = self.signer.on_refused(&refused);
+        let retry = self
+            .signer
+            .as_mut()
+            .is_some_and(|signer| signer.on_refused(&refused));
         match self.pending.take() {
             Some(change) if retry && change.id == refused.id => self
                 .sign_change(change.id, change.value)
@@ -102,10 +201,11 @@ impl Phone {
     }
 }
 
-fn phrase_key(phrase: &str) -> Result<LinkKey, String> {
-    key_for_phrase(phrase)
+/// `text` as a binding phrase (the rule every end applies), or why not.
+fn checked(text: &str) -> Result<&str, String> {
+    check_phrase(text)
         .map_err(|e| e.to_string())?
-        .ok_or_else(|| "an empty phrase: the module keeps its phrase".to_owned())
+        .ok_or_else(|| "no binding phrase".to_owned())
 }
 
 fn frame_module(record: &ModuleRecord) -> Result<Vec<u8>, String> {
@@ -115,19 +215,6 @@ fn frame_module(record: &ModuleRecord) -> Result<Vec<u8>, String> {
     let framed =
         frame(payload.get(..n).unwrap_or_default(), &mut out).map_err(|e| e.to_string())?;
     Ok(framed.to_vec())
-}
-
-/// The framed record that proposes `phrase` as the module's phrase, for a phone that does
-/// not know the module's current one: the module applies it only after the pilot confirms
-/// on the radio ("Phone Phrase", showing the fingerprint). An error text for an empty or
-/// unusable phrase.
-pub fn propose_module_phrase(phrase: &str) -> Result<Vec<u8>, String> {
-    frame_module(&ModuleRecord::ProposeKey(phrase_key(phrase)?.to_bytes()))
-}
-
-/// The fingerprint of `phrase`'s key, to compare with the radio's confirmation.
-pub fn phrase_fingerprint(phrase: &str) -> Result<String, String> {
-    Ok(phrase_key(phrase)?.fingerprint().to_string())
 }
 
 fn encode(message: &Message) -> Result<Vec<u8>, EncodeError> {
@@ -218,20 +305,63 @@ mod tests {
         }
     }
 
-    /// The page against the flight side's own gate: the right phrase gets its change applied
-    /// after one refusal that tells it the session; a wrong phrase is refused and not
-    /// retried.
+    /// What the module sends the page, as the page's decoder hands it over (event JSON).
+    fn as_event(record: &ModuleRecord) -> String {
+        serde_json::to_string(record).unwrap()
+    }
+
+    /// The module's side of a frame the page sent.
+    fn at_module(framed: &[u8]) -> ModuleRecord {
+        use telemetry::framing::{Deframed, Deframer};
+        let mut reader = Deframer::<256>::default();
+        for &b in framed {
+            if let Some(Deframed::Frame { .. }) = reader.push(b) {
+                return module_record::decode(reader.payload()).unwrap();
+            }
+        }
+        panic!("no frame");
+    }
+
+    /// The page against the module's exchange and the flight side's own gate: with the
+    /// module's phrase it is granted the change key and its change is applied after one
+    /// refusal that tells it the session; with another phrase the module refuses it and it
+    /// has nothing to sign with.
     #[test]
-    fn the_page_signs_changes_the_flight_side_accepts_only_with_the_right_phrase() {
-        let phrase = "correct horse battery staple";
+    fn the_page_proves_the_phrase_and_signs_changes_the_flight_side_accepts() {
+        use telemetry::change_auth::ChangeKey;
+        use telemetry::link::{LinkKey, PhraseSecret};
+        use telemetry::module_record::ModuleExchange;
+        let phrase = "amber kettle under the oak";
+        let link_key = LinkKey::from_bytes([0x5A; 16]);
+        let change_key = ChangeKey::from_link_key(&link_key);
         let (id, _) = find("pid.roll.kp").unwrap();
         let wire = to_wire(id as u16, 0.004).unwrap();
-        for (typed, applied) in [(phrase, true), ("a wrong phrase", false)] {
+        for (typed, granted) in [(phrase, true), ("amber kettle under the elm", false)] {
+            let module = ModuleExchange::new(&PhraseSecret::derive(phrase, [3; 8]), &[1; 32]);
+            let mut phone = Phone::new(typed).unwrap();
+            assert_eq!(at_module(&phone.hello().unwrap()), ModuleRecord::Hello);
+            let challenge = ModuleRecord::Challenge(module.challenge());
+            let response = phone.on_module_record(&as_event(&challenge), &[2; 32]);
+            let ModuleRecord::Response(response) = at_module(&response) else {
+                panic!("no response");
+            };
+            match module.respond(&response, Some(&change_key)) {
+                Some((_, grant)) => {
+                    let next =
+                        phone.on_module_record(&as_event(&ModuleRecord::Granted(grant)), &[]);
+                    assert!(next.is_empty());
+                    assert_eq!(phone.standing(), Standing::Granted);
+                }
+                None => {
+                    assert!(!granted, "the right phrase refused");
+                    assert!(phone.sign_change(id as u16, wire).is_err());
+                    continue;
+                }
+            }
             let mut flight = flight_core::settings::Settings::default();
-            flight.set_link_key(Some(telemetry::link::LinkKey::from_phrase(phrase)));
+            flight.set_link_key(Some(link_key));
             let key = flight.link_key();
             let mut gate = ChangeGate::new(0x1234_5678);
-            let mut phone = Phone::new(typed).unwrap();
             let mut frame = phone.sign_change(id as u16, wire).unwrap();
             let mut answers = Vec::new();
             while !frame.is_empty() && answers.len() < 5 {
@@ -244,26 +374,23 @@ mod tests {
                     Reply::Applied(_) => Vec::new(),
                 };
             }
-            let last = answers.last().copied().unwrap();
+            assert!(matches!(
+                answers.as_slice(),
+                [Reply::Refused(_), Reply::Applied(_)]
+            ));
             assert_eq!(
-                matches!(last, Reply::Applied(_)),
-                applied,
-                "{typed}: {answers:?}"
-            );
-            assert_eq!(answers.len(), 2, "one refusal, one more try: {answers:?}");
-            assert_eq!(
-                flight.get(flight_core::settings::handles::PID_ROLL_KP) == 0.004,
-                applied
+                flight.get(flight_core::settings::handles::PID_ROLL_KP),
+                0.004
             );
         }
         assert!(Phone::new("").is_err());
-        assert_eq!(
-            Phone::new(phrase).unwrap().fingerprint(),
-            telemetry::link::LinkKey::from_phrase(phrase)
-                .fingerprint()
-                .to_string()
+        assert!(Phone::new("short").is_err(), "the phrase rule");
+        assert!(
+            Phone::new("correct horse battery staple").is_err(),
+            "famous"
         );
     }
+
     use flight_core::report::f32_value;
     use flight_core::settings::Settings;
 

@@ -4,8 +4,8 @@
 //! dropped frame as the string `"Dropped"`. The HM-10 relay's frames are the link frames
 //! byte for byte (module-core `records`), so the same reader serves the phone, the flight
 //! USB console and the simulator. Records the module itself sends the phone
-//! (`telemetry::module_record`, e.g. its answer to a proposed key) become their own event,
-//! `{"KeyAnswer":{"outcome":"AwaitingConfirmation","fingerprint":…,"session":…,"counter":…}}`.
+//! (`telemetry::module_record`: its challenge, grant, answers and link security) become
+//! their own events, e.g. `{"Answer":{"outcome":"Applied","counter":1}}`.
 
 use telemetry::framing::{Deframed, Deframer, framed_len};
 use telemetry::messages::{FRAMED_MAX_BYTES, Message};

@@ -252,12 +252,16 @@ pub(crate) async fn flight_board(
         if let Some(p) = problem {
             app.on_settings_problem(p);
         }
-        // The firmware's RNG at boot: a fresh session nonce for the phone's changes every
-        // boot (the virtual time of the boot stands in for the hardware's entropy).
+        // The firmware's RNG at boot: the link's secrets, a fresh session for the phone's
+        // changes every boot (the virtual time of the boot stands in for the hardware's
+        // entropy).
         let boot_us = crate::clock::virtual_us(&medium);
         let mut boot_rng = telemetry::mock::SplitMix64::new(boot_us);
-        app.seed_change_session(boot_rng.next_u64() as u32);
-        app.seed_link_nonces(boot_rng.next_u64());
+        let mut random = [0u8; 32];
+        for chunk in random.chunks_exact_mut(8) {
+            chunk.copy_from_slice(&boot_rng.next_u64().to_le_bytes());
+        }
+        app.seed_random(&random);
         {
             let mut s = shared.borrow_mut();
             s.record_boot(End::Flight, cause, problem.is_some());

@@ -382,7 +382,7 @@ fn send_to_flight(b: &Board, message: &Message) {
 /// page's bytes from the phone.
 async fn hm10_task(b: &Board, shared: &Shared) {
     let mut reader = MessageReader::new();
-    let mut phone = shared.borrow().phone_key.map(|k| Signer::new(&k));
+    let mut phone = shared.borrow().phone_key.map(Signer::new);
     let mut pending: Option<SettingChange> = None;
     let mut frame = [0u8; module_core::hm10::relay::MAX_FRAME_LEN];
     loop {
@@ -480,8 +480,13 @@ pub(crate) async fn module_board(
         let Ok(mut app) = App::new(settings, AirLink::new(), Handset::new(&settings), true) else {
             return;
         };
-        // The firmware's RNG at boot seeds a receiver-role follower's epoch nonces.
-        app.seed_link_nonces(SplitMix64::new(seed ^ crate::clock::virtual_us(&medium)).next_u64());
+        // The firmware's RNG at boot seeds the module's secrets.
+        let mut boot_rng = SplitMix64::new(seed ^ crate::clock::virtual_us(&medium));
+        let mut random = [0u8; 32];
+        for chunk in random.chunks_exact_mut(8) {
+            chunk.copy_from_slice(&boot_rng.next_u64().to_le_bytes());
+        }
+        app.seed_random(&random);
         shared.borrow_mut().record_boot(End::Module, cause, false);
         let clock = SimClock::booting_now(medium.time(), MODULE_DRIFT_PPM);
         let board = Board {

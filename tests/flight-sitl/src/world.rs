@@ -28,7 +28,7 @@ use flight_core::pipeline::{
     ChannelMap, ImuSample, LoopOutput, channel_for, from_settings, store_link, store_openlrs,
     throttle_channel,
 };
-use flight_core::settings::Settings;
+use flight_core::settings::{Settings, handles};
 use flight_core::supervisor::Sticks;
 use flight_core::sysid::ekf::Identification;
 use quad_sim::quad::{Quad, Truth};
@@ -182,7 +182,7 @@ pub(crate) struct WorldState {
     /// The HM-10's phone side as raw bytes, when a page is attached ([`World::attach_phone`]).
     pub(crate) phone: Option<PhonePipes>,
     /// The link key the phone knows (the pilot typed the flight side's phrase into it).
-    pub(crate) phone_key: Option<telemetry::link::LinkKey>,
+    pub(crate) phone_key: Option<telemetry::change_auth::ChangeKey>,
     pub(crate) watchdog_resets: WatchdogResets,
     pub(crate) boots: Vec<Boot>,
     /// Until when (virtual ns) the flight board's one thread-mode executor is held by a
@@ -268,10 +268,14 @@ fn battery_raw(pack_mv: f32, divider: f32) -> u16 {
 /// The module's settings for the scenario: the given ones (or the factory settings), bound
 /// to the flight side as after a bind — an unbound module gets a bind ID drawn from the
 /// seed, which the flight side then stores too — at the scenario's rate (`Scenario::rate`
-/// decides both ends).
+/// decides both ends). A module given without a key flies the unauthenticated link (its
+/// explicit setting; the flight side gets `link.unauthenticated`), as every world did before
+/// the key agreement; one given a module key flies keyed, the flight side holding that
+/// link's key as the bind hands it over.
 pub fn module_settings(s: &Scenario) -> module_core::settings::Settings {
     let given = s.module_settings.unwrap_or_default();
     module_core::settings::Settings {
+        plain: given.plain || given.link_key.is_none(),
         bind_id: if given.bind_id == 0 {
             // Never 0 (unbound): the low half is set.
             0x7A11_0000 | ((s.seed as u32) & 0xFFFF) | 1
@@ -301,6 +305,15 @@ pub fn pair_flight_settings(settings: &mut Settings, module: &module_core::setti
     if let Some(link) = module_core::air::link_params(module) {
         let link = bound_model.map_or(link, |m| link.for_model(m));
         let _ = store_link(settings, &link);
+        // The key the bind handed over, or the unauthenticated link by the setting — unless
+        // the scenario gave the flight side a key or the unauthenticated setting of its own
+        // (a pair that does not match, on purpose).
+        let own = settings.link_key().is_some() || settings.get(handles::LINK_UNAUTHENTICATED) == 1;
+        if !own {
+            settings.set_link_key(module.link_key.map(|k| k.for_link(link.bind_id)));
+            let plain = u32::from(module.link_key.is_none());
+            let _ = settings.apply(&[handles::LINK_UNAUTHENTICATED.to(plain)]);
+        }
     }
     if let Ok(data) = module_core::settings::openlrs::bind_data(module) {
         let _ = store_openlrs(settings, &data);
@@ -398,7 +411,9 @@ impl World {
             handset_tx: Vec::new(),
             uplink: setting_changes,
             phone: None,
-            phone_key: settings.link_key(),
+            phone_key: settings
+                .link_key()
+                .map(|k| telemetry::change_auth::ChangeKey::from_link_key(&k)),
             watchdog_resets: WatchdogResets::default(),
             flight_busy_until_ns: 0,
             save_stretch: true,

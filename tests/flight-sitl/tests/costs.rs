@@ -57,10 +57,9 @@ fn on_the_ground_with(
     stretch: bool,
     save: bool,
 ) -> flight_sitl::Sitl {
-    let (quad, mut settings) = default_airframe();
-    // Changes from the phone are signed with the binding phrase both ends carry (spec §12.5).
-    let key = LinkKey::from_phrase("costs of blocking jobs");
-    settings.set_link_key(Some(key));
+    let (quad, settings) = default_airframe();
+    // A keyed pair: changes from the phone are signed with the link's change key (spec §12.5).
+    let key = LinkKey::from_bytes(*b"costs of jobs...");
     let mut s = Scenario::new(
         settings,
         quad,

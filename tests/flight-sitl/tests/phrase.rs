@@ -1,22 +1,43 @@
-//! The binding phrase at chip level: both applications (the module's `App` and the flight
-//! side's `FlightApp`) build their link ends from their own settings on virtual Si4432s.
-//! The same phrase on both ends links (channels and telemetry flow); different phrases, or
-//! a phrase on one end only, never do — not one channel frame is accepted — although both
-//! ends store the same bind (rate, band, bind ID) as after an over-the-air bind.
+//! The link key at chip level: both applications (the module's `App` and the flight side's
+//! `FlightApp`) build their link ends from their own settings on virtual Si4432s. The key
+//! the bind handed over (the module key's for that link) links — channels and telemetry
+//! flow; another key, or a key on one end only, never does — not one channel frame is
+//! accepted — although both ends store the same bind (rate, band, bind ID).
 #![allow(clippy::unwrap_used)]
 
+use flight_core::settings::handles;
 use flight_sitl::scenario::default_airframe;
 use flight_sitl::{PilotInput, Scenario, Sitl, run};
 use telemetry::link::LinkKey;
 
-const PHRASE: &str = "correct horse battery staple";
+const MODULE_KEY: LinkKey = LinkKey::from_bytes(*b"the module's key");
 
-fn world(module_phrase: Option<&str>, flight_phrase: Option<&str>) -> Sitl {
+/// What the flight side holds.
+#[derive(Clone, Copy, Debug)]
+enum Flight {
+    /// What the bind handed over.
+    Bound,
+    /// Another key (a bind with another module).
+    Key(LinkKey),
+    /// No key, the unauthenticated setting on.
+    Plain,
+}
+
+fn world(module_key: Option<LinkKey>, flight: Flight) -> Sitl {
     let (quad, mut settings) = default_airframe();
-    settings.set_link_key(flight_phrase.map(LinkKey::from_phrase));
+    match flight {
+        Flight::Bound => {}
+        Flight::Key(k) => settings.set_link_key(Some(k)),
+        Flight::Plain => {
+            settings
+                .apply(&[handles::LINK_UNAUTHENTICATED.to(1)])
+                .unwrap();
+        }
+    }
     let mut scenario = Scenario::new(settings, quad, 3.0, Box::new(|_| PilotInput::default()));
     scenario.module_settings = Some(module_core::settings::Settings {
-        link_key: module_phrase.map(LinkKey::from_phrase),
+        link_key: module_key,
+        plain: module_key.is_none(),
         ..module_core::settings::Settings::default()
     });
     run(scenario)
@@ -27,9 +48,12 @@ fn link_up(sitl: &Sitl) -> usize {
 }
 
 #[test]
-fn the_same_phrase_on_both_ends_links() {
-    let sitl = world(Some(PHRASE), Some(PHRASE));
-    assert_eq!(sitl.settings.link_key(), Some(LinkKey::from_phrase(PHRASE)));
+fn the_key_the_bind_handed_over_links() {
+    let sitl = world(Some(MODULE_KEY), Flight::Bound);
+    let bind_id = flight_core::pipeline::stored_link(&sitl.settings)
+        .unwrap()
+        .bind_id;
+    assert_eq!(sitl.settings.link_key(), Some(MODULE_KEY.for_link(bind_id)));
     assert!(
         sitl.samples.iter().all(|s| s.link_up),
         "channels all the time: {} of {}",
@@ -40,11 +64,14 @@ fn the_same_phrase_on_both_ends_links() {
 }
 
 #[test]
-fn different_phrases_never_link() {
+fn another_key_or_a_key_on_one_end_never_links() {
     for (module, flight) in [
-        (Some(PHRASE), Some("correct horse battery stapler")),
-        (Some(PHRASE), None),
-        (None, Some(PHRASE)),
+        (
+            Some(MODULE_KEY),
+            Flight::Key(LinkKey::from_bytes([0x0E; 16])),
+        ),
+        (Some(MODULE_KEY), Flight::Plain),
+        (None, Flight::Key(MODULE_KEY)),
     ] {
         let sitl = world(module, flight);
         assert_eq!(

@@ -29,10 +29,9 @@ fn telemetry_reaches_the_module_and_settings_come_back() {
         id,
         value: f32_value(0.9),
     };
-    // Both ends and the phone share a binding phrase: the phone signs its change.
-    let key = telemetry::link::LinkKey::from_phrase("correct horse battery staple");
-    let mut settings = settings;
-    settings.set_link_key(Some(key));
+    // A keyed pair: the phone signs its change with the link's change key (which a phone
+    // that proved the phrase gets from the module).
+    let key = telemetry::link::LinkKey::from_bytes(*b"module key, sitl");
     let sitl = run(Scenario {
         settings,
         quad,

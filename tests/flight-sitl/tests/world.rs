@@ -108,14 +108,14 @@ fn a_power_cycle_boots_again_from_the_stored_settings() {
     use flight_core::report::f32_value;
     use flight_core::settings::PARAMS;
     use telemetry::messages::SettingChange;
-    let (quad, mut settings) = default_airframe();
+    let (quad, settings) = default_airframe();
     let id = PARAMS
         .iter()
         .position(|p| p.name == "failsafe.descent_mps")
         .unwrap() as u16;
-    // Both ends and the phone share a binding phrase: the phone signs its change.
-    let key = telemetry::link::LinkKey::from_phrase("correct horse battery staple");
-    settings.set_link_key(Some(key));
+    // A keyed pair: the phone signs its change with the link's change key (which a phone
+    // that proved the phrase gets from the module).
+    let key = telemetry::link::LinkKey::from_bytes(*b"module key, sitl");
     let sitl = run(Scenario {
         module_settings: Some(module_core::settings::Settings {
             link_key: Some(key),

@@ -1,14 +1,17 @@
 //! Air frames (`telemetry::frame::decode`) and the bind helpers, with the link CRC re-sealed
-//! so every frame kind is reached. Invariants: a sealed frame is never refused for its CRC;
-//! every accepted frame re-encodes to exactly the bytes received; the bind helpers agree with
-//! the decoder.
+//! so every frame kind is reached — the key-agreement bind frames (version 2: offers with
+//! and without a salt, accepts with a share and tag, confirmations) among them.
+//! Invariants: a sealed frame is never refused for its CRC; every accepted frame re-encodes
+//! to exactly the bytes received; the bind helpers agree with the decoder: an offer's link
+//! parameters re-make the offer, a plain accept is recognised for its bind ID and an accept
+//! carrying a share never counts as a plain one.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use taulink_fuzz::{Input, seal};
 use telemetry::frame::{Frame, Received, Rejection, decode, encode};
 use telemetry::link::BIND_KEY;
-use telemetry::link::bind::{LinkParams, is_accept_of, offered_params};
+use telemetry::link::bind::{LinkParams, is_accept_of, offered};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
@@ -25,15 +28,17 @@ fuzz_target!(|data: &[u8]| {
     check(&frame, key);
 
     if key == BIND_KEY {
-        let offer = offered_params(&frame);
+        let offer = offered(&frame);
         match decode(&frame, BIND_KEY) {
             Received::Accepted(Frame::BindOffer(o)) => {
-                assert_eq!(offer, Some(LinkParams::from_offer(&o)));
-                assert_eq!(LinkParams::from_offer(&o).offer(), o);
+                assert_eq!(offer, Some(o));
+                assert_eq!(LinkParams::from_offer(&o).offer(o.exchange), o);
             }
             _ => assert_eq!(offer, None),
         }
-        if let Received::Accepted(Frame::BindAccept { bind_id }) = decode(&frame, BIND_KEY) {
+        if let Received::Accepted(Frame::BindAccept { bind_id, exchange }) =
+            decode(&frame, BIND_KEY)
+        {
             let params = LinkParams::new(
                 bind_id,
                 telemetry::link::Band::Mhz433,
@@ -42,7 +47,10 @@ fuzz_target!(|data: &[u8]| {
                 4,
             );
             // `new` remaps 0 and the bind key itself; every other ID is taken as is.
-            assert_eq!(is_accept_of(&frame, &params), params.bind_id == bind_id);
+            assert_eq!(
+                is_accept_of(&frame, &params),
+                params.bind_id == bind_id && exchange.is_none()
+            );
         }
     }
 });

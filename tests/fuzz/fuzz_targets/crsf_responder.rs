@@ -15,7 +15,7 @@ use taulink_handset::crsf::responder::{
 use taulink_handset::crsf::{Decoded, Decoder, Message};
 use taulink_handset::report::{
     AttitudeReport, BatteryReport, FlightModeReport, GpsReport, HandsetTelemetry, LinkReport,
-    VerticalReport,
+    LinkSecurityReport, VerticalReport,
 };
 
 fuzz_target!(|data: &[u8]| {
@@ -125,5 +125,9 @@ fn telemetry(input: &mut Input) -> HandsetTelemetry {
         }),
         cells: (present & 64 != 0).then(|| input.u8()),
         module_battery_mv: (present & 128 != 0).then(|| input.u16()),
+        link_security: input.bool().then(|| LinkSecurityReport {
+            tag_failures: input.u32(),
+            alert: input.bool(),
+        }),
     }
 }

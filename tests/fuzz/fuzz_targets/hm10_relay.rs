@@ -7,27 +7,36 @@
 //! reads back, through a fresh `PhoneReader`, as one record of at most `MAX_RECORD_LEN`;
 //! nothing goes to the phone while it is not connected; module-addressed records
 //! (`telemetry::module_record`, marker first) go to the module and nothing else does, and what
-//! decodes of them round-trips and, handed to the module's key logic (`phrase::PhoneKeys`),
-//! never changes the key while armed and changes it only with an `Applied` answer.
+//! decodes of them round-trips and, handed to the module's phone logic
+//! (`phrase::PhoneAccess`), never changes the stored phrase while armed and changes it only
+//! with an `Applied` answer; no answer ever carries a key but the `Granted` one, which comes
+//! only after a `Response` (no key on BLE without the phrase's proof, issue 30).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use module_core::hm10::relay::{MAX_FRAME_LEN, MAX_RECORD_LEN, PhoneEvent, PhoneReader, Relay};
-use module_core::params::Commands;
-use module_core::phrase::PhoneKeys;
+use module_core::phrase::PhoneAccess;
+use module_core::settings::Settings;
 use taulink_fuzz::Input;
+use telemetry::change_auth::ChangeKey;
 use telemetry::cobs;
 use telemetry::link::LinkKey;
-use telemetry::module_record::{self, KeyOutcome};
+use telemetry::module_record::{self, Answer, ModuleRecord, Outcome};
 
 fuzz_target!(|data: &[u8]| {
     let mut input = Input::new(data);
     let mut relay = Relay::new(input.bool());
-    let mut keys = PhoneKeys::new(u64::from(input.u8()));
-    let mut link_key = input
+    let mut access = PhoneAccess::default();
+    let mut settings = Settings::default();
+    if input.bool() {
+        // The derivation's bytes stand in for a phrase's (its slow derivation would make
+        // every execution slow).
+        settings.phrase_salt = [7; 8];
+        settings.phrase_prs = Some([input.u8(); 32]);
+    }
+    let change_key = input
         .bool()
-        .then(|| LinkKey::from_phrase("correct horse battery staple"));
-    let mut commands = Commands::default();
+        .then(|| ChangeKey::from_link_key(&LinkKey::from_bytes([input.u8(); 16])));
     while !input.is_empty() {
         match input.u8() % 5 {
             0 => relay.on_phone_bytes(input.chunk(100)),
@@ -55,16 +64,32 @@ fuzz_target!(|data: &[u8]| {
                         let mut again = [0u8; module_record::MAX_PAYLOAD_BYTES];
                         let k = module_record::encode(&decoded, &mut again).expect("re-encodes");
                         assert_eq!(module_record::decode(&again[..k]), Ok(decoded));
-                        commands.flight_armed = input.bool();
-                        let before = link_key;
-                        if let Some(outcome) =
-                            keys.on_record(&decoded, &mut link_key, &mut commands)
-                        {
-                            assert_eq!(outcome.changed, before != link_key);
-                            if outcome.changed {
-                                assert!(!commands.flight_armed, "a key changed while armed");
-                                assert_eq!(outcome.answer.outcome, KeyOutcome::Applied);
+                        let armed = input.bool();
+                        let before = settings.phrase_prs;
+                        let seed = input.u8();
+                        access.on_tick();
+                        let reply =
+                            access.on_record(&decoded, &mut settings, armed, change_key, || {
+                                [seed; 32]
+                            });
+                        if let Some(reply) = reply {
+                            let changed = settings.phrase_prs != before;
+                            assert!(!changed || reply.changed);
+                            if changed {
+                                assert!(!armed, "the phrase changed while armed");
+                                assert!(matches!(
+                                    reply.reply,
+                                    ModuleRecord::Answer(Answer {
+                                        outcome: Outcome::Applied,
+                                        ..
+                                    })
+                                ));
                             }
+                            if let ModuleRecord::Granted(_) = reply.reply {
+                                assert!(matches!(decoded, ModuleRecord::Response(_)));
+                            }
+                        } else {
+                            assert_eq!(settings.phrase_prs, before);
                         }
                     }
                 }

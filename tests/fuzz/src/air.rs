@@ -9,6 +9,7 @@
 
 use telemetry::channels::{CHANNEL_MAX, ChannelFormat, Channels};
 use telemetry::frame::{CRC_BYTES, Downlink, Frame, LinkReport, StreamHeader, Uplink};
+use telemetry::link::auth::TagContext;
 use telemetry::link::core::{Follower, Master, STREAM_RX_BYTES, Step, frame_counter};
 use telemetry::link::stream::{StreamReceiver, StreamSender};
 use telemetry::link::{Band, HOP_CHANNELS, LinkKey, LinkParams, LinkRx, RateMode};
@@ -26,12 +27,12 @@ pub enum Sealing<'k> {
         /// The link's bind ID.
         bind_id: u32,
     },
-    /// Keyed ends (spec §12.2): a tag under `key` and frame counter `counter`.
+    /// Keyed ends (spec §12.2): a tag under `key` in `context`.
     Tag {
         /// The key the frame is tagged with (link key or an epoch key).
         key: &'k LinkKey,
-        /// The frame counter it is tagged under.
-        counter: u64,
+        /// What the tag covers besides the frame (an epoch's frame counter, a nonce's).
+        context: TagContext,
     },
 }
 
@@ -60,8 +61,8 @@ pub fn sealed(input: &mut Input, frame: &Frame<'_>, sealing: Sealing<'_>) -> Vec
             flips(input, body);
             crate::seal(body, bind_id)
         }
-        Sealing::Tag { key, counter } => {
-            let n = telemetry::frame::seal(frame, key, counter, &mut buf).expect("fits 128 bytes");
+        Sealing::Tag { key, context } => {
+            let n = telemetry::frame::seal(frame, key, &context, &mut buf).expect("fits 128 bytes");
             let frame = &mut buf[..n];
             flips(input, frame);
             frame.to_vec()
@@ -101,17 +102,17 @@ pub fn uplink_slot(input: &mut Input, tracked: Option<(u8, u8)>) -> u8 {
     }
 }
 
-/// Any 64 fuzzed bits as a frame counter.
-pub fn any_counter(input: &mut Input) -> u64 {
-    u64::from(input.u32()) << 32 | u64::from(input.u32())
-}
-
-/// Any counter: one of an arbitrary epoch's, or 64 fuzzed bits.
-pub fn epoch_or_any_counter(input: &mut Input) -> u64 {
-    if input.bool() {
-        frame_counter(input.u32(), u32::from(input.u8()), input.u8())
-    } else {
-        any_counter(input)
+/// Any tag context: an epoch counter (of the first wraps, or 64 fuzzed bits), either
+/// nonce's, or the one before any epoch.
+pub fn any_context(input: &mut Input) -> TagContext {
+    match input.u8() % 6 {
+        0 | 1 => TagContext::Counter(frame_counter(u64::from(input.u8() % 4), input.u8())),
+        2 => TagContext::Counter(u64::from(input.u32()) << 32 | u64::from(input.u32())),
+        3 => TagContext::FollowerNonce,
+        4 => TagContext::MasterNonce {
+            follower_nonce: u64::from(input.u32()) << 32 | u64::from(input.u32()),
+        },
+        _ => TagContext::BeforeEpoch,
     }
 }
 

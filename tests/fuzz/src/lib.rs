@@ -14,7 +14,7 @@ use openlrs::{BindingVersion, RfmType};
 use telemetry::checksum::keyed_crc16;
 use telemetry::frame::CRC_BYTES;
 use telemetry::link::LinkKey;
-use telemetry::link::auth::TAG_BYTES;
+use telemetry::link::auth::{TAG_BYTES, TagContext};
 
 /// Reads the fuzz input front to back; every read succeeds (zeros once it runs dry), so a
 /// harness never has to handle "not enough input" and the fuzzer's mutations stay local.
@@ -91,14 +91,14 @@ pub fn seal(body: &[u8], key: u32) -> Vec<u8> {
 }
 
 /// Makes a fuzzed frame body pass a keyed end's tag check (spec §12.2): appends the 4-byte
-/// tag of `body` under `key` and frame counter `counter` — the counter the receiver reports
-/// it expects (`Master::frame_counter`, `Follower::frame_counter`, or
-/// `link::core::frame_counter(nonce, 0, slot)` for a nonce frame). Any other counter or key
-/// gives a frame that must be refused.
-pub fn seal_tagged(body: &[u8], key: &LinkKey, counter: u64) -> Vec<u8> {
+/// tag of `body` under `key` in `context` — the one the receiver checks in
+/// (`TagContext::Counter` of `Master::frame_counter` / `Follower::frame_counter` under the
+/// epoch key, `TagContext::FollowerNonce` or `TagContext::MasterNonce` under the link key).
+/// Any other context or key gives a frame that must be refused.
+pub fn seal_tagged(body: &[u8], key: &LinkKey, context: &TagContext) -> Vec<u8> {
     let mut frame = Vec::with_capacity(body.len() + TAG_BYTES);
     frame.extend_from_slice(body);
-    frame.extend_from_slice(&key.tag(counter, body).to_le_bytes());
+    frame.extend_from_slice(&key.tag_in(context, body).to_le_bytes());
     frame
 }
 

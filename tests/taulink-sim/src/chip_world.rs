@@ -15,7 +15,7 @@ use telemetry::mock::{MediumStats, SplitMix64};
 
 use crate::attack::{Powered, Witnessed, attacker, flight_end_powered, power_plan, victim_of};
 use crate::driver::{LinkRadio, SimClock};
-use crate::ends::{FlightStart, apps, flight_end, master_nonce_seed, module_end};
+use crate::ends::{FlightStart, ModuleBind, apps, flight_end, master_nonce_seed, module_end};
 use crate::probe::{Now, Record, Shared, Witness};
 use crate::scenario::Scenario;
 use crate::world::{
@@ -87,7 +87,7 @@ fn spawn_pair(
         module_radio,
         module_clock,
         params,
-        bind,
+        bind.then(|| ModuleBind::of(s, salt)),
         s.key.map(|k| (k, master_nonce_seed(s.seed, salt))),
         module_app,
     ));
@@ -185,12 +185,11 @@ pub fn simulate_chip(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome {
     medium.set_packet_loss(s.loss);
     let mut rng = SplitMix64::new(s.seed);
     let params = params_for(s, rng.next_u64() as u32);
-    // The attacker, when there is one: near the flight side (a tenth of the link's length
-    // from it), so its frames win at the follower; at the module it is about as loud as
-    // the flight side.
+    // The attacker, when there is one, a tenth of the link's length from the end it
+    // targets, so its frames win there (at the other end it is about as loud as that end).
     let attacker_radio = s
         .attack
-        .map(|_| medium.add_radio(ChipPlacement::at([0.9 * s.distance_m, 0.0, 0.0])));
+        .map(|a| medium.add_radio(ChipPlacement::at([a.position() * s.distance_m, 0.0, 0.0])));
     let (main, module_id, flight_id) = spawn_pair(
         &sim,
         &medium,
@@ -201,11 +200,20 @@ pub fn simulate_chip(s: &Scenario, mut status: impl FnMut(&Status)) -> Outcome {
         s.bind,
         attacker_radio.as_ref().map(|r| r.id),
     );
-    if let (Some(attack), Some(r)) = (s.attack, attacker_radio) {
-        let victim = victim_of(s, &params, s.key);
+    if let (Some(attack), Some(r), false) = (s.attack, attacker_radio, s.silent_attacker) {
+        let victim = victim_of(s, &params);
         let clock = SimClock::new(medium.time(), 0, 0.0);
         let radio = LinkRadio::new(Rfm22b::new(r.spi, r.nirq, r.sdn, r.delay), TxPower::MAX);
-        sim.spawn(attacker(attack, radio, clock, victim, main.clone(), s.seed));
+        let dictionary = crate::attack::guess::dictionary(s.phrase.as_deref());
+        sim.spawn(attacker(
+            attack,
+            radio,
+            clock,
+            victim,
+            main.clone(),
+            s.seed,
+            dictionary,
+        ));
     }
     let foreign = s.foreign_link.then(|| {
         let foreign_params = params_for(s, rng.next_u64() as u32);

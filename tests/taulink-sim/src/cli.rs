@@ -6,7 +6,7 @@
 use clap::{Parser, ValueEnum};
 use flight_sitl::runner::cli::number_in;
 use telemetry::channels::ChannelFormat;
-use telemetry::link::{Band, LinkKey, RateMode};
+use telemetry::link::{Band, RateMode};
 
 use openlrs::BindingVersion;
 
@@ -148,15 +148,23 @@ pub struct Cli {
     /// With --serve: virtual seconds per wall second (0.01..=100).
     #[arg(long, value_name = "X", default_value_t = 1.0, value_parser = speed)]
     pub speed: f64,
-    /// Binding phrase both ends are keyed with (hashed as the firmware does): every link
-    /// frame then carries a tag, and only frames of this link are accepted (spec §12).
-    #[arg(long, value_name = "TEXT")]
+    /// Binding phrase the bind's key agreement runs on (CPace, as the firmware): the link is
+    /// then keyed — every frame carries a tag, only frames of this link are accepted (spec
+    /// §12). It must meet the phrase rule (12+ characters, 6 different, no famous example).
+    #[arg(long, value_name = "TEXT", value_parser = phrase)]
     pub phrase: Option<String>,
+    /// A keyed link without a phrase (the bind's anonymous key agreement).
+    #[arg(long, conflicts_with = "phrase")]
+    pub keyed: bool,
     /// A third radio in the medium, nearer the flight side, attacks the keyed link for the
     /// whole run (chip level): `forge` (knows the header and hop sequence, not the key),
     /// `replay` (records and re-sends every frame; the flight side is power-cycled twice),
-    /// `bind-spoof` (bind offers without pause; the flight side is power-cycled every 5 s).
-    /// The report adds the attacker's frames sent and accepted (must be 0).
+    /// `bind-spoof` (bind offers without pause; the flight side is power-cycled every 5 s),
+    /// `nonce-replay` (records the flight side's nonce frames, power-cycles it, then jams a
+    /// downlink slot at the module and replays one in the next, again and again), `guess`
+    /// (records the bind and the link, then tries every offline check of a dictionary that
+    /// holds the true phrase; reports `offline_checkable`). The report adds the attacker's
+    /// frames sent and accepted (must be 0).
     #[arg(long, value_enum, conflicts_with_all = ["sweep", "serve", "packet_level", "foreign", "ber", "no_chip_crc"])]
     pub attack: Option<AttackArg>,
     /// Print the report as JSON on stdout (fields in the README); no status line.
@@ -234,6 +242,10 @@ pub enum AttackArg {
     Replay,
     /// Bind offers while the flight side power-cycles.
     BindSpoof,
+    /// Old nonce frames replayed after a jammed downlink slot.
+    NonceReplay,
+    /// Offline phrase guessing from a recording.
+    Guess,
 }
 
 impl From<AttackArg> for Attack {
@@ -242,7 +254,18 @@ impl From<AttackArg> for Attack {
             AttackArg::Forge => Attack::Forge,
             AttackArg::Replay => Attack::Replay,
             AttackArg::BindSpoof => Attack::BindSpoof,
+            AttackArg::NonceReplay => Attack::NonceReplay,
+            AttackArg::Guess => Attack::Guess,
         }
+    }
+}
+
+/// `--phrase`: the phrase rule every end applies.
+fn phrase(text: &str) -> Result<String, String> {
+    match telemetry::link::check_phrase(text) {
+        Ok(Some(p)) => Ok(p.to_owned()),
+        Ok(None) => Err("an empty phrase: leave --phrase out (or --keyed)".to_owned()),
+        Err(e) => Err(e.to_string()),
     }
 }
 
@@ -395,10 +418,17 @@ impl Cli {
     pub fn scenario(&self) -> Scenario {
         let attack: Option<Attack> = self.attack.map(Into::into);
         // An attacked link runs keyed (the default phrase if none is given).
-        let phrase = self.phrase.as_deref().or(attack.map(|_| ATTACK_PHRASE));
+        let phrase = self
+            .phrase
+            .clone()
+            .or(attack.map(|_| ATTACK_PHRASE.to_owned()));
+        let keyed = phrase.is_some() || self.keyed;
         // Stream test bytes are checked end to end; a power-cycled flight side loses its
         // stream buffers, so runs that power-cycle it carry none.
-        let cycles_power = matches!(attack, Some(Attack::Replay | Attack::BindSpoof));
+        let cycles_power = matches!(
+            attack,
+            Some(Attack::Replay | Attack::BindSpoof | Attack::NonceReplay)
+        );
         let rate = self.rate;
         let format = if self.compact8 {
             ChannelFormat::Compact8
@@ -420,14 +450,17 @@ impl Cli {
             duration_s: self.duration,
             failsafe_ms: self.failsafe_ms,
             cut_s: self.cut,
-            // An attacked link was bound before the run.
-            bind: !self.no_bind && attack.is_none(),
+            // An attacked link was bound before the run — but for the guesser, who records
+            // the bind.
+            bind: !self.no_bind && matches!(attack, None | Some(Attack::Guess)),
             telemetry_load: !self.no_telemetry && !cycles_power,
             header_check: !self.no_header_check,
             chip_crc: !self.no_chip_crc,
             chip_level: !self.packet_level && self.ber == 0.0 && !self.no_chip_crc,
-            key: phrase.map(LinkKey::from_phrase),
+            key: keyed.then(|| crate::scenario::link_key_of(self.seed)),
+            phrase,
             attack,
+            silent_attacker: false,
             handset: self.handset.into(),
         }
     }
@@ -457,12 +490,19 @@ mod tests {
     fn an_attack_runs_keyed_at_chip_level() {
         let s = parse("--attack bind-spoof").unwrap().scenario();
         assert_eq!(s.attack, Some(Attack::BindSpoof));
-        assert_eq!(s.key, Some(LinkKey::from_phrase(ATTACK_PHRASE)));
+        assert_eq!(s.phrase.as_deref(), Some(ATTACK_PHRASE));
+        assert_eq!(s.key, Some(crate::scenario::link_key_of(1)));
         assert!(s.chip_level && !s.telemetry_load && !s.bind);
-        let s = parse("--attack forge --phrase secret").unwrap().scenario();
-        assert_eq!(s.key, Some(LinkKey::from_phrase("secret")));
-        assert!(s.telemetry_load);
-        assert_eq!(parse("--phrase x").unwrap().scenario().attack, None);
+        let s = parse("--attack forge --phrase brass-lantern-weir")
+            .unwrap()
+            .scenario();
+        assert_eq!(s.phrase.as_deref(), Some("brass-lantern-weir"));
+        assert!(s.telemetry_load && s.key.is_some());
+        let s = parse("--attack guess").unwrap().scenario();
+        assert!(s.bind, "the guesser records the bind");
+        assert_eq!(parse("--keyed").unwrap().scenario().phrase, None);
+        assert!(parse("--keyed").unwrap().scenario().key.is_some());
+        assert!(parse("--phrase x").is_err(), "the phrase rule");
     }
 
     #[test]

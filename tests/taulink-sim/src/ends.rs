@@ -3,9 +3,11 @@
 
 use telemetry::channels::FailsafeValues;
 use telemetry::link::core::{Follower, Master};
-use telemetry::link::follower::{bind_follower, run_follower};
-use telemetry::link::master::{bind_master, run_master};
-use telemetry::link::{Band, LinkClock, LinkKey, LinkParams, PacketRadio};
+use telemetry::link::follower::{FollowerBind, bind_follower, run_follower};
+use telemetry::link::master::{MasterBind, bind_master, run_master};
+use telemetry::link::{
+    Band, BindAuth, FollowerAuth, LinkClock, LinkKey, LinkParams, PacketRadio, PhraseSecret,
+};
 
 use crate::probe::{FlightApp, ModuleApp, Now, Shared};
 use crate::scenario::Scenario;
@@ -31,20 +33,58 @@ pub(crate) fn apps(s: &Scenario, now: Now, record: &Shared, salt: u64) -> (Modul
     (module, flight)
 }
 
-/// The module (master) end: with `bind`, it offers the bind 0.3 s after boot first; then it
-/// runs the master loop until the simulation ends.
+/// How the module binds in a run: the key agreement (CPace on the phrase's derivation, or
+/// without a phrase, or none for an unkeyed link) and its randomness.
+pub(crate) struct ModuleBind {
+    /// The key agreement.
+    pub auth: BindAuth,
+    /// 32 bytes of the module's RNG.
+    pub random: [u8; 32],
+}
+
+impl ModuleBind {
+    /// The bind of scenario `s` (its phrase under a salt of the run, its key).
+    pub(crate) fn of(s: &Scenario, salt: u64) -> Self {
+        let salt8 = crate::scenario::seed_bytes(s.seed, salt ^ 0x5a17);
+        let auth = match (&s.phrase, s.key) {
+            (_, None) => BindAuth::Plain,
+            (None, Some(_)) => BindAuth::Anonymous,
+            (Some(p), Some(_)) => {
+                BindAuth::Phrase(PhraseSecret::derive(p, crate::scenario::head(&salt8)))
+            }
+        };
+        Self {
+            auth,
+            random: crate::scenario::seed_bytes(s.seed, salt ^ 0xb1d),
+        }
+    }
+}
+
+/// The module (master) end: with `bind`, it offers the bind 0.3 s after boot first (handing
+/// over the run's key, if keyed); then it runs the master loop until the simulation ends.
 pub(crate) async fn module_end<R: PacketRadio, C: LinkClock>(
     mut radio: R,
     mut clock: C,
     params: LinkParams,
-    bind: bool,
+    bind: Option<ModuleBind>,
     key: Option<(LinkKey, u64)>,
     mut app: ModuleApp,
 ) {
-    if bind {
+    if let Some(bind) = bind {
         let start = clock.now_us() + 300_000;
         clock.sleep_until_us(start).await;
-        let Ok(true) = bind_master(&mut radio, &mut clock, &params, BIND_TIMEOUT_US).await else {
+        let handed = key.map_or(LinkKey::from_bytes([0; 16]), |(k, _)| k);
+        let result = bind_master(
+            &mut radio,
+            &mut clock,
+            &params,
+            &bind.auth,
+            &handed,
+            &bind.random,
+            BIND_TIMEOUT_US,
+        )
+        .await;
+        let Ok(MasterBind::Bound(_)) = result else {
             return;
         };
     }
@@ -74,6 +114,10 @@ pub(crate) struct FlightStart {
     /// Link key (keyed link), and the seed of the follower's epoch nonces (a hardware RNG
     /// on the real controller).
     pub key: Option<(LinkKey, u64)>,
+    /// The phrase typed for the bind window.
+    pub phrase: Option<String>,
+    /// The bind's randomness.
+    pub random: [u8; 32],
 }
 
 impl FlightStart {
@@ -85,6 +129,39 @@ impl FlightStart {
             band: s.band,
             failsafe_us: s.failsafe_ms * 1000,
             key: s.key.map(|k| (k, s.seed ^ salt)),
+            phrase: s.phrase.clone(),
+            random: crate::scenario::seed_bytes(s.seed, salt ^ 0xf011),
+        }
+    }
+
+    /// What the bind window takes: the phrase, and an unkeyed run's unauthenticated link.
+    pub(crate) fn auth(&self) -> FollowerAuth<'_> {
+        FollowerAuth {
+            phrase: self.phrase.as_deref(),
+            stored: None,
+            allow_plain: self.key.is_none(),
+        }
+    }
+
+    /// The bind window: the link and its key, if one was bound.
+    pub(crate) async fn bind<R: PacketRadio, C: LinkClock>(
+        &self,
+        radio: &mut R,
+        clock: &mut C,
+    ) -> Option<(LinkParams, Option<LinkKey>)> {
+        let auth = self.auth();
+        match bind_follower(
+            radio,
+            clock,
+            self.band,
+            &auth,
+            &self.random,
+            BIND_TIMEOUT_US,
+        )
+        .await
+        {
+            Ok(FollowerBind::Bound { params, key }) => Some((params, key)),
+            _ => None,
         }
     }
 }
@@ -113,18 +190,18 @@ pub(crate) async fn flight_end<R: PacketRadio, C: LinkClock>(
     record: Shared,
     virtual_us: impl Fn(&C) -> u64,
 ) {
-    let params = if start.bind {
-        match bind_follower(&mut radio, &mut clock, start.band, BIND_TIMEOUT_US).await {
-            Ok(Some(p)) => p,
-            _ => return,
+    let (params, key) = if start.bind {
+        match start.bind(&mut radio, &mut clock).await {
+            Some((params, key)) => (params, key.zip(start.key.map(|(_, seed)| seed))),
+            None => return,
         }
     } else {
         let boot = clock.now_us() + 123_457;
         clock.sleep_until_us(boot).await;
-        start.params
+        (start.params, start.key)
     };
     record.borrow_mut().bound_us = Some(virtual_us(&clock));
     record.borrow_mut().follower_params = Some(params);
-    let mut follower = follower_for(params, start.failsafe_us, start.key);
+    let mut follower = follower_for(params, start.failsafe_us, key);
     let _ = run_follower(&mut radio, &mut clock, &mut follower, &mut app).await;
 }

@@ -161,6 +161,13 @@ pub struct Record {
     pub power_cycles: u32,
     /// Boots after which the flight side ran another link than the module's (must stay 0).
     pub rebinds: u32,
+    /// Keyed links: epochs the master adopted and verified nonce frames it refused.
+    pub handshakes: (u32, u32),
+    /// Keyed links: tag failures counted by the master, and by the flight side's
+    /// followers (summed over its boots).
+    pub tag_failures: (u32, u32),
+    /// `--attack guess`: what the guesser recorded and found.
+    pub guess: Option<crate::attack::GuessFigures>,
 }
 
 impl Record {
@@ -354,6 +361,8 @@ impl MasterHooks for ModuleApp {
         }
         rec.now.downlinks_received = master.counters().received;
         rec.now.master_rejected = master.counters().rejected;
+        rec.handshakes = master.handshakes();
+        rec.tag_failures.0 = master.counters().tag_failures;
     }
 }
 
@@ -374,6 +383,8 @@ pub struct FlightApp {
     last_updates: u32,
     last_sample: Option<u64>,
     last_failsafe: bool,
+    /// Tag failures of the flight side's earlier boots, and of this boot's follower.
+    tag_failures: (u32, u32),
     written: u64,
     read: u64,
 }
@@ -399,6 +410,7 @@ impl FlightApp {
             last_updates: 0,
             last_sample: None,
             last_failsafe: true,
+            tag_failures: (0, 0),
             written: 0,
             read: 0,
         }
@@ -503,6 +515,13 @@ impl FollowerHooks for FlightApp {
         rec.now.failsafe = follower.in_failsafe();
         rec.now.tracking = follower.sync_state() == SyncState::Tracking;
         rec.now.resyncs = follower.resyncs();
+        // A rebooted flight side's follower counts from 0 again.
+        let failures = follower.counters().tag_failures;
+        if failures < self.tag_failures.1 {
+            self.tag_failures.0 += self.tag_failures.1;
+        }
+        self.tag_failures.1 = failures;
+        rec.tag_failures.1 = self.tag_failures.0 + failures;
         let out = follower.output();
         rec.now.channels = [out[0], out[1], out[2], out[3]];
     }

@@ -116,6 +116,18 @@ pub struct Report {
     /// Boots after which the flight side ran a link other than the module's (must be 0).
     #[serde(skip)]
     pub rebinds: u32,
+    /// Epochs the master adopted (each an uplink spent on its nonce).
+    #[serde(skip)]
+    pub handshakes_adopted: u32,
+    /// Verified nonce frames the master refused (replays, or more than one a wrap).
+    #[serde(skip)]
+    pub nonce_frames_refused: u32,
+    /// Tag failures counted by the module and by the flight side.
+    #[serde(skip)]
+    pub tag_failures: (u32, u32),
+    /// `--attack guess`: what the guesser recorded and found.
+    #[serde(skip)]
+    pub guess: Option<crate::attack::GuessFigures>,
 }
 
 fn percentile(sorted: &[u32], p: f64) -> f64 {
@@ -196,29 +208,27 @@ pub fn summarise(s: &Scenario, o: &Outcome) -> Report {
             .foreign
             .as_ref()
             .map_or(0, |f| f.outputs_bad + f.up_bytes_bad + f.down_bytes_bad),
-        attack: s.attack.map(|a| {
-            match a {
-                crate::scenario::Attack::Forge => "forge",
-                crate::scenario::Attack::Replay => "replay",
-                crate::scenario::Attack::BindSpoof => "bind-spoof",
-            }
-            .to_string()
-        }),
+        attack: s.attack.map(|a| a.name().to_string()),
         attacker_frames_sent: m.attacker_sent,
         attacker_frames_accepted: m.attacker_accepted,
         power_cycles: m.power_cycles,
         rebinds: m.rebinds,
+        handshakes_adopted: m.handshakes.0,
+        nonce_frames_refused: m.handshakes.1,
+        tag_failures: m.tag_failures,
+        guess: m.guess,
     }
 }
 
 impl Report {
-    /// Whether the run went wrong: a wrong output or stream byte, or an attack that got
-    /// anything accepted.
+    /// Whether the run went wrong: a wrong output or stream byte, an attack that got
+    /// anything accepted, or a recording that lets a phrase be checked offline.
     pub fn failed(&self) -> bool {
         self.errors > 0
             || self.foreign_errors > 0
             || self.attacker_frames_accepted > 0
             || self.rebinds > 0
+            || self.guess.is_some_and(|g| g.verdict.offline_checkable)
     }
 
     /// One JSON object: every field, the attack figures only if there was an attack.
@@ -231,6 +241,18 @@ impl Report {
                 attacker_frames_accepted: self.attacker_frames_accepted,
                 power_cycles: self.power_cycles,
                 rebinds: self.rebinds,
+                handshakes_adopted: self.handshakes_adopted,
+                nonce_frames_refused: self.nonce_frames_refused,
+                tag_failures_module: self.tag_failures.0,
+                tag_failures_flight: self.tag_failures.1,
+                guess: self.guess.map(|g| GuessJson {
+                    recorded_bind_frames: g.bind_frames,
+                    recorded_link_frames: g.link_frames,
+                    recorded_nonce_frames: g.nonce_frames,
+                    guesses: g.verdict.guesses,
+                    checks: g.verdict.checks,
+                    offline_checkable: g.verdict.offline_checkable,
+                }),
             }),
         })
     }
@@ -318,6 +340,33 @@ impl Report {
                     self.attacker_frames_accepted, self.rebinds, self.power_cycles
                 ),
             );
+            row(
+                "epochs adopted / refused",
+                format!(
+                    "{} / {} nonce frames",
+                    self.handshakes_adopted, self.nonce_frames_refused
+                ),
+            );
+            row(
+                "tag failures module / flight",
+                format!("{} / {}", self.tag_failures.0, self.tag_failures.1),
+            );
+            if let Some(g) = self.guess {
+                row(
+                    "recorded bind / link frames",
+                    format!(
+                        "{} / {} ({} with a nonce)",
+                        g.bind_frames, g.link_frames, g.nonce_frames
+                    ),
+                );
+                row(
+                    "offline checkable (must not)",
+                    format!(
+                        "{} ({} words × {} checks)",
+                        g.verdict.offline_checkable, g.verdict.guesses, g.verdict.checks
+                    ),
+                );
+            }
         }
         t
     }
@@ -340,4 +389,21 @@ struct AttackJson<'a> {
     attacker_frames_accepted: u64,
     power_cycles: u32,
     rebinds: u32,
+    handshakes_adopted: u32,
+    nonce_frames_refused: u32,
+    tag_failures_module: u32,
+    tag_failures_flight: u32,
+    #[serde(flatten)]
+    guess: Option<GuessJson>,
+}
+
+/// The guesser's figures (`--attack guess` only), in their JSON order.
+#[derive(Serialize)]
+struct GuessJson {
+    recorded_bind_frames: u32,
+    recorded_link_frames: u32,
+    recorded_nonce_frames: u32,
+    guesses: u32,
+    checks: u32,
+    offline_checkable: bool,
 }

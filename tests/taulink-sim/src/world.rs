@@ -10,7 +10,7 @@ use telemetry::mock::{
     ChannelModel, Executor, Medium, MediumStats, MockRadio, Node, SimClock, SplitMix64, VirtualTime,
 };
 
-use crate::ends::{FlightStart, apps, flight_end, master_nonce_seed, module_end};
+use crate::ends::{FlightStart, ModuleBind, apps, flight_end, master_nonce_seed, module_end};
 use crate::probe::{Now, Record, Shared, Snapshot};
 use crate::report::{Report, summarise};
 use crate::scenario::Scenario;
@@ -87,7 +87,7 @@ fn spawn_pair<'a>(
         module_radio,
         module_clock,
         params,
-        bind,
+        bind.then(|| ModuleBind::of(s, salt)),
         s.key.map(|k| (k, master_nonce_seed(s.seed, salt))),
         module_app,
     ));

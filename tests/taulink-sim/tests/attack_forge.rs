@@ -15,6 +15,7 @@ use si4432_sim::{RadioConfig as Placement, Simulation};
 use taulink_sim::driver::{LinkRadio, SimClock};
 use telemetry::channels::{ChannelFormat, Channels, FailsafeValues, pack};
 use telemetry::frame::{Frame, StreamHeader, Uplink, encode, seal};
+use telemetry::link::auth::TagContext;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::follower::{FollowerHooks, run_follower};
 use telemetry::link::master::{MasterHooks, run_master};
@@ -98,7 +99,7 @@ fn forged_uplinks_from_a_third_radio_are_never_accepted() {
     let victim = Master::new(params).with_key(key);
     let config = victim.radio_config();
     let bind_id = victim.params().bind_id;
-    let hops = HopSequence::new(key.hop_seed());
+    let hops = HopSequence::new(bind_id);
     let mut clock = SimClock::new(medium.time(), 0, 0.0);
     let mut radio = LinkRadio::new(
         Rfm22b::new(attacker.spi, attacker.nirq, attacker.sdn, attacker.delay),
@@ -129,7 +130,8 @@ fn forged_uplinks_from_a_third_radio_are_never_accepted() {
             });
             let mut buf = [0u8; 64];
             let len = if n % 2 == 0 {
-                seal(&up, &guess, u64::from(slot), &mut buf).unwrap()
+                let counter = TagContext::Counter(u64::from(slot));
+                seal(&up, &guess, &counter, &mut buf).unwrap()
             } else {
                 encode(&up, bind_id, &mut buf).unwrap()
             };

@@ -1,16 +1,17 @@
 //! The console's behaviour: a line of `settings::console`'s command language in, the answer
 //! out. Changes go to the live settings (the gains are re-designed); `save` requests a
-//! write; `bind` opens the bind window (the only way this controller binds); `phrase` sets
-//! or clears the binding phrase (spec §12: the key derived from it is stored and saved at
-//! once, the phrase itself is neither kept nor ever printed; its fingerprint is shown so
-//! the pilot can compare both ends) and restarts the link with it; `set`, `save`,
-//! `defaults`, `bind` and `phrase` are refused while armed; `magcal` runs the magnetometer
-//! calibration (`super::magcal`), disarmed only. The USB adapter only moves lines and bytes.
+//! write; `bind [PHRASE]` opens the bind window (the only way this controller binds), with
+//! the binding phrase the module has (spec §12.1: the phrase is held in RAM for the window
+//! only, never stored or printed; the bind agrees a random link key, whose fingerprint
+//! `status` shows so the pilot can compare both ends); `set`, `save`, `defaults` and `bind`
+//! are refused while armed; `magcal` runs the magnetometer calibration (`super::magcal`),
+//! disarmed only. The USB adapter only moves lines and bytes.
 
 use core::fmt::Write;
 
 use super::FlightApp;
-use telemetry::link::{LinkKey, key_for_phrase};
+use super::link::{BindError, BindReport};
+use telemetry::link::Fingerprint;
 
 use crate::battery::BatteryLevel;
 use crate::sensors::ubx::config::Status;
@@ -20,7 +21,7 @@ use crate::settings::{
     Command, LineError, MagcalAction, Settings, parse_line, write_list, write_setting,
 };
 
-const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status | bind | phrase [TEXT|clear] | magcal start|status|save|cancel\r\n";
+const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status | bind [PHRASE] | magcal start|status|save|cancel\r\n";
 
 impl FlightApp {
     /// Answers what the line assembler (`settings::LineAssembler`) produced: a whole line,
@@ -49,9 +50,7 @@ impl FlightApp {
                 | Command::SetAll(_)
                 | Command::Save
                 | Command::Defaults
-                | Command::Bind
-                | Command::Phrase(_)
-                | Command::PhraseClear
+                | Command::Bind(_)
                 | Command::Magcal(_),
             ) if armed => out.write_str("refused: disarm first\r\n"),
             Ok(Command::Magcal(action)) => self.on_magcal(action, out),
@@ -83,36 +82,22 @@ impl FlightApp {
                 out.write_str("factory values (not saved)\r\n")
             }
             Ok(Command::Status) => self.write_status(out),
-            Ok(Command::Bind) => {
-                if self.request_bind() {
-                    write!(
-                        out,
-                        "bind window open for {} s: start the bind on the module\r\n",
-                        super::BIND_WINDOW_US / 1_000_000
-                    )
-                } else {
-                    out.write_str("refused: disarm first\r\n")
-                }
-            }
-            Ok(Command::Phrase(text)) => match key_for_phrase(text) {
-                Ok(Some(key)) => self.set_link_key(Some(key), out),
-                Ok(None) => out.write_str("refused: empty phrase (phrase clear removes it)\r\n"),
-                Err(e) => write!(out, "refused: {e}\r\n"),
+            Ok(Command::Bind(phrase)) => match self.request_bind(phrase) {
+                Ok(with_phrase) => write!(
+                    out,
+                    "bind window open for {} s {}: start the bind on the module\r\n",
+                    super::BIND_WINDOW_US / 1_000_000,
+                    if with_phrase {
+                        "with the phrase (held until the window closes, never stored)"
+                    } else {
+                        "without a phrase"
+                    }
+                ),
+                Err(BindError::Armed) => out.write_str("refused: disarm first\r\n"),
+                Err(BindError::Phrase(e)) => write!(out, "refused: {e}\r\n"),
             },
-            Ok(Command::PhraseClear) => self.set_link_key(None, out),
-            Ok(Command::PhraseShow) => write_phrase_state(out, self.live.link_key()),
             Err(e) => write!(out, "{e}\r\n"),
         }
-    }
-
-    /// Stores `key` (a phrase's, or none), saves it and restarts the link with it. The save
-    /// writes the live set, so other unsaved changes go to flash with it (the answer says so).
-    fn set_link_key<W: Write>(&mut self, key: Option<LinkKey>, out: &mut W) -> core::fmt::Result {
-        self.live.set_link_key(key);
-        self.on_link_key_changed();
-        self.request_save();
-        write_phrase_state(out, key)?;
-        out.write_str("saving (with any other unsaved change); the link restarts\r\n")
     }
 
     fn on_magcal<W: Write>(&mut self, action: MagcalAction, out: &mut W) -> core::fmt::Result {
@@ -231,7 +216,7 @@ impl FlightApp {
         if let Some(e) = self.setup_error {
             write!(out, "stored settings not flyable ({e}): factory setup\r\n")?;
         }
-        write_phrase_state(out, self.live.link_key())?;
+        self.write_link_state(out)?;
         let armed = self.flight.armed();
         match self.battery {
             Some(b) => write!(
@@ -250,6 +235,35 @@ impl FlightApp {
     }
 }
 
+impl FlightApp {
+    /// The link's key as the console shows it (its fingerprint, never the key) and how the
+    /// last bind window ended.
+    fn write_link_state<W: Write>(&self, out: &mut W) -> core::fmt::Result {
+        match (self.link_params(), self.live.link_key()) {
+            (Some(_), Some(key)) => write!(
+                out,
+                "link authenticated, key fingerprint {} (the module shows the same)\r\n",
+                key.fingerprint()
+            )?,
+            (Some(_), None) => {
+                out.write_str("link unauthenticated (link.unauthenticated 1)\r\n")?
+            }
+            (None, _) => out.write_str("not bound: bind [PHRASE] opens the bind window\r\n")?,
+        }
+        match self.last_bind() {
+            Some(BindReport::Bound { fingerprint, .. }) => match fingerprint {
+                Some(f) => write!(out, "last bind: bound, key {}\r\n", Fingerprint(f)),
+                None => out.write_str("last bind: bound unauthenticated\r\n"),
+            },
+            Some(BindReport::Refused(why)) => {
+                write!(out, "last bind: not bound, {}\r\n", why.describe())
+            }
+            Some(BindReport::NoOffer) => out.write_str("last bind: no offer heard\r\n"),
+            None => Ok(()),
+        }
+    }
+}
+
 /// A NAV-PVT fix type in words (`Debug` text would link core's struct formatting).
 fn fix_name(fix: FixType) -> &'static str {
     match fix {
@@ -260,18 +274,6 @@ fn fix_name(fix: FixType) -> &'static str {
         FixType::GnssDeadReckoning => "3D+dead-reckoning",
         FixType::TimeOnly => "time-only",
         FixType::Unknown(_) => "unknown",
-    }
-}
-
-/// The phrase's state as the console shows it: the fingerprint, never the key or phrase.
-fn write_phrase_state<W: Write>(out: &mut W, key: Option<LinkKey>) -> core::fmt::Result {
-    match key {
-        Some(key) => write!(
-            out,
-            "binding phrase set, fingerprint {} (the module must show the same)\r\n",
-            key.fingerprint()
-        ),
-        None => out.write_str("no binding phrase: link unauthenticated\r\n"),
     }
 }
 

@@ -11,10 +11,11 @@
 //! `olrs39` to obey an existing OpenLRSng transmitter (`super::openlrs`; OpenLRSng frames
 //! cannot be authenticated). The loop sees both the same way (`on_link_channels`).
 //!
-//! The link key (spec §12, from the binding phrase the console's `phrase` sets) is applied
-//! here too: [`FlightApp::follower`] builds the follower keyed when a key is stored, and a
-//! key change asks the link task to restart its follower at once
-//! ([`FlightApp::link_restart_due`]), so the new key is in force without a reboot.
+//! The link key (spec §12.1) is what the bind agreed with the module (CPace, on the phrase
+//! given with `bind`, or without one); [`FlightApp::follower`] builds the follower keyed with
+//! it, and a key change (a new bind, `defaults`) asks the link task to restart its follower
+//! at once ([`FlightApp::link_restart_due`]). A link without a key (an unauthenticated bind)
+//! runs only while `link.unauthenticated` allows it.
 //!
 //! Watchdog: every hook call checks the link task in, whatever the slot length; the
 //! follower calls its hooks at least every 50 ms in every sync state, and the adapter
@@ -23,17 +24,20 @@
 use openlrs::BindData;
 use openlrs::rx::Config as OpenLrsConfig;
 use telemetry::channels::FailsafeValues;
+use telemetry::link::alarm::TagAlarm;
 use telemetry::link::core::Follower;
-use telemetry::link::follower::FollowerHooks;
-use telemetry::link::{Band, LinkParams};
+use telemetry::link::follower::{FollowerBind, FollowerHooks};
+use telemetry::link::phrase::PHRASE_MAX_BYTES;
+use telemetry::link::{Band, BindRefusal, Entropy, LinkParams, PhraseError, check_phrase};
 use telemetry::messages::{
-    Decoded, FRAMED_MAX_BYTES, Message, MessageReader, SysIdResult, encode_message,
+    Decoded, FRAMED_MAX_BYTES, LinkSecurity, Message, MessageReader, SysIdResult, encode_message,
 };
 
 use super::{FlightApp, Task};
 use crate::authority::{ChangeGate, Reply};
 use crate::pipeline::{ChannelMap, Protocol, bind_band, protocol, store_link, stored_link};
 use crate::report::{LinkSeen, Reporter, Snapshot, sysid_messages};
+use crate::settings::handles;
 use crate::supervisor::FlightMode;
 use crate::sysid::ekf::Identification;
 
@@ -54,8 +58,15 @@ pub(super) struct LinkSide {
     /// The answer to the last change from the phone, still to send.
     reply: Option<Message>,
     gate: ChangeGate,
-    /// Seeds the follower's epoch nonces (spec §12.2), from the firmware's RNG at boot.
+    /// The link's secrets (bind scalars, nonce seed, change session), from the firmware's RNG
+    /// at boot.
+    entropy: Entropy,
+    /// Seeds the follower's epoch nonces (spec §12.2).
     nonce_seed: u64,
+    /// The binding phrase given with `bind`, until the window closes (never stored).
+    bind_phrase: Option<heapless::String<PHRASE_MAX_BYTES>>,
+    /// How the last bind window ended.
+    last_bind: Option<BindReport>,
     last_report_us: Option<u64>,
     last_state: Option<(bool, bool, FlightMode)>,
     failsafes: u16,
@@ -67,6 +78,13 @@ pub(super) struct LinkSide {
     pub(super) openlrs: super::openlrs::OpenLrsSide,
     /// The link key changed since the running follower was built: restart it.
     key_changed: bool,
+    /// Tag failures over the last seconds (spec §12.2).
+    alarm: TagAlarm,
+    /// The tag failures and alert last sent, and when (a `LinkSecurity` message goes out when
+    /// they change, at most once a second).
+    security_sent: (u32, bool, Option<u64>),
+    /// A `LinkSecurity` message is due.
+    security_due: Option<LinkSecurity>,
 }
 
 /// Where the explicit bind stands.
@@ -88,9 +106,12 @@ impl LinkSide {
             reporter: Reporter::new(),
             reader: MessageReader::new(),
             reply: None,
-            // Seeded by the firmware's RNG (`FlightApp::seed_change_session`).
+            // Seeded by the firmware's RNG (`FlightApp::seed_random`).
             gate: ChangeGate::new(0),
+            entropy: Entropy::new([0; 32]),
             nonce_seed: 0,
+            bind_phrase: None,
+            last_bind: None,
             last_report_us: None,
             last_state: None,
             failsafes: 0,
@@ -100,6 +121,9 @@ impl LinkSide {
             bind: BindState::Closed,
             openlrs: super::openlrs::OpenLrsSide::new(),
             key_changed: false,
+            alarm: TagAlarm::default(),
+            security_sent: (0, false, None),
+            security_due: None,
         }
     }
 
@@ -118,17 +142,64 @@ impl LinkSide {
     }
 }
 
-/// What the link task does next ([`FlightApp::next_link_step`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum LinkStep {
-    /// Listen for a bind offer on `band` for `window_us` (the console asked), at the radio's
-    /// lowest power step; then report with [`FlightApp::on_bind_result`].
-    Bind {
-        /// Where to listen.
-        band: Band,
-        /// How long, µs.
-        window_us: u64,
+/// Why the console's `bind` was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BindError {
+    /// The motors may turn.
+    Armed,
+    /// The phrase given does not meet the rules.
+    Phrase(PhraseError),
+}
+
+/// How a bind window ended, for `status` and the log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum BindReport {
+    /// Bound and stored; the key's fingerprint (`None`: an unauthenticated link).
+    Bound {
+        /// The link's bind ID.
+        bind_id: u32,
+        /// The agreed key's fingerprint.
+        fingerprint: Option<u32>,
     },
+    /// An offer came but was not bound.
+    Refused(BindRefusal),
+    /// No offer came.
+    NoOffer,
+}
+
+/// A bind window to open ([`LinkStep::Bind`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BindRequest {
+    /// Where to listen.
+    pub band: Band,
+    /// How long, µs.
+    pub window_us: u64,
+    /// The binding phrase given with `bind` (held for this window only).
+    pub phrase: Option<heapless::String<PHRASE_MAX_BYTES>>,
+    /// `link.unauthenticated`: an unauthenticated offer may be taken.
+    pub allow_plain: bool,
+    /// The window's CPace randomness.
+    pub random: [u8; 32],
+}
+
+impl BindRequest {
+    /// What the follower's bind takes from the request.
+    pub fn auth(&self) -> telemetry::link::FollowerAuth<'_> {
+        telemetry::link::FollowerAuth {
+            phrase: self.phrase.as_deref(),
+            stored: None,
+            allow_plain: self.allow_plain,
+        }
+    }
+}
+
+/// What the link task does next ([`FlightApp::next_link_step`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum LinkStep {
+    /// Listen for a bind offer (the console asked), at the radio's lowest power step; then
+    /// report with [`FlightApp::on_bind_result`].
+    Bind(BindRequest),
     /// Run the follower on the stored link, the app as its hooks, until the radio fails or a
     /// bind is asked for ([`FlightApp::bind_requested`]).
     Follow(LinkParams),
@@ -163,8 +234,8 @@ impl FlightApp {
         if let Protocol::OpenLrs(version) = protocol(&self.live) {
             return self.next_openlrs_step(version);
         }
-        if let Some((band, window_us)) = self.take_bind_request() {
-            return LinkStep::Bind { band, window_us };
+        if let Some(request) = self.take_bind_request() {
+            return LinkStep::Bind(request);
         }
         match self.link_params() {
             Some(params) => LinkStep::Follow(params),
@@ -173,9 +244,10 @@ impl FlightApp {
     }
 
     /// The follower for `params` (from [`LinkStep::Follow`]) with the stored link key, if
-    /// there is one (`Follower::with_key`: only uplinks sealed with the key are accepted,
-    /// identity and hop sequence derived from it), else unkeyed as before spec §12.
-    /// `failsafe_us`: the silence after which it flies failsafe ([`FAILSAFE_US`]).
+    /// there is one (`Follower::with_key`: only uplinks sealed with the key are accepted),
+    /// else unkeyed (only a link bound unauthenticated, while `link.unauthenticated`
+    /// allows it: see [`FlightApp::link_params`]). `failsafe_us`: the silence after which it
+    /// flies failsafe ([`FAILSAFE_US`]).
     pub fn follower(&self, params: LinkParams, failsafe_us: u64) -> Follower {
         let follower = Follower::new(params, FailsafeValues::default(), failsafe_us);
         match self.live.link_key() {
@@ -190,25 +262,35 @@ impl FlightApp {
         self.link.bind == BindState::Requested || self.link.key_changed
     }
 
-    /// The link key in force changed (the console's `phrase`): the link restarts with it.
+    /// The link key in force changed (a bind, `defaults`): the link restarts with it.
     pub(super) fn on_link_key_changed(&mut self) {
         self.link.key_changed = true;
     }
 
-    /// The link to run: the stored bind, or `None` for a controller never bound (it runs
-    /// no link and waits for a `bind` command).
+    /// The link to run: the stored bind — authenticated, or unauthenticated while
+    /// `link.unauthenticated` is 1 — or `None` for a controller never bound (it runs no link
+    /// and waits for a `bind` command).
     pub fn link_params(&self) -> Option<LinkParams> {
-        stored_link(&self.live)
+        let plain_allowed = self.live.get(handles::LINK_UNAUTHENTICATED) == 1;
+        stored_link(&self.live).filter(|_| self.live.link_key().is_some() || plain_allowed)
     }
 
-    /// The console's `bind`: refused while armed, else the link task is asked to open a
-    /// bind window. Returns whether it was accepted.
-    pub fn request_bind(&mut self) -> bool {
+    /// The console's `bind [PHRASE]`: refused while armed or for a phrase that breaks the
+    /// rules (`telemetry::link::check_phrase`), else the link task is asked to open a bind
+    /// window, the phrase held for it. Returns whether a phrase was given.
+    pub fn request_bind(&mut self, phrase: &str) -> Result<bool, BindError> {
         if self.flight.armed() {
-            return false;
+            return Err(BindError::Armed);
         }
+        let phrase = check_phrase(phrase).map_err(BindError::Phrase)?;
+        self.link.bind_phrase = phrase.and_then(|p| heapless::String::try_from(p).ok());
         self.link.bind = BindState::Requested;
-        true
+        Ok(phrase.is_some())
+    }
+
+    /// How the last bind window ended.
+    pub fn last_bind(&self) -> Option<BindReport> {
+        self.link.last_bind
     }
 
     /// A bind has been asked for and not yet started: the link task stops its follower and
@@ -218,33 +300,51 @@ impl FlightApp {
     }
 
     /// The link task starts a bind window if one was asked for (and we are still disarmed):
-    /// the band to listen on and the window length, µs. The task listens at the radio's
-    /// lowest power step (`RadioConfig::reduced_power`).
-    pub fn take_bind_request(&mut self) -> Option<(Band, u64)> {
+    /// the band to listen on, the window length, the phrase and the window's randomness. The
+    /// task listens at the radio's lowest power step (`RadioConfig::reduced_power`).
+    pub fn take_bind_request(&mut self) -> Option<BindRequest> {
         if self.link.bind != BindState::Requested {
             return None;
         }
         if self.flight.armed() {
             self.link.bind = BindState::Closed;
+            self.link.bind_phrase = None;
             return None;
         }
         self.link.bind = BindState::Open;
-        Some((bind_band(&self.live), BIND_WINDOW_US))
+        Some(BindRequest {
+            band: bind_band(&self.live),
+            window_us: BIND_WINDOW_US,
+            phrase: self.link.bind_phrase.take(),
+            allow_plain: self.live.get(handles::LINK_UNAUTHENTICATED) == 1,
+            random: self.link.entropy.draw(b"bind"),
+        })
     }
 
-    /// The bind window ended: `offered` is what a module bound us to, if one did. Stored
-    /// (and a save requested) only inside a window the console opened and while disarmed;
-    /// returns whether it was.
-    pub fn on_bind_result(&mut self, offered: Option<&LinkParams>) -> bool {
+    /// The bind window ended with `result`. A bound link and its key are stored (and a
+    /// save requested) only inside a window the console opened and while disarmed, and the
+    /// link restarts with them; returns whether they were.
+    pub fn on_bind_result(&mut self, result: &FollowerBind) -> bool {
         let open = self.link.bind == BindState::Open;
         self.link.bind = BindState::Closed;
-        let Some(params) = offered else {
+        self.link.bind_phrase = None;
+        self.link.last_bind = Some(match result {
+            FollowerBind::Bound { params, key } => BindReport::Bound {
+                bind_id: params.bind_id,
+                fingerprint: key.map(|k| k.fingerprint().0),
+            },
+            FollowerBind::Refused(why) => BindReport::Refused(*why),
+            FollowerBind::NoOffer => BindReport::NoOffer,
+        });
+        let FollowerBind::Bound { params, key } = result else {
             return false;
         };
         if !open || self.flight.armed() {
             return false;
         }
         if store_link(&mut self.live, params).is_ok() {
+            self.live.set_link_key(*key);
+            self.on_link_key_changed();
             self.request_save();
             return true;
         }
@@ -274,9 +374,31 @@ impl FlightApp {
             };
             self.on_uplink_bytes(bytes);
         }
+        self.watch_tags(now_us, follower.counters().tag_failures);
         if self.report_due(now_us) {
             self.report(now_us, follower);
         }
+    }
+
+    /// The follower's tag failures at `now_us`: the alarm follows them, and a change is
+    /// reported (at most once a second).
+    fn watch_tags(&mut self, now_us: u64, tag_failures: u32) {
+        let alert = self.link.alarm.update(now_us, tag_failures);
+        let (sent, sent_alert, at) = self.link.security_sent;
+        let changed = (tag_failures, alert) != (sent, sent_alert);
+        let quiet = at.is_none_or(|t| now_us.saturating_sub(t) >= 1_000_000);
+        if changed && quiet {
+            self.link.security_sent = (tag_failures, alert, Some(now_us));
+            self.link.security_due = Some(LinkSecurity {
+                tag_failures,
+                alert,
+            });
+        }
+    }
+
+    /// Whether the link's tag failures run above what noise explains.
+    pub fn tag_alert(&self) -> bool {
+        self.link.alarm.alert()
     }
 
     /// What every link protocol hands the loop after each step, the one interface the
@@ -331,17 +453,22 @@ impl FlightApp {
         self.link.reply = Some(reply.message());
     }
 
-    /// The session nonce of this boot's phone changes, from the firmware's RNG at boot
-    /// (spec §12.5: a change recorded in an earlier boot then never verifies again).
-    pub fn seed_change_session(&mut self, random: u32) {
-        self.link.gate = ChangeGate::new(random);
+    /// The session of this boot's phone changes (public: every refusal names it).
+    pub fn change_session(&self) -> u32 {
+        self.link.gate.session()
     }
 
-    /// The seed of the link follower's epoch nonces (spec §12.2), from the firmware's RNG at
-    /// every boot: a keyed follower's nonce must never repeat under one key, across reboots
-    /// too, or frames recorded before a reboot could verify again.
-    pub fn seed_link_nonces(&mut self, random: u64) {
-        self.link.nonce_seed = random;
+    /// The link's secrets from 32 bytes of the firmware's RNG at every boot (spec §12): the
+    /// session of this boot's phone changes (§12.5: a change recorded in an earlier boot
+    /// then never verifies again), the seed of the follower's epoch nonces (§12.2: a keyed
+    /// follower's nonce must never repeat under one key, across reboots too) and the CPace
+    /// randomness of each bind window (§12.1) — each drawn under its own label, so none
+    /// tells anything of another.
+    pub fn seed_random(&mut self, random: &[u8; 32]) {
+        let mut entropy = Entropy::new(*random);
+        self.link.gate = ChangeGate::new(entropy.draw_u64(b"change session") as u32);
+        self.link.nonce_seed = entropy.draw_u64(b"link nonces");
+        self.link.entropy = entropy;
     }
 
     /// One telemetry message when the downlink stream is empty: a setting echo, then an
@@ -396,6 +523,8 @@ impl FlightApp {
         } else if self.link.last_state != Some(state) {
             self.link.last_state = Some(state);
             Reporter::state(&snap)
+        } else if let Some(security) = self.link.security_due.take() {
+            Message::LinkSecurity(security)
         } else if let Some(home) = self.take_home_report() {
             home
         } else if let Some(gps) = self.take_gps_report() {

@@ -23,7 +23,7 @@ use openlrs::radio::Clock;
 use openlrs::rx::Receiver;
 use telemetry::link::LinkClock;
 use telemetry::link::core::Follower;
-use telemetry::link::follower::{FollowerHooks, bind_follower, run_follower};
+use telemetry::link::follower::{FollowerBind, FollowerHooks, bind_follower, run_follower};
 
 use super::{FlightApp, LinkStep, openlrs_bind_window, run_openlrs_receiver};
 
@@ -55,7 +55,11 @@ pub enum LinkEvent {
     Bound {
         /// The link's bind ID.
         bind_id: u32,
+        /// With an agreed key (else an unauthenticated link).
+        authenticated: bool,
     },
+    /// An offer in the console's window was not bound, and why.
+    BindRefused(telemetry::link::BindRefusal),
     /// An OpenLRSng bind in the console's window was stored.
     BoundOpenLrs {
         /// The transmitter's RF magic.
@@ -134,15 +138,34 @@ where
             restart_due(app, ticker).await;
             (None, false)
         }
-        LinkStep::Bind { band, window_us } => match chip.taulink() {
+        LinkStep::Bind(request) => match chip.taulink() {
             Some(radio) => {
-                let bind = bind_follower(radio, clock, band, window_us);
+                let auth = request.auth();
+                let bind = bind_follower(
+                    radio,
+                    clock,
+                    request.band,
+                    &auth,
+                    &request.random,
+                    request.window_us,
+                );
                 let Either::First(result) = select(bind, keep_alive(app, ticker)).await;
-                let offered = result.as_ref().ok().copied().flatten();
-                let stored = app.with_app(|a| a.on_bind_result(offered.as_ref()));
-                let event = offered
-                    .filter(|_| stored == Some(true))
-                    .map(|p| LinkEvent::Bound { bind_id: p.bind_id });
+                let outcome = result
+                    .as_ref()
+                    .ok()
+                    .copied()
+                    .unwrap_or(FollowerBind::NoOffer);
+                let stored = app.with_app(|a| a.on_bind_result(&outcome));
+                let event = match outcome {
+                    FollowerBind::Bound { params, key } if stored == Some(true) => {
+                        Some(LinkEvent::Bound {
+                            bind_id: params.bind_id,
+                            authenticated: key.is_some(),
+                        })
+                    }
+                    FollowerBind::Refused(why) => Some(LinkEvent::BindRefused(why)),
+                    _ => None,
+                };
                 (event, result.is_err())
             }
             None => (None, true),

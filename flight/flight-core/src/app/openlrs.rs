@@ -32,7 +32,7 @@ use telemetry::channels::MAX_CHANNELS;
 use telemetry::messages::FRAMED_MAX_BYTES;
 
 use super::FlightApp;
-use super::link::{BindState, LinkStep};
+use super::link::{BindRequest, BindState, LinkStep};
 use crate::pipeline::{openlrs_band, store_openlrs, stored_openlrs};
 use crate::report::LinkSeen;
 
@@ -92,7 +92,7 @@ impl FlightApp {
     /// [`FlightApp::next_link_step`] when `link.protocol` is OpenLRSng.
     pub(super) fn next_openlrs_step(&mut self, version: BindingVersion) -> LinkStep {
         let config = config(version, openlrs_band(&self.live));
-        if let Some((_, window_us)) = self.take_bind_request() {
+        if let Some(BindRequest { window_us, .. }) = self.take_bind_request() {
             return LinkStep::BindOpenLrs { config, window_us };
         }
         match stored_openlrs(&self.live, version) {

@@ -1,20 +1,25 @@
-//! The binding phrase on the flight side: the console's `phrase`, the stored key, the keyed
-//! follower and the link restart.
+//! The binding phrase and the link key on the flight side (spec §12.1, §12.5): `bind
+//! PHRASE` holds the phrase for the window only, the bind's agreed key is stored and the
+//! link restarts keyed with it, an unauthenticated link runs only by the explicit setting,
+//! and phone changes are checked under that key.
 
-use super::tests::{armed_in_the_air, some_link};
+use super::tests::{armed_in_the_air, bound, some_link};
 use super::*;
 use telemetry::link::LinkKey;
+use telemetry::link::follower::FollowerBind;
 
-const PHRASE: &str = "correct horse battery staple";
+const PHRASE: &str = "amber kettle under the oak";
 
 fn bound_app() -> FlightApp {
-    let mut settings = Settings::default();
-    let Ok(()) = crate::pipeline::store_link(&mut settings, &some_link()) else {
-        panic!("a valid link");
-    };
-    let Some(app) = FlightApp::new(settings, 0) else {
+    let Some(mut app) = FlightApp::new(Settings::default(), 0) else {
         panic!("factory settings make a setup");
     };
+    app.seed_random(&[0x5E; 32]);
+    assert!(app.request_bind("").is_ok());
+    let _ = app.take_bind_request();
+    assert!(app.on_bind_result(&bound(some_link())));
+    let _ = app.take_save();
+    let _ = app.next_link_step();
     app
 }
 
@@ -25,80 +30,104 @@ fn console(app: &mut FlightApp, line: &str) -> String {
 }
 
 #[test]
-fn the_console_sets_the_phrase_as_a_key_saves_it_and_restarts_the_link_keyed() {
-    let mut app = bound_app();
-    assert_eq!(app.next_link_step(), LinkStep::Follow(some_link()));
-    let unkeyed = app.follower(some_link(), FAILSAFE_US);
-    assert_eq!(unkeyed.params().bind_id, some_link().bind_id);
-    assert!(!app.link_restart_due());
-
-    let out = console(&mut app, &format!("phrase {PHRASE}"));
-    let key = LinkKey::from_phrase(PHRASE);
-    assert_eq!(app.settings().link_key(), Some(key));
+fn bind_with_a_phrase_holds_it_for_the_window_only_and_stores_the_agreed_key() {
+    let Some(mut app) = FlightApp::new(Settings::default(), 0) else {
+        panic!("a setup");
+    };
+    app.seed_random(&[1; 32]);
+    let out = console(&mut app, &format!("bind {PHRASE}"));
+    assert!(out.contains("with the phrase"), "{out}");
     assert!(
-        out.contains(&key.fingerprint().to_string()),
-        "fingerprint shown: {out}"
+        !out.contains("kettle"),
+        "the phrase is never printed: {out}"
     );
-    assert!(!out.contains("horse"), "the phrase is never printed: {out}");
-    assert!(app.link_restart_due(), "the running follower must stop");
+    let request = app.take_bind_request().expect("a window");
+    assert_eq!(request.phrase.as_deref(), Some(PHRASE));
+    assert_eq!(request.auth().phrase, Some(PHRASE));
+    assert!(!request.auth().allow_plain);
+    let key = LinkKey::from_bytes([0x42; 16]);
+    assert!(app.on_bind_result(&FollowerBind::Bound {
+        params: some_link(),
+        key: Some(key),
+    }));
+    assert_eq!(app.settings().link_key(), Some(key));
+    assert!(app.link_restart_due(), "the link restarts with the new key");
     let Some((to_write, _)) = app.take_save() else {
         panic!("a save is due");
     };
     assert_eq!(to_write.link_key(), Some(key));
-    // The next follower is keyed: its identity is the key's, not the bind's.
     assert_eq!(app.next_link_step(), LinkStep::Follow(some_link()));
-    assert!(!app.link_restart_due());
-    let keyed = app.follower(some_link(), FAILSAFE_US);
-    assert_eq!(keyed.params().bind_id, key.bind_id());
-    assert_eq!(keyed.params().rate, some_link().rate);
-
-    // Shown again (without the phrase), in `phrase` and in `status`.
-    for line in ["phrase", "status"] {
-        let out = console(&mut app, line);
-        assert!(
-            out.contains(&key.fingerprint().to_string()),
-            "{line}: {out}"
-        );
-    }
-
-    let out = console(&mut app, "phrase clear");
-    assert_eq!(app.settings().link_key(), None);
-    assert!(out.contains("unauthenticated"), "{out}");
-    assert!(app.link_restart_due());
-    assert!(app.take_save().is_some());
-    let _ = app.next_link_step();
-    assert_eq!(
-        app.follower(some_link(), FAILSAFE_US).params().bind_id,
-        some_link().bind_id
-    );
-    assert!(console(&mut app, "status").contains("unauthenticated"));
+    assert!(app.follower(some_link(), FAILSAFE_US).has_key());
+    let status = console(&mut app, "status");
+    assert!(status.contains(&key.fingerprint().to_string()), "{status}");
+    assert!(!status.contains("kettle"), "{status}");
+    // The window is over: a second one without a phrase does not keep the first's.
+    let _ = console(&mut app, "bind");
+    assert_eq!(app.take_bind_request().expect("a window").phrase, None);
 }
 
 #[test]
-fn the_phrase_cannot_change_in_flight_and_bad_phrases_are_refused() {
+fn bind_is_refused_in_flight_and_for_weak_or_famous_phrases() {
     let mut app = bound_app();
     armed_in_the_air(&mut app);
-    let out = console(&mut app, &format!("phrase {PHRASE}"));
-    assert!(out.contains("refused"), "{out}");
-    assert!(console(&mut app, "phrase clear").contains("refused"));
-    assert_eq!(app.settings().link_key(), None);
-    assert!(!app.link_restart_due());
-
+    assert!(console(&mut app, &format!("bind {PHRASE}")).contains("refused"));
+    assert!(!app.bind_requested());
     let mut app = bound_app();
-    let out = console(&mut app, &format!("phrase {}", "x".repeat(65)));
-    assert!(out.contains("refused"), "{out}");
-    assert_eq!(app.settings().link_key(), None);
-    assert!(!app.link_restart_due());
-    assert!(app.take_save().is_none());
+    for weak in [
+        "short one",
+        "correct horse battery staple",
+        "aaaaaaaaaaaaaaaa",
+    ] {
+        let out = console(&mut app, &format!("bind {weak}"));
+        assert!(out.contains("refused"), "{weak}: {out}");
+        assert!(!app.bind_requested());
+    }
 }
 
 #[test]
-fn factory_defaults_drop_the_key_and_restart_the_link() {
+fn a_refused_bind_stores_nothing_and_says_why() {
     let mut app = bound_app();
-    console(&mut app, &format!("phrase {PHRASE}"));
-    let _ = app.next_link_step();
+    let key = app.settings().link_key();
+    let _ = console(&mut app, "bind");
+    let _ = app.take_bind_request();
+    let refused = FollowerBind::Refused(telemetry::link::BindRefusal::PhraseWanted);
+    assert!(!app.on_bind_result(&refused));
+    assert_eq!(app.settings().link_key(), key);
+    assert_eq!(app.link_params(), Some(some_link()));
+    let status = console(&mut app, "status");
+    assert!(status.contains("phrase"), "{status}");
+}
+
+#[test]
+fn an_unauthenticated_link_runs_only_by_the_explicit_setting() {
+    let Some(mut app) = FlightApp::new(Settings::default(), 0) else {
+        panic!("a setup");
+    };
+    let _ = console(&mut app, "bind");
+    assert!(!app.take_bind_request().expect("a window").allow_plain);
+    // Stored anyway (the module offered it and the follower took it by the setting, say,
+    // which was then switched off): it does not run.
+    assert!(app.on_bind_result(&FollowerBind::Bound {
+        params: some_link(),
+        key: None,
+    }));
+    assert_eq!(app.link_params(), None);
+    assert_eq!(app.next_link_step(), LinkStep::WaitForBind);
+    console(&mut app, "set link.unauthenticated 1");
+    assert_eq!(app.link_params(), Some(some_link()));
+    assert!(!app.follower(some_link(), FAILSAFE_US).has_key());
+    assert!(console(&mut app, "status").contains("unauthenticated"));
+    let _ = console(&mut app, "bind");
+    assert!(app.take_bind_request().expect("a window").allow_plain);
+}
+
+#[test]
+fn factory_defaults_drop_the_key_and_the_link_and_restart_it() {
+    let mut app = bound_app();
+    assert!(app.settings().link_key().is_some());
     console(&mut app, "defaults");
     assert_eq!(app.settings().link_key(), None);
+    assert_eq!(app.link_params(), None);
     assert!(app.link_restart_due());
 }
 
@@ -117,16 +146,14 @@ fn uplink(app: &mut FlightApp, message: &telemetry::messages::Message, at_us: u6
 
 /// Before spec §12.5 any `SettingChange` on the uplink was applied while disarmed (so
 /// anyone who could inject into the stream could change gains and the failsafe): now only a
-/// change signed with the phrase's key is.
+/// change signed with the change key of the link's key is.
 #[test]
 fn an_unsigned_change_is_refused_and_a_signed_one_applied() {
     use crate::report::f32_value;
     use crate::settings::{PARAMS, handles};
     use telemetry::change_auth::ChangeKey;
-    use telemetry::messages::{Message, SettingChange};
+    use telemetry::messages::{ChangeRefused, Message, SettingChange};
     let mut app = bound_app();
-    console(&mut app, &format!("phrase {PHRASE}"));
-    app.seed_change_session(0xABCD_0001);
     let _ = app.take_design_request();
     let id = PARAMS
         .iter()
@@ -141,9 +168,24 @@ fn an_unsigned_change_is_refused_and_a_signed_one_applied() {
     assert_eq!(app.settings().get(handles::FAILSAFE_DESCENT_MPS), before);
     assert_eq!(app.take_design_request(), None);
 
-    let key = ChangeKey::from_link_key(&LinkKey::from_phrase(PHRASE));
-    let signed = key.sign(0xABCD_0001, 1, change);
-    uplink(&mut app, &Message::SignedChange(signed), 200_000);
+    // The phone learns the session from the refusal and signs with the link key's change key.
+    let mut phone = telemetry::change_auth::Signer::new(ChangeKey::from_link_key(
+        &app.settings().link_key().expect("keyed"),
+    ));
+    let first = phone.sign(change);
+    uplink(&mut app, &Message::SignedChange(first), 150_000);
+    let refused = ChangeRefused {
+        id,
+        reason: telemetry::messages::RefuseReason::NotAuthenticated,
+        session: app.change_session(),
+        counter: 0,
+    };
+    assert!(phone.on_refused(&refused));
+    uplink(
+        &mut app,
+        &Message::SignedChange(phone.sign(change)),
+        200_000,
+    );
     assert_eq!(app.settings().get(handles::FAILSAFE_DESCENT_MPS), 0.9);
     assert!(app.take_design_request().is_some());
 }

@@ -3,6 +3,7 @@ use crate::supervisor::Sticks;
 use telemetry::channels::ChannelFormat;
 use telemetry::channels::FailsafeValues;
 use telemetry::link::core::Follower;
+use telemetry::link::follower::FollowerBind;
 use telemetry::link::{Band, LinkParams, RateMode};
 
 /// A level frame at rest; a tiny sample-dependent gyro wiggle like real sensor noise
@@ -287,6 +288,14 @@ fn a_settings_problem_at_boot_refuses_arming_until_a_save() {
     assert!(app.armed(), "arms once the settings are saved");
 }
 
+/// A bind result with a key (the links the tests bind are authenticated).
+pub(super) fn bound(params: LinkParams) -> FollowerBind {
+    FollowerBind::Bound {
+        params,
+        key: Some(telemetry::link::LinkKey::from_bytes([0x6B; 16])),
+    }
+}
+
 #[test]
 fn an_unbound_controller_runs_no_link_and_nothing_binds_it_without_the_bind_command() {
     let mut app = app();
@@ -294,7 +303,7 @@ fn an_unbound_controller_runs_no_link_and_nothing_binds_it_without_the_bind_comm
     assert_eq!(app.take_bind_request(), None, "no bind window at boot");
     // A bind offer heard without a window opened by the owner (the old 3 s boot window)
     // is not stored.
-    assert!(!app.on_bind_result(Some(&some_link())));
+    assert!(!app.on_bind_result(&bound(some_link())));
     assert_eq!(app.link_params(), None);
     assert_eq!(app.take_save(), None);
 }
@@ -306,13 +315,19 @@ fn the_bind_command_opens_one_window_and_only_its_bind_is_stored() {
     let _ = app.on_console_line("bind", &mut out);
     assert!(out.contains("bind window open for 30 s"), "{out}");
     assert!(app.bind_requested());
+    let request = app.take_bind_request().expect("a window");
     assert_eq!(
-        app.take_bind_request(),
-        Some((Band::Mhz433, BIND_WINDOW_US))
+        (
+            request.band,
+            request.window_us,
+            request.phrase,
+            request.allow_plain
+        ),
+        (Band::Mhz433, BIND_WINDOW_US, None, false)
     );
     assert!(!app.bind_requested());
     assert_eq!(app.take_bind_request(), None, "one window per command");
-    assert!(app.on_bind_result(Some(&some_link())));
+    assert!(app.on_bind_result(&bound(some_link())));
     assert_eq!(app.link_params(), Some(some_link()));
     assert!(app.take_save().is_some(), "the bind is saved");
     // The window is closed: a second offer (a spoofer's) does not rebind.
@@ -323,13 +338,13 @@ fn the_bind_command_opens_one_window_and_only_its_bind_is_stored() {
         ChannelFormat::Compact8,
         2,
     );
-    assert!(!app.on_bind_result(Some(&other)));
+    assert!(!app.on_bind_result(&bound(other)));
     assert_eq!(app.link_params(), Some(some_link()), "stays bound");
     // A window that times out closes too.
     let _ = app.on_console_line("bind", &mut out);
     assert!(app.take_bind_request().is_some());
-    assert!(!app.on_bind_result(None));
-    assert!(!app.on_bind_result(Some(&other)));
+    assert!(!app.on_bind_result(&FollowerBind::NoOffer));
+    assert!(!app.on_bind_result(&bound(other)));
     assert_eq!(app.link_params(), Some(some_link()));
 }
 
@@ -342,7 +357,7 @@ fn bind_is_refused_while_armed() {
     assert!(out.contains("refused"), "{out}");
     assert!(!app.bind_requested());
     assert_eq!(app.take_bind_request(), None);
-    assert!(!app.on_bind_result(Some(&some_link())));
+    assert!(!app.on_bind_result(&bound(some_link())));
     assert_eq!(app.link_params(), None);
 }
 
@@ -381,14 +396,14 @@ fn the_link_task_is_told_what_to_do_next() {
     assert_eq!(app.next_link_step(), LinkStep::WaitForBind);
     let mut out = heapless::String::<256>::new();
     let _ = app.on_console_line("bind", &mut out);
+    let LinkStep::Bind(request) = app.next_link_step() else {
+        panic!("a bind window");
+    };
     assert_eq!(
-        app.next_link_step(),
-        LinkStep::Bind {
-            band: Band::Mhz433,
-            window_us: BIND_WINDOW_US
-        }
+        (request.band, request.window_us),
+        (Band::Mhz433, BIND_WINDOW_US)
     );
-    assert!(app.on_bind_result(Some(&some_link())));
+    assert!(app.on_bind_result(&bound(some_link())));
     assert_eq!(app.next_link_step(), LinkStep::Follow(some_link()));
 }
 

@@ -49,15 +49,10 @@ pub enum Command<'a> {
     Defaults,
     /// Live status.
     Status,
-    /// Open the bind window (the deliberate act that binds this controller to a module).
-    Bind,
-    /// Set the binding phrase: the rest of the line, trimmed (not yet checked: see
-    /// `telemetry::link::key_for_phrase`).
-    Phrase(&'a str),
-    /// Remove the binding phrase.
-    PhraseClear,
-    /// Show the binding phrase's fingerprint.
-    PhraseShow,
+    /// Open the bind window (the deliberate act that binds this controller to a module),
+    /// with the binding phrase for it: the rest of the line, trimmed (not yet checked: see
+    /// `telemetry::link::check_phrase`); empty: bind without a phrase.
+    Bind(&'a str),
     /// Magnetometer calibration.
     Magcal(MagcalAction),
     /// An empty line.
@@ -112,14 +107,11 @@ pub fn parse_line(line: &str) -> Result<Command<'_>, ConsoleError> {
             return Ok(Command::SetAll(pairs));
         }
     }
-    if word == "phrase" {
+    if word == "bind" {
         // The phrase is the rest of the line, spaces inside included.
-        let rest = line.trim_start().get(6..).unwrap_or("").trim();
-        return Ok(match rest {
-            "" => Command::PhraseShow,
-            "clear" => Command::PhraseClear,
-            phrase => Command::Phrase(phrase),
-        });
+        return Ok(Command::Bind(
+            line.trim_start().get(4..).unwrap_or("").trim(),
+        ));
     }
     let a = words.next();
     let b = words.next();
@@ -134,7 +126,6 @@ pub fn parse_line(line: &str) -> Result<Command<'_>, ConsoleError> {
         ("save", None, None) => Ok(Command::Save),
         ("defaults", None, None) => Ok(Command::Defaults),
         ("status", None, None) => Ok(Command::Status),
-        ("bind", None, None) => Ok(Command::Bind),
         ("magcal", Some(action), None) => match action {
             "start" => Ok(Command::Magcal(MagcalAction::Start)),
             "status" => Ok(Command::Magcal(MagcalAction::Status)),
@@ -208,12 +199,12 @@ mod tests {
         );
         assert_eq!(parse_line("rm -rf"), Err(ConsoleError::UnknownCommand));
         assert_eq!(
-            parse_line("  phrase  correct horse  battery staple "),
-            Ok(Command::Phrase("correct horse  battery staple"))
+            parse_line("  bind  amber kettle  under the oak "),
+            Ok(Command::Bind("amber kettle  under the oak"))
         );
-        assert_eq!(parse_line("phrase clear"), Ok(Command::PhraseClear));
-        assert_eq!(parse_line("phrase"), Ok(Command::PhraseShow));
-        assert_eq!(parse_line("phrases x"), Err(ConsoleError::UnknownCommand));
+        assert_eq!(parse_line("bind"), Ok(Command::Bind("")));
+        assert_eq!(parse_line("binds x"), Err(ConsoleError::UnknownCommand));
+        assert_eq!(parse_line("phrase x"), Err(ConsoleError::UnknownCommand));
     }
 
     #[test]

@@ -274,6 +274,9 @@ table! {
     // Magnetic declination at the flying field, degrees east of true north: the heading the
     // estimators take from the magnetometer is turned by it (`estimation::align`).
     MAG_DECLINATION_DEG: f32 = f(810, "mag.declination_deg", -180.0, 180.0, 0.0),
+    // 1 lets a bind without a key agreement through and the link it stores run
+    // unauthenticated (spec §12.1: only by this explicit setting; the module needs its own).
+    LINK_UNAUTHENTICATED: u32 = u(715, "link.unauthenticated", 0, 1, 0),
     // The flight log (9xx): which topics at which rates (`logging::Profile`). Factory:
     // `flight`, what the Sparky2's flash and the link stream take.
     LOG_PROFILE: u32 = c(900, "log.profile", LOG_PROFILES, 2),

@@ -20,9 +20,12 @@
 //! store loads as factory settings with [`LoadProblem::OldFormat`], and the next save writes
 //! the record format.
 //!
-//! Record versions: 3 (now) ends its pairs with the link key — a flag byte (0 none, 1 a key)
-//! and, with 1, the 16 key bytes (derived from the binding phrase; the phrase itself is never
-//! stored); 2 has no key and loads as "no phrase", its pairs unchanged.
+//! Record versions: 4 (now) ends its pairs with the link key — a flag byte (0 none, 1 a key)
+//! and, with 1, the 16 key bytes (the random key agreed at bind, spec §12.1; no phrase or
+//! value derived from one is stored). Versions 3 (a key hashed from the phrase alone, which
+//! a recording let a guesser test) and 2 (no key) load with their pairs, but neither their
+//! key nor their bound link: the link was bound by the protocol before the key agreement,
+//! so the controller runs no link until it is bound again.
 
 use embedded_storage_async::nor_flash::NorFlash;
 use sequential_storage::cache::CacheImpl;
@@ -52,8 +55,10 @@ impl Buffer {
 /// The two slots' map keys (parameter keys are 100…999, the old format's item keys).
 const SLOTS: [u16; 2] = [0xFE00, 0xFE01];
 /// Record format version.
-const VERSION: u8 = 3;
-/// The version before the link key, still loaded (no key).
+const VERSION: u8 = 4;
+/// The version whose key was the binding phrase's hash: its pairs load, not its link.
+const VERSION_PHRASE_KEY: u8 = 3;
+/// The version before the link key: its pairs load, not its link.
 const VERSION_NO_KEY: u8 = 2;
 /// Longest record: version, generation, count, pairs, key flag and key, CRC.
 const RECORD_MAX: usize = 1 + 4 + 2 + 6 * super::params::COUNT + 1 + KEY_BYTES + 4;
@@ -197,7 +202,7 @@ fn decode(bytes: &[u8]) -> Option<Record> {
         return None;
     }
     let (&version, rest) = body.split_first()?;
-    if version != VERSION && version != VERSION_NO_KEY {
+    if version != VERSION && version != VERSION_PHRASE_KEY && version != VERSION_NO_KEY {
         return None;
     }
     let (generation, rest) = rest.split_first_chunk::<4>()?;
@@ -205,10 +210,14 @@ fn decode(bytes: &[u8]) -> Option<Record> {
     let count = usize::from(u16::from_le_bytes(*count));
     let (pairs, key) = rest.split_at_checked(6 * count)?;
     let link_key = match (version, key) {
-        (VERSION_NO_KEY, []) | (VERSION, [0]) => None,
-        (VERSION, [1, key @ ..]) => Some(LinkKey::from_bytes(key.try_into().ok()?)),
+        (VERSION_NO_KEY, []) | (VERSION | VERSION_PHRASE_KEY, [0]) => None,
+        (VERSION | VERSION_PHRASE_KEY, [1, key @ ..]) => {
+            Some(LinkKey::from_bytes(key.try_into().ok()?))
+        }
         _ => return None,
     };
+    // A link bound before the key agreement is no link now (module doc).
+    let link_key = link_key.filter(|_| version == VERSION);
     let mut record = Record {
         generation: u32::from_le_bytes(*generation),
         settings: Settings::default(),
@@ -226,6 +235,12 @@ fn decode(bytes: &[u8]) -> Option<Record> {
             Ok(()) => record.loaded += 1,
             Err(_) => record.refused += 1,
         }
+    }
+    if version != VERSION {
+        record
+            .settings
+            .apply(&[super::handles::LINK_BIND_ID.to(0)])
+            .ok()?;
     }
     Some(record)
 }

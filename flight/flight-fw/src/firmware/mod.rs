@@ -38,11 +38,14 @@ async fn main(spawner: Spawner) {
         // Console, telemetry and arming all see it until the pilot saves a set.
         app.on_settings_problem(problem);
     }
-    // A fresh session for the phone's signed setting changes every boot (spec §12.5).
+    // The link's secrets every boot (spec §12): the phone changes' session, the epoch nonces'
+    // seed and each bind's CPace randomness, from 32 bytes of the hardware RNG.
     let mut rng = board.rng;
-    app.seed_change_session(rng.next_u32());
-    // And a fresh seed for the link's epoch nonces (spec §12.2).
-    app.seed_link_nonces(u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32()));
+    let mut random = [0u8; 32];
+    for word in random.chunks_exact_mut(4) {
+        word.copy_from_slice(&rng.next_u32().to_le_bytes());
+    }
+    app.seed_random(&random);
     if let Some(e) = app.setup_error() {
         error!("stored settings not flyable ({}): factory setup", e);
     }

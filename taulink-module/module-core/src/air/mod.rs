@@ -39,10 +39,13 @@ const UPLINK_RECORDS: usize = 8;
 /// Records received over the air waiting for the core.
 const RECEIVED_RECORDS: usize = 16;
 
-/// The bound link's parameters (`None` while unbound): the settings' band, rate mode and
-/// telemetry ratio, 16 channels.
+/// The bound link's parameters (`None` while unbound, or bound without a key while the
+/// unauthenticated setting is off): the settings' band, rate mode and telemetry ratio, 16
+/// channels.
 pub fn link_params(settings: &Settings) -> Option<LinkParams> {
-    (settings.bind_id != 0).then(|| LinkParams {
+    // A link without an agreed key runs only by the explicit setting (spec §12.1).
+    let runnable = settings.link_key.is_some() || settings.plain;
+    (settings.bind_id != 0 && runnable).then(|| LinkParams {
         bind_id: settings.bind_id,
         band: settings.band,
         rate: settings.rate,
@@ -50,6 +53,22 @@ pub fn link_params(settings: &Settings) -> Option<LinkParams> {
         format: telemetry::link::bind::format_for(settings.rate, ChannelFormat::Full16),
         telemetry_ratio: settings.telemetry_ratio,
     })
+}
+
+/// The key of the link the module runs with `settings` under radio model `model` (model
+/// match): in the transmitter role the module's key for that link's bind ID
+/// (`LinkKey::for_link`: each model's link its own), in the receiver role the key the master
+/// handed over; `None` without one (not bound, or bound unauthenticated).
+pub fn link_key(settings: &Settings, model: Option<u8>) -> Option<telemetry::link::LinkKey> {
+    let key = settings.link_key?;
+    match settings.role {
+        crate::settings::Role::Receiver => Some(key),
+        crate::settings::Role::Transmitter => {
+            let params = link_params(settings)?;
+            let params = model.map_or(params, |m| params.for_model(m));
+            Some(key.for_link(params.bind_id))
+        }
+    }
 }
 
 /// Parameters for a new bind: the settings' band, rate and telemetry ratio with a fresh ID
@@ -118,6 +137,7 @@ impl AirLink {
                 remote_link_quality_percent: None,
                 rate_code: 0,
                 schedule: None,
+                tag_failures: 0,
             },
             bind_requested: false,
             follower_updates: 0,
@@ -187,6 +207,7 @@ impl AirLink {
             remote_rssi_dbm: remote.map_or(0, |r| i16::from(r.rssi_dbm)),
             remote_link_quality_percent: remote.map(|r| r.lq_percent),
             rate_code: rate.code(),
+            tag_failures: master.counters().tag_failures,
             schedule: Some(AirSchedule {
                 period_us: rate.slot_us(),
                 // When the channels of the first uplink of this telemetry cycle are latched:
@@ -222,6 +243,7 @@ impl AirLink {
             remote_link_quality_percent: remote.map(|r| r.lq_percent),
             rate_code: follower.params().rate.code(),
             schedule: None,
+            tag_failures: follower.counters().tag_failures,
         };
     }
 
@@ -326,6 +348,7 @@ impl LinkPort for AirLink {
     fn on_link_stopped(&mut self) {
         self.stats = LinkStats {
             rate_code: self.stats.rate_code,
+            tag_failures: self.stats.tag_failures,
             ..LinkStats::default()
         };
         self.received_channels = None;
@@ -378,6 +401,12 @@ mod tests {
         let mut settings = Settings::default();
         assert_eq!(link_params(&settings), None, "unbound");
         settings.bind_id = 0x1234_5678;
+        assert_eq!(
+            link_params(&settings),
+            None,
+            "bound without a key, plain off"
+        );
+        settings.link_key = Some(telemetry::link::LinkKey::from_bytes([1; 16]));
         settings.band = telemetry::link::Band::Mhz868;
         settings.telemetry_ratio = 8;
         for rate in telemetry::link::RateMode::ALL {
@@ -411,6 +440,7 @@ mod tests {
         let mut master = Master::new(
             link_params(&Settings {
                 bind_id: 9,
+                plain: true,
                 ..Settings::default()
             })
             .unwrap(),
@@ -449,6 +479,7 @@ mod tests {
         let mut master = Master::new(
             link_params(&Settings {
                 bind_id: 9,
+                plain: true,
                 ..Settings::default()
             })
             .unwrap(),

@@ -92,6 +92,8 @@ impl AirLink {
             remote_link_quality_percent: remote.map(|(_, lq)| lq),
             rate_code: OPENLRS_RATE_CODE_BASE + tx.bind_data().modem_profile,
             schedule: None,
+            // OpenLRSng frames carry no tag.
+            tag_failures: 0,
         };
     }
 }

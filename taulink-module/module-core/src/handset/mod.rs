@@ -21,7 +21,7 @@ use taulink_handset::crsf::address;
 use taulink_handset::crsf::params::ParameterChunk;
 
 use crate::channels::ChannelFrame;
-use crate::ports::{HandsetOutput, HandsetRequest, LinkStats};
+use crate::ports::{HandsetOutput, HandsetRequest, LinkStats, TagFailures};
 use crate::settings::{InputProtocol, OutputProtocol, Role, Settings};
 pub use state::FlightState;
 
@@ -229,6 +229,10 @@ impl HandsetOutput for Handset {
 
     fn on_module_battery(&mut self, millivolts: u16) {
         self.state.on_module_battery(millivolts);
+    }
+
+    fn on_tag_failures(&mut self, failures: TagFailures) {
+        self.state.on_tag_failures(failures);
     }
 
     fn on_link_stats(&mut self, stats: &LinkStats) {

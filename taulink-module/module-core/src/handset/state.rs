@@ -5,11 +5,12 @@
 use heapless::String;
 use taulink_handset::HandsetTelemetry;
 use taulink_handset::report::{
-    AttitudeReport, BatteryReport, FlightModeReport, GpsReport, LinkReport, VerticalReport,
+    AttitudeReport, BatteryReport, FlightModeReport, GpsReport, LinkReport, LinkSecurityReport,
+    VerticalReport,
 };
 use telemetry::messages::{self, GpsFix, Message};
 
-use crate::ports::LinkStats;
+use crate::ports::{LinkStats, TagFailures};
 
 /// RFM22B output power per step of register 0x6D (+1, +2, +5, +8, +11, +14, +17, +20 dBm),
 /// in mW rounded, for CRSF's TX-power field.
@@ -42,6 +43,8 @@ pub struct FlightState {
     vertical: Option<messages::Vertical>,
     cells: Option<u8>,
     module_battery_mv: Option<u16>,
+    /// A keyed link's tag failures at both ends and the alert.
+    tag_failures: Option<TagFailures>,
     /// The flight side's own view of the link (uplink RSSI/LQ), from its LinkStats message.
     flight_link: Option<messages::LinkStats>,
     /// Records that held no message this firmware knows.
@@ -83,6 +86,8 @@ impl FlightState {
             | Message::SettingChange(_)
             | Message::SignedChange(_)
             | Message::ChangeRefused(_)
+            // The tag failures reach the handset through the core's device-tool row.
+            | Message::LinkSecurity(_)
             // No handset protocol here carries a home (CRSF, S.Port, FrSky D); the phone does.
             | Message::Home(_)
             // An older flight side's mode: its numbers meant other modes, so none is shown.
@@ -93,6 +98,11 @@ impl FlightState {
     /// The module's own supply (the radio battery on JR pin 3), mV.
     pub fn on_module_battery(&mut self, millivolts: u16) {
         self.module_battery_mv = Some(millivolts);
+    }
+
+    /// A keyed link's tag failures at both ends and the alert (the core's count and alarm).
+    pub fn on_tag_failures(&mut self, failures: TagFailures) {
+        self.tag_failures = Some(failures);
     }
 
     /// The link's statistics.
@@ -160,6 +170,10 @@ impl FlightState {
             }),
             cells: self.cells,
             module_battery_mv: self.module_battery_mv,
+            link_security: self.tag_failures.map(|t| LinkSecurityReport {
+                tag_failures: t.down.saturating_add(t.up),
+                alert: t.alert,
+            }),
         }
     }
 }
@@ -247,6 +261,24 @@ mod tests {
         assert_eq!((link.uplink_rssi_dbm, link.uplink_lq_percent), (-90, 1));
         state.on_link_stats(&LinkStats::default());
         assert_eq!(state.report().link, None);
+    }
+
+    #[test]
+    fn tag_failures_of_both_ends_are_summed_for_the_radio() {
+        let mut state = FlightState::new(3);
+        assert_eq!(state.report().link_security, None, "unkeyed: no sensor");
+        state.on_tag_failures(TagFailures {
+            down: 25,
+            up: 3,
+            alert: true,
+        });
+        assert_eq!(
+            state.report().link_security,
+            Some(LinkSecurityReport {
+                tag_failures: 28,
+                alert: true
+            })
+        );
     }
 
     #[test]

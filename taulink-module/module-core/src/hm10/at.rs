@@ -3,15 +3,19 @@
 //!
 //! HMSoft takes AT commands without CR/LF and answers `OK`, `OK+Set:x`; it ships at 9600 Bd
 //! and keeps `AT+BAUD4` (115 200 Bd) across power cycles. So the script first listens at
-//! 115 200 Bd (a phone still connected across a module reset shows up as traffic or an
-//! `OK+CONN`, and must not get an `AT`: while connected, a lone `AT` disconnects it), then
-//! probes at 115 200; if that is silent it probes at the factory 9600 and sets
-//! `AT+BAUD4` there. In both cases it sets the name and `AT+NOTI1` (connection
+//! 115 200 Bd, then probes at 115 200; if that is silent it probes at the factory 9600 and
+//! sets `AT+BAUD4` there. In both cases it sets the name and `AT+NOTI1` (connection
 //! notifications for the relay), with a PIN ([`Configurator::with_pin`]) also `AT+PASS` and
 //! `AT+TYPE3` (pairing needs the PIN, and the phone is bonded: the factory setting lets any
-//! phone in range connect and talk to the module), and sends `AT+RESET`, after which the settings apply; a
-//! last `AT` at 115 200 Bd checks that they did.
-//! An `OK+CONN` at any point aborts the script: the phone wins.
+//! phone in range connect and talk to the module), and sends `AT+RESET`, after which the
+//! settings apply; a last `AT` at 115 200 Bd checks that they did.
+//!
+//! A phone connected while the script runs — traffic in the listening window (a phone still
+//! connected across a module reset) or an `OK+CONN` at any point — is disconnected (a lone
+//! `AT` does that while connected) and the script starts over from the probe, at most
+//! [`MAX_DISCONNECTS`] times: the PIN is set before any phone is served (issue 30, finding
+//! 5: the script used to end there, leaving a factory HM-10 open). The relay opens only on
+//! [`Outcome::Configured`].
 
 use heapless::Vec;
 
@@ -30,6 +34,9 @@ const TRIES: u8 = 2;
 const LISTEN_MS: u32 = 500;
 /// `AT+RESET` reboots the module; it needs ≈ 0.5 s before it takes commands again.
 const REBOOT_MS: u32 = 1_000;
+/// Phones the script disconnects before it gives up ([`Outcome::Failed`] at
+/// [`Stage::Disconnect`]): a phone that reconnects at once, again and again.
+pub const MAX_DISCONNECTS: u8 = 3;
 
 /// A 6-digit HM-10 pairing PIN (000000–999999).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -85,11 +92,6 @@ pub enum Outcome {
         /// UART rate to use from now on.
         baud: u32,
     },
-    /// A phone is (or got) connected; configuration skipped, the relay runs at `baud`.
-    PhoneConnected {
-        /// UART rate to use from now on.
-        baud: u32,
-    },
     /// No answer at 115 200 or 9600 Bd: no HM-10 fitted (or a clone that wants CR/LF).
     NoModule,
     /// A command was refused or unanswered after the module had answered `AT`.
@@ -105,6 +107,8 @@ pub enum Outcome {
 pub enum Stage {
     /// Listening for traffic before the first command.
     Listen,
+    /// `AT` to a connected phone's module: it drops the phone.
+    Disconnect,
     /// `AT` at 115 200 Bd.
     ProbeFast,
     /// `AT` at 9600 Bd.
@@ -156,6 +160,8 @@ pub struct Configurator {
     baud_pending: bool,
     send_pending: bool,
     tries_left: u8,
+    /// Phones disconnected so far.
+    disconnects: u8,
     deadline_ms: u32,
     reply: Vec<u8, 32>,
     command: Vec<u8, 24>,
@@ -187,6 +193,7 @@ impl Configurator {
             baud_pending: true,
             send_pending: false,
             tries_left: TRIES,
+            disconnects: 0,
             deadline_ms: now_ms.wrapping_add(LISTEN_MS),
             reply: Vec::new(),
             command: Vec::new(),
@@ -226,7 +233,7 @@ impl Configurator {
         if contains(&self.reply, b"OK+CONN")
             || (self.stage == Stage::Listen && !self.reply.is_empty())
         {
-            return self.finish(Outcome::PhoneConnected { baud: self.baud });
+            return self.disconnect(now_ms);
         }
         if core::mem::take(&mut self.baud_pending) {
             return Action::SetBaud(self.baud);
@@ -245,7 +252,8 @@ impl Configurator {
             };
         }
         match self.stage {
-            Stage::Listen | Stage::Reboot => self.advance(now_ms),
+            // A phone dropped without a word still lets the script go on.
+            Stage::Listen | Stage::Reboot | Stage::Disconnect => self.advance(now_ms),
             _ if self.tries_left > 1 => {
                 self.tries_left -= 1;
                 self.send_pending = true;
@@ -266,7 +274,7 @@ impl Configurator {
     fn reply_complete(&self) -> bool {
         let expected: &[u8] = match self.stage {
             Stage::Listen | Stage::Reboot => return false,
-            Stage::ProbeFast | Stage::ProbeFactory | Stage::Verify => b"OK",
+            Stage::ProbeFast | Stage::ProbeFactory | Stage::Verify | Stage::Disconnect => b"OK",
             Stage::Name | Stage::Notifications | Stage::Pin | Stage::Bonding | Stage::Baud => {
                 b"OK+Set"
             }
@@ -277,7 +285,8 @@ impl Configurator {
 
     fn advance(&mut self, now_ms: u32) -> Action<'_> {
         let next = match self.stage {
-            Stage::Listen => Stage::ProbeFast,
+            Stage::Disconnect if self.factory => Stage::ProbeFactory,
+            Stage::Listen | Stage::Disconnect => Stage::ProbeFast,
             Stage::ProbeFast | Stage::ProbeFactory => Stage::Name,
             Stage::Name => Stage::Notifications,
             Stage::Notifications if self.pin.is_some() => Stage::Pin,
@@ -309,7 +318,9 @@ impl Configurator {
         self.command.clear();
         let pin = self.pin.map(Pin::digits).unwrap_or([b'0'; 6]);
         let parts: [&[u8]; 2] = match stage {
-            Stage::ProbeFast | Stage::ProbeFactory | Stage::Verify => [b"AT", b""],
+            Stage::ProbeFast | Stage::ProbeFactory | Stage::Verify | Stage::Disconnect => {
+                [b"AT", b""]
+            }
             Stage::Name => [b"AT+NAME", &self.name],
             Stage::Notifications => [b"AT+NOTI1", b""],
             Stage::Pin => [b"AT+PASS", &pin],
@@ -322,6 +333,20 @@ impl Configurator {
             // 8 + 12 bytes fit the 24-byte command buffer.
             let _ = self.command.extend_from_slice(part);
         }
+    }
+
+    /// A phone is connected: a lone `AT` drops it, then the script starts over from the
+    /// probe at the rate it heard the phone on; after [`MAX_DISCONNECTS`] it gives up.
+    fn disconnect(&mut self, now_ms: u32) -> Action<'_> {
+        if self.disconnects >= MAX_DISCONNECTS {
+            return self.finish(Outcome::Failed {
+                stage: Stage::Disconnect,
+            });
+        }
+        self.disconnects += 1;
+        self.reply.clear();
+        self.enter(Stage::Disconnect);
+        self.poll(now_ms, &[])
     }
 
     fn finish(&mut self, outcome: Outcome) -> Action<'_> {

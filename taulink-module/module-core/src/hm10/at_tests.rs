@@ -156,32 +156,56 @@ fn no_module_gives_up_after_both_rates() {
     assert_eq!(sent.len(), 4, "two tries at each rate");
 }
 
+/// Issue 30, finding 5: a phone talking in the listening window (or an `OK+CONN`) ended the
+/// script before `AT+PASS`/`AT+TYPE3`, and a factory HM-10 stayed open to any phone. The
+/// phone is now disconnected (a lone `AT`) and the PIN set before anything is relayed.
 #[test]
-fn a_connected_phone_never_sees_an_at() {
+fn a_connected_phone_is_dropped_and_the_pin_is_set_all_the_same() {
     for unprompted in [b"OK+CONN".to_vec(), vec![0x02, 0x14, 0x00]] {
         let mut module = FakeHm10::new(115_200);
         module.unprompted = unprompted;
-        let mut script = Configurator::new("TauLink", 0);
+        let mut script = Configurator::new("TauLink", 0).with_pin(Pin::new(246_810).unwrap());
         let (outcome, sent) = run(&mut module, &mut script);
-        assert_eq!(outcome, Outcome::PhoneConnected { baud: 115_200 });
-        assert!(sent.is_empty());
+        assert_eq!(outcome, Outcome::Configured { baud: 115_200 }, "{sent:?}");
+        assert_eq!(
+            sent.first().map(|(_, c)| c.as_slice()),
+            Some(b"AT".as_slice())
+        );
+        assert_eq!(module.pin.as_deref(), Some(b"246810".as_slice()));
+        assert_eq!(module.auth_type, 3, "PIN authentication with bonding");
     }
 }
 
 #[test]
-fn a_connection_mid_script_aborts_it() {
+fn a_connection_mid_script_is_dropped_and_the_script_starts_over() {
     let mut script = Configurator::new("TauLink", 0);
     assert_eq!(script.poll(0, &[]), Action::SetBaud(115_200));
     assert_eq!(script.poll(0, &[]), Action::Wait { until_ms: 500 });
     assert_eq!(script.poll(500, &[]), Action::Send(b"AT"));
     assert_eq!(script.poll(510, b"OK"), Action::Send(b"AT+NAMETauLink"));
+    assert_eq!(script.poll(520, b"OK+CONN"), Action::Send(b"AT"), "dropped");
     assert_eq!(
-        script.poll(520, b"OK+CONN"),
-        Action::Done(Outcome::PhoneConnected { baud: 115_200 })
+        script.poll(530, b"OK+LOST"),
+        Action::Send(b"AT"),
+        "probed again"
     );
+    assert_eq!(script.poll(540, b"OK"), Action::Send(b"AT+NAMETauLink"));
+    // A phone that keeps coming back: after three drops the script gives up (no relay).
+    let mut script = Configurator::new("TauLink", 0);
+    let mut now = 0;
+    let mut last = script.poll(now, &[]);
+    for _ in 0..20 {
+        now += 10;
+        last = script.poll(now, b"OK+CONN");
+        if matches!(last, Action::Done(_)) {
+            break;
+        }
+    }
     assert_eq!(
-        script.poll(900, b"OK"),
-        Action::Done(Outcome::PhoneConnected { baud: 115_200 })
+        last,
+        Action::Done(Outcome::Failed {
+            stage: Stage::Disconnect
+        })
     );
 }
 
@@ -248,7 +272,8 @@ fn deadlines_survive_the_millisecond_wrap() {
 
 proptest::proptest! {
     /// Whatever the module answers (garbage, partial replies, notifications), the script
-    /// ends within a bounded number of steps and sends nothing after an `OK+CONN`.
+    /// ends within a bounded number of steps, and what it sends right after an `OK+CONN` is
+    /// the lone `AT` that drops the phone.
     #[test]
     fn any_replies_end_the_script(
         replies in proptest::collection::vec(proptest::collection::vec(proptest::prelude::any::<u8>(), 0..12), 0..40),
@@ -266,7 +291,12 @@ proptest::proptest! {
                     finished = Some(outcome);
                     break;
                 }
-                Action::Send(_) => proptest::prop_assert!(!connected, "AT after OK+CONN"),
+                Action::Send(command) => {
+                    if connected {
+                        proptest::prop_assert_eq!(command, b"AT".as_slice(), "the phone dropped first");
+                        connected = false;
+                    }
+                }
                 Action::SetBaud(baud) => proptest::prop_assert!(baud == 9_600 || baud == 115_200),
                 Action::Wait { until_ms } => {
                     now = until_ms;
@@ -282,9 +312,13 @@ proptest::proptest! {
             }
         }
         let outcome = finished.expect("script must finish");
-        // The bytes with the notification reach the very next poll, which must end it.
+        // A phone that connected was dropped: the script went on or gave up, never served
+        // it unconfigured.
         if connected {
-            proptest::prop_assert!(matches!(outcome, Outcome::PhoneConnected { .. }), "{:?}", outcome);
+            proptest::prop_assert!(
+                matches!(outcome, Outcome::Configured { .. } | Outcome::Failed { .. } | Outcome::NoModule),
+                "{:?}", outcome
+            );
         }
     }
 }

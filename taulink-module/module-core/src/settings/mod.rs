@@ -18,7 +18,8 @@ pub use record::{
 pub use store::{SettingsStore, StoreError};
 pub use text::TextError;
 
-use telemetry::link::LinkKey;
+use telemetry::link::phrase::{PRS_BYTES, SALT_BYTES};
+use telemetry::link::{LinkKey, PhraseSecret};
 
 use crate::hm10::at::Pin;
 use crate::ppm::FailsafeOutput;
@@ -128,9 +129,21 @@ pub struct Settings {
     pub protocol: LinkProtocol,
     /// The OpenLRSng transmitter's bind parameters (used when `protocol` is OpenLRSng).
     pub openlrs: OpenLrsSettings,
-    /// The link key derived from the binding phrase (spec §12); `None`: no phrase, the link
-    /// runs unauthenticated. Set with `set_text("phrase", …)`.
+    /// The link key (spec §12.1): in the transmitter role the module's own random key, each
+    /// link's key derived from it and handed over at bind ([`LinkKey::for_link`]); in the
+    /// receiver role the key the master handed over. `None`: not bound with a key agreement
+    /// (the link runs only unauthenticated, when [`Settings::plain`] allows it).
     pub link_key: Option<LinkKey>,
+    /// The salt of the binding phrase's derivation (drawn once per module, public: it
+    /// travels in bind offers and phone challenges).
+    pub phrase_salt: [u8; SALT_BYTES],
+    /// The binding phrase's slow derivation under `phrase_salt`
+    /// ([`telemetry::link::PhraseSecret`]): what CPace runs on at bind and with the phone.
+    /// `None`: no phrase (binds agree a key without one). The phrase itself is never stored.
+    pub phrase_prs: Option<[u8; PRS_BYTES]>,
+    /// The explicit setting for an unauthenticated link (spec §12.1): binds agree no key and
+    /// a link without one runs. Off: every bind agrees a key.
+    pub plain: bool,
     /// The HM-10 pairing PIN; `None`: the factory PIN derived from the chip's unique ID
     /// ([`Pin::factory`]), never the HM-10's own 000000.
     pub ble_pin: Option<Pin>,
@@ -177,12 +190,23 @@ impl Default for Settings {
             protocol: LinkProtocol::TauLink,
             openlrs: OpenLrsSettings::default(),
             link_key: None,
+            phrase_salt: [0; SALT_BYTES],
+            phrase_prs: None,
+            plain: false,
             ble_pin: None,
         }
     }
 }
 
 impl Settings {
+    /// The binding phrase's derivation, if a phrase is set.
+    pub fn phrase(&self) -> Option<PhraseSecret> {
+        self.phrase_prs.map(|prs| PhraseSecret {
+            salt: self.phrase_salt,
+            prs,
+        })
+    }
+
     /// Whether the whole set runs (`openlrs::check`: an OpenLRSng link's carrier and hops
     /// inside the band plan, transmitter role). Every settings path checks it before a
     /// change sticks.

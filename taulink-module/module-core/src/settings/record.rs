@@ -30,12 +30,19 @@
 //! (u32 LE, 0 = band default), olrs_hop_seed (u32 LE)]`. Older records load as TauLink with
 //! OpenLRSng's factory parameters.
 //!
-//! Version 6 (57 bytes) appends the link key and the BLE PIN: `[.. version 5 fields ..,
-//! key_flag, key (16 bytes), ble_pin (u32 LE)]`. The key is the link key derived from the
-//! binding phrase (spec §12; flag 0 = no phrase, the key bytes then all 0; the phrase itself
-//! is never stored); `ble_pin` is the HM-10 pairing PIN, 0…999 999, or `u32::MAX` for the
-//! factory PIN derived from the chip's unique ID ([`Pin::factory`]). Older records load with
-//! no phrase and the factory PIN.
+//! Version 6 (57 bytes) appended a key and the BLE PIN: `[.. version 5 fields .., key_flag,
+//! key (16 bytes), ble_pin (u32 LE)]`; `ble_pin` is the HM-10 pairing PIN, 0…999 999, or
+//! `u32::MAX` for the factory PIN derived from the chip's unique ID ([`Pin::factory`]).
+//!
+//! Version 7 (99 bytes, now) keeps that layout — the key is now the link key agreed at bind
+//! (spec §12.1; flag 0 = none, the key bytes then all 0) — and appends the binding phrase's
+//! derivation and the unauthenticated setting: `[.. version 6 fields .., phrase_flag,
+//! phrase_salt (8 bytes), phrase_prs (32 bytes: all 0 with flag 0), plain (0 or 1)]`.
+//!
+//! Records before version 7 load with their other fields, but not bound (bind ID 0, no
+//! models, no key) and without a phrase: their link was bound by the protocol before the key
+//! agreement, and version 6's key was the phrase's bare hash, which a recording let a
+//! guesser test (issue 30, finding 1). The pilot sets the phrase again and binds.
 
 use telemetry::link::LinkKey;
 
@@ -59,9 +66,11 @@ pub const fn rate_from_old_code(code: u8) -> Option<RateMode> {
 }
 
 /// Current record version.
-pub const RECORD_VERSION: u8 = 6;
+pub const RECORD_VERSION: u8 = 7;
 /// Record length of the current version.
-pub const RECORD_LEN: usize = 57;
+pub const RECORD_LEN: usize = 99;
+/// Record length of version 6 (a key and the PIN, no phrase derivation).
+pub const RECORD_V6_LEN: usize = 57;
 /// Record length of version 5 (link protocol, no phrase or PIN).
 pub const RECORD_V5_LEN: usize = 36;
 /// Record length of version 4 (model match, no link protocol).
@@ -121,6 +130,10 @@ impl Settings {
             None => (0, [0; 16]),
         };
         let pin = self.ble_pin.map_or(FACTORY_PIN, Pin::value).to_le_bytes();
+        let (phrase_flag, prs) = match self.phrase_prs {
+            Some(prs) => (1, prs),
+            None => (0, [0; 32]),
+        };
         let mut record = [0u8; RECORD_LEN];
         let fields = [
             RECORD_VERSION,
@@ -161,14 +174,23 @@ impl Settings {
             s3,
             flag,
         ];
-        let bytes = fields.iter().chain(key.iter()).chain(pin.iter());
+        let flags = [phrase_flag];
+        let plain = [u8::from(self.plain)];
+        let bytes = fields
+            .iter()
+            .chain(key.iter())
+            .chain(pin.iter())
+            .chain(flags.iter())
+            .chain(self.phrase_salt.iter())
+            .chain(prs.iter())
+            .chain(plain.iter());
         for (slot, byte) in record.iter_mut().zip(bytes) {
             *slot = *byte;
         }
         record
     }
 
-    /// Parses a record of version 1 … 6; every field is range-checked.
+    /// Parses a record of version 1 … 7; every field is range-checked.
     pub fn from_record(record: &[u8]) -> Result<Self, DecodeError> {
         let Some(&version) = record.first() else {
             return Err(DecodeError::Length { found: 0 });
@@ -182,6 +204,7 @@ impl Settings {
             3 => RECORD_V3_LEN,
             4 => RECORD_V4_LEN,
             5 => RECORD_V5_LEN,
+            6 => RECORD_V6_LEN,
             RECORD_VERSION => RECORD_LEN,
             found => return Err(DecodeError::Version { found }),
         };
@@ -206,11 +229,20 @@ impl Settings {
         let (rest, tail) = rest.split_at(rest.len().min(RECORD_V3_LEN - RECORD_V1_LEN));
         let (models, link) = tail.split_at(tail.len().min(RECORD_V4_LEN - RECORD_V3_LEN));
         let (link, security) = link.split_at(link.len().min(RECORD_V5_LEN - RECORD_V4_LEN));
+        let (security, phrase) =
+            security.split_at(security.len().min(RECORD_V6_LEN - RECORD_V5_LEN));
         let (protocol, openlrs) = decode_link(link)?;
         let (link_key, ble_pin) = match security {
             [flag, tail @ ..] => decode_security(*flag, tail)?,
             [] => (None, None),
         };
+        let PhraseTail {
+            salt: phrase_salt,
+            prs: phrase_prs,
+            plain,
+        } = decode_phrase(phrase)?;
+        // Bound before the key agreement: no link (module doc).
+        let bound = version == RECORD_VERSION;
         let telemetry_ratio = match rest {
             [_, _, ratio, ..] if TELEMETRY_RATIOS.contains(ratio) => *ratio,
             [_, _, _, ..] => {
@@ -291,14 +323,21 @@ impl Settings {
                 1 => FailsafeOutput::StopPulses,
                 _ => return Err(field(7)),
             },
-            bind_id: u32::from_le_bytes([b0, b1, b2, b3]),
+            bind_id: if bound {
+                u32::from_le_bytes([b0, b1, b2, b3])
+            } else {
+                0
+            },
             input_timeout_ms,
             telemetry_ratio,
             model_match,
-            bound_models,
+            bound_models: if bound { bound_models } else { 0 },
             protocol,
             openlrs,
-            link_key,
+            link_key: link_key.filter(|_| bound),
+            phrase_salt,
+            phrase_prs,
+            plain,
             ble_pin,
         })
     }
@@ -373,6 +412,48 @@ fn decode_security(flag: u8, tail: &[u8]) -> Result<(Option<LinkKey>, Option<Pin
         value => Some(Pin::new(value).ok_or(field(RECORD_V5_LEN + 17))?),
     };
     Ok((link_key, ble_pin))
+}
+
+/// What version 7's tail holds.
+struct PhraseTail {
+    salt: [u8; 8],
+    prs: Option<[u8; 32]>,
+    plain: bool,
+}
+
+/// Version 7's tail (empty for older records: no phrase, no salt, authenticated): the phrase
+/// flag, the salt, the derivation (all 0 without a phrase) and the unauthenticated setting.
+fn decode_phrase(tail: &[u8]) -> Result<PhraseTail, DecodeError> {
+    let field = |offset: usize| DecodeError::Field { offset };
+    let Some((flag, rest)) = tail.split_first() else {
+        return Ok(PhraseTail {
+            salt: [0; 8],
+            prs: None,
+            plain: false,
+        });
+    };
+    let (salt, rest) = rest
+        .split_first_chunk::<8>()
+        .ok_or(field(RECORD_V6_LEN + 1))?;
+    let (prs, rest) = rest
+        .split_first_chunk::<32>()
+        .ok_or(field(RECORD_V6_LEN + 9))?;
+    let prs = match flag {
+        0 if prs.iter().all(|b| *b == 0) => None,
+        0 => return Err(field(RECORD_V6_LEN + 9)),
+        1 => Some(*prs),
+        _ => return Err(field(RECORD_V6_LEN)),
+    };
+    let plain = match rest {
+        [0] => false,
+        [1] => true,
+        _ => return Err(field(RECORD_V6_LEN + 41)),
+    };
+    Ok(PhraseTail {
+        salt: *salt,
+        prs,
+        plain,
+    })
 }
 
 #[cfg(test)]

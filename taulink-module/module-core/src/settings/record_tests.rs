@@ -28,13 +28,16 @@ fn record_round_trip_and_layout() {
         link_key: Some(LinkKey::from_bytes(core::array::from_fn(|i| {
             0xA0 + i as u8
         }))),
+        phrase_salt: [0x51; 8],
+        phrase_prs: Some([0x52; 32]),
+        plain: true,
         ble_pin: Pin::new(42_917),
     };
     let record = settings.to_record();
     assert_eq!(
         record[..RECORD_V5_LEN],
         [
-            6, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16, 1, 0x08, 0, 0, 0, 0, 0,
+            7, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16, 1, 0x08, 0, 0, 0, 0, 0,
             0, 0x80, 2, 4, 6, 0, 0x90, 0x78, 0x56, 0x34, 0x0D, 0xF0, 0xFE, 0xCA
         ]
     );
@@ -44,7 +47,14 @@ fn record_round_trip_and_layout() {
         record[RECORD_V5_LEN..RECORD_V5_LEN + 1 + 16],
         core::array::from_fn::<u8, 17, _>(|i| if i == 0 { 1 } else { 0xA0 + i as u8 - 1 })
     );
-    assert_eq!(record[RECORD_V5_LEN + 17..], 42_917u32.to_le_bytes());
+    assert_eq!(
+        record[RECORD_V5_LEN + 17..RECORD_V6_LEN],
+        42_917u32.to_le_bytes()
+    );
+    assert_eq!(record[RECORD_V6_LEN], 1, "a phrase");
+    assert_eq!(record[RECORD_V6_LEN + 1..RECORD_V6_LEN + 9], [0x51; 8]);
+    assert_eq!(record[RECORD_V6_LEN + 9..RECORD_V6_LEN + 41], [0x52; 32]);
+    assert_eq!(record[RECORD_V6_LEN + 41], 1, "plain");
     assert_eq!(Settings::from_record(&record), Ok(settings));
     assert_eq!(
         Settings::from_record(&Settings::default().to_record()),
@@ -78,11 +88,19 @@ fn bad_records_are_errors() {
         Err(DecodeError::Length { found: 0 })
     );
     assert_eq!(
-        Settings::from_record(&[7; 57]),
-        Err(DecodeError::Version { found: 7 })
+        Settings::from_record(&[8; 99]),
+        Err(DecodeError::Version { found: 8 })
     );
     // Each version with the length of the one before it.
-    for (version, len) in [(6, 36), (5, 24), (4, 15), (3, 14), (2, 12), (1, 11)] {
+    for (version, len) in [
+        (7, 57),
+        (6, 36),
+        (5, 24),
+        (4, 15),
+        (3, 14),
+        (2, 12),
+        (1, 11),
+    ] {
         assert_eq!(
             Settings::from_record(&vec![version; len]),
             Err(DecodeError::Length { found: len }),
@@ -158,8 +176,11 @@ fn version_3_records_load_as_taulink_and_the_link_tail_is_checked() {
         (settings.rate, settings.band),
         (RateMode::F500, Band::Mhz868)
     );
-    // Re-saved, every version-3 field keeps its byte.
-    assert_eq!(settings.to_record()[1..RECORD_V3_LEN], v3[1..]);
+    // Re-saved, every version-3 field keeps its byte but the bind ID (bound before the key
+    // agreement: unbound now).
+    assert_eq!(settings.to_record()[1..8], v3[1..8]);
+    assert_eq!(settings.to_record()[8..12], [0; 4]);
+    assert_eq!(settings.to_record()[12..RECORD_V3_LEN], v3[12..]);
     let mut record = Settings {
         protocol: LinkProtocol::OpenLrs38,
         ..Settings::default()
@@ -223,7 +244,10 @@ fn old_bit_rates_map_to_the_link_mode_they_ran_as() {
         assert_eq!(settings.rate, mode, "v2 code {code}");
         assert_eq!(settings.telemetry_ratio, DEFAULT_TELEMETRY_RATIO);
         assert_eq!(settings.input_timeout_ms, 500);
-        assert_eq!(settings.bind_id, 0x1234_5678);
+        assert_eq!(
+            settings.bind_id, 0,
+            "bound before the key agreement: unbound"
+        );
         // Re-saved as the current version, the same settings come back.
         assert_eq!(settings.to_record()[0], RECORD_VERSION);
         assert_eq!(Settings::from_record(&settings.to_record()), Ok(settings));
@@ -244,7 +268,10 @@ fn the_factory_failsafe_stops_pulses_and_old_records_keep_their_meaning() {
     let v1_hold = [1, 0, 2, 0, 2, 0, 7, 0, 0x78, 0x56, 0x34, 0x12];
     let settings = Settings::from_record(&v1_hold).unwrap();
     assert_eq!(settings.failsafe, FailsafeOutput::HoldLast);
-    assert_eq!(settings.bind_id, 0x1234_5678);
+    assert_eq!(
+        settings.bind_id, 0,
+        "bound before the key agreement: unbound"
+    );
     assert_eq!(settings.rate, RateMode::L50, "19 200 bit/s ran as L50");
     assert_eq!(settings.input_timeout_ms, DEFAULT_INPUT_TIMEOUT_MS);
     let mut v1_stop = v1_hold;
@@ -260,12 +287,13 @@ fn the_factory_failsafe_stops_pulses_and_old_records_keep_their_meaning() {
 }
 
 #[test]
-fn a_version_3_record_loads_with_no_phrase_and_the_factory_pin() {
+fn a_version_3_record_loads_unbound_with_no_phrase_and_the_factory_pin() {
     let v3 = [
         3, 1, 3, 1, 3, 3, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16,
     ];
     let settings = Settings::from_record(&v3).unwrap();
     assert_eq!(settings.link_key, None);
+    assert_eq!(settings.phrase(), None);
     assert_eq!(settings.ble_pin, None);
     assert_eq!(
         (
@@ -274,18 +302,44 @@ fn a_version_3_record_loads_with_no_phrase_and_the_factory_pin() {
             settings.bind_id,
             settings.telemetry_ratio
         ),
-        (RateMode::F500, Band::Ism433, 0xDEAD_BEEF, 16)
+        (RateMode::F500, Band::Ism433, 0, 16)
     );
     let upgraded = settings.to_record();
     assert_eq!(upgraded[0], RECORD_VERSION);
-    assert_eq!(upgraded[1..15], v3[1..]);
+    assert_eq!(upgraded[1..8], v3[1..8]);
     assert_eq!(Settings::from_record(&upgraded), Ok(settings));
 }
 
+/// Version 6 held a key hashed from the phrase alone (issue 30, finding 1): it loads
+/// unbound, without its key or models, its other fields and PIN kept.
 #[test]
-fn the_phrase_and_pin_fields_take_only_what_a_writer_produces() {
+fn a_version_6_record_loads_without_its_link_and_key() {
+    let mut v6 = Settings {
+        bind_id: 0xDEAD_BEEF,
+        bound_models: 1 << 3,
+        link_key: Some(LinkKey::from_bytes([0x6C; 16])),
+        ble_pin: Pin::new(123_456),
+        rate: RateMode::F250,
+        ..Settings::default()
+    }
+    .to_record()[..RECORD_V6_LEN]
+        .to_vec();
+    v6[0] = 6;
+    let settings = Settings::from_record(&v6).unwrap();
+    assert_eq!(
+        (settings.bind_id, settings.bound_models, settings.link_key),
+        (0, 0, None)
+    );
+    assert_eq!(
+        (settings.rate, settings.ble_pin),
+        (RateMode::F250, Pin::new(123_456))
+    );
+}
+
+#[test]
+fn the_key_phrase_and_pin_fields_take_only_what_a_writer_produces() {
     let keyed = Settings {
-        link_key: Some(LinkKey::from_phrase("a")),
+        link_key: Some(LinkKey::from_bytes([0x61; 16])),
         ..Settings::default()
     };
     let mut record = keyed.to_record();
@@ -303,18 +357,33 @@ fn the_phrase_and_pin_fields_take_only_what_a_writer_produces() {
         Err(DecodeError::Field { offset: flag + 1 })
     );
     let mut record = Settings::default().to_record();
-    assert_eq!(record[pin..], [0xFF; 4], "the factory PIN");
-    record[pin..].copy_from_slice(&1_000_000u32.to_le_bytes());
+    assert_eq!(record[pin..pin + 4], [0xFF; 4], "the factory PIN");
+    record[pin..pin + 4].copy_from_slice(&1_000_000u32.to_le_bytes());
     assert_eq!(
         Settings::from_record(&record),
         Err(DecodeError::Field { offset: pin })
     );
-    record[pin..].copy_from_slice(&0u32.to_le_bytes());
+    record[pin..pin + 4].copy_from_slice(&0u32.to_le_bytes());
     assert_eq!(
         Settings::from_record(&record).map(|s| s.ble_pin),
         Ok(Pin::new(0)),
         "000000 set on purpose stays possible"
     );
+    // The phrase flag, derivation bytes without a phrase, and the plain byte.
+    let phrase_flag = RECORD_V6_LEN;
+    for (at, value, offset) in [
+        (phrase_flag, 2, phrase_flag),
+        (phrase_flag + 9, 1, phrase_flag + 9),
+        (phrase_flag + 41, 2, phrase_flag + 41),
+    ] {
+        let mut record = Settings::default().to_record();
+        record[at] = value;
+        assert_eq!(
+            Settings::from_record(&record),
+            Err(DecodeError::Field { offset }),
+            "byte {at}"
+        );
+    }
 }
 
 proptest::proptest! {
@@ -328,7 +397,7 @@ proptest::proptest! {
                 proptest::prop_assert_eq!(&record[..], &bytes[..]);
             } else {
                 proptest::prop_assert_eq!(Settings::from_record(&record), Ok(settings));
-                proptest::prop_assert_eq!(&record[3..RECORD_V1_LEN], &bytes[3..RECORD_V1_LEN]);
+                proptest::prop_assert_eq!(&record[3..8], &bytes[3..8]);
             }
         }
     }

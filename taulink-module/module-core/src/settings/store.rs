@@ -82,9 +82,12 @@ impl<E> From<sequential_storage::Error<E>> for StoreError<E> {
     }
 }
 
+/// Bytes of the work buffer: the key, the value and the item header, rounded up to words.
+const WORK_BUFFER_LEN: usize = (1 + VALUE_LEN + 8 + 3) & !3;
+
 /// A word-aligned work buffer: the key, the record and the item header, rounded up.
 #[repr(align(4))]
-struct WorkBuffer([u8; 64]);
+struct WorkBuffer([u8; WORK_BUFFER_LEN]);
 
 /// Where the live settings are: the key and its generation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -107,7 +110,7 @@ impl<S: MultiwriteNorFlash> SettingsStore<S> {
         let config = MapConfig::try_new(range).map_err(|_| StoreError::BadRange)?;
         Ok(Self {
             map: MapStorage::new(flash, config, Cache::new_uncached()),
-            buffer: WorkBuffer([0; 64]),
+            buffer: WorkBuffer([0; WORK_BUFFER_LEN]),
             live: None,
         })
     }

@@ -5,11 +5,13 @@
 //! ([`Settings::validate`]: an OpenLRSng carrier or hop outside the band plan) is refused
 //! too, except while several values are typed together (see [`Settings::set_text`]).
 //!
-//! `phrase` takes the binding phrase (spec §12: 1–64 printable bytes, white space at the
-//! ends dropped; empty clears it) and stores only the key derived from it; `ble_pin` takes
-//! six digits or `factory`.
+//! `phrase` takes the binding phrase (spec §12.5: the strength rule of
+//! `telemetry::link::check_phrase`, white space at the ends dropped; empty clears it) and
+//! stores only its slow derivation under the module's salt (derived here at once: this path
+//! is a host tool's or a console's); `plain` (`on`/`off`) is the explicit setting for an
+//! unauthenticated link; `ble_pin` takes six digits or `factory`.
 
-use telemetry::link::key_for_phrase;
+use telemetry::link::{PhraseSecret, check_phrase};
 
 use super::openlrs::CHANNEL_MODES;
 use super::{
@@ -20,7 +22,7 @@ use crate::hm10::at::Pin;
 use crate::ppm::FailsafeOutput;
 
 /// Every setting name, in record order.
-pub const NAMES: [&str; 19] = [
+pub const NAMES: [&str; 20] = [
     "role",
     "rate",
     "input",
@@ -40,6 +42,7 @@ pub const NAMES: [&str; 19] = [
     "olrs_hop_seed",
     "phrase",
     "ble_pin",
+    "plain",
 ];
 
 /// Why a typed setting was refused (nothing changed).
@@ -55,7 +58,7 @@ pub enum TextError {
     /// The value is fine alone, but the set would not run (an OpenLRSng carrier or hop
     /// outside the band plan, OpenLRSng in the receiver role).
     Invalid,
-    /// A binding phrase longer than 64 bytes or with a control character.
+    /// A binding phrase that breaks the rule (`telemetry::link::check_phrase`).
     BadPhrase,
 }
 
@@ -66,7 +69,9 @@ impl core::fmt::Display for TextError {
             Self::Unparsable => "cannot read that value",
             Self::OutOfRange => "value out of range",
             Self::Invalid => "refused: the OpenLRSng link would leave the band plan",
-            Self::BadPhrase => "binding phrase: 1-64 printable bytes",
+            Self::BadPhrase => {
+                "binding phrase: 12-64 printable bytes, 6 different characters, no famous example"
+            }
         })
     }
 }
@@ -82,7 +87,7 @@ pub fn choices(name: &str) -> &'static [&'static str] {
         "output" => &["off", "crsf", "sport", "frsky_hub"],
         "band" => &["433", "868", "915", "ism433"],
         "failsafe" => &["hold_last", "stop_pulses"],
-        "model_match" => &["off", "on"],
+        "model_match" | "plain" => &["off", "on"],
         "protocol" => &["taulink", "openlrs38", "openlrs39"],
         "olrs_profile" => &["4800", "9600", "19200", "57600", "125000"],
         "olrs_channels" => &["4+4", "8", "8+4", "12", "12+4", "16"],
@@ -232,8 +237,11 @@ impl Settings {
             }
             "olrs_hop_seed" => self.openlrs.hop_seed = number(text, 0..=u32::MAX)?,
             "phrase" => {
-                self.link_key = key_for_phrase(text).map_err(|_| TextError::BadPhrase)?;
+                self.phrase_prs = check_phrase(text)
+                    .map_err(|_| TextError::BadPhrase)?
+                    .map(|phrase| PhraseSecret::derive(phrase, self.phrase_salt).prs);
             }
+            "plain" => self.plain = choice(text, words)? == 1,
             "ble_pin" => {
                 self.ble_pin = if text.eq_ignore_ascii_case("factory") {
                     None
@@ -273,8 +281,9 @@ mod tests {
             ("olrs_telemetry", "off"),
             ("olrs_frequency_hz", "866000000"),
             ("olrs_hop_seed", "77"),
-            ("phrase", " correct horse battery staple "),
+            ("phrase", " amber kettle under the oak "),
             ("ble_pin", "042917"),
+            ("plain", "on"),
             // Last: OpenLRSng runs in the transmitter role only.
             ("role", "transmitter"),
             ("protocol", "OpenLRS39"),
@@ -304,23 +313,21 @@ mod tests {
                     telemetry: false,
                     hop_seed: 77,
                 },
-                link_key: Some(telemetry::link::LinkKey::from_phrase(
-                    "correct horse battery staple"
-                )),
+                link_key: None,
+                phrase_salt: [0; 8],
+                phrase_prs: Some(
+                    telemetry::link::PhraseSecret::derive("amber kettle under the oak", [0; 8]).prs
+                ),
+                plain: true,
                 ble_pin: Pin::new(42_917),
             }
         );
         assert!(s.validate().is_ok());
         assert_eq!(Settings::from_record(&s.to_record()), Ok(s));
-        // "?" is a valid phrase; nothing else takes it.
-        assert!(
-            NAMES
-                .iter()
-                .filter(|n| **n != "phrase")
-                .all(|n| s.clone().set_text(n, "?").is_err())
-        );
+        // Nothing takes "?".
+        assert!(NAMES.iter().all(|n| s.clone().set_text(n, "?").is_err()));
         s.set_text("phrase", "").unwrap();
-        assert_eq!(s.link_key, None, "an empty phrase clears it");
+        assert_eq!(s.phrase_prs, None, "an empty phrase clears it");
         s.set_text("ble_pin", "Factory").unwrap();
         assert_eq!(s.ble_pin, None);
     }
@@ -342,7 +349,13 @@ mod tests {
             ("olrs_channels", "20", TextError::Unparsable),
             ("olrs_frequency_hz", "1000000000", TextError::OutOfRange),
             ("phrase", &"x".repeat(65), TextError::BadPhrase),
-            ("phrase", "tab\tinside", TextError::BadPhrase),
+            ("phrase", "tab\tinside this phrase", TextError::BadPhrase),
+            ("phrase", "too short", TextError::BadPhrase),
+            (
+                "phrase",
+                "correct horse battery staple",
+                TextError::BadPhrase,
+            ),
             ("ble_pin", "12345", TextError::Unparsable),
             ("ble_pin", "1234567", TextError::Unparsable),
             ("ble_pin", "12a456", TextError::Unparsable),

@@ -66,7 +66,10 @@ pub fn flight_gps() -> Gps {
     }
 }
 
-/// Transmitter settings, bound, at 125 kbit/s (the link's F250 mode, 4 ms slots).
+/// Transmitter settings, bound, at 125 kbit/s (the link's F250 mode, 4 ms slots), on the
+/// unauthenticated link (the explicit `plain` setting): these tests are about the handset
+/// and telemetry paths, which run the same keyed or not; `bind_over_the_air` and the
+/// simulators run keyed links.
 pub fn module_settings(input: InputProtocol, output: OutputProtocol) -> Settings {
     Settings {
         role: Role::Transmitter,
@@ -76,6 +79,7 @@ pub fn module_settings(input: InputProtocol, output: OutputProtocol) -> Settings
         band: Band::Mhz433,
         tx_power: 7,
         bind_id: BIND_ID,
+        plain: true,
         ..Settings::default()
     }
 }

@@ -342,7 +342,7 @@ impl Responder {
                     .as_ref()
                     .map(|a| Message::Attitude(Attitude::from(a))),
                 Some(frame_type::FLIGHT_MODE) => telemetry
-                    .flight_mode
+                    .flight_mode_shown()
                     .as_ref()
                     .map(|m| Message::FlightMode(FlightModeFrame::from(m))),
                 Some(frame_type::GPS) => telemetry.gps.as_ref().map(|g| Message::Gps(Gps::from(g))),

@@ -23,7 +23,7 @@ pub const DATA_FRAME: u8 = 0x10;
 /// Longest frame on the wire: start, physical ID, and 8 bytes that may each be escaped.
 pub const MAX_WIRE_LEN: usize = 2 + 2 * 8;
 
-/// Value IDs EdgeTX knows (`frsky_defs.h`) plus the two DIY IDs we use.
+/// Value IDs EdgeTX knows (`frsky_defs.h`) plus the four DIY IDs we use.
 pub mod value_id {
     /// RSSI in dB, low byte only. A non-zero RSSI is EdgeTX's "streaming" heartbeat (1 s).
     pub const RSSI: u16 = 0xF101;
@@ -57,6 +57,12 @@ pub mod value_id {
     pub const TAULINK_LQ: u16 = 0x5100;
     /// TauLink flight-mode number (DIY range: listed as "5101"; rename it "FM").
     pub const TAULINK_FLIGHT_MODE: u16 = 0x5101;
+    /// TauLink tag failures at both ends of a keyed link (DIY range: listed as "5102";
+    /// rename it "TAG").
+    pub const TAULINK_TAG_FAILURES: u16 = 0x5102;
+    /// TauLink tag alert: 1 while the tag failures run above what noise explains, else 0
+    /// (DIY range: listed as "5103"; rename it "TALR" and put an alarm on it).
+    pub const TAULINK_TAG_ALERT: u16 = 0x5103;
 }
 
 /// Physical IDs: 5-bit sensor ID plus three parity bits.

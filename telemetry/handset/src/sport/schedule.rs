@@ -2,8 +2,9 @@
 //! "SPort", OpenTX 2.2/2.3): one frame per slot, RSSI often enough to keep
 //! EdgeTX's 1 s streaming gate open, the rest by rate and age: VFAS, LQ, vario (0x0110) and
 //! altitude (0x0100) at the fast rate; current, flight mode and the cells (0x0300, two per
-//! frame, each the pack's average) at the slow rate; fuel and the module's own supply (A2,
-//! raw over 13.2 V) at 1 Hz.
+//! frame, each the pack's average) at the slow rate; fuel, the module's own supply (A2,
+//! raw over 13.2 V) and a keyed link's tag failures and tag alert (DIY 0x5102, 0x5103) at
+//! 1 Hz.
 
 use super::{Frame, physical_id, value_id};
 use crate::report::{HandsetTelemetry, scaled_u16};
@@ -86,9 +87,11 @@ enum Item {
     Altitude,
     Cells,
     ModuleBattery,
+    TagFailures,
+    TagAlert,
 }
 
-const ITEMS: [Item; 10] = [
+const ITEMS: [Item; 12] = [
     Item::Rssi,
     Item::Vfas,
     Item::LinkQuality,
@@ -99,6 +102,8 @@ const ITEMS: [Item; 10] = [
     Item::Fuel,
     Item::Cells,
     Item::ModuleBattery,
+    Item::TagFailures,
+    Item::TagAlert,
 ];
 
 /// The push scheduler.
@@ -190,7 +195,9 @@ impl Scheduler {
             }
             // Two cells per frame: a 6S pack needs three frames per round.
             Item::Current | Item::FlightMode | Item::Cells => self.config.slow_interval_us,
-            Item::Fuel | Item::ModuleBattery => self.config.fuel_interval_us,
+            Item::Fuel | Item::ModuleBattery | Item::TagFailures | Item::TagAlert => {
+                self.config.fuel_interval_us
+            }
         }
     }
 
@@ -241,6 +248,12 @@ impl Scheduler {
                 let raw = (u32::from(mv) * 255 / 13_200).min(255);
                 Frame::data(id, value_id::A2, raw)
             }),
+            Item::TagFailures => telemetry
+                .link_security
+                .map(|s| Frame::data(id, value_id::TAULINK_TAG_FAILURES, s.tag_failures)),
+            Item::TagAlert => telemetry
+                .link_security
+                .map(|s| Frame::data(id, value_id::TAULINK_TAG_ALERT, u32::from(s.alert))),
             Item::Cells => {
                 let count = telemetry.cells.filter(|c| (1..=15).contains(c))?;
                 let first = if self.next_cell < count {

@@ -1,24 +1,14 @@
 //! What both link ends do alike, written once for [`Master`](super::Master) and
-//! [`Follower`](super::Follower): the identity a key gives the link, the report an end sends
+//! [`Follower`](super::Follower): the report an end sends
 //! about how it hears the other, and the telemetry streams' share of each frame (filling a
 //! frame's room, taking a received frame's stream bytes and ack).
 
 use crate::frame::{LinkReport, StreamHeader};
-use crate::link::auth::LinkKey;
 use crate::link::bind::LinkParams;
-use crate::link::hopping::HopSequence;
 use crate::link::quality::{LqWindow, RssiFilter};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
 use super::tag_extra;
-
-/// Keys the link (spec §12): the link identity (`params.bind_id`, hence the header) and the
-/// hop sequence become `key`'s one-way derivations instead of the bind ID's. Returns the hop
-/// sequence.
-pub(super) fn keyed_hops(params: &mut LinkParams, key: &LinkKey) -> HopSequence {
-    params.bind_id = key.bind_id();
-    HopSequence::new(key.hop_seed())
-}
 
 /// How this end hears the other, as its frames report it: smoothed RSSI and LQ.
 pub(super) fn report(rssi: &RssiFilter, lq: &LqWindow) -> LinkReport {

@@ -8,7 +8,7 @@ use crate::frame::{
     Downlink, Frame, LinkReport, Received, Rejection, decode, downlink_overhead, encode, open,
     peek_sealed, seal,
 };
-use crate::link::auth::LinkKey;
+use crate::link::auth::{LinkKey, TagContext};
 use crate::link::bind::LinkParams;
 use crate::link::hopping::{HOP_CHANNELS, HopSequence};
 use crate::link::quality::{Counters, LqWindow, RssiFilter};
@@ -16,8 +16,8 @@ use crate::link::radio::{LinkRx, RadioConfig};
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
-use super::end::{keyed_hops, report, stream_in, stream_out, stream_room};
-use super::epoch::{FollowerEpoch, NonceSource, counter};
+use super::end::{report, stream_in, stream_out, stream_room};
+use super::epoch::{FollowerEpoch, NonceSource};
 use super::{MAX_LISTEN_US, STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
 
 /// Default failsafe delay.
@@ -32,6 +32,11 @@ pub const RX_EARLY_US: u64 = 100;
 /// Consecutive missed uplinks after which the follower gives up tracking and re-acquires:
 /// one hop cycle, i.e. every channel failed once.
 pub const RESYNC_MISSES: u32 = HOP_CHANNELS as u32;
+/// Accepted uplinks in a row that must carry the save-failsafe flag before the follower
+/// stores their channels as its failsafe values (spec §6, §12.2): one frame alone — a
+/// forgery that beat its 2⁻³² — never rewrites them. The master sets the flag in
+/// [`SAVE_FAILSAFE_REPEATS`](super::master::SAVE_FAILSAFE_REPEATS) uplinks in a row.
+pub const SAVE_FAILSAFE_FRAMES: u8 = 2;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Sync {
@@ -72,6 +77,16 @@ enum Heard {
     Nothing,
 }
 
+/// Whether a sealed frame names the slot being tracked: a tag failure is counted only
+/// then — a forger or replayer aims at that slot, while a neighbouring link's frames (which
+/// F700, sending no chip header, lets through) name any slot.
+fn names_tracked_slot(bytes: &[u8], sync: Sync) -> bool {
+    let Sync::Tracking { slot, .. } = sync else {
+        return false;
+    };
+    bytes.get(2) == Some(&slot)
+}
+
 /// The follower's state.
 #[derive(Debug)]
 pub struct Follower {
@@ -98,6 +113,14 @@ pub struct Follower {
     key: Option<LinkKey>,
     /// Keyed links: the epoch of the frame counter (spec §12.2).
     epoch: FollowerEpoch,
+    /// Keyed links: the key of the epoch this follower was last in force under, until its
+    /// next one: its nonce frames prove it to the master after a resync.
+    previous: Option<LinkKey>,
+    /// Keyed links: an uplink was taken under the epoch in force (tag failures count from
+    /// then: before it the master may still tag with the epoch it is leaving).
+    flying: bool,
+    /// Accepted uplinks in a row with the save-failsafe flag.
+    failsafe_flags: u8,
     nonces: NonceSource,
     /// The latest time the follower was told (stirs the nonces).
     now_us: u64,
@@ -132,24 +155,26 @@ impl Follower {
             resyncs: 0,
             key: None,
             epoch: FollowerEpoch::None,
+            previous: None,
+            flying: false,
+            failsafe_flags: 0,
             nonces: NonceSource::new(0),
             now_us: 0,
         }
     }
 
     /// Authenticates the link with `key` (spec §12): only uplinks whose tag verifies are
-    /// accepted — a forger who knows the header and hop sequence but not the key moves
-    /// neither the channels, nor the failsafe values, nor the sync state — and downlinks
-    /// are sealed. Identity and hop sequence become the key's one-way derivations.
+    /// accepted — a forger who knows the header and hop sequence (the public bind ID's) but
+    /// not the key moves neither the channels, nor the failsafe values, nor the sync state —
+    /// and downlinks are sealed.
     ///
-    /// Tags cover a 64-bit counter in an epoch of both ends' nonces: the follower draws its
+    /// Tags cover a counter in an epoch of both ends' 64-bit nonces: the follower draws its
     /// nonce at every (re)acquisition and sends it in its downlink slots; until the master's
-    /// nonce comes back in a [`Frame::MasterNonce`] uplink tagged under it, the follower
+    /// nonce comes back in a [`Frame::MasterNonce`] uplink tagged under both, the follower
     /// takes only timing from uplinks (channels stay failsafe); from then every frame is
     /// tagged with the epoch key ([`LinkKey::epoch_key`]). Seed the nonces with
     /// [`Follower::with_nonce_seed`].
     pub fn with_key(mut self, key: LinkKey) -> Self {
-        self.hops = keyed_hops(&mut self.params, &key);
         self.key = Some(key);
         self
     }
@@ -160,6 +185,11 @@ impl Follower {
     pub fn with_nonce_seed(mut self, seed: u64) -> Self {
         self.nonces = NonceSource::new(seed);
         self
+    }
+
+    /// Whether the link is authenticated ([`Follower::with_key`]).
+    pub fn has_key(&self) -> bool {
+        self.key.is_some()
     }
 
     /// Radio configuration of this link.
@@ -266,7 +296,11 @@ impl Follower {
         self.sync = if misses >= RESYNC_MISSES {
             self.resyncs += 1;
             self.lq.reset();
+            if let Some(key) = self.epoch.key() {
+                self.previous = Some(*key);
+            }
             self.epoch = FollowerEpoch::None;
+            self.flying = false;
             Sync::Acquiring {
                 index: next % HOP_CHANNELS as u8,
                 dwell_end_us: None,
@@ -365,10 +399,12 @@ impl Follower {
 
     fn build_downlink(&mut self, slot: u8, buf: &mut [u8]) -> Option<usize> {
         if let (Some(key), FollowerEpoch::Handshake { nonce }) = (&self.key, self.epoch) {
-            // The nonce goes out under `nonce ‖ 0 ‖ slot` (the master cannot know anything
-            // else yet), alone: no stream data that a replay could inject.
-            let frame = Frame::Nonce { slot, nonce };
-            return seal(&frame, key, counter(nonce, 0, slot), buf).ok();
+            // The nonce goes out with the link key (the master cannot know anything else
+            // yet), alone: no stream data that a replay could inject; after a resync with
+            // the proof of the epoch this follower was in force under.
+            let proof = self.previous.map(|k| k.rekey_proof(nonce, slot));
+            let frame = Frame::Nonce { slot, nonce, proof };
+            return seal(&frame, key, &TagContext::FollowerNonce, buf).ok();
         }
         let room = stream_room(&self.params, downlink_overhead(true), self.key.is_some());
         let mut data = [0u8; 64];
@@ -385,10 +421,16 @@ impl Follower {
             data,
         };
         match &self.key {
-            Some(link) => {
-                let key = self.epoch.key(link)?;
+            Some(_) => {
+                let key = self.epoch.key()?;
                 let counter = self.epoch.counter(slot)?;
-                seal(&Frame::Downlink(down), key, counter, buf).ok()
+                seal(
+                    &Frame::Downlink(down),
+                    key,
+                    &TagContext::Counter(counter),
+                    buf,
+                )
+                .ok()
             }
             None => encode(&Frame::Downlink(down), self.params.bind_id, buf).ok(),
         }
@@ -416,6 +458,12 @@ impl Follower {
             let slot_start_us =
                 now_us.saturating_sub(u64::from(self.schedule.packet_end_offset_us(len)));
             let received = self.decode_uplink(bytes);
+            if received == Received::Rejected(Rejection::Tag)
+                && self.flying
+                && names_tracked_slot(bytes, self.sync)
+            {
+                self.counters.tag_failures = self.counters.tag_failures.saturating_add(1);
+            }
             if let Received::Accepted(Frame::MasterNonce { slot, nonce }) = received
                 && self.take_master_nonce(slot, nonce, rssi_dbm, slot_start_us)
             {
@@ -469,7 +517,7 @@ impl Follower {
     fn take_master_nonce(
         &mut self,
         slot: u8,
-        master_nonce: u32,
+        master_nonce: u64,
         rssi_dbm: i16,
         slot_start_us: u64,
     ) -> bool {
@@ -487,6 +535,7 @@ impl Follower {
             key: link.epoch_key(nonce, master_nonce),
             wraps: 0,
         };
+        self.flying = false;
         self.sync = Sync::Tracking {
             slot,
             slot_start_us,
@@ -499,26 +548,38 @@ impl Follower {
         true
     }
 
-    /// Decodes an uplink: with a key, its tag is checked under the counter of the slot
-    /// being listened for — with the epoch key once the epoch is in force; during the
+    /// Decodes an uplink: with a key, its tag is checked in the context of the slot being
+    /// listened for — the epoch key under its counter once the epoch is in force; during the
     /// handshake only the master's nonce verifies (the link key, under our nonce); while
     /// acquiring nothing verifies (the follower's fresh nonce is not yet sent).
     fn decode_uplink<'a>(&self, bytes: &'a [u8]) -> Received<'a> {
         let Some(link) = &self.key else {
             return decode(bytes, self.params.bind_id);
         };
-        match (self.epoch.key(link), self.frame_counter()) {
-            (Some(key), Some(counter)) => match (open(bytes, key, counter), self.epoch) {
-                // The handshake's counter with the link key is the master's nonce's alone:
-                // nothing else is taken under it (the master sends channels only under the
-                // epoch key), so no frame can give channels before the epoch is in force.
-                (
-                    Received::Accepted(Frame::Uplink(_) | Frame::Downlink(_) | Frame::Nonce { .. }),
-                    FollowerEpoch::Handshake { .. },
-                ) => Received::Rejected(Rejection::Malformed),
-                (received, _) => received,
+        let Sync::Tracking { slot, .. } = self.sync else {
+            return Received::Rejected(Rejection::Tag);
+        };
+        match self.epoch {
+            FollowerEpoch::InForce { key, wraps, .. } => open(
+                bytes,
+                &key,
+                &TagContext::Counter(super::epoch::counter(wraps, slot)),
+            ),
+            // The handshake's context is the master's nonce's alone: nothing else is taken
+            // under it (the master sends channels only under an epoch key), so no frame
+            // can give channels before the epoch is in force.
+            FollowerEpoch::Handshake { nonce } => match open(
+                bytes,
+                link,
+                &TagContext::MasterNonce {
+                    follower_nonce: nonce,
+                },
+            ) {
+                received @ Received::Accepted(Frame::MasterNonce { .. }) => received,
+                Received::Accepted(_) => Received::Rejected(Rejection::Malformed),
+                rejected => rejected,
             },
-            _ => Received::Rejected(Rejection::Tag),
+            FollowerEpoch::None => Received::Rejected(Rejection::Tag),
         }
     }
 
@@ -556,11 +617,19 @@ impl Follower {
             }
         } else {
             self.updated_mask = up.channels_into_mask(&mut self.output).unwrap_or(0);
-            if up.save_failsafe {
+            self.failsafe_flags = if up.save_failsafe {
+                self.failsafe_flags.saturating_add(1)
+            } else {
+                0
+            };
+            if self.failsafe_flags >= SAVE_FAILSAFE_FRAMES {
                 self.failsafe_values = FailsafeValues::from_channels(&self.output);
             }
             self.in_failsafe = false;
             self.updates = self.updates.wrapping_add(1);
+        }
+        if self.key.is_some() {
+            self.flying = true;
         }
         self.remote = up.report.or(self.remote);
         let (send, receive) = (&mut self.downlink_stream, &mut self.uplink_stream);
@@ -613,7 +682,7 @@ impl Follower {
     /// public values (both travel in clear); frames are tagged with
     /// [`LinkKey::epoch_key`]`(follower, master)` of the link key. None during the handshake
     /// and while acquiring.
-    pub fn epoch_nonces(&self) -> Option<(u32, u32)> {
+    pub fn epoch_nonces(&self) -> Option<(u64, u64)> {
         match self.epoch {
             FollowerEpoch::InForce {
                 nonce,
@@ -624,20 +693,29 @@ impl Follower {
         }
     }
 
-    /// Keyed links: the 64-bit frame counter (spec §12.2) of the tracked slot, under which
-    /// an uplink of that slot must verify and the follower's downlink of it is tagged — the
-    /// handshake's `nonce ‖ 0 ‖ slot` (link key: the master's nonce in, ours out) or the
-    /// epoch in force's (epoch key). None while acquiring or without an epoch (nothing
-    /// verifies then).
+    /// Keyed links: the frame counter (spec §12.2) of the tracked slot in the epoch in force,
+    /// under which an uplink of that slot must verify (epoch key) and the follower's
+    /// downlink of it is tagged. None while acquiring or in the handshake (where only the
+    /// master's nonce verifies, in [`TagContext::MasterNonce`] of
+    /// [`Follower::handshake_nonce`] with the link key).
     ///
-    /// Public information, not a secret: the nonce travels in clear in nonce frames and the
-    /// slot and its wraps are counted on the grid both ends share; only the key makes a tag.
-    /// Read by diagnostics and by the fuzz harnesses (`tests/fuzz`), which seal fuzzed
-    /// uplinks under it so they reach channels, flags and the stream.
+    /// Public information, not a secret: the slot and its wraps are counted on the grid both
+    /// ends share; only the key makes a tag. Read by diagnostics and by the fuzz harnesses
+    /// (`tests/fuzz`), which seal fuzzed uplinks under it so they reach channels, flags and
+    /// the stream.
     pub fn frame_counter(&self) -> Option<u64> {
         match self.sync {
             Sync::Tracking { slot, .. } => self.epoch.counter(slot),
             Sync::Acquiring { .. } => None,
+        }
+    }
+
+    /// Keyed links in the handshake: the nonce this follower sends (public: it travels in
+    /// clear in its nonce frames).
+    pub fn handshake_nonce(&self) -> Option<u64> {
+        match self.epoch {
+            FollowerEpoch::Handshake { nonce } => Some(nonce),
+            FollowerEpoch::None | FollowerEpoch::InForce { .. } => None,
         }
     }
 

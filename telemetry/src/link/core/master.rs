@@ -4,10 +4,10 @@
 
 use crate::channels::{CHANNEL_CENTER, Channels, pack_group};
 use crate::frame::{
-    Frame, LinkReport, NONCE_FRAME_BYTES, Received, Uplink, decode, encode, open, peek_sealed,
-    seal, sealed_uplink_bytes, uplink_overhead,
+    Frame, LinkReport, NONCE_FRAME_BYTES, Received, Rejection, Uplink, decode, encode, open,
+    peek_sealed, seal, sealed_uplink_bytes, uplink_overhead,
 };
-use crate::link::auth::LinkKey;
+use crate::link::auth::{LinkKey, TagContext};
 use crate::link::bind::LinkParams;
 use crate::link::hopping::HopSequence;
 use crate::link::quality::{Counters, LqWindow, RssiFilter};
@@ -15,15 +15,24 @@ use crate::link::radio::{LinkRx, RadioConfig};
 use crate::link::schedule::{Schedule, SlotKind};
 use crate::link::stream::{StreamReceiver, StreamSender};
 
-use super::end::{
-    STREAM_CHUNK_BYTES, keyed_hops, report, stream_in, stream_out, stream_ready, stream_room,
-};
-use super::epoch::{MasterEpoch, NonceVerdict, counter};
+use super::end::{STREAM_CHUNK_BYTES, report, stream_in, stream_out, stream_ready, stream_room};
+use super::epoch::{MasterEpoch, NonceVerdict};
+use super::follower::DEFAULT_FAILSAFE_US;
 use super::{STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
 
 /// Uplinks that carry a save-failsafe request, so one lost packet does not lose it (storing
 /// twice is harmless: the follower keeps the channels of the last flagged packet).
 pub const SAVE_FAILSAFE_REPEATS: u8 = 8;
+
+/// Slots within which an epoch heard from its follower counts as live (spec §12.2): the
+/// follower's default failsafe period, at least one downlink period.
+fn live_slots(params: &LinkParams) -> u32 {
+    let schedule = params.schedule();
+    let slots = DEFAULT_FAILSAFE_US / u64::from(schedule.slot_us().max(1));
+    u32::try_from(slots)
+        .unwrap_or(u32::MAX)
+        .max(u32::from(schedule.telemetry_ratio))
+}
 
 /// The master's state.
 #[derive(Debug)]
@@ -56,8 +65,9 @@ pub struct Master {
     key: Option<LinkKey>,
     /// Keyed links: the epoch in use (spec §12.2).
     epoch: MasterEpoch,
-    /// Keyed links: the next uplink carries the master's nonce instead of channels (set at
-    /// adoption and at every repeat of the follower's nonce, which says it has not got it).
+    /// Keyed links: the next uplink carries the master's nonce of the pending epoch instead
+    /// of channels (set at adoption and at every repeat of the follower's nonce, which says
+    /// it has not got it).
     master_nonce_due: bool,
     /// The uplink planned in this slot is the master's nonce.
     planned_nonce: bool,
@@ -88,7 +98,7 @@ impl Master {
             counters: Counters::default(),
             last_downlink_us: None,
             key: None,
-            epoch: MasterEpoch::new(0),
+            epoch: MasterEpoch::new(0, live_slots(&params)),
             master_nonce_due: false,
             planned_nonce: false,
             stream_cap: None,
@@ -97,13 +107,13 @@ impl Master {
 
     /// Authenticates the link with `key` (spec §12): every frame is sealed with a tag and
     /// only tagged downlinks are accepted; the link identity (header) and the hop sequence
-    /// become the key's one-way derivations, replacing the bind ID's. Tags cover a 64-bit
-    /// counter in an epoch of both ends' nonces: the master adopts a verified fresh follower
-    /// nonce from a [`Frame::Nonce`] downlink, answers with its own in a
-    /// [`Frame::MasterNonce`] uplink, and from then tags and accepts frames only with the
-    /// epoch's key. Seed its nonces with [`Master::with_nonce_seed`].
+    /// stay the public bind ID's, which verify nothing. Tags cover a counter in an epoch of
+    /// both ends' 64-bit nonces: the master adopts a verified fresh follower nonce from a
+    /// [`Frame::Nonce`] downlink, answers with its own in a [`Frame::MasterNonce`] uplink,
+    /// and once a downlink verifies under the new epoch's key, tags and accepts frames only
+    /// with it (until then the epoch in force stays: a replayed nonce frame never takes the
+    /// link away from its follower). Seed its nonces with [`Master::with_nonce_seed`].
     pub fn with_key(mut self, key: LinkKey) -> Self {
-        self.hops = keyed_hops(&mut self.params, &key);
         self.key = Some(key);
         self
     }
@@ -113,8 +123,13 @@ impl Master {
     /// from restarting an old epoch's counters, across reboots too (each draw is also stirred
     /// with the time).
     pub fn with_nonce_seed(mut self, seed: u64) -> Self {
-        self.epoch = MasterEpoch::new(seed);
+        self.epoch = MasterEpoch::new(seed, live_slots(&self.params));
         self
+    }
+
+    /// Whether the link is authenticated ([`Master::with_key`]).
+    pub fn has_key(&self) -> bool {
+        self.key.is_some()
     }
 
     /// Radio configuration of this link.
@@ -216,8 +231,9 @@ impl Master {
         })
     }
 
-    /// The master's nonce and its counter, when this slot's uplink is to carry it.
-    fn master_nonce(&self) -> Option<(&LinkKey, (u32, u64))> {
+    /// The master's nonce and the follower's it answers, when this slot's uplink is to
+    /// carry it.
+    fn master_nonce(&self) -> Option<(&LinkKey, (u64, u64))> {
         let key = self.key.as_ref().filter(|_| self.master_nonce_due)?;
         Some((key, self.epoch.master_nonce_for(self.slot)?))
     }
@@ -225,14 +241,16 @@ impl Master {
     /// Builds the uplink into `buf`; returns its length.
     fn build_uplink(&mut self, buf: &mut [u8]) -> Option<usize> {
         self.planned_nonce = self.master_nonce().is_some();
-        if let Some((key, (nonce, counter))) = self.master_nonce() {
-            // The follower is still in its handshake: the master's nonce, alone, under the
-            // follower's nonce (the only counter it can check yet); no channels to take.
+        if let Some((key, (nonce, follower_nonce))) = self.master_nonce() {
+            // The follower is still in its handshake: the master's nonce, alone, with the
+            // link key under both nonces (only that follower can check it); no channels to
+            // take.
             let frame = Frame::MasterNonce {
                 slot: self.slot as u8,
                 nonce,
             };
-            return seal(&frame, key, counter, buf).ok();
+            let context = TagContext::MasterNonce { follower_nonce };
+            return seal(&frame, key, &context, buf).ok();
         }
         let format = self.params.format;
         let report = self.report_due.then(|| report(&self.rssi, &self.lq));
@@ -259,14 +277,17 @@ impl Master {
             packed_channels: packed,
             data,
         };
-        let len = match (&self.key, self.epoch.key()) {
-            (Some(_), Some(epoch_key)) => {
-                seal(&Frame::Uplink(up), epoch_key, self.frame_counter(), buf)
-            }
-            // No epoch yet: tagged with the link key under the bare slot, which no follower
-            // checks anything under (its nonces are never 0) — it gives timing only.
-            (Some(key), None) => seal(&Frame::Uplink(up), key, self.frame_counter(), buf),
-            (None, _) => encode(&Frame::Uplink(up), self.params.bind_id, buf),
+        let len = match (&self.key, self.epoch.key(), self.frame_counter()) {
+            (Some(_), Some(epoch_key), Some(counter)) => seal(
+                &Frame::Uplink(up),
+                epoch_key,
+                &TagContext::Counter(counter),
+                buf,
+            ),
+            // No epoch in force: tagged with the link key in a context no follower checks
+            // anything under — it gives timing only.
+            (Some(key), _, _) => seal(&Frame::Uplink(up), key, &TagContext::BeforeEpoch, buf),
+            (None, _, _) => encode(&Frame::Uplink(up), self.params.bind_id, buf),
         };
         len.ok()
     }
@@ -300,13 +321,12 @@ impl Master {
         match outcome {
             LinkRx::Packet { len, rssi_dbm } => {
                 let bytes = packet.get(..len).unwrap_or(&[]);
-                let received = match &self.key {
-                    Some(key) => self.open_downlink(key, bytes),
+                let received = match self.key {
+                    Some(key) => self.open_downlink(&key, bytes),
                     None => decode(bytes, self.params.bind_id),
                 };
                 match received {
                     Received::Accepted(Frame::Downlink(down)) if down.slot == self.slot as u8 => {
-                        self.epoch.heard(self.slot);
                         self.heard(rssi_dbm, now_us);
                         self.remote = down.report.or(self.remote);
                         let (send, receive) = (&mut self.uplink_stream, &mut self.downlink_stream);
@@ -314,10 +334,11 @@ impl Master {
                     }
                     // A verified nonce of this slot: only the epoch moves (its frame carries
                     // nothing else, so a refused replay changes nothing).
-                    Received::Accepted(Frame::Nonce { slot, nonce }) if slot == self.slot as u8 => {
-                        let ratio = self.params.telemetry_ratio;
+                    Received::Accepted(Frame::Nonce { slot, nonce, proof })
+                        if slot == self.slot as u8 =>
+                    {
                         let verdict = match &self.key {
-                            Some(key) => self.epoch.offer(nonce, self.slot, ratio, key, now_us),
+                            Some(key) => self.epoch.offer(nonce, proof, self.slot, key, now_us),
                             None => NonceVerdict::Refused,
                         };
                         match verdict {
@@ -339,16 +360,55 @@ impl Master {
         self.heard
     }
 
-    /// Checks a sealed downlink: a nonce frame with the link key under `nonce ‖ 0 ‖ slot`
-    /// (the nonce inside picks the counter; a wrong one fails the tag), anything else with
-    /// the epoch key under the epoch's counter (no epoch yet: nothing verifies).
-    fn open_downlink<'a>(&self, key: &LinkKey, bytes: &'a [u8]) -> Received<'a> {
-        match (peek_sealed(bytes), self.epoch.key()) {
-            (Some(Frame::Nonce { nonce, .. }), _) => {
-                open(bytes, key, counter(nonce, 0, self.slot as u8))
+    /// Checks a sealed downlink: a nonce frame with the link key in the follower's nonce
+    /// context; anything else with the key of the epoch in force under its counter, else
+    /// with the pending epoch's — whose follower is then heard under it, so it comes into
+    /// force. Without any epoch nothing verifies. Tag failures are counted where the tag
+    /// could be checked: a nonce frame's, and a downlink's under the epoch in force that
+    /// no pending epoch explains.
+    fn open_downlink<'a>(&mut self, key: &LinkKey, bytes: &'a [u8]) -> Received<'a> {
+        if let Some(Frame::Nonce { .. }) = peek_sealed(bytes) {
+            let received = open(bytes, key, &TagContext::FollowerNonce);
+            self.count_tag_failure(received, bytes);
+            return received;
+        }
+        let slot = self.slot;
+        // Only the follower's downlink of this slot is taken under an epoch: whatever else
+        // verifies (a frame the follower never sends) neither counts nor makes it live.
+        let check = |(epoch_key, counter): (LinkKey, u64)| match open(
+            bytes,
+            &epoch_key,
+            &TagContext::Counter(counter),
+        ) {
+            received @ Received::Accepted(Frame::Downlink(down)) if down.slot == slot as u8 => {
+                received
             }
-            (_, Some(epoch_key)) => open(bytes, epoch_key, self.frame_counter()),
-            (_, None) => Received::Rejected(crate::frame::Rejection::Tag),
+            Received::Accepted(_) => Received::Rejected(Rejection::Malformed),
+            received => received,
+        };
+        let current = self.epoch.current_check(slot).map(check);
+        if let Some(received @ Received::Accepted(_)) = current {
+            self.epoch.heard(slot);
+            return received;
+        }
+        if let Some(received @ Received::Accepted(_)) = self.epoch.pending_check(slot).map(check) {
+            self.epoch.confirm(slot);
+            return received;
+        }
+        let Some(received) = current else {
+            return Received::Rejected(Rejection::Tag);
+        };
+        self.count_tag_failure(received, bytes);
+        received
+    }
+
+    /// Counts a tag failure of a frame naming the current slot (a neighbouring link's
+    /// frames, which F700 lets through without a chip header, name any slot).
+    fn count_tag_failure(&mut self, received: Received<'_>, bytes: &[u8]) {
+        if received == Received::Rejected(Rejection::Tag)
+            && bytes.get(2) == Some(&(self.slot as u8))
+        {
+            self.counters.tag_failures = self.counters.tag_failures.saturating_add(1);
         }
     }
 
@@ -414,22 +474,34 @@ impl Master {
     /// Keyed links: the epoch in use as (the follower's nonce, the master's nonce) — public
     /// values (both travel in clear); the epoch key is
     /// [`LinkKey::epoch_key`]`(follower, master)` of the link key.
-    pub fn epoch_nonces(&self) -> Option<(u32, u32)> {
+    pub fn epoch_nonces(&self) -> Option<(u64, u64)> {
         self.epoch.nonces()
     }
 
-    /// The 64-bit frame counter of the current slot (spec §12.2): the planned uplink is
-    /// tagged, and a downlink other than a nonce frame is checked, under it with the epoch
-    /// key (a nonce frame either way with the link key under
-    /// [`frame_counter`](super::frame_counter)`(follower's nonce, 0, slot)`). Before any
-    /// epoch it is the bare slot, under which no follower verifies anything (its nonces are
-    /// never 0).
+    /// Keyed links: the epoch adopted but not yet heard from its follower, as (the
+    /// follower's nonce, the master's nonce); it comes into force with the first downlink
+    /// that verifies under it.
+    pub fn pending_epoch_nonces(&self) -> Option<(u64, u64)> {
+        self.epoch.pending_nonces()
+    }
+
+    /// Keyed links: the epochs adopted (each cost one uplink: the master's nonce instead of
+    /// channels) and the verified nonce frames refused, since this master started (spec
+    /// §12.2: a third radio can force at most one adoption per wrap of the slot counter
+    /// while an epoch is in force, and none while it is live).
+    pub fn handshakes(&self) -> (u32, u32) {
+        self.epoch.handshake_counts()
+    }
+
+    /// The frame counter of the current slot in the epoch in force (spec §12.2): the
+    /// planned uplink is tagged, and a downlink other than a nonce frame is checked, under
+    /// it with the epoch key. None without an epoch in force.
     ///
-    /// Public information, not a secret: the nonce travels in clear in nonce frames and the
-    /// slot and its wraps are counted on the grid both ends share; only the key makes a tag.
+    /// Public information, not a secret: the slot and its wraps are counted on the grid both
+    /// ends share; only the key makes a tag.
     /// Read by diagnostics and by the fuzz harnesses (`tests/fuzz`), which seal fuzzed
     /// frames under it so they reach the state machine behind the tag check.
-    pub fn frame_counter(&self) -> u64 {
+    pub fn frame_counter(&self) -> Option<u64> {
         self.epoch.counter(self.slot)
     }
 

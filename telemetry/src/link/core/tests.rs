@@ -246,21 +246,50 @@ fn save_failsafe_command_stores_the_channels_on_the_follower() {
         t += SLOT_US;
     }
     assert_eq!(flagged, super::master::SAVE_FAILSAFE_REPEATS);
-    follower.on_received(
-        LinkRx::Packet {
-            len: frame.len(),
-            rssi_dbm: -70,
-        },
-        &frame,
-        end,
-    );
+    let packet = |frame: &[u8]| LinkRx::Packet {
+        len: frame.len(),
+        rssi_dbm: -70,
+    };
+    // One flagged frame alone stores nothing (spec §6: a forgery that beat its tag must not
+    // rewrite the failsafe values).
+    follower.on_received(packet(&frame), &frame, end);
+    assert_eq!(follower.failsafe_values(), &FailsafeValues::default());
+    // The next one of the run does.
+    let Step::Listen { channel, .. } = follower.plan(end, &mut buf) else {
+        panic!()
+    };
+    let mut again = master_of(&channels);
+    again.request_save_failsafe();
+    let mut t2 = 0;
+    let (first, _) = next_uplink_on(&mut again, &mut t2, follower_dwell_channel());
+    assert_eq!(first, frame, "the same master run");
+    let (second, end2) = next_uplink_on(&mut again, &mut t2, channel);
+    assert_ne!(second[1] & 0x10, 0, "flagged");
+    follower.on_received(packet(&second), &second, end2);
     assert_eq!(
         follower.failsafe_values(),
         &FailsafeValues::from_channels(&channels)
     );
-    follower.plan(end + DEFAULT_FAILSAFE_US, &mut buf);
+    follower.plan(end2 + DEFAULT_FAILSAFE_US, &mut buf);
     assert!(follower.in_failsafe());
     assert_eq!(follower.output(), &channels);
+}
+
+/// A fresh master of [`pair`] sending `channels`.
+fn master_of(channels: &crate::channels::Channels) -> Master {
+    let (mut master, _) = pair();
+    master.set_channels(channels);
+    master
+}
+
+/// The hop channel a fresh follower of [`pair`] dwells on first.
+fn follower_dwell_channel() -> u8 {
+    let (_, mut follower) = pair();
+    let mut buf = [0u8; 64];
+    match follower.plan(0, &mut buf) {
+        Step::Listen { channel, .. } => channel,
+        other => panic!("{other:?}"),
+    }
 }
 
 #[test]
@@ -375,7 +404,7 @@ fn a_forged_uplink_moves_nothing_on_an_acquiring_follower() {
     let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
         panic!()
     };
-    let hops = crate::link::HopSequence::new(test_key(1).hop_seed());
+    let hops = crate::link::HopSequence::new(follower.params().bind_id);
     assert_eq!(
         hops.channel(0),
         channel,
@@ -405,7 +434,13 @@ fn a_forged_uplink_moves_nothing_on_an_acquiring_follower() {
     forged.push(b[..n].to_vec());
     // Sealed, with guessed keys.
     for guess in [0u8, 2, 0xFF] {
-        let n = crate::frame::seal(&frame, &test_key(guess), 0, &mut b).unwrap();
+        let n = crate::frame::seal(
+            &frame,
+            &test_key(guess),
+            &crate::link::auth::TagContext::Counter(0),
+            &mut b,
+        )
+        .unwrap();
         forged.push(b[..n].to_vec());
     }
     for (i, f) in forged.iter().enumerate() {

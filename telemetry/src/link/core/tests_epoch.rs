@@ -7,6 +7,7 @@ use super::tests::{SLOT_US, pair, test_key};
 use super::*;
 use crate::channels::Channels;
 use crate::frame::{Frame, SEALED_VERSION, peek_sealed};
+use crate::link::auth::TagContext;
 use crate::link::radio::LinkRx;
 use crate::link::schedule::SlotKind;
 
@@ -141,10 +142,13 @@ impl Link {
         }
     }
 
-    /// Runs clean slots until the follower tracks; returns how many it took.
+    /// Runs slots until the follower tracks and (keyed) both ends have the same epoch in
+    /// force; returns how many it took.
     fn until_tracking(&mut self, air: &mut impl FnMut(&OnAir) -> Option<Vec<u8>>) -> u32 {
         for n in 0..10_000 {
-            if self.follower.sync_state() == SyncState::Tracking {
+            if self.follower.sync_state() == SyncState::Tracking
+                && self.follower.epoch_nonces() == self.master.epoch_nonces()
+            {
                 return n;
             }
             self.slot(air);
@@ -158,6 +162,8 @@ fn clean(frame: &OnAir) -> Option<Vec<u8>> {
 }
 
 const RATIO: u32 = 4;
+/// Slots of F250 within which the master counts an epoch it heard as live (250 ms).
+const LIVE: u32 = 62;
 
 #[test]
 fn keyed_ends_handshake_the_epoch_then_fly_and_carry_telemetry() {
@@ -185,7 +191,7 @@ fn keyed_ends_handshake_the_epoch_then_fly_and_carry_telemetry() {
         .count();
     assert!(handshake > 0, "went through the handshake");
     // The nonce goes out in the first downlink slot after lock, the master's nonce comes
-    // back in the next uplink: the epoch is in force.
+    // back in the next uplink: the epoch is in force (the master's first one is at once).
     assert!(
         handshake as u32 <= RATIO + 1,
         "{handshake} slots of handshake"
@@ -199,6 +205,7 @@ fn keyed_ends_handshake_the_epoch_then_fly_and_carry_telemetry() {
     assert!(!link.follower.in_failsafe());
     let slot = link.master.slot() - 1;
     assert_eq!(link.follower.output(), &channels_of(slot));
+    assert_eq!(link.master.handshakes(), (1, 0));
 
     link.follower.downlink_stream.write(b"sealed");
     link.run(2 * RATIO, &mut clean);
@@ -234,6 +241,7 @@ fn a_frame_recorded_256_or_256k_slots_earlier_never_verifies() {
             slot.is_multiple_of(3) && link.master.schedule().kind(slot) == SlotKind::Uplink;
         let old = recorded.borrow()[(slot - 256 * k) as usize].clone();
         let (updates, rejected) = (link.follower.updates(), link.follower.counters().rejected);
+        let tag_failures = link.follower.counters().tag_failures;
         link.slot(&mut |f: &OnAir| {
             rec(f);
             if f.dir == Dir::Up && replay {
@@ -251,6 +259,11 @@ fn a_frame_recorded_256_or_256k_slots_earlier_never_verifies() {
                 "replay of slot {slot} - 256·{k} flown"
             );
             assert_eq!(link.follower.counters().rejected, rejected + 1);
+            assert_eq!(
+                link.follower.counters().tag_failures,
+                tag_failures + 1,
+                "every replay counted as a tag failure"
+            );
         } else if link.master.schedule().kind(slot) == SlotKind::Uplink {
             flown += 1;
             assert_eq!(link.follower.updates(), updates + 1);
@@ -387,8 +400,9 @@ fn recovery_after_master_reboot(keyed: bool) -> u32 {
 }
 
 /// A rebooted master has no epoch: the follower's tags stop verifying, it re-acquires after
-/// `RESYNC_MISSES` and hands over a new nonce. The handshake adds at most one downlink
-/// period (ratio + 1 slots) to what an unkeyed link needs to re-acquire.
+/// `RESYNC_MISSES` and hands over a new nonce, which the master (no epoch in force) puts in
+/// force at once. The handshake adds at most one downlink period (ratio + 1 slots) to what
+/// an unkeyed link needs to re-acquire.
 #[test]
 fn a_rebooted_master_is_back_within_one_downlink_period_of_an_unkeyed_reacquisition() {
     let keyed = recovery_after_master_reboot(true);
@@ -486,25 +500,17 @@ fn both_ends_report_the_counter_they_tag_and_check_under() {
         None,
         "acquiring: nothing verifies"
     );
-    assert_eq!(link.master.frame_counter() >> 32, 0, "no epoch yet");
+    assert_eq!(link.master.frame_counter(), None, "no epoch yet");
     link.until_tracking(&mut clean);
     for _ in 0..300 {
-        let master = link.master.frame_counter();
+        let master = link.master.frame_counter().expect("in force");
         let (follower_slot, _) = link.follower.tracked_slot().expect("tracking");
         assert_eq!(follower_slot, link.master.slot() as u8);
         assert_eq!(link.follower.frame_counter(), Some(master));
-        assert_ne!(master >> 32, 0, "the follower's nonce is the epoch");
-        assert_eq!(
-            master,
-            frame_counter(
-                (master >> 32) as u32,
-                ((master >> 8) & 0xFF_FFFF) as u32,
-                master as u8
-            )
-        );
+        assert_eq!(master, frame_counter(master >> 8, master as u8));
         link.slot(&mut clean);
     }
-    let wraps = (link.master.frame_counter() >> 8) & 0xFF_FFFF;
+    let wraps = link.master.frame_counter().expect("in force") >> 8;
     assert!(wraps >= 1, "ran past a wrap of the slot counter");
 
     // Forge an uplink of the tracked slot with the key, under the reported counter and
@@ -528,8 +534,9 @@ fn both_ends_report_the_counter_they_tag_and_check_under() {
         let mut buf = [0u8; 64];
         let (n, m) = link.follower.epoch_nonces().expect("in force");
         let epoch_key = test_key(1).epoch_key(n, m);
+        let context = TagContext::Counter(counter);
         let len =
-            crate::frame::seal(&Frame::Uplink(up), &epoch_key, counter, &mut buf).expect("fits");
+            crate::frame::seal(&Frame::Uplink(up), &epoch_key, &context, &mut buf).expect("fits");
         let before = link.follower.updates();
         link.follower.on_received(
             LinkRx::Packet { len, rssi_dbm: -70 },
@@ -539,7 +546,7 @@ fn both_ends_report_the_counter_they_tag_and_check_under() {
         link.follower.updates() != before
     };
     let expected = link.follower.frame_counter().expect("in force");
-    for wrong in [expected ^ 1 << 8, expected ^ 1 << 32, expected + 256] {
+    for wrong in [expected ^ 1 << 8, expected ^ 1 << 31, expected + 256] {
         assert!(!take(wrong, &mut link), "accepted under {wrong:#x}");
     }
     assert!(take(expected, &mut link), "refused under its own counter");
@@ -552,7 +559,15 @@ struct Recording {
     nonce: OnAir,
     downlinks: Vec<(u32, Vec<u8>)>,
     master_nonces: Vec<OnAir>,
-    epoch: Option<(u32, u32)>,
+    epoch: Option<(u64, u64)>,
+}
+
+/// The nonce a follower's nonce frame carries.
+fn nonce_in(bytes: &[u8]) -> u64 {
+    match peek_sealed(bytes) {
+        Some(Frame::Nonce { nonce, .. }) => nonce,
+        other => panic!("no nonce frame: {other:?}"),
+    }
 }
 
 fn is_nonce(bytes: &[u8]) -> bool {
@@ -575,11 +590,11 @@ fn record_first_epoch(link: &mut Link) -> Recording {
         }
         Some(f.bytes.clone())
     });
-    let epoch = link.master.frame_counter() >> 32;
+    let epoch = link.master.epoch_nonces().expect("in force").0;
     let nonce = nonces
         .into_iter()
         .rev()
-        .find(|f| u64::from(u32::from_le_bytes(f.bytes[3..7].try_into().unwrap())) == epoch)
+        .find(|f| nonce_in(&f.bytes) == epoch)
         .expect("the adopted nonce frame");
     let base = nonce.slot & !0xFF;
     let mut downlinks = Vec::new();
@@ -598,16 +613,14 @@ fn record_first_epoch(link: &mut Link) -> Recording {
     }
 }
 
-/// The attacker jams the follower's downlinks for more than a downlink period (so the
-/// master no longer hears its epoch), replays the recorded nonce frame in a slot with the
-/// same on-air number, and then, in every downlink slot, the recorded downlink of the same
-/// position in its epoch. Returns (whether the master adopted the old nonce, how many of the
-/// old downlinks it took).
+/// The attacker jams the follower's downlinks for more than a wrap of the slot counter (so
+/// the master no longer hears its epoch and may adopt an unproven nonce), replays the
+/// recorded nonce frame in a slot with the same on-air number, and then, in every downlink
+/// slot, the recorded downlink of the same position in its epoch. Returns (whether the
+/// master adopted the old nonce, how many of the old downlinks it took).
 fn replay_old_epoch(link: &mut Link, rec: &Recording) -> (bool, usize) {
-    let old = u64::from(u32::from_le_bytes(
-        rec.nonce.bytes[3..7].try_into().unwrap(),
-    ));
-    let mut target = link.master.slot() + RATIO + 1;
+    let old = nonce_in(&rec.nonce.bytes);
+    let mut target = link.master.slot() + 256 + LIVE;
     while target % 256 != rec.nonce.slot % 256 {
         target += 1;
     }
@@ -618,7 +631,13 @@ fn replay_old_epoch(link: &mut Link, rec: &Recording) -> (bool, usize) {
         Dir::Down => Some(rec.nonce.bytes.clone()),
         Dir::Up => Some(f.bytes.clone()),
     });
-    let adopted = link.master.frame_counter() >> 32 == old;
+    let adopted = [
+        link.master.epoch_nonces(),
+        link.master.pending_epoch_nonces(),
+    ]
+    .iter()
+    .flatten()
+    .any(|(n, _)| *n == old);
     let base = target & !0xFF;
     let mut taken = 0;
     for _ in 0..700 {
@@ -656,12 +675,12 @@ fn replay_old_epoch(link: &mut Link, rec: &Recording) -> (bool, usize) {
 fn a_nonce_replayed_after_nine_reacquisitions_never_makes_an_earlier_downlink_verify() {
     let mut link = Link::new(true, 11);
     let rec = record_first_epoch(&mut link);
-    let mut epochs = vec![link.master.frame_counter() >> 32];
+    let mut epochs = vec![link.master.epoch_nonces().expect("in force").0];
     for i in 0..9 {
         link.restart_follower(100 + i);
         link.until_tracking(&mut clean);
         link.run(50, &mut clean);
-        epochs.push(link.master.frame_counter() >> 32);
+        epochs.push(link.master.epoch_nonces().expect("in force").0);
     }
     epochs.dedup();
     assert_eq!(epochs.len(), 10, "nine re-acquisitions, nine new epochs");
@@ -729,6 +748,7 @@ fn a_replayed_master_nonce_never_puts_a_follower_in_force_under_an_old_epoch() {
     }
     assert!(delivered >= 1, "{delivered}");
     link.until_tracking(&mut clean);
+    link.run(RATIO + 1, &mut clean);
     assert_eq!(link.follower.epoch_nonces(), link.master.epoch_nonces());
     assert_ne!(link.follower.epoch_nonces(), rec.epoch);
     link.run(8, &mut clean);
@@ -753,24 +773,27 @@ fn recovery_after_follower_restart(keyed: bool) -> u32 {
     panic!("never recovered");
 }
 
-/// A restarted follower acquires like an unkeyed one and then hands over its nonce: the
-/// handshake (its nonce in the next downlink slot, the master's in the next uplink) adds at
-/// most a downlink period and one slot.
+/// A restarted follower (no epoch to prove) acquires like an unkeyed one and hands over its
+/// nonce; the master, which heard the old epoch in the slots before the restart, takes a
+/// nonce without proof only once that epoch has been quiet for the failsafe period (a
+/// replayed nonce frame looks the same), then puts it in force when the follower is heard
+/// under it: a downlink period for the handshake and one for the confirmation after the
+/// later of the two.
 #[test]
-fn a_restarted_follower_is_back_within_a_downlink_period_and_a_slot_of_an_unkeyed_one() {
+fn a_restarted_follower_is_back_a_failsafe_period_after_its_last_downlink() {
     let keyed = recovery_after_follower_restart(true);
     let unkeyed = recovery_after_follower_restart(false);
     println!("follower restart → channels again: keyed {keyed} slots, unkeyed {unkeyed} slots");
     assert!(
-        keyed <= unkeyed + RATIO + 2,
+        keyed <= unkeyed.max(LIVE) + 2 * RATIO + 2,
         "keyed {keyed}, unkeyed {unkeyed}"
     );
 }
 
-/// During the handshake the follower checks uplinks with the link key under its nonce's
-/// counter, which only the master's nonce frame is sent under: a channel uplink sealed
-/// there (only a holder of the key could make one) is still not taken — channels come only
-/// under the epoch key. (Found by `air_follower_keyed`.)
+/// During the handshake the follower checks uplinks with the link key in the master-nonce
+/// context of its nonce, which only the master's nonce frame is sent under: a channel
+/// uplink sealed there (only a holder of the key could make one) is still not taken —
+/// channels come only under the epoch key. (Found by `air_follower_keyed`.)
 #[test]
 fn in_the_handshake_only_the_master_nonce_is_taken_under_the_handshake_counter() {
     let mut link = Link::new(true, 17);
@@ -783,7 +806,8 @@ fn in_the_handshake_only_the_master_nonce_is_taken_under_the_handshake_counter()
         link.slot(&mut clean);
     }
     let (slot, _) = link.follower.tracked_slot().expect("on the grid");
-    let counter = link.follower.frame_counter().expect("handshake counter");
+    let follower_nonce = link.follower.handshake_nonce().expect("in the handshake");
+    assert_eq!(link.follower.frame_counter(), None);
     let packed = [0u8; 22];
     let up = crate::frame::Uplink {
         slot,
@@ -796,7 +820,8 @@ fn in_the_handshake_only_the_master_nonce_is_taken_under_the_handshake_counter()
         data: b"inject",
     };
     let mut buf = [0u8; 64];
-    let len = crate::frame::seal(&Frame::Uplink(up), &test_key(1), counter, &mut buf).unwrap();
+    let context = TagContext::MasterNonce { follower_nonce };
+    let len = crate::frame::seal(&Frame::Uplink(up), &test_key(1), &context, &mut buf).unwrap();
     let failsafe = *link.follower.failsafe_values();
     link.follower.on_received(
         LinkRx::Packet { len, rssi_dbm: -70 },
@@ -808,4 +833,197 @@ fn in_the_handshake_only_the_master_nonce_is_taken_under_the_handshake_counter()
     assert_eq!(link.follower.uplink_stream.available(), 0);
     assert_eq!(link.follower.counters().received, 0);
     assert_ne!(link.follower.sync_state(), SyncState::Tracking);
+}
+
+/// Issue 30, finding 3: a nonce frame recorded in an earlier power cycle of the flight side,
+/// replayed in the downlink slot after one the attacker jammed at the module, was adopted
+/// (the epoch was "live" only if heard in the previous downlink slot): every uplink then
+/// failed at the follower until it re-acquired. The epoch in force now stays: the frame is
+/// refused while the epoch is live, the follower flies every uplink, nothing resyncs.
+#[test]
+fn a_replayed_nonce_frame_never_tears_down_a_live_link() {
+    let mut link = Link::new(true, 21);
+    let mut old_nonces: Vec<OnAir> = Vec::new();
+    link.until_tracking(&mut |f: &OnAir| {
+        if f.dir == Dir::Down && matches!(peek_sealed(&f.bytes), Some(Frame::Nonce { .. })) {
+            old_nonces.push(f.clone());
+        }
+        Some(f.bytes.clone())
+    });
+    link.run(300, &mut clean);
+    // Both ends are power-cycled: a new follower, a master that remembers no nonce.
+    link.reboot_master();
+    link.restart_follower(22);
+    link.until_tracking(&mut clean);
+    link.run(300, &mut clean);
+    let epoch = link.master.epoch_nonces();
+    let resyncs = link.follower.resyncs();
+    let mut attacks = 0;
+    for _ in 0..4 * 256 {
+        let slot = link.master.slot();
+        let replay_at = slot + RATIO;
+        let old = old_nonces
+            .iter()
+            .find(|f| f.slot % 256 == replay_at % 256)
+            .map(|f| f.bytes.clone());
+        if link.master.schedule().kind(slot) == SlotKind::Downlink && old.is_some() {
+            // Jam this downlink at the module, replay the old nonce frame in the next one.
+            attacks += 1;
+            link.slot(&mut |f: &OnAir| (f.dir == Dir::Up).then(|| f.bytes.clone()));
+            for _ in 0..RATIO {
+                let slot = link.master.slot();
+                let updates = link.follower.updates();
+                let uplink = link.master.schedule().kind(slot) == SlotKind::Uplink;
+                link.slot(&mut |f: &OnAir| match f.dir {
+                    Dir::Down => old.clone(),
+                    Dir::Up => Some(f.bytes.clone()),
+                });
+                if uplink {
+                    assert_eq!(link.follower.updates(), updates + 1, "slot {slot} lost");
+                }
+            }
+        } else {
+            let updates = link.follower.updates();
+            let uplink = link.master.schedule().kind(slot) == SlotKind::Uplink;
+            link.slot(&mut clean);
+            if uplink {
+                assert_eq!(link.follower.updates(), updates + 1, "slot {slot} lost");
+            }
+        }
+    }
+    assert!(attacks >= 4, "{attacks}");
+    assert_eq!(
+        link.master.epoch_nonces(),
+        epoch,
+        "the epoch in force stays"
+    );
+    assert_eq!(link.follower.resyncs(), resyncs, "the link never dropped");
+    assert!(
+        link.master.handshakes().1 >= attacks,
+        "every replay refused and counted"
+    );
+}
+
+/// A follower that lost the master long enough to re-acquire (32 uplinks jammed at the
+/// flight side) proves its previous epoch in its new nonce frame: the master, which heard
+/// its downlinks until then (the epoch is live), takes it at once.
+#[test]
+fn a_resynced_follower_proves_its_epoch_and_is_taken_at_once() {
+    let mut link = Link::new(true, 23);
+    link.until_tracking(&mut clean);
+    link.run(300, &mut clean);
+    let resyncs = link.follower.resyncs();
+    while link.follower.resyncs() == resyncs {
+        link.slot(&mut |f: &OnAir| (f.dir == Dir::Down).then(|| f.bytes.clone()));
+    }
+    let proven = core::cell::Cell::new(false);
+    let back = link.until_tracking(&mut |f: &OnAir| {
+        if let Some(Frame::Nonce { proof: Some(_), .. }) = peek_sealed(&f.bytes) {
+            proven.set(true);
+        }
+        Some(f.bytes.clone())
+    });
+    assert!(proven.get(), "the nonce frame carried the proof");
+    // A dwell to re-acquire, then a downlink period each for the handshake and for the
+    // master to hear the follower under the new epoch — well inside the live period.
+    assert!(back <= 33 + 2 * RATIO + 2, "{back} slots");
+    assert_eq!(link.master.handshakes(), (2, 0));
+    let updates = link.follower.updates();
+    link.run(RATIO, &mut clean);
+    assert!(link.follower.updates() > updates);
+}
+
+/// Issue 30, finding 7: wrong tags were silent (only `rejected` rose, as for any noise) and
+/// one accepted uplink with the save-failsafe flag rewrote the failsafe values. Tag failures
+/// are now counted at both ends; a lucky forgery — here a frame sealed with the key in place
+/// of the master's — flies its one update but does not rewrite the failsafe values.
+#[test]
+fn tag_failures_are_counted_and_one_frame_cannot_rewrite_the_failsafe_values() {
+    let mut link = Link::new(true, 24);
+    link.until_tracking(&mut clean);
+    link.run(40, &mut clean);
+    while link.master.schedule().kind(link.master.slot()) != SlotKind::Uplink {
+        link.slot(&mut clean);
+    }
+    let (slot, _) = link.follower.tracked_slot().expect("tracking");
+    let mut evil = [992u16; 16];
+    evil[2] = 1811;
+    let mut packed = [0u8; 22];
+    crate::channels::pack(&evil, crate::channels::ChannelFormat::Full16, &mut packed);
+    let up = crate::frame::Uplink {
+        slot,
+        stream: crate::frame::StreamHeader { seq: 0, ack: 0 },
+        report: None,
+        save_failsafe: true,
+        input_lost: false,
+        format: crate::channels::ChannelFormat::Full16,
+        packed_channels: &packed,
+        data: &[],
+    };
+    let mut forged = [0u8; 64];
+    let wrong = test_key(9);
+    let n = crate::frame::seal(
+        &Frame::Uplink(up),
+        &wrong,
+        &TagContext::Counter(0),
+        &mut forged,
+    )
+    .unwrap();
+    let before = link.follower.counters();
+    for k in 0..100_000u64 {
+        link.follower.on_received(
+            LinkRx::Packet {
+                len: n,
+                rssi_dbm: -40,
+            },
+            &forged[..n],
+            link.t + 100 + k % 500,
+        );
+    }
+    let after = link.follower.counters();
+    assert_eq!(after.tag_failures, before.tag_failures + 100_000);
+    assert_eq!(after.received, before.received);
+    // The lucky one: sealed with the epoch key under the right counter.
+    let (nonce, master_nonce) = link.follower.epoch_nonces().expect("in force");
+    let epoch_key = test_key(1).epoch_key(nonce, master_nonce);
+    let counter = link.follower.frame_counter().expect("in force");
+    let n = crate::frame::seal(
+        &Frame::Uplink(up),
+        &epoch_key,
+        &TagContext::Counter(counter),
+        &mut forged,
+    )
+    .unwrap();
+    let failsafe = *link.follower.failsafe_values();
+    link.slot(&mut |f: &OnAir| match f.dir {
+        Dir::Up => Some(forged[..n].to_vec()),
+        Dir::Down => Some(f.bytes.clone()),
+    });
+    assert_eq!(link.follower.output()[2], 1811, "the one update flies");
+    assert_eq!(
+        link.follower.failsafe_values(),
+        &failsafe,
+        "one frame rewrote the failsafe values"
+    );
+    // The master's own uplinks follow: no flag, and the run of flags is over.
+    link.run(2 * RATIO, &mut clean);
+    assert_eq!(link.follower.failsafe_values(), &failsafe);
+    assert_ne!(link.follower.output()[2], 1811);
+    // At the master: a forged downlink of its slot is a tag failure too.
+    while link.master.schedule().kind(link.master.slot()) != SlotKind::Downlink {
+        link.slot(&mut clean);
+    }
+    let down = Frame::Downlink(crate::frame::Downlink {
+        slot: link.master.slot() as u8,
+        stream: crate::frame::StreamHeader { seq: 0, ack: 0 },
+        report: None,
+        data: b"set",
+    });
+    let n = crate::frame::seal(&down, &wrong, &TagContext::Counter(0), &mut forged).unwrap();
+    let master_failures = link.master.counters().tag_failures;
+    link.slot(&mut |f: &OnAir| match f.dir {
+        Dir::Down => Some(forged[..n].to_vec()),
+        Dir::Up => Some(f.bytes.clone()),
+    });
+    assert_eq!(link.master.counters().tag_failures, master_failures + 1);
 }

@@ -68,19 +68,22 @@ pub fn scenario(o: &WorldOptions) -> Scenario {
     s.seed = o.seed;
     s.rate = o.rate;
     s.packet_loss = o.packet_loss;
-    // Both ends carry the served world's binding phrase (spec §12): the page signs its
-    // setting changes with it, as a pilot's phone would.
-    let key = LinkKey::from_phrase(SERVE_PHRASE);
-    s.settings.set_link_key(Some(key));
+    // A keyed pair (spec §12: the world hands the flight side its link's key as a bind
+    // would) whose module holds the served world's binding phrase: the page proves it to
+    // the module (CPace over the HM-10) and gets the change key to sign its setting changes,
+    // as a pilot's phone would.
     let mut module = crate::runner::bound_module_settings(o.rate);
-    module.link_key = Some(key);
+    module.link_key = Some(LinkKey::from_bytes(*b"served world key"));
+    module.plain = false;
+    module.phrase_salt = *b"servesal";
+    let _ = module.set_text("phrase", SERVE_PHRASE);
     s.module_settings = Some(module);
     s
 }
 
-/// The binding phrase both ends of a served world carry (spec §12): the page signs setting
-/// changes with it. Printed with the URL; a demo value, public by design.
-pub const SERVE_PHRASE: &str = "taulink demo";
+/// The binding phrase the module of a served world holds (spec §12): the page proves it to
+/// get the change key. Printed with the URL; a demo value, public by design.
+pub const SERVE_PHRASE: &str = "taulink served demo";
 
 /// What the page was sent (the last message of each kind, as serde renders it) and the
 /// setting changes the flight application took, for `/api/sent`.
@@ -205,6 +208,16 @@ impl Session {
 
 #[cfg(test)]
 mod tests {
+    /// The change key a phone that proved the served phrase gets: the flight link's.
+    fn served_change_key(session: &Session) -> telemetry::change_auth::ChangeKey {
+        let key = session
+            .world
+            .flight_settings()
+            .link_key()
+            .expect("a keyed pair");
+        telemetry::change_auth::ChangeKey::from_link_key(&key)
+    }
+
     use super::*;
     use telemetry::change_auth::Signer;
     use telemetry::messages::{RefuseReason, encode_message};
@@ -281,7 +294,7 @@ mod tests {
         };
         assert_eq!(refused.reason, RefuseReason::NotAuthenticated);
         // Signed with the served world's phrase, after learning the session: applied.
-        let mut phone = Signer::new(&LinkKey::from_phrase(SERVE_PHRASE));
+        let mut phone = Signer::new(served_change_key(&session));
         assert!(phone.on_refused(refused));
         send(&mut session, Message::SignedChange(phone.sign(change)));
         session.run_until(s(4.5));
@@ -366,8 +379,20 @@ mod tests {
             .any(|m| matches!(m, Message::Attitude(a) if a.roll_cdeg.unsigned_abs() > 500));
         assert!(roll_seen, "the 15° roll step never showed");
 
-        // A signed change while armed: refused with the reason.
-        let mut phone = Signer::new(&LinkKey::from_phrase(SERVE_PHRASE));
+        // A signed change while armed: the first try only teaches the phone the session
+        // (the tag and counter are checked first, so a refused change is used up); the
+        // second is refused with the reason.
+        let mut phone = Signer::new(served_change_key(&session));
+        send(&mut session, Message::SignedChange(phone.sign(kp(0.004))));
+        session.run_until(s(warmup + RATE_FROM_S + 4.0));
+        let first = page_messages(&mut session, &mut reader)
+            .into_iter()
+            .find_map(|m| match m {
+                Message::ChangeRefused(r) => Some(r),
+                _ => None,
+            })
+            .expect("the first try refused");
+        assert!(phone.on_refused(&first), "{first:?}");
         send(&mut session, Message::SignedChange(phone.sign(kp(0.004))));
         session.run_until(s(warmup + RATE_TO_S));
         assert!(session.sent.applied.is_empty());

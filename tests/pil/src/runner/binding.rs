@@ -1,13 +1,15 @@
 //! Both ends bound, as after a bind, through the images' own settings flash. The pairing is
 //! flight-sitl's (`flight_sitl::world::module_settings` and `pair_flight_settings`: the
 //! module's factory settings with a bind ID at the scenario's rate, the flight side storing
-//! the module's link), plus the binding phrase on both ends; each end's settings are then
+//! the module's link and its key), plus, with a phrase, what a bind on it leaves (spec
+//! §12.1: the module's key, salt and phrase derivation); each end's settings are then
 //! written with the firmware's own storage code — `flight_core::settings::save_whole` into
 //! the sequential-storage map of flight sectors 2–3, module-core's `SettingsStore::save`
 //! into the module's eight pages — onto flash of the same geometry, and those bytes are
 //! programmed into the emulated flash before power-on. The images boot into exactly what a
-//! pilot's boards hold after `bind`, the long press and the phrase typed on each end: the
-//! least artificial way in, as the images' consoles are not reachable without a USB host.
+//! pilot's boards hold after the phrase typed at the module, `bind PHRASE` and the long
+//! press: the least artificial way in, as the images' consoles are not reachable without a
+//! USB host.
 
 use core::ops::Range;
 
@@ -19,7 +21,7 @@ use flight_core::settings::Settings;
 use flight_sitl::Scenario;
 use sequential_storage::cache::Cache;
 use sequential_storage::map::{MapConfig, MapStorage};
-use telemetry::link::LinkKey;
+use telemetry::link::{Entropy, LinkKey};
 
 /// The flight settings' flash: sectors 2–3 (flight-fw `tasks/storage.rs`: offsets
 /// 0x8000..0x1_0000 of bank 1 region 1, which starts at 0x0800_0000; 16 KiB sectors,
@@ -144,19 +146,46 @@ impl<const W: usize, const E: usize> NorFlash for FlashWindow<W, E> {
 /// A word may be programmed again (bits only clear), as on the F405 and the nRF52840's NVMC.
 impl<const W: usize, const E: usize> MultiwriteNorFlash for FlashWindow<W, E> {}
 
-/// Both ends' settings for `scenario`, bound as flight-sitl's world binds them, with
-/// `phrase` (if any) on both.
+/// Both ends' settings for `scenario`, bound as flight-sitl's world binds them. With
+/// `phrase`, as after a bind on it (spec §12.1): the module holds its module key (drawn from
+/// the scenario's seed, as the firmware draws it from its RNG), its phrase salt and the
+/// phrase's derivation; the flight side the key of its link, as the key agreement hands it
+/// over — the phrase itself is stored on neither end. Without one, the unauthenticated link
+/// by both ends' explicit settings.
+///
+/// # Errors
+///
+/// A phrase the strength rule refuses (`telemetry::link::check_phrase`), in words.
 pub fn bound_pair(
     scenario: &Scenario,
     phrase: Option<&str>,
-) -> (Settings, module_core::settings::Settings) {
-    let key = phrase.map(LinkKey::from_phrase);
+) -> Result<(Settings, module_core::settings::Settings), String> {
     let mut module = flight_sitl::world::module_settings(scenario);
-    module.link_key = key;
+    if let Some(phrase) = phrase {
+        let mut entropy = Entropy::new(seed_bytes(scenario.seed));
+        let key = entropy.draw(b"module key");
+        let salt = entropy.draw(b"phrase salt");
+        module.link_key = Some(LinkKey::from_bytes(head(&key)));
+        module.phrase_salt = head(&salt);
+        module.plain = false;
+        module
+            .set_text("phrase", phrase)
+            .map_err(|e| format!("binding phrase {phrase:?}: {e}"))?;
+    }
     let mut flight = scenario.settings.clone();
     flight_sitl::world::pair_flight_settings(&mut flight, &module);
-    flight.set_link_key(key);
-    (flight, module)
+    Ok((flight, module))
+}
+
+/// The scenario seed as the 32 bytes an [`Entropy`] starts from.
+fn seed_bytes(seed: u64) -> [u8; 32] {
+    let seed = seed.to_le_bytes();
+    core::array::from_fn(|i| seed.get(i).copied().unwrap_or(0))
+}
+
+/// The first `N` bytes of a draw.
+fn head<const N: usize>(bytes: &[u8; 32]) -> [u8; N] {
+    bytes.first_chunk::<N>().copied().unwrap_or([0; N])
 }
 
 /// The flight settings' sectors holding `settings` as the firmware stores them: (address,
@@ -197,7 +226,7 @@ mod tests {
     use flight_sitl::PilotInput;
     use quad_sim::quad::QuadParams;
 
-    const PHRASE: &str = "correct horse battery staple";
+    const PHRASE: &str = "amber kettle under the oak";
 
     fn scenario() -> Scenario {
         Scenario::new(
@@ -211,9 +240,17 @@ mod tests {
     #[test]
     fn both_ends_read_back_bound_with_the_phrase_by_their_own_load() {
         let s = scenario();
-        let (flight, module) = bound_pair(&s, Some(PHRASE));
+        let (flight, module) = bound_pair(&s, Some(PHRASE)).unwrap();
         assert_ne!(module.bind_id, 0);
-        assert_eq!(flight.link_key(), Some(LinkKey::from_phrase(PHRASE)));
+        // The flight side holds its link's key of the module key; the module the phrase's
+        // derivation under its salt, never the phrase.
+        let module_key = module.link_key.unwrap();
+        let link = module_core::air::link_params(&module).unwrap();
+        assert_eq!(flight.link_key(), Some(module_key.for_link(link.bind_id)));
+        assert_eq!(
+            module.phrase_prs,
+            Some(telemetry::link::phrase::PhraseSecret::derive(PHRASE, module.phrase_salt).prs)
+        );
         // The flight side, loaded as the firmware's storage task does at boot.
         let (addr, bytes) = flight_flash(&flight).unwrap();
         assert_eq!(addr, 0x0800_8000);
@@ -238,6 +275,15 @@ mod tests {
         let mut store = module_core::settings::SettingsStore::new(window, MODULE_SETTINGS).unwrap();
         let back = block_on(store.load()).unwrap();
         assert_eq!(back, Some(module));
+    }
+
+    #[test]
+    fn a_phrase_the_strength_rule_refuses_binds_nothing() {
+        let err = bound_pair(&scenario(), Some("short")).unwrap_err();
+        assert!(err.contains("binding phrase"), "{err}");
+        let (flight, module) = bound_pair(&scenario(), None).unwrap();
+        assert_eq!((flight.link_key(), module.link_key), (None, None));
+        assert!(module.plain);
     }
 
     #[test]

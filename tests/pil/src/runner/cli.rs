@@ -71,7 +71,7 @@ pub struct Cli {
     /// Time of the scenario's fault, s (2.5 ≤ S ≤ 3600).
     #[arg(long, value_name = "S", value_parser = at)]
     pub at: Option<f64>,
-    /// The binding phrase on both ends (default: "correct horse battery staple").
+    /// The binding phrase on both ends (default: "amber kettle under the oak").
     #[arg(long, value_name = "TEXT", conflicts_with = "no_phrase")]
     pub phrase: Option<String>,
     /// No binding phrase (an unauthenticated link).

@@ -33,7 +33,7 @@ use image::Image;
 pub use report::Outcome;
 
 /// The binding phrase both ends carry unless told otherwise.
-pub const DEFAULT_PHRASE: &str = "correct horse battery staple";
+pub const DEFAULT_PHRASE: &str = "amber kettle under the oak";
 
 /// The module's nRF52840 FICR DEVICEID, which a [`Platform`] programs into the model: the
 /// module derives its HM-10 pairing PIN from it (`module_core::hm10::at::Pin::factory`), and
@@ -292,13 +292,14 @@ pub fn run<P: Platform>(platform: &P, opts: &Options) -> Result<Outcome, PilErro
     if opts.kind == Kind::SettingsSave {
         scenario.setting_changes = vec![report::saved_change()];
     }
-    let (flight_settings, module_settings) = binding::bound_pair(&scenario, opts.phrase.as_deref());
+    let (flight_settings, module_settings) =
+        binding::bound_pair(&scenario, opts.phrase.as_deref()).map_err(PilError::Settings)?;
     let flight_flash = binding::flight_flash(&flight_settings).map_err(PilError::Settings)?;
     let module_flash = binding::module_flash(&module_settings).map_err(PilError::Settings)?;
-    let key = opts
-        .phrase
-        .as_deref()
-        .map(telemetry::link::LinkKey::from_phrase);
+    // The change key the pilot's phone got by proving the phrase to the module (spec §12.5).
+    let key = flight_settings
+        .link_key()
+        .map(|k| telemetry::change_auth::ChangeKey::from_link_key(&k));
     let config = WorldConfig {
         board: opts.board,
         quantum_ns: opts.quantum_ns,

@@ -77,8 +77,9 @@ pub struct WorldConfig {
     pub gps: Generation,
     /// The baro holds SDA low from this virtual time on (ns), needing this many SCL pulses.
     pub i2c_stuck: Option<(u64, u8)>,
-    /// The binding phrase the pilot typed into the phone (it signs setting changes).
-    pub phone_key: Option<telemetry::link::LinkKey>,
+    /// The change key the phone got by proving the binding phrase to the module (it signs
+    /// setting changes).
+    pub phone_key: Option<telemetry::change_auth::ChangeKey>,
 }
 
 impl Default for WorldConfig {
@@ -138,7 +139,7 @@ impl Radios {
     }
 }
 
-/// The phone on the HM-10: it sends the scenario's setting changes, signed with the phrase
+/// The phone on the HM-10: it sends the scenario's setting changes, signed with the change key
 /// (re-signed once after the refusal that names the flight side's session), as flight-sitl's
 /// phone does.
 struct Phone {
@@ -310,10 +311,7 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
             pilot_pin: config.phone_pin,
             loop_timing: timing::LoopTiming::default(),
             phone: Phone {
-                signer: config
-                    .phone_key
-                    .as_ref()
-                    .map(telemetry::change_auth::Signer::new),
+                signer: config.phone_key.map(telemetry::change_auth::Signer::new),
                 queue: scenario.setting_changes,
                 pending: None,
                 next_ns: 0,

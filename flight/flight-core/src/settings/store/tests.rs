@@ -336,15 +336,12 @@ fn the_link_key_is_saved_and_loaded_and_a_key_change_alone_is_a_change() {
     let mut m = map(Flash::new(WriteCountCheck::OnceOnly, None, true));
     let defaults = Settings::default();
     let mut s = defaults.clone();
-    s.set_link_key(Some(LinkKey::from_phrase("correct horse battery staple")));
+    s.set_link_key(Some(LinkKey::from_bytes([0x4B; 16])));
     assert_eq!(block_on(save(&mut m, &s, &defaults)), Ok(1), "only the key");
     let (flash, _) = m.destroy();
     let (loaded, report) = boot(flash);
     assert_eq!(report.problem, None);
-    assert_eq!(
-        loaded.link_key(),
-        Some(LinkKey::from_phrase("correct horse battery staple"))
-    );
+    assert_eq!(loaded.link_key(), Some(LinkKey::from_bytes([0x4B; 16])));
     assert_eq!(loaded, s);
     // Cleared again: a change too, and it loads as no key.
     let mut m = map(flash_of(&s));
@@ -364,16 +361,57 @@ fn flash_of(s: &Settings) -> Flash {
 /// A record as version 2 wrote it (no key field): what a controller updated to this
 /// firmware finds in flash.
 fn version_2_record(settings: &Settings, generation: u32) -> Vec<u8> {
-    let mut body = vec![2u8];
+    old_record(2, settings, generation, None)
+}
+
+/// A record of an older `version`, with the key field of version 3 when `key` is given.
+fn old_record(version: u8, settings: &Settings, generation: u32, key: Option<[u8; 16]>) -> Vec<u8> {
+    let mut body = vec![version];
     body.extend(generation.to_le_bytes());
     body.extend((PARAMS.len() as u16).to_le_bytes());
     for (p, v) in settings.iter() {
         body.extend(p.key.to_le_bytes());
         body.extend(v.to_bits().to_le_bytes());
     }
+    if let Some(key) = key {
+        body.push(1);
+        body.extend(key);
+    }
     let crc = crc32(&body);
     body.extend(crc.to_le_bytes());
     body
+}
+
+/// Records of versions 2 and 3 were bound by the protocol before the key agreement, and
+/// version 3's key is the phrase's bare hash (issue 30, finding 1): their pairs load, the
+/// link and the key do not.
+#[test]
+fn old_records_load_their_pairs_but_no_link_and_no_key() {
+    let old = generation_set(3);
+    assert_ne!(old.get(super::super::handles::LINK_BIND_ID), 0);
+    for record in [
+        old_record(2, &old, 9, None),
+        old_record(3, &old, 9, Some([0x6C; 16])),
+    ] {
+        let mut m = map(Flash::default());
+        let mut buf = Buffer::new();
+        block_on(m.store_item(&mut buf.0, &SLOTS[0], &&record[..])).unwrap();
+        let (flash, _) = m.destroy();
+        let (loaded, report) = boot(flash);
+        assert_eq!(report.problem, None);
+        assert_eq!(report.generation, 9);
+        assert_eq!(loaded.link_key(), None);
+        assert_eq!(
+            loaded.get(super::super::handles::LINK_BIND_ID),
+            0,
+            "unbound"
+        );
+        assert_eq!(
+            loaded.get(super::super::handles::PID_GAINS[0][0]),
+            old.get(super::super::handles::PID_GAINS[0][0]),
+            "the other pairs as stored"
+        );
+    }
 }
 
 #[test]
@@ -387,7 +425,11 @@ fn a_version_2_record_loads_whole_with_no_key() {
     let (loaded, report) = boot(flash);
     assert_eq!(report.problem, None);
     assert_eq!(report.generation, 9);
-    assert_eq!(loaded, old, "every pair as stored");
+    let mut unbound = old.clone();
+    unbound
+        .apply(&[super::super::handles::LINK_BIND_ID.to(0)])
+        .unwrap();
+    assert_eq!(loaded, unbound, "every pair as stored but the link");
     assert_eq!(loaded.link_key(), None);
     // A key field in a version-2 record, or a bad flag in version 3, is no record.
     let mut with_key = version_2_record(&old, 9);

@@ -27,7 +27,14 @@ pub async fn link_task(radio: Radio) {
     let mut clock = EmbassyClock;
     loop {
         match run_link_step(&SharedApp, &mut chip, &mut clock, FAILSAFE_US).await {
-            Some(LinkEvent::Bound { bind_id }) => info!("bound to link {:08x}", bind_id),
+            Some(LinkEvent::Bound {
+                bind_id,
+                authenticated,
+            }) => info!(
+                "bound to link {:08x} (authenticated: {})",
+                bind_id, authenticated
+            ),
+            Some(LinkEvent::BindRefused(why)) => warn!("bind not made: {}", why.describe()),
             Some(LinkEvent::BoundOpenLrs { rf_magic }) => {
                 info!("bound to OpenLRSng link {:08x}", rf_magic)
             }

@@ -24,9 +24,11 @@ pub async fn link_task(radio: Radio, boot_settings: Settings) {
     let driver = Rfm22b::new(device, radio.nirq, radio.sdn, Delay);
     let power = TxPower::from_step(boot_settings.tx_power);
     let mut chip = DualRadio::new(driver, power, || Instant::now().as_micros());
-    // A receiver-role follower's epoch nonces (spec §12.2): a fresh seed every boot.
-    let seed = u64::from(rng.blocking_next_u32()) << 32 | u64::from(rng.blocking_next_u32());
-    with_app(|app| app.seed_link_nonces(seed));
+    // The module's secrets every boot (spec §12): the epoch nonces' seed, the CPace
+    // randomness of binds and phone exchanges, new module keys, the phrase salt.
+    let mut seed = [0u8; 32];
+    rng.blocking_fill_bytes(&mut seed);
+    with_app(|app| app.seed_random(&seed));
     let mut clock = EmbassyClock;
     loop {
         let random = rng.blocking_next_u32();

@@ -7,6 +7,10 @@
 //! The attackers are the attacker's behaviour, not the link's: the victims run the real
 //! link cores (and, for the flight side's boot decision, the real `flight_core` app).
 
+mod grid;
+pub mod guess;
+mod replay;
+
 use std::cell::Cell;
 use std::future::Future;
 use std::pin::pin;
@@ -15,12 +19,13 @@ use std::task::Poll;
 
 use si4432_sim::{ChipHandle, Medium, Outcome as ChipOutcome, RadioId, SimDelay};
 use telemetry::channels::{ChannelFormat, Channels, pack};
-use telemetry::frame::{BindOffer, Downlink, Frame, StreamHeader, Uplink, encode, seal};
-use telemetry::link::bind::bind_radio_config;
-use telemetry::link::follower::{bind_follower, run_follower};
+use telemetry::frame::{Downlink, Frame, StreamHeader, Uplink, encode, seal};
+use telemetry::link::auth::TagContext;
+use telemetry::link::bind::{Offering, bind_radio_config};
+use telemetry::link::follower::run_follower;
 use telemetry::link::{
-    BIND_KEY, HOP_CHANNELS, HopSequence, LinkKey, LinkParams, LinkRx, PacketRadio, RadioConfig,
-    RateMode, Schedule,
+    BIND_KEY, BindAuth, HOP_CHANNELS, HopSequence, LinkKey, LinkParams, LinkRx, PacketRadio,
+    RadioConfig, RateMode, Schedule,
 };
 use telemetry::mock::SplitMix64;
 
@@ -28,7 +33,6 @@ use crate::driver::SimClock;
 use crate::ends::{FlightStart, follower_for};
 use crate::probe::{FlightApp, Shared};
 use crate::scenario::{Attack, Scenario};
-use crate::world::BIND_TIMEOUT_US;
 
 /// Throttle the forger tries to fly.
 pub const FORGED_THROTTLE: u16 = 1811;
@@ -38,6 +42,19 @@ const SPOOF_BIND_ID: u32 = 0xBAD_B1D5;
 const SPOOF_PERIOD_US: u64 = 20_000;
 /// How long a power-cycled flight side stays off.
 const POWER_OFF_US: u64 = 300_000;
+
+/// What the guesser of `--attack guess` recorded and found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GuessFigures {
+    /// Bind frames recorded.
+    pub bind_frames: u32,
+    /// Link frames recorded after the bind.
+    pub link_frames: u32,
+    /// Of them, epoch-nonce frames.
+    pub nonce_frames: u32,
+    /// The dictionary's verdict.
+    pub verdict: guess::Verdict,
+}
 
 /// A radio that, on every packet delivered, notes which radio sent it (from the medium's
 /// trace).
@@ -140,7 +157,9 @@ async fn until<T>(work: impl Future<Output = T>, stop: impl Future<Output = ()>)
 pub fn power_plan(attack: Attack, duration_s: f64) -> Vec<(u64, u64)> {
     let end_us = (duration_s * 1e6) as u64;
     let offs: Vec<u64> = match attack {
-        Attack::Forge => Vec::new(),
+        Attack::Forge | Attack::Guess => Vec::new(),
+        // One earlier session to record, then the attack on the next.
+        Attack::NonceReplay => vec![end_us / 6],
         Attack::Replay => vec![end_us / 3, 2 * end_us / 3],
         Attack::BindSpoof => (1..)
             .map(|k| k * 5_000_000)
@@ -190,6 +209,9 @@ pub(crate) async fn flight_end_powered<R: PacketRadio>(
     if flight_core::pipeline::store_link(&mut flash, &start.params).is_err() {
         return;
     }
+    if let Some((key, _)) = start.key {
+        flash.set_link_key(Some(key));
+    }
     let boot_delay = clock.now_us() + 123_457;
     clock.sleep_until_us(boot_delay).await;
     let mut plan = power.plan.iter().copied();
@@ -200,10 +222,10 @@ pub(crate) async fn flight_end_powered<R: PacketRadio>(
                 return;
             };
             let params = if matches!(fc.next_link_step(), flight_core::app::LinkStep::Bind { .. }) {
-                bind_follower(&mut radio, &mut clock, start.band, BIND_TIMEOUT_US)
+                start
+                    .bind(&mut radio, &mut clock)
                     .await
-                    .ok()
-                    .flatten()
+                    .map(|(params, _)| params)
             } else {
                 fc.link_params()
             };
@@ -257,17 +279,13 @@ pub(crate) struct Victim {
     pub format: ChannelFormat,
 }
 
-/// The victim link as an attacker sees it: everything derived from `params` and the key's
-/// public derivations, never the key.
-pub(crate) fn victim_of(s: &Scenario, params: &LinkParams, key: Option<LinkKey>) -> Victim {
-    let (bind_id, hop_seed) = key.map_or((params.bind_id, params.bind_id), |k| {
-        (k.bind_id(), k.hop_seed())
-    });
-    let public = LinkParams { bind_id, ..*params };
+/// The victim link as an attacker sees it: everything derived from `params` (the public
+/// bind ID: header and hop sequence), never the key.
+pub(crate) fn victim_of(s: &Scenario, params: &LinkParams) -> Victim {
     Victim {
-        bind_id,
-        config: public.radio_config(),
-        hops: HopSequence::new(hop_seed),
+        bind_id: params.bind_id,
+        config: params.radio_config(),
+        hops: HopSequence::new(params.bind_id),
         schedule: Schedule {
             rate: s.rate,
             telemetry_ratio: s.telemetry_ratio,
@@ -277,7 +295,8 @@ pub(crate) fn victim_of(s: &Scenario, params: &LinkParams, key: Option<LinkKey>)
     }
 }
 
-/// Runs the attacker of `attack` on `radio` until the simulation ends.
+/// Runs the attacker of `attack` on `radio` until the simulation ends (the guesser with
+/// `dictionary`).
 pub(crate) async fn attacker<R: PacketRadio>(
     attack: Attack,
     radio: R,
@@ -285,11 +304,14 @@ pub(crate) async fn attacker<R: PacketRadio>(
     victim: Victim,
     record: Shared,
     seed: u64,
+    dictionary: Vec<String>,
 ) {
     let _ = match attack {
         Attack::Forge => forge(radio, clock, &victim, &record, seed).await,
-        Attack::Replay => replay(radio, clock, &victim, &record).await,
-        Attack::BindSpoof => bind_spoof(radio, clock, &victim, &record).await,
+        Attack::Replay => replay::replay(radio, clock, &victim, &record).await,
+        Attack::BindSpoof => bind_spoof(radio, clock, &victim, &record, seed).await,
+        Attack::NonceReplay => replay::nonce_replay(radio, clock, &victim, &record).await,
+        Attack::Guess => guess::guess(radio, clock, &victim, &record, &dictionary).await,
     };
 }
 
@@ -317,7 +339,7 @@ async fn forge<R: PacketRadio>(
     for n in 0u64.. {
         let slot = (n % 256) as u8;
         let guess = LinkKey::from_bytes(core::array::from_fn(|_| rng.next_u64() as u8));
-        let counter = rng.next_u64();
+        let counter = TagContext::Counter(rng.next_u64() >> 32);
         let mut buf = [0u8; 64];
         let up = Frame::Uplink(Uplink {
             slot,
@@ -330,7 +352,7 @@ async fn forge<R: PacketRadio>(
             data: &[],
         });
         let len = match n % 5 {
-            0 => seal(&up, &guess, counter, &mut buf),
+            0 => seal(&up, &guess, &counter, &mut buf),
             1 => encode(&up, victim.bind_id, &mut buf),
             2 => seal(
                 &Frame::Downlink(Downlink {
@@ -340,25 +362,28 @@ async fn forge<R: PacketRadio>(
                     data: b"setting!",
                 }),
                 &guess,
-                counter,
+                &counter,
                 &mut buf,
             ),
             3 => seal(
                 &Frame::Nonce {
                     slot,
-                    nonce: (rng.next_u64() as u32) | 1,
+                    nonce: rng.next_u64() | 1,
+                    proof: None,
                 },
                 &guess,
-                counter,
+                &TagContext::FollowerNonce,
                 &mut buf,
             ),
             _ => seal(
                 &Frame::MasterNonce {
                     slot,
-                    nonce: (rng.next_u64() as u32) | 1,
+                    nonce: rng.next_u64() | 1,
                 },
                 &guess,
-                counter,
+                &TagContext::MasterNonce {
+                    follower_nonce: rng.next_u64() | 1,
+                },
                 &mut buf,
             ),
         };
@@ -375,122 +400,28 @@ async fn forge<R: PacketRadio>(
     Ok(())
 }
 
-/// Follows the victim's slots (slot number and timing from the uplinks, which carry the
-/// slot in clear) and alternates by wrap of the 8-bit slot counter: in even wraps it
-/// listens and records every frame; in odd wraps it sends recordings again in slots with
-/// the same on-air number — the same channel, the right time, a tag that was valid 256·k
-/// slots earlier (older recordings in turn, so frames from before a flight restart too) —
-/// in one slot in five, and in every slot whose recordings include an epoch-nonce frame.
-async fn replay<R: PacketRadio>(
-    mut radio: R,
-    mut clock: SimClock,
-    victim: &Victim,
-    record: &Shared,
-) -> Result<(), R::Error> {
-    radio.configure(&victim.config).await?;
-    let schedule = victim.schedule;
-    let slot_us = u64::from(schedule.slot_us());
-    let mut recordings: Vec<Vec<Vec<u8>>> = vec![Vec::new(); 256];
-    let mut buf = [0u8; 64];
-    loop {
-        // Acquire: dwell on one channel until an uplink names its slot.
-        radio.set_channel(victim.hops.channel(0)).await?;
-        let timeout = u32::try_from(2 * (HOP_CHANNELS as u64 + 1) * slot_us).unwrap_or(u32::MAX);
-        let LinkRx::Packet { len, .. } = radio.receive(&mut buf, timeout).await? else {
-            continue;
-        };
-        if !is_uplink(buf.get(..len).unwrap_or(&[])) {
-            continue;
-        }
-        let mut anchor = (
-            u64::from(buf[2]),
-            clock
-                .now_us()
-                .saturating_sub(u64::from(schedule.packet_end_offset_us(len))),
-        );
-        let mut k = anchor.0 + 1;
-        let mut heard_this_wrap = true;
-        loop {
-            let start = anchor.1 + (k - anchor.0) * slot_us;
-            if clock.now_us() + 50 > start {
-                k += 1;
-                continue;
-            }
-            let on_air = (k % 256) as usize;
-            if on_air == 0 {
-                if !heard_this_wrap && (k / 256) % 2 == 1 {
-                    break; // lost the grid: acquire again
-                }
-                heard_this_wrap = false;
-            }
-            radio
-                .set_channel(victim.hops.channel_for_slot(k as u32))
-                .await?;
-            if (k / 256) % 2 == 0 {
-                clock.sleep_until_us(start.saturating_sub(100)).await;
-                let until = start + u64::from(schedule.listen_end_offset_us());
-                let timeout = u32::try_from(until.saturating_sub(clock.now_us())).unwrap_or(0);
-                if let LinkRx::Packet { len, .. } = radio.receive(&mut buf, timeout).await?
-                    && buf.get(2) == Some(&(on_air as u8))
-                {
-                    heard_this_wrap = true;
-                    let frame = buf.get(..len).unwrap_or(&[]);
-                    if let Some(r) = recordings.get_mut(on_air) {
-                        r.push(frame.to_vec());
-                    }
-                    if is_uplink(frame) {
-                        anchor = (
-                            k,
-                            clock
-                                .now_us()
-                                .saturating_sub(u64::from(schedule.packet_end_offset_us(len))),
-                        );
-                    }
-                }
-            } else if let Some(old) = recordings.get(on_air).filter(|r| !r.is_empty()) {
-                let has_nonce = old.iter().any(|f| f.get(1).is_some_and(|k| k & 0x40 != 0));
-                if k % 5 == 0 || has_nonce {
-                    let pick = if has_nonce {
-                        old.iter()
-                            .rposition(|f| f.get(1).is_some_and(|k| k & 0x40 != 0))
-                    } else {
-                        Some((k / 512) as usize % old.len())
-                    };
-                    if let Some(frame) = pick.and_then(|i| old.get(i)) {
-                        // A lead shorter than the sender's: the replay's sync word arrives
-                        // first and, louder, captures the receiver.
-                        clock.sleep_until_us(start).await;
-                        radio.transmit(frame).await?;
-                        record.borrow_mut().attacker_sent += 1;
-                    }
-                }
-            }
-            k += 1;
-        }
-    }
-}
-
-fn is_uplink(frame: &[u8]) -> bool {
-    frame.get(1).is_some_and(|k| matches!(k & 0x07, 2 | 3))
-}
-
-/// Bind offers of the attacker's own link on the band's bind channel, every 20 ms.
+/// Bind offers of the attacker's own link (a key agreement without a phrase, which any
+/// follower in a bind window without one would take) on the band's bind channel, every
+/// 20 ms.
 async fn bind_spoof<R: PacketRadio>(
     mut radio: R,
     mut clock: SimClock,
     victim: &Victim,
     record: &Shared,
+    seed: u64,
 ) -> Result<(), R::Error> {
     radio.configure(&bind_radio_config(victim.band)).await?;
     radio.set_channel(0).await?;
-    let offer = Frame::BindOffer(BindOffer {
-        bind_id: SPOOF_BIND_ID,
-        band: victim.band,
-        rate: RateMode::F500,
-        format: ChannelFormat::Full16,
-        telemetry_ratio: 4,
-    });
-    let mut buf = [0u8; 32];
+    let params = LinkParams::new(
+        SPOOF_BIND_ID,
+        victim.band,
+        RateMode::F500,
+        ChannelFormat::Full16,
+        4,
+    );
+    let random = crate::scenario::seed_bytes(seed, 0x5b00f);
+    let offer = Frame::BindOffer(Offering::new(&params, &BindAuth::Anonymous, &random).offer());
+    let mut buf = [0u8; 64];
     let Ok(len) = encode(&offer, BIND_KEY, &mut buf) else {
         return Ok(());
     };
