@@ -11,6 +11,7 @@ mod flash;
 pub mod flight_end;
 pub mod flight_log;
 pub mod gps;
+pub mod log_figures;
 pub mod metrics;
 pub mod module_end;
 mod module_flash;

@@ -2,7 +2,9 @@
 //! through the firmware-in-the-loop world and prints its figures, as text or one JSON
 //! object, optionally drawn; `table` runs the acceptance set and prints it as Markdown
 //! (`--check` / `--write`: against the README's `runner-table` block);
-//! `serve [ADDR]` serves the web ground station against the world (`serve/cli.rs`).
+//! `serve [ADDR]` serves the web ground station against the world (`serve/cli.rs`);
+//! `log-figures [--check|--write]` measures the flight log's bytes per second per profile
+//! (against the flight README's `log-profiles` block).
 //! `--help` lists the options (`runner/cli.rs`).
 
 use std::process::ExitCode;
@@ -43,6 +45,9 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         };
+    }
+    if std::env::args().nth(1).as_deref() == Some("log-figures") {
+        return log_figures(std::env::args().nth(2).as_deref());
     }
     let cli = Cli::parse();
     let opts = match cli.options() {
@@ -128,4 +133,34 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     }
     ExitCode::SUCCESS
+}
+
+/// `flight-sitl log-figures [--check|--write]`: the flight log's profiles measured, printed
+/// or checked against (or written into) the flight README.
+fn log_figures(arg: Option<&str>) -> ExitCode {
+    let mode = match arg {
+        None => docblock::Mode::Print,
+        Some("--check") => docblock::Mode::Check,
+        Some("--write") => docblock::Mode::Write,
+        Some(other) => {
+            eprintln!("flight-sitl log-figures: unknown argument {other:?} (--check or --write)");
+            return ExitCode::from(2);
+        }
+    };
+    let readme = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../flight/README.md");
+    let result = flight_sitl::log_figures::table()
+        .and_then(|table| docblock::apply(&readme, "log-profiles", &table, mode));
+    match result {
+        Ok(current) if current || mode == docblock::Mode::Write => ExitCode::SUCCESS,
+        Ok(_) => {
+            eprintln!(
+                "flight-sitl: the flight README's log profiles are stale: run `cargo run --release -p flight-sitl -- log-figures --write`"
+            );
+            ExitCode::FAILURE
+        }
+        Err(e) => {
+            eprintln!("flight-sitl log-figures: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }

@@ -33,6 +33,10 @@ use crate::report::LinkSeen;
 use crate::supervisor::Decision;
 use crate::sysid::ekf;
 
+/// The Sparky2's log area: sectors 16–31 of its M25P16, 64 KiB each, where the Tau Labs
+/// firmware's flash map for the board puts its log stream (0–5 settings, 6–10 waypoints).
+pub const SPARKY2_LOG_AREA_BYTES: u32 = 16 * 64 * 1024;
+
 /// Entries the ring holds: 80 ms of the full profile's four loop topics at 1 kHz less the
 /// rest, far more for the others; the logging task drains it every few milliseconds.
 pub const RING_ENTRIES: usize = 96;

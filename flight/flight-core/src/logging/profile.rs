@@ -1,5 +1,5 @@
 //! Log profiles: which topics are logged how often. The pilot chooses one with the setting
-//! `log.profile`; the bytes per second each profile costs are generated into the flight
+//! `log.profile`; the bytes per second each profile costs are measured into the flight
 //! README (`cargo run --release -p flight-sitl -- log-figures --write`).
 
 /// A log profile (the `log.profile` choice, in [`crate::settings::LOG_PROFILES`]
@@ -8,11 +8,11 @@
 pub enum Profile {
     /// Nothing is logged.
     Off,
-    /// What the telemetry channel can carry (≈ 1 kB/s): the estimate, sticks and motors at
-    /// 10 Hz, status, baro and battery slower, every GPS fix; no raw IMU.
+    /// What the telemetry channel's leftover goodput carries (under 1 kB/s, below M100's
+    /// downlink): the estimate and motors at 5 Hz, the rest slower; no raw IMU.
     Link,
-    /// For the Sparky2's flash: raw IMU at 100 Hz, estimate, sticks and motors at 50 Hz,
-    /// every baro, GPS and link report.
+    /// For the Sparky2's flash (≈ 3.4 kB/s: five minutes in its 1 MiB log area): raw IMU at
+    /// 20 Hz, the estimate, sticks and motors at 10 Hz, every fifth baro, every GPS fix.
     Flight,
     /// Everything at its own rate (IMU, estimate, sticks and motors every loop): what a
     /// replay through the estimator needs to reproduce the flight bit for bit.
@@ -63,27 +63,27 @@ impl Profile {
             },
             Profile::Link => Rates {
                 imu_hz: 0,
+                estimate_hz: 5,
+                setpoint_hz: 2,
+                motors_hz: 5,
+                status_hz: 2,
+                identification_hz: 2,
+                baro_every: 25,
+                gps_every: 5,
+                battery_every: 50,
+                link_every: 40,
+            },
+            Profile::Flight => Rates {
+                imu_hz: 20,
                 estimate_hz: 10,
                 setpoint_hz: 10,
                 motors_hz: 10,
                 status_hz: 5,
-                identification_hz: 2,
-                baro_every: 10,
+                identification_hz: 5,
+                baro_every: 5,
                 gps_every: 1,
-                battery_every: 50,
-                link_every: 1,
-            },
-            Profile::Flight => Rates {
-                imu_hz: 100,
-                estimate_hz: 50,
-                setpoint_hz: 50,
-                motors_hz: 50,
-                status_hz: 10,
-                identification_hz: 10,
-                baro_every: 1,
-                gps_every: 1,
-                battery_every: 5,
-                link_every: 1,
+                battery_every: 10,
+                link_every: 20,
             },
             Profile::Full => Rates {
                 imu_hz: u16::MAX,
