@@ -18,6 +18,7 @@ mod module_flash;
 pub mod runner;
 pub mod scenario;
 pub mod serve;
+pub mod ulog_csv;
 pub mod world;
 
 pub use scenario::{

@@ -4,7 +4,9 @@
 //! (`--check` / `--write`: against the README's `runner-table` block);
 //! `serve [ADDR]` serves the web ground station against the world (`serve/cli.rs`);
 //! `log-figures [--check|--write]` measures the flight log's bytes per second per profile
-//! (against the flight README's `log-profiles` block).
+//! (against the flight README's `log-profiles` block); `ulog-csv FILE.ulg --out DIR` writes
+//! a log's data as pyulog's `ulog2csv` lays it out, read with this project's reader (CI holds
+//! the two against each other, `ulog_check.py`).
 //! `--help` lists the options (`runner/cli.rs`).
 
 use std::process::ExitCode;
@@ -45,6 +47,10 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         };
+    }
+    if std::env::args().nth(1).as_deref() == Some("ulog-csv") {
+        let args: Vec<String> = std::env::args().skip(2).collect();
+        return ulog_csv(&args);
     }
     if std::env::args().nth(1).as_deref() == Some("log-figures") {
         return log_figures(std::env::args().nth(2).as_deref());
@@ -160,6 +166,44 @@ fn log_figures(arg: Option<&str>) -> ExitCode {
         }
         Err(e) => {
             eprintln!("flight-sitl log-figures: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `flight-sitl ulog-csv FILE.ulg --out DIR`: one CSV per subscription, named and laid out
+/// as `ulog2csv` names them (`DIR/STEM_NAME_MULTIID.csv`).
+fn ulog_csv(args: &[String]) -> ExitCode {
+    let [file, flag, dir] = args else {
+        eprintln!("usage: flight-sitl ulog-csv FILE.ulg --out DIR");
+        return ExitCode::from(2);
+    };
+    if flag != "--out" {
+        eprintln!(
+            "flight-sitl ulog-csv: unknown argument {flag:?} (usage: ulog-csv FILE.ulg --out DIR)"
+        );
+        return ExitCode::from(2);
+    }
+    let path = std::path::Path::new(file);
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("log");
+    let written = std::fs::read(path)
+        .map_err(|e| format!("{file}: {e}"))
+        .and_then(|bytes| flight_sitl::ulog_csv::tables(&bytes).map_err(|e| format!("{file}: {e}")))
+        .and_then(|tables| {
+            std::fs::create_dir_all(dir).map_err(|e| format!("{dir}: {e}"))?;
+            for (suffix, text) in &tables {
+                let out = std::path::Path::new(dir).join(format!("{stem}_{suffix}"));
+                std::fs::write(&out, text).map_err(|e| format!("{}: {e}", out.display()))?;
+            }
+            Ok(tables.len())
+        });
+    match written {
+        Ok(n) => {
+            eprintln!("flight-sitl ulog-csv: {n} tables into {dir}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("flight-sitl ulog-csv: {e}");
             ExitCode::FAILURE
         }
     }

@@ -101,3 +101,28 @@ fn the_off_profile_logs_only_the_definitions() {
         .count();
     assert_eq!(data, 0);
 }
+
+#[test]
+fn ulog_csv_lays_a_log_out_as_ulog2csv_does() {
+    let bytes = hover_log(Profile::Flight, false, 2.0);
+    let tables = flight_sitl::ulog_csv::tables(&bytes).unwrap();
+    let estimates = flight_log::logged(&flight_log::read(&bytes).unwrap());
+    let text = &tables["estimate_0.csv"];
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "timestamp,q[0],q[1],q[2],q[3],euler_deg[0],euler_deg[1],euler_deg[2],\
+         velocity_ned_mps[0],velocity_ned_mps[1],velocity_ned_mps[2],position_ned_m[0],\
+         position_ned_m[1],position_ned_m[2],gyro_bias_radps[0],gyro_bias_radps[1],\
+         gyro_bias_radps[2],accel_bias_z_mps2,altitude_m,climb_mps,source"
+    );
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), estimates.len());
+    let last = rows.last().unwrap().split(',').collect::<Vec<_>>();
+    let e = estimates.last().unwrap();
+    assert_eq!(last[0], e.timestamp.to_string());
+    assert_eq!(last[1].parse::<f32>().unwrap(), e.q[0]);
+    // No GPS: the complementary filter flies and the INS fields are NaN.
+    assert_eq!(last[8], "NaN");
+    assert!(!tables.contains_key("sensor_gps_0.csv"), "no data, no file");
+}
