@@ -297,19 +297,21 @@ impl FlightApp {
             .flight
             .step(now_ms, sample, &self.link_input, self.climb_mps);
         self.record(out);
-        self.log.on_loop(
-            now_ms,
-            &LoopContext {
-                sample,
-                flight: &self.flight,
-                out: &out,
-                link: &self.link_input,
-                armed_before,
-                baro_altitude_m: self.baro_altitude_m(),
-                arming_blockers: self.arming_blockers(),
-                imu_fault: self.imu.fault(),
-            },
-        );
+        if self.log.profile() != Profile::Off {
+            self.log.on_loop(
+                now_ms,
+                &LoopContext {
+                    sample,
+                    flight: &self.flight,
+                    out: &out,
+                    link: &self.link_input,
+                    armed_before,
+                    baro_altitude_m: self.baro_altitude_m(),
+                    arming_blockers: self.arming_blockers(),
+                    imu_fault: self.imu.fault(),
+                },
+            );
+        }
         self.on_magcal_gesture(now_ms);
         self.identified = self.flight.take_identification();
         if let Some(id) = &self.identified {

@@ -7,7 +7,9 @@
 //! no I/O, no floating-point work beyond what the loop already computed — and the
 //! [`Encoder`], which a logging task (the firmware's, the simulator's, a host tool's) runs
 //! outside the loop to turn the entries into ULog bytes in whatever buffers its sink takes
-//! (a flash page, a telemetry frame, a file).
+//! (a flash page, a telemetry frame, a file). On the Sparky2 that sink is its M25P16's log
+//! area (`store`: pages that survive a power cut, erases ahead of time, sans-IO so the
+//! flash task schedules each operation between radio slots).
 //!
 //! When the ring is full, entries are dropped and the gap is marked: the next entry that
 //! fits is preceded by an [`Entry::Dropout`] of the lost time, which the encoder writes as
@@ -15,6 +17,7 @@
 
 mod encoder;
 mod profile;
+pub mod store;
 mod topics;
 
 pub use encoder::{Encoder, MIN_BUFFER, TOPICS, Topic, param_name};
