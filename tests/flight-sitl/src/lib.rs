@@ -15,6 +15,7 @@ pub mod log_figures;
 pub mod metrics;
 pub mod module_end;
 mod module_flash;
+pub mod overlay;
 pub mod runner;
 pub mod scenario;
 pub mod serve;

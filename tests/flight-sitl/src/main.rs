@@ -6,7 +6,8 @@
 //! `log-figures [--check|--write]` measures the flight log's bytes per second per profile
 //! (against the flight README's `log-profiles` block); `ulog-csv FILE.ulg --out DIR` writes
 //! a log's data as pyulog's `ulog2csv` lays it out, read with this project's reader (CI holds
-//! the two against each other, `ulog_check.py`).
+//! the two against each other, `ulog_check.py`); `overlay LOG.ulg --out DIR [--fps N]`
+//! draws a log as transparent video-overlay frames (`overlay.rs`).
 //! `--help` lists the options (`runner/cli.rs`).
 
 use std::process::ExitCode;
@@ -47,6 +48,10 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         };
+    }
+    if std::env::args().nth(1).as_deref() == Some("overlay") {
+        let args: Vec<String> = std::env::args().skip(2).collect();
+        return overlay(&args);
     }
     if std::env::args().nth(1).as_deref() == Some("ulog-csv") {
         let args: Vec<String> = std::env::args().skip(2).collect();
@@ -204,6 +209,43 @@ fn ulog_csv(args: &[String]) -> ExitCode {
         }
         Err(e) => {
             eprintln!("flight-sitl ulog-csv: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `flight-sitl overlay LOG.ulg --out DIR [--fps N]`: the log's overlay frames.
+fn overlay(args: &[String]) -> ExitCode {
+    const USAGE: &str = "usage: flight-sitl overlay LOG.ulg --out DIR [--fps N]";
+    let (file, dir, fps) = match args {
+        [file, o, dir] if o == "--out" => (file, dir, Ok(30.0)),
+        [file, o, dir, f, fps] if o == "--out" && f == "--fps" => (
+            file,
+            dir,
+            fps.parse::<f64>().map_err(|e| format!("--fps {fps}: {e}")),
+        ),
+        _ => {
+            eprintln!("{USAGE}");
+            return ExitCode::from(2);
+        }
+    };
+    let fps = match fps {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("flight-sitl overlay: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let written = std::fs::read(file)
+        .map_err(|e| format!("{file}: {e}"))
+        .and_then(|bytes| flight_sitl::overlay::write(&bytes, std::path::Path::new(dir), fps));
+    match written {
+        Ok(n) => {
+            eprintln!("flight-sitl overlay: {n} frames at {fps} fps into {dir}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("flight-sitl overlay: {e}");
             ExitCode::FAILURE
         }
     }

@@ -126,3 +126,30 @@ fn ulog_csv_lays_a_log_out_as_ulog2csv_does() {
     assert_eq!(last[8], "NaN");
     assert!(!tables.contains_key("sensor_gps_0.csv"), "no data, no file");
 }
+
+#[test]
+fn overlay_frames_follow_the_log_at_the_video_rate_and_are_transparent_around_the_drawing() {
+    let bytes = hover_log(Profile::Link, true, 4.0);
+    let frames = flight_sitl::overlay::frames(&bytes, 25.0).unwrap();
+    let span = frames.last().unwrap().t_s - frames[0].t_s;
+    assert_eq!(frames.len(), (span * 25.0).round() as usize + 1);
+    assert!((frames[1].t_s - frames[0].t_s - 0.04).abs() < 1e-6);
+    let last = frames.last().unwrap();
+    let status = last.status.unwrap();
+    assert!(status.armed, "hovering");
+    let (left, right) = flight_sitl::overlay::texts(last);
+    assert!(left[0].starts_with("ALT"), "{left:?}");
+    assert!(right[0].starts_with("ARMED"), "{right:?}");
+    assert!(right.iter().any(|l| l.starts_with("LQ 100 %")), "{right:?}");
+    let rgba = flight_sitl::overlay::draw(last).unwrap();
+    let (w, h) = flight_sitl::overlay::SIZE;
+    assert_eq!(rgba.len(), (w * h * 4) as usize);
+    let alpha = |x: u32, y: u32| rgba[((y * w + x) * 4 + 3) as usize];
+    assert_eq!(alpha(w / 2, h - 5), 0, "transparent below");
+    let drawn = rgba.chunks_exact(4).filter(|p| p[3] == 255).count();
+    assert!(
+        drawn > 2_000 && drawn < (w * h / 10) as usize,
+        "{drawn} pixels drawn"
+    );
+    assert!(flight_sitl::overlay::frames(&bytes, 0.0).is_err());
+}
