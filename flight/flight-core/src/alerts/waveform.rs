@@ -6,13 +6,14 @@
 pub const DAC_SAMPLES_PER_CYCLE: usize = 130;
 
 /// Fills `table` with one sine cycle for the 12-bit DAC: `centre_mv` ± `amplitude_mv`
-/// (peak) at a 3.3 V reference. Run once at boot, so libm's sine is fine here.
+/// (peak) at a 3.3 V reference. Run once at boot.
 pub fn sine_table(table: &mut [u16], centre_mv: f32, amplitude_mv: f32) {
     let n = table.len().max(1) as f32;
     let counts_per_mv = 4095.0 / 3300.0;
     for (i, sample) in table.iter_mut().enumerate() {
         let phase = 2.0 * core::f32::consts::PI * i as f32 / n;
-        let mv = centre_mv + amplitude_mv * libm::sinf(phase);
+        let (sin, _) = crate::estimation::math::sin_cos(phase);
+        let mv = centre_mv + amplitude_mv * sin;
         *sample = (mv * counts_per_mv + 0.5).clamp(0.0, 4095.0) as u16;
     }
 }

@@ -48,10 +48,10 @@ impl Attitude {
         }
     }
 
-    /// From roll, pitch and yaw in degrees (simulators and tests; cold path, uses libm).
+    /// From roll, pitch and yaw in degrees (simulators and tests).
     #[must_use]
     pub fn from_deg([roll_deg, pitch_deg, yaw_deg]: [f32; 3]) -> Self {
-        let (sin, cos) = libm::sincosf(yaw_deg / DEG_PER_RAD);
+        let (sin, cos) = crate::estimation::math::sin_cos(yaw_deg / DEG_PER_RAD);
         Self {
             roll_deg,
             pitch_deg,

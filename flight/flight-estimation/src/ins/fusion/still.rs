@@ -5,8 +5,8 @@
 //! from the accelerometer again, through the velocity states, the way GPS velocity does.
 
 use super::Fusion;
-use crate::estimation::ins::{Filter, index};
-use crate::estimation::{Error, check_finite};
+use crate::ins::{Filter, index};
+use crate::{Error, check_finite};
 
 impl Filter {
     /// Fuses "north and east velocity are zero" with variance `var_m2ps2` ((m/s)²). Not
@@ -39,8 +39,8 @@ impl Filter {
 
 #[cfg(test)]
 mod tests {
-    use crate::estimation::ins::{Config, Filter};
-    use crate::estimation::quaternion;
+    use crate::ins::{Config, Filter};
+    use crate::quaternion;
 
     #[test]
     fn holds_the_horizontal_velocity_and_levels_a_wrong_tilt() {
@@ -51,7 +51,7 @@ mod tests {
             1e-2,
             1e-2,
         );
-        let accel = [0.0, 0.0, -crate::estimation::GRAVITY_MPS2];
+        let accel = [0.0, 0.0, -crate::GRAVITY_MPS2];
         // WHEN it predicts at 1 kHz with the pseudo-measurement at 10 Hz for 60 s
         for k in 0..60_000 {
             f.predict([0.0; 3], accel, 0.001).unwrap();

@@ -8,10 +8,10 @@
 //! magnetometer calibration, or a start facing the heading where the proportional pull
 //! vanishes: sin 180° = 0).
 
-use crate::estimation::align;
-use crate::estimation::math::inv_sqrt;
-use crate::estimation::quaternion::{self, Quaternion, ned_to_body};
-use crate::estimation::{Error, check_finite};
+use crate::align;
+use crate::math::inv_sqrt;
+use crate::quaternion::{self, Quaternion, ned_to_body};
+use crate::{Error, check_finite};
 
 /// The cosine of the heading disagreement (30°) beyond which the filter counts towards a
 /// re-alignment.
@@ -160,7 +160,7 @@ impl Complementary {
         // R_be); their cross product is the rotation error in body axes.
         let [ax, ay, az] = accel_mps2;
         let f2 = ax * ax + ay * ay + az * az;
-        let g = crate::estimation::GRAVITY_MPS2;
+        let g = crate::GRAVITY_MPS2;
         if accel_corrects && f2 > 1e-6 {
             let inv = inv_sqrt(f2);
             let norm = f2 * inv;
@@ -281,8 +281,7 @@ mod tests {
             earth_field_ned: field,
             ..Config::default()
         });
-        let accel =
-            quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::estimation::GRAVITY_MPS2]);
+        let accel = quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::GRAVITY_MPS2]);
         let mag = quaternion::ned_to_body_vector(truth, field);
         let dt = 0.002;
         for _ in 0..(seconds / dt) as usize {
@@ -295,8 +294,7 @@ mod tests {
     fn converges_in_tilt_without_mag() {
         let truth = quaternion::from_euler(0.35, -0.17, 0.0);
         let mut cf = Complementary::new(Config::default());
-        let accel =
-            quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::estimation::GRAVITY_MPS2]);
+        let accel = quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::GRAVITY_MPS2]);
         for _ in 0..30000 {
             cf.update([0.0; 3], accel, None, 0.002).unwrap();
         }
@@ -370,8 +368,7 @@ mod tests {
             earth_field_ned: field,
             ..Config::default()
         });
-        let accel =
-            quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::estimation::GRAVITY_MPS2]);
+        let accel = quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::GRAVITY_MPS2]);
         let mag = quaternion::ned_to_body_vector(truth, field);
         // WHEN it runs 1.2 s with the magnetometer
         for _ in 0..600 {
@@ -390,8 +387,7 @@ mod tests {
             earth_field_ned: field,
             ..Config::default()
         });
-        let accel =
-            quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::estimation::GRAVITY_MPS2]);
+        let accel = quaternion::ned_to_body_vector(truth, [0.0, 0.0, -crate::GRAVITY_MPS2]);
         cf.align(accel, Some(quaternion::ned_to_body_vector(truth, field)))
             .unwrap();
         assert!(quaternion::angle_between(cf.attitude(), truth).to_degrees() < 0.01);

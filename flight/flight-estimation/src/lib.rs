@@ -2,6 +2,13 @@
 //! GPS, and the 14-state INS/GPS extended Kalman filter, plus the magnetometer's hard- and
 //! soft-iron calibration they rely on. All sans-IO, no globals: every estimator is a plain
 //! value, so several can run side by side.
+//!
+//! A crate of its own, re-exported as `flight_core::estimation`: the flight loop's hot
+//! numerics (the INS covariance above all) are built at `opt-level = 3` while the rest of
+//! the flight core is built for size (see the workspace manifest's profiles).
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
 
 pub mod align;
 pub mod complementary;
@@ -42,7 +49,7 @@ impl core::error::Error for Error {}
 /// NaN for ±∞ or NaN, and a NaN survives the sum. A test per value costs ≈ 5 instructions
 /// on the M4F (compare, flag transfer, branch); this one ≈ 1 per value.
 #[inline]
-pub(crate) fn all_finite(values: &[f32]) -> bool {
+pub fn all_finite(values: &[f32]) -> bool {
     values.iter().fold(0.0_f32, |s, v| s + v * 0.0) == 0.0
 }
 

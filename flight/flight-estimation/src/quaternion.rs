@@ -1,7 +1,7 @@
 //! Attitude quaternion helpers. Convention (as the Tau Labs INS): `q = [q0, q1, q2, q3]`,
 //! q0 scalar, rotating body FRD to NED; [`ned_to_body`] is R_be(q), the NED→body DCM.
 
-use crate::estimation::math::inv_sqrt;
+use crate::math::{inv_sqrt, sin_cos};
 
 /// Attitude quaternion `[w, x, y, z]`, body FRD → NED.
 pub type Quaternion = [f32; 4];
@@ -107,12 +107,12 @@ pub fn to_euler(q: Quaternion) -> [f32; 3] {
     ]
 }
 
-/// Quaternion from (roll, pitch, yaw) in radians, ZYX order (cold path: uses libm).
+/// Quaternion from (roll, pitch, yaw) in radians, ZYX order.
 #[must_use]
 pub fn from_euler(roll_rad: f32, pitch_rad: f32, yaw_rad: f32) -> Quaternion {
-    let (sr, cr) = libm::sincosf(0.5 * roll_rad);
-    let (sp, cp) = libm::sincosf(0.5 * pitch_rad);
-    let (sy, cy) = libm::sincosf(0.5 * yaw_rad);
+    let (sr, cr) = sin_cos(0.5 * roll_rad);
+    let (sp, cp) = sin_cos(0.5 * pitch_rad);
+    let (sy, cy) = sin_cos(0.5 * yaw_rad);
     normalized([
         cr * cp * cy + sr * sp * sy,
         sr * cp * cy - cr * sp * sy,

@@ -5,10 +5,10 @@
 //! direction of q to first order. The reference's row 8 (H = 0, K = 0) is not computed.
 
 use super::Fusion;
-use crate::estimation::ins::equations::{heading_field, level_frame_field};
-use crate::estimation::ins::{Filter, STATES, covariance, index};
-use crate::estimation::math::inv_sqrt;
-use crate::estimation::{Error, check_finite};
+use crate::ins::equations::{heading_field, level_frame_field};
+use crate::ins::{Filter, STATES, covariance, index};
+use crate::math::inv_sqrt;
+use crate::{Error, check_finite};
 
 impl Filter {
     /// The horizontal heading-frame field measured by `mag_body`, scaled to the earth field's

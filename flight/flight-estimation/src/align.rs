@@ -5,8 +5,8 @@
 //! (`Complementary::align`, `ins::Filter::align`) instead of level and north, and re-align
 //! their heading from it when the magnetometer keeps disagreeing (cold path: libm).
 
-use crate::estimation::ins::equations::level_frame_field;
-use crate::estimation::quaternion::{self, Quaternion};
+use crate::ins::equations::level_frame_field;
+use crate::quaternion::{self, Quaternion};
 
 /// (roll, pitch) from a specific-force vector that is pure gravity (level reads [0, 0, −g]).
 #[must_use]
@@ -57,17 +57,14 @@ pub fn attitude(
 /// magnetic north turned from true north. Only its direction matters to the heading.
 #[must_use]
 pub fn field_for_declination(declination_rad: f32) -> [f32; 3] {
-    [
-        libm::cosf(declination_rad),
-        libm::sinf(declination_rad),
-        0.0,
-    ]
+    let (sin, cos) = crate::math::sin_cos(declination_rad);
+    [cos, sin, 0.0]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::estimation::GRAVITY_MPS2;
+    use crate::GRAVITY_MPS2;
 
     #[test]
     fn any_heading_and_tilt_is_found_from_one_sample() {

@@ -4,8 +4,8 @@
 use ubx::{FixType, NavPvt};
 
 use super::*;
-use crate::estimation::ins::aiding::AidingConfig;
-use crate::estimation::ins::{Config, Ins};
+use crate::ins::aiding::AidingConfig;
+use crate::ins::{Config, Ins};
 
 const HOME: Home = Home {
     lat_e7: 522_227_387,
@@ -122,7 +122,7 @@ fn run_with_latency(latency_us: u32) -> (f32, f32) {
         ..GpsAidingConfig::default()
     });
     gps.set_home(HOME);
-    let g = crate::estimation::GRAVITY_MPS2;
+    let g = crate::GRAVITY_MPS2;
     let steps = 6000;
     for k in 1..=steps {
         let t = f64::from(k) * dt;

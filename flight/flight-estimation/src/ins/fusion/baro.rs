@@ -2,8 +2,8 @@
 //! with the measurement negated.
 
 use super::Fusion;
-use crate::estimation::ins::{Filter, index};
-use crate::estimation::{Error, check_finite};
+use crate::ins::{Filter, index};
+use crate::{Error, check_finite};
 
 impl Filter {
     /// Fuses a barometric altitude (m, up-positive, relative to the same origin as the

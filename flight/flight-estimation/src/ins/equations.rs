@@ -3,8 +3,8 @@
 //! differences in `tests/ins_jacobians.rs`.
 
 use super::STATES;
-use crate::estimation::math::inv_sqrt;
-use crate::estimation::quaternion::{Quaternion, ned_to_body};
+use crate::math::inv_sqrt;
+use crate::quaternion::{Quaternion, ned_to_body};
 
 /// ẋ = f(x, u) (DERIVATION.md §1): `ṗ = v`, `v̇ = R_beᵀ(q)(f − [0,0,ab_z]) + [0,0,g]`,
 /// `q̇ = ½ q ⊗ [0, ω − b_g]`, constant biases.

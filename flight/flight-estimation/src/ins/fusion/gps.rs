@@ -2,8 +2,8 @@
 //! (H rows are unit vectors, DERIVATION.md §4).
 
 use super::Fusion;
-use crate::estimation::ins::{Filter, index};
-use crate::estimation::{Error, check_finite};
+use crate::ins::{Filter, index};
+use crate::{Error, check_finite};
 
 impl Filter {
     /// Fuses a GPS position (NED, m, relative to the origin). With `vertical` false only

@@ -8,7 +8,7 @@ mod mag;
 mod still;
 
 use super::{Filter, STATES, covariance};
-use crate::estimation::Error;
+use crate::Error;
 
 /// Smallest variance any state may keep after an update.
 const VARIANCE_FLOOR: f32 = 1e-12;
@@ -94,7 +94,7 @@ impl Filter {
         if s.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
             return [0.0; STATES];
         }
-        let inv_sqrt_s = crate::estimation::math::inv_sqrt(s);
+        let inv_sqrt_s = crate::math::inv_sqrt(s);
         let u = ph.map(|v| v * inv_sqrt_s);
         let gain = innovation * inv_sqrt_s;
         for (x, &u_i) in self.x.iter_mut().zip(u.iter()) {
