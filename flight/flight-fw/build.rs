@@ -20,20 +20,21 @@ const BOOTLOADER: &str = "\
    from sector 5 (0x08020000, 384 KiB; the last 100 bytes hold the firmware descriptor that
    the GCS writes from the .tlfw). The bootloader starts the firmware only if
    (initial SP & 0x2FFE0000) == 0x20000000, which the end of the 128 KiB SRAM (0x20020000)
-   fails: the stack starts 16 bytes below it. */
+   fails; flip-link (.cargo/config.toml) starts the stack below the statics, well inside
+   (`cargo xtask verify` checks it). */
 MEMORY
 {
   FLASH : ORIGIN = 0x08020000, LENGTH = 384K - 100
   RAM   : ORIGIN = 0x20000000, LENGTH = 128K
 }
-_stack_start = ORIGIN(RAM) + LENGTH(RAM) - 16;
 ";
 
 /// Test variants for the processor-in-the-loop runner (`tests/pil` builds them from this
 /// source to show it models the hardware, not the app); `cargo xtask dist` never sets
 /// `TAULINK_PIL_VARIANT`, so no flashable image carries one. Comma-separated names:
 /// `radio-cs-pc13` wires the RFM22B's nSEL to PC13 instead of PA15 (a board with the wrong
-/// pin), `iwdg-half` halves the independent watchdog's timeout.
+/// pin), `iwdg-half` sets the independent watchdog's timeout to half the supervisor's feed
+/// period (no feeding meets it).
 const PIL_VARIANTS: [(&str, &str); 2] = [
     ("radio-cs-pc13", "pil_radio_cs_pc13"),
     ("iwdg-half", "pil_iwdg_half"),

@@ -264,7 +264,11 @@ impl PacketConfig {
         if modem.settings().manchester {
             bits *= 2;
         }
-        let rate = modem.bit_rate_bps() as u64;
+        // A modem at 0 bit/s cannot be built; 1 keeps the division free of a panic path.
+        let rate = match modem.bit_rate_bps() as u64 {
+            0 => 1,
+            r => r,
+        };
         ((bits as u64 * 1_000_000).div_ceil(rate)) as u32
     }
 }

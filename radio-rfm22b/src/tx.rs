@@ -42,7 +42,8 @@ where
         // The SPI order of Tau Labs' `PIOS_RFM22B_TransmitPacket`: FIFO clear, length, FIFO,
         // interrupts, status clear, TX on.
         self.clear_and_set_length(len).await?;
-        let (first, rest) = data.split_at(len.min(FIFO_LEN));
+        // Never `None` (`len` is `data.len()`); the checked split has no panic path.
+        let (first, rest) = data.split_at_checked(FIFO_LEN).unwrap_or((data, &[]));
         self.bus.write_burst(FIFO, first).await?;
         self.enable_tx_interrupts(len).await?;
         self.tx_on().await?;
@@ -90,7 +91,8 @@ where
             self.abort_if_busy().await?;
             return Err(Error::InvalidLength { len: data.len() });
         }
-        let (first, rest) = data.split_at(len.min(FIFO_LEN));
+        // Never `None` (`len` is `data.len()`); the checked split has no panic path.
+        let (first, rest) = data.split_at_checked(FIFO_LEN).unwrap_or((data, &[]));
         self.bus.write_burst(FIFO, first).await?;
         self.await_sent(rest, waking, timeout_us).await
     }

@@ -45,8 +45,8 @@ pub fn frame<'o>(payload: &[u8], out: &'o mut [u8]) -> Result<&'o [u8], FramingE
     let body = out.get_mut(..needed - 1).ok_or(too_small)?;
     let encoded = cobs::encode_parts(&[payload, &crc], body).map_err(|_| too_small)?;
     let (framed, _) = out.split_at_mut_checked(encoded + 1).ok_or(too_small)?;
-    let (_, delimiter) = framed.split_at_mut(encoded);
-    delimiter.fill(0);
+    let (delimiter, _) = framed.split_last_mut().ok_or(too_small)?;
+    *delimiter = 0;
     Ok(framed)
 }
 

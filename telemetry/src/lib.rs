@@ -4,6 +4,8 @@
 //! [`link::LinkClock`]. What the module speaks to the handset (CRSF, S.Port, FrSky D) is its
 //! own crate, `taulink-handset`, re-exported here as [`handset`].
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
+// docs.rs: the feature each gated item needs, shown beside it.
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -21,3 +23,4 @@ pub mod messages;
 #[cfg(feature = "std")]
 pub mod mock;
 pub mod module_record;
+pub mod settings;

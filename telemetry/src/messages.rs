@@ -60,7 +60,7 @@ pub struct LinkStats {
 ///
 /// **The variant order is the wire and the settings.** postcard encodes the variant index,
 /// and that index is [`FlightMode::id`], the number the flight side's settings store for the
-/// mode-switch positions (`mode.switch_low/mid/high`, `flight_core::settings::params::MODES`
+/// mode-switch positions (`mode.switch_low/mid/high`, [`crate::settings::MODES`]
 /// in the same order). So stored switch choices keep their meaning and the wire byte is the
 /// stable id: new modes are appended, never inserted, reordered or removed (a retired mode
 /// keeps its variant). The flight-only policy of each mode (which loops run) lives in
@@ -214,9 +214,10 @@ pub struct SysIdResult {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SettingChange {
-    /// Setting identifier (the flight code's parameter table index).
+    /// Setting identifier: the row's index in the schema, [`crate::settings::PARAMS`].
     pub id: u16,
-    /// New value, in the setting's own fixed-point unit.
+    /// New value: the row's 32 stored bits (a real as IEEE-754, a whole number or a
+    /// choice's index as itself; [`crate::settings::Param::from_bits`] reads it).
     pub value: i32,
 }
 
@@ -298,6 +299,32 @@ pub struct Home {
     pub set: bool,
 }
 
+/// What the flight controller's firmware has to say about itself (flight → ground; sent
+/// when it changes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, MaxSize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Health {
+    /// Flags, the flight code's bit set ([`Health::BARO_FAILED`] …).
+    pub flags: u8,
+    /// IMU samples the flight loop missed since boot (saturating).
+    pub imu_missed: u16,
+    /// Flight-loop steps that ran past the next sample since boot (saturating).
+    pub loop_overruns: u16,
+}
+
+impl Health {
+    /// The barometer is declared failed (the hold modes fall back).
+    pub const BARO_FAILED: u8 = 1;
+    /// The crystal did not start: the clocks run from the internal RC.
+    pub const CLOCK_FALLBACK: u8 = 2;
+    /// This boot resumed a flight after a reset in the air.
+    pub const RESUMED: u8 = 4;
+    /// The hardware random generator failed: seeds from a weaker source.
+    pub const RNG_FALLBACK: u8 = 8;
+    /// A USB host is connected (arming refused).
+    pub const USB_CONNECTED: u8 = 16;
+}
+
 /// The air link's authentication failures at the flight side (spec §12.2, "Tag failures"):
 /// sent when they change, at most once a second; a clean link never sends it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
@@ -349,6 +376,8 @@ pub enum Message {
     /// The link's authentication failures at the flight side (flight → module and ground;
     /// appended).
     LinkSecurity(LinkSecurity),
+    /// The firmware's health (flight → ground; appended: earlier variants keep their numbers).
+    Health(Health),
 }
 
 /// Largest postcard encoding of a [`Message`].

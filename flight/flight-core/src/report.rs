@@ -68,6 +68,7 @@ pub const fn blocker_bit(b: ArmBlocker) -> u16 {
         ArmBlocker::GainsNotReady => 8,
         ArmBlocker::BatteryCritical => 16,
         ArmBlocker::SettingsProblem => 32,
+        ArmBlocker::UsbConnected => 64,
     }
 }
 
@@ -259,7 +260,7 @@ fn to_wire(value: Value) -> i32 {
 }
 
 fn from_wire(param: &Param, value: i32) -> Result<Value, ParamError> {
-    param.from_bits(value as u32)
+    Ok(param.from_bits(value as u32)?)
 }
 
 /// Applies a change from the module (`id` = index in the parameter table). Returns the

@@ -43,6 +43,23 @@ pub fn max(a: f32, b: f32) -> f32 {
     if b > a || a.is_nan() { b } else { a }
 }
 
+/// `x` limited to ±|`limit`|: `x.clamp(-limit, limit)` for every limit `clamp` accepts, and
+/// for the ones it panics on (a negative limit: crossed bounds; NaN) no panic path at all —
+/// the limit's magnitude counts, a NaN limit leaves `x` as it is, a NaN `x` stays NaN (as
+/// `clamp` returns it). Two compares, no call.
+#[must_use]
+#[inline(always)]
+pub fn clamp_abs(x: f32, limit: f32) -> f32 {
+    let limit = limit.abs();
+    if x < -limit {
+        -limit
+    } else if x > limit {
+        limit
+    } else {
+        x
+    }
+}
+
 /// `v.clamp(lo, hi)` without its panic: `f32::clamp` asserts `lo ≤ hi` and, unless the
 /// bounds are constants, formats them with `Debug` for the message — which alone links
 /// core's float formatting into the image (≈ 10 KB of flash, issue 33). A NaN `v` stays

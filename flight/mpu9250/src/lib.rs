@@ -26,6 +26,8 @@
 //! # }
 //! ```
 #![cfg_attr(not(test), no_std)]
+// docs.rs: the feature each gated item needs, shown beside it.
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -131,6 +133,36 @@ impl<SPI: SpiDevice> Mpu9250<SPI> {
         };
         dev.write(reg::PWR_MGMT_1, reg::H_RESET).await?;
         delay.delay_ms(RESET_DELAY_MS).await;
+        dev.configure(delay).await?;
+        Ok(dev)
+    }
+
+    /// Configures a chip that stayed powered across the host's reset, without the device
+    /// reset and its 100 ms start-up wait: the same register writes and checks as
+    /// [`Mpu9250::new`] after its reset (every one of them sets its register whole, so what
+    /// the chip held before does not matter). For a host that must fly again fast — a flight
+    /// controller resuming after a reset in the air; a chip that lost power needs `new`.
+    ///
+    /// # Errors
+    /// As [`Mpu9250::new`].
+    pub async fn new_warm(
+        spi: SPI,
+        config: Config,
+        delay: &mut impl DelayNs,
+    ) -> Result<Self, Error<SPI::Error>> {
+        let mut dev = Self {
+            spi,
+            config,
+            mag_scale: [0.0; 3],
+        };
+        dev.configure(delay).await?;
+        Ok(dev)
+    }
+
+    /// Everything after the device reset: probe, configuration, the AK8963, interrupts.
+    async fn configure(&mut self, delay: &mut impl DelayNs) -> Result<(), Error<SPI::Error>> {
+        let config = self.config;
+        let dev = self;
         dev.probe(delay).await?;
         dev.write(reg::PWR_MGMT_1, reg::CLKSEL_PLL).await?;
         dev.write(reg::PWR_MGMT_2, 0).await?;
@@ -159,12 +191,12 @@ impl<SPI: SpiDevice> Mpu9250<SPI> {
         }
         if config.magnetometer {
             dev.write(reg::I2C_MST_CTRL, reg::I2C_MST_400KHZ).await?;
-            dev.mag_scale = ak8963::init(&mut dev, delay).await?;
+            dev.mag_scale = ak8963::init(dev, delay).await?;
         }
         dev.write(reg::INT_PIN_CFG, reg::INT_LATCHED_ANY_READ_CLEARS)
             .await?;
         dev.write(reg::INT_ENABLE, reg::RAW_RDY_EN).await?;
-        Ok(dev)
+        Ok(())
     }
 
     /// Polls WHO_AM_I a bounded number of times.

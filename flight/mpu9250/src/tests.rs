@@ -129,6 +129,26 @@ fn bring_up_with_magnetometer_and_burst_read() {
 }
 
 #[test]
+fn a_warm_start_is_the_bring_up_without_the_reset() {
+    // GIVEN a chip that kept its power (and its old configuration) across the host's reset
+    let mut t = core_bring_up(true);
+    // The bring-up without its first transaction, the H_RESET write (0x6B ← 0x80).
+    t.drain(..write(0x6B, 0x80).len());
+    t.extend(mag_bring_up(0x48, [128, 128, 128]));
+    t.extend(interrupts());
+    let mut spi = Mock::new(&t);
+    // WHEN the driver starts warm: every register written again, no H_RESET
+    let dev = block_on(Mpu9250::new_warm(
+        spi.clone(),
+        Config::default(),
+        &mut NoopDelay::new(),
+    ));
+    // THEN it is configured, the magnetometer's scale read
+    assert!(dev.is_ok());
+    spi.done();
+}
+
+#[test]
 fn bring_up_without_magnetometer_reads_14_bytes() {
     let mut t = core_bring_up(false);
     t.extend(interrupts());

@@ -23,6 +23,8 @@
 //! # }
 //! ```
 #![cfg_attr(not(test), no_std)]
+// docs.rs: the feature each gated item needs, shown beside it.
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 

@@ -25,6 +25,8 @@
 //! assert_eq!(messages, [Message::Ack { class: 0x06, id: 0x8A }]);
 //! ```
 #![cfg_attr(not(test), no_std)]
+// docs.rs: the feature each gated item needs, shown beside it.
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 

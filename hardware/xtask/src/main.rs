@@ -10,6 +10,8 @@
 //! cargo xtask verify                                     # boot contracts, flash budgets, README
 //! cargo xtask readme                                     # the README's size tables from dist/
 //! cargo xtask figures [--check | --write]                # the docs' M4 instruction figures
+//! cargo xtask web [--test]                               # the web ground station, built (and tested)
+//! cargo xtask wasm                                       # its decoder and bindings only
 //! ```
 
 use fw_elf as elf;
@@ -20,6 +22,7 @@ mod layout;
 mod size_report;
 mod tlfw;
 mod verify;
+mod web;
 
 use layout::Layout;
 
@@ -41,7 +44,9 @@ use clap::{Parser, Subcommand};
   cargo xtask dist                       every variant -> dist/*.{elf,bin,hex,uf2}
   cargo xtask size                       text/data/bss of what dist/ holds
   cargo xtask size-report --image flight-sparky2 --top 40
-                                         its text by crate and its 40 largest symbols"
+                                         its text by crate and its 40 largest symbols
+  cargo xtask web                        the web ground station, from a clone to its dist/
+  cargo xtask web --test                 the same, then its unit and browser tests"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -88,6 +93,18 @@ enum Task {
         #[arg(long)]
         write: bool,
     },
+    /// Build the web ground station from a clone: the wasm target if missing, the decoder
+    /// and its bindings (`wasm`), the app's npm packages (no browser download) and the app
+    /// into telemetry/ground-station/dist.
+    Web {
+        /// Then run its unit tests and its browser tests (Debian's Chromium, against
+        /// `taulink-sim --serve`).
+        #[arg(long)]
+        test: bool,
+    },
+    /// Build the ground station's decoder for the browser and write its JavaScript
+    /// bindings into telemetry/ground-station/src/wasm (what `npm run wasm` runs).
+    Wasm,
 }
 
 #[derive(Subcommand, Debug)]
@@ -633,6 +650,8 @@ fn run(task: &Task) -> Result<(), String> {
             let elf_dir = target_dir().join(TARGET).join("release");
             figures::run(&workspace_root(), &elf_dir, mode)
         }
+        Task::Web { test } => web::web(&workspace_root(), &target_dir(), web::Web { test: *test }),
+        Task::Wasm => web::wasm(&workspace_root(), &target_dir()),
     }
 }
 

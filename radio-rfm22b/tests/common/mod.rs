@@ -5,23 +5,15 @@ pub mod spi;
 
 use std::path::PathBuf;
 
-/// `shared/vectors/<name>`: `$TAULINK_VECTORS` if set, else the nearest ancestor of this
-/// crate that has a `shared/vectors` directory (the workspace sits beside `shared/`).
+/// The vector set `<name>`: `$TAULINK_VECTORS/<name>` if set, else the repository's
+/// `testdata/<name>` (its README says where the vectors come from).
 pub fn vectors_dir(name: &str) -> PathBuf {
-    if let Ok(dir) = std::env::var("TAULINK_VECTORS") {
-        return PathBuf::from(dir).join(name);
+    match std::env::var("TAULINK_VECTORS") {
+        Ok(dir) => PathBuf::from(dir).join(name),
+        Err(_) => PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../testdata")
+            .join(name),
     }
-    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    for ancestor in manifest.ancestors() {
-        let candidate = ancestor.join("shared").join("vectors").join(name);
-        if candidate.is_dir() {
-            return candidate;
-        }
-    }
-    panic!(
-        "shared/vectors/{name} not found above {}",
-        manifest.display()
-    );
 }
 
 /// Parses one vector file.

@@ -4,6 +4,7 @@
 // power-up, armed from ≈ 10 s, rate mode from 20 s to 28 s, landed and disarmed by ≈ 60 s);
 // the page is the phone on the module's HM-10. `/api/sent` tells what the server sent the
 // page (decoded) and which setting changes the FlightApp took.
+import { spawn } from "node:child_process";
 import { readFileSync } from "node:fs";
 import { fileURLToPath } from "node:url";
 import { expect, test, type Page } from "@playwright/test";
@@ -89,6 +90,79 @@ test("arming and a flight-mode change are spoken; mute silences the next change"
 
 /** The binding phrase the simulated module holds (`taulink-sim --serve` prints it). */
 const SERVE_PHRASE = "taulink served demo";
+
+test("opened from the URL taulink-sim --serve prints, the page connects by itself", async ({ page }) => {
+  // A server of its own on a free port, started as a user starts it; its first line is the URL.
+  const server = spawn(fileURLToPath(new URL("../../../target/release/taulink-sim", import.meta.url)), ["--serve", "127.0.0.1:0", "--dist", "dist"], {
+    cwd: fileURLToPath(new URL("..", import.meta.url)),
+    stdio: ["ignore", "pipe", "inherit"],
+  });
+  try {
+    const url = await new Promise<string>((resolve, reject) => {
+      let out = "";
+      server.stdout.on("data", (d: Buffer) => {
+        out += d.toString();
+        const m = /open (http:\/\/\S+)/.exec(out);
+        if (m) resolve(m[1]!);
+      });
+      server.on("exit", (code) => reject(new Error(`taulink-sim exited (${code}): ${out}`)));
+    });
+    await page.goto(url);
+    // No click: the status and the values arrive by themselves.
+    await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
+    await expect(page.getByLabel("Battery voltage", { exact: true })).toHaveText(/^\d\.\d\d V$/, { timeout: 10_000 });
+  } finally {
+    server.kill();
+  }
+});
+
+test("one element per accessible name", async ({ page }) => {
+  await page.goto("/");
+  await expect(page.getByLabel("Setting pid.roll.kp")).toBeVisible();
+  // Every name given on the page (aria-label, and a button's text where it has none).
+  const names = await page.evaluate(() =>
+    [...document.querySelectorAll("[aria-label], button")].map((e) => e.getAttribute("aria-label") ?? e.textContent?.trim() ?? ""),
+  );
+  expect(names.length).toBeGreaterThan(100);
+  const seen = new Set<string>();
+  const twice = names.filter((n) => seen.size === seen.add(n.toLowerCase()).size);
+  expect(twice).toEqual([]);
+  // Outside the per-setting rows, no name is part of another, so a name asked for as
+  // Playwright or a screen reader's search does (case-insensitive, in part) finds one element:
+  // the heading value is "Heading", the compass strip "Compass strip".
+  const fixed = names.filter((n) => !/^(Setting|New value for|Set) [a-z]/.test(n));
+  for (const name of fixed) {
+    const within = fixed.filter((other) => other !== name && other.toLowerCase().includes(name.toLowerCase()));
+    expect(within, `"${name}" is part of`).toEqual([]);
+  }
+  await expect(page.getByLabel("Heading")).toHaveCount(1);
+  await expect(page.getByRole("img", { name: "Compass strip" })).toHaveCount(1);
+});
+
+test("an enum setting is chosen by its name, numbers show their unit and range, refusals say why", async ({ page }) => {
+  await page.goto("/?sim");
+  await expect(page.getByRole("status", { name: "Connection status" })).toHaveText("connected: simulator");
+  await page.getByLabel("Binding phrase").fill(SERVE_PHRASE);
+  await page.getByRole("button", { name: "Use phrase" }).click();
+  await expect(page.getByLabel("Phrase status")).toHaveText("phrase confirmed", { timeout: 10_000 });
+  // A number: its range and unit beside its name; a value outside it is not sent, and why.
+  await page.getByLabel("Filter settings").fill("rate.max_dps");
+  await expect(page.getByRole("row", { name: /rate\.max_dps/ })).toContainText("30 … 2000 °/s");
+  await page.getByLabel("New value for rate.max_dps").fill("5000");
+  await page.getByRole("button", { name: "Set rate.max_dps" }).click();
+  await expect(page.getByRole("status", { name: "Settings status" })).toHaveText(
+    "rate.max_dps: 5000 is above the largest value, 2000 °/s",
+  );
+  // A choice: picked from its names, echoed by name once the flight side holds it.
+  await page.getByLabel("Filter settings").fill("mode.switch_high");
+  await page.getByLabel("New value for mode.switch_high").selectOption({ label: "horizon" });
+  await page.getByRole("button", { name: "Set mode.switch_high" }).click();
+  await expect(page.getByLabel("Setting mode.switch_high")).toHaveText("horizon", { timeout: 10_000 });
+  const applied = (await sent(page)).applied;
+  expect(applied).toHaveLength(1);
+  // The wire carries the choice's index: horizon is the fourth of the modes.
+  expect(applied[0]!.value).toBe(3);
+});
 
 test("a setting change round-trips to the flight side", async ({ page }) => {
   await page.goto("/?sim");

@@ -1,11 +1,12 @@
 /**
- * The WebAssembly half (telemetry-wasm, built by scripts/build-wasm.sh into src/wasm/):
+ * The WebAssembly half (telemetry-wasm, built by `cargo xtask wasm` into src/wasm/):
  * loading it, and typed wrappers over its JSON answers.
  */
 import init, {
   Decoder as WasmDecoder,
   Phone as WasmPhone,
   encode_setting_change,
+  setting_check,
   setting_from_wire,
   setting_to_wire,
   settings_table,
@@ -15,6 +16,10 @@ import type { Event, ModuleEvent } from "./messages";
 export interface SettingRow {
   id: number;
   name: string;
+  /** The value's unit ("°/s", "µs"), "" for a pure number. */
+  unit: string;
+  /** What the setting does, in one line (the schema's doc). */
+  doc: string;
   kind: "real" | "whole" | "choice";
   min?: number;
   max?: number;
@@ -53,6 +58,15 @@ export function settingsTable(): SettingRow[] {
 export function settingChangeFrame(id: number, value: number): Uint8Array | undefined {
   const wire = setting_to_wire(id, value);
   return wire === undefined ? undefined : encode_setting_change(id, wire);
+}
+
+/** The wire value of `value` for setting `id`, or why the flight side would refuse it. */
+export function checkSetting(id: number, value: number): { wire: number } | { refused: string } {
+  try {
+    return { wire: setting_check(id, value) };
+  } catch (e) {
+    return { refused: e instanceof Error ? e.message : String(e) };
+  }
 }
 
 export function settingValue(id: number, wire: number): number | undefined {
@@ -94,10 +108,8 @@ export class Phone {
     return this.inner.set_module_phrase(newPhrase);
   }
 
-  /** The signed change frame of `id` to `value`; undefined if the value would be refused or the module has not granted the change key. */
-  signChange(id: number, value: number): Uint8Array | undefined {
-    const wire = setting_to_wire(id, value);
-    if (wire === undefined) return undefined;
+  /** The signed change frame of `id` to the wire value `wire` (from `checkSetting`); undefined until the module granted the change key. */
+  signChange(id: number, wire: number): Uint8Array | undefined {
     const frame = this.inner.sign_change(id, wire);
     return frame.length ? frame : undefined;
   }

@@ -8,6 +8,7 @@ import { Alerts, Speaker, armText } from "./alerts";
 import {
   Decoder,
   Phone,
+  checkSetting,
   loadWasm,
   settingValue,
   settingsTable,
@@ -40,6 +41,8 @@ let horizon: Horizon;
 let settings: SettingRow[] = [];
 /** The phone's half with the binding phrase (in memory only: gone with the page). */
 let phone: Phone | undefined;
+/** Why the page itself did not send the last value typed (shown before the flight side's refusals). */
+let pageRefusal: string | undefined;
 /** Console values by setting name (USB), shown when no link echo is there. */
 const consoleValues = new Map<string, string>();
 
@@ -144,12 +147,18 @@ function renderSysid(): void {
   if (body.innerHTML !== html) body.innerHTML = html;
 }
 
+/** A setting's value as shown: a choice by its name, a number with its unit. */
+function valueText(row: SettingRow, v: number): string {
+  if (row.kind === "choice") return row.choices?.[v] ?? String(v);
+  const n = row.kind === "real" ? fmt.real(v) : String(v);
+  return row.unit ? `${n} ${row.unit}` : n;
+}
+
 function shownValue(row: SettingRow): string {
   const wire = state.settings.get(row.id);
   if (wire !== undefined) {
     const v = settingValue(row.id, wire);
-    if (v === undefined) return "?";
-    return row.kind === "choice" ? (row.choices?.[v] ?? String(v)) : row.kind === "real" ? fmt.real(v) : String(v);
+    return v === undefined ? "?" : valueText(row, v);
   }
   return consoleValues.get(row.name) ?? "—";
 }
@@ -159,13 +168,14 @@ const REFUSALS: Record<RefuseReason, string> = {
   NotAuthenticated: "refused: not signed with the link's change key",
   Replayed: "refused: replayed",
   NoPhrase: "refused: the flight side has no keyed link",
-  Invalid: "refused: value not accepted",
+  Invalid: "refused: out of range, or the other settings would not run with it",
 };
 
 function renderSettingValues(): void {
   const r = state.refused;
   const name = r ? (settings.find((row) => row.id === r.id)?.name ?? `#${r.id}`) : "";
-  set("settings-status", r ? `${name} ${REFUSALS[r.reason]}` : "", r ? "bad" : "");
+  const refusal = pageRefusal ?? (r ? `${name} ${REFUSALS[r.reason]}` : undefined);
+  set("settings-status", refusal ?? "", refusal ? "bad" : "");
   // The flight side refuses changes while armed; the page does not offer them then.
   const armed = state.arm?.armed === true;
   for (const b of document.querySelectorAll<HTMLButtonElement>("button[data-set], #module-phrase-send")) {
@@ -183,37 +193,58 @@ function renderSettingValues(): void {
   }
 }
 
+/** Where a number may go, with its unit ("30 … 2000 °/s"); a choice's names. */
+function rangeText(row: SettingRow): string {
+  if (row.kind === "choice") return (row.choices ?? []).join(" · ");
+  const [lo, hi] = [row.min ?? 0, row.max ?? 0].map((v) => (row.kind === "real" ? fmt.real(v) : String(v)));
+  return `${lo} … ${hi}${row.unit ? ` ${row.unit}` : ""}`;
+}
+
+/** A choice is picked by name from its list; a number is typed, with its range shown. */
+function newValueControl(row: SettingRow): string {
+  const label = `aria-label="New value for ${row.name}" data-id="${row.id}"`;
+  if (row.kind === "choice") {
+    const options = (row.choices ?? []).map((c, i) => `<option value="${i}">${c}</option>`).join("");
+    return `<select ${label}><option value="" selected>choose…</option>${options}</select>`;
+  }
+  const step = row.kind === "whole" ? "1" : "any";
+  return `<input ${label} type="number" inputmode="decimal" min="${row.min}" max="${row.max}" step="${step}" placeholder="${rangeText(row)}" />`;
+}
+
 function buildSettings(): void {
   settings = settingsTable();
   const filter = ($<HTMLInputElement>("settings-filter").value || "").trim();
   $("settings-rows").innerHTML = settings
     .filter((r) => r.name.includes(filter))
-    .map((r) => {
-      const range = r.kind === "choice" ? (r.choices ?? []).map((c, i) => `${i}=${c}`).join(" ") : `${fmt.real(r.min ?? 0)}…${fmt.real(r.max ?? 0)}`;
-      return `<tr><td title="${range}">${r.name}</td><td id="set-${r.id}" aria-label="Setting ${r.name}">—</td>` +
-        `<td><input data-id="${r.id}" aria-label="New value for ${r.name}" placeholder="${range}" /></td>` +
-        `<td><button type="button" data-set="${r.id}">Set</button></td></tr>`;
-    })
+    .map((r) =>
+      `<tr><td title="${r.doc}">${r.name}<br /><small class="range">${rangeText(r)}</small></td>` +
+      `<td id="set-${r.id}" aria-label="Setting ${r.name}">—</td>` +
+      `<td>${newValueControl(r)}</td>` +
+      `<td><button type="button" data-set="${r.id}" aria-label="Set ${r.name}">Set</button></td></tr>`)
     .join("");
   renderSettingValues();
 }
 
-async function sendSetting(row: SettingRow, text: string): Promise<void> {
+/** Sends `value` (a number, or a choice's index) for `row`; a refused value is explained. */
+async function sendSetting(row: SettingRow, value: number): Promise<void> {
+  const check = checkSetting(row.id, value);
+  pageRefusal = "refused" in check ? `${row.name}: ${check.refused}` : undefined;
+  renderSettingValues();
+  if ("refused" in check) return;
+  const shown = valueText(row, value);
   if (usb) {
-    await usb.command(`set ${row.name} ${text}`);
+    // The console reads a choice by its name and a number without its unit.
+    await usb.command(`set ${row.name} ${row.kind === "choice" ? shown : String(value)}`);
     await usb.command(`get ${row.name}`);
     return;
   }
-  const value = row.kind === "choice" && row.choices?.includes(text) ? row.choices.indexOf(text) : Number(text);
   if (!phone || !phone.standing.startsWith("granted")) {
     status("enter the binding phrase first: the module must confirm it before changes can be signed");
     return;
   }
-  const frame = phone.signChange(row.id, value);
+  const frame = phone.signChange(row.id, check.wire);
   if (!frame) {
-    status(phone.standing === "granted"
-      ? `${row.name}: ${text} is outside what the flight side accepts`
-      : "the module has no keyed flight link yet: bind first");
+    status("the module has no keyed flight link yet: bind first");
     return;
   }
   if (!transport) {
@@ -221,7 +252,7 @@ async function sendSetting(row: SettingRow, text: string): Promise<void> {
     return;
   }
   await transport.send(frame);
-  status(`${row.name} → ${text} sent; waiting for the flight side's report`);
+  status(`${row.name} → ${shown} sent; waiting for the flight side's report`);
 }
 
 /** A new module phrase is on its way (until the module answers). */
@@ -411,8 +442,9 @@ async function main(): Promise<void> {
   $("settings-rows").onclick = (ev) => {
     const id = (ev.target as HTMLElement).dataset.set;
     const row = settings.find((r) => String(r.id) === id);
-    const input = document.querySelector<HTMLInputElement>(`input[data-id="${id}"]`);
-    if (row && input && input.value.trim()) void sendSetting(row, input.value.trim());
+    const control = document.querySelector<HTMLInputElement | HTMLSelectElement>(`[data-id="${id}"]`);
+    const text = control?.value.trim() ?? "";
+    if (row && text) void sendSetting(row, Number(text));
   };
   $("mute").onclick = () => {
     speaker.muted = !speaker.muted;

@@ -37,7 +37,7 @@ export class Horizon {
         <path d="M60 100 h25 l7 8 M140 100 h-25 l-7 8" stroke="#ffcc00" stroke-width="4" fill="none"/>
         <circle cx="100" cy="100" r="3" fill="#ffcc00"/>
       </svg>
-      <svg viewBox="0 0 200 28" class="tape" role="img" aria-label="Heading tape">
+      <svg viewBox="0 0 200 28" class="tape" role="img" aria-label="Compass strip">
         <rect width="200" height="28" fill="#111"/>
         <g class="hz-tape"></g>
         <path d="M100 0 l-5 7 h10z" fill="#ffcc00"/>

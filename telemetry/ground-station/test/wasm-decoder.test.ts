@@ -4,7 +4,7 @@
 import { readFileSync } from "node:fs";
 import { fileURLToPath } from "node:url";
 import { beforeAll, describe, expect, it } from "vitest";
-import { Decoder, Phone, loadWasm, settingChangeFrame, settingValue, settingsTable } from "../src/decoder";
+import { Decoder, Phone, checkSetting, loadWasm, settingChangeFrame, settingValue, settingsTable } from "../src/decoder";
 import { fromHex } from "../src/log";
 
 const here = (p: string): string => fileURLToPath(new URL(p, import.meta.url));
@@ -42,6 +42,25 @@ describe("settings encoders", () => {
     expect(settingValue(kp!.id, change.value)).toBeCloseTo(0.004, 7);
     expect(settingChangeFrame(kp!.id, 5)).toBeUndefined();
   });
+
+  it("gives each number its unit and range, each choice its names", () => {
+    const table = settingsTable();
+    const rate = table.find((r) => r.name === "rate.max_dps")!;
+    expect([rate.kind, rate.unit, rate.min, rate.max]).toEqual(["real", "°/s", 30, 2000]);
+    expect(rate.doc).toBe("Rate modes: the rate full stick commands.");
+    const frame = table.find((r) => r.name === "mixer.frame")!;
+    expect([frame.kind, frame.choices]).toEqual(["choice", ["quad-x", "quad-plus", "hex-x"]]);
+  });
+
+  it("says why the flight side would refuse a value", () => {
+    const table = settingsTable();
+    const id = (name: string): number => table.find((r) => r.name === name)!.id;
+    expect(checkSetting(id("pid.roll.kp"), 0.004)).toEqual({ wire: new Int32Array(new Float32Array([0.004]).buffer)[0] });
+    expect(checkSetting(id("pid.roll.kp"), 5)).toEqual({ refused: "5 is above the largest value, 1" });
+    expect(checkSetting(id("rate.max_dps"), 10)).toEqual({ refused: "10 is below the smallest value, 30 °/s" });
+    expect(checkSetting(id("battery.cells"), 2.5)).toEqual({ refused: "2.5 is not a whole number" });
+    expect(checkSetting(id("battery.cells"), NaN)).toEqual({ refused: "not a number" });
+  });
 });
 
 describe("the phone's half", () => {
@@ -51,7 +70,9 @@ describe("the phone's half", () => {
     expect(phone.standing).toBe("unknown");
     // The Hello is a module record: the page's own decoder reads it back as one.
     expect(new Decoder().push(phone.hello())).toEqual(["Hello"]);
-    expect(phone.signChange(kp.id, 0.004)).toBeUndefined();
+    const check = checkSetting(kp.id, 0.004);
+    if (!("wire" in check)) throw new Error(check.refused);
+    expect(phone.signChange(kp.id, check.wire)).toBeUndefined();
     expect(phone.onRefused({ id: kp.id, reason: "NotAuthenticated", session: 42, counter: 0 })).toBeUndefined();
     // A module's refusal is the phone's standing.
     expect(phone.onModuleRecord({ Answer: { outcome: { Refused: "NoPhrase" }, counter: 0 } })).toBeUndefined();

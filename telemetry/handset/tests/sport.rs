@@ -1,5 +1,5 @@
 //! S.Port frames byte-exact against worked frames and openLRSng's output
-//! (`shared/vectors/openlrs/frsky.json`, transcribed below), the decoder, and property tests.
+//! (`testdata/openlrs/frsky.json`, transcribed below), the decoder, and property tests.
 //!
 //! The worked frames were composed from the frame layout and value IDs as EdgeTX parses them
 //! (`radio/src/telemetry/frsky_sport.cpp`, `frsky_defs.h`: `7E physId 10 idLo idHi v0..v3

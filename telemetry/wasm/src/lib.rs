@@ -58,6 +58,13 @@ pub fn setting_to_wire(id: u16, value: f64) -> Option<i32> {
     settings::to_wire(id, value)
 }
 
+/// The wire value of `value` for setting `id`; throws why the flight side would refuse it
+/// ("2 is above the largest value, 1").
+#[wasm_bindgen]
+pub fn setting_check(id: u16, value: f64) -> Result<i32, wasm_bindgen::JsError> {
+    settings::check(id, value).map_err(|e| wasm_bindgen::JsError::new(&e))
+}
+
 /// The number a wire value of setting `id` stands for (a choice as its index).
 #[wasm_bindgen]
 pub fn setting_from_wire(id: u16, wire: i32) -> Option<f64> {

@@ -1,7 +1,7 @@
-//! The flight side's settings as the ground station sees them: the parameter table of
-//! `flight_core::settings` (index = the `SettingChange::id` on the wire), the conversion of a
-//! number to its wire value and back (`flight_core::report`: reals as IEEE-754 bits, whole
-//! numbers and choices as themselves), and the framed `SettingChange` the phone sends.
+//! The flight side's settings as the ground station sees them: the schema of
+//! `telemetry::settings` (index = the `SettingChange::id` on the wire; names, kinds, ranges,
+//! units, docs), the conversion of a number to its wire value and back (reals as IEEE-754
+//! bits, whole numbers and choices as themselves), and the framed `SettingChange` the phone sends.
 //! Authority stays on the flight side: it applies only changes signed with the link's change
 //! key (spec §12.5) and never while armed, and echoes what it holds, so the app shows a value
 //! only once the flight side reported it. [`Phone`] is the phone's half: the binding phrase
@@ -9,7 +9,6 @@
 //! to the module with CPace (`telemetry::module_record`), which grants the change key; the
 //! signer and its counter; and new module phrases sealed in that session.
 
-use flight_core::settings::{Kind, PARAMS, Param, Value};
 use serde_json::json;
 use telemetry::change_auth::Signer;
 use telemetry::framing::{frame, framed_len};
@@ -18,6 +17,7 @@ use telemetry::messages::{
     ChangeRefused, EncodeError, FRAMED_MAX_BYTES, Message, SettingChange, encode_message,
 };
 use telemetry::module_record::{self, ModuleRecord, Outcome, PhoneSession, Refusal};
+use telemetry::settings::{Kind, PARAMS, Value, by_id};
 
 /// Where the phone stands with the module.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -239,14 +239,20 @@ fn number(value: Value) -> f64 {
     }
 }
 
-/// `[{"id":0,"name":"output.protocol","kind":"choice","choices":[...],"default":0}, ...]`;
-/// reals and whole numbers carry `"min"` and `"max"`.
+/// `[{"id":0,"name":"output.protocol","unit":"","doc":"…","kind":"choice","choices":[...],
+/// "default":0}, ...]`; reals and whole numbers carry `"min"` and `"max"`.
 pub fn table_json() -> String {
     let rows: Vec<serde_json::Value> = PARAMS
         .iter()
         .enumerate()
         .map(|(id, p)| {
-            let mut row = json!({"id": id, "name": p.name, "default": number(p.default)});
+            let mut row = json!({
+                "id": id,
+                "name": p.name,
+                "unit": p.unit(),
+                "doc": p.doc(),
+                "default": number(p.default),
+            });
             let extra = match p.kind {
                 Kind::F32 { min, max } => {
                     json!({"kind": "real", "min": f64::from(min), "max": f64::from(max)})
@@ -263,162 +269,103 @@ pub fn table_json() -> String {
     serde_json::Value::Array(rows).to_string()
 }
 
-fn param(id: u16) -> Option<&'static Param> {
-    PARAMS.get(usize::from(id))
-}
-
 /// The wire value of `value` for setting `id`; `None` for an unknown setting or a value the
 /// flight side would refuse (outside the range, not a whole number, not a choice).
 pub fn to_wire(id: u16, value: f64) -> Option<i32> {
-    let p = param(id)?;
+    check(id, value).ok()
+}
+
+/// The wire value of `value` for setting `id`, or why the flight side would refuse it, in
+/// words for the pilot ("2 is above the largest value, 1").
+pub fn check(id: u16, value: f64) -> Result<i32, String> {
+    let p = by_id(id).ok_or("no such setting")?;
+    if !value.is_finite() {
+        return Err("not a number".into());
+    }
+    let unit = match p.unit() {
+        "" => String::new(),
+        u => format!(" {u}"),
+    };
     let bits = match p.kind {
-        Kind::F32 { .. } => (value as f32).to_bits(),
-        Kind::U32 { .. } | Kind::Choice(_) => {
-            if value.fract() != 0.0 || !(0.0..=f64::from(u32::MAX)).contains(&value) {
-                return None;
+        Kind::F32 { min, max } => {
+            let v = value as f32;
+            if v < min {
+                return Err(format!("{v} is below the smallest value, {min}{unit}"));
+            }
+            if v > max {
+                return Err(format!("{v} is above the largest value, {max}{unit}"));
+            }
+            v.to_bits()
+        }
+        Kind::U32 { min, max } => {
+            if value.fract() != 0.0 {
+                return Err(format!("{value} is not a whole number"));
+            }
+            if value < f64::from(min) {
+                return Err(format!("{value} is below the smallest value, {min}{unit}"));
+            }
+            if value > f64::from(max) {
+                return Err(format!("{value} is above the largest value, {max}{unit}"));
+            }
+            value as u32
+        }
+        Kind::Choice(names) => {
+            if value.fract() != 0.0 || value < 0.0 || value >= names.len() as f64 {
+                return Err(format!("not one of {}", names.join(", ")));
             }
             value as u32
         }
     };
-    // The flight side's own check decides what is in range.
-    p.from_bits(bits).ok()?;
-    Some(bits as i32)
+    // The schema's own check (the flight side's) has the last word.
+    p.from_bits(bits)
+        .map_err(|e| e.to_string())
+        .map(|_| bits as i32)
 }
 
 /// The number wire value `wire` of setting `id` stands for.
 pub fn from_wire(id: u16, wire: i32) -> Option<f64> {
-    param(id)?.from_bits(wire as u32).ok().map(number)
+    by_id(id)?.from_bits(wire as u32).ok().map(number)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flight_core::authority::{ChangeGate, Reply};
-    use telemetry::messages::{Decoded, MessageReader};
-
-    fn decode(bytes: &[u8]) -> Message {
-        let mut reader = MessageReader::new();
-        let got: Vec<_> = bytes.iter().filter_map(|&b| reader.push(b)).collect();
-        match got.as_slice() {
-            [Decoded::Message(m)] => *m,
-            other => panic!("one message expected: {other:?}"),
-        }
-    }
-
-    /// What the module sends the page, as the page's decoder hands it over (event JSON).
-    fn as_event(record: &ModuleRecord) -> String {
-        serde_json::to_string(record).unwrap()
-    }
-
-    /// The module's side of a frame the page sent.
-    fn at_module(framed: &[u8]) -> ModuleRecord {
-        use telemetry::framing::{Deframed, Deframer};
-        let mut reader = Deframer::<256>::default();
-        for &b in framed {
-            if let Some(Deframed::Frame { .. }) = reader.push(b) {
-                return module_record::decode(reader.payload()).unwrap();
-            }
-        }
-        panic!("no frame");
-    }
-
-    /// The page against the module's exchange and the flight side's own gate: with the
-    /// module's phrase it is granted the change key and its change is applied after one
-    /// refusal that tells it the session; with another phrase the module refuses it and it
-    /// has nothing to sign with.
-    #[test]
-    fn the_page_proves_the_phrase_and_signs_changes_the_flight_side_accepts() {
-        use telemetry::change_auth::ChangeKey;
-        use telemetry::link::{LinkKey, PhraseSecret};
-        use telemetry::module_record::ModuleExchange;
-        let phrase = "amber kettle under the oak";
-        let link_key = LinkKey::from_bytes([0x5A; 16]);
-        let change_key = ChangeKey::from_link_key(&link_key);
-        let (id, _) = find("pid.roll.kp").unwrap();
-        let wire = to_wire(id as u16, 0.004).unwrap();
-        for (typed, granted) in [(phrase, true), ("amber kettle under the elm", false)] {
-            let module = ModuleExchange::new(&PhraseSecret::derive(phrase, [3; 8]), &[1; 32]);
-            let mut phone = Phone::new(typed).unwrap();
-            assert_eq!(at_module(&phone.hello().unwrap()), ModuleRecord::Hello);
-            let challenge = ModuleRecord::Challenge(module.challenge());
-            let response = phone.on_module_record(&as_event(&challenge), &[2; 32]);
-            let ModuleRecord::Response(response) = at_module(&response) else {
-                panic!("no response");
-            };
-            match module.respond(&response, Some(&change_key)) {
-                Some((_, grant)) => {
-                    let next =
-                        phone.on_module_record(&as_event(&ModuleRecord::Granted(grant)), &[]);
-                    assert!(next.is_empty());
-                    assert_eq!(phone.standing(), Standing::Granted);
-                }
-                None => {
-                    assert!(!granted, "the right phrase refused");
-                    assert!(phone.sign_change(id as u16, wire).is_err());
-                    continue;
-                }
-            }
-            let mut flight = flight_core::settings::Settings::default();
-            flight.set_link_key(Some(link_key));
-            let key = flight.link_key();
-            let mut gate = ChangeGate::new(0x1234_5678);
-            let mut frame = phone.sign_change(id as u16, wire).unwrap();
-            let mut answers = Vec::new();
-            while !frame.is_empty() && answers.len() < 5 {
-                let reply = gate
-                    .on_message(&decode(&frame), &mut flight, key, false)
-                    .unwrap();
-                answers.push(reply);
-                frame = match reply {
-                    Reply::Refused(r) => phone.on_refused(&serde_json::to_string(&r).unwrap()),
-                    Reply::Applied(_) => Vec::new(),
-                };
-            }
-            assert!(matches!(
-                answers.as_slice(),
-                [Reply::Refused(_), Reply::Applied(_)]
-            ));
-            assert_eq!(
-                flight.get(flight_core::settings::handles::PID_ROLL_KP),
-                0.004
-            );
-        }
-        assert!(Phone::new("").is_err());
-        assert!(Phone::new("short").is_err(), "the phrase rule");
-        assert!(
-            Phone::new("correct horse battery staple").is_err(),
-            "famous"
-        );
-    }
-
-    use flight_core::report::f32_value;
-    use flight_core::settings::Settings;
-
-    fn find(name: &str) -> Option<(usize, &'static Param)> {
-        PARAMS.iter().enumerate().find(|(_, p)| p.name == name)
-    }
+    use telemetry::settings::find;
 
     #[test]
-    fn wire_values_are_what_the_flight_side_applies() {
+    fn wire_values_are_the_schemas_bits_and_refusals_say_why() {
         let (id, _) = find("pid.roll.kp").unwrap();
         let id = id as u16;
         let wire = to_wire(id, 0.004).unwrap();
-        assert_eq!(wire, f32_value(0.004));
-        let mut settings = Settings::default();
-        let (result, echo) =
-            flight_core::report::apply_setting(&mut settings, SettingChange { id, value: wire });
-        assert_eq!(result, Ok(()));
-        assert_eq!(
-            from_wire(id, echo.unwrap().value),
-            Some(f64::from(0.004f32))
-        );
-        // Outside the range: refused here as the flight side would.
+        assert_eq!(wire, 0.004f32.to_bits() as i32);
+        assert_eq!(from_wire(id, wire), Some(f64::from(0.004f32)));
+        // Outside the range: refused here as the flight side would, and said why.
         assert_eq!(to_wire(id, 2.0), None);
+        assert_eq!(
+            check(id, 2.0),
+            Err("2 is above the largest value, 1".into())
+        );
+        let (rate, _) = find("rate.max_dps").unwrap();
+        assert_eq!(
+            check(rate as u16, 10.0),
+            Err("10 is below the smallest value, 30 °/s".into())
+        );
+        let (cells, _) = find("battery.cells").unwrap();
+        assert_eq!(
+            check(cells as u16, 2.5),
+            Err("2.5 is not a whole number".into())
+        );
+        assert_eq!(check(cells as u16, f64::NAN), Err("not a number".into()));
         let (choice, _) = find("mixer.frame").unwrap();
         assert_eq!(to_wire(choice as u16, 1.0), Some(1));
         assert_eq!(to_wire(choice as u16, 1.5), None);
         assert_eq!(to_wire(choice as u16, 9.0), None);
+        assert_eq!(
+            check(choice as u16, 9.0),
+            Err("not one of quad-x, quad-plus, hex-x".into())
+        );
         assert_eq!(to_wire(u16::MAX, 1.0), None);
+        assert_eq!(check(u16::MAX, 1.0), Err("no such setting".into()));
     }
 
     #[test]
@@ -430,6 +377,18 @@ mod tests {
             assert_eq!(row["id"], id);
             assert_eq!(row["name"], p.name);
         }
+        let unit_of = |name: &str| rows.iter().find(|r| r["name"] == name).unwrap()["unit"].clone();
+        assert_eq!(unit_of("rate.max_dps"), "°/s");
+        assert_eq!(unit_of("battery.current_mv_per_a"), "mV/A");
+        assert_eq!(unit_of("arm.idle_disarm_ms"), "ms");
+        assert_eq!(unit_of("lqg.tau_s"), "s");
+        assert_eq!(unit_of("failsafe.descent_mps"), "m/s");
+        assert_eq!(unit_of("pid.roll.kp"), "");
+        let doc_of = |name: &str| rows.iter().find(|r| r["name"] == name).unwrap()["doc"].clone();
+        assert_eq!(
+            doc_of("rate.max_dps"),
+            "Rate modes: the rate full stick commands."
+        );
     }
 
     #[test]

@@ -14,7 +14,11 @@ use std::rc::Rc;
 use embassy_futures::join::join5;
 use embassy_futures::select::{Either, select};
 use flight_core::app::link_task::run_link_step;
-use flight_core::app::{FEED_PERIOD_MS, FlightApp, Task};
+use flight_core::app::resume::{
+    self, FAULT_WORDS, FEED_WORDS, FaultReason, GAINS_WORDS, Kept, ResetCause, Resume, STATE_WORDS,
+};
+use flight_core::app::{FEED_PERIOD_MS, FlightApp, ImuFault, ImuStep, LoopSide, Task};
+use flight_core::pipeline::ImuSample;
 use flight_core::pipeline::{Controllers, from_settings};
 use openlrs::dual::DualRadio;
 use openlrs::radio::Clock;
@@ -32,6 +36,12 @@ use si4432_sim::{SimClock, VirtualTime};
 /// start-up ≈ 100 ms (its datasheet's start-up time after power-on; the driver waits for
 /// it), gain design ≈ 40 ms (≈ 5.5 M instructions of f64 Riccati solves).
 pub const FLIGHT_BOOT_MS: u64 = 145;
+/// Reset to the first loop of a resumed flight, ms, the firmware's resume path at 168 MHz:
+/// clocks ≈ 2 ms, settings load ≈ 3 ms, the record decoded and the controllers rebuilt from
+/// its Riccati solutions (no design) < 1 ms, the MPU-9250's warm start without its 100 ms
+/// reset (`Mpu9250::new_warm`) ≈ 1 ms and the AK8963's set-up (seven 10 ms I²C transfers
+/// through the MPU's master) 70 ms: 76 ms.
+pub const FLIGHT_RESUME_BOOT_MS: u64 = 76;
 /// The flight board's crystal error, ppm (the module's runs 40 ppm apart).
 const FLIGHT_DRIFT_PPM: f64 = -20.0;
 /// How often the stop watcher looks at power and the IWDG, ms.
@@ -65,6 +75,54 @@ impl FlightChip {
 enum Stop {
     Watchdog,
     PowerOff,
+    Panic,
+}
+
+/// The flight board's no-init RAM as the firmware keeps it (`flight-fw` `fault::Record`):
+/// the blocks `flight_core::app::resume` encodes.
+#[derive(Debug, Clone)]
+pub(crate) struct KeptRecord {
+    state: [u32; STATE_WORDS],
+    gains: [u32; GAINS_WORDS],
+    fault: [u32; FAULT_WORDS],
+    feed: [u32; FEED_WORDS],
+}
+
+impl Default for KeptRecord {
+    /// Power-up RAM: nothing any block accepts.
+    fn default() -> Self {
+        Self {
+            state: [0; STATE_WORDS],
+            gains: [0; GAINS_WORDS],
+            fault: [0; FAULT_WORDS],
+            feed: [0; FEED_WORDS],
+        }
+    }
+}
+
+impl KeptRecord {
+    /// The IMU task's part, after each loop (`flight-fw` `imu::keep_for_resume`).
+    pub(crate) fn keep(&mut self, app: &mut FlightApp, side: &mut LoopSide, now_ms: u32) {
+        if let Some(state) = side.resume_state_due(now_ms) {
+            self.state = state;
+        }
+        app.keep_resume_gains(&mut self.gains);
+    }
+
+    /// Boot: the decision on what the last boot left, and the record invalidated.
+    fn take_plan(&mut self, cause: ResetCause) -> Option<Resume> {
+        let kept = Kept {
+            state: &self.state,
+            gains: &self.gains,
+            fault: &self.fault,
+            feed: &self.feed,
+        };
+        let plan = resume::plan(cause, &kept).ok();
+        self.state = [0; STATE_WORDS];
+        self.fault = [0; FAULT_WORDS];
+        self.feed = [0; FEED_WORDS];
+        plan
+    }
 }
 
 /// The firmware's link task: `flight_core::app::link_task::run_link_step` in a loop, on
@@ -109,24 +167,39 @@ impl<C: Clock> Drop for GiveBack<'_, C> {
 /// cycles per instruction and 168 MHz.
 pub const DESIGN_US: u64 = 42_700;
 
-/// Holds the flight board for `us`: every flight task runs on one thread-mode executor, so
-/// a blocking job (a gain design; a flash operation, which on the single-bank F405 also
-/// stalls code fetch) keeps the others — the IMU adapter, the supervisor — from running.
-/// The radio link's timing is not held (a simplification: its slots run on).
-async fn occupy(shared: &Shared, time: &VirtualTime, us: u64) {
+/// What holds the flight board during a blocking job.
+#[derive(Clone, Copy)]
+enum Holds {
+    /// The thread-mode executor (a gain design): the other thread tasks wait — the
+    /// supervisor, storage, gains, heartbeat, baro, battery, alerts and GPS adapters — while
+    /// the flight loop, in its interrupt executor, flies on.
+    Thread,
+    /// The whole CPU (a flash operation: on the single-bank F405 code fetch stalls, the
+    /// loop's interrupt too): no IMU sample either.
+    Cpu,
+}
+
+/// Holds the flight board for `us`. The radio link's timing is not held (a
+/// simplification: its slots run on).
+async fn occupy(shared: &Shared, time: &VirtualTime, us: u64, holds: Holds) {
     {
         let mut s = shared.borrow_mut();
-        s.flight_busy_until_ns = s.now_ns() + us * 1000;
+        let until = s.now_ns() + us * 1000;
+        match holds {
+            Holds::Thread => s.flight_thread_busy_until_ns = until,
+            Holds::Cpu => s.flight_busy_until_ns = until,
+        }
     }
     time.sleep_ns(us * 1000).await;
 }
 
-/// Waits while the board is held by a blocking job.
+/// Waits while the thread-mode executor is held.
 async fn wait_while_busy(shared: &Shared, time: &VirtualTime) {
     loop {
         let left = {
             let s = shared.borrow();
-            s.flight_busy_until_ns.saturating_sub(s.now_ns())
+            let until = s.flight_busy_until_ns.max(s.flight_thread_busy_until_ns);
+            until.saturating_sub(s.now_ns())
         };
         if left == 0 {
             return;
@@ -135,29 +208,51 @@ async fn wait_while_busy(shared: &Shared, time: &VirtualTime) {
     }
 }
 
+/// The firmware's IMU task for one sample (`flight-fw` `tasks::imu`): the loop's inputs
+/// taken from the app, a designed setup installed while disarmed, the step on the loop's
+/// side, its report handed back.
+pub(crate) fn imu_task_step(
+    app: &mut FlightApp,
+    side: &mut LoopSide,
+    now_ms: u32,
+    reading: Result<ImuSample, ImuFault>,
+) -> ImuStep {
+    let inputs = app.loop_inputs();
+    if inputs.setup_pending
+        && !side.armed()
+        && let Some((setup, controllers)) = app.take_pending_setup()
+    {
+        side.install(&setup, controllers);
+    }
+    let (step, report) = match reading {
+        Ok(sample) => side.step(now_ms, &sample, &inputs),
+        Err(cause) => side.missing(now_ms, cause, &inputs),
+    };
+    app.on_loop_report(now_ms, &report);
+    step
+}
+
 /// The supervisor task: polls the check-in policy every `FEED_PERIOD_MS`; the IWDG is fed
 /// inside the app's model (`Watchdog::poll`), which the stop watcher reads.
 async fn supervisor_task(app: Rc<RefCell<FlightApp>>, clock: SimClock, shared: &Shared) {
     loop {
         sleep_ms(clock.time(), u64::from(FEED_PERIOD_MS)).await;
         wait_while_busy(shared, clock.time()).await;
-        let _fed = app.borrow_mut().on_watchdog_poll(clock.now_ms());
+        let now = clock.now_ms();
+        if app.borrow_mut().on_watchdog_poll(now) {
+            shared.borrow_mut().flight_record.feed = resume::encode_feed(now);
+        }
     }
 }
 
-/// The heartbeat LED task (50 ms ticker) and the motor task's check-in (it wakes at least
-/// every 100 ms; the commands themselves go to the quad in the physics task).
-async fn heartbeat_and_motors_task(
-    app: Rc<RefCell<FlightApp>>,
-    time: VirtualTime,
-    shared: &Shared,
-) {
+/// The heartbeat LED task (50 ms ticker; the motor commands go to the quad from the IMU
+/// adapter in the physics task, as the firmware's loop drives the outputs itself).
+async fn heartbeat_task(app: Rc<RefCell<FlightApp>>, time: VirtualTime, shared: &Shared) {
     loop {
         sleep_ms(&time, 50).await;
         wait_while_busy(shared, &time).await;
         let mut a = app.borrow_mut();
         a.check_in(Task::Heartbeat);
-        a.check_in(Task::Motors);
     }
 }
 
@@ -181,7 +276,7 @@ async fn storage_task(
                 .on_watchdog_stretched(clock.now_ms(), job.watchdog_ms);
         }
         let (saved, work) = flash.borrow_mut().save(&job);
-        occupy(shared, &time, work.f405_us()).await;
+        occupy(shared, &time, work.f405_us(), Holds::Cpu).await;
         let saved = saved.then(|| job.live.clone());
         app.borrow_mut().on_save_done(clock.now_ms(), saved);
     }
@@ -199,20 +294,41 @@ async fn gains_task(app: Rc<RefCell<FlightApp>>, time: VirtualTime, shared: &Sha
             continue;
         };
         let designed = Controllers::design(&setup.control);
-        occupy(shared, &time, DESIGN_US).await;
+        occupy(shared, &time, DESIGN_US, Holds::Thread).await;
         if let Ok(c) = designed {
             app.borrow_mut().on_designed(setup, c);
         }
     }
 }
 
-/// Ends a boot: the IWDG expired (no feed for `WATCHDOG_TIMEOUT_MS`) or the power went.
+/// Ends a boot: the IWDG expired (no feed for its timeout), the power went, or the firmware
+/// panicked (the handler's reset, with the fault recorded). A hang holds the board (no task
+/// runs, no feed) until the IWDG ends it. The injections act on their change to true.
 async fn stop_watcher(app: &Rc<RefCell<FlightApp>>, shared: &Shared, clock: &SimClock) -> Stop {
+    let (mut panicked, mut hung) = {
+        let input = shared.borrow().input;
+        (input.flight_panic, input.flight_hang)
+    };
     loop {
         sleep_ms(clock.time(), WATCH_MS).await;
-        if !shared.borrow().input.flight_powered {
+        let input = shared.borrow().input;
+        if !input.flight_powered {
             return Stop::PowerOff;
         }
+        if input.flight_panic && !panicked {
+            let fault = resume::Fault {
+                reason: FaultReason::Panic,
+                at_ms: clock.now_ms(),
+                address: 0,
+            };
+            shared.borrow_mut().flight_record.fault = fault.encode();
+            return Stop::Panic;
+        }
+        panicked = input.flight_panic;
+        if input.flight_hang && !hung {
+            shared.borrow_mut().flight_thread_busy_until_ns = u64::MAX;
+        }
+        hung = input.flight_hang;
         if app.borrow().watchdog().expired(clock.now_ms()) {
             return Stop::Watchdog;
         }
@@ -237,21 +353,46 @@ pub(crate) async fn flight_board(
             sleep_ms(&time, WATCH_MS).await;
         }
         if cause == BootCause::PowerOn {
-            // The RFM22B is powered with the board.
+            // The RFM22B is powered with the board, the RAM is not kept.
             chip.power_on_reset();
+            shared.borrow_mut().flight_record = KeptRecord::default();
         }
-        sleep_ms(&time, FLIGHT_BOOT_MS).await;
+        // A reset ends whatever held the board.
+        {
+            let mut s = shared.borrow_mut();
+            s.flight_busy_until_ns = 0;
+            s.flight_thread_busy_until_ns = 0;
+        }
+        let reset = match cause {
+            BootCause::PowerOn => ResetCause::PowerOn,
+            BootCause::Watchdog => ResetCause::Watchdog,
+            BootCause::Panic | BootCause::Resumed => ResetCause::Software,
+        };
+        let resume = shared.borrow_mut().flight_record.take_plan(reset);
+        let boot_ms = if resume.is_some() {
+            FLIGHT_RESUME_BOOT_MS
+        } else {
+            FLIGHT_BOOT_MS
+        };
+        sleep_ms(&time, boot_ms).await;
         if !shared.borrow().input.flight_powered {
             continue;
         }
         let clock = SimClock::booting_now(medium.time(), FLIGHT_DRIFT_PPM);
         let (settings, problem) = flash.borrow_mut().load();
-        let Some(mut app) = FlightApp::new(settings, clock.now_ms()) else {
+        let resumed = resume
+            .as_ref()
+            .and_then(|r| FlightApp::resume(settings.clone(), r, clock.now_ms()));
+        if resumed.is_some() {
+            cause = BootCause::Resumed;
+        }
+        let Some(mut app) = resumed.or_else(|| FlightApp::new(settings, clock.now_ms())) else {
             return;
         };
         if let Some(p) = problem {
             app.on_settings_problem(p);
         }
+        app.model_watchdog_lsi_hz(shared.borrow().flight_lsi_hz);
         // The firmware's RNG at boot: the link's secrets, a fresh session for the phone's
         // changes every boot (the virtual time of the boot stands in for the hardware's
         // entropy).
@@ -269,12 +410,18 @@ pub(crate) async fn flight_board(
                 u64::from(clock.now_ms()) * 1000,
             ));
         }
+        // The IMU task owns the loop's side, apart from the app.
+        let side = app.take_loop_side();
         let app = Rc::new(RefCell::new(app));
-        shared.borrow_mut().flight = Some((app.clone(), clock.clone()));
+        {
+            let mut s = shared.borrow_mut();
+            s.flight = Some((app.clone(), clock.clone()));
+            s.flight_loop = side;
+        }
         let tasks = join5(
             link_task(app.clone(), &radio, clock.clone(), failsafe_us),
             supervisor_task(app.clone(), clock.clone(), &shared),
-            heartbeat_and_motors_task(app.clone(), time.clone(), &shared),
+            heartbeat_task(app.clone(), time.clone(), &shared),
             storage_task(app.clone(), &flash, clock.clone(), &shared),
             gains_task(app.clone(), time.clone(), &shared),
         );
@@ -284,6 +431,7 @@ pub(crate) async fn flight_board(
         };
         let mut s = shared.borrow_mut();
         s.flight = None;
+        s.flight_loop = None;
         s.flight_settings = app.borrow().settings().clone();
         cause = match stop {
             Stop::Watchdog => {
@@ -291,6 +439,7 @@ pub(crate) async fn flight_board(
                 BootCause::Watchdog
             }
             Stop::PowerOff => BootCause::PowerOn,
+            Stop::Panic => BootCause::Panic,
         };
     }
 }

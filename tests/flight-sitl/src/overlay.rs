@@ -8,10 +8,10 @@
 use std::path::Path;
 
 use flight_core::logging::{Battery, Estimate, LinkStats, SensorGps, Status, TOPICS};
-use flight_core::settings::MODES;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use taulink_ulog::{Message, Reader, Record};
+use telemetry::settings::MODES;
 
 /// Frame size, pixels (720p).
 pub const SIZE: (u32, u32) = (1280, 720);

@@ -39,6 +39,12 @@ pub struct PilotInput {
     /// The model selected on the radio (CRSF input: EdgeTX sends its model ID in a model-select
     /// command at start and whenever it changes); `None`: the radio sends none.
     pub radio_model: Option<u8>,
+    /// The flight firmware panics (on the change to true): its handler stops the motors,
+    /// records the fault and resets the board (`flight_core::app::resume`).
+    pub flight_panic: bool,
+    /// The flight firmware hangs (on the change to true): no task runs, the motor timers keep
+    /// their last commands, the IWDG resets the board.
+    pub flight_hang: bool,
 }
 
 /// A fault injected at one end's radio (chip and bus of the virtual Si4432).
@@ -119,6 +125,8 @@ impl Default for PilotInput {
             flight_radio: RadioInjection::Healthy,
             module_radio: RadioInjection::Healthy,
             radio_model: None,
+            flight_panic: false,
+            flight_hang: false,
         }
     }
 }

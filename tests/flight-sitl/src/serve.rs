@@ -68,7 +68,7 @@ struct Shared {
 pub fn main(options: Options) -> i32 {
     if !options.dist.join("index.html").is_file() {
         eprintln!(
-            "no built app in {} (cd telemetry/ground-station && npm ci && npm run wasm && npm run build)",
+            "no built app in {} (build it with: cargo xtask web)",
             options.dist.display()
         );
         return 2;
@@ -81,7 +81,8 @@ pub fn main(options: Options) -> i32 {
         }
     };
     let addr = listener.local_addr().unwrap_or(options.addr);
-    println!("TauLink ground station: open http://{addr}/");
+    // `?sim`: the page connects to this server's world by itself.
+    println!("TauLink ground station: open http://{addr}/?sim");
     println!(
         "binding phrase of both simulated ends (the settings view asks for it): {}",
         session::SERVE_PHRASE

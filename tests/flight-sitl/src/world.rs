@@ -88,8 +88,10 @@ pub struct Sample {
     /// The flight controller was running its application this loop (false while it is
     /// unpowered or booting; `out` is then the last output it gave, `motors` all stopped).
     pub flight_up: bool,
-    /// The flight board was held by a blocking job (a flash operation, a gain design) this
-    /// loop: no IMU sample was handled, the motors kept their last commands.
+    /// The flight board's CPU was stalled by a flash operation this loop (code fetch from the
+    /// single-bank flash stops, the flight loop's interrupt too): no IMU sample was handled,
+    /// the motors kept their last commands. A gain design or a hung task holds only the
+    /// thread-mode executor: the loop, in its interrupt executor, flies on.
     pub flight_busy: bool,
 }
 
@@ -144,6 +146,11 @@ pub enum BootCause {
     PowerOn,
     /// Its independent watchdog expired.
     Watchdog,
+    /// Its panic handler reset it (`PilotInput::flight_panic`).
+    Panic,
+    /// A watchdog or panic reset in the air, from which the flight was resumed
+    /// (`flight_core::app::resume`).
+    Resumed,
 }
 
 /// Virtual time before the scenario starts, s: both boards boot at 0, the flight side takes
@@ -185,12 +192,23 @@ pub(crate) struct WorldState {
     pub(crate) phone_key: Option<telemetry::change_auth::ChangeKey>,
     pub(crate) watchdog_resets: WatchdogResets,
     pub(crate) boots: Vec<Boot>,
-    /// Until when (virtual ns) the flight board's one thread-mode executor is held by a
-    /// blocking job (a flash operation, a gain design).
+    /// Until when (virtual ns) the flight board's CPU is stalled by a flash operation: nothing
+    /// runs, the loop's interrupt neither.
     pub(crate) flight_busy_until_ns: u64,
+    /// Until when (virtual ns) the flight board's thread-mode executor is held by a blocking
+    /// job (a gain design) or a hung task: the loop, in its interrupt executor, flies on.
+    pub(crate) flight_thread_busy_until_ns: u64,
+    /// The flight loop's side while the flight board runs (its IMU task owns it apart from
+    /// the app, as the firmware's interrupt executor does).
+    pub(crate) flight_loop: Option<flight_core::app::LoopSide>,
     /// The flight storage adapter stretches the watchdog around a save as the app's job
     /// asks (`false`: [`World::without_save_watchdog_stretch`]).
     pub(crate) save_stretch: bool,
+    /// The flight board's LSI, Hz: what its IWDG counts.
+    pub(crate) flight_lsi_hz: u32,
+    /// The flight board's no-init RAM: the record a resume after a reset reads (kept across
+    /// resets, lost with the power).
+    pub(crate) flight_record: crate::flight_end::KeptRecord,
     /// The flight log of each boot (the last one growing).
     pub(crate) flight_logs: Vec<crate::flight_log::LogFile>,
     medium: si4432_sim::Medium,
@@ -207,9 +225,15 @@ impl WorldState {
         self.medium.now().as_nanos() as u64
     }
 
-    /// The flight board is held by a flash operation or a gain design.
+    /// The flight board's CPU is stalled by a flash operation.
     pub(crate) fn flight_busy(&self) -> bool {
         self.now_ns() < self.flight_busy_until_ns
+    }
+
+    /// The flight board's thread-mode executor is held (a gain design, a hung task, or the
+    /// whole CPU by a flash operation).
+    pub(crate) fn flight_thread_busy(&self) -> bool {
+        self.flight_busy() || self.now_ns() < self.flight_thread_busy_until_ns
     }
 
     pub(crate) fn record_boot(&mut self, end: End, cause: BootCause, settings_error: bool) {
@@ -416,8 +440,12 @@ impl World {
                 .map(|k| telemetry::change_auth::ChangeKey::from_link_key(&k)),
             watchdog_resets: WatchdogResets::default(),
             flight_busy_until_ns: 0,
+            flight_thread_busy_until_ns: 0,
+            flight_loop: None,
             save_stretch: true,
             flight_logs: Vec::new(),
+            flight_lsi_hz: flight_core::app::LSI_TYP_HZ,
+            flight_record: crate::flight_end::KeptRecord::default(),
             boots: Vec::new(),
             medium: medium.clone(),
         }));
@@ -461,6 +489,7 @@ impl World {
                 let mut before = PilotInput::default();
                 let mut held_motors = [Command::Stopped; 4];
                 let mut held_record = None;
+                let mut held_tone = 0u16;
                 let mut seen = Sight {
                     on_ground: true,
                     ..Sight::default()
@@ -490,10 +519,10 @@ impl World {
                         inject_radio(&module_chip, before.module_radio, input.module_radio);
                     }
                     before = input;
-                    let (flight, busy) = {
+                    let (flight, busy, thread_busy) = {
                         let mut s = shared.borrow_mut();
                         s.input = input;
-                        (s.flight.clone(), s.flight_busy())
+                        (s.flight.clone(), s.flight_busy(), s.flight_thread_busy())
                     };
                     let mut motors = [Command::Stopped; 4];
                     let mut record = None;
@@ -508,14 +537,16 @@ impl World {
                             let mut app = app.borrow_mut();
                             let now_ms = clock.now_ms();
                             loops_since_boot += 1;
-                            // The baro task: MS5611 altitude at 50 Hz with 0.1 m (1σ) noise.
-                            if loops_since_boot.is_multiple_of(baro_every) {
+                            // The baro task (thread mode): MS5611 altitude at 50 Hz with
+                            // 0.1 m (1σ) noise.
+                            if !thread_busy && loops_since_boot.is_multiple_of(baro_every) {
                                 let altitude =
                                     -quad.state().position_m[2] + baro_noise.normal(BARO_NOISE_M);
                                 app.on_baro(now_ms, Some(altitude as f32));
                             }
-                            // The GPS task: a NAV-PVT's bytes when the receiver has one.
-                            if let Some(g) = gps.as_mut() {
+                            // The GPS task: a NAV-PVT's bytes when the receiver has one
+                            // (its DMA ring buffer keeps them while the task is held).
+                            if let Some(g) = gps.as_mut().filter(|_| !thread_busy) {
                                 let s = quad.state();
                                 if let Some(bytes) =
                                     g.step(t_us / 1000, t_s, s.position_m, s.velocity_mps)
@@ -524,36 +555,52 @@ impl World {
                                 }
                             }
                             let link = app.link_input();
-                            // The IMU task: a sample, or what the injected fault leaves of it.
+                            // The IMU task (the loop's interrupt executor): a sample, or what
+                            // the injected fault leaves of it, on the loop's side.
                             let imu = ImuSample {
                                 gyro_radps: sensors.gyro_dps.map(|g| g * RAD_PER_DEG),
                                 accel_mps2: sensors.accel_mps2,
                                 mag: None,
                             };
-                            let step = match input.imu {
+                            let reading = match input.imu {
                                 ImuInjection::Healthy => {
                                     last_good = imu;
-                                    app.on_imu_sample(now_ms, &imu)
+                                    Ok(imu)
                                 }
-                                ImuInjection::Frozen => app.on_imu_sample(now_ms, &last_good),
-                                ImuInjection::AllZero => app.on_imu_sample(
-                                    now_ms,
-                                    &ImuSample {
-                                        gyro_radps: [0.0; 3],
-                                        accel_mps2: [0.0; 3],
-                                        mag: None,
+                                ImuInjection::Frozen => Ok(last_good),
+                                ImuInjection::AllZero => Ok(ImuSample {
+                                    gyro_radps: [0.0; 3],
+                                    accel_mps2: [0.0; 3],
+                                    mag: None,
+                                }),
+                                ImuInjection::Stalled => Err(ImuFault::Stalled),
+                                ImuInjection::ReadError => Err(ImuFault::ReadError),
+                            };
+                            let step = {
+                                let mut s = shared.borrow_mut();
+                                let WorldState {
+                                    flight_loop,
+                                    flight_record,
+                                    ..
+                                } = &mut *s;
+                                match flight_loop.as_mut() {
+                                    Some(side) => {
+                                        let step = crate::flight_end::imu_task_step(
+                                            &mut app, side, now_ms, reading,
+                                        );
+                                        // It keeps the flight state and gains for a resume.
+                                        flight_record.keep(&mut app, side, now_ms);
+                                        step
+                                    }
+                                    None => flight_core::app::ImuStep {
+                                        motors: [Command::Stopped; 4],
+                                        reprobe: false,
                                     },
-                                ),
-                                ImuInjection::Stalled => {
-                                    app.on_imu_missing(now_ms, ImuFault::Stalled)
-                                }
-                                ImuInjection::ReadError => {
-                                    app.on_imu_missing(now_ms, ImuFault::ReadError)
                                 }
                             };
                             motors = step.motors;
                             // The battery task.
-                            if loops_since_boot.is_multiple_of(battery_every) {
+                            if !thread_busy && loops_since_boot.is_multiple_of(battery_every) {
                                 app.on_battery(
                                     now_ms,
                                     battery_raw(input.battery_mv, divider),
@@ -561,8 +608,13 @@ impl World {
                                 );
                                 level = app.battery().map_or(level, |b| b.level);
                             }
-                            // The alert task.
-                            let tone_hz = app.on_alert_tick(now_ms);
+                            // The alert task (the tone holds while it is held).
+                            let tone_hz = if thread_busy {
+                                held_tone
+                            } else {
+                                app.on_alert_tick(now_ms)
+                            };
+                            held_tone = tone_hz;
                             // The logging task: what the app recorded, into this boot's file.
                             if let Some(log) = shared.borrow_mut().flight_logs.last_mut() {
                                 log.drain(&mut app);
@@ -654,6 +706,12 @@ impl World {
     /// `SaveJob::watchdog_ms` ignored): what the stretch is for, shown.
     pub fn without_save_watchdog_stretch(&mut self) {
         self.shared.borrow_mut().save_stretch = false;
+    }
+
+    /// The flight board's LSI runs at `hz` (the datasheet allows 17–47 kHz): its IWDG's
+    /// timeout follows (`flight_core::app::IWDG`), from the next boot on.
+    pub fn with_flight_lsi_hz(&mut self, hz: u32) {
+        self.shared.borrow_mut().flight_lsi_hz = hz;
     }
 
     /// Runs `d` more of virtual time.

@@ -1,7 +1,8 @@
 //! What blocking jobs cost the flight board (issue 12: time that costs): a gain design
-//! (≈ 42 ms on the F405) and the settings flash's writes and sector erases hold its one
-//! thread-mode executor — the loop takes no IMU sample meanwhile, the supervisor does not
-//! feed the IWDG.
+//! (≈ 42 ms on the F405) holds its thread-mode executor — the supervisor does not feed the
+//! IWDG meanwhile, but the flight loop, in its interrupt executor, flies on (issue 29); the
+//! settings flash's writes and sector erases stall the whole CPU (code fetch from the
+//! single-bank flash), the loop too.
 
 #![allow(
     clippy::unwrap_used,
@@ -72,6 +73,7 @@ fn on_the_ground_with(
     });
     s.flight_flash = flash;
     let mut world = World::new(s);
+    world.with_flight_lsi_hz(flight_core::app::LSI_MAX_HZ);
     if !stretch {
         world.without_save_watchdog_stretch();
     }
@@ -91,24 +93,27 @@ fn on_the_ground_with(
 }
 
 #[test]
-fn a_gain_design_holds_the_board_for_42_ms() {
+fn a_gain_design_holds_the_thread_tasks_but_not_the_loop() {
     // An LQG cost from the phone, on the ground: applied, the gains re-designed, saved.
     let sitl = on_the_ground(&[change("lqg.q_rate", 900.0)], 2.0);
     assert_eq!(sitl.settings.get(handles::LQG_Q_RATE), 900.0);
     let stretches = held(&sitl.samples, sitl.ts_s);
     println!("held: {stretches:?}");
-    let design = stretches
-        .iter()
-        .find(|(_, len)| (*len - 0.042).abs() < 0.002)
-        .copied();
-    assert!(design.is_some(), "no 42 ms design stretch in {stretches:?}");
+    // The 42 ms design is no stretch of missed loops any more (it was, on one executor).
+    assert!(
+        stretches
+            .iter()
+            .all(|(_, len)| (*len - 0.042).abs() > 0.002),
+        "a design stretch in {stretches:?}"
+    );
     assert_eq!(sitl.watchdog_resets.flight, 0);
 }
 
 /// A save that needs a sector erase (the map ran out of room) holds the F405 for the erase
-/// (250 ms, DS8626) — as long as the 250 ms watchdog timeout. The storage adapter stretches
-/// the watchdog to the app's `SaveJob::watchdog_ms` for it: no reset. Without the stretch
-/// the watchdog model sees the stall and resets the flight controller.
+/// (250 ms typical, 500 ms max, DS8626) — beyond the IWDG's 200 ms on a chip whose LSI runs
+/// at the datasheet's fastest 47 kHz. The storage adapter stretches the watchdog to the app's
+/// `SaveJob::watchdog_ms` for it: no reset. Without the stretch the watchdog model sees the
+/// stall and resets that flight controller.
 #[test]
 fn a_save_with_a_sector_erase_resets_nothing_because_the_watchdog_is_stretched() {
     let changes = [change("pid.roll.kp", 0.0042)];
@@ -129,6 +134,6 @@ fn a_save_with_a_sector_erase_resets_nothing_because_the_watchdog_is_stretched()
     let unstretched = on_the_ground_with(&changes, 2.0, FlashInjection::NearlyFull, false, true);
     assert!(
         unstretched.watchdog_resets.flight >= 1,
-        "a 250 ms stall under a 250 ms watchdog must reset the flight controller"
+        "a 250 ms stall under a 200 ms watchdog must reset the flight controller"
     );
 }

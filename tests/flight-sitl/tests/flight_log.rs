@@ -78,7 +78,7 @@ fn a_log_holds_the_definitions_every_setting_and_its_profile_topics() {
     }
     let names: Vec<&str> = TOPICS.iter().map(|t| t.name).collect();
     assert_eq!(formats, names);
-    assert_eq!(params, flight_core::settings::COUNT);
+    assert_eq!(params, telemetry::settings::COUNT);
     assert!(armed, "the arming is a logged string");
     let count = |name: &str| per_topic[names.iter().position(|n| *n == name).unwrap()];
     // The flight profile over ≈ 9 s of boot, warm-up and scenario: IMU at 20 Hz,

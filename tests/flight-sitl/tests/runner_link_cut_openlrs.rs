@@ -41,15 +41,15 @@ fn link_cut(protocol: LinkProtocol, flight: &str, profile: u8, channel_mode: u8)
 
 #[test]
 fn openlrs39_default_profile_link_cut_lands_and_disarms() {
-    link_cut(LinkProtocol::OpenLrs39, "olrs39", 2, 2);
+    link_cut(LinkProtocol::OpenLrs39, "openlrs39", 2, 2);
 }
 
 #[test]
 fn openlrs38_default_profile_link_cut_lands_and_disarms() {
-    link_cut(LinkProtocol::OpenLrs38, "olrs38", 2, 2);
+    link_cut(LinkProtocol::OpenLrs38, "openlrs38", 2, 2);
 }
 
 #[test]
 fn openlrs39_fastest_profile_16_channels_link_cut_lands_and_disarms() {
-    link_cut(LinkProtocol::OpenLrs39, "olrs39", 4, 6);
+    link_cut(LinkProtocol::OpenLrs39, "openlrs39", 4, 6);
 }

@@ -50,7 +50,10 @@ fuzz_target!(|data: &[u8]| {
         rest = tail;
         k += 1;
     }
-    let q = app.flight_loop().attitude();
+    let Some(side) = app.loop_side() else {
+        return;
+    };
+    let q = side.flight_loop().attitude();
     let norm = q.iter().map(|x| x * x).sum::<f32>();
     assert!((norm - 1.0).abs() < 1e-3, "{q:?}");
 });

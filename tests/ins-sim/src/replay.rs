@@ -1,4 +1,4 @@
-//! Log replay in the PX4 ECL replay format (`shared/datasets/px4-ecl/README.md`): parse the
+//! Log replay in the PX4 ECL replay format (`testdata/px4-ecl/README.md`): parse the
 //! sensor lines, drive an [`Ins`] with them (GPS origin = first fix), produce one estimate
 //! row per IMU sample, and compare estimates with a truth or a PX4 EKF2 history.
 

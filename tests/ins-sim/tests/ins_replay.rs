@@ -1,4 +1,4 @@
-//! Replays the two PX4 SITL recordings (shared/datasets/px4-ecl) and bounds the difference
+//! Replays the two PX4 SITL recordings (testdata/px4-ecl) and bounds the difference
 //! to PX4 EKF2's logged estimates; then checks our own output against the committed golden
 //! "change indication" files (tests/ins-sim/change_indication/*.csv, 10 Hz), so every
 //! numerical change to the filter shows up as a diff. `UPDATE_GOLDEN=1` rewrites them.
@@ -16,13 +16,13 @@ use std::path::PathBuf;
 use ins_sim::compare::{compare, parse_reference};
 use ins_sim::replay::{HEADER, Options, Row, parse_sensors, run};
 
-/// The recordings live in `shared/` beside the checkout (as CI has it), or in `PX4_ECL_DIR`.
+/// The recordings live in the repository's `testdata/px4-ecl`, or in `PX4_ECL_DIR`.
 /// A missing recording fails the test: a replay test that silently skips asserts nothing.
 fn dataset(kind: &str, name: &str) -> String {
     let root = std::env::var("PX4_ECL_DIR")
         .map(PathBuf::from)
         .unwrap_or_else(|_| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/datasets/px4-ecl")
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../testdata/px4-ecl")
         });
     let path = root.join(kind).join(format!("{name}.csv"));
     std::fs::read_to_string(&path).unwrap_or_else(|e| {

@@ -13,7 +13,7 @@ fn path(kind: &str, name: &str) -> PathBuf {
     let root = std::env::var("PX4_ECL_DIR")
         .map(PathBuf::from)
         .unwrap_or_else(|_| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/datasets/px4-ecl")
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../testdata/px4-ecl")
         });
     root.join(kind).join(format!("{name}.csv"))
 }

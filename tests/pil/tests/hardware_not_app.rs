@@ -5,8 +5,8 @@
 //!
 //! - `radio-cs-pc13`: the RFM22B's nSEL on PC13 instead of PA15 — the radio never hears the
 //!   MCU, so `hover` never links (no telemetry, never armed);
-//! - `iwdg-half`: the independent watchdog's timeout halved (125 ms against the supervisor's
-//!   100 ms feed period) — `hover` reports watchdog resets.
+//! - `iwdg-half`: the independent watchdog's timeout half the supervisor's feed period
+//!   (25 ms at the fastest LSI against 50 ms) — `hover` reports watchdog resets.
 //!
 //! Each builds the firmware (minutes) and flies 40 s of emulated time, so they are ignored
 //! in a plain `cargo test`; run them with the dist images built (`cargo xtask dist`):

@@ -23,3 +23,8 @@ mod time;
 pub use clock::SimClock;
 pub use executor::{Executor, Spawner, Task};
 pub use time::{Events, Sleep, VirtualTime};
+
+/// The README's examples, run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -166,3 +166,8 @@ mod tests {
         assert_eq!(u64::from(a.byte()), b.next_u64() >> 56);
     }
 }
+
+/// The README's examples, run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -4,9 +4,11 @@
 //! `control/LQG.md` §6 designs for), discretised with backward Euler so the derivative filter is
 //! stable for any τ_d. Setpoint weighting: P acts on b·sp − y and D on c·sp − y (c = 0 avoids the
 //! derivative kick on stick steps). Anti-windup: the integrator freezes while the output is
-//! saturated in the direction the error would push it, and is clamped.
+//! saturated in the direction the error would push it, and is clamped. Every limit goes
+//! through [`clamp_abs`]: the limits come from settings, and `f32::clamp` panics on crossed
+//! or NaN bounds.
 
-use crate::estimation::math::clamp;
+use crate::estimation::math::clamp_abs;
 
 /// Gains and shaping of one PID.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -93,20 +95,17 @@ impl Pid {
         self.derivative = (g.derivative_tau_s * self.derivative + g.kd * delta)
             / (g.derivative_tau_s + self.ts_s);
         let unsaturated = p + self.integral + self.derivative;
-        let pushing_further = (unsaturated >= g.output_limit && error > 0.0)
-            || (unsaturated <= -g.output_limit && error < 0.0);
+        let limit = g.output_limit.abs();
+        let pushing_further =
+            (unsaturated >= limit && error > 0.0) || (unsaturated <= -limit && error < 0.0);
         if !pushing_further {
-            self.integral = clamp(
-                self.integral + g.ki * self.ts_s * error,
-                -g.integral_limit,
-                g.integral_limit,
-            );
+            self.integral = clamp_abs(self.integral + g.ki * self.ts_s * error, g.integral_limit);
         }
         let out = p + self.integral + self.derivative;
         if out.is_nan() {
             0.0
         } else {
-            clamp(out, -g.output_limit, g.output_limit)
+            clamp_abs(out, g.output_limit)
         }
     }
 }
@@ -146,9 +145,8 @@ impl AttitudePid {
 
     /// The rate setpoint the outer loop asks for, deg/s.
     pub fn rate_setpoint(&self, angle_error_deg: f32) -> f32 {
-        clamp(
+        clamp_abs(
             self.outer_kp * angle_error_deg + self.outer_integral,
-            -self.max_rate_dps,
             self.max_rate_dps,
         )
     }
@@ -156,9 +154,8 @@ impl AttitudePid {
     /// One step from the angle error (deg) and the gyro (deg/s); returns the output.
     pub fn update(&mut self, angle_error_deg: f32, gyro_dps: f32) -> f32 {
         let limit = 0.25 * self.max_rate_dps;
-        self.outer_integral = clamp(
+        self.outer_integral = clamp_abs(
             self.outer_integral + self.outer_ki * self.ts_s * angle_error_deg,
-            -limit,
             limit,
         );
         let sp = self.rate_setpoint(angle_error_deg);
@@ -169,6 +166,34 @@ impl AttitudePid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn inverted_or_nan_limits_never_panic() {
+        // A negative limit is clamp's crossed bounds (min > max), a NaN one its NaN bound:
+        // both panicked in `f32::clamp`. The magnitude counts; NaN leaves the value.
+        let mut gains = PidGains::new(2.0, 50.0, 0.0, 0.01);
+        gains.integral_limit = -0.1;
+        gains.output_limit = -0.5;
+        let mut pid = Pid::new(gains, 0.001);
+        for _ in 0..400 {
+            pid.update(0.01, 0.0);
+        }
+        assert_eq!(pid.integral(), 0.1);
+        assert!((pid.update(0.01, 0.0) - 0.12).abs() < 1e-6);
+        assert_eq!(pid.update(10.0, 0.0), 0.5);
+        gains.output_limit = f32::NAN;
+        let mut pid = Pid::new(gains, 0.001);
+        assert_eq!(pid.update(0.25, 0.0), 0.5 + 50.0 * 0.001 * 0.25);
+        let mut att = AttitudePid::new(
+            1.0,
+            1.0,
+            -100.0,
+            Pid::new(PidGains::new(0.01, 0.0, 0.0, 0.01), 0.001),
+            0.001,
+        );
+        assert_eq!(att.rate_setpoint(1_000.0), 100.0);
+        assert!(att.update(1_000.0, 0.0).is_finite());
+    }
 
     #[test]
     fn pid_terms_and_anti_windup() {

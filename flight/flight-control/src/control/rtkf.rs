@@ -5,6 +5,7 @@
 //! dRonin's structure). The input-bias state b is the controller's integral action: the
 //! plant is driven by (u − b), so adding b̂ to the output cancels a constant disturbance.
 
+use crate::estimation::math::clamp_abs;
 use crate::model::EstimatorMatrices;
 
 /// One axis' estimate.
@@ -89,21 +90,9 @@ impl Rtkf {
         self.x = RateTorqueEstimate {
             rate_dps: rate_pred + l_rate * innovation,
             torque: torque_pred + l_torque * innovation,
-            bias: clamp_bias(bias + l_bias * innovation, self.bias_limit),
+            bias: clamp_abs(bias + l_bias * innovation, self.bias_limit),
         };
         self.x
-    }
-}
-
-/// `bias.clamp(-limit, limit)` for the limit `Rtkf` keeps ≥ 0, without `clamp`'s
-/// crossed-bounds check (a compare and a branch to a panic on every axis, every loop).
-fn clamp_bias(bias: f32, limit: f32) -> f32 {
-    if bias < -limit {
-        -limit
-    } else if bias > limit {
-        limit
-    } else {
-        bias
     }
 }
 

@@ -13,6 +13,8 @@
 //! +0.012…+0.027 with 0.7, +0.000…+0.017 with 1.0. 0.7 keeps 0.3 of the motor range for
 //! roll/pitch during a yaw pulse; frames with ln β_yaw > 7.46 are below the cap anyway.
 
+use core::num::NonZeroU32;
+
 /// Axis index order used throughout identification: roll, pitch, yaw.
 const PHASES: [(usize, f32); 8] = [
     (2, 1.0),
@@ -30,33 +32,40 @@ const LN_AMPLITUDE_SCALE: f32 = 7.1;
 /// Amplitude caps, roll/pitch and yaw.
 const CAPS: [f32; 3] = [0.25, 0.25, 0.7];
 
-/// The shake generator.
+/// The shake generator. Both divisors are `NonZeroU32`: a phase of `u32::MAX / 8` samples or
+/// more would wrap the cycle length `8 × phase` to a multiple of 2³² (0 at 2²⁹), and the
+/// counter's `%` would divide by zero; the phase is capped below that instead.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Shake {
-    phase_samples: u32,
+    phase_samples: NonZeroU32,
+    cycle_samples: NonZeroU32,
     counter: u32,
 }
+
+/// The longest phase, samples: the cycle (8 phases) still fits a `u32`.
+const MAX_PHASE_SAMPLES: u32 = u32::MAX / 8;
 
 impl Shake {
     /// A shake whose phases last `phase_s` (Tau Labs: 75 ms) at loop period `ts_s`.
     pub fn new(ts_s: f32, phase_s: f32) -> Self {
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)] // ≥ 1, small
-        let phase_samples = libm::roundf(phase_s / ts_s).max(1.0) as u32;
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)] // saturating cast
+        let phase = (libm::roundf(phase_s / ts_s) as u32).clamp(1, MAX_PHASE_SAMPLES);
         Self {
-            phase_samples,
+            phase_samples: NonZeroU32::new(phase).unwrap_or(NonZeroU32::MIN),
+            cycle_samples: NonZeroU32::new(8 * phase).unwrap_or(NonZeroU32::MIN),
             counter: 0,
         }
     }
 
     /// Samples per phase.
     pub fn phase_samples(&self) -> u32 {
-        self.phase_samples
+        self.phase_samples.get()
     }
 
     /// The offsets (roll, pitch, yaw) for this sample, then advances one sample.
     pub fn next(&mut self, ln_beta_estimate: [f32; 3]) -> [f32; 3] {
         let phase = (self.counter / self.phase_samples) % 8;
-        self.counter = self.counter.wrapping_add(1) % (8 * self.phase_samples);
+        self.counter = self.counter.wrapping_add(1) % self.cycle_samples;
         let mut out = [0.0f32; 3];
         #[allow(clippy::cast_possible_truncation)] // phase < 8
         if let Some(&(axis, sign)) = PHASES.get(phase as usize)
@@ -97,5 +106,26 @@ mod tests {
         // Yaw first, capped: exp(2.1) > 0.7.
         assert_eq!(first, [0.0, 0.0, 0.7]);
         assert!(sum.iter().all(|v| v.abs() < 1e-3), "{sum:?}");
+    }
+
+    #[test]
+    fn any_phase_length_runs_without_a_zero_divisor() {
+        // 2²⁹ samples a phase made the cycle 8 × 2²⁹ = 2³², i.e. 0: `%` by zero.
+        for (ts, phase) in [
+            (1.0, 536_870_912.0),
+            (1e-30, 1.0),
+            (0.001, f32::NAN),
+            (0.0, 1.0),
+        ] {
+            let mut s = Shake::new(ts, phase);
+            assert!((1..=MAX_PHASE_SAMPLES).contains(&s.phase_samples()));
+            for _ in 0..20 {
+                assert!(s.next([10.0; 3]).iter().all(|v| v.is_finite()));
+            }
+        }
+        assert_eq!(
+            Shake::new(1.0, 536_870_912.0).phase_samples(),
+            MAX_PHASE_SAMPLES
+        );
     }
 }

@@ -10,6 +10,22 @@ use super::patterns::Alert;
 /// their turn is lost, which is fine — the state they announce is reported in telemetry.
 const QUEUE: usize = 8;
 
+/// Removes and returns the `i`-th queued alert, keeping the others' order (ties go to the
+/// earliest queued). `retain` has no panic path, unlike `Vec::remove`'s bounds assert.
+fn take(queue: &mut Vec<Alert, QUEUE>, i: usize) -> Option<Alert> {
+    let mut index = 0;
+    let mut taken = None;
+    queue.retain(|a| {
+        let keep = index != i;
+        if !keep {
+            taken = Some(*a);
+        }
+        index += 1;
+        keep
+    });
+    taken
+}
+
 /// The sequencer.
 #[derive(Debug, Clone)]
 pub struct TonePlayer {
@@ -68,7 +84,7 @@ impl TonePlayer {
                 .map(|(i, a)| (i, a.priority()));
             match weakest {
                 Some((i, p)) if p < alert.priority() => {
-                    self.queue.remove(i);
+                    take(&mut self.queue, i);
                 }
                 _ => return,
             }
@@ -126,7 +142,7 @@ impl TonePlayer {
             .iter()
             .enumerate()
             .max_by_key(|(i, a)| (a.priority(), core::cmp::Reverse(*i)))?;
-        let alert = self.queue.remove(i);
+        let alert = take(&mut self.queue, i)?;
         Some(Playing {
             alert,
             tone: 0,

@@ -9,8 +9,8 @@
 
 use core::fmt::Write;
 
-use super::FlightApp;
 use super::link::{BindError, BindReport};
+use super::{FlightApp, resume};
 use telemetry::link::Fingerprint;
 
 use crate::battery::BatteryLevel;
@@ -39,7 +39,7 @@ impl FlightApp {
 
     /// Answers one console line (without its line ending) into `out`.
     pub fn on_console_line<W: Write>(&mut self, line: &str, out: &mut W) -> core::fmt::Result {
-        let armed = self.flight.armed();
+        let armed = self.armed();
         match parse_line(line) {
             Ok(Command::Nothing) => Ok(()),
             Ok(Command::Help) => out.write_str(HELP),
@@ -148,7 +148,7 @@ impl FlightApp {
 
     fn write_status<W: Write>(&self, out: &mut W) -> core::fmt::Result {
         let link = if self.link_input.up { "up" } else { "down" };
-        match &self.last_out {
+        match self.last_output() {
             Some(state) => {
                 write!(
                     out,
@@ -163,15 +163,16 @@ impl FlightApp {
             }
             None => out.write_str("flight loop not running (IMU?)\r\n")?,
         }
-        let estimator = self.flight.estimator();
-        write!(
-            out,
-            "estimator {} (ins.mode {}), fallbacks {}, gps fix {}\r\n",
-            estimator.source().name(),
-            estimator.mode().name(),
-            estimator.fallbacks(),
-            estimator.gps_fix()
-        )?;
+        if let Some(estimator) = self.view.as_ref().map(|v| v.estimator) {
+            write!(
+                out,
+                "estimator {} (ins.mode {}), fallbacks {}, gps fix {}\r\n",
+                estimator.source.name(),
+                estimator.mode.name(),
+                estimator.fallbacks,
+                estimator.gps_fix
+            )?;
+        }
         if let Some((pvt, _)) = self.gps_latest() {
             let (generation, config) = self.gps_config_status();
             write!(
@@ -193,14 +194,14 @@ impl FlightApp {
             }
             out.write_str("\r\n")?;
         }
-        if let Some(home) = estimator.home() {
+        if let Some(home) = self.view.as_ref().and_then(|v| v.estimator.home) {
             write!(
                 out,
                 "home lat {} lon {} (1e-7 deg) msl {} mm\r\n",
                 home.lat_e7, home.lon_e7, home.h_msl_mm
             )?;
         }
-        if let Some(fault) = self.imu.fault() {
+        if let Some(fault) = self.imu_fault() {
             write!(
                 out,
                 "IMU fault: {} (motors stopped, re-arm needed)\r\n",
@@ -216,8 +217,9 @@ impl FlightApp {
         if let Some(e) = self.setup_error {
             write!(out, "stored settings not flyable ({e}): factory setup\r\n")?;
         }
+        self.write_health(out)?;
         self.write_link_state(out)?;
-        let armed = self.flight.armed();
+        let armed = self.armed();
         match self.battery {
             Some(b) => write!(
                 out,
@@ -236,6 +238,49 @@ impl FlightApp {
 }
 
 impl FlightApp {
+    /// The firmware's standing, a line each: the loop's misses, what the boot found, the
+    /// baro, a resumed flight, the USB host.
+    fn write_health<W: Write>(&self, out: &mut W) -> core::fmt::Result {
+        let h = self.health();
+        write!(
+            out,
+            "loop: {} IMU samples missed, {} overruns\r\n",
+            h.imu_missed, h.loop_overruns
+        )?;
+        if self.board.boot.clock_fallback {
+            out.write_str("HSE crystal did not start: clocks on the HSI (USB unreliable)\r\n")?;
+        }
+        if self.board.boot.rng_fallback {
+            out.write_str("RNG failed at boot: seeds from the unique ID and timing\r\n")?;
+        }
+        if self.baro.failed() {
+            write!(
+                out,
+                "baro failed ({} failed readings): hold modes fall back to attitude\r\n",
+                self.baro.failures()
+            )?;
+        }
+        if let Some(fault) = self.resumed {
+            // In words and numbers: `Debug` would link core's struct formatting.
+            out.write_str("flight resumed after a reset in the air (")?;
+            match fault {
+                None => out.write_str("watchdog")?,
+                Some(f) => {
+                    let reason = match f.reason {
+                        resume::FaultReason::Panic => "panic",
+                        resume::FaultReason::HardFault => "HardFault",
+                    };
+                    write!(out, "{reason} at {} ms, address {:#x}", f.at_ms, f.address)?;
+                }
+            }
+            out.write_str(")\r\n")?;
+        }
+        if self.board.usb_connected {
+            out.write_str("USB connected: arming refused (unplug to fly)\r\n")?;
+        }
+        Ok(())
+    }
+
     /// The link's key as the console shows it (its fingerprint, never the key) and how the
     /// last bind window ended.
     fn write_link_state<W: Write>(&self, out: &mut W) -> core::fmt::Result {

@@ -14,7 +14,7 @@
 //! NAV-PVTs. The GPS task does not check in with the watchdog: no GPS (or a dead one) must
 //! not reset a flying frame; its loss shows as a lost fix.
 
-use heapless::Vec;
+use heapless::Deque;
 use telemetry::messages::{Gps, GpsFix, Home as WireHome, Message as WireMessage};
 use ubx::config::{self, Bytes};
 use ubx::{Configurator, FixType, Generation, Message, NavPvt, Parser, Status};
@@ -62,6 +62,8 @@ pub(super) struct GpsPort {
     last_report_ms: Option<u32>,
     report: Option<Gps>,
     last_update: Option<GpsUpdate>,
+    /// Fixes for the loop's INS, oldest first (it fuses one per step).
+    pending: Deque<NavPvt, 4>,
     /// The home last queued for telemetry, and when.
     last_home: Option<(Home, u32)>,
     home_report: Option<WireHome>,
@@ -77,9 +79,21 @@ impl GpsPort {
             last_report_ms: None,
             report: None,
             last_update: None,
+            pending: Deque::new(),
             last_home: None,
             home_report: None,
         }
+    }
+
+    /// The next fix for the loop's INS.
+    pub(super) fn next_pvt(&mut self) -> Option<NavPvt> {
+        self.pending.pop_front()
+    }
+
+    /// The loop fused a fix (`update`: what came of it), and the home is now `home`.
+    pub(super) fn on_fused(&mut self, now_ms: u32, update: Option<GpsUpdate>, home: Option<Home>) {
+        self.last_update = update;
+        self.on_home(now_ms, home);
     }
 
     /// The `Gps` telemetry message due, once.
@@ -132,41 +146,36 @@ pub fn gps_message(pvt: &NavPvt) -> Gps {
 }
 
 impl FlightApp {
-    /// Bytes from the GPS UART at `now_ms`.
+    /// Bytes from the GPS UART at `now_ms`: each NAV-PVT goes to the flight log, is queued
+    /// for the loop's INS (it fuses one per step; more than four behind, the oldest go) and
+    /// becomes the telemetry's fix when one is due.
     pub fn on_gps_bytes(&mut self, now_ms: u32, bytes: &[u8]) {
-        let mut pvts: Vec<NavPvt, 4> = Vec::new();
         let GpsPort {
             parser,
             configurator,
+            pending,
+            last_pvt,
+            last_report_ms,
+            report,
             ..
         } = &mut self.gps;
+        let log = &mut self.log;
         parser.feed(bytes, |frame| {
             let message = Message::from_frame(&frame);
             configurator.on_message(&message);
             if let Message::NavPvt(pvt) = message {
-                // More than four in one read cannot be more than a second's worth at 5 Hz
-                // behind; the newest ones count, the oldest are dropped.
-                if pvts.is_full() {
-                    pvts.remove(0);
+                log.on_gps(now_ms, &pvt);
+                if pending.is_full() {
+                    pending.pop_front();
                 }
-                let _ = pvts.push(pvt);
+                let _ = pending.push_back(pvt);
+                *last_pvt = Some(pvt);
+                if last_report_ms.is_none_or(|t| now_ms.wrapping_sub(t) >= GPS_REPORT_PERIOD_MS) {
+                    *last_report_ms = Some(now_ms);
+                    *report = Some(gps_message(&pvt));
+                }
             }
         });
-        for pvt in &pvts {
-            self.log.on_gps(now_ms, pvt);
-            self.gps.last_update = self.flight.on_gps(pvt);
-            self.gps.last_pvt = Some(*pvt);
-            let due = self
-                .gps
-                .last_report_ms
-                .is_none_or(|t| now_ms.wrapping_sub(t) >= GPS_REPORT_PERIOD_MS);
-            if due {
-                self.gps.last_report_ms = Some(now_ms);
-                self.gps.report = Some(gps_message(pvt));
-            }
-            let home = self.flight.estimator().home();
-            self.gps.on_home(now_ms, home);
-        }
     }
 
     /// The configuration frame the GPS task should write now (at [`GPS_BAUD`]), if any.

@@ -7,8 +7,8 @@
 //! of [`BIND_WINDOW_US`], and only a bind inside that window is stored. Nothing binds at
 //! boot, and no default link ID exists that every unbound controller would share.
 //!
-//! The air protocol is the setting `link.protocol`: `taulink` (factory), or `olrs38` /
-//! `olrs39` to obey an existing OpenLRSng transmitter (`super::openlrs`; OpenLRSng frames
+//! The air protocol is the setting `link.protocol`: `taulink` (factory), or `openlrs38` /
+//! `openlrs39` to obey an existing OpenLRSng transmitter (`super::openlrs`; OpenLRSng frames
 //! cannot be authenticated). The loop sees both the same way (`on_link_channels`).
 //!
 //! The link key (spec §12.1) is what the bind agreed with the module (CPace, on the phrase
@@ -279,7 +279,7 @@ impl FlightApp {
     /// rules (`telemetry::link::check_phrase`), else the link task is asked to open a bind
     /// window, the phrase held for it. Returns whether a phrase was given.
     pub fn request_bind(&mut self, phrase: &str) -> Result<bool, BindError> {
-        if self.flight.armed() {
+        if self.armed() {
             return Err(BindError::Armed);
         }
         let phrase = check_phrase(phrase).map_err(BindError::Phrase)?;
@@ -306,7 +306,7 @@ impl FlightApp {
         if self.link.bind != BindState::Requested {
             return None;
         }
-        if self.flight.armed() {
+        if self.armed() {
             self.link.bind = BindState::Closed;
             self.link.bind_phrase = None;
             return None;
@@ -339,7 +339,7 @@ impl FlightApp {
         let FollowerBind::Bound { params, key } = result else {
             return false;
         };
-        if !open || self.flight.armed() {
+        if !open || self.armed() {
             return false;
         }
         if store_link(&mut self.live, params).is_ok() {
@@ -438,7 +438,7 @@ impl FlightApp {
     /// gate (signed, fresh, disarmed); the applied value is echoed, a refusal answered with
     /// its reason and the session to sign the next one with.
     fn apply_link_change(&mut self, message: &Message) {
-        let armed = self.flight.armed();
+        let armed = self.armed();
         let key = self.live.link_key();
         let Some(reply) = self
             .link
@@ -499,13 +499,14 @@ impl FlightApp {
 
     /// The next telemetry message, framed into `buf`, with `seen` as the link's figures:
     /// a setting echo, then an identification result, then a state change out of turn, then
-    /// the home and the GPS fix when due, else the rotation. `None` before the loop has run.
+    /// the firmware's health when it changed, the home and the GPS fix when due, else the
+    /// rotation. `None` before the loop has run.
     pub(super) fn next_report<'o>(
         &mut self,
         seen: LinkSeen,
         buf: &'o mut [u8; FRAMED_MAX_BYTES],
     ) -> Option<&'o [u8]> {
-        let out = self.last_out?;
+        let out = *self.last_output()?;
         let snap = Snapshot {
             out,
             battery: self.battery,
@@ -513,7 +514,7 @@ impl FlightApp {
             arming_blockers: self.arming_blockers(),
             sysid: self.link.sysid.front().copied(),
             altitude_m: self.baro_altitude_m(),
-            climb_mps: self.flight.climb_estimate(),
+            climb_mps: self.view.as_ref().and_then(|v| v.climb_mps),
         };
         let state = (out.armed, out.failsafe, out.mode);
         let message = if let Some(reply) = self.link.reply.take() {
@@ -525,6 +526,9 @@ impl FlightApp {
             Reporter::state(&snap)
         } else if let Some(security) = self.link.security_due.take() {
             Message::LinkSecurity(security)
+        } else if let Some(health) = self.take_health_report(self.link.last_report_us.unwrap_or(0))
+        {
+            Message::Health(health)
         } else if let Some(home) = self.take_home_report() {
             home
         } else if let Some(gps) = self.take_gps_report() {

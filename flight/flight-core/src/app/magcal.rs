@@ -220,7 +220,7 @@ impl super::FlightApp {
     /// The stick gesture, after each loop: starts a session, or stores the one collecting
     /// (a refused one is dropped: the pilot starts again), with a tone either way.
     pub(super) fn on_magcal_gesture(&mut self, now_ms: u32) {
-        let allowed = !self.flight.armed() && self.link_input.up;
+        let allowed = !self.armed() && self.link_input.up;
         let sticks = allowed.then_some(&self.link_input.sticks);
         if !self.magcal_gesture.update(now_ms, sticks) {
             return;

@@ -3,6 +3,7 @@
 //! refused and nothing is stored; nothing runs while armed.
 
 use super::*;
+use crate::pipeline::ImuSample;
 use crate::settings::handles;
 use crate::supervisor::Sticks;
 
@@ -90,8 +91,11 @@ fn a_turn_through_every_orientation_is_checked_stored_and_applied() {
     assert!(app.take_save().is_some());
     assert!(!app.magcal().collecting());
     // AND the readings the estimator gets are calibrated: round, whatever the direction
+    // (the loop takes the new calibration with its next step)
+    app.on_imu_sample(600_000, &crate::app::tests::resting(7));
+    let cal = *app.loop_side().unwrap().mag_calibration();
     let field = |d: [f32; 3]| {
-        let c = app.mag_cal.apply(raw(d));
+        let c = cal.apply(raw(d));
         c.iter().map(|v| v * v).sum::<f32>().sqrt()
     };
     let (a, b) = (field([1.0, 0.0, 0.0]), field([0.0, 0.3, -1.0]));

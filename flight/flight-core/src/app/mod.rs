@@ -6,7 +6,8 @@
 //! ([`FlightApp::take_design_request`]). No heap, no panics, time injected.
 //!
 //! Owned here: the live and stored settings and the setup derived from them; the flight
-//! loop and its controllers; the IMU fault policy (`imu`); the baro climb rate; the
+//! loop and its controllers; the IMU fault policy (`imu`); the baro climb rate and health
+//! (`baro`: a failing baro declared failed, never a reset); the
 //! battery monitor and the tone player; the link follower's hooks, bind handling and
 //! telemetry (`link`), the same over OpenLRSng (`openlrs`), and the link task's body the
 //! firmware and the simulator share (`link_task`); the console's command language
@@ -15,13 +16,17 @@
 //! boot configuration out); the magnetometer calibration (`magcal`: collected from the
 //! console, applied to every reading).
 
+mod baro;
 mod console;
 mod gps;
+mod health;
 mod imu;
 mod link;
 pub mod link_task;
+mod loop_side;
 mod magcal;
 mod openlrs;
+pub mod resume;
 mod save;
 mod watchdog;
 
@@ -32,30 +37,37 @@ mod phrase_tests;
 #[cfg(test)]
 mod tests;
 
+pub use baro::{BARO_FAILED_AFTER, BARO_HEALTHY_AFTER, BARO_RETRY_MS, BaroChange, BaroHealth};
 pub use gps::{
     GPS_BAUD, GPS_BOOT_BAUDS, GPS_REPORT_PERIOD_MS, HOME_REPORT_PERIOD_MS, gps_baud_messages,
     gps_message, home_message,
 };
+pub use health::{BootFacts, HEALTH_COUNTERS_PERIOD_US, Leds};
 pub use imu::{
     CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
 };
 pub use link::{
     BIND_WINDOW_US, BindError, BindReport, BindRequest, FAILSAFE_US, LinkStep, REPORT_PERIOD_US,
 };
+pub use loop_side::{EstimatorStatus, LoopHealth, LoopInputs, LoopReport, LoopSide};
 pub use magcal::{MagcalSession, calibration as mag_calibration};
 pub use openlrs::{
     OPENLRS_FAILSAFE_DELAY, OPENLRS_RATE_CODE_BASE, openlrs_bind_window, run_openlrs_receiver,
 };
 pub use save::{SAVE_WATCHDOG_MS, SaveJob};
-pub use watchdog::{FEED_PERIOD_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog};
+pub use watchdog::{
+    CHECK_IN_POLLS, FEED_GAP_MAX_MS, FEED_PERIOD_MS, IWDG, IwdgSetting, LSI_MAX_HZ, LSI_MIN_HZ,
+    LSI_TYP_HZ, MARGIN, POLL_LATENCY_MAX_MS, Task, WATCHDOG_TIMEOUT_MS, Watchdog,
+};
 
-use crate::alerts::{Alert, TonePlayer};
+use crate::alerts::TonePlayer;
 use crate::battery::{BatteryMonitor, BatteryStatus};
-use crate::logging::{Entry, Event, LoopContext, Profile, Recorder};
+use crate::control::design::AxisDesign;
+use crate::logging::{Entry, Profile, Recorder};
 use crate::outputs::Command;
 use crate::pipeline::{
-    ClimbRate, Controllers, FlightLoop, FlightSetup, ImuSample, LinkInput, LoopOutput, SetupError,
-    announce_battery, from_settings, loop_alerts,
+    ClimbRate, Controllers, FlightSetup, LinkInput, LoopOutput, SetupError, announce_battery,
+    from_settings, loop_alerts,
 };
 use crate::report::blocker_bit;
 use crate::settings::{LoadProblem, Settings};
@@ -77,20 +89,35 @@ pub struct FlightApp {
     stored: Settings,
     setup: FlightSetup,
     setup_error: Option<SetupError>,
-    flight: FlightLoop,
-    pending_setup: Option<(FlightSetup, Controllers)>,
+    /// The settings the setup in force was derived from (what a resume rebuilds it from).
+    flown: Settings,
+    /// The loop's side while the app runs it itself (hosts); the firmware takes it to its
+    /// own executor ([`FlightApp::take_loop_side`]).
+    loop_side: Option<LoopSide>,
+    /// The loop's latest report: what the tasks see of it.
+    view: Option<LoopReport>,
+    /// The Riccati solutions of the controllers flying (what a resume rebuilds them from).
+    designs: Option<[AxisDesign; 3]>,
+    /// A designed setup with its controllers and the settings they came from, installed
+    /// as soon as the motors are stopped.
+    pending_setup: Option<(FlightSetup, Controllers, Settings)>,
+    /// The settings of the design request being solved.
+    design_settings: Option<Settings>,
     design_requested: bool,
     save_requested: bool,
-    imu: ImuHealth,
-    last_out: Option<LoopOutput>,
     blockers: u16,
     climb: ClimbRate,
     climb_mps: Option<f32>,
+    /// A baro altitude for the loop's INS, until the loop takes it.
+    pending_baro_m: Option<f32>,
+    baro: BaroHealth,
     /// The tracked baro altitude when the tracker first settled: the power-up point the
     /// handset's altitude counts from (the MS5611 reads standard-atmosphere altitude).
     baro_ground_m: Option<f32>,
     battery_monitor: BatteryMonitor,
     battery: Option<BatteryStatus>,
+    /// The pack is at its critical level (arming refused).
+    battery_critical: bool,
     player: TonePlayer,
     link_input: LinkInput,
     link: link::LinkSide,
@@ -99,9 +126,15 @@ pub struct FlightApp {
     settings_problem: Option<LoadProblem>,
     gps: gps::GpsPort,
     magcal: MagcalSession,
+    /// A new magnetometer calibration for the loop (the live settings changed).
+    mag_cal_changed: Option<crate::estimation::magcal::MagCalibration>,
+    /// This boot resumed a flight (with the fault that reset the board, if recorded).
+    resumed: Option<Option<resume::Fault>>,
+    /// The gains changed since the resume record last took them.
+    gains_changed: bool,
+    /// Boot facts, the USB host, the health last reported.
+    board: health::BoardState,
     magcal_gesture: magcal::MagcalGesture,
-    /// The magnetometer calibration in force (from the live settings).
-    mag_cal: crate::estimation::magcal::MagCalibration,
     /// The flight log's ring (`logging`), drained by the logging task.
     log: Recorder,
 }
@@ -123,27 +156,50 @@ impl FlightApp {
         let (setup, setup_error) = setup_for(&stored);
         let setup = setup?;
         let controllers = Controllers::design(&setup.control).ok();
+        let flown = if setup_error.is_some() {
+            Settings::default()
+        } else {
+            stored.clone()
+        };
+        let mut app = Self::with_setup(stored, flown, setup, controllers, now_ms);
+        app.setup_error = setup_error;
+        Some(app)
+    }
+
+    /// The application with a setup and controllers already made from `flown`.
+    fn with_setup(
+        stored: Settings,
+        flown: Settings,
+        setup: FlightSetup,
+        controllers: Option<Controllers>,
+        now_ms: u32,
+    ) -> Self {
         let mag_cal = magcal::calibration(&stored);
         let log = Recorder::new(log_profile(&stored), setup.loop_rate_hz);
-        Some(Self {
+        Self {
             log,
             link: link::LinkSide::new(setup.channels),
             live: stored.clone(),
             stored,
-            flight: FlightLoop::new(setup.loop_config, setup.mixer, controllers),
+            flown,
+            designs: controllers.map(|c| *c.designs()),
+            loop_side: Some(LoopSide::new(&setup, controllers, mag_cal, now_ms)),
+            view: None,
             battery_monitor: BatteryMonitor::new(setup.battery),
             setup,
-            setup_error,
+            setup_error: None,
             pending_setup: None,
+            design_settings: None,
             design_requested: false,
             save_requested: false,
-            imu: ImuHealth::new(now_ms),
-            last_out: None,
             blockers: 0,
             climb: ClimbRate::new(),
             climb_mps: None,
+            pending_baro_m: None,
+            baro: BaroHealth::default(),
             baro_ground_m: None,
             battery: None,
+            battery_critical: false,
             player: TonePlayer::new(),
             link_input: LinkInput {
                 mode_channel: -1.0,
@@ -154,9 +210,12 @@ impl FlightApp {
             settings_problem: None,
             gps: gps::GpsPort::new(),
             magcal: MagcalSession::default(),
+            mag_cal_changed: None,
+            resumed: None,
+            gains_changed: true,
+            board: health::BoardState::default(),
             magcal_gesture: magcal::MagcalGesture::default(),
-            mag_cal,
-        })
+        }
     }
 
     /// The setup in force (motor protocol, loop rate: the firmware starts its peripherals
@@ -175,14 +234,22 @@ impl FlightApp {
         &self.live
     }
 
-    /// Motors may turn.
+    /// Motors may turn (as the loop last reported; before its first report, as it starts).
     pub fn armed(&self) -> bool {
-        self.flight.armed()
+        match &self.view {
+            Some(v) => v.armed,
+            None => self.loop_side.as_ref().is_some_and(LoopSide::armed),
+        }
     }
 
     /// The loop's latest output.
     pub fn last_output(&self) -> Option<&LoopOutput> {
-        self.last_out.as_ref()
+        self.view.as_ref().and_then(|v| v.out.as_ref())
+    }
+
+    /// What the loop missed since boot (its latest report).
+    pub fn loop_health(&self) -> LoopHealth {
+        self.view.as_ref().map(|v| v.health).unwrap_or_default()
     }
 
     /// What the link delivers to the loop now.
@@ -198,7 +265,7 @@ impl FlightApp {
 
     /// The standing IMU fault.
     pub fn imu_fault(&self) -> Option<ImuFault> {
-        self.imu.fault()
+        self.view.as_ref().and_then(|v| v.imu_fault)
     }
 
     /// The latest battery reading.
@@ -217,16 +284,11 @@ impl FlightApp {
         &self.log
     }
 
-    /// The flight loop (read-only: estimates for logs and the simulator).
-    pub fn flight_loop(&self) -> &FlightLoop {
-        &self.flight
-    }
-
     /// Arming blockers as telemetry's bit set; an IMU fault shows as "sensors unhealthy",
     /// an unfixed boot-time settings problem as "settings problem", both standing (not only
     /// after a refused arm).
     pub fn arming_blockers(&self) -> u16 {
-        let imu = if self.imu.fault().is_some() {
+        let imu = if self.imu_fault().is_some() {
             blocker_bit(ArmBlocker::SensorsUnhealthy)
         } else {
             0
@@ -247,7 +309,6 @@ impl FlightApp {
     /// `save`). The firmware calls it right after [`FlightApp::new`].
     pub fn on_settings_problem(&mut self, problem: LoadProblem) {
         self.settings_problem = Some(problem);
-        self.flight.set_settings_problem(true);
     }
 
     /// The boot-time settings problem not yet fixed by a save.
@@ -255,135 +316,20 @@ impl FlightApp {
         self.settings_problem
     }
 
-    // ---- IMU task -------------------------------------------------------------------
-
-    /// A sample from the IMU at `now_ms`: one loop, unless the sample is unusable (then
-    /// the ride-through policy decides). A new setup is installed first while disarmed.
-    pub fn on_imu_sample(&mut self, now_ms: u32, sample: &ImuSample) -> ImuStep {
-        self.watchdog.check_in(Task::Imu);
-        if !self.flight.armed()
-            && let Some((setup, controllers)) = self.pending_setup.take()
-        {
-            // Same sensor rate only: a rate change needs the chip reconfigured (next boot).
-            self.flight = FlightLoop::new(setup.loop_config, setup.mixer, Some(controllers));
-            self.battery_monitor = BatteryMonitor::new(setup.battery);
-            self.link.set_channel_map(setup.channels);
-            self.log
-                .reconfigure(log_profile(&self.live), setup.loop_rate_hz);
-            self.log.on_event(now_ms, Event::LoopRestarted);
-            self.setup = setup;
-        }
-        if self.imu.check_sample(now_ms, sample).is_some() {
-            return self.ride_through(now_ms);
-        }
-        if self.imu.fault().is_some() {
-            // Good data again, not yet for long enough to trust: stay disarmed.
-            return self.ride_through(now_ms);
-        }
-        // The raw reading to a calibration being collected (never while armed: arming
-        // ends it), the calibrated one to the estimator.
-        if self.flight.armed() && self.magcal.collecting() {
-            self.magcal.cancel();
-        }
-        if let Some(raw) = sample.mag {
-            self.magcal.offer(now_ms, raw);
-        }
-        let sample = &ImuSample {
-            mag: sample.mag.map(|m| self.mag_cal.apply(m)),
-            ..*sample
-        };
-        let armed_before = self.flight.armed();
-        let out = self
-            .flight
-            .step(now_ms, sample, &self.link_input, self.climb_mps);
-        self.record(out);
-        if self.log.profile() != Profile::Off {
-            self.log.on_loop(
-                now_ms,
-                &LoopContext {
-                    sample,
-                    flight: &self.flight,
-                    out: &out,
-                    link: &self.link_input,
-                    armed_before,
-                    baro_altitude_m: self.baro_altitude_m(),
-                    arming_blockers: self.arming_blockers(),
-                    imu_fault: self.imu.fault(),
-                },
-            );
-        }
-        self.on_magcal_gesture(now_ms);
-        self.identified = self.flight.take_identification();
-        if let Some(id) = &self.identified {
-            self.link.queue_identification(id);
-            self.log.on_identified(now_ms, id);
-        }
-        ImuStep {
-            motors: out.motors,
-            reprobe: false,
-        }
-    }
-
-    /// No usable sample: the data-ready edge did not come within the adapter's poll
-    /// period (`ImuFault::Stalled`) or the read failed (`ImuFault::ReadError`).
-    pub fn on_imu_missing(&mut self, now_ms: u32, cause: ImuFault) -> ImuStep {
-        self.watchdog.check_in(Task::Imu);
-        self.imu.problem(cause);
-        self.ride_through(now_ms)
-    }
-
-    /// Holds the last command within the ride-through bound; past it, disarms once.
-    fn ride_through(&mut self, now_ms: u32) -> ImuStep {
-        if self.imu.expire(now_ms).is_some() {
-            let decision = self.flight.sensor_fault();
-            self.log.on_event(now_ms, Event::ImuFault);
-            self.log.on_event(now_ms, Event::Decision(decision));
-            if let Some(out) = self.last_out.as_mut() {
-                out.motors = [Command::Stopped; 4];
-                out.armed = false;
-                out.failsafe = false;
-                out.decision = decision;
-            }
-            if decision == Decision::DisarmedSensorFault {
-                self.player.push(Alert::SensorFault);
-            }
-        }
-        let motors = match self.last_out {
-            Some(out) if self.flight.armed() => out.motors,
-            _ => [Command::Stopped; 4],
-        };
-        ImuStep {
-            motors,
-            reprobe: self.imu.reprobe_due(now_ms),
-        }
-    }
+    // ---- IMU task: the loop's side is `loop_side` -------------------------------------
 
     fn record(&mut self, out: LoopOutput) {
         if let Decision::ArmRefused(b) = out.decision {
             self.blockers = blocker_bit(b);
-        } else if out.decision == Decision::Armed {
+        } else if matches!(out.decision, Decision::Armed | Decision::Resumed) {
             self.blockers = 0;
         }
         for alert in loop_alerts(&out).into_iter().flatten() {
             self.player.push(alert);
         }
-        self.last_out = Some(out);
     }
 
     // ---- baro, battery, alerts, watchdog --------------------------------------------
-
-    /// A baro altitude (`None`: the reading failed) at `now_ms`.
-    pub fn on_baro(&mut self, now_ms: u32, altitude_m: Option<f32>) {
-        self.watchdog.check_in(Task::Baro);
-        self.climb_mps = altitude_m.and_then(|a| self.climb.update(now_ms, a));
-        if self.climb_mps.is_some() && self.baro_ground_m.is_none() {
-            self.baro_ground_m = self.climb.altitude_m();
-        }
-        if let Some(a) = altitude_m {
-            self.log.on_baro(now_ms, a);
-            self.flight.on_baro_altitude(a);
-        }
-    }
 
     /// Barometric altitude above the power-up point, m (the tracked baro altitude less its
     /// value when the tracker first settled); `None` before that or while the baro fails.
@@ -402,8 +348,7 @@ impl FlightApp {
             announce_battery(&mut self.player, status.level);
         }
         // Arming is refused on a critical pack (unless `arm.critical_battery allow`).
-        self.flight
-            .set_battery_critical(status.level == crate::battery::BatteryLevel::Critical);
+        self.battery_critical = status.level == crate::battery::BatteryLevel::Critical;
         self.log.on_battery(now_ms, &status);
         self.battery = Some(status);
     }
@@ -424,6 +369,12 @@ impl FlightApp {
         self.watchdog.poll(now_ms)
     }
 
+    /// A simulator's chip counts an LSI of `lsi_hz`: the watchdog model's timeout follows
+    /// (the firmware never calls it; its IWDG counts the real LSI).
+    pub fn model_watchdog_lsi_hz(&mut self, lsi_hz: u32) {
+        self.watchdog.set_lsi_hz(lsi_hz);
+    }
+
     /// The check-in state (for the simulator's IWDG model and diagnostics).
     pub fn watchdog(&self) -> &Watchdog {
         &self.watchdog
@@ -434,7 +385,7 @@ impl FlightApp {
     /// A setting changed: the gains adapter re-derives the setup and re-solves the gains.
     fn settings_changed(&mut self) {
         self.design_requested = true;
-        self.mag_cal = magcal::calibration(&self.live);
+        self.mag_cal_changed = Some(magcal::calibration(&self.live));
     }
 
     /// The magnetometer calibration session (console `magcal`).
@@ -452,7 +403,7 @@ impl FlightApp {
     /// problem stands, flash does not hold what `stored` says: write the whole set
     /// (`settings::save_whole`, see [`FlightApp::save_whole`]) even if nothing changed.
     pub fn take_save(&mut self) -> Option<(Settings, Settings)> {
-        if !self.save_requested || self.flight.armed() {
+        if !self.save_requested || self.armed() {
             return None;
         }
         self.save_requested = false;
@@ -469,7 +420,6 @@ impl FlightApp {
     pub fn on_saved(&mut self, saved: Settings) {
         self.stored = saved;
         self.settings_problem = None;
-        self.flight.set_settings_problem(false);
     }
 
     /// For the gains adapter: settings to design a setup and gains for (once per change).
@@ -478,13 +428,18 @@ impl FlightApp {
         if !core::mem::take(&mut self.design_requested) {
             return None;
         }
+        self.design_settings = Some(self.live.clone());
         Some(self.live.clone())
     }
 
     /// The gains adapter designed `setup` and `controllers`: installed by the IMU path as
     /// soon as the motors are stopped.
     pub fn on_designed(&mut self, setup: FlightSetup, controllers: Controllers) {
-        self.pending_setup = Some((setup, controllers));
+        let flown = self
+            .design_settings
+            .take()
+            .unwrap_or_else(|| self.live.clone());
+        self.pending_setup = Some((setup, controllers, flown));
     }
 }
 

@@ -1,4 +1,4 @@
-//! The flight side of an OpenLRSng link (`link.protocol` = `olrs38` / `olrs39`): the link
+//! The flight side of an OpenLRSng link (`link.protocol` = `openlrs38` / `openlrs39`): the link
 //! task runs `openlrs`'s receiver role and hands the app what each `rx_step`
 //! reported; the app turns it into the same thing the TauLink follower gives the loop
 //! (channels on the CRSF scale, failsafe, failsafe counting, watchdog check-in,
@@ -113,7 +113,7 @@ impl FlightApp {
         let Some(data) = bound else {
             return false;
         };
-        if !open || self.flight.armed() {
+        if !open || self.armed() {
             return false;
         }
         if store_openlrs(&mut self.live, data).is_ok() {

@@ -153,8 +153,8 @@ fn channels_us(throttle_us: u16) -> [u16; 16] {
 #[test]
 fn an_openlrsng_link_binds_only_in_the_window_and_flies_the_loop_like_taulink() {
     for (protocol, version) in [
-        ("olrs38", BindingVersion::V38),
-        ("olrs39", BindingVersion::V39),
+        ("openlrs38", BindingVersion::V38),
+        ("openlrs39", BindingVersion::V39),
     ] {
         // The default profile (19 200 bit/s, 40 Hz) and the fastest (125 000 bit/s).
         for profile in [2, 4] {
@@ -204,10 +204,14 @@ fn an_openlrsng_link_binds_only_in_the_window_and_flies_the_loop_like_taulink() 
 
 #[test]
 fn every_openlrsng_step_checks_the_link_task_in() {
-    let mut app = openlrs_app("olrs39");
+    let mut app = openlrs_app("openlrs39");
     let config = bind(&mut app, &tx_data(BindingVersion::V39, 2));
     let mut rx = Receiver::new(config, Some(tx_data(BindingVersion::V39, 2)));
     rx.start(0);
+    // The start-up grace (every task alive for CHECK_IN_POLLS polls) runs out first.
+    for k in 0..crate::app::CHECK_IN_POLLS as u32 {
+        app.on_watchdog_poll(50 * k);
+    }
     for t in Task::ALL {
         if t != Task::Link {
             app.check_in(t);
@@ -222,7 +226,7 @@ fn every_openlrsng_step_checks_the_link_task_in() {
 
 #[test]
 fn switching_the_protocol_keeps_each_links_binding() {
-    let mut app = openlrs_app("olrs39");
+    let mut app = openlrs_app("openlrs39");
     bind(&mut app, &tx_data(BindingVersion::V39, 2));
     let mut out = heapless::String::<256>::new();
     let _ = app.on_console_line("set link.protocol taulink", &mut out);
@@ -231,7 +235,7 @@ fn switching_the_protocol_keeps_each_links_binding() {
         LinkStep::WaitForBind,
         "TauLink is unbound"
     );
-    let _ = app.on_console_line("set link.protocol olrs38", &mut out);
+    let _ = app.on_console_line("set link.protocol openlrs38", &mut out);
     let LinkStep::FollowOpenLrs { config, data } = app.next_link_step() else {
         panic!("the OpenLRSng bind stays");
     };

@@ -1,4 +1,5 @@
 use super::*;
+use crate::pipeline::ImuSample;
 use crate::supervisor::Sticks;
 use telemetry::channels::ChannelFormat;
 use telemetry::channels::FailsafeValues;
@@ -183,29 +184,52 @@ fn a_still_noisy_sensor_is_never_a_fault() {
     assert_eq!(app.arming_blockers(), 0);
 }
 
+/// Polls out the watchdog's start-up grace (every task alive for the first window).
+fn starve(w: &mut Watchdog) {
+    for _ in 0..CHECK_IN_POLLS {
+        w.poll(0);
+    }
+}
+
+/// The same through the app.
+fn starve_app(app: &mut FlightApp) {
+    for _ in 0..CHECK_IN_POLLS {
+        app.on_watchdog_poll(0);
+    }
+}
+
 #[test]
 fn the_watchdog_is_fed_only_when_every_task_checked_in() {
     let mut w = Watchdog::new(0);
+    // Every task starts alive for the window; with none checking in the feeds stop after it.
+    for k in 1..=CHECK_IN_POLLS as u32 {
+        assert!(w.poll(0), "grace poll {k}");
+    }
+    assert!(!w.poll(0));
+    let mut w = Watchdog::new(0);
+    starve(&mut w);
     for t in Task::ALL.iter().skip(1) {
         w.check_in(*t);
     }
-    assert!(!w.poll(100));
+    assert!(!w.poll(50));
     assert_eq!(
         w.missing().collect::<heapless::Vec<_, 8>>(),
         [Task::Heartbeat]
     );
-    assert!(!w.expired(249));
-    assert!(w.expired(250), "250 ms without a feed is a reset");
+    assert!(!w.expired(WATCHDOG_TIMEOUT_MS - 1));
+    assert!(
+        w.expired(WATCHDOG_TIMEOUT_MS),
+        "no feed for the timeout is a reset"
+    );
     w.check_in(Task::Heartbeat);
-    assert!(w.poll(200));
-    assert!(!w.expired(449));
-    assert!(!w.poll(300), "the set starts over after a feed");
-    assert_eq!(w.missing().count(), Task::ALL.len());
+    assert!(w.poll(100));
+    assert!(!w.expired(99 + WATCHDOG_TIMEOUT_MS));
 }
 
 #[test]
 fn every_link_hook_call_checks_the_link_in() {
     let mut app = app();
+    starve_app(&mut app);
     let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
     for t in Task::ALL {
         if t != Task::Link {
@@ -214,15 +238,19 @@ fn every_link_hook_call_checks_the_link_in() {
     }
     assert!(!app.on_watchdog_poll(100));
     app.on_link_step(100_000, &mut follower);
-    assert!(app.on_watchdog_poll(100));
-    // Waiting outside the follower counts too.
+    assert!(app.on_watchdog_poll(150));
+    // Waiting outside the follower counts too (on a fresh app: the check-ins above stay
+    // alive for CHECK_IN_POLLS polls).
+    let mut app = self::app();
+    starve_app(&mut app);
     for t in Task::ALL {
         if t != Task::Link {
             app.check_in(t);
         }
     }
+    assert!(!app.on_watchdog_poll(100));
     app.on_link_idle();
-    assert!(app.on_watchdog_poll(200));
+    assert!(app.on_watchdog_poll(150));
     // Failsafe from the start: the loop sees the link down, and a link that never came up
     // is not a failsafe event in telemetry.
     assert!(!app.link_input().up);
@@ -544,8 +572,16 @@ mod gps {
         let mut a = FlightApp::new(settings, 0).unwrap();
         fly(&mut a, 0, 3_000, sticks(0.0, 0.0));
         assert_eq!(a.take_home_report(), None, "no fix, no home");
-        a.on_gps_bytes(10, &bytes(&pvt(1_000)));
-        let home = a.flight.estimator().home().expect("the first fix is home");
+        a.on_gps_bytes(3_000, &bytes(&pvt(1_000)));
+        // The loop fuses it with its next step.
+        fly(&mut a, 3_000, 1, sticks(0.0, 0.0));
+        let home = a
+            .view
+            .as_ref()
+            .unwrap()
+            .estimator
+            .home
+            .expect("the first fix is home");
         // The link's report queue sends it (after the state change out of turn).
         let mut reader = telemetry::messages::MessageReader::new();
         let mut sent = Vec::new();
@@ -577,10 +613,14 @@ mod gps {
             }
         );
         assert_eq!((home.lat_e7, home.lon_e7), (h.latitude_e7, h.longitude_e7));
-        // Not repeated before the period; repeated after it.
-        a.on_gps_bytes(1_010, &bytes(&pvt(2_000)));
+        // Not repeated before the period; repeated after it (each fix fused by the loop's
+        // next step).
+        a.on_gps_bytes(4_000, &bytes(&pvt(2_000)));
+        fly(&mut a, 4_000, 1, sticks(0.0, 0.0));
         assert_eq!(a.take_home_report(), None);
-        a.on_gps_bytes(10 + HOME_REPORT_PERIOD_MS, &bytes(&pvt(6_000)));
+        let t = 3_000 + HOME_REPORT_PERIOD_MS;
+        a.on_gps_bytes(t, &bytes(&pvt(6_000)));
+        fly(&mut a, t, 1, sticks(0.0, 0.0));
         assert_eq!(
             a.take_home_report(),
             Some(telemetry::messages::Message::Home(h))
@@ -590,7 +630,7 @@ mod gps {
             lat_e7: home.lat_e7 + 100,
             ..home
         };
-        a.gps.on_home(20 + HOME_REPORT_PERIOD_MS, Some(moved));
+        a.gps.on_home(t + 10, Some(moved));
         let Some(telemetry::messages::Message::Home(m)) = a.take_home_report() else {
             panic!("a moved home is reported at once");
         };
@@ -607,9 +647,12 @@ mod gps {
             let mut a = FlightApp::new(settings, 0).unwrap();
             fly(&mut a, 0, 3_000, sticks(0.0, 0.0));
             // WHEN a usable fix arrives
-            a.on_gps_bytes(10, &bytes(&pvt(1_000)));
+            a.on_gps_bytes(3_000, &bytes(&pvt(1_000)));
+            // (the loop fuses it with its next step)
+            fly(&mut a, 3_000, 1, sticks(0.0, 0.0));
             // THEN it is home, and the Home message is due
-            let home = a.flight.estimator().home().expect("the first fix is home");
+            let estimator = a.view.as_ref().unwrap().estimator;
+            let home = estimator.home.expect("the first fix is home");
             assert_eq!(
                 (home.lat_e7, home.lon_e7),
                 (470_654_321, 80_123_456),
@@ -627,8 +670,8 @@ mod gps {
                 )),
                 "{mode}"
             );
-            assert!(a.flight.estimator().gps_fix(), "{mode}");
-            assert_eq!(a.flight.estimator().source(), {
+            assert!(estimator.gps_fix, "{mode}");
+            assert_eq!(estimator.source, {
                 if mode == "complementary" {
                     crate::pipeline::Source::Complementary
                 } else {

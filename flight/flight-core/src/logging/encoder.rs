@@ -11,8 +11,9 @@ use super::topics::{
     Battery, Entry, Estimate, Event, Identification, LinkStats, Motors, SensorBaro, SensorGps,
     SensorImu, Setpoint, Status,
 };
-use crate::settings::{COUNT, MODES, Settings, Value, handles};
+use crate::settings::{Settings, Value, handles};
 use crate::supervisor::{ArmBlocker, Decision};
+use telemetry::settings::{COUNT, MODES};
 
 /// The smallest writer buffer every message fits in (the longest is `sensor_gps`'s
 /// format, checked by a test).
@@ -291,6 +292,7 @@ fn decision_text(d: Decision) -> Option<(Level, [&'static str; 2])> {
                     ArmBlocker::GainsNotReady => "gains not ready",
                     ArmBlocker::BatteryCritical => "battery critical",
                     ArmBlocker::SettingsProblem => "settings problem",
+                    ArmBlocker::UsbConnected => "USB connected",
                 },
             ],
         ),
@@ -301,5 +303,9 @@ fn decision_text(d: Decision) -> Option<(Level, [&'static str; 2])> {
         Decision::FailsafeEntered => (Level::Critical, ["link failsafe", ""]),
         Decision::ControlRecovered => (Level::Notice, ["link back: ", "pilot in control"]),
         Decision::DisarmedSensorFault => (Level::Critical, ["disarmed: ", "IMU fault"]),
+        Decision::Resumed => (
+            Level::Critical,
+            ["armed again: ", "flight resumed after a reset"],
+        ),
     })
 }

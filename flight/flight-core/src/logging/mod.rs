@@ -31,6 +31,8 @@ use heapless::Deque;
 
 use crate::app::ImuFault;
 use crate::battery::{BatteryLevel, BatteryStatus};
+use crate::estimation::ins::State as InsState;
+use crate::estimation::quaternion::Quaternion;
 use crate::pipeline::{FlightLoop, ImuSample, LinkInput, LoopOutput, Source};
 use crate::report::LinkSeen;
 use crate::supervisor::Decision;
@@ -44,19 +46,65 @@ pub const SPARKY2_LOG_AREA_BYTES: u32 = 16 * 64 * 1024;
 /// rest, far more for the others; the logging task drains it every few milliseconds.
 pub const RING_ENTRIES: usize = 96;
 
-/// What the flight loop's state is when a loop sample is recorded (beyond the loop's own).
-#[derive(Debug, Clone, Copy)]
-pub struct LoopContext<'a> {
-    /// The sample the estimator took.
-    pub sample: &'a ImuSample,
-    /// The loop after its step.
-    pub flight: &'a FlightLoop,
-    /// Its output.
-    pub out: &'a LoopOutput,
-    /// What the link delivered.
-    pub link: &'a LinkInput,
+/// What the flight loop's step contributes to the log: taken on the loop's side after a
+/// step while a profile records ([`LoopSnapshot::of`]), carried to the app by the loop's
+/// report (`app::LoopReport`), recorded there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopSnapshot {
+    /// The sample the estimator took (the magnetometer calibrated).
+    pub sample: ImuSample,
+    /// What the link delivered to the step.
+    pub link: LinkInput,
     /// The motors were enabled when the sample was estimated.
     pub armed_before: bool,
+    /// The accelerometer corrected the complementary filter on this sample.
+    pub accel_corrected: bool,
+    /// Body → NED attitude after the step.
+    pub attitude: Quaternion,
+    /// The INS's state while it flies.
+    pub ins: Option<InsState>,
+    /// The INS's altitude (m, up) while it flies with a recent baro reading.
+    pub ins_altitude_m: Option<f32>,
+    /// The loop's climb estimate, m/s up.
+    pub climb_mps: Option<f32>,
+    /// INS fallbacks so far.
+    pub fallbacks: u16,
+    /// The identification running, as it stands.
+    pub identification: Option<ekf::Identification>,
+}
+
+impl LoopSnapshot {
+    /// The snapshot of `flight` after it stepped on `sample` with `link`.
+    pub fn of(
+        flight: &FlightLoop,
+        sample: &ImuSample,
+        link: &LinkInput,
+        armed_before: bool,
+    ) -> Self {
+        let estimator = flight.estimator();
+        Self {
+            sample: *sample,
+            link: *link,
+            armed_before,
+            accel_corrected: flight.accel_corrected(),
+            attitude: flight.attitude(),
+            ins: estimator.ins_state(),
+            ins_altitude_m: estimator.vertical().map(|(altitude, _)| altitude),
+            climb_mps: flight.climb_estimate(),
+            fallbacks: estimator.fallbacks(),
+            identification: flight.identification_in_progress(),
+        }
+    }
+}
+
+/// What a loop sample is recorded with: the loop's snapshot and the app's side of the
+/// moment.
+#[derive(Debug, Clone, Copy)]
+pub struct LoopContext<'a> {
+    /// The loop's step.
+    pub snapshot: &'a LoopSnapshot,
+    /// Its output.
+    pub out: &'a LoopOutput,
     /// Barometric altitude above the power-up point, m.
     pub baro_altitude_m: Option<f32>,
     /// Arming blockers (telemetry's bit set).
@@ -135,7 +183,8 @@ impl Recorder {
         self.profile
     }
 
-    /// Entries dropped since boot because the ring was full.
+    /// Entries dropped since boot because the ring was full (a loop sample that never
+    /// reached the recorder counts as one).
     pub fn dropped(&self) -> u32 {
         self.dropped
     }
@@ -199,7 +248,7 @@ impl Recorder {
             self.push(t, Entry::Estimate(estimate_record(t, c)));
         }
         if Self::due(n, every.setpoint) {
-            let l = c.link;
+            let l = c.snapshot.link;
             self.push(
                 t,
                 Entry::Setpoint(Setpoint {
@@ -233,7 +282,7 @@ impl Recorder {
             self.push(t, Entry::Status(status_record(t, c)));
         }
         if Self::due(n, every.identification)
-            && let Some(id) = c.flight.identification_in_progress()
+            && let Some(id) = c.snapshot.identification
         {
             self.push(t, Entry::Identification(identification(t, &id, false)));
         }
@@ -247,11 +296,22 @@ impl Recorder {
         if c.out.mode_changed {
             self.push(t, Entry::Event(t, Event::Mode(c.out.mode)));
         }
-        let fallbacks = c.flight.estimator().fallbacks();
+        let fallbacks = c.snapshot.fallbacks;
         if fallbacks != self.last_fallbacks {
             self.last_fallbacks = fallbacks;
             self.push(t, Entry::Event(t, Event::EstimatorFallback));
         }
+    }
+
+    /// `steps` loop samples up to `now_ms` that never reached the recorder (the loop's
+    /// reports merged while the app's side was busy): marked as lost, like a full ring's.
+    pub fn on_loops_missed(&mut self, now_ms: u32, steps: u32) {
+        if self.profile == Profile::Off || steps == 0 {
+            return;
+        }
+        self.loops = self.loops.wrapping_add(steps);
+        self.lose(u64::from(now_ms) * 1000);
+        self.dropped = self.dropped.saturating_add(steps - 1);
     }
 
     /// An event at `now_ms`.
@@ -346,15 +406,15 @@ impl Recorder {
 }
 
 fn imu_record(t: u64, c: &LoopContext) -> SensorImu {
-    let s = c.sample;
+    let s = &c.snapshot.sample;
     let mut flags = 0;
     if s.mag.is_some() {
         flags |= imu_flags::MAG;
     }
-    if c.flight.accel_corrected() {
+    if c.snapshot.accel_corrected {
         flags |= imu_flags::ACCEL_CORRECTS;
     }
-    if c.armed_before {
+    if c.snapshot.armed_before {
         flags |= imu_flags::ARMED;
     }
     SensorImu {
@@ -367,24 +427,20 @@ fn imu_record(t: u64, c: &LoopContext) -> SensorImu {
 }
 
 fn estimate_record(t: u64, c: &LoopContext) -> Estimate {
-    let estimator = c.flight.estimator();
+    let l = c.snapshot;
     let nan3 = [f32::NAN; 3];
-    let ins = estimator.ins_state();
-    let altitude_m = match estimator.vertical() {
-        Some((altitude, _)) => altitude,
-        None => c.baro_altitude_m.unwrap_or(f32::NAN),
-    };
+    let ins = l.ins;
     Estimate {
         timestamp: t,
-        q: c.flight.attitude(),
+        q: l.attitude,
         // The yaw angle is left to the encoder (an atan2 the loop does not need).
         euler_deg: [c.out.attitude.roll_deg, c.out.attitude.pitch_deg, f32::NAN],
         velocity_ned_mps: ins.map_or(nan3, |s| s.velocity_ned_mps),
         position_ned_m: ins.map_or(nan3, |s| s.position_ned_m),
         gyro_bias_radps: ins.map_or(nan3, |s| s.gyro_bias_radps),
         accel_bias_z_mps2: ins.map_or(f32::NAN, |s| s.accel_bias_z_mps2),
-        altitude_m,
-        climb_mps: c.flight.climb_estimate().unwrap_or(f32::NAN),
+        altitude_m: l.ins_altitude_m.or(c.baro_altitude_m).unwrap_or(f32::NAN),
+        climb_mps: l.climb_mps.unwrap_or(f32::NAN),
         source: source_code(c.out.estimator),
     }
 }

@@ -2,7 +2,7 @@
 //! `log.profile`; the bytes per second each profile costs are measured into the flight
 //! README (`cargo run --release -p flight-sitl -- log-figures --write`).
 
-/// A log profile (the `log.profile` choice, in [`crate::settings::LOG_PROFILES`]
+/// A log profile (the `log.profile` choice, in [`telemetry::settings::LOG_PROFILES`]
 /// order).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Profile {
@@ -153,7 +153,11 @@ mod tests {
             Profile::Flight
         );
         for (i, p) in Profile::ALL.iter().enumerate() {
-            assert_eq!(crate::settings::LOG_PROFILES[i], p.name(), "setting order");
+            assert_eq!(
+                telemetry::settings::LOG_PROFILES[i],
+                p.name(),
+                "setting order"
+            );
         }
     }
 }

@@ -14,7 +14,7 @@ pub const BATTERY_REPEAT_MS: u32 = 4_000;
 pub fn loop_alerts(out: &LoopOutput) -> [Option<Alert>; 2] {
     let decision = match out.decision {
         Decision::Steady => None,
-        Decision::Armed => Some(Alert::Armed),
+        Decision::Armed | Decision::Resumed => Some(Alert::Armed),
         Decision::ArmRefused(_) => Some(Alert::ArmRefused),
         Decision::DisarmedByPilot
         | Decision::DisarmedIdle

@@ -2,7 +2,7 @@
 //! attitude PIDs, designed together before take-off (the Riccati solves run in f64 and take
 //! milliseconds, so arming waits for them, never the loop).
 
-use crate::control::design::{DesignError, KfNoise, LqrCosts, design_axis};
+use crate::control::design::{AxisDesign, DesignError, KfNoise, LqrCosts, design_axis};
 use crate::control::lqr::{AxisSetpoint, LqgAxis};
 use crate::control::pid::{AttitudePid, Pid, PidGains};
 use crate::model::AxisModel;
@@ -37,6 +37,9 @@ pub struct Controllers {
     lqg: [LqgAxis; 3],
     pid: [Pid; 3],
     attitude_pid: [AttitudePid; 2],
+    /// The Riccati solutions they were built from: with the parameters, all that rebuilds
+    /// them without solving again ([`Controllers::from_designs`]).
+    designs: [AxisDesign; 3],
 }
 
 /// |bias state| limit of the RTKF (actuator units): the integral action's authority.
@@ -46,32 +49,47 @@ impl Controllers {
     /// Solves the three axes' LQG gains and builds the PIDs.
     pub fn design(p: &ControlParams) -> Result<Self, DesignError> {
         let ts = f64::from(p.ts_s);
-        let mut lqg = [None; 3];
-        for (((slot, model), rate), attitude) in lqg
+        let mut designs = [None; 3];
+        for (((slot, model), rate), attitude) in designs
             .iter_mut()
             .zip(p.models.iter())
             .zip(&p.rate_costs)
             .zip(&p.attitude_costs)
         {
-            let design = design_axis(model, ts, rate, attitude, &p.noise)?;
-            *slot = Some(
-                LqgAxis::new(model, p.ts_s, &design, BIAS_LIMIT)
-                    .with_output_delay(p.output_delay_samples),
-            );
+            *slot = Some(design_axis(model, ts, rate, attitude, &p.noise)?);
         }
-        let [Some(roll), Some(pitch), Some(yaw)] = lqg else {
+        let [Some(roll), Some(pitch), Some(yaw)] = designs else {
             return Err(DesignError::BadCost);
         };
+        Ok(Self::from_designs(p, [roll, pitch, yaw]))
+    }
+
+    /// The controllers `p` and the axes' Riccati solutions `designs` make (as
+    /// [`Controllers::design`] found them): no solve, a few thousand instructions. A
+    /// resumed flight rebuilds its gains this way (`app::resume`).
+    pub fn from_designs(p: &ControlParams, designs: [AxisDesign; 3]) -> Self {
+        let [mr, mp, my] = p.models;
+        let [dr, dp, dy] = designs;
+        let lqg = [(mr, dr), (mp, dp), (my, dy)].map(|(model, design)| {
+            LqgAxis::new(&model, p.ts_s, &design, BIAS_LIMIT)
+                .with_output_delay(p.output_delay_samples)
+        });
         let pid = p.pid_rate.map(|g| Pid::new(g, p.ts_s));
         let [roll_pid, pitch_pid, _] = pid;
         let attitude_pid = [roll_pid, pitch_pid].map(|rate| {
             AttitudePid::new(p.attitude_kp, 0.0, p.attitude_max_rate_dps, rate, p.ts_s)
         });
-        Ok(Self {
-            lqg: [roll, pitch, yaw],
+        Self {
+            lqg,
             pid,
             attitude_pid,
-        })
+            designs,
+        }
+    }
+
+    /// The axes' Riccati solutions (roll, pitch, yaw).
+    pub fn designs(&self) -> &[AxisDesign; 3] {
+        &self.designs
     }
 
     /// Restarts every controller (arming, taking control back): no stale integrals.

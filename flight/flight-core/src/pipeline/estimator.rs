@@ -202,6 +202,24 @@ impl Estimator {
         }
     }
 
+    /// The attitude filter's gyro bias, rad/s (the INS's while it flies).
+    pub fn gyro_bias_radps(&self) -> [f32; 3] {
+        match self.source {
+            Source::Complementary => self.cf.gyro_bias_radps(),
+            Source::Ins => self.last_good.1,
+        }
+    }
+
+    /// Starts from `attitude` and `gyro_bias_radps` kept across a reset in the air (the
+    /// complementary filter flies first, as after any boot; the INS starts from it): in the
+    /// air the accelerometer does not show the attitude, and it corrects only slowly while
+    /// armed. A non-finite record is ignored.
+    pub fn resume(&mut self, attitude: Quaternion, gyro_bias_radps: [f32; 3]) {
+        if self.cf.reset(attitude, gyro_bias_radps).is_ok() {
+            self.last_good = (self.cf.attitude(), gyro_bias_radps);
+        }
+    }
+
     /// The INS estimate while the INS flies.
     pub fn ins_state(&self) -> Option<State> {
         (self.source == Source::Ins).then(|| self.ins.state())

@@ -9,6 +9,7 @@ use super::hold::{DescentHold, Hold, Horizontal, Nav};
 use super::identify::Sysid;
 use super::stages;
 use super::sticks::StickShaping;
+use crate::app::resume::FlightState;
 use crate::control::mixer::Mixer;
 use crate::estimation::GRAVITY_MPS2;
 use crate::estimation::complementary;
@@ -177,6 +178,11 @@ pub struct FlightLoop {
     failsafe_holds_altitude: bool,
     /// The boot-time settings load had a problem not yet fixed by a save (arming refused).
     settings_problem: bool,
+    /// The vertical estimate's sensor (the baro) was declared failed: the hold modes fall
+    /// back to attitude mode.
+    vertical_lost: bool,
+    /// A USB host has the console (arming refused).
+    usb_connected: bool,
 }
 
 impl FlightLoop {
@@ -208,6 +214,66 @@ impl FlightLoop {
             failsafe_airborne: false,
             failsafe_holds_altitude: false,
             settings_problem: false,
+            vertical_lost: false,
+            usb_connected: false,
+        }
+    }
+
+    /// Whether a USB host has the console (arming is refused while it does).
+    pub fn set_usb_connected(&mut self, connected: bool) {
+        self.usb_connected = connected;
+    }
+
+    /// The controllers flying (`None` until the gains are solved).
+    pub fn controllers(&self) -> Option<&Controllers> {
+        self.controllers.as_ref()
+    }
+
+    /// What a resume after a reset needs of the loop at `now_ms` (`app::resume`).
+    pub fn resume_state(&self, now_ms: u32) -> FlightState {
+        FlightState {
+            written_ms: now_ms,
+            armed: self.supervisor.motors_enabled(),
+            in_air: self.airborne && !self.landing.landed(),
+            failsafe: self.supervisor.failsafe_descent_mps().is_some(),
+            mode: self.mode,
+            hover_throttle: self.hover_throttle,
+            attitude: self.estimator.attitude(),
+            gyro_bias_radps: self.estimator.gyro_bias_radps(),
+        }
+    }
+
+    /// Continues a flight after a reset in the air, from `state` (`app::resume`): in the
+    /// air, the attitude and gyro bias, hover throttle and mode restored, in failsafe until
+    /// the link decides (`Supervisor::resume`).
+    pub fn resume(&mut self, now_ms: u32, state: &FlightState) {
+        self.supervisor.resume(now_ms);
+        self.modes.select(state.mode);
+        self.mode = self.effective_mode(state.mode);
+        if state.hover_throttle.is_finite() {
+            self.hover_throttle = state.hover_throttle.clamp(0.05, 0.95);
+        }
+        self.estimator.resume(state.attitude, state.gyro_bias_radps);
+        self.airborne = true;
+        self.landing.airborne();
+        self.failsafe_since_ms = Some(now_ms);
+        self.failsafe_airborne = true;
+    }
+
+    /// The baro was declared failed (`true`) or is healthy again: while it is failed the hold
+    /// modes cannot engage and an engaged one falls back to attitude mode, the throttle
+    /// back on the stick (their altitude comes from it).
+    pub fn set_vertical_lost(&mut self, lost: bool) {
+        self.vertical_lost = lost;
+    }
+
+    /// The mode the loop flies when the switch selects `selected`: attitude mode instead of
+    /// a hold mode while the vertical estimate is lost.
+    pub fn effective_mode(&self, selected: FlightMode) -> FlightMode {
+        if self.vertical_lost && selected.holds() {
+            FlightMode::Attitude
+        } else {
+            selected
         }
     }
 
@@ -469,9 +535,12 @@ impl FlightLoop {
     /// Supervise stage: the flight-mode switch (while the link is up) and the arming /
     /// failsafe state machine.
     fn supervise(&mut self, now_ms: u32, link: &LinkInput, estimate: &Estimate) -> Decision {
-        if link.up {
-            self.mode = self.modes.update(link.mode_channel);
-        }
+        let selected = if link.up {
+            self.modes.update(link.mode_channel)
+        } else {
+            self.modes.mode()
+        };
+        self.mode = self.effective_mode(selected);
         self.supervisor.update(&Inputs {
             now_ms,
             link_up: link.up,
@@ -483,6 +552,7 @@ impl FlightLoop {
             landing_detectable: self.climb_mps.is_some(),
             battery_critical: self.battery_critical,
             settings_problem: self.settings_problem,
+            usb_connected: self.usb_connected,
         })
     }
 
@@ -549,7 +619,11 @@ impl FlightLoop {
         if self.controllers.is_none() {
             return ([Command::Stopped; 4], 0.0);
         }
-        if matches!(fly.decision, Decision::Armed | Decision::FailsafeEntered) || fly.mode_changed {
+        if matches!(
+            fly.decision,
+            Decision::Armed | Decision::FailsafeEntered | Decision::Resumed
+        ) || fly.mode_changed
+        {
             self.hold.reset();
         }
         let ts = self.config.ts_s;
@@ -603,7 +677,10 @@ impl FlightLoop {
             return ([Command::Stopped; 4], 0.0);
         };
         let gyro_dps = fly.gyro_dps;
-        if matches!(fly.decision, Decision::Armed | Decision::ControlRecovered) || fly.mode_changed
+        if matches!(
+            fly.decision,
+            Decision::Armed | Decision::ControlRecovered | Decision::Resumed
+        ) || fly.mode_changed
         {
             c.reset(gyro_dps);
         }

@@ -11,14 +11,10 @@ use telemetry::link::{Band, LinkParams, RateMode};
 
 use crate::settings::{Change, Handle, ParamError, Settings, handles};
 
-const BANDS: [Band; 3] = [Band::Mhz433, Band::Mhz868, Band::Mhz915];
-const RATES: [RateMode; 5] = [
-    RateMode::L50,
-    RateMode::M100,
-    RateMode::F250,
-    RateMode::F500,
-    RateMode::F700,
-];
+/// `link.band`'s values, in the order of its words (`telemetry::settings::BANDS`).
+const BANDS: [Band; 4] = [Band::Mhz433, Band::Mhz868, Band::Mhz915, Band::Ism433];
+/// `link.rate`'s values, in the order of its words (`telemetry::settings::RATES`).
+const RATES: [RateMode; 5] = RateMode::ALL;
 const FORMATS: [ChannelFormat; 3] = [
     ChannelFormat::Full16,
     ChannelFormat::Compact8,
@@ -216,7 +212,7 @@ mod tests {
         }
         s.set_text("link.band", "868").unwrap();
         store_openlrs(&mut s, &data).unwrap();
-        s.set_text("link.protocol", "olrs39").unwrap();
+        s.set_text("link.protocol", "openlrs39").unwrap();
         assert_eq!(protocol(&s), Protocol::OpenLrs(BindingVersion::V39));
         assert_eq!(stored_openlrs(&s, BindingVersion::V39), Some(data));
         assert_eq!(data.to_bytes()[0], 0x39);

@@ -22,7 +22,8 @@
 use core::fmt::Write;
 
 use super::decimal::Shortest;
-use super::params::{Kind, Settings, Value, find};
+use super::params::Settings;
+use telemetry::settings::{Kind, Value, find};
 
 /// A parsed line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -232,7 +233,7 @@ mod tests {
     #[test]
     fn every_settable_value_reads_back_from_its_text() {
         use crate::settings::decimal::Shortest;
-        use crate::settings::{PARAMS, Value};
+        use crate::settings::{PARAMS, ParamText, Value};
         for p in PARAMS {
             let Kind::F32 { min, max } = p.kind else {
                 continue;

@@ -34,8 +34,9 @@ use sequential_storage::map::MapStorage;
 use telemetry::link::LinkKey;
 use telemetry::link::auth::KEY_BYTES;
 
-use super::params::{PARAMS, Settings};
+use super::params::Settings;
 use crate::pipeline::InvalidSettings;
+use telemetry::settings::PARAMS;
 
 /// Scratch buffer size for one map item: the slot key and the record, rounded up to the
 /// flash word (the record is 11 + 6 × parameters bytes).
@@ -61,7 +62,7 @@ const VERSION_PHRASE_KEY: u8 = 3;
 /// The version before the link key: its pairs load, not its link.
 const VERSION_NO_KEY: u8 = 2;
 /// Longest record: version, generation, count, pairs, key flag and key, CRC.
-const RECORD_MAX: usize = 1 + 4 + 2 + 6 * super::params::COUNT + 1 + KEY_BYTES + 4;
+pub(crate) const RECORD_MAX: usize = 1 + 4 + 2 + 6 * super::params::COUNT + 1 + KEY_BYTES + 4;
 
 /// A storage failure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -131,8 +132,9 @@ pub struct LoadReport {
     pub problem: Option<LoadProblem>,
 }
 
-/// IEEE CRC-32 (reflected, polynomial 0xEDB88320), bitwise: the record is read once per boot.
-fn crc32(bytes: &[u8]) -> u32 {
+/// IEEE CRC-32 (reflected, polynomial 0xEDB88320), bitwise: the record is read once per boot
+/// (the resume record, `app::resume`, reuses it).
+pub(crate) fn crc32(bytes: &[u8]) -> u32 {
     let mut crc = !0u32;
     for &b in bytes {
         crc ^= u32::from(b);
@@ -153,7 +155,7 @@ fn crc32(bytes: &[u8]) -> u32 {
 /// # Errors
 /// [`StoreError::Flash`] if the record outgrew [`RECORD_MAX`] (ruled out by the bound's
 /// formula): refused rather than stored cut short.
-fn record(
+pub(crate) fn record(
     settings: &Settings,
     generation: u32,
 ) -> Result<heapless::Vec<u8, RECORD_MAX>, StoreError> {
@@ -188,15 +190,15 @@ fn encode(settings: &Settings, generation: u32, out: &mut [u8; RECORD_MAX]) -> u
 }
 
 /// A decoded record.
-struct Record {
+pub(crate) struct Record {
     generation: u32,
-    settings: Settings,
+    pub(crate) settings: Settings,
     loaded: u16,
-    refused: u16,
+    pub(crate) refused: u16,
 }
 
 /// Parses and checks a record (CRC, version, length); values go through the table's checks.
-fn decode(bytes: &[u8]) -> Option<Record> {
+pub(crate) fn decode(bytes: &[u8]) -> Option<Record> {
     let (body, crc) = bytes.split_at_checked(bytes.len().checked_sub(4)?)?;
     if crc32(body).to_le_bytes() != *crc {
         return None;

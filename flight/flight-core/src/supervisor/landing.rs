@@ -90,6 +90,12 @@ impl LandingDetector {
         *self = Self::new();
     }
 
+    /// In the air (a flight resumed after a reset): no touchdown until one is detected.
+    pub fn airborne(&mut self) {
+        self.landed = false;
+        self.candidate_since = None;
+    }
+
     /// A loop holds the altitude (the failsafe's hold with a GPS fix): "not descending" is
     /// then by design and proves nothing, so no touchdown is concluded — the candidate is
     /// dropped and the state kept.

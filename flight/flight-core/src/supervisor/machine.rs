@@ -94,6 +94,11 @@ pub struct Inputs {
     /// The settings loaded at boot had a problem (corrupt, invalid, refused values): the
     /// frame flies nothing until the pilot saves a set.
     pub settings_problem: bool,
+    /// A USB host has the console (the board enumerated): arming is refused. The frame is on
+    /// the bench, tethered by a cable; settings may change under the pilot's hands; and a
+    /// board powered from the port browns out when motors start. Disconnecting or connecting
+    /// while armed changes nothing (a cable caught in flight must not disarm).
+    pub usb_connected: bool,
 }
 
 /// The supervisor's state.
@@ -127,6 +132,8 @@ pub enum ArmBlocker {
     BatteryCritical,
     /// The stored settings had a problem at boot; fixed by a successful save.
     SettingsProblem,
+    /// A USB host has the console (unplug to fly).
+    UsbConnected,
 }
 
 /// What happened this loop (for alerts and telemetry), besides the state itself.
@@ -154,6 +161,9 @@ pub enum Decision {
     /// Disarmed because the attitude sensor stopped delivering usable data (the frame can
     /// no longer sense its attitude). Only a fresh arm restarts the motors.
     DisarmedSensorFault,
+    /// Back in the air after a reset: the link shows the arm switch still on (or no arm switch
+    /// is set) — armed in the mode the frame had ([`Supervisor::resume`]).
+    Resumed,
 }
 
 /// The state machine.
@@ -163,6 +173,8 @@ pub struct Supervisor {
     state: State,
     gestures: GestureDetector,
     throttle_low_since: Option<u32>,
+    /// In failsafe since a reset in the air, waiting for the link's word ([`Self::resume`]).
+    resumed: bool,
 }
 
 impl Supervisor {
@@ -173,7 +185,19 @@ impl Supervisor {
             state: State::Disarmed,
             gestures: GestureDetector::new(settings.gesture_hold_ms),
             throttle_low_since: None,
+            resumed: false,
         }
+    }
+
+    /// The board reset in the air while armed (`app::resume`): the motors run again at once,
+    /// in failsafe — levelling, descending or holding as a link loss would — until the link
+    /// delivers: then the arm switch decides, on (or no arm switch set) is
+    /// [`Decision::Resumed`] and armed, off disarms. A link that never comes back is the
+    /// failsafe as usual, landing and disarming on touchdown.
+    pub fn resume(&mut self, now_ms: u32) {
+        self.state = State::Failsafe { since_ms: now_ms };
+        self.throttle_low_since = None;
+        self.resumed = true;
     }
 
     /// Current state.
@@ -204,6 +228,8 @@ impl Supervisor {
             Some(ArmBlocker::BatteryCritical)
         } else if inputs.settings_problem {
             Some(ArmBlocker::SettingsProblem)
+        } else if inputs.usb_connected {
+            Some(ArmBlocker::UsbConnected)
         } else {
             None
         }
@@ -217,6 +243,7 @@ impl Supervisor {
         }
         self.state = State::Disarmed;
         self.throttle_low_since = None;
+        self.resumed = false;
         Decision::DisarmedSensorFault
     }
 
@@ -266,6 +293,15 @@ impl Supervisor {
                 }
                 Decision::Steady
             }
+            State::Failsafe { .. } if self.resumed && link_ok => {
+                self.resumed = false;
+                if inputs.arm_switch == Some(false) {
+                    self.state = State::Disarmed;
+                    return Decision::DisarmedByPilot;
+                }
+                self.state = State::Armed;
+                Decision::Resumed
+            }
             State::Failsafe { since_ms } => {
                 if inputs.landed {
                     self.state = State::Disarmed;
@@ -311,6 +347,7 @@ mod tests {
             landing_detectable: true,
             battery_critical: false,
             settings_problem: false,
+            usb_connected: false,
         }
     }
 
@@ -497,6 +534,27 @@ mod tests {
     }
 
     #[test]
+    fn a_usb_host_refuses_arming_but_never_disarms() {
+        let s = Settings::default();
+        let mut sup = Supervisor::new(s);
+        let mut usb = inputs(0, true, 0.0, 1.0);
+        usb.usb_connected = true;
+        sup.update(&usb);
+        usb.now_ms = s.gesture_hold_ms;
+        assert_eq!(
+            sup.update(&usb),
+            Decision::ArmRefused(ArmBlocker::UsbConnected)
+        );
+        // Unplugged: arms; plugged in while armed (flying): nothing happens.
+        let mut sup = armed(&s);
+        let mut flying = inputs(5_000, true, 0.5, 0.0);
+        flying.landed = false;
+        flying.usb_connected = true;
+        assert_eq!(sup.update(&flying), Decision::Steady);
+        assert!(sup.motors_enabled());
+    }
+
+    #[test]
     fn control_returns_only_with_centred_sticks() {
         let s = Settings::default();
         let mut sup = armed(&s);
@@ -514,6 +572,61 @@ mod tests {
         );
         assert_eq!(sup.state(), State::Armed);
         assert_eq!(sup.failsafe_descent_mps(), None);
+    }
+
+    #[test]
+    fn a_resumed_board_flies_in_failsafe_until_the_link_decides() {
+        let s = Settings::default();
+        let air = |t, up, switch| Inputs {
+            landed: false,
+            arm_switch: switch,
+            ..inputs(t, up, 0.6, 0.3)
+        };
+        // The link back, the arm switch on: armed, the sticks wherever they are.
+        let mut sup = Supervisor::new(s);
+        sup.resume(0);
+        assert!(sup.motors_enabled(), "motors at once, before any link");
+        assert_eq!(sup.failsafe_descent_mps(), Some(0.7));
+        assert_eq!(sup.update(&air(5, false, None)), Decision::Steady);
+        assert_eq!(sup.update(&air(400, true, Some(true))), Decision::Resumed);
+        assert_eq!(sup.state(), State::Armed);
+        // No arm switch set (stick arming): the link alone is the pilot's word.
+        let mut sup = Supervisor::new(s);
+        sup.resume(0);
+        assert_eq!(sup.update(&air(400, true, None)), Decision::Resumed);
+        // The arm switch off: disarmed.
+        let mut sup = Supervisor::new(s);
+        sup.resume(0);
+        assert_eq!(
+            sup.update(&air(400, true, Some(false))),
+            Decision::DisarmedByPilot
+        );
+        assert!(!sup.motors_enabled());
+        // No link: the failsafe as usual, down to the touchdown.
+        let mut sup = Supervisor::new(s);
+        sup.resume(0);
+        for t in (0..60_000).step_by(10) {
+            assert_eq!(sup.update(&air(t, false, Some(true))), Decision::Steady);
+        }
+        assert_eq!(
+            sup.update(&inputs(60_000, false, 0.6, 0.0)),
+            Decision::DisarmedFailsafe
+        );
+        // The resume is spent once decided: a later link loss is a normal failsafe, whose
+        // recovery wants centred sticks.
+        let mut sup = Supervisor::new(s);
+        sup.resume(0);
+        assert_eq!(sup.update(&air(100, true, Some(true))), Decision::Resumed);
+        assert_eq!(
+            sup.update(&air(200, false, Some(true))),
+            Decision::FailsafeEntered
+        );
+        assert_eq!(sup.update(&air(300, true, Some(true))), Decision::Steady);
+        let centred = Inputs {
+            sticks: Sticks::default(),
+            ..air(400, true, Some(true))
+        };
+        assert_eq!(sup.update(&centred), Decision::ControlRecovered);
     }
 
     #[test]

@@ -58,6 +58,14 @@ impl ModeSwitch {
         self.mode()
     }
 
+    /// Selects the position that holds `mode` (a resumed flight's), if one does; the next
+    /// update from the channel takes over.
+    pub fn select(&mut self, mode: FlightMode) {
+        if let Some(i) = self.positions.iter().position(|m| *m == mode) {
+            self.current = i;
+        }
+    }
+
     /// The mode selected now.
     pub fn mode(&self) -> FlightMode {
         self.positions

@@ -5,10 +5,9 @@ use embassy_stm32::adc::{Adc, AdcChannel};
 use embassy_stm32::dac::DacChannel;
 use embassy_stm32::exti::ExtiInput;
 use embassy_stm32::flash::{Bank1Region1, Blocking, Flash};
-use embassy_stm32::gpio::{Level, Output, OutputType, Pull, Speed};
+use embassy_stm32::gpio::{Flex, Level, Output, OutputType, Pull, Speed};
 use embassy_stm32::i2c::{self, I2c};
 use embassy_stm32::peripherals::{TIM3, TIM9};
-use embassy_stm32::rng::{self, Rng};
 use embassy_stm32::timer::Channel;
 use embassy_stm32::timer::low_level::Timer;
 use embassy_stm32::timer::simple_pwm::PwmPin;
@@ -27,10 +26,7 @@ use embassy_stm32::spi::{self, Spi};
 use embassy_stm32::time::Hertz;
 #[cfg(feature = "sparky2")]
 use embassy_stm32::usart;
-use embassy_stm32::wdg::IndependentWatchdog;
-use embassy_stm32::{
-    Config, Peri, Peripherals, bind_interrupts, dma, exti, interrupt, peripherals,
-};
+use embassy_stm32::{Peri, Peripherals, bind_interrupts, dma, exti, interrupt, peripherals};
 
 /// Board name for the boot log.
 #[cfg(not(feature = "sparky2"))]
@@ -39,27 +35,22 @@ pub const BOARD: &str = "BrushedSparky";
 #[cfg(feature = "sparky2")]
 pub const BOARD: &str = "Sparky2";
 
-/// Independent watchdog timeout (Tau Labs used 250 ms; the PIL's `iwdg-half` test variant,
-/// build.rs, halves it).
-pub const WATCHDOG_TIMEOUT_US: u32 = if cfg!(pil_iwdg_half) {
-    125_000
-} else {
-    250_000
-};
-
 // DMA streams (RM0090 tables 42/43): DAC1 on DMA1 S5; SPI3 (radio) TX S7, RX S2 (channel 0
 // both; S0 is left to I2C1); I2C1 (baro) TX S6, RX S0 (channel 1); SPI1 (IMU) TX DMA2 S3,
 // RX DMA2 S0 (channel 3). EXTI9_5 serves the IMU's data-ready (EXTI5) and, on the
 // BrushedSparky, the radio's nIRQ (EXTI7).
 bind_interrupts!(pub struct Irqs {
     #[cfg(feature = "sparky2")]
-    USART1 => usart::BufferedInterruptHandler<peripherals::USART1>;
+    USART1 => usart::InterruptHandler<peripherals::USART1>;
+    #[cfg(feature = "sparky2")]
+    DMA2_STREAM2 => dma::InterruptHandler<peripherals::DMA2_CH2>;
+    #[cfg(feature = "sparky2")]
+    DMA2_STREAM7 => dma::InterruptHandler<peripherals::DMA2_CH7>;
     #[cfg(feature = "sparky2")]
     EXTI2 => exti::InterruptHandler<interrupt::typelevel::EXTI2>;
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
-    RNG => rng::InterruptHandler<peripherals::RNG>;
     DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
     DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
     DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
@@ -98,39 +89,39 @@ pub struct Imu {
     pub int: ExtiInput<'static, Async>,
 }
 
-/// The MS5611 on I2C1 (SCL PB8, SDA PB9, 10 k pull-ups on the board), 400 kHz.
+/// The MS5611 on I2C1 (SCL PB8, SDA PB9, 10 k pull-ups on the board), 400 kHz, with DMA1
+/// streams 6 (TX) and 0 (RX). Kept as parts: the bus clear drives the pins as GPIO before
+/// each (re-)initialisation of the driver.
 pub struct Baro {
-    /// I2C1 with DMA1 streams 6 (TX) and 0 (RX).
-    pub i2c: I2c<'static, Async, i2c::Master>,
+    i2c: Peri<'static, peripherals::I2C1>,
+    scl: Peri<'static, peripherals::PB8>,
+    sda: Peri<'static, peripherals::PB9>,
+    tx_dma: Peri<'static, peripherals::DMA1_CH6>,
+    rx_dma: Peri<'static, peripherals::DMA1_CH0>,
 }
 
-/// HSE 8 MHz → PLL (M 8, N 336, P 2, Q 7): SYSCLK 168 MHz, USB 48 MHz; APB1 42 MHz
-/// (timers 84 MHz), APB2 84 MHz (timers 168 MHz). The board has a ceramic resonator, so the
-/// HSE runs as an oscillator, not in bypass.
-pub fn clocks() -> Config {
-    use embassy_stm32::rcc::{
-        AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllMul, PllPDiv, PllPreDiv, PllQDiv,
-        PllSource, Sysclk, mux,
-    };
-    let mut config = Config::default();
-    config.rcc.hse = Some(Hse {
-        freq: Hertz(8_000_000),
-        mode: HseMode::Oscillator,
-    });
-    config.rcc.pll_src = PllSource::HSE;
-    config.rcc.pll = Some(Pll {
-        prediv: PllPreDiv::DIV8,
-        mul: PllMul::MUL336,
-        divp: Some(PllPDiv::DIV2),
-        divq: Some(PllQDiv::DIV7),
-        divr: None,
-    });
-    config.rcc.sys = Sysclk::PLL1_P;
-    config.rcc.ahb_pre = AHBPrescaler::DIV1;
-    config.rcc.apb1_pre = APBPrescaler::DIV4;
-    config.rcc.apb2_pre = APBPrescaler::DIV2;
-    config.rcc.mux.clk48sel = mux::Clk48sel::PLL1_Q;
-    config
+impl Baro {
+    /// Clears the bus (`i2c_bus::recover`); whether SDA was released.
+    pub fn recover_bus(&mut self) -> bool {
+        let mut scl = Flex::new(self.scl.reborrow());
+        let mut sda = Flex::new(self.sda.reborrow());
+        super::i2c_bus::recover(&mut scl, &mut sda)
+    }
+
+    /// I2C1 at 400 kHz, initialised afresh (dropping it disables the peripheral).
+    pub fn driver(&mut self) -> I2c<'_, Async, i2c::Master> {
+        let mut config = i2c::Config::default();
+        config.frequency = Hertz(400_000);
+        I2c::new(
+            self.i2c.reborrow(),
+            self.scl.reborrow(),
+            self.sda.reborrow(),
+            self.tx_dma.reborrow(),
+            self.rx_dma.reborrow(),
+            Irqs,
+            config,
+        )
+    }
 }
 
 /// The RFM22B on SPI3 (SCK PC10, MISO PC11, MOSI PC12), nSEL PA15, nIRQ on EXTI.
@@ -142,6 +133,41 @@ pub struct Radio {
     pub nsel: Output<'static>,
     /// nIRQ: PB7 (BrushedSparky) or PD2 (Sparky2), falling edge.
     pub nirq: ExtiInput<'static, Async>,
+}
+
+/// Drives motor outputs 1–4 low as GPIO, at once, by register: for the fault handlers,
+/// which cannot trust the timers' state or any HAL object. Low is off for every protocol
+/// (no pulse; the brushed FETs off).
+pub fn motors_off() {
+    use embassy_stm32::pac;
+    use embassy_stm32::pac::gpio::regs::Bsrr;
+    // Output 1 PB0, 2 PB1, 3 PA3, 4 PA2 (`MotorParts::start`), as masks: straight-line
+    // register writes (the metapac's per-pin setters assert the pin number, a panic path
+    // inside the panic handler).
+    const ON_B: u32 = (1 << 0) | (1 << 1);
+    const ON_A: u32 = (1 << 3) | (1 << 2);
+    for (port, pins, (mask, output)) in [
+        (pac::GPIOB, ON_B, const { mode_bits(ON_B) }),
+        (pac::GPIOA, ON_A, const { mode_bits(ON_A) }),
+    ] {
+        // The output level first (no effect while in AF mode), then the mode: the pin goes
+        // low the moment it becomes a GPIO.
+        port.bsrr().write_value(Bsrr(pins << 16));
+        port.moder().modify(|w| w.0 = (w.0 & !mask) | output);
+    }
+}
+
+/// MODER's two-bit fields of the pins set in `pins`: their mask, and 0b01 (output) in each.
+const fn mode_bits(pins: u32) -> (u32, u32) {
+    let (mut mask, mut output, mut pin) = (0, 0, 0);
+    while pin < 16 {
+        if pins & (1 << pin) != 0 {
+            mask |= 0b11 << (2 * pin);
+            output |= 0b01 << (2 * pin);
+        }
+        pin += 1;
+    }
+    (mask, output)
 }
 
 /// Motor outputs 1–4 before the protocol is known: the pins are already in their timer
@@ -178,8 +204,8 @@ impl MotorParts {
 pub struct Board {
     /// Blue STAT/HEARTBEAT LED on PB5, active low.
     pub heartbeat_led: Output<'static>,
-    /// The independent watchdog, not yet started.
-    pub watchdog: IndependentWatchdog<'static, IWDG>,
+    /// The independent watchdog, not yet started (the supervisor task programs it).
+    pub watchdog: Peri<'static, IWDG>,
     /// The radio module.
     pub radio: Radio,
     /// Gyro/accelerometer/magnetometer.
@@ -199,24 +225,30 @@ pub struct Board {
     /// The GPS receiver (Sparky2 only: the BrushedSparky's PA9/PA10 select the VTX band).
     #[cfg(feature = "sparky2")]
     pub gps: Option<Gps>,
-    /// The true RNG (clocked from the 48 MHz PLL Q the USB uses): seeds the session of the
-    /// phone's authenticated setting changes at boot.
-    pub rng: Rng<'static, peripherals::RNG>,
+    /// The true RNG (clocked from the 48 MHz PLL Q the USB uses): the boot's seeds
+    /// (`seeds`).
+    pub rng: Peri<'static, peripherals::RNG>,
+    /// Orange ALARM/ERR LED on PB4, active low.
+    pub alarm_led: Output<'static>,
+    /// Blue LINK/RF LED on PB6, active low.
+    pub link_led: Output<'static>,
 }
 
 /// The u-blox receiver on the Sparky2's Main port: USART1, TX PA9, RX PA10
-/// (`hardware/brushedsparky/README.md`), interrupt-driven with a 256-byte receive buffer (2.5
-/// NAV-PVTs; the task drains it every few ms) and 64 bytes for the configuration frames.
+/// (`hardware/brushedsparky/README.md`). Receive by DMA into a 512-byte ring (DMA2 stream 2,
+/// channel 4: 5 NAV-PVTs, 44 ms of bytes at 115 200 Bd; no interrupt per byte, so neither the
+/// flight loop's priority nor a busy executor can make it overrun), transmit by DMA (DMA2
+/// stream 7, channel 4).
 #[cfg(feature = "sparky2")]
 pub struct Gps {
-    /// USART1, 8N1, at the first of `GPS_BOOT_BAUDS` until the task reconfigures it.
-    pub uart: usart::BufferedUart<'static>,
+    /// USART1 TX, 8N1, at the first of `GPS_BOOT_BAUDS` until the task reconfigures it.
+    pub tx: usart::UartTx<'static, Async>,
+    /// USART1 RX into the ring (the baud rate is the port's, set through either half).
+    pub rx: usart::RingBufferedUartRx<'static>,
 }
 
 #[cfg(feature = "sparky2")]
-static GPS_RX: StaticCell<[u8; 256]> = StaticCell::new();
-#[cfg(feature = "sparky2")]
-static GPS_TX: StaticCell<[u8; 64]> = StaticCell::new();
+static GPS_RING: StaticCell<[u8; 512]> = StaticCell::new();
 
 /// Keeps the M25P16's chip select driven for the life of the firmware (a dropped `Output`
 /// would float the pin again).
@@ -251,12 +283,12 @@ impl Board {
             cs: Output::new(p.PC4, Level::High, Speed::VeryHigh),
             int: ExtiInput::new(p.PC5, p.EXTI5, Pull::None, Irqs),
         };
-        let mut i2c_config = i2c::Config::default();
-        i2c_config.frequency = Hertz(400_000);
         let baro = Baro {
-            i2c: I2c::new(
-                p.I2C1, p.PB8, p.PB9, p.DMA1_CH6, p.DMA1_CH0, Irqs, i2c_config,
-            ),
+            i2c: p.I2C1,
+            scl: p.PB8,
+            sda: p.PB9,
+            tx_dma: p.DMA1_CH6,
+            rx_dma: p.DMA1_CH0,
         };
         let motors = MotorParts {
             tim3: p.TIM3,
@@ -320,16 +352,16 @@ impl Board {
         let gps = {
             let mut config = usart::Config::default();
             config.baudrate = flight_core::app::GPS_BOOT_BAUDS[0];
-            match usart::BufferedUart::new(
-                p.USART1,
-                p.PA10,
-                p.PA9,
-                GPS_TX.init([0; 64]),
-                GPS_RX.init([0; 256]),
-                Irqs,
-                config,
+            match usart::Uart::new(
+                p.USART1, p.PA10, p.PA9, p.DMA2_CH7, p.DMA2_CH2, Irqs, config,
             ) {
-                Ok(uart) => Some(Gps { uart }),
+                Ok(uart) => {
+                    let (tx, rx) = uart.split();
+                    Some(Gps {
+                        tx,
+                        rx: rx.into_ring_buffered(GPS_RING.init([0; 512])),
+                    })
+                }
                 // 9600 Bd from an 84 MHz APB2 is always reachable; should the driver still
                 // refuse, the board flies without GPS.
                 Err(_) => None,
@@ -346,9 +378,11 @@ impl Board {
             speaker,
             usb,
             settings_flash,
-            rng: Rng::new(p.RNG, Irqs),
+            rng: p.RNG,
             heartbeat_led: Output::new(p.PB5, Level::High, Speed::Low),
-            watchdog: IndependentWatchdog::new(p.IWDG, WATCHDOG_TIMEOUT_US),
+            alarm_led: Output::new(p.PB4, Level::High, Speed::Low),
+            link_led: Output::new(p.PB6, Level::High, Speed::Low),
+            watchdog: p.IWDG,
             radio: Radio {
                 spi,
                 nsel: Output::new(radio_nsel(p.PA15, p.PC13), Level::High, Speed::VeryHigh),

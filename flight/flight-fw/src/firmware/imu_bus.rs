@@ -2,8 +2,8 @@
 //! for the configuration registers but 20 MHz for reading sensor and interrupt registers.
 //! The driver configures the chip once through the slow clock; the IMU task then flips
 //! [`IMU_SPI_FAST`] and every later transaction runs fast — the 23-byte burst drops from
-//! 0.28 ms to 18 µs. `AliveDelay` is the driver's delay during (re-)probing: it checks the
-//! IMU task in with the watchdog around each wait.
+//! 0.28 ms to 18 µs. `AliveDelay` is the driver's delay during (re-)probing: it marks the
+//! loop alive for the watchdog around each wait.
 
 use core::sync::atomic::{AtomicBool, Ordering};
 
@@ -17,10 +17,8 @@ use embedded_hal_async::delay::DelayNs;
 use embedded_hal_async::spi::SpiDevice;
 use embedded_hal_bus::spi::{ExclusiveDevice, NoDelay};
 
-use flight_core::app::Task;
-
 use super::board::{IMU_SPI_FAST_HZ, IMU_SPI_SLOW_HZ};
-use super::shared::check_in;
+use super::shared::loop_alive;
 
 /// Set once the chip is configured: sensor reads may use the fast clock.
 pub static IMU_SPI_FAST: AtomicBool = AtomicBool::new(false);
@@ -75,13 +73,14 @@ impl SpiDevice for ImuBus {
     }
 }
 
-/// The driver's waits (a 100 ms reset) check in, so a re-probe never starves the watchdog.
+/// The driver's waits (a 100 ms reset) keep the loop counted alive (`shared::loop_alive`:
+/// the loop cannot take the app's lock), so a re-probe never starves the watchdog.
 pub struct AliveDelay;
 
 impl DelayNs for AliveDelay {
     async fn delay_ns(&mut self, ns: u32) {
-        check_in(Task::Imu);
+        loop_alive();
         Timer::after_nanos(u64::from(ns)).await;
-        check_in(Task::Imu);
+        loop_alive();
     }
 }

@@ -1,4 +1,5 @@
-//! Table of contents: clocks, board, settings → flight setup and solved gains, then one task
+//! Table of contents: the reset's cause and record (`fault`), clocks (HSE probe, flash
+//! accelerator), board, settings → flight setup and solved gains, then one task
 //! per concern: imu (the flight loop, driven by the MPU9250's data-ready), motors, link (the
 //! TauLink follower on the RFM22B), baro, gains (re-solve after setting changes), battery,
 //! alerts, console, storage, heartbeat and the watchdog supervisor. Every decision is in
@@ -6,50 +7,85 @@
 //! their peripheral and the app. See `shared` for the data flow.
 
 mod board;
+mod clocks;
+mod fault;
+mod i2c_bus;
 mod imu_bus;
 mod link_radio;
 mod outputs;
+mod seeds;
 mod shared;
 mod tasks;
 mod usb_cdc;
 
-use defmt::{error, info};
-use embassy_executor::{SpawnError, SpawnToken, Spawner};
-use flight_core::app::FlightApp;
+use defmt::{error, info, warn};
+use defmt_rtt as _;
+use embassy_executor::{InterruptExecutor, SendSpawner, SpawnError, SpawnToken, Spawner};
+use embassy_stm32::interrupt;
+use embassy_stm32::interrupt::{InterruptExt, Priority};
+use flight_core::app::resume::{self, Kept, ResetCause, Resume};
+use flight_core::app::{BootFacts, FlightApp};
+use flight_core::pipeline::from_settings;
+use flight_core::settings::Settings;
 use mpu9250::SampleRate;
-use {defmt_rtt as _, panic_probe as _};
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
-    let p = embassy_stm32::init(board::clocks());
+    // Before anything can reset again: why this boot, and what the last one left.
+    let cause = fault::reset_cause();
+    let kept = fault::take();
+    let source = clocks::probe();
+    let p = embassy_stm32::init(clocks::config(source));
+    clocks::accelerate_flash();
     info!("TauLink flight firmware on {}", board::BOARD);
+    if source == clocks::Clocks::HsiFallback {
+        error!(
+            "HSE did not start within {} ms: running from the HSI",
+            clocks::HSE_WAIT_MS
+        );
+    }
     let board = board::Board::new(p);
 
     // Flash work first: a sector erase can stall the CPU longer than the watchdog timeout,
     // and the watchdog starts with the supervisor below.
     let (map, settings, problem) = tasks::storage::open(board.settings_flash).await;
-    // The application: settings → setup (factory setup if the stored one does not fly) and
-    // the solved gains, before anything can arm.
-    let Some(mut app) = FlightApp::new(settings, shared::now_ms()) else {
+    // A reset in the air with a fresh record resumes the flight with the record's gains;
+    // otherwise the application: settings → setup (factory setup if the stored one does not
+    // fly) and the solved gains, before anything can arm.
+    let Some(app) = boot_app(cause, &kept, settings) else {
         error!("no flyable setup, not even the factory one");
         return;
     };
+    let resuming = app.resumed().is_some();
+    if resuming {
+        warn!("reset in the air ({}): flight resumed", cause);
+    }
     if let Some(problem) = problem {
         // Console, telemetry and arming all see it until the pilot saves a set.
         app.on_settings_problem(problem);
     }
     // The link's secrets every boot (spec §12): the phone changes' session, the epoch nonces'
-    // seed and each bind's CPace randomness, from 32 bytes of the hardware RNG.
-    let mut rng = board.rng;
+    // seed and each bind's CPace randomness, from 32 bytes of the hardware RNG (bounded: the
+    // unique ID and cycle counter when it gives nothing).
+    let (words, rng_fallback) = seeds::seeds::<8>(board.rng);
     let mut random = [0u8; 32];
-    for word in random.chunks_exact_mut(4) {
-        word.copy_from_slice(&rng.next_u32().to_le_bytes());
+    for (bytes, word) in random.chunks_exact_mut(4).zip(words) {
+        bytes.copy_from_slice(&word.to_le_bytes());
     }
     app.seed_random(&random);
+    if rng_fallback {
+        error!("RNG gave nothing: seeds from the unique ID and timing");
+    }
+    app.on_boot_facts(BootFacts {
+        clock_fallback: source == clocks::Clocks::HsiFallback,
+        rng_fallback,
+    });
     if let Some(e) = app.setup_error() {
         error!("stored settings not flyable ({}): factory setup", e);
     }
     let setup = *app.setup();
+    // The loop's side goes to its own executor; the rest of the app to the tasks.
+    let side = shared::loop_side(app);
     shared::install(app);
     if let Some(map) = map {
         spawn(&spawner, "storage", tasks::storage::storage_task(map));
@@ -60,23 +96,42 @@ async fn main(spawner: Spawner) {
         "supervisor",
         tasks::supervisor::supervisor_task(board.watchdog),
     );
-    match board.motors.start(setup.protocol) {
-        Ok(motors) => spawn(&spawner, "motors", tasks::motors::motors_task(motors)),
-        // Without the motor task the watchdog is never fed: reset, and the pins stay low.
-        Err(e) => error!("motor outputs cannot run {}: {}", setup.protocol, e),
-    }
+    let motors = match board.motors.start(setup.protocol) {
+        Ok(motors) => Some(motors),
+        // The pins stay low; the loop flies on without them.
+        Err(e) => {
+            error!("motor outputs cannot run {}: {}", setup.protocol, e);
+            None
+        }
+    };
     spawn(
         &spawner,
-        "imu",
-        tasks::imu::imu_task(board.imu, sample_rate(setup.loop_rate_hz)),
+        "loop report",
+        tasks::loop_report::loop_report_task(),
     );
+    match side {
+        Some(side) => {
+            let token = tasks::imu::imu_task(
+                board.imu,
+                sample_rate(setup.loop_rate_hz),
+                resuming,
+                side,
+                motors,
+            );
+            match token {
+                Ok(token) => loop_executor().spawn(token),
+                Err(e) => error!("cannot start the flight loop: {}", e),
+            }
+        }
+        None => error!("the flight loop's side is gone"),
+    }
     spawn(&spawner, "link", tasks::link::link_task(board.radio));
     spawn(&spawner, "baro", tasks::baro::baro_task(board.baro));
     spawn(&spawner, "gains", tasks::gains::gains_task());
     spawn(
         &spawner,
         "heartbeat",
-        tasks::heartbeat::heartbeat_task(board.heartbeat_led),
+        tasks::heartbeat::heartbeat_task(board.heartbeat_led, board.alarm_led, board.link_led),
     );
     spawn(
         &spawner,
@@ -94,6 +149,63 @@ async fn main(spawner: Spawner) {
         Some(gps) => spawn(&spawner, "gps", tasks::gps::gps_task(gps)),
         None => error!("GPS port unavailable"),
     }
+}
+
+/// The application for this boot, built in its static storage: the flight the no-init
+/// record describes resumed when it says so (`flight_core::app::resume::plan`) and its
+/// settings make a setup, else the stored settings' (the factory's if they do not fly) with
+/// freshly solved gains.
+fn boot_app(
+    cause: ResetCause,
+    kept: &fault::Record,
+    settings: Settings,
+) -> Option<&'static mut FlightApp> {
+    let kept = Kept {
+        state: &kept.state,
+        gains: &kept.gains,
+        fault: &kept.fault,
+        feed: &kept.feed,
+    };
+    match resume::plan(cause, &kept) {
+        Ok(r) if from_settings(&r.settings).is_ok() => resumed_app(settings, &r),
+        Ok(_) => {
+            info!("boot after {}: the record's settings make no setup", cause);
+            new_app(settings)
+        }
+        Err(why) => {
+            info!("boot after {}: {}", cause, why);
+            new_app(settings)
+        }
+    }
+}
+
+// One builder per frame, neither inlined: the app (≈ 16 KiB) is built in each and written
+// to its storage, so the boot's stack holds one copy, not one per way of making it.
+#[inline(never)]
+fn resumed_app(settings: Settings, r: &Resume) -> Option<&'static mut FlightApp> {
+    shared::create(|| FlightApp::resume(settings, r, shared::now_ms()))
+}
+
+#[inline(never)]
+fn new_app(settings: Settings) -> Option<&'static mut FlightApp> {
+    shared::create(|| FlightApp::new(settings, shared::now_ms()))
+}
+
+/// The flight loop's executor: UART5's interrupt (unused on both boards), above every
+/// thread-mode task and below the HAL's interrupt handlers (priority 0), which only wake
+/// tasks.
+static LOOP_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+
+#[interrupt]
+unsafe fn UART5() {
+    // SAFETY: the executor's own interrupt, started before it can fire (`loop_executor`).
+    unsafe { LOOP_EXECUTOR.on_interrupt() }
+}
+
+/// Starts the flight loop's executor.
+fn loop_executor() -> SendSpawner {
+    interrupt::UART5.set_priority(Priority::P6);
+    LOOP_EXECUTOR.start(interrupt::UART5)
 }
 
 /// The MPU9250's sample rate for the loop rate.

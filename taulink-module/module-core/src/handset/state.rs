@@ -90,6 +90,8 @@ impl FlightState {
             | Message::LinkSecurity(_)
             // No handset protocol here carries a home (CRSF, S.Port, FrSky D); the phone does.
             | Message::Home(_)
+            // The flight firmware's health: the phone shows it, the handset has no sensor.
+            | Message::Health(_)
             // An older flight side's mode: its numbers meant other modes, so none is shown.
             | Message::RetiredFlightMode(_) => {}
         }

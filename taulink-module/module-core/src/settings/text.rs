@@ -12,6 +12,7 @@
 //! unauthenticated link; `ble_pin` takes six digits or `factory`.
 
 use telemetry::link::{PhraseSecret, check_phrase};
+use telemetry::settings::{BANDS, PROTOCOLS, RATES, choice_index};
 
 use super::openlrs::CHANNEL_MODES;
 use super::{
@@ -78,17 +79,19 @@ impl core::fmt::Display for TextError {
 
 impl core::error::Error for TextError {}
 
-/// The words each choice setting accepts (case-insensitive), for help texts.
+/// The words each choice setting accepts (case-insensitive), for help texts. The rate, band
+/// and air protocol are the link's and spelt as the flight side spells them
+/// (`telemetry::settings`: `rate=F500` here is `link.rate F500` there).
 pub fn choices(name: &str) -> &'static [&'static str] {
     match name {
         "role" => &["transmitter", "receiver"],
-        "rate" => &["L50", "M100", "F250", "F500"],
+        "rate" => RATES,
         "input" => &["ppm", "crsf", "crsf115200", "crsf921600"],
         "output" => &["off", "crsf", "sport", "frsky_hub"],
-        "band" => &["433", "868", "915", "ism433"],
+        "band" => BANDS,
         "failsafe" => &["hold_last", "stop_pulses"],
         "model_match" | "plain" => &["off", "on"],
-        "protocol" => &["taulink", "openlrs38", "openlrs39"],
+        "protocol" => PROTOCOLS,
         "olrs_profile" => &["4800", "9600", "19200", "57600", "125000"],
         "olrs_channels" => &["4+4", "8", "8+4", "12", "12+4", "16"],
         "olrs_telemetry" => &["off", "on"],
@@ -96,12 +99,9 @@ pub fn choices(name: &str) -> &'static [&'static str] {
     }
 }
 
-/// The index of `text` among `words` (case-insensitive).
+/// The index of `text` among `words` (case-insensitive, as every end reads choice words).
 fn choice(text: &str, words: &[&str]) -> Result<usize, TextError> {
-    words
-        .iter()
-        .position(|w| w.eq_ignore_ascii_case(text))
-        .ok_or(TextError::Unparsable)
+    choice_index(words, text).ok_or(TextError::Unparsable)
 }
 
 /// A whole number within `range`.
@@ -121,7 +121,7 @@ fn number(text: &str, range: core::ops::RangeInclusive<u32>) -> Result<u32, Text
 
 impl Settings {
     /// Sets the field `name` (one of [`NAMES`]) from `text`; on an error nothing changes.
-    /// Rates are the link's rate modes (`L50`, `M100`, `F250`, `F500`); the telemetry ratio
+    /// Rates are the link's rate modes (`L50`, `M100`, `F250`, `F500`, `F700`); the telemetry ratio
     /// one of [`TELEMETRY_RATIOS`]. A change after which the set would not run
     /// ([`Settings::validate`]) is refused with [`TextError::Invalid`]; to change the band
     /// and the OpenLRSng carrier together, use [`Settings::set_text_unchecked`] for each and
@@ -260,6 +260,28 @@ impl Settings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The module reads the link's words as the flight side's schema spells them, each to
+    /// the value at its place (the device tool's option of the same index).
+    #[test]
+    fn the_link_words_are_the_schemas_on_both_ends() {
+        let mut s = Settings::default();
+        for (i, word) in PROTOCOLS.iter().enumerate() {
+            s.set_text("protocol", word).unwrap();
+            assert_eq!(usize::from(s.protocol.code()), i, "{word}");
+        }
+        s.set_text("protocol", "taulink").unwrap();
+        for (word, mode) in RATES.iter().zip(RateMode::ALL) {
+            s.set_text("rate", word).unwrap();
+            assert_eq!(s.rate, mode, "{word}");
+        }
+        let bands = [Band::Mhz433, Band::Mhz868, Band::Mhz915, Band::Ism433];
+        for (word, band) in BANDS.iter().zip(bands) {
+            s.set_text("band", word).unwrap();
+            assert_eq!(s.band, band, "{word}");
+        }
+        assert_eq!(s.set_text("protocol", "olrs38"), Err(TextError::Unparsable));
+    }
 
     #[test]
     fn every_name_sets_its_field_and_the_record_still_loads() {

@@ -11,32 +11,39 @@ use embassy_nrf::wdt::{self, Watchdog, WatchdogHandle};
 use embassy_nrf::{Peri, Peripherals, bind_interrupts, config, peripherals, saadc, uarte};
 
 bind_interrupts!(pub struct Irqs {
-    SPIM3 => spim::InterruptHandler<peripherals::SPI3>;
+    SPI2 => spim::InterruptHandler<peripherals::SPI2>;
     UARTE0 => uarte::InterruptHandler<peripherals::UARTE0>;
     UARTE1 => uarte::InterruptHandler<peripherals::UARTE1>;
     SAADC => saadc::InterruptHandler;
 });
 
-/// Watchdog period in 32 768 Hz ticks (module-core's `WATCHDOG_TIMEOUT_MS`, 250 ms).
+/// Watchdog period in 32 768 Hz ticks (module-core's `WATCHDOG_TIMEOUT_MS`, 300 ms).
 const WATCHDOG_TICKS: u32 = 32_768 * module_core::watchdog::WATCHDOG_TIMEOUT_MS / 1_000;
 
 /// Settings area in flash: 8 pages of 4 KiB below the UF2 bootloader (build.rs keeps the
 /// image out of it in both layouts).
 pub const SETTINGS_FLASH: core::ops::Range<u32> = 0xEC000..0xF4000;
 
-/// HFXO for the radio-grade 64 MHz clock and accurate UART baud rates; LFXO for the RTC
-/// that drives embassy-time. DC/DC on (the nice!nano fits the inductor).
-pub fn clocks() -> config::Config {
+/// The configuration besides the clock sources (`clocks::probe` chooses those: HFXO for
+/// accurate UART baud rates, LFXO for the RTC that drives embassy-time, each with a fallback)
+/// and REGOUT0: DC/DC on (the nice!nano fits the inductor).
+pub fn config() -> config::Config {
     let mut config = config::Config::default();
-    config.hfclk_source = config::HfclkSource::ExternalXtal;
-    config.lfclk_source = config::LfclkSource::ExternalXtal;
     config.dcdc.reg1 = true;
     config
 }
 
-/// The RFM22B on SPIM3: SCK P0.17, MOSI P0.20, MISO P0.22, nSEL P0.24, nIRQ P0.11, SDN P1.00.
+/// The RFM22B on SPIM2: SCK P0.17, MOSI P0.20, MISO P0.22, nSEL P0.24, nIRQ P0.11, SDN P1.00.
+///
+/// Not SPIM3: nRF52840 errata, anomaly 198 ("SPIM: SPIM3 transmit data might be corrupted",
+/// Rev 1–3): SPIM3's EasyDMA reads wrong transmit bytes when the CPU or another master
+/// touches the RAM block of its TXD buffer at the same time — with the radio task's buffers
+/// in the same RAM as every other task's, that is any time. The errata's workaround is a
+/// RAM block of its own for the buffer; SPIM0–2 are not affected at all, and their 8 MHz
+/// limit is the rate the Si4432 runs at anyway (its limit is 10 MHz). SPIM2 shares its
+/// peripheral ID only with SPIS2, both otherwise unused, so both TWI instances stay free.
 pub struct Radio {
-    /// SPIM3 at 8 MHz, mode 0.
+    /// SPIM2 at 8 MHz, mode 0.
     pub spim: Spim<'static>,
     /// nSEL, idle high.
     pub nsel: Output<'static>,
@@ -223,10 +230,10 @@ impl Board {
     /// it starts on configuration, so the supervisor must be spawned right after this).
     pub fn new(p: Peripherals) -> Self {
         let mut spi_config = spim::Config::default();
-        // Si4432 limit is 10 MHz; 8 MHz is the nearest SPIM rate below it.
+        // Si4432 limit is 10 MHz; 8 MHz is the nearest SPIM rate below it (and SPIM2's top).
         spi_config.frequency = spim::Frequency::M8;
         spi_config.mode = spim::MODE_0;
-        let spim = Spim::new(p.SPI3, Irqs, p.P0_17, p.P0_22, p.P0_20, spi_config);
+        let spim = Spim::new(p.SPI2, Irqs, p.P0_17, p.P0_22, p.P0_20, spi_config);
 
         let mut wdt_config = wdt::Config::default();
         wdt_config.timeout_ticks = WATCHDOG_TICKS;

@@ -1,24 +1,34 @@
-//! Table of contents: clocks, board, settings, the module core, then one task per concern.
+//! Table of contents: clocks (bounded crystal start-up, REGOUT0), board, settings, the module core, then one task per concern.
 
 mod board;
+mod clocks;
+mod fault;
 mod link_radio;
 mod shared;
 mod tasks;
 
 use defmt::{error, info, warn};
+use defmt_rtt as _;
 use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_executor::{SpawnError, SpawnToken, Spawner};
 use embassy_nrf::nvmc::Nvmc;
 use module_core::app::App;
 use module_core::settings::{InputProtocol, Role, Settings, SettingsStore};
-use {defmt_rtt as _, panic_probe as _};
 
 use tasks::supervisor::Watched;
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
-    let p = embassy_nrf::init(board::clocks());
+    let last_fault = fault::take();
+    let (config, clocks) = clocks::probe(board::config());
+    let p = embassy_nrf::init(config);
     info!("TauLink module firmware (nRF52840)");
+    if let Some(f) = last_fault {
+        warn!("the last boot ended in a fault: {}", f);
+    }
+    if clocks.high != clocks::HighClock::Crystal || clocks.low != clocks::LowClock::Crystal {
+        error!("crystal did not start: {}", clocks);
+    }
     let board = board::Board::new(p);
     let Some(watchdog) = board.watchdog else {
         // Only possible if a previous image left the WDT running with another config; it

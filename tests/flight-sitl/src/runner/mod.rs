@@ -56,11 +56,17 @@ pub enum Kind {
     /// Hovering in attitude mode, the pilot rolls to 15° (stick 1/3) for 1 s: the stick's way
     /// to the motors and the attitude loop's response.
     AttitudeStep,
+    /// Hovering, the flight firmware panics: the handler stops the motors and resets, the
+    /// flight resumes from the record kept across the reset (`flight_core::app::resume`).
+    Panic,
+    /// Hovering, a thread-mode task hangs (the loop flies on in its interrupt executor):
+    /// the watchdog is no longer fed, the IWDG resets the board, the flight resumes.
+    Hang,
 }
 
 impl Kind {
     /// Every scenario, in the order of the README.
-    pub const ALL: [Kind; 14] = [
+    pub const ALL: [Kind; 16] = [
         Kind::Hover,
         Kind::LinkCut,
         Kind::PowerCycle,
@@ -75,6 +81,8 @@ impl Kind {
         Kind::PositionHold,
         Kind::Loiter,
         Kind::AttitudeStep,
+        Kind::Panic,
+        Kind::Hang,
     ];
 
     /// The command-line name.
@@ -94,6 +102,8 @@ impl Kind {
             Kind::PositionHold => "position-hold",
             Kind::Loiter => "loiter",
             Kind::AttitudeStep => "attitude-step",
+            Kind::Panic => "panic",
+            Kind::Hang => "hang",
         }
     }
 
@@ -399,6 +409,8 @@ impl Piloting for PlanPilot {
                 Kind::RadioStuckIrq => input.flight_radio = RadioInjection::IrqStuckLow,
                 Kind::RadioBrownout => input.flight_radio = RadioInjection::BrownOut,
                 Kind::AttitudeStep => input.roll = STEP_ROLL_STICK,
+                Kind::Panic => input.flight_panic = true,
+                Kind::Hang => input.flight_hang = true,
                 Kind::Hover
                 | Kind::SettingsCorrupt
                 | Kind::LowBattery
@@ -531,7 +543,12 @@ pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunEr
             let at = opts.at_s.unwrap_or(t_reach + SETTLE_S);
             (Some(at), Some(t_reach), at + 3.0)
         }
-        Kind::ImuStall | Kind::ImuFrozen | Kind::RadioStuckIrq | Kind::RadioBrownout => {
+        Kind::ImuStall
+        | Kind::ImuFrozen
+        | Kind::RadioStuckIrq
+        | Kind::RadioBrownout
+        | Kind::Panic
+        | Kind::Hang => {
             let at = opts.at_s.unwrap_or(t_reach + SETTLE_S);
             (Some(at), Some(t_reach), at + 8.0)
         }

@@ -76,6 +76,8 @@ pub struct Report {
     pub hold: super::hold::Figures,
     /// `attitude-step`: the stick's way and the attitude loop's response.
     pub step: Option<StepFigures>,
+    /// A reset in the air (`panic`, `hang`): the figures of the resumed flight.
+    pub resume: Option<ResumeFigures>,
 }
 
 /// The `attitude-step` figures, all from the stick's move (the step's `fault_at_s`) unless
@@ -96,6 +98,52 @@ pub struct StepFigures {
     pub within_1deg_from_setpoint_s: Option<f64>,
     /// Peak roll beyond the target while the stick is held, % of the target.
     pub overshoot_pct: Option<f64>,
+}
+
+/// A resumed flight's figures (the `panic` and `hang` scenarios).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ResumeFigures {
+    /// The flight board came back as a resumed flight (not a cold boot).
+    pub resumed: bool,
+    /// From the fault to the motors stopping (the panic handler at once; a hang keeps the
+    /// last commands until the IWDG), s.
+    pub motors_off_after_s: Option<f64>,
+    /// How long the motors stayed stopped: the reset and the resumed boot, s.
+    pub motors_off_for_s: Option<f64>,
+    /// From the motors back to the link's word (armed again in the recorded mode), s.
+    pub link_word_after_s: Option<f64>,
+    /// How far the frame sank from its height at the fault until the link's word gave it
+    /// back to the pilot, m (after that the pilot flies it).
+    pub drop_m: Option<f64>,
+}
+
+/// The resume's figures from the samples after the fault at `at_s`.
+fn resume_figures(sitl: &Sitl, at_s: f64) -> ResumeFigures {
+    let s: Vec<&Sample> = sitl.samples.iter().filter(|x| x.t_s >= at_s).collect();
+    let height = s.first().map(|x| x.altitude_m);
+    let off = s.iter().find(|x| stopped(x)).map(|x| x.t_s);
+    let back = off.and_then(|o| s.iter().find(|x| x.t_s > o && !stopped(x)).map(|x| x.t_s));
+    let word = back.and_then(|b| {
+        s.iter()
+            .find(|x| x.t_s >= b && x.out.decision == Decision::Resumed)
+            .map(|x| x.t_s)
+    });
+    let lowest = word.map(|w| {
+        s.iter()
+            .filter(|x| x.t_s <= w)
+            .map(|x| x.altitude_m)
+            .fold(f64::INFINITY, f64::min)
+    });
+    ResumeFigures {
+        resumed: sitl
+            .boots
+            .iter()
+            .any(|b| b.end == End::Flight && b.cause == crate::BootCause::Resumed),
+        motors_off_after_s: off.map(|o| o - at_s),
+        motors_off_for_s: off.zip(back).map(|(o, b)| b - o),
+        link_word_after_s: word.zip(back).map(|(w, b)| w - b),
+        drop_m: height.zip(lowest).map(|(h, l)| (h - l).max(0.0)),
+    }
 }
 
 /// The step's figures from the samples between the stick's move `at_s` and its release
@@ -247,7 +295,12 @@ pub fn extract(sitl: &Sitl, plan: &Plan) -> Report {
         }
         _ => None,
     };
+    let resume = match (plan.kind, plan.fault_at_s) {
+        (Kind::Panic | Kind::Hang, Some(at)) => Some(resume_figures(sitl, at)),
+        _ => None,
+    };
     Report {
+        resume,
         kind: plan.kind,
         rate: plan.rate,
         seed: plan.seed,
@@ -331,6 +384,16 @@ impl Report {
                     e.push(("held_position_drift_m", num(h.held_position_drift_m, 2)));
                     e.push(("altitude_error_max_m", num(h.altitude_error_max_m, 2)));
                 }
+            }
+            Kind::Panic | Kind::Hang => {
+                let r = self.resume.unwrap_or_default();
+                fault(&mut e);
+                e.push(("flight_boots", self.flight_boots.to_string()));
+                e.push(("resumed", r.resumed.to_string()));
+                e.push(("motors_off_after_s", num(r.motors_off_after_s, 3)));
+                e.push(("motors_off_for_s", num(r.motors_off_for_s, 3)));
+                e.push(("link_word_after_s", num(r.link_word_after_s, 3)));
+                e.push(("drop_m", num(r.drop_m, 2)));
             }
             Kind::PowerCycle => {
                 e.push(("power_off_at_s", num(self.fault_at_s, 3)));

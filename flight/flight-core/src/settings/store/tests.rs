@@ -466,9 +466,9 @@ fn an_old_records_mode_switch_choices_select_the_same_modes() {
         ("position-hold", FlightMode::PositionHold),
         ("loiter", FlightMode::Loiter),
     ];
-    assert_eq!(super::super::params::MODES.len(), before.len());
+    assert_eq!(telemetry::settings::MODES.len(), before.len());
     for (id, (name, mode)) in (0u32..).zip(before) {
-        assert_eq!(super::super::params::MODES[id as usize], name);
+        assert_eq!(telemetry::settings::MODES[id as usize], name);
         let mut old = generation_set(1);
         // Any one of three positions: the others keep their (valid) values.
         let position = ["mode.switch_low", "mode.switch_mid", "mode.switch_high"][id as usize % 3];

@@ -31,6 +31,10 @@ pub struct Speaker {
 
 #[embassy_executor::task]
 pub async fn alerts_task(mut speaker: Speaker) {
+    // At rest the output sits at the sine's centre before the first tone too: from the DAC's
+    // 0 V reset value the first tone would start with a step of half a volt into the video
+    // transmitter's audio (a click), and end with another back to the centre.
+    speaker.dac.set(Value::Bit12Right(CENTRE_COUNTS));
     let mut ticker = Ticker::every(Duration::from_millis(10));
     let mut frequency = 0u16;
     loop {

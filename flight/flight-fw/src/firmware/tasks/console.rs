@@ -49,8 +49,12 @@ pub async fn console_task(driver: Driver<'static, USB_OTG_FS>) {
     let session = async {
         loop {
             class.wait_connection().await;
+            // A host has the console: arming is refused until it goes
+            // (`flight_core::supervisor::Inputs::usb_connected`).
+            with_app(|a| a.on_usb(true));
             // A disconnect ends the session; wait for the next one.
             let _ = serve(&mut class).await;
+            with_app(|a| a.on_usb(false));
         }
     };
     join(usb.run(), session).await;

@@ -1,14 +1,15 @@
-//! The u-blox receiver on the Sparky2's Main port (USART1, `board::Gps`): bytes in go to
-//! `FlightApp::on_gps_bytes` (UBX parser, estimator, telemetry), the app's configuration
+//! The u-blox receiver on the Sparky2's Main port (USART1, `board::Gps`: received into a DMA
+//! ring): bytes in go to `FlightApp::on_gps_bytes` (UBX parser; the fixes to the flight
+//! loop's INS, telemetry), the app's configuration
 //! frames (`FlightApp::gps_to_send`) go out. At boot, the baud-rate messages of both
 //! receiver generations at each baud a receiver may power up at, then 115200 Bd for good.
 //! No watchdog check-in: a missing or dead receiver must not reset a flying frame; it shows
 //! as a lost fix.
 
 use defmt::{info, warn};
-use embassy_stm32::usart::BufferedUart;
+use embassy_stm32::mode::Async;
+use embassy_stm32::usart::UartTx;
 use embassy_time::{Duration, Timer, with_timeout};
-use embedded_io_async::{Read, Write};
 use flight_core::app::{GPS_BAUD, GPS_BOOT_BAUDS, gps_baud_messages};
 use flight_core::sensors::ubx::frame::MAX_FRAME;
 use heapless::Vec;
@@ -22,12 +23,13 @@ const READ_TIMEOUT: Duration = Duration::from_millis(50);
 
 #[embassy_executor::task]
 pub async fn gps_task(gps: Gps) {
-    let mut uart = gps.uart;
-    announce_baud(&mut uart).await;
-    if uart.set_baudrate(GPS_BAUD).is_err() {
+    let Gps { mut tx, mut rx } = gps;
+    announce_baud(&mut tx).await;
+    if tx.set_baudrate(GPS_BAUD).is_err() {
         warn!("GPS: USART1 refused {} Bd", GPS_BAUD);
     }
     info!("GPS port at {} Bd", GPS_BAUD);
+    rx.start_uart();
     let mut buf = [0u8; 64];
     loop {
         let frame: Option<Vec<u8, MAX_FRAME>> = with_app(|a| {
@@ -36,16 +38,17 @@ pub async fn gps_task(gps: Gps) {
         })
         .flatten();
         if let Some(f) = frame
-            && uart.write_all(&f).await.is_err()
+            && tx.write(&f).await.is_err()
         {
             warn!("GPS: write failed");
         }
-        match with_timeout(READ_TIMEOUT, uart.read(&mut buf)).await {
+        match with_timeout(READ_TIMEOUT, rx.read(&mut buf)).await {
             Ok(Ok(n)) => {
                 let bytes = buf.get(..n).unwrap_or_default();
                 with_app(|a| a.on_gps_bytes(now_ms(), bytes));
             }
-            // Overrun or framing error: bytes were lost, the parser resynchronises.
+            // Overrun (the ring lapped: the task was held longer than it lasts) or framing
+            // error: bytes were lost, the parser resynchronises.
             Ok(Err(_)) => warn!("GPS: receive error"),
             Err(_) => {}
         }
@@ -53,17 +56,17 @@ pub async fn gps_task(gps: Gps) {
 }
 
 /// Writes both generations' baud-rate messages at each power-up baud.
-async fn announce_baud(uart: &mut BufferedUart<'static>) {
+async fn announce_baud(tx: &mut UartTx<'static, Async>) {
     for baud in GPS_BOOT_BAUDS {
-        if uart.set_baudrate(baud).is_err() {
+        if tx.set_baudrate(baud).is_err() {
             continue;
         }
         for m in gps_baud_messages() {
-            if uart.write_all(&m).await.is_err() {
+            if tx.write(&m).await.is_err() {
                 warn!("GPS: write failed at {} Bd", baud);
             }
         }
-        let _ = uart.flush().await;
+        let _ = tx.flush().await;
         // The receiver changes baud after sending its answer; give it a moment.
         Timer::after(Duration::from_millis(20)).await;
     }

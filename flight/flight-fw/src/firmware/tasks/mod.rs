@@ -10,6 +10,7 @@ pub mod gps;
 pub mod heartbeat;
 pub mod imu;
 pub mod link;
+pub mod loop_report;
 pub mod motors;
 pub mod storage;
 pub mod supervisor;

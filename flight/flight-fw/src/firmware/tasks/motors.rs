@@ -1,17 +1,13 @@
-//! Owns the motor timers (outputs 1–4: TIM3 and TIM9). Applies each control loop's
-//! commands the moment they arrive, so outputs stay synchronous with the gyro; with no
-//! command for 100 ms (control stalled) every motor is stopped.
+//! The motor timers (outputs 1–4: TIM3 and TIM9), driven by the flight loop itself
+//! (`tasks::imu`) right after each step, so the outputs stay synchronous with the gyro; a
+//! stalled sensor stops them through the loop's ride-through policy.
 
-use embassy_futures::select::{Either, select};
 use embassy_stm32::peripherals::{TIM3, TIM9};
 use embassy_stm32::timer::simple_pwm::PwmPin;
 use embassy_stm32::timer::{Ch1, Ch2, Ch3, Ch4};
-use embassy_time::{Duration, Timer};
 use flight_core::outputs::Command;
 
 use crate::firmware::outputs::MotorTimer;
-use crate::firmware::shared::{MOTORS, check_in};
-use flight_core::app::Task;
 
 /// Both banks of a quad: outputs 1–2 and 3–4.
 pub struct Motors {
@@ -32,20 +28,10 @@ pub type MotorPins = (
 );
 
 impl Motors {
-    fn apply(&mut self, commands: &[Command; 4]) {
+    /// Applies one loop's commands.
+    pub fn apply(&mut self, commands: &[Command; 4]) {
         let [m1, m2, m3, m4] = *commands;
         self.bank0.apply(&[m1, m2]);
         self.bank1.apply(&[m3, m4]);
-    }
-}
-
-#[embassy_executor::task]
-pub async fn motors_task(mut motors: Motors) {
-    loop {
-        match select(MOTORS.wait(), Timer::after(Duration::from_millis(100))).await {
-            Either::First(commands) => motors.apply(&commands),
-            Either::Second(()) => motors.apply(&[Command::Stopped; 4]),
-        }
-        check_in(Task::Motors);
     }
 }

@@ -12,6 +12,7 @@ use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
 
 use super::supervisor::with_long_timeout;
+use crate::firmware::clocks::DataCacheOff;
 use crate::firmware::shared::{now_ms, with_app};
 
 /// The flash under the map.
@@ -34,7 +35,10 @@ pub async fn open(
         return (None, settings, None);
     };
     let mut map = MapStorage::new(BlockingAsync::new(flash), config, Cache::new_uncached());
+    // A load may write (sequential-storage repairs an interrupted page).
+    let cache_off = DataCacheOff::new();
     let (report, unreadable) = load_at_boot(&mut map, &mut settings).await;
+    drop(cache_off);
     match unreadable {
         Some(e) => warn!("settings unreadable ({}), using defaults", e),
         None => {
@@ -59,7 +63,9 @@ pub async fn storage_task(mut map: SettingsMap) {
         let Some(job) = with_app(|a| a.take_save_job()).flatten() else {
             continue;
         };
+        let cache_off = DataCacheOff::new();
         let written = with_long_timeout(job.watchdog_ms, job.write(&mut map)).await;
+        drop(cache_off);
         let saved = written.as_ref().ok().map(|_| job.live.clone());
         with_app(|a| a.on_save_done(now_ms(), saved));
         match written {

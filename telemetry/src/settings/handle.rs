@@ -1,17 +1,18 @@
-//! Typed handles to the parameter table's rows, and the macro that declares the table and
-//! its handles from one list. Code reads a setting as `settings.get(params::RATE_MAX_DPS)`
-//! (an `f32`); a misspelt handle does not compile, and a row declared as `f32` cannot be
-//! read as a `u32` (the row builder's type must match the handle's). The dotted names stay
-//! for the console, telemetry's `SettingChange` and the phone; code never looks one up.
+//! Typed handles to the table's rows, and the macro that declares the table and its handles
+//! from one list. Code reads a setting as `settings.get(handles::RATE_MAX_DPS)` (an `f32`); a
+//! misspelt handle does not compile, and a row declared as `f32` cannot be read as a `u32`
+//! (the row builder's type must match the handle's). The dotted names stay for the console,
+//! the `SettingChange` and the phone; code never looks one up.
 //!
 //! Each handle carries an accessor that indexes the value array with a *constant*, so an
 //! index past the table fails to compile — there is no "wrong name reads 0.0" path left.
 
 use core::marker::PhantomData;
 
-use super::params::{COUNT, Param, Value};
+use super::table::COUNT;
+use super::{Param, Value};
 
-/// What a parameter's value is as a Rust type: `f32` for real-number rows, `u32` for
+/// What a setting's value is as a Rust type: `f32` for real-number rows, `u32` for
 /// whole-number rows and choices (the choice's index).
 pub trait ParamType: Copy {
     /// The 32 bits stored for `self` (what flash holds).
@@ -58,10 +59,10 @@ pub(super) const fn typed<T>(row: Row<T>) -> Param {
     row.param
 }
 
-/// The value array a handle reads: every parameter's stored bits, in table order.
-pub(super) type Bits = [u32; COUNT];
+/// Every setting's stored bits, in table order (what a handle reads).
+pub type Bits = [u32; COUNT];
 
-/// A typed handle to one parameter: its table index and a constant-index accessor.
+/// A typed handle to one setting: its table index and a constant-index accessor.
 #[derive(Clone, Copy)]
 pub struct Handle<T> {
     pub(super) index: usize,
@@ -78,10 +79,20 @@ impl<T> core::fmt::Debug for Handle<T> {
 impl<T: ParamType> Handle<T> {
     /// The row this handle names.
     pub fn param(self) -> Option<&'static Param> {
-        super::params::PARAMS.get(self.index)
+        super::PARAMS.get(self.index)
     }
 
-    /// A change setting this parameter to `value`, for [`Settings::apply`](super::Settings::apply).
+    /// Its row's index (the `SettingChange` id).
+    pub fn index(self) -> usize {
+        self.index
+    }
+
+    /// Its value in `bits`.
+    pub fn read(self, bits: &Bits) -> T {
+        T::from_bits((self.read)(bits))
+    }
+
+    /// A change setting this row to `value` (range-checked where it is applied).
     pub fn to(self, value: T) -> Change {
         Change {
             index: self.index,
@@ -90,34 +101,55 @@ impl<T: ParamType> Handle<T> {
     }
 }
 
-/// One parameter change: which row and its new value (range-checked when applied).
+/// One setting change: which row and its new value (range-checked when applied).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Change {
-    pub(super) index: usize,
-    pub(super) value: Value,
+    index: usize,
+    value: Value,
 }
 
-/// Declares the table (`PARAMS`) and one typed handle per row (in `handles`), from one list
-/// of `HANDLE: type = row,` entries in table order; items after the `;` join the handles
-/// module (the handle arrays of composite names). The table order is the stored order and
-/// the telemetry `SettingChange` id, so rows are only ever appended.
+impl Change {
+    /// The change of the row named `name` to `value`; `None` for an unknown name.
+    pub fn by_name(name: &str, value: Value) -> Option<Self> {
+        super::find(name).map(|(index, _)| Self { index, value })
+    }
+
+    /// The row's index.
+    pub fn index(&self) -> usize {
+        self.index
+    }
+
+    /// The new value, unchecked.
+    pub fn value(&self) -> Value {
+        self.value
+    }
+}
+
+/// Declares the table (`PARAMS`, `DOCS`) and one typed handle per row (in `handles`), from
+/// one list of `/// doc` `HANDLE: type = row,` entries in table order; items after the `;`
+/// join the handles module (the handle arrays of composite names). The table order is the
+/// stored order and the `SettingChange` id, so rows are only ever appended.
 macro_rules! table {
-    ($( $handle:ident : $t:ty = $row:expr, )* ; $( $extra:item )*) => {
+    ($( #[doc = $doc:literal] $handle:ident : $t:ty = $row:expr, )* ; $( $extra:item )*) => {
         /// Row positions, counted by the compiler from the list.
         #[allow(non_camel_case_types, clippy::upper_case_acronyms, dead_code)]
         #[repr(usize)]
         enum Index { $( $handle, )* }
 
-        /// Every parameter. Keys are grouped by hundreds per subsystem.
+        /// Every setting. Keys are grouped by hundreds per subsystem.
         pub const PARAMS: &[Param] = &[ $( $crate::settings::handle::typed::<$t>($row), )* ];
 
-        /// One typed handle per parameter, named after its dotted name in capitals
+        /// Each row's meaning, in table order (a separate table, so firmware that never
+        /// shows it links none of it).
+        pub(super) const DOCS: &[&str] = &[ $( $doc.trim_ascii(), )* ];
+
+        /// One typed handle per setting, named after its dotted name in capitals
         /// (`rate.max_dps` → `RATE_MAX_DPS`).
         pub mod handles {
             use core::marker::PhantomData;
             use $crate::settings::handle::Handle;
             $(
-                #[doc = concat!("The `", stringify!($handle), "` row.")]
+                #[doc = $doc]
                 pub const $handle: Handle<$t> = Handle {
                     index: super::Index::$handle as usize,
                     read: |bits| {
@@ -133,7 +165,7 @@ macro_rules! table {
 
         /// Every handle with its identifier, its index and whether its type fits its row.
         #[cfg(test)]
-        pub(crate) fn handle_rows() -> Vec<(&'static str, usize, bool)> {
+        pub(super) fn handle_rows() -> Vec<(&'static str, usize, bool)> {
             use $crate::settings::handle::fits;
             vec![ $( (
                 stringify!($handle),
@@ -148,8 +180,8 @@ pub(super) use table;
 
 /// Whether a row of `kind` holds a `T` (test support for the macro's handle list).
 #[cfg(test)]
-pub(crate) fn fits<T: ParamType>(kind: super::params::Kind) -> bool {
-    use super::params::Kind;
+pub(super) fn fits<T: ParamType>(kind: super::Kind) -> bool {
+    use super::Kind;
     let probe = T::from_bits(0).to_value();
     matches!(
         (kind, probe),

@@ -1,0 +1,435 @@
+//! Flying on after a reset in the air (ArduPilot resumes after an in-flight watchdog reset;
+//! a reset was a crash here). What the firmware keeps in RAM the reset start-up code does not
+//! clear (a no-init section), as words this module encodes, checks and decodes:
+//!
+//! - the **flight state** ([`FlightState`], [`STATE_WORDS`]): armed and in the air, failsafe,
+//!   the flight mode, the learnt hover throttle, the attitude and gyro bias — refreshed by
+//!   the loop at least every [`STATE_REFRESH_MS`];
+//! - the **gains** ([`GAINS_WORDS`]): the live settings (the flash record's encoding) and the
+//!   three axes' Riccati solutions, written whenever the loop gets new ones — a resume
+//!   rebuilds the controllers from them (`Controllers::from_designs`), no design;
+//! - the **fault** ([`FAULT_WORDS`]): what the panic or HardFault handler adds before its
+//!   reset — the reason, the time, the faulting address;
+//! - the **feed** ([`FEED_WORDS`]): the time of the supervisor's last watchdog feed.
+//!
+//! Each block carries a magic word and a CRC-32 (the flash record's), so RAM that held
+//! anything else — a power-up's random contents — never decodes. [`plan`] decides at boot:
+//! only after a watchdog or software (handler) reset, only from a record that says "armed,
+//! in the air", and only if it is fresh — written at most [`FRESH_MS`] before the reset. The
+//! reset's time is the handler's stamp, or after a watchdog reset the last feed plus the
+//! IWDG's longest timeout (its slowest LSI): a bound, never an underestimate. The firmware
+//! clears the record's magic words at once, so a record resumes one boot at most. The loop's
+//! side hands out the flight state (`LoopSide::resume_state_due`), the app the gains
+//! ([`FlightApp::keep_resume_gains`]).
+//!
+//! The resumed flight ([`FlightApp::resume`]) starts in failsafe with the recorded gains,
+//! mode, hover throttle and attitude: the motors run again as soon as the IMU delivers,
+//! without waiting for the link, and the link then decides (`Supervisor::resume`): the arm
+//! switch on — or no arm switch set — is armed in the recorded mode, off is disarmed, a link
+//! that does not come back is the failsafe as usual.
+
+use crate::control::design::AxisDesign;
+use crate::estimation::quaternion::Quaternion;
+use crate::pipeline::{Controllers, from_settings};
+use crate::settings::{RECORD_MAX, Settings, crc32, decode_record, record};
+use crate::supervisor::FlightMode;
+
+use super::FlightApp;
+use super::watchdog::{IWDG, LSI_MIN_HZ};
+
+/// A record is fresh when it was written at most this long before the reset, ms.
+pub const FRESH_MS: u32 = 1_000;
+/// The loop refreshes the flight state at least this often, ms (and at once on a change of
+/// the armed state, failsafe or mode).
+pub const STATE_REFRESH_MS: u32 = 10;
+
+const STATE_MAGIC: u32 = 0x5453_5431; // "TST1"
+const GAINS_MAGIC: u32 = 0x5447_4E31; // "TGN1"
+const FAULT_MAGIC: u32 = 0x5446_4C31; // "TFL1"
+
+/// Words of the flight-state block: magic, time, flags and mode, hover throttle, attitude
+/// (4), gyro bias (3), CRC.
+pub const STATE_WORDS: usize = 12;
+/// Words of the fault block: magic, reason, time, address, CRC.
+pub const FAULT_WORDS: usize = 5;
+/// Words of the feed block: the time and its complement.
+pub const FEED_WORDS: usize = 2;
+/// Words of the gains block: magic, record length, the settings record, three axes' designs
+/// (8 f64 and 3 iteration counts each), CRC.
+pub const GAINS_WORDS: usize = 2 + RECORD_MAX.div_ceil(4) + 3 * (16 + 3) + 1;
+
+/// What reset the MCU, from its reset flags (RCC_CSR on the F405).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ResetCause {
+    /// Power-on or brown-out: RAM holds nothing.
+    PowerOn,
+    /// The reset pin (a button, a debugger).
+    Pin,
+    /// The independent watchdog.
+    Watchdog,
+    /// The firmware's own reset request (the panic and HardFault handlers).
+    Software,
+    /// Anything else (the window watchdog, low-power management).
+    Other,
+}
+
+/// Why a fault handler reset the board.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FaultReason {
+    /// A Rust panic.
+    Panic,
+    /// A HardFault (a fault no handler took, escalated).
+    HardFault,
+}
+
+/// A fault handler's record.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Fault {
+    /// What happened.
+    pub reason: FaultReason,
+    /// The board's clock at the fault, ms.
+    pub at_ms: u32,
+    /// The faulting instruction's address (HardFault), or 0.
+    pub address: u32,
+}
+
+/// The loop's state worth keeping across a reset.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlightState {
+    /// The board's clock when it was written, ms.
+    pub written_ms: u32,
+    /// Motors may turn.
+    pub armed: bool,
+    /// The touchdown detector had the frame in the air.
+    pub in_air: bool,
+    /// In the link failsafe.
+    pub failsafe: bool,
+    /// The flight mode flown.
+    pub mode: FlightMode,
+    /// The learnt hover throttle.
+    pub hover_throttle: f32,
+    /// Body → NED attitude.
+    pub attitude: Quaternion,
+    /// The attitude filter's gyro bias, rad/s.
+    pub gyro_bias_radps: [f32; 3],
+}
+
+/// What, changed, makes the flight state due at once: armed, in the air, failsafe, mode.
+pub(crate) type StateKey = (bool, bool, bool, FlightMode);
+
+/// What a resumed flight starts from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Resume {
+    /// The loop's state at the reset.
+    pub state: FlightState,
+    /// The live settings then.
+    pub settings: Settings,
+    /// The axes' Riccati solutions then.
+    pub designs: [AxisDesign; 3],
+    /// The fault that reset the board, if a handler recorded one.
+    pub fault: Option<Fault>,
+}
+
+/// Why a record does not resume.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ColdBoot {
+    /// Power-on, the reset pin or another cause: a normal boot.
+    NotAFaultReset,
+    /// No valid flight state (never written, or the CRC fails: power-up RAM).
+    NoState,
+    /// The frame was disarmed or on the ground.
+    NotInTheAir,
+    /// Written longer than [`FRESH_MS`] before the reset (or the reset's time unknown).
+    Stale,
+    /// No valid gains record, or settings that no longer make a setup.
+    NoGains,
+}
+
+fn crc_words(words: &[u32]) -> u32 {
+    let mut bytes = [0u8; 4 * GAINS_WORDS];
+    let mut n = 0;
+    for (chunk, w) in bytes.chunks_exact_mut(4).zip(words) {
+        chunk.copy_from_slice(&w.to_le_bytes());
+        n += 4;
+    }
+    crc32(bytes.get(..n).unwrap_or_default())
+}
+
+/// Seals a block: its last word becomes the CRC of the others.
+fn seal(block: &mut [u32]) {
+    if let Some((crc, body)) = block.split_last_mut() {
+        *crc = crc_words(body);
+    }
+}
+
+/// The block's body if its magic and CRC hold.
+fn open(block: &[u32], magic: u32) -> Option<&[u32]> {
+    let (crc, body) = block.split_last()?;
+    (body.first() == Some(&magic) && crc_words(body) == *crc).then_some(body)
+}
+
+impl FlightState {
+    /// The block the firmware keeps.
+    pub fn encode(&self) -> [u32; STATE_WORDS] {
+        let flags = u32::from(self.armed)
+            | u32::from(self.in_air) << 1
+            | u32::from(self.failsafe) << 2
+            | u32::from(self.mode.id()) << 8;
+        let [w, x, y, z] = self.attitude.map(f32::to_bits);
+        let [bx, by, bz] = self.gyro_bias_radps.map(f32::to_bits);
+        let mut words = [
+            STATE_MAGIC,
+            self.written_ms,
+            flags,
+            self.hover_throttle.to_bits(),
+            w,
+            x,
+            y,
+            z,
+            bx,
+            by,
+            bz,
+            0,
+        ];
+        seal(&mut words);
+        words
+    }
+
+    /// The state a block holds, if its magic and CRC check.
+    pub fn decode(block: &[u32; STATE_WORDS]) -> Option<Self> {
+        let [_, written_ms, flags, hover, w, x, y, z, bx, by, bz] = *open(block, STATE_MAGIC)?
+        else {
+            return None;
+        };
+        let mode = u8::try_from(flags >> 8)
+            .ok()
+            .and_then(FlightMode::from_id)?;
+        Some(Self {
+            written_ms,
+            armed: flags & 1 != 0,
+            in_air: flags & 2 != 0,
+            failsafe: flags & 4 != 0,
+            mode,
+            hover_throttle: f32::from_bits(hover),
+            attitude: [w, x, y, z].map(f32::from_bits),
+            gyro_bias_radps: [bx, by, bz].map(f32::from_bits),
+        })
+    }
+}
+
+impl Fault {
+    /// The block a fault handler writes.
+    pub fn encode(&self) -> [u32; FAULT_WORDS] {
+        let reason = match self.reason {
+            FaultReason::Panic => 1,
+            FaultReason::HardFault => 2,
+        };
+        let mut words = [FAULT_MAGIC, reason, self.at_ms, self.address, 0];
+        seal(&mut words);
+        words
+    }
+
+    /// The fault a block holds, if its magic and CRC check.
+    pub fn decode(block: &[u32; FAULT_WORDS]) -> Option<Self> {
+        let [_, reason, at_ms, address] = *open(block, FAULT_MAGIC)? else {
+            return None;
+        };
+        let reason = match reason {
+            1 => FaultReason::Panic,
+            2 => FaultReason::HardFault,
+            _ => return None,
+        };
+        Some(Self {
+            reason,
+            at_ms,
+            address,
+        })
+    }
+}
+
+/// The feed block for a feed at `now_ms`.
+pub const fn encode_feed(now_ms: u32) -> [u32; FEED_WORDS] {
+    [now_ms, !now_ms]
+}
+
+/// The last feed's time, if the block is whole.
+pub fn decode_feed(block: &[u32; FEED_WORDS]) -> Option<u32> {
+    let [t, check] = *block;
+    (check == !t).then_some(t)
+}
+
+/// The gains block for `settings` (live) and the controllers' `designs`; `None` only if
+/// the settings record does not fit (ruled out by its bound).
+pub fn encode_gains(settings: &Settings, designs: &[AxisDesign; 3]) -> Option<[u32; GAINS_WORDS]> {
+    let bytes = record(settings, 0).ok()?;
+    let mut words = [0u32; GAINS_WORDS];
+    let (head, rest) = words.split_at_mut(2);
+    head.copy_from_slice(&[GAINS_MAGIC, u32::try_from(bytes.len()).ok()?]);
+    let (packed, rest) = rest.split_at_mut(RECORD_MAX.div_ceil(4));
+    for (word, chunk) in packed.iter_mut().zip(bytes.chunks(4)) {
+        let mut b = [0u8; 4];
+        for (d, s) in b.iter_mut().zip(chunk) {
+            *d = *s;
+        }
+        *word = u32::from_le_bytes(b);
+    }
+    let (gains, counts) = rest.split_at_mut(3 * 16);
+    let values = designs
+        .iter()
+        .flat_map(|d| d.kalman.into_iter().chain(d.rate).chain(d.attitude));
+    for (pair, v) in gains.chunks_exact_mut(2).zip(values) {
+        let bits = v.to_bits();
+        pair.copy_from_slice(&[bits as u32, (bits >> 32) as u32]);
+    }
+    for (word, n) in counts
+        .iter_mut()
+        .zip(designs.iter().flat_map(|d| d.iterations))
+    {
+        *word = n;
+    }
+    seal(&mut words);
+    Some(words)
+}
+
+/// The settings and designs a gains block holds, if its magic, CRC and settings record
+/// check.
+pub fn decode_gains(block: &[u32; GAINS_WORDS]) -> Option<(Settings, [AxisDesign; 3])> {
+    let body = open(block, GAINS_MAGIC)?;
+    let (&len, rest) = body.get(1..)?.split_first()?;
+    let (packed, rest) = rest.split_at_checked(RECORD_MAX.div_ceil(4))?;
+    let mut bytes = [0u8; 4 * RECORD_MAX.div_ceil(4)];
+    for (chunk, word) in bytes.chunks_exact_mut(4).zip(packed) {
+        chunk.copy_from_slice(&word.to_le_bytes());
+    }
+    let record = decode_record(bytes.get(..usize::try_from(len).ok()?)?)?;
+    if record.refused > 0 {
+        return None;
+    }
+    let (gains, counts) = rest.split_at_checked(3 * 16)?;
+    let mut values = gains.chunks_exact(2).map(|p| match *p {
+        [lo, hi] => f64::from_bits(u64::from(lo) | u64::from(hi) << 32),
+        _ => f64::NAN,
+    });
+    let mut counts = counts.iter().copied();
+    let designs = [(); 3].map(|()| {
+        let mut next = || values.next().unwrap_or(f64::NAN);
+        let (kalman, rate, attitude) = (
+            [next(), next(), next()],
+            [next(), next()],
+            [next(), next(), next()],
+        );
+        let mut count = || counts.next().unwrap_or(0);
+        AxisDesign {
+            kalman,
+            rate,
+            attitude,
+            iterations: [count(), count(), count()],
+        }
+    });
+    Some((record.settings, designs))
+}
+
+/// What a board's start-up found in its no-init record.
+#[derive(Debug, Clone, Copy)]
+pub struct Kept<'a> {
+    /// The flight-state block.
+    pub state: &'a [u32; STATE_WORDS],
+    /// The gains block.
+    pub gains: &'a [u32; GAINS_WORDS],
+    /// The fault block.
+    pub fault: &'a [u32; FAULT_WORDS],
+    /// The feed block.
+    pub feed: &'a [u32; FEED_WORDS],
+}
+
+/// The boot's decision: resume the flight the record describes, or why not.
+pub fn plan(cause: ResetCause, kept: &Kept<'_>) -> Result<Resume, ColdBoot> {
+    if !matches!(cause, ResetCause::Watchdog | ResetCause::Software) {
+        return Err(ColdBoot::NotAFaultReset);
+    }
+    let state = FlightState::decode(kept.state).ok_or(ColdBoot::NoState)?;
+    if !(state.armed && state.in_air) {
+        return Err(ColdBoot::NotInTheAir);
+    }
+    let fault = Fault::decode(kept.fault);
+    // The reset's time: the handler's stamp, else the last feed plus the longest the IWDG
+    // can take (at the slowest LSI). Unknown is stale.
+    let reset_ms = match (cause, fault) {
+        (ResetCause::Software, Some(f)) => Some(f.at_ms),
+        (ResetCause::Watchdog, _) => {
+            decode_feed(kept.feed).map(|t| t.wrapping_add(IWDG.timeout_ms(LSI_MIN_HZ)))
+        }
+        _ => None,
+    };
+    let age_ms = reset_ms.map(|t| t.wrapping_sub(state.written_ms));
+    if age_ms.is_none_or(|a| a > FRESH_MS) {
+        return Err(ColdBoot::Stale);
+    }
+    let (settings, designs) = decode_gains(kept.gains).ok_or(ColdBoot::NoGains)?;
+    if from_settings(&settings).is_err() {
+        return Err(ColdBoot::NoGains);
+    }
+    Ok(Resume {
+        state,
+        settings,
+        designs,
+        fault: fault.filter(|_| cause == ResetCause::Software),
+    })
+}
+
+impl FlightApp {
+    /// The application booting at `now_ms` into a flight resumed after a reset in the air
+    /// ([`plan`]): `stored` is what flash holds, the live settings, gains and loop state are
+    /// the record's, and the loop flies in failsafe until the link decides
+    /// (`Supervisor::resume`). `None` if the record's settings make no setup.
+    pub fn resume(stored: Settings, resume: &Resume, now_ms: u32) -> Option<Self> {
+        let setup = from_settings(&resume.settings).ok()?;
+        let controllers = Controllers::from_designs(&setup.control, resume.designs);
+        let mut app = Self::with_setup(
+            stored,
+            resume.settings.clone(),
+            setup,
+            Some(controllers),
+            now_ms,
+        );
+        app.live = resume.settings.clone();
+        app.resumed = Some(resume.fault);
+        if let Some(side) = app.loop_side.as_mut() {
+            side.resume(now_ms, &resume.state);
+        }
+        Some(app)
+    }
+
+    /// How this boot started: `Some` after a resumed flight (with the fault that reset the
+    /// board, if a handler recorded one).
+    pub fn resumed(&self) -> Option<Option<Fault>> {
+        self.resumed
+    }
+
+    /// Writes the gains block into `out` if the loop's gains changed since it was last
+    /// written (at boot, after a new design is installed); whether it did.
+    pub fn keep_resume_gains(&mut self, out: &mut [u32; GAINS_WORDS]) -> bool {
+        if !self.gains_changed {
+            return false;
+        }
+        let Some(designs) = self.designs else {
+            return false;
+        };
+        self.gains_changed = false;
+        match encode_gains(&self.flown, &designs) {
+            Some(words) => {
+                *out = words;
+                true
+            }
+            None => false,
+        }
+    }
+}
+
+#[cfg(test)]
+#[path = "resume_tests.rs"]
+mod tests;
