@@ -14,6 +14,7 @@ pub mod battery;
 pub mod board;
 pub use flight_control::control;
 pub use flight_estimation as estimation;
+pub mod logging;
 pub use lqg_design::model;
 pub mod outputs;
 pub mod pipeline;

@@ -69,6 +69,12 @@ const FIGURES: &[(&str, &str, Select)] = &[
     ("app.imu_sample", "flight_app", Select::Region(3)),
     ("app.loop_step", "flight_app", Select::Region(5)),
     ("app.imu_missing", "flight_app", Select::Region(7)),
+    ("app.imu_sample_log_off", "flight_app", Select::Mean(9, 10)),
+    (
+        "app.imu_sample_log_full",
+        "flight_app",
+        Select::Mean(11, 10),
+    ),
     ("control.design", "control", Select::Region(1)),
     ("control.lqg", "control", Select::Region(3)),
     ("control.pid", "control", Select::Region(5)),

@@ -78,6 +78,9 @@ pub const LOOP_RATES: Choice = &["500", "1000"];
 pub const INS_MODES: Choice = &["complementary", "ins", "ins_indoor"];
 /// VTX bands (`flight_core::vtx::Band`): the BrushedSparky's VTX module's band-select pins.
 pub const VTX_BANDS: Choice = &["a", "b", "e", "airwave"];
+/// Flight-log profiles (`flight_core::logging::Profile`): off, the telemetry channel's, the
+/// Sparky2 flash's, every sample (replay-grade).
+pub const LOG_PROFILES: Choice = &["off", "link", "flight", "full"];
 
 table! {
     // outputs (1xx)
@@ -257,6 +260,9 @@ table! {
     VTX_BAND: u32 = c(900, "vtx.band", VTX_BANDS, 0),
     /// VTX channel 1–8 within the band.
     VTX_CHANNEL: u32 = u(901, "vtx.channel", 1, 8, 1),
+    // The flight log (91x). Factory: `flight`, what the Sparky2's flash and the link take.
+    /// Which topics the flight log records, at which rates.
+    LOG_PROFILE: u32 = c(910, "log.profile", LOG_PROFILES, 2),
     ;
     // Handle arrays for the composite names, in the handles module.
     /// The rate PID gains, `[roll, pitch, yaw][kp, ki, kd]` (`pid.<axis>.<gain>`).

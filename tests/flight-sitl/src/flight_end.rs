@@ -403,9 +403,13 @@ pub(crate) async fn flight_board(
             chunk.copy_from_slice(&boot_rng.next_u64().to_le_bytes());
         }
         app.seed_random(&random);
-        shared
-            .borrow_mut()
-            .record_boot(End::Flight, cause, problem.is_some());
+        {
+            let mut s = shared.borrow_mut();
+            s.record_boot(End::Flight, cause, problem.is_some());
+            s.flight_logs.push(crate::flight_log::LogFile::new(
+                u64::from(clock.now_ms()) * 1000,
+            ));
+        }
         // The IMU task owns the loop's side, apart from the app.
         let side = app.take_loop_side();
         let app = Rc::new(RefCell::new(app));

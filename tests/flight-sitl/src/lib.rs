@@ -9,13 +9,17 @@ mod clock;
 pub mod console;
 mod flash;
 pub mod flight_end;
+pub mod flight_log;
 pub mod gps;
+pub mod log_figures;
 pub mod metrics;
 pub mod module_end;
 mod module_flash;
+pub mod overlay;
 pub mod runner;
 pub mod scenario;
 pub mod serve;
+pub mod ulog_csv;
 pub mod world;
 
 pub use scenario::{

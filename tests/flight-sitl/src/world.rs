@@ -112,6 +112,9 @@ pub struct Sitl {
     pub watchdog_resets: WatchdogResets,
     /// Every boot of either end, with the time (s) and why.
     pub boots: Vec<Boot>,
+    /// The flight controller's log of each boot, as ULog files (the `log.profile` setting
+    /// chooses what is in them; `off`: empty).
+    pub flight_logs: Vec<Vec<u8>>,
 }
 
 /// Independent-watchdog resets counted per end.
@@ -209,6 +212,8 @@ pub(crate) struct WorldState {
     /// The flight board's no-init RAM: the record a resume after a reset reads (kept across
     /// resets, lost with the power).
     pub(crate) flight_record: crate::flight_end::KeptRecord,
+    /// The flight log of each boot (the last one growing).
+    pub(crate) flight_logs: Vec<crate::flight_log::LogFile>,
     medium: si4432_sim::Medium,
 }
 
@@ -442,6 +447,7 @@ impl World {
             flight_thread_busy_until_ns: 0,
             flight_loop: None,
             save_stretch: true,
+            flight_logs: Vec::new(),
             flight_lsi_hz: flight_core::app::LSI_TYP_HZ,
             flight_record: crate::flight_end::KeptRecord::default(),
             boots: Vec::new(),
@@ -613,6 +619,10 @@ impl World {
                                 app.on_alert_tick(now_ms)
                             };
                             held_tone = tone_hz;
+                            // The logging task: what the app recorded, into this boot's file.
+                            if let Some(log) = shared.borrow_mut().flight_logs.last_mut() {
+                                log.drain(&mut app);
+                            }
                             let identification = app.identification_finished();
                             if let Some(out) = app.last_output().copied() {
                                 last_out = Some(out);
@@ -819,6 +829,10 @@ impl World {
             settings,
             watchdog_resets: s.watchdog_resets,
             boots: std::mem::take(&mut s.boots),
+            flight_logs: std::mem::take(&mut s.flight_logs)
+                .into_iter()
+                .map(crate::flight_log::LogFile::into_bytes)
+                .collect(),
         }
     }
 }

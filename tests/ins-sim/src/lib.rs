@@ -3,6 +3,7 @@
 #![warn(missing_docs)]
 
 pub mod compare;
+pub mod flight_log;
 pub mod magcal;
 pub mod metrics;
 pub mod noise;

@@ -68,7 +68,7 @@ fn help_describes_the_options_and_exits_0() {
     assert!(out.status.success());
     let help = text(&out.stdout);
     for n in [
-        "<SENSORS.csv>",
+        "<SENSORS.csv|FLIGHT.ulg>",
         "--out <EST.csv>",
         "--truth <TRUTH.csv>",
         "--declination-deg <DEG>",
@@ -174,4 +174,24 @@ fn valid_log_replays_and_plots_svg() {
         assert!(plots.join(f).exists(), "{f} missing");
     }
     let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn a_cut_flight_log_is_refused_with_its_offset() {
+    let d = scratch("ulog");
+    let log = d.join("cut.ulg");
+    // ULog's magic and version, then a header cut short.
+    std::fs::write(&log, b"ULog\x01\x12\x35\x01\x00\x00").unwrap();
+    let out = replay(&[
+        log.to_str().unwrap(),
+        "--out",
+        d.join("e.csv").to_str().unwrap(),
+    ]);
+    let _ = std::fs::remove_dir_all(&d);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr).contains("cut.ulg: "),
+        "{}",
+        text(&out.stderr)
+    );
 }

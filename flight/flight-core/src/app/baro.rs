@@ -99,8 +99,9 @@ impl FlightApp {
         if self.climb_mps.is_some() && self.baro_ground_m.is_none() {
             self.baro_ground_m = self.climb.altitude_m();
         }
-        if altitude_m.is_some() {
-            // For the loop's INS, with its next step.
+        if let Some(a) = altitude_m {
+            // For the loop's INS, with its next step (the log has it at its reading's time).
+            self.log.on_baro(now_ms, a);
             self.pending_baro_m = altitude_m;
         }
     }

@@ -146,9 +146,9 @@ pub fn gps_message(pvt: &NavPvt) -> Gps {
 }
 
 impl FlightApp {
-    /// Bytes from the GPS UART at `now_ms`: each NAV-PVT is queued for the loop's INS (it
-    /// fuses one per step; more than four behind, the oldest go) and becomes the telemetry's
-    /// fix when one is due.
+    /// Bytes from the GPS UART at `now_ms`: each NAV-PVT goes to the flight log, is queued
+    /// for the loop's INS (it fuses one per step; more than four behind, the oldest go) and
+    /// becomes the telemetry's fix when one is due.
     pub fn on_gps_bytes(&mut self, now_ms: u32, bytes: &[u8]) {
         let GpsPort {
             parser,
@@ -159,10 +159,12 @@ impl FlightApp {
             report,
             ..
         } = &mut self.gps;
+        let log = &mut self.log;
         parser.feed(bytes, |frame| {
             let message = Message::from_frame(&frame);
             configurator.on_message(&message);
             if let Message::NavPvt(pvt) = message {
+                log.on_gps(now_ms, &pvt);
                 if pending.is_full() {
                     pending.pop_front();
                 }

@@ -386,7 +386,7 @@ impl FlightApp {
         }
         self.watch_tags(now_us, follower.counters().tag_failures);
         if self.report_due(now_us) {
-            self.report(follower);
+            self.report(now_us, follower);
         }
     }
 
@@ -495,8 +495,22 @@ impl FlightApp {
 
     /// One telemetry message when the downlink stream is empty: the device tool's answer
     /// first (`super::device`), then a setting echo, then an identification result, then a
-    /// state change out of turn, else the rotation.
-    fn report(&mut self, follower: &mut Follower) {
+    /// state change out of turn, else the rotation. The link's figures go to the flight log
+    /// on every report tick, sent or not.
+    fn report(&mut self, now_us: u64, follower: &mut Follower) {
+        let counters = follower.counters();
+        let seen = LinkSeen {
+            rssi_dbm: follower
+                .uplink_rssi_dbm()
+                .map_or(0, |r| i8::try_from(r).unwrap_or(i8::MIN)),
+            lq_percent: follower.uplink_lq(),
+            downlink: follower.remote_report().map(|r| (r.rssi_dbm, r.lq_percent)),
+            rate_mode: follower.params().rate.code(),
+            received: counters.received,
+            missed: counters.missed,
+            failsafes: self.link.failsafes,
+        };
+        self.log.on_link(now_us, &seen);
         let stream = &follower.downlink_stream;
         if stream.pending() > 0 || stream.free() < framed_len(MAX_RECORD_PAYLOAD) {
             return; // one message in flight at most: stale telemetry helps nobody
@@ -510,18 +524,6 @@ impl FlightApp {
             }
             return;
         }
-        let counters = follower.counters();
-        let seen = LinkSeen {
-            rssi_dbm: follower
-                .uplink_rssi_dbm()
-                .map_or(0, |r| i8::try_from(r).unwrap_or(i8::MIN)),
-            lq_percent: follower.uplink_lq(),
-            downlink: follower.remote_report().map(|r| (r.rssi_dbm, r.lq_percent)),
-            rate_mode: follower.params().rate.code(),
-            received: counters.received,
-            missed: counters.missed,
-            failsafes: self.link.failsafes,
-        };
         let mut buf = [0u8; FRAMED_MAX_BYTES];
         if let Some(framed) = self.next_report(seen, &mut buf) {
             follower.downlink_stream.write(framed);

@@ -13,7 +13,8 @@
 //! is handed over whole, between steps, while disarmed ([`FlightApp::take_pending_setup`]).
 //! What the tasks read of the loop rides the report ([`LoopReport`]: the output, the armed
 //! state, the estimators' standing, alerts, the identification, raw magnetometer readings
-//! for a calibration being collected).
+//! for a calibration being collected, and while a flight-log profile records, the step's
+//! [`LoopSnapshot`] for the app's log ring).
 //!
 //! The loop also counts what it misses ([`LoopHealth`]): samples that did not come or could
 //! not be read, data-ready edges that came while a step still ran, and steps that ran past
@@ -25,6 +26,7 @@ use super::{FlightApp, ImuStep, Task};
 use crate::alerts::Alert;
 use crate::estimation::ins::aiding::gps::{GpsUpdate, Home};
 use crate::estimation::magcal::MagCalibration;
+use crate::logging::{Event, LoopContext, LoopSnapshot, Profile};
 use crate::outputs::Command;
 use crate::pipeline::{
     Controllers, EstimatorMode, FlightLoop, FlightSetup, ImuSample, LinkInput, LoopOutput, Source,
@@ -60,6 +62,8 @@ pub struct LoopInputs {
     pub mag_cal: Option<MagCalibration>,
     /// A designed setup waits to be installed ([`FlightApp::take_pending_setup`]).
     pub setup_pending: bool,
+    /// The flight log records loop samples: report each step's [`LoopSnapshot`].
+    pub log_loop: bool,
 }
 
 /// The estimators' standing, as the console and telemetry show it.
@@ -118,6 +122,13 @@ pub struct LoopReport {
     pub gps_update: Option<Option<GpsUpdate>>,
     /// What the loop missed.
     pub health: LoopHealth,
+    /// The latest step's snapshot for the flight log (while it records).
+    pub log: Option<LoopSnapshot>,
+    /// Steps the flight log asked a snapshot of, since the app last took a report (more
+    /// than one: the earlier ones were merged away, and the log marks them lost).
+    pub log_steps: u32,
+    /// A new setup was installed (the loop restarted) since the app last took a report.
+    pub restarted: bool,
 }
 
 /// The loop's side.
@@ -134,6 +145,8 @@ pub struct LoopSide {
     last_edge_us: Option<u64>,
     /// When the flight state was last handed out for the resume record, and what it said.
     resume_kept: Option<(u32, StateKey)>,
+    /// A setup was installed and no report has said so yet.
+    restarted: bool,
 }
 
 impl LoopInputs {
@@ -170,6 +183,8 @@ impl LoopReport {
             identification,
             mag_raw,
             gps_update,
+            log_steps: self.log_steps.saturating_add(later.log_steps),
+            restarted: self.restarted || later.restarted,
             ..later
         };
     }
@@ -192,6 +207,7 @@ impl LoopSide {
             period_us: period_us(setup),
             last_edge_us: None,
             resume_kept: None,
+            restarted: false,
         }
     }
 
@@ -221,6 +237,7 @@ impl LoopSide {
     pub fn install(&mut self, setup: &FlightSetup, controllers: Controllers) {
         self.flight = FlightLoop::new(setup.loop_config, setup.mixer, Some(controllers));
         self.period_us = period_us(setup);
+        self.restarted = true;
     }
 
     /// Continues a flight after a reset in the air (`app::resume`).
@@ -268,6 +285,7 @@ impl LoopSide {
             mag: sample.mag.map(|m| self.mag_cal.apply(m)),
             ..*sample
         };
+        let armed_before = self.armed();
         let out = self
             .flight
             .step(now_ms, sample, &inputs.link, inputs.climb_mps);
@@ -278,6 +296,15 @@ impl LoopSide {
         };
         let mut report = self.report(true, false, gps_update);
         report.mag_raw = mag_raw;
+        if inputs.log_loop {
+            report.log = Some(LoopSnapshot::of(
+                &self.flight,
+                sample,
+                &inputs.link,
+                armed_before,
+            ));
+            report.log_steps = 1;
+        }
         (step, report)
     }
 
@@ -357,6 +384,9 @@ impl LoopSide {
             mag_raw: None,
             gps_update,
             health: self.health,
+            log: None,
+            log_steps: 0,
+            restarted: core::mem::take(&mut self.restarted),
         }
     }
 
@@ -418,6 +448,7 @@ impl FlightApp {
             magcal_collecting: false,
             mag_cal: None,
             setup_pending: false,
+            log_loop: false,
         };
         self.loop_inputs_into(&mut inputs);
         inputs
@@ -435,6 +466,7 @@ impl FlightApp {
         mailbox.usb_connected = self.board.usb_connected;
         mailbox.magcal_collecting = self.magcal.collecting();
         mailbox.setup_pending = self.pending_setup.is_some();
+        mailbox.log_loop = self.log.profile() != Profile::Off;
         if mailbox.baro_m.is_none() {
             mailbox.baro_m = self.pending_baro_m.take();
         }
@@ -456,13 +488,16 @@ impl FlightApp {
         self.gains_changed = true;
         self.battery_monitor = crate::battery::BatteryMonitor::new(setup.battery);
         self.link.set_channel_map(setup.channels);
+        self.log
+            .reconfigure(super::log_profile(&self.live), setup.loop_rate_hz);
         self.setup = setup;
         Some((setup, controllers))
     }
 
     /// What the loop reported after a step at `now_ms` (the firmware's IMU task hands it
     /// over under the app's lock): the IMU task's check-in, arming refusals and the alerts,
-    /// the identification for the link, the calibration's readings, the GPS fusion.
+    /// the identification for the link, the calibration's readings, the GPS fusion, the
+    /// flight log's loop topics and events.
     pub fn on_loop_report(&mut self, now_ms: u32, report: &LoopReport) {
         self.watchdog.check_in(Task::Imu);
         for out in &report.news {
@@ -488,10 +523,46 @@ impl FlightApp {
         if let Some(update) = report.gps_update {
             self.gps.on_fused(now_ms, update, report.estimator.home);
         }
+        let fault_before = self.view.as_ref().and_then(|v| v.imu_fault);
         self.view = Some(LoopReport {
             news: LoopNews::new(),
             ..report.clone()
         });
+        if self.log.profile() != Profile::Off {
+            self.log_report(now_ms, report, fault_before.is_none());
+        }
+    }
+
+    /// The flight log's share of a report: a restart, the loop sample (steps merged away
+    /// marked lost), a ride-through's decision, a finished identification.
+    fn log_report(&mut self, now_ms: u32, report: &LoopReport, fault_new: bool) {
+        if report.restarted {
+            self.log.on_event(now_ms, Event::LoopRestarted);
+        }
+        let logged = u32::from(report.log.is_some());
+        self.log
+            .on_loops_missed(now_ms, report.log_steps.saturating_sub(logged));
+        if let (Some(snapshot), Some(out)) = (&report.log, &report.out) {
+            let context = LoopContext {
+                snapshot,
+                out,
+                baro_altitude_m: self.baro_altitude_m(),
+                arming_blockers: self.arming_blockers(),
+                imu_fault: report.imu_fault,
+            };
+            self.log.on_loop(now_ms, &context);
+        } else if report.imu_fault.is_some() {
+            // No step ran: the ride-through holds; its decision, once it expires.
+            if fault_new {
+                self.log.on_event(now_ms, Event::ImuFault);
+            }
+            for out in &report.news {
+                self.log.on_event(now_ms, Event::Decision(out.decision));
+            }
+        }
+        if let Some(id) = &report.identification {
+            self.log.on_identified(now_ms, id);
+        }
     }
 
     /// One loop on the app's own loop side (hosts: the tests and simulators that do not run

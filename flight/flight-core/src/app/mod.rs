@@ -68,6 +68,7 @@ pub use watchdog::{
 use crate::alerts::TonePlayer;
 use crate::battery::{BatteryMonitor, BatteryStatus};
 use crate::control::design::AxisDesign;
+use crate::logging::{Entry, Profile, Recorder};
 use crate::outputs::Command;
 use crate::pipeline::{
     ClimbRate, Controllers, FlightSetup, LinkInput, LoopOutput, SetupError, announce_battery,
@@ -143,6 +144,8 @@ pub struct FlightApp {
     device: device::DeviceSide,
     /// The VTX channel the pins were last set to (`vtx`).
     vtx_applied: Option<crate::vtx::VtxChannel>,
+    /// The flight log's ring (`logging`), drained by the logging task.
+    log: Recorder,
 }
 
 /// The flight setup for `settings`, or the factory one (and why) if they do not fly.
@@ -181,7 +184,9 @@ impl FlightApp {
         now_ms: u32,
     ) -> Self {
         let mag_cal = magcal::calibration(&stored);
+        let log = Recorder::new(log_profile(&stored), setup.loop_rate_hz);
         Self {
+            log,
             link: link::LinkSide::new(setup.channels),
             live: stored.clone(),
             stored,
@@ -279,6 +284,17 @@ impl FlightApp {
         self.battery
     }
 
+    /// The oldest flight-log entry not yet taken (the logging task drains them and encodes
+    /// them with `logging::Encoder`).
+    pub fn take_log_entry(&mut self) -> Option<Entry> {
+        self.log.pop()
+    }
+
+    /// The flight log's recorder (profile, entries waiting, entries dropped).
+    pub fn log_recorder(&self) -> &Recorder {
+        &self.log
+    }
+
     /// Arming blockers as telemetry's bit set; an IMU fault shows as "sensors unhealthy",
     /// an unfixed boot-time settings problem as "settings problem", both standing (not only
     /// after a refused arm).
@@ -344,6 +360,7 @@ impl FlightApp {
         }
         // Arming is refused on a critical pack (unless `arm.critical_battery allow`).
         self.battery_critical = status.level == crate::battery::BatteryLevel::Critical;
+        self.log.on_battery(now_ms, &status);
         self.battery = Some(status);
     }
 
@@ -435,4 +452,9 @@ impl FlightApp {
             .unwrap_or_else(|| self.live.clone());
         self.pending_setup = Some((setup, controllers, flown));
     }
+}
+
+/// The log profile the settings choose.
+fn log_profile(settings: &Settings) -> Profile {
+    Profile::from_index(settings.get(crate::settings::handles::LOG_PROFILE))
 }

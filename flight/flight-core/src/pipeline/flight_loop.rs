@@ -145,6 +145,9 @@ pub struct FlightLoop {
     hover_throttle: f32,
     /// Samples since the accelerometer last corrected the estimate while armed.
     accel_phase: u16,
+    /// Whether the accelerometer corrected the complementary filter on the latest sample
+    /// (what the flight log records so a replay feeds the estimator the same inputs).
+    accel_corrected: bool,
     /// Integral of the failsafe descent-rate error (throttle units).
     descent_integral: f32,
     /// Blended climb rate, m/s up.
@@ -197,6 +200,7 @@ impl FlightLoop {
             mixer,
             hover_throttle: 0.5,
             accel_phase: 0,
+            accel_corrected: true,
             descent_integral: 0.0,
             climb_mps: None,
             airborne: false,
@@ -386,6 +390,11 @@ impl FlightLoop {
         &self.estimator
     }
 
+    /// Whether the accelerometer corrected the complementary filter on the latest sample.
+    pub fn accel_corrected(&self) -> bool {
+        self.accel_corrected
+    }
+
     /// A baro altitude (m, up) for the INS's next update.
     pub fn on_baro_altitude(&mut self, altitude_m: f32) {
         self.estimator.baro(altitude_m);
@@ -511,6 +520,7 @@ impl FlightLoop {
         } else {
             true
         };
+        self.accel_corrected = accel_corrects;
         let filter_ok = self
             .estimator
             .update(imu, accel_corrects, armed, self.config.ts_s)

@@ -52,6 +52,7 @@ Examples:
   flight-sitl link-cut --gps              (the failsafe holds position 30 s, then descends)
   flight-sitl position-hold --wind 3 --json
   flight-sitl handset-unplugged --module-set input_timeout_ms=1000
+  flight-sitl hover --duration 60 --log hover.ulg   (every sample; `replay hover.ulg`)
   flight-sitl table > acceptance.md
   flight-sitl table --check               (CI: the README's runner table is current)
 
@@ -94,6 +95,12 @@ pub struct Cli {
     /// A steady wind from the north, m/s (0 ≤ M/S ≤ 15).
     #[arg(long, value_name = "M/S", value_parser = wind, default_value_t = 0.0)]
     pub wind: f64,
+    /// Write the flight controller's log (ULog, what pyulog and PlotJuggler read) to FILE;
+    /// the profile is `full` (every sample: replayable) unless --set log.profile says
+    /// otherwise. A run with reboots writes each later boot's log next to it
+    /// (FILE.boot2.ulg, …).
+    #[arg(long, value_name = "FILE.ulg")]
+    pub log: Option<std::path::PathBuf>,
     /// Print the figures as one JSON object on stdout (fields in the README).
     #[arg(long)]
     pub json: bool,
@@ -213,6 +220,14 @@ impl Cli {
         o.at_s = self.at;
         o.altitude_m = self.altitude;
         o.duration_s = self.duration;
+        if self.log.is_some() {
+            o.settings
+                .put(
+                    flight_core::settings::handles::LOG_PROFILE,
+                    flight_core::logging::Profile::Full.index(),
+                )
+                .map_err(|e| format!("--log: {e}"))?;
+        }
         for (name, value) in &self.set {
             o.settings
                 .set_text(name, value)

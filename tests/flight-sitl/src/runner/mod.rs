@@ -616,6 +616,23 @@ pub fn run_kind(kind: Kind, opts: &Options) -> Result<Outcome, RunError> {
     Ok(run_plan(opts, plan(kind, opts, reach)?))
 }
 
+/// Writes the flight controller's logs of a run: the first boot's to `path`, each later
+/// boot's next to it as `STEM.bootN.ulg`.
+///
+/// # Errors
+/// A file that cannot be written.
+pub fn write_logs(path: &std::path::Path, logs: &[Vec<u8>]) -> std::io::Result<()> {
+    for (i, bytes) in logs.iter().enumerate() {
+        let file = if i == 0 {
+            path.to_path_buf()
+        } else {
+            path.with_extension(format!("boot{}.ulg", i + 1))
+        };
+        std::fs::write(file, bytes)?;
+    }
+    Ok(())
+}
+
 /// The pilot's glances at most this long after the hold starts, s.
 pub const MAX_GLANCING_S: f64 = 8.0;
 

@@ -64,6 +64,7 @@ fn sitl(samples: Vec<Sample>) -> Sitl {
         settings: flight_core::settings::Settings::default(),
         watchdog_resets: WatchdogResets::default(),
         boots: Vec::new(),
+        flight_logs: Vec::new(),
     }
 }
 

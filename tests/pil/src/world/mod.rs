@@ -698,6 +698,8 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
                 module: self.module.stats().watchdog_resets,
             },
             boots: self.boots.clone(),
+            // The images write no log stream yet (flight-fw has no logging task).
+            flight_logs: Vec::new(),
         }
     }
 }
