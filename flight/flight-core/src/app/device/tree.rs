@@ -4,7 +4,7 @@
 //! table shows up here without a second list.
 //!
 //! **Numbering** (fixed for a table; the radio reads 1 … [`PARAMETER_COUNT`]): the folders
-//! first ([`FOLDERS`], 1 … 9), then every setting in table order (number
+//! first ([`FOLDERS`], 1 … 10), then every setting in table order (number
 //! [`SETTINGS_BASE`] + its table index, the index the phone's `SettingChange` uses), then
 //! the commands and the two info rows ([`SAVE`] …).
 //!
@@ -29,7 +29,7 @@ use crate::vtx::{self, VtxChannel};
 use telemetry::settings::COUNT;
 
 /// The folders, in number order (folder `n` is number `n + 1`).
-pub const FOLDERS: [&str; 9] = [
+pub const FOLDERS: [&str; 10] = [
     "Rates",
     "Control",
     "Modes & Switches",
@@ -39,6 +39,7 @@ pub const FOLDERS: [&str; 9] = [
     "Sensors",
     "VTX",
     "Link",
+    "Logging",
 ];
 /// Number of the first setting (table index 0).
 pub const SETTINGS_BASE: u8 = FOLDERS.len() as u8 + 1;
@@ -75,6 +76,7 @@ pub fn folder_of(name: &str) -> u8 {
         "ins" | "mag" => 6,
         "vtx" => 7,
         "link" => 8,
+        "log" => 9,
         _ => return 0,
     };
     index + 1
