@@ -573,22 +573,30 @@ impl FlightApp {
         now_ms: u32,
         run: impl FnOnce(&mut LoopSide, &LoopInputs) -> (ImuStep, LoopReport),
     ) -> ImuStep {
-        let Some(mut side) = self.loop_side.take() else {
-            return ImuStep {
-                motors: [Command::Stopped; 4],
-                reprobe: false,
-            };
+        // The side is borrowed in place, not moved out and back: it is kilobytes (the INS's
+        // covariance), and a move copies all of it (≈ 11 000 instructions a sample).
+        let stopped = ImuStep {
+            motors: [Command::Stopped; 4],
+            reprobe: false,
+        };
+        let Some(armed) = self.loop_side.as_ref().map(LoopSide::armed) else {
+            return stopped;
         };
         let inputs = self.loop_inputs();
-        if inputs.setup_pending
-            && !side.armed()
-            && let Some((setup, controllers)) = self.take_pending_setup()
-        {
+        let install = inputs.setup_pending && !armed;
+        let pending = if install {
+            self.take_pending_setup()
+        } else {
+            None
+        };
+        let Some(side) = self.loop_side.as_mut() else {
+            return stopped;
+        };
+        if let Some((setup, controllers)) = pending {
             side.install(&setup, controllers);
         }
-        let (step, report) = run(&mut side, &inputs);
+        let (step, report) = run(side, &inputs);
         self.on_loop_report(now_ms, &report);
-        self.loop_side = Some(side);
         step
     }
 
