@@ -1,6 +1,6 @@
 //! TauLink flight firmware for the STM32F405 (BrushedSparky; Sparky2 with `--features sparky2`).
 //!
-//! All behaviour lives in `flight-core`'s application, `flight_core::app::FlightApp`; this
+//! All behaviour lives in `flight-core`'s application, `flight_app::app::FlightApp`; this
 //! crate only wires the board to it: every task moves bytes or samples between a peripheral
 //! and the app (shared behind a thread-mode mutex, `firmware::shared`), the flight loop's
 //! side of the app runs in its own interrupt executor. On the host it compiles to an empty

@@ -3,7 +3,7 @@
 //! polls every [`FEED_PERIOD_MS`] and feeds the WDT when [`CheckIns::poll`] says so, and
 //! flight-sitl's module board runs the same rule against its simulated WDT.
 //!
-//! **The rule** (the flight side's, `flight_core::app::Watchdog`): a registered task is alive
+//! **The rule** (the flight side's, `flight_app::app::Watchdog`): a registered task is alive
 //! when it checked in during one of the last [`CHECK_IN_POLLS`] poll intervals, and each poll
 //! at which all are alive feeds. Counting the window in polls rather than from the last feed
 //! keeps a task's period from beating against the poll's (a 100 ms task against 100 ms

@@ -78,7 +78,7 @@ pub const LOOP_RATES: Choice = &["500", "1000"];
 pub const INS_MODES: Choice = &["complementary", "ins", "ins_indoor"];
 /// VTX bands (`flight_core::vtx::Band`): the BrushedSparky's VTX module's band-select pins.
 pub const VTX_BANDS: Choice = &["a", "b", "e", "airwave"];
-/// Flight-log profiles (`flight_core::logging::Profile`): off, the telemetry channel's, the
+/// Flight-log profiles (`flight_app::logging::Profile`): off, the telemetry channel's, the
 /// Sparky2 flash's, every sample (replay-grade).
 pub const LOG_PROFILES: Choice = &["off", "link", "flight", "full"];
 

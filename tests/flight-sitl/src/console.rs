@@ -3,8 +3,8 @@
 //! firmware's console task) into the application's own console
 //! (`FlightApp::on_console_input`), exactly the calls the firmware task makes.
 
-use flight_core::app::FlightApp;
-use flight_core::settings::LineAssembler;
+use flight_app::app::FlightApp;
+use flight_app::settings::LineAssembler;
 
 /// The firmware console's line buffer, bytes.
 pub const LINE_BUFFER: usize = 96;

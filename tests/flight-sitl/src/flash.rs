@@ -1,12 +1,12 @@
 //! The flight controller's settings flash: sectors 2–3 of the F405 (2 × 16 KiB) as
 //! sequential-storage's `MockFlashBase`, kept by the world so it survives resets and power
-//! cycles, written and read only through `flight_core::settings::{load, save, save_whole}`
+//! cycles, written and read only through `flight_app::settings::{load, save, save_whole}`
 //! as the firmware's storage task does. What it holds at the first boot is the scenario's
 //! [`FlashInjection`].
 
 use embassy_futures::block_on;
-use flight_core::app::SaveJob;
-use flight_core::settings::{
+use flight_app::app::SaveJob;
+use flight_app::settings::{
     Handle, LoadProblem, Settings, handles, load_at_boot, save, save_whole,
 };
 use sequential_storage::cache::{Cache, Uncached};
@@ -188,7 +188,7 @@ fn corrupt(flash: &mut Flash, seed: u64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flight_core::settings::handles;
+    use flight_app::settings::handles;
 
     fn tuned() -> Settings {
         let mut s = Settings::default();
@@ -214,7 +214,7 @@ mod tests {
             live,
             stored: tuned(),
             whole: false,
-            watchdog_ms: flight_core::app::SAVE_WATCHDOG_MS,
+            watchdog_ms: flight_app::app::SAVE_WATCHDOG_MS,
         };
         let (saved, work) = f.save(&job);
         assert!(saved);

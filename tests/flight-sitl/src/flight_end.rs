@@ -1,6 +1,6 @@
-//! The flight controller board: boots `flight_core::app::FlightApp` from its simulated
+//! The flight controller board: boots `flight_app::app::FlightApp` from its simulated
 //! settings flash and runs the firmware's task adapters around it — link (the firmware's
-//! own task body, `flight_core::app::link_task::run_link_step`: the TauLink follower or,
+//! own task body, `flight_app::app::link_task::run_link_step`: the TauLink follower or,
 //! with `link.protocol` OpenLRSng, the OpenLRSng receiver — a bind only in a window the
 //! console opens — on the real rfm22b driver over the virtual Si4432), supervisor (polls the
 //! app's check-in policy every `FEED_PERIOD_MS` and feeds the IWDG), storage, gains and
@@ -13,13 +13,13 @@ use std::rc::Rc;
 
 use embassy_futures::join::join5;
 use embassy_futures::select::{Either, select};
-use flight_core::app::link_task::run_link_step;
-use flight_core::app::resume::{
+use flight_app::app::link_task::run_link_step;
+use flight_app::app::resume::{
     self, FAULT_WORDS, FEED_WORDS, FaultReason, GAINS_WORDS, Kept, ResetCause, Resume, STATE_WORDS,
 };
-use flight_core::app::{FEED_PERIOD_MS, FlightApp, ImuFault, ImuStep, LoopSide, Task};
-use flight_core::pipeline::ImuSample;
-use flight_core::pipeline::{Controllers, from_settings};
+use flight_app::app::{FEED_PERIOD_MS, FlightApp, ImuFault, ImuStep, LoopSide, Task};
+use flight_app::pipeline::ImuSample;
+use flight_app::pipeline::{Controllers, from_settings};
 use openlrs::dual::DualRadio;
 use openlrs::radio::Clock;
 use radio_rfm22b::{NoPin, Rfm22b, TxPower};
@@ -79,7 +79,7 @@ enum Stop {
 }
 
 /// The flight board's no-init RAM as the firmware keeps it (`flight-fw` `fault::Record`):
-/// the blocks `flight_core::app::resume` encodes.
+/// the blocks `flight_app::app::resume` encodes.
 #[derive(Debug, Clone)]
 pub(crate) struct KeptRecord {
     state: [u32; STATE_WORDS],
@@ -125,7 +125,7 @@ impl KeptRecord {
     }
 }
 
-/// The firmware's link task: `flight_core::app::link_task::run_link_step` in a loop, on
+/// The firmware's link task: `flight_app::app::link_task::run_link_step` in a loop, on
 /// the board's driver lent to a `DualRadio` for this boot (given back when the boot ends).
 async fn link_task(
     app: Rc<RefCell<FlightApp>>,

@@ -3,8 +3,8 @@
 //! flight core's own `logging::Encoder` into one ULog file per boot. What `--log FILE.ulg`
 //! writes, and what the tests read back with `taulink_ulog::Reader` and pyulog.
 
-use flight_core::app::FlightApp;
-use flight_core::logging::{Encoder, MIN_BUFFER};
+use flight_app::app::FlightApp;
+use flight_app::logging::{Encoder, MIN_BUFFER};
 use taulink_ulog::Writer;
 
 /// The `ver_hw` of a simulated board's logs.

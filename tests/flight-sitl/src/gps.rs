@@ -6,7 +6,7 @@
 
 use std::collections::VecDeque;
 
-use flight_core::sensors::ubx::{FixType, NavPvt, frame};
+use flight_app::sensors::ubx::{FixType, NavPvt, frame};
 use telemetry::mock::SplitMix64;
 
 /// The receiver's behaviour.

@@ -1,4 +1,4 @@
-//! Firmware in the loop: the flight firmware's application (`flight_core::app::FlightApp`)
+//! Firmware in the loop: the flight firmware's application (`flight_app::app::FlightApp`)
 //! and the module's (`module_core::App`), each driven by simulated adapters of its
 //! firmware's tasks, both ends on the real rfm22b driver over virtual Si4432 chips, with
 //! independent watchdogs, a settings flash and injectable faults, flying the quad-sim 6-DoF

@@ -4,8 +4,8 @@
 //! README's `log-profiles` block shows (`flight-sitl log-figures --write`), so the choice
 //! between profiles is made on figures, not guesses.
 
-use flight_core::logging::{Profile, SPARKY2_LOG_AREA_BYTES, TOPICS};
-use flight_core::settings::handles;
+use flight_app::logging::{Profile, SPARKY2_LOG_AREA_BYTES, TOPICS};
+use flight_app::settings::handles;
 use taulink_ulog::{Message, Reader};
 
 use crate::runner::{Kind, Options, run_kind};

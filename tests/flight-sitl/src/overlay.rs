@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use flight_core::logging::{Battery, Estimate, LinkStats, SensorGps, Status, TOPICS};
+use flight_app::logging::{Battery, Estimate, LinkStats, SensorGps, Status, TOPICS};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use taulink_ulog::{Message, Reader, Record};

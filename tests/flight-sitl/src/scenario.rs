@@ -1,7 +1,7 @@
 //! What the pilot and the environment do over time: stick positions and switches on the
 //! transmitter, link cuts, and the battery voltage at the ADC.
 
-use flight_core::settings::Settings;
+use flight_app::settings::Settings;
 use quad_sim::quad::QuadParams;
 use telemetry::messages::SettingChange;
 
@@ -40,7 +40,7 @@ pub struct PilotInput {
     /// command at start and whenever it changes); `None`: the radio sends none.
     pub radio_model: Option<u8>,
     /// The flight firmware panics (on the change to true): its handler stops the motors,
-    /// records the fault and resets the board (`flight_core::app::resume`).
+    /// records the fault and resets the board (`flight_app::app::resume`).
     pub flight_panic: bool,
     /// The flight firmware hangs (on the change to true): no task runs, the motor timers keep
     /// their last commands, the IWDG resets the board.
@@ -237,9 +237,9 @@ impl Scenario {
 /// numbers).
 #[allow(clippy::expect_used)]
 pub fn default_airframe() -> (QuadParams, Settings) {
-    use flight_core::control::mixer::QUAD_X;
-    use flight_core::settings::handles::*;
-    use flight_core::sysid::autotune::{AutotuneSettings, analytic_pid, lqg_costs};
+    use flight_app::control::mixer::QUAD_X;
+    use flight_app::settings::handles::*;
+    use flight_app::sysid::autotune::{AutotuneSettings, analytic_pid, lqg_costs};
     let quad = QuadParams::quad_x(10.0, 6.5, 0.03, &QUAD_X);
     let mut s = Settings::default();
     let tune = analytic_pid([10.0, 10.0, 6.5], 0.03, &AutotuneSettings::default())

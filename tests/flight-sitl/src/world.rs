@@ -1,6 +1,6 @@
 //! The simulated world, firmware in the loop: both ends' own applications on virtual
 //! Si4432s. The module board (`module_end`: `module_core::App` and the module firmware's
-//! task adapters) and the flight board (`flight_end`: `flight_core::app::FlightApp` and the
+//! task adapters) and the flight board (`flight_end`: `flight_app::app::FlightApp` and the
 //! flight firmware's task adapters) each drive the real `radio-rfm22b` driver over
 //! `si4432-sim`'s chips — SPI transactions at each board's bus clock, nIRQ latency — through
 //! its RF medium; each end has its independent watchdog, and the flight end its settings
@@ -21,16 +21,16 @@ use std::collections::VecDeque;
 use std::rc::Rc;
 use std::time::Duration;
 
-use flight_core::app::{FlightApp, ImuFault};
-use flight_core::battery::BatteryLevel;
-use flight_core::outputs::Command;
-use flight_core::pipeline::{
+use flight_app::app::{FlightApp, ImuFault};
+use flight_app::battery::BatteryLevel;
+use flight_app::outputs::Command;
+use flight_app::pipeline::{
     ChannelMap, ImuSample, LoopOutput, channel_for, from_settings, store_link, store_openlrs,
     throttle_channel,
 };
-use flight_core::settings::{Settings, handles};
-use flight_core::supervisor::Sticks;
-use flight_core::sysid::ekf::Identification;
+use flight_app::settings::{Settings, handles};
+use flight_app::supervisor::Sticks;
+use flight_app::sysid::ekf::Identification;
 use quad_sim::quad::{Quad, Truth};
 use si4432_sim::{RadioConfig, SPI_CLOCK_F405_HZ, SPI_CLOCK_NRF52840_HZ, Simulation};
 use telemetry::channels::{CHANNEL_CENTER, Channels, MAX_CHANNELS};
@@ -149,7 +149,7 @@ pub enum BootCause {
     /// Its panic handler reset it (`PilotInput::flight_panic`).
     Panic,
     /// A watchdog or panic reset in the air, from which the flight was resumed
-    /// (`flight_core::app::resume`).
+    /// (`flight_app::app::resume`).
     Resumed,
 }
 
@@ -203,7 +203,7 @@ pub(crate) struct WorldState {
     pub(crate) flight_thread_busy_until_ns: u64,
     /// The flight loop's side while the flight board runs (its IMU task owns it apart from
     /// the app, as the firmware's interrupt executor does).
-    pub(crate) flight_loop: Option<flight_core::app::LoopSide>,
+    pub(crate) flight_loop: Option<flight_app::app::LoopSide>,
     /// The flight storage adapter stretches the watchdog around a save as the app's job
     /// asks (`false`: [`World::without_save_watchdog_stretch`]).
     pub(crate) save_stretch: bool,
@@ -448,7 +448,7 @@ impl World {
             flight_loop: None,
             save_stretch: true,
             flight_logs: Vec::new(),
-            flight_lsi_hz: flight_core::app::LSI_TYP_HZ,
+            flight_lsi_hz: flight_app::app::LSI_TYP_HZ,
             flight_record: crate::flight_end::KeptRecord::default(),
             boots: Vec::new(),
             medium: medium.clone(),
@@ -596,7 +596,7 @@ impl World {
                                         flight_record.keep(&mut app, side, now_ms);
                                         step
                                     }
-                                    None => flight_core::app::ImuStep {
+                                    None => flight_app::app::ImuStep {
                                         motors: [Command::Stopped; 4],
                                         reprobe: false,
                                     },
@@ -713,7 +713,7 @@ impl World {
     }
 
     /// The flight board's LSI runs at `hz` (the datasheet allows 17–47 kHz): its IWDG's
-    /// timeout follows (`flight_core::app::IWDG`), from the next boot on.
+    /// timeout follows (`flight_app::app::IWDG`), from the next boot on.
     pub fn with_flight_lsi_hz(&mut self, hz: u32) {
         self.shared.borrow_mut().flight_lsi_hz = hz;
     }

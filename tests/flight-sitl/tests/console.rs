@@ -3,8 +3,8 @@
 
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
 
-use flight_core::app::FlightApp;
-use flight_core::settings::{Settings, handles};
+use flight_app::app::FlightApp;
+use flight_app::settings::{Settings, handles};
 use flight_sitl::console::{LINE_BUFFER, type_into_console};
 
 #[test]

@@ -11,8 +11,8 @@
     clippy::cast_possible_truncation
 )]
 
-use flight_core::report::f32_value;
-use flight_core::settings::{PARAMS, handles};
+use flight_app::report::f32_value;
+use flight_app::settings::{PARAMS, handles};
 use flight_sitl::scenario::default_airframe;
 use std::time::Duration;
 
@@ -73,7 +73,7 @@ fn on_the_ground_with(
     });
     s.flight_flash = flash;
     let mut world = World::new(s);
-    world.with_flight_lsi_hz(flight_core::app::LSI_MAX_HZ);
+    world.with_flight_lsi_hz(flight_app::app::LSI_MAX_HZ);
     if !stretch {
         world.without_save_watchdog_stretch();
     }
@@ -127,7 +127,7 @@ fn a_save_with_a_sector_erase_resets_nothing_because_the_watchdog_is_stretched()
     assert_eq!(sitl.watchdog_resets.flight, 0);
     assert_eq!(
         sitl.settings
-            .get(flight_core::settings::handles::PID_ROLL_KP),
+            .get(flight_app::settings::handles::PID_ROLL_KP),
         0.0042
     );
 

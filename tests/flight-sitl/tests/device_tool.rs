@@ -15,7 +15,7 @@
 
 use std::time::Duration;
 
-use flight_core::settings::{PARAMS, handles};
+use flight_app::settings::{PARAMS, handles};
 use flight_sitl::scenario::default_airframe;
 use flight_sitl::{PilotInput, Scenario, World};
 use module_core::settings::{InputProtocol, Settings as ModuleSettings};

@@ -12,8 +12,8 @@
 mod common;
 
 use common::*;
-use flight_core::outputs::Command;
-use flight_core::supervisor::Decision;
+use flight_app::outputs::Command;
+use flight_app::supervisor::Decision;
 use flight_sitl::scenario::{Piloting, Sight, default_airframe};
 use flight_sitl::{PilotInput, Scenario, Sitl, run};
 

@@ -10,7 +10,7 @@
 mod common;
 
 use common::*;
-use flight_core::supervisor::{Decision, FlightMode};
+use flight_app::supervisor::{Decision, FlightMode};
 use flight_sitl::PilotInput;
 use flight_sitl::metrics::{step, window, worst};
 

@@ -6,8 +6,8 @@
 
 #![allow(clippy::unwrap_used)]
 
-use flight_core::logging::{Profile, TOPICS};
-use flight_core::settings::handles;
+use flight_app::logging::{Profile, TOPICS};
+use flight_app::settings::handles;
 use flight_sitl::runner::{Kind, Options, run_kind};
 use ins_sim::flight_log;
 use taulink_ulog::{Message, Reader};

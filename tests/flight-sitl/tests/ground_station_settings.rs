@@ -5,9 +5,9 @@
 // The helpers below are test code outside `#[test]` functions.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use flight_core::authority::{ChangeGate, Reply};
-use flight_core::report::{apply_setting, f32_value};
-use flight_core::settings::{Settings, handles};
+use flight_app::authority::{ChangeGate, Reply};
+use flight_app::report::{apply_setting, f32_value};
+use flight_app::settings::{Settings, handles};
 use telemetry::messages::{Decoded, Message, MessageReader, SettingChange};
 use telemetry::module_record::{self, ModuleRecord};
 use telemetry::settings::find;

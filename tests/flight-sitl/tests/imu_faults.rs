@@ -12,9 +12,9 @@
 mod common;
 
 use common::*;
-use flight_core::app::{ImuFault, STALL_RIDE_THROUGH_MS};
-use flight_core::outputs::Command;
-use flight_core::supervisor::Decision;
+use flight_app::app::{ImuFault, STALL_RIDE_THROUGH_MS};
+use flight_app::outputs::Command;
+use flight_app::supervisor::Decision;
 use flight_sitl::{ImuInjection, PilotInput};
 
 const FAULT_AT_S: f64 = 6.0;

@@ -12,18 +12,18 @@
 mod common;
 
 use common::*;
-use flight_core::pipeline::Source;
+use flight_app::pipeline::Source;
 use flight_sitl::PilotInput;
 use flight_sitl::metrics::{window, worst};
 
-fn indoor() -> flight_core::settings::Settings {
+fn indoor() -> flight_app::settings::Settings {
     let mut s = airframe_settings();
     s.set_text("ins.mode", "ins_indoor").unwrap();
     s
 }
 
 /// Take-off, hover, then a 2 s roll of 0.3 stick (13.5°) and back level.
-fn banking(settings: flight_core::settings::Settings) -> flight_sitl::Sitl {
+fn banking(settings: flight_app::settings::Settings) -> flight_sitl::Sitl {
     fly(
         settings,
         12.0,
@@ -87,7 +87,7 @@ fn the_indoor_ins_holds_the_attitude_over_a_long_hover_with_a_gyro_bias() {
     // GIVEN a gyro reading 0.5, −0.5, 0.3 °/s off (learnt on the ground in 2.5 s at most)
     let (mut quad, _) = flight_sitl::scenario::default_airframe();
     quad.gyro_bias_dps = [0.5, -0.5, 0.3];
-    let run = |settings: flight_core::settings::Settings| {
+    let run = |settings: flight_app::settings::Settings| {
         flight_sitl::run(flight_sitl::Scenario::new(
             settings,
             quad.clone(),
@@ -110,11 +110,11 @@ fn the_indoor_ins_holds_the_attitude_over_a_long_hover_with_a_gyro_bias() {
 
 // ---- hold modes and the failsafe hold ---------------------------------------------------
 
-use flight_core::supervisor::FlightMode;
+use flight_app::supervisor::FlightMode;
 use flight_sitl::gps::GpsConfig;
 
 /// Switch low: attitude (take-off), switch high: `mode`; the INS in `ins_mode`.
-fn hold_settings(ins_mode: &str, mode: &str) -> flight_core::settings::Settings {
+fn hold_settings(ins_mode: &str, mode: &str) -> flight_app::settings::Settings {
     let mut s = airframe_settings();
     s.set_text("ins.mode", ins_mode).unwrap();
     s.set_text("mode.switch_high", mode).unwrap();
@@ -123,7 +123,7 @@ fn hold_settings(ins_mode: &str, mode: &str) -> flight_core::settings::Settings 
 
 /// Take off in attitude mode, at `engage_s` switch high with the sticks centred.
 fn hold_flight(
-    settings: flight_core::settings::Settings,
+    settings: flight_app::settings::Settings,
     wind_mps: f64,
     gps: Option<GpsConfig>,
     seconds: f64,

@@ -1,7 +1,7 @@
 //! The magnetometer calibration from the sticks (issue 32): disarmed, throttle low, yaw
 //! centred and the roll/pitch stick in its forward-left corner for 2 s starts collecting;
 //! the same gesture again fits, checks and stores it; tones confirm each step
-//! (`flight_core::app`'s magcal module). The world has no magnetometer, so here the second
+//! (`flight_app::app`'s magcal module). The world has no magnetometer, so here the second
 //! gesture finds no readings and is refused with its tone, nothing stored; the stored path
 //! is `flight-core`'s `app::magcal_tests` (a synthetic rotation). Armed, the gesture does
 //! nothing.
@@ -11,7 +11,7 @@
 mod common;
 
 use common::*;
-use flight_core::alerts::Alert;
+use flight_app::alerts::Alert;
 use flight_sitl::{PilotInput, Sitl};
 
 /// The gesture's stick position.
@@ -81,7 +81,7 @@ fn the_gesture_starts_a_calibration_and_a_second_one_ends_it_with_tones() {
     assert!(played(&sitl, Alert::MagcalStored).is_none());
     assert!(sitl.samples.iter().all(|s| !s.out.armed));
     let factory = airframe_settings();
-    for h in flight_core::settings::handles::MAG_CALIBRATION {
+    for h in flight_app::settings::handles::MAG_CALIBRATION {
         assert_eq!(sitl.settings.get(h), factory.get(h), "{h:?}");
     }
 }

@@ -5,7 +5,7 @@
 //! accepted — although both ends store the same bind (rate, band, bind ID).
 #![allow(clippy::unwrap_used)]
 
-use flight_core::settings::handles;
+use flight_app::settings::handles;
 use flight_sitl::scenario::default_airframe;
 use flight_sitl::{PilotInput, Scenario, Sitl, run};
 use telemetry::link::LinkKey;
@@ -50,7 +50,7 @@ fn link_up(sitl: &Sitl) -> usize {
 #[test]
 fn the_key_the_bind_handed_over_links() {
     let sitl = world(Some(MODULE_KEY), Flight::Bound);
-    let bind_id = flight_core::pipeline::stored_link(&sitl.settings)
+    let bind_id = flight_app::pipeline::stored_link(&sitl.settings)
         .unwrap()
         .bind_id;
     assert_eq!(sitl.settings.link_key(), Some(MODULE_KEY.for_link(bind_id)));

@@ -11,10 +11,10 @@
 mod common;
 
 use common::*;
-use flight_core::battery::BatteryLevel;
-use flight_core::outputs::Command;
-use flight_core::settings::Value;
-use flight_core::supervisor::{ArmBlocker, Decision};
+use flight_app::battery::BatteryLevel;
+use flight_app::outputs::Command;
+use flight_app::settings::Value;
+use flight_app::supervisor::{ArmBlocker, Decision};
 use flight_sitl::PilotInput;
 use flight_sitl::metrics::{window, worst};
 

@@ -10,15 +10,15 @@
 mod common;
 
 use common::*;
-use flight_core::supervisor::Decision;
+use flight_app::supervisor::Decision;
 use flight_sitl::metrics::{window, worst};
 use flight_sitl::scenario::default_airframe;
 use flight_sitl::{PilotInput, Scenario, run};
 
 #[test]
 fn telemetry_reaches_the_module_and_settings_come_back() {
-    use flight_core::report::f32_value;
-    use flight_core::settings::{PARAMS, handles};
+    use flight_app::report::f32_value;
+    use flight_app::settings::{PARAMS, handles};
     use telemetry::messages::{FlightMode, Message, SettingChange};
     let (quad, settings) = default_airframe();
     let id = PARAMS
@@ -174,7 +174,7 @@ fn the_home_reaches_the_module_with_the_complementary_filter_and_a_fix() {
     // GIVEN the factory estimator (the complementary filter: no INS) and a receiver
     let (quad, settings) = default_airframe();
     assert_eq!(
-        settings.get(flight_core::settings::handles::INS_MODE),
+        settings.get(flight_app::settings::handles::INS_MODE),
         0,
         "factory: complementary"
     );

@@ -1,15 +1,15 @@
 //! The link-search watchdog hole (issue 12/13): with no module on the air the follower
 //! searches, dwelling on one channel; the flight link task checks in only from the
 //! follower's hooks, so the watchdog is fed only if the hooks run often enough. The app's
-//! check-in policy (`flight_core::app::Watchdog`, the firmware supervisor's) and an IWDG
+//! check-in policy (`flight_app::app::Watchdog`, the firmware supervisor's) and an IWDG
 //! model run against the real follower on mock radios at every rate mode.
 #![allow(clippy::expect_used)]
 
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use flight_core::app::{FAILSAFE_US, FEED_PERIOD_MS, FlightApp, Task, WATCHDOG_TIMEOUT_MS};
-use flight_core::settings::Settings;
+use flight_app::app::{FAILSAFE_US, FEED_PERIOD_MS, FlightApp, Task, WATCHDOG_TIMEOUT_MS};
+use flight_app::settings::Settings;
 use telemetry::channels::{ChannelFormat, FailsafeValues};
 use telemetry::link::core::Follower;
 use telemetry::link::follower::{FollowerHooks, run_follower};

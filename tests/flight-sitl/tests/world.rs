@@ -9,7 +9,7 @@
 
 mod common;
 
-use flight_core::outputs::Command;
+use flight_app::outputs::Command;
 use flight_sitl::scenario::default_airframe;
 use flight_sitl::{
     BootCause, End, FlashInjection, PilotInput, RadioInjection, Scenario, Sitl, WatchdogResets, run,
@@ -105,8 +105,8 @@ fn a_link_cut_at_every_rate_is_a_failsafe_never_a_reset() {
 /// state is lost (a live setting change not saved is gone) and the stored settings load.
 #[test]
 fn a_power_cycle_boots_again_from_the_stored_settings() {
-    use flight_core::report::f32_value;
-    use flight_core::settings::PARAMS;
+    use flight_app::report::f32_value;
+    use flight_app::settings::PARAMS;
     use telemetry::messages::SettingChange;
     let (quad, settings) = default_airframe();
     let id = PARAMS
@@ -158,7 +158,7 @@ fn a_power_cycle_boots_again_from_the_stored_settings() {
     // The change reached the app before the cut (live only), the reboot loaded the stored 0.7.
     assert_eq!(
         sitl.settings
-            .get(flight_core::settings::handles::FAILSAFE_DESCENT_MPS),
+            .get(flight_app::settings::handles::FAILSAFE_DESCENT_MPS),
         0.7
     );
 }
@@ -259,7 +259,7 @@ fn factory_module_settings_are_bound_at_the_scenario_rate() {
     });
     assert!(sitl.samples.iter().all(|x| x.link_up));
     assert_eq!(
-        sitl.settings.get(flight_core::settings::handles::LINK_RATE),
+        sitl.settings.get(flight_app::settings::handles::LINK_RATE),
         1,
         "M100 stored on the flight side"
     );

@@ -1,4 +1,4 @@
-//! The flight controller's USB console (`flight_core::settings::console`): fuzzed text,
+//! The flight controller's USB console (`flight_app::settings::console`): fuzzed text,
 //! line by line, parsed and applied to the settings as the console task does.
 //!
 //! Invariants: parsing never fails on anything but the command word or the word count; a
@@ -9,7 +9,7 @@
 //! refuses without panicking (the console's bind window starts from it).
 #![no_main]
 
-use flight_core::settings::{Command, Settings, parse_line, write_list, write_setting};
+use flight_app::settings::{Command, Settings, parse_line, write_list, write_setting};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -1,4 +1,4 @@
-//! The flight settings store (`flight_core::settings::load`): sequential-storage's mock flash
+//! The flight settings store (`flight_app::settings::load`): sequential-storage's mock flash
 //! filled with fuzz bytes (the rest erased), loaded as at boot.
 //!
 //! Invariants: loading never panics and only returns a flash error or a report; every value
@@ -7,7 +7,7 @@
 //! changes nothing the second read could see).
 #![no_main]
 
-use flight_core::settings::{PARAMS, Settings, load};
+use flight_app::settings::{PARAMS, Settings, load};
 use libfuzzer_sys::fuzz_target;
 use sequential_storage::cache::Cache;
 use sequential_storage::map::{MapConfig, MapStorage};

@@ -6,9 +6,9 @@
 //! attitude estimate stays finite and normalised whatever the receiver claims.
 #![no_main]
 
-use flight_core::app::FlightApp;
-use flight_core::pipeline::ImuSample;
-use flight_core::settings::Settings;
+use flight_app::app::FlightApp;
+use flight_app::pipeline::ImuSample;
+use flight_app::settings::Settings;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -1,4 +1,4 @@
-//! The flight controller's ULog logs (`flight_core::logging`) read for replay: the
+//! The flight controller's ULog logs (`flight_app::logging`) read for replay: the
 //! settings from the parameter messages (the initial ones and every change), the sensor
 //! topics in the order the flight core fed them to its estimator, and the estimate it
 //! flew on. Two replays use them:
@@ -14,12 +14,12 @@
 //! a topic whose format differs from this build's (a log of another version), a parameter
 //! the settings refuse.
 
-use flight_core::estimation::ins::State;
-use flight_core::logging::{
+use flight_app::estimation::ins::State;
+use flight_app::logging::{
     self, Estimate, Profile, SensorBaro, SensorGps, SensorImu, TOPICS, imu_flags,
 };
-use flight_core::pipeline::{Estimator, ImuSample, from_settings};
-use flight_core::settings::{Kind, PARAMS, Settings, Value, handles};
+use flight_app::pipeline::{Estimator, ImuSample, from_settings};
+use flight_app::settings::{Kind, PARAMS, Settings, Value, handles};
 use taulink_ulog::{Message, Reader, Record as UlogRecord, Scalar};
 
 use crate::replay::{Record, Row};

@@ -1,8 +1,8 @@
 //! The `magcal` tool's logic: read a magnetometer log (`time_us,mx,my,mz`), fit and check a
-//! hard/soft-iron calibration with `flight_core::estimation::magcal`, and print it as text
+//! hard/soft-iron calibration with `flight_app::estimation::magcal`, and print it as text
 //! or JSON.
 
-use flight_core::estimation::magcal::{MagCalConfig, MagCalibration, fit};
+use flight_app::estimation::magcal::{MagCalConfig, MagCalibration, fit};
 
 /// The CSV header the tool expects.
 pub const HEADER: &str = "time_us,mx,my,mz";

@@ -1,7 +1,7 @@
 //! Error metrics between an estimate and the truth: attitude angle, roll/pitch/yaw
 //! (wrap-safe, unlike the reference's `fmod` check), position and velocity.
 
-use flight_core::estimation::ins::State;
+use flight_app::estimation::ins::State;
 
 use crate::trajectory::{Truth, multiply, to_euler};
 

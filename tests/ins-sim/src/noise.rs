@@ -4,7 +4,7 @@
 //! measured from the log). The derivation itself is flight-core's
 //! (`Config::with_sensor_noise`, `AidingConfig::for_known_noise`).
 
-use flight_core::estimation::ins::SensorNoise;
+use flight_app::estimation::ins::SensorNoise;
 
 use crate::replay::{Options, Record};
 

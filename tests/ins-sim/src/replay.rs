@@ -2,9 +2,9 @@
 //! sensor lines, drive an [`Ins`] with them (GPS origin = first fix), produce one estimate
 //! row per IMU sample, and compare estimates with a truth or a PX4 EKF2 history.
 
-use flight_core::estimation::ins::aiding::AidingConfig;
-use flight_core::estimation::ins::{Config, Ins};
-use flight_core::estimation::quaternion;
+use flight_app::estimation::ins::aiding::AidingConfig;
+use flight_app::estimation::ins::{Config, Ins};
+use flight_app::estimation::quaternion;
 
 /// Output CSV header (issue 7).
 pub const HEADER: &str = "time_us,qw,qx,qy,qz,vn,ve,vd,pn,pe,pd,gbx,gby,gbz,abz";
@@ -296,7 +296,7 @@ pub struct Options {
     pub declination_deg: f32,
     /// The sensors' noise figures (`--noise`, `--tuning`), if known: the filter then
     /// derives its noise terms from them ([`crate::noise::told`]).
-    pub noise: Option<flight_core::estimation::ins::SensorNoise>,
+    pub noise: Option<flight_app::estimation::ins::SensorNoise>,
 }
 
 impl Default for Options {
@@ -494,7 +494,7 @@ pub fn run_with_progress(
 fn align(ins: &mut Ins, options: &Options, accel: [f32; 3], mag: [f32; 3]) -> bool {
     // Earth field: the first reading levelled with the accelerometer's tilt gives the
     // horizontal and vertical magnitudes; the declination turns the horizontal part.
-    let [roll, pitch] = flight_core::estimation::ins::tilt_from_accel(accel);
+    let [roll, pitch] = flight_app::estimation::ins::tilt_from_accel(accel);
     let level = quaternion::from_euler(roll, pitch, 0.0);
     let [mn, me, md] = quaternion::body_to_ned_vector(level, mag);
     let h = (mn * mn + me * me).sqrt();
@@ -505,7 +505,7 @@ fn align(ins: &mut Ins, options: &Options, accel: [f32; 3], mag: [f32; 3]) -> bo
     ins.align(accel, mag, [0.0; 3]).is_ok()
 }
 
-fn row(time_us: u64, state: Option<flight_core::estimation::ins::State>) -> Row {
+fn row(time_us: u64, state: Option<flight_app::estimation::ins::State>) -> Row {
     let Some(s) = state else {
         return Row {
             time_us,

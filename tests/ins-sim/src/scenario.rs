@@ -2,7 +2,7 @@
 //! [`Simulation::drive`] feeds an [`Ins`] the way the firmware would (predict on every IMU
 //! sample, then the measurements that arrived with it).
 
-use flight_core::estimation::ins::{Aided, Ins};
+use flight_app::estimation::ins::{Aided, Ins};
 
 use crate::sensors::{BaroModel, Bias, GpsModel, ImuModel, MagModel, Readings};
 use crate::trajectory::{Motion, Trajectory, Truth};

@@ -2,7 +2,7 @@
 //! Tau Labs `simulation.py` does) so the truth is exactly consistent with an ideal IMU.
 //! Integration runs in f64 with an exact rotation per step.
 
-use flight_core::estimation::GRAVITY_MPS2;
+use flight_app::estimation::GRAVITY_MPS2;
 
 /// Truth at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -12,7 +12,7 @@
 mod common;
 
 use common::{report, run};
-use flight_core::estimation::ins::Ins;
+use flight_app::estimation::ins::Ins;
 use ins_sim::scenario::Scenario;
 use ins_sim::sensors::Bias;
 use ins_sim::trajectory::Motion;

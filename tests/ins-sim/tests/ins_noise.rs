@@ -10,8 +10,8 @@
     clippy::needless_range_loop
 )] // test code
 
-use flight_core::estimation::ins::aiding::AidingConfig;
-use flight_core::estimation::ins::{Config, Ins, SensorNoise};
+use flight_app::estimation::ins::aiding::AidingConfig;
+use flight_app::estimation::ins::{Config, Ins, SensorNoise};
 use ins_sim::metrics::errors;
 use ins_sim::scenario::{Scenario, Simulation};
 use ins_sim::trajectory::Motion;

@@ -12,9 +12,9 @@
 mod common;
 
 use common::{report, run_with};
-use flight_core::estimation::complementary::{self, Complementary};
-use flight_core::estimation::ins::aiding::AidingConfig;
-use flight_core::estimation::ins::{Config, Ins};
+use flight_app::estimation::complementary::{self, Complementary};
+use flight_app::estimation::ins::aiding::AidingConfig;
+use flight_app::estimation::ins::{Config, Ins};
 use ins_sim::metrics::attitude_angle_deg;
 use ins_sim::scenario::{Scenario, Simulation};
 use ins_sim::sensors::Bias;

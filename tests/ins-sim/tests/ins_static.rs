@@ -12,7 +12,7 @@
 mod common;
 
 use common::{assert_state, report, run};
-use flight_core::estimation::ins::State;
+use flight_app::estimation::ins::State;
 use ins_sim::scenario::Scenario;
 use ins_sim::sensors::Bias;
 use ins_sim::trajectory::from_euler;

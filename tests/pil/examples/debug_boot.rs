@@ -2,7 +2,7 @@
 //! aid for bringing an image up (`cargo run --release -p pil --example debug_boot -- flight
 //! dist/flight-brushedsparky.elf 500`).
 
-use flight_core::outputs::Protocol;
+use flight_app::outputs::Protocol;
 use pil::board::flight::{FlightBoard, FlightBoardKind};
 use pil::board::module::ModuleBoard;
 use pil::runner::Platform;

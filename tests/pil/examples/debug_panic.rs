@@ -2,7 +2,7 @@
 //! panic's entry (`rust_begin_unwind`): a debugging aid (`cargo run --release -p pil
 //! --example debug_panic -- IMAGE MS`).
 
-use flight_core::outputs::Protocol;
+use flight_app::outputs::Protocol;
 use m4_sim::{Bus, Cpu, Reg, Stop, Width};
 use pil::board::flight::{FlightBoard, FlightBoardKind};
 use pil::runner::image::Image;

@@ -3,8 +3,8 @@
 //! quantum. `cargo run --release -p pil --example world_overhead` prints the CPU time; the
 //! emulated cores' time comes on top.
 
-use flight_core::control::mixer::QUAD_X;
-use flight_core::outputs::Protocol;
+use flight_app::control::mixer::QUAD_X;
+use flight_app::outputs::Protocol;
 use flight_sitl::{PilotInput, Scenario};
 use pil::world::machine::FakeMachine;
 use pil::world::{Radios, World, WorldConfig, flight_board, module_board};
@@ -12,7 +12,7 @@ use quad_sim::quad::QuadParams;
 
 fn main() {
     let scenario = Scenario::new(
-        flight_core::settings::Settings::default(),
+        flight_app::settings::Settings::default(),
         QuadParams::quad_x(10.0, 6.5, 0.03, &QUAD_X),
         30.0,
         Box::new(|_| PilotInput::default()),

@@ -5,11 +5,11 @@
 use super::attitude::Attitude;
 use super::controllers::Controllers;
 use super::estimator::{Estimator, EstimatorMode, Source};
+use super::flight_state::FlightState;
 use super::hold::{DescentHold, Hold, Horizontal, Nav};
 use super::identify::Sysid;
 use super::stages;
 use super::sticks::StickShaping;
-use crate::app::resume::FlightState;
 use crate::control::mixer::Mixer;
 use crate::estimation::GRAVITY_MPS2;
 use crate::estimation::complementary;

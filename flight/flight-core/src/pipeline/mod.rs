@@ -12,6 +12,7 @@ mod climb;
 mod controllers;
 mod estimator;
 mod flight_loop;
+pub mod flight_state;
 mod hold;
 mod identify;
 mod link;

@@ -16,7 +16,7 @@ pub use params::{MAX_PAIRS, ParamError, ParamText, Settings};
 pub use store::{
     FLASH_BUFFER, LoadProblem, LoadReport, StoreError, load, load_at_boot, save, save_whole,
 };
-pub(crate) use store::{RECORD_MAX, crc32, decode as decode_record, record};
+pub use store::{RECORD_MAX, crc32, crc32_words, decode as decode_record, record};
 pub use telemetry::settings::{
     Change, Choice, Handle, Kind, PARAMS, Param, ParamType, Value, ValueError, handles,
 };

@@ -62,7 +62,7 @@ const VERSION_PHRASE_KEY: u8 = 3;
 /// The version before the link key: its pairs load, not its link.
 const VERSION_NO_KEY: u8 = 2;
 /// Longest record: version, generation, count, pairs, key flag and key, CRC.
-pub(crate) const RECORD_MAX: usize = 1 + 4 + 2 + 6 * super::params::COUNT + 1 + KEY_BYTES + 4;
+pub const RECORD_MAX: usize = 1 + 4 + 2 + 6 * super::params::COUNT + 1 + KEY_BYTES + 4;
 
 /// A storage failure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -133,20 +133,30 @@ pub struct LoadReport {
 }
 
 /// IEEE CRC-32 (reflected, polynomial 0xEDB88320), bitwise: the record is read once per boot
-/// (the resume record, `app::resume`, reuses it).
-pub(crate) fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
+/// (the resume record, `flight_app::app::resume`, reuses it).
+pub fn crc32(bytes: &[u8]) -> u32 {
+    !bytes.iter().fold(!0u32, |crc, &b| crc32_step(crc, b))
+}
+
+/// [`crc32`] of the words' little-endian bytes (the resume record's blocks).
+pub fn crc32_words(words: &[u32]) -> u32 {
+    !words
+        .iter()
+        .flat_map(|w| w.to_le_bytes())
+        .fold(!0u32, crc32_step)
+}
+
+/// One byte into a running CRC-32.
+fn crc32_step(mut crc: u32, b: u8) -> u32 {
+    crc ^= u32::from(b);
+    for _ in 0..8 {
+        crc = if crc & 1 != 0 {
+            (crc >> 1) ^ 0xEDB8_8320
+        } else {
+            crc >> 1
+        };
     }
-    !crc
+    crc
 }
 
 /// Serialises `settings` as generation `generation`; returns the record.
@@ -155,7 +165,7 @@ pub(crate) fn crc32(bytes: &[u8]) -> u32 {
 /// # Errors
 /// [`StoreError::Flash`] if the record outgrew [`RECORD_MAX`] (ruled out by the bound's
 /// formula): refused rather than stored cut short.
-pub(crate) fn record(
+pub fn record(
     settings: &Settings,
     generation: u32,
 ) -> Result<heapless::Vec<u8, RECORD_MAX>, StoreError> {
@@ -190,15 +200,17 @@ fn encode(settings: &Settings, generation: u32, out: &mut [u8; RECORD_MAX]) -> u
 }
 
 /// A decoded record.
-pub(crate) struct Record {
+pub struct Record {
     generation: u32,
-    pub(crate) settings: Settings,
+    /// The settings it holds (values the table refused at their factory value).
+    pub settings: Settings,
     loaded: u16,
-    pub(crate) refused: u16,
+    /// How many of its values the table refused.
+    pub refused: u16,
 }
 
 /// Parses and checks a record (CRC, version, length); values go through the table's checks.
-pub(crate) fn decode(bytes: &[u8]) -> Option<Record> {
+pub fn decode(bytes: &[u8]) -> Option<Record> {
     let (body, crc) = bytes.split_at_checked(bytes.len().checked_sub(4)?)?;
     if crc32(body).to_le_bytes() != *crc {
         return None;

@@ -14,8 +14,8 @@ use embassy_stm32::timer::Channel;
 use embassy_stm32::timer::low_level::Timer;
 use embassy_stm32::timer::simple_pwm::PwmPin;
 use embassy_stm32::usb::{self, Driver};
-use flight_core::alerts::{DAC_SAMPLES_PER_CYCLE, sine_table};
-use flight_core::outputs::{OutputError, Protocol};
+use flight_app::alerts::{DAC_SAMPLES_PER_CYCLE, sine_table};
+use flight_app::outputs::{OutputError, Protocol};
 use static_cell::StaticCell;
 
 use super::outputs::MotorTimer;
@@ -266,8 +266,8 @@ pub struct VtxPins {
 
 #[cfg(not(feature = "sparky2"))]
 impl VtxPins {
-    /// Drives the levels `flight_core::vtx` chose (`true` = released).
-    pub fn set(&mut self, levels: flight_core::vtx::VtxPins) {
+    /// Drives the levels `flight_app::vtx` chose (`true` = released).
+    pub fn set(&mut self, levels: flight_app::vtx::VtxPins) {
         for (pin, released) in [
             (&mut self.rf_s1, levels.rf_s1),
             (&mut self.rf_s2, levels.rf_s2),
@@ -384,7 +384,7 @@ impl Board {
         #[cfg(feature = "sparky2")]
         let gps = {
             let mut config = usart::Config::default();
-            config.baudrate = flight_core::app::GPS_BOOT_BAUDS[0];
+            config.baudrate = flight_app::app::GPS_BOOT_BAUDS[0];
             match usart::Uart::new(
                 p.USART1, p.PA10, p.PA9, p.DMA2_CH7, p.DMA2_CH2, Irqs, config,
             ) {

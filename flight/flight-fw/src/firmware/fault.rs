@@ -1,5 +1,5 @@
 //! Faults and resets: the panic and HardFault handlers, the reset's cause, and the record
-//! kept across a reset for a resumed flight (`flight_core::app::resume`: what it holds and
+//! kept across a reset for a resumed flight (`flight_app::app::resume`: what it holds and
 //! the decision are there).
 //!
 //! - **Handlers.** A panic (every `unwrap!`/`assert!` of the HAL ends here too) or a
@@ -19,14 +19,14 @@ use core::panic::PanicInfo;
 
 use cortex_m_rt::{ExceptionFrame, exception};
 use embassy_stm32::pac;
-use flight_core::app::resume::{
+use flight_app::app::resume::{
     FAULT_WORDS, FEED_WORDS, Fault, FaultReason, GAINS_WORDS, ResetCause, STATE_WORDS, encode_feed,
 };
 
 use super::board;
 use super::shared::now_ms;
 
-/// The blocks `flight_core::app::resume` encodes, as the firmware keeps them.
+/// The blocks `flight_app::app::resume` encodes, as the firmware keeps them.
 #[repr(C)]
 pub struct Record {
     /// The flight state (the IMU task, every few ms).

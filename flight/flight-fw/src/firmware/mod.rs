@@ -3,7 +3,7 @@
 //! per concern: imu (the flight loop, driven by the MPU9250's data-ready), motors, link (the
 //! TauLink follower on the RFM22B), baro, gains (re-solve after setting changes), battery,
 //! alerts, console, storage, heartbeat and the watchdog supervisor. Every decision is in
-//! `flight_core::app::FlightApp` (installed in `shared`); the tasks only move data between
+//! `flight_app::app::FlightApp` (installed in `shared`); the tasks only move data between
 //! their peripheral and the app. See `shared` for the data flow.
 
 mod board;
@@ -23,10 +23,10 @@ use defmt_rtt as _;
 use embassy_executor::{InterruptExecutor, SendSpawner, SpawnError, SpawnToken, Spawner};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
-use flight_core::app::resume::{self, Kept, ResetCause, Resume};
-use flight_core::app::{BootFacts, FlightApp};
-use flight_core::pipeline::from_settings;
-use flight_core::settings::Settings;
+use flight_app::app::resume::{self, Kept, ResetCause, Resume};
+use flight_app::app::{BootFacts, FlightApp};
+use flight_app::pipeline::from_settings;
+use flight_app::settings::Settings;
 use mpu9250::SampleRate;
 
 #[embassy_executor::main]
@@ -154,7 +154,7 @@ async fn main(spawner: Spawner) {
 }
 
 /// The application for this boot, built in its static storage: the flight the no-init
-/// record describes resumed when it says so (`flight_core::app::resume::plan`) and its
+/// record describes resumed when it says so (`flight_app::app::resume::plan`) and its
 /// settings make a setup, else the stored settings' (the factory's if they do not fly) with
 /// freshly solved gains.
 fn boot_app(

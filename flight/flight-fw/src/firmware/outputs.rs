@@ -1,10 +1,10 @@
-//! Drives one output bank (a timer and its channels) with a `flight_core::outputs::Protocol`.
+//! Drives one output bank (a timer and its channels) with a `flight_app::outputs::Protocol`.
 //! The arithmetic lives in flight-core; this only writes PSC/ARR/CCR and, for OneShot125,
 //! fires the one-pulse timer once per control loop.
 
 use embassy_stm32::timer::low_level::{OutputCompareMode, OutputPolarity, Timer};
 use embassy_stm32::timer::{Channel, GeneralInstance4Channel};
-use flight_core::outputs::{Command, OutputError, Protocol, TimerClock, TimerTiming};
+use flight_app::outputs::{Command, OutputError, Protocol, TimerClock, TimerTiming};
 
 /// A timer bank driving motors or servos.
 pub struct MotorTimer<'d, T: GeneralInstance4Channel> {

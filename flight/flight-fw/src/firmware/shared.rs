@@ -12,7 +12,7 @@
 //! interrupts: the flight loop, in its interrupt executor, preempts any task's call, however
 //! long (a console `status`, a link step). The loop never takes that lock; it trades with the
 //! app through three mailboxes under critical sections a few hundred cycles long, each a
-//! copy: the inputs (`flight_core::app::LoopInputs`), its report (`LoopReport`, merged while
+//! copy: the inputs (`flight_app::app::LoopInputs`), its report (`LoopReport`, merged while
 //! the report task has not taken it), and a newly designed setup.
 
 use core::cell::RefCell;
@@ -22,9 +22,9 @@ use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::{CriticalSectionRawMutex, ThreadModeRawMutex};
 use embassy_sync::signal::Signal;
 use embassy_time::Instant;
-use flight_core::app::link_task::AppAccess;
-use flight_core::app::{FlightApp, LoopInputs, LoopReport, LoopSide};
-use flight_core::pipeline::{Controllers, FlightSetup};
+use flight_app::app::link_task::AppAccess;
+use flight_app::app::{FlightApp, LoopInputs, LoopReport, LoopSide};
+use flight_app::pipeline::{Controllers, FlightSetup};
 use heapless::Vec;
 use static_cell::StaticCell;
 
@@ -125,7 +125,7 @@ fn locked(f: &mut dyn FnMut(&mut FlightApp)) {
     });
 }
 
-/// The installed application, as the shared task bodies (`flight_core::app::link_task`)
+/// The installed application, as the shared task bodies (`flight_app::app::link_task`)
 /// reach it.
 pub struct SharedApp;
 

@@ -4,7 +4,7 @@
 //! records go into the [`Transmitter`]; after each step the downlink comes out: OpenLRSng's
 //! link-info frames become the link statistics the handset shows (CRSF link statistics,
 //! S.Port RSSI) and its serial passthrough bytes the telemetry records (the flight side
-//! sends TauLink's message stream through it, `flight_core::app::openlrs`).
+//! sends TauLink's message stream through it, `flight_app::app::openlrs`).
 //!
 //! Input loss: the transmitter stops sending once the handset's channels are older than the
 //! input timeout (`Transmitter::with_stale_input_stop`: OpenLRSng's `ppmAge`), so the

@@ -12,7 +12,7 @@ use telemetry::link::RateMode;
 
 use super::{Kind, Options};
 
-/// The flight firmware's own application (`flight_core::app::FlightApp`) flying a simulated
+/// The flight firmware's own application (`flight_app::app::FlightApp`) flying a simulated
 /// 250-class quad over the TauLink air link from a simulated module, in virtual time, through
 /// a named scenario; prints its figures (or JSON) and can draw them.
 #[derive(Parser, Clone, Debug)]
@@ -223,8 +223,8 @@ impl Cli {
         if self.log.is_some() {
             o.settings
                 .put(
-                    flight_core::settings::handles::LOG_PROFILE,
-                    flight_core::logging::Profile::Full.index(),
+                    flight_app::settings::handles::LOG_PROFILE,
+                    flight_app::logging::Profile::Full.index(),
                 )
                 .map_err(|e| format!("--log: {e}"))?;
         }
@@ -265,7 +265,7 @@ impl Cli {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flight_core::settings::handles;
+    use flight_app::settings::handles;
 
     fn parse(s: &str) -> Result<Cli, clap::Error> {
         Cli::try_parse_from(std::iter::once("flight-sitl").chain(s.split_whitespace()))
@@ -315,10 +315,10 @@ mod tests {
 
     /// The index of choice `text` of setting `name`.
     fn choice(name: &str, text: &str) -> u32 {
-        let mut s = flight_core::settings::Settings::default();
+        let mut s = flight_app::settings::Settings::default();
         s.set_text(name, text).unwrap();
         match s.by_name(name) {
-            Some(flight_core::settings::Value::U32(i)) => i,
+            Some(flight_app::settings::Value::U32(i)) => i,
             other => panic!("{name} is no choice: {other:?}"),
         }
     }

@@ -3,7 +3,7 @@
 //! how far the altitude and the horizontal position stray from what was held, and for the
 //! link cut with a GPS fix how far the failsafe's position hold drifts.
 
-use flight_core::supervisor::FlightMode;
+use flight_app::supervisor::FlightMode;
 
 use super::Kind;
 use super::pilot::Push;

@@ -12,7 +12,7 @@ pub mod pilot;
 pub mod plot;
 pub mod report;
 
-use flight_core::settings::{Settings, handles};
+use flight_app::settings::{Settings, handles};
 use quad_sim::quad::QuadParams;
 use telemetry::link::RateMode;
 
@@ -57,7 +57,7 @@ pub enum Kind {
     /// to the motors and the attitude loop's response.
     AttitudeStep,
     /// Hovering, the flight firmware panics: the handler stops the motors and resets, the
-    /// flight resumes from the record kept across the reset (`flight_core::app::resume`).
+    /// flight resumes from the record kept across the reset (`flight_app::app::resume`).
     Panic,
     /// Hovering, a thread-mode task hangs (the loop flies on in its interrupt executor):
     /// the watchdog is no longer fed, the IWDG resets the board, the flight resumes.
@@ -183,7 +183,7 @@ impl Options {
     /// Factory flight and module settings on quad-sim's 250-class quad X
     /// (`QuadParams::quad_x(10, 6.5, 0.03)`), F250, seed 7.
     pub fn factory() -> Self {
-        use flight_core::control::mixer::QUAD_X;
+        use flight_app::control::mixer::QUAD_X;
         Self {
             rate: RateMode::F250,
             seed: 7,
@@ -512,7 +512,7 @@ pub fn plan(kind: Kind, opts: &Options, reach: (f64, f64)) -> Result<Plan, RunEr
             let top = altitude.max(2.5 * (at - pilot::TAKEOFF_S)) + 5.0;
             // With a fix the failsafe first holds the position and altitude.
             let held = if opts.gps {
-                f64::from(flight_core::pipeline::FAILSAFE_HOLD_MS) / 1_000.0
+                f64::from(flight_app::pipeline::FAILSAFE_HOLD_MS) / 1_000.0
             } else {
                 0.0
             };

@@ -209,7 +209,7 @@ impl PilotPlan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flight_core::control::mixer::QUAD_X;
+    use flight_app::control::mixer::QUAD_X;
 
     #[test]
     fn arms_takes_off_climbs_and_holds_on_what_it_saw() {

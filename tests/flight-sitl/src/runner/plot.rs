@@ -2,7 +2,7 @@
 //! altitude and climb rate, attitude (true and estimated), the four motor commands, and the
 //! link/arming state — with the fault, failsafe, disarm and touchdown marked.
 
-use flight_core::outputs::Command;
+use flight_app::outputs::Command;
 use sim_plot::{Event, Figure, Panel, Series};
 
 use super::Outcome;

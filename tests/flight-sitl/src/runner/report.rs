@@ -3,9 +3,9 @@
 
 use std::fmt::Write as _;
 
-use flight_core::battery::BatteryLevel;
-use flight_core::outputs::Command;
-use flight_core::supervisor::Decision;
+use flight_app::battery::BatteryLevel;
+use flight_app::outputs::Command;
+use flight_app::supervisor::Decision;
 use telemetry::link::RateMode;
 
 use super::{Kind, Plan};
@@ -274,7 +274,7 @@ pub fn extract(sitl: &Sitl, plan: &Plan) -> Report {
             super::hold::measure(sitl, k, &timeline, plan.duration_s)
         }
         (Kind::LinkCut, _) if plan.gps => {
-            let hold_s = f64::from(flight_core::pipeline::FAILSAFE_HOLD_MS) / 1_000.0;
+            let hold_s = f64::from(flight_app::pipeline::FAILSAFE_HOLD_MS) / 1_000.0;
             let held = failsafe_at_s.and_then(|f| super::hold::failsafe_hold(sitl, f, hold_s));
             super::hold::Figures {
                 held_position_drift_m: held.map(|h| h.0),
@@ -288,7 +288,7 @@ pub fn extract(sitl: &Sitl, plan: &Plan) -> Report {
         (Kind::AttitudeStep, Some(at), Some(end)) => {
             let max_deg = f64::from(
                 sitl.settings
-                    .get(flight_core::settings::handles::ATTITUDE_MAX_DEG),
+                    .get(flight_app::settings::handles::ATTITUDE_MAX_DEG),
             );
             let target = f64::from(super::STEP_ROLL_STICK) * max_deg;
             Some(step_figures(s, at, end, target))

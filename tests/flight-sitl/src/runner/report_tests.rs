@@ -4,8 +4,8 @@ use super::*;
 use crate::runner::pilot::PilotPlan;
 use crate::scenario::PilotInput;
 use crate::world::{Boot, BootCause};
-use flight_core::pipeline::LoopOutput;
-use flight_core::supervisor::FlightMode;
+use flight_app::pipeline::LoopOutput;
+use flight_app::supervisor::FlightMode;
 use quad_sim::quad::{QuadState, Truth};
 
 const TS: f64 = 0.1;
@@ -22,11 +22,11 @@ fn sample(t_s: f64, altitude_m: f64, climb_mps: f64, armed: bool, failsafe: bool
             mode_changed: false,
             armed,
             failsafe,
-            attitude: flight_core::pipeline::Attitude::LEVEL,
-            estimator: flight_core::pipeline::Source::Complementary,
+            attitude: flight_app::pipeline::Attitude::LEVEL,
+            estimator: flight_app::pipeline::Source::Complementary,
         },
         link_up: !failsafe,
-        link_sticks: flight_core::supervisor::Sticks::default(),
+        link_sticks: flight_app::supervisor::Sticks::default(),
         truth: Truth {
             state: QuadState {
                 position_m: [0.0, 0.0, -altitude_m],
@@ -61,7 +61,7 @@ fn sitl(samples: Vec<Sample>) -> Sitl {
         ts_s: TS,
         module_rx: Vec::new(),
         handset_tx: Vec::new(),
-        settings: flight_core::settings::Settings::default(),
+        settings: flight_app::settings::Settings::default(),
         watchdog_resets: WatchdogResets::default(),
         boots: Vec::new(),
         flight_logs: Vec::new(),
@@ -70,7 +70,7 @@ fn sitl(samples: Vec<Sample>) -> Sitl {
 
 fn plan(kind: Kind, fault_at_s: Option<f64>) -> Plan {
     let quad =
-        quad_sim::quad::QuadParams::quad_x(10.0, 6.5, 0.03, &flight_core::control::mixer::QUAD_X);
+        quad_sim::quad::QuadParams::quad_x(10.0, 6.5, 0.03, &flight_app::control::mixer::QUAD_X);
     Plan {
         kind,
         rate: RateMode::M100,

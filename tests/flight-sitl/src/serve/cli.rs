@@ -89,7 +89,7 @@ impl ServeCli {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flight_core::settings::handles;
+    use flight_app::settings::handles;
     use telemetry::link::RateMode;
 
     fn parse(s: &str) -> Result<ServeCli, clap::Error> {

@@ -9,8 +9,8 @@ use std::collections::VecDeque;
 use std::time::Duration;
 use telemetry::link::LinkKey;
 
-use flight_core::report::setting_report;
-use flight_core::settings::{PARAMS, Settings, handles};
+use flight_app::report::setting_report;
+use flight_app::settings::{PARAMS, Settings, handles};
 use quad_sim::quad::QuadParams;
 use telemetry::link::RateMode;
 use telemetry::messages::{Decoded, Message, MessageReader, SettingChange};
@@ -239,7 +239,7 @@ mod tests {
         let id = PARAMS.iter().position(|p| p.name == "pid.roll.kp").unwrap();
         SettingChange {
             id: id as u16,
-            value: flight_core::report::f32_value(value),
+            value: flight_app::report::f32_value(value),
         }
     }
 
@@ -328,7 +328,7 @@ mod tests {
             x.altitude_m > 0.3
                 && x.motors
                     .iter()
-                    .all(|m| *m == flight_core::outputs::Command::Stopped)
+                    .all(|m| *m == flight_app::outputs::Command::Stopped)
         });
         assert!(!airborne_stop, "motors stopped in the air");
         let armed = |t: f64| {

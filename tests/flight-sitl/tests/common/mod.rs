@@ -9,7 +9,7 @@
     clippy::cast_precision_loss
 )]
 
-use flight_core::settings::Settings;
+use flight_app::settings::Settings;
 use flight_sitl::scenario::default_airframe;
 use flight_sitl::{PilotInput, Scenario, Sitl, run};
 

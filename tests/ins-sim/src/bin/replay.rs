@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Parser;
-use flight_core::logging::Profile;
+use flight_app::logging::Profile;
 use ins_sim::compare::{compare, parse_reference};
 use ins_sim::flight_log;
 use ins_sim::replay::{HEADER, Options, Row, parse_sensors, run_with_progress};

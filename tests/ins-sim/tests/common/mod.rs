@@ -2,8 +2,8 @@
 //! the final errors, the worst errors after a settling time and bias convergence times.
 #![allow(dead_code, clippy::indexing_slicing)] // test harness (clippy.toml allows this in tests)
 
-use flight_core::estimation::ins::aiding::AidingConfig;
-use flight_core::estimation::ins::{Config, Ins, State};
+use flight_app::estimation::ins::aiding::AidingConfig;
+use flight_app::estimation::ins::{Config, Ins, State};
 use ins_sim::metrics::{Errors, errors};
 use ins_sim::scenario::{Scenario, Simulation};
 use ins_sim::trajectory::Truth;
@@ -69,9 +69,9 @@ pub fn run_with(mut ins: Ins, scenario: Scenario, seconds: f64, check_from_s: f6
             .flatten()
         {
             match o {
-                flight_core::estimation::ins::Aided::Fused(_) => {}
-                flight_core::estimation::ins::Aided::Rejected { .. } => rejections += 1,
-                flight_core::estimation::ins::Aided::Reset(_) => resets += 1,
+                flight_app::estimation::ins::Aided::Fused(_) => {}
+                flight_app::estimation::ins::Aided::Rejected { .. } => rejections += 1,
+                flight_app::estimation::ins::Aided::Reset(_) => resets += 1,
             }
         }
         truth = sample.truth;

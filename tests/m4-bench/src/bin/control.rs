@@ -11,11 +11,11 @@
 #[cortex_m_rt::entry]
 fn main() -> ! {
     use core::hint::black_box;
-    use flight_core::control::design::{FrameInvariantCosts, KfNoise, design_axis};
-    use flight_core::control::lqr::{AxisSetpoint, LqgAxis};
-    use flight_core::control::mixer::{Mixer, QUAD_X, ThrustCurve};
-    use flight_core::control::pid::{Pid, PidGains};
-    use flight_core::model::AxisModel;
+    use flight_app::control::design::{FrameInvariantCosts, KfNoise, design_axis};
+    use flight_app::control::lqr::{AxisSetpoint, LqgAxis};
+    use flight_app::control::mixer::{Mixer, QUAD_X, ThrustCurve};
+    use flight_app::control::pid::{Pid, PidGains};
+    use flight_app::model::AxisModel;
     use m4_bench::{exit, m4count_marker};
 
     let ts = 1.0 / 8000.0;
@@ -78,7 +78,7 @@ fn main() -> ! {
 
     // (c) One step of the 13-state identification EKF (autotune, not in the normal loop).
     let mut ekf =
-        flight_core::sysid::SystemIdentifier::new(flight_core::sysid::SysidConfig::new(ts as f32));
+        flight_app::sysid::SystemIdentifier::new(flight_app::sysid::SysidConfig::new(ts as f32));
     ekf.record_output(black_box([0.05, -0.02, 0.1]));
     m4count_marker();
     ekf.update(gyro);

@@ -1,4 +1,4 @@
-//! What `flight_core::app::FlightApp` adds around the flight loop, as the IMU task calls it:
+//! What `flight_app::app::FlightApp` adds around the flight loop, as the IMU task calls it:
 //! one `on_imu_sample` (IMU fault checks, the loop step, alerts, identification hand-off)
 //! next to one bare `FlightLoop::step` on the same kind of sample, both disarmed (arming
 //! needs the link, which this bench does not run), and one `on_imu_missing` (ride-through).
@@ -14,10 +14,10 @@
 #[cortex_m_rt::entry]
 fn main() -> ! {
     use core::hint::black_box;
-    use flight_core::app::{FlightApp, ImuFault};
-    use flight_core::logging::Profile;
-    use flight_core::pipeline::{FlightLoop, ImuSample, LinkInput, from_settings};
-    use flight_core::settings::{Settings, handles};
+    use flight_app::app::{FlightApp, ImuFault};
+    use flight_app::logging::Profile;
+    use flight_app::pipeline::{FlightLoop, ImuSample, LinkInput, from_settings};
+    use flight_app::settings::{Settings, handles};
     use m4_bench::{exit, m4count_marker};
 
     // Real sensors are noisy: bit-identical samples are the frozen-data fault.

@@ -18,11 +18,11 @@
 #[cortex_m_rt::entry]
 fn main() -> ! {
     use core::hint::black_box;
-    use flight_core::pipeline::{
+    use flight_app::pipeline::{
         Controllers, FlightLoop, ImuSample, LinkInput, Source, from_settings,
     };
-    use flight_core::settings::Settings;
-    use flight_core::supervisor::Sticks;
+    use flight_app::settings::Settings;
+    use flight_app::supervisor::Sticks;
     use m4_bench::{exit, m4count_marker};
 
     let Ok(setup) = from_settings(&Settings::default()) else {

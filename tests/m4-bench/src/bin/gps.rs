@@ -8,10 +8,10 @@
 #[cortex_m_rt::entry]
 fn main() -> ! {
     use core::hint::black_box;
-    use flight_core::estimation::ins::aiding::AidingConfig;
-    use flight_core::estimation::ins::aiding::gps::{GpsAiding, GpsAidingConfig};
-    use flight_core::estimation::ins::{Config, Ins};
-    use flight_core::sensors::ubx::{Message, Parser};
+    use flight_app::estimation::ins::aiding::AidingConfig;
+    use flight_app::estimation::ins::aiding::gps::{GpsAiding, GpsAidingConfig};
+    use flight_app::estimation::ins::{Config, Ins};
+    use flight_app::sensors::ubx::{Message, Parser};
     use m4_bench::{exit, m4count_marker};
 
     const FRAME: [u8; 100] = [

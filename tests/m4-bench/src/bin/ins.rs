@@ -8,7 +8,7 @@
 #[cortex_m_rt::entry]
 fn main() -> ! {
     use core::hint::black_box;
-    use flight_core::estimation::ins::{Config, Filter};
+    use flight_app::estimation::ins::{Config, Filter};
     use m4_bench::{exit, m4count_marker};
 
     let mut f = Filter::new(Config::default());

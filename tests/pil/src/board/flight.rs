@@ -16,7 +16,7 @@
 
 use std::collections::HashMap;
 
-use flight_core::outputs::{Command, Protocol};
+use flight_app::outputs::{Command, Protocol};
 
 use super::{MISO_FLOATING, Outbox, Trace};
 use crate::chips::m25p16::M25p16;

@@ -1,11 +1,11 @@
 //! A motor output pin read back: its edges give the pulse width and period, and the output
-//! protocol's mapping (`flight_core::outputs::Protocol`, the one the settings choose and
+//! protocol's mapping (`flight_app::outputs::Protocol`, the one the settings choose and
 //! flight-sitl flies) turns them into the command an ESC or a brushed FET makes of them:
 //! brushed — the duty cycle; PWM — (pulse − min) / (max − min); OneShot125 — (pulse −
 //! 125 µs) / 125 µs. A pin that stops pulsing is a stopped motor (an ESC without pulses
 //! stops; a FET held low is off, held high full on).
 
-use flight_core::outputs::{Command, Protocol};
+use flight_app::outputs::{Command, Protocol};
 
 /// Below this command the motor counts as stopped (half a step of the finest output: an
 /// 84 MHz timer's brushed duty at 32 kHz has 2 625 steps).

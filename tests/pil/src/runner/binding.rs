@@ -3,7 +3,7 @@
 //! module's factory settings with a bind ID at the scenario's rate, the flight side storing
 //! the module's link and its key), plus, with a phrase, what a bind on it leaves (spec
 //! §12.1: the module's key, salt and phrase derivation); each end's settings are then
-//! written with the firmware's own storage code — `flight_core::settings::save_whole` into
+//! written with the firmware's own storage code — `flight_app::settings::save_whole` into
 //! the sequential-storage map of flight sectors 2–3, module-core's `SettingsStore::save`
 //! into the module's eight pages — onto flash of the same geometry, and those bytes are
 //! programmed into the emulated flash before power-on. The images boot into exactly what a
@@ -17,7 +17,7 @@ use embassy_futures::block_on;
 use embedded_storage_async::nor_flash::{
     ErrorType, MultiwriteNorFlash, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
-use flight_core::settings::Settings;
+use flight_app::settings::Settings;
 use flight_sitl::Scenario;
 use sequential_storage::cache::Cache;
 use sequential_storage::map::{MapConfig, MapStorage};
@@ -198,7 +198,7 @@ pub fn flight_flash(settings: &Settings) -> Result<(u32, Vec<u8>), String> {
     let config =
         MapConfig::try_new(FLIGHT_SETTINGS).map_err(|_| "flight settings range".to_owned())?;
     let mut map: MapStorage<u16, _, _> = MapStorage::new(flash, config, Cache::new_uncached());
-    block_on(flight_core::settings::save_whole(&mut map, settings))
+    block_on(flight_app::settings::save_whole(&mut map, settings))
         .map_err(|e| format!("flight settings: {e:?}"))?;
     let (flash, _) = map.destroy();
     Ok((
@@ -222,7 +222,7 @@ pub fn module_flash(settings: &module_core::settings::Settings) -> Result<(u32, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flight_core::control::mixer::QUAD_X;
+    use flight_app::control::mixer::QUAD_X;
     use flight_sitl::PilotInput;
     use quad_sim::quad::QuadParams;
 
@@ -261,7 +261,7 @@ mod tests {
         let mut map: MapStorage<u16, _, _> = MapStorage::new(window, config, Cache::new_uncached());
         let mut loaded = Settings::default();
         let (report, unreadable) =
-            block_on(flight_core::settings::load_at_boot(&mut map, &mut loaded));
+            block_on(flight_app::settings::load_at_boot(&mut map, &mut loaded));
         assert!(
             unreadable.is_none() && report.problem.is_none(),
             "{report:?}"

@@ -21,7 +21,7 @@ pub mod report;
 
 use std::path::PathBuf;
 
-use flight_core::outputs::Protocol;
+use flight_app::outputs::Protocol;
 use flight_sitl::runner::pilot::PilotPlan;
 use flight_sitl::runner::{Kind as SitlKind, Options as SitlOptions, Plan, RunError};
 
@@ -263,8 +263,8 @@ fn sitl_options(opts: &Options) -> SitlOptions {
 }
 
 /// The output protocol the flight settings choose (what the motors are read with).
-pub fn protocol(settings: &flight_core::settings::Settings) -> Protocol {
-    flight_core::pipeline::from_settings(settings)
+pub fn protocol(settings: &flight_app::settings::Settings) -> Protocol {
+    flight_app::pipeline::from_settings(settings)
         .map(|s| s.protocol)
         .unwrap_or(Protocol::Brushed {
             frequency_hz: 32_000,

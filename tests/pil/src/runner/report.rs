@@ -12,7 +12,7 @@
 
 use std::fmt::Write as _;
 
-use flight_core::outputs::Command;
+use flight_app::outputs::Command;
 use flight_sitl::runner::report::fixed;
 use flight_sitl::runner::{Kind as SitlKind, Plan, Report};
 use flight_sitl::{Sitl, WARMUP_S};
@@ -36,14 +36,14 @@ pub const SAVED_SETTING: (&str, f32) = ("failsafe.descent_mps", 0.9);
 
 /// The change `settings-save`'s phone sends.
 pub fn saved_change() -> SettingChange {
-    let id = flight_core::settings::PARAMS
+    let id = flight_app::settings::PARAMS
         .iter()
         .position(|p| p.name == SAVED_SETTING.0)
         .and_then(|i| u16::try_from(i).ok())
         .unwrap_or(u16::MAX);
     SettingChange {
         id,
-        value: flight_core::report::f32_value(SAVED_SETTING.1),
+        value: flight_app::report::f32_value(SAVED_SETTING.1),
     }
 }
 
@@ -424,9 +424,9 @@ fn stored(bytes: &[u8]) -> bool {
         return false;
     };
     let mut map: MapStorage<u16, _, _> = MapStorage::new(window, config, Cache::new_uncached());
-    let mut settings = flight_core::settings::Settings::default();
-    let _ = embassy_futures::block_on(flight_core::settings::load_at_boot(&mut map, &mut settings));
+    let mut settings = flight_app::settings::Settings::default();
+    let _ = embassy_futures::block_on(flight_app::settings::load_at_boot(&mut map, &mut settings));
     settings
         .by_name(SAVED_SETTING.0)
-        .is_some_and(|v| v == flight_core::settings::Value::F32(SAVED_SETTING.1))
+        .is_some_and(|v| v == flight_app::settings::Value::F32(SAVED_SETTING.1))
 }

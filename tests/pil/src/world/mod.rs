@@ -24,9 +24,9 @@ pub mod machine;
 pub mod observe;
 pub mod timing;
 
-use flight_core::outputs::{Command, Protocol};
-use flight_core::pipeline::{Attitude, LoopOutput, Source};
-use flight_core::supervisor::{FlightMode, Sticks};
+use flight_app::outputs::{Command, Protocol};
+use flight_app::pipeline::{Attitude, LoopOutput, Source};
+use flight_app::supervisor::{FlightMode, Sticks};
 use flight_sitl::scenario::{ImuInjection, PilotInput, Piloting, Scenario, Sight};
 use flight_sitl::world::{CUT_DB, DISTANCE_M, FLIGHT_CRYSTAL_PPM, MODULE_CRYSTAL_PPM, WARMUP_S};
 use flight_sitl::{Boot, BootCause, End, Sample, Sitl, WatchdogResets};
@@ -692,7 +692,7 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
                 .map(|(t, m)| (Self::scenario_s(*t), *m))
                 .collect(),
             handset_tx: Vec::new(),
-            settings: flight_core::settings::Settings::default(),
+            settings: flight_app::settings::Settings::default(),
             watchdog_resets: WatchdogResets {
                 flight: stats.watchdog_resets,
                 module: self.module.stats().watchdog_resets,

@@ -1,16 +1,16 @@
 //! What the flight controller's state is, seen from outside as a pilot or a bench does:
 //! the motor pins (armed: any motor turning — disarmed, every output is at its stopped
 //! level), the buzzer (PC8, on while a tone sounds) played back against the alert patterns
-//! of `flight_core::alerts` (the pilot hears "failsafe", "sensor fault", "control back",
+//! of `flight_app::alerts` (the pilot hears "failsafe", "sensor fault", "control back",
 //! "battery warning/critical"), and the telemetry the phone gets through the HM-10. The
 //! image's RAM is never read: the PIL checks the image as hardware, so flight-sitl's record
 //! (`LoopOutput`'s armed, failsafe and decision) is rebuilt from these observations after
 //! the run, with hindsight (a pattern is recognised when its first tone ends; its event is
 //! dated at the tone's start, within one 10 ms alert tick of the event itself).
 
-use flight_core::alerts::Alert;
-use flight_core::battery::BatteryLevel;
-use flight_core::supervisor::Decision;
+use flight_app::alerts::Alert;
+use flight_app::battery::BatteryLevel;
+use flight_app::supervisor::Decision;
 
 /// How far an observed tone may be from a pattern's, ms (the firmware's alert task ticks
 /// every 10 ms, so a tone lasts its length ± one tick).

@@ -5,7 +5,7 @@ use super::machine::FakeMachine;
 use super::*;
 use crate::board::Input;
 use crate::wire::{Drive, Outside, Pin};
-use flight_core::control::mixer::QUAD_X;
+use flight_app::control::mixer::QUAD_X;
 use quad_sim::quad::QuadParams;
 
 const PC4: Pin = Pin::new(2, 4);
@@ -56,7 +56,7 @@ fn flight_behaviour() -> impl FnMut(&mut FlightBoard, u64, &[Input]) {
 fn scenario(duration_s: f64) -> Scenario {
     let quad = QuadParams::quad_x(10.0, 6.5, 0.03, &QUAD_X);
     Scenario::new(
-        flight_core::settings::Settings::default(),
+        flight_app::settings::Settings::default(),
         quad,
         duration_s,
         Box::new(|_| PilotInput::default()),
@@ -165,7 +165,7 @@ fn the_motor_pins_fly_the_quad_and_the_records_are_flight_sitls() {
     assert!(
         sitl.samples
             .iter()
-            .any(|s| s.out.decision == flight_core::supervisor::Decision::Armed)
+            .any(|s| s.out.decision == flight_app::supervisor::Decision::Armed)
     );
 }
 

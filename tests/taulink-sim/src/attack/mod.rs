@@ -5,7 +5,7 @@
 //! hooks can attribute every frame their link core accepted.
 //!
 //! The attackers are the attacker's behaviour, not the link's: the victims run the real
-//! link cores (and, for the flight side's boot decision, the real `flight_core` app).
+//! link cores (and, for the flight side's boot decision, the real `flight_app` app).
 
 mod grid;
 pub mod guess;
@@ -193,7 +193,7 @@ impl Powered {
 }
 
 /// The flight end of an attacked run: bound before the run (its flash holds the module's
-/// link), it boots, asks the real flight application what to run — `flight_core`'s explicit
+/// link), it boots, asks the real flight application what to run — `flight_app`'s explicit
 /// bind: a bind only after the console's command, so never here — and runs it, until the
 /// power plan switches it off; then again from boot, with a fresh nonce seed as a hardware
 /// RNG would give.
@@ -205,8 +205,8 @@ pub(crate) async fn flight_end_powered<R: PacketRadio>(
     record: Shared,
     power: Powered,
 ) {
-    let mut flash = flight_core::settings::Settings::default();
-    if flight_core::pipeline::store_link(&mut flash, &start.params).is_err() {
+    let mut flash = flight_app::settings::Settings::default();
+    if flight_app::pipeline::store_link(&mut flash, &start.params).is_err() {
         return;
     }
     if let Some((key, _)) = start.key {
@@ -218,10 +218,10 @@ pub(crate) async fn flight_end_powered<R: PacketRadio>(
     for boot in 0u64.. {
         let off = plan.next();
         let session = async {
-            let Some(mut fc) = flight_core::app::FlightApp::new(flash.clone(), 0) else {
+            let Some(mut fc) = flight_app::app::FlightApp::new(flash.clone(), 0) else {
                 return;
             };
-            let params = if matches!(fc.next_link_step(), flight_core::app::LinkStep::Bind { .. }) {
+            let params = if matches!(fc.next_link_step(), flight_app::app::LinkStep::Bind { .. }) {
                 start
                     .bind(&mut radio, &mut clock)
                     .await

@@ -9,7 +9,7 @@ use embassy_stm32::mode::Async;
 use embassy_stm32::peripherals::TIM6;
 use embassy_stm32::timer::low_level::Timer;
 use embassy_time::{Duration, Ticker};
-use flight_core::alerts::{DAC_SAMPLES_PER_CYCLE, dac_sample_period_ticks};
+use flight_app::alerts::{DAC_SAMPLES_PER_CYCLE, dac_sample_period_ticks};
 
 use crate::firmware::shared::{now_ms, with_app};
 

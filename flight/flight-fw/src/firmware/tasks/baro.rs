@@ -1,6 +1,6 @@
 //! The MS5611 on I2C1 (address 0x77, OSR 1024: two 2.3 ms conversions per reading) at 50 Hz:
 //! each altitude, or `None` for a failed reading, goes to `FlightApp::on_baro` (climb rate for
-//! the failsafe descent; the baro's health, `flight_core::app::BaroHealth`: a failing baro is
+//! the failsafe descent; the baro's health, `flight_app::app::BaroHealth`: a failing baro is
 //! declared failed there, never a reset). The task cannot hang: every transaction is under a
 //! timeout (`i2c_bus::TimedI2c`), and the bus is cleared (`i2c_bus::recover`) and the driver
 //! and sensor initialised afresh at boot and after every failure, at the pace the app asks

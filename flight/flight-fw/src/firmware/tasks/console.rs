@@ -8,7 +8,7 @@ use embassy_stm32::usb::Driver;
 use embassy_usb::class::cdc_acm::{CdcAcmClass, State};
 use embassy_usb::driver::EndpointError;
 use embassy_usb::{Builder, Config};
-use flight_core::settings::LineAssembler;
+use flight_app::settings::LineAssembler;
 use heapless::String;
 use static_cell::StaticCell;
 
@@ -50,7 +50,7 @@ pub async fn console_task(driver: Driver<'static, USB_OTG_FS>) {
         loop {
             class.wait_connection().await;
             // A host has the console: arming is refused until it goes
-            // (`flight_core::supervisor::Inputs::usb_connected`).
+            // (`flight_app::supervisor::Inputs::usb_connected`).
             with_app(|a| a.on_usb(true));
             // A disconnect ends the session; wait for the next one.
             let _ = serve(&mut class).await;

@@ -6,7 +6,7 @@
 
 use defmt::{info, warn};
 use embassy_time::{Duration, Timer};
-use flight_core::pipeline::{Controllers, from_settings};
+use flight_app::pipeline::{Controllers, from_settings};
 
 use crate::firmware::shared::with_app;
 

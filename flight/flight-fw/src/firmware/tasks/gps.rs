@@ -10,8 +10,8 @@ use defmt::{info, warn};
 use embassy_stm32::mode::Async;
 use embassy_stm32::usart::UartTx;
 use embassy_time::{Duration, Timer, with_timeout};
-use flight_core::app::{GPS_BAUD, GPS_BOOT_BAUDS, gps_baud_messages};
-use flight_core::sensors::ubx::frame::MAX_FRAME;
+use flight_app::app::{GPS_BAUD, GPS_BOOT_BAUDS, gps_baud_messages};
+use flight_app::sensors::ubx::frame::MAX_FRAME;
 use heapless::Vec;
 
 use crate::firmware::board::Gps;

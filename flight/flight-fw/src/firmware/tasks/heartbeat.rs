@@ -6,7 +6,7 @@
 use embassy_stm32::gpio::Output;
 use embassy_time::{Duration, Ticker};
 
-use flight_core::app::Task;
+use flight_app::app::Task;
 
 use crate::firmware::shared::with_app;
 

@@ -16,8 +16,8 @@ use defmt::warn;
 use embassy_futures::select::{Either, select};
 use embassy_time::{Duration, Instant, Timer};
 use embedded_hal_bus::spi::ExclusiveDevice;
-use flight_core::app::{ImuFault, LoopInputs, LoopReport, LoopSide};
-use flight_core::pipeline::ImuSample;
+use flight_app::app::{ImuFault, LoopInputs, LoopReport, LoopSide};
+use flight_app::pipeline::ImuSample;
 use mpu9250::{Config, Mpu9250, SampleRate};
 
 use super::motors::Motors;

@@ -1,4 +1,4 @@
-//! Owns the RFM22B and runs the link task's body, `flight_core::app::link_task`, on it:
+//! Owns the RFM22B and runs the link task's body, `flight_app::app::link_task`, on it:
 //! what `FlightApp::next_link_step` says (a bind window the console opened, the TauLink
 //! follower or OpenLRSng receiver with the app as its hooks, or nothing until the owner
 //! binds), the chip lent to OpenLRSng and back by `openlrs::dual::DualRadio`. This task
@@ -7,8 +7,8 @@
 use defmt::{info, warn};
 use embassy_time::{Delay, Instant};
 use embedded_hal_bus::spi::ExclusiveDevice;
-use flight_core::app::FAILSAFE_US;
-use flight_core::app::link_task::{LinkEvent, run_link_step};
+use flight_app::app::FAILSAFE_US;
+use flight_app::app::link_task::{LinkEvent, run_link_step};
 use openlrs::dual::DualRadio;
 use radio_rfm22b::{Rfm22b, TxPower};
 

@@ -4,7 +4,7 @@
 //! loop's mailbox once the loop reports the motors stopped, the gains a resume needs into
 //! the no-init record.
 
-use flight_core::app::FlightApp;
+use flight_app::app::FlightApp;
 
 use crate::firmware::fault::with_record;
 use crate::firmware::shared::{

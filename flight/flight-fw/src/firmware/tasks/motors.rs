@@ -5,7 +5,7 @@
 use embassy_stm32::peripherals::{TIM3, TIM9};
 use embassy_stm32::timer::simple_pwm::PwmPin;
 use embassy_stm32::timer::{Ch1, Ch2, Ch3, Ch4};
-use flight_core::outputs::Command;
+use flight_app::outputs::Command;
 
 use crate::firmware::outputs::MotorTimer;
 

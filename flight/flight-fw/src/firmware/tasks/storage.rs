@@ -7,7 +7,7 @@ use defmt::{info, warn};
 use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_stm32::flash::{Bank1Region1, Blocking};
 use embassy_time::{Duration, Timer};
-use flight_core::settings::{LoadProblem, Settings, load_at_boot};
+use flight_app::settings::{LoadProblem, Settings, load_at_boot};
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
 

@@ -1,14 +1,14 @@
-//! Owns the independent watchdog: programs it as `flight_core::app::IWDG` (200 ms at the
+//! Owns the independent watchdog: programs it as `flight_app::app::IWDG` (200 ms at the
 //! fastest LSI the datasheet allows, 47 kHz; 552 ms at the slowest, 17 kHz) and feeds it at
 //! each of the app's polls that says every supervised task is alive
-//! (`flight_core::app::Watchdog`: the rule and its margin are there), so a stuck task is a
+//! (`flight_app::app::Watchdog`: the rule and its margin are there), so a stuck task is a
 //! reset, not a runaway motor. Register-level rather than embassy's `IndependentWatchdog`,
 //! which computes its reload for a 32 kHz LSI.
 //!
 //! A flash sector erase stalls the CPU for up to 0.5 s (16 KiB sector at ×32, DS8626
 //! "Flash memory programming"), longer than the timeout. Settings are only written while
 //! disarmed, inside [`with_long_timeout`], which stretches the watchdog to at least the
-//! period the app's save job asks for (`flight_core::app::SAVE_WATCHDOG_MS`) at the fastest
+//! period the app's save job asks for (`flight_app::app::SAVE_WATCHDOG_MS`) at the fastest
 //! LSI and restores it afterwards, telling the app's watchdog model both times.
 
 use core::sync::atomic::Ordering;
@@ -18,7 +18,7 @@ use embassy_stm32::pac;
 use embassy_stm32::pac::iwdg::vals::{Key, Pr};
 use embassy_stm32::peripherals::IWDG;
 use embassy_time::{Duration, Ticker};
-use flight_core::app::{FEED_PERIOD_MS, IWDG as SETTING, IwdgSetting, Task};
+use flight_app::app::{FEED_PERIOD_MS, IWDG as SETTING, IwdgSetting, Task};
 
 use crate::firmware::fault::keep_feed;
 use crate::firmware::shared::{LOOP_ALIVE, now_ms, with_app};

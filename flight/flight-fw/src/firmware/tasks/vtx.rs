@@ -1,7 +1,7 @@
 //! The BrushedSparky's VTX select pins (`board::VtxPins`): set at boot from the settings
 //! and again after a change of `vtx.band` / `vtx.channel` (console, phone, the radio's
 //! device tool) while disarmed — the app decides when and which levels
-//! (`FlightApp::take_vtx_pins`, `flight_core::vtx`). The Sparky2 has no VTX.
+//! (`FlightApp::take_vtx_pins`, `flight_app::vtx`). The Sparky2 has no VTX.
 
 use defmt::info;
 use embassy_time::{Duration, Timer};

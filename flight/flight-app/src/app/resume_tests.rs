@@ -3,7 +3,7 @@
 use super::*;
 use crate::app::LinkInput;
 use crate::pipeline::ImuSample;
-use crate::supervisor::{Decision, Sticks};
+use crate::supervisor::{Decision, FlightMode, Sticks};
 
 /// A record of a frame flying at 20 s: armed, in the air, attitude mode.
 fn flying(written_ms: u32) -> FlightState {

@@ -29,27 +29,21 @@
 //! that does not come back is the failsafe as usual.
 
 use crate::control::design::AxisDesign;
-use crate::estimation::quaternion::Quaternion;
+pub use crate::loop_side::STATE_REFRESH_MS;
+pub use crate::pipeline::flight_state::{FlightState, STATE_WORDS};
+use crate::pipeline::flight_state::{open, seal};
 use crate::pipeline::{Controllers, from_settings};
-use crate::settings::{RECORD_MAX, Settings, crc32, decode_record, record};
-use crate::supervisor::FlightMode;
+use crate::settings::{RECORD_MAX, Settings, decode_record, record};
 
 use super::FlightApp;
 use super::watchdog::{IWDG, LSI_MIN_HZ};
 
 /// A record is fresh when it was written at most this long before the reset, ms.
 pub const FRESH_MS: u32 = 1_000;
-/// The loop refreshes the flight state at least this often, ms (and at once on a change of
-/// the armed state, failsafe or mode).
-pub const STATE_REFRESH_MS: u32 = 10;
 
-const STATE_MAGIC: u32 = 0x5453_5431; // "TST1"
 const GAINS_MAGIC: u32 = 0x5447_4E31; // "TGN1"
 const FAULT_MAGIC: u32 = 0x5446_4C31; // "TFL1"
 
-/// Words of the flight-state block: magic, time, flags and mode, hover throttle, attitude
-/// (4), gyro bias (3), CRC.
-pub const STATE_WORDS: usize = 12;
 /// Words of the fault block: magic, reason, time, address, CRC.
 pub const FAULT_WORDS: usize = 5;
 /// Words of the feed block: the time and its complement.
@@ -97,30 +91,6 @@ pub struct Fault {
     pub address: u32,
 }
 
-/// The loop's state worth keeping across a reset.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FlightState {
-    /// The board's clock when it was written, ms.
-    pub written_ms: u32,
-    /// Motors may turn.
-    pub armed: bool,
-    /// The touchdown detector had the frame in the air.
-    pub in_air: bool,
-    /// In the link failsafe.
-    pub failsafe: bool,
-    /// The flight mode flown.
-    pub mode: FlightMode,
-    /// The learnt hover throttle.
-    pub hover_throttle: f32,
-    /// Body → NED attitude.
-    pub attitude: Quaternion,
-    /// The attitude filter's gyro bias, rad/s.
-    pub gyro_bias_radps: [f32; 3],
-}
-
-/// What, changed, makes the flight state due at once: armed, in the air, failsafe, mode.
-pub(crate) type StateKey = (bool, bool, bool, FlightMode);
-
 /// What a resumed flight starts from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Resume {
@@ -148,78 +118,6 @@ pub enum ColdBoot {
     Stale,
     /// No valid gains record, or settings that no longer make a setup.
     NoGains,
-}
-
-fn crc_words(words: &[u32]) -> u32 {
-    let mut bytes = [0u8; 4 * GAINS_WORDS];
-    let mut n = 0;
-    for (chunk, w) in bytes.chunks_exact_mut(4).zip(words) {
-        chunk.copy_from_slice(&w.to_le_bytes());
-        n += 4;
-    }
-    crc32(bytes.get(..n).unwrap_or_default())
-}
-
-/// Seals a block: its last word becomes the CRC of the others.
-fn seal(block: &mut [u32]) {
-    if let Some((crc, body)) = block.split_last_mut() {
-        *crc = crc_words(body);
-    }
-}
-
-/// The block's body if its magic and CRC hold.
-fn open(block: &[u32], magic: u32) -> Option<&[u32]> {
-    let (crc, body) = block.split_last()?;
-    (body.first() == Some(&magic) && crc_words(body) == *crc).then_some(body)
-}
-
-impl FlightState {
-    /// The block the firmware keeps.
-    pub fn encode(&self) -> [u32; STATE_WORDS] {
-        let flags = u32::from(self.armed)
-            | u32::from(self.in_air) << 1
-            | u32::from(self.failsafe) << 2
-            | u32::from(self.mode.id()) << 8;
-        let [w, x, y, z] = self.attitude.map(f32::to_bits);
-        let [bx, by, bz] = self.gyro_bias_radps.map(f32::to_bits);
-        let mut words = [
-            STATE_MAGIC,
-            self.written_ms,
-            flags,
-            self.hover_throttle.to_bits(),
-            w,
-            x,
-            y,
-            z,
-            bx,
-            by,
-            bz,
-            0,
-        ];
-        seal(&mut words);
-        words
-    }
-
-    /// The state a block holds, if its magic and CRC check.
-    pub fn decode(block: &[u32; STATE_WORDS]) -> Option<Self> {
-        let [_, written_ms, flags, hover, w, x, y, z, bx, by, bz] = *open(block, STATE_MAGIC)?
-        else {
-            return None;
-        };
-        let mode = u8::try_from(flags >> 8)
-            .ok()
-            .and_then(FlightMode::from_id)?;
-        Some(Self {
-            written_ms,
-            armed: flags & 1 != 0,
-            in_air: flags & 2 != 0,
-            failsafe: flags & 4 != 0,
-            mode,
-            hover_throttle: f32::from_bits(hover),
-            attitude: [w, x, y, z].map(f32::from_bits),
-            gyro_bias_radps: [bx, by, bz].map(f32::from_bits),
-        })
-    }
 }
 
 impl Fault {

@@ -1,4 +1,5 @@
 use super::*;
+use crate::outputs::Command;
 use crate::pipeline::ImuSample;
 use crate::supervisor::Sticks;
 use telemetry::channels::ChannelFormat;

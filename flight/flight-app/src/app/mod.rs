@@ -23,7 +23,6 @@ mod console;
 mod device;
 mod gps;
 mod health;
-mod imu;
 mod link;
 pub mod link_task;
 mod loop_side;
@@ -41,6 +40,9 @@ mod phrase_tests;
 #[cfg(test)]
 mod tests;
 
+pub use crate::loop_side::imu::{
+    CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
+};
 pub use baro::{BARO_FAILED_AFTER, BARO_HEALTHY_AFTER, BARO_RETRY_MS, BaroChange, BaroHealth};
 pub use device::{DEVICE_NAME, Note as DeviceNote, tree as device_tree};
 pub use gps::{
@@ -48,13 +50,10 @@ pub use gps::{
     gps_message, home_message,
 };
 pub use health::{BootFacts, HEALTH_COUNTERS_PERIOD_US, Leds};
-pub use imu::{
-    CLEAR_SAMPLES, FROZEN_SAMPLES, ImuFault, ImuHealth, REPROBE_PERIOD_MS, STALL_RIDE_THROUGH_MS,
-};
 pub use link::{
     BIND_WINDOW_US, BindError, BindReport, BindRequest, FAILSAFE_US, LinkStep, REPORT_PERIOD_US,
 };
-pub use loop_side::{EstimatorStatus, LoopHealth, LoopInputs, LoopReport, LoopSide};
+pub use loop_side::{EstimatorStatus, ImuStep, LoopHealth, LoopInputs, LoopReport, LoopSide};
 pub use magcal::{MagcalSession, calibration as mag_calibration};
 pub use openlrs::{
     OPENLRS_FAILSAFE_DELAY, OPENLRS_RATE_CODE_BASE, openlrs_bind_window, run_openlrs_receiver,
@@ -69,7 +68,6 @@ use crate::alerts::TonePlayer;
 use crate::battery::{BatteryMonitor, BatteryStatus};
 use crate::control::design::AxisDesign;
 use crate::logging::{Entry, Profile, Recorder};
-use crate::outputs::Command;
 use crate::pipeline::{
     ClimbRate, Controllers, FlightSetup, LinkInput, LoopOutput, SetupError, announce_battery,
     from_settings, loop_alerts,
@@ -78,15 +76,6 @@ use crate::report::blocker_bit;
 use crate::settings::{LoadProblem, Settings};
 use crate::supervisor::{ArmBlocker, Decision};
 use crate::sysid::ekf::Identification;
-
-/// What the IMU adapter does after a sample (or a missing one).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImuStep {
-    /// Commands for motors 1–4, to apply now.
-    pub motors: [Command; 4],
-    /// Re-initialise the sensor (it is faulted).
-    pub reprobe: bool,
-}
 
 /// The flight application.
 pub struct FlightApp {
