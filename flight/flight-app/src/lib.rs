@@ -13,6 +13,7 @@
 
 pub mod app;
 pub mod authority;
+pub mod gains;
 pub mod logging;
 pub mod report;
 pub mod sensors;

@@ -153,7 +153,7 @@ impl FlightApp {
     pub fn new(stored: Settings, now_ms: u32) -> Option<Self> {
         let (setup, setup_error) = setup_for(&stored);
         let setup = setup?;
-        let controllers = Controllers::design(&setup.control).ok();
+        let controllers = crate::gains::design(&setup.control).ok();
         let flown = if setup_error.is_some() {
             Settings::default()
         } else {

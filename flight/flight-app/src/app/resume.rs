@@ -32,7 +32,7 @@ use crate::control::design::AxisDesign;
 pub use crate::loop_side::STATE_REFRESH_MS;
 pub use crate::pipeline::flight_state::{FlightState, STATE_WORDS};
 use crate::pipeline::flight_state::{open, seal};
-use crate::pipeline::{Controllers, from_settings};
+use crate::pipeline::from_settings;
 use crate::settings::{RECORD_MAX, Settings, decode_record, record};
 
 use super::FlightApp;
@@ -287,7 +287,7 @@ impl FlightApp {
     /// (`Supervisor::resume`). `None` if the record's settings make no setup.
     pub fn resume(stored: Settings, resume: &Resume, now_ms: u32) -> Option<Self> {
         let setup = from_settings(&resume.settings).ok()?;
-        let controllers = Controllers::from_designs(&setup.control, resume.designs);
+        let controllers = crate::gains::rebuild(&setup.control, resume.designs);
         let mut app = Self::with_setup(
             stored,
             resume.settings.clone(),

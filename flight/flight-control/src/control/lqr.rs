@@ -83,6 +83,7 @@ impl FoldedLaw {
     /// (u = k_θ·(θ_err − Σ Ts·ω̂ⱼ) − k_ω·ω̂ₐ − k_ν·ν̂ₐ + b̂), ω̂ₐ and ν̂ₐ predicted `delay` periods
     /// ahead under the pending outputs. Folded in f64 from the flight (f32) values.
     #[allow(clippy::cast_possible_truncation)] // f64 folding → f32 flight coefficients
+    #[inline] // run-once: compiled where the controllers are built (see `LqgAxis::new`)
     fn new(gains: &[f32], m: &EstimatorMatrices<f32>, ts_s: f32, delay: usize) -> Self {
         let f = f64::from;
         let (a, e, b_rate, b_torque) = (f(m.a_rate_torque), f(m.e), f(m.b_rate), f(m.b_torque));
@@ -151,6 +152,11 @@ impl FoldedLaw {
 
 impl LqgAxis {
     /// Builds the controller from an f64 design for `model` at loop period `ts_s`.
+    ///
+    /// Run once per design, never in the loop: `#[inline]` (like the folding and
+    /// [`Self::with_output_delay`]) so it is compiled in the crate that builds the
+    /// controllers, built for size (`flight-app`), not in this one, built for speed.
+    #[inline]
     pub fn new(model: &AxisModel, ts_s: f32, design: &AxisDesign, bias_limit: f32) -> Self {
         let kf = Rtkf::new(
             EstimatorMatrices::new(model, ts_s),
@@ -174,6 +180,7 @@ impl LqgAxis {
     }
 
     /// Folds the gains and the look-ahead for the current delay into the per-loop laws.
+    #[inline]
     fn fold_laws(&mut self) {
         let m = self.kf.model();
         let d = self.output_delay_samples;
@@ -200,6 +207,7 @@ impl LqgAxis {
     /// present, up to 1.65 %); told 1 with 0 present, 0.003–0.36 % overshoot and a 2–4 ms
     /// slower rise. Attitude steps change by ≤ 0.002 %. So when the path's delay is
     /// uncertain, round it up.
+    #[inline]
     pub fn with_output_delay(mut self, samples: u8) -> Self {
         self.output_delay_samples = usize::from(samples.min(3));
         self.fold_laws();

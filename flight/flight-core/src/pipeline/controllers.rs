@@ -47,7 +47,13 @@ const BIAS_LIMIT: f32 = 0.3;
 
 impl Controllers {
     /// Solves the three axes' LQG gains and builds the PIDs.
+    #[inline] // see `from_designs`
     pub fn design(p: &ControlParams) -> Result<Self, DesignError> {
+        Ok(Self::from_designs(p, Self::solve(p)?))
+    }
+
+    /// The three axes' Riccati solutions (roll, pitch, yaw) for `p`.
+    pub fn solve(p: &ControlParams) -> Result<[AxisDesign; 3], DesignError> {
         let ts = f64::from(p.ts_s);
         let mut designs = [None; 3];
         for (((slot, model), rate), attitude) in designs
@@ -61,12 +67,17 @@ impl Controllers {
         let [Some(roll), Some(pitch), Some(yaw)] = designs else {
             return Err(DesignError::BadCost);
         };
-        Ok(Self::from_designs(p, [roll, pitch, yaw]))
+        Ok([roll, pitch, yaw])
     }
 
     /// The controllers `p` and the axes' Riccati solutions `designs` make (as
     /// [`Controllers::design`] found them): no solve, a few thousand instructions. A
     /// resumed flight rebuilds its gains this way (`app::resume`).
+    ///
+    /// Run once per design, never in the loop: `#[inline]` (with the LQG axes'
+    /// constructors) so it is compiled in the crate that calls it — the application's
+    /// `flight_app::gains`, built for size — rather than in this crate, built for speed.
+    #[inline]
     pub fn from_designs(p: &ControlParams, designs: [AxisDesign; 3]) -> Self {
         let [mr, mp, my] = p.models;
         let [dr, dp, dy] = designs;

@@ -6,7 +6,8 @@
 
 use defmt::{info, warn};
 use embassy_time::{Duration, Timer};
-use flight_app::pipeline::{Controllers, from_settings};
+use flight_app::gains;
+use flight_app::pipeline::from_settings;
 
 use crate::firmware::shared::with_app;
 
@@ -25,7 +26,7 @@ pub async fn gains_task() {
                 continue;
             }
         };
-        match Controllers::design(&setup.control) {
+        match gains::design(&setup.control) {
             Ok(c) => {
                 with_app(|a| a.on_designed(setup, c));
                 info!("gains solved");
