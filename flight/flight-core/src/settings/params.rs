@@ -62,6 +62,10 @@ pub trait ParamText {
 }
 
 impl ParamText for Param {
+    // Console text only, never the loop: `#[inline]` (with `Settings::set_text` and
+    // `set_text_pairs`, its only callers) so it is compiled where the console is, in
+    // `flight-app` (built for size), rather than in this crate, built for speed.
+    #[inline]
     fn parse(&self, text: &str) -> Result<Value, ParamError> {
         let value = match self.kind {
             Kind::F32 { .. } => Value::F32(decimal::parse(text).ok_or(ParamError::Unparsable)?),
@@ -161,6 +165,7 @@ impl Settings {
     }
 
     /// Changes a value given as console text.
+    #[inline] // see `ParamText::parse`
     pub fn set_text(&mut self, name: &str, text: &str) -> Result<(), ParamError> {
         let (_, p) = find(name).ok_or(ParamError::Unknown)?;
         let value = p.parse(text)?;
@@ -169,6 +174,7 @@ impl Settings {
 
     /// Changes up to [`MAX_PAIRS`] values given as console text, `NAME VALUE NAME VALUE …`,
     /// together (see [`Settings::apply`]).
+    #[inline] // see `ParamText::parse`
     pub fn set_text_pairs(&mut self, text: &str) -> Result<(), ParamError> {
         let mut changes: heapless::Vec<Change, MAX_PAIRS> = heapless::Vec::new();
         let mut words = text.split_ascii_whitespace();
