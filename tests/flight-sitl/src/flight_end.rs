@@ -18,8 +18,9 @@ use flight_app::app::resume::{
     self, FAULT_WORDS, FEED_WORDS, FaultReason, GAINS_WORDS, Kept, ResetCause, Resume, STATE_WORDS,
 };
 use flight_app::app::{FEED_PERIOD_MS, FlightApp, ImuFault, ImuStep, LoopSide, Task};
+use flight_app::gains;
 use flight_app::pipeline::ImuSample;
-use flight_app::pipeline::{Controllers, from_settings};
+use flight_app::pipeline::from_settings;
 use openlrs::dual::DualRadio;
 use openlrs::radio::Clock;
 use radio_rfm22b::{NoPin, Rfm22b, TxPower};
@@ -293,7 +294,7 @@ async fn gains_task(app: Rc<RefCell<FlightApp>>, time: VirtualTime, shared: &Sha
         let Ok(setup) = from_settings(&settings) else {
             continue;
         };
-        let designed = Controllers::design(&setup.control);
+        let designed = gains::design(&setup.control);
         occupy(shared, &time, DESIGN_US, Holds::Thread).await;
         if let Ok(c) = designed {
             app.borrow_mut().on_designed(setup, c);

@@ -7,7 +7,7 @@
 //!   the loop at least every [`STATE_REFRESH_MS`];
 //! - the **gains** ([`GAINS_WORDS`]): the live settings (the flash record's encoding) and the
 //!   three axes' Riccati solutions, written whenever the loop gets new ones — a resume
-//!   rebuilds the controllers from them (`Controllers::from_designs`), no design;
+//!   rebuilds the controllers from them (`crate::gains::rebuild`), no design;
 //! - the **fault** ([`FAULT_WORDS`]): what the panic or HardFault handler adds before its
 //!   reset — the reason, the time, the faulting address;
 //! - the **feed** ([`FEED_WORDS`]): the time of the supervisor's last watchdog feed.
