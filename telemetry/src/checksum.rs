@@ -14,13 +14,15 @@
 //! for anything else that wants CRC-16/CCITT; [`link_crc16`] and [`keyed_crc16`] are the
 //! air frames'.
 
-use crc::{CRC_16_CMS, CRC_16_IBM_3740, Crc};
+use crc::{CRC_16_CMS, CRC_16_IBM_3740, Crc, NoTable};
 
 /// The link algorithm.
 pub const LINK_CRC: Crc<u16> = Crc::<u16>::new(&CRC_16_CMS);
 /// The Si4432's CRC-16/CCITT as the packet handler computes it (0x30 crc = 00, init 0xFFFF;
-/// IBM-3740 is the catalogue name of CCITT-FALSE).
-pub const CHIP_CRC: Crc<u16> = Crc::<u16>::new(&CRC_16_IBM_3740);
+/// IBM-3740 is the catalogue name of CCITT-FALSE). Bit by bit, without the 512-byte table:
+/// no image computes it per air frame (the chip does), only over flash pages (the flight
+/// log's) and in the simulators.
+pub const CHIP_CRC: Crc<u16, NoTable> = Crc::<u16, NoTable>::new(&CRC_16_IBM_3740);
 
 /// Link CRC (CRC-16/CMS) of `bytes`.
 pub fn link_crc16(bytes: &[u8]) -> u16 {
