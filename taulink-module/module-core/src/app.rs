@@ -22,7 +22,6 @@ use crate::ppm::{self, Decoded, Decoder, DecoderConfig, Encoder, EncoderConfig};
 use crate::session::{BindOutcome, LinkStep, Session, SessionEnd};
 use crate::settings::{InputProtocol, Role, Settings};
 use crate::status::LinkState;
-use heapless::Deque;
 use taulink_handset::crsf::address;
 use taulink_handset::crsf::params::ParameterChunk;
 use telemetry::change_auth::ChangeKey;
@@ -45,6 +44,24 @@ pub enum Action {
     Led(LinkState),
     /// Persist these settings.
     Save(Settings),
+}
+
+/// The actions waiting for [`App::take_action`], one slot per kind: a request can never be
+/// lost to a full queue, and repeats coalesce — only the newest LED state matters, and a save
+/// writes the settings as they are when it is taken (so no change made after it is lost).
+#[derive(Debug, Default)]
+struct Outbox {
+    led: Option<LinkState>,
+    save: bool,
+}
+
+impl Outbox {
+    fn put(&mut self, action: Action) {
+        match action {
+            Action::Led(state) => self.led = Some(state),
+            Action::Save(_) => self.save = true,
+        }
+    }
 }
 
 /// The module's supply (the radio battery on JR pin 3) counts as low below this: 1.1 V per
@@ -90,8 +107,8 @@ pub struct App<L: LinkPort, H: HandsetOutput> {
     /// The module's supply is below [`MODULE_BATTERY_LOW_MV`] (until it recovers by the
     /// hysteresis).
     battery_low: bool,
-    /// Actions from the JR line (a save, a bind's LED) for [`App::take_action`].
-    actions: Deque<Action, 4>,
+    /// What the JR line asked of the firmware, for [`App::take_action`].
+    actions: Outbox,
     /// The radio model the running link step's identity was built for (model match).
     link_model: Option<u8>,
     /// The chip's unique ID (for the factory PIN), once the HM-10 script asked for it.
@@ -145,7 +162,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             commands: Commands::default(),
             restart_request: false,
             battery_low: false,
-            actions: Deque::new(),
+            actions: Outbox::default(),
             link_model: None,
             unique_id: None,
             entropy: Entropy::new([0; 32]),
@@ -229,7 +246,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         }
         self.settings.phrase_prs = Some(secret.prs);
         self.commands.phrase_note = Some(PhraseNote::Set);
-        let _ = self.actions.push_back(Action::Save(self.settings));
+        self.actions.save = true;
         false
     }
 
@@ -578,7 +595,11 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
     /// The next thing the firmware must do that a JR-line request caused (save the settings,
     /// show the binding LED); call after the `on_handset_*` methods until `None`.
     pub fn take_action(&mut self) -> Option<Action> {
-        self.actions.pop_front()
+        if let Some(state) = self.actions.led.take() {
+            return Some(Action::Led(state));
+        }
+        // The settings as they are when the firmware asks: a later change is in the save.
+        core::mem::take(&mut self.actions.save).then_some(Action::Save(self.settings))
     }
 
     /// The radio's parameter commands' state.
@@ -688,11 +709,11 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
                 // As a long press: a deliberate act of the pilot in the radio's menu.
                 // A bind already under way (a long press) carries this one.
                 if let Some(action) = self.on_button(ButtonEvent::LongPress) {
-                    let _ = self.actions.push_back(action);
+                    self.actions.put(action);
                 }
             }
             Effect::Save => {
-                let _ = self.actions.push_back(Action::Save(self.settings));
+                self.actions.save = true;
             }
             Effect::None | Effect::CommandStatus | Effect::DerivePhrase => {}
         }

@@ -928,3 +928,52 @@ fn tag_failures_show_on_the_radio_and_reach_the_phone_with_the_alert() {
         "{told:?}"
     );
 }
+
+/// Issue 36: the pilot saves faster than the firmware takes actions (eight changes, each
+/// saved, and a bind started, before the app task runs). No request is dropped: the LED
+/// shows the bind, and the one save carries the last change — a four-deep queue used to keep
+/// the first four saves and drop the rest, the last change with them.
+#[test]
+fn a_save_is_never_lost_when_requests_pile_up() {
+    let mut app = app(Settings::default());
+    let _ = app.on_radio_present(true);
+    while app.take_action().is_some() {}
+    for power in 0..8u8 {
+        radio_writes(&mut app, params::TX_POWER, &[power]);
+        radio_writes(
+            &mut app,
+            params::SAVE,
+            &[taulink_handset::crsf::params::CommandStatus::Start as u8],
+        );
+        radio_writes(
+            &mut app,
+            params::SAVE,
+            &[taulink_handset::crsf::params::CommandStatus::Confirm as u8],
+        );
+        if power == 5 {
+            radio_writes(
+                &mut app,
+                params::BIND,
+                &[taulink_handset::crsf::params::CommandStatus::Start as u8],
+            );
+        }
+    }
+    let mut actions = Vec::new();
+    while let Some(action) = app.take_action() {
+        actions.push(action);
+    }
+    let saves: Vec<Settings> = actions
+        .iter()
+        .filter_map(|a| match a {
+            Action::Save(s) => Some(*s),
+            Action::Led(_) => None,
+        })
+        .collect();
+    assert_eq!(saves.len(), 1, "{actions:?}");
+    assert_eq!(saves[0].tx_power, 7, "the last change is in the save");
+    assert!(
+        actions.contains(&Action::Led(LinkState::Binding)),
+        "{actions:?}"
+    );
+    assert_eq!(app.take_action(), None);
+}

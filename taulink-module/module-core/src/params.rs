@@ -1,7 +1,9 @@
 //! The module's settings as CRSF parameters, as the radio's device tool (the ExpressLRS Lua
 //! script EdgeTX users run for any CRSF module) lists and changes them; the wire format is
-//! `taulink_handset::crsf::params`. This module owns the table: numbers, names, options,
-//! what a write changes and which changes restart the link.
+//! `taulink_handset::crsf::params`. This module owns the numbering, the rows that are no
+//! setting (folders, commands, what the module reports) and what a write asks of the core;
+//! a setting's row — label, options, folder, the effect of a change — is its row of
+//! `crate::settings::table`, and reads and writes of those rows are one loop over it.
 //!
 //! Changes apply at once to the settings in RAM; the **Save** command persists them (after a
 //! confirmation). Packet rate, telemetry ratio and band restart the link (the session ends
@@ -40,12 +42,8 @@ use heapless::{String, Vec};
 use taulink_handset::crsf::params::{CommandStatus, Entry, MAX_ENTRY_LEN};
 
 use crate::phrase::{self, HANDSET_PHRASE_MAX, PhraseNote};
-use crate::ppm::FailsafeOutput;
-use crate::settings::openlrs::{CHANNEL_MODES, DEFAULT_CHANNEL_MODE, DEFAULT_PROFILE};
-use crate::settings::{
-    Band, DEFAULT_INPUT_TIMEOUT_MS, DEFAULT_TELEMETRY_RATIO, INPUT_TIMEOUT_MS, InputProtocol,
-    LinkProtocol, OutputProtocol, RateMode, Settings, TELEMETRY_RATIOS,
-};
+use crate::settings::table::{self, Crsf, OnChange, Options, Row};
+use crate::settings::{InputProtocol, Settings};
 
 /// Packet rate (the link's rate modes).
 pub const PACKET_RATE: u8 = 1;
@@ -157,36 +155,6 @@ pub enum Effect {
     DerivePhrase,
 }
 
-/// The name the radio shows for a rate mode, with its packet rate.
-fn rate_label(rate: RateMode) -> &'static str {
-    match rate {
-        RateMode::L50 => "L50 (50 Hz)",
-        RateMode::M100 => "M100 (100 Hz)",
-        RateMode::F250 => "F250 (250 Hz)",
-        RateMode::F500 => "F500 (500 Hz)",
-        RateMode::F700 => "F700 (700 Hz)",
-    }
-}
-
-/// The RFM22B's eight power steps (`radio_rfm22b::TxPower`): nominal dBm and mW.
-const TX_POWER_LABELS: [&str; 8] = [
-    "1dBm 1mW",
-    "2dBm 2mW",
-    "5dBm 3mW",
-    "8dBm 6mW",
-    "11dBm 13mW",
-    "14dBm 25mW",
-    "17dBm 50mW",
-    "20dBm 100mW",
-];
-
-/// Band options, in `Band` order, with their legal meaning.
-const BAND_LABELS: [&str; 4] = ["433 HAM licence", "868 EU SRD", "915 US ISM", "433 ISM LPD"];
-const INPUT_LABELS: [&str; 4] = ["PPM", "CRSF 400k", "CRSF 115k", "CRSF 921k"];
-const OUTPUT_LABELS: [&str; 4] = ["Off", "CRSF", "S.Port", "FrSky D"];
-const FAILSAFE_LABELS: [&str; 2] = ["Hold last", "Stop pulses"];
-const OFF_ON_LABELS: [&str; 2] = ["Off", "On"];
-
 /// The "Model" row: with model match on, the radio's model ID and whether a receiver was
 /// bound under it ("mismatch": none was, so nothing answers until one is bound).
 fn model_text(settings: &Settings, commands: &Commands) -> Option<String<24>> {
@@ -199,21 +167,7 @@ fn model_text(settings: &Settings, commands: &Commands) -> Option<String<24>> {
     }
     Some(text)
 }
-/// Protocol options, in `LinkProtocol` order: the OpenLRSng ones say they are unauthenticated.
-const PROTOCOL_LABELS: [&str; 3] = ["TauLink", "OLRSng3.8 (no auth)", "OLRSng3.9 (no auth)"];
-/// OpenLRSng's modem profiles.
-const OPENLRS_RATE_LABELS: [&str; 5] = ["4800bps", "9600bps", "19k2bps", "57k6bps", "125kbps"];
-/// OpenLRSng's channel modes 1..6.
-const OPENLRS_CHANNEL_LABELS: [&str; 6] = ["4+4", "8", "8+4", "12", "12+4", "16"];
-
-fn ratio_index(ratio: u8) -> u8 {
-    TELEMETRY_RATIOS
-        .iter()
-        .position(|r| *r == ratio)
-        .and_then(|i| u8::try_from(i).ok())
-        .unwrap_or(0)
-}
-
+/// `base`, or "(link restarted)" on the row whose change last restarted the link.
 fn unit(commands: &Commands, number: u8, base: &'static str) -> &'static str {
     if commands.restarted_by == Some(number) {
         RESTARTED
@@ -228,86 +182,56 @@ pub fn entry(
     settings: &Settings,
     commands: &Commands,
 ) -> Option<Vec<u8, MAX_ENTRY_LEN>> {
+    let entry = match table::by_crsf(number) {
+        Some((row, crsf)) => setting_entry(row, crsf, settings, commands),
+        None => other_entry(number, settings, commands)?,
+    };
+    entry.finish().ok()
+}
+
+/// A setting's row as the radio shows it ([`table::ROWS`]).
+fn setting_entry(row: &Row, crsf: Crsf, settings: &Settings, commands: &Commands) -> Entry {
+    let (value, default) = ((row.get)(settings), row.default);
+    let unit = match row.on_change {
+        OnChange::RestartLink | OnChange::OpenLrs => unit(commands, crsf.number, ""),
+        OnChange::PowerUp => ON_POWER_UP,
+        OnChange::InputTimeout | OnChange::PpmFailsafe => "",
+    };
+    let (folder, label) = (crsf.folder, crsf.label);
+    match crsf.options {
+        Options::Labels(labels) => {
+            let index = |v: u32| u8::try_from(v).unwrap_or(0);
+            Entry::selection(folder, label, labels, index(value), index(default), unit)
+        }
+        Options::Values(labels, values) => {
+            let index = |v: u32| {
+                let i = values.iter().position(|x| u32::from(*x) == v);
+                i.and_then(|i| u8::try_from(i).ok()).unwrap_or(0)
+            };
+            Entry::selection(folder, label, labels, index(value), index(default), unit)
+        }
+        Options::Uint16(unit) => {
+            let number = |v: u32| u16::try_from(v).unwrap_or(0);
+            let (min, max) = (number(row.min), number(row.max));
+            Entry::uint16(
+                folder,
+                label,
+                number(value),
+                min,
+                max,
+                number(default),
+                unit,
+            )
+        }
+    }
+}
+
+/// The rows that are no setting: folders, commands and what the module reports.
+fn other_entry(number: u8, settings: &Settings, commands: &Commands) -> Option<Entry> {
     let entry = match number {
-        PACKET_RATE => {
-            let labels: Vec<&str, 8> = RateMode::ALL.iter().map(|r| rate_label(*r)).collect();
-            Entry::selection(
-                0,
-                "Packet Rate",
-                &labels,
-                settings.rate.code(),
-                RateMode::L50.code(),
-                unit(commands, number, ""),
-            )
-        }
-        TELEMETRY_RATIO => {
-            let mut texts: Vec<String<6>, 8> = Vec::new();
-            for ratio in TELEMETRY_RATIOS {
-                let mut text = String::new();
-                write!(text, "1:{ratio}").ok()?;
-                texts.push(text).ok()?;
-            }
-            let labels: Vec<&str, 8> = texts.iter().map(|t| t.as_str()).collect();
-            Entry::selection(
-                0,
-                "Telem Ratio",
-                &labels,
-                ratio_index(settings.telemetry_ratio),
-                ratio_index(DEFAULT_TELEMETRY_RATIO),
-                unit(commands, number, ""),
-            )
-        }
-        TX_POWER => Entry::selection(
-            0,
-            "TX Power",
-            &TX_POWER_LABELS,
-            settings.tx_power,
-            7,
-            ON_POWER_UP,
-        ),
-        BAND => Entry::selection(
-            0,
-            "Band",
-            &BAND_LABELS,
-            Band::code(settings.band),
-            0,
-            unit(commands, number, ""),
-        ),
         HANDSET_FOLDER => Entry::folder(0, "Handset"),
-        INPUT => Entry::selection(
-            HANDSET_FOLDER,
-            "Input",
-            &INPUT_LABELS,
-            settings.input as u8,
-            0,
-            ON_POWER_UP,
-        ),
-        TELEMETRY_OUTPUT => Entry::selection(
-            HANDSET_FOLDER,
-            "Telem Output",
-            &OUTPUT_LABELS,
-            settings.output as u8,
-            OutputProtocol::SPort as u8,
-            ON_POWER_UP,
-        ),
-        INPUT_TIMEOUT => Entry::uint16(
-            HANDSET_FOLDER,
-            "Input Timeout",
-            settings.input_timeout_ms,
-            *INPUT_TIMEOUT_MS.start(),
-            *INPUT_TIMEOUT_MS.end(),
-            DEFAULT_INPUT_TIMEOUT_MS,
-            "ms",
-        ),
         RECEIVER_FOLDER => Entry::folder(0, "Receiver Role"),
-        PPM_FAILSAFE => Entry::selection(
-            RECEIVER_FOLDER,
-            "PPM Failsafe",
-            &FAILSAFE_LABELS,
-            settings.failsafe as u8,
-            FailsafeOutput::StopPulses as u8,
-            "",
-        ),
+        OPENLRS_FOLDER => Entry::folder(0, "OpenLRSng"),
         BIND => {
             let (status, info) = match (commands.binding, commands.bind_result) {
                 (true, _) => (CommandStatus::Progress, "Binding"),
@@ -331,72 +255,11 @@ pub fn entry(
             };
             Entry::command(0, "Save", status, POLL_10MS, info)
         }
-        MODEL_MATCH => Entry::selection(
-            0,
-            "Model Match",
-            &OFF_ON_LABELS,
-            u8::from(settings.model_match),
-            0,
-            unit(commands, number, ""),
-        ),
         MODEL => Entry::info(0, "Model", &model_text(settings, commands)?),
-        PROTOCOL => Entry::selection(
-            0,
-            "Protocol",
-            &PROTOCOL_LABELS,
-            settings.protocol.code(),
-            LinkProtocol::TauLink.code(),
-            unit(commands, number, ""),
-        ),
-        OPENLRS_FOLDER => Entry::folder(0, "OpenLRSng"),
-        OPENLRS_RATE => Entry::selection(
-            OPENLRS_FOLDER,
-            "OLRS Rate",
-            &OPENLRS_RATE_LABELS,
-            settings.openlrs.profile,
-            DEFAULT_PROFILE,
-            unit(commands, number, ""),
-        ),
-        OPENLRS_CHANNELS => Entry::selection(
-            OPENLRS_FOLDER,
-            "OLRS Channels",
-            &OPENLRS_CHANNEL_LABELS,
-            settings
-                .openlrs
-                .channel_mode
-                .saturating_sub(*CHANNEL_MODES.start()),
-            DEFAULT_CHANNEL_MODE - CHANNEL_MODES.start(),
-            unit(commands, number, ""),
-        ),
-        OPENLRS_TELEMETRY => Entry::selection(
-            OPENLRS_FOLDER,
-            "OLRS Telem",
-            &OFF_ON_LABELS,
-            u8::from(settings.openlrs.telemetry),
-            1,
-            unit(commands, number, ""),
-        ),
         // The value is always empty: the phrase is not kept, and the radio's editor starts
         // from the value, so anything shown would have to be overwritten.
         BIND_PHRASE => Entry::string(0, "Bind Phrase", "", HANDSET_PHRASE_MAX),
-        LINK_KEY => {
-            let mut text: String<24> = String::new();
-            let key = crate::air::link_key(settings, model_of(settings, commands));
-            let phrase = if settings.phrase_prs.is_some() {
-                " +phrase"
-            } else {
-                " no phrase"
-            };
-            match (commands.phrase_note.and_then(PhraseNote::text), key) {
-                (Some(note), _) => text.push_str(note).ok()?,
-                (None, Some(key)) => write!(text, "{}{phrase}", key.fingerprint()).ok()?,
-                (None, None) if crate::air::link_params(settings).is_some() => {
-                    write!(text, "{UNAUTHENTICATED}{phrase}").ok()?
-                }
-                (None, None) => write!(text, "not bound{phrase}").ok()?,
-            }
-            Entry::info(0, "Link Key", &text)
-        }
+        LINK_KEY => Entry::info(0, "Link Key", &link_key_text(settings, commands)?),
         TAG_FAILS => {
             let mut text: String<24> = String::new();
             let t = commands.tag_failures;
@@ -420,75 +283,84 @@ pub fn entry(
         }
         _ => return None,
     };
-    entry.finish().ok()
+    Some(entry)
+}
+
+/// The "Link Key" row: the running key's fingerprint and whether a phrase is set, or what
+/// the last phrase write did.
+fn link_key_text(settings: &Settings, commands: &Commands) -> Option<String<24>> {
+    let mut text: String<24> = String::new();
+    let key = crate::air::link_key(settings, model_of(settings, commands));
+    let phrase = if settings.phrase_prs.is_some() {
+        " +phrase"
+    } else {
+        " no phrase"
+    };
+    match (commands.phrase_note.and_then(PhraseNote::text), key) {
+        (Some(note), _) => text.push_str(note).ok()?,
+        (None, Some(key)) => write!(text, "{}{phrase}", key.fingerprint()).ok()?,
+        (None, None) if crate::air::link_params(settings).is_some() => {
+            write!(text, "{UNAUTHENTICATED}{phrase}").ok()?
+        }
+        (None, None) => write!(text, "not bound{phrase}").ok()?,
+    }
+    Some(text)
 }
 
 /// Applies a write of `value` to parameter `number`; invalid values change nothing.
 pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut Commands) -> Effect {
-    let byte = value.first().copied();
     let before = *settings;
-    let effect = match (number, byte) {
-        (PACKET_RATE, Some(code)) => match RateMode::from_code(code) {
-            Some(rate) => {
-                settings.rate = rate;
-                Effect::RestartLink
-            }
-            None => Effect::None,
-        },
-        (TELEMETRY_RATIO, Some(index)) => match TELEMETRY_RATIOS.get(usize::from(index)) {
-            Some(ratio) => {
-                settings.telemetry_ratio = *ratio;
-                Effect::RestartLink
-            }
-            None => Effect::None,
-        },
-        (TX_POWER, Some(step @ 0..=7)) => {
-            settings.tx_power = step;
-            Effect::None
+    let effect = match table::by_crsf(number) {
+        Some((row, crsf)) => write_setting(row, crsf, value, settings),
+        None => write_other(number, value, commands),
+    };
+    if settings.validate().is_err() && before.validate().is_ok() {
+        // The change would make the set unusable (an OpenLRSng link outside the band plan):
+        // nothing changes. A set that was already unusable (a damaged record) stays
+        // editable, so the pilot can repair it from the radio.
+        *settings = before;
+        return Effect::None;
+    }
+    if effect == Effect::RestartLink {
+        if *settings == before {
+            // The same value again: the link keeps running.
+            return Effect::None;
         }
-        (BAND, Some(index)) => Band::from_code(index).map_or(Effect::None, |band| {
-            settings.band = band;
-            Effect::RestartLink
-        }),
-        (INPUT, Some(index)) => {
-            if let Some(input) = match index {
-                0 => Some(InputProtocol::Ppm),
-                1 => Some(InputProtocol::Crsf),
-                2 => Some(InputProtocol::Crsf115200),
-                3 => Some(InputProtocol::Crsf921600),
-                _ => None,
-            } {
-                settings.input = input;
-            }
-            Effect::None
+        commands.restarted_by = Some(number);
+    } else if number != BIND && number != SAVE && *settings != before {
+        commands.restarted_by = None;
+    }
+    effect
+}
+
+/// A write to a setting's row: a selection's index (one byte) or a 16-bit number (two,
+/// big-endian), within the row's options or range; anything else changes nothing.
+fn write_setting(row: &Row, crsf: Crsf, value: &[u8], settings: &mut Settings) -> Effect {
+    let chosen = match (crsf.options, value) {
+        (Options::Labels(labels), [index, ..]) if usize::from(*index) < labels.len() => {
+            Some(u32::from(*index))
         }
-        (TELEMETRY_OUTPUT, Some(index)) => {
-            if let Some(output) = match index {
-                0 => Some(OutputProtocol::Off),
-                1 => Some(OutputProtocol::Crsf),
-                2 => Some(OutputProtocol::SPort),
-                3 => Some(OutputProtocol::FrskyHub),
-                _ => None,
-            } {
-                settings.output = output;
-            }
-            Effect::None
+        (Options::Values(_, values), [index, ..]) => {
+            values.get(usize::from(*index)).map(|v| u32::from(*v))
         }
-        (INPUT_TIMEOUT, _) => match value {
-            [high, low] if INPUT_TIMEOUT_MS.contains(&u16::from_be_bytes([*high, *low])) => {
-                settings.input_timeout_ms = u16::from_be_bytes([*high, *low]);
-                Effect::InputTimeout
-            }
-            _ => Effect::None,
-        },
-        (PPM_FAILSAFE, Some(index @ 0..=1)) => {
-            settings.failsafe = if index == 0 {
-                FailsafeOutput::HoldLast
-            } else {
-                FailsafeOutput::StopPulses
-            };
-            Effect::PpmFailsafe
-        }
+        (Options::Uint16(_), [high, low]) => Some(u32::from(u16::from_be_bytes([*high, *low]))),
+        _ => None,
+    };
+    if !chosen.is_some_and(|v| row.assign(settings, v)) {
+        return Effect::None;
+    }
+    match row.on_change {
+        OnChange::RestartLink => Effect::RestartLink,
+        OnChange::OpenLrs => openlrs_change(settings),
+        OnChange::PowerUp => Effect::None,
+        OnChange::InputTimeout => Effect::InputTimeout,
+        OnChange::PpmFailsafe => Effect::PpmFailsafe,
+    }
+}
+
+/// A write to a command or the phrase's row.
+fn write_other(number: u8, value: &[u8], commands: &mut Commands) -> Effect {
+    match (number, value.first().copied()) {
         (BIND, Some(step)) => match CommandStatus::from_byte(step) {
             Some(CommandStatus::Start) if !commands.binding => {
                 commands.binding = true;
@@ -500,29 +372,6 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
             Some(_) => Effect::CommandStatus,
             None => Effect::None,
         },
-        (MODEL_MATCH, Some(on @ 0..=1)) => {
-            settings.model_match = on == 1;
-            Effect::RestartLink
-        }
-        (PROTOCOL, Some(code)) => match LinkProtocol::from_code(code) {
-            Some(protocol) => {
-                settings.protocol = protocol;
-                Effect::RestartLink
-            }
-            None => Effect::None,
-        },
-        (OPENLRS_RATE, Some(profile)) if usize::from(profile) < OPENLRS_RATE_LABELS.len() => {
-            settings.openlrs.profile = profile;
-            openlrs_change(settings)
-        }
-        (OPENLRS_CHANNELS, Some(index)) if usize::from(index) < OPENLRS_CHANNEL_LABELS.len() => {
-            settings.openlrs.channel_mode = CHANNEL_MODES.start() + index;
-            openlrs_change(settings)
-        }
-        (OPENLRS_TELEMETRY, Some(on @ 0..=1)) => {
-            settings.openlrs.telemetry = on == 1;
-            openlrs_change(settings)
-        }
         (BIND_PHRASE, Some(_)) => match phrase::phrase_from_write(value) {
             Ok(_) if commands.flight_armed => {
                 commands.phrase_note = Some(PhraseNote::Armed);
@@ -556,24 +405,7 @@ pub fn write(number: u8, value: &[u8], settings: &mut Settings, commands: &mut C
             None => Effect::None,
         },
         _ => Effect::None,
-    };
-    if settings.validate().is_err() && before.validate().is_ok() {
-        // The change would make the set unusable (an OpenLRSng link outside the band plan):
-        // nothing changes. A set that was already unusable (a damaged record) stays
-        // editable, so the pilot can repair it from the radio.
-        *settings = before;
-        return Effect::None;
     }
-    if effect == Effect::RestartLink {
-        if *settings == before {
-            // The same value again: the link keeps running.
-            return Effect::None;
-        }
-        commands.restarted_by = Some(number);
-    } else if number != BIND && number != SAVE && *settings != before {
-        commands.restarted_by = None;
-    }
-    effect
 }
 
 /// The radio model the module's link is mixed with (model match on, transmitter role).

@@ -1,6 +1,7 @@
 //! Tests of the CRSF parameter table: every row's entry, reads and writes, commands.
 
 use super::*;
+use crate::settings::{Band, LinkProtocol, RateMode};
 
 #[test]
 fn every_parameter_has_an_entry_and_no_more() {

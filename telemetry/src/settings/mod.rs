@@ -7,10 +7,13 @@
 //! words a person types (`link.protocol openlrs38`, `link.rate F500`) are spelt once here and
 //! read case-insensitively on every end.
 //!
+//! The module's settings are described with the same rows in [`module`].
+//!
 //! What the flight side does with a set (whether the whole set runs, its storage in flash,
 //! the binding phrase's key, which lives outside the table) is `flight_core::settings`.
 
 mod handle;
+pub mod module;
 mod table;
 
 pub use handle::{Bits, Change, Handle, ParamType};

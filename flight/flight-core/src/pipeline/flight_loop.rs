@@ -1,12 +1,16 @@
 //! One pass of the flight loop, run right after each gyro sample, in named stages:
-//! estimate → supervise → failsafe descent or setpoint → mix → output commands. The
-//! stateless parts of the setpoint and mix stages live in `stages`.
+//! estimate → supervise → guidance (link failsafe, hold mode or sticks) → controllers →
+//! mix → output commands. The failsafe's guidance lives in `failsafe`, the hold modes' and
+//! the sticks' in `guidance`, the stateless parts of the controller and mix stages in
+//! `stages`.
 
 use super::attitude::Attitude;
 use super::controllers::Controllers;
 use super::estimator::{Estimator, EstimatorMode, Source};
+use super::failsafe::{FailsafeGuidance, Situation};
 use super::flight_state::FlightState;
-use super::hold::{DescentHold, Hold, Horizontal, Nav};
+use super::guidance::{self, Guidance};
+use super::hold::{Hold, Nav};
 use super::identify::Sysid;
 use super::stages;
 use super::sticks::StickShaping;
@@ -30,10 +34,6 @@ const GYRO_LIMIT_DPS: f32 = 2200.0;
 const CLIMB_BLEND_S: f32 = 1.0;
 /// Time constant of the hover-throttle estimate (a low-pass of the flying throttle), s.
 const HOVER_LEARN_S: f32 = 2.0;
-/// On a link failsafe with a good GPS fix the frame holds its position and altitude this
-/// long (the pilot may walk back into range, the link may return), then descends in place
-/// at the failsafe rate, still holding the position. Without a fix: the descent at once.
-pub const FAILSAFE_HOLD_MS: u32 = 30_000;
 
 /// Fixed configuration of the loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -99,7 +99,8 @@ pub struct LoopOutput {
     pub mode_changed: bool,
     /// Motors may turn.
     pub armed: bool,
-    /// Link failsafe descent active (or its position hold, see [`FAILSAFE_HOLD_MS`]).
+    /// Link failsafe descent active (or its position hold, see
+    /// [`super::FAILSAFE_HOLD_MS`]).
     pub failsafe: bool,
     /// Estimated attitude: roll and pitch, deg; the yaw on demand ([`Attitude::yaw_deg`]).
     pub attitude: Attitude,
@@ -148,8 +149,6 @@ pub struct FlightLoop {
     /// Whether the accelerometer corrected the complementary filter on the latest sample
     /// (what the flight log records so a replay feeds the estimator the same inputs).
     accel_corrected: bool,
-    /// Integral of the failsafe descent-rate error (throttle units).
-    descent_integral: f32,
     /// Blended climb rate, m/s up.
     climb_mps: Option<f32>,
     /// The throttle has been raised since arming (cleared when disarmed).
@@ -164,18 +163,8 @@ pub struct FlightLoop {
     battery_critical: bool,
     /// Altitude/position hold loops (hold modes, failsafe hold).
     hold: Hold,
-    /// Whether the failsafe descent (with a fix) still holds the position.
-    descent_hold: DescentHold,
-    /// When the current link failsafe began, ms.
-    failsafe_since_ms: Option<u32>,
-    /// The touchdown detector had the frame in the air when the current failsafe began:
-    /// only then does a failsafe with a fix hold the altitude first (on the ground it
-    /// descends, i.e. stays, and disarms at once as without a fix).
-    failsafe_airborne: bool,
-    /// This loop the failsafe held the altitude (with a fix): the touchdown detector is held
-    /// off — a held altitude shows "not descending" by design, and the thrust against a
-    /// stale hover estimate (learnt in a climb) proves nothing.
-    failsafe_holds_altitude: bool,
+    /// The link failsafe's guidance and its state.
+    failsafe: FailsafeGuidance,
     /// The boot-time settings load had a problem not yet fixed by a save (arming refused).
     settings_problem: bool,
     /// The vertical estimate's sensor (the baro) was declared failed: the hold modes fall
@@ -201,7 +190,6 @@ impl FlightLoop {
             hover_throttle: 0.5,
             accel_phase: 0,
             accel_corrected: true,
-            descent_integral: 0.0,
             climb_mps: None,
             airborne: false,
             sysid: None,
@@ -209,10 +197,7 @@ impl FlightLoop {
             landing: LandingDetector::new(),
             battery_critical: false,
             hold: Hold::default(),
-            descent_hold: DescentHold::Idle,
-            failsafe_since_ms: None,
-            failsafe_airborne: false,
-            failsafe_holds_altitude: false,
+            failsafe: FailsafeGuidance::default(),
             settings_problem: false,
             vertical_lost: false,
             usb_connected: false,
@@ -256,8 +241,7 @@ impl FlightLoop {
         self.estimator.resume(state.attitude, state.gyro_bias_radps);
         self.airborne = true;
         self.landing.airborne();
-        self.failsafe_since_ms = Some(now_ms);
-        self.failsafe_airborne = true;
+        self.failsafe.resume(now_ms);
     }
 
     /// The baro was declared failed (`true`) or is healthy again: while it is failed the hold
@@ -438,13 +422,8 @@ impl FlightLoop {
         if self.mode != FlightMode::SystemId || failsafe.is_some() || !armed {
             self.finish_sysid();
         }
-        if failsafe.is_none() {
-            self.failsafe_since_ms = None;
-            self.failsafe_airborne = false;
-        } else if decision == Decision::FailsafeEntered || self.failsafe_since_ms.is_none() {
-            self.failsafe_since_ms = Some(now_ms);
-            self.failsafe_airborne = !self.landing.landed();
-        }
+        self.failsafe
+            .track(failsafe.is_some(), decision, now_ms, &self.landing);
         // The navigation estimate, only where a hold loop reads it.
         let nav = (self.mode.holds() || failsafe.is_some()).then(|| {
             let [[r11, r12, _], _, _] = r;
@@ -466,14 +445,12 @@ impl FlightLoop {
                 failsafe_descent_mps: failsafe,
                 climb_rate_mps,
                 nav,
-                failsafe_for_ms: self.failsafe_since_ms.map(|t| now_ms.wrapping_sub(t)),
-                failsafe_airborne: self.failsafe_airborne,
+                now_ms,
             };
             let sticks = stages::flown_sticks(&link.sticks, link.arm_switch.is_some());
             self.fly(&fly, &sticks)
         } else {
             self.hold.reset();
-            self.failsafe_holds_altitude = false;
             if let Some(c) = self.controllers.as_mut() {
                 self.airborne = false;
                 // On the ground nothing integrates.
@@ -568,7 +545,7 @@ impl FlightLoop {
         thrust: f32,
         failsafe_descent_mps: Option<f32>,
     ) {
-        if armed && self.failsafe_holds_altitude {
+        if armed && self.failsafe.holds_altitude() {
             self.landing.hold_off();
         } else if armed {
             self.landing.update(&LandingInputs {
@@ -585,115 +562,28 @@ impl FlightLoop {
         }
     }
 
-    /// Failsafe-descent stage, throttle part: PI on the climb rate around the hover value
-    /// (the attitude part levels the frame or holds the position, [`stages::angle_setpoint`]).
-    fn descent_throttle(
-        &mut self,
-        decision: Decision,
-        descent_mps: f32,
-        climb_rate_mps: Option<f32>,
-    ) -> f32 {
-        if decision == Decision::FailsafeEntered {
-            self.descent_integral = 0.0;
-        }
-        let throttle = match climb_rate_mps {
-            // PI on the climb rate around the hover value: 0.1 throttle per m/s and 0.2 per
-            // metre of accumulated error. With ≈ 60 m/s² per unit throttle (a 2:1
-            // thrust-to-weight frame) the loop has ωn ≈ 3.5 rad/s, ζ ≈ 0.9; the integral
-            // absorbs a wrong hover estimate (±0.2).
-            Some(climb) => {
-                let error = -descent_mps - climb;
-                self.descent_integral =
-                    (self.descent_integral + 0.2 * error * self.config.ts_s).clamp(-0.2, 0.2);
-                self.hover_throttle + 0.1 * error + self.descent_integral
-            }
-            None => self.hover_throttle * 0.9,
-        };
-        throttle.clamp(0.0, 1.0)
-    }
-
-    /// Armed with a plausible gyro: failsafe descent or the pilot's setpoint, then the mix.
-    /// Returns the motor commands and the collective throttle they carry.
+    /// Armed with a plausible gyro: the guidance (the link failsafe's, else a hold mode's,
+    /// else the pilot's sticks), then the controllers, then the mix. Returns the motor
+    /// commands and the collective throttle they carry.
+    #[inline(always)]
     fn fly(&mut self, fly: &Fly, sticks: &Sticks) -> ([Command; 4], f32) {
-        self.failsafe_holds_altitude = false;
         if self.controllers.is_none() {
             return ([Command::Stopped; 4], 0.0);
         }
-        if matches!(
-            fly.decision,
-            Decision::Armed | Decision::FailsafeEntered | Decision::Resumed
-        ) || fly.mode_changed
-        {
-            self.hold.reset();
-        }
-        let ts = self.config.ts_s;
-        let hover = self.hover_throttle;
-        // Failsafe with a good fix: hold the position, and the altitude for the first
-        // FAILSAFE_HOLD_MS, then descend in place. Without a fix: level and descend.
-        let fix_nav = fly.nav.filter(|n| n.horizontal.is_some());
-        let holding =
-            fly.failsafe_airborne && fly.failsafe_for_ms.is_some_and(|t| t < FAILSAFE_HOLD_MS);
-        // In the descent the position is held until the frame stops descending (the
-        // ground; `DescentHold`).
-        self.descent_hold = match (fly.failsafe_descent_mps, fly.failsafe_for_ms) {
-            (Some(d), Some(t)) if !holding => {
-                let descending = fly
-                    .climb_rate_mps
-                    .is_some_and(|c| c < -crate::supervisor::landed_climb_limit(d));
-                self.descent_hold.update(descending, t)
-            }
-            _ => DescentHold::Idle,
-        };
-        let failsafe_angles = match (fly.failsafe_descent_mps, fix_nav) {
-            (Some(_), Some(nav)) if self.descent_hold.holds() => {
-                self.hold
-                    .angles(Horizontal::PositionHold, [0.0; 2], &nav, ts)
-            }
-            _ => None,
-        };
-        let descent = match (fly.failsafe_descent_mps, fix_nav) {
-            (Some(_), Some(nav)) if holding => Some(self.hold.throttle(0.5, &nav, hover, ts)),
-            (Some(d), _) => Some(self.descent_throttle(fly.decision, d, fly.climb_rate_mps)),
-            (None, _) => None,
-        };
-        self.failsafe_holds_altitude =
-            holding && fly.failsafe_descent_mps.is_some() && fix_nav.is_some();
-        // The hold modes' throttle and angles (the sticks' when their loops cannot fly).
-        let hold_out = match (descent, fly.nav) {
-            (None, Some(nav)) if self.mode.holds() => {
-                let throttle = self.hold.throttle(sticks.throttle, &nav, hover, ts);
-                let horizontal = match self.mode {
-                    FlightMode::PositionHold => Some(Horizontal::PositionHold),
-                    FlightMode::Loiter => Some(Horizontal::Loiter),
-                    _ => None,
-                };
-                let angles = horizontal
-                    .and_then(|h| self.hold.angles(h, [sticks.roll, sticks.pitch], &nav, ts));
-                Some((throttle, angles))
-            }
-            _ => None,
-        };
+        let guidance = self.guidance(fly, sticks);
         let Some(c) = self.controllers.as_mut() else {
             return ([Command::Stopped; 4], 0.0);
         };
         let gyro_dps = fly.gyro_dps;
-        if matches!(
-            fly.decision,
-            Decision::Armed | Decision::ControlRecovered | Decision::Resumed
-        ) || fly.mode_changed
-        {
+        if fly.restarts_controllers() {
             c.reset(gyro_dps);
         }
-        let (throttle, attitude_out, shaking) = match descent {
-            Some(throttle) => (
-                throttle,
-                c.lqg(
-                    gyro_dps,
-                    stages::angle_setpoint(failsafe_angles.unwrap_or([0.0; 2]), fly.attitude_deg),
-                ),
-                false,
-            ),
-            None => {
+        let (attitude, shaking) = match guidance {
+            Guidance::Failsafe { angles_deg, .. } => {
+                let setpoint = stages::angle_setpoint(angles_deg, fly.attitude_deg);
+                (c.lqg(gyro_dps, setpoint), false)
+            }
+            Guidance::Hold { .. } | Guidance::Sticks => {
                 let (out, shaking) = stages::setpoint(
                     c,
                     &mut self.sysid,
@@ -702,58 +592,64 @@ impl FlightLoop {
                     sticks,
                     gyro_dps,
                     fly.attitude_deg,
-                    hold_out.and_then(|(_, angles)| angles),
+                    guidance.hold_angles(),
                 );
-                let throttle = match hold_out {
-                    Some((throttle, _)) => throttle,
-                    None => sticks.throttle.clamp(0.0, 1.0),
-                };
-                // Throttle at the bottom before the first take-off, or after the touchdown
-                // detector saw the frame land, means sitting on the ground: the
-                // controllers neither act nor wind up (motors at idle), or a held arm or
-                // disarm gesture would spin the frame up and lift it. In the air a closed
-                // throttle keeps full stabilisation (air mode) until that touchdown.
                 let on_ground = !self.airborne || self.landing.landed();
-                let out = if sticks.throttle_low() && on_ground {
-                    c.reset(gyro_dps);
-                    [0.0; 3]
-                } else {
-                    out
-                };
-                // 2 s low-pass (`HOVER_LEARN_S`) of the flying throttle: what hovering takes (learnt from the
-                // pilot's throttle only: the hold loops fly around it).
-                if hold_out.is_none() && throttle > 0.1 {
-                    self.airborne = true;
-                    let k = self.gains.hover;
-                    self.hover_throttle += k * (throttle - self.hover_throttle);
-                }
-                (throttle, out, shaking)
+                let out = stages::ground_idle(c, out, sticks, on_ground, gyro_dps);
+                (out, shaking)
             }
         };
-        // Controllers that predict with their own output are told what the motors will
-        // realise: desaturation scales the demand down whenever it does not fit.
-        let uses_lqg = descent.is_some()
-            || match self.mode {
-                FlightMode::RateLqg | FlightMode::Horizon => true,
-                FlightMode::Attitude
-                | FlightMode::AltitudeHold
-                | FlightMode::PositionHold
-                | FlightMode::Loiter => self.config.attitude_uses_lqg,
-                FlightMode::RatePid | FlightMode::SystemId => false,
-            };
+        let throttle = guidance.throttle(sticks);
+        let demand = stages::Demand {
+            throttle,
+            attitude,
+            idle: self.gains.idle,
+            uses_lqg: guidance.is_failsafe() || stages::uses_lqg(self.mode, &self.config),
+        };
         let sysid = if shaking { self.sysid.as_mut() } else { None };
-        let motors = stages::mix(
-            c,
-            &self.mixer,
-            sysid,
-            stages::Demand {
-                throttle,
-                attitude: attitude_out,
-                idle: self.gains.idle,
-                uses_lqg,
-            },
-        );
+        let motors = stages::mix(c, &self.mixer, sysid, demand);
+        if matches!(guidance, Guidance::Sticks) {
+            self.learn_hover(throttle);
+        }
         (motors, throttle)
+    }
+
+    /// 2 s low-pass (`HOVER_LEARN_S`) of the flying throttle: what hovering takes, learnt
+    /// from the pilot's throttle only (the hold loops fly around it).
+    #[inline(always)]
+    fn learn_hover(&mut self, throttle: f32) {
+        if throttle > 0.1 {
+            self.airborne = true;
+            let k = self.gains.hover;
+            self.hover_throttle += k * (throttle - self.hover_throttle);
+        }
+    }
+
+    /// Guidance stage: the link failsafe's guidance, else the pilot's (a hold mode's loops
+    /// or the sticks). The hold loops start afresh when armed, resumed, on a failsafe or a
+    /// mode change.
+    #[inline(always)]
+    fn guidance(&mut self, fly: &Fly, sticks: &Sticks) -> Guidance {
+        if fly.restarts_hold() {
+            self.hold.reset();
+        }
+        let (ts_s, hover_throttle) = (self.config.ts_s, self.hover_throttle);
+        // The navigation estimate by value: a reference into `fly` keeps all of it in
+        // memory, stored every loop, rather than in registers.
+        let nav = fly.nav;
+        let Some(descent_mps) = fly.failsafe_descent_mps else {
+            return guidance::pilot(self.mode, &mut self.hold, nav, sticks, hover_throttle, ts_s);
+        };
+        let situation = Situation {
+            now_ms: fly.now_ms,
+            entered: fly.decision == Decision::FailsafeEntered,
+            descent_mps,
+            climb_rate_mps: fly.climb_rate_mps,
+            nav,
+            hover_throttle,
+            ts_s,
+        };
+        self.failsafe.guide(&situation, &mut self.hold)
     }
 }
 
@@ -780,10 +676,30 @@ struct Fly {
     climb_rate_mps: Option<f32>,
     /// The navigation estimate (hold modes and failsafe only).
     nav: Option<Nav>,
-    /// How long the link failsafe has lasted, ms.
-    failsafe_for_ms: Option<u32>,
-    /// The frame was in the air when the failsafe began.
-    failsafe_airborne: bool,
+    /// The loop's clock, ms.
+    now_ms: u32,
+}
+
+impl Fly {
+    /// Whether the hold loops start afresh: on arming, a resume, a new failsafe or a mode
+    /// change.
+    #[inline(always)]
+    fn restarts_hold(&self) -> bool {
+        matches!(
+            self.decision,
+            Decision::Armed | Decision::FailsafeEntered | Decision::Resumed
+        ) || self.mode_changed
+    }
+
+    /// Whether the controllers start afresh: on arming, a resume, the pilot's recovered
+    /// control or a mode change.
+    #[inline(always)]
+    fn restarts_controllers(&self) -> bool {
+        matches!(
+            self.decision,
+            Decision::Armed | Decision::ControlRecovered | Decision::Resumed
+        ) || self.mode_changed
+    }
 }
 
 #[cfg(test)]

@@ -11,8 +11,10 @@ mod channels;
 mod climb;
 mod controllers;
 mod estimator;
+mod failsafe;
 mod flight_loop;
 pub mod flight_state;
+mod guidance;
 mod hold;
 mod identify;
 mod link;
@@ -32,7 +34,8 @@ pub use controllers::{ControlParams, Controllers};
 pub use estimator::{
     Estimator, EstimatorMode, INS_START_S, PSEUDO_PERIOD_S, PSEUDO_VAR_M2PS2, Source,
 };
-pub use flight_loop::{FAILSAFE_HOLD_MS, FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
+pub use failsafe::FAILSAFE_HOLD_MS;
+pub use flight_loop::{FlightLoop, ImuSample, LinkInput, LoopConfig, LoopOutput};
 pub use hold::{
     DescentHold, Hold, Horizontal, LOITER_SPEED_MPS, MAX_CLIMB_MPS, MAX_SPEED_MPS, MAX_TILT_DEG,
     Nav, STICK_DEADBAND,

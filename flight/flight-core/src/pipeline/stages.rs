@@ -1,6 +1,6 @@
-//! The stateless halves of the flight loop's setpoint, failsafe-descent and mix stages:
-//! what the active flight mode's controller asks for, the levelling setpoint of the
-//! failsafe descent, and the mix into motor commands. `FlightLoop::step` owns the order
+//! The stateless halves of the flight loop's controller and mix stages: what the active
+//! flight mode's controller asks for (nothing on the ground), the angle setpoint of the
+//! failsafe guidance, and the mix into motor commands. `FlightLoop::step` owns the order
 //! and the state; these only compute.
 
 use super::controllers::Controllers;
@@ -118,6 +118,39 @@ pub(super) fn setpoint(
         }
     };
     (out, false)
+}
+
+/// The pilot's controller output, or nothing on the ground. Throttle at the bottom before
+/// the first take-off, or after the touchdown detector saw the frame land, means sitting on
+/// the ground: the controllers neither act nor wind up (motors at idle), or a held arm or
+/// disarm gesture would spin the frame up and lift it. In the air a closed throttle keeps
+/// full stabilisation (air mode) until that touchdown.
+pub(super) fn ground_idle(
+    c: &mut Controllers,
+    out: [f32; 3],
+    sticks: &Sticks,
+    on_ground: bool,
+    gyro_dps: [f32; 3],
+) -> [f32; 3] {
+    if sticks.throttle_low() && on_ground {
+        c.reset(gyro_dps);
+        [0.0; 3]
+    } else {
+        out
+    }
+}
+
+/// Whether `mode`'s controller is the LQG, which predicts with its own output (the mix
+/// tells it what the motors realise).
+pub(super) fn uses_lqg(mode: FlightMode, config: &LoopConfig) -> bool {
+    match mode {
+        FlightMode::RateLqg | FlightMode::Horizon => true,
+        FlightMode::Attitude
+        | FlightMode::AltitudeHold
+        | FlightMode::PositionHold
+        | FlightMode::Loiter => config.attitude_uses_lqg,
+        FlightMode::RatePid | FlightMode::SystemId => false,
+    }
 }
 
 /// The configured idle command limited to 0…0.3 (worked out once, not per loop).

@@ -1,4 +1,7 @@
-//! The module's settings and their on-flash record.
+//! The module's settings and their on-flash record. Every setting with a value of its own
+//! is one row of [`table`] (its schema row in `telemetry::settings::module`, its field, its
+//! place in the record, its CRSF parameter, the effect of a change); the record, the text
+//! path and the CRSF parameters loop over it.
 //!
 //! The record is one versioned, fixed-size byte string stored under one key, so a save is
 //! a single sequential-storage item write: after a power cut the map holds either the old
@@ -8,6 +11,7 @@
 pub mod openlrs;
 pub mod record;
 pub mod store;
+pub mod table;
 pub mod text;
 
 pub use openlrs::{LinkProtocol, OpenLrsError, OpenLrsSettings};
@@ -20,6 +24,8 @@ pub use text::TextError;
 
 use telemetry::link::phrase::{PRS_BYTES, SALT_BYTES};
 use telemetry::link::{LinkKey, PhraseSecret};
+use telemetry::settings::module as schema;
+use telemetry::settings::{Kind, Param, Value};
 
 use crate::hm10::at::Pin;
 use crate::ppm::FailsafeOutput;
@@ -161,40 +167,73 @@ impl Settings {
 
 /// The telemetry ratios the link takes (`telemetry::frame::valid_telemetry_ratio`).
 pub const TELEMETRY_RATIOS: [u8; 7] = [2, 4, 8, 16, 32, 64, 128];
-/// Factory telemetry ratio: one slot in 4.
-pub const DEFAULT_TELEMETRY_RATIO: u8 = 4;
+/// Factory telemetry ratio (the schema's): one slot in 4.
+pub const DEFAULT_TELEMETRY_RATIO: u8 = whole(&schema::TELEMETRY_RATIO).1 as u8;
 
-/// Range and default of [`Settings::input_timeout_ms`]: never shorter than a few frames of
-/// the slowest input (PPM 22.5 ms, CRSF at 50 Hz), never so long that stale sticks fly for
-/// seconds.
-pub const INPUT_TIMEOUT_MS: core::ops::RangeInclusive<u16> = 100..=2_000;
-/// Factory input timeout: the flight side is in failsafe within 1 s of the input stopping.
-pub const DEFAULT_INPUT_TIMEOUT_MS: u16 = 500;
+/// Range of [`Settings::input_timeout_ms`] (the schema's, `telemetry::settings::module`).
+pub const INPUT_TIMEOUT_MS: core::ops::RangeInclusive<u16> = {
+    let (range, _) = whole(&schema::INPUT_TIMEOUT_MS);
+    (*range.start() as u16)..=(*range.end() as u16)
+};
+/// Factory input timeout (the schema's): the flight side is in failsafe within 1 s of the
+/// input stopping.
+pub const DEFAULT_INPUT_TIMEOUT_MS: u16 = whole(&schema::INPUT_TIMEOUT_MS).1 as u16;
+
+/// A whole-number schema row's range and factory value (constants of the field types
+/// derive from it; the schema's values all fit them, `table`'s tests check).
+const fn whole(param: &Param) -> (core::ops::RangeInclusive<u32>, u32) {
+    let range = match param.kind {
+        Kind::U32 { min, max } => min..=max,
+        Kind::F32 { .. } | Kind::Choice(_) => 0..=0,
+    };
+    let default = match param.default {
+        Value::U32(v) => v,
+        Value::F32(_) => 0,
+    };
+    (range, default)
+}
+
+impl Settings {
+    /// The fields before the table's factory values are set ([`Settings::default`]); the
+    /// rest are the factory state: not bound, no key, no phrase, the factory PIN.
+    const BLANK: Self = Self {
+        role: Role::Transmitter,
+        rate: RateMode::L50,
+        input: InputProtocol::Ppm,
+        output: OutputProtocol::Off,
+        band: Band::Mhz433,
+        tx_power: 0,
+        failsafe: FailsafeOutput::HoldLast,
+        bind_id: 0,
+        input_timeout_ms: 0,
+        telemetry_ratio: 0,
+        model_match: false,
+        bound_models: 0,
+        protocol: LinkProtocol::TauLink,
+        openlrs: OpenLrsSettings {
+            frequency_hz: 0,
+            profile: 0,
+            channel_mode: 0,
+            telemetry: false,
+            hop_seed: 0,
+        },
+        link_key: None,
+        phrase_salt: [0; SALT_BYTES],
+        phrase_prs: None,
+        plain: false,
+        ble_pin: None,
+    };
+}
 
 impl Default for Settings {
+    /// Every table row at the schema's factory value (each one a value its row holds,
+    /// `table`'s tests check), not bound, no key, phrase or PIN of its own.
     fn default() -> Self {
-        Self {
-            role: Role::Transmitter,
-            rate: RateMode::L50,
-            input: InputProtocol::Ppm,
-            output: OutputProtocol::SPort,
-            band: Band::Mhz433,
-            tx_power: 7,
-            // Holding the last values would hold the throttle on a lost link.
-            failsafe: FailsafeOutput::StopPulses,
-            bind_id: 0,
-            input_timeout_ms: DEFAULT_INPUT_TIMEOUT_MS,
-            telemetry_ratio: DEFAULT_TELEMETRY_RATIO,
-            model_match: false,
-            bound_models: 0,
-            protocol: LinkProtocol::TauLink,
-            openlrs: OpenLrsSettings::default(),
-            link_key: None,
-            phrase_salt: [0; SALT_BYTES],
-            phrase_prs: None,
-            plain: false,
-            ble_pin: None,
+        let mut settings = Self::BLANK;
+        for row in &table::ROWS {
+            (row.set)(&mut settings, row.default);
         }
+        settings
     }
 }
 

@@ -45,14 +45,11 @@
 //! guesser test (issue 30, finding 1). The pilot sets the phrase again and binds.
 
 use telemetry::link::LinkKey;
+use telemetry::settings::module as schema;
 
-use super::openlrs::{self, LinkProtocol, OpenLrsSettings};
-use super::{
-    Band, DEFAULT_INPUT_TIMEOUT_MS, DEFAULT_TELEMETRY_RATIO, INPUT_TIMEOUT_MS, InputProtocol,
-    OutputProtocol, RateMode, Role, Settings, TELEMETRY_RATIOS,
-};
+use super::table::{ROWS, Row};
+use super::{RateMode, Settings};
 use crate::hm10::at::Pin;
-use crate::ppm::FailsafeOutput;
 
 /// The link mode a version-1/2 record's bit-rate code ran as: the three slow OpenLRSng-style
 /// rates shared the link's 19.2 kbit/s L50, 57 600 bit/s was M100, 125 000 bit/s F250.
@@ -83,6 +80,10 @@ const FACTORY_PIN: u32 = u32::MAX;
 pub const RECORD_V2_LEN: usize = 14;
 /// Record length of version 1 (bit-rate codes, no input timeout).
 pub const RECORD_V1_LEN: usize = 12;
+/// Where version 4's bound models (u64 LE) start.
+const MODELS_AT: usize = RECORD_V3_LEN + 1;
+/// Where version 7's unauthenticated setting sits (after the phrase's derivation).
+const PLAIN_AT: usize = RECORD_LEN - 1;
 
 /// Why a record does not decode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -118,277 +119,125 @@ impl core::fmt::Display for DecodeError {
 impl core::error::Error for DecodeError {}
 
 impl Settings {
-    /// The current (version 6) record.
+    /// The current (version 7) record: the table's fields ([`ROWS`]), then the bound
+    /// models, the key, the PIN and the phrase's derivation.
     pub fn to_record(&self) -> [u8; RECORD_LEN] {
-        let [b0, b1, b2, b3] = self.bind_id.to_le_bytes();
-        let [t0, t1] = self.input_timeout_ms.to_le_bytes();
-        let [m0, m1, m2, m3, m4, m5, m6, m7] = self.bound_models.to_le_bytes();
-        let [f0, f1, f2, f3] = self.openlrs.frequency_hz.to_le_bytes();
-        let [s0, s1, s2, s3] = self.openlrs.hop_seed.to_le_bytes();
+        let mut record = [0u8; RECORD_LEN];
+        if let Some(version) = record.first_mut() {
+            *version = RECORD_VERSION;
+        }
+        for row in &ROWS {
+            if let Some(field) = record.get_mut(row.stored.range()) {
+                row.stored.encode((row.get)(self), field);
+            }
+        }
         let (flag, key) = match self.link_key {
             Some(key) => (1, key.to_bytes()),
             None => (0, [0; 16]),
         };
-        let pin = self.ble_pin.map_or(FACTORY_PIN, Pin::value).to_le_bytes();
+        let pin = self.ble_pin.map_or(FACTORY_PIN, Pin::value);
         let (phrase_flag, prs) = match self.phrase_prs {
             Some(prs) => (1, prs),
             None => (0, [0; 32]),
         };
-        let mut record = [0u8; RECORD_LEN];
-        let fields = [
-            RECORD_VERSION,
-            self.role as u8,
-            self.rate.code(),
-            self.input as u8,
-            self.output as u8,
-            self.band.code(),
-            self.tx_power,
-            self.failsafe as u8,
-            b0,
-            b1,
-            b2,
-            b3,
-            t0,
-            t1,
-            self.telemetry_ratio,
-            u8::from(self.model_match),
-            m0,
-            m1,
-            m2,
-            m3,
-            m4,
-            m5,
-            m6,
-            m7,
-            self.protocol.code(),
-            self.openlrs.profile,
-            self.openlrs.channel_mode,
-            u8::from(self.openlrs.telemetry),
-            f0,
-            f1,
-            f2,
-            f3,
-            s0,
-            s1,
-            s2,
-            s3,
-            flag,
+        let tails: [(usize, &[u8]); 7] = [
+            (MODELS_AT, &self.bound_models.to_le_bytes()),
+            (RECORD_V5_LEN, &[flag]),
+            (RECORD_V5_LEN + 1, &key),
+            (RECORD_V5_LEN + 17, &pin.to_le_bytes()),
+            (RECORD_V6_LEN, &[phrase_flag]),
+            (RECORD_V6_LEN + 1, &self.phrase_salt),
+            (RECORD_V6_LEN + 9, &prs),
         ];
-        let flags = [phrase_flag];
-        let plain = [u8::from(self.plain)];
-        let bytes = fields
-            .iter()
-            .chain(key.iter())
-            .chain(pin.iter())
-            .chain(flags.iter())
-            .chain(self.phrase_salt.iter())
-            .chain(prs.iter())
-            .chain(plain.iter());
-        for (slot, byte) in record.iter_mut().zip(bytes) {
-            *slot = *byte;
+        for (offset, bytes) in tails {
+            if let Some(field) = record.get_mut(offset..offset + bytes.len()) {
+                field.copy_from_slice(bytes);
+            }
         }
         record
     }
 
-    /// Parses a record of version 1 … 7; every field is range-checked.
+    /// Parses a record of version 1 … 7; every field is range-checked, a field an older
+    /// version lacks takes its factory value.
     pub fn from_record(record: &[u8]) -> Result<Self, DecodeError> {
-        let Some(&version) = record.first() else {
-            return Err(DecodeError::Length { found: 0 });
-        };
-        let wrong_length = DecodeError::Length {
-            found: record.len(),
-        };
-        let expected = match version {
-            1 => RECORD_V1_LEN,
-            2 => RECORD_V2_LEN,
-            3 => RECORD_V3_LEN,
-            4 => RECORD_V4_LEN,
-            5 => RECORD_V5_LEN,
-            6 => RECORD_V6_LEN,
-            RECORD_VERSION => RECORD_LEN,
-            found => return Err(DecodeError::Version { found }),
-        };
-        if record.len() != expected {
-            return Err(wrong_length);
-        }
-        let (common, rest) = record
-            .split_first_chunk::<RECORD_V1_LEN>()
-            .ok_or(wrong_length)?;
-        let input_timeout_ms = match rest {
-            [t0, t1, ..] => {
-                let timeout = u16::from_le_bytes([*t0, *t1]);
-                if !INPUT_TIMEOUT_MS.contains(&timeout) {
-                    return Err(DecodeError::Field {
-                        offset: RECORD_V1_LEN,
-                    });
-                }
-                timeout
-            }
-            _ => DEFAULT_INPUT_TIMEOUT_MS,
-        };
-        let (rest, tail) = rest.split_at(rest.len().min(RECORD_V3_LEN - RECORD_V1_LEN));
-        let (models, link) = tail.split_at(tail.len().min(RECORD_V4_LEN - RECORD_V3_LEN));
-        let (link, security) = link.split_at(link.len().min(RECORD_V5_LEN - RECORD_V4_LEN));
-        let (security, phrase) =
-            security.split_at(security.len().min(RECORD_V6_LEN - RECORD_V5_LEN));
-        let (protocol, openlrs) = decode_link(link)?;
-        let (link_key, ble_pin) = match security {
-            [flag, tail @ ..] => decode_security(*flag, tail)?,
-            [] => (None, None),
-        };
-        let PhraseTail {
-            salt: phrase_salt,
-            prs: phrase_prs,
-            plain,
-        } = decode_phrase(phrase)?;
-        // Bound before the key agreement: no link (module doc).
-        let bound = version == RECORD_VERSION;
-        let telemetry_ratio = match rest {
-            [_, _, ratio, ..] if TELEMETRY_RATIOS.contains(ratio) => *ratio,
-            [_, _, _, ..] => {
-                return Err(DecodeError::Field {
-                    offset: RECORD_V2_LEN,
-                });
-            }
-            _ => DEFAULT_TELEMETRY_RATIO,
-        };
-        let (model_match, bound_models) = match models {
-            [on @ (0 | 1), models @ ..] => {
-                let models: [u8; 8] = models.try_into().map_err(|_| wrong_length)?;
-                (*on == 1, u64::from_le_bytes(models))
-            }
-            [_, ..] => {
-                return Err(DecodeError::Field {
-                    offset: RECORD_V3_LEN,
-                });
-            }
-            [] => (false, 0),
-        };
-        // Rate codes, the fastest CRSF input and the ISM plan are version 3's vocabulary.
-        let current = version >= 3;
-        let [
-            _,
-            role,
-            rate,
-            input,
-            output,
-            band,
-            tx_power,
-            failsafe,
-            b0,
-            b1,
-            b2,
-            b3,
-        ] = *common;
+        let version = version_of(record)?;
         let field = |offset: usize| DecodeError::Field { offset };
-        Ok(Self {
-            role: match role {
-                0 => Role::Transmitter,
-                1 => Role::Receiver,
-                _ => return Err(field(1)),
-            },
-            rate: if current {
-                RateMode::from_code(rate)
-            } else {
-                rate_from_old_code(rate)
+        let mut settings = Settings::default();
+        for row in &ROWS {
+            let Some(bytes) = record.get(row.stored.range()) else {
+                continue;
+            };
+            let offset = row.stored.offset();
+            let value = row.stored.decode(bytes).ok_or(field(offset))?;
+            let value = older_meaning(version, row, value).ok_or(field(offset))?;
+            if !row.assign(&mut settings, value) {
+                return Err(field(offset));
             }
-            .ok_or(field(2))?,
-            input: match input {
-                0 => InputProtocol::Ppm,
-                1 => InputProtocol::Crsf,
-                2 => InputProtocol::Crsf115200,
-                3 if current => InputProtocol::Crsf921600,
-                _ => return Err(field(3)),
-            },
-            output: match output {
-                0 => OutputProtocol::Off,
-                1 => OutputProtocol::Crsf,
-                2 => OutputProtocol::SPort,
-                3 => OutputProtocol::FrskyHub,
-                _ => return Err(field(4)),
-            },
-            band: match Band::from_code(band) {
-                // The ISM plan came with version 3.
-                Some(Band::Ism433) if !current => return Err(field(5)),
-                Some(band) => band,
-                None => return Err(field(5)),
-            },
-            tx_power: if tx_power <= 7 {
-                tx_power
-            } else {
-                return Err(field(6));
-            },
-            failsafe: match failsafe {
-                0 => FailsafeOutput::HoldLast,
-                1 => FailsafeOutput::StopPulses,
-                _ => return Err(field(7)),
-            },
-            bind_id: if bound {
-                u32::from_le_bytes([b0, b1, b2, b3])
-            } else {
-                0
-            },
-            input_timeout_ms,
-            telemetry_ratio,
-            model_match,
-            bound_models: if bound { bound_models } else { 0 },
-            protocol,
-            openlrs,
-            link_key: link_key.filter(|_| bound),
-            phrase_salt,
-            phrase_prs,
-            plain,
-            ble_pin,
+        }
+        if let Some(models) = record.get(MODELS_AT..RECORD_V4_LEN) {
+            let models: [u8; 8] = models.try_into().map_err(|_| field(MODELS_AT))?;
+            settings.bound_models = u64::from_le_bytes(models);
+        }
+        let security = record.get(RECORD_V5_LEN..RECORD_V6_LEN).unwrap_or(&[]);
+        if let [flag, tail @ ..] = security {
+            (settings.link_key, settings.ble_pin) = decode_security(*flag, tail)?;
+        }
+        if let Some(phrase) = record.get(RECORD_V6_LEN..PLAIN_AT) {
+            (settings.phrase_salt, settings.phrase_prs) = decode_phrase(phrase)?;
+        }
+        if version != RECORD_VERSION {
+            // Bound before the key agreement: no link (module doc).
+            settings.bind_id = 0;
+            settings.bound_models = 0;
+            settings.link_key = None;
+        }
+        Ok(settings)
+    }
+}
+
+/// The record's version, once its length is checked against it.
+fn version_of(record: &[u8]) -> Result<u8, DecodeError> {
+    let Some(&version) = record.first() else {
+        return Err(DecodeError::Length { found: 0 });
+    };
+    let expected = match version {
+        1 => RECORD_V1_LEN,
+        2 => RECORD_V2_LEN,
+        3 => RECORD_V3_LEN,
+        4 => RECORD_V4_LEN,
+        5 => RECORD_V5_LEN,
+        6 => RECORD_V6_LEN,
+        RECORD_VERSION => RECORD_LEN,
+        found => return Err(DecodeError::Version { found }),
+    };
+    if record.len() == expected {
+        Ok(version)
+    } else {
+        Err(DecodeError::Length {
+            found: record.len(),
         })
     }
 }
 
-/// The version-5 tail (empty for older records: TauLink, OpenLRSng factory parameters).
-fn decode_link(link: &[u8]) -> Result<(LinkProtocol, OpenLrsSettings), DecodeError> {
-    let [
-        protocol,
-        profile,
-        mode,
-        telemetry,
-        f0,
-        f1,
-        f2,
-        f3,
-        s0,
-        s1,
-        s2,
-        s3,
-    ] = *link
-    else {
-        return Ok((LinkProtocol::TauLink, OpenLrsSettings::default()));
-    };
-    let field = |offset: usize| DecodeError::Field { offset };
-    let protocol = LinkProtocol::from_code(protocol).ok_or(field(RECORD_V4_LEN))?;
-    if profile >= ::openlrs::bind::MODEM_PROFILE_COUNT {
-        return Err(field(RECORD_V4_LEN + 1));
+const RATE_KEY: u16 = schema::RATE.key;
+const INPUT_KEY: u16 = schema::INPUT.key;
+const BAND_KEY: u16 = schema::BAND.key;
+
+/// A stored value in today's terms: versions 1 and 2 stored the rate as a bit-rate code and
+/// knew neither the fastest CRSF input nor the ISM plan (index 3 of both); `None`: a value
+/// no writer of `version` produced.
+fn older_meaning(version: u8, row: &Row, value: u32) -> Option<u32> {
+    if version >= 3 {
+        return Some(value);
     }
-    if !openlrs::CHANNEL_MODES.contains(&mode) {
-        return Err(field(RECORD_V4_LEN + 2));
+    match row.key {
+        RATE_KEY => u8::try_from(value)
+            .ok()
+            .and_then(rate_from_old_code)
+            .map(|rate| u32::from(rate.code())),
+        INPUT_KEY | BAND_KEY if value == 3 => None,
+        _ => Some(value),
     }
-    let telemetry = match telemetry {
-        0 => false,
-        1 => true,
-        _ => return Err(field(RECORD_V4_LEN + 3)),
-    };
-    let frequency_hz = u32::from_le_bytes([f0, f1, f2, f3]);
-    if !openlrs::carrier_in_range(frequency_hz) {
-        return Err(field(RECORD_V4_LEN + 4));
-    }
-    Ok((
-        protocol,
-        OpenLrsSettings {
-            frequency_hz,
-            profile,
-            channel_mode: mode,
-            telemetry,
-            hop_seed: u32::from_le_bytes([s0, s1, s2, s3]),
-        },
-    ))
 }
 
 /// Version 6's key flag (at [`RECORD_V5_LEN`]) and what follows it: the key bytes (all 0
@@ -414,46 +263,23 @@ fn decode_security(flag: u8, tail: &[u8]) -> Result<(Option<LinkKey>, Option<Pin
     Ok((link_key, ble_pin))
 }
 
-/// What version 7's tail holds.
-struct PhraseTail {
-    salt: [u8; 8],
-    prs: Option<[u8; 32]>,
-    plain: bool,
-}
-
-/// Version 7's tail (empty for older records: no phrase, no salt, authenticated): the phrase
-/// flag, the salt, the derivation (all 0 without a phrase) and the unauthenticated setting.
-fn decode_phrase(tail: &[u8]) -> Result<PhraseTail, DecodeError> {
+/// Version 7's phrase fields (the flag, the salt, the derivation: all 0 without a phrase).
+fn decode_phrase(tail: &[u8]) -> Result<([u8; 8], Option<[u8; 32]>), DecodeError> {
     let field = |offset: usize| DecodeError::Field { offset };
     let Some((flag, rest)) = tail.split_first() else {
-        return Ok(PhraseTail {
-            salt: [0; 8],
-            prs: None,
-            plain: false,
-        });
+        return Ok(([0; 8], None));
     };
     let (salt, rest) = rest
         .split_first_chunk::<8>()
         .ok_or(field(RECORD_V6_LEN + 1))?;
-    let (prs, rest) = rest
-        .split_first_chunk::<32>()
-        .ok_or(field(RECORD_V6_LEN + 9))?;
+    let prs: &[u8; 32] = rest.try_into().map_err(|_| field(RECORD_V6_LEN + 9))?;
     let prs = match flag {
         0 if prs.iter().all(|b| *b == 0) => None,
         0 => return Err(field(RECORD_V6_LEN + 9)),
         1 => Some(*prs),
         _ => return Err(field(RECORD_V6_LEN)),
     };
-    let plain = match rest {
-        [0] => false,
-        [1] => true,
-        _ => return Err(field(RECORD_V6_LEN + 41)),
-    };
-    Ok(PhraseTail {
-        salt: *salt,
-        prs,
-        plain,
-    })
+    Ok((*salt, prs))
 }
 
 #[cfg(test)]

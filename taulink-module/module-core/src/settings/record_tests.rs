@@ -1,6 +1,11 @@
 //! The record's layout, every version's decode and the bytes no writer produces.
 
 use super::*;
+use crate::ppm::FailsafeOutput;
+use crate::settings::openlrs::{LinkProtocol, OpenLrsSettings};
+use crate::settings::{
+    Band, DEFAULT_INPUT_TIMEOUT_MS, DEFAULT_TELEMETRY_RATIO, InputProtocol, OutputProtocol, Role,
+};
 
 #[test]
 fn record_round_trip_and_layout() {

@@ -1,7 +1,8 @@
-//! Settings by name and text (`rate=M100`, `input_timeout_ms=750`): the one place that maps
-//! the words a person types (a host tool's `--module-set`, a console) onto [`Settings`]
-//! fields, with the same ranges the record decoder enforces, so nothing typed can make a
-//! set the module would refuse to load. A value that leaves the whole set unusable
+//! Settings by name and text (`rate=M100`, `input_timeout_ms=750`): the words a person types
+//! (a host tool's `--module-set`, a console) read through the settings table
+//! (`super::table`: the schema's choice words and ranges, and what each field can take, as
+//! the record decoder checks them), so nothing typed can make a set the module would refuse
+//! to load. A value that leaves the whole set unusable
 //! ([`Settings::validate`]: an OpenLRSng carrier or hop outside the band plan) is refused
 //! too, except while several values are typed together (see [`Settings::set_text`]).
 //!
@@ -12,45 +13,27 @@
 //! unauthenticated link; `ble_pin` takes six digits or `factory`.
 
 use telemetry::link::{PhraseSecret, check_phrase};
-use telemetry::settings::{BANDS, PROTOCOLS, RATES, choice_index};
+use telemetry::settings::{Kind, choice_index};
 
-use super::openlrs::CHANNEL_MODES;
-use super::{
-    Band, INPUT_TIMEOUT_MS, InputProtocol, LinkProtocol, OutputProtocol, RateMode, Role, Settings,
-    TELEMETRY_RATIOS,
-};
+use super::Settings;
+use super::table::by_name;
 use crate::hm10::at::Pin;
-use crate::ppm::FailsafeOutput;
+use telemetry::settings::module::MODULE_PARAMS;
 
-/// Every setting name, in record order.
-pub const NAMES: [&str; 20] = [
-    "role",
-    "rate",
-    "input",
-    "output",
-    "band",
-    "tx_power",
-    "failsafe",
-    "bind_id",
-    "input_timeout_ms",
-    "telemetry_ratio",
-    "model_match",
-    "protocol",
-    "olrs_profile",
-    "olrs_channels",
-    "olrs_telemetry",
-    "olrs_frequency_hz",
-    "olrs_hop_seed",
-    "phrase",
-    "ble_pin",
-    "plain",
-];
+/// The settings typed as text that are no table row: the binding phrase (stored as its
+/// derivation) and the HM-10 PIN.
+pub const TEXT_ONLY: [&str; 2] = ["phrase", "ble_pin"];
+
+/// Every setting name: the table's, in record order, then [`TEXT_ONLY`].
+pub fn names() -> impl Iterator<Item = &'static str> {
+    MODULE_PARAMS.iter().map(|p| p.name).chain(TEXT_ONLY)
+}
 
 /// Why a typed setting was refused (nothing changed).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum TextError {
-    /// No setting by that name (see [`NAMES`]).
+    /// No setting by that name (see [`names`]).
     Unknown,
     /// Not a number, or not one of the setting's words.
     Unparsable,
@@ -79,50 +62,30 @@ impl core::fmt::Display for TextError {
 
 impl core::error::Error for TextError {}
 
-/// The words each choice setting accepts (case-insensitive), for help texts. The rate, band
-/// and air protocol are the link's and spelt as the flight side spells them
-/// (`telemetry::settings`: `rate=F500` here is `link.rate F500` there).
+/// The words each choice setting accepts (case-insensitive), for help texts: the schema's
+/// (`telemetry::settings::module`; the rate, band and air protocol are spelt as the flight
+/// side spells them: `rate=F500` here is `link.rate F500` there).
 pub fn choices(name: &str) -> &'static [&'static str] {
-    match name {
-        "role" => &["transmitter", "receiver"],
-        "rate" => RATES,
-        "input" => &["ppm", "crsf", "crsf115200", "crsf921600"],
-        "output" => &["off", "crsf", "sport", "frsky_hub"],
-        "band" => BANDS,
-        "failsafe" => &["hold_last", "stop_pulses"],
-        "model_match" | "plain" => &["off", "on"],
-        "protocol" => PROTOCOLS,
-        "olrs_profile" => &["4800", "9600", "19200", "57600", "125000"],
-        "olrs_channels" => &["4+4", "8", "8+4", "12", "12+4", "16"],
-        "olrs_telemetry" => &["off", "on"],
+    match by_name(name).map(|(_, p)| p.kind) {
+        Some(Kind::Choice(words)) => words,
         _ => &[],
     }
 }
 
-/// The index of `text` among `words` (case-insensitive, as every end reads choice words).
-fn choice(text: &str, words: &[&str]) -> Result<usize, TextError> {
-    choice_index(words, text).ok_or(TextError::Unparsable)
-}
-
-/// A whole number within `range`.
-fn number(text: &str, range: core::ops::RangeInclusive<u32>) -> Result<u32, TextError> {
+/// A whole number, decimal or `0x` hexadecimal.
+fn number(text: &str) -> Result<u32, TextError> {
     let t = text.trim();
-    let v = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+    match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
         Some(hex) => u32::from_str_radix(hex, 16),
         None => t.parse(),
     }
-    .map_err(|_| TextError::Unparsable)?;
-    if range.contains(&v) {
-        Ok(v)
-    } else {
-        Err(TextError::OutOfRange)
-    }
+    .map_err(|_| TextError::Unparsable)
 }
 
 impl Settings {
-    /// Sets the field `name` (one of [`NAMES`]) from `text`; on an error nothing changes.
-    /// Rates are the link's rate modes (`L50`, `M100`, `F250`, `F500`, `F700`); the telemetry ratio
-    /// one of [`TELEMETRY_RATIOS`]. A change after which the set would not run
+    /// Sets the setting `name` (one of [`names`]) from `text`; on an error nothing changes.
+    /// Rates are the link's rate modes (`L50`, `M100`, `F250`, `F500`, `F700`); the telemetry
+    /// ratio one of [`super::TELEMETRY_RATIOS`]. A change after which the set would not run
     /// ([`Settings::validate`]) is refused with [`TextError::Invalid`]; to change the band
     /// and the OpenLRSng carrier together, use [`Settings::set_text_unchecked`] for each and
     /// [`Settings::validate`] once.
@@ -137,120 +100,40 @@ impl Settings {
         Ok(())
     }
 
-    /// [`Settings::set_text`] without the whole-set check (ranges still apply).
+    /// [`Settings::set_text`] without the whole-set check (ranges still apply): a choice by
+    /// its word, a number within its row's range that the field can take.
     pub fn set_text_unchecked(&mut self, name: &str, text: &str) -> Result<(), TextError> {
         let text = text.trim();
-        let words = choices(name);
+        let Some((row, param)) = by_name(name) else {
+            return self.set_text_only(name, text);
+        };
+        let value = match param.kind {
+            Kind::Choice(words) => choice_index(words, text)
+                .and_then(|i| u32::try_from(i).ok())
+                .ok_or(TextError::Unparsable)?,
+            Kind::U32 { .. } | Kind::F32 { .. } => number(text)?,
+        };
+        if row.assign(self, value) {
+            Ok(())
+        } else {
+            Err(TextError::OutOfRange)
+        }
+    }
+
+    /// The [`TEXT_ONLY`] settings: the phrase (spec §12.5's rule; empty clears it), the PIN
+    /// (six digits, or `factory`).
+    fn set_text_only(&mut self, name: &str, text: &str) -> Result<(), TextError> {
         match name {
-            "role" => {
-                self.role = [Role::Transmitter, Role::Receiver]
-                    .get(choice(text, words)?)
-                    .copied()
-                    .ok_or(TextError::Unparsable)?;
-            }
-            "rate" => {
-                self.rate = RateMode::ALL
-                    .get(choice(text, words)?)
-                    .copied()
-                    .ok_or(TextError::Unparsable)?;
-            }
-            "input" => {
-                self.input = [
-                    InputProtocol::Ppm,
-                    InputProtocol::Crsf,
-                    InputProtocol::Crsf115200,
-                    InputProtocol::Crsf921600,
-                ]
-                .get(choice(text, words)?)
-                .copied()
-                .ok_or(TextError::Unparsable)?;
-            }
-            "output" => {
-                self.output = [
-                    OutputProtocol::Off,
-                    OutputProtocol::Crsf,
-                    OutputProtocol::SPort,
-                    OutputProtocol::FrskyHub,
-                ]
-                .get(choice(text, words)?)
-                .copied()
-                .ok_or(TextError::Unparsable)?;
-            }
-            "band" => {
-                self.band = [Band::Mhz433, Band::Mhz868, Band::Mhz915, Band::Ism433]
-                    .get(choice(text, words)?)
-                    .copied()
-                    .ok_or(TextError::Unparsable)?;
-            }
-            "failsafe" => {
-                self.failsafe = [FailsafeOutput::HoldLast, FailsafeOutput::StopPulses]
-                    .get(choice(text, words)?)
-                    .copied()
-                    .ok_or(TextError::Unparsable)?;
-            }
-            "tx_power" => {
-                self.tx_power =
-                    u8::try_from(number(text, 0..=7)?).map_err(|_| TextError::OutOfRange)?;
-            }
-            "bind_id" => self.bind_id = number(text, 0..=u32::MAX)?,
-            "input_timeout_ms" => {
-                let range =
-                    u32::from(*INPUT_TIMEOUT_MS.start())..=u32::from(*INPUT_TIMEOUT_MS.end());
-                self.input_timeout_ms =
-                    u16::try_from(number(text, range)?).map_err(|_| TextError::OutOfRange)?;
-            }
-            "telemetry_ratio" => {
-                let v = number(text, 0..=u32::from(u8::MAX))?;
-                self.telemetry_ratio = TELEMETRY_RATIOS
-                    .iter()
-                    .copied()
-                    .find(|r| u32::from(*r) == v)
-                    .ok_or(TextError::OutOfRange)?;
-            }
-            "model_match" => self.model_match = choice(text, words)? == 1,
-            "protocol" => {
-                self.protocol = [
-                    LinkProtocol::TauLink,
-                    LinkProtocol::OpenLrs38,
-                    LinkProtocol::OpenLrs39,
-                ]
-                .get(choice(text, words)?)
-                .copied()
-                .ok_or(TextError::Unparsable)?;
-            }
-            "olrs_profile" => {
-                self.openlrs.profile =
-                    u8::try_from(choice(text, words)?).map_err(|_| TextError::Unparsable)?;
-            }
-            "olrs_channels" => {
-                let index =
-                    u8::try_from(choice(text, words)?).map_err(|_| TextError::Unparsable)?;
-                self.openlrs.channel_mode = CHANNEL_MODES.start() + index;
-            }
-            "olrs_telemetry" => self.openlrs.telemetry = choice(text, words)? == 1,
-            "olrs_frequency_hz" => {
-                let hz = number(text, 0..=u32::MAX)?;
-                if !super::openlrs::carrier_in_range(hz) {
-                    return Err(TextError::OutOfRange);
-                }
-                self.openlrs.frequency_hz = hz;
-            }
-            "olrs_hop_seed" => self.openlrs.hop_seed = number(text, 0..=u32::MAX)?,
             "phrase" => {
                 self.phrase_prs = check_phrase(text)
                     .map_err(|_| TextError::BadPhrase)?
                     .map(|phrase| PhraseSecret::derive(phrase, self.phrase_salt).prs);
             }
-            "plain" => self.plain = choice(text, words)? == 1,
-            "ble_pin" => {
-                self.ble_pin = if text.eq_ignore_ascii_case("factory") {
-                    None
-                } else if text.len() == 6 && text.bytes().all(|b| b.is_ascii_digit()) {
-                    Some(Pin::new(number(text, 0..=999_999)?).ok_or(TextError::OutOfRange)?)
-                } else {
-                    return Err(TextError::Unparsable);
-                };
+            "ble_pin" if text.eq_ignore_ascii_case("factory") => self.ble_pin = None,
+            "ble_pin" if text.len() == 6 && text.bytes().all(|b| b.is_ascii_digit()) => {
+                self.ble_pin = Some(Pin::new(number(text)?).ok_or(TextError::OutOfRange)?);
             }
+            "ble_pin" => return Err(TextError::Unparsable),
             _ => return Err(TextError::Unknown),
         }
         Ok(())
@@ -260,6 +143,9 @@ impl Settings {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ppm::FailsafeOutput;
+    use crate::settings::{Band, InputProtocol, LinkProtocol, OutputProtocol, RateMode, Role};
+    use telemetry::settings::{BANDS, PROTOCOLS, RATES};
 
     /// The module reads the link's words as the flight side's schema spells them, each to
     /// the value at its place (the device tool's option of the same index).
@@ -347,7 +233,7 @@ mod tests {
         assert!(s.validate().is_ok());
         assert_eq!(Settings::from_record(&s.to_record()), Ok(s));
         // Nothing takes "?".
-        assert!(NAMES.iter().all(|n| s.clone().set_text(n, "?").is_err()));
+        assert!(names().all(|n| s.clone().set_text(n, "?").is_err()));
         s.set_text("phrase", "").unwrap();
         assert_eq!(s.phrase_prs, None, "an empty phrase clears it");
         s.set_text("ble_pin", "Factory").unwrap();

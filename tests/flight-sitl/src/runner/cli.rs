@@ -243,7 +243,9 @@ impl Cli {
                 m.set_text(name, value).map_err(|e| {
                     format!(
                         "--module-set {name}={value}: {e} (names: {})",
-                        module_core::settings::text::NAMES.join(", ")
+                        module_core::settings::text::names()
+                            .collect::<Vec<_>>()
+                            .join(", ")
                     )
                 })?;
             }
