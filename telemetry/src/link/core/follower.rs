@@ -278,7 +278,14 @@ impl Follower {
 
     fn slot_end_us(&self, slot: u8, slot_start_us: u64) -> u64 {
         match self.schedule.kind(u32::from(slot)) {
-            SlotKind::Uplink => slot_start_us + u64::from(self.schedule.listen_end_offset_us()),
+            // The wait for a packet's start ends where the next slot's window opens, so a
+            // missed uplink never delays the next window (the sync word of ours comes long
+            // before; a packet that started is received whole).
+            SlotKind::Uplink => {
+                slot_start_us
+                    + u64::from(self.schedule.listen_end_offset_us())
+                        .min(u64::from(self.schedule.slot_us()).saturating_sub(RX_EARLY_US))
+            }
             SlotKind::Downlink => slot_start_us + u64::from(self.schedule.rate.tx_lead_us()),
         }
     }
