@@ -23,12 +23,25 @@ use super::{MAX_LISTEN_US, STREAM_RX_BYTES, STREAM_TX_BYTES, Step};
 /// Default failsafe delay.
 pub const DEFAULT_FAILSAFE_US: u64 = 250_000;
 /// The follower opens its receive window this long before the expected slot start, to
-/// absorb clock drift between packets (40 ppm × one hop cycle at 20 ms slots ≈ 26 µs). The
-/// grid estimate also runs late by the nIRQ latency and FIFO read-out before a packet is
-/// timestamped; with SPI time modelled the receiver's set-up and PLL settle still finish
-/// before the sender's preamble (which comes after its lead and SPI set-up), so 100 µs holds
-/// (taulink-sim, chip level, F250/F500 at 1:2: no failsafe).
-pub const RX_EARLY_US: u64 = 100;
+/// absorb clock drift between packets (40 ppm × one hop cycle at 20 ms slots ≈ 26 µs), the
+/// grid estimate's lateness (a packet is timestamped after the nIRQ latency and its FIFO
+/// read-out) and a preemption of its own receiver set-up. On the flight image the loop's
+/// interrupt executor preempts the link task for ≈ 100–150 µs every IMU sample, at a phase
+/// to the slots that holds for seconds (1 kHz against 250 Hz, a few hundred ppm apart): the
+/// read-out then ends ≈ 250 µs after the packet and the set-up takes ≈ 250 µs instead of
+/// ≈ 100. With 100 µs the window opened after the master's preamble for seconds at a time
+/// (PIL, issue 28); 300 µs covers both. Opening earlier costs receiver current only: the
+/// slot before is on another hop channel, and its listen ends 75 µs before this slot.
+pub const RX_EARLY_US: u64 = 300;
+/// While tracking, a packet of the tracked slot moves the grid later by at most this much
+/// (an earlier estimate is taken whole). A packet is timestamped after the nIRQ latency and
+/// its FIFO read-out, so its estimate of the slot start is never early, only late — by
+/// hundreds of µs when a higher-priority task preempts the read-out (the flight loop's
+/// interrupt executor, ≈ 150 µs in the PIL, issue 28), which taken whole left the follower's
+/// next receive window opening after the master's preamble, every slot, until a resync.
+/// Two crystals drift apart by ≤ 100 ppm: ≤ 2 µs per 20 ms slot, ≤ 13 µs over the
+/// [`RESYNC_MISSES`] slots of F250 a tracking follower can go without a packet.
+pub const MAX_RETIME_LATE_US: u64 = 20;
 /// Consecutive missed uplinks after which the follower gives up tracking and re-acquires:
 /// one hop cycle, i.e. every channel failed once.
 pub const RESYNC_MISSES: u32 = HOP_CHANNELS as u32;
@@ -265,7 +278,14 @@ impl Follower {
 
     fn slot_end_us(&self, slot: u8, slot_start_us: u64) -> u64 {
         match self.schedule.kind(u32::from(slot)) {
-            SlotKind::Uplink => slot_start_us + u64::from(self.schedule.listen_end_offset_us()),
+            // The wait for a packet's start ends where the next slot's window opens, so a
+            // missed uplink never delays the next window (the sync word of ours comes long
+            // before; a packet that started is received whole).
+            SlotKind::Uplink => {
+                slot_start_us
+                    + u64::from(self.schedule.listen_end_offset_us())
+                        .min(u64::from(self.schedule.slot_us()).saturating_sub(RX_EARLY_US))
+            }
             SlotKind::Downlink => slot_start_us + u64::from(self.schedule.rate.tx_lead_us()),
         }
     }
@@ -455,7 +475,7 @@ impl Follower {
         if let LinkRx::Packet { len, rssi_dbm } = outcome {
             let bytes = packet.get(..len).unwrap_or(&[]);
             // Re-time the grid: the master started this slot `packet_end_offset` ago.
-            let slot_start_us =
+            let measured_us =
                 now_us.saturating_sub(u64::from(self.schedule.packet_end_offset_us(len)));
             let received = self.decode_uplink(bytes);
             if received == Received::Rejected(Rejection::Tag)
@@ -465,7 +485,7 @@ impl Follower {
                 self.counters.tag_failures = self.counters.tag_failures.saturating_add(1);
             }
             if let Received::Accepted(Frame::MasterNonce { slot, nonce }) = received
-                && self.take_master_nonce(slot, nonce, rssi_dbm, slot_start_us)
+                && self.take_master_nonce(slot, nonce, rssi_dbm, self.retimed(slot, measured_us))
             {
                 return;
             }
@@ -479,7 +499,7 @@ impl Follower {
                 if expected && self.schedule.kind(u32::from(up.slot)) == SlotKind::Uplink {
                     self.sync = Sync::Tracking {
                         slot: up.slot,
-                        slot_start_us,
+                        slot_start_us: self.retimed(up.slot, measured_us),
                         misses: 0,
                     };
                     self.accept(&up, rssi_dbm, now_us);
@@ -495,7 +515,7 @@ impl Follower {
                 }
                 self.sync = Sync::Tracking {
                     slot,
-                    slot_start_us,
+                    slot_start_us: self.retimed(slot, measured_us),
                     misses: 0,
                 };
                 // Its content is not taken: counted as rejected.
@@ -508,6 +528,19 @@ impl Follower {
             self.counters.rejected += 1;
         }
         self.check_failsafe(now_us);
+    }
+
+    /// The start of `slot` from a packet's `measured_us` estimate: while that slot is the one
+    /// tracked, no more than [`MAX_RETIME_LATE_US`] after the grid's own.
+    fn retimed(&self, slot: u8, measured_us: u64) -> u64 {
+        match self.sync {
+            Sync::Tracking {
+                slot: tracked,
+                slot_start_us,
+                ..
+            } if tracked == slot => measured_us.min(slot_start_us + MAX_RETIME_LATE_US),
+            _ => measured_us,
+        }
     }
 
     /// The master's nonce, verified under the handshake's counter of the tracked slot: the

@@ -116,6 +116,96 @@ fn follower_acquires_then_tracks_the_master() {
     }
 }
 
+/// A packet timestamped late (its read-out preempted) moves the follower's grid by at most
+/// `MAX_RETIME_LATE_US`; one on time puts it back at once. Taken whole, a 400 µs late
+/// timestamp opened the next window 300 µs after the master's slot start: past its preamble.
+#[test]
+fn a_late_timestamp_moves_the_grid_by_the_bound_only_and_an_early_one_at_once() {
+    use super::follower::{MAX_RETIME_LATE_US, RX_EARLY_US};
+    let (mut master, mut follower) = pair();
+    let mut buf = [0u8; 64];
+    let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
+        panic!()
+    };
+    let mut t = 0;
+    let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
+    follower.on_received(
+        LinkRx::Packet {
+            len: frame.len(),
+            rssi_dbm: -70,
+        },
+        &frame,
+        end,
+    );
+    // The grid's lateness behind the master's, µs, after each late packet.
+    let mut shift = 0;
+    let mut lateness = [400, 400, 400, 0, 150].into_iter();
+    let mut late = lateness.next();
+    while let Some(l) = late {
+        let (mut fbuf, mut mbuf) = ([0u8; 64], [0u8; 64]);
+        match (master.plan(t, &mut mbuf), follower.plan(t, &mut fbuf)) {
+            (Step::Transmit { len, .. }, Step::Listen { from_us, .. }) => {
+                assert_eq!(from_us, t + shift - RX_EARLY_US, "lateness {shift}");
+                master.on_sent();
+                let end = t + u64::from(master.schedule().packet_end_offset_us(len));
+                follower.on_received(LinkRx::Packet { len, rssi_dbm: -70 }, &mbuf, end + l);
+                assert_eq!(follower.sync_state(), SyncState::Tracking);
+                shift = l.min(shift + MAX_RETIME_LATE_US);
+                late = lateness.next();
+            }
+            (Step::Listen { .. }, f) => {
+                match f {
+                    Step::Transmit { .. } => follower.on_sent(),
+                    _ => follower.on_skipped(),
+                }
+                master.finish_listen();
+            }
+            other => panic!("{other:?}"),
+        }
+        t += SLOT_US;
+    }
+    assert_eq!(shift, MAX_RETIME_LATE_US, "after 0 then 150 µs late");
+}
+
+/// A tracked uplink slot's wait for a packet ends where the next slot's window opens: after a
+/// miss the next window still opens `RX_EARLY_US` early. Before, it ended 75 µs before the
+/// next slot on the follower's (late) grid, and the window after a miss opened past the
+/// master's preamble — one missed uplink became a resync (PIL, Sparky2, issue 28).
+#[test]
+fn after_a_missed_uplink_the_next_window_still_opens_early() {
+    use super::follower::RX_EARLY_US;
+    let (mut master, mut follower) = pair();
+    let mut buf = [0u8; 64];
+    let Step::Listen { channel, .. } = follower.plan(0, &mut buf) else {
+        panic!()
+    };
+    let mut t = 0;
+    let (frame, end) = next_uplink_on(&mut master, &mut t, channel);
+    follower.on_received(
+        LinkRx::Packet {
+            len: frame.len(),
+            rssi_dbm: -70,
+        },
+        &frame,
+        end,
+    );
+    // t is the next slot's start, an uplink slot (the lock was on slot 0 of its period).
+    let Step::Listen {
+        from_us, until_us, ..
+    } = follower.plan(end, &mut buf)
+    else {
+        panic!()
+    };
+    assert_eq!(from_us, t - RX_EARLY_US);
+    assert_eq!(until_us, t + SLOT_US - RX_EARLY_US);
+    // Nothing came: the next plan, at that instant, opens the following slot's window.
+    follower.on_received(LinkRx::Timeout, &[], until_us);
+    let Step::Listen { from_us, .. } = follower.plan(until_us, &mut buf) else {
+        panic!()
+    };
+    assert_eq!(from_us, t + SLOT_US - RX_EARLY_US);
+}
+
 #[test]
 fn downlink_reaches_the_master_with_report_and_ack() {
     let (mut master, mut follower) = pair();

@@ -9,7 +9,10 @@
 //! of at most 20 bytes, the phone's writes come out of its TX, and a lone `AT` drops the
 //! connection (`OK+LOST` with `AT+NOTI1`). The phone connects at the time the scenario says
 //! once the module is up — with `AT+TYPE3` only knowing the PIN set by `AT+PASS` (the pilot
-//! typed it in from the module's label) — and `AT+NOTI1` reports `OK+CONN`.
+//! typed it in from the module's label) — and `AT+NOTI1` reports `OK+CONN`. A phone the
+//! module dropped connects again [`PHONE_RETRY_NS`] later: the ground station says
+//! "Bluetooth disconnected" and the pilot connects again (the module's boot script drops a
+//! phone that connects while it runs, module-core `hm10::at`).
 
 use super::uart::{Link, frame_ns};
 
@@ -28,6 +31,9 @@ const REBOOT_NS: u64 = 500_000_000;
 pub const NOTIFY_BYTES: usize = 20;
 /// Connection interval, ns: one notification per event each way (a conservative phone).
 pub const CONNECTION_INTERVAL_NS: u64 = 20_000_000;
+
+/// A dropped phone tries again this much later, ns (the pilot's second click on "connect").
+pub const PHONE_RETRY_NS: u64 = 2_000_000_000;
 
 /// The settings HMSoft keeps across resets.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -230,7 +236,7 @@ impl Hm10 {
             // Transparent; only a lone AT is taken, and it drops the connection.
             if command == b"AT" {
                 self.connected = false;
-                self.phone_at_ns = None;
+                self.phone_at_ns = Some(t + PHONE_RETRY_NS);
                 if self.active.notify {
                     self.send(b"OK+LOST", t);
                 }
@@ -389,9 +395,13 @@ mod tests {
         );
         h.phone_write(b"hello");
         assert_eq!(answer(&mut h, t + 200_000_000), "hello");
-        // A lone AT while connected drops the phone.
+        // A lone AT while connected drops the phone; the pilot connects again 2 s later.
         let t = type_in(&mut h, b"AT", t + 300_000_000, 9_600);
         assert_eq!(answer(&mut h, t + 40_000_000), "OK+LOST");
         assert!(!h.connected());
+        answer(&mut h, t + PHONE_RETRY_NS);
+        assert!(!h.connected(), "not before the retry");
+        assert_eq!(answer(&mut h, t + PHONE_RETRY_NS + 10_000_000), "OK+CONN");
+        assert!(h.connected());
     }
 }

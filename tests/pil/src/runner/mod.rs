@@ -277,11 +277,13 @@ pub const IMU_RX_DMA: Injection = Injection::DmaTransferError {
     stream: 0,
 };
 
-/// Runs `opts` on `platform`.
+/// The world of `opts` on `platform` at virtual 0: both images loaded onto their boards, the
+/// bound settings in their flash, the phone knowing the module's PIN; with the scenario's
+/// plan and the two images.
 ///
 /// # Errors
 /// When an image, the plan, the settings or a machine cannot be made.
-pub fn run<P: Platform>(platform: &P, opts: &Options) -> Result<Outcome, PilError> {
+pub fn world<P: Platform>(platform: &P, opts: &Options) -> Result<Prepared<P>, PilError> {
     let flight_image =
         Image::load(&opts.flight_image).map_err(|e| PilError::Image(e.to_string()))?;
     let module_image =
@@ -321,9 +323,35 @@ pub fn run<P: Platform>(platform: &P, opts: &Options) -> Result<Outcome, PilErro
     let module = platform
         .module(&module_image, mb, &module_flash, seed)
         .map_err(PilError::Platform)?;
+    Ok(Prepared {
+        world: World::new(scenario, config, radios, flight, module),
+        plan,
+        images: [flight_image, module_image],
+    })
+}
+
+/// A world ready to run ([`world`]).
+pub struct Prepared<P: Platform> {
+    /// The co-simulation at virtual 0.
+    pub world: World<P::Flight, P::Module>,
+    /// The scenario's timeline.
+    pub plan: Plan,
+    /// The flight and the module image.
+    pub images: [Image; 2],
+}
+
+/// Runs `opts` on `platform`.
+///
+/// # Errors
+/// When an image, the plan, the settings or a machine cannot be made.
+pub fn run<P: Platform>(platform: &P, opts: &Options) -> Result<Outcome, PilError> {
+    let Prepared {
+        mut world,
+        plan,
+        images: [flight_image, module_image],
+    } = world(platform, opts)?;
     let started = std::time::Instant::now();
     let cpu_before = report::thread_cpu_s();
-    let mut world = World::new(scenario, config, radios, flight, module);
     let injected = if let (Kind::Panic, Some(at)) = (opts.kind, plan.fault_at_s) {
         world.run_until(report::virtual_ns(at));
         Some((world.now_ns(), world.flight.inject(IMU_RX_DMA)))

@@ -321,6 +321,11 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
         }
     }
 
+    /// The radio medium (its trace: every frame on air and what the other radio made of it).
+    pub fn medium(&self) -> &Medium {
+        &self.radios.medium
+    }
+
     /// Virtual time now, ns.
     pub fn now_ns(&self) -> u64 {
         self.now_ns
