@@ -159,33 +159,46 @@ impl FlightApp {
         } else {
             stored.clone()
         };
-        let mut app = Self::with_setup(stored, flown, setup, controllers, now_ms);
-        app.setup_error = setup_error;
-        Some(app)
+        Self::with_setup(
+            stored,
+            flown,
+            (setup, setup_error),
+            controllers,
+            now_ms,
+            None,
+        )
     }
 
-    /// The application with a setup and controllers already made from `flown`.
+    /// The application with a setup (and why it is not the stored one) and controllers
+    /// already made from `flown`, resuming the flight `resumed` describes (always `Some`). Built straight into its caller's result,
+    /// once, out of line: the app is ≈ 25 KiB, and every move of it is a copy on the boot's
+    /// stack (the firmware writes the result to its static storage).
+    #[inline(never)]
     fn with_setup(
         stored: Settings,
         flown: Settings,
-        setup: FlightSetup,
+        (setup, setup_error): (FlightSetup, Option<SetupError>),
         controllers: Option<Controllers>,
         now_ms: u32,
-    ) -> Self {
+        resumed: Option<&resume::Resume>,
+    ) -> Option<Self> {
         let mag_cal = magcal::calibration(&stored);
-        let log = Recorder::new(log_profile(&stored), setup.loop_rate_hz);
-        Self {
-            log,
+        let mut loop_side = LoopSide::new(&setup, controllers, mag_cal, now_ms);
+        if let Some(r) = resumed {
+            loop_side.resume(now_ms, &r.state);
+        }
+        Some(Self {
+            log: Recorder::new(log_profile(&stored), setup.loop_rate_hz),
             link: link::LinkSide::new(setup.channels),
-            live: stored.clone(),
+            live: resumed.map_or_else(|| stored.clone(), |r| r.settings.clone()),
             stored,
             flown,
             designs: controllers.map(|c| *c.designs()),
-            loop_side: Some(LoopSide::new(&setup, controllers, mag_cal, now_ms)),
+            loop_side: Some(loop_side),
             view: None,
             battery_monitor: BatteryMonitor::new(setup.battery),
             setup,
-            setup_error: None,
+            setup_error,
             pending_setup: None,
             design_settings: None,
             design_requested: false,
@@ -209,13 +222,13 @@ impl FlightApp {
             gps: gps::GpsPort::new(),
             magcal: MagcalSession::default(),
             mag_cal_changed: None,
-            resumed: None,
+            resumed: resumed.map(|r| r.fault),
             gains_changed: true,
             board: health::BoardState::default(),
             magcal_gesture: magcal::MagcalGesture::default(),
             device: device::DeviceSide::default(),
             vtx_applied: None,
-        }
+        })
     }
 
     /// The setup in force (motor protocol, loop rate: the firmware starts its peripherals

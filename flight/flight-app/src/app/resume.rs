@@ -288,19 +288,14 @@ impl FlightApp {
     pub fn resume(stored: Settings, resume: &Resume, now_ms: u32) -> Option<Self> {
         let setup = from_settings(&resume.settings).ok()?;
         let controllers = crate::gains::rebuild(&setup.control, resume.designs);
-        let mut app = Self::with_setup(
+        Self::with_setup(
             stored,
             resume.settings.clone(),
-            setup,
+            (setup, None),
             Some(controllers),
             now_ms,
-        );
-        app.live = resume.settings.clone();
-        app.resumed = Some(resume.fault);
-        if let Some(side) = app.loop_side.as_mut() {
-            side.resume(now_ms, &resume.state);
-        }
-        Some(app)
+            Some(resume),
+        )
     }
 
     /// How this boot started: `Some` after a resumed flight (with the fault that reset the
