@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::app::LinkInput;
+use crate::gains;
 use crate::pipeline::ImuSample;
 use crate::supervisor::{Decision, FlightMode, Sticks};
 
@@ -31,7 +32,7 @@ impl Blocks {
     fn new(state: FlightState) -> Self {
         let settings = Settings::default();
         let setup = from_settings(&settings).unwrap();
-        let controllers = Controllers::design(&setup.control).unwrap();
+        let controllers = gains::design(&setup.control).unwrap();
         Self {
             state: state.encode(),
             gains: encode_gains(&settings, controllers.designs()).unwrap(),
@@ -68,9 +69,9 @@ fn every_block_round_trips_and_a_flipped_bit_fails_its_crc() {
     let (settings, designs) = decode_gains(&b.gains).unwrap();
     assert_eq!(settings, Settings::default());
     let setup = from_settings(&settings).unwrap();
-    let designed = Controllers::design(&setup.control).unwrap();
+    let designed = gains::design(&setup.control).unwrap();
     // The same gains, bit for bit: the rebuilt controllers equal the designed ones.
-    assert_eq!(Controllers::from_designs(&setup.control, designs), designed);
+    assert_eq!(gains::rebuild(&setup.control, designs), designed);
     for bit in [0, 37, 100, 31 * STATE_WORDS as u32] {
         let mut words = state.encode();
         let (w, b) = ((bit / 32) as usize % STATE_WORDS, bit % 32);
