@@ -73,7 +73,7 @@ fn boots(name: &str, tasks: usize) {
 #[test]
 #[ignore = "needs the images: cargo xtask dist"]
 fn boots_brushedsparky() {
-    boots("flight-brushedsparky.elf", 12);
+    boots("flight-brushedsparky.elf", 13);
 }
 
 #[test]
@@ -85,7 +85,7 @@ fn boots_sparky2() {
 #[test]
 #[ignore = "needs the images: cargo xtask dist"]
 fn boots_brushedsparky_behind_the_taulabs_bootloader() {
-    boots("flight-brushedsparky-taulabs-bl.elf", 12);
+    boots("flight-brushedsparky-taulabs-bl.elf", 13);
 }
 
 #[test]
