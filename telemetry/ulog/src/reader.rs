@@ -203,7 +203,9 @@ fn parse(msg_type: u8, body: &[u8]) -> Option<Message<'_>> {
                 name,
             }
         }
-        kind::UNSUBSCRIPTION => Message::Unsubscription {
+        // The fixed-size messages are refused at any other size: a reader that took the
+        // first bytes of a longer one would lose the rest without a word.
+        kind::UNSUBSCRIPTION if body.len() == 2 => Message::Unsubscription {
             msg_id: u16_at(body, 0)?,
         },
         kind::DATA => Message::Data {
@@ -222,14 +224,15 @@ fn parse(msg_type: u8, body: &[u8]) -> Option<Message<'_>> {
             text: body.get(11..)?,
         },
         kind::SYNC => {
-            if body.get(..8)? != SYNC_MAGIC {
+            if body != SYNC_MAGIC {
                 return None;
             }
             Message::Sync
         }
-        kind::DROPOUT => Message::Dropout {
+        kind::DROPOUT if body.len() == 2 => Message::Dropout {
             duration_ms: u16_at(body, 0)?,
         },
+        kind::UNSUBSCRIPTION | kind::DROPOUT => return None,
         _ => Message::Unknown { msg_type, body },
     })
 }
@@ -488,6 +491,33 @@ mod tests {
         assert_eq!(Reader::new(&buf[..15]).err(), Some(Error::NotULog));
         buf[0] = b'X';
         assert_eq!(Reader::new(&buf).err(), Some(Error::NotULog));
+    }
+
+    /// Fuzzing (ulog_reader) found a dropout of nine bytes read as its first two: the
+    /// fixed-size messages are malformed at any other size, never cut short.
+    #[test]
+    fn fixed_size_messages_of_another_size_are_errors() {
+        let mut file = vec![
+            0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35, 1, 0, 0, 0, 0, 0, 0, 0, 0,
+        ];
+        file.extend_from_slice(&[
+            9, 0, b'O', 0xf7, 0x28, 0x50, 0x50, 0xf7, 0x10, 0x09, 0x00, 0xf7,
+        ]);
+        file.extend_from_slice(&[3, 0, b'R', 1, 0, 0]); // an unsubscription of three bytes
+        file.extend_from_slice(&[
+            9, 0, b'S', 0x2F, 0x73, 0x13, 0x20, 0x25, 0x0C, 0xBB, 0x12, 0,
+        ]);
+        file.extend_from_slice(&[2, 0, b'O', 20, 0]); // a whole dropout still reads
+        let all: Vec<_> = Reader::new(&file).unwrap().collect();
+        assert_eq!(
+            all,
+            [
+                Err(Error::Malformed { offset: 16 }),
+                Err(Error::Malformed { offset: 28 }),
+                Err(Error::Malformed { offset: 34 }),
+                Ok((46, Message::Dropout { duration_ms: 20 })),
+            ]
+        );
     }
 
     #[test]
