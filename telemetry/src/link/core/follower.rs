@@ -30,9 +30,11 @@ pub const DEFAULT_FAILSAFE_US: u64 = 250_000;
 /// to the slots that holds for seconds (1 kHz against 250 Hz, a few hundred ppm apart): the
 /// read-out then ends ≈ 250 µs after the packet and the set-up takes ≈ 250 µs instead of
 /// ≈ 100. With 100 µs the window opened after the master's preamble for seconds at a time
-/// (PIL, issue 28); 300 µs covers both. Opening earlier costs receiver current only: the
-/// slot before is on another hop channel, and its listen ends 75 µs before this slot.
-pub const RX_EARLY_US: u64 = 300;
+/// (PIL, issue 28); with 300 µs, once the flight log and the CRSF device side had grown the
+/// loop's exchange, for ≈ 1 s every 3.5–15 s; with 500 µs none in 30 s. Opening earlier
+/// costs receiver current only: the slot before is on another hop channel, and its listen
+/// ends where this window opens.
+pub const RX_EARLY_US: u64 = 500;
 /// While tracking, a packet of the tracked slot moves the grid later by at most this much
 /// (an earlier estimate is taken whole). A packet is timestamped after the nIRQ latency and
 /// its FIFO read-out, so its estimate of the slot start is never early, only late — by
