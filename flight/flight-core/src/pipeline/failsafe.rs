@@ -156,20 +156,11 @@ impl FailsafeGuidance {
 
 #[cfg(test)]
 mod tests {
+    use super::super::guidance::tests::nav;
     use super::*;
 
     const TS: f32 = 0.002;
     const HOVER: f32 = 0.4;
-
-    /// A navigation estimate at 10 m, level; `fix`: a good GPS fix 2 m north of the origin.
-    fn nav(fix: bool) -> Nav {
-        Nav {
-            vertical: Some((10.0, 0.0)),
-            climb_mps: Some(0.0),
-            horizontal: fix.then_some(([2.0, 0.0], [0.0, 0.0])),
-            yaw_cos_sin: [1.0, 0.0],
-        }
-    }
 
     fn situation(now_ms: u32, climb: Option<f32>, nav: Option<Nav>) -> Situation {
         Situation {

@@ -83,14 +83,15 @@ pub(super) fn pilot(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     const TS: f32 = 0.002;
     const HOVER: f32 = 0.4;
 
-    /// At 10 m, level, facing north; `fix`: a good fix 2 m north of the origin.
-    fn nav(fix: bool) -> Nav {
+    /// At 10 m, level, facing north; `fix`: a good fix 2 m north of the origin (the
+    /// failsafe guidance's tests fly from it too).
+    pub(in crate::pipeline) fn nav(fix: bool) -> Nav {
         Nav {
             vertical: Some((10.0, 0.0)),
             climb_mps: Some(0.0),
