@@ -26,10 +26,10 @@ const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE
 impl FlightApp {
     /// Answers what the line assembler (`settings::LineAssembler`) produced: a whole line,
     /// or the reason one was refused (too long, not text) — never a cut line.
-    pub fn on_console_input<W: Write>(
+    pub fn on_console_input(
         &mut self,
         line: Result<&str, &LineError>,
-        out: &mut W,
+        out: &mut dyn Write,
     ) -> core::fmt::Result {
         match line {
             Ok(line) => self.on_console_line(line, out),
@@ -38,7 +38,7 @@ impl FlightApp {
     }
 
     /// Answers one console line (without its line ending) into `out`.
-    pub fn on_console_line<W: Write>(&mut self, line: &str, out: &mut W) -> core::fmt::Result {
+    pub fn on_console_line(&mut self, line: &str, out: &mut dyn Write) -> core::fmt::Result {
         let armed = self.armed();
         match parse_line(line) {
             Ok(Command::Nothing) => Ok(()),
@@ -103,7 +103,7 @@ impl FlightApp {
         }
     }
 
-    fn on_magcal<W: Write>(&mut self, action: MagcalAction, out: &mut W) -> core::fmt::Result {
+    fn on_magcal(&mut self, action: MagcalAction, out: &mut dyn Write) -> core::fmt::Result {
         match action {
             MagcalAction::Start => {
                 self.magcal.start();
@@ -138,7 +138,7 @@ impl FlightApp {
         }
     }
 
-    fn write_magcal_samples<W: Write>(&self, out: &mut W) -> core::fmt::Result {
+    fn write_magcal_samples(&self, out: &mut dyn Write) -> core::fmt::Result {
         let m = &self.magcal;
         write!(
             out,
@@ -149,7 +149,7 @@ impl FlightApp {
         )
     }
 
-    fn write_status<W: Write>(&self, out: &mut W) -> core::fmt::Result {
+    fn write_status(&self, out: &mut dyn Write) -> core::fmt::Result {
         let link = if self.link_input.up { "up" } else { "down" };
         match self.last_output() {
             Some(state) => {
@@ -243,7 +243,7 @@ impl FlightApp {
 impl FlightApp {
     /// The firmware's standing, a line each: the loop's misses, what the boot found, the
     /// baro, a resumed flight, the USB host.
-    fn write_health<W: Write>(&self, out: &mut W) -> core::fmt::Result {
+    fn write_health(&self, out: &mut dyn Write) -> core::fmt::Result {
         let h = self.health();
         write!(
             out,
@@ -286,7 +286,7 @@ impl FlightApp {
 
     /// The link's key as the console shows it (its fingerprint, never the key) and how the
     /// last bind window ended.
-    fn write_link_state<W: Write>(&self, out: &mut W) -> core::fmt::Result {
+    fn write_link_state(&self, out: &mut dyn Write) -> core::fmt::Result {
         match (self.link_params(), self.live.link_key()) {
             (Some(_), Some(key)) => write!(
                 out,
@@ -326,8 +326,8 @@ fn fix_name(fix: FixType) -> &'static str {
 }
 
 /// The fit and its checks, one line each.
-fn write_calibration<W: Write>(
-    out: &mut W,
+fn write_calibration(
+    out: &mut dyn Write,
     cal: &crate::estimation::magcal::MagCalibration,
 ) -> core::fmt::Result {
     let [[xx, xy, xz], [_, yy, yz], [_, _, zz]] = cal.matrix.map(|row| row.map(Shortest));
@@ -343,8 +343,8 @@ fn write_calibration<W: Write>(
 }
 
 /// `[x, y, z]`, each value written as `text` makes it.
-fn write_vector<W: Write, T: core::fmt::Display>(
-    out: &mut W,
+fn write_vector<T: core::fmt::Display>(
+    out: &mut dyn Write,
     v: [f32; 3],
     text: impl Fn(f32) -> T,
 ) -> core::fmt::Result {

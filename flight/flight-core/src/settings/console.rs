@@ -144,7 +144,7 @@ pub fn parse_line(line: &str) -> Result<Command<'_>, ConsoleError> {
 }
 
 /// Writes `name = value` the way `set` accepts it back.
-pub fn write_setting<W: Write>(out: &mut W, settings: &Settings, name: &str) -> core::fmt::Result {
+pub fn write_setting(out: &mut dyn Write, settings: &Settings, name: &str) -> core::fmt::Result {
     let Some((_, param)) = find(name) else {
         return writeln!(out, "{name}: no such setting");
     };
@@ -163,7 +163,7 @@ pub fn write_setting<W: Write>(out: &mut W, settings: &Settings, name: &str) -> 
 }
 
 /// Writes every setting starting with `prefix`.
-pub fn write_list<W: Write>(out: &mut W, settings: &Settings, prefix: &str) -> core::fmt::Result {
+pub fn write_list(out: &mut dyn Write, settings: &Settings, prefix: &str) -> core::fmt::Result {
     for (p, _) in settings.iter().filter(|(p, _)| p.name.starts_with(prefix)) {
         write_setting(out, settings, p.name)?;
     }
