@@ -307,13 +307,14 @@ async fn area_erased<S: NorFlash, C: CacheImpl<u16>>(
     Ok(true)
 }
 
-/// Whether any old-format item (one per parameter key) is stored.
+/// Whether any old-format item (one per parameter key) is stored. Read as bytes, as the
+/// slots are: one instance of the map's fetch in the image, not a second one for `u32`.
 async fn old_format_present<S: NorFlash, C: CacheImpl<u16>>(
     map: &mut MapStorage<u16, S, C>,
 ) -> bool {
     for p in PARAMS {
         let mut buf = Buffer::new();
-        if let Ok(Some(_)) = map.fetch_item::<u32>(&mut buf.0, &p.key).await {
+        if let Ok(Some(_)) = map.fetch_item::<&[u8]>(&mut buf.0, &p.key).await {
             return true;
         }
     }
