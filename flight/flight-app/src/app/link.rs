@@ -32,7 +32,7 @@ use telemetry::link::follower::{FollowerBind, FollowerHooks};
 use telemetry::link::phrase::PHRASE_MAX_BYTES;
 use telemetry::link::{Band, BindRefusal, Entropy, LinkParams, PhraseError, check_phrase};
 use telemetry::messages::{
-    FRAMED_MAX_BYTES, LinkSecurity, Message, SysIdResult, decode_payload, encode_message,
+    FRAMED_MAX_BYTES, LinkSecurity, Message, SysIdResult, decode_change, encode_message,
 };
 
 use super::{FlightApp, Task};
@@ -438,7 +438,7 @@ impl FlightApp {
                     slot.copy_from_slice(body);
                     self.on_crsf_record(slot_bytes(&record, len));
                 }
-            } else if let Some(m) = decode_payload(payload) {
+            } else if let Some(m) = decode_change(payload) {
                 self.apply_link_change(&m);
             }
         }
