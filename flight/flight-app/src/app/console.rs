@@ -18,7 +18,7 @@ use crate::sensors::ubx::config::Status;
 use crate::sensors::ubx::{FixType, Generation};
 use crate::settings::decimal::{Fixed, Shortest};
 use crate::settings::{
-    Command, LineError, MagcalAction, Settings, parse_line, write_list, write_setting,
+    Command, LineError, MagcalAction, Settings, Word, parse_line, write_list, write_setting,
 };
 
 const HELP: &str = "help | list [prefix] | get NAME | set NAME VALUE [NAME VALUE]... | save | defaults | status | bind [PHRASE] | magcal start|status|save|cancel\r\n";
@@ -87,11 +87,11 @@ impl FlightApp {
                     out,
                     "bind window open for {} s {}: start the bind on the module\r\n",
                     super::BIND_WINDOW_US / 1_000_000,
-                    if with_phrase {
+                    Word(if with_phrase {
                         "with the phrase (held until the window closes, never stored)"
                     } else {
                         "without a phrase"
-                    }
+                    })
                 ),
                 Err(BindError::Armed) => out.write_str("refused: disarm first\r\n"),
                 Err(BindError::Phrase(e)) => write!(out, "refused: {e}\r\n"),
@@ -143,21 +143,21 @@ impl FlightApp {
         write!(
             out,
             "magcal {}: {} readings{}\r\n",
-            if m.collecting() { "collecting" } else { "idle" },
+            Word(if m.collecting() { "collecting" } else { "idle" }),
             m.len(),
-            if m.is_full() { " (full)" } else { "" }
+            Word(if m.is_full() { " (full)" } else { "" })
         )
     }
 
     fn write_status(&self, out: &mut dyn Write) -> core::fmt::Result {
-        let link = if self.link_input.up { "up" } else { "down" };
+        let link = Word(if self.link_input.up { "up" } else { "down" });
         match self.last_output() {
             Some(state) => {
                 write!(
                     out,
                     "mode {}, failsafe {}, link {}, arm blockers {:#x}, attitude ",
-                    state.mode.name(),
-                    state.failsafe,
+                    Word(state.mode.name()),
+                    Word::of_bool(state.failsafe),
                     link,
                     self.arming_blockers(),
                 )?;
@@ -170,10 +170,10 @@ impl FlightApp {
             write!(
                 out,
                 "estimator {} (ins.mode {}), fallbacks {}, gps fix {}\r\n",
-                estimator.source.name(),
-                estimator.mode.name(),
+                Word(estimator.source.name()),
+                Word(estimator.mode.name()),
                 estimator.fallbacks,
-                estimator.gps_fix
+                Word::of_bool(estimator.gps_fix)
             )?;
         }
         if let Some((pvt, _)) = self.gps_latest() {
@@ -181,13 +181,13 @@ impl FlightApp {
             write!(
                 out,
                 "gps {} sats {} hacc {} mm, receiver {}, config ",
-                fix_name(pvt.fix_type),
+                Word(fix_name(pvt.fix_type)),
                 pvt.num_sv,
                 pvt.h_acc_mm,
-                match generation {
+                Word(match generation {
                     Generation::M8 => "M8",
                     Generation::M9M10 => "M9/M10",
-                },
+                }),
             )?;
             match config {
                 Status::Pending { step } => write!(out, "waiting for ACK {step}")?,
@@ -208,7 +208,7 @@ impl FlightApp {
             write!(
                 out,
                 "IMU fault: {} (motors stopped, re-arm needed)\r\n",
-                fault.name()
+                Word(fault.name())
             )?;
         }
         if let Some(p) = self.settings_problem {
@@ -222,18 +222,18 @@ impl FlightApp {
         }
         self.write_health(out)?;
         self.write_link_state(out)?;
-        let armed = self.armed();
+        let armed = Word::of_bool(self.armed());
         match self.battery {
             Some(b) => write!(
                 out,
                 "armed {armed}, battery {} mV {} mA {}\r\n",
                 b.voltage_mv,
                 b.current_ma,
-                match b.level {
+                Word(match b.level {
                     BatteryLevel::Ok => "ok",
                     BatteryLevel::Warning => "warning",
                     BatteryLevel::Critical => "critical",
-                }
+                })
             ),
             None => write!(out, "armed {armed}, battery unknown\r\n"),
         }
@@ -269,10 +269,10 @@ impl FlightApp {
             match fault {
                 None => out.write_str("watchdog")?,
                 Some(f) => {
-                    let reason = match f.reason {
+                    let reason = Word(match f.reason {
                         resume::FaultReason::Panic => "panic",
                         resume::FaultReason::HardFault => "HardFault",
-                    };
+                    });
                     write!(out, "{reason} at {} ms, address {:#x}", f.at_ms, f.address)?;
                 }
             }
@@ -304,7 +304,7 @@ impl FlightApp {
                 None => out.write_str("last bind: bound unauthenticated\r\n"),
             },
             Some(BindReport::Refused(why)) => {
-                write!(out, "last bind: not bound, {}\r\n", why.describe())
+                write!(out, "last bind: not bound, {}\r\n", Word(why.describe()))
             }
             Some(BindReport::NoOffer) => out.write_str("last bind: no offer heard\r\n"),
             None => Ok(()),

@@ -10,7 +10,9 @@ mod line;
 mod params;
 mod store;
 
-pub use console::{Command, ConsoleError, MagcalAction, parse_line, write_list, write_setting};
+pub use console::{
+    Command, ConsoleError, MagcalAction, Word, parse_line, write_list, write_setting,
+};
 pub use line::{LineAssembler, LineError};
 pub use params::{MAX_PAIRS, ParamError, ParamText, Settings};
 pub use store::{

@@ -24,7 +24,7 @@ use core::fmt::Write;
 use heapless::{String, Vec};
 use telemetry::handset::crsf::params::{Entry, MAX_ENTRY_LEN};
 
-use crate::settings::{Kind, PARAMS, Param, Settings, Value};
+use crate::settings::{Kind, PARAMS, Param, Settings, Value, Word};
 use crate::vtx::{self, VtxChannel};
 use telemetry::settings::COUNT;
 
@@ -233,7 +233,7 @@ impl View<'_> {
         if let Some((n, note)) = self.note
             && n == number
         {
-            let _ = write!(text, " ({note})");
+            let _ = write!(text, " ({})", Word(note));
         }
         text
     }
@@ -409,7 +409,7 @@ pub fn vtx_frequency_text(settings: &Settings) -> Text {
         text,
         "{} MHz ({} {})",
         vtx.frequency_mhz(),
-        vtx.band.label(),
+        Word(vtx.band.label()),
         vtx.channel
     );
     text
