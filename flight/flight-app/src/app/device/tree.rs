@@ -331,6 +331,7 @@ fn setting_entry(
 }
 
 /// "1 5725MHz;2 5745MHz;…" for the settings' band: the channel row shows frequencies.
+/// (Numbers as `u32`, the console's one unsigned formatter: `app::console`.)
 fn vtx_channel_entry(parent: u8, value: Value, settings: &Settings, unit: &str) -> Entry {
     let band = VtxChannel::from_settings(settings).band;
     let mut labels: Vec<Text, { vtx::CHANNELS as usize }> = Vec::new();
@@ -338,8 +339,9 @@ fn vtx_channel_entry(parent: u8, value: Value, settings: &Settings, unit: &str) 
         let mut label = String::new();
         let _ = write!(
             label,
-            "{channel} {}MHz",
-            vtx::frequency_mhz(band, channel).unwrap_or(0)
+            "{} {}MHz",
+            u32::from(channel),
+            u32::from(vtx::frequency_mhz(band, channel).unwrap_or(0))
         );
         let _ = labels.push(label);
     }
@@ -408,9 +410,9 @@ pub fn vtx_frequency_text(settings: &Settings) -> Text {
     let _ = write!(
         text,
         "{} MHz ({} {})",
-        vtx.frequency_mhz(),
+        u32::from(vtx.frequency_mhz()),
         Word(vtx.band.label()),
-        vtx.channel
+        u32::from(vtx.channel)
     );
     text
 }
