@@ -11,7 +11,7 @@ mod params;
 mod store;
 
 pub use console::{
-    Command, ConsoleError, MagcalAction, Word, parse_line, write_list, write_setting,
+    Command, ConsoleError, MagcalAction, Signed, Word, parse_line, write_list, write_setting,
 };
 pub use line::{LineAssembler, LineError};
 pub use params::{MAX_PAIRS, ParamError, ParamText, Settings};
