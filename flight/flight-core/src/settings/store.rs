@@ -282,6 +282,26 @@ async fn read_slot<S: NorFlash, C: CacheImpl<u16>>(
     }
 }
 
+/// Both slots, read in turn (one read in the image for `load` and `save_whole`).
+async fn read_slots<S: NorFlash, C: CacheImpl<u16>>(
+    map: &mut MapStorage<u16, S, C>,
+) -> Result<[Slot; 2], StoreError> {
+    let mut slots = [Slot::Empty, Slot::Empty];
+    for (slot, key) in slots.iter_mut().zip(SLOTS) {
+        *slot = read_slot(map, key).await?;
+    }
+    Ok(slots)
+}
+
+/// The record of higher generation (the second on a tie), if either slot holds one.
+fn newest(slots: [Slot; 2]) -> Option<Record> {
+    match slots {
+        [Slot::Record(x), Slot::Record(y)] => Some(if x.generation > y.generation { x } else { y }),
+        [Slot::Record(r), _] | [_, Slot::Record(r)] => Some(r),
+        _ => None,
+    }
+}
+
 /// Whether every byte of the settings area reads erased (0xFF): nothing was ever stored.
 async fn area_erased<S: NorFlash, C: CacheImpl<u16>>(
     map: &mut MapStorage<u16, S, C>,
@@ -327,18 +347,10 @@ pub async fn load<S: NorFlash, C: CacheImpl<u16>>(
     map: &mut MapStorage<u16, S, C>,
     settings: &mut Settings,
 ) -> Result<LoadReport, StoreError> {
-    let [a, b] = SLOTS;
-    let slots = [read_slot(map, a).await?, read_slot(map, b).await?];
+    let slots = read_slots(map).await?;
     let damaged = slots.iter().any(|s| matches!(s, Slot::Damaged));
-    let newest = slots
-        .into_iter()
-        .filter_map(|s| match s {
-            Slot::Record(r) => Some(r),
-            _ => None,
-        })
-        .max_by_key(|r| r.generation);
     let mut report = LoadReport::default();
-    let Some(record) = newest else {
+    let Some(record) = newest(slots) else {
         *settings = Settings::default();
         report.problem = if damaged {
             Some(LoadProblem::Corrupt)
@@ -425,14 +437,10 @@ pub async fn save_whole<S: NorFlash, C: CacheImpl<u16>>(
     settings: &Settings,
 ) -> Result<(), StoreError> {
     let [a, b] = SLOTS;
-    let generation = |s: &Slot| match s {
+    let [ga, gb] = read_slots(map).await?.map(|s| match s {
         Slot::Record(r) => Some(r.generation),
         _ => None,
-    };
-    let (ga, gb) = (
-        generation(&read_slot(map, a).await?),
-        generation(&read_slot(map, b).await?),
-    );
+    });
     // Overwrite the slot that does not hold the newest whole record.
     let (target, newest) = match (ga, gb) {
         (Some(x), Some(y)) if x >= y => (b, x),
