@@ -1,16 +1,19 @@
 //! The telemetry stream's framing and messages: bytes into `MessageReader` (COBS deframing,
-//! CRC, postcard), and any payload through `framing::frame` and the `Deframer`.
+//! CRC, postcard), any payload through `framing::frame` and the `Deframer`, and through the
+//! flight side's `decode_change`.
 //!
 //! Invariants: every decoded message re-encodes into a frame that decodes to the same bytes
 //! again (compared as encodings: a NaN float is not equal to itself); a framed payload always
-//! comes back unchanged and contains no delimiter inside.
+//! comes back unchanged and contains no delimiter inside; `decode_change` reads a payload as
+//! `decode_payload` does when that is a setting change (plain or signed), else not at all.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use taulink_fuzz::Input;
 use telemetry::framing::{Deframed, Deframer, frame, framed_len};
 use telemetry::messages::{
-    Decoded, FRAMED_MAX_BYTES, MESSAGE_MAX_BYTES, MessageReader, encode_message,
+    Decoded, FRAMED_MAX_BYTES, MESSAGE_MAX_BYTES, Message, MessageReader, decode_change,
+    decode_payload, encode_message,
 };
 
 fuzz_target!(|data: &[u8]| {
@@ -52,4 +55,9 @@ fuzz_target!(|data: &[u8]| {
         }]
     );
     assert_eq!(deframer.payload(), payload);
+
+    // The flight side's reading of the same payload.
+    let change = decode_payload(payload)
+        .filter(|m| matches!(m, Message::SettingChange(_) | Message::SignedChange(_)));
+    assert_eq!(decode_change(payload), change);
 });
