@@ -73,12 +73,12 @@ fuzz_target!(|data: &[u8]| {
                 if let Some(n) = rewrite(&message, &mut out) {
                     assert_eq!(out[..n], file[offset..end], "{message:?}");
                 }
-                if let Message::Format(f) = message {
-                    if let Ok(size) = f.size() {
-                        for field in f.fields() {
-                            let (at, ty) = f.field(field.name).expect("its own field");
-                            assert!(at + ty.size().expect("basic") <= size);
-                        }
+                if let Message::Format(f) = message
+                    && let Ok(size) = f.size()
+                {
+                    for field in f.fields() {
+                        let (at, ty) = f.field(field.name).expect("its own field");
+                        assert!(at + ty.size().expect("basic") <= size);
                     }
                 }
             }
