@@ -263,18 +263,19 @@ where
 
     /// Ends a TX/RX: on success only disables interrupts; on failure also goes to READY and
     /// flushes `fifos`; a POR triggers re-init; a timeout checks the chip is still there.
-    pub(crate) async fn finish<T>(
+    /// Not generic over a value: one copy of it serves TX and RX (issue 33).
+    pub(crate) async fn finish(
         &mut self,
-        outcome: Result<T, Error<SPI::Error>>,
+        outcome: Result<(), Error<SPI::Error>>,
         fifos: u8,
-    ) -> Result<T, Error<SPI::Error>> {
+    ) -> Result<(), Error<SPI::Error>> {
         match outcome {
-            Ok(value) => {
+            Ok(()) => {
                 self.bus
                     .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
                     .await?;
                 self.busy = false;
-                Ok(value)
+                Ok(())
             }
             Err(Error::ChipReset) => Err(self.recover().await),
             Err(e) => {
