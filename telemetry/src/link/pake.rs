@@ -17,10 +17,9 @@
 use curve25519_dalek::ristretto::{CompressedRistretto, RistrettoPoint};
 use curve25519_dalek::scalar::Scalar;
 use curve25519_dalek::traits::Identity;
-use hmac::{Hmac, Mac};
-use sha2::Sha512 as HmacHash;
+use hmac::Mac;
 
-use super::sha512::{Sha512, sha512};
+use super::sha512::{HmacSha512, Sha512, hmac, sha512};
 
 /// Bytes of an encoded share (a ristretto255 element).
 pub const SHARE_BYTES: usize = 32;
@@ -49,11 +48,10 @@ impl SessionKey {
     /// exchange (the link key, each confirmation tag) takes its own label.
     pub fn derive(&self, label: &[u8]) -> [u8; 64] {
         // HMAC takes keys of any length: this cannot fail.
-        let Ok(mut mac) = Hmac::<HmacHash>::new_from_slice(&self.0) else {
+        let Ok(mac) = HmacSha512::new_from_slice(&self.0) else {
             return [0; 64];
         };
-        mac.update(label);
-        mac.finalize().into_bytes().into()
+        hmac(&mac, &[label])
     }
 
     /// The first 16 bytes of [`SessionKey::derive`]: a 128-bit key or confirmation tag.
