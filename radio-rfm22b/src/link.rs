@@ -42,7 +42,7 @@ impl telemetry::link::LinkClock for EmbassyClock {
 /// The modem of each rate mode: deviation for a modulation index 2Δf/R of 1.2…3.1 (Tau
 /// Labs' and OpenLRSng's profiles span 1.1–4.7); 256 kbps uses the 150 kHz Tau Labs
 /// intended, not its table's 9.4 kHz typo.
-pub fn modem_for(rate: RateMode) -> Result<ModemConfig, ConfigError> {
+pub const fn modem_for(rate: RateMode) -> Result<ModemConfig, ConfigError> {
     let deviation_hz = match rate {
         RateMode::L50 => 30_000,
         RateMode::M100 => 45_000,
@@ -145,7 +145,16 @@ where
         if self.configured == Some(*config) {
             return Ok(());
         }
-        let modem = modem_for(config.rate).map_err(LinkRadioError::Config)?;
+        // Each mode's modem computed at build time: the register calculator's arithmetic
+        // stays out of the image (issue 33).
+        let modem = match config.rate {
+            RateMode::L50 => const { modem_for(RateMode::L50) },
+            RateMode::M100 => const { modem_for(RateMode::M100) },
+            RateMode::F250 => const { modem_for(RateMode::F250) },
+            RateMode::F500 => const { modem_for(RateMode::F500) },
+            RateMode::F700 => const { modem_for(RateMode::F700) },
+        }
+        .map_err(LinkRadioError::Config)?;
         let carrier = Carrier::try_new(config.base_hz).map_err(LinkRadioError::Config)?;
         let mut chip = Config::new(
             modem,

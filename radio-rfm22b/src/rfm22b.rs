@@ -194,59 +194,48 @@ where
 
     /// Writes every register of `config`, in bursts (about 20 SPI transactions).
     pub(crate) async fn configure(&mut self, config: &Config) -> Result<(), Error<SPI::Error>> {
-        let bus = &mut self.bus;
-        bus.write(OPERATING_MODE_1, MODE_XTON).await?;
-        bus.write(OPERATING_MODE_2, 0x00).await?;
-        bus.write(CRYSTAL_LOAD, config.crystal_load.register())
-            .await?;
         let [g0, g1, g2] = config.gpio.registers();
-        bus.write_burst(GPIO0_CONFIG, &[g0, g1, g2, 0x00]).await?;
-        // Temperature sensor on the ADC, −64…+64 °C range, 0.5 °C steps (0x12 = 0x20).
-        bus.write_burst(ADC_CONFIG, &[0x00, 0x00]).await?;
-        bus.write_burst(TEMPERATURE_CONTROL, &[0x20, 0x00]).await?;
-        bus.write(
-            RSSI_THRESHOLD,
-            measure::rssi_raw(config.clear_channel_threshold_dbm),
-        )
-        .await?;
-
         let modem = config.modem.registers();
-        bus.write_burst(IF_FILTER_BANDWIDTH, &modem.block_1c)
-            .await?;
-        bus.write(AFC_LIMITER, modem.afc_limiter).await?;
-        bus.write(CHARGE_PUMP_TRIM, modem.charge_pump).await?;
-        bus.write(AGC_OVERRIDE, modem.agc).await?;
         let [dr1, dr0, m70, m71, fd] = modem.block_6e;
         let m70 = m70 | u8::from(config.packet.whitening());
-        bus.write_burst(TX_DATA_RATE_1, &[dr1, dr0, m70, m71, fd])
-            .await?;
-
         let packet = &config.packet;
-        bus.write(DATA_ACCESS_CONTROL, packet.data_access_control())
-            .await?;
-        bus.write_burst(HEADER_CONTROL_1, &packet.header_block())
-            .await?;
-        bus.write_burst(SYNC_WORD_3, &packet.address_block())
-            .await?;
-
-        bus.write(TX_POWER, config.tx_power.register(config.lna_switch))
-            .await?;
         let [band, fc1, fc0] = config.carrier.registers();
-        bus.write_burst(FREQUENCY_OFFSET_1, &[0x00, 0x00, band, fc1, fc0])
-            .await?;
-        bus.write_burst(
-            HOP_CHANNEL,
-            &[self.channel, config.channel_spacing.register()],
-        )
-        .await?;
-        bus.write_burst(TX_FIFO_ALMOST_FULL, &config.fifo.registers())
-            .await?;
+        // One table, written by one loop: each awaited write is a state of the future, and
+        // a state is flash (issue 33).
+        let blocks: [(u8, &[u8]); 19] = [
+            (OPERATING_MODE_1, &[MODE_XTON]),
+            (OPERATING_MODE_2, &[0x00]),
+            (CRYSTAL_LOAD, &[config.crystal_load.register()]),
+            (GPIO0_CONFIG, &[g0, g1, g2, 0x00]),
+            // Temperature sensor on the ADC, −64…+64 °C range, 0.5 °C steps (0x12 = 0x20).
+            (ADC_CONFIG, &[0x00, 0x00]),
+            (TEMPERATURE_CONTROL, &[0x20, 0x00]),
+            (
+                RSSI_THRESHOLD,
+                &[measure::rssi_raw(config.clear_channel_threshold_dbm)],
+            ),
+            (IF_FILTER_BANDWIDTH, &modem.block_1c),
+            (AFC_LIMITER, &[modem.afc_limiter]),
+            (CHARGE_PUMP_TRIM, &[modem.charge_pump]),
+            (AGC_OVERRIDE, &[modem.agc]),
+            (TX_DATA_RATE_1, &[dr1, dr0, m70, m71, fd]),
+            (DATA_ACCESS_CONTROL, &[packet.data_access_control()]),
+            (HEADER_CONTROL_1, &packet.header_block()),
+            (SYNC_WORD_3, &packet.address_block()),
+            (TX_POWER, &[config.tx_power.register(config.lna_switch)]),
+            (FREQUENCY_OFFSET_1, &[0x00, 0x00, band, fc1, fc0]),
+            (
+                HOP_CHANNEL,
+                &[self.channel, config.channel_spacing.register()],
+            ),
+            (TX_FIFO_ALMOST_FULL, &config.fifo.registers()),
+        ];
+        for (address, data) in blocks {
+            self.bus.write_burst(address, data).await?;
+        }
         Ok(())
     }
 
-    /// Reads (and so clears) the interrupt status before arming an operation. A power-on
-    /// reset latched while the chip sat idle means its registers are back at their reset
-    /// values (915 MHz, 40 kbit/s): re-initialise and report it rather than clear it unseen.
     pub(crate) async fn clear_status(&mut self) -> Result<(), Error<SPI::Error>> {
         let status = self.read_status().await?;
         // All ones is a bus with no chip on it, not a reset: the operation's own presence
@@ -274,18 +263,19 @@ where
 
     /// Ends a TX/RX: on success only disables interrupts; on failure also goes to READY and
     /// flushes `fifos`; a POR triggers re-init; a timeout checks the chip is still there.
-    pub(crate) async fn finish<T>(
+    /// Not generic over a value: one copy of it serves TX and RX (issue 33).
+    pub(crate) async fn finish(
         &mut self,
-        outcome: Result<T, Error<SPI::Error>>,
+        outcome: Result<(), Error<SPI::Error>>,
         fifos: u8,
-    ) -> Result<T, Error<SPI::Error>> {
+    ) -> Result<(), Error<SPI::Error>> {
         match outcome {
-            Ok(value) => {
+            Ok(()) => {
                 self.bus
                     .write_burst(INTERRUPT_ENABLE_1, &[0x00, 0x00])
                     .await?;
                 self.busy = false;
-                Ok(value)
+                Ok(())
             }
             Err(Error::ChipReset) => Err(self.recover().await),
             Err(e) => {

@@ -156,29 +156,27 @@ where
                 }
             }
         };
-        match outcome {
+        let (received, ended) = match outcome {
             Ok(RxOutcome::Packet(p)) => {
                 // The chip leaves RX by itself after a valid packet; make READY explicit so
                 // no second packet starts filling the FIFO.
                 self.bus.write(OPERATING_MODE_1, MODE_XTON).await?;
-                self.finish(Ok(RxOutcome::Packet(p)), FFCLR_RX).await
+                (RxOutcome::Packet(p), Ok(()))
             }
             // Discarded packets: back to READY with an empty FIFO, as after a timeout.
             Ok(other) => {
                 self.idle().await?;
                 self.clear_fifos(FFCLR_RX).await?;
-                Ok(other)
+                return Ok(other);
             }
-            Err(Error::Timeout) => {
-                self.finish::<()>(Err(Error::Timeout), FFCLR_RX)
-                    .await
-                    .or_else(|e| match e {
-                        Error::Timeout => Ok(()),
-                        other => Err(other),
-                    })?;
-                Ok(RxOutcome::Timeout)
-            }
-            Err(e) => self.finish(Err(e), FFCLR_RX).await,
+            Err(e) => (RxOutcome::Timeout, Err(e)),
+        };
+        // One clean-up for every ending; a timeout that clean-up confirms is no error.
+        let timed_out = matches!(ended, Err(Error::Timeout));
+        match self.finish(ended, FFCLR_RX).await {
+            Ok(()) => Ok(received),
+            Err(Error::Timeout) if timed_out => Ok(RxOutcome::Timeout),
+            Err(e) => Err(e),
         }
     }
 }

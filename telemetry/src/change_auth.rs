@@ -18,7 +18,7 @@
 //!   afresh.
 
 use crate::link::LinkKey;
-use crate::link::auth::{KEY_BYTES, sip_cold};
+use crate::link::auth::{KEY_BYTES, sip};
 use crate::messages::{ChangeRefused, RefuseReason, SettingChange, SignedChange};
 
 const DOMAIN_KEY_LOW: &[u8] = b"TauLink/1 phone/0";
@@ -59,7 +59,7 @@ impl ChangeKey {
     pub fn tag(&self, session: u32, counter: u32, change: &SettingChange) -> [u8; 8] {
         let (s, c) = (session.to_le_bytes(), counter.to_le_bytes());
         let (id, value) = (change.id.to_le_bytes(), change.value.to_le_bytes());
-        sip_cold(&self.0, &[DOMAIN_CHANGE, &s, &c, &id, &value]).to_le_bytes()
+        sip(&self.0, &[DOMAIN_CHANGE, &s, &c, &id, &value]).to_le_bytes()
     }
 
     /// `change` signed with `counter` in `session`: what the phone sends.

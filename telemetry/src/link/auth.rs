@@ -74,16 +74,21 @@ pub enum TagContext {
 }
 
 impl TagContext {
-    fn write(&self, h: &mut SipHasher24) {
+    /// The bytes the tag covers ahead of the frame (8, or 16 for a master's nonce), and how
+    /// many of `buf` they fill.
+    fn encode(&self, buf: &mut [u8; 16]) -> usize {
+        let (head, tail) = buf.split_at_mut(8);
         match self {
-            TagContext::Counter(counter) => h.write(&counter.to_le_bytes()),
-            TagContext::FollowerNonce => h.write(b"TLnonceF"),
+            TagContext::Counter(counter) => head.copy_from_slice(&counter.to_le_bytes()),
+            TagContext::FollowerNonce => head.copy_from_slice(b"TLnonceF"),
             TagContext::MasterNonce { follower_nonce } => {
-                h.write(b"TLnonceM");
-                h.write(&follower_nonce.to_le_bytes());
+                head.copy_from_slice(b"TLnonceM");
+                tail.copy_from_slice(&follower_nonce.to_le_bytes());
+                return 16;
             }
-            TagContext::BeforeEpoch => h.write(&[0xFF; 8]),
+            TagContext::BeforeEpoch => head.copy_from_slice(&[0xFF; 8]),
         }
+        8
     }
 }
 
@@ -112,9 +117,8 @@ impl LinkKey {
     /// tells nothing of the module's or of another link's. Forging under a link key is as
     /// hard as under this one (2⁻³² per frame).
     pub fn for_link(&self, bind_id: u32) -> Self {
-        let half = |n: u8| {
-            sip_cold(&self.0, &[DOMAIN_LINK_KEY, &bind_id.to_le_bytes(), &[n]]).to_le_bytes()
-        };
+        let half =
+            |n: u8| sip(&self.0, &[DOMAIN_LINK_KEY, &bind_id.to_le_bytes(), &[n]]).to_le_bytes();
         let mut bytes = [0u8; KEY_BYTES];
         let (lo, hi) = bytes.split_at_mut(8);
         lo.copy_from_slice(&half(0));
@@ -131,7 +135,7 @@ impl LinkKey {
     pub fn epoch_key(&self, follower_nonce: u64, master_nonce: u64) -> Self {
         let half = |n: u8| {
             let (f, m) = (follower_nonce.to_le_bytes(), master_nonce.to_le_bytes());
-            sip_cold(&self.0, &[DOMAIN_EPOCH_KEY, &f, &m, &[n]]).to_le_bytes()
+            sip(&self.0, &[DOMAIN_EPOCH_KEY, &f, &m, &[n]]).to_le_bytes()
         };
         let mut bytes = [0u8; KEY_BYTES];
         let (lo, hi) = bytes.split_at_mut(8);
@@ -144,10 +148,9 @@ impl LinkKey {
     /// slot extended by the wraps both ends count): the low half of SipHash-2-4(key,
     /// context ‖ frame). A forger without the key is right with probability 2⁻³² per frame.
     pub fn tag_in(&self, context: &TagContext, frame: &[u8]) -> u32 {
-        let mut h = SipHasher24::new(&self.0);
-        context.write(&mut h);
-        h.write(frame);
-        h.finish() as u32
+        let mut buf = [0u8; 16];
+        let len = context.encode(&mut buf);
+        sip(&self.0, &[buf.get(..len).unwrap_or_default(), frame]) as u32
     }
 
     /// Checks a received tag, in time independent of where it differs.
@@ -170,21 +173,21 @@ impl LinkKey {
     /// "TauLink/2 rekey" ‖ new nonce ‖ slot). A master takes a new nonce at once from the
     /// follower of its epoch, and only after the epoch went quiet from anyone else.
     pub fn rekey_proof(&self, new_nonce: u64, slot: u8) -> u32 {
-        sip_cold(&self.0, &[DOMAIN_REKEY, &new_nonce.to_le_bytes(), &[slot]]) as u32
+        sip(&self.0, &[DOMAIN_REKEY, &new_nonce.to_le_bytes(), &[slot]]) as u32
     }
 
     pub(crate) fn prf(&self, domain: &[u8]) -> u64 {
-        sip_cold(&self.0, &[domain])
+        sip(&self.0, &[domain])
     }
 }
 
-/// SipHash-2-4 of `parts`, in order, under `key`: one out-of-line copy for the derivations
-/// and MACs that run once per bind, handshake, rekey or settings change (keys, PRFs, rekey
-/// proofs, the phone's signed changes, the change records).
-/// The hasher is forced inline for the per-frame tag, and each inlined copy is ≈ 1.2 KB of
-/// flash (issue 33).
+/// SipHash-2-4 of `parts`, in order, under `key`: the one copy of the hasher in an image,
+/// for the per-frame tag and for the derivations and MACs that run once per bind,
+/// handshake, rekey or settings change (keys, PRFs, rekey proofs, the phone's signed
+/// changes, the change records). Each inlined copy of the hasher is ≈ 1.2 KB of flash
+/// (issue 33); the call and the loop over the parts cost a frame's tag a few instructions.
 #[inline(never)]
-pub(crate) fn sip_cold(key: &[u8; KEY_BYTES], parts: &[&[u8]]) -> u64 {
+pub(crate) fn sip(key: &[u8; KEY_BYTES], parts: &[&[u8]]) -> u64 {
     let mut h = SipHasher24::new(key);
     for part in parts {
         h.write(part);

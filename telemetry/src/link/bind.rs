@@ -372,12 +372,7 @@ impl Offering {
 /// The session nonce of an offer, one-way from the bind's random bytes (the scalar is
 /// another hash of them).
 fn session_of(random: &[u8; 32]) -> [u8; SESSION_BYTES] {
-    use sha2::Digest;
-    let digest: [u8; 64] = sha2::Sha512::new()
-        .chain_update(b"TauLink/2 session")
-        .chain_update(random)
-        .finalize()
-        .into();
+    let digest = super::sha512::sha512(&[b"TauLink/2 session", random]);
     core::array::from_fn(|i| digest.get(i).copied().unwrap_or(0))
 }
 

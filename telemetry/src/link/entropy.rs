@@ -5,7 +5,7 @@
 //! one-way function of the seed and its own label and draw number), and simulations stay
 //! deterministic (their seed is injected like the firmware's).
 
-use sha2::{Digest, Sha512};
+use super::sha512::sha512;
 
 /// A seeded generator of 256-bit secrets.
 #[derive(Clone)]
@@ -29,12 +29,7 @@ impl Entropy {
     /// The next 32 bytes for `label`: SHA-512(seed ‖ draw number ‖ label), first half.
     pub fn draw(&mut self, label: &[u8]) -> [u8; 32] {
         self.draws = self.draws.wrapping_add(1);
-        let digest: [u8; 64] = Sha512::new()
-            .chain_update(self.seed)
-            .chain_update(self.draws.to_le_bytes())
-            .chain_update(label)
-            .finalize()
-            .into();
+        let digest = sha512(&[&self.seed, &self.draws.to_le_bytes(), label]);
         core::array::from_fn(|i| digest.get(i).copied().unwrap_or(0))
     }
 

@@ -18,6 +18,7 @@ pub mod radio;
 pub mod rate;
 mod recovery;
 pub mod schedule;
+mod sha512;
 mod step_io;
 pub mod stream;
 

@@ -17,8 +17,9 @@
 use curve25519_dalek::ristretto::{CompressedRistretto, RistrettoPoint};
 use curve25519_dalek::scalar::Scalar;
 use curve25519_dalek::traits::Identity;
-use hmac::{Hmac, Mac};
-use sha2::{Digest, Sha512};
+use hmac::Mac;
+
+use super::sha512::{HmacSha512, Sha512, hmac, sha512};
 
 /// Bytes of an encoded share (a ristretto255 element).
 pub const SHARE_BYTES: usize = 32;
@@ -47,11 +48,10 @@ impl SessionKey {
     /// exchange (the link key, each confirmation tag) takes its own label.
     pub fn derive(&self, label: &[u8]) -> [u8; 64] {
         // HMAC takes keys of any length: this cannot fail.
-        let Ok(mut mac) = Hmac::<Sha512>::new_from_slice(&self.0) else {
+        let Ok(mac) = HmacSha512::new_from_slice(&self.0) else {
             return [0; 64];
         };
-        mac.update(label);
-        mac.finalize().into_bytes().into()
+        hmac(&mac, &[label])
     }
 
     /// The first 16 bytes of [`SessionKey::derive`]: a 128-bit key or confirmation tag.
@@ -88,11 +88,7 @@ impl Exchange {
     /// Starts an exchange for `prs` in channel `ci` and session `sid`, the secret scalar from
     /// `random` (32 bytes of a hardware RNG, hashed to a uniform scalar).
     pub fn start(prs: &[u8], ci: &[u8], sid: &[u8], random: &[u8; 32]) -> Self {
-        let wide: [u8; 64] = Sha512::new()
-            .chain_update(b"TauLink/2 scalar")
-            .chain_update(random)
-            .finalize()
-            .into();
+        let wide = sha512(&[b"TauLink/2 scalar", random]);
         Self::with_scalar(prs, ci, sid, Scalar::from_bytes_mod_order_wide(&wide))
     }
 
@@ -134,7 +130,7 @@ impl Exchange {
         lv(&mut h, ada);
         lv(&mut h, yb);
         lv(&mut h, adb);
-        Some(SessionKey(h.finalize().into()))
+        Some(SessionKey(h.finish()))
     }
 }
 
@@ -154,7 +150,7 @@ fn generator(prs: &[u8], ci: &[u8], sid: &[u8]) -> RistrettoPoint {
     lv_zeros(&mut h, zpad);
     lv(&mut h, ci);
     lv(&mut h, sid);
-    RistrettoPoint::from_uniform_bytes(&h.finalize().into())
+    RistrettoPoint::from_uniform_bytes(&h.finish())
 }
 
 /// Bytes of the LEB128 encoding of `len`.
@@ -175,10 +171,10 @@ fn length(h: &mut Sha512, len: usize) {
         let byte = (rest & 0x7F) as u8;
         rest >>= 7;
         if rest == 0 {
-            h.update([byte]);
+            h.update(&[byte]);
             return;
         }
-        h.update([byte | 0x80]);
+        h.update(&[byte | 0x80]);
     }
 }
 
@@ -192,7 +188,7 @@ fn lv(h: &mut Sha512, data: &[u8]) {
 fn lv_zeros(h: &mut Sha512, n: usize) {
     length(h, n);
     for _ in 0..n {
-        h.update([0]);
+        h.update(&[0]);
     }
 }
 

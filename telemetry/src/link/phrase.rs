@@ -15,8 +15,9 @@
 //! modules, and each guess at a stored value costs the iterations. [`Derivation`] runs it in
 //! steps, so a firmware task can yield between them.
 
-use hmac::{Hmac, Mac};
-use sha2::Sha512;
+use hmac::Mac;
+
+use super::sha512::{HmacSha512, hmac};
 
 /// Fewest characters (Unicode scalar values) a phrase has, white space at the ends dropped.
 pub const PHRASE_MIN_CHARS: usize = 12;
@@ -165,7 +166,7 @@ impl PhraseSecret {
 /// PBKDF2-HMAC-SHA-512 of one phrase, run a number of iterations at a time.
 #[derive(Clone)]
 pub struct Derivation {
-    mac: Hmac<Sha512>,
+    mac: HmacSha512,
     salt: [u8; SALT_BYTES],
     u: [u8; 64],
     t: [u8; 64],
@@ -187,8 +188,8 @@ impl Derivation {
 
     fn with_iterations(phrase: &str, salt: [u8; SALT_BYTES], iterations: u32) -> Self {
         // HMAC takes keys of any length: this cannot fail.
-        let mac = Hmac::<Sha512>::new_from_slice(phrase.as_bytes())
-            .unwrap_or_else(|_| Hmac::<Sha512>::new(&Default::default()));
+        let mac = HmacSha512::new_from_slice(phrase.as_bytes())
+            .unwrap_or_else(|_| HmacSha512::new(&Default::default()));
         Self {
             mac,
             salt,
@@ -205,15 +206,11 @@ impl Derivation {
             if self.done == self.iterations {
                 break;
             }
-            let mut mac = self.mac.clone();
-            if self.done == 0 {
-                mac.update(SALT_PREFIX);
-                mac.update(&self.salt);
-                mac.update(&1u32.to_be_bytes());
+            self.u = if self.done == 0 {
+                hmac(&self.mac, &[SALT_PREFIX, &self.salt, &1u32.to_be_bytes()])
             } else {
-                mac.update(&self.u);
-            }
-            self.u = mac.finalize().into_bytes().into();
+                hmac(&self.mac, &[&self.u])
+            };
             for (t, u) in self.t.iter_mut().zip(self.u) {
                 *t ^= u;
             }

@@ -22,7 +22,7 @@ use super::outputs::MotorTimer;
 use super::tasks::alerts::Speaker;
 use super::tasks::battery::BatterySense;
 use super::tasks::motors::{MotorPins, Motors};
-use embassy_stm32::mode::Async;
+use embassy_stm32::mode::{self, Async};
 use embassy_stm32::peripherals::IWDG;
 use embassy_stm32::spi::{self, Spi};
 use embassy_stm32::time::Hertz;
@@ -37,10 +37,10 @@ pub const BOARD: &str = "BrushedSparky";
 #[cfg(feature = "sparky2")]
 pub const BOARD: &str = "Sparky2";
 
-// DMA streams (RM0090 tables 42/43): DAC1 on DMA1 S5; SPI3 (radio) TX S7, RX S2 (channel 0
-// both; S0 is left to I2C1); I2C1 (baro) TX S6, RX S0 (channel 1); SPI1 (IMU) TX DMA2 S3,
-// RX DMA2 S0 (channel 3). EXTI9_5 serves the IMU's data-ready (EXTI5) and, on the
-// BrushedSparky, the radio's nIRQ (EXTI7).
+// DMA streams (RM0090 tables 42/43): DAC1 on DMA1 S5; I2C1 (baro) TX S6, RX S0 (channel
+// 1); SPI1 (IMU) TX DMA2 S3, RX DMA2 S0 (channel 3); SPI3 (radio) polls, without DMA.
+// EXTI9_5 serves the IMU's data-ready (EXTI5) and, on the BrushedSparky, the radio's nIRQ
+// (EXTI7).
 bind_interrupts!(pub struct Irqs {
     #[cfg(feature = "sparky2")]
     USART1 => usart::InterruptHandler<peripherals::USART1>;
@@ -53,8 +53,6 @@ bind_interrupts!(pub struct Irqs {
     EXTI9_5 => exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
     DMA1_STREAM5 => dma::InterruptHandler<peripherals::DMA1_CH5>;
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
-    DMA1_STREAM7 => dma::InterruptHandler<peripherals::DMA1_CH7>;
-    DMA1_STREAM2 => dma::InterruptHandler<peripherals::DMA1_CH2>;
     DMA1_STREAM6 => dma::InterruptHandler<peripherals::DMA1_CH6>;
     DMA1_STREAM0 => dma::InterruptHandler<peripherals::DMA1_CH0>;
     DMA2_STREAM3 => dma::InterruptHandler<peripherals::DMA2_CH3>;
@@ -129,8 +127,8 @@ impl Baro {
 /// The RFM22B on SPI3 (SCK PC10, MISO PC11, MOSI PC12), nSEL PA15, nIRQ on EXTI.
 /// SDN is tied to GND on both boards: the only reset is the software one.
 pub struct Radio {
-    /// SPI3 with DMA1 stream 7 (TX) and stream 0 (RX).
-    pub spi: Spi<'static, Async, spi::mode::Master>,
+    /// SPI3, polled, without DMA (why: `tasks/link.rs`).
+    pub spi: Spi<'static, mode::Blocking, spi::mode::Master>,
     /// nSEL, idle high.
     pub nsel: Output<'static>,
     /// nIRQ: PB7 (BrushedSparky) or PD2 (Sparky2), falling edge.
@@ -301,9 +299,7 @@ impl Board {
         // Si4432: SPI mode 0, ≤ 10 MHz; APB1 42 MHz / 8 = 5.25 MHz as Tau Labs ran it.
         spi_config.frequency = Hertz(5_250_000);
         spi_config.mode = spi::MODE_0;
-        let spi = Spi::new(
-            p.SPI3, p.PC10, p.PC12, p.PC11, p.DMA1_CH7, p.DMA1_CH2, Irqs, spi_config,
-        );
+        let spi = Spi::new_blocking(p.SPI3, p.PC10, p.PC12, p.PC11, spi_config);
         // MPU9250: SPI mode 3, starting slow for the configuration (imu_bus.rs switches to
         // the fast clock for sensor reads).
         let mut imu_config = spi::Config::default();
