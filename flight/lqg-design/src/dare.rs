@@ -10,8 +10,8 @@
 //! The matrices are [`Square`]s whose size is a runtime value: one loop serves the 2- and
 //! 3-state problems, where fixed-size matrices made the optimiser write out every product
 //! of every size in soft-float calls (12.5 KB of flash for this file; issue 33). Every
-//! product, sum and inverse is evaluated in the order nalgebra's did before, so the gains
-//! are the same to the last bit.
+//! product, sum and inverse is evaluated in the order nalgebra's did before, so the solve
+//! gives nalgebra's bits for the same matrices.
 
 use core::fmt;
 
@@ -210,7 +210,7 @@ impl Square {
     /// (a non-finite result is the caller's to refuse). One 3×3 cofactor loop serves every
     /// size: a smaller matrix is padded with 1 on the diagonal, which leaves its cofactors
     /// and determinant unchanged. Each cofactor is the product difference nalgebra's
-    /// `try_inverse` writes out term by term, so the gains keep their last bits.
+    /// `try_inverse` writes out term by term: the same bits.
     #[inline(never)]
     pub fn inverse(&self) -> Option<Square> {
         if self.n == 0 {
@@ -439,8 +439,8 @@ mod tests {
 
     #[test]
     fn operations_give_nalgebras_bits() {
-        // The design's earlier nalgebra code, operation by operation: the same bits, so the
-        // gains (and every simulation flown on them) are unchanged.
+        // The design's earlier nalgebra code, operation by operation: the same bits for the
+        // same matrices.
         use nalgebra::{Matrix3, Vector3};
         let mut state = 0x1234_5678_9ABC_DEF0_u64;
         let mut next = move || {

@@ -56,15 +56,11 @@ impl Real for f32 {
 impl Real for f64 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
-    /// 1 + expm1: the design needs `expm1` anyway, and f64 `exp` would be another 0.8 KB
-    /// of soft-float flash. Within an ulp or so for every argument it gets (ln β ∈ [0, 20],
-    /// −Ts/τ ∈ [−1, 0)); for a large negative argument the tiny result would lose relative
-    /// accuracy, but none reaches here.
     fn exp(self) -> Self {
-        libm::expm1(self) + 1.0
+        crate::exp::exp(self)
     }
     fn exp_m1(self) -> Self {
-        libm::expm1(self)
+        crate::exp::expm1(self)
     }
     fn from_f64(v: f64) -> Self {
         v
