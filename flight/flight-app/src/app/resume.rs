@@ -198,6 +198,17 @@ fn gains_of(d: &AxisDesign) -> [f64; 8] {
     [k0, k1, k2, r0, r1, a0, a1, a2]
 }
 
+/// The design [`gains_of`] lists, with its doubling steps.
+fn design_of(gains: [f64; 8], iterations: [u32; 3]) -> AxisDesign {
+    let [k0, k1, k2, r0, r1, a0, a1, a2] = gains;
+    AxisDesign {
+        kalman: [k0, k1, k2],
+        rate: [r0, r1],
+        attitude: [a0, a1, a2],
+        iterations,
+    }
+}
+
 /// The settings and designs a gains block holds, if its magic, CRC and settings record
 /// check.
 pub fn decode_gains(block: &[u32; GAINS_WORDS]) -> Option<(Settings, [AxisDesign; 3])> {
@@ -219,19 +230,14 @@ pub fn decode_gains(block: &[u32; GAINS_WORDS]) -> Option<(Settings, [AxisDesign
     });
     let mut counts = counts.iter().copied();
     let designs = [(); 3].map(|()| {
-        let mut next = || values.next().unwrap_or(f64::NAN);
-        let (kalman, rate, attitude) = (
-            [next(), next(), next()],
-            [next(), next()],
-            [next(), next(), next()],
-        );
-        let mut count = || counts.next().unwrap_or(0);
-        AxisDesign {
-            kalman,
-            rate,
-            attitude,
-            iterations: [count(), count(), count()],
+        let (mut gains, mut iterations) = ([f64::NAN; 8], [0; 3]);
+        for (slot, v) in gains.iter_mut().zip(values.by_ref()) {
+            *slot = v;
         }
+        for (slot, n) in iterations.iter_mut().zip(counts.by_ref()) {
+            *slot = n;
+        }
+        design_of(gains, iterations)
     });
     Some((record.settings, designs))
 }
