@@ -302,40 +302,45 @@ fn check_spread(
     if max > 0.0 && min / max >= config.min_spread_ratio {
         return Ok(());
     }
-    let nf = samples.len() as f32;
-    let distance = |s: &[f32; 3]| norm(sub(*s, mean));
-    let d: f32 = samples.iter().map(distance).sum::<f32>() / nf;
-    let var: f32 = samples
-        .iter()
-        .map(|s| {
-            let e = distance(s) - d;
-            e * e
-        })
-        .sum::<f32>()
-        / nf;
+    let about_mean = MagCalibration {
+        offset: mean,
+        matrix: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        field: 0.0,
+        residual_pct: 0.0,
+        coverage: 0.0,
+    };
+    let (d, rms) = magnitudes(samples, &about_mean);
     // Coefficient of variation of the distance from the mean: ~0.1 for an ellipse
     // (a ring), ≥ 0.3 for a filled patch or an arc.
-    if d > 0.0 && libm::sqrtf(var) / d < 0.25 {
+    if d > 0.0 && rms / d < 0.25 {
         Err(MagCalError::SinglePlane)
     } else {
         Err(MagCalError::TooLittleRotation)
     }
 }
 
-/// Mean calibrated magnitude, relative RMS deviation (%), direction coverage.
-fn quality(samples: &[[f32; 3]], cal: &MagCalibration) -> (f32, f32, f32) {
+/// The mean and the RMS deviation of the calibrated readings' magnitudes.
+fn magnitudes(samples: &[[f32; 3]], cal: &MagCalibration) -> (f32, f32) {
     let nf = samples.len() as f32;
-    let cals = || samples.iter().map(|s| cal.apply(*s));
-    let field = cals().map(norm).sum::<f32>() / nf;
-    let var = cals()
-        .map(|c| {
-            let e = norm(c) - field;
+    let lengths = || samples.iter().map(|s| norm(cal.apply(*s)));
+    let mean = lengths().sum::<f32>() / nf;
+    let var = lengths()
+        .map(|l| {
+            let e = l - mean;
             e * e
         })
         .sum::<f32>()
         / nf;
+    (mean, libm::sqrtf(var))
+}
+
+/// Mean calibrated magnitude, relative RMS deviation (%), direction coverage.
+fn quality(samples: &[[f32; 3]], cal: &MagCalibration) -> (f32, f32, f32) {
+    let nf = samples.len() as f32;
+    let cals = || samples.iter().map(|s| cal.apply(*s));
+    let (field, rms) = magnitudes(samples, cal);
     let residual_pct = if field > 0.0 {
-        100.0 * libm::sqrtf(var) / field
+        100.0 * rms / field
     } else {
         f32::INFINITY
     };
