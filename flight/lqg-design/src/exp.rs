@@ -5,9 +5,9 @@
 //! (the tests measure it against std).
 
 /// ln 2 split so that k·`LN2_HI` is exact for |k| < 2²⁰ (its low 32 bits are zero).
-const LN2_HI: f64 = 6.931_471_803_691_238_2e-1;
+const LN2_HI: f64 = f64::from_bits(0x3FE6_2E42_FEE0_0000);
 /// ln 2 − `LN2_HI`.
-const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+const LN2_LO: f64 = f64::from_bits(0x3DEA_39EF_3579_3C76);
 /// 1 / ln 2.
 const INV_LN2: f64 = core::f64::consts::LOG2_E;
 /// Terms of the series: |r|¹⁸/18! < 2⁻⁵³·|r| for |r| ≤ ln 2 / 2.
