@@ -161,10 +161,6 @@ fn norm(a: Vec3) -> f32 {
     libm::sqrtf(dot(a, a))
 }
 
-fn mat_vec(m: &Mat3, v: Vec3) -> Vec3 {
-    m.map(|row| dot(row, v))
-}
-
 /// `m += w · a·aᵀ`.
 fn add_outer(m: &mut Mat3, a: Vec3, w: f32) {
     for (row, ai) in m.iter_mut().zip(a) {
@@ -226,38 +222,37 @@ pub fn fit(samples: &[[f32; 3]], config: &MagCalConfig) -> Result<MagCalibration
             *b += pi;
         }
     }
-    let [a, b, c, d, e, f, g, h, i] =
-        solve_linear(ata, atb, QUADRIC).ok_or(MagCalError::NotAnEllipsoid)?;
-    let m = [[a, d, e], [d, b, f], [e, f, c]];
-    // The centre solves M·c = −v.
-    let mut m9 = [[0.0; QUADRIC]; QUADRIC];
-    for (row9, row) in m9.iter_mut().zip(m) {
-        for (e9, e) in row9.iter_mut().zip(row) {
-            *e9 = e;
-        }
-    }
-    let [x, y, z, ..] = solve_linear(m9, [-g, -h, -i, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 3)
-        .ok_or(MagCalError::NotAnEllipsoid)?;
-    let centre = [x, y, z];
-    let k = 1.0 + dot(centre, mat_vec(&m, centre));
-    if k.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
-        return Err(MagCalError::NotAnEllipsoid);
-    }
-    let (lambda, v) = symmetric_eigen(m.map(|row| row.map(|e| e / k)));
+    let [a, b, c, d, e, f, g, h, i] = solve_linear(ata, atb).ok_or(MagCalError::NotAnEllipsoid)?;
+    // The quadric is (x − c)ᵀ·M·(x − c) = k with k = 1 + cᵀ·M·c and the centre solving
+    // M·c = −v; an ellipsoid's M is positive definite. One eigen-decomposition
+    // M = Σ λₖ·uₖ·uₖᵀ gives all three: c = −Σ (uₖ·v)/λₖ·uₖ, cᵀ·M·c = Σ (uₖ·v)²/λₖ, and
+    // M/k has the eigenvalues λₖ/k on the same vectors.
+    let (lambda, u) = symmetric_eigen([[a, d, e], [d, b, f], [e, f, c]]);
     if lambda
         .iter()
         .any(|&l| l.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater))
     {
         return Err(MagCalError::NotAnEllipsoid);
     }
-    // W = Σ √λₖ·vₖ·vₖᵀ maps the ellipsoid onto a sphere; det W = √(λ₀λ₁λ₂), so W scaled
+    let (mut centre, mut k) = ([0.0; 3], 1.0);
+    for (vector, l) in u.iter().zip(lambda) {
+        let along = dot(*vector, [g, h, i]);
+        centre = sub(centre, vector.map(|x| x * along / l));
+        k += along * along / l;
+    }
+    // Also refuses NaN.
+    if k.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
+        return Err(MagCalError::NotAnEllipsoid);
+    }
+    let lambda = lambda.map(|l| l / k);
+    // W = Σ √λₖ·uₖ·uₖᵀ maps the ellipsoid onto a sphere; det W = √(λ₀λ₁λ₂), so W scaled
     // to determinant 1 (the shape corrected, the size of the field kept) takes √(λₖ/γ),
     // γ the geometric mean of the λ.
     let [l0, l1, l2] = lambda;
     let gamma = cube_root(l0 * l1 * l2);
     let root = lambda.map(|l| libm::sqrtf(l / gamma));
     let mut w = [[0.0; 3]; 3];
-    for (vector, r) in v.iter().zip(root) {
+    for (vector, r) in u.iter().zip(root) {
         add_outer(&mut w, *vector, r);
     }
     let offset = add(mean, centre.map(|c| c * scale));
@@ -356,16 +351,10 @@ fn quality(samples: &[[f32; 3]], cal: &MagCalibration) -> (f32, f32, f32) {
     (field, residual_pct, coverage)
 }
 
-/// Solves the leading `n`×`n` block of `a·x = b` (n ≤ 9) by Gaussian elimination with
-/// partial pivoting; `None` when a pivot vanishes. One routine for the 9-unknown quadric
-/// and the 3×3 centre: the size is a runtime value, so it is not written out per size.
-#[inline(never)]
-fn solve_linear(
-    mut a: [[f32; QUADRIC]; QUADRIC],
-    mut b: [f32; QUADRIC],
-    n: usize,
-) -> Option<[f32; QUADRIC]> {
-    let n = n.min(QUADRIC);
+/// Solves the quadric's normal equations `a·x = b` by Gaussian elimination with partial
+/// pivoting; `None` when a pivot vanishes.
+fn solve_linear(mut a: [[f32; QUADRIC]; QUADRIC], mut b: [f32; QUADRIC]) -> Option<[f32; QUADRIC]> {
+    let n = QUADRIC;
     for k in 0..n {
         let magnitude = |i: &usize| a.get(*i).and_then(|r| r.get(k)).map_or(0.0, |v| v.abs());
         let pivot = (k..n).max_by(|i, j| magnitude(i).total_cmp(&magnitude(j)))?;

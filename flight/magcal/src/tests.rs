@@ -219,19 +219,23 @@ fn cube_root_is_correct_to_round_off() {
 
 #[test]
 fn linear_solve_pivots_and_refuses_singular() {
+    // A zero first pivot in a 3×3 block, the rest of the 9×9 a scaled identity.
     let mut a = [[0.0; QUADRIC]; QUADRIC];
-    a[0] = [0.0, 2.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-    a[1] = [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-    a[2] = [3.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-    let want = [1.0f32, -2.0, 0.5];
-    let mut b = [0.0; QUADRIC];
-    for r in 0..3 {
-        b[r] = (0..3).map(|c| a[r][c] * want[c]).sum();
+    a[0][..3].copy_from_slice(&[0.0, 2.0, 1.0]);
+    a[1][..3].copy_from_slice(&[1.0, 1.0, 0.0]);
+    a[2][..3].copy_from_slice(&[3.0, 0.0, 1.0]);
+    for k in 3..QUADRIC {
+        a[k][k] = k as f32;
     }
-    let x = solve_linear(a, b, 3).unwrap();
-    for r in 0..3 {
+    let want = [1.0f32, -2.0, 0.5, 3.0, -1.0, 0.25, 7.0, -0.5, 2.0];
+    let mut b = [0.0; QUADRIC];
+    for r in 0..QUADRIC {
+        b[r] = (0..QUADRIC).map(|c| a[r][c] * want[c]).sum();
+    }
+    let x = solve_linear(a, b).unwrap();
+    for r in 0..QUADRIC {
         assert!((x[r] - want[r]).abs() < 1e-6, "{x:?}");
     }
-    a[2] = [1.0, 3.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]; // row 0 + row 1
-    assert_eq!(solve_linear(a, b, 3), None);
+    a[2][..3].copy_from_slice(&[1.0, 3.0, 1.0]); // row 0 + row 1
+    assert_eq!(solve_linear(a, b), None);
 }
