@@ -12,8 +12,11 @@ const LN2_LO: f64 = f64::from_bits(0x3DEA_39EF_3579_3C76);
 const INV_LN2: f64 = core::f64::consts::LOG2_E;
 /// Terms of the series: |r|¹⁸/18! < 2⁻⁵³·|r| for |r| ≤ ln 2 / 2.
 const TERMS: u32 = 18;
-/// Above this exp overflows.
-const OVERFLOW: f64 = 709.78;
+/// 1.5·2⁵²: a double below 2⁵¹ plus this is rounded to an integer its low bits hold.
+const SHIFTER: f64 = 6_755_399_441_055_744.0;
+/// Above this the result is ∞: 1023.5·ln 2, the last x whose k is 1023 (exp itself
+/// overflows at 709.78; nothing here comes near either).
+const OVERFLOW: f64 = 709.43;
 /// Below this exp is under f64's smallest normal (returned as 0, expm1 as −1).
 const UNDERFLOW: f64 = -708.0;
 
@@ -27,15 +30,14 @@ fn series(r: f64) -> f64 {
     r * acc
 }
 
-/// x = k·ln 2 + r: (2^k, r), 2^k built from its exponent bits (k within ±1022 here).
+/// x = k·ln 2 + r: (2^k, r). Adding [`SHIFTER`] rounds x/ln 2 to the nearest integer k and
+/// leaves k in the low bits (two's complement): no float–integer conversion.
 fn reduce(x: f64) -> (f64, f64) {
-    let half = if x < 0.0 { -0.5 } else { 0.5 };
-    // Truncation of x/ln 2 ± ½ rounds to the nearest k; NaN becomes 0 and stays in r.
-    #[allow(clippy::cast_possible_truncation)]
-    let k = (x * INV_LN2 + half) as i32;
-    let kf = f64::from(k);
+    let shifted = x * INV_LN2 + SHIFTER;
+    let kf = shifted - SHIFTER;
     let r = (x - kf * LN2_HI) - kf * LN2_LO;
-    #[allow(clippy::cast_sign_loss)] // 1023 + k > 0 for k > −1023
+    // −1021 ≤ k ≤ 1023 between UNDERFLOW and OVERFLOW, a normal 2^k.
+    let k = i64::from(shifted.to_bits() as u32 as i32);
     let two_k = f64::from_bits(((1023 + k) as u64) << 52);
     (two_k, r)
 }
@@ -123,6 +125,8 @@ mod tests {
         assert_eq!(exp(0.0), 1.0);
         assert_eq!(expm1(0.0), 0.0);
         assert_eq!(exp(800.0), f64::INFINITY);
+        assert!(ulps(exp(709.4), 709.4f64.exp()) <= 2.0);
+        assert!(ulps(exp(-707.9), (-707.9f64).exp()) <= 2.0);
         assert_eq!(exp(-800.0), 0.0);
         assert_eq!(expm1(-800.0), -1.0);
         assert!(exp(f64::NAN).is_nan() && expm1(f64::NAN).is_nan());
