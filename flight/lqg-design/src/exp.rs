@@ -11,7 +11,7 @@ const LN2_LO: f64 = f64::from_bits(0x3DEA_39EF_3579_3C76);
 /// 1 / ln 2.
 const INV_LN2: f64 = core::f64::consts::LOG2_E;
 /// Terms of the series: |r|¹⁸/18! < 2⁻⁵³·|r| for |r| ≤ ln 2 / 2.
-const TERMS: u32 = 18;
+const TERMS: f64 = 18.0;
 /// 1.5·2⁵²: a double below 2⁵¹ plus this is rounded to an integer its low bits hold.
 const SHIFTER: f64 = 6_755_399_441_055_744.0;
 /// Above this the result is ∞: 1023.5·ln 2, the last x whose k is 1023 (exp itself
@@ -23,9 +23,10 @@ const UNDERFLOW: f64 = -708.0;
 /// expm1(r) = r·(1 + r/2·(1 + r/3·(…))) for |r| ≤ ln 2 / 2, where every factor is
 /// near 1 and nothing cancels.
 fn series(r: f64) -> f64 {
-    let mut acc = 1.0;
-    for n in (2..=TERMS).rev() {
-        acc = 1.0 + r / f64::from(n) * acc;
+    let (mut acc, mut n) = (1.0, TERMS);
+    while n > 1.5 {
+        acc = 1.0 + r / n * acc;
+        n -= 1.0;
     }
     r * acc
 }
