@@ -10,8 +10,8 @@
 //! The matrices are [`Square`]s whose size is a runtime value: one loop serves the 2- and
 //! 3-state problems, where fixed-size matrices made the optimiser write out every product
 //! of every size in soft-float calls (12.5 KB of flash for this file; issue 33). Every
-//! product, sum and inverse is evaluated in the order nalgebra's did before, so the gains
-//! are the same to the last bit.
+//! product, sum and inverse is evaluated in the order nalgebra's did before, so the solve
+//! gives nalgebra's bits for the same matrices.
 
 use core::fmt;
 
@@ -206,57 +206,44 @@ impl Square {
         out
     }
 
-    /// The inverse by the adjugate over the determinant (n ≤ 3), written out term by term
-    /// in the order the design has always evaluated it, so the gains keep their last bits;
-    /// `None` when the determinant is 0 (a non-finite result is the caller's to refuse).
+    /// The inverse by the adjugate over the determinant; `None` when the determinant is 0
+    /// (a non-finite result is the caller's to refuse). One 3×3 cofactor loop serves every
+    /// size: a smaller matrix is padded with 1 on the diagonal, which leaves its cofactors
+    /// and determinant unchanged. Each cofactor is the product difference nalgebra's
+    /// `try_inverse` writes out term by term: the same bits.
     #[inline(never)]
     pub fn inverse(&self) -> Option<Square> {
-        let g = |i, j| self.get(i, j);
-        let (m11, m12, m13) = (g(0, 0), g(0, 1), g(0, 2));
-        let (m21, m22, m23) = (g(1, 0), g(1, 1), g(1, 2));
-        let (m31, m32, m33) = (g(2, 0), g(2, 1), g(2, 2));
-        let rows: [[f64; MAX_STATES]; MAX_STATES] = match self.n {
-            1 if m11 != 0.0 => [[1.0 / m11, 0.0, 0.0], [0.0; 3], [0.0; 3]],
-            2 => {
-                let det = m11 * m22 - m21 * m12;
-                if det == 0.0 {
-                    return None;
-                }
-                [
-                    [m22 / det, -m12 / det, 0.0],
-                    [-m21 / det, m11 / det, 0.0],
-                    [0.0; 3],
-                ]
+        if self.n == 0 {
+            return None;
+        }
+        let mut padded = self.m;
+        for (i, row) in padded.iter_mut().enumerate().skip(self.n) {
+            if let Some(e) = row.get_mut(i) {
+                *e = 1.0;
             }
-            3 => {
-                let minor_23_23 = m22 * m33 - m32 * m23;
-                let minor_13_23 = m21 * m33 - m31 * m23;
-                let minor_12_23 = m21 * m32 - m31 * m22;
-                let det = m11 * minor_23_23 - m12 * minor_13_23 + m13 * minor_12_23;
-                if det == 0.0 {
-                    return None;
-                }
-                [
-                    [
-                        minor_23_23 / det,
-                        (m13 * m32 - m33 * m12) / det,
-                        (m12 * m23 - m22 * m13) / det,
-                    ],
-                    [
-                        -minor_13_23 / det,
-                        (m11 * m33 - m31 * m13) / det,
-                        (m13 * m21 - m23 * m11) / det,
-                    ],
-                    [
-                        minor_12_23 / det,
-                        (m12 * m31 - m32 * m11) / det,
-                        (m11 * m22 - m21 * m12) / det,
-                    ],
-                ]
-            }
-            _ => return None,
+        }
+        let g = |i: usize, j: usize| {
+            padded
+                .get(i % MAX_STATES)
+                .and_then(|r| r.get(j % MAX_STATES))
+                .copied()
+                .unwrap_or(0.0)
         };
-        Some(Square { n: self.n, m: rows })
+        // Entry (i, j) of the adjugate: the cofactor of (j, i).
+        let adjugate = |i: usize, j: usize| {
+            g(j + 1, i + 1) * g(j + 2, i + 2) - g(j + 1, i + 2) * g(j + 2, i + 1)
+        };
+        let det = (0..MAX_STATES).fold(0.0, |acc, k| acc + g(0, k) * adjugate(k, 0));
+        if det == 0.0 {
+            return None;
+        }
+        let mut out = Square::zeros(self.n);
+        for i in 0..self.n {
+            for j in 0..self.n {
+                out.set(i, j, adjugate(i, j) / det);
+            }
+        }
+        Some(out)
     }
 
     fn entries(&self) -> impl Iterator<Item = f64> + '_ {
@@ -452,8 +439,8 @@ mod tests {
 
     #[test]
     fn operations_give_nalgebras_bits() {
-        // The design's earlier nalgebra code, operation by operation: the same bits, so the
-        // gains (and every simulation flown on them) are unchanged.
+        // The design's earlier nalgebra code, operation by operation: the same bits for the
+        // same matrices.
         use nalgebra::{Matrix3, Vector3};
         let mut state = 0x1234_5678_9ABC_DEF0_u64;
         let mut next = move || {

@@ -21,4 +21,5 @@
 
 pub mod dare;
 pub mod design;
+mod exp;
 pub mod model;

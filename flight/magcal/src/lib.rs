@@ -13,10 +13,12 @@
 //! and calibrated magnitudes that agree (the residual). Pure, no heap: the caller owns the
 //! samples (the firmware keeps a bounded buffer while the owner turns the frame).
 //!
-//! The arithmetic is f64 (soft-float on a Cortex-M4F): the fit runs once per calibration,
-//! so the crate is built for size in TauLink's workspace. The 9-unknown least squares is
-//! one Gaussian elimination with partial pivoting, the symmetric 3×3 eigenproblems cyclic
-//! Jacobi rotations — no linear-algebra crate, no libm beyond `sqrt`.
+//! The arithmetic is f32, which a Cortex-M4F does in hardware: the readings are centred on
+//! their mean and scaled to unit spread before the fit, so the normal equations stay well
+//! conditioned and f32 recovers the calibration to well within the noise of any real
+//! magnetometer (the crate's tests: 1e-6 of the field without noise). The 9-unknown least
+//! squares is one Gaussian elimination with partial pivoting, the symmetric 3×3
+//! eigenproblems cyclic Jacobi rotations — no linear-algebra crate, no libm beyond `sqrt`.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -31,12 +33,12 @@ pub struct MagCalConfig {
     pub min_samples: usize,
     /// Smallest ratio of the raw readings' least to largest spread (variance): below it
     /// the rotation stayed in one plane or covered too little.
-    pub min_spread_ratio: f64,
+    pub min_spread_ratio: f32,
     /// Smallest coverage of calibrated directions (3 × the least eigenvalue of their
     /// mean outer product: 1 for a uniform sphere, 0 for one plane).
-    pub min_coverage: f64,
+    pub min_coverage: f32,
     /// Largest residual accepted (relative RMS deviation of calibrated magnitudes, %).
-    pub max_residual_pct: f64,
+    pub max_residual_pct: f32,
 }
 
 impl Default for MagCalConfig {
@@ -137,12 +139,8 @@ impl core::fmt::Display for MagCalError {
 
 impl core::error::Error for MagCalError {}
 
-type Vec3 = [f64; 3];
-type Mat3 = [[f64; 3]; 3];
-
-fn vec3(s: &[f32; 3]) -> Vec3 {
-    s.map(f64::from)
-}
+type Vec3 = [f32; 3];
+type Mat3 = [[f32; 3]; 3];
 
 fn add(a: Vec3, b: Vec3) -> Vec3 {
     let ([x, y, z], [p, q, r]) = (a, b);
@@ -154,21 +152,17 @@ fn sub(a: Vec3, b: Vec3) -> Vec3 {
     [x - p, y - q, z - r]
 }
 
-fn dot(a: Vec3, b: Vec3) -> f64 {
+fn dot(a: Vec3, b: Vec3) -> f32 {
     let ([x, y, z], [p, q, r]) = (a, b);
     x * p + y * q + z * r
 }
 
-fn norm(a: Vec3) -> f64 {
-    libm::sqrt(dot(a, a))
-}
-
-fn mat_vec(m: &Mat3, v: Vec3) -> Vec3 {
-    m.map(|row| dot(row, v))
+fn norm(a: Vec3) -> f32 {
+    libm::sqrtf(dot(a, a))
 }
 
 /// `m += w · a·aᵀ`.
-fn add_outer(m: &mut Mat3, a: Vec3, w: f64) {
+fn add_outer(m: &mut Mat3, a: Vec3, w: f32) {
     for (row, ai) in m.iter_mut().zip(a) {
         for (e, aj) in row.iter_mut().zip(a) {
             *e += w * ai * aj;
@@ -194,22 +188,22 @@ pub fn fit(samples: &[[f32; 3]], config: &MagCalConfig) -> Result<MagCalibration
     if samples.iter().flatten().any(|v| !v.is_finite()) {
         return Err(MagCalError::NonFinite);
     }
-    let nf = n as f64;
-    let sum = samples.iter().fold([0.0; 3], |acc, s| add(acc, vec3(s)));
+    let nf = n as f32;
+    let sum = samples.iter().fold([0.0; 3], |acc, s| add(acc, *s));
     let mean = sum.map(|v| v / nf);
     let mut cov = [[0.0; 3]; 3];
     for s in samples {
-        add_outer(&mut cov, sub(vec3(s), mean), 1.0 / nf);
+        add_outer(&mut cov, sub(*s, mean), 1.0 / nf);
     }
     check_spread(samples, mean, &cov, config)?;
 
     // Fit in centred, scaled coordinates so the normal equations are well conditioned.
     let [[c0, ..], [_, c1, _], [.., c2]] = cov;
-    let scale = libm::sqrt(c0 + c1 + c2);
+    let scale = libm::sqrtf(c0 + c1 + c2);
     let mut ata = [[0.0; QUADRIC]; QUADRIC];
     let mut atb = [0.0; QUADRIC];
     for s in samples {
-        let [x, y, z] = sub(vec3(s), mean).map(|v| v / scale);
+        let [x, y, z] = sub(*s, mean).map(|v| v / scale);
         let phi = [
             x * x,
             y * y,
@@ -228,55 +222,53 @@ pub fn fit(samples: &[[f32; 3]], config: &MagCalConfig) -> Result<MagCalibration
             *b += pi;
         }
     }
-    let [a, b, c, d, e, f, g, h, i] =
-        solve_linear(ata, atb, QUADRIC).ok_or(MagCalError::NotAnEllipsoid)?;
-    let m = [[a, d, e], [d, b, f], [e, f, c]];
-    // The centre solves M·c = −v.
-    let mut m9 = [[0.0; QUADRIC]; QUADRIC];
-    for (row9, row) in m9.iter_mut().zip(m) {
-        for (e9, e) in row9.iter_mut().zip(row) {
-            *e9 = e;
-        }
-    }
-    let [x, y, z, ..] = solve_linear(m9, [-g, -h, -i, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 3)
-        .ok_or(MagCalError::NotAnEllipsoid)?;
-    let centre = [x, y, z];
-    let k = 1.0 + dot(centre, mat_vec(&m, centre));
-    if k.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
-        return Err(MagCalError::NotAnEllipsoid);
-    }
-    let (lambda, v) = symmetric_eigen(m.map(|row| row.map(|e| e / k)));
+    let [a, b, c, d, e, f, g, h, i] = solve_linear(ata, atb).ok_or(MagCalError::NotAnEllipsoid)?;
+    // The quadric is (x − c)ᵀ·M·(x − c) = k with k = 1 + cᵀ·M·c and the centre solving
+    // M·c = −v; an ellipsoid's M is positive definite. One eigen-decomposition
+    // M = Σ λₖ·uₖ·uₖᵀ gives all three: c = −Σ (uₖ·v)/λₖ·uₖ, cᵀ·M·c = Σ (uₖ·v)²/λₖ, and
+    // M/k has the eigenvalues λₖ/k on the same vectors.
+    let (lambda, u) = symmetric_eigen([[a, d, e], [d, b, f], [e, f, c]]);
     if lambda
         .iter()
         .any(|&l| l.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater))
     {
         return Err(MagCalError::NotAnEllipsoid);
     }
-    // W = Σ √λₖ·vₖ·vₖᵀ maps the ellipsoid onto a sphere; det W = √(λ₀λ₁λ₂), so W scaled
+    let (mut centre, mut k) = ([0.0; 3], 1.0);
+    for (vector, l) in u.iter().zip(lambda) {
+        let along = dot(*vector, [g, h, i]);
+        centre = sub(centre, vector.map(|x| x * along / l));
+        k += along * along / l;
+    }
+    // Also refuses NaN.
+    if k.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
+        return Err(MagCalError::NotAnEllipsoid);
+    }
+    let lambda = lambda.map(|l| l / k);
+    // W = Σ √λₖ·uₖ·uₖᵀ maps the ellipsoid onto a sphere; det W = √(λ₀λ₁λ₂), so W scaled
     // to determinant 1 (the shape corrected, the size of the field kept) takes √(λₖ/γ),
     // γ the geometric mean of the λ.
     let [l0, l1, l2] = lambda;
     let gamma = cube_root(l0 * l1 * l2);
-    let root = lambda.map(|l| libm::sqrt(l / gamma));
+    let root = lambda.map(|l| libm::sqrtf(l / gamma));
     let mut w = [[0.0; 3]; 3];
-    for (vector, r) in v.iter().zip(root) {
+    for (vector, r) in u.iter().zip(root) {
         add_outer(&mut w, *vector, r);
     }
-    let matrix = w.map(|row| row.map(|e| e as f32));
     let offset = add(mean, centre.map(|c| c * scale));
 
     let cal = MagCalibration {
-        offset: offset.map(|o| o as f32),
-        matrix,
+        offset,
+        matrix: w,
         field: 0.0,
         residual_pct: 0.0,
         coverage: 0.0,
     };
     let (field, residual_pct, coverage) = quality(samples, &cal);
     let cal = MagCalibration {
-        field: field as f32,
-        residual_pct: residual_pct as f32,
-        coverage: coverage as f32,
+        field,
+        residual_pct,
+        coverage,
         ..cal
     };
     if coverage < config.min_coverage {
@@ -300,70 +292,69 @@ fn check_spread(
     config: &MagCalConfig,
 ) -> Result<(), MagCalError> {
     let (eig, _) = symmetric_eigen(*cov);
-    let max = eig.iter().copied().fold(f64::MIN, f64::max);
-    let min = eig.iter().copied().fold(f64::MAX, f64::min);
+    let max = eig.iter().copied().fold(f32::MIN, f32::max);
+    let min = eig.iter().copied().fold(f32::MAX, f32::min);
     if max > 0.0 && min / max >= config.min_spread_ratio {
         return Ok(());
     }
-    let nf = samples.len() as f64;
-    let distance = |s: &[f32; 3]| norm(sub(vec3(s), mean));
-    let d: f64 = samples.iter().map(distance).sum::<f64>() / nf;
-    let var: f64 = samples
-        .iter()
-        .map(|s| {
-            let e = distance(s) - d;
-            e * e
-        })
-        .sum::<f64>()
-        / nf;
+    let about_mean = MagCalibration {
+        offset: mean,
+        matrix: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        field: 0.0,
+        residual_pct: 0.0,
+        coverage: 0.0,
+    };
+    let (d, rms) = magnitudes(samples, &about_mean);
     // Coefficient of variation of the distance from the mean: ~0.1 for an ellipse
     // (a ring), ≥ 0.3 for a filled patch or an arc.
-    if d > 0.0 && libm::sqrt(var) / d < 0.25 {
+    if d > 0.0 && rms / d < 0.25 {
         Err(MagCalError::SinglePlane)
     } else {
         Err(MagCalError::TooLittleRotation)
     }
 }
 
-/// Mean calibrated magnitude, relative RMS deviation (%), direction coverage.
-fn quality(samples: &[[f32; 3]], cal: &MagCalibration) -> (f64, f64, f64) {
-    let nf = samples.len() as f64;
-    let cals = || samples.iter().map(|s| vec3(&cal.apply(*s)));
-    let field = cals().map(norm).sum::<f64>() / nf;
-    let var = cals()
-        .map(|c| {
-            let e = norm(c) - field;
+/// The mean and the RMS deviation of the calibrated readings' magnitudes.
+fn magnitudes(samples: &[[f32; 3]], cal: &MagCalibration) -> (f32, f32) {
+    let nf = samples.len() as f32;
+    let lengths = || samples.iter().map(|s| norm(cal.apply(*s)));
+    let mean = lengths().sum::<f32>() / nf;
+    let var = lengths()
+        .map(|l| {
+            let e = l - mean;
             e * e
         })
-        .sum::<f64>()
+        .sum::<f32>()
         / nf;
+    (mean, libm::sqrtf(var))
+}
+
+/// Mean calibrated magnitude, relative RMS deviation (%), direction coverage.
+fn quality(samples: &[[f32; 3]], cal: &MagCalibration) -> (f32, f32, f32) {
+    let nf = samples.len() as f32;
+    let cals = || samples.iter().map(|s| cal.apply(*s));
+    let (field, rms) = magnitudes(samples, cal);
     let residual_pct = if field > 0.0 {
-        100.0 * libm::sqrt(var) / field
+        100.0 * rms / field
     } else {
-        f64::INFINITY
+        f32::INFINITY
     };
     let mut spread = [[0.0; 3]; 3];
     for c in cals() {
         let length = norm(c);
-        if length > 1e-12 {
+        if length > 1e-30 {
             add_outer(&mut spread, c.map(|v| v / length), 1.0 / nf);
         }
     }
     let (eig, _) = symmetric_eigen(spread);
-    let coverage = 3.0 * eig.iter().copied().fold(f64::MAX, f64::min);
+    let coverage = 3.0 * eig.iter().copied().fold(f32::MAX, f32::min);
     (field, residual_pct, coverage)
 }
 
-/// Solves the leading `n`×`n` block of `a·x = b` (n ≤ 9) by Gaussian elimination with
-/// partial pivoting; `None` when a pivot vanishes. One routine for the 9-unknown quadric
-/// and the 3×3 centre: the size is a runtime value, so it is not written out per size.
-#[inline(never)]
-fn solve_linear(
-    mut a: [[f64; QUADRIC]; QUADRIC],
-    mut b: [f64; QUADRIC],
-    n: usize,
-) -> Option<[f64; QUADRIC]> {
-    let n = n.min(QUADRIC);
+/// Solves the quadric's normal equations `a·x = b` by Gaussian elimination with partial
+/// pivoting; `None` when a pivot vanishes.
+fn solve_linear(mut a: [[f32; QUADRIC]; QUADRIC], mut b: [f32; QUADRIC]) -> Option<[f32; QUADRIC]> {
+    let n = QUADRIC;
     for k in 0..n {
         let magnitude = |i: &usize| a.get(*i).and_then(|r| r.get(k)).map_or(0.0, |v| v.abs());
         let pivot = (k..n).max_by(|i, j| magnitude(i).total_cmp(&magnitude(j)))?;
@@ -387,7 +378,7 @@ fn solve_linear(
     let mut x = [0.0; QUADRIC];
     for k in (0..n).rev() {
         let row = a.get(k)?;
-        let known: f64 = row
+        let known: f32 = row
             .iter()
             .zip(&x)
             .take(n)
@@ -403,6 +394,10 @@ fn solve_linear(
 /// Eigenvalues of a symmetric 3×3 matrix and its orthonormal eigenvectors (the rows of
 /// the second, in the same order), by cyclic Jacobi rotations — each zeroes one
 /// off-diagonal entry; a few sweeps reach round-off.
+/// Jacobi stops when Σ off² ≤ this · Σ diagonal²: (f32 epsilon / 8)², the off-diagonal
+/// entries a small fraction of an ulp of the diagonal.
+const JACOBI_TOLERANCE: f32 = (f32::EPSILON / 8.0) * (f32::EPSILON / 8.0);
+
 fn symmetric_eigen(m: Mat3) -> (Vec3, Mat3) {
     let [[a00, a01, a02], [_, a11, a12], [.., a22]] = m;
     let mut diagonal = [a00, a11, a22];
@@ -410,10 +405,10 @@ fn symmetric_eigen(m: Mat3) -> (Vec3, Mat3) {
     let mut off = [a12, a02, a01];
     let mut vectors = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for _ in 0..32 {
-        let size = diagonal.iter().map(|v| v * v).sum::<f64>();
-        let rest = off.iter().map(|v| v * v).sum::<f64>();
-        // Also stops on NaN.
-        if rest.partial_cmp(&(1e-32 * size)) != Some(core::cmp::Ordering::Greater) {
+        let size = diagonal.iter().map(|v| v * v).sum::<f32>();
+        let rest = off.iter().map(|v| v * v).sum::<f32>();
+        // Off-diagonal below f32 round-off of the diagonal; also stops on NaN.
+        if rest.partial_cmp(&(JACOBI_TOLERANCE * size)) != Some(core::cmp::Ordering::Greater) {
             break;
         }
         for (p, q, r) in [(0, 1, 2), (0, 2, 1), (1, 2, 0)] {
@@ -438,15 +433,16 @@ fn rotate(diagonal: &mut Vec3, off: &mut Vec3, vectors: &mut Mat3, [p, q, r]: [u
     }
     // t = tan of the rotation angle, the smaller root of t² + 2θt − 1 = 0.
     let theta = (*aqq - *app) / (2.0 * *apq);
-    let t = if theta.abs() > 1e100 {
+    // Past 1e18, θ² + 1 would overflow f32; there t ≈ 1/(2θ).
+    let t = if theta.abs() > 1e18 {
         0.5 / theta
     } else {
-        let t = 1.0 / (theta.abs() + libm::sqrt(theta * theta + 1.0));
+        let t = 1.0 / (theta.abs() + libm::sqrtf(theta * theta + 1.0));
         if theta < 0.0 { -t } else { t }
     };
-    let c = 1.0 / libm::sqrt(t * t + 1.0);
+    let c = 1.0 / libm::sqrtf(t * t + 1.0);
     let s = t * c;
-    let turn = |x: &mut f64, y: &mut f64| {
+    let turn = |x: &mut f32, y: &mut f32| {
         let (a, b) = (*x, *y);
         *x = c * a - s * b;
         *y = s * a + c * b;
@@ -463,12 +459,12 @@ fn rotate(diagonal: &mut Vec3, off: &mut Vec3, vectors: &mut Mat3, [p, q, r]: [u
 }
 
 /// x^(1/3) for a finite x > 0: Newton's iteration y ← (2y + x/y²)/3 from the exponent
-/// divided by three (within ≈ 10 %), six steps to round-off. libm's `cbrt` and the `fma` it
-/// uses were 3 KB of flash for this one call per calibration.
-fn cube_root(x: f64) -> f64 {
-    const ONE_THIRD_BIAS: u64 = (1023 - 1023 / 3) << 52;
-    let mut y = f64::from_bits(x.to_bits() / 3 + ONE_THIRD_BIAS);
-    for _ in 0..6 {
+/// divided by three (within ≈ 10 %), five steps to round-off: one call per calibration,
+/// where libm's `cbrtf` would be flash for nothing.
+fn cube_root(x: f32) -> f32 {
+    const ONE_THIRD_BIAS: u32 = (127 - 127 / 3) << 23;
+    let mut y = f32::from_bits(x.to_bits() / 3 + ONE_THIRD_BIAS);
+    for _ in 0..5 {
         y = (2.0 * y + x / (y * y)) / 3.0;
     }
     y

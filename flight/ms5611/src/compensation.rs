@@ -78,10 +78,45 @@ pub fn compensate(prom: &Prom, d1: u32, d2: u32) -> Reading {
 }
 
 /// Altitude (m) of `pressure_pa` in the ICAO standard atmosphere above the level where the
-/// pressure is `sea_level_pa`: h = 44330.77·(1 − (p/p₀)^0.190263).
+/// pressure is `sea_level_pa`: h = 44330.77·(1 − (p/p₀)^0.190263), evaluated as
+/// −44330.77·expm1(0.190263·ln(p/p₀)) — nothing cancels near p₀, and of libm only `expm1f`
+/// (`powf` is 1 KB of flash).
 #[must_use]
 pub fn altitude_m(pressure_pa: f32, sea_level_pa: f32) -> f32 {
-    44_330.77 * (1.0 - libm::powf(pressure_pa / sea_level_pa, 0.190_263))
+    -44_330.77 * libm::expm1f(0.190_263 * ln(pressure_pa / sea_level_pa))
+}
+
+/// ln x: x = 2ᵉ·m with m in [√½, √2), ln m = 2·atanh((m − 1)/(m + 1)) by its series (the
+/// argument is below 0.172, six terms reach f32's round-off). 0 gives −∞, ∞ gives ∞,
+/// a negative x or NaN gives NaN.
+fn ln(x: f32) -> f32 {
+    if !(x > 0.0 && x < f32::INFINITY) {
+        return if x == 0.0 {
+            f32::NEG_INFINITY
+        } else if x > 0.0 {
+            x
+        } else {
+            f32::NAN
+        };
+    }
+    // A subnormal x is scaled into the normal range first.
+    let (x, scaled) = if x < f32::MIN_POSITIVE {
+        (x * 33_554_432.0, 25) // 2²⁵
+    } else {
+        (x, 0)
+    };
+    let bits = x.to_bits();
+    let mut exponent = ((bits >> 23) & 0xFF) as i32 - 127 - scaled;
+    let mut m = f32::from_bits((bits & 0x007F_FFFF) | 0x3F80_0000);
+    if m > core::f32::consts::SQRT_2 {
+        m *= 0.5;
+        exponent += 1;
+    }
+    let u = (m - 1.0) / (m + 1.0);
+    let s = u * u;
+    let series =
+        1.0 + s * (1.0 / 3.0 + s * (1.0 / 5.0 + s * (1.0 / 7.0 + s * (1.0 / 9.0 + s / 11.0))));
+    exponent as f32 * core::f32::consts::LN_2 + 2.0 * u * series
 }
 
 #[cfg(test)]
@@ -145,6 +180,40 @@ mod tests {
             ((rem >> 12) & 0xF) as u8
         };
         assert_eq!(crc4(&prom), by_hand);
+    }
+
+    #[test]
+    fn ln_agrees_with_std() {
+        let mut worst = 0.0f64;
+        let mut x = 1e-44f32;
+        while x < 3e38 {
+            for v in [x, x * 1.01, x * 1.414, x * 1.42, x * 1.9] {
+                let want = f64::from(v).ln();
+                let error = (f64::from(ln(v)) - want).abs() / want.abs().max(1.0);
+                worst = worst.max(error);
+            }
+            x *= 1.37;
+        }
+        assert!(worst < 2.5e-7, "{worst}");
+        assert_eq!(ln(1.0), 0.0);
+        assert_eq!(ln(0.0), f32::NEG_INFINITY);
+        assert_eq!(ln(f32::INFINITY), f32::INFINITY);
+        assert!(ln(-1.0).is_nan() && ln(f32::NAN).is_nan());
+    }
+
+    #[test]
+    fn altitude_within_two_millimetres_of_the_f64_formula() {
+        // From 30 kPa (≈ 9 km) to 110 kPa, against sea-level pressures of a real day: at
+        // most 1.5 mm off (f32's step at 9 km is 1 mm; `powf` in f32 was 3.0 mm off).
+        for sea in [98_000.0f32, 101_325.0, 103_500.0] {
+            let mut p = 30_000.0f32;
+            while p < 110_000.0 {
+                let want = 44_330.77 * (1.0 - (f64::from(p) / f64::from(sea)).powf(0.190_263));
+                let got = f64::from(altitude_m(p, sea));
+                assert!((got - want).abs() < 2e-3, "{p} {sea}: {got} vs {want}");
+                p += 37.3;
+            }
+        }
     }
 
     #[test]

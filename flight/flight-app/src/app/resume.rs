@@ -177,21 +177,36 @@ pub fn encode_gains(settings: &Settings, designs: &[AxisDesign; 3]) -> Option<[u
         *word = u32::from_le_bytes(b);
     }
     let (gains, counts) = rest.split_at_mut(3 * 16);
-    let values = designs
-        .iter()
-        .flat_map(|d| d.kalman.into_iter().chain(d.rate).chain(d.attitude));
-    for (pair, v) in gains.chunks_exact_mut(2).zip(values) {
-        let bits = v.to_bits();
-        pair.copy_from_slice(&[bits as u32, (bits >> 32) as u32]);
-    }
-    for (word, n) in counts
-        .iter_mut()
-        .zip(designs.iter().flat_map(|d| d.iterations))
-    {
-        *word = n;
+    let (mut pairs, mut counts) = (gains.chunks_exact_mut(2), counts.iter_mut());
+    // Each design's values drive the zips, so no pair or count word is skipped.
+    for d in designs {
+        for (v, pair) in gains_of(d).into_iter().zip(pairs.by_ref()) {
+            let bits = v.to_bits();
+            pair.copy_from_slice(&[bits as u32, (bits >> 32) as u32]);
+        }
+        for (n, word) in d.iterations.into_iter().zip(counts.by_ref()) {
+            *word = n;
+        }
     }
     seal(&mut words);
     Some(words)
+}
+
+/// A design's gains in the block's order: Kalman, rate, attitude.
+fn gains_of(d: &AxisDesign) -> [f64; 8] {
+    let ([k0, k1, k2], [r0, r1], [a0, a1, a2]) = (d.kalman, d.rate, d.attitude);
+    [k0, k1, k2, r0, r1, a0, a1, a2]
+}
+
+/// The design [`gains_of`] lists, with its doubling steps.
+fn design_of(gains: [f64; 8], iterations: [u32; 3]) -> AxisDesign {
+    let [k0, k1, k2, r0, r1, a0, a1, a2] = gains;
+    AxisDesign {
+        kalman: [k0, k1, k2],
+        rate: [r0, r1],
+        attitude: [a0, a1, a2],
+        iterations,
+    }
 }
 
 /// The settings and designs a gains block holds, if its magic, CRC and settings record
@@ -215,19 +230,14 @@ pub fn decode_gains(block: &[u32; GAINS_WORDS]) -> Option<(Settings, [AxisDesign
     });
     let mut counts = counts.iter().copied();
     let designs = [(); 3].map(|()| {
-        let mut next = || values.next().unwrap_or(f64::NAN);
-        let (kalman, rate, attitude) = (
-            [next(), next(), next()],
-            [next(), next()],
-            [next(), next(), next()],
-        );
-        let mut count = || counts.next().unwrap_or(0);
-        AxisDesign {
-            kalman,
-            rate,
-            attitude,
-            iterations: [count(), count(), count()],
+        let (mut gains, mut iterations) = ([f64::NAN; 8], [0; 3]);
+        for (slot, v) in gains.iter_mut().zip(values.by_ref()) {
+            *slot = v;
         }
+        for (slot, n) in iterations.iter_mut().zip(counts.by_ref()) {
+            *slot = n;
+        }
+        design_of(gains, iterations)
     });
     Some((record.settings, designs))
 }

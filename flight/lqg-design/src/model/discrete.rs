@@ -27,8 +27,8 @@ pub trait Real:
     const ONE: Self;
     /// exp(self).
     fn exp(self) -> Self;
-    /// exp(self) − 1 without cancellation.
-    fn exp_m1(self) -> Self;
+    /// (exp(self), exp(self) − 1), the second without cancellation.
+    fn exp_and_exp_m1(self) -> (Self, Self);
     /// Conversion from f64 (rounds for f32).
     fn from_f64(v: f64) -> Self;
     /// Conversion from f32 (exact).
@@ -41,8 +41,8 @@ impl Real for f32 {
     fn exp(self) -> Self {
         libm::expf(self)
     }
-    fn exp_m1(self) -> Self {
-        libm::expm1f(self)
+    fn exp_and_exp_m1(self) -> (Self, Self) {
+        (libm::expf(self), libm::expm1f(self))
     }
     #[allow(clippy::cast_possible_truncation)] // rounding to f32 is the point
     fn from_f64(v: f64) -> Self {
@@ -57,10 +57,10 @@ impl Real for f64 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
     fn exp(self) -> Self {
-        libm::exp(self)
+        crate::exp::exp(self)
     }
-    fn exp_m1(self) -> Self {
-        libm::expm1(self)
+    fn exp_and_exp_m1(self) -> (Self, Self) {
+        crate::exp::exp_and_exp_m1(self)
     }
     fn from_f64(v: f64) -> Self {
         v
@@ -91,8 +91,8 @@ pub struct Phi<T> {
 impl<T: Real> Phi<T> {
     /// Evaluates the φ functions for x = Ts/τ ≥ 0.
     pub fn new(x: T) -> Self {
-        let e = (-x).exp();
-        let phi1 = -(-x).exp_m1();
+        let (e, e_m1) = (-x).exp_and_exp_m1();
+        let phi1 = -e_m1;
         if x < T::ONE {
             // t_n = (−x)^n / n!: φ2 = Σ_{n≥2} t_n, φ3 = −Σ_{n≥3} t_n, g = Σ_{n≥2} (n−1)·t_n.
             let two = T::ONE + T::ONE;

@@ -98,12 +98,13 @@ impl AxisModel {
 
     /// β1 in (deg/s²)/unit, f64 for the gain design.
     pub fn beta1(&self) -> f64 {
-        libm::exp(f64::from(self.ln_beta1))
+        discrete::Real::exp(f64::from(self.ln_beta1))
     }
 
     /// β2 in (deg/s²)/unit (0 when absent), f64 for the gain design.
     pub fn beta2(&self) -> f64 {
-        self.ln_beta2.map_or(0.0, |l| libm::exp(f64::from(l)))
+        self.ln_beta2
+            .map_or(0.0, |l| discrete::Real::exp(f64::from(l)))
     }
 
     /// τ in seconds as f64.
