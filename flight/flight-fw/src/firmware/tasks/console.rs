@@ -13,7 +13,7 @@ use heapless::String;
 use static_cell::StaticCell;
 
 use crate::firmware::shared::with_app;
-use crate::firmware::usb_cdc::send;
+use crate::firmware::usb_cdc::{Reply, send};
 
 struct Buffers {
     config_descriptor: [u8; 256],
@@ -76,17 +76,5 @@ async fn serve(
             with_app(|a| a.on_console_input(line.as_ref().map(|l| l.as_str()), &mut reply));
             send(class, reply.0.as_bytes()).await?;
         }
-    }
-}
-
-/// One answer's text. Its one `write_str`, never inlined: the answer is written in a few
-/// dozen pieces, and the buffer's append inlined at each of them cost 592 B of flash
-/// (Sparky2, measured).
-struct Reply(String<2048>);
-
-impl core::fmt::Write for Reply {
-    #[inline(never)]
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        self.0.write_str(s)
     }
 }
