@@ -109,7 +109,13 @@ def main():
     if len(sys.argv) != 3 or sys.argv[1] not in ("check", "write"):
         raise SystemExit("usage: pil_figures.py check|write RUNS_DIR")
     mode, runs_dir = sys.argv[1], Path(sys.argv[2])
-    runs = {run: json.loads((runs_dir / f"{run}.json").read_text()) for run, _, _ in BOOT_ROWS}
+    runs = {}
+    for run, _, _ in BOOT_ROWS:
+        path = runs_dir / f"{run}.json"
+        try:
+            runs[run] = json.loads(path.read_text())
+        except (OSError, ValueError) as e:
+            raise SystemExit(f"{path}: no boot report to read ({e})")
     ok = replace_block("tests/pil/README.md", "pil-boot", boot_table(runs), mode)
     ok = replace_block("README.md", "pil-stack", stack_table(runs), mode) and ok
     sys.exit(0 if ok else 1)
