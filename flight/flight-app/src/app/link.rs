@@ -457,8 +457,9 @@ impl FlightApp {
     }
 
     /// A message from the phone (relayed by the module): a setting change goes through the
-    /// gate (signed, fresh, disarmed); the applied value is echoed, a refusal answered with
-    /// its reason and the session to sign the next one with.
+    /// gate (signed, fresh, disarmed); the applied value is echoed and saved (the phone has
+    /// no `save` of its own: a change the pilot made must survive the next power cycle), a
+    /// refusal answered with its reason and the session to sign the next one with.
     fn apply_link_change(&mut self, message: &Message) {
         let armed = self.armed();
         let key = self.live.link_key();
@@ -471,6 +472,7 @@ impl FlightApp {
         };
         if matches!(reply, Reply::Applied(_)) {
             self.settings_changed();
+            self.request_save();
         }
         self.link.reply = Some(reply.message());
     }

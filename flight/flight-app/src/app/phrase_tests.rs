@@ -188,4 +188,9 @@ fn an_unsigned_change_is_refused_and_a_signed_one_applied() {
     );
     assert_eq!(app.settings().get(handles::FAILSAFE_DESCENT_MPS), 0.9);
     assert!(app.take_design_request().is_some());
+    // Saved: the phone has no `save` command, and a change must survive a power cycle.
+    let Some((to_write, _)) = app.take_save() else {
+        panic!("an applied phone change is saved");
+    };
+    assert_eq!(to_write.get(handles::FAILSAFE_DESCENT_MPS), 0.9);
 }
