@@ -227,7 +227,7 @@ impl FlightBoard {
     /// ESC inputs have pull-downs).
     pub fn power_off(&mut self, now_ns: u64) {
         for m in &mut self.motors {
-            m.edge(now_ns, false);
+            m.power_lost(now_ns);
         }
         self.buzzer.set(now_ns, false);
     }

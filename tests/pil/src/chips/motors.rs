@@ -54,6 +54,14 @@ impl PulseMeter {
         self.changed_ns = t_ns;
     }
 
+    /// The board lost power at `t_ns`: the pin falls and the motor (a FET gate or an
+    /// ESC input with its pull-down) has no pulse to go on — stopped at once, not after
+    /// the quiet periods that tell a stopped output from a slow one.
+    pub fn power_lost(&mut self, t_ns: u64) {
+        self.edge(t_ns, false);
+        self.last = None;
+    }
+
     /// The level now.
     pub fn level(&self) -> bool {
         self.level
@@ -188,5 +196,22 @@ mod tests {
             Command::Stopped
         );
         assert_eq!(o.last_pulse(), Some((200_000, Some(1_000_000))));
+    }
+
+    #[test]
+    fn a_board_without_power_stops_its_motors_at_once() {
+        let brushed = Protocol::Brushed {
+            frequency_hz: 32_000,
+        };
+        for (p, high, period) in [
+            (brushed, 20_000, 31_250),
+            (Protocol::OneShot125, 200_000, 1_000_000),
+        ] {
+            let mut m = PulseMeter::new();
+            let t = pulses(&mut m, 0, high, period, 10);
+            assert_ne!(m.command(&p, t), Command::Stopped, "{p:?} turning");
+            m.power_lost(t);
+            assert_eq!(m.command(&p, t), Command::Stopped, "{p:?} at the power cut");
+        }
     }
 }

@@ -18,6 +18,7 @@ pub mod cli;
 pub mod emulated;
 pub mod image;
 pub mod report;
+pub mod variant;
 
 use std::path::PathBuf;
 
@@ -94,7 +95,8 @@ impl Kind {
             Kind::LinkCut => SitlKind::LinkCut,
             Kind::ImuStall => SitlKind::ImuStall,
             Kind::SettingsSave => SitlKind::PowerCycle,
-            Kind::Boot | Kind::Hover | Kind::I2cStuck | Kind::Panic => SitlKind::Hover,
+            Kind::Panic => SitlKind::Panic,
+            Kind::Boot | Kind::Hover | Kind::I2cStuck => SitlKind::Hover,
         }
     }
 }
@@ -239,14 +241,9 @@ pub fn plan(opts: &Options) -> Result<Plan, RunError> {
             .copied()
             .unwrap_or((0.0, 0.0))
     };
-    let mut plan = flight_sitl::runner::plan(kind, &sitl, reach)?;
-    if matches!(opts.kind, Kind::I2cStuck | Kind::Panic) {
-        // A fault of the PIL's own, 3 s into the hold (panic), or none in the timeline.
-        plan.fault_at_s =
-            (opts.kind == Kind::Panic).then(|| opts.sitl.at_s.unwrap_or(reach.0 + 3.0));
-        plan.fault_end_s = None;
-    }
-    Ok(plan)
+    // flight-sitl's timeline; the panic's fault is the PIL's own (a DMA transfer error at
+    // `fault_at_s`, injected by `run`), not the SITL's `flight_panic` input.
+    Ok(flight_sitl::runner::plan(kind, &sitl, reach)?)
 }
 
 /// The scenario time `boot` runs after the 4 s warm-up, s.

@@ -218,15 +218,11 @@ impl Outcome {
     pub fn check(&self) -> Vec<String> {
         let mut bad: Vec<String> = match self.kind {
             Kind::Boot => Vec::new(),
-            Kind::I2cStuck | Kind::Panic => {
-                // Flown as a hover; the hover's criteria hold unless the scenario says.
+            Kind::I2cStuck => {
+                // Flown as a hover: the hover's criteria hold.
                 let mut r = self.report.clone();
                 r.kind = SitlKind::Hover;
-                if self.kind == Kind::Panic {
-                    Vec::new()
-                } else {
-                    flight_sitl::runner::acceptance::check(&r)
-                }
+                flight_sitl::runner::acceptance::check(&r)
             }
             _ => flight_sitl::runner::acceptance::check(&self.report),
         };

@@ -168,6 +168,11 @@ fn flight_sitl_scenarios_keep_their_plans_and_hover_flies_30_s() {
     assert_eq!(p.kind, SitlKind::Hover);
     let (opts, _dir) = options(Kind::Panic);
     let p = plan(&opts).unwrap();
+    assert_eq!(
+        p.kind,
+        SitlKind::Panic,
+        "flight-sitl's panic timeline and figures"
+    );
     assert!(
         p.fault_at_s
             .is_some_and(|a| a > p.hold_from_s.unwrap_or(0.0))

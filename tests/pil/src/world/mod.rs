@@ -82,12 +82,17 @@ pub struct WorldConfig {
     pub phone_key: Option<telemetry::change_auth::ChangeKey>,
 }
 
+/// When the pilot's phone connects, s after power-up: once the module is up (its HM-10
+/// script, which drops a phone that connects while it runs, ends ≈ 3.2 s after power-up
+/// with the dist image), as a pilot opens the app after switching the radio on.
+pub const PHONE_AT_S: f64 = 3.4;
+
 impl Default for WorldConfig {
     fn default() -> Self {
         Self {
             board: FlightBoardKind::BrushedSparky,
             quantum_ns: QUANTUM_NS,
-            phone_at_s: Some(2.0),
+            phone_at_s: Some(PHONE_AT_S),
             phone_pin: None,
             gps: Generation::M8,
             i2c_stuck: None,
@@ -141,16 +146,26 @@ impl Radios {
 
 /// The phone on the HM-10: it sends the scenario's setting changes, signed with the change key
 /// (re-signed once after the refusal that names the flight side's session), as flight-sitl's
-/// phone does.
+/// phone does; and sends a change again, freshly signed, when no answer (the echo or a
+/// refusal) came within [`PHONE_ANSWER_NS`] — the link's records are not acknowledged, so an
+/// uplink the flight radio missed loses the change, and a pilot whose app shows nothing
+/// presses again.
 struct Phone {
     signer: Option<telemetry::change_auth::Signer>,
     queue: Vec<telemetry::messages::SettingChange>,
     pending: Option<telemetry::messages::SettingChange>,
     next_ns: u64,
+    sent_ns: u64,
 }
 
-/// The phone sends one change per this much time, ns, from a second after it connected.
+/// The phone sends one change per this much time, ns, from [`PHONE_FIRST_NS`] after it
+/// connected.
 const PHONE_CHANGE_NS: u64 = 20_000_000;
+/// The phone's first change this long after it connected, ns.
+const PHONE_FIRST_NS: u64 = 200_000_000;
+/// The phone sends a change again when nothing answered it for this long, ns (an answer
+/// takes ≈ 0.1 s: the next uplink slot, the flight side's reply in the telemetry rotation).
+pub const PHONE_ANSWER_NS: u64 = 500_000_000;
 
 impl Phone {
     fn message(&mut self, change: telemetry::messages::SettingChange) -> Message {
@@ -209,6 +224,12 @@ pub struct World<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard
     telemetry: Vec<(u64, Message)>,
     reader: MessageReader,
     boots: Vec<Boot>,
+    /// The flight MCU's resets other than power-on (watchdog, the fault handler's), virtual
+    /// ns at the record that first saw each.
+    flight_resets: Vec<u64>,
+    /// The flight MCU's reset and watchdog counts already accounted for, and whether the
+    /// next reset is the power-on the world itself made.
+    resets_seen: (u32, u32, bool),
     halts: Vec<(End, u64, Halt)>,
     stats_at_power_off: MachineStats,
     pilot_pin: Option<u32>,
@@ -306,6 +327,8 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
                     settings_error: false,
                 },
             ],
+            flight_resets: Vec::new(),
+            resets_seen: (0, 0, false),
             halts: Vec::new(),
             stats_at_power_off: MachineStats::default(),
             pilot_pin: config.phone_pin,
@@ -315,6 +338,7 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
                 queue: scenario.setting_changes,
                 pending: None,
                 next_ns: 0,
+                sent_ns: 0,
             },
             config,
             now_ns: 0,
@@ -489,6 +513,7 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
         let before = self.input;
         self.apply_input(&before, &input, t_ns);
         self.input = input;
+        self.note_flight_reset(t_ns);
         let motors = self.flight.board().motor_commands(t_ns);
         self.records.push(Record {
             t_ns,
@@ -497,6 +522,29 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
             motors,
             flight_up: self.flight.powered(),
         });
+    }
+
+    /// A reset of the flight MCU since the last record that the world did not make (power
+    /// on): a boot with its cause — the watchdog's, else the fault handler's (a resumed
+    /// flight is told apart in [`World::finish`], from the `Health` telemetry).
+    fn note_flight_reset(&mut self, t_ns: u64) {
+        let stats = self.flight.stats();
+        let (resets, watchdog, power_on) = self.resets_seen;
+        if stats.resets > resets && !power_on {
+            self.flight_resets.push(t_ns);
+            self.boots.push(Boot {
+                t_s: Self::scenario_s(t_ns),
+                end: End::Flight,
+                cause: if stats.watchdog_resets > watchdog {
+                    BootCause::Watchdog
+                } else {
+                    BootCause::Panic
+                },
+                settings_error: false,
+            });
+        }
+        let power_on = power_on && stats.resets == resets;
+        self.resets_seen = (stats.resets, stats.watchdog_resets, power_on);
     }
 
     fn apply_input(&mut self, before: &PilotInput, input: &PilotInput, t_ns: u64) {
@@ -524,6 +572,7 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
             if input.flight_powered {
                 self.flight.set_powered(true, t_ns);
                 self.flight.board().power_on(t_ns, IMU_PPM);
+                self.resets_seen.2 = true;
                 self.boots.push(Boot {
                     t_s: Self::scenario_s(t_ns),
                     end: End::Flight,
@@ -566,15 +615,24 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
         board.tick(t1);
         if board.hm10.connected() && !self.phone.queue.is_empty() {
             if self.phone.next_ns == 0 {
-                self.phone.next_ns = t1 + 1_000_000_000;
+                self.phone.next_ns = t1 + PHONE_FIRST_NS;
             }
             if t1 >= self.phone.next_ns {
                 self.phone.next_ns = t1 + PHONE_CHANGE_NS;
                 let change = self.phone.queue.remove(0);
                 self.phone.pending = Some(change);
+                self.phone.sent_ns = t1;
                 let m = self.phone.message(change);
                 board.hm10.phone_write(&encoded(&m));
             }
+        }
+        if let Some(change) = self.phone.pending
+            && board.hm10.connected()
+            && t1 >= self.phone.sent_ns + PHONE_ANSWER_NS
+        {
+            self.phone.sent_ns = t1;
+            let m = self.phone.message(change);
+            board.hm10.phone_write(&encoded(&m));
         }
         let rx = board.hm10.take_phone_rx();
         for (t, chunk) in rx {
@@ -587,11 +645,21 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
     }
 
     fn on_telemetry(&mut self, t: u64, m: Message) {
-        if let (Message::ChangeRefused(r), Some(change)) = (&m, self.phone.pending)
-            && self.phone.signer.as_mut().is_some_and(|s| s.on_refused(r))
-        {
-            let again = self.phone.message(change);
-            self.module.board().hm10.phone_write(&encoded(&again));
+        match (&m, self.phone.pending) {
+            (Message::ChangeRefused(r), Some(change)) if r.id == change.id => {
+                if self.phone.signer.as_mut().is_some_and(|s| s.on_refused(r)) {
+                    self.phone.sent_ns = t;
+                    let again = self.phone.message(change);
+                    self.module.board().hm10.phone_write(&encoded(&again));
+                } else {
+                    // The refusal stands (a wrong phrase, armed, a bad value): shown, not retried.
+                    self.phone.pending = None;
+                }
+            }
+            (Message::SettingChange(echo), Some(change)) if echo.id == change.id => {
+                self.phone.pending = None;
+            }
+            _ => {}
         }
         self.telemetry.push((t, m));
     }
@@ -609,6 +677,40 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
     /// Telemetry the phone received: (virtual ns, message).
     pub fn telemetry(&self) -> &[(u64, Message)] {
         &self.telemetry
+    }
+
+    /// A flight boot after a fault or watchdog reset whose `Health` telemetry says "flight
+    /// resumed" (before the next boot) was a resumed flight.
+    fn tell_resumed_boots(&mut self) {
+        let resumed_at: Vec<f64> = self
+            .telemetry
+            .iter()
+            .filter_map(|(t, m)| match m {
+                Message::Health(h) if h.flags & telemetry::messages::Health::RESUMED != 0 => {
+                    Some(Self::scenario_s(*t))
+                }
+                _ => None,
+            })
+            .collect();
+        let flight_boots: Vec<f64> = self
+            .boots
+            .iter()
+            .filter(|b| b.end == End::Flight)
+            .map(|b| b.t_s)
+            .collect();
+        for b in self.boots.iter_mut().filter(|b| b.end == End::Flight) {
+            if !matches!(b.cause, BootCause::Panic | BootCause::Watchdog) {
+                continue;
+            }
+            let next = flight_boots
+                .iter()
+                .copied()
+                .find(|t| *t > b.t_s)
+                .unwrap_or(f64::INFINITY);
+            if resumed_at.iter().any(|t| *t >= b.t_s && *t < next) {
+                b.cause = BootCause::Resumed;
+            }
+        }
     }
 
     /// The records in flight-sitl's form, the flight controller's state observed from
@@ -640,7 +742,16 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
                 _ => None,
             })
             .collect();
-        let observed = observe::rebuild(&times, &armed, &heard, &told, &gesture, &airborne);
+        let observed = observe::rebuild(
+            &times,
+            &armed,
+            &heard,
+            &told,
+            &gesture,
+            &airborne,
+            &self.flight_resets,
+        );
+        self.tell_resumed_boots();
         let mode = self
             .telemetry
             .iter()

@@ -12,6 +12,13 @@ use flight_app::alerts::Alert;
 use flight_app::battery::BatteryLevel;
 use flight_app::supervisor::Decision;
 
+/// A flight MCU reset's motors-off may be seen this long before the record that saw the
+/// reset (the handler stops them, then resets within microseconds), ns.
+const RESET_SLACK_NS: u64 = 2_000_000;
+/// A resumed flight runs its motors again within this long of the reset (the resume record
+/// is fresh for 1 s; the resumed boot takes ≈ 80 ms), ns.
+pub const RESUME_WINDOW_NS: u64 = 1_000_000_000;
+
 /// How far an observed tone may be from a pattern's, ms (the firmware's alert task ticks
 /// every 10 ms, so a tone lasts its length ± one tick).
 const TOLERANCE_MS: f64 = 12.0;
@@ -172,7 +179,11 @@ pub struct Observed {
 /// Rebuilds the flight controller's state at each of `times` (ns, ascending) from the
 /// motors (`armed`, per time), the buzzer's alerts, telemetry's failsafe flag where heard
 /// (`telemetry_failsafe`: (ns, failsafe), ascending) and, for the disarm reason, whether the
-/// pilot was making the disarm gesture then and whether the frame was airborne.
+/// pilot was making the disarm gesture then and whether the frame was airborne. Around a
+/// reset of the flight MCU (`resets`, ns; not a power-on) the motors stopping is the reboot
+/// (`Steady`, as flight-sitl records it), their coming back within [`RESUME_WINDOW_NS`] a
+/// resumed flight (`Steady`: in failsafe until the link decides), and the "armed" tones
+/// after it the link's word (`Resumed`).
 pub fn rebuild(
     times: &[u64],
     armed: &[bool],
@@ -180,17 +191,25 @@ pub fn rebuild(
     telemetry_failsafe: &[(u64, bool)],
     gesture: &[bool],
     airborne: &[bool],
+    resets: &[u64],
 ) -> Vec<Observed> {
     let mut out = Vec::with_capacity(times.len());
     let mut failsafe = false;
     let mut battery = BatteryLevel::Ok;
     let mut was_armed = false;
     let (mut hi, mut ti) = (0, 0);
+    let mut awaiting_word = false;
     for (k, &t) in times.iter().enumerate() {
         let mut decision = Decision::Steady;
-        while let Some(&(th, h)) = heard.get(hi).filter(|(th, _)| *th <= t) {
+        let mut armed_tones = false;
+        let since_reset = resets
+            .iter()
+            .rev()
+            .find(|r| **r <= t + RESET_SLACK_NS)
+            .map(|r| t.saturating_sub(*r));
+        let near_reset = since_reset.is_some_and(|d| d <= RESUME_WINDOW_NS);
+        while let Some(&(_, h)) = heard.get(hi).filter(|(th, _)| *th <= t) {
             hi += 1;
-            let _ = th;
             match h {
                 Heard::Failsafe => {
                     failsafe = true;
@@ -204,6 +223,7 @@ pub fn rebuild(
                     battery = BatteryLevel::Warning
                 }
                 Heard::BatteryCritical => battery = BatteryLevel::Critical,
+                Heard::ArmedOrDisarmed => armed_tones = true,
                 _ => {}
             }
         }
@@ -212,8 +232,12 @@ pub fn rebuild(
             failsafe = f;
         }
         let now_armed = armed.get(k).copied().unwrap_or(false);
-        if now_armed && !was_armed {
+        if now_armed && !was_armed && near_reset {
+            awaiting_word = true;
+        } else if now_armed && !was_armed {
             decision = Decision::Armed;
+        } else if was_armed && !now_armed && near_reset {
+            // The fault handler stopped the motors and reset the MCU.
         } else if was_armed && !now_armed {
             // The alert that came with the disarm, within a tone's start.
             let near = |want: Heard| {
@@ -236,6 +260,11 @@ pub fn rebuild(
                 Decision::DisarmedIdle
             };
         }
+        if awaiting_word && now_armed && armed_tones {
+            awaiting_word = false;
+            decision = Decision::Resumed;
+        }
+        awaiting_word &= now_armed;
         was_armed = now_armed;
         out.push(Observed {
             armed: now_armed,
@@ -317,6 +346,7 @@ mod tests {
             &[],
             &vec![false; times.len()],
             &airborne,
+            &[],
         );
         assert_eq!(got[1].decision, Decision::Armed);
         assert!(!got[4].failsafe && got[5].failsafe);
@@ -338,6 +368,7 @@ mod tests {
             &[],
             &vec![false; times.len()],
             &airborne,
+            &[],
         );
         assert_eq!(got[10].decision, Decision::DisarmedSensorFault);
         // Telemetry's flag counts too.
@@ -348,7 +379,60 @@ mod tests {
             &[(3_000_000_000, true)],
             &vec![false; times.len()],
             &airborne,
+            &[],
         );
         assert!(got[3].failsafe && !got[2].failsafe);
+    }
+
+    #[test]
+    fn a_reset_in_the_air_is_a_reboot_and_the_armed_tones_after_it_the_links_word() {
+        // 1 ms records; armed at 10 ms; the handler stops the motors at 100 ms and the reset
+        // is seen at 101 ms; the resumed boot runs them from 180 ms, the link's word (the
+        // armed tones) at 210 ms.
+        let ms = 1_000_000;
+        let times: Vec<u64> = (0..400).map(|k| k * ms).collect();
+        let armed: Vec<bool> = times
+            .iter()
+            .map(|t| (10 * ms..100 * ms).contains(t) || *t >= 180 * ms)
+            .collect();
+        let heard = alerts_heard(&play(Alert::Armed, 210 * ms));
+        let n = times.len();
+        let got = rebuild(
+            &times,
+            &armed,
+            &heard,
+            &[],
+            &vec![false; n],
+            &vec![true; n],
+            &[101 * ms],
+        );
+        assert_eq!(got[10].decision, Decision::Armed);
+        assert_eq!(
+            got[100].decision,
+            Decision::Steady,
+            "the reboot, not a disarm"
+        );
+        assert!(!got[100].armed && got[180].armed);
+        assert_eq!(
+            got[180].decision,
+            Decision::Steady,
+            "resumed, not armed anew"
+        );
+        let word: Vec<usize> = (0..n)
+            .filter(|k| got[*k].decision == Decision::Resumed)
+            .collect();
+        assert_eq!(word, vec![210]);
+        // Without the reset the same motors are a disarm and a new arming.
+        let got = rebuild(
+            &times,
+            &armed,
+            &heard,
+            &[],
+            &vec![false; n],
+            &vec![true; n],
+            &[],
+        );
+        assert_eq!(got[100].decision, Decision::DisarmedIdle);
+        assert_eq!(got[180].decision, Decision::Armed);
     }
 }
