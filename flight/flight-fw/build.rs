@@ -30,14 +30,23 @@ MEMORY
 ";
 
 /// Test variants for the processor-in-the-loop runner (`tests/pil` builds them from this
-/// source to show it models the hardware, not the app); `cargo xtask dist` never sets
-/// `TAULINK_PIL_VARIANT`, so no flashable image carries one. Comma-separated names:
-/// `radio-cs-pc13` wires the RFM22B's nSEL to PC13 instead of PA15 (a board with the wrong
-/// pin), `iwdg-half` sets the independent watchdog's timeout to half the supervisor's feed
-/// period (no feeding meets it).
-const PIL_VARIANTS: [(&str, &str); 2] = [
+/// source to show it models the hardware, not the app, and that each of issue 29's glue
+/// fixes is what passes its scenario); `cargo xtask dist` never sets `TAULINK_PIL_VARIANT`,
+/// so no flashable image carries one. Comma-separated names:
+/// - `radio-cs-pc13` wires the RFM22B's nSEL to PC13 instead of PA15 (a board with the wrong
+///   pin), `iwdg-half` sets the independent watchdog's timeout to half the supervisor's feed
+///   period (no feeding meets it);
+/// - the glue as it was before a fix: `i2c-unguarded` (no bus clear, no transaction
+///   timeout), `fault-halts` (panic and HardFault spin with the motors as they were, as
+///   panic-probe did, until the watchdog), `no-resume` (every reset boots cold),
+///   `flash-slow` (the flash accelerator left off: 5 wait states, no caches or prefetch).
+const PIL_VARIANTS: [(&str, &str); 6] = [
     ("radio-cs-pc13", "pil_radio_cs_pc13"),
     ("iwdg-half", "pil_iwdg_half"),
+    ("i2c-unguarded", "pil_i2c_unguarded"),
+    ("fault-halts", "pil_fault_halts"),
+    ("no-resume", "pil_no_resume"),
+    ("flash-slow", "pil_flash_slow"),
 ];
 
 fn pil_variants() {

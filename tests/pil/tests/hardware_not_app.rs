@@ -1,7 +1,7 @@
 //! The PIL models the hardware, not the app: the same flight application built with a
 //! different board glue fails as that hardware would. The flight image is built here from
 //! the firmware source with a test knob `cargo xtask dist` never sets
-//! (`flight/flight-fw/build.rs`, `TAULINK_PIL_VARIANT`), kept in `target/pil-variants`:
+//! (`pil::runner::variant`), kept in `target/pil-variants`:
 //!
 //! - `radio-cs-pc13`: the RFM22B's nSEL on PC13 instead of PA15 — the radio never hears the
 //!   MCU, so `hover` never links (no telemetry, never armed);
@@ -15,41 +15,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use std::path::PathBuf;
-use std::process::Command;
-use std::sync::Mutex;
 
 use pil::runner::emulated::EmulatedBoards;
 use pil::runner::{Kind, Options, image, run};
 
-/// Builds the BrushedSparky flight image with `variant` in the workspace's target folder
-/// (where `cargo xtask dist` built the images: only flight-fw itself recompiles) and keeps
-/// a copy as `target/pil-variants/<variant>.elf`; returns the copy's path. The tests build
-/// into one folder: one build and its copy at a time.
 fn build_variant(variant: &str) -> PathBuf {
-    static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
-    let _turn = ONE_AT_A_TIME.lock().unwrap();
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let target =
-        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
-    let status = Command::new(env!("CARGO"))
-        .current_dir(&root)
-        .env("TAULINK_PIL_VARIANT", variant)
-        .args([
-            "build",
-            "--release",
-            "-p",
-            "flight-fw",
-            "--target",
-            "thumbv7em-none-eabihf",
-        ])
-        .status()
-        .expect("cargo runs");
-    assert!(status.success(), "building the {variant} variant");
-    let kept = target.join("pil-variants");
-    std::fs::create_dir_all(&kept).unwrap();
-    let elf = kept.join(format!("{variant}.elf"));
-    std::fs::copy(target.join("thumbv7em-none-eabihf/release/flight-fw"), &elf).unwrap();
-    elf
+    pil::runner::variant::build(variant).unwrap()
 }
 
 fn hover_with(flight_image: PathBuf) -> pil::runner::Outcome {

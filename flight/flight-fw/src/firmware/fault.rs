@@ -98,6 +98,9 @@ pub fn take() -> Record {
 /// Motors off, the fault kept, reset.
 fn fail(reason: FaultReason, address: u32) -> ! {
     cortex_m::interrupt::disable();
+    if cfg!(pil_fault_halts) {
+        halt();
+    }
     board::motors_off();
     let fault = Fault {
         reason,
@@ -106,6 +109,14 @@ fn fail(reason: FaultReason, address: u32) -> ! {
     };
     with_record(|r| r.fault = fault.encode());
     cortex_m::peripheral::SCB::sys_reset()
+}
+
+/// The PIL's `fault-halts` variant (flight-fw `build.rs`): spin as panic-probe's handler
+/// did, the motors at their last duty until the watchdog resets the board.
+fn halt() -> ! {
+    loop {
+        cortex_m::asm::nop();
+    }
 }
 
 /// The handler's return address: where core's panic entry called it (the site is its caller,
@@ -123,6 +134,9 @@ fn return_address() -> u32 {
 #[panic_handler]
 fn panic(_info: &PanicInfo) -> ! {
     let address = return_address();
+    if cfg!(pil_fault_halts) {
+        halt();
+    }
     // The motors first: logging waits for nothing, but it is not free.
     board::motors_off();
     defmt::error!("panic, returning to {=u32:#x}", address);

@@ -36,7 +36,10 @@ async fn main(spawner: Spawner) {
     let kept = fault::take();
     let source = clocks::probe();
     let p = embassy_stm32::init(clocks::config(source));
-    clocks::accelerate_flash();
+    // The PIL's `flash-slow` variant (flight-fw `build.rs`) leaves it off.
+    if !cfg!(pil_flash_slow) {
+        clocks::accelerate_flash();
+    }
     info!("TauLink flight firmware on {}", board::BOARD);
     if source == clocks::Clocks::HsiFallback {
         error!(
@@ -169,6 +172,8 @@ fn boot_app(
         feed: &kept.feed,
     };
     match resume::plan(cause, &kept) {
+        // The PIL's `no-resume` variant (flight-fw `build.rs`) boots cold after any reset.
+        Ok(_) if cfg!(pil_no_resume) => new_app(settings),
         Ok(r) if from_settings(&r.settings).is_ok() => resumed_app(settings, &r),
         Ok(_) => {
             info!("boot after {}: the record's settings make no setup", cause);
