@@ -19,8 +19,9 @@ pub struct BootFacts {
 }
 
 /// Counters change every missed sample; a `Health` message for them alone goes at most
-/// this often, µs (a flag change goes at once).
-pub const HEALTH_COUNTERS_PERIOD_US: u64 = 1_000_000;
+/// this often, µs (a flag change goes at once). A standing flag is said again this often:
+/// the link does not acknowledge messages, so a lost one costs this long, not the news.
+pub const HEALTH_PERIOD_US: u64 = 1_000_000;
 
 /// The standing the app keeps.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -68,14 +69,15 @@ impl FlightApp {
         }
     }
 
-    /// The `Health` message due at `now_us` (link clock): at once when a flag changed, at most
-    /// once per [`HEALTH_COUNTERS_PERIOD_US`] when only the counters did; nothing while all is
-    /// well from boot on.
+    /// The `Health` message due at `now_us` (link clock): at once when a flag changed, once
+    /// per [`HEALTH_PERIOD_US`] while a flag stands or when the counters changed; nothing
+    /// while all is well from boot on.
     pub(super) fn take_health_report(&mut self, now_us: u64) -> Option<Health> {
         let now = self.health();
         let (last, at) = self.board.last_sent.unwrap_or((Health::default(), now_us));
+        let period = now_us.saturating_sub(at) >= HEALTH_PERIOD_US;
         let due = now.flags != last.flags
-            || (now != last && now_us.saturating_sub(at) >= HEALTH_COUNTERS_PERIOD_US)
+            || (period && (now != last || now.flags != 0))
             || (now != last && self.board.last_sent.is_none());
         if !due {
             return None;
@@ -126,6 +128,11 @@ mod tests {
             rng_fallback: false,
         });
         assert!(app.take_health_report(40).is_some());
+        // A standing flag is said again a period later, in case the message was lost.
+        assert_eq!(app.take_health_report(50), None);
+        let again = app.take_health_report(40 + HEALTH_PERIOD_US).unwrap();
+        assert_ne!(again.flags & Health::CLOCK_FALLBACK, 0);
+        assert_eq!(app.take_health_report(50 + HEALTH_PERIOD_US), None);
     }
 
     #[test]

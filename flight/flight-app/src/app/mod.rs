@@ -49,7 +49,7 @@ pub use gps::{
     GPS_BAUD, GPS_BOOT_BAUDS, GPS_REPORT_PERIOD_MS, HOME_REPORT_PERIOD_MS, gps_baud_messages,
     gps_message, home_message,
 };
-pub use health::{BootFacts, HEALTH_COUNTERS_PERIOD_US, Leds};
+pub use health::{BootFacts, HEALTH_PERIOD_US, Leds};
 pub use link::{
     BIND_WINDOW_US, BindError, BindReport, BindRequest, FAILSAFE_US, LinkStep, REPORT_PERIOD_US,
 };
