@@ -28,6 +28,10 @@ use embassy_stm32::{Config, rcc};
 pub const HSE_WAIT_MS: u32 = 20;
 /// The HSI's frequency, which runs the CPU until the clock tree is set up.
 const HSI_HZ: u32 = 16_000_000;
+/// DEMCR.TRCENA: the DWT and ITM blocks on (ARMv7-M ARM C1.6.5).
+const DEMCR_TRCENA: u32 = 1 << 24;
+/// DWT_CTRL.CYCCNTENA: the cycle counter counts (ARMv7-M ARM C1.8.7).
+const DWT_CYCCNTENA: u32 = 1;
 /// DBGMCU_IDCODE.REV_ID of revision A silicon (ES0182 table 1).
 const REV_A: u16 = 0x1000;
 
@@ -40,20 +44,29 @@ pub enum Clocks {
     HsiFallback,
 }
 
-/// Starts the HSE and waits for it at most [`HSE_WAIT_MS`] (the CPU still runs from the HSI
-/// after reset, 16 MHz, so the wait is counted in HSI cycles). A running HSE stays on for
-/// `embassy_stm32::init`, whose own wait then ends at once; a dead one is switched off.
+/// Starts the HSE and waits for it at most [`HSE_WAIT_MS`], counted on the core's cycle
+/// counter (the CPU still runs from the HSI after reset, 16 MHz): a delay loop's cycles per
+/// pass depend on the flash and the pipeline, and one that assumed a cycle each waited
+/// 80 ms in the PIL. A running HSE stays on for `embassy_stm32::init`, whose own wait then
+/// ends at once; a dead one is switched off.
 pub fn probe() -> Clocks {
+    use cortex_m::peripheral::{DCB, DWT};
+    // SAFETY: sets DEMCR.TRCENA and DWT_CTRL.CYCCNTENA, read-modify-write before anything
+    // else runs; nothing owns the trace block yet (the seeds read the counter later).
+    unsafe {
+        (*DCB::PTR).demcr.modify(|w| w | DEMCR_TRCENA);
+        (*DWT::PTR).ctrl.modify(|w| w | DWT_CYCCNTENA);
+    }
     let rcc = pac::RCC;
     rcc.cr().modify(|w| {
         w.set_hsebyp(false);
         w.set_hseon(true);
     });
-    for _ in 0..HSE_WAIT_MS * 10 {
+    let start = DWT::cycle_count();
+    while DWT::cycle_count().wrapping_sub(start) < HSI_HZ / 1_000 * HSE_WAIT_MS {
         if rcc.cr().read().hserdy() {
             return Clocks::Hse;
         }
-        cortex_m::asm::delay(HSI_HZ / 10_000);
     }
     rcc.cr().modify(|w| w.set_hseon(false));
     Clocks::HsiFallback
