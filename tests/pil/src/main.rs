@@ -12,6 +12,10 @@ use pil::runner::image::Image;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(e) = cli.check() {
+        eprintln!("pil: {e}");
+        return ExitCode::from(2);
+    }
     let opts = cli.options();
     for path in [&opts.flight_image, &opts.module_image] {
         match Image::load(path) {

@@ -9,7 +9,7 @@
 //!   (25 ms at the fastest LSI against 50 ms) — `hover` reports watchdog resets.
 //!
 //! Each rebuilds flight-fw (its dependencies are those of `cargo xtask dist`, already built)
-//! and flies 40 s of emulated time, so they are ignored
+//! and flies 14 s of emulated time, so they are ignored
 //! in a plain `cargo test`; run them with the dist images built (`cargo xtask dist`):
 //! `cargo test --release -p pil --test hardware_not_app -- --ignored`.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
@@ -27,11 +27,13 @@ fn hover_with(flight_image: PathBuf) -> pil::runner::Outcome {
     let mut o = Options::new(Kind::Hover);
     o.flight_image = flight_image;
     o.module_image = image::dist_dir().join("module-nrf52840.elf");
+    // 10 s after the warm-up: the take-off and the climb, long enough for either fault.
+    o.sitl.duration_s = Some(10.0);
     run(&EmulatedBoards, &o).expect("the run is made")
 }
 
 #[test]
-#[ignore = "builds a firmware variant and flies 40 s emulated: run with --ignored"]
+#[ignore = "builds a firmware variant and flies 14 s emulated: run with --ignored"]
 fn a_radio_chip_select_on_the_wrong_pin_never_links() {
     let out = hover_with(build_variant("radio-cs-pc13"));
     assert_eq!(
@@ -48,7 +50,7 @@ fn a_radio_chip_select_on_the_wrong_pin_never_links() {
 }
 
 #[test]
-#[ignore = "builds a firmware variant and flies 40 s emulated: run with --ignored"]
+#[ignore = "builds a firmware variant and flies 14 s emulated: run with --ignored"]
 fn a_halved_watchdog_timeout_resets_the_flight_controller() {
     let out = hover_with(build_variant("iwdg-half"));
     let [flight, _] = &out.images;

@@ -31,6 +31,7 @@ Examples:
   pil hover --rate F250 --seed 7
   pil link-cut --altitude 30 --json
   pil hover --board sparky2 --lsi-hz 47000
+  pil hover --board sparky2 --gps --console-busy
   pil hover --flight-image my-flight.elf      (your own modified image)
 
 Exit status: 0 when the run was made and its criteria met, 1 when a criterion failed or
@@ -77,6 +78,14 @@ pub struct Cli {
     /// No binding phrase (an unauthenticated link).
     #[arg(long)]
     pub no_phrase: bool,
+    /// A u-blox on the Sparky2's GPS port (USART1, 115 200 Bd once configured).
+    #[arg(long)]
+    pub gps: bool,
+    /// From the take-off a USB host at the flight console types `status` every 10 ms
+    /// (the loop's jitter with the console busy; plugged once armed: a host at the console
+    /// refuses arming).
+    #[arg(long)]
+    pub console_busy: bool,
     /// The lockstep quantum, µs (1 ≤ U ≤ 100).
     #[arg(long, value_name = "U", value_parser = quantum, default_value_t = 5.0)]
     pub quantum_us: f64,
@@ -164,6 +173,17 @@ fn quantum(s: &str) -> Result<f64, String> {
 }
 
 impl Cli {
+    /// What the parser cannot see: a combination the boards do not have.
+    ///
+    /// # Errors
+    /// The reason, for the command line's error message.
+    pub fn check(&self) -> Result<(), String> {
+        if self.gps && self.board != BoardArg::Sparky2 {
+            return Err("--gps: the BrushedSparky has no GPS port (use --board sparky2)".into());
+        }
+        Ok(())
+    }
+
     /// The run these options describe.
     pub fn options(&self) -> Options {
         let kind = self.scenario.kind();
@@ -178,6 +198,8 @@ impl Cli {
         o.sitl.altitude_m = self.altitude;
         o.sitl.at_s = self.at;
         o.lsi_hz = self.lsi_hz;
+        o.sitl.gps = self.gps;
+        o.console_busy = self.console_busy;
         o.flight_image = self
             .flight_image
             .clone()
@@ -248,5 +270,10 @@ mod tests {
         ] {
             assert!(parse(bad).is_err(), "{bad} accepted");
         }
+        assert!(parse("hover --gps").unwrap().check().is_err());
+        let busy = parse("hover --board sparky2 --gps --console-busy").unwrap();
+        assert!(busy.check().is_ok());
+        let o = busy.options();
+        assert!(o.sitl.gps && o.console_busy);
     }
 }

@@ -274,6 +274,14 @@ impl Machine for FlightMcu {
     fn uart_baud(&mut self, uart: u8) -> Option<u32> {
         Some(self.soc.uart_baud(uart)).filter(|b| *b > 0)
     }
+    fn usb_plug(&mut self, plugged: bool) -> bool {
+        self.soc.usb_plug(plugged);
+        true
+    }
+    fn usb_type(&mut self, line: &[u8]) -> usize {
+        self.soc.usb_send(line);
+        self.soc.usb_take_received().len()
+    }
     fn set_powered(&mut self, on: bool, now_ns: u64) {
         if on && !self.powered {
             self.soc

@@ -120,6 +120,8 @@ pub struct Options {
     pub phrase: Option<String>,
     /// The lockstep quantum, ns.
     pub quantum_ns: u64,
+    /// A USB host at the flight console asks `status` every 10 ms from the take-off.
+    pub console_busy: bool,
 }
 
 impl Options {
@@ -135,6 +137,7 @@ impl Options {
             module_image: image::dist_dir().join("module-nrf52840.elf"),
             phrase: Some(DEFAULT_PHRASE.to_owned()),
             quantum_ns: crate::world::QUANTUM_NS,
+            console_busy: false,
         }
     }
 }
@@ -243,7 +246,7 @@ pub fn plan(opts: &Options) -> Result<Plan, RunError> {
     };
     // flight-sitl's timeline; the panic's fault is the PIL's own (a DMA transfer error at
     // `fault_at_s`, injected by `run`), not the SITL's `flight_panic` input.
-    Ok(flight_sitl::runner::plan(kind, &sitl, reach)?)
+    flight_sitl::runner::plan(kind, &sitl, reach)
 }
 
 /// The scenario time `boot` runs after the 4 s warm-up, s.
@@ -305,6 +308,9 @@ pub fn world<P: Platform>(platform: &P, opts: &Options) -> Result<Prepared<P>, P
         i2c_stuck: (opts.kind == Kind::I2cStuck).then_some((0, 9)),
         phone_key: key,
         phone_pin: Some(module_core::hm10::at::Pin::factory(MODULE_DEVICE_ID).value()),
+        console_busy_from: opts
+            .console_busy
+            .then(|| report::virtual_ns(flight_sitl::runner::pilot::TAKEOFF_S)),
         ..WorldConfig::default()
     };
     let mut radios = Radios::new(scenario.seed, scenario.packet_loss);

@@ -97,6 +97,10 @@ pub struct PilFigures {
     pub setting_in_flash: Option<bool>,
     /// Halts of either MCU (lockups, emulation errors), with their scenario time.
     pub halts: Vec<String>,
+    /// `--console-busy`: bytes the flight console answered the host.
+    pub console_answered_bytes: usize,
+    /// `Gps` telemetry messages the phone received (the flight side reads its receiver).
+    pub gps_messages: usize,
 }
 
 /// One run's result.
@@ -169,6 +173,11 @@ impl Outcome {
             setting_echoed: telemetry
                 .iter()
                 .any(|(_, m)| *m == Message::SettingChange(change)),
+            console_answered_bytes: world.console_answered(),
+            gps_messages: telemetry
+                .iter()
+                .filter(|(_, m)| matches!(m, Message::Gps(_)))
+                .count(),
             halts: world
                 .halts()
                 .iter()
@@ -356,7 +365,7 @@ impl Outcome {
         );
         let _ = write!(
             o,
-            ",\"pil\":{{\"telemetry_messages\":{},\"first_telemetry_s\":{},\"baro_conversions\":{},\"panic_at_s\":{},\"panic_injected\":{},\"motors_off_after_ms\":{},\"setting_echoed\":{},\"setting_in_flash\":{},\"halts\":[{}]}}",
+            ",\"pil\":{{\"telemetry_messages\":{},\"first_telemetry_s\":{},\"baro_conversions\":{},\"panic_at_s\":{},\"panic_injected\":{},\"motors_off_after_ms\":{},\"setting_echoed\":{},\"setting_in_flash\":{},\"console_answered_bytes\":{},\"gps_messages\":{},\"halts\":[{}]}}",
             p.telemetry_messages,
             num(p.first_telemetry_s, 3),
             p.baro_conversions,
@@ -365,6 +374,8 @@ impl Outcome {
             num(p.motors_off_after_ms, 3),
             p.setting_echoed,
             p.setting_in_flash.map_or("null".into(), |b| b.to_string()),
+            p.console_answered_bytes,
+            p.gps_messages,
             p.halts
                 .iter()
                 .map(|h| format!("\"{}\"", h.replace('"', "'")))

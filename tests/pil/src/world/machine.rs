@@ -112,6 +112,20 @@ pub trait Machine {
         false
     }
 
+    /// A USB host at the console port is plugged in (or pulled) now; false when the machine
+    /// has no USB port modelled.
+    fn usb_plug(&mut self, plugged: bool) -> bool {
+        let _ = plugged;
+        false
+    }
+
+    /// The USB host types `line` into the console now (sent once it has enumerated) and
+    /// drops what the firmware answered since the last call; the answer's length.
+    fn usb_type(&mut self, line: &[u8]) -> usize {
+        let _ = line;
+        0
+    }
+
     /// `len` bytes of its memory at `addr` as a debug probe reads them (flash, RAM); None
     /// when unmapped or not supported.
     fn read_memory(&self, addr: u32, len: usize) -> Option<Vec<u8>> {

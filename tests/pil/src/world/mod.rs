@@ -80,7 +80,16 @@ pub struct WorldConfig {
     /// The change key the phone got by proving the binding phrase to the module (it signs
     /// setting changes).
     pub phone_key: Option<telemetry::change_auth::ChangeKey>,
+    /// A USB host plugs into the flight board's console at this virtual time (ns) and asks
+    /// `status` every [`CONSOLE_PERIOD_NS`] from then on (issue 29: the loop's jitter with
+    /// the console busy).
+    pub console_busy_from: Option<u64>,
 }
+
+/// How often the busy console's host asks `status`, ns.
+pub const CONSOLE_PERIOD_NS: u64 = 10_000_000;
+/// The host's first line this long after it plugged in (enumeration), ns.
+const CONSOLE_ENUMERATION_NS: u64 = 500_000_000;
 
 /// When the pilot's phone connects, s after power-up: once the module is up (its HM-10
 /// script, which drops a phone that connects while it runs, ends ≈ 3.2 s after power-up
@@ -97,6 +106,7 @@ impl Default for WorldConfig {
             gps: Generation::M8,
             i2c_stuck: None,
             phone_key: None,
+            console_busy_from: None,
         }
     }
 }
@@ -236,6 +246,9 @@ pub struct World<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard
     /// Data-ready to motor pulse.
     pub loop_timing: timing::LoopTiming,
     phone: Phone,
+    /// The busy console: when the host types next (None: not plugged yet), and the bytes
+    /// the firmware answered.
+    console: (Option<u64>, usize),
 }
 
 /// The flight board for a scenario (radio from `radios`).
@@ -333,6 +346,7 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
             stats_at_power_off: MachineStats::default(),
             pilot_pin: config.phone_pin,
             loop_timing: timing::LoopTiming::default(),
+            console: (None, 0),
             phone: Phone {
                 signer: config.phone_key.map(telemetry::change_auth::Signer::new),
                 queue: scenario.setting_changes,
@@ -380,6 +394,7 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
         self.physics_to(t1);
         self.handset_to(t1);
         self.module_chips(t1);
+        self.console_to(t1);
         self.radios.medium.advance_to_ns(t1);
         self.flight.board().forward_radio();
         self.module.board().forward_radio();
@@ -605,6 +620,30 @@ impl<F: Machine<Board = FlightBoard>, M: Machine<Board = ModuleBoard>> World<F, 
                 }
             }
         }
+    }
+
+    /// The busy console's host: plugs in at `console_busy_from`, then types `status` every
+    /// [`CONSOLE_PERIOD_NS`] once it has enumerated.
+    fn console_to(&mut self, t1: u64) {
+        let Some(from) = self.config.console_busy_from.filter(|f| t1 >= *f) else {
+            return;
+        };
+        match self.console.0 {
+            None => {
+                self.flight.usb_plug(true);
+                self.console.0 = Some(from + CONSOLE_ENUMERATION_NS);
+            }
+            Some(next) if t1 >= next => {
+                self.console.1 += self.flight.usb_type(b"status\n");
+                self.console.0 = Some(next + CONSOLE_PERIOD_NS);
+            }
+            Some(_) => {}
+        }
+    }
+
+    /// Bytes the busy console's host got back from the firmware.
+    pub fn console_answered(&self) -> usize {
+        self.console.1
     }
 
     fn module_chips(&mut self, t1: u64) {
