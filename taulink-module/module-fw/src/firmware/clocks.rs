@@ -20,6 +20,7 @@
 //!   (`DcdcConfig::reg0_voltage`), which writes the word through the NVMC and resets once; a
 //!   value someone programmed is left as it is.
 
+use cortex_m::peripheral::{DCB, DWT};
 use embassy_nrf::config::{self, HfclkSource, LfclkSource, Reg0Voltage};
 use embassy_nrf::pac;
 
@@ -69,6 +70,7 @@ pub struct Clocks {
 /// Starts the crystals with bounded waits and checks REGOUT0; returns what to tell
 /// `embassy_nrf::init` besides `base` and what was found.
 pub fn probe(mut base: config::Config) -> (config::Config, Clocks) {
+    count_cycles();
     let high = start_hfxo();
     let low = if lfxo_starts() {
         LowClock::Crystal
@@ -98,15 +100,28 @@ pub fn probe(mut base: config::Config) -> (config::Config, Clocks) {
     )
 }
 
-/// Waits up to `limit_ms` for `ready`, polling every 100 µs.
+/// Waits up to `limit_ms` for `ready`, timed on the core's cycle counter: a delay loop's
+/// cycles per pass depend on the flash and the pipeline, and one that assumed a cycle each
+/// waited four times its limit in the PIL (a dead LFXO held the boot 4 s, not 1 s).
 fn wait(limit_ms: u32, ready: impl Fn() -> bool) -> bool {
-    for _ in 0..limit_ms * 10 {
+    let start = DWT::cycle_count();
+    while DWT::cycle_count().wrapping_sub(start) < CPU_HZ / 1_000 * limit_ms {
         if ready() {
             return true;
         }
-        cortex_m::asm::delay(CPU_HZ / 10_000);
     }
     ready()
+}
+
+/// Turns the cycle counter on (DEMCR.TRCENA, DWT_CTRL.CYCCNTENA; ARMv7-M ARM C1.6.5,
+/// C1.8.7) for [`wait`].
+fn count_cycles() {
+    // SAFETY: read-modify-writes of two debug registers before anything else runs; nothing
+    // else in the firmware uses the trace block.
+    unsafe {
+        (*DCB::PTR).demcr.modify(|w| w | 1 << 24);
+        (*DWT::PTR).ctrl.modify(|w| w | 1);
+    }
 }
 
 fn start_hfxo() -> HighClock {
