@@ -155,11 +155,12 @@ fn a_power_cycle_boots_again_from_the_stored_settings() {
             .all(|x| x.flight_up)
     );
     assert_eq!(sitl.watchdog_resets, WatchdogResets::default());
-    // The change reached the app before the cut (live only), the reboot loaded the stored 0.7.
+    // The change reached the app before the cut and was saved (a phone's change is saved as
+    // the console's `save` is): the reboot loads 0.9, not the factory's 0.7.
     assert_eq!(
         sitl.settings
             .get(flight_app::settings::handles::FAILSAFE_DESCENT_MPS),
-        0.7
+        0.9
     );
 }
 
