@@ -308,6 +308,16 @@ impl<O: Outside> Nrf52840<O> {
             .and_then(|u| u.rx_baud())
     }
 
+    /// UARTE `uart`'s (1 = UARTE0, 2 = UARTE1) BAUDRATE register as a read would find it
+    /// now, without the access (which counts as a change of the chip).
+    pub fn uarte_baudrate(&mut self, uart: u8) -> Option<u32> {
+        self.catch_up(self.now);
+        usize::from(uart)
+            .checked_sub(1)
+            .and_then(|n| self.parts.uarte.get(n))
+            .map(super::uarte::Uarte::baudrate)
+    }
+
     /// The board.
     pub const fn outside(&self) -> &O {
         &self.outside
@@ -315,7 +325,8 @@ impl<O: Outside> Nrf52840<O> {
 
     /// The board, mutably.
     pub fn outside_mut(&mut self) -> &mut O {
-        self.changed();
+        // The board's levels may change; its events are the chip's own.
+        self.quiet.settled = false;
         &mut self.outside
     }
 
@@ -782,7 +793,6 @@ impl<O: Outside> Bus for Nrf52840<O> {
     }
 
     fn take_reset_request(&mut self) -> Option<ResetCause> {
-        self.changed();
         self.parts.wdt.take_reset().then_some(ResetCause::Watchdog)
     }
 
