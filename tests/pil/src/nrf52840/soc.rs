@@ -6,7 +6,8 @@
 //! The CPU's own memory accesses (RAM, flash) change neither the peripherals nor the
 //! inputs, and they are most of its accesses: the chip remembers its next event and
 //! whether its inputs are settled until something else happens ([`Quiet`]), so such an
-//! access costs no scan of the peripherals and no re-read of the pins. This assumes, as
+//! access costs no scan of the peripherals and no re-read of the pins, and the core's
+//! look at the interrupt lines after it none either. This assumes, as
 //! the boards do, that `Outside::pin_level` answers the same until the board is changed
 //! (through [`Nrf52840::outside_mut`] or the chip's own calls to it).
 
@@ -110,12 +111,14 @@ const fn peripheral_exists(id: u32) -> bool {
     id <= 0x29 || id == 0x2D || id == 0x2F
 }
 
-/// What stays true while only the CPU's memory accesses happen; forgotten
+/// What stays true while only the CPU's memory accesses (and the reset poll) happen; forgotten
 /// ([`Nrf52840::changed`]) at anything else.
 #[derive(Debug, Default)]
 struct Quiet {
     /// The next internal event (peripherals and queued inputs) as last computed.
     next_event: Cell<Option<u64>>,
+    /// The peripherals' interrupt lines as last computed.
+    irq_lines: Cell<Option<[u32; 8]>>,
     /// The inputs were settled and no event waits for routing: settling them again would
     /// find nothing.
     settled: bool,
@@ -591,6 +594,7 @@ impl<O: Outside> Nrf52840<O> {
 
     /// Cycles an access to flash waits while the NVMC writes or erases (the CPU is halted
     /// on flash meanwhile, PS "NVMC"); each wait is reported once.
+    #[inline]
     fn nvmc_stall(&mut self) -> u32 {
         let busy = self.parts.nvmc.busy_until();
         let from = self.now.max(self.stall_reported_until);
@@ -640,6 +644,7 @@ impl<O: Outside> Bus for Nrf52840<O> {
         }
     }
 
+    #[inline]
     fn fetch_stall(&mut self, addr: u32, _sequential: bool) -> u32 {
         self.records.pc = addr;
         if addr >= FLASH_SIZE {
@@ -777,7 +782,12 @@ impl<O: Outside> Bus for Nrf52840<O> {
     }
 
     fn irq_lines(&self) -> [u32; 8] {
-        self.parts.irq_lines()
+        if let Some(lines) = self.quiet.irq_lines.get() {
+            return lines;
+        }
+        let lines = self.parts.irq_lines();
+        self.quiet.irq_lines.set(Some(lines));
+        lines
     }
 
     fn next_event_ns(&self) -> u64 {
