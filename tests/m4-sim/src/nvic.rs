@@ -175,6 +175,11 @@ impl Nvic {
     /// pending unless it is active, and a rising edge sets it pending even when active (a
     /// new request while the handler runs). Returns whether anything became pending.
     pub fn sample(&mut self, lines: Bits) -> bool {
+        if lines == [0; 8] {
+            // No level and no rising edge.
+            self.lines = lines;
+            return false;
+        }
         let rising = [0, 1, 2, 3, 4, 5, 6, 7]
             .map(|k| lines.get(k).copied().unwrap_or(0) & !self.lines.get(k).copied().unwrap_or(0));
         self.lines = lines;

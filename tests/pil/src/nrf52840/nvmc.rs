@@ -16,8 +16,6 @@
 //! 2-byte aligned (rust-embedded/cortex-m issue 151) — a penalty of 0–2 cycles per
 //! iteration, which a 1-cycle line change reproduces in size.
 
-use std::collections::HashSet;
-
 use super::map::FLASH_PAGE;
 use super::memory::{Flash, Uicr};
 
@@ -61,7 +59,33 @@ pub struct Nvmc {
     partial_cfg: u32,
     timing: FlashTiming,
     buffered_line: Option<u32>,
-    cached: HashSet<u32>,
+    cached: LineSet,
+}
+
+/// Flash lines, one bit each (the cache's contents): a fetch from a new line looks one up.
+#[derive(Debug, Default)]
+struct LineSet {
+    words: Vec<u64>,
+}
+
+impl LineSet {
+    /// Adds `line`; whether it was not there.
+    fn insert(&mut self, line: u32) -> bool {
+        let i = (line / 64) as usize;
+        if i >= self.words.len() {
+            self.words.resize(i + 1, 0);
+        }
+        let bit = 1u64 << (line % 64);
+        self.words.get_mut(i).is_some_and(|w| {
+            let new = *w & bit == 0;
+            *w |= bit;
+            new
+        })
+    }
+
+    fn clear(&mut self) {
+        self.words.fill(0);
+    }
 }
 
 impl Nvmc {
@@ -76,7 +100,7 @@ impl Nvmc {
             partial_cfg: 0x0A,
             timing,
             buffered_line: None,
-            cached: HashSet::new(),
+            cached: LineSet::default(),
         }
     }
 
@@ -189,11 +213,22 @@ impl Nvmc {
     }
 
     /// Stall cycles for an instruction fetched from flash at `addr`.
+    #[inline]
     pub fn fetch_stall(&mut self, addr: u32) -> u32 {
-        let line = addr / self.timing.line_bytes.max(1);
+        let bytes = self.timing.line_bytes.max(1);
+        let line = if bytes.is_power_of_two() {
+            addr >> bytes.trailing_zeros()
+        } else {
+            addr / bytes
+        };
         if self.buffered_line == Some(line) {
             return 0;
         }
+        self.fetch_new_line(line)
+    }
+
+    /// A fetch from another line than the buffered one.
+    fn fetch_new_line(&mut self, line: u32) -> u32 {
         self.buffered_line = Some(line);
         if !self.cache_enabled() {
             return self.timing.wait_states;

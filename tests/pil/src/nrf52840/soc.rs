@@ -2,6 +2,16 @@
 //! access, keeps every peripheral on virtual time (events happen at their own instants,
 //! in order, each routed through the PPI at once), re-reads the inputs the image watches
 //! after anything that may have changed them, and records what it does not model.
+//!
+//! The CPU's own memory accesses (RAM, flash) change neither the peripherals nor the
+//! inputs, and they are most of its accesses: the chip remembers its next event and
+//! whether its inputs are settled until something else happens ([`Quiet`]), so such an
+//! access costs no scan of the peripherals and no re-read of the pins, and the core's
+//! look at the interrupt lines after it none either. This assumes, as
+//! the boards do, that `Outside::pin_level` answers the same until the board is changed
+//! (through [`Nrf52840::outside_mut`] or the chip's own calls to it).
+
+use std::cell::Cell;
 
 use m4_sim::bus::ResetCause;
 use m4_sim::{Bus, BusFault, Width};
@@ -101,6 +111,19 @@ const fn peripheral_exists(id: u32) -> bool {
     id <= 0x29 || id == 0x2D || id == 0x2F
 }
 
+/// What stays true while only the CPU's memory accesses (and the reset poll) happen; forgotten
+/// ([`Nrf52840::changed`]) at anything else.
+#[derive(Debug, Default)]
+struct Quiet {
+    /// The next internal event (peripherals and queued inputs) as last computed.
+    next_event: Cell<Option<u64>>,
+    /// The peripherals' interrupt lines as last computed.
+    irq_lines: Cell<Option<[u32; 8]>>,
+    /// The inputs were settled and no event waits for routing: settling them again would
+    /// find nothing.
+    settled: bool,
+}
+
 /// The nRF52840 around a board `O`.
 pub struct Nrf52840<O: Outside> {
     outside: O,
@@ -121,6 +144,7 @@ pub struct Nrf52840<O: Outside> {
     asleep_since: Option<u64>,
     sleep_ns: u64,
     resets: Vec<ResetRecord>,
+    quiet: Quiet,
 }
 
 impl<O: Outside> Nrf52840<O> {
@@ -153,6 +177,7 @@ impl<O: Outside> Nrf52840<O> {
             asleep_since: None,
             sleep_ns: 0,
             resets: Vec::new(),
+            quiet: Quiet::default(),
         };
         chip.latch_uicr();
         chip
@@ -176,6 +201,7 @@ impl<O: Outside> Nrf52840<O> {
     /// Programs a load segment as a debug probe would (before the chip powers up: UICR
     /// effects apply at once).
     pub fn load_segment(&mut self, addr: u32, data: &[u8]) -> Result<(), LoadError> {
+        self.changed();
         let outside = LoadError::Outside {
             addr,
             len: data.len(),
@@ -215,6 +241,7 @@ impl<O: Outside> Nrf52840<O> {
     /// Installs the MBR and UF2-bootloader stand-ins (`boot`) for an application at `app`,
     /// with the UICR words the bootloader leaves.
     pub fn install_uf2_boot_chain(&mut self, app: u32) {
+        self.changed();
         for (addr, bytes) in boot::flash_segments(app) {
             self.flash.load(addr, &bytes);
         }
@@ -228,6 +255,7 @@ impl<O: Outside> Nrf52840<O> {
     /// Programs a UICR word as a debug probe would (effective from the next reset, or now
     /// if the chip has not run yet).
     pub fn program_uicr(&mut self, offset: u32, value: u32) {
+        self.changed();
         self.uicr.program(offset, value);
         if self.now == 0 {
             self.latch_uicr();
@@ -248,6 +276,7 @@ impl<O: Outside> Nrf52840<O> {
     /// The board queues a level on an input pin from `at_ns` on (see `gpio` for how it
     /// combines with `Outside::pin_level`).
     pub fn drive_input(&mut self, pin: Pin, level: bool, at_ns: u64) {
+        self.changed();
         self.pins.drive_input(pin, level, at_ns);
     }
 
@@ -264,6 +293,7 @@ impl<O: Outside> Nrf52840<O> {
     }
 
     fn queue_uart(&mut self, uart: u8, byte: u8, baud: Option<f64>, at_ns: u64) {
+        self.changed();
         if let Some(u) = usize::from(uart)
             .checked_sub(1)
             .and_then(|n| self.parts.uarte.get_mut(n))
@@ -281,6 +311,16 @@ impl<O: Outside> Nrf52840<O> {
             .and_then(|u| u.rx_baud())
     }
 
+    /// UARTE `uart`'s (1 = UARTE0, 2 = UARTE1) BAUDRATE register as a read would find it
+    /// now, without the access (which counts as a change of the chip).
+    pub fn uarte_baudrate(&mut self, uart: u8) -> Option<u32> {
+        self.catch_up(self.now);
+        usize::from(uart)
+            .checked_sub(1)
+            .and_then(|n| self.parts.uarte.get(n))
+            .map(super::uarte::Uarte::baudrate)
+    }
+
     /// The board.
     pub const fn outside(&self) -> &O {
         &self.outside
@@ -288,6 +328,8 @@ impl<O: Outside> Nrf52840<O> {
 
     /// The board, mutably.
     pub fn outside_mut(&mut self) -> &mut O {
+        // The board's levels may change; its events are the chip's own.
+        self.quiet.settled = false;
         &mut self.outside
     }
 
@@ -353,6 +395,7 @@ impl<O: Outside> Nrf52840<O> {
 
     /// Runs `f` on the peripherals with the rest of the chip lent to them at `now`.
     fn with_parts<R>(&mut self, now: u64, f: impl FnOnce(&mut Parts, &mut Ctx<'_>) -> R) -> R {
+        self.changed();
         let mut ctx = Ctx {
             now,
             outside: &mut self.outside,
@@ -366,6 +409,7 @@ impl<O: Outside> Nrf52840<O> {
 
     /// Routes the events generated through the PPI and settles the inputs, until quiet.
     fn propagate(&mut self, now: u64) {
+        self.changed();
         for _ in 0..1000 {
             let settled = self.pins.settle(&mut self.outside, now);
             for (i, level) in settled.edges {
@@ -376,6 +420,7 @@ impl<O: Outside> Nrf52840<O> {
             }
             if self.fired.is_empty() {
                 self.check_lfclk(now);
+                self.quiet.settled = true;
                 return;
             }
             let events = core::mem::take(&mut self.fired);
@@ -403,6 +448,7 @@ impl<O: Outside> Nrf52840<O> {
     fn check_lfclk(&mut self, now: u64) {
         let lf = self.parts.clock.lf_timing();
         if lf != self.lf_seen {
+            self.changed();
             self.lf_seen = lf;
             for r in &mut self.parts.rtc {
                 r.lf_changed(lf, now);
@@ -410,8 +456,20 @@ impl<O: Outside> Nrf52840<O> {
         }
     }
 
+    /// The next internal event, computed once after each change.
     fn next_internal_event(&self) -> u64 {
-        self.parts.next_event_ns().min(self.pins.next_input_ns())
+        if let Some(t) = self.quiet.next_event.get() {
+            return t;
+        }
+        let t = self.parts.next_event_ns().min(self.pins.next_input_ns());
+        self.quiet.next_event.set(Some(t));
+        t
+    }
+
+    /// Something other than a memory access by the CPU happened: the next event and the
+    /// inputs' settling are found afresh.
+    fn changed(&mut self) {
+        self.quiet = Quiet::default();
     }
 
     /// Brings everything to `now`, each event at its own time.
@@ -431,6 +489,7 @@ impl<O: Outside> Nrf52840<O> {
                 break;
             }
             self.now = self.now.max(t);
+            self.changed();
             self.pins.apply_inputs(t);
             self.with_parts(t, |p, ctx| p.step(ctx));
             self.propagate(t);
@@ -440,6 +499,7 @@ impl<O: Outside> Nrf52840<O> {
 }
 
 /// Where an address lies.
+#[derive(Clone, Copy)]
 enum Region {
     Flash(u32),
     Ram(u32),
@@ -451,6 +511,16 @@ enum Region {
     Absent,
     Gpio(u32),
     Unmapped,
+}
+
+impl Region {
+    /// Registers, or nothing: a read there may change the chip (memory reads do not).
+    const fn is_register(&self) -> bool {
+        matches!(
+            self,
+            Region::Nvmc(_) | Region::Peripheral(_) | Region::Gpio(_) | Region::Absent
+        )
+    }
 }
 
 fn region(addr: u32) -> Region {
@@ -503,6 +573,7 @@ impl<O: Outside> Nrf52840<O> {
 
     /// A reset for `cause`, recorded in RESETREAS as `reason`.
     fn reset_as(&mut self, cause: ResetCause, reason: u32) {
+        self.changed();
         let now = self.now;
         let power_on = cause == ResetCause::PowerOn;
         self.parts.clock.reset(reason, power_on);
@@ -523,6 +594,7 @@ impl<O: Outside> Nrf52840<O> {
 
     /// Cycles an access to flash waits while the NVMC writes or erases (the CPU is halted
     /// on flash meanwhile, PS "NVMC"); each wait is reported once.
+    #[inline]
     fn nvmc_stall(&mut self) -> u32 {
         let busy = self.parts.nvmc.busy_until();
         let from = self.now.max(self.stall_reported_until);
@@ -572,6 +644,7 @@ impl<O: Outside> Bus for Nrf52840<O> {
         }
     }
 
+    #[inline]
     fn fetch_stall(&mut self, addr: u32, _sequential: bool) -> u32 {
         self.records.pc = addr;
         if addr >= FLASH_SIZE {
@@ -585,7 +658,11 @@ impl<O: Outside> Bus for Nrf52840<O> {
         let now = self.now;
         let fault = BusFault { addr, write: false };
         let word_addr = addr & !3;
-        Ok(match region(addr) {
+        let target = region(addr);
+        if target.is_register() {
+            self.changed();
+        }
+        Ok(match target {
             Region::Flash(a) => self.flash.read(a, width.bytes()).ok_or(fault)?,
             Region::Ram(a) => self.ram.cpu_read(a, width, now).ok_or(fault)?,
             Region::Ficr(o) => match self.ficr.read(o & !3) {
@@ -640,6 +717,10 @@ impl<O: Outside> Bus for Nrf52840<O> {
         let peripheral =
             |r: &Region| matches!(r, Region::Peripheral(_) | Region::Nvmc(_) | Region::Gpio(_));
         let target = region(addr);
+        let ram = matches!(target, Region::Ram(_));
+        if !ram {
+            self.changed();
+        }
         if width != Width::Word && peripheral(&target) {
             self.records
                 .note("SoC", "store narrower than a word to a register", now);
@@ -682,7 +763,10 @@ impl<O: Outside> Bus for Nrf52840<O> {
             Region::Absent => self.records.unmodelled(word_addr, true, word, now),
             Region::Unmapped => return Err(BusFault { addr, write: true }),
         }
-        self.propagate(now);
+        // A store to RAM changes no input: settled inputs stay settled.
+        if !(ram && self.quiet.settled) {
+            self.propagate(now);
+        }
         Ok(())
     }
 
@@ -698,7 +782,12 @@ impl<O: Outside> Bus for Nrf52840<O> {
     }
 
     fn irq_lines(&self) -> [u32; 8] {
-        self.parts.irq_lines()
+        if let Some(lines) = self.quiet.irq_lines.get() {
+            return lines;
+        }
+        let lines = self.parts.irq_lines();
+        self.quiet.irq_lines.set(Some(lines));
+        lines
     }
 
     fn next_event_ns(&self) -> u64 {
@@ -735,5 +824,6 @@ impl<O: Outside> Bus for Nrf52840<O> {
             self.sleep_ns += now.saturating_sub(t);
         }
         self.parts.wdt.sleeping(asleep, now);
+        self.changed();
     }
 }

@@ -168,6 +168,11 @@ impl Uarte {
         self.enable == ENABLE_UARTE
     }
 
+    /// The BAUDRATE register.
+    pub const fn baudrate(&self) -> u32 {
+        self.baudrate
+    }
+
     /// The baud rate the receiver listens at, when it runs.
     pub fn rx_baud(&self) -> Option<f64> {
         if !self.enabled() || !self.rx_running {

@@ -329,16 +329,6 @@ impl Machine for FlightMcu {
     }
 }
 
-/// UARTE `uart`'s (1 = UARTE0) BAUDRATE register address (PS: UARTE0 at 0x4000_2000,
-/// UARTE1 at 0x4002_8000; BAUDRATE at 0x524).
-fn uarte_baudrate_addr(uart: u8) -> Option<u32> {
-    match uart {
-        1 => Some(0x4000_2524),
-        2 => Some(0x4002_8524),
-        _ => None,
-    }
-}
-
 impl Machine for ModuleMcu {
     type Board = ModuleBoard;
 
@@ -358,11 +348,8 @@ impl Machine for ModuleMcu {
         self.soc.uart_receive(uart, byte, at_ns);
     }
     fn uart_baud(&mut self, uart: u8) -> Option<u32> {
-        // The configured rate, transmitting or receiving (BAUDRATE reads without side
-        // effects).
-        let addr = uarte_baudrate_addr(uart)?;
-        let now = self.soc.now_ns();
-        let reg = self.soc.read(addr, Width::Word, now).ok()?;
+        // The configured rate, transmitting or receiving.
+        let reg = self.soc.uarte_baudrate(uart)?;
         crate::nrf52840::uarte_bit_ps(reg).map(|ps| (1e12 / ps as f64).round() as u32)
     }
     fn set_powered(&mut self, on: bool, _now_ns: u64) {

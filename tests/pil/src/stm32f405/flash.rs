@@ -274,12 +274,18 @@ impl FlashIf {
 
     /// Stall cycles for an instruction fetch at flash offset `offset`, at `now` (the
     /// latest time the SoC saw), with `hclk` for converting a busy wait.
+    #[inline]
     pub fn fetch_stall(&mut self, offset: u32, now: u64, hclk: u32) -> u32 {
         let line = offset >> 4;
         if line == self.current_line {
             self.executed_in_line += 1;
             return 0;
         }
+        self.fetch_new_line(line, now, hclk)
+    }
+
+    /// A fetch from another line than the last one's.
+    fn fetch_new_line(&mut self, line: u32, now: u64, hclk: u32) -> u32 {
         let latency = self.latency();
         self.stats.fetch_lines += 1;
         let mut stall = if self.acr & PRFTEN != 0 && line == self.prefetched {

@@ -533,6 +533,7 @@ impl<O: Outside> m4_sim::Bus for Stm32f405<O> {
         self.fetch_halfword(addr)
     }
 
+    #[inline]
     fn fetch_stall(&mut self, addr: u32, _sequential: bool) -> u32 {
         // Called for every instruction: the flash test first, without the full decode.
         let off = addr.wrapping_sub(map::FLASH_BASE);
