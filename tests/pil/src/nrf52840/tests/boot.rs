@@ -271,7 +271,10 @@ fn a_dead_32khz_crystal_falls_back_and_the_boot_goes_on() {
     // the cycle counter) and runs from the LFCLK synthesised from the HFXO: both boots (the
     // REGOUT0 reset between them) take the probe's second, and no more.
     let at = b.all_polled_ns.unwrap_or(u64::MAX);
-    assert!((2_000_000_000..2_600_000_000).contains(&at), "every task polled at {at} ns");
+    assert!(
+        (2_000_000_000..2_600_000_000).contains(&at),
+        "every task polled at {at} ns"
+    );
     assert_eq!(b.chip.watchdog_timeouts(), 0);
     assert_eq!(b.chip.resets().len(), 1, "only init's UICR reset");
 }
