@@ -87,7 +87,11 @@ impl<B: I2c> I2c for TimedI2c<B> {
         operations: &mut [Operation<'_>],
     ) -> Result<(), Self::Error> {
         if cfg!(pil_i2c_unguarded) {
-            return self.0.transaction(address, operations).await.map_err(TimedError::Bus);
+            return self
+                .0
+                .transaction(address, operations)
+                .await
+                .map_err(TimedError::Bus);
         }
         match with_timeout(TRANSACTION_TIMEOUT, self.0.transaction(address, operations)).await {
             Ok(result) => result.map_err(TimedError::Bus),
