@@ -32,6 +32,7 @@ use telemetry::crsf_record::{self, MAX_RECORD_PAYLOAD};
 use telemetry::framing::{Deframed, Deframer, frame, framed_len};
 use telemetry::link::alarm::TagAlarm;
 use telemetry::link::core::Follower;
+use telemetry::link::core::follower::SyncState;
 use telemetry::link::follower::{FollowerBind, FollowerHooks};
 use telemetry::link::phrase::PHRASE_MAX_BYTES;
 use telemetry::link::power::{MAX_STEP, PowerControl, PowerInput};
@@ -408,7 +409,9 @@ impl FlightApp {
         let step = self.link.power.update(&PowerInput {
             now_us,
             rate: params.rate,
-            connected: !follower.in_failsafe(),
+            // On the master's grid, failsafe or not (a master whose handset input stopped
+            // still hears us): the link is up.
+            connected: follower.sync_state() == SyncState::Tracking,
             report: follower.remote_report_at(),
             report_period_us: params
                 .rate

@@ -22,6 +22,7 @@ pub mod openlrs;
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat};
 use telemetry::link::LinkParams;
 use telemetry::link::RateMode;
+use telemetry::link::core::follower::SyncState;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::master::uplink_latch_offset_us;
 use telemetry::link::power::{PowerControl, PowerInput};
@@ -212,7 +213,11 @@ impl AirLink {
             .last_downlink_us()
             .is_some_and(|t| now_us.saturating_sub(t) < CONNECTED_TIMEOUT_US);
         let (ratio, report) = (master.params().telemetry_ratio, master.remote_report_at());
-        let step = self.power_step(now_us, (rate, ratio), connected, report);
+        // Up for the power once a downlink came: at long telemetry ratios the downlinks are
+        // further apart than `connected`'s timeout, and the power's own rule (no report for
+        // three telemetry cycles) says when they stopped.
+        let heard = master.last_downlink_us().is_some();
+        let step = self.power_step(now_us, (rate, ratio), heard, report);
         master.set_tx_power(step);
         self.stats = LinkStats {
             connected,
@@ -252,12 +257,10 @@ impl AirLink {
         let remote = follower.remote_report();
         let params = *follower.params();
         let link = (params.rate, params.telemetry_ratio);
-        let step = self.power_step(
-            now_us,
-            link,
-            !follower.in_failsafe(),
-            follower.remote_report_at(),
-        );
+        // On the master's grid, failsafe or not (a master whose handset input stopped
+        // still hears us): the link is up.
+        let tracking = follower.sync_state() == SyncState::Tracking;
+        let step = self.power_step(now_us, link, tracking, follower.remote_report_at());
         follower.set_tx_power(step);
         self.stats = LinkStats {
             connected: !follower.in_failsafe(),
