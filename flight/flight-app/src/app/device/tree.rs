@@ -96,7 +96,7 @@ pub fn setting(number: u8) -> Option<(usize, &'static Param)> {
 /// changes no link parameter, stays writable).
 pub fn read_only(param: &Param) -> bool {
     let dynamic_power = crate::settings::handles::LINK_DYNAMIC_POWER.param();
-    param.name.starts_with("link.") && !dynamic_power.is_some_and(|p| p.key == param.key)
+    param.name.starts_with("link.") && dynamic_power.is_none_or(|p| p.key != param.key)
 }
 
 /// The unit a name's last part implies (`…_hz` → "Hz").
