@@ -224,6 +224,20 @@ where
         })
     }
 
+    /// Register 0x6D at `step` (the driver's [`Rfm22b::set_tx_power`]); kept for every later
+    /// (re)configuration of the bound link.
+    async fn set_tx_power(&mut self, step: u8) -> Result<(), Self::Error> {
+        self.tx_power = TxPower::from_step(step);
+        // In bind mode the chip stays at its lowest step: only the bound link's power moves.
+        if self.configured.is_some_and(|c| c.reduced_power) {
+            return Ok(());
+        }
+        self.radio
+            .set_tx_power(self.tx_power)
+            .await
+            .map_err(LinkRadioError::Radio)
+    }
+
     /// The driver's [`Rfm22b::check_health`]: a chip that lost its setup (silent reset) is
     /// re-initialised and reported as [`Error::ChipReset`].
     async fn check_health(&mut self) -> Result<(), Self::Error> {

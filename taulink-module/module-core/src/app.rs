@@ -145,6 +145,7 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             ..EncoderConfig::default()
         })?;
         link.set_input_timeout_ms(settings.input_timeout_ms);
+        link.set_tx_power(settings.tx_power, settings.dynamic_power);
         Ok(Self {
             settings,
             link,
@@ -285,6 +286,9 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
         }
         if before.failsafe != after.failsafe {
             self.apply(Effect::PpmFailsafe);
+        }
+        if (before.tx_power, before.dynamic_power) != (after.tx_power, after.dynamic_power) {
+            self.apply(Effect::TxPower);
         }
         if let (Some(id), Some(_)) = (self.unique_id, self.commands.ble_pin) {
             // The new PIN reaches the HM-10 at the next power-up; the row shows the set one.
@@ -697,6 +701,9 @@ impl<L: LinkPort, H: HandsetOutput> App<L, H> {
             Effect::InputTimeout => self
                 .link
                 .set_input_timeout_ms(self.settings.input_timeout_ms),
+            Effect::TxPower => self
+                .link
+                .set_tx_power(self.settings.tx_power, self.settings.dynamic_power),
             Effect::PpmFailsafe => {
                 if let Ok(encoder) = Encoder::new(EncoderConfig {
                     failsafe: self.settings.failsafe,

@@ -8,9 +8,11 @@
 //! Changes apply at once to the settings in RAM; the **Save** command persists them (after a
 //! confirmation). Packet rate, telemetry ratio and band restart the link (the session ends
 //! with `SessionEnd::SettingsChanged`) and the changed row then reads "(link restarted)"; the
-//! receiver learns them at the next **Bind**. Input, telemetry output and TX power are read at
-//! power-up (they would cut the JR line the tool talks over, or the radio's power is set
-//! when the chip starts), so their rows say "(on power-up)".
+//! receiver learns them at the next **Bind**. Input and telemetry output are read at
+//! power-up (they would cut the JR line the tool talks over), so their rows say "(on
+//! power-up)". **TX Power** (3) is the maximum and **Dynamic Power** (24, Off / On, added at
+//! the end) whether the power follows the link below it (`telemetry::link::power`); both
+//! apply from the link's next slot.
 //!
 //! Numbering (fixed; the radio reads 1 … [`PARAMETER_COUNT`]). Model match (13, restarts
 //! the link) and the "Model" row (14, INFO: the radio's model and whether a receiver was
@@ -91,8 +93,10 @@ pub const BLE_PIN: u8 = 21;
 pub const LINK_KEY: u8 = 22;
 /// Info: the link's authentication failures, both ends.
 pub const TAG_FAILS: u8 = 23;
+/// Dynamic transmit power, Off / On.
+pub const DYNAMIC_POWER: u8 = 24;
 /// Parameters the module offers (DEVICE_INFO's count).
-pub const PARAMETER_COUNT: u8 = 23;
+pub const PARAMETER_COUNT: u8 = 24;
 
 /// The key row of a link without a key (before the phrase's state).
 pub const UNAUTHENTICATED: &str = "NO AUTH";
@@ -144,6 +148,8 @@ pub enum Effect {
     InputTimeout,
     /// Apply the PPM failsafe to the encoder.
     PpmFailsafe,
+    /// Apply the power limits (TX power, dynamic power) to the link.
+    TxPower,
     /// Start a bind (the radio's Bind command).
     Bind,
     /// Persist the settings.
@@ -195,7 +201,7 @@ fn setting_entry(row: &Row, crsf: Crsf, settings: &Settings, commands: &Commands
     let unit = match row.on_change {
         OnChange::RestartLink | OnChange::OpenLrs => unit(commands, crsf.number, ""),
         OnChange::PowerUp => ON_POWER_UP,
-        OnChange::InputTimeout | OnChange::PpmFailsafe => "",
+        OnChange::InputTimeout | OnChange::PpmFailsafe | OnChange::TxPower => "",
     };
     let (folder, label) = (crsf.folder, crsf.label);
     match crsf.options {
@@ -355,6 +361,7 @@ fn write_setting(row: &Row, crsf: Crsf, value: &[u8], settings: &mut Settings) -
         OnChange::PowerUp => Effect::None,
         OnChange::InputTimeout => Effect::InputTimeout,
         OnChange::PpmFailsafe => Effect::PpmFailsafe,
+        OnChange::TxPower => Effect::TxPower,
     }
 }
 

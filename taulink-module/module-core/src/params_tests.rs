@@ -135,7 +135,7 @@ fn the_protocol_choice_labels_openlrsng_unauthenticated_and_restarts_the_link() 
     assert!(broken.validate().is_err());
     assert_eq!(
         write(TX_POWER, &[2], &mut broken, &mut commands),
-        Effect::None
+        Effect::TxPower
     );
     assert_eq!(broken.tx_power, 2, "editable while broken");
     assert_eq!(

@@ -39,6 +39,9 @@ pub struct LinkStats {
     /// Frames whose authentication tag failed at this end since the link session started
     /// (spec §12.2).
     pub tag_failures: u32,
+    /// The power step (0…7) the running TauLink link sends at (`None`: no such link, the
+    /// set power applies).
+    pub tx_power_step: Option<u8>,
 }
 
 /// The link's authentication failures (spec §12.2) as the handset and the phone show them.
@@ -61,6 +64,12 @@ pub trait LinkPort {
     /// and the link must stop flying the last channels (it makes the other end fly its
     /// failsafe). The core sets it from the settings when it is built.
     fn set_input_timeout_ms(&mut self, timeout_ms: u16);
+    /// The transmit power's maximum step (0…7) and whether it follows the link below it
+    /// (`telemetry::link::power`). The core sets it from the settings. Default: ignored (a
+    /// link without power control).
+    fn set_tx_power(&mut self, max_step: u8, dynamic: bool) {
+        let _ = (max_step, dynamic);
+    }
     /// Whether the link can take another uplink telemetry record now.
     fn can_send_record(&self) -> bool;
     /// A record for the other end (phone → flight side); only called after

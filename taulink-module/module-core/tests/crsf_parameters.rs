@@ -390,7 +390,7 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
             let name_end = info[2..].iter().position(|&b| b == 0).unwrap() + 2;
             assert_eq!(&info[2..name_end], b"TauLink");
             let count = info[name_end + 13];
-            assert_eq!(count, 23, "DEVICE_INFO's parameter count");
+            assert_eq!(count, 24, "DEVICE_INFO's parameter count");
 
             // Read every parameter.
             let mut fields = Vec::new();
@@ -427,9 +427,12 @@ fn the_device_tool_reads_everything_changes_the_rate_binds_and_saves() {
                     "Bind Phrase",
                     "BLE PIN",
                     "Link Key",
-                    "Tag Fails"
+                    "Tag Fails",
+                    "Dynamic Power"
                 ]
             );
+            assert_eq!(fields[23].options, ["Off", "On"]);
+            assert_eq!(fields[23].value, 1, "dynamic power, on from the factory");
             assert_eq!(fields[12].options, ["Off", "On"]);
             assert_eq!(fields[12].value, 0, "model match is off from the factory");
             assert_eq!((fields[13].kind, fields[13].info.as_str()), (12, "any (match off)"));

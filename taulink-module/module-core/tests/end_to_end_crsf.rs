@@ -165,6 +165,15 @@ fn crsf_channels_to_flight_and_telemetry_back_as_crsf() {
     }
     let link = module_core::ports::LinkPort::stats(world.app.borrow().link());
     assert!(i16::from(last.downlink_rssi_dbm).abs_diff(link.rssi_dbm) <= 1);
+    // TX power: the live step of the dynamic power (on from the factory). The packet-level
+    // radios keep their power, so the margin at 200 m holds and the master steps down once
+    // a second from 100 mW (CRSF index 3) after the link came up: 50 mW (index 8) by 2 s,
+    // 25 mW (index 2) at the end.
+    let power_at = |t: u64| stats.iter().rev().find(|(at, _)| *at <= t).unwrap().1;
+    assert_eq!(power_at(up_from + 900_000).uplink_tx_power_index, 3);
+    assert_eq!(power_at(2_000_000).uplink_tx_power_index, 8);
+    assert_eq!(last.uplink_tx_power_index, 2);
+    assert_eq!(link.tx_power_step, Some(5), "+14 dBm, 25 mW");
     assert!(
         (-110..-30).contains(&link.rssi_dbm),
         "{} dBm at 200 m",

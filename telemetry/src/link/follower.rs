@@ -14,7 +14,7 @@ use super::phrase::{Derivation, PhraseSecret};
 use super::radio::{LinkClock, LinkRx, PacketRadio};
 use super::rate::FIFO_BYTES;
 use super::recovery::Recovery;
-use super::step_io::{receive_until, transmit_at, tune_until};
+use super::step_io::{apply_power, receive_until, transmit_at, tune_until};
 use crate::frame::{Frame, encode};
 
 /// Iterations of the phrase's derivation between two yields to the executor (≈ 10 ms of a
@@ -181,12 +181,18 @@ pub async fn run_follower<R: PacketRadio, C: LinkClock, H: FollowerHooks>(
     radio.configure(&config).await?;
     let mut buf = [0u8; FIFO_BYTES];
     let mut recovery = Recovery::new(clock.now_us());
+    let mut power = None;
     loop {
         let step = follower.plan(clock.now_us(), &mut buf);
         // Right after planning: a packet just received and any failsafe just declared are
         // visible to the application at once, not a step later.
         hooks.on_step(clock.now_us(), follower);
         let result = run_step(radio, clock, follower, step, &mut buf).await;
+        // The power the hooks asked for, between steps (never inside a planned packet).
+        let result = match result {
+            Ok(()) => apply_power(radio, follower.tx_power(), &mut power).await,
+            failed => failed,
+        };
         recovery
             .after_step(radio, clock, &config, result, || follower.on_radio_error())
             .await?;

@@ -12,7 +12,7 @@ use super::radio::{LinkClock, LinkRx, PacketRadio};
 use super::rate::{FIFO_BYTES, PLL_SETTLE_US, RateMode};
 use super::recovery::Recovery;
 use super::schedule::SlotKind;
-use super::step_io::{receive_until, transmit_at, tune_until};
+use super::step_io::{apply_power, receive_until, transmit_at, tune_until};
 use crate::frame::{Frame, encode};
 
 /// Gap before each bind answer or confirmation: the peer needs to turn around to RX (PLL
@@ -141,6 +141,7 @@ pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
     let mut slot_start_us = clock.now_us();
     let mut buf = [0u8; FIFO_BYTES];
     let mut recovery = Recovery::new(clock.now_us());
+    let mut power = None;
     loop {
         // Fell behind by a whole slot (a debugger, a radio reset): skip, keep the grid.
         while clock.now_us() > slot_start_us + slot_us / 2 {
@@ -155,6 +156,11 @@ pub async fn run_master<R: PacketRadio, C: LinkClock, H: MasterHooks>(
             hooks.on_slot(slot_start_us, master);
             let step = master.plan(slot_start_us, &mut buf);
             run_slot(radio, clock, master, step, &mut buf).await
+        };
+        // The power the hooks asked for, after the slot's packet and before the next.
+        let result = match result {
+            Ok(()) => apply_power(radio, master.tx_power(), &mut power).await,
+            failed => failed,
         };
         recovery
             .after_step(radio, clock, &config, result, || master.on_radio_error())

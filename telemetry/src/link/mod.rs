@@ -13,6 +13,7 @@ pub mod hopping;
 pub mod master;
 pub mod pake;
 pub mod phrase;
+pub mod power;
 pub mod quality;
 pub mod radio;
 pub mod rate;

@@ -87,6 +87,16 @@ pub trait PacketRadio {
     /// arrived (the caller timestamps it with its clock).
     async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<LinkRx, Self::Error>;
 
+    /// Sets the transmit power to `step` of the radio's eight (0 lowest … 7 highest; the
+    /// RFM22B's +1 … +20 dBm), from the next transmission on and kept across a
+    /// [`PacketRadio::recover`]; the loops call it between slots when the state machine's
+    /// [`tx_power`](crate::link::core::Master::tx_power) changes (dynamic power,
+    /// `link::power`). Default: a radio without power control ignores it.
+    async fn set_tx_power(&mut self, step: u8) -> Result<(), Self::Error> {
+        let _ = step;
+        Ok(())
+    }
+
     /// Checks that the chip still holds its setup (the link loops call it every
     /// `HEALTH_CHECK_PERIOD_US`); an error (e.g. the chip had reset) makes the loop
     /// [`PacketRadio::recover`]. Default: nothing to check.

@@ -227,6 +227,19 @@ impl RateMode {
         }
     }
 
+    /// The Si4432's sensitivity at the mode's bit rate, whole dBm: −121 dBm at 2.4 kbps
+    /// (datasheet, GFSK, BER 10⁻³) worse by 10·log10 of the bit rate over it (the noise
+    /// bandwidth grows with it), as the simulators model it (`telemetry::mock`,
+    /// `si4432-sim`'s `propagation`). The dynamic power's margins are over this.
+    pub const fn sensitivity_dbm(self) -> i16 {
+        match self {
+            RateMode::L50 => -112,
+            RateMode::M100 => -107,
+            RateMode::F250 => -104,
+            RateMode::F500 | RateMode::F700 => -101,
+        }
+    }
+
     /// The mode's name, as the handset's Packet Rate row, the settings text and the tools'
     /// command lines spell it.
     pub const fn name(self) -> &'static str {

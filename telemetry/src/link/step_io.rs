@@ -1,6 +1,7 @@
 //! The radio side of a planned [`Step`](super::core::Step), alike at both ends: tune, wait
 //! for the planned time, then send (and tell the state machine it was sent or skipped), or
-//! receive with a timeout that ends at a planned time. The loops in `master` and `follower`
+//! receive with a timeout that ends at a planned time; and the power step written between
+//! slots. The loops in `master` and `follower`
 //! keep what differs — the master skipping a late uplink slot and listening on after a
 //! foreign packet — and what they do with a received packet.
 
@@ -63,6 +64,21 @@ pub(super) async fn transmit_at<R: PacketRadio, C: LinkClock, S: Sender>(
         }
     }
     Ok(())
+}
+
+/// Writes the power step the state machine asks for (`wanted`) into the radio when it is not
+/// the one written last (`applied`), between slots. A failed write counts as written: the
+/// radio keeps the step for the recovery's re-configure.
+pub(super) async fn apply_power<R: PacketRadio>(
+    radio: &mut R,
+    wanted: Option<u8>,
+    applied: &mut Option<u8>,
+) -> Result<(), R::Error> {
+    let Some(step) = wanted.filter(|w| Some(*w) != *applied) else {
+        return Ok(());
+    };
+    *applied = Some(step);
+    radio.set_tx_power(step).await
 }
 
 /// Tunes to `channel` and waits until `from_us`, where a listen starts.

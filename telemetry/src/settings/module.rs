@@ -82,10 +82,13 @@ pub const OLRS_FREQUENCY_HZ: Param = number(1015, "olrs_frequency_hz", 0, u32::M
 pub const OLRS_HOP_SEED: Param = number(1016, "olrs_hop_seed", 0, u32::MAX, 0);
 /// The explicit setting for an unauthenticated link (spec §12.1).
 pub const PLAIN: Param = choice(1017, "plain", OFF_ON, 0);
+/// Dynamic transmit power (`telemetry::link::power`): the power follows the link up to
+/// `tx_power`; off, the module always sends at `tx_power`.
+pub const DYNAMIC_POWER: Param = choice(1018, "dynamic_power", OFF_ON, 1);
 
 /// Every module setting with a value of its own, in the record's order. The binding phrase
 /// and the BLE PIN (typed as text, stored as a derivation or a PIN) are the module's.
-pub const MODULE_PARAMS: [&Param; 18] = [
+pub const MODULE_PARAMS: [&Param; 19] = [
     &ROLE,
     &RATE,
     &INPUT,
@@ -104,6 +107,7 @@ pub const MODULE_PARAMS: [&Param; 18] = [
     &OLRS_FREQUENCY_HZ,
     &OLRS_HOP_SEED,
     &PLAIN,
+    &DYNAMIC_POWER,
 ];
 
 #[cfg(test)]

@@ -263,6 +263,10 @@ table! {
     // The flight log (91x). Factory: `flight`, what the Sparky2's flash and the link take.
     /// Which topics the flight log records, at which rates.
     LOG_PROFILE: u32 = c(910, "log.profile", LOG_PROFILES, 2),
+    // Dynamic transmit power (`telemetry::link::power`), appended: the flight side's
+    // downlink power follows the link up to the radio's maximum.
+    /// 1: the transmit power follows the link (`link::power`); 0: always the maximum.
+    LINK_DYNAMIC_POWER: u32 = u(716, "link.dynamic_power", 0, 1, 1),
     ;
     // Handle arrays for the composite names, in the handles module.
     /// The rate PID gains, `[roll, pitch, yaw][kp, ki, kd]` (`pid.<axis>.<gain>`).

@@ -167,6 +167,21 @@ pub struct Cli {
     /// frames sent and accepted (must be 0).
     #[arg(long, value_enum, conflicts_with_all = ["sweep", "serve", "packet_level", "foreign", "ber", "no_chip_crc"])]
     pub attack: Option<AttackArg>,
+    /// Dynamic transmit power (`telemetry::link::power`) on both ends, against the fixed
+    /// maximum: with --walk, the walk is run both ways and compared.
+    #[arg(long, requires = "walk")]
+    pub dynamic_power: bool,
+    /// With --dynamic-power: the flight side walks away from FROM to TO metres over
+    /// --duration (geometrically; default 2000:200000, beyond the range at +20 dBm), the
+    /// module core and the flight application at the ends on the chip simulator; prints each
+    /// end's mean power and both LQs per tenth of the walk, fixed maximum against dynamic,
+    /// and the power saved. Exit 1 when dynamic power lost LQ ≥ 95 % where the fixed
+    /// maximum had it. --rate, --ratio, --seed and --duration apply; with --docs MODE the
+    /// README's `dynamic-power` block from the documented walk (the defaults) instead.
+    #[arg(long, value_name = "FROM:TO", num_args = 0..=1, default_missing_value = "2000:200000",
+          value_parser = walk_range, requires = "dynamic_power",
+          conflicts_with_all = ["sweep", "serve", "attack", "packet_level", "cut", "foreign", "plot", "protocol"])]
+    pub walk: Option<(f64, f64)>,
     /// Print the report as JSON on stdout (fields in the README); no status line.
     #[arg(long)]
     pub json: bool,
@@ -344,7 +359,33 @@ fn cut(s: &str) -> Result<(f64, f64), String> {
     Ok((from, to))
 }
 
+fn walk_range(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("{s:?}: expected FROM:TO in metres, e.g. 2000:200000"))?;
+    let from = number_in(a, 1.0, 1_000_000.0, "FROM (m)")?;
+    let to = number_in(b, 1.0, 1_000_000.0, "TO (m)")?;
+    if to <= from {
+        return Err(format!("the walk must go away from the module, got {s}"));
+    }
+    Ok((from, to))
+}
+
 impl Cli {
+    /// The walk `--dynamic-power --walk` asks for, if it does.
+    pub fn walk_plan(&self) -> Option<crate::walk::WalkPlan> {
+        let (from_m, to_m) = self.walk.filter(|_| self.dynamic_power)?;
+        Some(crate::walk::WalkPlan {
+            rate: self.rate,
+            ratio: self.ratio,
+            from_m,
+            to_m,
+            duration_s: self.duration,
+            bins: crate::walk::WALK_BINS,
+            seed: self.seed,
+        })
+    }
+
     /// The OpenLRSng scenario these options describe: `Ok(None)` for `--protocol taulink`,
     /// an error naming the first option that has no meaning for OpenLRSng (the TauLink
     /// rate, keying, attacks, handset models, packet-level medium, sweeps, plots, serve).

@@ -22,6 +22,7 @@ pub mod report;
 pub mod scenario;
 pub mod serve;
 pub mod sweep;
+pub mod walk;
 pub mod world;
 
 pub use cli::Cli;

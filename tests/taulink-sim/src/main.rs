@@ -148,6 +148,48 @@ fn docs(mode: docblock::Mode, progress: bool) -> ExitCode {
     ExitCode::SUCCESS
 }
 
+/// `--dynamic-power --walk`: both walks, the table (or JSON), exit 1 when LQ was lost.
+fn walk(plan: &taulink_sim::walk::WalkPlan, json: bool) -> ExitCode {
+    let report = taulink_sim::walk::WalkReport::run(plan);
+    if json {
+        match serde_json::to_string_pretty(&report) {
+            Ok(text) => println!("{text}"),
+            Err(e) => {
+                eprintln!("taulink-sim: {e}");
+                return ExitCode::FAILURE;
+            }
+        }
+    } else {
+        print!("{}", report.table());
+    }
+    if report.lq_lost().is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    }
+}
+
+/// `--dynamic-power --walk --docs MODE`: the README's `dynamic-power` block from the
+/// documented walk.
+fn walk_docs(mode: docblock::Mode) -> ExitCode {
+    let report = taulink_sim::walk::WalkReport::run(&taulink_sim::walk::WalkPlan::DOCUMENTED);
+    let readme = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md");
+    match docblock::apply(&readme, "dynamic-power", &report.table(), mode) {
+        Ok(false) if mode == docblock::Mode::Check => {
+            eprintln!(
+                "taulink-sim: the dynamic-power walk is stale: run `cargo run --release -p taulink-sim -- --dynamic-power --walk --docs write`"
+            );
+            ExitCode::FAILURE
+        }
+        Ok(_) if report.lq_lost().is_empty() => ExitCode::SUCCESS,
+        Ok(_) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("taulink-sim: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
 fn main() -> ExitCode {
     // clap prints --help/--version (exit 0) and usage errors with a suggestion (exit 2).
     let cli = Cli::parse();
@@ -174,6 +216,12 @@ fn main() -> ExitCode {
             };
         }
         Ok(None) => {}
+    }
+    if let Some(plan) = cli.walk_plan() {
+        return match cli.docs {
+            Some(mode) => walk_docs(mode.into()),
+            None => walk(&plan, cli.json),
+        };
     }
     if let Some(options) = taulink_sim::serve::options(&cli) {
         return ExitCode::from(u8::try_from(taulink_sim::serve::main(options)).unwrap_or(1));

@@ -53,6 +53,17 @@ fn nonsense_values_are_refused_with_the_reason() {
         (&["--ratio", "3"], "power of two"),
         (&["--cut", "5:2"], "end after it starts"),
         (&["--rate", "F1000"], "L50, M100, F250, F500 or F700"),
+        (
+            &["--dynamic-power", "--walk", "500:100"],
+            "go away from the module",
+        ),
+        (&["--dynamic-power", "--walk", "0:100"], "FROM (m)"),
+        (&["--walk"], "--dynamic-power"),
+        (&["--dynamic-power"], "--walk"),
+        (
+            &["--dynamic-power", "--walk", "--sweep"],
+            "cannot be used with",
+        ),
     ] {
         sim(args).assert_refused(says);
     }
@@ -124,5 +135,28 @@ fn openlrs_runs_print_json_and_refuse_taulink_options() {
         (&["--protocol", "openlrs39", "--rate", "F700"], "--rate"),
     ] {
         sim(args).assert_refused(says);
+    }
+}
+
+#[test]
+fn a_dynamic_power_walk_prints_both_runs_as_json() {
+    let out = sim(&[
+        "--dynamic-power",
+        "--walk",
+        "2000:20000",
+        "--duration",
+        "2",
+        "--json",
+    ]);
+    assert!(out.success(), "{}", out.stderr);
+    for field in [
+        "\"plan\"",
+        "\"rate\": \"F250\"",
+        "\"fixed\"",
+        "\"dynamic\": {",
+        "\"module_mw\"",
+        "\"downlink_lq\"",
+    ] {
+        assert!(out.stdout.contains(field), "{field} in {}", out.stdout);
     }
 }

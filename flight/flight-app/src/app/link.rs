@@ -17,6 +17,10 @@
 //! at once ([`FlightApp::link_restart_due`]). A link without a key (an unauthenticated bind)
 //! runs only while `link.unauthenticated` allows it.
 //!
+//! Dynamic transmit power (`telemetry::link::power`, setting `link.dynamic_power`, on by
+//! factory): the downlink's power step follows the master's reports of how it hears us, up
+//! to the radio's maximum; the follower loop writes it into the radio between steps.
+//!
 //! Watchdog: every hook call checks the link task in, whatever the slot length; the
 //! follower calls its hooks at least every 50 ms in every sync state, and the adapter
 //! checks in while it waits outside the follower (bind window, retry after a radio error).
@@ -28,8 +32,10 @@ use telemetry::crsf_record::{self, MAX_RECORD_PAYLOAD};
 use telemetry::framing::{Deframed, Deframer, frame, framed_len};
 use telemetry::link::alarm::TagAlarm;
 use telemetry::link::core::Follower;
+use telemetry::link::core::follower::SyncState;
 use telemetry::link::follower::{FollowerBind, FollowerHooks};
 use telemetry::link::phrase::PHRASE_MAX_BYTES;
+use telemetry::link::power::{MAX_STEP, PowerControl, PowerInput};
 use telemetry::link::{Band, BindRefusal, Entropy, LinkParams, PhraseError, check_phrase};
 use telemetry::messages::{
     FRAMED_MAX_BYTES, LinkSecurity, Message, SysIdResult, decode_change, encode_message,
@@ -88,6 +94,8 @@ pub(super) struct LinkSide {
     security_sent: (u32, bool, Option<u64>),
     /// A `LinkSecurity` message is due.
     security_due: Option<LinkSecurity>,
+    /// Dynamic transmit power (`link.dynamic_power`), up to the radio's maximum.
+    power: PowerControl,
 }
 
 /// Where the explicit bind stands.
@@ -127,6 +135,7 @@ impl LinkSide {
             alarm: TagAlarm::default(),
             security_sent: (0, false, None),
             security_due: None,
+            power: PowerControl::new(MAX_STEP, true),
         }
     }
 
@@ -385,9 +394,36 @@ impl FlightApp {
             self.on_uplink_bytes(bytes);
         }
         self.watch_tags(now_us, follower.counters().tag_failures);
+        self.follow_power(now_us, follower);
         if self.report_due(now_us) {
             self.report(now_us, follower);
         }
+    }
+
+    /// The downlink's power step from the master's latest report (`link::power`), handed to
+    /// the follower for its loop to write.
+    fn follow_power(&mut self, now_us: u64, follower: &mut Follower) {
+        let dynamic = self.live.get(handles::LINK_DYNAMIC_POWER) == 1;
+        self.link.power.configure(MAX_STEP, dynamic);
+        let params = follower.params();
+        let step = self.link.power.update(&PowerInput {
+            now_us,
+            rate: params.rate,
+            // On the master's grid, failsafe or not (a master whose handset input stopped
+            // still hears us): the link is up.
+            connected: follower.sync_state() == SyncState::Tracking,
+            report: follower.remote_report_at(),
+            report_period_us: params
+                .rate
+                .slot_us()
+                .saturating_mul(u32::from(params.telemetry_ratio.max(1))),
+        });
+        follower.set_tx_power(step);
+    }
+
+    /// The power step the downlink is sent at (0…7, `telemetry::link::power`).
+    pub fn tx_power_step(&self) -> u8 {
+        self.link.power.step()
     }
 
     /// The follower's tag failures at `now_us`: the alarm follows them, and a change is

@@ -715,3 +715,29 @@ mod gps {
         assert_eq!(&bauds[1][2..4], &[0x06, 0x00]);
     }
 }
+
+/// Dynamic power (`link.dynamic_power`): with no report from the master (not on its grid
+/// yet) the follower is asked for the maximum, step 7, and so with the setting off; the
+/// walk in `tests/taulink-sim` (`--dynamic-power --walk`) shows the step following the link.
+#[test]
+fn the_link_hook_asks_the_follower_for_its_power_step() {
+    use crate::settings::handles;
+    let mut app = app();
+    assert_eq!(
+        app.settings().get(handles::LINK_DYNAMIC_POWER),
+        1,
+        "factory: on"
+    );
+    let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
+    assert_eq!(follower.tx_power(), None);
+    app.on_link_step(100_000, &mut follower);
+    assert_eq!((follower.tx_power(), app.tx_power_step()), (Some(7), 7));
+    let mut settings = app.settings().clone();
+    settings
+        .apply(&[handles::LINK_DYNAMIC_POWER.to(0)])
+        .unwrap();
+    let mut fixed = FlightApp::new(settings, 0).unwrap();
+    let mut follower = Follower::new(some_link(), FailsafeValues::default(), FAILSAFE_US);
+    fixed.on_link_step(100_000, &mut follower);
+    assert_eq!(follower.tx_power(), Some(7));
+}

@@ -10,6 +10,10 @@
 //! flies its failsafe at once (`telemetry::link::core::Master::set_input_lost`). Freshness
 //! is taken at slot starts on the link clock, so it lags the input by less than a slot.
 //!
+//! Both roles run the link's dynamic transmit power (`telemetry::link::power`) from the
+//! other end's reports, capped by the settings' TX power; the loop writes the step the state
+//! machine is given into the radio between slots, and the statistics carry it to the handset.
+//!
 //! Records travel in the link's telemetry stream as `telemetry::framing` frames
 //! (`crate::records`); a record that does not fit the stream now waits in a bounded queue.
 
@@ -17,8 +21,11 @@ pub mod openlrs;
 
 use telemetry::channels::{CHANNEL_CENTER, ChannelFormat};
 use telemetry::link::LinkParams;
+use telemetry::link::RateMode;
+use telemetry::link::core::follower::SyncState;
 use telemetry::link::core::{Follower, Master};
 use telemetry::link::master::uplink_latch_offset_us;
+use telemetry::link::power::{PowerControl, PowerInput};
 #[cfg(test)]
 use telemetry::link::rate::TX_LEAD_US;
 #[cfg(test)]
@@ -106,6 +113,8 @@ pub struct AirLink {
     last_downlink_us: Option<u64>,
     /// OpenLRSng: the receiver's last link report (RSSI dBm, LQ %).
     openlrs_remote: Option<(i16, u8)>,
+    /// Dynamic transmit power (the core sets its limits from the settings).
+    power: PowerControl,
 }
 
 impl Default for AirLink {
@@ -138,12 +147,14 @@ impl AirLink {
                 rate_code: 0,
                 schedule: None,
                 tag_failures: 0,
+                tx_power_step: None,
             },
             bind_requested: false,
             follower_updates: 0,
             rejected_records: 0,
             last_downlink_us: None,
             openlrs_remote: None,
+            power: PowerControl::new(telemetry::link::power::MAX_STEP, true),
         }
     }
 
@@ -198,10 +209,19 @@ impl AirLink {
         self.exchange_records(&mut master.uplink_stream, &mut master.downlink_stream);
         let remote = master.remote_report();
         let rate = master.params().rate;
+        let connected = master
+            .last_downlink_us()
+            .is_some_and(|t| now_us.saturating_sub(t) < CONNECTED_TIMEOUT_US);
+        let (ratio, report) = (master.params().telemetry_ratio, master.remote_report_at());
+        // Up for the power once a downlink came: at long telemetry ratios the downlinks are
+        // further apart than `connected`'s timeout, and the power's own rule (no report for
+        // three telemetry cycles) says when they stopped.
+        let heard = master.last_downlink_us().is_some();
+        let step = self.power_step(now_us, (rate, ratio), heard, report);
+        master.set_tx_power(step);
         self.stats = LinkStats {
-            connected: master
-                .last_downlink_us()
-                .is_some_and(|t| now_us.saturating_sub(t) < CONNECTED_TIMEOUT_US),
+            connected,
+            tx_power_step: Some(step),
             rssi_dbm: master.downlink_rssi_dbm().unwrap_or(0),
             link_quality_percent: master.downlink_lq(),
             remote_rssi_dbm: remote.map_or(0, |r| i16::from(r.rssi_dbm)),
@@ -224,7 +244,7 @@ impl AirLink {
 
     /// Receiver role, after every follower step: new channels and received records out,
     /// queued records in, statistics (connected = not in failsafe).
-    pub fn on_follower_step(&mut self, _now_us: u64, follower: &mut Follower) {
+    pub fn on_follower_step(&mut self, now_us: u64, follower: &mut Follower) {
         if follower.updates() != self.follower_updates {
             self.follower_updates = follower.updates();
             let count = follower.params().format.count();
@@ -235,8 +255,16 @@ impl AirLink {
         }
         self.exchange_records(&mut follower.downlink_stream, &mut follower.uplink_stream);
         let remote = follower.remote_report();
+        let params = *follower.params();
+        let link = (params.rate, params.telemetry_ratio);
+        // On the master's grid, failsafe or not (a master whose handset input stopped
+        // still hears us): the link is up.
+        let tracking = follower.sync_state() == SyncState::Tracking;
+        let step = self.power_step(now_us, link, tracking, follower.remote_report_at());
+        follower.set_tx_power(step);
         self.stats = LinkStats {
             connected: !follower.in_failsafe(),
+            tx_power_step: Some(step),
             rssi_dbm: follower.uplink_rssi_dbm().unwrap_or(0),
             link_quality_percent: follower.uplink_lq(),
             remote_rssi_dbm: remote.map_or(0, |r| i16::from(r.rssi_dbm)),
@@ -245,6 +273,24 @@ impl AirLink {
             schedule: None,
             tag_failures: follower.counters().tag_failures,
         };
+    }
+
+    /// The power step from now: the other end's `report` (with its arrival time) on a link of
+    /// `rate` with one report per telemetry cycle of `ratio` slots.
+    fn power_step(
+        &mut self,
+        now_us: u64,
+        (rate, ratio): (RateMode, u8),
+        connected: bool,
+        report: Option<(telemetry::frame::LinkReport, u64)>,
+    ) -> u8 {
+        self.power.update(&PowerInput {
+            now_us,
+            rate,
+            connected,
+            report,
+            report_period_us: rate.slot_us().saturating_mul(u32::from(ratio.max(1))),
+        })
     }
 
     /// Input freshness at the slot starting at `now_us`.
@@ -327,6 +373,10 @@ impl LinkPort for AirLink {
 
     fn set_input_timeout_ms(&mut self, timeout_ms: u16) {
         self.input_timeout_us = u64::from(timeout_ms) * 1_000;
+    }
+
+    fn set_tx_power(&mut self, max_step: u8, dynamic: bool) {
+        self.power.configure(max_step, dynamic);
     }
 
     fn can_send_record(&self) -> bool {

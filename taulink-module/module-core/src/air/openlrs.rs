@@ -94,6 +94,8 @@ impl AirLink {
             schedule: None,
             // OpenLRSng frames carry no tag.
             tag_failures: 0,
+            // OpenLRSng sends at its bind data's power (no dynamic power).
+            tx_power_step: None,
         };
     }
 }

@@ -107,9 +107,15 @@ impl FlightState {
         self.tag_failures = Some(failures);
     }
 
-    /// The link's statistics.
+    /// The link's statistics; a running link's power step is the TX power shown from now.
     pub fn on_link_stats(&mut self, stats: &LinkStats) {
         self.link = *stats;
+        if let Some(mw) = stats
+            .tx_power_step
+            .and_then(|s| TX_POWER_MW.get(usize::from(s)))
+        {
+            self.tx_power_mw = *mw;
+        }
     }
 
     /// The link report: ours for the downlink; for the uplink the other end's report in the

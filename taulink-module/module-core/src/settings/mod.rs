@@ -150,6 +150,9 @@ pub struct Settings {
     /// The explicit setting for an unauthenticated link (spec §12.1): binds agree no key and
     /// a link without one runs. Off: every bind agrees a key.
     pub plain: bool,
+    /// Dynamic transmit power (`telemetry::link::power`): the power follows how the other
+    /// end hears us, up to [`Settings::tx_power`]; off, always `tx_power`.
+    pub dynamic_power: bool,
     /// The HM-10 pairing PIN; `None`: the factory PIN derived from the chip's unique ID
     /// ([`Pin::factory`]), never the HM-10's own 000000.
     pub ble_pin: Option<Pin>,
@@ -221,6 +224,7 @@ impl Settings {
         phrase_salt: [0; SALT_BYTES],
         phrase_prs: None,
         plain: false,
+        dynamic_power: false,
         ble_pin: None,
     };
 }

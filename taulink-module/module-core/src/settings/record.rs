@@ -1,5 +1,5 @@
 //! The settings' on-flash record: the current version's encoder and the decoders of every
-//! version a module ever wrote (1 … 6), each field range-checked.
+//! version a module ever wrote (1 … 7), each field range-checked.
 //!
 //! Record layout (version 3, 15 bytes, and versions 4 to 6 below; input 0 PPM, 1 CRSF 400 kBd, 2 CRSF 115 200 Bd,
 //! 3 CRSF 921 600 Bd;
@@ -34,10 +34,14 @@
 //! key (16 bytes), ble_pin (u32 LE)]`; `ble_pin` is the HM-10 pairing PIN, 0…999 999, or
 //! `u32::MAX` for the factory PIN derived from the chip's unique ID ([`Pin::factory`]).
 //!
-//! Version 7 (99 bytes, now) keeps that layout — the key is now the link key agreed at bind
+//! Version 7 (99 bytes) keeps that layout — the key is now the link key agreed at bind
 //! (spec §12.1; flag 0 = none, the key bytes then all 0) — and appends the binding phrase's
 //! derivation and the unauthenticated setting: `[.. version 6 fields .., phrase_flag,
 //! phrase_salt (8 bytes), phrase_prs (32 bytes: all 0 with flag 0), plain (0 or 1)]`.
+//!
+//! Version 8 (100 bytes, now) appends dynamic transmit power: `[.. version 7 fields ..,
+//! dynamic_power (0 off, 1 on)]`; a version-7 record loads with it on (the factory value),
+//! its link still bound.
 //!
 //! Records before version 7 load with their other fields, but not bound (bind ID 0, no
 //! models, no key) and without a phrase: their link was bound by the protocol before the key
@@ -63,9 +67,11 @@ pub const fn rate_from_old_code(code: u8) -> Option<RateMode> {
 }
 
 /// Current record version.
-pub const RECORD_VERSION: u8 = 7;
+pub const RECORD_VERSION: u8 = 8;
 /// Record length of the current version.
-pub const RECORD_LEN: usize = 99;
+pub const RECORD_LEN: usize = 100;
+/// Record length of version 7 (no dynamic power).
+pub const RECORD_V7_LEN: usize = 99;
 /// Record length of version 6 (a key and the PIN, no phrase derivation).
 pub const RECORD_V6_LEN: usize = 57;
 /// Record length of version 5 (link protocol, no phrase or PIN).
@@ -83,7 +89,7 @@ pub const RECORD_V1_LEN: usize = 12;
 /// Where version 4's bound models (u64 LE) start.
 const MODELS_AT: usize = RECORD_V3_LEN + 1;
 /// Where version 7's unauthenticated setting sits (after the phrase's derivation).
-const PLAIN_AT: usize = RECORD_LEN - 1;
+const PLAIN_AT: usize = RECORD_V7_LEN - 1;
 
 /// Why a record does not decode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -119,7 +125,7 @@ impl core::fmt::Display for DecodeError {
 impl core::error::Error for DecodeError {}
 
 impl Settings {
-    /// The current (version 7) record: the table's fields ([`ROWS`]), then the bound
+    /// The current (version 8) record: the table's fields ([`ROWS`]), then the bound
     /// models, the key, the PIN and the phrase's derivation.
     pub fn to_record(&self) -> [u8; RECORD_LEN] {
         let mut record = [0u8; RECORD_LEN];
@@ -157,7 +163,7 @@ impl Settings {
         record
     }
 
-    /// Parses a record of version 1 … 7; every field is range-checked, a field an older
+    /// Parses a record of version 1 … 8; every field is range-checked, a field an older
     /// version lacks takes its factory value.
     pub fn from_record(record: &[u8]) -> Result<Self, DecodeError> {
         let version = version_of(record)?;
@@ -185,7 +191,7 @@ impl Settings {
         if let Some(phrase) = record.get(RECORD_V6_LEN..PLAIN_AT) {
             (settings.phrase_salt, settings.phrase_prs) = decode_phrase(phrase)?;
         }
-        if version != RECORD_VERSION {
+        if version < 7 {
             // Bound before the key agreement: no link (module doc).
             settings.bind_id = 0;
             settings.bound_models = 0;
@@ -207,6 +213,7 @@ fn version_of(record: &[u8]) -> Result<u8, DecodeError> {
         4 => RECORD_V4_LEN,
         5 => RECORD_V5_LEN,
         6 => RECORD_V6_LEN,
+        7 => RECORD_V7_LEN,
         RECORD_VERSION => RECORD_LEN,
         found => return Err(DecodeError::Version { found }),
     };

@@ -36,13 +36,14 @@ fn record_round_trip_and_layout() {
         phrase_salt: [0x51; 8],
         phrase_prs: Some([0x52; 32]),
         plain: true,
+        dynamic_power: false,
         ble_pin: Pin::new(42_917),
     };
     let record = settings.to_record();
     assert_eq!(
         record[..RECORD_V5_LEN],
         [
-            7, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16, 1, 0x08, 0, 0, 0, 0, 0,
+            8, 1, 3, 1, 3, 2, 5, 1, 0xEF, 0xBE, 0xAD, 0xDE, 0xEE, 0x02, 16, 1, 0x08, 0, 0, 0, 0, 0,
             0, 0x80, 2, 4, 6, 0, 0x90, 0x78, 0x56, 0x34, 0x0D, 0xF0, 0xFE, 0xCA
         ]
     );
@@ -60,6 +61,12 @@ fn record_round_trip_and_layout() {
     assert_eq!(record[RECORD_V6_LEN + 1..RECORD_V6_LEN + 9], [0x51; 8]);
     assert_eq!(record[RECORD_V6_LEN + 9..RECORD_V6_LEN + 41], [0x52; 32]);
     assert_eq!(record[RECORD_V6_LEN + 41], 1, "plain");
+    assert_eq!(record[RECORD_V7_LEN], 0, "dynamic power off");
+    assert_eq!(
+        Settings::default().to_record()[RECORD_V7_LEN],
+        1,
+        "factory: on"
+    );
     assert_eq!(Settings::from_record(&record), Ok(settings));
     assert_eq!(
         Settings::from_record(&Settings::default().to_record()),
@@ -93,11 +100,12 @@ fn bad_records_are_errors() {
         Err(DecodeError::Length { found: 0 })
     );
     assert_eq!(
-        Settings::from_record(&[8; 99]),
-        Err(DecodeError::Version { found: 8 })
+        Settings::from_record(&[9; 100]),
+        Err(DecodeError::Version { found: 9 })
     );
     // Each version with the length of the one before it.
     for (version, len) in [
+        (8, 99),
         (7, 57),
         (6, 36),
         (5, 24),
@@ -315,6 +323,29 @@ fn a_version_3_record_loads_unbound_with_no_phrase_and_the_factory_pin() {
     assert_eq!(Settings::from_record(&upgraded), Ok(settings));
 }
 
+/// Version 7 had no dynamic power: it loads with the factory value (on), its link and key
+/// kept.
+#[test]
+fn a_version_7_record_keeps_its_link_and_gets_dynamic_power() {
+    let bound = Settings {
+        bind_id: 0xDEAD_BEEF,
+        link_key: Some(LinkKey::from_bytes([0x6C; 16])),
+        tx_power: 5,
+        dynamic_power: false,
+        ..Settings::default()
+    };
+    let mut v7 = bound.to_record()[..RECORD_V7_LEN].to_vec();
+    v7[0] = 7;
+    let settings = Settings::from_record(&v7).unwrap();
+    assert_eq!(
+        settings,
+        Settings {
+            dynamic_power: true,
+            ..bound
+        }
+    );
+}
+
 /// Version 6 held a key hashed from the phrase alone (issue 30, finding 1): it loads
 /// unbound, without its key or models, its other fields and PIN kept.
 #[test]
@@ -380,6 +411,7 @@ fn the_key_phrase_and_pin_fields_take_only_what_a_writer_produces() {
         (phrase_flag, 2, phrase_flag),
         (phrase_flag + 9, 1, phrase_flag + 9),
         (phrase_flag + 41, 2, phrase_flag + 41),
+        (RECORD_V7_LEN, 2, RECORD_V7_LEN),
     ] {
         let mut record = Settings::default().to_record();
         record[at] = value;

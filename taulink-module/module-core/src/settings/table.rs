@@ -16,9 +16,10 @@ use telemetry::settings::{Kind, Param, Value};
 use super::openlrs::{LinkProtocol, carrier_in_range};
 use super::{InputProtocol, OutputProtocol, Role, Settings, TELEMETRY_RATIOS};
 use crate::params::{
-    BAND, HANDSET_FOLDER as HANDSET, INPUT, INPUT_TIMEOUT, MODEL_MATCH, OPENLRS_CHANNELS,
-    OPENLRS_FOLDER as OPENLRS, OPENLRS_RATE, OPENLRS_TELEMETRY, PACKET_RATE, PPM_FAILSAFE,
-    PROTOCOL, RECEIVER_FOLDER as RECEIVER, TELEMETRY_OUTPUT, TELEMETRY_RATIO, TX_POWER,
+    BAND, DYNAMIC_POWER, HANDSET_FOLDER as HANDSET, INPUT, INPUT_TIMEOUT, MODEL_MATCH,
+    OPENLRS_CHANNELS, OPENLRS_FOLDER as OPENLRS, OPENLRS_RATE, OPENLRS_TELEMETRY, PACKET_RATE,
+    PPM_FAILSAFE, PROTOCOL, RECEIVER_FOLDER as RECEIVER, TELEMETRY_OUTPUT, TELEMETRY_RATIO,
+    TX_POWER,
 };
 use crate::ppm::FailsafeOutput;
 
@@ -117,6 +118,8 @@ pub enum OnChange {
     InputTimeout,
     /// The PPM encoder's failsafe changes.
     PpmFailsafe,
+    /// The link's power limits change (maximum, dynamic): from the next slot on.
+    TxPower,
 }
 
 /// One setting.
@@ -291,7 +294,7 @@ const OPENLRS_RATE_LABELS: [&str; 5] = ["4800bps", "9600bps", "19k2bps", "57k6bp
 const OPENLRS_CHANNEL_LABELS: [&str; 6] = ["4+4", "8", "8+4", "12", "12+4", "16"];
 
 /// Every setting, in the record's order (the `telemetry::settings::module` rows').
-pub static ROWS: [Row; 18] = [
+pub static ROWS: [Row; 19] = [
     row(
         &schema::ROLE,
         byte(1),
@@ -341,7 +344,7 @@ pub static ROWS: [Row; 18] = [
         &schema::TX_POWER,
         byte(6),
         crsf(TX_POWER, 0, "TX Power", Options::Labels(&TX_POWER_LABELS)),
-        OnChange::PowerUp,
+        OnChange::TxPower,
         |s| u32::from(s.tx_power),
         |s, v| put(&mut s.tx_power, u8::try_from(v).ok().filter(|p| *p <= 7)),
     ),
@@ -495,6 +498,19 @@ pub static ROWS: [Row; 18] = [
         OnChange::RestartLink,
         |s| u32::from(s.plain),
         |s, v| put(&mut s.plain, pick(&[false, true], v)),
+    ),
+    row(
+        &schema::DYNAMIC_POWER,
+        byte(99),
+        crsf(
+            DYNAMIC_POWER,
+            0,
+            "Dynamic Power",
+            Options::Labels(&OFF_ON_LABELS),
+        ),
+        OnChange::TxPower,
+        |s| u32::from(s.dynamic_power),
+        |s, v| put(&mut s.dynamic_power, pick(&[false, true], v)),
     ),
 ];
 

@@ -59,6 +59,7 @@ fn the_factory_values_are_the_schemas_and_unchanged() {
             phrase_salt: [0; 8],
             phrase_prs: None,
             plain: false,
+            dynamic_power: true,
             ble_pin: None,
         }
     );
@@ -157,5 +158,5 @@ fn the_device_tool_rows_are_numbered_once_with_one_label_per_option() {
         };
         assert_eq!(options.0, options.1, "{}", crsf.label);
     }
-    assert_eq!(seen.len(), 13, "the settings among the 23 rows");
+    assert_eq!(seen.len(), 14, "the settings among the 24 rows");
 }

@@ -192,6 +192,7 @@ mod tests {
             ("phrase", " amber kettle under the oak "),
             ("ble_pin", "042917"),
             ("plain", "on"),
+            ("dynamic_power", "off"),
             // Last: OpenLRSng runs in the transmitter role only.
             ("role", "transmitter"),
             ("protocol", "OpenLRS39"),
@@ -227,6 +228,7 @@ mod tests {
                     telemetry::link::PhraseSecret::derive("amber kettle under the oak", [0; 8]).prs
                 ),
                 plain: true,
+                dynamic_power: false,
                 ble_pin: Pin::new(42_917),
             }
         );

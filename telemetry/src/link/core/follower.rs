@@ -123,6 +123,10 @@ pub struct Follower {
     lq: LqWindow,
     rssi: RssiFilter,
     remote: Option<LinkReport>,
+    /// When `remote` arrived.
+    remote_us: Option<u64>,
+    /// The power step the application asked for.
+    tx_power: Option<u8>,
     counters: Counters,
     resyncs: u32,
     key: Option<LinkKey>,
@@ -166,6 +170,8 @@ impl Follower {
             lq: LqWindow::new(),
             rssi: RssiFilter::default(),
             remote: None,
+            remote_us: None,
+            tx_power: None,
             counters: Counters::default(),
             resyncs: 0,
             key: None,
@@ -666,7 +672,10 @@ impl Follower {
         if self.key.is_some() {
             self.flying = true;
         }
-        self.remote = up.report.or(self.remote);
+        if up.report.is_some() {
+            self.remote = up.report;
+            self.remote_us = Some(now_us);
+        }
         let (send, receive) = (&mut self.downlink_stream, &mut self.uplink_stream);
         stream_in(send, receive, up.stream, up.data);
     }
@@ -772,6 +781,24 @@ impl Follower {
     /// The master's last report of how it hears us.
     pub fn remote_report(&self) -> Option<LinkReport> {
         self.remote
+    }
+
+    /// The master's last report with the time it arrived on this end's clock (dynamic power,
+    /// `link::power`, counts missed reports from it).
+    pub fn remote_report_at(&self) -> Option<(LinkReport, u64)> {
+        self.remote.zip(self.remote_us)
+    }
+
+    /// Asks the loop to transmit at power `step` (0…7, `link::power`) from the next slot
+    /// on; the loop writes the radio ([`PacketRadio::set_tx_power`](crate::link::PacketRadio::set_tx_power)) when it changes.
+    pub fn set_tx_power(&mut self, step: u8) {
+        self.tx_power = Some(step);
+    }
+
+    /// The power step asked for by [`Follower::set_tx_power`]; `None`: the radio's own, as
+    /// configured.
+    pub fn tx_power(&self) -> Option<u8> {
+        self.tx_power
     }
 
     /// Packet counters.

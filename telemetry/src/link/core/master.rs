@@ -60,6 +60,10 @@ pub struct Master {
     lq: LqWindow,
     rssi: RssiFilter,
     remote: Option<LinkReport>,
+    /// When `remote` arrived.
+    remote_us: Option<u64>,
+    /// The power step the application asked for.
+    tx_power: Option<u8>,
     counters: Counters,
     last_downlink_us: Option<u64>,
     key: Option<LinkKey>,
@@ -95,6 +99,8 @@ impl Master {
             lq: LqWindow::new(),
             rssi: RssiFilter::default(),
             remote: None,
+            remote_us: None,
+            tx_power: None,
             counters: Counters::default(),
             last_downlink_us: None,
             key: None,
@@ -328,7 +334,10 @@ impl Master {
                 match received {
                     Received::Accepted(Frame::Downlink(down)) if down.slot == self.slot as u8 => {
                         self.heard(rssi_dbm, now_us);
-                        self.remote = down.report.or(self.remote);
+                        if down.report.is_some() {
+                            self.remote = down.report;
+                            self.remote_us = Some(now_us);
+                        }
                         let (send, receive) = (&mut self.uplink_stream, &mut self.downlink_stream);
                         stream_in(send, receive, down.stream, down.data);
                     }
@@ -452,6 +461,24 @@ impl Master {
     /// The follower's last report of how it hears us (uplink RSSI and LQ).
     pub fn remote_report(&self) -> Option<LinkReport> {
         self.remote
+    }
+
+    /// The follower's last report with the time it arrived on this end's clock (dynamic power,
+    /// `link::power`, counts missed reports from it).
+    pub fn remote_report_at(&self) -> Option<(LinkReport, u64)> {
+        self.remote.zip(self.remote_us)
+    }
+
+    /// Asks the loop to transmit at power `step` (0…7, `link::power`) from the next slot
+    /// on; the loop writes the radio ([`PacketRadio::set_tx_power`](crate::link::PacketRadio::set_tx_power)) when it changes.
+    pub fn set_tx_power(&mut self, step: u8) {
+        self.tx_power = Some(step);
+    }
+
+    /// The power step asked for by [`Master::set_tx_power`]; `None`: the radio's own, as
+    /// configured.
+    pub fn tx_power(&self) -> Option<u8> {
+        self.tx_power
     }
 
     /// Packet counters.

@@ -107,6 +107,10 @@ impl<R: PacketRadio> PacketRadio for Witnessed<R> {
         self.inner.finish_transmit(frame).await
     }
 
+    async fn set_tx_power(&mut self, step: u8) -> Result<(), Self::Error> {
+        self.inner.set_tx_power(step).await
+    }
+
     async fn receive(&mut self, buf: &mut [u8], timeout_us: u32) -> Result<LinkRx, Self::Error> {
         let outcome = self.inner.receive(buf, timeout_us).await?;
         if self.enabled && matches!(outcome, LinkRx::Packet { .. }) {

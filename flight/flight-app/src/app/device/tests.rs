@@ -221,6 +221,10 @@ fn changes_are_refused_armed_unkeyed_out_of_range_and_on_the_bound_link() {
     assert_eq!(app.settings().get(handles::LINK_BIND_ID), 0);
     let (_, _, _, last) = split(&read_entry(&mut app, tree::LAST_CHANGE));
     assert_eq!(last, b"link.bind_id refused: read-only\0");
+    // Dynamic power changes no link parameter: the one link row the tool writes.
+    let dynamic = number_of("link.dynamic_power");
+    write(&mut app, dynamic, &0u16.to_be_bytes());
+    assert_eq!(app.settings().get(handles::LINK_DYNAMIC_POWER), 0);
 
     armed_in_the_air(&mut app);
     write(&mut app, cells, &3u16.to_be_bytes());

@@ -18,6 +18,7 @@
 //! **Read-only rows.** The bound link's values (`link.bind_id`, band, rate, channels,
 //! telemetry ratio, protocol and the OpenLRSng bind data) are INFO rows: they are what the
 //! bind agreed with the module, and a change would cut the link the tool talks over.
+//! `link.dynamic_power` is not one of them: it changes the power only, from the next slot.
 
 use core::fmt::Write;
 
@@ -91,9 +92,11 @@ pub fn setting(number: u8) -> Option<(usize, &'static Param)> {
     PARAMS.get(index).map(|p| (index, p))
 }
 
-/// Whether a setting is shown read-only (the bound link's values).
+/// Whether a setting is shown read-only (the bound link's values; dynamic power, which
+/// changes no link parameter, stays writable).
 pub fn read_only(param: &Param) -> bool {
-    param.name.starts_with("link.")
+    let dynamic_power = crate::settings::handles::LINK_DYNAMIC_POWER.param();
+    param.name.starts_with("link.") && dynamic_power.is_none_or(|p| p.key != param.key)
 }
 
 /// The unit a name's last part implies (`…_hz` → "Hz").
