@@ -145,6 +145,31 @@ fn a_dead_hse_falls_back_to_the_hsi() {
     assert!(boot_ms < 155.0, "{boot_ms} ms");
 }
 
+/// Issue 29, "boot hangs on missing clocks", the RNG: embassy's `Rng::new` waits for DRDY
+/// forever; the image reads the RNG by register under a 1 ms limit and seeds from the unique
+/// ID and the cycle counter otherwise — every task runs, the boot no more than the limit
+/// longer.
+#[test]
+#[ignore = "needs the images: cargo xtask dist"]
+fn a_dead_rng_never_holds_the_boot() {
+    let boot_ms = |dead: bool| {
+        let mut mcu = Mcu::new(
+            Board::default(),
+            Config::default(),
+            &dist("flight-brushedsparky.elf"),
+        )
+        .unwrap();
+        mcu.soc_mut().set_rng_fault(dead);
+        run(&mut mcu, 1_000_000_000);
+        assert_eq!(mcu.tasks_polled(), (13, 13), "dead RNG {dead}");
+        assert_eq!(mcu.stats().resets, 0);
+        mcu.boot_ns().unwrap_or(u64::MAX) as f64 / 1e6
+    };
+    let (alive, dead) = (boot_ms(false), boot_ms(true));
+    println!("every task polled at {alive:.1} ms, {dead:.1} ms with a dead RNG");
+    assert!(dead < alive + 2.0, "{dead} ms against {alive} ms");
+}
+
 /// Issue 29, "flash accelerator off": after the boot FLASH_ACR holds 5 wait states with
 /// both caches on (and the prefetch, on silicon past revision A). (Built `flash-slow`, the
 /// glue before the fix, the CPU load rises by a third: `tests/findings.rs`.)

@@ -346,6 +346,11 @@ impl<O: Outside> Stm32f405<O> {
         self.rcc.set_hse_fault(fault);
     }
 
+    /// Makes the RNG's noise source dead (or alive again): DRDY never rises.
+    pub fn set_rng_fault(&mut self, fault: bool) {
+        self.rng.set_dead(fault);
+    }
+
     /// Asks for a reset the core will take at its next poll: `Pin` (NRST from outside) or
     /// `PowerOn` (a power cycle).
     pub fn request_reset(&mut self, kind: ResetKind) {

@@ -29,6 +29,9 @@ pub struct Rng {
     /// The clocks that matter, as of the last access: PLL48CLK and HCLK.
     pll48: u32,
     hclk: u32,
+    /// A dead noise source: DRDY never rises and no error is flagged (issue 29's "RNG
+    /// waits have no timeouts").
+    dead: bool,
 }
 
 impl Rng {
@@ -44,7 +47,13 @@ impl Rng {
             source,
             pll48: 0,
             hclk: 16_000_000,
+            dead: false,
         }
+    }
+
+    /// Kills the noise source (or revives it).
+    pub fn set_dead(&mut self, dead: bool) {
+        self.dead = dead;
     }
 
     /// Back to reset values (the generator's sequence goes on).
@@ -77,7 +86,7 @@ impl Rng {
         if self.cr & RNGEN != 0 {
             if !self.clock_ok() {
                 v |= CECS | CEIS;
-            } else if now >= self.ready_at {
+            } else if now >= self.ready_at && !self.dead {
                 v |= DRDY;
             }
         }
@@ -86,7 +95,7 @@ impl Rng {
 
     /// The next time DRDY rises.
     pub fn next_event(&self) -> u64 {
-        if self.cr & (RNGEN | IE) == RNGEN | IE && self.clock_ok() {
+        if self.cr & (RNGEN | IE) == RNGEN | IE && self.clock_ok() && !self.dead {
             self.ready_at
         } else {
             u64::MAX
